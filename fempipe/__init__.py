@@ -1,0 +1,30 @@
+"""fempipe: finite elements and modal Galerkin for the soft pipe conveying fluid.
+
+The geometrically exact model of Chen, Hu, Dai & Wang (Appl. Math. Mech.
+41(9) 1381-1400, 2020), Eq. (20), discretised by 1-D Lagrange finite
+elements on a scikit-fem MeshLine or by the paper's sine modes.
+"""
+
+from .discretization import FiniteElement, Modal, parse_discretization
+from .kinematics import shape, tip_values
+from .operators import PipeModel
+from .params import Params, PipeSI
+from .static import NewtonError, continuation, solve_path, solve_static, switch_branch
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "FiniteElement",
+    "Modal",
+    "NewtonError",
+    "Params",
+    "PipeModel",
+    "PipeSI",
+    "continuation",
+    "parse_discretization",
+    "shape",
+    "solve_path",
+    "solve_static",
+    "switch_branch",
+    "tip_values",
+]

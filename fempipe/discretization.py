@@ -1,0 +1,288 @@
+"""The two discretisations of theta(xi) behind one contract.
+
+A discretisation represents theta = sum_j phi_j(xi) q_j with theta(0) = 0
+built in, and supplies everything the residual of Eq. (20) needs:
+
+``quad``       :class:`~fempipe.quadrature.LineQuadrature` (points, weights,
+               integration operators);
+``Phi``        basis values at the quadrature points, shape (n_q, n);
+``dPhi``       their xi-derivatives, shape (n_q, n);
+``tip``        phi_j(1), shape (n,);
+``K``          bending stiffness ``\\int phi_i' phi_j'``, shape (n, n);
+``sparse``     whether ``Phi``, ``dPhi`` and ``K`` are scipy sparse matrices;
+``evaluate``   theta at arbitrary points, for post-processing;
+``to_dict``    a JSON-able description.
+
+:class:`FiniteElement` is the package's point: 1-D Lagrange elements of any
+degree on a scikit-fem ``MeshLine``.  :class:`Modal` is the paper's sine-mode
+Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2).  Solvers only use
+the contract and never ask which one they have.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import scipy.sparse as sp
+
+from .quadrature import LineQuadrature
+
+__all__ = ["Discretization", "FiniteElement", "Modal", "parse_discretization"]
+
+
+@runtime_checkable
+class Discretization(Protocol):
+    quad: LineQuadrature
+    Phi: object
+    dPhi: object
+    tip: np.ndarray
+    K: object
+    sparse: bool
+    n: int
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray: ...
+
+    def to_dict(self) -> dict: ...
+
+
+class FiniteElement:
+    """Lagrange finite elements of degree ``degree`` on a line mesh of [0, 1].
+
+    Parameters
+    ----------
+    n_elements : int, optional
+        Number of uniform elements (ignored if ``nodes`` is given).
+    degree : int
+        Polynomial degree (1 to 10).  P1, P2 use scikit-fem's ``ElementLineP1``,
+        ``ElementLineP2``; higher degrees ``ElementLinePp``.
+    nodes : array_like, optional
+        Mesh nodes for graded meshes; must start at 0, end at 1, increase.
+    n_gauss : int, optional
+        Gauss points per element for all integrals.  The default ``2 * degree``
+        (at least 2) keeps the nodal superconvergence O(h^(2k)) of P_k in the
+        static tip values and eigenvalues: the integration operators interpolate
+        at the n_g Gauss points, so their local error is O(h^(n_g + 1)), and
+        the Gauss sums themselves are exact to degree 2 n_g - 1.
+
+    Notes
+    -----
+    The Dirichlet condition theta(0) = 0 is imposed by removing the dof of the
+    node at xi = 0; theta'(1) = 0 is natural in the weak form.
+    """
+
+    def __init__(
+        self,
+        n_elements: int = 16,
+        degree: int = 2,
+        nodes: np.ndarray | None = None,
+        n_gauss: int | None = None,
+    ) -> None:
+        from skfem import Basis, BilinearForm, ElementLineP1, ElementLineP2, ElementLinePp, MeshLine
+
+        degree = int(degree)
+        if not 1 <= degree <= 10:
+            raise ValueError(f"degree must be an integer from 1 to 10, got {degree}")
+        if nodes is None:
+            if int(n_elements) < 1:
+                raise ValueError(f"n_elements must be >= 1, got {n_elements}")
+            nodes = np.linspace(0.0, 1.0, int(n_elements) + 1)
+        nodes = np.asarray(nodes, dtype=float)
+        if nodes.ndim != 1 or nodes.size < 2 or not np.all(np.diff(nodes) > 0):
+            raise ValueError("nodes must be a strictly increasing 1-D array of >= 2 points")
+        if abs(nodes[0]) > 1e-12 or abs(nodes[-1] - 1.0) > 1e-12:
+            raise ValueError("nodes must start at 0 and end at 1")
+        nodes = nodes.copy()
+        nodes[0], nodes[-1] = 0.0, 1.0
+        self.degree = degree
+        self.nodes = nodes
+        self.n_elements = nodes.size - 1
+        self.n_gauss = int(n_gauss) if n_gauss is not None else max(2, 2 * degree)
+        if self.n_gauss < degree + 1:
+            raise ValueError(
+                f"n_gauss must be >= degree + 1 = {degree + 1} so that the integration "
+                f"operators are exact for P{degree}, got {self.n_gauss}"
+            )
+        element = {1: ElementLineP1, 2: ElementLineP2}.get(degree)
+        element = element() if element is not None else ElementLinePp(degree)
+        self.mesh = MeshLine(nodes)
+        t = self.mesh.t
+        if not (np.all(self.mesh.p[0, t[0]] < self.mesh.p[0, t[1]]) and np.all(np.diff(self.mesh.p[0, t[0]]) > 0)):
+            raise RuntimeError("MeshLine cells are not ordered left to right")
+        self.basis = Basis(self.mesh, element, intorder=2 * self.n_gauss - 1)
+        ref = self.basis.X[0]
+        if ref.size != self.n_gauss:
+            raise RuntimeError("scikit-fem quadrature is not the expected Gauss rule")
+        self.quad = LineQuadrature(nodes, self.n_gauss)
+        if not np.allclose(np.sort(ref), self.quad.ref_points, atol=1e-13):
+            raise RuntimeError("scikit-fem quadrature points differ from Gauss-Legendre")
+        order = np.argsort(ref)
+
+        # Global quadrature index of (element e, point k) is e * n_g + k.
+        n_g, n_el, n_b = self.n_gauss, self.n_elements, self.basis.Nbfun
+        rows = np.broadcast_to(
+            (np.arange(n_el)[:, None] * n_g + np.arange(n_g)[None, :])[None], (n_b, n_el, n_g)
+        )
+        cols = np.broadcast_to(self.basis.element_dofs[:, :, None], (n_b, n_el, n_g))
+        vals = np.stack([self.basis.basis[i][0].value[:, order] for i in range(n_b)])
+        ders = np.stack([self.basis.basis[i][0].grad[0][:, order] for i in range(n_b)])
+        N_all = self.basis.N
+        shape = (self.quad.n_q, N_all)
+        Phi_all = sp.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=shape)
+        dPhi_all = sp.csr_matrix((ders.ravel(), (rows.ravel(), cols.ravel())), shape=shape)
+
+        clamped = int(np.argmin(self.mesh.p[0]))
+        free_end = int(np.argmax(self.mesh.p[0]))
+        # Vertex dofs come first in scikit-fem's numbering, one per vertex.
+        self.clamped_dof = clamped
+        self.free = np.setdiff1d(np.arange(N_all), [clamped])
+        self.n_all = N_all
+        self.n = self.free.size
+        self.Phi = Phi_all[:, self.free].tocsr()
+        self.dPhi = dPhi_all[:, self.free].tocsr()
+        tip = np.zeros(N_all)
+        tip[free_end] = 1.0
+        self.tip = tip[self.free]
+
+        @BilinearForm
+        def bending(u, v, w):
+            return u.grad[0] * v.grad[0]
+
+        self.K = bending.assemble(self.basis)[self.free][:, self.free].tocsr()
+        self.sparse = True
+
+    @property
+    def name(self) -> str:
+        return f"P{self.degree}:{self.n_elements}"
+
+    def full(self, q: np.ndarray) -> np.ndarray:
+        """All scikit-fem dofs, the clamped one set to zero; shape (N,) or (N, m)."""
+        q = np.asarray(q)
+        out = np.zeros((self.n_all,) + q.shape[1:], dtype=q.dtype)
+        out[self.free] = q
+        return out
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        """theta(xi) at arbitrary points in [0, 1]."""
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        P = self.basis.probes(xi[None, :])
+        return P @ self.full(q)
+
+    def refined(self, factor: int = 2) -> FiniteElement:
+        """Return a copy with every element split into ``factor`` equal parts."""
+        factor = int(factor)
+        x = self.nodes
+        fine = (x[:-1, None] + np.diff(x)[:, None] * np.arange(factor)[None, :] / factor).ravel()
+        return FiniteElement(
+            degree=self.degree, nodes=np.append(fine, 1.0), n_gauss=self.n_gauss
+        )
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": "fe",
+            "element": f"P{self.degree}",
+            "degree": self.degree,
+            "n_elements": self.n_elements,
+            "n_dofs": self.n,
+            "n_gauss": self.n_gauss,
+            "uniform": bool(np.allclose(np.diff(self.nodes), 1.0 / self.n_elements)),
+        }
+
+    def __repr__(self) -> str:
+        return f"FiniteElement(degree={self.degree}, n_elements={self.n_elements})"
+
+
+class Modal:
+    """The paper's sine-mode Galerkin discretisation, Eq. (22).
+
+    phi_r(xi) = sin((2r - 1) pi xi / 2), r = 1..N: the clamped-free string
+    modes.  They satisfy theta(0) = 0 and theta'(1) = 0, and also
+    theta''(0) = 0, which the true solution does not, so the method converges
+    only algebraically in N.
+
+    Parameters
+    ----------
+    n_modes : int
+        N >= 1.
+    n_cells, n_gauss : int, optional
+        The quadrature used for the nonlinear integrals.  The default
+        (max(32, 4N) cells of 8 Gauss points) integrates the sine modes and
+        the nonlinear terms to near round-off, so the error measured is the
+        modal truncation alone.
+    """
+
+    def __init__(self, n_modes: int = 4, n_cells: int | None = None, n_gauss: int = 8) -> None:
+        n_modes = int(n_modes)
+        if n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {n_modes}")
+        self.n_modes = n_modes
+        self.n = n_modes
+        self.quad = LineQuadrature.uniform(n_cells or max(32, 4 * n_modes), n_gauss)
+        self.k = (2.0 * np.arange(1, n_modes + 1) - 1.0) * np.pi / 2.0
+        x = self.quad.x
+        self.Phi = np.sin(np.outer(x, self.k))
+        self.dPhi = np.cos(np.outer(x, self.k)) * self.k
+        self.tip = np.sin(self.k)
+        # \int_0^1 phi_i' phi_j' = k_i^2 / 2 delta_ij (orthogonal cosines).
+        self.K = np.diag(self.k**2 / 2.0)
+        self.sparse = False
+
+    @property
+    def name(self) -> str:
+        return f"modal:{self.n_modes}"
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        return np.sin(np.outer(xi, self.k)) @ np.asarray(q)
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": "modal",
+            "n_modes": self.n_modes,
+            "n_dofs": self.n,
+            "n_cells": self.quad.n_cells,
+            "n_gauss": self.quad.n_gauss,
+        }
+
+    def __repr__(self) -> str:
+        return f"Modal(n_modes={self.n_modes})"
+
+
+_FE_RE = re.compile(r"^[Pp](\d+)\s*:\s*(\d+)$")
+
+
+def parse_discretization(fe: str | None = None, modal: int | str | None = None):
+    """Build a discretisation from the CLI spellings ``--fe P2:16`` / ``--modal 4``.
+
+    Raises
+    ------
+    ValueError
+        With a message naming the option and the allowed forms.
+    """
+    if fe is not None and modal is not None:
+        raise ValueError("--fe and --modal are mutually exclusive")
+    if modal is not None:
+        try:
+            n = int(str(modal))
+        except ValueError:
+            raise ValueError(f"--modal expects a number of modes >= 1, got {modal!r}") from None
+        if n < 1:
+            raise ValueError(f"--modal expects a number of modes >= 1, got {n}")
+        return Modal(n)
+    m = _FE_RE.match(str(fe if fe is not None else DEFAULT_FE).strip())
+    if not m:
+        raise ValueError(
+            f"--fe expects Pk:n with degree k in 1..10 and n >= 1 elements (e.g. P2:16), got {fe!r}"
+        )
+    degree, n_el = int(m.group(1)), int(m.group(2))
+    if not 1 <= degree <= 10:
+        raise ValueError(f"--fe element degree must be 1..10, got P{degree}")
+    if n_el < 1:
+        raise ValueError(f"--fe number of elements must be >= 1, got {n_el}")
+    return FiniteElement(n_el, degree)
+
+
+#: The default discretisation; its static tip error is below 1e-7 (see
+#: ``tests/test_static.py::test_default_discretization_accuracy``).
+DEFAULT_FE = "P3:16"

@@ -1,0 +1,160 @@
+"""Physical parameters of the soft pipe conveying fluid.
+
+The model has five dimensionless groups (Eq. (19) of Chen, Hu, Dai & Wang
+2020): the inclination ``alpha``, the mass ratio ``beta``, the gravity
+parameter ``gamma``, the Kelvin--Voigt damping ``mu`` and the flow velocity
+``v``.  :class:`Params` holds them; :class:`PipeSI` holds a dimensional pipe
+(lengths in m, stiffness in N m^2, masses per length in kg/m, velocities in
+m/s) and converts both ways.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+__all__ = ["Params", "PipeSI"]
+
+
+def _check_finite(name: str, value: float) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value}")
+    return value
+
+
+@dataclass(frozen=True)
+class Params:
+    """Dimensionless parameters of Eq. (20).
+
+    Parameters
+    ----------
+    alpha : float
+        Inclination of the undeformed pipe from the downward vertical, rad.
+        0 hangs down, pi/2 is horizontal, pi stands up.  Any finite value.
+    beta : float
+        Mass ratio M/(m+M), 0 <= beta <= 1.
+    gamma : float
+        Gravity parameter (m+M) g L^3 / EI >= 0.
+    mu : float
+        Kelvin--Voigt damping sqrt(EI/(m+M)) a / L^2 >= 0.
+    v : float
+        Flow velocity sqrt(M/EI) U L >= 0 (discharge at the free end).
+    """
+
+    alpha: float = 0.0
+    beta: float = 0.142
+    gamma: float = 18.9
+    mu: float = 5e-3
+    v: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("alpha", "beta", "gamma", "mu", "v"):
+            object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
+        if not 0.0 <= self.beta <= 1.0:
+            raise ValueError(f"beta must satisfy 0 <= beta <= 1, got {self.beta}")
+        if self.gamma < 0.0:
+            raise ValueError(f"gamma must be >= 0, got {self.gamma}")
+        if self.mu < 0.0:
+            raise ValueError(f"mu must be >= 0, got {self.mu}")
+        if self.v < 0.0:
+            raise ValueError(
+                f"v must be >= 0 (the model assumes discharge at the free end), got {self.v}"
+            )
+
+    def with_flow(self, v: float) -> Params:
+        """Return a copy with flow velocity ``v``."""
+        return replace(self, v=v)
+
+    def to_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class PipeSI:
+    """A dimensional pipe, for users who think in SI units.
+
+    Parameters
+    ----------
+    L : float
+        Length, m (> 0).
+    EI : float
+        Bending stiffness, N m^2 (> 0).
+    m : float
+        Pipe mass per unit length, kg/m (>= 0).
+    M : float
+        Fluid mass per unit length, kg/m (>= 0; m + M > 0).
+    g : float
+        Gravitational acceleration, m/s^2 (>= 0).
+    a : float
+        Kelvin--Voigt retardation time, s (>= 0), Eq. (18).
+    alpha : float
+        Inclination from the downward vertical, rad.
+    """
+
+    L: float
+    EI: float
+    m: float
+    M: float
+    g: float = 9.81
+    a: float = 0.0
+    alpha: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("L", "EI", "m", "M", "g", "a", "alpha"):
+            object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
+        if self.L <= 0:
+            raise ValueError(f"L (length) must be > 0 m, got {self.L}")
+        if self.EI <= 0:
+            raise ValueError(f"EI must be > 0 N m^2, got {self.EI}")
+        if self.m < 0:
+            raise ValueError(f"m (pipe mass per length) must be >= 0 kg/m, got {self.m}")
+        if self.M < 0:
+            raise ValueError(f"M (fluid mass per length) must be >= 0 kg/m, got {self.M}")
+        if self.m + self.M <= 0:
+            raise ValueError("m + M must be > 0 kg/m")
+        if self.g < 0:
+            raise ValueError(f"g must be >= 0 m/s^2, got {self.g}")
+        if self.a < 0:
+            raise ValueError(f"a (Kelvin-Voigt coefficient) must be >= 0 s, got {self.a}")
+
+    # --- Eq. (19) scales -------------------------------------------------
+    @property
+    def time_scale(self) -> float:
+        """Seconds per unit of tau: L^2 sqrt((m+M)/EI)."""
+        return self.L**2 * math.sqrt((self.m + self.M) / self.EI)
+
+    @property
+    def velocity_scale(self) -> float:
+        """m/s per unit of v: sqrt(EI/M) / L (infinite if M = 0)."""
+        if self.M == 0:
+            return math.inf
+        return math.sqrt(self.EI / self.M) / self.L
+
+    def v_of_U(self, U: float) -> float:
+        """Dimensionless flow velocity v = sqrt(M/EI) U L."""
+        U = _check_finite("U", U)
+        if U < 0:
+            raise ValueError(f"U must be >= 0 m/s, got {U}")
+        return math.sqrt(self.M / self.EI) * U * self.L
+
+    def U_of_v(self, v: float) -> float:
+        """Flow velocity in m/s for dimensionless ``v``."""
+        return v * self.velocity_scale if v else 0.0
+
+    def params(self, U: float = 0.0) -> Params:
+        """Dimensionless :class:`Params` at flow velocity ``U`` (m/s), Eq. (19)."""
+        mt = self.m + self.M
+        return Params(
+            alpha=self.alpha,
+            beta=self.M / mt,
+            gamma=mt * self.g * self.L**3 / self.EI,
+            mu=math.sqrt(self.EI / mt) * self.a / self.L**2,
+            v=self.v_of_U(U),
+        )
+
+    def to_dict(self) -> dict[str, float]:
+        return asdict(self)
