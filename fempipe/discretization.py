@@ -108,7 +108,10 @@ class FiniteElement:
         element = element() if element is not None else ElementLinePp(degree)
         self.mesh = MeshLine(nodes)
         t = self.mesh.t
-        if not (np.all(self.mesh.p[0, t[0]] < self.mesh.p[0, t[1]]) and np.all(np.diff(self.mesh.p[0, t[0]]) > 0)):
+        if not (
+            np.all(self.mesh.p[0, t[0]] < self.mesh.p[0, t[1]])
+            and np.all(np.diff(self.mesh.p[0, t[0]]) > 0)
+        ):
             raise RuntimeError("MeshLine cells are not ordered left to right")
         self.basis = Basis(self.mesh, element, intorder=2 * self.n_gauss - 1)
         ref = self.basis.X[0]
@@ -174,9 +177,7 @@ class FiniteElement:
         factor = int(factor)
         x = self.nodes
         fine = (x[:-1, None] + np.diff(x)[:, None] * np.arange(factor)[None, :] / factor).ravel()
-        return FiniteElement(
-            degree=self.degree, nodes=np.append(fine, 1.0), n_gauss=self.n_gauss
-        )
+        return FiniteElement(degree=self.degree, nodes=np.append(fine, 1.0), n_gauss=self.n_gauss)
 
     def to_dict(self) -> dict:
         return {

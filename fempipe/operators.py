@@ -268,7 +268,9 @@ class PipeModel:
         F = F + cv * th_d[:, None] * fl.n + v_dot * np.sqrt(p.beta) * fl.t
 
         # d/dq: through n(theta) in front, and through n, t inside F.
-        dF = self.quad.cumulative(self._phi_field(-th_dd[:, None] * fl.t - th_d[:, None] ** 2 * fl.n))
+        dF = self.quad.cumulative(
+            self._phi_field(-th_dd[:, None] * fl.t - th_d[:, None] ** 2 * fl.n)
+        )
         dF = dF + self._phi_field(-cv * th_d[:, None] * fl.t + v_dot * np.sqrt(p.beta) * fl.n)
         Jq = (
             _dense(self.disc.K)

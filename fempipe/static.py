@@ -476,7 +476,12 @@ def _interp_state(a: BranchPoint, b: BranchPoint, value: float) -> np.ndarray:
 
 
 def _detect(
-    cont: _Continuation, branch: Branch, a: BranchPoint, b: BranchPoint, locate_tol: float, tol: float
+    cont: _Continuation,
+    branch: Branch,
+    a: BranchPoint,
+    b: BranchPoint,
+    locate_tol: float,
+    tol: float,
 ) -> None:
     """Locate a fold (t_lambda changes sign) or a bifurcation (det sign flip) in [a, b]."""
     n = cont.model.n
