@@ -1,0 +1,3 @@
+from fempipe.cli import main
+
+raise SystemExit(main())

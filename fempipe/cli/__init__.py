@@ -1,0 +1,57 @@
+"""Command-line interface: ``fempipe <subcommand>``; one module per subcommand."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> (module, one-line help).  Each module defines
+#: ``add_arguments(parser)`` and ``run(args) -> int``.
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "static": ("fempipe.cli.static", "static large deformation against flow velocity"),
+    "spectrum": ("fempipe.cli.spectrum", "eigenvalues of the linearised problem against v"),
+    "critical": ("fempipe.cli.critical", "critical flow velocity and stability events"),
+    "stability-map": ("fempipe.cli.stability_map", "v_cr against alpha for lists of beta, gamma"),
+    "simulate": ("fempipe.cli.simulate", "nonlinear time integration and limit cycle"),
+    "bifurcation": ("fempipe.cli.bifurcation", "bifurcation diagram of the tip response"),
+    "validate": ("fempipe.cli.validate", "run the validation suite and write the report"),
+    "bench": ("fempipe.cli.bench", "performance benchmarks"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fempipe",
+        description="Soft cantilevered pipe conveying fluid under gravity: "
+        "finite elements and modal Galerkin (Chen et al. 2020, Eq. (20)).",
+    )
+    from fempipe import __version__
+
+    parser.add_argument("--version", action="version", version=f"fempipe {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module, help_) in SUBCOMMANDS.items():
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name != module:
+                raise
+            continue  # subcommand not built yet
+        p = sub.add_parser(name, help=help_, description=help_)
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit code (0 ok, 1 failure, 2 bad input)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help(sys.stderr)
+        return 2
+    return int(args._run(args) or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
