@@ -21,7 +21,9 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from fempipe.cli.common import ArgumentParser  # one-line errors, exit 2
+
+    parser = ArgumentParser(
         prog="fempipe",
         description="Soft cantilevered pipe conveying fluid under gravity: "
         "finite elements and modal Galerkin (Chen et al. 2020, Eq. (20)).",
@@ -50,7 +52,17 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help(sys.stderr)
         return 2
-    return int(args._run(args) or 0)
+    from fempipe.cli.common import CLIError
+    from fempipe.static import NewtonError
+
+    try:
+        return int(args._run(args) or 0)
+    except CLIError as exc:  # bad input: one line naming the option, exit 2
+        print(f"fempipe {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except NewtonError as exc:  # a solver failed: say where, exit 1
+        print(f"fempipe {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover
