@@ -216,6 +216,9 @@ class Branch:
         Folds and bifurcation points, located to ``locate_tol`` in arclength.
     steps, rejected_steps : int
         Continuation diagnostics.
+    end_reason : str
+        ``"stop"`` (reached the requested value), ``"returned to v = 0"``
+        (the branch folded back out of the physical range) or ``"max_steps"``.
     """
 
     parameter: str
@@ -224,6 +227,7 @@ class Branch:
     special: list[SpecialPoint] = field(default_factory=list)
     steps: int = 0
     rejected_steps: int = 0
+    end_reason: str = "max_steps"
 
     @property
     def values(self) -> np.ndarray:
@@ -263,8 +267,26 @@ class _Continuation:
         self.sparse = disc.sparse
 
     def at(self, value: float) -> PipeModel:
-        p = replace(self.model.params, **{self.parameter: value})
+        """The model at parameter ``value``.
+
+        v and gamma are physical only when >= 0, but a branch may pass
+        through 0 (a buckled branch at alpha = pi returns to v = 0).  The
+        corrector may therefore evaluate negative values, which are mapped to
+        their mirror images: R depends on v only through v^2, and gamma < 0 is
+        |gamma| with alpha + pi.  :meth:`dR_dlambda` carries the sign.
+        """
+        p = self.model.params
+        if self.parameter == "v":
+            p = replace(p, v=abs(value))
+        elif self.parameter == "gamma":
+            p = replace(p, gamma=abs(value), alpha=p.alpha + (np.pi if value < 0 else 0.0))
+        else:
+            p = replace(p, alpha=value)
         return self.model.with_params(p)
+
+    def dR_dlambda(self, q: np.ndarray, value: float) -> np.ndarray:
+        d = self.at(value).static_parameter_derivative(q, self.parameter)
+        return -d if (value < 0 and self.parameter != "alpha") else d
 
     def dot(self, a: np.ndarray, b: np.ndarray) -> float:
         n = self.model.n
@@ -277,11 +299,11 @@ class _Continuation:
         """[[dR/dq, dR/dlambda], [G t_q, t_lambda]]: the pseudo-arclength Jacobian."""
         m = self.at(value)
         J = m.static_jacobian(q)
-        Rl = m.static_parameter_derivative(q, self.parameter)
+        Rl = self.dR_dlambda(q, value)
         n = self.model.n
         row = np.append(self.G @ t[:n], t[n])
         if self.sparse:
-            A = sp.bmat([[J, sp.csc_matrix(Rl[:, None])], [sp.csr_matrix(row[None, :])]])
+            A = sp.vstack([sp.hstack([J, sp.csc_matrix(Rl[:, None])]), sp.csr_matrix(row[None, :])])
             return A.tocsc()
         return np.block([[J, Rl[:, None]], [row[None, :]]])
 
@@ -452,11 +474,16 @@ def continuation(
         new = BranchPoint(y[:n], float(y[n]), t_new, its, rn, sign)
         branch.steps += 1
         crossed = (new.value - stop) * (1 if going_up else -1) >= 0
-        if crossed:
-            # Land exactly on the stop value by Newton at fixed parameter.
-            end = solve_static(cont.at(stop), q0=_interp_state(prev, new, stop), tol=tol)
-            t_end, s_end = cont.tangent(end.q, stop, new.tangent)
-            new = BranchPoint(end.q, float(stop), t_end, end.iterations, end.residual_norm, s_end)
+        left = parameter in ("v", "gamma") and new.value < 0 <= prev.value
+        if crossed or left:
+            # Land exactly on the stop value (or on the end of the physical
+            # range, 0) by Newton at fixed parameter.
+            target = stop if crossed else 0.0
+            end = solve_static(cont.at(target), q0=_interp_state(prev, new, target), tol=tol)
+            t_end, s_end = cont.tangent(end.q, target, new.tangent)
+            new = BranchPoint(end.q, target, t_end, end.iterations, end.residual_norm, s_end)
+            branch.end_reason = "stop" if crossed else f"returned to {parameter} = 0"
+            crossed = True
         if detect:
             _detect(cont, branch, prev, new, locate_tol, tol)
         branch.points.append(new)
@@ -607,7 +634,7 @@ def switch_branch(
     m = cont.at(point.value)
     J = m.static_jacobian(point.q)
     Jd = J.toarray() if sp.issparse(J) else J
-    Rl = m.static_parameter_derivative(point.q, parameter)
+    Rl = cont.dR_dlambda(point.q, point.value)
     # Null space of [J, R_lambda] (dimension 2 at a simple branch point).
     A = np.hstack([Jd, Rl[:, None]])
     _, _, Vt = np.linalg.svd(A)
