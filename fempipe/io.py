@@ -1,0 +1,244 @@
+"""Writing results to files, atomically.
+
+Every writer here writes to a temporary file in the destination directory
+and moves it into place with :func:`os.replace`, so a reader (or a crashed
+run) never sees a half-written file: the destination either keeps its old
+content or gets the complete new one.
+
+Formats
+-------
+* JSON (:func:`write_json`): numpy scalars and arrays are converted, NaN/inf
+  become ``null`` (strict JSON).
+* CSV (:func:`write_csv`): one row per result, a header line.
+* Shapes (:func:`write_shapes`): deformed centrelines as a meshio VTU file
+  (VTK XML unstructured grid): line cells, the global-frame centreline
+  (X_g, Z_g, 0) as points, theta, varsigma, eta, X_g, Z_g, xi and the
+  continuation value as point data.  VTU was chosen by trying: it stores line
+  cells and point data and reads back with plain meshio (and opens in
+  ParaView); meshio's XDMF writer needs h5py, which is not a dependency.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io as _io
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "atomic_path",
+    "to_jsonable",
+    "json_dumps",
+    "write_json",
+    "write_csv",
+    "write_text",
+    "write_figure",
+    "write_shapes",
+    "read_shapes",
+    "SHAPE_FIELDS",
+]
+
+#: Point-data fields of a shape file, in order (all dimensionless; theta in rad).
+SHAPE_FIELDS = ("xi", "theta", "varsigma", "eta", "X_g", "Z_g")
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; move it onto ``path`` on success.
+
+    The temporary file keeps the destination's suffix (some writers choose the
+    format from it).  On an exception it is removed and ``path`` is untouched.
+
+    Examples
+    --------
+    >>> with atomic_path("out/fig.png") as tmp:   # doctest: +SKIP
+    ...     fig.savefig(tmp)
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp_path.unlink()
+        raise
+
+
+def to_jsonable(obj):
+    """Recursively convert numpy types, tuples and non-finite floats for strict JSON.
+
+    NaN and +-inf become ``None`` (JSON has no such numbers); arrays become lists.
+    """
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        x = float(obj)
+        return x if math.isfinite(x) else None
+    if isinstance(obj, Path):
+        return str(obj)
+    if hasattr(obj, "to_dict"):
+        return to_jsonable(obj.to_dict())
+    return obj
+
+
+def json_dumps(obj, indent: int | None = 2) -> str:
+    """``json.dumps`` of :func:`to_jsonable` (strict: no NaN literals)."""
+    return json.dumps(to_jsonable(obj), indent=indent, allow_nan=False)
+
+
+def write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` atomically (UTF-8)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def write_json(path: str | os.PathLike, obj) -> Path:
+    """Write ``obj`` as indented strict JSON, atomically."""
+    return write_text(path, json_dumps(obj) + "\n")
+
+
+def write_csv(
+    path: str | os.PathLike,
+    rows: Sequence[Mapping],
+    columns: Sequence[str] | None = None,
+) -> Path:
+    """Write a list of flat dicts as CSV with a header, atomically.
+
+    Parameters
+    ----------
+    rows : sequence of mapping
+        One dict per row; missing keys give empty cells.
+    columns : sequence of str, optional
+        Column order (default: keys in order of first appearance).
+    """
+    if columns is None:
+        columns = []
+        for row in rows:
+            columns.extend(k for k in row if k not in columns)
+    buf = _io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(columns), extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for row in rows:
+        w.writerow({k: _csv_cell(row.get(k)) for k in columns})
+    return write_text(path, buf.getvalue())
+
+
+def _csv_cell(x):
+    if x is None:
+        return ""
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x))  # round-trip precision
+    return x
+
+
+def write_figure(path: str | os.PathLike, fig, **savefig_kwargs) -> Path:
+    """``fig.savefig`` atomically; the format follows the suffix of ``path``."""
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, **savefig_kwargs)
+    return Path(path)
+
+
+def write_shapes(
+    path: str | os.PathLike,
+    shapes: Sequence,
+    values: Sequence[float],
+    parameter: str = "v",
+    length: float | None = None,
+) -> Path:
+    """Write deformed centrelines to one VTU file (meshio), atomically.
+
+    Each shape becomes a polyline of ``line`` cells; all shapes share one file
+    and are told apart by the point data ``shape_index`` and ``parameter``.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination, normally ending in ``.vtu``.
+    shapes : sequence of Shape
+        :class:`fempipe.kinematics.Shape` (or objects with the attributes in
+        :data:`SHAPE_FIELDS`), dimensionless.
+    values : sequence of float
+        The continuation value of each shape (e.g. v), same length.
+    parameter : str
+        Name of ``values`` in the point data.
+    length : float, optional
+        Pipe length in m: points are then in metres (the point data stay
+        dimensionless, with ``X_g_m``, ``Z_g_m`` added).
+
+    Returns
+    -------
+    Path
+    """
+    import meshio
+
+    if len(shapes) != len(values):
+        raise ValueError(f"got {len(shapes)} shapes but {len(values)} values")
+    if not shapes:
+        raise ValueError("no shapes to write")
+    scale = 1.0 if length is None else float(length)
+    pts, lines, data = [], [], {f: [] for f in SHAPE_FIELDS}
+    index, value = [], []
+    offset = 0
+    for i, (s, val) in enumerate(zip(shapes, values, strict=True)):
+        X, Z = np.asarray(s.X_g, dtype=float), np.asarray(s.Z_g, dtype=float)
+        m = X.size
+        # Eq. (28): X_g along gravity, Z_g horizontal; the third coordinate is 0.
+        pts.append(np.column_stack([X, Z, np.zeros(m)]) * scale)
+        lines.append(offset + np.column_stack([np.arange(m - 1), np.arange(1, m)]))
+        for f in SHAPE_FIELDS:
+            data[f].append(np.asarray(getattr(s, f), dtype=float))
+        index.append(np.full(m, i, dtype=float))
+        value.append(np.full(m, float(val)))
+        offset += m
+    point_data = {f: np.concatenate(data[f]) for f in SHAPE_FIELDS}
+    point_data["shape_index"] = np.concatenate(index)
+    point_data[parameter] = np.concatenate(value)
+    if length is not None:
+        point_data["X_g_m"] = point_data["X_g"] * scale
+        point_data["Z_g_m"] = point_data["Z_g"] * scale
+    mesh = meshio.Mesh(
+        np.concatenate(pts), [("line", np.concatenate(lines))], point_data=point_data
+    )
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
+    return Path(path)
+
+
+def read_shapes(path: str | os.PathLike) -> list[dict[str, np.ndarray]]:
+    """Read a file written by :func:`write_shapes` back, one dict per shape.
+
+    Each dict holds the point data of one shape (``xi``, ``theta``, ...,
+    the continuation value) and ``points``, shape (m, 3).
+    """
+    import meshio
+
+    mesh = meshio.read(path)
+    idx = np.asarray(mesh.point_data["shape_index"]).astype(int)
+    out = []
+    for i in np.unique(idx):
+        sel = idx == i
+        d = {k: np.asarray(a)[sel] for k, a in mesh.point_data.items() if k != "shape_index"}
+        d["points"] = np.asarray(mesh.points)[sel]
+        out.append(d)
+    return out
