@@ -128,7 +128,7 @@ class FiniteElement:
             (np.arange(n_el)[:, None] * n_g + np.arange(n_g)[None, :])[None], (n_b, n_el, n_g)
         )
         cols = np.broadcast_to(self.basis.element_dofs[:, :, None], (n_b, n_el, n_g))
-        vals = np.stack([self.basis.basis[i][0].value[:, order] for i in range(n_b)])
+        vals = np.stack([np.asarray(self.basis.basis[i][0])[:, order] for i in range(n_b)])
         ders = np.stack([self.basis.basis[i][0].grad[0][:, order] for i in range(n_b)])
         N_all = self.basis.N
         shape = (self.quad.n_q, N_all)
