@@ -37,6 +37,7 @@ __all__ = [
     "SpecialPoint",
     "solve_static",
     "solve_path",
+    "sagged_state",
     "continuation",
     "switch_branch",
     "CONTINUATION_PARAMETERS",
@@ -521,8 +522,14 @@ def _detect(
         # At a fold the bordered determinant keeps its sign; a flip is a branch point.
         sp_ = _bisect(cont, a, b, lambda y, t, s: float(s), locate_tol, tol)
         if sp_ is not None:
+            # The bordered matrix is singular at a branch point, so the tangent
+            # computed there is meaningless; the chord of the bracketing
+            # points is the known branch's direction to O(step^2).
+            chord = np.append(b.q - a.q, b.value - a.value)
             branch.special.append(
-                SpecialPoint("bifurcation", float(sp_[0][n]), sp_[0][:n], sp_[1], idx)
+                SpecialPoint(
+                    "bifurcation", float(sp_[0][n]), sp_[0][:n], cont.normalize(chord), idx
+                )
             )
     branch.special.sort(key=lambda s: (s.index, s.value))
 
@@ -557,6 +564,32 @@ def _bisect(cont: _Continuation, a: BranchPoint, b: BranchPoint, f, locate_tol: 
     return best
 
 
+def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
+    """The static state reached by loading the straight pipe with gravity.
+
+    Newton from the straight pipe first; if that fails (large deformations,
+    e.g. alpha = 3 pi / 4 with gamma = 18.9), continuation in gamma from 0,
+    where theta = 0 is the exact solution for every v and alpha.  At
+    alpha = pi (and alpha = 0) this stays on the straight branch; the buckled
+    branches are reached with :func:`switch_branch`.
+    """
+    try:
+        return solve_static(model, tol=tol)
+    except NewtonError:
+        if model.params.gamma == 0.0:
+            raise
+    start = model.with_params(replace(model.params, gamma=0.0))
+    branch = continuation(start, "gamma", stop=model.params.gamma, tol=tol, detect=False)
+    if branch.end_reason != "stop":
+        raise NewtonError(
+            f"gravity loading did not reach gamma={model.params.gamma:.6g} ({branch.end_reason})",
+            params=model.params,
+            iterations=branch.steps,
+            residual=float("nan"),
+        )
+    return solve_static(model, q0=branch.points[-1].q, tol=tol)
+
+
 def solve_path(
     model: PipeModel,
     values: Sequence[float],
@@ -567,7 +600,8 @@ def solve_path(
 ) -> list[StaticSolution]:
     """Static states at the given parameter values, following one branch.
 
-    The first value is solved by Newton from ``q0`` (default: straight); each
+    The first value is solved by Newton from ``q0`` (default: the
+    gravity-sagged state of :func:`sagged_state`); each
     next one starts from a linear extrapolation of the previous two.  If Newton
     fails (a fast-changing or folded branch), the gap is bridged by
     pseudo-arclength continuation, which passes folds.
@@ -585,6 +619,14 @@ def solve_path(
     guess = q0
     for i, value in enumerate(values):
         m = model.with_params(replace(model.params, **{parameter: value}))
+        if not prev_q and q0 is None:
+            sol = sagged_state(m, tol=tol)
+            out.append(sol)
+            prev_q.append(sol.q)
+            prev_v.append(value)
+            if callback:
+                callback(i, sol)
+            continue
         if len(prev_q) >= 2 and prev_v[-1] != prev_v[-2]:
             s = (value - prev_v[-1]) / (prev_v[-1] - prev_v[-2])
             guess = prev_q[-1] + s * (prev_q[-1] - prev_q[-2])
