@@ -211,7 +211,7 @@ def test_solve_path_matches_pointwise_solves():
     model = PipeModel(disc, Params(alpha=np.pi / 3, gamma=10.0))
     vs = np.linspace(0, 6, 7)
     path = solve_path(model, vs)
-    for v, sol in zip(vs, path):
+    for v, sol in zip(vs, path, strict=True):
         direct = solve_static(model.with_params(model.params.with_flow(v)), q0=sol.q * 0.9)
         assert np.allclose(sol.q, direct.q, atol=1e-10)
         assert sol.params.v == v
