@@ -1,0 +1,270 @@
+"""Checks, tables and case results: the vocabulary of the validation suite.
+
+A validation case compares what fempipe computes with a reference and says
+whether they agree.  Every comparison is a :class:`Check` that carries its own
+tolerance, the reason for that tolerance and the source of the reference
+number, so a reader of the report can judge it without reading the code.
+
+Checks come in two categories:
+
+``numerics``
+    fempipe against an independent computation (a refined mesh, the other
+    discretisation, an independent ODE boundary-value solver, a symmetry, a
+    classical value).  These must pass; a failure is a bug in fempipe.
+``paper``
+    a statement or number of the paper (Chen, Hu, Dai & Wang 2020) against
+    fempipe's mesh-converged answer.  A failure here is a *finding*: the
+    paper and the converged model disagree, and the report says by how much.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "CATEGORIES",
+    "CaseResult",
+    "Check",
+    "Table",
+    "below",
+    "close",
+    "holds",
+    "load_references",
+]
+
+CATEGORIES = ("numerics", "paper")
+_REFERENCE_DIR = Path(__file__).with_name("references")
+
+
+def _plain(x: Any) -> Any:
+    """JSON-able version of numpy scalars/arrays (for ``to_dict``)."""
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    return x
+
+
+@dataclass(frozen=True)
+class Check:
+    """One comparison with a pass/fail verdict.
+
+    Attributes
+    ----------
+    name : str
+        Short identifier, unique within its case.
+    claim : str
+        The statement checked, in words ("flutter in the second mode").
+    category : {'numerics', 'paper'}
+        See the module docstring.
+    passed : bool
+    measured : float or str
+        What fempipe computed.
+    reference : float or str or None
+        The number or statement it is compared with.
+    tolerance : str
+        The acceptance criterion, with why it has that size.
+    source : str
+        Where the reference comes from (paper section/figure/equation, a
+        classical result with its citation, or the independent computation).
+    """
+
+    name: str
+    claim: str
+    category: str
+    passed: bool
+    measured: Any
+    reference: Any
+    tolerance: str
+    source: str
+
+    def __post_init__(self) -> None:
+        if self.category not in CATEGORIES:
+            raise ValueError(f"category must be one of {CATEGORIES}, got {self.category!r}")
+        object.__setattr__(self, "passed", bool(self.passed))
+
+    def to_dict(self) -> dict:
+        return _plain(asdict(self))
+
+
+def _fmt(x: Any) -> str:
+    if isinstance(x, (float, np.floating)):
+        return f"{float(x):.6g}"
+    return str(x)
+
+
+def close(
+    name: str,
+    claim: str,
+    measured: float,
+    reference: float,
+    *,
+    atol: float = 0.0,
+    rtol: float = 0.0,
+    why: str,
+    source: str,
+    category: str = "numerics",
+) -> Check:
+    """``|measured - reference| <= atol + rtol |reference|``.
+
+    ``why`` says why the tolerance has that size; it is stored with it.
+    """
+    measured, reference = float(measured), float(reference)
+    bound = atol + rtol * abs(reference)
+    err = abs(measured - reference)
+    parts = []
+    if atol:
+        parts.append(f"{atol:.3g}")
+    if rtol:
+        parts.append(f"{rtol:.3g}·|ref|")
+    tol = f"|Δ| ≤ {' + '.join(parts) or '0'} (|Δ| = {err:.3g}); {why}"
+    return Check(name, claim, category, bool(err <= bound), measured, reference, tol, source)
+
+
+def below(
+    name: str,
+    claim: str,
+    measured: float,
+    limit: float,
+    *,
+    why: str,
+    source: str,
+    category: str = "numerics",
+) -> Check:
+    """``measured <= limit`` (an error, a drift, a difference)."""
+    measured = float(measured)
+    return Check(
+        name,
+        claim,
+        category,
+        bool(measured <= limit),
+        measured,
+        f"≤ {limit:.3g}",
+        f"≤ {limit:.3g}; {why}",
+        source,
+    )
+
+
+def holds(
+    name: str,
+    claim: str,
+    ok: bool,
+    measured: Any,
+    *,
+    reference: Any = "true",
+    why: str = "qualitative statement",
+    source: str,
+    category: str = "paper",
+) -> Check:
+    """A qualitative statement (monotonicity, a mode number, an attractor type)."""
+    return Check(name, claim, category, bool(ok), measured, reference, why, source)
+
+
+@dataclass(frozen=True)
+class Table:
+    """A small table for the report: a title, column names and rows of cells."""
+
+    title: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[Any, ...], ...]
+    note: str = ""
+
+    def to_markdown(self) -> str:
+        head = "| " + " | ".join(self.columns) + " |"
+        sep = "|" + "|".join("---" for _ in self.columns) + "|"
+        body = ["| " + " | ".join(_fmt(c) for c in row) + " |" for row in self.rows]
+        out = [f"**{self.title}**", "", head, sep, *body]
+        if self.note:
+            out += ["", self.note]
+        return "\n".join(out)
+
+    def to_dict(self) -> dict:
+        return _plain(asdict(self))
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """What one validation case returns.
+
+    Attributes
+    ----------
+    case : str
+        Module name (``fig02b``).
+    figure : str
+        The paper's figure it reproduces (``Fig. 2(b)``).
+    title : str
+    paper_shows : tuple of str
+        What the paper shows there, in words; each is checked below.
+    checks : tuple of Check
+    tables : tuple of Table
+    findings : tuple of str
+        Disagreements with the paper, with the measurement.
+    data : dict
+        Arrays the figure is drawn from (not serialised by ``to_dict``).
+    quick : bool
+        Whether the quick (coarser) version ran.
+    runtime : float
+        Wall time of ``run``, s.
+    """
+
+    case: str
+    figure: str
+    title: str
+    paper_shows: tuple[str, ...]
+    checks: tuple[Check, ...]
+    tables: tuple[Table, ...] = ()
+    findings: tuple[str, ...] = ()
+    data: dict = field(default_factory=dict, compare=False, repr=False)
+    quick: bool = False
+    runtime: float = 0.0
+
+    @property
+    def numerics_passed(self) -> bool:
+        """All numerics checks passed (fempipe is right)."""
+        return all(c.passed for c in self.checks if c.category == "numerics")
+
+    @property
+    def failed(self) -> tuple[Check, ...]:
+        return tuple(c for c in self.checks if not c.passed)
+
+    def to_dict(self) -> dict:
+        return {
+            "case": self.case,
+            "figure": self.figure,
+            "title": self.title,
+            "paper_shows": list(self.paper_shows),
+            "quick": self.quick,
+            "runtime": self.runtime,
+            "checks": [c.to_dict() for c in self.checks],
+            "tables": [t.to_dict() for t in self.tables],
+            "findings": list(self.findings),
+        }
+
+
+def load_references(case: str) -> dict[str, dict]:
+    """Reference numbers of a case from ``references/<case>.json``.
+
+    Each entry is ``{"value": ..., "source": "..."}``; the file's ``"_about"``
+    entry says where the numbers come from as a whole.
+    """
+    path = _REFERENCE_DIR / f"{case}.json"
+    with path.open(encoding="utf-8") as fh:
+        data = json.load(fh)
+    for key, entry in data.items():
+        if key.startswith("_"):
+            continue
+        if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
+            raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
+    return data

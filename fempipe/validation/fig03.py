@@ -1,0 +1,101 @@
+"""Fig. 3: static shapes of the horizontal pipe for gamma = 10, 30, 100.
+
+Checks the paper's statements of Sec. 3.2: the deformation grows with the
+gravity parameter, and for large gamma the pipe approaches a plumb line
+(theta ~ -alpha).  The plumb-line limit is measured as the L2 distance
+``||theta + alpha||`` over the pipe, which must shrink as gamma grows; near
+the clamp theta(0) = 0 forces a boundary layer of width ~ gamma^(-1/3), so it
+never vanishes.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .checks import CaseResult, Table, holds, load_references
+from .static_shapes import panel_checks, panel_table, static_panel
+
+CASE = "fig03"
+FIGURE = "Fig. 3"
+TITLE = "Static shapes, α = π/2, γ = 10, 30, 100: the effect of gravity"
+PAPER_SHOWS = (
+    "the deformation becomes larger as γ increases (Sec. 3.2)",
+    "for sufficiently large γ the pipe is close to a plumb line, θ ≈ -α (Sec. 3.2)",
+)
+
+
+def _plumb_distance(fam, alpha: float) -> np.ndarray:
+    """L2 norm over xi of theta + alpha, per v (trapezoid on the common grid)."""
+    return np.sqrt(np.trapezoid((fam.theta + alpha) ** 2, fam.xi, axis=1))
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Shapes and checks; see the module docstring."""
+    t0 = time.perf_counter()
+    ref = load_references(CASE)
+    v = ref["v_quick" if quick else "v"]["value"]
+    alpha = ref["alpha"]["value"]
+    gammas = ref["gamma"]["value"]
+    panels = [static_panel(f"γ = {g:g}", alpha, g, v) for g in gammas]
+    checks = panel_checks(panels)
+    drop = np.array([p.fe.tips["X_tip"] for p in panels])  # (n_gamma, n_v)
+    plumb = np.array([_plumb_distance(p.fe, alpha) for p in panels])
+    checks.append(
+        holds(
+            "grows_with_gamma",
+            "the tip drop X_g(1) grows with γ at every v",
+            bool(np.all(np.diff(drop, axis=0) > 0)),
+            "; ".join(
+                f"v = {vv:g}: " + ", ".join(f"{d:.4f}" for d in drop[:, j])
+                for j, vv in enumerate(v)
+            ),
+            source="paper Sec. 3.2, Fig. 3",
+        )
+    )
+    checks.append(
+        holds(
+            "plumb_line",
+            "||θ + α|| decreases as γ grows, at every v (θ → -α for large γ)",
+            bool(np.all(np.diff(plumb, axis=0) < 0)),
+            "; ".join(
+                f"v = {vv:g}: " + ", ".join(f"{d:.3f}" for d in plumb[:, j])
+                for j, vv in enumerate(v)
+            ),
+            source="paper Sec. 3.2, text",
+        )
+    )
+    plumb_table = Table(
+        "Distance from the plumb line, ||θ + α||_L2, converged FE",
+        ("γ", *[f"v = {vv:g}" for vv in v]),
+        tuple((g, *plumb[i]) for i, g in enumerate(gammas)),
+        note="||θ + α|| = 0 would be a vertical line; θ(0) = 0 keeps a boundary layer at the clamp.",
+    )
+    return CaseResult(
+        case=CASE,
+        figure=FIGURE,
+        title=TITLE,
+        paper_shows=PAPER_SHOWS,
+        checks=tuple(checks),
+        tables=(plumb_table, panel_table(panels, "Tip values, α = π/2")),
+        data={"panels": panels},
+        quick=quick,
+        runtime=time.perf_counter() - t0,
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """One panel per γ; FE solid, N = 3 dashed, N = 4 dotted."""
+    from .drawing import draw_shapes, new_figure
+
+    panels = result.data["panels"]
+    if fig is None:
+        fig, axes = new_figure(len(panels), ncols=len(panels))
+    else:
+        axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
+    for ax, p in zip(axes, panels, strict=False):
+        draw_shapes(ax, p.fams)
+        ax.set_title(f"Fig. 3: α = π/2, {p.title}")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,321 @@
+"""Static states on one branch for the figure cases of Section 3 (Figs. 2-4).
+
+Every discretisation follows the same branch: the gravity-sagged state is
+reached by continuation in gamma from the straight pipe at gamma = 0 (where
+theta = 0 is exact), then followed in v.  Starting Newton from theta = 0 at
+the target gamma instead may land on another equilibrium for a nearly upright
+pipe (alpha = 9 pi / 10), which is why the path matters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..discretization import FiniteElement, Modal, parse_discretization
+from ..kinematics import shape, tip_values
+from ..operators import PipeModel
+from ..params import Params
+from ..static import solve_path
+
+__all__ = [
+    "CONVERGED_FE",
+    "PAPER_MODES",
+    "StaticShapes",
+    "discretizations",
+    "shape_distance",
+    "static_shapes",
+]
+
+#: The FE discretisation whose static tip values are converged to < 1e-8
+#: (each case checks this against a 2x refined mesh).
+CONVERGED_FE = "P3:16"
+#: The paper's truncations.
+PAPER_MODES = (3, 4)
+
+
+def discretizations(extra_modes: Sequence[int] = ()) -> dict[str, object]:
+    """``{"FE P3:16": FiniteElement, "N = 3": Modal(3), "N = 4": Modal(4), ...}``."""
+    out: dict[str, object] = {f"FE {CONVERGED_FE}": parse_discretization(fe=CONVERGED_FE)}
+    for n in sorted(set(PAPER_MODES) | set(extra_modes)):
+        out[f"N = {n}"] = Modal(n)
+    return out
+
+
+@dataclass(frozen=True)
+class StaticShapes:
+    """Static states at several v on one branch, one discretisation.
+
+    Attributes
+    ----------
+    v : ndarray, shape (k,)
+    q : list of ndarray
+    tips : dict of ndarray, shape (k,)
+        theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
+    X_g, Z_g, theta : ndarray, shape (k, m)
+        Centrelines on the common grid ``xi`` (m points).
+    xi : ndarray, shape (m,)
+    newton_iterations : ndarray, shape (k,)
+    """
+
+    name: str
+    params: Params
+    v: np.ndarray
+    q: list
+    tips: dict
+    xi: np.ndarray
+    X_g: np.ndarray
+    Z_g: np.ndarray
+    theta: np.ndarray
+    newton_iterations: np.ndarray
+
+
+def _common_grid(disc, q, alpha, xi):
+    """Centreline on a common grid: densely sampled shape, then interpolated.
+
+    16 samples per quadrature cell make the linear interpolation error
+    ~ (h/16)^2 / 8 * curvature < 1e-5 for the figures; precise comparisons use
+    tip values, which are exact Gauss integrals.
+    """
+    s = shape(disc, q, alpha, points_per_cell=16)
+    return (
+        np.interp(xi, s.xi, s.X_g),
+        np.interp(xi, s.xi, s.Z_g),
+        np.interp(xi, s.xi, s.theta),
+    )
+
+
+def static_shapes(
+    disc,
+    alpha: float,
+    gamma: float,
+    v_values: Sequence[float],
+    beta: float = 0.142,
+    mu: float = 5e-3,
+    name: str = "",
+    n_gamma_steps: int = 8,
+    n_points: int = 201,
+) -> StaticShapes:
+    """Static states at ``v_values`` (ascending from >= 0) on the sagged branch.
+
+    Parameters
+    ----------
+    disc : FiniteElement or Modal
+    alpha, gamma, beta, mu : float
+    v_values : sequence of float
+    n_gamma_steps : int
+        Newton steps of the continuation in gamma from 0 at v = 0.
+    n_points : int
+        Points of the common xi grid for the centrelines.
+    """
+    v_values = np.asarray(v_values, dtype=float)
+    if np.any(np.diff(v_values) < 0) or np.any(v_values < 0):
+        raise ValueError("v_values must be ascending and >= 0")
+    base = Params(alpha=alpha, beta=beta, gamma=0.0, mu=mu, v=0.0)
+    model = PipeModel(disc, base)
+    path = solve_path(model, np.linspace(0.0, gamma, n_gamma_steps + 1), parameter="gamma")
+    q0 = path[-1].q
+    model = model.with_params(Params(alpha=alpha, beta=beta, gamma=gamma, mu=mu, v=0.0))
+    vs = np.concatenate([[0.0], v_values]) if v_values[0] > 0 else v_values
+    sols = solve_path(model, vs, parameter="v", q0=q0)
+    if v_values[0] > 0:
+        sols = sols[1:]
+    xi = np.linspace(0.0, 1.0, n_points)
+    tips: dict[str, list] = {}
+    X, Z, T = [], [], []
+    for s in sols:
+        for k, val in tip_values(disc, s.q, alpha).items():
+            tips.setdefault(k, []).append(val)
+        x_, z_, t_ = _common_grid(disc, s.q, alpha, xi)
+        X.append(x_)
+        Z.append(z_)
+        T.append(t_)
+    return StaticShapes(
+        name=name or disc.name,
+        params=model.params,
+        v=v_values,
+        q=[s.q for s in sols],
+        tips={k: np.array(v) for k, v in tips.items()},
+        xi=xi,
+        X_g=np.array(X),
+        Z_g=np.array(Z),
+        theta=np.array(T),
+        newton_iterations=np.array([s.iterations for s in sols]),
+    )
+
+
+def shape_distance(a: StaticShapes, b: StaticShapes) -> np.ndarray:
+    """max over xi of |r_a(xi) - r_b(xi)| in the global frame, per v (units of L)."""
+    return np.max(np.hypot(a.X_g - b.X_g, a.Z_g - b.Z_g), axis=1)
+
+
+def refined(disc):
+    """The 2x refined copy of a finite-element discretisation (modal: N doubled)."""
+    if isinstance(disc, FiniteElement):
+        return disc.refined(2)
+    return Modal(2 * disc.n_modes)
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One panel of a static figure: the shapes of every discretisation.
+
+    ``fams`` maps labels (``"FE P3:16"``, ``"N = 3"``, ...) to
+    :class:`StaticShapes`; ``mesh_error`` is the largest tip-position change
+    under 2x refinement of the FE mesh; ``bvp_error`` the largest tip-position
+    difference from the independent collocation solver; ``modal_error`` maps
+    the modal labels to the largest centreline distance from the FE result.
+    """
+
+    title: str
+    alpha: float
+    gamma: float
+    fams: dict
+    mesh_error: float
+    bvp_error: float
+    modal_error: dict
+
+    @property
+    def fe(self) -> StaticShapes:
+        return next(iter(self.fams.values()))
+
+
+def static_panel(
+    title: str,
+    alpha: float,
+    gamma: float,
+    v_values: Sequence[float],
+    extra_modes: Sequence[int] = (),
+    bvp: bool = True,
+    max_doublings: int = 3,
+) -> Panel:
+    """Shapes by converged FE and modal N, plus the mesh and BVP cross-checks.
+
+    The FE mesh starts at :data:`CONVERGED_FE` and is doubled (at most
+    ``max_doublings`` times) until the tip positions change by less than 1e-9;
+    the panel keeps the last mesh and its change under doubling as
+    ``mesh_error``.
+    """
+    from .bvp import solve_static_bvp
+
+    discs = discretizations(extra_modes)
+    fams = {
+        label: static_shapes(d, alpha, gamma, v_values, name=label) for label, d in discs.items()
+    }
+    fe_label = next(iter(fams))
+    fe_disc = discs[fe_label]
+    fe = fams[fe_label]
+    # Refine the FE mesh until the tip positions change by < 1e-9 under
+    # doubling (a steep boundary layer at the clamp for large gamma needs it).
+    for _ in range(max_doublings + 1):
+        fine_disc = refined(fe_disc)
+        fine = static_shapes(fine_disc, alpha, gamma, v_values)
+        mesh_err = max(float(np.max(np.abs(fe.tips[k] - fine.tips[k]))) for k in ("X_tip", "Z_tip"))
+        if mesh_err < 1e-9:
+            break
+        fe_disc, fe = fine_disc, fine
+    if fe_disc is not discs[fe_label]:
+        fams.pop(fe_label)
+        fe_label = f"FE {fe_disc.name}"
+        fams = {fe_label: replace(fe, name=fe_label), **fams}
+        fe = fams[fe_label]
+    bvp_err = float("nan")
+    if bvp:
+        errs = []
+        for i, v in enumerate(fe.v):
+            sol = solve_static_bvp(
+                alpha, gamma, v, guess=lambda x, t=fe.theta[i]: np.interp(x, fe.xi, t)
+            )
+            errs.append(
+                max(abs(sol.X_tip - fe.tips["X_tip"][i]), abs(sol.Z_tip - fe.tips["Z_tip"][i]))
+            )
+        bvp_err = float(max(errs))
+    modal_err = {
+        label: float(np.max(shape_distance(fam, fe)))
+        for label, fam in fams.items()
+        if label != fe_label
+    }
+    return Panel(title, alpha, gamma, fams, mesh_err, bvp_err, modal_err)
+
+
+def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list:
+    """The standard checks of a static figure (mesh, BVP, N = 3 and N = 4)."""
+    from .checks import below
+
+    checks = [
+        below(
+            "fe_mesh_converged",
+            "converged FE tip positions equal the 2x refined mesh (all panels)",
+            max(p.mesh_error for p in panels),
+            1e-8,
+            why="P3 tip error is O(h^6); 1e-8 L is invisible in any figure",
+            source="fempipe, 2x refined mesh (FE "
+            + ", ".join(sorted({next(iter(p.fams)) for p in panels}))
+            + " doubled)",
+        )
+    ]
+    bvp = [p.bvp_error for p in panels if np.isfinite(p.bvp_error)]
+    if bvp:
+        checks.append(
+            below(
+                "fe_vs_bvp",
+                "FE tip positions equal an independent strong-form solution (all panels)",
+                max(bvp),
+                1e-8,
+                why="solve_bvp tolerance 1e-10; both discretisation errors far below 1e-8",
+                source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
+            )
+        )
+    for n in PAPER_MODES:
+        label = f"N = {n}"
+        worst = max(panels, key=lambda p: p.modal_error[label])
+        checks.append(
+            below(
+                f"modal_{n}_shape",
+                f"the paper's {label} shapes match the converged FE to the resolution "
+                "of its figures",
+                worst.modal_error[label],
+                modal_tol,
+                why=f"{modal_tol:g} L, about a line width on the paper's axes "
+                f"(worst panel: {worst.title})",
+                source="fempipe converged FE (this case)",
+                category="paper",
+            )
+        )
+    return checks
+
+
+def panel_table(panels: Sequence[Panel], title: str):
+    """Tip values of every panel and discretisation, with the modal errors."""
+    from .checks import Table
+
+    rows = []
+    for p in panels:
+        fe = p.fe
+        for label, fam in p.fams.items():
+            for i, v in enumerate(fam.v):
+                err = (
+                    ""
+                    if label == next(iter(p.fams))
+                    else float(np.hypot(fam.X_g[i] - fe.X_g[i], fam.Z_g[i] - fe.Z_g[i]).max())
+                )
+                rows.append(
+                    (
+                        p.title,
+                        label,
+                        v,
+                        fam.tips["X_tip"][i],
+                        fam.tips["Z_tip"][i],
+                        fam.tips["theta_tip"][i],
+                        err,
+                    )
+                )
+    return Table(
+        title,
+        ("panel", "discretisation", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max |r - r_FE|"),
+        tuple(rows),
+        note="Dimensionless (lengths in units of L). Last column: largest centreline distance "
+        "from the converged FE shape.",
+    )
