@@ -102,7 +102,7 @@ class Check:
 def _fmt(x: Any) -> str:
     if isinstance(x, (float, np.floating)):
         return f"{float(x):.6g}"
-    return str(x)
+    return str(x).replace("|", "\\|").replace("\n", " ")
 
 
 def close(
@@ -182,7 +182,7 @@ class Table:
     note: str = ""
 
     def to_markdown(self) -> str:
-        head = "| " + " | ".join(self.columns) + " |"
+        head = "| " + " | ".join(_fmt(c) for c in self.columns) + " |"
         sep = "|" + "|".join("---" for _ in self.columns) + "|"
         body = ["| " + " | ".join(_fmt(c) for c in row) + " |" for row in self.rows]
         out = [f"**{self.title}**", "", head, sep, *body]

@@ -158,8 +158,8 @@ def run(quick: bool = False) -> CaseResult:
         checks.append(
             below(
                 f"modal_{label[-1]}_shape",
-                f"modal {label} shapes match the converged FE "
-                "to the resolution of the paper's figure",
+                f"{label} (the paper's truncation) reproduces the converged "
+                "shapes to the resolution of the figure",
                 float(np.max(shape_mm)),
                 0.01 * si.L * 1e3,
                 why="1% of L (0.94 mm): a line width on the paper's Fig. 2(b) axes",

@@ -251,8 +251,8 @@ def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list:
             max(p.mesh_error for p in panels),
             1e-8,
             why="P3 tip error is O(h^6); 1e-8 L is invisible in any figure",
-            source="fempipe, 2x refined mesh (FE "
-            + ", ".join(sorted({next(iter(p.fams)) for p in panels}))
+            source="fempipe, 2x refined mesh ("
+            + ", ".join(sorted({next(iter(p.fams))[3:] for p in panels}))
             + " doubled)",
         )
     ]
@@ -274,8 +274,8 @@ def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list:
         checks.append(
             below(
                 f"modal_{n}_shape",
-                f"the paper's {label} shapes match the converged FE to the resolution "
-                "of its figures",
+                f"{label} (the paper's truncation) reproduces the converged shapes to the "
+                "resolution of the figures",
                 worst.modal_error[label],
                 modal_tol,
                 why=f"{modal_tol:g} L, about a line width on the paper's axes "
@@ -314,7 +314,7 @@ def panel_table(panels: Sequence[Panel], title: str):
                 )
     return Table(
         title,
-        ("panel", "discretisation", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max |r - r_FE|"),
+        ("panel", "discretisation", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max distance to FE"),
         tuple(rows),
         note="Dimensionless (lengths in units of L). Last column: largest centreline distance "
         "from the converged FE shape.",

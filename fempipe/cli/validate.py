@@ -1,0 +1,120 @@
+"""``fempipe validate``: run the validation suite and write the report.
+
+Examples
+--------
+fempipe validate --quick                  # < 3 min on 2 cores
+fempipe validate --out validation/report --workers 2
+fempipe validate --case fig02b --case symmetry --json
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+DEFAULT_OUT = os.path.join("validation", "report")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="the quick suite (coarser sweeps; under 3 minutes on 2 cores)",
+    )
+    parser.add_argument(
+        "--workers",
+        metavar="N",
+        default=None,
+        help="worker processes (default: the number of CPUs, at most 4)",
+    )
+    parser.add_argument(
+        "--case",
+        metavar="NAME",
+        action="append",
+        default=None,
+        help="run only this case (repeatable, or comma-separated); see --list",
+    )
+    parser.add_argument("--list", action="store_true", help="list the cases and exit")
+    common.add_output_arguments(parser)
+    for action in parser._actions:  # the report has a default directory
+        if action.dest == "out":
+            action.help = f"write REPORT.md, results.json and the PNG figures into DIR (default {DEFAULT_OUT})"
+
+
+def _workers(text) -> int:
+    if text is None:
+        return max(1, min(os.cpu_count() or 1, 4))
+    try:
+        n = int(str(text))
+    except ValueError:
+        raise CLIError("--workers", f"expects an integer >= 1, got {text!r}") from None
+    if n < 1:
+        raise CLIError("--workers", f"expects an integer >= 1, got {n}")
+    return n
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe.io import json_dumps
+    from fempipe.validation import CASES, missing_dependencies
+
+    if args.list:
+        for name in CASES:
+            missing = missing_dependencies(name)
+            note = f"  (needs {', '.join(missing)})" if missing else ""
+            print(f"{name}{note}")
+        return 0
+    workers = _workers(args.workers)
+    cases = None
+    if args.case:
+        cases = [c.strip() for item in args.case for c in item.split(",") if c.strip()]
+        unknown = [c for c in cases if c not in CASES]
+        if unknown:
+            raise CLIError("--case", f"unknown case {unknown[0]!r}; choose from {', '.join(CASES)}")
+    out = args.out or DEFAULT_OUT
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from fempipe.validation.report import write_report
+    from fempipe.validation.suite import run_suite
+
+    n_cases = len(cases) if cases else len(CASES)
+    with common.progress(args, n_cases, "validate") as bar:
+
+        def done(outcome) -> None:
+            bar.update()
+            bar.set_postfix_str(f"{outcome.name}: {outcome.status}")
+
+        suite = run_suite(quick=args.quick, out=out, workers=workers, cases=cases, callback=done)
+    path = write_report(suite, out)
+    summary = suite.to_dict()
+    if args.json:
+        print(
+            json_dumps(
+                {k: v for k, v in summary.items() if k != "cases"}
+                | {
+                    "report": str(path),
+                    "cases": [
+                        {
+                            "name": o.name,
+                            "status": o.status,
+                            "numerics_passed": o.ok,
+                            "runtime": o.wall_time,
+                        }
+                        for o in suite.outcomes
+                    ],
+                }
+            )
+        )
+    elif args.progress is not False:
+        n, p = summary["numerics_checks"], summary["paper_checks"]
+        print(
+            f"fempipe validate: {'PASS' if suite.ok else 'FAIL'}: numerics {n['passed']}/{n['total']}, "
+            f"paper statements {p['passed']}/{p['total']}, {suite.wall_time:.1f} s; report {path}",
+            file=sys.stderr,
+        )
+    return 0 if suite.ok else 1

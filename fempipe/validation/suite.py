@@ -1,0 +1,268 @@
+"""Run the validation cases (in parallel) and collect their results.
+
+:func:`run_suite` runs each case of :data:`fempipe.validation.CASES` in its
+own worker process, draws its figure there (matplotlib, Agg backend) and
+returns a :class:`SuiteResult`; :func:`fempipe.validation.report.write_report`
+turns that into the Markdown report.  A case that raises is recorded with its
+error and the suite goes on: what finished is kept.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from . import CASES, load_case, missing_dependencies
+from .checks import CaseResult
+
+__all__ = ["CaseOutcome", "SuiteResult", "run_case", "run_suite"]
+
+log = logging.getLogger(__name__)
+
+#: Rough relative cost of the full cases, to start the longest first.
+_COST = {
+    "fig08_10": 100,
+    "convergence": 90,
+    "fig07": 80,
+    "fig06": 70,
+    "fig11": 40,
+    "fig12": 40,
+    "fig05": 20,
+}
+
+
+@dataclass(frozen=True)
+class CaseOutcome:
+    """One case of a suite run: its result, or why there is none.
+
+    ``status`` is ``"ok"`` (ran; see ``result``), ``"error"`` (raised;
+    ``error`` holds the traceback) or ``"skipped"`` (a module it needs is
+    missing; ``error`` names it).  ``figure`` is the PNG file name, if drawn.
+    """
+
+    name: str
+    status: str
+    result: CaseResult | None = None
+    figure: str | None = None
+    error: str = ""
+    wall_time: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        """Ran and every numerics check passed."""
+        return self.status == "ok" and self.result is not None and self.result.numerics_passed
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "status": self.status,
+            "figure": self.figure,
+            "error": self.error,
+            "wall_time": self.wall_time,
+            "result": self.result.to_dict() if self.result is not None else None,
+        }
+
+
+@dataclass(frozen=True)
+class SuiteResult:
+    """All outcomes of a run, with how it was run."""
+
+    outcomes: tuple[CaseOutcome, ...]
+    quick: bool
+    workers: int
+    wall_time: float
+    started: str
+    environment: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """No case errored and every numerics check of every case passed."""
+        return all(o.ok or o.status == "skipped" for o in self.outcomes)
+
+    def checks(self, category: str | None = None):
+        for o in self.outcomes:
+            if o.result is None:
+                continue
+            for c in o.result.checks:
+                if category is None or c.category == category:
+                    yield o.name, c
+
+    def to_dict(self) -> dict:
+        n_num = [c.passed for _, c in self.checks("numerics")]
+        n_pap = [c.passed for _, c in self.checks("paper")]
+        return {
+            "quick": self.quick,
+            "workers": self.workers,
+            "wall_time": self.wall_time,
+            "started": self.started,
+            "ok": self.ok,
+            "numerics_checks": {"passed": sum(n_num), "total": len(n_num)},
+            "paper_checks": {"passed": sum(n_pap), "total": len(n_pap)},
+            "environment": self.environment,
+            "cases": [o.to_dict() for o in self.outcomes],
+        }
+
+
+def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = None) -> CaseOutcome:
+    """Run one case; draw its figure into ``out`` (if given) as ``<name>.png``.
+
+    Never raises for a failing case: the outcome records the error.
+    """
+    t0 = time.perf_counter()
+    missing = missing_dependencies(name)
+    if missing:
+        return CaseOutcome(name, "skipped", error=f"needs {', '.join(missing)} (not available)")
+    try:
+        module = load_case(name)
+        result = module.run(quick=quick)
+    except Exception:  # a failing case must not stop the suite
+        log.exception("validation case %s failed", name)
+        return CaseOutcome(
+            name, "error", error=traceback.format_exc(), wall_time=time.perf_counter() - t0
+        )
+    figure = None
+    if out is not None:
+        try:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            from ..io import write_figure
+
+            fig = module.plot(result)
+            figure = f"{name}.png"
+            write_figure(Path(out) / figure, fig, dpi=110)
+            plt.close(fig)
+        except Exception:
+            log.exception("figure of validation case %s failed", name)
+            return CaseOutcome(
+                name,
+                "error",
+                result=replace(result, data={}),
+                error="figure: " + traceback.format_exc(),
+                wall_time=time.perf_counter() - t0,
+            )
+    # The arrays stay in the worker: the report needs only checks, tables, figure.
+    return CaseOutcome(
+        name,
+        "ok",
+        result=replace(result, data={}),
+        figure=figure,
+        wall_time=time.perf_counter() - t0,
+    )
+
+
+def _environment(workers: int) -> dict:
+    import platform
+
+    import numpy
+    import scipy
+    import skfem
+
+    from .. import __version__
+
+    commit = None
+    try:
+        import subprocess
+
+        root = Path(__file__).resolve().parents[2]
+        if (root / ".git").exists():
+            commit = (
+                subprocess.run(
+                    ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                    capture_output=True,
+                    text=True,
+                    check=False,
+                    timeout=10,
+                ).stdout.strip()
+                or None
+            )
+    except (OSError, subprocess.SubprocessError):
+        commit = None
+    return {
+        "fempipe": __version__,
+        "git_commit": commit,
+        "python": platform.python_version(),
+        "numpy": numpy.__version__,
+        "scipy": scipy.__version__,
+        "scikit-fem": getattr(skfem, "__version__", "?"),
+        "platform": platform.platform(),
+        "cpu_count": os.cpu_count(),
+        "workers": workers,
+    }
+
+
+def run_suite(
+    quick: bool = False,
+    out: str | os.PathLike | None = None,
+    workers: int = 1,
+    cases: Sequence[str] | None = None,
+    executor: Executor | None = None,
+    callback: Callable[[CaseOutcome], None] | None = None,
+) -> SuiteResult:
+    """Run validation cases and return their outcomes.
+
+    Parameters
+    ----------
+    quick : bool
+        The quick versions (coarser sweeps; the default test suite runs them).
+    out : path, optional
+        Directory for the case figures (PNG).  Nothing is written without it.
+    workers : int
+        Worker processes (1: run in this process).  Cases are independent;
+        the most expensive start first.
+    cases : sequence of str, optional
+        Subset of case names (default: all).
+    executor : concurrent.futures.Executor, optional
+        Use this instead of a new process pool (``workers`` is then ignored).
+    callback : callable, optional
+        Called with each finished :class:`CaseOutcome` (progress).
+    """
+    names = list(CASES) if cases is None else list(cases)
+    for n in names:
+        if n not in CASES:
+            raise ValueError(f"unknown validation case {n!r}; choose from {', '.join(CASES)}")
+    if int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    if out is not None:
+        Path(out).mkdir(parents=True, exist_ok=True)
+    started = time.strftime("%Y-%m-%d %H:%M:%S %Z")
+    t0 = time.perf_counter()
+    order = sorted(names, key=lambda n: -_COST.get(n, 1))
+    done: dict[str, CaseOutcome] = {}
+    if executor is None and workers == 1:
+        for n in order:
+            done[n] = run_case(n, quick, out)
+            if callback:
+                callback(done[n])
+    else:
+        own = executor is None
+        pool = executor or ProcessPoolExecutor(max_workers=int(workers))
+        try:
+            futures = {pool.submit(run_case, n, quick, out): n for n in order}
+            for fut in as_completed(futures):
+                n = futures[fut]
+                try:
+                    done[n] = fut.result()
+                except Exception:  # a crashed worker
+                    done[n] = CaseOutcome(n, "error", error=traceback.format_exc())
+                if callback:
+                    callback(done[n])
+        finally:
+            if own:
+                pool.shutdown()
+    return SuiteResult(
+        outcomes=tuple(done[n] for n in names),
+        quick=quick,
+        workers=int(workers) if executor is None else -1,
+        wall_time=time.perf_counter() - t0,
+        started=started,
+        environment=_environment(int(workers)),
+    )

@@ -1,0 +1,216 @@
+"""Sec. 5, closing remark: the symmetries of Eq. (20).
+
+The paper ends Sec. 5 with "the solution for a given value of alpha is
+antisymmetric with the solution for alpha - pi, since sin(theta + alpha) =
+-sin(theta + alpha - pi)".  That identity only says that alpha -> alpha - pi
+flips the sign of the gravity term (gamma -> -gamma): it turns gravity
+upside down, so a pipe clamped at 3 pi / 4 (pointing obliquely up) is not the
+mirror image of one clamped at -pi / 4 (pointing obliquely down).  The
+symmetry Eq. (20) does have is (theta, alpha) -> (-theta, -alpha) (every term
+is odd under it), so the solution for -alpha is minus the solution for
+alpha, and at alpha = 0 and alpha = pi the problem is symmetric under theta
+-> -theta (mirror buckled branches).
+
+This case measures both on static states (converged FE):
+
+* ``||theta_alpha + theta_{-alpha}||``: zero to round-off (the true symmetry);
+* ``||theta_alpha + theta_{alpha - pi}||``: O(1) (the paper's claim fails);
+* at alpha = pi above the Greenhill load, the two buckled states are mirror
+  images.
+
+The paper's conclusion that 0 <= alpha <= pi suffices is still right, by the
+true symmetry alpha -> -alpha and 2 pi periodicity, not by the one it gives.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..discretization import parse_discretization
+from ..kinematics import shape
+from ..operators import PipeModel
+from ..params import Params
+from ..static import solve_static
+from .checks import CaseResult, Table, below, holds, load_references
+from .static_shapes import CONVERGED_FE, static_shapes
+
+CASE = "symmetry"
+FIGURE = "Sec. 5 (end)"
+TITLE = "Symmetries: α → −α is a mirror symmetry; α → α − π is not"
+PAPER_SHOWS = (
+    "the solution for α is antisymmetric with the solution for α − π (Sec. 5, end)",
+    "at α = 0 or π the problem is symmetric; the buckled branches at α = π come in mirror pairs",
+)
+
+
+def _l2(disc, q) -> float:
+    th = disc.Phi @ q
+    return float(np.sqrt(disc.quad.w @ th**2))
+
+
+def _name(a: float) -> str:
+    """alpha as a multiple of pi (``3π/4``, ``-π/3``) when it is one."""
+    from fractions import Fraction
+
+    k = Fraction(a / np.pi).limit_denominator(12)
+    if abs(float(k) * np.pi - a) > 1e-12:
+        return f"{a:.4f}"
+    sign = "-" if k < 0 else ""
+    num, den = abs(k.numerator), k.denominator
+    return f"{sign}{'' if num == 1 else num}π{'' if den == 1 else f'/{den}'}"
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Static states for the symmetry pairs; see the module docstring."""
+    t0 = time.perf_counter()
+    ref = load_references(CASE)
+    gamma, v = ref["gamma"]["value"], ref["v"]["value"]
+    disc = parse_discretization(fe=CONVERGED_FE)
+    pairs = ref["alpha_pairs"]["value"][: 1 if quick else None]
+    a_m = ref["alpha_mirror"]["value"]
+
+    def state(alpha):
+        return static_shapes(disc, alpha, gamma, [v])
+
+    rows, shapes = [], {}
+    mirror = [state(a_m), state(-a_m)]
+    shapes[_name(a_m)], shapes[_name(-a_m)] = mirror
+    mirror_dev = _l2(disc, mirror[0].q[0] + mirror[1].q[0])
+    rows.append(
+        (
+            f"{_name(a_m)} vs {_name(-a_m)}",
+            "true: (θ, α) → (−θ, −α)",
+            _l2(disc, mirror[0].q[0]),
+            mirror_dev,
+        )
+    )
+    paper_dev = []
+    for a, b in pairs:
+        sa, sb = state(a), state(b)
+        shapes.setdefault(_name(a), sa)
+        shapes.setdefault(_name(b), sb)
+        dev = _l2(disc, sa.q[0] + sb.q[0])
+        paper_dev.append(dev)
+        rows.append((f"{_name(a)} vs {_name(b)}", "paper: α → α − π", _l2(disc, sa.q[0]), dev))
+    checks = [
+        below(
+            "mirror_symmetry",
+            f"θ(α = {_name(a_m)}) = −θ(α = {_name(-a_m)}) (static, v = {v:g}, γ = {gamma:g})",
+            mirror_dev,
+            1e-10,
+            why="Eq. (20) is exactly odd under (θ, α) → (−θ, −α); only Newton's tolerance differs",
+            source="SPEC §2; every term of Eq. (20) is odd under the map",
+        ),
+        holds(
+            "paper_alpha_minus_pi",
+            "the solution for α is antisymmetric with that for α − π: ||θ_α + θ_{α−π}|| ≈ 0",
+            max(paper_dev) < 1e-6,
+            "||θ_α + θ_{α−π}||_L2 = " + ", ".join(f"{d:.3f}" for d in paper_dev),
+            reference="< 1e-6",
+            why="antisymmetry would hold to Newton's tolerance",
+            source="paper Sec. 5, last paragraph",
+        ),
+    ]
+    # alpha = pi: mirror buckled states.
+    bk = ref["buckled"]["value"]
+    model = PipeModel(disc, Params(alpha=bk["alpha"], gamma=bk["gamma"], v=bk["v"]))
+    # Guess theta = +/- 2.5 sin(pi xi / 2) (least squares on the quadrature
+    # points): smaller guesses let Newton fall back onto the straight state.
+    Phi = disc.Phi.toarray() if disc.sparse else disc.Phi
+    guess = np.linalg.lstsq(Phi, 2.5 * np.sin(np.pi * disc.quad.x / 2.0), rcond=None)[0]
+    up = solve_static(model, q0=guess)
+    down = solve_static(model, q0=-guess)
+    size = _l2(disc, up.q)
+    buck_dev = _l2(disc, up.q + down.q)
+    checks.append(
+        holds(
+            "buckled_exists",
+            f"the upright pipe (α = π, γ = {bk['gamma']:g} > 7.837) has buckled states",
+            size > 0.1,
+            f"||θ|| of the buckled state = {size:.3f}",
+            reference="> 0.1",
+            why="the straight state is unstable above Greenhill's load γ = 7.837",
+            source="Greenhill's self-weight buckling load, γ = 7.837 (Wang, C.M. et al., "
+            "Exact Solutions for Buckling of Structural Members, 2004)",
+            category="numerics",
+        )
+    )
+    checks.append(
+        below(
+            "buckled_mirror",
+            "the two buckled states at α = π are mirror images",
+            buck_dev,
+            1e-10,
+            why="θ → −θ maps Eq. (20) at α = π onto itself",
+            source="paper Sec. 5 ('two symmetric branches'); SPEC §2",
+        )
+    )
+    buckled = {
+        "+": shape(disc, up.q, bk["alpha"]),
+        "−": shape(disc, down.q, bk["alpha"]),
+    }
+    findings = (
+        "The paper's closing remark of Sec. 5 is wrong: α → α − π flips the sign of the gravity "
+        "term (γ → −γ), it is not a symmetry. Measured on static states (γ = "
+        f"{gamma:g}, v = {v:g}): ||θ_α + θ_(α−π)||_L2 = "
+        + ", ".join(f"{d:.3f}" for d in paper_dev)
+        + f" for the pairs {', '.join(f'({_name(a)}, {_name(b)})' for a, b in pairs)}, whereas "
+        f"the true symmetry (θ, α) → (−θ, −α) holds to {mirror_dev:.1e}. The paper's conclusion "
+        "that 0 ≤ α ≤ π suffices survives, by the true symmetry.",
+    )
+    table = Table(
+        "Antisymmetry test on static states (converged FE)",
+        ("pair", "map", "||θ_α||_L2", "||θ_α + θ_pair||_L2"),
+        tuple(rows),
+        note="Zero in the last column means the two states are mirror images.",
+    )
+    return CaseResult(
+        case=CASE,
+        figure=FIGURE,
+        title=TITLE,
+        paper_shows=PAPER_SHOWS,
+        checks=tuple(checks),
+        tables=(table,),
+        findings=findings,
+        data={"shapes": shapes, "pairs": pairs, "mirror": a_m, "buckled": buckled},
+        quick=quick,
+        runtime=time.perf_counter() - t0,
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """Left: α and −α (mirror images); middle: the paper's pairs α, α − π; right: α = π buckled."""
+    from .drawing import new_figure
+
+    d = result.data
+    if fig is None:
+        fig, axes = new_figure(3, ncols=3)
+    else:
+        axes = list(fig.subplots(1, 3, squeeze=False).ravel())
+    sh = d["shapes"]
+    a = _name(d["mirror"])
+    groups = [
+        ([a, _name(-d["mirror"])], "true symmetry: α ↔ −α"),
+        ([n for pair in d["pairs"] for n in map(_name, pair)], "paper's claim: α ↔ α − π"),
+    ]
+    for ax, (names, title) in zip(axes[:2], groups, strict=True):
+        for n in names:
+            s = sh[n]
+            ax.plot(s.Z_g[0], s.X_g[0], label=f"α = {n}")
+        ax.set_title(title)
+    for k, s in d["buckled"].items():
+        axes[2].plot(s.Z_g, s.X_g, label=f"buckled {k}")
+    axes[2].set_title("α = π: mirror buckled states")
+    for ax in axes:
+        ax.plot([0], [0], "ks", ms=4)
+        ax.axvline(0.0, color="0.7", lw=0.8)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.invert_yaxis()
+        ax.set_xlabel(r"$Z_g$")
+        ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
