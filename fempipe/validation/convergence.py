@@ -1,0 +1,374 @@
+"""The convergence study: error against degrees of freedom, FE P1/P2/P3 and modal N.
+
+For each quantity Q (a static tip value; v_cr for each alpha of Fig. 6; a
+limit-cycle amplitude) the study computes Q on a sequence of meshes for each
+element degree and for increasing numbers of sine modes, then
+
+* takes as reference the Richardson extrapolation of the two finest P3
+  values, ``Q_ref = Q_h + (Q_h - Q_2h) / (2^p - 1)`` with the theoretical
+  order p, and as its error estimate ``|Q_h - Q_2h| / (2^p - 1)`` (the
+  correction itself, an upper bound once the sequence is asymptotic);
+* fits the observed order as the least-squares slope of log(error) against
+  log(dofs) over the last three points whose error is well above the
+  reference's own uncertainty and round-off;
+* tabulates the error of the paper's N = 3 and N = 4 against the reference.
+
+FE tip values of P_k converge as h^(2k) (nodal superconvergence; kept by the
+Gauss integration operators, see :mod:`fempipe.quadrature`); the sine modes
+converge only algebraically because they force theta''(0) = 0, which the
+solution does not satisfy (SPEC §2).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..discretization import FiniteElement, Modal
+from .checks import CaseResult, Table, close, holds, load_references
+
+CASE = "convergence"
+FIGURE = "Convergence study"
+TITLE = "Error against degrees of freedom: FE P1, P2, P3 and modal N"
+PAPER_SHOWS = (
+    "N = 3 is converged for the static shapes (Sec. 3.1, Fig. 2(a))",
+    "the stability results are converged in the Galerkin discretisation (Sec. 4)",
+    "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
+)
+
+
+@dataclass(frozen=True)
+class Series:
+    """One discretisation family: dofs, values, errors and the fitted order."""
+
+    label: str
+    dofs: np.ndarray
+    values: np.ndarray
+    errors: np.ndarray
+    order: float  # observed order in dofs (positive: error ~ dofs^-order)
+    fit: tuple[int, ...]  # indices used by the fit
+    expected: float | None = None
+
+
+@dataclass(frozen=True)
+class Study:
+    """The convergence study of one quantity."""
+
+    quantity: str
+    reference: float
+    reference_error: float
+    series: dict
+    paper_modes: dict  # N -> value
+    independent: tuple[str, float] | None = None  # (name, value) of an independent check
+
+    def to_rows(self):
+        for s in self.series.values():
+            for d, v, e in zip(s.dofs, s.values, s.errors, strict=True):
+                yield (self.quantity, s.label, int(d), v, e)
+
+
+def observed_order(dofs: np.ndarray, errors: np.ndarray, floor: float) -> tuple[float, tuple]:
+    """Slope of log(err) vs log(dofs) over the last 3 points with err > floor.
+
+    Returns ``(order, indices)``; order is positive for a decaying error and
+    NaN if fewer than two usable points exist.
+    """
+    ok = np.flatnonzero(np.isfinite(errors) & (errors > floor))
+    # Use the finest usable points, which are consecutive refinements.
+    idx = tuple(int(i) for i in ok[-3:])
+    if len(idx) < 2:
+        return float("nan"), idx
+    slope = np.polyfit(np.log(dofs[list(idx)]), np.log(errors[list(idx)]), 1)[0]
+    return float(-slope), idx
+
+
+def richardson(coarse: float, fine: float, order: float, ratio: float = 2.0) -> tuple[float, float]:
+    """Richardson extrapolation and its error estimate (the size of the correction)."""
+    corr = (fine - coarse) / (ratio**order - 1.0)
+    return fine + corr, abs(corr)
+
+
+def run_study(
+    quantity: str,
+    compute: Callable[[object], float],
+    fe_elements: dict,
+    modes: Sequence[int],
+    fe_order: dict,
+    paper_modes: Sequence[int] = (3, 4),
+    roundoff: float = 1e-12,
+) -> Study:
+    """Compute ``quantity`` on every discretisation and fit the orders.
+
+    Parameters
+    ----------
+    compute : callable
+        ``compute(disc) -> float``.
+    fe_elements : dict
+        degree (str or int) -> list of element counts, each the double of the last.
+    modes : sequence of int
+        Modal truncations N.
+    fe_order : dict
+        degree -> theoretical order in h (Richardson uses that of the highest degree).
+    roundoff : float
+        Errors below ``roundoff * max(1, |Q|)`` are not used in the fits.
+    """
+    raw: dict[str, tuple[np.ndarray, np.ndarray, float | None]] = {}
+    for deg, ns in fe_elements.items():
+        deg = int(deg)
+        discs = [FiniteElement(n, deg) for n in ns]
+        vals = np.array([compute(d) for d in discs])
+        raw[f"FE P{deg}"] = (np.array([d.n for d in discs]), vals, float(fe_order[str(deg)]))
+    mvals = {int(n): compute(Modal(int(n))) for n in sorted(set(modes) | set(paper_modes))}
+    raw["modal"] = (np.array(sorted(mvals)), np.array([mvals[n] for n in sorted(mvals)]), None)
+    top = max(int(d) for d in fe_elements)
+    _, vtop, _ = raw[f"FE P{top}"]
+    ref, ref_err = richardson(vtop[-2], vtop[-1], float(fe_order[str(top)]))
+    floor = max(10.0 * ref_err, roundoff * max(1.0, abs(ref)))
+    series = {}
+    for label, (dofs, vals, expected) in raw.items():
+        err = np.abs(vals - ref)
+        order, idx = observed_order(dofs, err, floor)
+        series[label] = Series(label, dofs, vals, err, order, idx, expected)
+    return Study(quantity, ref, ref_err, series, {n: mvals[n] for n in paper_modes})
+
+
+def study_checks(study: Study, tag: str, order_tol: float, source_order: str) -> list:
+    """Observed FE orders against theory, modal algebraic convergence."""
+    checks = []
+    for label, s in study.series.items():
+        if s.expected is None:
+            continue
+        checks.append(
+            close(
+                f"{tag}_order_{label[-2:]}",
+                f"{study.quantity}: observed order of {label} in h equals 2k",
+                s.order,
+                s.expected,
+                atol=order_tol,
+                why="fit over the last 3 refinements above the reference's uncertainty",
+                source=source_order,
+            )
+        )
+    m = study.series["modal"]
+    checks.append(
+        holds(
+            f"{tag}_modal_algebraic",
+            f"{study.quantity}: the sine modes converge algebraically (order in N below 6)",
+            bool(np.isfinite(m.order) and 0.5 < m.order < 6.0),
+            f"observed order in N: {m.order:.2f}",
+            reference="0.5 < p < 6",
+            why="θ''(0) = 0 of every sine mode is violated by the solution: algebraic, "
+            "not spectral, convergence (SPEC §2)",
+            source="SPEC §2; measured here",
+            category="numerics",
+        )
+    )
+    return checks
+
+
+def _static_compute(si_params):
+    from .static_shapes import static_shapes
+
+    p = si_params
+
+    def compute(disc) -> float:
+        return float(
+            static_shapes(disc, p.alpha, p.gamma, [p.v], beta=p.beta, mu=0.0).tips["X_tip"][0]
+        )
+
+    return compute
+
+
+def static_study(quick: bool) -> tuple[Study, list]:
+    """(a) The Texier-Dorbolo tip drop X_g(1) at U = 2 m/s."""
+    from .bvp import solve_static_bvp
+    from .fig02b import pipe
+
+    ref = load_references(CASE)
+    si = pipe()
+    p = si.params(ref["static_U"]["value"])
+    q = "_quick" if quick else ""
+    st = run_study(
+        "static tip drop X_g(1) (Texier-Dorbolo, U = 2 m/s)",
+        _static_compute(p),
+        ref[f"fe_elements{q}"]["value"],
+        ref[f"modes{q}"]["value"],
+        ref["fe_order"]["value"],
+    )
+    bvp = solve_static_bvp(p.alpha, p.gamma, p.v, tol=1e-11)
+    st = Study(
+        st.quantity,
+        st.reference,
+        st.reference_error,
+        st.series,
+        st.paper_modes,
+        ("solve_bvp", bvp.X_tip),
+    )
+    checks = study_checks(st, "static", ref["order_tol"]["value"], ref["fe_order"]["source"])
+    checks.append(
+        close(
+            "static_reference_vs_bvp",
+            "the Richardson reference equals the independent collocation solution",
+            st.reference,
+            bvp.X_tip,
+            atol=max(1e-10, 10 * st.reference_error),
+            why="solve_bvp tolerance 1e-11; 10x the Richardson error estimate",
+            source="scipy.integrate.solve_bvp on Eq. (31a)",
+        )
+    )
+    return st, checks
+
+
+def _paper_table(studies: Sequence[Study]) -> Table:
+    rows = []
+    for s in studies:
+        for n, val in s.paper_modes.items():
+            rows.append(
+                (
+                    s.quantity,
+                    f"N = {n}",
+                    val,
+                    s.reference,
+                    val - s.reference,
+                    abs(val - s.reference) / max(abs(s.reference), 1e-300),
+                )
+            )
+    return Table(
+        "Error of the paper's N = 3 and N = 4 against the converged FE answer",
+        (
+            "quantity",
+            "modes",
+            "modal value",
+            "converged FE (Richardson)",
+            "error",
+            "relative error",
+        ),
+        tuple(rows),
+    )
+
+
+def _order_table(studies: Sequence[Study]) -> Table:
+    rows = []
+    for s in studies:
+        for ser in s.series.values():
+            rows.append(
+                (
+                    s.quantity,
+                    ser.label,
+                    ser.order,
+                    "" if ser.expected is None else ser.expected,
+                    ", ".join(str(int(ser.dofs[i])) for i in ser.fit),
+                    float(np.min(ser.errors)),
+                )
+            )
+    return Table(
+        "Observed orders (error ~ dofs^-p)",
+        ("quantity", "series", "observed p", "theory p", "dofs used in fit", "smallest |error|"),
+        tuple(rows),
+        note="For FE, dofs ∝ 1/h, so p is the order in h; for the modes, the order in N.",
+    )
+
+
+def _reference_table(studies: Sequence[Study]) -> Table:
+    rows = []
+    for s in studies:
+        name, val = s.independent if s.independent else ("", float("nan"))
+        diff = abs(s.reference - val) if s.independent else ""
+        rows.append((s.quantity, s.reference, s.reference_error, name, val, diff))
+    return Table(
+        "Richardson-extrapolated references",
+        (
+            "quantity",
+            "reference",
+            "error estimate",
+            "independent check",
+            "its value",
+            "|difference|",
+        ),
+        tuple(rows),
+        note="Reference: the two finest P3 values extrapolated with p = 6; error estimate: "
+        "the size of the Richardson correction.",
+    )
+
+
+def run(quick: bool = False) -> CaseResult:
+    """The studies whose solvers are available (static always; v_cr, limit cycle when built)."""
+    t0 = time.perf_counter()
+    studies, checks = [], []
+    st, ch = static_study(quick)
+    studies.append(st)
+    checks += ch
+    rows = tuple(r for s in studies for r in s.to_rows())
+    data_table = Table(
+        "All values and errors",
+        ("quantity", "series", "dofs", "value", "|error|"),
+        rows,
+    )
+    return CaseResult(
+        case=CASE,
+        figure=FIGURE,
+        title=TITLE,
+        paper_shows=PAPER_SHOWS,
+        checks=tuple(checks),
+        tables=(
+            _paper_table(studies),
+            _reference_table(studies),
+            _order_table(studies),
+            data_table,
+        ),
+        data={"studies": studies},
+        quick=quick,
+        runtime=time.perf_counter() - t0,
+    )
+
+
+def draw_study(study: Study, ax=None):
+    """Log-log error against dofs with the observed slopes in the legend."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots()
+    markers = {"FE P1": "o-", "FE P2": "s-", "FE P3": "^-", "modal": "d--"}
+    for label, s in study.series.items():
+        ok = s.errors > 0
+        ax.loglog(
+            s.dofs[ok],
+            s.errors[ok],
+            markers.get(label, ".-"),
+            ms=4,
+            label=f"{label}: p = {s.order:.2f}"
+            + (f" (theory {s.expected:g})" if s.expected else ""),
+        )
+        if len(s.fit) >= 2:
+            ax.loglog(s.dofs[list(s.fit)], s.errors[list(s.fit)], "k-", lw=2.5, alpha=0.25)
+    for n, val in study.paper_modes.items():
+        e = abs(val - study.reference)
+        ax.annotate(f"N = {n}", (n, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    if study.reference_error > 0:
+        ax.axhline(
+            study.reference_error, color="0.5", ls=":", lw=1, label="reference error estimate"
+        )
+    ax.set_xlabel("degrees of freedom")
+    ax.set_ylabel("|error|")
+    ax.set_title(study.quantity, fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6)
+    return ax
+
+
+def plot(result: CaseResult, fig=None):
+    """One log-log panel per study."""
+    from .drawing import new_figure
+
+    studies = result.data["studies"]
+    if fig is None:
+        fig, axes = new_figure(len(studies), ncols=min(len(studies), 3), size=4.5)
+    else:
+        axes = list(fig.subplots(1, len(studies), squeeze=False).ravel())
+    for ax, s in zip(axes, studies, strict=False):
+        draw_study(s, ax=ax)
+    fig.tight_layout()
+    return fig
