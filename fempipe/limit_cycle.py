@@ -1,0 +1,651 @@
+"""Attractors of Eq. (20): equilibria, periodic orbits (limit cycles), non-periodic motion.
+
+The post-flutter motion of the paper (Section 5, Figs. 7-12) is a limit cycle.
+This module finds it in three stages:
+
+1. **Integration past the transient** with :class:`fempipe.dynamics.Radau`,
+   recording a Poincare section of the tip motion: the upward crossings of
+   the tip's lateral displacement eta(1) through a level (the static value,
+   about which the Hopf cycle is born).  The full state at each crossing is
+   kept.
+2. **Recurrence**: the smallest n for which the section points x_k and
+   x_{k-n} agree gives a period-n candidate (n distinct points on the
+   section: period-1, period-2, ...).  Equilibria are recognised when the
+   state comes close to a linearly stable static state and keeps approaching
+   it; motion without recurrence until ``t_max`` is reported as non-periodic.
+3. **Shooting**: Newton's method on ``phi_T(x0) - x0 = 0`` with the phase
+   condition ``eta_tip(x0) = level``, unknowns (x0, T).  The Jacobian uses the
+   monodromy matrix, the exact derivative of the discrete Radau flow map
+   (accumulated step by step from the stage Jacobians, see
+   :meth:`fempipe.dynamics.Radau._accumulate_sensitivity`), so Newton converges
+   quadratically and the eigenvalues of the matrix are the Floquet multipliers
+   to the integration accuracy.  One multiplier is 1 (the phase along the
+   orbit); the cycle is stable when all others are inside the unit circle.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.optimize import brentq
+
+from .dynamics import IntegrationError, Radau, Trajectory, _limit_blas_threads, initial_state
+from .operators import PipeModel
+
+__all__ = [
+    "TIP_KEYS",
+    "LimitCycle",
+    "Attractor",
+    "ShootingError",
+    "tip_coordinates",
+    "shoot",
+    "find_attractor",
+    "static_growth_rate",
+]
+
+log = logging.getLogger(__name__)
+
+#: Tip coordinates recorded on attractors: eta(1) in the local frame,
+#: X_g(1) (along gravity) and Z_g(1) (horizontal) in the global frame, Eq. (28).
+TIP_KEYS = ("eta_tip", "X_tip", "Z_tip")
+
+
+class ShootingError(RuntimeError):
+    """Newton's method on the periodic orbit did not converge."""
+
+    def __init__(self, message: str, iterations: int, residual: float) -> None:
+        super().__init__(message)
+        self.iterations = iterations
+        self.residual = residual
+
+
+def tip_coordinates(disc, alpha: float, q: np.ndarray) -> dict[str, np.ndarray]:
+    """eta_tip, X_tip, Z_tip for one state (n,) or many (m, n), vectorised.
+
+    Same Gauss sums as :func:`fempipe.kinematics.tip_values`.
+    """
+    q = np.asarray(q)
+    th = disc.Phi @ q.T  # (n_q,) or (n_q, m)
+    w = disc.quad.w
+    return {
+        "eta_tip": w @ np.sin(th),
+        "X_tip": w @ np.cos(th + alpha),
+        "Z_tip": w @ np.sin(th + alpha),
+    }
+
+
+def _eta(disc, q: np.ndarray) -> float:
+    return float(disc.quad.w @ np.sin(disc.Phi @ q))
+
+
+def _eta_gradient(disc, q: np.ndarray) -> np.ndarray:
+    th = disc.Phi @ q
+    return np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(th)))
+
+
+def static_growth_rate(model: PipeModel, q_static: np.ndarray) -> float:
+    """Largest real part of the eigenvalues of the linearisation (Eqs. (31b)-(33)).
+
+    The quadratic problem (lambda^2 M^d + lambda C^d + K^d) x = 0 at the static
+    state, solved as a first-order (companion) problem of size 2n.  Negative:
+    the static state is linearly stable.
+    """
+    K, D, M = model.jacobians(q_static)
+    n = model.n
+    Minv_K = np.linalg.solve(M, K)
+    Minv_D = np.linalg.solve(M, D)
+    Acomp = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_D]])
+    return float(np.max(np.linalg.eigvals(Acomp).real))
+
+
+@dataclass(frozen=True)
+class LimitCycle:
+    """A periodic orbit computed by shooting.
+
+    Attributes
+    ----------
+    period : float
+        Period T in units of tau (of the whole orbit, n section crossings).
+    q0, qdot0 : ndarray, shape (n,)
+        State on the orbit where eta_tip = ``level`` (upward).
+    level : float
+        Section level of eta_tip.
+    tip : dict
+        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` on the orbit.
+    floquet_multipliers : ndarray, complex
+        Eigenvalues of the monodromy matrix, by decreasing modulus.
+    stable : bool
+        All multipliers except the trivial one (closest to 1) inside the unit circle.
+    iterations : int
+        Newton iterations.
+    residual : float
+        Final RMS of phi_T(x0) - x0 (q in rad, q' scaled by T / 2 pi).
+    orbit_t, orbit_q, orbit_qdot : ndarray
+        The orbit sampled at 200 equally spaced times over one period.
+    steps : int
+        Integration steps over the last period.
+    total_steps, rejected_steps : int
+        Steps (accepted, rejected) over all Newton iterations.
+    wall_time : float
+        Seconds spent in the shooting.
+    """
+
+    period: float
+    q0: np.ndarray
+    qdot0: np.ndarray
+    level: float
+    tip: dict
+    floquet_multipliers: np.ndarray
+    stable: bool
+    iterations: int
+    residual: float
+    orbit_t: np.ndarray = field(repr=False)
+    orbit_q: np.ndarray = field(repr=False)
+    orbit_qdot: np.ndarray = field(repr=False)
+    steps: int = 0
+    total_steps: int = 0
+    rejected_steps: int = 0
+    wall_time: float = 0.0
+
+    @property
+    def max_nontrivial_multiplier(self) -> float:
+        mu = self.floquet_multipliers
+        if mu.size < 2:
+            return 0.0
+        trivial = int(np.argmin(np.abs(mu - 1.0)))
+        return float(np.max(np.abs(np.delete(mu, trivial))))
+
+    def to_dict(self, n_multipliers: int = 6) -> dict:
+        mu = self.floquet_multipliers[:n_multipliers]
+        return {
+            "period": self.period,
+            "tip": self.tip,
+            "floquet_multipliers": [[float(z.real), float(z.imag)] for z in mu],
+            "max_nontrivial_multiplier": self.max_nontrivial_multiplier,
+            "stable": self.stable,
+            "newton_iterations": self.iterations,
+            "residual": self.residual,
+            "level": self.level,
+        }
+
+
+@dataclass(frozen=True)
+class Attractor:
+    """The attractor reached from an initial state.
+
+    Attributes
+    ----------
+    kind : str
+        ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
+    period : float or None
+        Period of the periodic orbit.
+    period_n : int or None
+        Number of distinct section points (1 for period-1, 2 for period-2, ...).
+    tip : dict
+        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` on the attractor.
+    cycle : LimitCycle or None
+    q, qdot : ndarray, shape (n,)
+        A state on the attractor (to start the next point of a sweep from).
+    params : Params
+    t_end : float
+        Time integrated before the attractor was recognised.
+    stats : dict
+        Integration diagnostics summed over the transient and the shooting.
+    trajectory : Trajectory or None
+        The transient, if recorded.
+    """
+
+    kind: str
+    period: float | None
+    period_n: int | None
+    tip: dict
+    cycle: LimitCycle | None
+    q: np.ndarray
+    qdot: np.ndarray
+    params: object
+    t_end: float
+    stats: dict
+    trajectory: Trajectory | None = field(default=None, repr=False)
+    message: str = ""
+
+    def to_dict(self) -> dict:
+        d = {
+            "attractor": self.kind,
+            "period": self.period,
+            "period_n": self.period_n,
+            "tip": self.tip,
+            "floquet_multipliers": (
+                self.cycle.to_dict()["floquet_multipliers"] if self.cycle is not None else None
+            ),
+            "max_nontrivial_multiplier": (
+                self.cycle.max_nontrivial_multiplier if self.cycle is not None else None
+            ),
+            "params": self.params.to_dict(),
+            "t_transient": self.t_end,
+            "message": self.message,
+        }
+        d.update(self.stats)
+        return d
+
+
+# ---------------------------------------------------------------------------
+def _extrema(disc, alpha: float, stepper: Radau, samples: list, per_step: int = 8) -> None:
+    """Append tip coordinates sampled on the last step's collocation polynomial."""
+    t_old, t = stepper.t_old, stepper.t
+    ts = np.linspace(t_old, t, per_step + 1)[1:]
+    qs = np.array([stepper.dense(s)[0] for s in ts[:-1]] + [stepper.q])
+    samples.append((ts, tip_coordinates(disc, alpha, qs)))
+
+
+def _refined_range(t: np.ndarray, y: np.ndarray) -> list[float]:
+    """[min, max] of a densely sampled periodic signal, parabola-refined at the extremum."""
+    out = []
+    for k in (int(np.argmin(y)), int(np.argmax(y))):
+        if 0 < k < y.size - 1 and t[k + 1] > t[k] > t[k - 1]:
+            y0, y1, y2 = y[k - 1], y[k], y[k + 1]
+            den = y0 - 2 * y1 + y2
+            if den != 0:
+                s = 0.5 * (y0 - y2) / den
+                out.append(float(y1 - 0.25 * (y0 - y2) * s))
+                continue
+        out.append(float(y[k]))
+    return [min(out[0], float(y.min())), max(out[1], float(y.max()))]
+
+
+def _tip_ranges(samples: list) -> dict:
+    t = np.concatenate([s[0] for s in samples])
+    return {k: _refined_range(t, np.concatenate([s[1][k] for s in samples])) for k in TIP_KEYS}
+
+
+def _state_distance(dq: np.ndarray, dp: np.ndarray, timescale: float) -> float:
+    """RMS distance of two states; velocities scaled by a time scale (period / 2 pi)."""
+    return float(np.sqrt(np.mean(dq**2) + np.mean((dp * timescale) ** 2)))
+
+
+def shoot(
+    model: PipeModel,
+    q0: np.ndarray,
+    qdot0: np.ndarray,
+    period: float,
+    *,
+    level: float | None = None,
+    rtol: float = 1e-8,
+    tol: float = 1e-7,
+    max_iter: int = 12,
+    n_samples: int = 200,
+) -> LimitCycle:
+    """Compute a periodic orbit by Newton shooting with the monodromy matrix.
+
+    Parameters
+    ----------
+    model : PipeModel
+    q0, qdot0 : ndarray, shape (n,)
+        Initial guess on or near the orbit.
+    period : float
+        Initial guess of the period.
+    level : float, optional
+        Phase condition eta_tip(q0) = level (default: eta_tip of the guess).
+    rtol : float
+        Integration tolerance; the orbit is accurate to about this level.
+    tol : float
+        Convergence when the RMS of phi_T(x0) - x0 (velocities scaled by
+        T / 2 pi) is below ``tol``; must exceed the integration error.
+    max_iter : int
+    n_samples : int
+        Samples of the orbit stored for plotting.
+
+    Returns
+    -------
+    LimitCycle
+
+    Raises
+    ------
+    ShootingError
+        Naming v, the iterations and the last residual.
+    """
+    if not period > 0:
+        raise ValueError(f"period must be > 0, got {period}")
+    disc, alpha, n = model.disc, model.params.alpha, model.n
+    q = np.array(q0, dtype=float)
+    p = np.array(qdot0, dtype=float)
+    T = float(period)
+    level = _eta(disc, q) if level is None else float(level)
+    res = math.inf
+    t_start = time.perf_counter()
+    total_steps = rejected = 0
+    with _limit_blas_threads():
+        for it in range(1, max_iter + 1):
+            stepper = Radau(model, q, p, 0.0, rtol=rtol, sensitivity=True)
+            samples: list = []
+            for _ in stepper.steps(T):
+                _extrema(disc, alpha, stepper, samples)
+            qT, pT, aT = stepper.q, stepper.qdot, stepper.qddot
+            total_steps += stepper.stats.steps
+            rejected += stepper.stats.rejected_steps
+            scale = T / (2 * math.pi)
+            r = np.r_[qT - q, pT - p]
+            res = _state_distance(qT - q, pT - p, scale)
+            g = _eta(disc, q) - level
+            log.debug("shooting it %d: T=%.10g residual %.3e phase %.3e", it, T, res, g)
+            if res < tol and abs(g) < tol:
+                Phi = stepper.sensitivity_matrix
+                mu = np.linalg.eigvals(Phi)
+                mu = mu[np.argsort(-np.abs(mu))]
+                tt = np.linspace(0.0, T, n_samples)
+                orbit = _resample(model, q, p, T, tt, rtol)
+                cycle = LimitCycle(
+                    period=T,
+                    q0=q,
+                    qdot0=p,
+                    level=level,
+                    tip=_tip_ranges(samples),
+                    floquet_multipliers=mu,
+                    stable=True,
+                    iterations=it,
+                    residual=res,
+                    orbit_t=tt,
+                    orbit_q=orbit[0],
+                    orbit_qdot=orbit[1],
+                    steps=stepper.stats.steps,
+                    total_steps=total_steps,
+                    rejected_steps=rejected,
+                    wall_time=time.perf_counter() - t_start,
+                )
+                return _with_stability(cycle)
+            Phi = stepper.sensitivity_matrix
+            J = np.zeros((2 * n + 1, 2 * n + 1))
+            J[: 2 * n, : 2 * n] = Phi - np.eye(2 * n)
+            J[: 2 * n, -1] = np.r_[pT, aT]
+            J[-1, :n] = _eta_gradient(disc, q)
+            rhs = -np.r_[r, g]
+            try:
+                dx = sla.solve(J, rhs)
+            except (sla.LinAlgError, ValueError):
+                break
+            if not np.all(np.isfinite(dx)):
+                break
+            # Trust region: a Newton step larger than ~0.3 rad RMS leaves the
+            # neighbourhood where the linearised map means anything.
+            size = _state_distance(dx[:n], dx[n : 2 * n], scale)
+            lam = min(1.0, 0.3 / size) if size > 0 else 1.0
+            q = q + lam * dx[:n]
+            p = p + lam * dx[n : 2 * n]
+            T = T + lam * dx[-1]
+            if not T > 0:
+                break
+    raise ShootingError(
+        f"shooting did not converge at v = {model.params.v:.6g}, alpha = {alpha:.6g}: "
+        f"residual {res:.3e} after {it} Newton iterations",
+        iterations=it,
+        residual=res,
+    )
+
+
+def _with_stability(cycle: LimitCycle) -> LimitCycle:
+    from dataclasses import replace
+
+    return replace(cycle, stable=cycle.max_nontrivial_multiplier < 1.0)
+
+
+def _resample(model, q, p, T, tt, rtol):
+    stepper = Radau(model, q, p, 0.0, rtol=rtol)
+    out_q, out_p = [q.copy()], [p.copy()]
+    k = 1
+    for t, qs, ps in stepper.steps(T):
+        while k < tt.size and tt[k] <= t + 1e-12:
+            if tt[k] < t:
+                a, b = stepper.dense(tt[k])
+            else:
+                a, b = qs, ps
+            out_q.append(a)
+            out_p.append(b)
+            k += 1
+    while len(out_q) < tt.size:
+        out_q.append(stepper.q.copy())
+        out_p.append(stepper.qdot.copy())
+    return np.array(out_q), np.array(out_p)
+
+
+# ---------------------------------------------------------------------------
+def find_attractor(
+    model: PipeModel,
+    q0: np.ndarray | None = None,
+    qdot0: np.ndarray | None = None,
+    *,
+    t_max: float = 300.0,
+    rtol: float = 1e-6,
+    shoot_rtol: float = 1e-8,
+    shoot_tol: float = 1e-6,
+    use_shooting: bool = True,
+    recurrence_tol: float = 2e-2,
+    converged_tol: float = 1e-6,
+    equilibrium_radius: float = 1e-2,
+    n_max: int = 8,
+    record: bool = False,
+    perturbation: float = 0.01,
+    callback: Callable[[float], None] | None = None,
+) -> Attractor:
+    """Integrate past the transient and classify the attractor.
+
+    Parameters
+    ----------
+    model : PipeModel
+    q0, qdot0 : ndarray, optional
+        Initial state; default the static state plus ``perturbation`` rad in
+        the first sine mode, at rest.
+    t_max : float
+        Longest integration (tau) before declaring the motion non-periodic.
+    rtol : float
+        Tolerance of the transient integration.
+    shoot_rtol, shoot_tol : float
+        Integration tolerance and Newton tolerance of the shooting.
+    use_shooting : bool
+        If False, a periodic orbit is accepted when successive section returns
+        agree to ``converged_tol`` (plain long integration).
+    recurrence_tol : float
+        Section returns this close (RMS, rad) start the shooting.
+    equilibrium_radius : float
+        Within this RMS distance of a linearly stable static state, and still
+        approaching it, the attractor is that equilibrium (its basin contains
+        this neighbourhood as long as the linearisation dominates; the
+        criterion also asks the distance to decrease).
+    n_max : int
+        Largest period-n looked for.
+    record : bool
+        Keep the transient trajectory (every step) in ``Attractor.trajectory``.
+    callback : callable, optional
+        Called with tau after every step.
+
+    Returns
+    -------
+    Attractor
+    """
+    from .static import NewtonError, solve_static
+
+    if not t_max > 0:
+        raise ValueError(f"t_max must be > 0, got {t_max}")
+    disc, alpha, n = model.disc, model.params.alpha, model.n
+    guess = None if q0 is None else np.asarray(q0, dtype=float)
+    try:
+        q_s = solve_static(model, guess).q
+    except NewtonError:
+        try:
+            q_s = solve_static(model).q
+        except NewtonError:
+            q_s = None
+    stable = q_s is not None and static_growth_rate(model, q_s) < 0
+    if q0 is None:
+        if q_s is None:
+            raise ValueError("no initial state given and the static problem has no solution")
+        q0, qdot0 = initial_state(model, 1, perturbation, q_static=q_s)
+    qdot0 = np.zeros(n) if qdot0 is None else np.asarray(qdot0, dtype=float)
+    level = _eta(disc, q_s) if q_s is not None else _eta(disc, np.asarray(q0))
+
+    stepper = Radau(model, q0, qdot0, 0.0, rtol=rtol)
+    stats = {"steps": 0, "rejected_steps": 0, "n_residual": 0, "n_jacobian": 0, "wall_time": 0.0}
+    rec_t, rec_q, rec_p = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
+    sec_t: list[float] = []
+    sec_x: list[tuple[np.ndarray, np.ndarray]] = []
+    sec_i: list[int] = []  # index into ``samples`` at each section point
+    samples: list = []  # tip coordinates sampled on every step
+    max_samples = 20000
+    s_old = _eta(disc, stepper.q) - level
+    d_prev = math.inf
+    next_eq_check = 0.0
+    tried_tol = recurrence_tol
+    result = None
+
+    def finish(kind, period=None, period_n=None, tip=None, cycle=None, q=None, p=None, msg=""):
+        st = stepper.stats
+        stats.update(
+            steps=stats["steps"] + st.steps,
+            rejected_steps=stats["rejected_steps"] + st.rejected_steps,
+            n_residual=stats["n_residual"] + st.n_residual,
+            n_jacobian=stats["n_jacobian"] + st.n_jacobian,
+            wall_time=stats["wall_time"] + st.wall_time,
+        )
+        traj = None
+        if record:
+            traj = Trajectory(
+                t=np.array(rec_t),
+                q=np.array(rec_q),
+                qdot=np.array(rec_p),
+                steps=st.steps,
+                rejected_steps=st.rejected_steps,
+                newton_failures=st.newton_failures,
+                n_residual=st.n_residual,
+                n_jacobian=st.n_jacobian,
+                n_lu=st.n_lu,
+                wall_time=st.wall_time,
+                rtol=rtol,
+            )
+        return Attractor(
+            kind=kind,
+            period=period,
+            period_n=period_n,
+            tip=tip,
+            cycle=cycle,
+            q=stepper.q.copy() if q is None else q,
+            qdot=stepper.qdot.copy() if p is None else p,
+            params=model.params,
+            t_end=stepper.t,
+            stats=stats,
+            trajectory=traj,
+            message=msg,
+        )
+
+    with _limit_blas_threads():
+        while stepper.t < t_max:
+            try:
+                stepper.step(t_max)
+            except IntegrationError as exc:
+                raise IntegrationError(
+                    f"{exc} (alpha = {alpha:.6g}, v = {model.params.v:.6g})", exc.t, exc.h
+                ) from None
+            if record:
+                rec_t.append(stepper.t)
+                rec_q.append(stepper.q.copy())
+                rec_p.append(stepper.qdot.copy())
+            if callback is not None:
+                callback(stepper.t)
+            _extrema(disc, alpha, stepper, samples, per_step=4)
+            if len(samples) > max_samples:  # keep memory bounded on long runs
+                drop = len(samples) - max_samples
+                samples = samples[drop:]
+                sec_i = [i - drop for i in sec_i]
+
+            # -- equilibrium: close to a stable static state and approaching it
+            if stepper.t >= next_eq_check:
+                next_eq_check = stepper.t + 0.05
+                if q_s is None or _state_distance(stepper.q - q_s, stepper.qdot, 0.1) > 0.3:
+                    # Far from the known static state and almost at rest: maybe
+                    # another equilibrium (e.g. a buckled branch at alpha = pi).
+                    if np.sqrt(np.mean(stepper.qdot**2)) < 1e-3:
+                        try:
+                            q_new = solve_static(model, stepper.q).q
+                            if static_growth_rate(model, q_new) < 0:
+                                q_s, stable, d_prev = q_new, True, math.inf
+                                level = _eta(disc, q_s)
+                        except NewtonError:
+                            pass
+                if q_s is not None and stable:
+                    d = _state_distance(stepper.q - q_s, stepper.qdot, 0.1)
+                    if d < equilibrium_radius and d < d_prev:
+                        tv = tip_coordinates(disc, alpha, q_s)
+                        tip = {k: [float(tv[k]), float(tv[k])] for k in TIP_KEYS}
+                        result = finish("equilibrium", tip=tip, q=q_s.copy(), p=np.zeros(n))
+                        break
+                    d_prev = d if d < equilibrium_radius else math.inf
+
+            # -- Poincare section: upward crossing of eta_tip through the level
+            s_new = _eta(disc, stepper.q) - level
+            if s_old < 0.0 <= s_new:
+                f = lambda tt, c=level: _eta(disc, stepper.dense(tt)[0]) - c  # noqa: E731
+                t_c = stepper.t if s_new == 0 else brentq(f, stepper.t_old, stepper.t, xtol=1e-13)
+                sec_t.append(t_c)
+                sec_x.append(stepper.dense(t_c))
+                sec_i.append(len(samples))
+                found = _recurrence(sec_t, sec_x, n_max)
+                if found is not None:
+                    nn, dist = found
+                    T_guess = sec_t[-1] - sec_t[-1 - nn]
+                    qk, pk = sec_x[-1]
+                    if use_shooting and dist < tried_tol:
+                        try:
+                            cyc = shoot(
+                                model, qk, pk, T_guess, level=level, rtol=shoot_rtol, tol=shoot_tol
+                            )
+                        except (ShootingError, IntegrationError) as exc:
+                            log.info("shooting failed, integrating on: %s", exc)
+                            tried_tol = dist / 10.0
+                        else:
+                            stats["steps"] += cyc.total_steps
+                            stats["rejected_steps"] += cyc.rejected_steps
+                            stats["wall_time"] += cyc.wall_time
+                            if cyc.stable:
+                                result = finish(
+                                    "periodic",
+                                    period=cyc.period,
+                                    period_n=nn,
+                                    tip=cyc.tip,
+                                    cycle=cyc,
+                                    q=cyc.q0.copy(),
+                                    p=cyc.qdot0.copy(),
+                                )
+                                break
+                            tried_tol = dist / 10.0
+                    elif not use_shooting and dist < converged_tol:
+                        tip = _tip_ranges(samples[max(sec_i[-1 - nn] - 1, 0) :])
+                        result = finish("periodic", period=T_guess, period_n=nn, tip=tip)
+                        break
+            s_old = s_new
+
+    if result is None:
+        tip = _tip_ranges(samples[len(samples) // 2 :]) if samples else None
+        msg = f"no recurrence of the Poincare section within t_max = {t_max:g}"
+        result = finish("non-periodic", tip=tip, msg=msg)
+    return result
+
+
+def _recurrence(sec_t: list, sec_x: list, n_max: int):
+    """(n, d_n) for the smallest n whose return distance d_n = |x_k - x_{k-n}| is within
+    a factor 2 of the smallest over n <= n_max; None before the second section point."""
+    k = len(sec_x) - 1
+    d = []
+    for nn in range(1, min(n_max, k) + 1):
+        T = sec_t[k] - sec_t[k - nn]
+        (qa, pa), (qb, pb) = sec_x[k], sec_x[k - nn]
+        d.append(_state_distance(qa - qb, pa - pb, T / (2 * math.pi * nn)))
+    if not d:
+        return None
+    best = min(d)
+    for nn, dn in enumerate(d, start=1):
+        if dn <= 2.0 * best:
+            return nn, dn
+    return None  # pragma: no cover
