@@ -377,9 +377,9 @@ print(
 #
 # Expected: slopes 2, 4, 6 for P1, P2, P3 and about 3 for the sine modes.
 # P3 reaches 1e-10 with about fifty unknowns; at slope 3 the sine modes
-# would need about four hundred modes for that.  Everything above rests on one weak form and two
-# integration operators; fempipe adds the dynamic terms, stability and time
-# integration on the same pieces.  `fempipe validate` repeats this study for
+# would need about four hundred modes for that.  Everything above rests on
+# one weak form and two integration operators; fempipe adds the dynamic
+# terms, stability and time integration on the same pieces.  `fempipe validate` repeats this study for
 # the critical velocities and limit cycles and compares every figure of the
 # paper.
 
