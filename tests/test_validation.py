@@ -1,0 +1,231 @@
+"""The validation suite: its cases, report and ``fempipe validate``.
+
+The quick cases run here (a few seconds each); the full suite is marked slow.
+A numerics check that fails is a bug in fempipe, so every quick case must pass
+all of them; paper checks may legitimately fail (findings), and the ones whose
+outcome is known are asserted explicitly.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fempipe.cli import main
+from fempipe.validation import CASES, available_cases, load_case
+from fempipe.validation.checks import CaseResult, Check, Table, close, load_references
+from fempipe.validation.report import render_report
+from fempipe.validation.suite import CaseOutcome, SuiteResult, run_suite
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Cases cheap enough for the default test run (quick versions, ~1 s each).
+CHEAP = ["fig02a", "fig02b", "fig03", "fig04", "symmetry", "convergence"]
+
+
+@pytest.fixture(scope="module")
+def quick_results():
+    """Run each cheap quick case once for the whole module."""
+    return {name: load_case(name).run(quick=True) for name in CHEAP}
+
+
+@pytest.mark.parametrize("name", CHEAP)
+def test_quick_case_numerics_pass(quick_results, name):
+    res = quick_results[name]
+    assert isinstance(res, CaseResult)
+    failed = [
+        (c.name, c.measured, c.tolerance)
+        for c in res.checks
+        if c.category == "numerics" and not c.passed
+    ]
+    assert not failed, failed
+
+
+@pytest.mark.parametrize("name", CHEAP)
+def test_every_check_states_tolerance_and_source(quick_results, name):
+    res = quick_results[name]
+    assert res.paper_shows, "a case must say what the paper shows"
+    assert res.checks
+    for c in res.checks:
+        assert c.tolerance.strip() and c.source.strip() and c.claim.strip(), c
+    json.dumps(res.to_dict())  # serialisable
+
+
+@pytest.mark.parametrize("name", CHEAP)
+def test_case_draws_its_figure(quick_results, name):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = load_case(name).plot(quick_results[name])
+    assert fig.axes and any(ax.lines for ax in fig.axes)
+    plt.close(fig)
+
+
+def test_reference_files_have_sources():
+    """Every reference number sits beside its case with a source line."""
+    for name in CASES:
+        path = ROOT / "fempipe" / "validation" / "references" / f"{name}.json"
+        if path.exists():
+            refs = load_references(name)
+            assert "_about" in refs
+
+
+def test_alpha_minus_pi_is_not_a_symmetry(quick_results):
+    """The paper's closing remark of Sec. 5 is wrong; the true symmetry holds."""
+    checks = {c.name: c for c in quick_results["symmetry"].checks}
+    assert checks["mirror_symmetry"].passed
+    assert not checks["paper_alpha_minus_pi"].passed
+    assert quick_results["symmetry"].findings
+
+
+def test_static_convergence_orders(quick_results):
+    """FE tip values converge as h^(2k); independent of the checks' own tolerance."""
+    study = quick_results["convergence"].data["studies"][0]
+    orders = {k: s.order for k, s in study.series.items()}
+    assert orders["FE P1"] == pytest.approx(2.0, abs=0.3)
+    assert orders["FE P2"] == pytest.approx(4.0, abs=0.3)
+    assert orders["FE P3"] == pytest.approx(6.0, abs=0.3)
+    # The paper's N = 4 is worse than P3 on 16 elements by orders of magnitude.
+    assert abs(study.paper_modes[4] - study.reference) > 1e-6
+
+
+def test_fig02b_eq29(quick_results):
+    names = {c.name: c.passed for c in quick_results["fig02b"].checks}
+    assert names["beta"] and names["gamma"] and names["v_over_U"]
+
+
+def test_close_check_fails_when_it_should():
+    assert close("x", "x", 1.0, 1.0 + 2e-6, atol=1e-6, why="w", source="s").passed is False
+    assert close("x", "x", 1.0, 1.0 + 5e-7, atol=1e-6, why="w", source="s").passed is True
+    with pytest.raises(ValueError, match="category"):
+        Check("x", "x", "wrong", True, 1, 1, "t", "s")
+
+
+def _fake_suite(passed: bool) -> SuiteResult:
+    check = Check("c", "a claim", "numerics", passed, 1.0, 2.0, "tol", "src")
+    finding = Check("p", "a paper claim", "paper", False, 3.0, 4.0, "tol", "paper Fig. 9")
+    res = CaseResult(
+        "fake",
+        "Fig. 0",
+        "fake case",
+        ("it shows",),
+        (check, finding),
+        tables=(Table("t", ("a", "b|c"), ((1.0, "x|y"),)),),
+    )
+    return SuiteResult(
+        (CaseOutcome("fake", "ok", result=res),),
+        quick=True,
+        workers=1,
+        wall_time=1.5,
+        started="now",
+        environment={"workers": 1},
+    )
+
+
+def test_report_marks_failures_and_findings():
+    bad = render_report(_fake_suite(False))
+    assert "**FAIL**" in bad and "❌ FAIL" in bad
+    good = render_report(_fake_suite(True))
+    assert "**PASS**" in good and "❌" not in good
+    # the failed paper check is listed as a finding with its measurement
+    assert "a paper claim" in good.split("## Findings")[1].split("<a id")[0]
+    assert "b\\|c" in good  # table cells are escaped
+
+
+def test_run_suite_records_errors(monkeypatch, tmp_path):
+    """A case that raises is recorded, the suite goes on and is not ok."""
+    import fempipe.validation.fig02b as case
+
+    def boom(quick=False):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(case, "run", boom)
+    suite = run_suite(quick=True, cases=["fig02b", "symmetry"], out=tmp_path)
+    status = {o.name: o.status for o in suite.outcomes}
+    assert status == {"fig02b": "error", "symmetry": "ok"}
+    assert not suite.ok
+    assert (tmp_path / "symmetry.png").exists()
+
+
+def test_cli_validate_quick_subset(tmp_path, capsys):
+    code = main(
+        [
+            "validate",
+            "--quick",
+            "--case",
+            "fig02b,symmetry",
+            "--out",
+            str(tmp_path),
+            "--workers",
+            "2",
+            "--json",
+            "--quiet",
+        ]
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert out["ok"] is True and [c["name"] for c in out["cases"]] == ["fig02b", "symmetry"]
+    report = (tmp_path / "REPORT.md").read_text()
+    assert "Runtime:" in report and "fig02b.png" in report
+    assert (tmp_path / "fig02b.png").stat().st_size > 1000
+    assert json.loads((tmp_path / "results.json").read_text())["quick"] is True
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--workers", "0"], "--workers"),
+        (["--workers", "two"], "--workers"),
+        (["--case", "fig99"], "--case"),
+    ],
+)
+def test_cli_validate_bad_input(argv, option, capsys, tmp_path):
+    code = main(["validate", "--out", str(tmp_path), *argv])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert (
+        len(err.splitlines()) == 1 and option in err and err.startswith("fempipe validate: error:")
+    )
+
+
+def test_cli_validate_list(capsys):
+    assert main(["validate", "--list"]) == 0
+    assert "fig02b" in capsys.readouterr().out
+
+
+def test_tutorial_runs(tmp_path):
+    """The literate tutorial runs top to bottom and writes its plot."""
+    script = ROOT / "validation" / "tutorial.py"
+    if not script.exists():
+        pytest.skip("tutorial not in this checkout")
+    proc = subprocess.run(
+        [sys.executable, str(script), "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "tutorial_convergence.png").exists()
+    orders = [float(line.split("p =")[1]) for line in proc.stdout.splitlines() if "p =" in line]
+    assert np.allclose(orders[:3], [2, 4, 6], atol=0.3)
+
+
+@pytest.mark.slow
+def test_full_suite(tmp_path):
+    """The whole suite, full versions: every case that can run passes its numerics."""
+    suite = run_suite(quick=False, out=tmp_path, workers=2)
+    bad = [
+        (o.name, o.status, o.error[-300:])
+        for o in suite.outcomes
+        if o.status == "error" or (o.result is not None and not o.result.numerics_passed)
+    ]
+    assert not bad, bad
+    assert {o.name for o in suite.outcomes if o.status == "ok"} == set(available_cases())
