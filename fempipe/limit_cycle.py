@@ -275,8 +275,8 @@ def shoot(
     period: float,
     *,
     level: float | None = None,
-    rtol: float = 1e-8,
-    tol: float = 1e-7,
+    rtol: float = 1e-7,
+    tol: float = 1e-6,
     max_iter: int = 12,
     n_samples: int = 200,
 ) -> LimitCycle:
@@ -323,8 +323,15 @@ def shoot(
         for it in range(1, max_iter + 1):
             stepper = Radau(model, q, p, 0.0, rtol=rtol, sensitivity=True)
             samples: list = []
-            for _ in stepper.steps(T):
+            tt = np.linspace(0.0, T, n_samples)
+            orbit_q, orbit_p, k = [q.copy()], [p.copy()], 1
+            for t_now, q_now, p_now in stepper.steps(T):
                 _extrema(disc, alpha, stepper, samples)
+                while k < n_samples and tt[k] <= t_now + 1e-12:
+                    a, b = stepper.dense(tt[k]) if tt[k] < t_now else (q_now, p_now)
+                    orbit_q.append(a)
+                    orbit_p.append(b)
+                    k += 1
             qT, pT, aT = stepper.q, stepper.qdot, stepper.qddot
             total_steps += stepper.stats.steps
             rejected += stepper.stats.rejected_steps
@@ -334,24 +341,32 @@ def shoot(
             g = _eta(disc, q) - level
             log.debug("shooting it %d: T=%.10g residual %.3e phase %.3e", it, T, res, g)
             if res < tol and abs(g) < tol:
-                Phi = stepper.sensitivity_matrix
-                mu = np.linalg.eigvals(Phi)
+                tip = _tip_ranges(samples)
+                if max(hi - lo for lo, hi in tip.values()) < 1e-6:
+                    # A periodic orbit of zero amplitude is the equilibrium.
+                    raise ShootingError(
+                        f"shooting converged to an equilibrium at v = {model.params.v:.6g}",
+                        iterations=it,
+                        residual=res,
+                    )
+                mu = np.linalg.eigvals(stepper.sensitivity_matrix)
                 mu = mu[np.argsort(-np.abs(mu))]
-                tt = np.linspace(0.0, T, n_samples)
-                orbit = _resample(model, q, p, T, tt, rtol)
+                while len(orbit_q) < n_samples:
+                    orbit_q.append(stepper.q.copy())
+                    orbit_p.append(stepper.qdot.copy())
                 cycle = LimitCycle(
                     period=T,
                     q0=q,
                     qdot0=p,
                     level=level,
-                    tip=_tip_ranges(samples),
+                    tip=tip,
                     floquet_multipliers=mu,
                     stable=True,
                     iterations=it,
                     residual=res,
                     orbit_t=tt,
-                    orbit_q=orbit[0],
-                    orbit_qdot=orbit[1],
+                    orbit_q=np.array(orbit_q),
+                    orbit_qdot=np.array(orbit_p),
                     steps=stepper.stats.steps,
                     total_steps=total_steps,
                     rejected_steps=rejected,
@@ -393,25 +408,6 @@ def _with_stability(cycle: LimitCycle) -> LimitCycle:
     return replace(cycle, stable=cycle.max_nontrivial_multiplier < 1.0)
 
 
-def _resample(model, q, p, T, tt, rtol):
-    stepper = Radau(model, q, p, 0.0, rtol=rtol)
-    out_q, out_p = [q.copy()], [p.copy()]
-    k = 1
-    for t, qs, ps in stepper.steps(T):
-        while k < tt.size and tt[k] <= t + 1e-12:
-            if tt[k] < t:
-                a, b = stepper.dense(tt[k])
-            else:
-                a, b = qs, ps
-            out_q.append(a)
-            out_p.append(b)
-            k += 1
-    while len(out_q) < tt.size:
-        out_q.append(stepper.q.copy())
-        out_p.append(stepper.qdot.copy())
-    return np.array(out_q), np.array(out_p)
-
-
 # ---------------------------------------------------------------------------
 def find_attractor(
     model: PipeModel,
@@ -419,8 +415,8 @@ def find_attractor(
     qdot0: np.ndarray | None = None,
     *,
     t_max: float = 300.0,
-    rtol: float = 1e-6,
-    shoot_rtol: float = 1e-8,
+    rtol: float = 1e-5,
+    shoot_rtol: float = 1e-7,
     shoot_tol: float = 1e-6,
     use_shooting: bool = True,
     recurrence_tol: float = 2e-2,
@@ -496,8 +492,8 @@ def find_attractor(
     samples: list = []  # tip coordinates sampled on every step
     max_samples = 20000
     s_old = _eta(disc, stepper.q) - level
-    d_prev = math.inf
-    next_eq_check = 0.0
+    next_eq_check = 0.5
+    d_prev = _state_distance(np.asarray(q0) - q_s, qdot0, 0.05) if q_s is not None else math.inf
     tried_tol = recurrence_tol
     result = None
 
@@ -560,10 +556,12 @@ def find_attractor(
                 samples = samples[drop:]
                 sec_i = [i - drop for i in sec_i]
 
-            # -- equilibrium: close to a stable static state and approaching it
+            # -- equilibrium: close to a linearly stable static state and not
+            # moving away from it (checked every 0.5 tau, about two flutter
+            # periods, so that the exchange between q and q' averages out).
             if stepper.t >= next_eq_check:
-                next_eq_check = stepper.t + 0.05
-                if q_s is None or _state_distance(stepper.q - q_s, stepper.qdot, 0.1) > 0.3:
+                next_eq_check = stepper.t + 0.5
+                if q_s is None or _state_distance(stepper.q - q_s, stepper.qdot, 0.05) > 0.3:
                     # Far from the known static state and almost at rest: maybe
                     # another equilibrium (e.g. a buckled branch at alpha = pi).
                     if np.sqrt(np.mean(stepper.qdot**2)) < 1e-3:
@@ -575,8 +573,8 @@ def find_attractor(
                         except NewtonError:
                             pass
                 if q_s is not None and stable:
-                    d = _state_distance(stepper.q - q_s, stepper.qdot, 0.1)
-                    if d < equilibrium_radius and d < d_prev:
+                    d = _state_distance(stepper.q - q_s, stepper.qdot, 0.05)
+                    if d < equilibrium_radius and d <= d_prev:
                         tv = tip_coordinates(disc, alpha, q_s)
                         tip = {k: [float(tv[k]), float(tv[k])] for k in TIP_KEYS}
                         result = finish("equilibrium", tip=tip, q=q_s.copy(), p=np.zeros(n))

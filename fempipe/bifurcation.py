@@ -1,0 +1,465 @@
+"""Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10).
+
+A sweep steps v up (or down) through a list of values; each point starts
+from the attractor of the previous one (plus a small perturbation when that
+attractor is an equilibrium, since an equilibrium of one v is not one of the
+next only approximately, and not at all at alpha = 0 where theta = 0 is static
+for every v) and records, with :func:`fempipe.limit_cycle.find_attractor`, the
+kind of attractor, its period and the extrema of eta(1), X_g(1), Z_g(1).
+Sweeping up and down shows hysteresis where a stable equilibrium and a stable
+cycle coexist (subcritical Hopf).
+
+Independent sweeps (up and down, several alpha) run in parallel on any
+:class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``, or a Dask
+``Client.get_executor()``).  Every finished point is written at once as its own
+JSON file (atomically: temporary file + ``os.replace``) in a point store; a
+rerun on the same store loads the finished points, including the state each
+one ended on, and computes only the rest, so the chain of starting states and
+hence the results are the same as in an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .dynamics import initial_state
+from .limit_cycle import find_attractor
+from .operators import PipeModel
+
+__all__ = [
+    "BifurcationPoint",
+    "PointStore",
+    "sweep",
+    "bifurcation_diagram",
+    "DIRECTIONS",
+    "BifurcationDiagram",
+]
+
+log = logging.getLogger(__name__)
+
+DIRECTIONS = ("up", "down")
+
+
+@dataclass(frozen=True)
+class BifurcationPoint:
+    """One point of a sweep.
+
+    Attributes
+    ----------
+    v : float
+    direction : str
+        ``"up"`` or ``"down"``.
+    index : int
+        Position in the sweep.
+    alpha : float
+    attractor : str
+        ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
+    eta_tip, X_tip, Z_tip : list of float
+        [min, max] on the attractor.
+    period : float or None
+    period_n : int or None
+    max_multiplier : float or None
+        Largest non-trivial Floquet multiplier modulus of a periodic attractor.
+    steps, rejected_steps : int
+    wall_time : float
+    q, qdot : ndarray
+        The state the point ended on (start of the next point).
+    """
+
+    v: float
+    direction: str
+    index: int
+    alpha: float
+    attractor: str
+    eta_tip: list
+    X_tip: list
+    Z_tip: list
+    period: float | None
+    period_n: int | None
+    max_multiplier: float | None
+    steps: int
+    rejected_steps: int
+    wall_time: float
+    q: np.ndarray = field(repr=False)
+    qdot: np.ndarray = field(repr=False)
+
+    def to_dict(self, state: bool = False) -> dict:
+        d = {
+            "v": self.v,
+            "direction": self.direction,
+            "index": self.index,
+            "alpha": self.alpha,
+            "attractor": self.attractor,
+            "eta_tip": self.eta_tip,
+            "X_tip": self.X_tip,
+            "Z_tip": self.Z_tip,
+            "period": self.period,
+            "period_n": self.period_n,
+            "max_multiplier": self.max_multiplier,
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "wall_time": self.wall_time,
+        }
+        if state:
+            # repr-exact floats: a resumed sweep restarts from exactly this state.
+            d["q"] = [float(x) for x in self.q]
+            d["qdot"] = [float(x) for x in self.qdot]
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> BifurcationPoint:
+        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot")}
+        return cls(**kw, q=np.asarray(d["q"], dtype=float), qdot=np.asarray(d["qdot"], dtype=float))
+
+
+class PointStore:
+    """A directory of finished points, one JSON file each, written atomically.
+
+    Parameters
+    ----------
+    directory : path
+        Created if missing.
+    manifest : dict
+        Describes the run (discretisation, parameters but v, values, options).
+        A store written by a different run is refused (ValueError), so that a
+        resume never mixes results.
+    """
+
+    def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.manifest = json.loads(json.dumps(manifest))
+        path = self.directory / "run.json"
+        if path.exists():
+            old = json.loads(path.read_text())
+            if old != self.manifest:
+                raise ValueError(
+                    f"point store {self.directory} holds a different run "
+                    f"(run.json differs); use another directory or delete it"
+                )
+        else:
+            _atomic_write(path, json.dumps(self.manifest, indent=1))
+
+    def path(self, alpha_index: int, direction: str, index: int) -> Path:
+        return self.directory / f"a{alpha_index:02d}-{direction}-{index:03d}.json"
+
+    def load(self, alpha_index: int, direction: str, index: int) -> BifurcationPoint | None:
+        p = self.path(alpha_index, direction, index)
+        if not p.exists():
+            return None
+        return BifurcationPoint.from_dict(json.loads(p.read_text()))
+
+    def save(self, alpha_index: int, point: BifurcationPoint) -> None:
+        _atomic_write(
+            self.path(alpha_index, point.direction, point.index),
+            json.dumps(point.to_dict(state=True)),
+        )
+
+    def count(self) -> int:
+        return sum(1 for _ in self.directory.glob("a*-*-*.json"))
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _ordered(values: Sequence[float], direction: str) -> list[float]:
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
+    vals = sorted(float(v) for v in values)
+    return vals if direction == "up" else vals[::-1]
+
+
+def sweep(
+    model: PipeModel,
+    values: Sequence[float],
+    direction: str = "up",
+    *,
+    q0: np.ndarray | None = None,
+    qdot0: np.ndarray | None = None,
+    perturbation: float = 0.01,
+    store: PointStore | None = None,
+    alpha_index: int = 0,
+    progress: Callable[[BifurcationPoint], None] | None = None,
+    **attractor_options,
+) -> list[BifurcationPoint]:
+    """Sweep the flow velocity, each point starting from the previous attractor.
+
+    Parameters
+    ----------
+    model : PipeModel
+        Its ``params.v`` is replaced by each value.
+    values : sequence of float
+        Flow velocities (sorted up or down according to ``direction``).
+    direction : {"up", "down"}
+    q0, qdot0 : ndarray, optional
+        Start of the first point (default: static state + perturbation).
+    perturbation : float
+        Amplitude (rad, first sine mode) added when the previous attractor is
+        an equilibrium.
+    store : PointStore, optional
+        Finished points are read from and written to it (resume).
+    alpha_index : int
+        Index of this sweep's alpha in the store's file names.
+    progress : callable, optional
+        Called with each finished (or loaded) point.
+    **attractor_options
+        Passed to :func:`fempipe.limit_cycle.find_attractor` (``t_max``,
+        ``rtol``, ``shoot_rtol`` ...).
+
+    Returns
+    -------
+    list of BifurcationPoint
+    """
+    vals = _ordered(values, direction)
+    if not vals:
+        raise ValueError("values must not be empty")
+    q, p = q0, qdot0
+    previous_equilibrium = q0 is None
+    points = []
+    for i, v in enumerate(vals):
+        m = model.with_params(model.params.with_flow(v))
+        if store is not None:
+            old = store.load(alpha_index, direction, i)
+            if old is not None:
+                if not math.isclose(old.v, v, rel_tol=0, abs_tol=1e-12):
+                    raise ValueError(
+                        f"stored point {i} ({direction}) has v = {old.v}, expected {v}"
+                    )
+                points.append(old)
+                q, p = old.q, old.qdot
+                previous_equilibrium = old.attractor == "equilibrium"
+                if progress is not None:
+                    progress(old)
+                continue
+        if q is None:
+            q, p = initial_state(m, 1, perturbation)
+        elif previous_equilibrium:
+            dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
+            q, p = np.asarray(q) + dq, np.zeros(m.n)
+        t0 = time.perf_counter()
+        att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
+        point = BifurcationPoint(
+            v=float(v),
+            direction=direction,
+            index=i,
+            alpha=float(m.params.alpha),
+            attractor=att.kind,
+            eta_tip=att.tip["eta_tip"] if att.tip else [math.nan, math.nan],
+            X_tip=att.tip["X_tip"] if att.tip else [math.nan, math.nan],
+            Z_tip=att.tip["Z_tip"] if att.tip else [math.nan, math.nan],
+            period=att.period,
+            period_n=att.period_n,
+            max_multiplier=(att.cycle.max_nontrivial_multiplier if att.cycle else None),
+            steps=att.stats["steps"],
+            rejected_steps=att.stats["rejected_steps"],
+            wall_time=time.perf_counter() - t0,
+            q=np.asarray(att.q, dtype=float),
+            qdot=np.asarray(att.qdot, dtype=float),
+        )
+        log.info(
+            "%s v=%.4g: %s, eta_tip [%.4g, %.4g] (%.1f s)",
+            direction,
+            v,
+            att.kind,
+            point.eta_tip[0],
+            point.eta_tip[1],
+            point.wall_time,
+        )
+        if store is not None:
+            store.save(alpha_index, point)
+        points.append(point)
+        q, p = point.q, point.qdot
+        previous_equilibrium = att.kind == "equilibrium"
+        if progress is not None:
+            progress(point)
+    return points
+
+
+def _sweep_task(model, values, direction, alpha_index, store_dir, manifest, options):
+    """One independent sweep in a worker process: rebuilds the store, runs, returns dicts."""
+    store = PointStore(store_dir, manifest)
+    pts = sweep(model, values, direction, store=store, alpha_index=alpha_index, **options)
+    return [pt.to_dict(state=False) for pt in pts]
+
+
+def _manifest(model: PipeModel, values, directions, alphas, options) -> dict:
+    p = model.params.to_dict()
+    p.pop("v")
+    p.pop("alpha")
+    return {
+        "discretization": model.disc.to_dict(),
+        "params": p,
+        "alphas": [float(a) for a in alphas],
+        "values": sorted(float(v) for v in values),
+        "directions": list(directions),
+        "options": {k: options[k] for k in sorted(options)},
+    }
+
+
+@dataclass(frozen=True)
+class BifurcationDiagram:
+    """All points of a set of sweeps, with run diagnostics."""
+
+    points: list
+    wall_time: float
+    manifest: dict
+
+    def to_dict(self) -> dict:
+        return {
+            "points": [p if isinstance(p, dict) else p.to_dict() for p in self.points],
+            "wall_time": self.wall_time,
+            "discretization": self.manifest["discretization"],
+            "params": self.manifest["params"],
+        }
+
+
+def bifurcation_diagram(
+    model: PipeModel,
+    values: Sequence[float],
+    directions: Sequence[str] = DIRECTIONS,
+    *,
+    alphas: Sequence[float] | None = None,
+    store_dir: str | os.PathLike | None = None,
+    executor: Executor | None = None,
+    workers: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    **attractor_options,
+) -> BifurcationDiagram:
+    """Sweeps up and/or down (for one or several alpha), in parallel.
+
+    Parameters
+    ----------
+    model : PipeModel
+    values : sequence of float
+        Flow velocities.
+    directions : sequence of {"up", "down"}
+    alphas : sequence of float, optional
+        Inclinations; default ``[model.params.alpha]``.
+    store_dir : path, optional
+        Point store (resume); a temporary directory if omitted.
+    executor : concurrent.futures.Executor, optional
+        Runs the independent sweeps (any Executor: process pool, Dask's
+        ``Client.get_executor()``).  With a remote executor the store directory
+        must be visible to the workers.
+    workers : int, optional
+        Without an executor: > 1 starts a local ``ProcessPoolExecutor`` with
+        that many processes; 1 or None runs in this process.
+    progress : callable, optional
+        Called as ``progress(done, total)`` when points finish.
+    **attractor_options
+        Passed to :func:`fempipe.limit_cycle.find_attractor`.
+
+    Returns
+    -------
+    BifurcationDiagram
+        Points ordered by alpha, direction, then sweep order.
+    """
+    t0 = time.perf_counter()
+    directions = list(directions)
+    for d in directions:
+        if d not in DIRECTIONS:
+            raise ValueError(f"direction must be 'up' or 'down', got {d!r}")
+    if not len(values):
+        raise ValueError("values must not be empty")
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
+    manifest = _manifest(model, values, directions, alphas, attractor_options)
+    tmp = None
+    if store_dir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="fempipe-sweep-")
+        store_dir = tmp.name
+    store = PointStore(store_dir, manifest)
+    total = len(values) * len(directions) * len(alphas)
+    tasks = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]  # independent sweeps
+    results: dict = {}
+    own_pool = None
+    try:
+        if executor is None and workers is not None and int(workers) > 1:
+            own_pool = ProcessPoolExecutor(max_workers=int(workers))
+            executor = own_pool
+        if executor is None:
+            done = 0
+            for ia, a, d in tasks:
+                m = model.with_params(_replace_alpha(model.params, a))
+
+                def on_point(_pt):
+                    nonlocal done
+                    done += 1
+                    if progress is not None:
+                        progress(done, total)
+
+                pts = sweep(
+                    m,
+                    values,
+                    d,
+                    store=store,
+                    alpha_index=ia,
+                    progress=on_point,
+                    **attractor_options,
+                )
+                results[(ia, d)] = [pt.to_dict() for pt in pts]
+        else:
+            futures = {}
+            for ia, a, d in tasks:
+                m = model.with_params(_replace_alpha(model.params, a))
+                fut = executor.submit(
+                    _sweep_task,
+                    m,
+                    list(values),
+                    d,
+                    ia,
+                    str(store_dir),
+                    manifest,
+                    dict(attractor_options),
+                )
+                futures[fut] = (ia, d)
+            pending = set(futures)
+            last = -1
+            while pending:
+                finished = {f for f in pending if f.done()}
+                pending -= finished
+                if progress is not None:
+                    n = store.count()
+                    if n != last:
+                        progress(n, total)
+                        last = n
+                if pending:
+                    time.sleep(0.2)
+            for fut, key in futures.items():
+                results[key] = fut.result()
+            if progress is not None and store.count() != last:
+                progress(store.count(), total)
+    finally:
+        if own_pool is not None:
+            own_pool.shutdown()
+        if tmp is not None:
+            tmp.cleanup()
+    points = [pt for ia, _a, d in tasks for pt in results[(ia, d)]]
+    return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)
+
+
+def _replace_alpha(params, alpha: float):
+    from dataclasses import replace
+
+    return replace(params, alpha=float(alpha))
