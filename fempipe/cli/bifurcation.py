@@ -1,0 +1,231 @@
+"""``fempipe bifurcation``: tip extrema on the attractor against v, swept up and down.
+
+Each point starts from the attractor of the previous one
+(:func:`fempipe.bifurcation.sweep`); up and down sweeps (and several
+inclinations given with ``--alphas``) are independent and run in parallel on
+``--workers N`` local processes or on a Dask cluster (``--dask tcp://host:port``,
+needs the optional extra ``fempipe[dask]``).
+
+``--json`` prints ``{"points": [{"v", "direction", "attractor", "eta_tip":
+[min, max], "X_tip": [...], "Z_tip": [...], "period"}, ...]}``.  ``--out DIR``
+writes bifurcation.json, the diagrams eta_tip.png (Fig. 7), X_tip.png
+(Fig. 9), Z_tip.png (Fig. 10), and keeps the point store DIR/points/: every
+finished point is written at once, and rerunning the same command resumes,
+computing only the missing points.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    common.add_physical_arguments(parser)
+    common.add_flow_arguments(parser, default="5:12:36")
+    common.add_discretization_arguments(parser)
+    g = parser.add_argument_group("sweep")
+    g.add_argument(
+        "--directions",
+        metavar="D",
+        default="up,down",
+        help="sweep directions: up, down or up,down (default up,down)",
+    )
+    g.add_argument(
+        "--alphas",
+        metavar="LIST",
+        default=None,
+        help="several inclinations swept independently (alpha spellings, e.g. 0,pi/4,pi/2); "
+        "overrides --alpha",
+    )
+    g.add_argument("--t-max", metavar="T", default="300", help="longest integration per point")
+    g.add_argument("--rtol", metavar="TOL", default="1e-5", help="transient tolerance (1e-5)")
+    g.add_argument("--shoot-rtol", metavar="TOL", default="1e-7", help="shooting tolerance (1e-7)")
+    par = parser.add_argument_group("parallel")
+    ex = par.add_mutually_exclusive_group()
+    ex.add_argument(
+        "--workers", metavar="N", default="1", help="local processes for independent sweeps (1)"
+    )
+    ex.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        default=None,
+        help="run the sweeps on a Dask cluster, e.g. tcp://127.0.0.1:8786 (needs fempipe[dask]; "
+        "the --out directory must be visible to the workers)",
+    )
+    common.add_output_arguments(parser)
+
+
+def _positive(args, name: str, hi: float | None = None) -> float:
+    opt = "--" + name.replace("_", "-")
+    try:
+        x = common.parse_float(getattr(args, name), opt)
+    except ValueError as exc:
+        raise CLIError(opt, str(exc)) from None
+    if x <= 0 or (hi is not None and x > hi):
+        rng = f"0 < {opt} <= {hi:g}" if hi is not None else f"{opt} > 0"
+        raise CLIError(opt, f"must satisfy {rng}, got {x:g}")
+    return x
+
+
+def _parse(args):
+    directions = [d.strip() for d in str(args.directions).split(",")]
+    if not directions or any(d not in ("up", "down") for d in directions):
+        raise CLIError("--directions", f"expects up, down or up,down, got {args.directions!r}")
+    if len(set(directions)) != len(directions):
+        raise CLIError("--directions", f"repeats a direction: {args.directions!r}")
+    alphas = None
+    if args.alphas is not None:
+        items = str(args.alphas).split(",")
+        try:
+            alphas = [common.parse_alpha(s) for s in items]
+        except ValueError as exc:
+            raise CLIError("--alphas", str(exc).replace("--alpha", "--alphas")) from None
+    try:
+        workers = int(args.workers)
+    except ValueError:
+        raise CLIError("--workers", f"expects an integer >= 1, got {args.workers!r}") from None
+    if workers < 1:
+        raise CLIError("--workers", f"expects an integer >= 1, got {workers}")
+    return directions, alphas, workers
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe.bifurcation import bifurcation_diagram
+    from fempipe.dynamics import IntegrationError
+    from fempipe.io import json_dumps
+    from fempipe.operators import PipeModel
+
+    setup = common.setup_from_args(args)
+    directions, alphas, workers = _parse(args)
+    t_max = _positive(args, "t_max")
+    rtol = _positive(args, "rtol", 0.1)
+    shoot_rtol = _positive(args, "shoot_rtol", 0.1)
+    if not setup.v:
+        raise CLIError("--v", "no flow velocities to sweep")
+    executor = client = None
+    if args.dask is not None:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise CLIError(
+                "--dask", "needs dask.distributed: pip install 'fempipe[dask]'"
+            ) from None
+        try:
+            client = Client(args.dask, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise CLIError("--dask", f"cannot connect to {args.dask}: {exc}") from None
+        executor = client.get_executor()
+    store_dir = None
+    if args.out is not None:
+        from pathlib import Path
+
+        store_dir = Path(args.out) / "points"
+    model = PipeModel(setup.disc, setup.params)
+    n_alpha = 1 if alphas is None else len(alphas)
+    total = len(setup.v) * len(directions) * n_alpha
+    try:
+        with common.progress(args, total, "bifurcation") as bar:
+            seen = [0]
+
+            def on_progress(done, _total):
+                if done > seen[0]:
+                    bar.update(done - seen[0])
+                    seen[0] = done
+
+            try:
+                diagram = bifurcation_diagram(
+                    model,
+                    setup.v,
+                    directions,
+                    alphas=alphas,
+                    store_dir=store_dir,
+                    executor=executor,
+                    workers=workers if executor is None else None,
+                    progress=on_progress,
+                    t_max=t_max,
+                    rtol=rtol,
+                    shoot_rtol=shoot_rtol,
+                )
+            except ValueError as exc:
+                if "point store" in str(exc):
+                    raise CLIError("--out", str(exc)) from None
+                raise
+            except IntegrationError as exc:
+                print(
+                    f"fempipe bifurcation: error: {' '.join(str(exc).split())}; "
+                    "finished points are kept in the point store",
+                    file=sys.stderr,
+                )
+                return 1
+    finally:
+        if client is not None:
+            client.close()
+
+    result = setup.to_dict()
+    result["params"].pop("v", None)
+    if alphas is not None:
+        result["params"]["alphas"] = alphas
+    result["points"] = diagram.points
+    result["wall_time"] = diagram.wall_time
+    if args.out is not None:
+        _write_outputs(args, result, alphas)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print_table(result)
+    return 0
+
+
+def _write_outputs(args, result, alphas) -> None:
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fempipe.io import write_figure, write_json
+    from fempipe.plotting.dynamics import plot_bifurcation
+
+    out = Path(args.out)
+    p = result["params"]
+    figure = {"eta_tip": "Fig. 7", "X_tip": "Fig. 9", "Z_tip": "Fig. 10"}
+    for key, fig_name in figure.items():
+        groups = sorted({pt["alpha"] for pt in result["points"]})
+        fig, axes = plt.subplots(1, len(groups), figsize=(5.5 * len(groups), 4), squeeze=False)
+        try:
+            for ax, a in zip(axes[0], groups, strict=True):
+                pts = [pt for pt in result["points"] if pt["alpha"] == a]
+                plot_bifurcation(
+                    pts,
+                    key,
+                    ax=ax,
+                    title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
+                    f"γ = {p['gamma']:.4g} (cf. {fig_name})",
+                )
+            write_figure(out / f"{key}.png", fig, dpi=130)
+        finally:
+            plt.close(fig)
+    write_json(out / "bifurcation.json", result)
+    if not args.json and args.progress is not False:
+        for name in ("bifurcation.json", "eta_tip.png", "X_tip.png", "Z_tip.png", "points/"):
+            print(f"wrote {out / name}", file=sys.stderr)
+
+
+def _print_table(result: dict) -> None:
+    print(
+        f"{'alpha':>8s} {'dir':>4s} {'v':>8s} {'attractor':>12s} {'period':>10s} "
+        f"{'eta_min':>9s} {'eta_max':>9s} {'X_min':>9s} {'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}"
+    )
+    for pt in result["points"]:
+        per = f"{pt['period']:.6g}" if pt["period"] else "-"
+        print(
+            f"{pt['alpha']:8.4g} {pt['direction']:>4s} {pt['v']:8.4g} {pt['attractor']:>12s} "
+            f"{per:>10s} {pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f} "
+            f"{pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} {pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
+        )

@@ -1,0 +1,262 @@
+"""``fempipe simulate``: nonlinear time integration of Eq. (20) and its attractor.
+
+Starts from the static state plus a small perturbation in a chosen sine mode,
+integrates past the transient, classifies the attractor (equilibrium,
+periodic with its period-n, non-periodic) and computes a limit cycle by
+shooting with the monodromy matrix (period, tip extrema, Floquet multipliers).
+With ``--sigma`` > 0 the flow pulsates, v(tau) = v (1 + sigma sin(omega tau)),
+and the command integrates to ``--t-max`` and reports the tip extrema over the
+second half (``"attractor": "forced"``, no classification).
+
+``--json`` prints ``{"attractor", "period", "tip": {"eta_tip": [min, max],
+"X_tip": [...], "Z_tip": [...]}, "floquet_multipliers", "steps",
+"rejected_steps", "wall_time", ...}``.  ``--out DIR`` writes simulate.json,
+time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
+oscillating_shapes.png, pipe.gif and trajectory.pvd (+ trajectory/ VTU frames).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+import numpy as np
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    common.add_physical_arguments(parser)
+    common.add_flow_arguments(parser, default="10")
+    common.add_discretization_arguments(parser)
+    g = parser.add_argument_group("time integration")
+    g.add_argument("--t-max", metavar="T", default="300", help="longest integration in tau (300)")
+    g.add_argument(
+        "--rtol", metavar="TOL", default="1e-5", help="tolerance of the transient (1e-5)"
+    )
+    g.add_argument(
+        "--shoot-rtol",
+        metavar="TOL",
+        default="1e-7",
+        help="integration tolerance of the shooting; sets the accuracy of the cycle (1e-7)",
+    )
+    g.add_argument(
+        "--mode", metavar="R", default="1", help="sine mode r of the initial perturbation (1)"
+    )
+    g.add_argument(
+        "--amplitude", metavar="A", default="0.01", help="initial perturbation in rad (0.01)"
+    )
+    g.add_argument(
+        "--no-shooting",
+        action="store_true",
+        help="accept a cycle when successive Poincare returns agree to 1e-6 (long integration)",
+    )
+    g.add_argument(
+        "--sigma", metavar="S", default="0", help="pulsating flow amplitude, 0 <= S <= 1 (0)"
+    )
+    g.add_argument("--omega", metavar="W", default="0", help="pulsating flow frequency (0)")
+    common.add_output_arguments(parser)
+
+
+def _float(args, name: str, lo: float | None = None, hi: float | None = None, strict=False):
+    opt = "--" + name.replace("_", "-")
+    try:
+        x = common.parse_float(getattr(args, name), opt)
+    except ValueError as exc:
+        raise CLIError(opt, str(exc)) from None
+    if lo is not None and (x < lo or (strict and x == lo)):
+        raise CLIError(opt, f"must be {'>' if strict else '>='} {lo:g}, got {x:g}")
+    if hi is not None and x > hi:
+        raise CLIError(opt, f"must be <= {hi:g}, got {x:g}")
+    return x
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe.dynamics import IntegrationError, PulsatingFlow, initial_state, simulate
+    from fempipe.io import json_dumps
+    from fempipe.limit_cycle import TIP_KEYS, find_attractor, tip_coordinates
+    from fempipe.operators import PipeModel
+    from fempipe.static import solve_static
+
+    setup = common.setup_from_args(args)
+    if len(setup.v) != 1:
+        opt = "--U" if args.U is not None else "--v"
+        raise CLIError(opt, f"simulate takes a single flow velocity, got {len(setup.v)}")
+    t_max = _float(args, "t_max", 0.0, strict=True)
+    rtol = _float(args, "rtol", 0.0, 0.1, strict=True)
+    shoot_rtol = _float(args, "shoot_rtol", 0.0, 0.1, strict=True)
+    amplitude = _float(args, "amplitude")
+    sigma = _float(args, "sigma", 0.0, 1.0)
+    omega = _float(args, "omega", 0.0)
+    try:
+        mode = int(args.mode)
+    except ValueError:
+        raise CLIError("--mode", f"expects an integer >= 1, got {args.mode!r}") from None
+    if mode < 1:
+        raise CLIError("--mode", f"expects an integer >= 1, got {mode}")
+
+    params, disc = setup.params, setup.disc
+    model = PipeModel(disc, params)
+    q_s = solve_static(model).q
+    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
+    t_start = time.perf_counter()
+    with common.progress(args, 100, f"simulate v={params.v:g}") as bar:
+        last = [0]
+
+        def on_time(t):
+            k = min(100, int(100 * t / t_max))
+            if k > last[0]:
+                bar.update(k - last[0])
+                last[0] = k
+
+        try:
+            if sigma > 0:
+                flow = PulsatingFlow(params.v, sigma, omega)
+                traj = simulate(model, q0, p0, t_max, rtol=rtol, flow=flow, callback=on_time)
+                att = None
+            else:
+                att = find_attractor(
+                    model,
+                    q0,
+                    p0,
+                    t_max=t_max,
+                    rtol=rtol,
+                    shoot_rtol=shoot_rtol,
+                    use_shooting=not args.no_shooting,
+                    record=True,
+                    callback=on_time,
+                )
+                traj = att.trajectory
+        except IntegrationError as exc:
+            print(f"fempipe simulate: error: {' '.join(str(exc).split())}", file=sys.stderr)
+            return 1
+
+    result = setup.to_dict()
+    result["params"]["v"] = params.v
+    if att is None:
+        half = traj.t >= 0.5 * traj.t[-1]
+        tc = tip_coordinates(disc, params.alpha, traj.q[half])
+        result.update(
+            {
+                "attractor": "forced",
+                "period": None,
+                "tip": {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS},
+                "floquet_multipliers": None,
+                "flow": {"v0": params.v, "sigma": sigma, "omega": omega},
+            }
+        )
+        result.update(traj.stats())
+    else:
+        d = att.to_dict()
+        d.pop("params")
+        result.update(d)
+    result["wall_time"] = time.perf_counter() - t_start
+    if setup.pipe is not None:
+        ts = setup.pipe.time_scale
+        result["period_s"] = result["period"] * ts if result.get("period") else None
+        result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
+
+    if args.out is not None:
+        _write_outputs(args, result, model, traj, att)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print_summary(result)
+    return 0
+
+
+def _display_states(att, traj, n_periods: int = 3):
+    """(t, q, qdot) for the figures: the transient, then a few periods of the cycle."""
+    t, q, p = traj.t, traj.q, traj.qdot
+    if att is not None and att.cycle is not None:
+        c = att.cycle
+        tt = [t]
+        qq, pp = [q], [p]
+        for k in range(n_periods):
+            tt.append(t[-1] + k * c.period + c.orbit_t[1:])
+            qq.append(c.orbit_q[1:])
+            pp.append(c.orbit_qdot[1:])
+        return np.concatenate(tt), np.concatenate(qq), np.concatenate(pp)
+    return t, q, p
+
+
+def _write_outputs(args, result, model, traj, att) -> None:
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fempipe.io import write_figure, write_json
+    from fempipe.plotting.dynamics import (
+        animate,
+        plot_oscillating_shapes,
+        plot_phase_portrait,
+        plot_time_traces,
+    )
+    from fempipe.trajectory_io import write_trajectory
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    disc, p = model.disc, model.params
+    title = f"α = {math.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, v = {p.v:.4g}"
+    t, q, qd = _display_states(att, traj)
+    # Phase portrait, shapes and animation on the attractor: the cycle if any,
+    # else the second half of the computed motion.
+    if att is not None and att.cycle is not None:
+        ct, cq = att.cycle.orbit_t, att.cycle.orbit_q
+    else:
+        half = t >= 0.5 * t[-1]
+        ct, cq = t[half], q[half]
+    figs = []
+    try:
+        ax = plot_time_traces(disc, p.alpha, t, q, title=title)
+        figs.append(("time_traces.png", ax.figure))
+        ax = plot_phase_portrait(disc, p.alpha, q[t >= 0.5 * t[-1]], qd[t >= 0.5 * t[-1]])
+        ax.set_title(title, fontsize="small")
+        figs.append(("phase_portrait.png", ax.figure))
+        ax = plot_oscillating_shapes(disc, p.alpha, cq, title=title)
+        figs.append(("oscillating_shapes.png", ax.figure))
+        for name, fig in figs:
+            write_figure(out / name, fig, dpi=130)
+    finally:
+        for _, fig in figs:
+            plt.close(fig)
+    frames = np.linspace(0, len(ct) - 1, min(48, len(ct))).round().astype(int)
+    animate(out / "pipe.gif", disc, p.alpha, ct[frames], cq[frames], fps=16, title=title)
+    write_trajectory(out / "trajectory.pvd", disc, p.alpha, t, q, qd)
+    write_json(out / "simulate.json", result)
+    if not args.json and args.progress is not False:
+        for name in (
+            "simulate.json",
+            "time_traces.png",
+            "phase_portrait.png",
+            "oscillating_shapes.png",
+            "pipe.gif",
+            "trajectory.pvd",
+        ):
+            print(f"wrote {out / name}", file=sys.stderr)
+
+
+def _print_summary(r: dict) -> None:
+    p = r["params"]
+    print(
+        f"alpha = {p['alpha']:.6g}, beta = {p['beta']:.6g}, gamma = {p['gamma']:.6g}, "
+        f"mu = {p['mu']:.6g}, v = {p['v']:.6g}"
+    )
+    line = f"attractor: {r['attractor']}"
+    if r.get("period"):
+        line += f", period {r['period']:.8g}"
+        if r.get("period_n"):
+            line += f" (period-{r['period_n']})"
+    print(line)
+    for k, (lo, hi) in r["tip"].items():
+        print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
+    if r.get("floquet_multipliers"):
+        mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"])
+        print(f"  |Floquet multipliers| {mus}")
+    print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")

@@ -1,0 +1,206 @@
+"""Figures of the nonlinear oscillation (Section 5 of the paper).
+
+* :func:`plot_time_traces` - tip position X_g(1), Z_g(1) against tau (Fig. 11);
+* :func:`plot_phase_portrait` - Z_g(1) against its velocity (Fig. 12);
+* :func:`plot_oscillating_shapes` - overlaid centrelines over one period in the
+  global frame, gravity down the page, equal axes (the insets of Figs. 7, 9);
+* :func:`plot_bifurcation` - extrema of a tip coordinate against v, sweeps up
+  and down (Figs. 7, 9, 10);
+* :func:`animate` - an animated GIF of the moving pipe (matplotlib PillowWriter).
+
+matplotlib is imported inside each function; every function takes ``ax=None``
+and returns the Axes (``animate`` returns the path written).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = [
+    "plot_time_traces",
+    "plot_phase_portrait",
+    "plot_oscillating_shapes",
+    "plot_bifurcation",
+    "animate",
+]
+
+_LABEL = {"eta_tip": r"$\eta(1)$", "X_tip": r"$X_{g}(1)$", "Z_tip": r"$Z_{g}(1)$"}
+
+
+def _axes(ax, figsize=(6, 4)):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=figsize)
+    return ax
+
+
+def _tip_series(disc, alpha: float, q: np.ndarray, qdot: np.ndarray | None = None) -> dict:
+    from fempipe.limit_cycle import tip_coordinates
+
+    out = tip_coordinates(disc, alpha, np.atleast_2d(q))
+    if qdot is not None:
+        th = disc.Phi @ np.atleast_2d(q).T
+        thd = disc.Phi @ np.atleast_2d(qdot).T
+        w = disc.quad.w
+        out["Z_dot"] = w @ (thd * np.cos(th + alpha))
+        out["X_dot"] = -(w @ (thd * np.sin(th + alpha)))
+    return out
+
+
+def plot_time_traces(disc, alpha: float, t, q, ax=None, title: str | None = None):
+    """Tip position in the global frame against time, Fig. 11.
+
+    Parameters
+    ----------
+    disc : Discretization
+    alpha : float
+    t : ndarray, shape (m,)
+    q : ndarray, shape (m, n)
+    """
+    ax = _axes(ax, (7, 3.5))
+    tip = _tip_series(disc, alpha, q)
+    ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
+    ax.plot(t, tip["Z_tip"], label=_LABEL["Z_tip"] + " (horizontal)")
+    ax.set_xlabel(r"$\tau$")
+    ax.set_ylabel("tip position")
+    ax.legend(loc="upper right", fontsize="small")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_phase_portrait(
+    disc, alpha: float, q, qdot, ax=None, coordinate: str = "Z_tip", label=None, title=None
+):
+    """Phase trajectory of a tip coordinate (Z_g(1) by default), Fig. 12."""
+    if coordinate not in ("Z_tip", "X_tip"):
+        raise ValueError(f"coordinate must be 'Z_tip' or 'X_tip', got {coordinate!r}")
+    ax = _axes(ax, (4.5, 4))
+    tip = _tip_series(disc, alpha, q, qdot)
+    dot = tip["Z_dot"] if coordinate == "Z_tip" else tip["X_dot"]
+    ax.plot(tip[coordinate], dot, lw=1.0, label=label)
+    ax.set_xlabel(_LABEL[coordinate])
+    ax.set_ylabel(r"$d$" + _LABEL[coordinate] + r"$/d\tau$")
+    ax.grid(alpha=0.3)
+    if label:
+        ax.legend(fontsize="small")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_oscillating_shapes(disc, alpha: float, q, ax=None, n_shapes: int = 12, title=None):
+    """Overlaid centrelines in the global frame: Z_g across, X_g (gravity) down the page.
+
+    Parameters
+    ----------
+    q : ndarray, shape (m, n)
+        States over (about) one period; ``n_shapes`` of them are drawn.
+    """
+    import matplotlib.pyplot as plt
+
+    from fempipe.kinematics import shape
+
+    ax = _axes(ax, (4.5, 5))
+    q = np.atleast_2d(q)
+    idx = np.linspace(0, q.shape[0] - 1, min(n_shapes, q.shape[0])).round().astype(int)
+    cmap = plt.get_cmap("viridis")
+    for j, k in enumerate(idx):
+        s = shape(disc, q[k], alpha)
+        ax.plot(s.Z_g, s.X_g, color=cmap(j / max(len(idx) - 1, 1)), lw=1.2)
+    ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8, label="undeformed")
+    ax.plot([0], [0], "ks", ms=6)
+    ax.set_aspect("equal")
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()  # X_g points along gravity: down the page
+    ax.set_xlabel(r"$Z_g$")
+    ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
+    ax.set_xlim(-1.05, 1.05)
+    ax.set_ylim(1.05, -1.05)
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_bifurcation(points: Sequence[dict], key: str = "eta_tip", ax=None, label=None, title=None):
+    """Extrema of a tip coordinate on the attractor against v (Figs. 7, 9, 10).
+
+    Parameters
+    ----------
+    points : sequence of dict
+        ``{"v", "direction", "attractor", key: [min, max]}`` as produced by
+        :func:`fempipe.bifurcation.bifurcation_diagram` (``to_dict()``).
+    key : {"eta_tip", "X_tip", "Z_tip"}
+    """
+    if key not in _LABEL:
+        raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
+    ax = _axes(ax, (6, 4))
+    style = {"up": ("o", "C0", "sweep up"), "down": ("x", "C3", "sweep down")}
+    for direction, (marker, color, text) in style.items():
+        pts = [p for p in points if p["direction"] == direction]
+        if not pts:
+            continue
+        v = np.array([p["v"] for p in pts])
+        lo = np.array([p[key][0] for p in pts], dtype=float)
+        hi = np.array([p[key][1] for p in pts], dtype=float)
+        lab = f"{label}: {text}" if label else text
+        ax.plot(v, hi, marker, color=color, ms=5, mfc="none", label=lab)
+        ax.plot(v, lo, marker, color=color, ms=5, mfc="none")
+    ax.set_xlabel(r"$v$")
+    ax.set_ylabel(_LABEL[key] + " extrema")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def animate(
+    path: str | os.PathLike, disc, alpha: float, t, q, fps: int = 20, title: str | None = None
+):
+    """Animated GIF of the moving pipe in the global frame (matplotlib PillowWriter).
+
+    Written atomically to ``path``.  Returns the path.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    from fempipe.io import atomic_path
+    from fempipe.kinematics import shape
+
+    q = np.atleast_2d(q)
+    t = np.asarray(t)
+    fig, ax = plt.subplots(figsize=(4, 4.4))
+    ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8)
+    ax.plot([0], [0], "ks", ms=6)
+    (line,) = ax.plot([], [], "C0", lw=2.5)
+    (tip,) = ax.plot([], [], "C3o", ms=5)
+    label = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top")
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.05, 1.05)
+    ax.set_ylim(1.05, -1.05)  # gravity down the page
+    ax.set_xlabel(r"$Z_g$")
+    ax.set_ylabel(r"$X_g$")
+    if title:
+        ax.set_title(title, fontsize="small")
+
+    def draw(k):
+        s = shape(disc, q[k], alpha, points_per_cell=2)
+        line.set_data(s.Z_g, s.X_g)
+        tip.set_data([s.Z_g[-1]], [s.X_g[-1]])
+        label.set_text(rf"$\tau$ = {t[k]:.3f}")
+        return line, tip, label
+
+    anim = FuncAnimation(fig, draw, frames=q.shape[0], blit=True)
+    try:
+        with atomic_path(path) as tmp:
+            anim.save(str(tmp), writer=PillowWriter(fps=fps))
+    finally:
+        plt.close(fig)
+    return path
