@@ -60,11 +60,31 @@ def model_for(disc, alpha: float, v: float) -> PipeModel:
 
 
 def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
-    """Bifurcation points for increasing v (the paper's diagrams are swept up)."""
-    from ..bifurcation import sweep
+    """Bifurcation points for increasing v (the paper's diagrams are swept up).
 
-    m = model_for(disc, alpha, float(min(values)))
-    return sweep(m, sorted(float(v) for v in values), "up", perturbation=perturbation)
+    The first point starts from the gravity-sagged static state (continuation
+    in gamma, :func:`~fempipe.validation.static_shapes.static_shapes`) plus
+    ``perturbation`` rad in the first sine mode; at alpha = pi that state is
+    the straight pipe and the +mode-1 kick selects the left buckled branch
+    (Z_g < 0), the one the paper plots.
+    """
+    from ..bifurcation import sweep
+    from ..dynamics import initial_state
+    from .static_shapes import static_shapes
+
+    values = sorted(float(v) for v in values)
+    m = model_for(disc, alpha, values[0])
+    st = static_shapes(
+        disc,
+        alpha,
+        PAPER_PARAMS["gamma"],
+        [values[0]],
+        beta=PAPER_PARAMS["beta"],
+        mu=PAPER_PARAMS["mu"],
+        n_points=3,
+    )
+    q0, qdot0 = initial_state(m, 1, perturbation, q_static=st.q[0])
+    return sweep(m, values, "up", q0=q0, qdot0=qdot0, perturbation=perturbation)
 
 
 @functools.lru_cache(maxsize=64)
@@ -180,3 +200,75 @@ def linear_onset(disc, alpha: float, v_lo: float, v_hi: float, tol: float = 1e-4
         else:
             v_hi = mid
     return 0.5 * (v_lo + v_hi)
+
+
+def project(src, q: np.ndarray, dst) -> np.ndarray:
+    """L2 projection of theta = src(q) onto the discretisation ``dst``."""
+    x, w = dst.quad.x, dst.quad.w
+    theta = src.evaluate(q, x)
+    Phi = dst.Phi.toarray() if dst.sparse else np.asarray(dst.Phi)
+    sw = np.sqrt(w)[:, None]
+    return np.linalg.lstsq(Phi * sw, theta * sw[:, 0], rcond=None)[0]
+
+
+def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
+    """The limit cycle of ``disc`` at (alpha, v), as a LimitCycle.
+
+    With ``guess = (q0, qdot0, period)`` on ``guess_disc`` (another
+    discretisation's cycle), shoot from its L2 projection: a few Newton
+    iterations instead of a transient.  Otherwise (or if shooting fails)
+    integrate past the transient with :func:`fempipe.limit_cycle.find_attractor`.
+    Returns None if the attractor is not periodic.
+    """
+    from ..limit_cycle import ShootingError, find_attractor, shoot
+
+    m = model_for(disc, alpha, v)
+    if guess is not None:
+        q0, p0, period = guess
+        try:
+            return shoot(m, project(guess_disc, q0, disc), project(guess_disc, p0, disc), period)
+        except ShootingError:
+            pass
+    att = find_attractor(m)
+    return att.cycle if att.kind == "periodic" else None
+
+
+@functools.lru_cache(maxsize=4)
+def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
+    """Limit cycles at flow ``v`` for each alpha and discretisation (cached per process).
+
+    The FE cycle is found from the static state (transient, then shooting);
+    N = 3 and N = 4 shoot from its projection.  Returns
+    ``{(alpha, label): LimitCycle or None}``.
+    """
+    discs = dyn_discretizations(quick)
+    fe_label = next(iter(discs))
+    out = {}
+    for a in alphas:
+        ref = cycle_on(discs[fe_label], a, v)
+        out[(a, fe_label)] = ref
+        for label, d in discs.items():
+            if label == fe_label:
+                continue
+            guess = None if ref is None else (ref.q0, ref.qdot0, ref.period)
+            out[(a, label)] = cycle_on(d, a, v, discs[fe_label], guess)
+    return out
+
+
+def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
+    """Tip coordinates and their rates along ``periods`` periods of a cycle."""
+    from ..kinematics import tip_velocity
+    from ..limit_cycle import tip_coordinates
+
+    q, p = cycle.orbit_q[:-1], cycle.orbit_qdot[:-1]  # the last sample repeats the first
+    tip = tip_coordinates(disc, alpha, q)
+    rates = [tip_velocity(disc, a, b, alpha) for a, b in zip(q, p, strict=True)]
+    dt = cycle.orbit_t[1] - cycle.orbit_t[0]
+    m = q.shape[0]
+    t = np.arange(periods * m + 1) * dt
+    out = {"t": t, "period": cycle.period}
+    for k in ("eta_tip", "X_tip", "Z_tip"):
+        out[k] = np.append(np.tile(tip[k], periods), tip[k][0])
+        r = np.array([x[k] for x in rates])
+        out[k + "_rate"] = np.append(np.tile(r, periods), r[0])
+    return out

@@ -1,0 +1,181 @@
+"""Fig. 11: time traces of the tip position at v = 10 for several alpha.
+
+The limit cycle at v = 10 of each inclination, computed by shooting
+(:func:`fempipe.limit_cycle.shoot`, Floquet multipliers from the monodromy
+matrix) for the converged FE mesh and for N = 3 and N = 4, drawn over three
+periods.  Checks: the cycles are periodic and stable, the tip excursion is
+close to the pipe length, and how well N = 3 and N = 4 reproduce the
+converged period and tip ranges.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .checks import CaseResult, Table, below, holds, load_references
+from .dynamic_runs import cycle_traces, cycles_at, dyn_discretizations
+
+CASE = "fig11"
+FIGURE = "Fig. 11"
+TITLE = "Time traces of X_g(1), Z_g(1) at v = 10"
+PAPER_SHOWS = (
+    "at v = 10 the pipe oscillates periodically with a tip excursion of the order of its length",
+)
+_NAMES = {1: "π/4", 2: "π/2", 3: "3π/4", 4: "π"}
+
+
+def alpha_name(alpha: float) -> str:
+    return _NAMES.get(int(round(alpha / (np.pi / 4))), f"{alpha:.4f}")
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Cycles, traces and checks; see the module docstring."""
+    t0 = time.perf_counter()
+    ref = load_references(CASE)
+    v = ref["v"]["value"]
+    alphas = tuple(ref["alpha_quick" if quick else "alpha"]["value"])
+    discs = dyn_discretizations(quick)
+    fe_label = next(iter(discs))
+    cycles = cycles_at(alphas, v, quick)
+    checks, rows, traces = [], [], {}
+    for a in alphas:
+        name = alpha_name(a)
+        fe = cycles[(a, fe_label)]
+        found = {lb: cycles[(a, lb)] is not None for lb in discs}
+        checks.append(
+            holds(
+                f"periodic_{name}",
+                f"α = {name}: the attractor at v = 10 is a stable limit cycle (all discretisations)",
+                all(found.values())
+                and all(cycles[(a, lb)].max_nontrivial_multiplier < 1 for lb in discs),
+                ", ".join(
+                    f"{lb}: "
+                    + (
+                        f"|μ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
+                        if found[lb]
+                        else "not periodic"
+                    )
+                    for lb in discs
+                ),
+                reference="periodic, |μ| < 1",
+                why="Floquet multipliers from the monodromy matrix of the shooting",
+                source="paper Sec. 5, Fig. 11",
+            )
+        )
+        if fe is None:
+            continue
+        tr = {lb: cycle_traces(discs[lb], a, cycles[(a, lb)]) for lb in discs if found[lb]}
+        traces[name] = tr
+        fx = tr[fe_label]
+        xr, zr = np.ptp(fx["X_tip"]), np.ptp(fx["Z_tip"])
+        checks.append(
+            holds(
+                f"large_{name}",
+                f"α = {name}: tip excursion close to L (≥ {ref['large']['value']:g} L)",
+                max(xr, zr) >= ref["large"]["value"],
+                f"X_g(1) range {xr:.3f} L, Z_g(1) range {zr:.3f} L",
+                reference=f"≥ {ref['large']['value']:g}",
+                why=ref["large"]["source"],
+                source="paper Sec. 5, Fig. 11",
+            )
+        )
+        for lb in discs:
+            if not found[lb]:
+                continue
+            c = cycles[(a, lb)]
+            t_ = tr[lb]
+            rows.append(
+                (
+                    name,
+                    lb,
+                    c.period,
+                    (c.period - fe.period) / fe.period,
+                    t_["X_tip"].min(),
+                    t_["X_tip"].max(),
+                    t_["Z_tip"].min(),
+                    t_["Z_tip"].max(),
+                    c.max_nontrivial_multiplier,
+                )
+            )
+            if lb == fe_label:
+                continue
+            checks.append(
+                below(
+                    f"period_{name}_{lb[-1]}",
+                    f"α = {name}: {lb} reproduces the converged period",
+                    abs(c.period - fe.period) / fe.period,
+                    ref["period_tol"]["value"],
+                    why=ref["period_tol"]["source"],
+                    source=f"fempipe converged FE ({fe_label})",
+                    category="paper",
+                )
+            )
+            dev = max(
+                max(abs(t_[k].min() - fx[k].min()), abs(t_[k].max() - fx[k].max()))
+                for k in ("X_tip", "Z_tip")
+            )
+            checks.append(
+                below(
+                    f"range_{name}_{lb[-1]}",
+                    f"α = {name}: {lb} reproduces the converged tip extrema",
+                    dev,
+                    ref["amplitude_tol"]["value"],
+                    why=ref["amplitude_tol"]["source"],
+                    source=f"fempipe converged FE ({fe_label})",
+                    category="paper",
+                )
+            )
+    table = Table(
+        "Limit cycles at v = 10",
+        (
+            "α",
+            "discretisation",
+            "period",
+            "relative period error",
+            "X_g(1) min",
+            "X_g(1) max",
+            "Z_g(1) min",
+            "Z_g(1) max",
+            "max |Floquet multiplier|",
+        ),
+        tuple(rows),
+        note="Period in τ; positions in units of L; the trivial multiplier 1 is excluded.",
+    )
+    return CaseResult(
+        case=CASE,
+        figure=FIGURE,
+        title=TITLE,
+        paper_shows=PAPER_SHOWS,
+        checks=tuple(checks),
+        tables=(table,),
+        data={"traces": traces, "v": v},
+        quick=quick,
+        runtime=time.perf_counter() - t0,
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """One row per α: X_g(1)(τ) and Z_g(1)(τ); FE solid, N = 3 dashed, N = 4 dotted."""
+    import matplotlib.pyplot as plt
+
+    from .drawing import style_for
+
+    traces = result.data["traces"]
+    n = max(len(traces), 1)
+    if fig is None:
+        fig = plt.figure(figsize=(10, 2.8 * n))
+    axes = np.atleast_2d(fig.subplots(n, 2, squeeze=False))
+    for row, (name, tr) in zip(axes, traces.items(), strict=False):
+        for lb, t_ in tr.items():
+            for ax, key in zip(row, ("X_tip", "Z_tip"), strict=True):
+                ax.plot(t_["t"], t_[key], style_for(lb), lw=1.2, label=lb)
+        for ax, lab in zip(row, (r"$X_g(1)$", r"$Z_g(1)$"), strict=True):
+            ax.set_xlabel(r"$\tau$ (from a section crossing)")
+            ax.set_ylabel(lab)
+            ax.set_title(f"Fig. 11: α = {name}, v = {result.data['v']:g}", fontsize=9)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
