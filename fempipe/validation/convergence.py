@@ -222,6 +222,65 @@ def static_study(quick: bool) -> tuple[Study, list]:
     return st, checks
 
 
+def vcr_studies(quick: bool) -> tuple[list, list]:
+    """(b) v_cr for each alpha of Fig. 6 (independent onset, Brent to 1e-12 in v)."""
+    from .onset import critical_velocity
+
+    ref = load_references(CASE)
+    q = "_quick" if quick else ""
+    studies, checks = [], []
+    for a in ref[f"vcr_alpha{q}"]["value"]:
+
+        def compute(disc, a=a) -> float:
+            return critical_velocity(disc, a, beta=0.142, gamma=18.9, mu=5e-3, xtol=1e-12).v_cr
+
+        st = run_study(
+            f"v_cr, α = {np.degrees(a):.0f}°",
+            compute,
+            ref[f"vcr_fe_elements{q}"]["value"],
+            ref[f"vcr_modes{q}"]["value"],
+            ref["fe_order"]["value"],
+            roundoff=1e-11,
+        )
+        studies.append(st)
+        checks += study_checks(
+            st, f"vcr{np.degrees(a):.0f}", ref["order_tol"]["value"], ref["fe_order"]["source"]
+        )
+    return studies, checks
+
+
+def lco_study() -> tuple[Study, list]:
+    """(c) the eta(1) amplitude of the limit cycle at alpha = 0, v = 10 (full suite)."""
+    from .dynamic_runs import cycle_on
+
+    ref = load_references(CASE)
+    a, v = ref["lco"]["value"]["alpha"], ref["lco"]["value"]["v"]
+    seed_disc = FiniteElement(8, 3)
+    seed = cycle_on(seed_disc, a, v)
+    guess = (seed.q0, seed.qdot0, seed.period)
+
+    def compute(disc) -> float:
+        c = cycle_on(disc, a, v, seed_disc, guess)
+        return float("nan") if c is None else 0.5 * (c.tip["eta_tip"][1] - c.tip["eta_tip"][0])
+
+    st = run_study(
+        "limit-cycle amplitude of η(1), α = 0, v = 10",
+        compute,
+        ref["lco_fe_elements"]["value"],
+        ref["lco_modes"]["value"],
+        ref["fe_order"]["value"],
+        roundoff=ref["lco_floor"]["value"],
+    )
+    checks = study_checks(
+        st,
+        "lco",
+        1.0,
+        ref["fe_order"]["source"] + "; tolerance 1.0 because "
+        "the fit range is short above the time-integration floor",
+    )
+    return st, checks
+
+
 def _paper_table(studies: Sequence[Study]) -> Table:
     rows = []
     for s in studies:
@@ -301,6 +360,19 @@ def run(quick: bool = False) -> CaseResult:
     st, ch = static_study(quick)
     studies.append(st)
     checks += ch
+    try:
+        import fempipe.limit_cycle  # noqa: F401 - the dynamics are optional until built
+    except ImportError:
+        have_dynamics = False
+    else:
+        have_dynamics = True
+    sts, ch = vcr_studies(quick)
+    studies += sts
+    checks += ch
+    if have_dynamics and not quick:
+        st, ch = lco_study()
+        studies.append(st)
+        checks += ch
     rows = tuple(r for s in studies for r in s.to_rows())
     data_table = Table(
         "All values and errors",

@@ -1,0 +1,190 @@
+"""Fig. 5: eigenvalues Omega against v (Argand diagrams) for several alpha.
+
+Root loci of the four lowest modes about the gravity-sagged static state,
+with mode numbers carried by continuity (:func:`fempipe.stability.root_locus`),
+for the converged FE mesh and the paper's N = 3 and N = 4; every stability
+event on the static branches (:func:`fempipe.stability.stability_analysis`).
+The paper plots Omega = -i lambda: Im Omega < 0 is unstable.
+
+Checks: flutter in the second mode for alpha != pi; for alpha = pi the
+sequence divergence (mode 1) -> restabilisation -> flutter (mode 2); v_cr
+against the independent onset of :mod:`fempipe.validation.onset`; mesh
+convergence of the event velocities.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..discretization import parse_discretization
+from ..operators import PipeModel
+from ..params import Params
+from .checks import CaseResult, Table, below, holds, load_references
+from .dynamic_runs import dyn_discretizations
+from .fig11 import alpha_name
+from .onset import critical_velocity as independent_vcr
+
+CASE = "fig05"
+FIGURE = "Fig. 5"
+TITLE = (
+    "Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilisation, flutter"
+)
+PAPER_SHOWS = (
+    "for α ≠ π the pipe loses stability by flutter in the second mode (Figs. 5(a)-(c))",
+    "for α = π: buckling in the first mode, regained stability, flutter in the second mode (Fig. 5(d))",
+)
+PARAMS = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
+
+
+def _events(model, follow: bool, v_max: float):
+    from ..stability import stability_analysis
+
+    return stability_analysis(model, v_max=v_max, follow_bifurcations=follow)
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Loci, events and checks; see the module docstring."""
+    from ..stability import root_locus
+
+    t0 = time.perf_counter()
+    ref = load_references(CASE)
+    alphas = ref["alpha_quick" if quick else "alpha"]["value"]
+    v_max = ref["v_max"]["value"]
+    dv = ref["dv_quick" if quick else "dv"]["value"]
+    values = np.round(np.arange(0.0, v_max + 1e-9, dv), 10)
+    discs = dyn_discretizations(quick=False)  # P3:8, N = 3, N = 4 (cheap for spectra)
+    fe_label = next(iter(discs))
+    checks, rows, loci = [], [], {}
+    for a in alphas:
+        name = alpha_name(a)
+        is_pi = abs(a - np.pi) < 1e-12
+        loci[name] = {}
+        results = {}
+        for label, d in discs.items():
+            m = PipeModel(d, Params(alpha=a, **PARAMS))
+            loci[name][label] = root_locus(m, values, n_modes=ref["n_modes"]["value"])
+            results[label] = _events(m, follow=is_pi, v_max=v_max)
+            for br in results[label].branches:
+                for ev in br.events:
+                    rows.append((name, label, br.name, ev.type, ev.v, ev.mode, ev.frequency))
+        fe = results[fe_label]
+        if not is_pi:
+            for label, res in results.items():
+                c = res.critical
+                ok = c is not None and c.type == "flutter" and c.mode == 2
+                checks.append(
+                    holds(
+                        f"second_mode_{name}_{label.replace(' ', '').replace('=', '')}",
+                        f"α = {name}, {label}: the first instability is flutter in mode 2",
+                        ok,
+                        "none" if c is None else f"{c.type} in mode {c.mode} at v = {c.v:.6f}",
+                        reference="flutter, mode 2",
+                        source="paper Sec. 4, Figs. 5(a)-(c)",
+                        category="paper",
+                    )
+                )
+            ind = independent_vcr(discs[fe_label], a, **PARAMS)
+            checks.append(
+                below(
+                    f"vcr_two_ways_{name}",
+                    f"α = {name}: v_cr of fempipe.stability equals the independent onset",
+                    abs(fe.v_cr - ind.v_cr),
+                    ref["onset_tol"]["value"],
+                    why=ref["onset_tol"]["source"],
+                    source="fempipe.validation.onset (Brent on the spectral abscissa)",
+                )
+            )
+        else:
+            prim = next(b for b in fe.branches if b.name == "primary")
+            seq = [(e.type, e.mode) for e in prim.events]
+            want = [("divergence", 1), ("restabilization", 1), ("flutter", 2)]
+            checks.append(
+                holds(
+                    "pi_sequence",
+                    "α = π, straight pipe: divergence in mode 1, restabilisation, flutter in mode 2",
+                    seq[:3] == want,
+                    "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events),
+                    reference="divergence(1), restabilization(1), flutter(2)",
+                    source="paper Sec. 4, Fig. 5(d)",
+                )
+            )
+        # Mesh convergence of the first event on the primary branch (or the flutter at pi).
+        fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PARAMS))
+        rf = _events(fine, follow=False, v_max=v_max)
+
+        def key(res):
+            prim = next(b for b in res.branches if b.name == "primary")
+            return next((e.v for e in prim.events if e.type == "flutter"), float("nan"))
+
+        checks.append(
+            below(
+                f"fe_mesh_{name}",
+                f"α = {name}: flutter velocity of {fe_label[3:]} equals P3:16",
+                abs(key(fe) - key(rf)),
+                ref["mesh_tol"]["value"],
+                why=ref["mesh_tol"]["source"],
+                source="fempipe, refined mesh (P3:16)",
+            )
+        )
+    table = Table(
+        "Stability events on the static branches (v ≤ 10)",
+        ("α", "discretisation", "branch", "event", "v", "mode", "frequency Im λ"),
+        tuple(rows),
+        note="primary: the gravity-loaded branch (α = π: the straight pipe); B1±: the buckled "
+        "branches born at its branch point. Events located to 1e-10 in v.",
+    )
+    return CaseResult(
+        case=CASE,
+        figure=FIGURE,
+        title=TITLE,
+        paper_shows=PAPER_SHOWS,
+        checks=tuple(checks),
+        tables=(table,),
+        data={"loci": loci},
+        quick=quick,
+        runtime=time.perf_counter() - t0,
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """Argand diagrams: Re Ω against Im Ω of modes 1-4, FE solid, N = 3 dashed, N = 4 dotted."""
+    import matplotlib.pyplot as plt
+
+    from .drawing import new_figure, style_for
+
+    loci = result.data["loci"]
+    if fig is None:
+        fig, axes = new_figure(len(loci), ncols=2, size=4.5)
+    else:
+        axes = list(fig.subplots(1, len(loci), squeeze=False).ravel())
+    colors = plt.cm.tab10(np.arange(10))
+    for ax, (name, fams) in zip(axes, loci.items(), strict=False):
+        for label, rl in fams.items():
+            Om = rl.Omega
+            for j, mode in enumerate(rl.modes):
+                z = np.where(rl.resolved[:, j], Om[:, j], np.nan)
+                keep = z.real >= 0  # the paper shows Re Ω >= 0 (one of each pair)
+                z = np.where(keep, z, np.nan)
+                ax.plot(
+                    z.real,
+                    z.imag,
+                    style_for(label),
+                    color=colors[(mode - 1) % 10],
+                    lw=1.0,
+                    label=f"{label}" if (j == 0) else None,
+                )
+                if label.startswith("FE"):
+                    marks = np.isclose(rl.v % 2.0, 0.0) & keep
+                    ax.plot(z.real[marks], z.imag[marks], "k.", ms=3)
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        ax.set_xlabel(r"Re $\Omega$")
+        ax.set_ylabel(r"Im $\Omega$  (< 0 unstable)")
+        ax.set_title(
+            f"Fig. 5: α = {name} (modes 1-4 by colour; dots at v = 0, 2, 4, ...)", fontsize=8
+        )
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig

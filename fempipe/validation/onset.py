@@ -1,0 +1,157 @@
+"""Critical flow velocities, computed independently of :mod:`fempipe.stability`.
+
+v_cr is the first flow velocity at which the static state (on the
+gravity-sagged branch) loses linear stability: the spectral abscissa, the
+largest real part of the eigenvalues of the linearised problem
+(lambda^2 M^d + lambda C^d + K^d) x = 0 (Eqs. (31b)-(33), via
+:func:`fempipe.limit_cycle.static_growth_rate`), changes sign from negative
+to positive.  It is bracketed on a grid in v and located by Brent's method,
+with each trial static state solved by Newton from the nearest state already
+known.  Kelvin-Voigt damping (mu > 0) gives the unresolved high modes of a
+fine mesh large negative real parts, so they never decide the sign.
+
+This is a second, deliberately simple implementation: where the stability
+module exists, the Fig. 6 case compares the two.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..operators import PipeModel
+from ..params import Params
+from ..static import NewtonError, solve_static
+
+__all__ = ["Onset", "critical_velocity", "spectrum"]
+
+
+class _Branch:
+    """Static states on the sagged branch, by Newton from the nearest known state."""
+
+    def __init__(self, disc, alpha: float, beta: float, gamma: float, mu: float, v0: float):
+        from .static_shapes import static_shapes
+
+        self.disc = disc
+        self.base = Params(alpha=alpha, beta=beta, gamma=gamma, mu=mu, v=v0)
+        st = static_shapes(disc, alpha, gamma, [v0], beta=beta, mu=mu, n_points=3)
+        self.known = {float(v0): st.q[0]}
+
+    def model(self, v: float) -> PipeModel:
+        return PipeModel(self.disc, self.base.with_flow(v))
+
+    def state(self, v: float) -> np.ndarray:
+        """Static state at v, stepping from the nearest known state (halving on failure).
+
+        Raises NewtonError if the steps fall below 1e-7: the branch has a fold
+        (it does not reach v).
+        """
+        u = min(self.known, key=lambda x: abs(x - v))
+        q = self.known[u]
+        h = v - u
+        while u != v:
+            target = v if abs(v - u) <= abs(h) else u + h
+            try:
+                q = solve_static(self.model(target), q0=q).q
+            except NewtonError:
+                h *= 0.5
+                if abs(h) < 1e-7:
+                    raise
+                continue
+            u = target
+            self.known[float(u)] = q
+        return q
+
+
+def spectrum(model: PipeModel, q_static: np.ndarray) -> np.ndarray:
+    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearisation, sorted by Re."""
+    K, D, M = model.jacobians(q_static)
+    n = model.n
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]])
+    lam = np.linalg.eigvals(A)
+    return lam[np.argsort(-lam.real)]
+
+
+@dataclass(frozen=True)
+class Onset:
+    """The first loss of stability on the sagged branch.
+
+    ``v_cr`` (NaN if none below ``v_max``; 0 if unstable at rest),
+    ``frequency`` = |Im lambda| of the crossing eigenvalue (0: divergence),
+    ``kind`` ``"flutter"`` or ``"divergence"``, ``evaluations`` of the spectrum.
+    """
+
+    v_cr: float
+    frequency: float
+    kind: str
+    evaluations: int
+
+
+def critical_velocity(
+    disc,
+    alpha: float,
+    beta: float = 0.142,
+    gamma: float = 18.9,
+    mu: float = 5e-3,
+    v_max: float = 14.0,
+    dv: float = 0.5,
+    xtol: float = 1e-10,
+) -> Onset:
+    """v_cr of the sagged static branch by bracketing and Brent's method.
+
+    Parameters
+    ----------
+    disc : FiniteElement or Modal
+    alpha, beta, gamma, mu : float
+    v_max, dv : float
+        The bracketing grid 0, dv, 2 dv, ... up to v_max.
+    xtol : float
+        Absolute tolerance in v of Brent's method.
+    """
+    br = _Branch(disc, alpha, beta, gamma, mu, 0.0)
+    count = 0
+
+    def growth(v: float) -> float:
+        nonlocal count
+        count += 1
+        return float(spectrum(br.model(v), br.state(v))[0].real)
+
+    g_prev, v_prev = growth(0.0), 0.0
+    if g_prev > 0:
+        return Onset(0.0, float("nan"), "unstable at rest", count)
+    v = dv
+    while v <= v_max + 1e-12:
+        try:
+            g = growth(v)
+        except NewtonError:
+            # The sagged branch folds before v: locate the fold (last v with a state).
+            lo, hi = v_prev, v
+            while hi - lo > 1e-6:
+                mid = 0.5 * (lo + hi)
+                try:
+                    if growth(mid) > 0:
+                        hi = mid  # lost stability before the fold
+                        break
+                    lo = mid
+                except NewtonError:
+                    hi = mid
+            else:
+                return Onset(float(lo), 0.0, "fold", count)
+            v_cr = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            lam = spectrum(br.model(v_cr), br.state(v_cr))[0]
+            freq = abs(lam.imag)
+            return Onset(
+                float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
+            )
+        if g > 0:
+            v_cr = brentq(growth, v_prev, v, xtol=xtol, rtol=4 * np.finfo(float).eps)
+            lam = spectrum(br.model(v_cr), br.state(v_cr))[0]
+            freq = abs(lam.imag)
+            return Onset(
+                float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
+            )
+        v_prev = v
+        v += dv
+    return Onset(float("nan"), float("nan"), "stable", count)
