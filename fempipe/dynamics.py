@@ -434,13 +434,14 @@ class Radau:
         Q = self.q[None, :] + h * C[:, None] * self.qdot[None, :] + h * h * (A2 @ acc)
         return Q, P
 
-    def _newton(self, t: float, h: float, acc: np.ndarray, scale: np.ndarray):
+    def _newton(self, t: float, h: float, acc: np.ndarray, scale: np.ndarray, max_iter=None):
         """Solve the stage equations; return (converged, iterations, acc, rate)."""
+        max_iter = NEWTON_MAXITER if max_iter is None else max_iter
         _, lu_r, lu_c = self._lu
         n = self.n
         dnorm_old, rate = None, None
         G = np.empty((3, n))
-        for k in range(NEWTON_MAXITER):
+        for k in range(max_iter):
             Q, P = self._stages(h, acc)
             for i in range(3):
                 m, vd = self._model_at(t + C[i] * h)
@@ -457,7 +458,7 @@ class Radau:
             if dnorm_old is not None:
                 rate = dnorm / dnorm_old
             if rate is not None and (
-                rate >= 1 or rate ** (NEWTON_MAXITER - k) / (1 - rate) * dnorm > self.newton_tol
+                rate >= 1 or rate ** (max_iter - k) / (1 - rate) * dnorm > self.newton_tol
             ):
                 return False, k + 1, acc, rate
             acc = acc + dacc
@@ -466,7 +467,7 @@ class Radau:
             if self.h_fixed is not None and dnorm < 1e-3 * self.newton_tol:
                 return True, k + 1, acc, rate
             dnorm_old = dnorm
-        return False, NEWTON_MAXITER, acc, rate
+        return False, max_iter, acc, rate
 
     def _error(self, t, h, Q, P, scale, refine: bool) -> float:
         """RADAU5's embedded error estimate in second-order form.
@@ -537,6 +538,12 @@ class Radau:
                 self._current_jac = True
                 self._factor(h)
                 converged, n_iter, acc, rate = self._newton(t, h, acc0, scale)
+            if not converged and self.h_fixed is not None:
+                # A fixed step cannot be halved: retry from the constant
+                # guess (extrapolated stiff accelerations can be far off) with
+                # more iterations before giving up.
+                acc0 = np.tile(self.qddot, (3, 1))
+                converged, n_iter, acc, rate = self._newton(t, h, acc0, scale, max_iter=25)
             if not converged:
                 if self.h_fixed is not None:
                     raise IntegrationError(
