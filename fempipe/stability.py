@@ -419,21 +419,52 @@ def gravity_loaded_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution
     gamma = 18.9 it converges to the nearly straight, unstable equilibrium
     (theta_tip = +0.93 at 160 deg instead of -2.25).  At alpha = 0 and pi the
     loaded state is the straight pipe (the pitchfork there is not taken).
+
+    Near alpha = pi the loaded branch turns sharply where the perfect column
+    would buckle (gamma = 7.837), and a large continuation step can land on
+    the unstable near-straight state or on the mirror-image (unfavoured)
+    lean.  The result is therefore checked -- for sin(alpha) != 0 gravity
+    rotates the pipe towards the plumb line, so theta_tip sin(alpha) < 0,
+    and at v = 0 the state must be a minimum of the potential energy (the
+    static Jacobian, symmetric there, positive definite) -- and the loading
+    is repeated with steps 0.5, 0.1 and 0.02 until it passes (measured:
+    alpha = 179 deg needs 0.5, 179.99 deg needs 0.1).
     """
     p = model.params
     if p.gamma == 0.0:
         return solve_static(model, tol=tol)
     start = model.with_params(replace(p, gamma=0.0))
-    branch = continuation(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=2.0)
-    if branch.end_reason != "stop":
-        raise NewtonError(
-            f"gravity loading did not reach gamma={p.gamma:.6g} at alpha={p.alpha:.6g}, "
-            f"v={p.v:.6g} ({branch.end_reason})",
-            params=p,
-            iterations=branch.steps,
-            residual=float("nan"),
-        )
-    return solve_static(model, q0=branch.points[-1].q, tol=tol)
+    q = None
+    for ds_max in (0.5, 0.1, 0.02):
+        branch = continuation(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=ds_max)
+        if branch.end_reason != "stop":
+            raise NewtonError(
+                f"gravity loading did not reach gamma={p.gamma:.6g} at alpha={p.alpha:.6g}, "
+                f"v={p.v:.6g} ({branch.end_reason})",
+                params=p,
+                iterations=branch.steps,
+                residual=float("nan"),
+            )
+        q = branch.points[-1].q
+        if _loaded_plausible(model, q):
+            break
+        log.info("gravity loading with step %g landed on another branch; retrying", ds_max)
+    return solve_static(model, q0=q, tol=tol)
+
+
+def _loaded_plausible(model: PipeModel, q: np.ndarray) -> bool:
+    """theta_tip sin(alpha) < 0 and, at v = 0, a positive definite static Jacobian."""
+    p = model.params
+    s = math.sin(p.alpha)
+    if abs(s) < 1e-12:
+        return True  # alpha = 0 or pi: the straight pipe, by symmetry
+    if s * float(model.disc.tip @ q) >= 0.0:
+        return False
+    if p.v == 0.0:
+        J = model.static_jacobian(q)
+        J = J.toarray() if sp.issparse(J) else np.asarray(J)
+        return bool(np.linalg.eigvalsh(0.5 * (J + J.T)).min() > 0.0)
+    return True
 
 
 @dataclass(frozen=True)
@@ -1659,8 +1690,16 @@ def run_tasks(
 
 
 def _map_point(disc, params: Params, v_max: float, options: dict) -> dict:
-    res = critical_velocity(PipeModel(disc, params), v_max, **options)
+    model = PipeModel(disc, params)
+    res = critical_velocity(model, v_max, **options)
     c = res.critical
+    if c is not None and c.at_start:
+        # Unstable from the start (the straight column at alpha = pi): follow the
+        # branch to the end for its first flutter (what Fig. 6 shows there).
+        full = stability_analysis(
+            model, v_max, **{**options, "stop_at_first": False, "follow_bifurcations": False}
+        )
+        res = replace(res, v_flutter=full.v_flutter, n_spectra=res.n_spectra + full.n_spectra)
     return {
         "v_cr": res.v_cr,
         "type": None if c is None else c.type,

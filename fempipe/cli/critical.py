@@ -1,0 +1,150 @@
+"""``fempipe critical``: critical flow velocity and every stability event on the static branches.
+
+Follows the gravity-loaded static branch in v over the range of ``--v`` (or
+``--U``: their smallest and largest values), locates every change of stability
+and every fold to 1e-10 in v, follows the branches born at branch points
+(pitchforks at alpha = 0, pi; ``--no-branches`` to skip) and reports the first
+loss of stability of the primary branch as v_cr
+(:func:`fempipe.stability.stability_analysis`).
+
+``--json`` prints ``{"v_cr": float or null, "events": [{"v", "type", "branch",
+"frequency", "mode"}, ...], "critical", "v_flutter", "v_range", "params",
+"discretization", "branches", ...}`` with type one of flutter, divergence,
+restabilization, fold and frequency = Im lambda = Re Omega at the crossing.
+An instability already present at the start of the range is listed at that v.
+With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes critical.json,
+events.csv and branches.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    common.add_physical_arguments(parser)
+    common.add_flow_arguments(parser, default="0,10")
+    common.add_discretization_arguments(parser)
+    g = parser.add_argument_group("stability")
+    g.add_argument(
+        "--no-branches",
+        action="store_true",
+        help="do not follow the branches born at branch points (faster; v_cr is unaffected)",
+    )
+    g.add_argument(
+        "--ds-max",
+        metavar="DS",
+        default="0.1",
+        help="largest continuation step; spectra are computed at every step (default 0.1)",
+    )
+    common.add_output_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe.io import json_dumps
+    from fempipe.operators import PipeModel
+    from fempipe.stability import stability_analysis
+
+    setup = common.setup_from_args(args)
+    flow_opt = "--U" if args.U is not None else "--v"
+    if not setup.v:
+        raise CLIError(flow_opt, "give the flow range, e.g. --v 0,10")
+    v_min, v_max = min(setup.v), max(setup.v)
+    if v_max <= v_min:
+        raise CLIError(flow_opt, f"needs a range with two different values, got {v_min:g} only")
+    try:
+        ds_max = common.parse_float(args.ds_max, "--ds-max")
+    except ValueError as exc:
+        raise CLIError("--ds-max", str(exc)) from None
+    if not 0 < ds_max <= 1:
+        raise CLIError("--ds-max", f"must satisfy 0 < --ds-max <= 1, got {ds_max:g}")
+    model = PipeModel(setup.disc, setup.params)
+    with common.progress(args, None, "critical") as bar:
+
+        def on_sample(branch: str, v: float) -> None:
+            bar.update()
+            bar.set_postfix_str(f"{branch} v={v:.4f}")
+
+        try:
+            res = stability_analysis(
+                model,
+                v_max=v_max,
+                v_min=v_min,
+                follow_bifurcations=not args.no_branches,
+                ds_max=ds_max,
+                callback=on_sample,
+            )
+        except ValueError as exc:
+            raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
+    head = setup.to_dict()
+    result = res.to_dict()
+    result["params"] = head["params"]
+    result["discretization"] = head["discretization"]
+    if setup.pipe is not None:
+        pipe = setup.pipe
+        result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
+        result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
+    if args.out is not None:
+        _write(args, result, res)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print(result, setup.pipe)
+    return 0
+
+
+def _write(args, result: dict, res) -> None:
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fempipe.io import write_csv, write_figure, write_json
+    from fempipe.plotting.stability import plot_branches
+
+    out = Path(args.out)
+    rows = [ev.details() for ev in res.events]
+    for r in rows:
+        r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
+    ax = plot_branches(res)
+    try:
+        write_json(out / "critical.json", result)
+        write_csv(out / "events.csv", rows)
+        write_figure(out / "branches.png", ax.figure, dpi=150)
+    finally:
+        plt.close(ax.figure)
+    if not args.json and args.progress is not False:
+        for name in ("critical.json", "events.csv", "branches.png"):
+            print(f"wrote {out / name}", file=sys.stderr)
+
+
+def _print(result: dict, pipe) -> None:
+    p = result["params"]
+    d = result["discretization"]
+    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
+    head = ", ".join(f"{k} = {p[k]:.6g}" for k in ("alpha", "beta", "gamma", "mu") if k in p)
+    lo, hi = result["v_range"]
+    print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretisation {disc}")
+    v_cr = result["v_cr"]
+    if v_cr is None:
+        print("v_cr: none (the primary branch is stable over the range)")
+    else:
+        c = result["critical"]
+        extra = f" (U = {result['U_cr']:.6g} m/s)" if pipe is not None else ""
+        print(
+            f"v_cr = {v_cr:.10f}{extra}: {c['type']} in mode {c['mode']}, Im lambda = {c['frequency']:.6f}"
+        )
+    if result["v_flutter"] is not None and result["v_flutter"] != v_cr:
+        print(f"first flutter of the primary branch: v = {result['v_flutter']:.10f}")
+    print(f"{'branch':>8} {'type':>16} {'v':>15} {'mode':>5} {'Im lambda':>11}")
+    for ev in result["events"]:
+        mode = "-" if ev["mode"] is None else str(ev["mode"])
+        print(
+            f"{ev['branch']:>8} {ev['type']:>16} {ev['v']:15.10f} {mode:>5} {ev['frequency']:11.6f}"
+        )

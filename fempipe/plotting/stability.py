@@ -1,0 +1,223 @@
+"""Figures of the linear stability analysis (Figs. 5 and 6 of the paper).
+
+* :func:`plot_argand` -- root loci in the plane of the paper's Omega = -i lambda
+  (Re Omega the frequency, Im Omega < 0 unstable), one curve per mode, with
+  the flow velocity marked along the loci (Fig. 5).
+* :func:`plot_stability_map` -- v_cr against alpha, one curve per (beta, gamma)
+  (Fig. 6).
+* :func:`plot_branches` -- the static branches (theta_tip against v), solid
+  where stable, dashed where unstable, with the events marked.
+* :func:`plot_mode_shape` -- a mode about its static state in the global frame.
+
+matplotlib is imported inside the functions; each takes ``ax=None`` and
+returns the Axes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_argand", "plot_stability_map", "plot_branches", "plot_mode_shape"]
+
+_EVENT_MARKERS = {"flutter": "o", "divergence": "s", "restabilization": "^", "fold": "D"}
+
+
+def _axes(ax, size=(6.0, 4.5)):
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=size)
+    return ax
+
+
+def plot_argand(
+    locus, ax=None, mark_every: float | None = None, label_marks: bool = True, title=None
+):
+    """Argand diagram of a :class:`~fempipe.stability.RootLocus` (Fig. 5).
+
+    Parameters
+    ----------
+    locus : RootLocus
+    ax : Axes, optional
+    mark_every : float, optional
+        Mark the loci at multiples of this v (default: about six marks over
+        the range); the marks are labelled with v on the lowest mode.
+    label_marks : bool
+        Write the v values next to the marks of each mode's locus.
+    title : str, optional
+
+    Returns
+    -------
+    Axes
+    """
+    import matplotlib.pyplot as plt
+
+    ax = _axes(ax)
+    v = np.asarray(locus.v)
+    if mark_every is None:
+        span = float(v.max() - v.min()) if v.size > 1 else 1.0
+        mark_every = _nice_step(span / 6.0)
+    Om = np.where(locus.resolved, locus.Omega, np.nan)
+    colors = plt.cm.tab10(np.arange(10))
+    marks = np.isclose(np.mod(v + 1e-9, mark_every), 0.0, atol=1e-6)
+    seen = set()
+    for j, mode in enumerate(locus.modes):
+        z = Om[:, j]
+        # One member of each conjugate pair: Re Omega = Im lambda >= 0.
+        z = np.where(z.real >= -1e-12, z, np.nan)
+        if np.all(np.isnan(z)):
+            continue
+        c = colors[(int(mode) - 1) % 10]
+        ax.plot(
+            z.real, z.imag, "-", color=c, lw=1.2, label=None if mode in seen else f"mode {mode}"
+        )
+        seen.add(int(mode))
+        m = marks & ~np.isnan(z)
+        ax.plot(z.real[m], z.imag[m], "o", color=c, ms=3)
+        if label_marks:
+            for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
+                ax.annotate(
+                    f"{vv:g}", (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points"
+                )
+    ax.axhline(0.0, color="0.4", lw=0.8)
+    ax.set_xlabel(r"Re $\Omega$ = Im $\lambda$")
+    ax.set_ylabel(r"Im $\Omega$ = $-$Re $\lambda$   (< 0 unstable)")
+    p = locus.params
+    ax.set_title(
+        title
+        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
+        rf"$\mu$ = {p.mu:g}; marks every $\Delta v$ = {mark_every:g}",
+        fontsize=9,
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
+
+
+def _nice_step(x: float) -> float:
+    if x <= 0:
+        return 1.0
+    e = 10.0 ** np.floor(np.log10(x))
+    for f in (1.0, 2.0, 5.0, 10.0):
+        if x <= f * e:
+            return f * e
+    return 10.0 * e
+
+
+def plot_stability_map(smap, ax=None, key: str = "v_cr", title=None):
+    """v_cr against alpha for each (beta, gamma) curve of a :class:`~fempipe.stability.StabilityMap`.
+
+    Points where the first instability is divergence (or a fold) are drawn
+    with open squares; flutter with filled circles.
+
+    Returns
+    -------
+    Axes
+    """
+    ax = _axes(ax)
+    a = np.asarray(smap.alphas) / np.pi
+    values = smap.array(key)
+    for c, (beta, gamma) in enumerate(smap.curves):
+        (line,) = ax.plot(
+            a, values[c], "-", lw=1.2, label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}"
+        )
+        types = [pt.get("type") for pt in smap.points[c]]
+        flut = np.array([t == "flutter" for t in types])
+        other = np.array([t in ("divergence", "fold") for t in types])
+        ax.plot(a[flut], values[c][flut], "o", ms=3, color=line.get_color())
+        if other.any():
+            ax.plot(a[other], values[c][other], "s", ms=4, mfc="none", color=line.get_color())
+    ax.set_xlabel(r"$\alpha/\pi$")
+    ax.set_ylabel(r"$v_{cr}$" if key == "v_cr" else key)
+    ax.set_title(
+        title
+        or rf"critical flow velocity ($\mu$ = {smap.base.mu:g}; ○ flutter, □ divergence/fold)",
+        fontsize=9,
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
+
+
+def plot_branches(result, ax=None, title=None):
+    """Static branches of a :class:`~fempipe.stability.StabilityResult`: theta_tip against v.
+
+    Solid where stable, dashed where some resolved eigenvalue has
+    Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilisation,
+    ◇ fold).
+
+    Returns
+    -------
+    Axes
+    """
+    import matplotlib.pyplot as plt
+
+    ax = _axes(ax)
+    colors = plt.cm.tab10(np.arange(10))
+    for i, b in enumerate(result.branches):
+        c = colors[i % 10]
+        stable = b.n_unstable == 0
+        # Stable samples solid; unstable ones dashed, joined to their neighbours.
+        ax.plot(b.v, np.where(stable, b.theta_tip, np.nan), "-", color=c, lw=1.2, label=b.name)
+        dashed = ~stable | _edges(~stable)
+        ax.plot(b.v, np.where(dashed, b.theta_tip, np.nan), "--", color=c, lw=1.2)
+        for ev in b.events:
+            j = int(np.argmin(np.abs(b.v - ev.v)))
+            ax.plot(
+                ev.v, b.theta_tip[j], _EVENT_MARKERS.get(ev.type, "x"), color=c, mfc="none", ms=6
+            )
+    ax.set_xlabel("v")
+    ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
+    p = result.params
+    ax.set_title(
+        title
+        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}: "
+        "solid stable, dashed unstable",
+        fontsize=9,
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
+
+
+def _edges(mask: np.ndarray) -> np.ndarray:
+    """Samples next to a True sample (so stable and unstable pieces join)."""
+    out = np.zeros_like(mask)
+    out[1:] |= mask[:-1]
+    out[:-1] |= mask[1:]
+    return out
+
+
+def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, title=None):
+    """A mode about its static state in the global frame (gravity down the page).
+
+    Draws the static centreline and ``X + amplitude Re(dX e^{i phi})`` for
+    ``phases`` phases over a period.
+
+    Returns
+    -------
+    Axes
+    """
+    ax = _axes(ax, size=(4.5, 5.0))
+    ax.plot(shape.Z_static, shape.X_static, "k-", lw=2.0, label="static")
+    for k, phi in enumerate(np.linspace(0.0, 2 * np.pi, phases, endpoint=False)):
+        rot = np.exp(1j * phi)
+        ax.plot(
+            shape.Z_static + amplitude * (shape.Z_g * rot).real,
+            shape.X_static + amplitude * (shape.X_g * rot).real,
+            "-",
+            lw=0.8,
+            alpha=0.6,
+            color="C0",
+            label="mode" if k == 0 else None,
+        )
+    ax.invert_yaxis()
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$Z_g$")
+    ax.set_ylabel(r"$X_g$ (along gravity)")
+    lam = shape.lam
+    ax.set_title(
+        title or rf"mode {shape.mode}: $\lambda$ = {lam.real:.4g} {lam.imag:+.4g}i", fontsize=9
+    )
+    ax.legend(fontsize=7)
+    return ax
