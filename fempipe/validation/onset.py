@@ -67,10 +67,16 @@ class _Branch:
 
 def spectrum(model: PipeModel, q_static: np.ndarray) -> np.ndarray:
     """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearisation, sorted by Re."""
+    import scipy.linalg as sla
+
     K, D, M = model.jacobians(q_static)
     n = model.n
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]])
-    lam = np.linalg.eigvals(A)
+    # Generalised first-order form: no inverse of the (ill-conditioned) mass matrix.
+    Z, eye = np.zeros((n, n)), np.eye(n)
+    A = np.block([[Z, eye], [-K, -D]])
+    B = np.block([[eye, Z], [Z, M]])
+    lam = sla.eigvals(A, B)
+    lam = lam[np.isfinite(lam)]
     return lam[np.argsort(-lam.real)]
 
 
