@@ -1,0 +1,141 @@
+"""Limit cycles: onset at the linear v_cr, shooting vs long integration, Floquet multipliers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fempipe import FiniteElement, Params, PipeModel
+from fempipe.limit_cycle import (
+    _recurrence,
+    find_attractor,
+    shoot,
+    static_growth_rate,
+    tip_coordinates,
+)
+from fempipe.static import solve_static
+
+# P3 on 4 elements: v_cr within 1e-4 of the converged value (the stability
+# tests) and cheap enough for the default run.
+DISC = FiniteElement(4, 3)
+
+
+def _v_cr(alpha: float = 0.0) -> float:
+    """Linear critical velocity from the quadratic eigenproblem (fempipe.stability)."""
+    from fempipe.stability import critical_velocity
+
+    return critical_velocity(PipeModel(DISC, Params(alpha=alpha)), v_max=8.0).v_cr
+
+
+@pytest.fixture(scope="module")
+def onset():
+    v_cr = _v_cr()
+    cycles = {}
+    for d in (0.05, 0.1):
+        m = PipeModel(DISC, Params(alpha=0.0, v=v_cr + d))
+        cycles[d] = (m, find_attractor(m))
+    return v_cr, cycles
+
+
+def test_onset_amplitude_vanishes_at_linear_v_cr(onset):
+    """Supercritical Hopf: A^2 is linear in v - v0; v0 must equal the linear v_cr.
+
+    Two cycles at v_cr + 0.05 and v_cr + 0.1 (alpha = 0), A = max eta(1); the
+    straight-line extrapolation of A^2 to zero gives v0.  Measured
+    |v0 - v_cr| = 1.8e-3 (the cubic normal form's O(dv^2) correction); the
+    issue asks for 0.01.
+    """
+    v_cr, cycles = onset
+    (v1, a1), (v2, a2) = [(m.params.v, att.tip["eta_tip"][1]) for m, att in cycles.values()]
+    for _, att in cycles.values():
+        assert att.kind == "periodic" and att.period_n == 1
+    v0 = v1 - a1**2 * (v2 - v1) / (a2**2 - a1**2)
+    assert abs(v0 - v_cr) < 0.01, (v0, v_cr)
+
+
+def test_floquet_multiplier_near_onset_matches_linear_growth(onset):
+    """Normal form r' = sigma r - c r^3: the cycle's radial multiplier is exp(-2 sigma T).
+
+    sigma is the growth rate of the static state (linear eigenvalues), an
+    independent computation.  The relation holds to O(v - v_cr): measured
+    ln(mu_2) / (-2 sigma T) = 0.99 at v_cr + 0.05; we allow 15 %.
+    """
+    _, cycles = onset
+    m, att = cycles[0.05]
+    sigma = static_growth_rate(m, solve_static(m).q)
+    assert sigma > 0
+    mu2 = att.cycle.max_nontrivial_multiplier
+    ratio = math.log(mu2) / (-2 * sigma * att.period)
+    assert abs(ratio - 1) < 0.15, ratio
+    # The trivial multiplier (phase along the orbit) is 1 to the integration accuracy.
+    mu = att.cycle.floquet_multipliers
+    assert np.min(np.abs(mu - 1)) < 1e-5
+
+
+def test_equilibrium_below_v_cr():
+    v = _v_cr() - 0.3
+    m = PipeModel(DISC, Params(alpha=0.0, v=v))
+    att = find_attractor(m)
+    assert att.kind == "equilibrium"
+    tip = tip_coordinates(DISC, 0.0, solve_static(m).q)
+    assert att.tip["X_tip"] == [pytest.approx(tip["X_tip"])] * 2
+
+
+def test_shooting_equals_long_integration():
+    """alpha = pi/4, v = 8 (asymmetric cycle): shooting (rtol 1e-7) vs integration
+    until successive Poincare returns agree to 1e-7 (rtol 1e-8).  Measured
+    differences 4e-10 in T and 3e-9 in the tip extrema; bound 1e-6."""
+    m = PipeModel(DISC, Params(alpha=math.pi / 4, v=8.0))
+    a = find_attractor(m)
+    b = find_attractor(m, use_shooting=False, rtol=1e-8, converged_tol=1e-7)
+    assert a.kind == b.kind == "periodic"
+    assert a.cycle is not None and b.cycle is None
+    assert a.period == pytest.approx(b.period, abs=1e-6)
+    for k in ("eta_tip", "X_tip", "Z_tip"):
+        np.testing.assert_allclose(a.tip[k], b.tip[k], atol=1e-6)
+    # and the cycle is a cycle: integrate one period from its start
+    from fempipe.dynamics import Radau
+
+    st = Radau(m, a.cycle.q0, a.cycle.qdot0, rtol=1e-9)
+    for _ in st.steps(a.period):
+        pass
+    assert np.sqrt(np.mean((st.q - a.cycle.q0) ** 2)) < 1e-6
+
+
+def test_shoot_converges_quadratically_from_a_rough_guess():
+    """Newton with the exact discrete monodromy matrix: 3-5 iterations from a 1e-2 guess."""
+    m = PipeModel(DISC, Params(alpha=0.0, v=8.0))
+    ref = find_attractor(m)
+    c = ref.cycle
+    guess_q = c.q0 * 1.02
+    cyc = shoot(m, guess_q, c.qdot0 * 0.98, c.period * 1.01, level=c.level)
+    assert cyc.iterations <= 5
+    assert cyc.period == pytest.approx(c.period, abs=1e-7)
+    assert cyc.stable
+
+
+def test_alpha_zero_cycle_is_symmetric():
+    """At alpha = 0 Eq. (20) is odd in theta: eta(1) swings symmetrically, Z_g = eta."""
+    m = PipeModel(DISC, Params(alpha=0.0, v=10.0))
+    att = find_attractor(m)
+    lo, hi = att.tip["eta_tip"]
+    assert lo == pytest.approx(-hi, abs=1e-6)
+    np.testing.assert_allclose(att.tip["Z_tip"], att.tip["eta_tip"], atol=1e-12)
+    assert att.period_n == 1
+
+
+@pytest.mark.parametrize(
+    "returns, expected",
+    [
+        ([1.0, 1.0, 1.0, 1.0], 1),
+        ([1.0, 2.0, 1.0, 2.0, 1.0], 2),
+        ([1.0, 2.0, 3.0, 1.0, 2.0, 3.0, 1.0], 3),
+    ],
+)
+def test_recurrence_tells_period_n(returns, expected):
+    x = [(np.array([r, 0.0]), np.zeros(2)) for r in returns]
+    t = list(range(len(returns)))
+    n, d = _recurrence(t, x, n_max=4)
+    assert n == expected and d == 0.0
