@@ -1,0 +1,159 @@
+"""Bifurcation sweeps: ordering, resume after a kill, atomic point store, executors."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fempipe.bifurcation as bif
+from fempipe import Modal, Params, PipeModel
+from fempipe.bifurcation import PointStore, bifurcation_diagram, sweep
+
+# Two sine modes on a coarse quadrature: the cheapest model that flutters
+# (v_cr ~ 6 at alpha = 0), so sweeps take seconds.
+VALUES = [5.0, 7.0, 9.0]
+OPTIONS = {"rtol": 1e-5, "shoot_rtol": 1e-6}
+
+
+def _model(alpha=0.0):
+    return PipeModel(Modal(2, n_cells=8), Params(alpha=alpha))
+
+
+def _strip(points):
+    return [{k: v for k, v in p.items() if k not in ("wall_time",)} for p in points]
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """An uninterrupted serial run (up and down)."""
+    return bifurcation_diagram(_model(), VALUES, **OPTIONS)
+
+
+def test_sweep_orders_values_and_finds_flutter(reference):
+    pts = reference.points
+    assert [p["v"] for p in pts if p["direction"] == "up"] == VALUES
+    assert [p["v"] for p in pts if p["direction"] == "down"] == VALUES[::-1]
+    kinds = {(p["direction"], p["v"]): p["attractor"] for p in pts}
+    assert kinds[("up", 5.0)] == kinds[("down", 5.0)] == "equilibrium"
+    assert kinds[("up", 9.0)] == kinds[("down", 9.0)] == "periodic"
+    # No hysteresis in this supercritical case: up and down agree.
+    up = {p["v"]: p for p in pts if p["direction"] == "up"}
+    for p in pts:
+        if p["direction"] == "down":
+            np.testing.assert_allclose(p["eta_tip"], up[p["v"]]["eta_tip"], atol=1e-5)
+
+
+def test_resume_after_kill_gives_same_points_without_recomputation(tmp_path, reference):
+    """Kill a sweep in a subprocess once its first point is on disk, rerun, compare.
+
+    The rerun must load the finished points (not call find_attractor for them)
+    and give the same points as the uninterrupted run: each stored point holds
+    the exact (repr-round-tripped) state the next point starts from.
+    """
+    store = tmp_path / "points"
+    script = textwrap.dedent(
+        f"""
+        from fempipe import Modal, Params, PipeModel
+        from fempipe.bifurcation import bifurcation_diagram
+        m = PipeModel(Modal(2, n_cells=8), Params(alpha=0.0))
+        bifurcation_diagram(m, {VALUES!r}, ["up"], store_dir={str(store)!r}, **{OPTIONS!r})
+        """
+    )
+    env = dict(os.environ, PYTHONPATH=str(Path(bif.__file__).parents[1]))
+    proc = subprocess.Popen([sys.executable, "-c", script], env=env)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and not list(store.glob("a00-up-000.json")):
+            time.sleep(0.05)
+        proc.kill()
+    finally:
+        proc.wait()
+    done = sorted(p.name for p in store.glob("a00-*.json"))
+    assert 1 <= len(done) < len(VALUES), done  # killed midway
+    for name in done:  # finished points are complete JSON
+        json.loads((store / name).read_text())
+    mtimes = {n: (store / n).stat().st_mtime_ns for n in done}
+
+    calls = []
+    real = bif.find_attractor
+
+    def counting(model, *a, **k):
+        calls.append(model.params.v)
+        return real(model, *a, **k)
+
+    bif.find_attractor = counting
+    try:
+        d = bifurcation_diagram(_model(), VALUES, ["up"], store_dir=store, **OPTIONS)
+    finally:
+        bif.find_attractor = real
+    assert len(calls) == len(VALUES) - len(done)  # only the missing points
+    assert all((store / n).stat().st_mtime_ns == mtimes[n] for n in done)
+    ref_up = [p for p in reference.points if p["direction"] == "up"]
+    assert _strip(d.points) == _strip(ref_up)
+
+
+def test_store_refuses_a_different_run(tmp_path):
+    bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, **OPTIONS)
+    with pytest.raises(ValueError, match="different run"):
+        bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, rtol=1e-4)
+
+
+def test_point_store_writes_atomically(tmp_path):
+    store = PointStore(tmp_path, {"run": 1})
+    pts = sweep(_model(), [5.0], "up", store=store, **OPTIONS)
+    files = sorted(os.listdir(tmp_path))
+    assert files == ["a00-up-000.json", "run.json"]  # no temporary files left
+    back = store.load(0, "up", 0)
+    assert back.to_dict(state=True) == pts[0].to_dict(state=True)
+
+
+def test_process_pool_gives_the_serial_result(reference):
+    with ProcessPoolExecutor(max_workers=2) as ex:
+        d = bifurcation_diagram(_model(), VALUES, executor=ex, **OPTIONS)
+    assert _strip(d.points) == _strip(reference.points)
+
+
+def test_progress_callback_counts_points():
+    seen = []
+    bifurcation_diagram(
+        _model(), [5.0, 5.5], ["up", "down"], progress=lambda d, t: seen.append((d, t)), **OPTIONS
+    )
+    assert seen[-1] == (4, 4)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+
+
+def test_several_alphas_are_independent_sweeps():
+    d = bifurcation_diagram(_model(), [5.0], ["up"], alphas=[0.0, 0.5], **OPTIONS)
+    assert [p["alpha"] for p in d.points] == [0.0, 0.5]
+    # alpha = 0.5: the static tip leaves the vertical
+    assert abs(d.points[1]["Z_tip"][0]) > 0.1 > abs(d.points[0]["Z_tip"][0])
+
+
+@pytest.mark.parametrize(
+    "kwargs, word",
+    [({"directions": ["sideways"]}, "direction"), ({"workers": 0}, "workers")],
+)
+def test_bad_arguments(kwargs, word):
+    with pytest.raises(ValueError, match=word):
+        bifurcation_diagram(_model(), [5.0], **kwargs)
+
+
+def test_dask_local_cluster(reference):
+    distributed = pytest.importorskip("dask.distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        d = bifurcation_diagram(_model(), VALUES, executor=client.get_executor(), **OPTIONS)
+    assert _strip(d.points) == _strip(reference.points)
