@@ -1,0 +1,163 @@
+"""``fempipe simulate`` and ``fempipe bifurcation`` in-process (main(argv))."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fempipe.cli import main
+
+# The cheapest flutter model (two sine modes) keeps these tests to seconds.
+CHEAP = ["--modal", "2"]
+
+
+def _json(capsys, argv):
+    code = main(argv)
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    return json.loads(out.out)
+
+
+def test_simulate_json_contract(capsys):
+    d = _json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet"])
+    for key in (
+        "attractor",
+        "period",
+        "tip",
+        "floquet_multipliers",
+        "steps",
+        "rejected_steps",
+        "wall_time",
+    ):
+        assert key in d
+    assert d["attractor"] == "periodic"
+    assert set(d["tip"]) == {"eta_tip", "X_tip", "Z_tip"}
+    assert all(len(v) == 2 and v[0] <= v[1] for v in d["tip"].values())
+    # the library gives the same cycle
+    from fempipe import Modal, Params, PipeModel
+    from fempipe.limit_cycle import find_attractor
+
+    att = find_attractor(PipeModel(Modal(2), Params(v=9.0)))
+    assert d["period"] == pytest.approx(att.period, rel=1e-6)
+
+
+def test_simulate_equilibrium_below_flutter(capsys):
+    d = _json(capsys, ["simulate", *CHEAP, "--v", "3", "--json", "--quiet"])
+    assert d["attractor"] == "equilibrium" and d["period"] is None
+
+
+def test_simulate_pulsating_flow(capsys):
+    d = _json(
+        capsys,
+        [
+            "simulate",
+            *CHEAP,
+            "--v",
+            "3",
+            "--sigma",
+            "0.5",
+            "--omega",
+            "10",
+            "--t-max",
+            "2",
+            "--json",
+            "--quiet",
+        ],
+    )
+    assert d["attractor"] == "forced" and d["flow"]["sigma"] == 0.5
+
+
+def test_simulate_out_files(tmp_path, capsys):
+    out = tmp_path / "run"
+    d = _json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet", "--out", str(out)])
+    for name in (
+        "simulate.json",
+        "time_traces.png",
+        "phase_portrait.png",
+        "oscillating_shapes.png",
+        "pipe.gif",
+        "trajectory.pvd",
+    ):
+        assert (out / name).stat().st_size > 0, name
+    assert json.loads((out / "simulate.json").read_text())["period"] == d["period"]
+    # The trajectory reads back with meshio: line cells, theta and velocity per point.
+    from fempipe.trajectory_io import read_trajectory
+
+    times, meshes = read_trajectory(out / "trajectory.pvd")
+    assert len(meshes) == times.size > 10 and np.all(np.diff(times) > 0)
+    mesh = meshes[-1]
+    assert mesh.cells[0].type == "line"
+    assert {"theta", "theta_dot", "velocity"} <= set(mesh.point_data)
+    # The clamp is at the origin and the centreline has unit length.
+    pts = mesh.points
+    assert np.allclose(pts[0], 0.0)
+    assert np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1)) == pytest.approx(1.0, abs=1e-3)
+    from PIL import Image
+
+    with Image.open(out / "pipe.gif") as im:
+        assert im.format == "GIF" and im.n_frames > 10
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--rtol", "0"], "--rtol"),
+        (["--mode", "0"], "--mode"),
+        (["--sigma", "2"], "--sigma"),
+        (["--t-max", "-1"], "--t-max"),
+        (["--v", "1,2"], "--v"),
+        (["--fe", "Q3"], "--fe"),
+    ],
+)
+def test_simulate_bad_input(capsys, argv, option):
+    code = main(["simulate", *argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("fempipe simulate: error:") and option in err
+    assert err.count("\n") == 1
+
+
+def test_bifurcation_json_contract_and_resume(tmp_path, capsys):
+    out = tmp_path / "bif"
+    argv = [
+        "bifurcation",
+        *CHEAP,
+        "--v",
+        "5,9",
+        "--json",
+        "--quiet",
+        "--out",
+        str(out),
+        "--workers",
+        "2",
+    ]
+    d = _json(capsys, argv)
+    assert len(d["points"]) == 4
+    for p in d["points"]:
+        assert {"v", "direction", "attractor", "eta_tip", "X_tip", "Z_tip", "period"} <= set(p)
+        assert p["direction"] in ("up", "down")
+    for name in ("eta_tip.png", "X_tip.png", "Z_tip.png", "bifurcation.json"):
+        assert (out / name).stat().st_size > 0
+    stored = sorted((out / "points").glob("a00-*.json"))
+    assert len(stored) == 4
+    mtimes = [p.stat().st_mtime_ns for p in stored]
+    again = _json(capsys, argv)  # resumes: nothing recomputed, same answer
+    assert [p.stat().st_mtime_ns for p in stored] == mtimes
+    assert [p["eta_tip"] for p in again["points"]] == [p["eta_tip"] for p in d["points"]]
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--directions", "sideways"], "--directions"),
+        (["--workers", "0"], "--workers"),
+        (["--alphas", "north"], "--alphas"),
+        (["--shoot-rtol", "0"], "--shoot-rtol"),
+    ],
+)
+def test_bifurcation_bad_input(capsys, argv, option):
+    code = main(["bifurcation", *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and option in err and err.count("\n") == 1
