@@ -211,6 +211,9 @@ class CaseResult:
     tables : tuple of Table
     findings : tuple of str
         Disagreements with the paper, with the measurement.
+    explained : tuple of str
+        Names of failed paper checks that a finding already explains (the
+        report lists them once, by the finding's text).
     data : dict
         Arrays the figure is drawn from (not serialised by ``to_dict``).
     quick : bool
@@ -227,6 +230,7 @@ class CaseResult:
     tables: tuple[Table, ...] = ()
     findings: tuple[str, ...] = ()
     data: dict = field(default_factory=dict, compare=False, repr=False)
+    explained: tuple[str, ...] = ()
     quick: bool = False
     runtime: float = 0.0
 

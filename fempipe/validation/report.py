@@ -104,12 +104,12 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
             k += 1
             lines.append(f"{k}. **{o.result.figure}** ({o.name}): {f}")
         for c in o.result.checks:
-            if c.category == "paper" and not c.passed:
+            if c.category == "paper" and not c.passed and c.name not in o.result.explained:
                 k += 1
                 lines.append(
-                    f"{k}. **{o.result.figure}** ({o.name}): the paper's statement “{c.claim}” "
-                    f"does not hold at fempipe's tolerance: measured {_cell(c.measured)}, "
-                    f"required {_cell(c.reference)} ({c.tolerance}). Source: {c.source}."
+                    f"{k}. **{o.result.figure}** ({o.name}): “{c.claim}” does not hold for the "
+                    f"converged model: measured {_cell(c.measured)}; criterion "
+                    f"{_cell(c.reference)} ({c.tolerance}). Reference: {c.source}."
                 )
     if k == 0:
         lines.append("None.")

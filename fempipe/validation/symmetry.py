@@ -174,6 +174,7 @@ def run(quick: bool = False) -> CaseResult:
         checks=tuple(checks),
         tables=(table,),
         findings=findings,
+        explained=("paper_alpha_minus_pi",),
         data={"shapes": shapes, "pairs": pairs, "mirror": a_m, "buckled": buckled},
         quick=quick,
         runtime=time.perf_counter() - t0,
