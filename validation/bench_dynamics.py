@@ -1,0 +1,108 @@
+"""Benchmarks of the nonlinear dynamics (issue 4); not timed tests.
+
+``python validation/bench_dynamics.py [--skip-fig7] [--workers 2] [--out FILE.json]``
+
+* ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, paper's
+  beta, gamma, mu) from the static state + perturbation, transient and
+  shooting included.  Target: < 10 s at the default discretisation P3:16.
+* ``fig7``: the Fig. 7 diagram, alpha = 0, 36 velocities from 5 to 12, swept up
+  and down (the two sweeps in parallel).  Target: < 5 min on 2 cores.
+
+Both run for the default finite elements and for the paper's modal N = 4 in
+the same invocation.  The functions are importable (``bench_limit_cycle``,
+``bench_fig7``) so that ``fempipe bench`` can register them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from fempipe import Params, PipeModel, parse_discretization
+from fempipe.discretization import DEFAULT_FE
+
+
+def _disc(spec: str):
+    return (
+        parse_discretization(modal=spec.split(":")[1])
+        if spec.startswith("modal")
+        else (parse_discretization(fe=spec))
+    )
+
+
+def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
+    """One converged limit cycle at alpha = 0, v = 10; returns timing and the cycle."""
+    from fempipe.limit_cycle import find_attractor
+
+    model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0))
+    t0 = time.perf_counter()
+    att = find_attractor(model)
+    wall = time.perf_counter() - t0
+    return {
+        "name": "limit_cycle",
+        "disc": spec,
+        "wall_time": wall,
+        "target_s": 10.0,
+        "attractor": att.kind,
+        "period": att.period,
+        "eta_tip": att.tip["eta_tip"],
+        "steps": att.stats["steps"],
+        "shooting_iterations": att.cycle.iterations if att.cycle else None,
+    }
+
+
+def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> dict:
+    """The Fig. 7 sweep up and down in parallel; returns timing and a summary."""
+    from fempipe.bifurcation import bifurcation_diagram
+
+    model = PipeModel(_disc(spec), Params(alpha=0.0))
+    values = np.linspace(5.0, 12.0, n_values)
+    t0 = time.perf_counter()
+    d = bifurcation_diagram(model, values, workers=workers)
+    wall = time.perf_counter() - t0
+    pts = d.points
+    first_periodic = {
+        direction: min(
+            (p["v"] for p in pts if p["direction"] == direction and p["attractor"] == "periodic"),
+            default=None,
+        )
+        for direction in ("up", "down")
+    }
+    return {
+        "name": "fig7",
+        "disc": spec,
+        "workers": workers,
+        "wall_time": wall,
+        "target_s": 300.0,
+        "n_points": len(pts),
+        "kinds": {k: sum(p["attractor"] == k for p in pts) for k in {p["attractor"] for p in pts}},
+        "first_periodic_v": first_periodic,
+        "max_point_wall_time": max(p["wall_time"] for p in pts),
+        "eta_tip_at_v12": [p["eta_tip"] for p in pts if p["v"] == 12.0],
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--skip-fig7", action="store_true")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    rows = []
+    for spec in (DEFAULT_FE, "modal:4"):
+        rows.append(bench_limit_cycle(spec))
+        print(json.dumps(rows[-1]), flush=True)
+    if not args.skip_fig7:
+        for spec in (DEFAULT_FE, "modal:4"):
+            rows.append(bench_fig7(spec, workers=args.workers))
+            print(json.dumps(rows[-1]), flush=True)
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(rows, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
