@@ -423,6 +423,9 @@ def draw_study(study: Study, ax=None):
         ax.axhline(
             study.reference_error, color="0.5", ls=":", lw=1, label="reference error estimate"
         )
+    from matplotlib.ticker import NullFormatter
+
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("degrees of freedom")
     ax.set_ylabel("|error|")
     ax.set_title(study.quantity, fontsize=8)
@@ -431,16 +434,42 @@ def draw_study(study: Study, ax=None):
     return ax
 
 
+def draw_orders(studies: Sequence[Study], ax=None):
+    """Observed order of every series against the v_cr study's alpha."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots()
+    vc = [s for s in studies if s.quantity.startswith("v_cr")]
+    alphas = [float(s.quantity.split("=")[1].strip().rstrip("°")) for s in vc]
+    for label, mk in (("FE P1", "o-"), ("FE P2", "s-"), ("FE P3", "^-"), ("modal", "d--")):
+        ax.plot(alphas, [s.series[label].order for s in vc], mk, ms=4, label=label)
+    for p in (2, 4, 6):
+        ax.axhline(p, color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel("α (degrees)")
+    ax.set_ylabel("observed order p")
+    ax.set_title("v_cr: observed orders against α (theory 2, 4, 6)", fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6)
+    return ax
+
+
 def plot(result: CaseResult, fig=None):
-    """One log-log panel per study."""
+    """Log-log error against dofs: static tip, v_cr at α = 0 and 90°, limit cycle; orders vs α."""
     from .drawing import new_figure
 
     studies = result.data["studies"]
+    shown = [s for s in studies if not s.quantity.startswith("v_cr")]
+    vc = [s for s in studies if s.quantity.startswith("v_cr")]
+    shown[1:1] = [s for s in vc if s.quantity.endswith(("= 0°", "= 90°"))]
+    n = len(shown) + (1 if len(vc) > 1 else 0)
     if fig is None:
-        fig, axes = new_figure(len(studies), ncols=min(len(studies), 3), size=4.5)
+        fig, axes = new_figure(n, ncols=min(n, 3), size=4.5)
     else:
-        axes = list(fig.subplots(1, len(studies), squeeze=False).ravel())
-    for ax, s in zip(axes, studies, strict=False):
+        axes = list(fig.subplots(1, n, squeeze=False).ravel())
+    for ax, s in zip(axes, shown, strict=False):
         draw_study(s, ax=ax)
+    if len(vc) > 1:
+        draw_orders(studies, ax=axes[len(shown)])
     fig.tight_layout()
     return fig
