@@ -1,0 +1,279 @@
+"""``fempipe static``: large static deformation along a list of flow velocities.
+
+Solves Eq. (31a) at each value of ``--v`` (or ``--U`` in m/s) by Newton and
+continuation from the gravity-sagged state (:func:`fempipe.static.solve_path`),
+and reports the tip values (Eq. (28)) as a table, as JSON (``--json``) or as
+files (``--out DIR``: static.json, static.csv, shapes.png, shapes.vtu).
+
+``--continuation gamma`` or ``--continuation alpha`` with ``--values LIST``
+follows the static state in gravity or inclination at one flow velocity instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import replace
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+#: Tip quantities reported per point (dimensionless), in table order.
+TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    common.add_physical_arguments(parser)
+    common.add_flow_arguments(parser, default="0:10:11")
+    common.add_discretization_arguments(parser)
+    g = parser.add_argument_group("continuation")
+    g.add_argument(
+        "--continuation",
+        choices=("v", "gamma", "alpha"),
+        default="v",
+        help="parameter to step through (default v: the flow list); gamma or alpha use --values "
+        "at a single flow velocity",
+    )
+    g.add_argument(
+        "--values",
+        metavar="LIST",
+        default=None,
+        help="values of the --continuation parameter (gamma: 0:100:11; alpha: items as in --alpha, "
+        "e.g. 0,pi/4,pi/2 or 0deg:180deg:7)",
+    )
+    common.add_output_arguments(parser)
+
+
+def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple[str, list]:
+    """The continued parameter and its values, validated (CLIError naming the option)."""
+    parameter = args.continuation
+    if parameter == "v":
+        if args.values is not None:
+            raise CLIError("--values", "only with --continuation gamma|alpha; use --v or --U")
+        return parameter, list(setup.v)
+    if args.values is None:
+        raise CLIError("--values", f"--continuation {parameter} needs --values LIST")
+    if parameter == "gamma" and setup.pipe is not None:
+        raise CLIError(
+            "--continuation",
+            "gamma is fixed by the SI pipe (--length --EI --m --M --g); use dimensionless input",
+        )
+    if parameter == "alpha":
+        values = _parse_alpha_values(args.values)
+    else:
+        try:
+            values = common.parse_values(args.values, "--values")
+        except ValueError as exc:
+            raise CLIError("--values", str(exc)) from None
+    for x in values:
+        try:
+            replace(setup.params, **{parameter: x})
+        except ValueError as exc:
+            raise CLIError("--values", str(exc)) from None
+    return parameter, values
+
+
+def _parse_alpha_values(text: str) -> list[float]:
+    """Alpha list: ``0,pi/4,pi/2`` or ``start:stop:count`` with alpha spellings."""
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise ValueError(f"--values expects start:stop:count, got {text!r}")
+            start, stop = common.parse_alpha(parts[0]), common.parse_alpha(parts[1])
+            return common.parse_values(f"{start!r}:{stop!r}:{parts[2]}", "--values")
+        items = text.split(",")
+        if any(not s.strip() for s in items):
+            raise ValueError(f"--values has an empty item in {text!r}")
+        return [common.parse_alpha(s) for s in items]
+    except ValueError as exc:
+        raise CLIError("--values", str(exc).replace("--alpha", "--values (alpha)")) from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe.kinematics import shape, tip_values
+    from fempipe.operators import PipeModel
+    from fempipe.static import NewtonError, solve_path
+
+    setup = common.setup_from_args(args)
+    pipe, disc = setup.pipe, setup.disc
+    parameter, values = _continuation_values(args, setup)
+    base = setup.params
+    if parameter != "v":
+        flow_given = args.v is not None or args.U is not None
+        if flow_given and len(setup.v) != 1:
+            opt = "--U" if args.U is not None else "--v"
+            raise CLIError(opt, f"--continuation {parameter} takes a single flow velocity")
+        base = replace(base, v=setup.v[0] if flow_given else 0.0)
+    if not values:
+        raise CLIError("--v", "no values to solve")
+
+    model = PipeModel(disc, replace(base, **{parameter: values[0]}))
+    solved = []
+    with common.progress(args, len(values), f"static ({parameter})") as bar:
+
+        def on_point(i, sol):
+            solved.append(sol)
+            bar.update()
+
+        try:
+            sols = solve_path(model, values, parameter=parameter, callback=on_point)
+        except NewtonError as exc:
+            where = ""
+            if pipe is not None and parameter == "v":
+                U = pipe.U_of_v(exc.params.v)
+                where = f" (U = {U:.6g} m/s)"
+            raise NewtonError(
+                f"{exc}{where}; {len(solved)} of {len(values)} points solved, nothing written",
+                params=exc.params,
+                iterations=exc.iterations,
+                residual=exc.residual,
+            ) from exc
+
+    points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
+    result = setup.to_dict()
+    result["params"].pop(parameter, None)
+    if parameter != "v":
+        result["params"]["v"] = base.v
+    result = {
+        "points": points,
+        "params": result["params"],
+        "discretization": result["discretization"],
+    }
+
+    if args.out is not None:
+        shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
+        _write_outputs(args.out, result, points, shapes, values, parameter, pipe, args)
+
+    if args.json:
+        from fempipe.io import json_dumps
+
+        print(json_dumps(result))
+    else:
+        _print_table(result, parameter, pipe)
+    return 0
+
+
+def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
+    """One row of the results: tip values, Newton diagnostics, SI values if SI."""
+    p = sol.params
+    tip = tip_values(disc, sol.q, p.alpha)
+    row: dict = {"v": p.v}
+    if parameter != "v":
+        row[parameter] = getattr(p, parameter)
+    row.update({k: tip[k] for k in TIP_KEYS})
+    # Drop of the tip along gravity relative to the undeformed (straight) pipe,
+    # whose tip sits at X_g = cos(alpha): positive = the tip moved down.
+    row["tip_drop"] = tip["X_tip"] - math.cos(p.alpha)
+    row["newton_iterations"] = sol.iterations
+    row["residual_norm"] = sol.residual_norm
+    if pipe is not None:
+        L = pipe.L
+        row["U"] = pipe.U_of_v(p.v)
+        row["X_tip_m"] = tip["X_tip"] * L
+        row["Z_tip_m"] = tip["Z_tip"] * L
+        row["eta_tip_m"] = tip["eta_tip"] * L
+        row["varsigma_tip_m"] = tip["varsigma_tip"] * L
+        row["tip_drop_mm"] = row["tip_drop"] * L * 1e3
+    return row
+
+
+def _labels(values, parameter: str, pipe) -> list[str]:
+    if parameter == "alpha":
+        return [f"α = {math.degrees(a):.4g}°" for a in values]
+    if parameter == "gamma":
+        return [f"γ = {g:.4g}" for g in values]
+    if pipe is None:
+        return [f"v = {v:.4g}" for v in values]
+    return [f"v = {v:.4g}  (U = {pipe.U_of_v(v):.3g} m/s)" for v in values]
+
+
+def _write_outputs(out, result, points, shapes, values, parameter, pipe, args) -> None:
+    """Make everything in memory first, then write each file atomically."""
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fempipe.io import write_csv, write_figure, write_json, write_shapes
+    from fempipe.plotting.static import plot_shapes
+
+    out = Path(out)
+    p = result["params"]
+    if pipe is not None:
+        title = (
+            f"L = {pipe.L * 1e3:.4g} mm, EI = {pipe.EI:.3g} N m², α = {math.degrees(pipe.alpha):.4g}°"
+            f"  (β = {p['beta']:.4g}, γ = {p['gamma']:.4g})"
+        )
+    else:
+        fixed = [f"{sym} = {p[k]:.4g}" for k, sym in (("beta", "β"), ("gamma", "γ")) if k in p]
+        if "alpha" in p:
+            fixed.insert(0, f"α = {math.degrees(p['alpha']):.4g}°")
+        if parameter != "v":
+            fixed.append(f"v = {p['v']:.4g}")
+        title = ", ".join(fixed)
+    ax = plot_shapes(
+        shapes,
+        _labels(values, parameter, pipe),
+        si_length=None if pipe is None else pipe.L,
+        alpha=_alphas(values, parameter, p),
+        title=title,
+    )
+    fig = ax.figure
+    try:
+        write_json(out / "static.json", result)
+        write_csv(out / "static.csv", points)
+        write_figure(out / "shapes.png", fig, dpi=150)
+        write_shapes(
+            out / "shapes.vtu",
+            shapes,
+            values,
+            parameter=parameter,
+            length=None if pipe is None else pipe.L,
+        )
+    finally:
+        plt.close(fig)
+    if not args.json and args.progress is not False:
+        for name in ("static.json", "static.csv", "shapes.png", "shapes.vtu"):
+            print(f"wrote {out / name}", file=sys.stderr)
+
+
+def _alphas(values, parameter: str, p: dict) -> list[float]:
+    if parameter == "alpha":
+        return list(values)
+    return [p["alpha"]] * len(values)
+
+
+def _print_table(result: dict, parameter: str, pipe) -> None:
+    p = result["params"]
+    d = result["discretization"]
+    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
+    head = ", ".join(f"{k} = {p[k]:.6g}" for k in ("alpha", "beta", "gamma", "mu", "v") if k in p)
+    print(f"static deformation, {head}; discretisation {disc}")
+    if pipe is not None:
+        print(
+            f"SI pipe: L = {pipe.L:g} m, EI = {pipe.EI:g} N m^2, m = {pipe.m:g} kg/m, "
+            f"M = {pipe.M:g} kg/m, g = {pipe.g:g} m/s^2; v = {1 / pipe.velocity_scale:.6g} U"
+        )
+    cols = [("v", "v", "{:8.4f}")]
+    if parameter != "v":
+        cols.insert(0, (parameter, parameter, "{:9.5f}"))
+    if pipe is not None:
+        cols.append(("U", "U [m/s]", "{:8.4f}"))
+    cols += [
+        ("theta_tip", "theta_tip", "{:+10.6f}"),
+        ("X_tip", "X_tip", "{:+10.6f}"),
+        ("Z_tip", "Z_tip", "{:+10.6f}"),
+        ("eta_tip", "eta_tip", "{:+10.6f}"),
+    ]
+    if pipe is not None:
+        cols.append(("tip_drop_mm", "drop [mm]", "{:+10.4f}"))
+    cols += [("newton_iterations", "Newton", "{:6d}"), ("residual_norm", "residual", "{:9.2e}")]
+    widths = [max(len(h), len(f.format(0 if "d}" in f else 0.0))) for _, h, f in cols]
+    print("  ".join(h.rjust(w) for (_, h, _), w in zip(cols, widths, strict=True)))
+    for row in result["points"]:
+        cells = [f.format(row[k]).rjust(w) for (k, _, f), w in zip(cols, widths, strict=True)]
+        print("  ".join(cells))

@@ -1,0 +1,145 @@
+"""Figures of static deformation: deformed centrelines in the global frame.
+
+Drawn the way the paper's Figs. 2-4 show them: gravity points down the page
+(X_g, the coordinate along gravity in Eq. (28), increases downward), Z_g is
+horizontal, both axes have the same scale so shapes are not distorted, one
+curve per flow velocity, the clamp at the origin.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = ["plot_shapes"]
+
+
+def _as_list(alpha, n: int) -> list[float | None]:
+    if alpha is None or np.ndim(alpha) == 0:
+        return [alpha] * n
+    alpha = list(alpha)
+    if len(alpha) != n:
+        raise ValueError(f"alpha must be a float or one value per shape ({n}), got {len(alpha)}")
+    return alpha
+
+
+def _clamp_angle(s) -> float:
+    """Undeformed direction from the first segment: theta(0) = 0, so it is alpha."""
+    return float(np.arctan2(s.Z_g[1] - s.Z_g[0], s.X_g[1] - s.X_g[0]))
+
+
+def plot_shapes(
+    shapes: Sequence,
+    labels: Sequence[str] | None = None,
+    ax=None,
+    si_length: float | None = None,
+    alpha: float | Sequence[float] | None = None,
+    max_labels: int = 12,
+    title: str | None = None,
+):
+    """Deformed centrelines (X_g, Z_g) with gravity pointing down.
+
+    Parameters
+    ----------
+    shapes : sequence of Shape
+        :class:`fempipe.kinematics.Shape`, dimensionless (Eq. (28)).
+    labels : sequence of str, optional
+        One legend entry per shape (e.g. ``"v = 2"``, ``"v = 1.69 (U = 1 m/s)"``).
+    ax : matplotlib Axes, optional
+        Drawn into; a new figure is made if None.
+    si_length : float, optional
+        Pipe length L in m: coordinates are then shown in mm.
+    alpha : float or sequence of float, optional
+        Inclination(s), rad, for the dashed undeformed pipe and the clamp;
+        inferred from the first segment of each shape if None.
+    max_labels : int
+        At most this many legend entries (every k-th curve is labelled).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib import colormaps
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 5.6), layout="constrained")
+    n = len(shapes)
+    if labels is not None and len(labels) != n:
+        raise ValueError(f"got {n} shapes but {len(labels)} labels")
+    scale = 1.0 if si_length is None else 1e3 * float(si_length)
+    alphas = [
+        a if a is not None else _clamp_angle(s)
+        for a, s in zip(_as_list(alpha, n), shapes, strict=True)
+    ]
+    cmap = colormaps["viridis"]
+    colors = cmap(np.linspace(0.0, 0.9, n)) if n > 1 else [cmap(0.0)]
+    every = max(1, int(np.ceil(n / max_labels)))
+
+    # Undeformed pipe(s) and clamp(s), once per distinct inclination.
+    for k, a in enumerate(dict.fromkeys(round(x, 12) for x in alphas)):
+        tx, tz = np.cos(a), np.sin(a)  # (X, Z) direction of the undeformed pipe
+        ax.plot(
+            [0.0, tz * scale],
+            [0.0, tx * scale],
+            ls="--",
+            color="0.6",
+            lw=1.0,
+            label="undeformed" if k == 0 else None,
+            zorder=1,
+        )
+        _draw_clamp(ax, tx, tz, 0.06 * scale)
+
+    for i, s in enumerate(shapes):
+        lab = labels[i] if labels is not None and (i % every == 0 or i == n - 1) else None
+        ax.plot(
+            np.asarray(s.Z_g) * scale,
+            np.asarray(s.X_g) * scale,
+            color=colors[i],
+            lw=1.6,
+            label=lab,
+            zorder=2,
+        )
+        ax.plot(s.Z_g[-1] * scale, s.X_g[-1] * scale, "o", ms=3, color=colors[i], zorder=3)
+
+    ax.set_aspect("equal", adjustable="datalim")
+    # Include the clamp and a margin so the clamp is never cut off.
+    ax.update_datalim([(-0.1 * scale, -0.1 * scale), (0.1 * scale, 0.1 * scale)])
+    ax.autoscale_view()
+    ax.invert_yaxis()  # X_g points along gravity: down the page
+    if si_length is None:
+        ax.set_xlabel(r"$Z_g$  (horizontal, $/L$)")
+        ax.set_ylabel(r"$X_g$  (along gravity, $/L$)")
+    else:
+        ax.set_xlabel(r"$Z_g\,L$  (mm)")
+        ax.set_ylabel(r"$X_g\,L$  (mm, along gravity)")
+    ax.grid(True, lw=0.4, alpha=0.5)
+    # Gravity arrow in the lower right corner (the pipe hangs away from it), in axes coordinates: always points down.
+    ax.annotate(
+        "",
+        xy=(0.97, 0.04),
+        xytext=(0.97, 0.17),
+        xycoords="axes fraction",
+        arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 1.2},
+    )
+    ax.text(0.95, 0.105, "$g$", transform=ax.transAxes, ha="right", va="center")
+    if labels is not None or n:
+        ax.legend(fontsize="small", loc="best", framealpha=0.85)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def _draw_clamp(ax, tx: float, tz: float, size: float) -> None:
+    """A wall across the pipe at the origin, hatched on the side away from the pipe."""
+    # Wall direction is perpendicular to the pipe's (X, Z) direction.
+    wx, wz = -tz, tx
+    ax.plot([-wz * size, wz * size], [-wx * size, wx * size], color="k", lw=2.5, zorder=4)
+    for s in np.linspace(-1.0, 1.0, 6):
+        # Short strokes behind the wall (opposite to the pipe), slanted.
+        x0, z0 = s * wx * size, s * wz * size
+        x1 = x0 - 0.45 * size * tx + 0.3 * size * wx
+        z1 = z0 - 0.45 * size * tz + 0.3 * size * wz
+        ax.plot([z0, z1], [x0, x1], color="k", lw=0.8, zorder=4)
