@@ -1,0 +1,244 @@
+"""Performance benchmarks (timings, never unit tests).
+
+A benchmark is a function ``fn(quick: bool = False) -> dict`` registered
+under a name in :data:`BENCHMARKS`; ``fempipe bench`` runs them all or
+``--only NAME``.  To add one from another module::
+
+    from fempipe.bench import register
+
+    @register("my_solver")
+    def bench_my_solver(quick: bool = False) -> dict:
+        ...
+        return {"seconds": t, ...}
+
+and list that module in :data:`BENCHMARK_MODULES` so the CLI imports it.
+A result dict may carry a ``"table"`` (list of flat dicts), which the CLI
+prints as a table; everything else is printed as ``key: value``.
+
+The static benchmarks (issue 2):
+
+``static_path``
+    A 61-point path in v = 0..10 at the default discretisation, the paper's
+    case (beta = 0.142, gamma = 18.9, mu = 5e-3, alpha = pi/2) and the
+    Texier--Dorbolo pipe (SPEC section 5) at alpha = pi/2, through
+    :func:`fempipe.static.solve_path` (what ``fempipe static`` does) and,
+    for comparison, the pseudo-arclength :func:`fempipe.static.continuation`
+    from v = 0 to 10.
+``static_scaling``
+    The same 61-point path (paper's case) on P3 meshes of 8, 16, ..., 256
+    elements: wall time per point and the exponent p of time ~ n_elements^p,
+    fitted over the whole range and over the finest three meshes.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import math
+import os
+import platform
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["BENCHMARKS", "BENCHMARK_MODULES", "register", "run", "available"]
+
+log = logging.getLogger(__name__)
+
+#: name -> benchmark function ``fn(quick=False) -> dict``.
+BENCHMARKS: dict[str, Callable[..., dict]] = {}
+
+#: Modules imported by :func:`available` so that their ``@register`` runs.
+#: Modules that do not exist (yet) are skipped.
+BENCHMARK_MODULES: tuple[str, ...] = ("fempipe.bench",)
+
+#: The paper's reference case (Section 5) at alpha = pi/2.
+PAPER = {"alpha": math.pi / 2, "beta": 0.142, "gamma": 18.9, "mu": 5e-3}
+#: Texier & Dorbolo's pipe (paper Section 3.1, Fig. 2b): SI values.
+TEXIER_DORBOLO = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}
+
+
+def register(name: str) -> Callable[[Callable[..., dict]], Callable[..., dict]]:
+    """Decorator: register ``fn(quick=False) -> dict`` as benchmark ``name``."""
+
+    def deco(fn: Callable[..., dict]) -> Callable[..., dict]:
+        if name in BENCHMARKS and BENCHMARKS[name] is not fn:
+            raise ValueError(f"benchmark {name!r} is already registered")
+        BENCHMARKS[name] = fn
+        return fn
+
+    return deco
+
+
+def available() -> dict[str, Callable[..., dict]]:
+    """All registered benchmarks, after importing :data:`BENCHMARK_MODULES`."""
+    for mod in BENCHMARK_MODULES:
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as exc:
+            if exc.name != mod:
+                raise
+            log.debug("benchmark module %s not found, skipped", mod)
+    return dict(BENCHMARKS)
+
+
+def environment() -> dict:
+    """Where the numbers were measured."""
+    import scipy
+
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "machine": platform.machine(),
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def run(
+    names: list[str] | None = None,
+    quick: bool = False,
+    callback: Callable[[str, dict], None] | None = None,
+) -> dict:
+    """Run benchmarks by name (all if None).
+
+    Parameters
+    ----------
+    names : list of str, optional
+    quick : bool
+        Smaller problems and one repetition (a smoke run, not a measurement).
+    callback : callable, optional
+        Called as ``callback(name, result)`` after each benchmark.
+
+    Returns
+    -------
+    dict
+        ``{"environment": ..., "quick": quick, "benchmarks": {name: result}}``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (naming the known ones).
+    """
+    table = available()
+    names = list(table) if not names else list(names)
+    unknown = [n for n in names if n not in table]
+    if unknown:
+        raise ValueError(f"unknown benchmark {unknown[0]!r}; known: {', '.join(sorted(table))}")
+    out = {"environment": environment(), "quick": quick, "benchmarks": {}}
+    for name in names:
+        log.info("benchmark %s", name)
+        res = table[name](quick=quick)
+        out["benchmarks"][name] = res
+        if callback:
+            callback(name, res)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Static benchmarks
+# ---------------------------------------------------------------------------
+
+
+def _best_time(fn: Callable[[], object], repeats: int) -> tuple[float, object]:
+    """Minimum wall time of ``repeats`` calls (the least disturbed run) and the last result."""
+    best, result = math.inf, None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+def _fit_exponent(n: np.ndarray, t: np.ndarray) -> float:
+    """Least-squares slope of log t against log n."""
+    return float(np.polyfit(np.log(n), np.log(t), 1)[0])
+
+
+def _path_case(name: str, params, disc, values: list[float], repeats: int) -> dict:
+    from fempipe.kinematics import tip_values
+    from fempipe.operators import PipeModel
+    from fempipe.static import continuation, solve_path
+
+    model = PipeModel(disc, params)
+    t_path, sols = _best_time(lambda: solve_path(model, values), repeats)
+    t_arc, branch = _best_time(lambda: continuation(model, "v", stop=values[-1]), repeats)
+    last = sols[-1]
+    tip = tip_values(disc, last.q, params.alpha)
+    tip_arc = tip_values(disc, branch.points[-1].q, params.alpha)
+    return {
+        "case": name,
+        "discretization": disc.name,
+        "n_dofs": disc.n,
+        "n_points": len(values),
+        "v_max": values[-1],
+        "seconds": t_path,
+        "ms_per_point": 1e3 * t_path / len(values),
+        "newton_iterations_total": int(sum(s.iterations for s in sols)),
+        "theta_tip_at_v_max": tip["theta_tip"],
+        "X_tip_at_v_max": tip["X_tip"],
+        "arclength_seconds": t_arc,
+        "arclength_steps": branch.steps,
+        "arclength_rejected_steps": branch.rejected_steps,
+        # Both routes must land on the same state: a cheap consistency check.
+        "arclength_theta_tip_diff": abs(tip_arc["theta_tip"] - tip["theta_tip"]),
+    }
+
+
+@register("static_path")
+def bench_static_path(quick: bool = False) -> dict:
+    """61-point path in v = 0..10 at the default discretisation, two cases."""
+    from fempipe.discretization import DEFAULT_FE, parse_discretization
+    from fempipe.params import Params, PipeSI
+
+    n_points = 11 if quick else 61
+    repeats = 1 if quick else 3
+    values = list(np.linspace(0.0, 10.0, n_points))
+    disc = parse_discretization(DEFAULT_FE)
+    td = PipeSI(alpha=math.pi / 2, **TEXIER_DORBOLO).params(0.0)
+    rows = [
+        _path_case("paper alpha=pi/2", Params(**PAPER), disc, values, repeats),
+        _path_case("Texier-Dorbolo alpha=pi/2", td, disc, values, repeats),
+    ]
+    return {"repeats": repeats, "table": rows}
+
+
+@register("static_scaling")
+def bench_static_scaling(quick: bool = False) -> dict:
+    """Cost of the 61-point path as the P3 mesh doubles from 8 to 256 elements."""
+    from fempipe.discretization import FiniteElement
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.static import solve_path
+
+    n_points = 11 if quick else 61
+    repeats = 1 if quick else 3
+    meshes = [8, 16, 32] if quick else [8, 16, 32, 64, 128, 256]
+    values = list(np.linspace(0.0, 10.0, n_points))
+    params = Params(**PAPER)
+    rows = []
+    for n_el in meshes:
+        disc = FiniteElement(n_el, 3)
+        model = PipeModel(disc, params)
+        t, sols = _best_time(lambda model=model: solve_path(model, values), repeats)
+        rows.append(
+            {
+                "n_elements": n_el,
+                "n_dofs": disc.n,
+                "seconds": t,
+                "ms_per_point": 1e3 * t / n_points,
+                "newton_iterations_total": int(sum(s.iterations for s in sols)),
+                "us_per_newton_iteration": 1e6 * t / sum(s.iterations for s in sols),
+            }
+        )
+    n = np.array([r["n_elements"] for r in rows], dtype=float)
+    tt = np.array([r["seconds"] for r in rows])
+    return {
+        "element": "P3",
+        "n_points": n_points,
+        "repeats": repeats,
+        "exponent_all": _fit_exponent(n, tt),
+        "exponent_finest_3": _fit_exponent(n[-3:], tt[-3:]),
+        "table": rows,
+    }

@@ -1,0 +1,91 @@
+"""``fempipe bench``: performance benchmarks (see :mod:`fempipe.bench`).
+
+``fempipe bench`` runs every registered benchmark; ``--only NAME`` (repeatable
+or comma-separated) selects some, ``--list`` names them, ``--quick`` runs
+small versions (a smoke test, not a measurement).  ``--json`` prints
+``{"environment", "quick", "benchmarks": {name: result}}``; ``--out DIR``
+writes the same to DIR/bench.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from fempipe.cli import common
+from fempipe.cli.common import CLIError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--only",
+        metavar="NAME",
+        action="append",
+        default=None,
+        help="run only these benchmarks (repeat or comma-separate); see --list",
+    )
+    parser.add_argument("--list", action="store_true", help="list the benchmarks and exit")
+    parser.add_argument(
+        "--quick", action="store_true", help="small problems, one repetition (smoke run)"
+    )
+    common.add_output_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fempipe import bench
+    from fempipe.io import json_dumps, write_json
+
+    table = bench.available()
+    if args.list:
+        for name, fn in table.items():
+            doc = (fn.__doc__ or "").strip().splitlines()
+            print(f"{name:20s} {doc[0] if doc else ''}")
+        return 0
+    names = None
+    if args.only:
+        names = [n.strip() for item in args.only for n in item.split(",") if n.strip()]
+        unknown = [n for n in names if n not in table]
+        if unknown:
+            raise CLIError(
+                "--only", f"unknown benchmark {unknown[0]!r}; known: {', '.join(sorted(table))}"
+            )
+    n = len(names) if names else len(table)
+    with common.progress(args, n, "bench") as bar:
+        result = bench.run(names, quick=args.quick, callback=lambda name, res: bar.update())
+    if args.out is not None:
+        from pathlib import Path
+
+        path = write_json(Path(args.out) / "bench.json", result)
+        if not args.json:
+            print(f"wrote {path}", file=sys.stderr)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print(result)
+    return 0
+
+
+def _fmt(x) -> str:
+    if isinstance(x, float):
+        return f"{x:.4g}"
+    return str(x)
+
+
+def _print(result: dict) -> None:
+    env = result["environment"]
+    print("environment: " + ", ".join(f"{k} {v}" for k, v in env.items()))
+    if result["quick"]:
+        print("(quick run: small problems, not a measurement)")
+    for name, res in result["benchmarks"].items():
+        print(f"\n== {name} ==")
+        for k, v in res.items():
+            if k != "table":
+                print(f"  {k}: {_fmt(v)}")
+        rows = res.get("table")
+        if rows:
+            cols = list(dict.fromkeys(k for r in rows for k in r))
+            cells = [[_fmt(r.get(c, "")) for c in cols] for r in rows]
+            widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
+            print("  " + "  ".join(c.rjust(w) for c, w in zip(cols, widths, strict=True)))
+            for row in cells:
+                print("  " + "  ".join(s.rjust(w) for s, w in zip(row, widths, strict=True)))
