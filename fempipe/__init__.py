@@ -9,6 +9,7 @@ from .discretization import FiniteElement, Modal, parse_discretization
 from .kinematics import shape, tip_values
 from .operators import PipeModel
 from .params import Params, PipeSI
+from .stability import critical_velocity, spectrum, stability_analysis
 from .static import NewtonError, continuation, solve_path, solve_static, switch_branch
 
 __version__ = "0.1.0"
@@ -21,10 +22,13 @@ __all__ = [
     "PipeModel",
     "PipeSI",
     "continuation",
+    "critical_velocity",
     "parse_discretization",
     "shape",
     "solve_path",
     "solve_static",
+    "spectrum",
+    "stability_analysis",
     "switch_branch",
     "tip_values",
 ]
