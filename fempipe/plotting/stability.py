@@ -104,11 +104,13 @@ def _nice_step(x: float) -> float:
     return 10.0 * e
 
 
-def plot_stability_map(smap, ax=None, key: str = "v_cr", title=None):
-    """v_cr against alpha for each (beta, gamma) curve of a :class:`~fempipe.stability.StabilityMap`.
+def plot_stability_map(smap, ax=None, title=None):
+    """Flutter velocity against alpha for each (beta, gamma) of a :class:`~fempipe.stability.StabilityMap`.
 
-    Points where the first instability is divergence (or a fold) are drawn
-    with open squares; flutter with filled circles.
+    The lines are the first flutter velocity of the primary branch (what the
+    paper's Fig. 6 plots); where the branch loses stability earlier by
+    divergence or at a fold (at and near alpha = pi), v_cr is drawn as an open
+    square.
 
     Returns
     -------
@@ -116,22 +118,20 @@ def plot_stability_map(smap, ax=None, key: str = "v_cr", title=None):
     """
     ax = _axes(ax)
     a = np.asarray(smap.alphas) / np.pi
-    values = smap.array(key)
+    flutter, vcr = smap.array("v_flutter"), smap.array("v_cr")
     for c, (beta, gamma) in enumerate(smap.curves):
         (line,) = ax.plot(
-            a, values[c], "-", lw=1.2, label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}"
+            a, flutter[c], "o-", ms=3, lw=1.2, label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}"
         )
-        types = [pt.get("type") for pt in smap.points[c]]
-        flut = np.array([t == "flutter" for t in types])
-        other = np.array([t in ("divergence", "fold") for t in types])
-        ax.plot(a[flut], values[c][flut], "o", ms=3, color=line.get_color())
+        other = np.array([pt.get("type") in ("divergence", "fold") for pt in smap.points[c]])
         if other.any():
-            ax.plot(a[other], values[c][other], "s", ms=4, mfc="none", color=line.get_color())
+            ax.plot(a[other], vcr[c][other], "s", ms=5, mfc="none", color=line.get_color())
     ax.set_xlabel(r"$\alpha/\pi$")
-    ax.set_ylabel(r"$v_{cr}$" if key == "v_cr" else key)
+    ax.set_ylabel(r"$v_{cr}$")
     ax.set_title(
         title
-        or rf"critical flow velocity ($\mu$ = {smap.base.mu:g}; ○ flutter, □ divergence/fold)",
+        or rf"flutter velocity (○, $\mu$ = {smap.base.mu:g}); □ earlier loss of stability "
+        "(divergence, fold)",
         fontsize=9,
     )
     ax.grid(alpha=0.3)
