@@ -242,3 +242,66 @@ def bench_static_scaling(quick: bool = False) -> dict:
         "exponent_finest_3": _fit_exponent(n[-3:], tt[-3:]),
         "table": rows,
     }
+
+
+# ---------------------------------------------------------------------------
+# Stability benchmarks (issue 3)
+# ---------------------------------------------------------------------------
+
+
+@register("stability_vcr")
+def bench_stability_vcr(quick: bool = False) -> dict:
+    """v_cr at alpha = pi/2 (paper's case) on the default discretisation, events to 1e-10 in v.
+
+    Target: under 3 s.  Accuracy: the relative difference to P3:32 (target 1e-6).
+    """
+    from fempipe.discretization import DEFAULT_FE, FiniteElement, parse_discretization
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.stability import critical_velocity, resolution
+
+    disc = parse_discretization(DEFAULT_FE)
+    resolution(disc)  # canonical modes, cached per discretisation
+    model = PipeModel(disc, Params(**PAPER))
+    t, res = _best_time(lambda: critical_velocity(model, 10.0), 1 if quick else 3)
+    out = {
+        "discretization": disc.name,
+        "alpha": PAPER["alpha"],
+        "v_cr": res.v_cr,
+        "type": res.critical.type,
+        "mode": res.critical.mode,
+        "frequency": res.critical.frequency,
+        "n_spectra": res.n_spectra,
+        "seconds": t,
+        "target_seconds": 3.0,
+    }
+    if not quick:
+        fine = critical_velocity(PipeModel(FiniteElement(32, 3), Params(**PAPER)), 10.0)
+        out["v_cr_P3_32"] = fine.v_cr
+        out["rel_diff_vs_P3_32"] = abs(res.v_cr / fine.v_cr - 1.0)
+    return out
+
+
+@register("stability_curve")
+def bench_stability_curve(quick: bool = False) -> dict:
+    """v_cr(alpha) at 37 inclinations 0..pi (Fig. 6) on 2 processes; target under 60 s."""
+    from fempipe.discretization import DEFAULT_FE, parse_discretization
+    from fempipe.stability import stability_map
+
+    n_alpha = 5 if quick else 37
+    alphas = np.linspace(0.0, math.pi, n_alpha)
+    disc = parse_discretization(DEFAULT_FE)
+    t0 = time.perf_counter()
+    smap = stability_map(
+        disc, alphas, [(PAPER["beta"], PAPER["gamma"])], mu=PAPER["mu"], v_max=10.0, workers=2
+    )
+    t = time.perf_counter() - t0
+    rows = smap.rows()
+    return {
+        "n_alpha": n_alpha,
+        "workers": 2,
+        "seconds": t,
+        "target_seconds": 60.0,
+        "failed_points": sum(1 for r in rows if r["error"]),
+        "table": [{k: r[k] for k in ("alpha", "v_cr", "type", "mode", "v_flutter")} for r in rows],
+    }
