@@ -1180,7 +1180,7 @@ class _BranchAnalysis:
         self,
         model: PipeModel,
         res: Resolution,
-        branch: Branch,
+        branch: _Pieces,
         name: str,
         v_range: tuple[float, float],
         method: str,
@@ -1198,20 +1198,9 @@ class _BranchAnalysis:
         self.events: list[tuple[float, StabilityEvent, int, int]] = []
 
     # -- pass 1: samples ----------------------------------------------------
-    def _points(self) -> list[tuple[np.ndarray, float, bool]]:
-        """Branch points with the folds inserted, in arclength order."""
-        folds = sorted(self.branch.folds, key=lambda s: s.index)
-        out, fi = [], 0
-        for i, p in enumerate(self.branch.points):
-            out.append((p.q, p.value, False))
-            while fi < len(folds) and folds[fi].index == i:
-                out.append((folds[fi].q, folds[fi].value, True))
-                fi += 1
-        return out
-
     def run(self) -> None:
         s, prev = 0.0, None
-        for q, v, is_fold in self._points():
+        for q, v, is_fold in self.branch.iter_points():
             if prev is not None:
                 s += abs(v - prev[1]) + _l2(self.model, q - prev[0])
             prev = (q, v)
@@ -1465,19 +1454,92 @@ class _BranchAnalysis:
         )
 
 
-def _follow(
-    model: PipeModel,
-    v_range: tuple[float, float],
-    ds_max: float,
-    q0: np.ndarray | None,
-    max_steps: int,
-) -> Branch:
-    lo, hi = v_range
-    m = model.with_params(replace(model.params, v=lo))
-    q = gravity_loaded_state(m).q if q0 is None else solve_static(m, q0=q0).q
-    return continuation(
-        m, "v", stop=hi, q0=q, ds=min(0.05, ds_max), ds_max=ds_max, max_steps=max_steps
-    )
+class _Pieces:
+    """A static branch continued in v piece by piece, seen as one branch.
+
+    With ``chunk`` set, the continuation advances ``chunk`` in v at a time and
+    only as far as the analysis asks (``stop_at_first``: no continuation
+    beyond the first loss of stability); otherwise in one piece.  Fold and
+    branch-point indices are renumbered to the concatenated point list.
+    """
+
+    def __init__(self, branch: Branch | None = None) -> None:
+        self.points: list = []
+        self.special: list = []
+        self.end_reason = "stop"
+        self._next = None
+        if branch is not None:
+            self._add(branch)
+
+    @classmethod
+    def follow(
+        cls,
+        model: PipeModel,
+        v_range: tuple[float, float],
+        ds_max: float,
+        q0: np.ndarray | None,
+        max_steps: int,
+        chunk: float | None = None,
+    ) -> _Pieces:
+        lo, hi = v_range
+        m = model.with_params(replace(model.params, v=lo))
+        q = gravity_loaded_state(m).q if q0 is None else solve_static(m, q0=q0).q
+        self = cls()
+        kw = {"ds": min(0.05, ds_max), "ds_max": ds_max, "max_steps": max_steps}
+
+        def advance(piece_start, tangent):
+            v_a, q_a = piece_start
+            stop = hi if chunk is None else min(hi, v_a + chunk)
+            ma = model.with_params(replace(model.params, v=v_a))
+            return continuation(ma, "v", stop=stop, q0=q_a, tangent=tangent, **kw)
+
+        self._next = lambda: advance((lo, q), None)
+        self._hi = hi
+        self._advance = advance
+        return self
+
+    def _add(self, branch: Branch) -> None:
+        skip = 1 if self.points else 0
+        offset = len(self.points) - skip
+        self.points.extend(branch.points[skip:])
+        self.special.extend(replace(s, index=s.index + offset) for s in branch.special)
+        self.end_reason = branch.end_reason
+
+    def more(self) -> bool:
+        """Continue one more piece; False when the branch is finished."""
+        if self._next is None:
+            return False
+        piece = self._next()
+        self._add(piece)
+        last = self.points[-1]
+        if piece.end_reason != "stop" or last.value >= self._hi:
+            self._next = None
+        else:
+            self._next = lambda: self._advance((last.value, last.q), last.tangent)
+        return True
+
+    @property
+    def folds(self) -> list:
+        return [s for s in self.special if s.kind == "fold"]
+
+    @property
+    def bifurcations(self) -> list:
+        return [s for s in self.special if s.kind == "bifurcation"]
+
+    def iter_points(self):
+        """(q, v, is_fold) in arclength order, continuing lazily."""
+        i = 0
+        while True:
+            while i < len(self.points):
+                # The folds located in segment [i - 1, i] come before point i.
+                for f in self.special:
+                    if f.kind == "fold" and f.index == i - 1:
+                        yield f.q, f.value, True
+                p = self.points[i]
+                yield p.q, p.value, False
+                i += 1
+            if not self.more():
+                return
 
 
 @_small_blas
@@ -1539,7 +1601,9 @@ def stability_analysis(
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
         raise ValueError(f"discretisation {model.disc.name} resolves no mode; refine it")
-    primary = _follow(model, (v_min, v_max), ds_max, q0, max_steps)
+    # Piecewise continuation when only v_cr is wanted: nothing beyond it is computed.
+    chunk = 1.0 if stop_at_first else None
+    primary = _Pieces.follow(model, (v_min, v_max), ds_max, q0, max_steps, chunk)
     ana = _BranchAnalysis(
         model, res, primary, "primary", (v_min, v_max), method, stop_at_first, callback
     )
@@ -1569,7 +1633,7 @@ def stability_analysis(
             for sign, kid in zip("+-", kids, strict=True):
                 kname = f"B{k}{sign}" if name == "primary" else f"{name}.B{k}{sign}"
                 ka = _BranchAnalysis(
-                    model, res, kid, kname, (v_min, v_max), method, False, callback
+                    model, res, _Pieces(kid), kname, (v_min, v_max), method, False, callback
                 )
                 ka.run()
                 results.append(ka.finish(name, parent_ana.refined_bifurcation(bp.value)))
