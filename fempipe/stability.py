@@ -27,8 +27,8 @@ modes approximate the continuum.  The rule used here (:func:`resolution`):
    clamped-free Euler-Bernoulli beam, whose exact frequencies beta_r^2
    (cos beta cosh beta = -1) are known.  Canonical mode r is *resolved* when
    the discretisation reproduces omega_r within ``RESOLUTION_TOL`` = 5 %
-   (and so are all lower ones).  P3:16 resolves 24 modes, P3:256 a few
-   hundred, modal N resolves N - 1: the N-th sine mode is always 8-9 % off
+   (and so are all lower ones).  P3:16 resolves 27 modes, P3:256 423,
+   modal N resolves N - 1: the N-th sine mode is always 8-9 % off
    because the sine basis misses theta''(0) != 0 (see SPEC section 2).
 2. An eigenvector of the actual problem (any static state, any v) is expanded
    in the canonical modes (an M(0)-orthonormal basis).  The eigenvalue is
@@ -38,10 +38,10 @@ modes approximate the continuum.  The rule used here (:func:`resolution`):
 
 Only resolved eigenvalues are reported and used for stability decisions.
 The unresolved ones are the top of the discrete spectrum, where |lambda| is
-1e5-1e11 and the eigensolver's round-off alone gives |Re lambda| ~ 1e-4 for
-an exactly conservative problem (measured on P3:64, v = mu = 0); for
-mu > 0 they also include the slow Kelvin-Voigt roots near -1/mu of modes the
-mesh cannot represent.  A resolved eigenvalue is unstable when
+1e5-1e11 and the eigensolver's round-off alone gives Re lambda up to 1e-7
+(QZ, P3:64) or 0.5 (shift-invert, P3:256) for an exactly conservative
+problem (v = mu = 0); for mu > 0 they also include the slow Kelvin-Voigt
+roots near -1/mu of modes the mesh cannot represent.  A resolved eigenvalue is unstable when
 Re lambda > ``STABILITY_TOL`` max(1, |lambda|) = 1e-8 max(1, |lambda|):
 round-off on resolved modes was measured below 2e-10 (P1:128 ... P3:64 at
 v = mu = 0, an exactly conservative case).
@@ -64,8 +64,9 @@ every point, and locates to 1e-10 in v (Brent's method, recomputing the
 static state at every trial v) every crossing of a tracked eigenvalue through
 Re lambda = 0: flutter (a complex pair to the right), divergence (a real root
 through zero), restabilisation (back to the left).  Folds of the static
-branch come from the continuation (located to 1e-10 in arclength); a real
-root passes through zero there, which is reported as the fold itself.  Branch
+branch come from the continuation (bisection to 1e-10 in arclength; v at a
+fold agrees with the Moore-Spence extended system to 1e-15); a real root
+passes through zero there, which is reported as the fold itself.  Branch
 points (pitchforks at alpha = 0, pi) are followed with
 :func:`fempipe.static.switch_branch` and the new branches analysed the same
 way.  v_cr is the first velocity along the primary branch (the gravity-loaded
