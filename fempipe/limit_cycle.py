@@ -495,6 +495,7 @@ def find_attractor(
     next_eq_check = 0.5
     d_prev = _state_distance(np.asarray(q0) - q_s, qdot0, 0.05) if q_s is not None else math.inf
     tried_tol = recurrence_tol
+    level_time = 0.0
     result = None
 
     def finish(kind, period=None, period_n=None, tip=None, cycle=None, q=None, p=None, msg=""):
@@ -581,7 +582,20 @@ def find_attractor(
                         break
                     d_prev = d if d < equilibrium_radius else math.inf
 
-            # -- Poincare section: upward crossing of eta_tip through the level
+            # -- Poincare section: upward crossing of eta_tip through the level.
+            # The static value is crossed by a Hopf cycle near onset; a cycle
+            # that has drifted away from it is sectioned at its own mean
+            # instead, once no crossing has happened for 3 tau (~10 periods).
+            last_cross = max(sec_t[-1] if sec_t else 0.0, level_time)
+            if stepper.t - last_cross > 3.0 and samples:
+                t_recent = np.concatenate([s[0] for s in samples[-400:]])
+                eta_recent = np.concatenate([s[1]["eta_tip"] for s in samples[-400:]])
+                keep = t_recent >= stepper.t - 1.0
+                level = float(np.mean(eta_recent[keep]))
+                level_time = stepper.t
+                sec_t, sec_x, sec_i = [], [], []
+                s_old = _eta(disc, stepper.q) - level
+                log.debug("section level moved to the mean eta_tip %.6g", level)
             s_new = _eta(disc, stepper.q) - level
             if s_old < 0.0 <= s_new:
                 f = lambda tt, c=level: _eta(disc, stepper.dense(tt)[0]) - c  # noqa: E731

@@ -233,3 +233,18 @@ def test_fixed_step_failure_says_where():
     st = Radau(m, q0, p0, h_fixed=0.5)
     with pytest.raises(IntegrationError, match="tau"):
         st.step()
+
+
+@pytest.mark.slow
+def test_steps_independent_of_mesh_p3_8_to_64():
+    """The acceptance measurement: P3 with 8, 16, 32, 64 elements, tau in [0, 2],
+    alpha = 0, v = 10, rtol 1e-6.  Measured 778, 709, 692, 693 steps."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "validation"))
+    from dynamics_acceptance import steps
+
+    rows = steps((8, 16, 32, 64))
+    counts = [r["steps"] for r in rows if r["disc"].startswith("P3")]
+    assert max(counts) <= 1.2 * min(counts), counts
