@@ -12,7 +12,9 @@ Why not XDMF: tried and measured with meshio 5.3.5.  ``meshio.xdmf.TimeSeriesWri
 needs h5py (not a dependency of fempipe), writes line cells as a ``Polyline``
 topology without ``NodesPerElement`` (which ParaView's XDMF reader needs to
 split a polyline into segments), and in our test the written series did not
-read back (``TimeSeriesReader`` failed to open the HDF5 heavy data).  VTU
+read back (the writer put the HDF5 heavy data in the current working
+directory, not beside the .xdmf file that refers to it, so the reader could
+not find it).  VTU
 stores line cells and point data and reads back with plain meshio; the PVD
 wrapper gives ParaView the time values.
 
