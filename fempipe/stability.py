@@ -709,8 +709,9 @@ def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> Mo
 class _Tracker:
     """Carries mode numbers along a sequence of states by continuity.
 
-    ``track[j]`` is the index, in each :class:`_Eig`, of tracked eigenvalue
-    j; ``labels[j]`` its mode number, fixed at the first state.
+    Tracked eigenvalue j is, at every state, one index into that state's
+    :class:`_Eig`; ``labels[j]`` is its mode number, fixed at the first state
+    (canonical assignment) and inherited by continuity afterwards.
     """
 
     def __init__(self, first: _Eig, n_modes: int | None = None) -> None:
@@ -763,8 +764,8 @@ def _l2(model: PipeModel, dq: np.ndarray) -> float:
 class _Path:
     """Spectra along a sequence of static states, with tracking and refinement.
 
-    ``solve(a, b, v)`` returns the static state at v between samples a and b
-    (both on the same monotone piece in v), or None.
+    ``static_between(a, b, v)`` returns the static state at v between samples
+    a and b (both on the same monotone piece in v), or None.
     """
 
     def __init__(
@@ -980,6 +981,7 @@ def root_locus(
 # Stability events along branches
 # ---------------------------------------------------------------------------
 
+#: The event types of :class:`StabilityEvent`.
 EVENT_TYPES = ("flutter", "divergence", "restabilization", "fold")
 
 
