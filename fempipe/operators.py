@@ -142,9 +142,17 @@ class PipeModel:
         Phi = self.disc.Phi
         return Phi.T @ _rows(d, Phi)
 
+    @property
+    def _Phi_dense(self) -> np.ndarray:
+        """Phi as a dense array, cached: the dense Jacobians use it every call."""
+        P = self.__dict__.get("_Phi_dense_cache")
+        if P is None:
+            P = self.__dict__["_Phi_dense_cache"] = _dense(self.disc.Phi)
+        return P
+
     def _phi_field(self, coef: np.ndarray) -> np.ndarray:
         """(coef[:, c] * Phi) stacked as shape (n_q, 2, n)."""
-        Phi = _dense(self.disc.Phi)
+        Phi = self._Phi_dense
         return coef[:, :, None] * Phi[:, None, :]
 
     # ---------------------------------------------------- local terms --
@@ -272,11 +280,18 @@ class PipeModel:
             self._phi_field(-th_dd[:, None] * fl.t - th_d[:, None] ** 2 * fl.n)
         )
         dF = dF + self._phi_field(-cv * th_d[:, None] * fl.t + v_dot * np.sqrt(p.beta) * fl.n)
+        # The gravity, follower (local part) and normal-derivative terms are all
+        # Phi^T diag(d) Phi: one dense product instead of three small sparse
+        # ones (scipy.sparse overhead dominated the time-integration cost).
+        d = p.gamma * self.w * (1.0 - self.x) * np.cos(fl.theta + p.alpha)
+        c_tip = np.cos(fl.theta_tip - fl.theta)
+        d = d - p.v**2 * self.w * c_tip
+        d = d - np.einsum("qc,qc->q", fl.t, self.quad.from_tip(F)) * self.w
+        Phi = self._Phi_dense
         Jq = (
             _dense(self.disc.K)
-            + _dense(self.gravity_jacobian(fl))
-            + _dense(self.follower_jacobian(fl))
-            + _dense(self._project_jac_normal(F, fl))
+            + (Phi.T * d) @ Phi
+            + np.outer(p.v**2 * self._test(c_tip), self.disc.tip)
             + self._project_jac(dF, fl)
         )
         # d/dq': centripetal and Coriolis, plus Kelvin-Voigt.
