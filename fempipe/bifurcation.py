@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .dynamics import initial_state
-from .limit_cycle import find_attractor
+from .dynamics import IntegrationError, initial_state
+from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
 from .operators import PipeModel
 
 __all__ = [
@@ -200,6 +200,7 @@ def sweep(
     store: PointStore | None = None,
     alpha_index: int = 0,
     progress: Callable[[BifurcationPoint], None] | None = None,
+    continue_cycles: bool = True,
     **attractor_options,
 ) -> list[BifurcationPoint]:
     """Sweep the flow velocity, each point starting from the previous attractor.
@@ -222,6 +223,12 @@ def sweep(
         Index of this sweep's alpha in the store's file names.
     progress : callable, optional
         Called with each finished (or loaded) point.
+    continue_cycles : bool
+        When the previous attractor is a stable cycle, first shoot directly
+        from it with its period (natural-parameter continuation of the periodic
+        orbit, no transient); accepted only if Newton converges to a stable
+        cycle of non-zero amplitude, else the point falls back to
+        :func:`~fempipe.limit_cycle.find_attractor` from the same state.
     **attractor_options
         Passed to :func:`fempipe.limit_cycle.find_attractor` (``t_max``,
         ``rtol``, ``shoot_rtol`` ...).
@@ -235,6 +242,7 @@ def sweep(
         raise ValueError("values must not be empty")
     q, p = q0, qdot0
     previous_equilibrium = q0 is None
+    prev_cycle = None
     points = []
     for i, v in enumerate(vals):
         m = model.with_params(model.params.with_flow(v))
@@ -248,6 +256,7 @@ def sweep(
                 points.append(old)
                 q, p = old.q, old.qdot
                 previous_equilibrium = old.attractor == "equilibrium"
+                prev_cycle = (old.period, old.period_n) if old.attractor == "periodic" else None
                 if progress is not None:
                     progress(old)
                 continue
@@ -257,7 +266,15 @@ def sweep(
             dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
             q, p = np.asarray(q) + dq, np.zeros(m.n)
         t0 = time.perf_counter()
-        att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
+        att = None
+        if (
+            continue_cycles
+            and prev_cycle is not None
+            and attractor_options.get("use_shooting", True)
+        ):
+            att = _continue_cycle(m, q, p, prev_cycle, attractor_options)
+        if att is None:
+            att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
         point = BifurcationPoint(
             v=float(v),
             direction=direction,
@@ -290,9 +307,49 @@ def sweep(
         points.append(point)
         q, p = point.q, point.qdot
         previous_equilibrium = att.kind == "equilibrium"
+        prev_cycle = (att.period, att.period_n) if att.cycle is not None else None
         if progress is not None:
             progress(point)
     return points
+
+
+def _continue_cycle(model, q, p, prev_cycle, options) -> Attractor | None:
+    """Shoot from the previous point's cycle; None if that does not give a stable cycle."""
+    period, period_n = prev_cycle
+    try:
+        cyc = shoot(
+            model,
+            q,
+            p,
+            period,
+            rtol=options.get("shoot_rtol", 1e-7),
+            tol=options.get("shoot_tol", 1e-6),
+            max_iter=8,
+            reuse_monodromy=True,
+        )
+    except (ShootingError, IntegrationError) as exc:
+        log.info("cycle continuation failed at v = %.6g (%s); integrating", model.params.v, exc)
+        return None
+    if not cyc.stable:
+        log.info("continued cycle unstable at v = %.6g; integrating", model.params.v)
+        return None
+    return Attractor(
+        kind="periodic",
+        period=cyc.period,
+        period_n=period_n,
+        tip=cyc.tip,
+        cycle=cyc,
+        q=cyc.q0.copy(),
+        qdot=cyc.qdot0.copy(),
+        params=model.params,
+        t_end=0.0,
+        stats={
+            "steps": cyc.total_steps,
+            "rejected_steps": cyc.rejected_steps,
+            "wall_time": cyc.wall_time,
+        },
+        message="continued from the previous cycle by shooting",
+    )
 
 
 def _sweep_task(model, values, direction, alpha_index, store_dir, manifest, options):

@@ -61,7 +61,7 @@ def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> 
     model = PipeModel(_disc(spec), Params(alpha=0.0))
     values = np.linspace(5.0, 12.0, n_values)
     t0 = time.perf_counter()
-    d = bifurcation_diagram(model, values, workers=workers)
+    d = bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
     wall = time.perf_counter() - t0
     pts = d.points
     first_periodic = {
