@@ -157,3 +157,15 @@ def test_dask_local_cluster(reference):
     ):
         d = bifurcation_diagram(_model(), VALUES, executor=client.get_executor(), **OPTIONS)
     assert _strip(d.points) == _strip(reference.points)
+
+
+def test_no_spurious_cycle_below_v_cr_when_sweeping_down():
+    """Regression: continuing the v = 6.5 cycle to v = 6.2 < v_cr = 6.334 (P3:4,
+    supercritical Hopf) once let Newton stop on its way to the equilibrium and
+    report a 'cycle' of amplitude 7e-6.  Below v_cr the attractor is the
+    equilibrium; there is no hysteresis here."""
+    from fempipe import FiniteElement
+
+    m = PipeModel(FiniteElement(4, 3), Params(alpha=0.0))
+    pts = sweep(m, [6.2, 6.5], "down", shoot_rtol=1e-6)
+    assert [p.attractor for p in pts] == ["periodic", "equilibrium"]
