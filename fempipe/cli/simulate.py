@@ -12,7 +12,8 @@ second half (``"attractor": "forced"``, no classification).
 "X_tip": [...], "Z_tip": [...]}, "floquet_multipliers", "steps",
 "rejected_steps", "wall_time", ...}``.  ``--out DIR`` writes simulate.json,
 time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
-oscillating_shapes.png, pipe.gif and trajectory.pvd (+ trajectory/ VTU frames).
+oscillating_shapes.png, pipe.gif and trajectory.pvd (+ trajectory/ VTU frames,
+at most 400: the transient and three periods of the cycle).
 """
 
 from __future__ import annotations
@@ -228,7 +229,9 @@ def _write_outputs(args, result, model, traj, att) -> None:
             plt.close(fig)
     frames = np.linspace(0, len(ct) - 1, min(48, len(ct))).round().astype(int)
     animate(out / "pipe.gif", disc, p.alpha, ct[frames], cq[frames], fps=16, title=title)
-    write_trajectory(out / "trajectory.pvd", disc, p.alpha, t, q, qd)
+    # At most 400 frames (every step of a long run would be thousands of files).
+    keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
+    write_trajectory(out / "trajectory.pvd", disc, p.alpha, t[keep], q[keep], qd[keep])
     write_json(out / "simulate.json", result)
     if not args.json and args.progress is not False:
         for name in (
