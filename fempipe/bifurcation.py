@@ -7,7 +7,10 @@ next only approximately, and not at all at alpha = 0 where theta = 0 is static
 for every v) and records, with :func:`fempipe.limit_cycle.find_attractor`, the
 kind of attractor, its period and the extrema of eta(1), X_g(1), Z_g(1).
 Sweeping up and down shows hysteresis where a stable equilibrium and a stable
-cycle coexist (subcritical Hopf).
+cycle coexist (subcritical Hopf).  When the previous attractor is a stable
+cycle, the next point first shoots directly from it (natural-parameter
+continuation of the periodic orbit, chord-Newton); only if that fails, or
+gives an unstable or degenerate cycle, does it integrate past a transient.
 
 Independent sweeps (up and down, several alpha) run in parallel on any
 :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``, or a Dask
