@@ -142,9 +142,10 @@ def run(args: argparse.Namespace) -> int:
         "discretization": result["discretization"],
     }
 
+    written = []
     if args.out is not None:
         shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
-        _write_outputs(args.out, result, points, shapes, values, parameter, pipe, args)
+        written = _write_outputs(args.out, result, points, shapes, values, parameter, pipe)
 
     if args.json:
         from fempipe.io import json_dumps
@@ -152,6 +153,10 @@ def run(args: argparse.Namespace) -> int:
         print(json_dumps(result))
     else:
         _print_table(result, parameter, pipe)
+        sys.stdout.flush()
+        if args.progress is not False:
+            for path in written:
+                print(f"wrote {path}", file=sys.stderr)
     return 0
 
 
@@ -189,7 +194,7 @@ def _labels(values, parameter: str, pipe) -> list[str]:
     return [f"v = {v:.4g}  (U = {pipe.U_of_v(v):.3g} m/s)" for v in values]
 
 
-def _write_outputs(out, result, points, shapes, values, parameter, pipe, args) -> None:
+def _write_outputs(out, result, points, shapes, values, parameter, pipe) -> list:
     """Make everything in memory first, then write each file atomically."""
     from pathlib import Path
 
@@ -236,9 +241,7 @@ def _write_outputs(out, result, points, shapes, values, parameter, pipe, args) -
         )
     finally:
         plt.close(fig)
-    if not args.json and args.progress is not False:
-        for name in ("static.json", "static.csv", "shapes.png", "shapes.vtu"):
-            print(f"wrote {out / name}", file=sys.stderr)
+    return [out / name for name in ("static.json", "static.csv", "shapes.png", "shapes.vtu")]
 
 
 def _alphas(values, parameter: str, p: dict) -> list[float]:
