@@ -154,16 +154,15 @@ QZ_MAX_N = 200
 
 @contextlib.contextmanager
 def _blas_threads(n: int):
-    """One BLAS thread for small problems.
+    """One BLAS thread for the dense eigenproblems.
 
-    The eigenproblems here are tiny (2n = 96 for P3:16); a multi-threaded
-    BLAS spends more time synchronising than computing (measured: 32 ms per
-    spectrum with 2 OpenBLAS threads, 7 ms with one).  threadpoolctl is
+    They are small (2n = 96 for P3:16), where a multi-threaded BLAS spends
+    more time synchronising than computing (measured: 32 ms per spectrum with
+    2 OpenBLAS threads, 7 ms with one), and LAPACK's nonsymmetric QR
+    iterations parallelise poorly even at n = 768 (P3:256: 5 s with one
+    thread, 18 s with two on a busy 2-core machine).  threadpoolctl is
     optional; without it nothing changes.
     """
-    if n > QZ_MAX_N:
-        yield
-        return
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # pragma: no cover - optional dependency
