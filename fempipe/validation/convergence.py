@@ -271,13 +271,7 @@ def lco_study() -> tuple[Study, list]:
         ref["fe_order"]["value"],
         roundoff=ref["lco_floor"]["value"],
     )
-    checks = study_checks(
-        st,
-        "lco",
-        1.0,
-        ref["fe_order"]["source"] + "; tolerance 1.0 because "
-        "the fit range is short above the time-integration floor",
-    )
+    checks = study_checks(st, "lco", ref["order_tol"]["value"], ref["fe_order"]["source"])
     return st, checks
 
 
@@ -334,8 +328,8 @@ def _order_table(studies: Sequence[Study]) -> Table:
 def _reference_table(studies: Sequence[Study]) -> Table:
     rows = []
     for s in studies:
-        name, val = s.independent if s.independent else ("", float("nan"))
-        diff = abs(s.reference - val) if s.independent else ""
+        name, val = s.independent if s.independent else ("—", "—")
+        diff = abs(s.reference - val) if s.independent else "—"
         rows.append((s.quantity, s.reference, s.reference_error, name, val, diff))
     return Table(
         "Richardson-extrapolated references",

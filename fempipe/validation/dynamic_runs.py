@@ -7,10 +7,8 @@ gets the same treatment: sweeps in v with :func:`fempipe.bifurcation.sweep`
 resampled with :func:`fempipe.dynamics.simulate` for time traces, phase
 portraits and oscillating shapes.
 
-The linear onset used to check the sweeps is located here independently of
-:mod:`fempipe.stability`: bisection on the sign of the largest real part of
-the linearised spectrum (:func:`fempipe.limit_cycle.static_growth_rate`) along
-the static branch.
+The linear onset used to check the sweeps comes from
+:mod:`fempipe.validation.onset` (independent of :mod:`fempipe.stability`).
 """
 
 from __future__ import annotations
@@ -33,7 +31,6 @@ __all__ = [
     "Orbit",
     "attractor",
     "dyn_discretizations",
-    "linear_onset",
     "orbit",
     "sweep_up",
 ]
@@ -166,40 +163,6 @@ def orbit(
         s = shape(disc, traj.q[i], alpha)
         shapes.append((s.Z_g, s.X_g))
     return Orbit(label, alpha, v, period, traj.t - traj.t[0], tip, tip_rate, shapes)
-
-
-def linear_onset(disc, alpha: float, v_lo: float, v_hi: float, tol: float = 1e-4) -> float:
-    """First v in [v_lo, v_hi] where the static state loses linear stability.
-
-    Follows the sagged static branch (continuation in gamma, then v) and
-    bisects the sign of the largest real part of the spectrum.  Returns NaN
-    if the state is unstable at ``v_lo`` or stable at ``v_hi``.
-    """
-    from ..limit_cycle import static_growth_rate
-    from .static_shapes import static_shapes
-
-    def growth(v: float) -> float:
-        st = static_shapes(
-            disc,
-            alpha,
-            PAPER_PARAMS["gamma"],
-            [v],
-            beta=PAPER_PARAMS["beta"],
-            mu=PAPER_PARAMS["mu"],
-            n_points=3,
-        )
-        return static_growth_rate(model_for(disc, alpha, v), st.q[0])
-
-    g_lo, g_hi = growth(v_lo), growth(v_hi)
-    if not (g_lo < 0 < g_hi):
-        return float("nan")
-    while v_hi - v_lo > tol:
-        mid = 0.5 * (v_lo + v_hi)
-        if growth(mid) < 0:
-            v_lo = mid
-        else:
-            v_hi = mid
-    return 0.5 * (v_lo + v_hi)
 
 
 def project(src, q: np.ndarray, dst) -> np.ndarray:

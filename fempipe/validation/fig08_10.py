@@ -15,9 +15,12 @@ import time
 
 import numpy as np
 
+from ..operators import PipeModel
+from ..params import Params
 from .checks import CaseResult, Table, below, holds, load_references
-from .dynamic_runs import dyn_discretizations, linear_onset, orbit, sweep_up
+from .dynamic_runs import PAPER_PARAMS, dyn_discretizations, orbit, sweep_up
 from .fig07 import _amp, _bracket, draw_diagram, draw_orbit_shapes
+from .onset import critical_velocity
 
 CASE = "fig08_10"
 FIGURE = "Figs. 8-10"
@@ -62,7 +65,7 @@ def run(quick: bool = False) -> CaseResult:
             lo, hi = _bracket(sweeps[label])
             v_lin = float("nan")
             if not is_pi and np.isfinite(lo) and np.isfinite(hi):
-                v_lin = linear_onset(d, alpha, lo, hi)
+                v_lin = critical_velocity(d, alpha).v_cr
                 checks.append(
                     holds(
                         f"onset_{name}_{label.replace(' ', '').replace('=', '')}",
@@ -72,7 +75,7 @@ def run(quick: bool = False) -> CaseResult:
                         f"equilibrium at v = {lo:g}, periodic at v = {hi:g}; linear v_cr = {v_lin:.4f}",
                         reference="lo ≤ v_cr ≤ hi",
                         why="the sweep resolves the onset only to its spacing",
-                        source="fempipe: bisection on the linearised spectrum",
+                        source="fempipe.validation.onset: Brent's method on the spectral abscissa",
                         category="numerics",
                     )
                 )
@@ -102,7 +105,10 @@ def run(quick: bool = False) -> CaseResult:
                     a1 == "equilibrium" and a2 == "periodic",
                     f"v = {v1:g}: {a1}; v = {v2:g}: {a2}",
                     reference=f"{v1:g} < v_cr < {v2:g}",
-                    source="inferred from the shapes chosen for Fig. 9 (static, then oscillating)",
+                    why="inferred: the text lists the shapes of Fig. 9 at these v; as for α = 0 "
+                    "(6.3 static, 6.5 oscillating) we read the first as static, the second as "
+                    "oscillating",
+                    source="paper Sec. 5, the v of the shapes added to Fig. 9",
                 )
             )
         else:
@@ -128,6 +134,7 @@ def run(quick: bool = False) -> CaseResult:
                     source="paper Sec. 4-5, Figs. 5(d), 8(d)-10(d)",
                 )
             )
+            checks += _pi_cross_checks(discs[fe_label], pts)
             checks.append(
                 holds(
                     "pi_shape_velocities",
@@ -225,6 +232,61 @@ def run(quick: bool = False) -> CaseResult:
         quick=quick,
         runtime=time.perf_counter() - t0,
     )
+
+
+def _pi_cross_checks(disc, pts) -> list:
+    """alpha = pi: the sweep's jumps against the stability module's events (if available).
+
+    Up-sweep from the left buckled state: it stays buckled up to the fold of
+    the buckled branch (a subcritical pitchfork makes the straight state
+    stable a little earlier, at the restabilisation), jumps to the straight
+    pipe, and starts to oscillate at the flutter of the straight pipe.
+    """
+    try:
+        from ..stability import stability_analysis
+    except ImportError:
+        return []
+    m = PipeModel(disc, Params(alpha=np.pi, **PAPER_PARAMS))
+    res = stability_analysis(m, v_max=6.0, follow_bifurcations=True)
+    prim = next(b for b in res.branches if b.name == "primary")
+    flutter = next((e.v for e in prim.events if e.type == "flutter"), float("nan"))
+    folds = [f for b in res.branches if b.name != "primary" for f in b.folds]
+    fold = min(folds) if folds else float("nan")
+    buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
+    straight = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) < 1e-3]
+    periodic = [p.v for p in pts if p.attractor == "periodic"]
+    out = []
+    if buckled and straight:
+        lo, hi = max(buckled), min(v for v in straight if v > max(buckled))
+        out.append(
+            holds(
+                "pi_fold_vs_sweep",
+                "α = π: the sweep leaves the buckled state where the buckled branch folds",
+                lo <= fold <= hi,
+                f"buckled at v = {lo:g}, straight at v = {hi:g}; fold of the buckled branch at "
+                f"v = {fold:.6f}",
+                reference="lo ≤ v_fold ≤ hi",
+                why="the sweep resolves the jump only to its spacing",
+                source="fempipe.stability.stability_analysis (branch switching, folds)",
+                category="numerics",
+            )
+        )
+    if straight and periodic:
+        lo = max(v for v in straight if v < min(periodic))
+        hi = min(periodic)
+        out.append(
+            holds(
+                "pi_flutter_vs_sweep",
+                "α = π: the limit cycle appears at the flutter of the straight pipe",
+                lo <= flutter <= hi,
+                f"straight at v = {lo:g}, periodic at v = {hi:g}; flutter at v = {flutter:.6f}",
+                reference="lo ≤ v_flutter ≤ hi",
+                why="the sweep resolves the onset only to its spacing",
+                source="fempipe.stability.stability_analysis",
+                category="numerics",
+            )
+        )
+    return out
 
 
 def plot(result: CaseResult, fig=None):
