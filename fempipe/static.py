@@ -18,6 +18,7 @@ same thing on every mesh.
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -565,29 +566,61 @@ def _bisect(cont: _Continuation, a: BranchPoint, b: BranchPoint, f, locate_tol: 
 
 
 def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
-    """The static state reached by loading the straight pipe with gravity.
+    """The static state reached by switching gravity on slowly: continuation in gamma from 0.
 
-    Newton from the straight pipe first; if that fails (large deformations,
-    e.g. alpha = 3 pi / 4 with gamma = 18.9), continuation in gamma from 0,
-    where theta = 0 is the exact solution for every v and alpha.  At
-    alpha = pi (and alpha = 0) this stays on the straight branch; the buckled
-    branches are reached with :func:`switch_branch`.
+    At gamma = 0 the straight pipe is the solution for every v and alpha;
+    following it to the actual gamma gives the state a pipe reaches when it
+    is loaded, which is the primary branch of every stability analysis.
+    Newton from the straight pipe is not used: for alpha >= ~150 deg and
+    gamma = 18.9 it converges to the nearly straight, unstable equilibrium
+    (theta_tip = +0.93 at 160 deg instead of -2.25).  At alpha = 0 and pi the
+    loaded state is the straight pipe (the pitchfork there is not taken).
+
+    Near alpha = pi the loaded branch turns sharply where the perfect column
+    would buckle (gamma = 7.837), and a large continuation step can land on
+    the unstable near-straight state or on the mirror-image (unfavoured)
+    lean.  The result is therefore checked -- for sin(alpha) != 0 gravity
+    rotates the pipe towards the plumb line, so theta_tip sin(alpha) < 0,
+    and at v = 0 the state must be a minimum of the potential energy (the
+    static Jacobian, symmetric there, positive definite) -- and the loading
+    is repeated with steps 1, 0.5, 0.1 and 0.02 until it passes (measured:
+    alpha = 179 deg needs 0.5, 179.99 deg needs 0.1).
     """
-    try:
+    p = model.params
+    if p.gamma == 0.0:
         return solve_static(model, tol=tol)
-    except NewtonError:
-        if model.params.gamma == 0.0:
-            raise
-    start = model.with_params(replace(model.params, gamma=0.0))
-    branch = continuation(start, "gamma", stop=model.params.gamma, tol=tol, detect=False)
-    if branch.end_reason != "stop":
-        raise NewtonError(
-            f"gravity loading did not reach gamma={model.params.gamma:.6g} ({branch.end_reason})",
-            params=model.params,
-            iterations=branch.steps,
-            residual=float("nan"),
-        )
-    return solve_static(model, q0=branch.points[-1].q, tol=tol)
+    start = model.with_params(replace(p, gamma=0.0))
+    q = None
+    for ds_max in (1.0, 0.5, 0.1, 0.02):
+        branch = continuation(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=ds_max)
+        if branch.end_reason != "stop":
+            raise NewtonError(
+                f"gravity loading did not reach gamma={p.gamma:.6g} at alpha={p.alpha:.6g}, "
+                f"v={p.v:.6g} ({branch.end_reason})",
+                params=p,
+                iterations=branch.steps,
+                residual=float("nan"),
+            )
+        q = branch.points[-1].q
+        if _loaded_plausible(model, q):
+            break
+        log.info("gravity loading with step %g landed on another branch; retrying", ds_max)
+    return solve_static(model, q0=q, tol=tol)
+
+
+def _loaded_plausible(model: PipeModel, q: np.ndarray) -> bool:
+    """theta_tip sin(alpha) < 0 and, at v = 0, a positive definite static Jacobian."""
+    p = model.params
+    s = math.sin(p.alpha)
+    if abs(s) < 1e-12:
+        return True  # alpha = 0 or pi: the straight pipe, by symmetry
+    if s * float(model.disc.tip @ q) >= 0.0:
+        return False
+    if p.v == 0.0:
+        J = model.static_jacobian(q)
+        J = J.toarray() if sp.issparse(J) else np.asarray(J)
+        return bool(np.linalg.eigvalsh(0.5 * (J + J.T)).min() > 0.0)
+    return True
 
 
 def solve_path(

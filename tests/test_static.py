@@ -215,3 +215,20 @@ def test_solve_path_matches_pointwise_solves():
         direct = solve_static(model.with_params(model.params.with_flow(v)), q0=sol.q * 0.9)
         assert np.allclose(sol.q, direct.q, atol=1e-10)
         assert sol.params.v == v
+
+
+def test_sagged_state_is_the_energy_minimum_near_vertical():
+    """alpha = 160 deg, gamma = 18.9, v = 0: Newton from the straight pipe finds a
+    nearly straight equilibrium (theta_tip ~ +0.93) that is a saddle of the
+    potential energy; the gravity-loaded state leans over (theta_tip ~ -2.25)
+    and is a minimum: lower energy and a positive definite Hessian."""
+    disc = FiniteElement(16, 3)
+    model = PipeModel(disc, Params(alpha=np.radians(160), gamma=18.9, v=0.0))
+    loaded = sagged_state(model)
+    straightish = solve_static(model)
+    assert loaded.q @ disc.tip < -2.0 and straightish.q @ disc.tip > 0.5
+    assert model.potential_energy(loaded.q) < model.potential_energy(straightish.q) - 1.0
+    H = model.static_jacobian(loaded.q).toarray()
+    assert np.linalg.eigvalsh(0.5 * (H + H.T)).min() > 0
+    H2 = model.static_jacobian(straightish.q).toarray()
+    assert np.linalg.eigvalsh(0.5 * (H2 + H2.T)).min() < 0
