@@ -144,6 +144,11 @@ def solve_static(
     scale = _residual_scale(model)
     r = model.static_residual(q)
     rn = float(np.linalg.norm(r))
+    if rn <= 1e-3 * tol * scale:
+        # Already a solution (e.g. a located branch point, where the Jacobian
+        # is singular and a Newton step would be meaningless).
+        return StaticSolution(q=q, params=model.params, iterations=0, residual_norm=rn)
+    it = 0
     for it in range(1, max_iter + 1):
         dq = _solve(model.static_jacobian(q), -r)
         if not np.all(np.isfinite(dq)):
