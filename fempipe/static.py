@@ -610,7 +610,10 @@ def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
         if _loaded_plausible(model, q):
             break
         log.info("gravity loading with step %g landed on another branch; retrying", ds_max)
-    return solve_static(model, q0=q, tol=tol)
+    sol = solve_static(model, q0=q, tol=tol)
+    # Report the Newton work of the whole gravity loading, not of the last polish.
+    loading = sum(pt.iterations for pt in branch.points)
+    return replace(sol, iterations=sol.iterations + loading)
 
 
 def _loaded_plausible(model: PipeModel, q: np.ndarray) -> bool:

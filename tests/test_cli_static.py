@@ -317,3 +317,15 @@ def test_bench_unknown_name_is_bad_input(capsys):
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1
     assert err.startswith("fempipe bench: error: --only: unknown benchmark 'nope'; known: ")
+
+
+def test_points_report_linear_stability(capsys):
+    """The straight standing column (alpha = pi) beyond Greenhill's gamma = 7.837 is
+    an unstable equilibrium at v = 0; below it, and the sagged horizontal pipe at
+    v = 0, are stable (no flow: a conservative system at an energy minimum)."""
+    d = run_json(["static", "--alpha", "pi", "--v", "0", "--gamma", "18.9"], capsys)
+    assert d["points"][0]["stable"] is False
+    d = run_json(["static", "--alpha", "pi", "--v", "0", "--gamma", "7.0"], capsys)
+    assert d["points"][0]["stable"] is True
+    d = run_json(["static", "--alpha", "pi/2", "--v", "0"], capsys)
+    assert d["points"][0]["stable"] is True

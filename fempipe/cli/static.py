@@ -132,6 +132,8 @@ def run(args: argparse.Namespace) -> int:
             ) from exc
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
+    for row, sol in zip(points, sols, strict=True):
+        row["stable"] = _stable(model.with_params(sol.params), sol.q)
     result = setup.to_dict()
     result["params"].pop(parameter, None)
     if parameter != "v":
@@ -158,6 +160,21 @@ def run(args: argparse.Namespace) -> int:
             for path in written:
                 print(f"wrote {path}", file=sys.stderr)
     return 0
+
+
+def _stable(model, q) -> bool | None:
+    """Linear stability of the static state (Eq. (32)); None if nothing is resolved.
+
+    A static state can be an equilibrium nobody observes: at alpha = pi with
+    gamma > 7.837 the straight column is one.  ``fempipe critical`` follows
+    the other branches.
+    """
+    from fempipe.stability import spectrum
+
+    try:
+        return bool(spectrum(model, q).stable)
+    except ValueError:  # a discretisation too coarse to resolve any mode
+        return None
 
 
 def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
@@ -275,8 +292,14 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
     if pipe is not None:
         cols.append(("tip_drop_mm", "drop [mm]", "{:+10.4f}"))
     cols += [("newton_iterations", "Newton", "{:6d}"), ("residual_norm", "residual", "{:9.2e}")]
+    cols.append(("stable", "stable", "{!s:>6}"))
     widths = [max(len(h), len(f.format(0 if "d}" in f else 0.0))) for _, h, f in cols]
     print("  ".join(h.rjust(w) for (_, h, _), w in zip(cols, widths, strict=True)))
     for row in result["points"]:
         cells = [f.format(row[k]).rjust(w) for (k, _, f), w in zip(cols, widths, strict=True)]
         print("  ".join(cells))
+    if any(row["stable"] is False for row in result["points"]):
+        print(
+            "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)); "
+            "`fempipe critical` lists the stability events and follows the other branches"
+        )
