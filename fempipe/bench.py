@@ -51,7 +51,7 @@ BENCHMARKS: dict[str, Callable[..., dict]] = {}
 
 #: Modules imported by :func:`available` so that their ``@register`` runs.
 #: Modules that do not exist (yet) are skipped.
-BENCHMARK_MODULES: tuple[str, ...] = ("fempipe.bench",)
+BENCHMARK_MODULES: tuple[str, ...] = ("fempipe.bench", "fempipe.bench_dynamics")
 
 #: The paper's reference case (Section 5) at alpha = pi/2.
 PAPER = {"alpha": math.pi / 2, "beta": 0.142, "gamma": 18.9, "mu": 5e-3}

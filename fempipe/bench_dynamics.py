@@ -1,6 +1,7 @@
 """Benchmarks of the nonlinear dynamics (issue 4); not timed tests.
 
-``python validation/bench_dynamics.py [--skip-fig7] [--workers 2] [--out FILE.json]``
+Registered with :mod:`fempipe.bench` (``fempipe bench --only limit_cycle,fig7``);
+also ``python -m fempipe.bench_dynamics [--skip-fig7] [--workers 2] [--out FILE.json]``.
 
 * ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, paper's
   beta, gamma, mu) from the static state + perturbation, transient and
@@ -9,8 +10,7 @@
   and down (the two sweeps in parallel).  Target: < 5 min on 2 cores.
 
 Both run for the default finite elements and for the paper's modal N = 4 in
-the same invocation.  The functions are importable (``bench_limit_cycle``,
-``bench_fig7``) so that ``fempipe bench`` can register them.
+the same invocation.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from fempipe import Params, PipeModel, parse_discretization
+from fempipe.bench import register
 from fempipe.discretization import DEFAULT_FE
 
 
@@ -83,6 +84,28 @@ def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> 
         "max_point_wall_time": max(p["wall_time"] for p in pts),
         "eta_tip_at_v12": [p["eta_tip"] for p in pts if p["v"] == 12.0],
     }
+
+
+@register("limit_cycle")
+def limit_cycle(quick: bool = False) -> dict:
+    """One converged limit cycle, P3:16 and modal N = 4 (quick: P3:8 and modal N = 3)."""
+    specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
+    rows = [bench_limit_cycle(s) for s in specs]
+    return {"target_s": 10.0, "table": rows}
+
+
+@register("fig7")
+def fig7(quick: bool = False) -> dict:
+    """The Fig. 7 sweep (36 v, up and down, 2 workers), P3:16 and modal N = 4.
+
+    quick: 4 velocities on P3:8 and modal N = 3.
+    """
+    specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
+    rows = [bench_fig7(s, workers=2, n_values=4 if quick else 36) for s in specs]
+    table = [
+        {k: r[k] for k in ("disc", "workers", "n_points", "wall_time", "target_s")} for r in rows
+    ]
+    return {"target_s": 300.0, "table": table, "details": rows}
 
 
 def main() -> None:
