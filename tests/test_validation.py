@@ -18,7 +18,14 @@ import pytest
 
 from fempipe.cli import main
 from fempipe.validation import CASES, available_cases, load_case, missing_dependencies
-from fempipe.validation.checks import CaseResult, Check, Table, close, load_references
+from fempipe.validation.checks import (
+    CaseResult,
+    Check,
+    Table,
+    close,
+    load_references,
+    merge_results,
+)
 from fempipe.validation.report import render_report
 from fempipe.validation.suite import CaseOutcome, SuiteResult, run_suite
 
@@ -129,6 +136,20 @@ def test_close_check_fails_when_it_should():
     assert close("x", "x", 1.0, 1.0 + 5e-7, atol=1e-6, why="w", source="s").passed is True
     with pytest.raises(ValueError, match="category"):
         Check("x", "x", "wrong", True, 1, 1, "t", "s")
+
+
+def test_merge_results_of_parts():
+    """Parts of a split case merge into one result: checks, table rows, data, runtime."""
+
+    def part(k):
+        c = Check(f"c{k}", "claim", "numerics", True, k, k, "t", "s")
+        t = Table("T", ("a",), ((k,),))
+        return CaseResult("x", "Fig", "t", ("s",), (c,), (t,), data={"panels": {k: k}}, runtime=1.0)
+
+    m = merge_results([part(1), part(2)])
+    assert [c.name for c in m.checks] == ["c1", "c2"]
+    assert m.tables[0].rows == ((1,), (2,)) and m.data["panels"] == {1: 1, 2: 2}
+    assert m.runtime == 2.0
 
 
 def _fake_suite(passed: bool) -> SuiteResult:

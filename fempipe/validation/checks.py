@@ -36,6 +36,7 @@ __all__ = [
     "close",
     "holds",
     "load_references",
+    "merge_results",
 ]
 
 CATEGORIES = ("numerics", "paper")
@@ -272,3 +273,42 @@ def load_references(case: str) -> dict[str, dict]:
         if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
             raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
     return data
+
+
+def merge_results(results: list[CaseResult]) -> CaseResult:
+    """One CaseResult from the parts of a case run separately (in order).
+
+    Checks and findings are concatenated, tables with the same title get their
+    rows concatenated, ``data`` dicts are merged (dict values merged key by
+    key), runtimes are summed.
+    """
+    if not results:
+        raise ValueError("nothing to merge")
+    first = results[0]
+    tables: dict[str, Table] = {}
+    for r in results:
+        for t in r.tables:
+            old = tables.get(t.title)
+            tables[t.title] = (
+                t if old is None else Table(t.title, t.columns, old.rows + t.rows, t.note)
+            )
+    data: dict = {}
+    for r in results:
+        for k, v in r.data.items():
+            if isinstance(v, dict) and isinstance(data.get(k), dict):
+                data[k] = {**data[k], **v}
+            else:
+                data.setdefault(k, v)
+    return CaseResult(
+        case=first.case,
+        figure=first.figure,
+        title=first.title,
+        paper_shows=first.paper_shows,
+        checks=tuple(c for r in results for c in r.checks),
+        tables=tuple(tables.values()),
+        findings=tuple(f for r in results for f in r.findings),
+        data=data,
+        quick=first.quick,
+        runtime=sum(r.runtime for r in results),
+        explained=tuple(e for r in results for e in r.explained),
+    )

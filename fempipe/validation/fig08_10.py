@@ -37,12 +37,24 @@ def _name(alpha: float) -> str:
     return _NAMES[int(round(alpha / (np.pi / 4))) - 1]
 
 
-def run(quick: bool = False) -> CaseResult:
-    """Sweeps and checks; see the module docstring."""
+def parts(quick: bool = False) -> list[int]:
+    """Independent parts (one per alpha) the suite may run in parallel, see ``run(part=...)``."""
+    ref = load_references(CASE)
+    return list(range(len(ref["alpha_quick" if quick else "alpha"]["value"])))
+
+
+def run(quick: bool = False, part: int | None = None) -> CaseResult:
+    """Sweeps and checks; see the module docstring.
+
+    ``part`` (an index of :func:`parts`) restricts the run to one alpha; the
+    suite merges the parts with :func:`fempipe.validation.checks.merge_results`.
+    """
     t0 = time.perf_counter()
     ref = load_references(CASE)
     all_alphas = ref["alpha"]["value"]
     alphas = ref["alpha_quick"]["value"] if quick else all_alphas
+    if part is not None:
+        alphas = [alphas[part]]
     discs = dyn_discretizations(quick)
     fe_label = next(iter(discs))
     tol = ref["amplitude_tol"]["value"]

@@ -131,6 +131,47 @@ class SuiteResult:
         }
 
 
+def _draw(name: str, module, result: CaseResult, out) -> str:
+    """Draw a case's figure into ``out/<name>.png``; return the file name."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..io import write_figure
+
+    fig = module.plot(result)
+    figure = f"{name}.png"
+    write_figure(Path(out) / figure, fig, dpi=110)
+    plt.close(fig)
+    return figure
+
+
+def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcome:
+    """Draw the figure (if ``out``) and wrap the result without its arrays."""
+    figure = None
+    if out is not None:
+        try:
+            figure = _draw(name, module, result, out)
+        except Exception:
+            log.exception("figure of validation case %s failed", name)
+            return CaseOutcome(
+                name,
+                "error",
+                result=replace(result, data={}),
+                error="figure: " + traceback.format_exc(),
+                wall_time=time.perf_counter() - t0,
+            )
+    # The arrays stay behind: the report needs only checks, tables, figure.
+    return CaseOutcome(
+        name,
+        "ok",
+        result=replace(result, data={}),
+        figure=figure,
+        wall_time=time.perf_counter() - t0,
+    )
+
+
 def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = None) -> CaseOutcome:
     """Run one case; draw its figure into ``out`` (if given) as ``<name>.png``.
 
@@ -148,37 +189,37 @@ def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = Non
         return CaseOutcome(
             name, "error", error=traceback.format_exc(), wall_time=time.perf_counter() - t0
         )
-    figure = None
-    if out is not None:
-        try:
-            import matplotlib
+    return _finish(name, module, result, out, t0)
 
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
 
-            from ..io import write_figure
+def run_part(name: str, quick: bool, part) -> tuple[str, object]:
+    """One part of a split case: ``("ok", CaseResult)`` or ``("error", traceback)``."""
+    try:
+        return "ok", load_case(name).run(quick=quick, part=part)
+    except Exception:
+        log.exception("validation case %s, part %s failed", name, part)
+        return "error", traceback.format_exc()
 
-            fig = module.plot(result)
-            figure = f"{name}.png"
-            write_figure(Path(out) / figure, fig, dpi=110)
-            plt.close(fig)
-        except Exception:
-            log.exception("figure of validation case %s failed", name)
-            return CaseOutcome(
-                name,
-                "error",
-                result=replace(result, data={}),
-                error="figure: " + traceback.format_exc(),
-                wall_time=time.perf_counter() - t0,
-            )
-    # The arrays stay in the worker: the report needs only checks, tables, figure.
-    return CaseOutcome(
-        name,
-        "ok",
-        result=replace(result, data={}),
-        figure=figure,
-        wall_time=time.perf_counter() - t0,
-    )
+
+def _parts(name: str, quick: bool) -> list | None:
+    """The parts of a case that defines ``parts(quick)`` (run in parallel), else None."""
+    if missing_dependencies(name):
+        return None
+    fn = getattr(load_case(name), "parts", None)
+    return list(fn(quick)) if fn is not None else None
+
+
+def _merge_parts(name: str, quick: bool, out, pieces: list, wall: float) -> CaseOutcome:
+    """Merge the parts of a split case and draw its figure here."""
+    from .checks import merge_results
+
+    errors = [p for status, p in pieces if status != "ok"]
+    if errors:
+        return CaseOutcome(name, "error", error="\n".join(errors), wall_time=wall)
+    t0 = time.perf_counter()
+    result = merge_results([p for _, p in pieces])
+    outcome = _finish(name, load_case(name), result, out, t0)
+    return replace(outcome, wall_time=wall + outcome.wall_time)
 
 
 def _environment(workers: int) -> dict:
@@ -239,7 +280,10 @@ def run_suite(
         Directory for the case figures (PNG).  Nothing is written without it.
     workers : int
         Worker processes (1: run in this process).  Cases are independent;
-        the most expensive start first.
+        the most expensive start first.  A case that defines ``parts(quick)``
+        (Figs. 8-10: one part per alpha) is run part by part in parallel and
+        merged (:func:`fempipe.validation.checks.merge_results`) before its
+        figure is drawn in this process.
     cases : sequence of str, optional
         Subset of case names (default: all).
     executor : concurrent.futures.Executor, optional
@@ -259,28 +303,54 @@ def run_suite(
     t0 = time.perf_counter()
     order = sorted(names, key=lambda n: -_COST.get(n, 1))
     done: dict[str, CaseOutcome] = {}
-    tasks = _tasks(order)
+    split = {n: _parts(n, quick) for n in order}
+    split = {n: p for n, p in split.items() if p}
+
+    def finished(outcome: CaseOutcome) -> None:
+        done[outcome.name] = outcome
+        if callback:
+            callback(outcome)
+
+    tasks = _tasks([n for n in order if n not in split])
     if executor is None and workers == 1:
+        for n, parts in split.items():
+            t1 = time.perf_counter()
+            pieces = [run_part(n, quick, k) for k in parts]
+            finished(_merge_parts(n, quick, out, pieces, time.perf_counter() - t1))
         for task in tasks:
             for outcome in run_group(task, quick, out):
-                done[outcome.name] = outcome
-                if callback:
-                    callback(outcome)
+                finished(outcome)
     else:
         own = executor is None
         pool = executor or ProcessPoolExecutor(max_workers=int(workers))
         try:
-            futures = {pool.submit(run_group, task, quick, out): task for task in tasks}
+            futures = {}
+            pieces: dict[str, dict] = {n: {} for n in split}
+            started_at = {n: time.perf_counter() for n in split}
+            # The parts of the split (longest) cases first, then the rest by cost.
+            for n, parts in split.items():
+                for k in parts:
+                    futures[pool.submit(run_part, n, quick, k)] = ("part", n, k)
+            for task in tasks:
+                futures[pool.submit(run_group, task, quick, out)] = ("group", task, None)
             for fut in as_completed(futures):
-                task = futures[fut]
+                kind, key, k = futures[fut]
+                if kind == "part":
+                    try:
+                        pieces[key][k] = fut.result()
+                    except Exception:  # a crashed worker
+                        pieces[key][k] = ("error", traceback.format_exc())
+                    if len(pieces[key]) == len(split[key]):
+                        ordered = [pieces[key][j] for j in split[key]]
+                        wall = time.perf_counter() - started_at[key]
+                        finished(_merge_parts(key, quick, out, ordered, wall))
+                    continue
                 try:
                     outcomes = fut.result()
                 except Exception:  # a crashed worker
-                    outcomes = [CaseOutcome(n, "error", error=traceback.format_exc()) for n in task]
+                    outcomes = [CaseOutcome(n, "error", error=traceback.format_exc()) for n in key]
                 for outcome in outcomes:
-                    done[outcome.name] = outcome
-                    if callback:
-                        callback(outcome)
+                    finished(outcome)
         finally:
             if own:
                 pool.shutdown()
