@@ -534,3 +534,14 @@ def progress(args: argparse.Namespace, total: int, desc: str):
 def values_text(values: Sequence[float]) -> str:
     """Short human rendering of a value list for messages."""
     return ", ".join(f"{x:g}" for x in values)
+
+
+def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu")) -> tuple:
+    """``(discretisation label, "alpha = ..., beta = ...")`` for a table heading.
+
+    ``result`` is a subcommand's JSON dict with ``params`` and ``discretization``.
+    """
+    p, d = result["params"], result["discretization"]
+    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
+    head = ", ".join(f"{k} = {p[k]:.6g}" for k in keys if k in p)
+    return disc, head

@@ -125,10 +125,7 @@ def _write(args, result: dict, res) -> None:
 
 
 def _print(result: dict, pipe) -> None:
-    p = result["params"]
-    d = result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
-    head = ", ".join(f"{k} = {p[k]:.6g}" for k in ("alpha", "beta", "gamma", "mu") if k in p)
+    disc, head = common.describe(result)
     lo, hi = result["v_range"]
     print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretisation {disc}")
     v_cr = result["v_cr"]

@@ -126,10 +126,7 @@ def _write(args, result: dict, locus) -> None:
 
 
 def _print_table(result: dict, locus) -> None:
-    p = result["params"]
-    d = result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
-    head = ", ".join(f"{k} = {p[k]:.6g}" for k in ("alpha", "beta", "gamma", "mu") if k in p)
+    disc, head = common.describe(result)
     print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretisation {disc}")
     modes = sorted({int(m) for m in locus.modes})[:4]
     cols = "".join(f"   mode {m}: Re Omega  Im Omega" for m in modes)

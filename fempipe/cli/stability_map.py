@@ -184,8 +184,7 @@ def _write(args, result: dict, smap) -> None:
 
 
 def _print(result: dict) -> None:
-    d = result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
+    disc, _ = common.describe({"params": {}, "discretization": result["discretization"]})
     print(f"critical flow velocity, mu = {result['mu']:g}, v <= {result['v_max']:g}; {disc}")
     print(
         f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} {'v_flutter':>14}"

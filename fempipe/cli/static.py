@@ -268,10 +268,7 @@ def _alphas(values, parameter: str, p: dict) -> list[float]:
 
 
 def _print_table(result: dict, parameter: str, pipe) -> None:
-    p = result["params"]
-    d = result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
-    head = ", ".join(f"{k} = {p[k]:.6g}" for k in ("alpha", "beta", "gamma", "mu", "v") if k in p)
+    disc, head = common.describe(result, ("alpha", "beta", "gamma", "mu", "v"))
     print(f"static deformation, {head}; discretisation {disc}")
     if pipe is not None:
         print(
