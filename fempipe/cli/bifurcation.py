@@ -90,12 +90,7 @@ def _parse(args):
             alphas = [common.parse_alpha(s) for s in items]
         except ValueError as exc:
             raise CLIError("--alphas", str(exc).replace("--alpha", "--alphas")) from None
-    try:
-        workers = int(args.workers)
-    except ValueError:
-        raise CLIError("--workers", f"expects an integer >= 1, got {args.workers!r}") from None
-    if workers < 1:
-        raise CLIError("--workers", f"expects an integer >= 1, got {workers}")
+    workers = common.parse_workers(args.workers)
     return directions, alphas, workers
 
 

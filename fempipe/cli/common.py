@@ -545,3 +545,14 @@ def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu"
     disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
     head = ", ".join(f"{k} = {p[k]:.6g}" for k in keys if k in p)
     return disc, head
+
+
+def parse_workers(text) -> int:
+    """``--workers N``: a whole number of local processes >= 1 (CLIError otherwise)."""
+    try:
+        n = int(str(text))
+    except ValueError:
+        raise CLIError("--workers", f"expects an integer >= 1, got {text!r}") from None
+    if n < 1:
+        raise CLIError("--workers", f"expects an integer >= 1, got {n}")
+    return n

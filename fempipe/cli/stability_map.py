@@ -121,12 +121,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(flow_opt, "the map searches from v = 0: give a range starting at 0")
     alphas = _alphas(args.alphas)
     curves = _curves(args, setup)
-    try:
-        workers = int(args.workers)
-    except ValueError:
-        raise CLIError("--workers", f"expects an integer >= 1, got {args.workers!r}") from None
-    if workers < 1:
-        raise CLIError("--workers", f"expects an integer >= 1, got {workers}")
+    workers = common.parse_workers(args.workers)
     total = len(alphas) * len(curves)
     with common.progress(args, total, "stability map") as bar:
         smap = stability_map(
