@@ -102,7 +102,7 @@ class Check:
 
 def _fmt(x: Any) -> str:
     if isinstance(x, (float, np.floating)):
-        return f"{float(x):.6g}"
+        return f"{float(x):.8g}"
     return str(x).replace("|", "\\|").replace("\n", " ")
 
 

@@ -127,6 +127,30 @@ def run(quick: bool = False) -> CaseResult:
                     category="paper",
                 )
             )
+    if not quick and fe_label == "FE P3:8" and (np.pi / 2) in alphas:
+        # Mesh convergence of one cycle: P3:8 against P3:16, shot from its projection.
+        from ..discretization import parse_discretization
+        from .dynamic_runs import cycle_on
+
+        a = np.pi / 2
+        c8 = cycles[(a, fe_label)]
+        c16 = cycle_on(
+            parse_discretization(fe="P3:16"), a, v, discs[fe_label], (c8.q0, c8.qdot0, c8.period)
+        )
+        dev = max(
+            abs(c16.period - c8.period) / c8.period,
+            *(abs(c16.tip[k][j] - c8.tip[k][j]) for k in ("X_tip", "Z_tip") for j in (0, 1)),
+        )
+        checks.append(
+            below(
+                "fe_mesh_π/2",
+                "α = π/2: the P3:8 cycle (period, tip extrema) equals P3:16",
+                dev,
+                1e-4,
+                why="relative period and tip extrema (units of L); shooting to rtol 1e-8",
+                source="fempipe, refined mesh (P3:16)",
+            )
+        )
     table = Table(
         "Limit cycles at v = 10",
         (

@@ -17,7 +17,7 @@ __all__ = ["render_report", "write_report"]
 
 def _cell(x) -> str:
     if isinstance(x, float):
-        return f"{x:.6g}"
+        return f"{x:.8g}"
     s = str(x)
     return s.replace("|", "\\|").replace("\n", " ")
 
