@@ -48,13 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _workers(text) -> int:
     if text is None:
         return max(1, min(os.cpu_count() or 1, 4))
-    try:
-        n = int(str(text))
-    except ValueError:
-        raise CLIError("--workers", f"expects an integer >= 1, got {text!r}") from None
-    if n < 1:
-        raise CLIError("--workers", f"expects an integer >= 1, got {n}")
-    return n
+    return common.parse_workers(text)
 
 
 def run(args: argparse.Namespace) -> int:
