@@ -85,11 +85,7 @@ def _parse(args):
         raise CLIError("--directions", f"repeats a direction: {args.directions!r}")
     alphas = None
     if args.alphas is not None:
-        items = str(args.alphas).split(",")
-        try:
-            alphas = [common.parse_alpha(s) for s in items]
-        except ValueError as exc:
-            raise CLIError("--alphas", str(exc).replace("--alpha", "--alphas")) from None
+        alphas = common.parse_alpha_list(args.alphas, "--alphas")
     workers = common.parse_workers(args.workers)
     return directions, alphas, workers
 

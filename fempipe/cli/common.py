@@ -556,3 +556,22 @@ def parse_workers(text) -> int:
     if n < 1:
         raise CLIError("--workers", f"expects an integer >= 1, got {n}")
     return n
+
+
+def parse_alpha_list(text: str, option: str) -> list[float]:
+    """A list of inclinations: ``0,pi/4,pi/2`` or ``start:stop:count`` in any
+    :func:`parse_alpha` spelling (``0deg:180deg:7``); CLIError naming ``option``."""
+    text = str(text)
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise ValueError(f"{option} expects start:stop:count, got {text!r}")
+            start, stop = parse_alpha(parts[0]), parse_alpha(parts[1])
+            return parse_values(f"{start!r}:{stop!r}:{parts[2]}", option)
+        items = text.split(",")
+        if any(not s.strip() for s in items):
+            raise ValueError(f"{option} has an empty item in {text!r}")
+        return [parse_alpha(s) for s in items]
+    except ValueError as exc:
+        raise CLIError(option, str(exc).replace("--alpha ", f"{option} ")) from None

@@ -55,19 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _alphas(text: str) -> list[float]:
-    try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError(f"--alphas expects start:stop:count, got {text!r}")
-            start, stop = common.parse_alpha(parts[0]), common.parse_alpha(parts[1])
-            return common.parse_values(f"{start!r}:{stop!r}:{parts[2]}", "--alphas")
-        items = text.split(",")
-        if any(not s.strip() for s in items):
-            raise ValueError(f"--alphas has an empty item in {text!r}")
-        return [common.parse_alpha(s) for s in items]
-    except ValueError as exc:
-        raise CLIError("--alphas", str(exc).replace("--alpha ", "--alphas ")) from None
+    return common.parse_alpha_list(text, "--alphas")
 
 
 def _list(args, name: str, low: float, high: float | None) -> list[float] | None:

@@ -76,19 +76,7 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
 
 def _parse_alpha_values(text: str) -> list[float]:
     """Alpha list: ``0,pi/4,pi/2`` or ``start:stop:count`` with alpha spellings."""
-    try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError(f"--values expects start:stop:count, got {text!r}")
-            start, stop = common.parse_alpha(parts[0]), common.parse_alpha(parts[1])
-            return common.parse_values(f"{start!r}:{stop!r}:{parts[2]}", "--values")
-        items = text.split(",")
-        if any(not s.strip() for s in items):
-            raise ValueError(f"--values has an empty item in {text!r}")
-        return [common.parse_alpha(s) for s in items]
-    except ValueError as exc:
-        raise CLIError("--values", str(exc).replace("--alpha", "--values (alpha)")) from None
+    return common.parse_alpha_list(text, "--values")
 
 
 def run(args: argparse.Namespace) -> int:
