@@ -710,6 +710,24 @@ class Trajectory:
     rtol: float
     flow: dict | None = field(default=None)
 
+    @classmethod
+    def recorded(cls, t, q, qdot, stats, rtol: float, flow: dict | None = None) -> Trajectory:
+        """A trajectory from recorded samples and a stepper's running statistics."""
+        return cls(
+            t=np.asarray(t),
+            q=np.asarray(q),
+            qdot=np.asarray(qdot),
+            steps=stats.steps,
+            rejected_steps=stats.rejected_steps,
+            newton_failures=stats.newton_failures,
+            n_residual=stats.n_residual,
+            n_jacobian=stats.n_jacobian,
+            n_lu=stats.n_lu,
+            wall_time=stats.wall_time,
+            rtol=rtol,
+            flow=flow,
+        )
+
     def stats(self) -> dict:
         return {
             "steps": self.steps,
@@ -785,18 +803,5 @@ def simulate(
                 k += 1
         if callback is not None:
             callback(t)
-    st = stepper.stats
-    return Trajectory(
-        t=np.asarray(ts),
-        q=np.asarray(qs),
-        qdot=np.asarray(ps),
-        steps=st.steps,
-        rejected_steps=st.rejected_steps,
-        newton_failures=st.newton_failures,
-        n_residual=st.n_residual,
-        n_jacobian=st.n_jacobian,
-        n_lu=st.n_lu,
-        wall_time=st.wall_time,
-        rtol=rtol,
-        flow=flow.to_dict() if hasattr(flow, "to_dict") else None,
-    )
+    flow_dict = flow.to_dict() if hasattr(flow, "to_dict") else None
+    return Trajectory.recorded(ts, qs, ps, stepper.stats, rtol, flow_dict)

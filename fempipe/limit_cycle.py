@@ -530,19 +530,7 @@ def find_attractor(
         )
         traj = None
         if record:
-            traj = Trajectory(
-                t=np.array(rec_t),
-                q=np.array(rec_q),
-                qdot=np.array(rec_p),
-                steps=st.steps,
-                rejected_steps=st.rejected_steps,
-                newton_failures=st.newton_failures,
-                n_residual=st.n_residual,
-                n_jacobian=st.n_jacobian,
-                n_lu=st.n_lu,
-                wall_time=st.wall_time,
-                rtol=rtol,
-            )
+            traj = Trajectory.recorded(rec_t, rec_q, rec_p, st, rtol)
         return Attractor(
             kind=kind,
             period=period,
