@@ -135,12 +135,10 @@ class PipeModel:
         G = self.quad.from_tip(dF)
         return self._test(np.einsum("qc,qcj->qj", fl.n, G))
 
-    def _project_jac_normal(self, F: np.ndarray, fl: Fields):
-        """Derivative of ``\\int phi_i n . C^R F`` through n(theta): dn = -t dtheta."""
-        G = self.quad.from_tip(F)
-        d = -np.einsum("qc,qc->q", fl.t, G) * self.w
-        Phi = self.disc.Phi
-        return Phi.T @ _rows(d, Phi)
+    def _normal_weight(self, F: np.ndarray, fl: Fields) -> np.ndarray:
+        """Derivative of ``\\int phi_i n . C^R F`` through n(theta) (dn = -t dtheta):
+        ``Phi^T diag(d) Phi`` with the d returned here."""
+        return -np.einsum("qc,qc->q", fl.t, self.quad.from_tip(F)) * self.w
 
     @property
     def _Phi_dense(self) -> np.ndarray:
@@ -169,24 +167,33 @@ class PipeModel:
         p = self.params
         return p.gamma * self._test((1.0 - self.x) * np.sin(fl.theta + p.alpha))
 
-    def gravity_jacobian(self, fl: Fields):
+    def _gravity_weight(self, fl: Fields) -> np.ndarray:
+        """d(gravity)/dq = ``Phi^T diag(d) Phi`` with this d."""
         p = self.params
-        d = p.gamma * self.w * (1.0 - self.x) * np.cos(fl.theta + p.alpha)
+        return p.gamma * self.w * (1.0 - self.x) * np.cos(fl.theta + p.alpha)
+
+    def gravity_jacobian(self, fl: Fields):
         Phi = self.disc.Phi
-        return Phi.T @ _rows(d, Phi)
+        return Phi.T @ _rows(self._gravity_weight(fl), Phi)
 
     def follower(self, fl: Fields) -> np.ndarray:
         """Eq. (20) v^2 sin(theta(1) - theta): the jet's reaction at the free end, Eq. (14)."""
         return self.params.v**2 * self._test(np.sin(fl.theta_tip - fl.theta))
 
-    def follower_jacobian(self, fl: Fields):
+    def _follower_weights(self, fl: Fields) -> tuple[np.ndarray, np.ndarray]:
+        """d(follower)/dq = ``Phi^T diag(d) Phi + tip_col tip^T``: (d, tip_col).
+
+        The theta(1) dependence couples every row to the tip dofs: a rank-one
+        update, which is one extra column for finite elements.
+        """
         v2 = self.params.v**2
         c = np.cos(fl.theta_tip - fl.theta)
+        return -v2 * self.w * c, v2 * self._test(c)
+
+    def follower_jacobian(self, fl: Fields):
+        d, tip_col = self._follower_weights(fl)
         Phi = self.disc.Phi
-        local = Phi.T @ _rows(-v2 * self.w * c, Phi)
-        # The theta(1) dependence couples every row to the tip dofs: a rank-one
-        # update, which is one extra column for finite elements.
-        tip_col = v2 * self._test(c)
+        local = Phi.T @ _rows(d, Phi)
         if sp.issparse(local):
             tip = sp.csr_matrix(self.disc.tip)
             return local + sp.csr_matrix(tip_col[:, None]) @ tip
@@ -283,15 +290,13 @@ class PipeModel:
         # The gravity, follower (local part) and normal-derivative terms are all
         # Phi^T diag(d) Phi: one dense product instead of three small sparse
         # ones (scipy.sparse overhead dominated the time-integration cost).
-        d = p.gamma * self.w * (1.0 - self.x) * np.cos(fl.theta + p.alpha)
-        c_tip = np.cos(fl.theta_tip - fl.theta)
-        d = d - p.v**2 * self.w * c_tip
-        d = d - np.einsum("qc,qc->q", fl.t, self.quad.from_tip(F)) * self.w
+        d_follower, tip_col = self._follower_weights(fl)
+        d = self._gravity_weight(fl) + d_follower + self._normal_weight(F, fl)
         Phi = self._Phi_dense
         Jq = (
             _dense(self.disc.K)
             + (Phi.T * d) @ Phi
-            + np.outer(p.v**2 * self._test(c_tip), self.disc.tip)
+            + np.outer(tip_col, self.disc.tip)
             + self._project_jac(dF, fl)
         )
         # d/dq': centripetal and Coriolis, plus Kelvin-Voigt.
