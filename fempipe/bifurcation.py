@@ -1,10 +1,10 @@
 """Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10).
 
 A sweep steps v up (or down) through a list of values; each point starts
-from the attractor of the previous one (when that attractor is an
-equilibrium: the equilibrium continued to the new v by Newton, plus a small
-perturbation, since at alpha = 0 theta = 0 is static for every v and an
-unperturbed start would never leave it) and records, with :func:`fempipe.limit_cycle.find_attractor`, the
+from the attractor of the previous one (plus a small perturbation when that
+attractor is an equilibrium, since an equilibrium of one v is not one of the
+next only approximately, and not at all at alpha = 0 where theta = 0 is static
+for every v) and records, with :func:`fempipe.limit_cycle.find_attractor`, the
 kind of attractor, its period and the extrema of eta(1), X_g(1), Z_g(1).
 Sweeping up and down shows hysteresis where a stable equilibrium and a stable
 cycle coexist (subcritical Hopf).  When the previous attractor is a stable
@@ -39,7 +39,6 @@ import numpy as np
 from .dynamics import IntegrationError, initial_state
 from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
 from .operators import PipeModel
-from .static import NewtonError, solve_static
 
 __all__ = [
     "BifurcationPoint",
@@ -267,15 +266,8 @@ def sweep(
         if q is None:
             q, p = initial_state(m, 1, perturbation)
         elif previous_equilibrium:
-            # Continue the equilibrium to the new v first: starting from the old
-            # one, a point where the static state is stable could be pushed onto
-            # a coexisting cycle by the offset alone.
-            try:
-                q_eq = solve_static(m, q0=q).q
-            except NewtonError:
-                q_eq = np.asarray(q)
             dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
-            q, p = q_eq + dq, np.zeros(m.n)
+            q, p = np.asarray(q) + dq, np.zeros(m.n)
         t0 = time.perf_counter()
         att = None
         if (
