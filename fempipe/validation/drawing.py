@@ -73,3 +73,21 @@ def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6, loc="best")
     return ax
+
+
+def plot_shape_panels(result, fig, title, **figure_options):
+    """One panel of overlaid shapes per entry of ``result.data["panels"]``.
+
+    ``title(panel)`` gives each panel's title; ``figure_options`` go to
+    :func:`new_figure` when ``fig`` is None.  Returns the figure.
+    """
+    panels = result.data["panels"]
+    if fig is None:
+        fig, axes = new_figure(len(panels), **figure_options)
+    else:
+        axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
+    for ax, p in zip(axes, panels, strict=False):
+        draw_shapes(ax, p.fams)
+        ax.set_title(title(p))
+    fig.tight_layout()
+    return fig

@@ -87,15 +87,8 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """One panel per γ; FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import draw_shapes, new_figure
+    from .drawing import plot_shape_panels
 
-    panels = result.data["panels"]
-    if fig is None:
-        fig, axes = new_figure(len(panels), ncols=len(panels))
-    else:
-        axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
-    for ax, p in zip(axes, panels, strict=False):
-        draw_shapes(ax, p.fams)
-        ax.set_title(f"Fig. 3: α = π/2, {p.title}")
-    fig.tight_layout()
-    return fig
+    return plot_shape_panels(
+        result, fig, lambda p: f"Fig. 3: α = π/2, {p.title}", ncols=len(result.data["panels"])
+    )

@@ -99,43 +99,42 @@ def run(quick: bool = False) -> CaseResult:
             source="paper Sec. 4; abstract; conclusion (iii)",
         )
     )
+
     # v_cr falls with alpha.
-    for b in betas:
-        v = vc(by_beta[b])
+    def falls_with_alpha(name: str, label: str, v, source: str):
         rises = [
             (_deg(alphas[i]), _deg(alphas[i + 1]), v[i + 1] - v[i])
             for i in range(len(v) - 1)
             if v[i + 1] > v[i]
         ]
+        return holds(
+            name,
+            label,
+            not rises,
+            "monotone decreasing"
+            if not rises
+            else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
+            source=source,
+        )
+
+    for b in betas:
         checks.append(
-            holds(
+            falls_with_alpha(
                 f"falls_with_alpha_b{b:g}",
                 f"β = {b:g}, γ = {BASE_GAMMA:g}: v_cr falls as α grows (every step of the α grid)",
-                not rises,
-                "monotone decreasing"
-                if not rises
-                else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
-                source="paper Sec. 4, Fig. 6; conclusion (iii)",
+                vc(by_beta[b]),
+                "paper Sec. 4, Fig. 6; conclusion (iii)",
             )
         )
     for g in gammas:
         if g == BASE_GAMMA:
             continue
-        v = vc(by_gamma[g])
-        rises = [
-            (_deg(alphas[i]), _deg(alphas[i + 1]), v[i + 1] - v[i])
-            for i in range(len(v) - 1)
-            if v[i + 1] > v[i]
-        ]
         checks.append(
-            holds(
+            falls_with_alpha(
                 f"falls_with_alpha_g{g:g}",
                 f"γ = {g:g}, β = {BASE_BETA:g}: v_cr falls as α grows",
-                not rises,
-                "monotone decreasing"
-                if not rises
-                else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
-                source="paper Sec. 4, Fig. 6",
+                vc(by_gamma[g]),
+                "paper Sec. 4, Fig. 6",
             )
         )
     # v_cr rises with beta at every alpha.
