@@ -13,7 +13,12 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-__all__ = ["Params", "PipeSI"]
+__all__ = ["PAPER_CASE", "Params", "PipeSI"]
+
+#: The paper's reference case (Chen et al. 2020, Secs. 4-5): mass ratio,
+#: gravity parameter and Kelvin--Voigt damping.  Stated here once; the
+#: defaults of :class:`Params` and every "paper's case" elsewhere use it.
+PAPER_CASE: dict[str, float] = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 
 
 def _check_finite(name: str, value: float) -> float:
@@ -46,9 +51,9 @@ class Params:
     """
 
     alpha: float = 0.0
-    beta: float = 0.142
-    gamma: float = 18.9
-    mu: float = 5e-3
+    beta: float = PAPER_CASE["beta"]
+    gamma: float = PAPER_CASE["gamma"]
+    mu: float = PAPER_CASE["mu"]
     v: float = 0.0
 
     def __post_init__(self) -> None:
