@@ -6,12 +6,18 @@ parameter ``gamma``, the Kelvin--Voigt damping ``mu`` and the flow velocity
 ``v``.  :class:`Params` holds them; :class:`PipeSI` holds a dimensional pipe
 (lengths in m, stiffness in N m^2, masses per length in kg/m, velocities in
 m/s) and converts both ways.
+
+Invalid values raise :class:`~fempipe.errors.ParamError` (a ``ValueError``)
+whose ``field`` names the offending field, so a caller can point at the input
+that set it.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
+
+from .errors import ParamError
 
 __all__ = ["PAPER_CASE", "Params", "PipeSI"]
 
@@ -24,10 +30,10 @@ PAPER_CASE: dict[str, float] = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 def _check_finite(name: str, value: float) -> float:
     try:
         value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ParamError(name, f"{name} must be a real number, got {value!r}") from None
     if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value}")
+        raise ParamError(name, f"{name} must be finite, got {value}")
     return value
 
 
@@ -60,14 +66,22 @@ class Params:
         for name in ("alpha", "beta", "gamma", "mu", "v"):
             object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
         if not 0.0 <= self.beta <= 1.0:
-            raise ValueError(f"beta must satisfy 0 <= beta <= 1, got {self.beta}")
+            raise ParamError("beta", f"beta must satisfy 0 <= beta <= 1, got {self.beta}")
         if self.gamma < 0.0:
-            raise ValueError(f"gamma must be >= 0, got {self.gamma}")
+            # Eq. (19): gamma = (m+M) g L^3/EI is a magnitude.  Gravity along
+            # the pipe's axis is set by alpha: Eq. (20) is unchanged under
+            # (alpha, gamma) -> (alpha + pi, -gamma).
+            raise ParamError(
+                "gamma",
+                f"gamma must be >= 0, got {self.gamma}; a pipe standing up is alpha = pi "
+                f"with gamma > 0 (this input is alpha = {self.alpha + math.pi:.6g}, "
+                f"gamma = {-self.gamma:g})",
+            )
         if self.mu < 0.0:
-            raise ValueError(f"mu must be >= 0, got {self.mu}")
+            raise ParamError("mu", f"mu must be >= 0, got {self.mu}")
         if self.v < 0.0:
-            raise ValueError(
-                f"v must be >= 0 (the model assumes discharge at the free end), got {self.v}"
+            raise ParamError(
+                "v", f"v must be >= 0 (the model assumes discharge at the free end), got {self.v}"
             )
 
     def with_flow(self, v: float) -> Params:
@@ -112,19 +126,42 @@ class PipeSI:
         for name in ("L", "EI", "m", "M", "g", "a", "alpha"):
             object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
         if self.L <= 0:
-            raise ValueError(f"L (length) must be > 0 m, got {self.L}")
+            raise ParamError("L", f"L (length) must be > 0 m, got {self.L}")
         if self.EI <= 0:
-            raise ValueError(f"EI must be > 0 N m^2, got {self.EI}")
+            raise ParamError("EI", f"EI must be > 0 N m^2, got {self.EI}")
         if self.m < 0:
-            raise ValueError(f"m (pipe mass per length) must be >= 0 kg/m, got {self.m}")
+            raise ParamError("m", f"m (pipe mass per length) must be >= 0 kg/m, got {self.m}")
         if self.M < 0:
-            raise ValueError(f"M (fluid mass per length) must be >= 0 kg/m, got {self.M}")
+            raise ParamError("M", f"M (fluid mass per length) must be >= 0 kg/m, got {self.M}")
         if self.m + self.M <= 0:
-            raise ValueError("m + M must be > 0 kg/m")
+            raise ParamError("m", "m + M must be > 0 kg/m")
         if self.g < 0:
-            raise ValueError(f"g must be >= 0 m/s^2, got {self.g}")
+            raise ParamError("g", f"g must be >= 0 m/s^2, got {self.g}")
         if self.a < 0:
-            raise ValueError(f"a (Kelvin-Voigt coefficient) must be >= 0 s, got {self.a}")
+            raise ParamError("a", f"a (Kelvin-Voigt coefficient) must be >= 0 s, got {self.a}")
+        # The dimensionless groups of Eq. (19) must exist as floats: L^3 or
+        # 1/EI can overflow for absurd input.
+        for group, (value, field) in self._groups().items():
+            if not math.isfinite(value):
+                raise ParamError(
+                    field,
+                    f"{group} of Eq. (19) overflows for L = {self.L:g} m, EI = {self.EI:g} N m^2, "
+                    f"m = {self.m:g} kg/m, M = {self.M:g} kg/m, g = {self.g:g} m/s^2, "
+                    f"a = {self.a:g} s",
+                )
+
+    def _groups(self) -> dict[str, tuple[float, str]]:
+        """beta, gamma, mu of Eq. (19), each with the field named if it overflows."""
+        mt = self.m + self.M
+        try:
+            gamma = mt * self.g * self.L**3 / self.EI
+        except OverflowError:  # L**3 of a float raises instead of giving inf
+            gamma = math.inf
+        try:
+            mu = math.sqrt(self.EI / mt) * self.a / self.L**2
+        except OverflowError:
+            mu = math.inf
+        return {"beta": (self.M / mt, "M"), "gamma": (gamma, "EI"), "mu": (mu, "a")}
 
     # --- Eq. (19) scales -------------------------------------------------
     @property
@@ -143,8 +180,11 @@ class PipeSI:
         """Dimensionless flow velocity v = sqrt(M/EI) U L."""
         U = _check_finite("U", U)
         if U < 0:
-            raise ValueError(f"U must be >= 0 m/s, got {U}")
-        return math.sqrt(self.M / self.EI) * U * self.L
+            raise ParamError("U", f"U must be >= 0 m/s, got {U}")
+        v = math.sqrt(self.M / self.EI) * U * self.L
+        if not math.isfinite(v):
+            raise ParamError("U", f"v = sqrt(M/EI) U L overflows for U = {U:g} m/s")
+        return v
 
     def U_of_v(self, v: float) -> float:
         """Flow velocity in m/s for dimensionless ``v``."""
@@ -152,12 +192,12 @@ class PipeSI:
 
     def params(self, U: float = 0.0) -> Params:
         """Dimensionless :class:`Params` at flow velocity ``U`` (m/s), Eq. (19)."""
-        mt = self.m + self.M
+        g = self._groups()
         return Params(
             alpha=self.alpha,
-            beta=self.M / mt,
-            gamma=mt * self.g * self.L**3 / self.EI,
-            mu=math.sqrt(self.EI / mt) * self.a / self.L**2,
+            beta=g["beta"][0],
+            gamma=g["gamma"][0],
+            mu=g["mu"][0],
             v=self.v_of_U(U),
         )
 
