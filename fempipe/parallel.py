@@ -1,0 +1,347 @@
+"""Independent tasks in worker processes: one runner, one BLAS limiter, clean exits.
+
+Every parallel sweep of the package (stability maps and root loci, the
+bifurcation sweeps, the validation cases) runs through :func:`run_tasks`, so
+they share one error policy and one worker lifecycle:
+
+* **Results in task order, failures per task.**  A task that raises an
+  :class:`Exception` does not stop the others; its slot in the returned list
+  holds the exception instead of a value.  ``traceback.format_exception(exc)``
+  shows where it failed (for a process pool the worker's traceback is chained
+  as ``__cause__``).  A worker process that dies (``BrokenProcessPool``) is
+  such a failure for every task it takes down.  The caller decides what a
+  failure means (record it, or raise it once all tasks are done).
+* **Interrupts stop everything.**  ``KeyboardInterrupt`` (and so
+  :class:`Interrupted`) or ``SystemExit`` in the parent while tasks run, or an
+  exception raised by a callback, cancels the tasks not yet started,
+  terminates the workers of a pool that :func:`run_tasks` started, and
+  propagates.  :func:`interruptible` turns SIGINT and SIGTERM into
+  :class:`Interrupted` so that a command-line run stops its workers and exits
+  with 128 + the signal number (130, 143).
+* **No orphans.**  Workers started here (:func:`process_pool`) ignore SIGINT
+  (the parent decides), die on SIGTERM, and exit within about a second when
+  their parent is gone, even if the parent was killed with SIGKILL and could
+  not clean up: on Linux the kernel sends them SIGKILL when the parent dies
+  (``prctl(PR_SET_PDEATHSIG)``), and on every platform a watchdog thread
+  exits the worker when its parent process changes.
+* **One BLAS thread per process** (:func:`single_blas_thread`): the dense
+  matrices of the model are small (2n = 96 for P3:16), where a multi-threaded
+  BLAS spends more time synchronising than computing (measured: 32 ms per
+  spectrum with two OpenBLAS threads, 7 ms with one), and LAPACK's
+  nonsymmetric QR iterations parallelise poorly even at n = 768 (5 s with one
+  thread, 18 s with two on a busy 2-core machine).  Parallelism comes from
+  independent tasks instead.
+
+Any :class:`concurrent.futures.Executor` can run the tasks instead of a local
+pool (e.g. Dask's ``Client.get_executor()``); it is not shut down, and its
+workers' lifecycle is its owner's business.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
+
+from threadpoolctl import threadpool_limits
+
+__all__ = [
+    "Interrupted",
+    "interruptible",
+    "process_pool",
+    "run_tasks",
+    "single_blas_thread",
+    "HEARTBEAT",
+    "PARENT_POLL",
+]
+
+#: Seconds between calls of ``run_tasks(heartbeat=...)`` while tasks run.
+HEARTBEAT = 0.2
+#: Seconds between a worker's checks that its parent process is still alive.
+PARENT_POLL = 0.5
+#: Seconds a terminated worker is given to exit before it is killed.
+_TERMINATE_GRACE = 5.0
+#: From <linux/prctl.h>.
+_PR_SET_PDEATHSIG = 1
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (see :func:`interruptible`).
+
+    A ``KeyboardInterrupt`` so that code catching ``Exception`` (such as the
+    per-task error policy of :func:`run_tasks`) never swallows it.
+
+    Attributes
+    ----------
+    signum : int
+        The signal received.
+    exit_code : int
+        The shell's convention for a process ended by that signal,
+        128 + ``signum`` (130 for SIGINT, 143 for SIGTERM).
+    """
+
+    def __init__(self, signum: int) -> None:
+        self.signum = int(signum)
+        super().__init__(f"interrupted by {signal.Signals(self.signum).name}")
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + self.signum
+
+
+@contextlib.contextmanager
+def interruptible() -> Iterator[None]:
+    """Raise :class:`Interrupted` in the main thread on SIGINT or SIGTERM.
+
+    Without it SIGTERM ends the process at once (its workers then exit by
+    themselves, see :func:`process_pool`, but nothing is cleaned up and no
+    message is printed).  Inside it the signal unwinds the stack like Ctrl-C:
+    :func:`run_tasks` terminates its workers on the way, ``finally`` blocks
+    and context managers run.  A second signal while the first one unwinds is
+    ignored.  The previous handlers are restored on exit.
+
+    Signal handlers can only be installed in the main thread; elsewhere this
+    context manager does nothing (signals are delivered to the main thread).
+
+    Examples
+    --------
+    >>> with interruptible():                      # doctest: +SKIP
+    ...     results = run_tasks(fn, tasks, workers=4)
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired = False
+
+    def handler(signum, _frame):
+        nonlocal fired
+        if fired:
+            return
+        fired = True
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def single_blas_thread() -> contextlib.AbstractContextManager:
+    """Context manager: one BLAS thread in this process while it is active.
+
+    For the small dense solves and eigenproblems of the model, where thread
+    start-up and synchronisation cost more than the arithmetic (see the module
+    docstring for measurements).  The previous limits are restored on exit.
+
+    Examples
+    --------
+    >>> with single_blas_thread():
+    ...     pass
+    """
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _parent_died(parent: int) -> bool:
+    try:
+        os.kill(parent, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:  # a process of another user took the pid
+        return True
+    return False
+
+
+def _watch_parent(ppid: int) -> None:
+    while True:
+        time.sleep(PARENT_POLL)
+        if os.getppid() != ppid:  # re-parented: the parent is gone
+            os._exit(1)
+
+
+def _init_worker(parent: int) -> None:
+    """Initializer of the workers of :func:`process_pool` (runs in each worker).
+
+    Parameters
+    ----------
+    parent : int
+        Pid of the process that created the pool.
+    """
+    # The parent handles Ctrl-C (the terminal sends SIGINT to the whole process
+    # group) and stops the workers with SIGTERM; a forked worker would
+    # otherwise inherit the parent's Python-level handlers.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    threadpool_limits(limits=1, user_api="blas")
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0:
+            err = ctypes.get_errno()
+            raise OSError(err, f"prctl(PR_SET_PDEATHSIG): {os.strerror(err)}")
+    # The parent may have died before the death signal was armed.  With the
+    # "forkserver" start method the worker's parent is the fork server (it
+    # exits when the pool's creator does), hence the check on ``parent`` too.
+    ppid = os.getppid()
+    if ppid == 1 or _parent_died(parent):
+        os._exit(1)
+    threading.Thread(
+        target=_watch_parent, args=(ppid,), name="parent-watchdog", daemon=True
+    ).start()
+
+
+def process_pool(workers: int) -> ProcessPoolExecutor:
+    """A ``ProcessPoolExecutor`` whose workers never outlive this process.
+
+    Each worker uses one BLAS thread, ignores SIGINT, dies on SIGTERM, and
+    exits within about :data:`PARENT_POLL` seconds of this process's death
+    (on Linux at once, by a parent-death signal).  :func:`run_tasks` starts
+    one of these when asked for ``workers > 1``; build one yourself to reuse
+    the workers for several calls (``executor=``).
+
+    Linux sends the parent-death signal when the *thread* that started a
+    worker exits: use the pool from the thread that created it (or one that
+    outlives it).
+
+    Parameters
+    ----------
+    workers : int
+        Number of worker processes (>= 1).
+    """
+    if int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    return ProcessPoolExecutor(
+        max_workers=int(workers), initializer=_init_worker, initargs=(os.getpid(),)
+    )
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and terminate the workers (no waiting for tasks)."""
+    terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+    if terminate is not None:
+        terminate()
+        return
+    processes = list((pool._processes or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in processes:
+        p.terminate()
+    for p in processes:
+        p.join(_TERMINATE_GRACE)
+        if p.is_alive():
+            p.kill()
+            p.join()
+
+
+def run_tasks(
+    fn: Callable,
+    tasks: Sequence[tuple],
+    *,
+    workers: int | None = None,
+    executor: Executor | None = None,
+    callback: Callable[[int, int, object], None] | None = None,
+    on_result: Callable[[int, object], None] | None = None,
+    heartbeat: Callable[[], None] | None = None,
+) -> list:
+    """Run ``fn(*task)`` for every task, in parallel if asked; results in task order.
+
+    Error policy (the same serially and in parallel): a task that raises an
+    ``Exception`` leaves that exception in its slot and the other tasks run
+    on; ``KeyboardInterrupt`` (:class:`Interrupted`), ``SystemExit`` or an
+    exception raised by a callback cancel the tasks not started, terminate
+    the workers of the pool started here, and propagate.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (it is pickled for process pools).
+    tasks : sequence of tuple
+        Positional arguments of each call.
+    workers : int, optional
+        Without ``executor``: > 1 starts a :func:`process_pool` with
+        ``min(workers, len(tasks))`` processes, shut down on return; None or
+        1 (or a single task) runs in this process.
+    executor : concurrent.futures.Executor, optional
+        Any executor (a :func:`process_pool`, Dask's
+        ``Client.get_executor()``); it is not shut down, and on an interrupt
+        only the tasks not yet started are cancelled.
+    callback : callable, optional
+        ``callback(done, total, result)`` as each task finishes (progress).
+    on_result : callable, optional
+        ``on_result(index, result)`` as each task finishes, with the task's
+        position in ``tasks`` (to act on results before all are done).
+    heartbeat : callable, optional
+        Called without arguments every :data:`HEARTBEAT` seconds while
+        parallel tasks run (e.g. to report progress that the tasks write
+        elsewhere, such as files).
+
+    Returns
+    -------
+    list
+        One entry per task: its return value, or the exception it raised.
+
+    Raises
+    ------
+    ValueError
+        ``workers`` < 1.
+    """
+    tasks = [tuple(t) for t in tasks]
+    total = len(tasks)
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    out: list = [None] * total
+
+    def finish(i: int, result: object, done: int) -> None:
+        out[i] = result
+        if on_result is not None:
+            on_result(i, result)
+        if callback is not None:
+            callback(done, total, result)
+
+    if executor is None and (workers is None or int(workers) == 1 or total <= 1):
+        for i, t in enumerate(tasks):
+            try:
+                result = fn(*t)
+            except Exception as exc:  # noqa: BLE001 - the per-task error policy
+                result = exc
+            finish(i, result, i + 1)
+        return out
+
+    own = None
+    if executor is None:
+        own = executor = process_pool(min(int(workers), total))
+    futures: dict = {}
+    try:
+        for i, t in enumerate(tasks):
+            futures[executor.submit(fn, *t)] = i
+        pending = set(futures)
+        done = 0
+        while pending:
+            finished, pending = wait(
+                pending, timeout=HEARTBEAT if heartbeat else None, return_when=FIRST_COMPLETED
+            )
+            for fut in sorted(finished, key=futures.__getitem__):
+                try:
+                    result = fut.result()
+                except Exception as exc:  # noqa: BLE001 - the per-task error policy
+                    result = exc
+                done += 1
+                finish(futures[fut], result, done)
+            if heartbeat is not None:
+                heartbeat()
+    except BaseException:
+        for fut in futures:
+            fut.cancel()
+        if own is not None:
+            _stop_pool(own)
+            own = None
+        raise
+    finally:
+        if own is not None:
+            own.shutdown()
+    return out
