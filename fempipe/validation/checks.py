@@ -19,13 +19,12 @@ Checks come in two categories:
 
 from __future__ import annotations
 
-import json
-import math
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..io import to_jsonable
 
 __all__ = [
     "CATEGORIES",
@@ -35,27 +34,10 @@ __all__ = [
     "below",
     "close",
     "holds",
-    "load_references",
     "merge_results",
 ]
 
 CATEGORIES = ("numerics", "paper")
-_REFERENCE_DIR = Path(__file__).with_name("references")
-
-
-def _plain(x: Any) -> Any:
-    """JSON-able version of numpy scalars/arrays (for ``to_dict``)."""
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    return x
 
 
 @dataclass(frozen=True)
@@ -97,7 +79,7 @@ class Check:
         object.__setattr__(self, "passed", bool(self.passed))
 
     def to_dict(self) -> dict:
-        return _plain(asdict(self))
+        return to_jsonable(asdict(self))
 
 
 def _fmt(x: Any) -> str:
@@ -192,7 +174,7 @@ class Table:
         return "\n".join(out)
 
     def to_dict(self) -> dict:
-        return _plain(asdict(self))
+        return to_jsonable(asdict(self))
 
 
 @dataclass(frozen=True)
@@ -256,23 +238,6 @@ class CaseResult:
             "tables": [t.to_dict() for t in self.tables],
             "findings": list(self.findings),
         }
-
-
-def load_references(case: str) -> dict[str, dict]:
-    """Reference numbers of a case from ``references/<case>.json``.
-
-    Each entry is ``{"value": ..., "source": "..."}``; the file's ``"_about"``
-    entry says where the numbers come from as a whole.
-    """
-    path = _REFERENCE_DIR / f"{case}.json"
-    with path.open(encoding="utf-8") as fh:
-        data = json.load(fh)
-    for key, entry in data.items():
-        if key.startswith("_"):
-            continue
-        if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
-            raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
-    return data
 
 
 def merge_results(results: list[CaseResult]) -> CaseResult:

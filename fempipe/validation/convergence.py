@@ -14,9 +14,14 @@ element degree and for increasing numbers of sine modes, then
 * tabulates the error of the paper's N = 3 and N = 4 against the reference.
 
 FE tip values of P_k converge as h^(2k) (nodal superconvergence; kept by the
-Gauss integration operators, see :mod:`fempipe.quadrature`); the sine modes
-converge only algebraically because they force theta''(0) = 0, which the
-solution does not satisfy (SPEC §2).
+Gauss integration operators, see :mod:`fempipe.quadrature`).  The sine modes
+sin(k_r xi), k_r = (2r - 1) pi / 2, converge only algebraically: each has
+phi''(0) = 0, whereas Eq. (31a) at xi = 0 gives
+theta''(0) = gamma sin(alpha) + v^2 sin(theta(1)) != 0.  Integrating the sine
+coefficient c_r = 2 int theta sin(k_r xi) by parts three times leaves
+c_r = -2 theta''(0) / k_r^3 + O(k_r^-4), so the truncation error in the
+energy norm is O(N^(-3/2)) and functionals and eigenvalues (the square of it)
+converge as N^-3 (README, The model: conventions and derivations).
 """
 
 from __future__ import annotations
@@ -28,15 +33,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..discretization import FiniteElement, Modal
-from .checks import CaseResult, Table, close, holds, load_references
+from ..params import PAPER_CASE
+from .bvp import solve_static_bvp
+from .case import Case
+from .checks import CaseResult, Check, Table, close, holds
+from .dynamic_runs import cycle_on
+from .fig02b import pipe
+from .onset import critical_velocity
+from .static_shapes import static_shapes
 
-CASE = "convergence"
-FIGURE = "Convergence study"
-TITLE = "Error against degrees of freedom: FE P1, P2, P3 and modal N"
-PAPER_SHOWS = (
-    "N = 3 is converged for the static shapes (Sec. 3.1, Fig. 2(a))",
-    "the stability results are converged in the Galerkin discretisation (Sec. 4)",
-    "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
+CASE = Case(
+    name="convergence",
+    figure="Convergence study",
+    title="Error against degrees of freedom: FE P1, P2, P3 and modal N",
+    paper_shows=(
+        "N = 3 is converged for the static shapes (Sec. 3.1, Fig. 2(a))",
+        "the stability results are converged in the Galerkin discretisation (Sec. 4)",
+        "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
+    ),
+    requires=("static_reference_vs_bvp",),
 )
 
 
@@ -135,8 +150,13 @@ def run_study(
     return Study(quantity, ref, ref_err, series, {n: mvals[n] for n in paper_modes})
 
 
-def study_checks(study: Study, tag: str, order_tol: float, source_order: str) -> list:
-    """Observed FE orders against theory, modal algebraic convergence."""
+def study_names(tag: str, degrees) -> list[str]:
+    """The checks :func:`study_checks` emits for FE degrees ``degrees``."""
+    return [f"{tag}_order_P{int(k)}" for k in degrees] + [f"{tag}_modal_algebraic"]
+
+
+def study_checks(study: Study, tag: str, order_tol: float, source_order: str) -> list[Check]:
+    """Observed FE orders against theory, modal algebraic convergence: :func:`study_names`."""
     checks = []
     for label, s in study.series.items():
         if s.expected is None:
@@ -161,18 +181,16 @@ def study_checks(study: Study, tag: str, order_tol: float, source_order: str) ->
             f"observed order in N: {m.order:.2f}",
             reference="0.5 < p < 6",
             why="θ''(0) = 0 of every sine mode is violated by the solution: algebraic, "
-            "not spectral, convergence (SPEC §2)",
-            source="SPEC §2; measured here",
+            "not spectral, convergence (order 3 in N)",
+            source="README, The model: why the sine modes converge only algebraically; "
+            "measured here",
             category="numerics",
         )
     )
     return checks
 
 
-def _static_compute(si_params):
-    from .static_shapes import static_shapes
-
-    p = si_params
+def _static_compute(p):
 
     def compute(disc) -> float:
         return float(
@@ -184,19 +202,15 @@ def _static_compute(si_params):
 
 def static_study(quick: bool) -> tuple[Study, list]:
     """(a) The Texier-Dorbolo tip drop X_g(1) at U = 2 m/s."""
-    from .bvp import solve_static_bvp
-    from .fig02b import pipe
-
-    ref = load_references(CASE)
+    ref = CASE.references
     si = pipe()
-    p = si.params(ref["static_U"]["value"])
-    q = "_quick" if quick else ""
+    p = si.params(ref.value("static_U"))
     st = run_study(
         "static tip drop X_g(1) (Texier-Dorbolo, U = 2 m/s)",
         _static_compute(p),
-        ref[f"fe_elements{q}"]["value"],
-        ref[f"modes{q}"]["value"],
-        ref["fe_order"]["value"],
+        ref.value("fe_elements", quick),
+        ref.value("modes", quick),
+        ref.value("fe_order"),
     )
     bvp = solve_static_bvp(p.alpha, p.gamma, p.v, tol=1e-11)
     st = Study(
@@ -207,7 +221,7 @@ def static_study(quick: bool) -> tuple[Study, list]:
         st.paper_modes,
         ("solve_bvp", bvp.X_tip),
     )
-    checks = study_checks(st, "static", ref["order_tol"]["value"], ref["fe_order"]["source"])
+    checks = study_checks(st, "static", ref.value("order_tol"), ref.source("fe_order"))
     checks.append(
         close(
             "static_reference_vs_bvp",
@@ -224,37 +238,32 @@ def static_study(quick: bool) -> tuple[Study, list]:
 
 def vcr_studies(quick: bool) -> tuple[list, list]:
     """(b) v_cr for each alpha of Fig. 6 (independent onset, Brent to 1e-12 in v)."""
-    from .onset import critical_velocity
-
-    ref = load_references(CASE)
-    q = "_quick" if quick else ""
+    ref = CASE.references
     studies, checks = [], []
-    for a in ref[f"vcr_alpha{q}"]["value"]:
+    for a in ref.value("vcr_alpha", quick):
 
         def compute(disc, a=a) -> float:
-            return critical_velocity(disc, a, beta=0.142, gamma=18.9, mu=5e-3, xtol=1e-12).v_cr
+            return critical_velocity(disc, a, **PAPER_CASE, xtol=1e-12).v_cr
 
         st = run_study(
             f"v_cr, α = {np.degrees(a):.0f}°",
             compute,
-            ref[f"vcr_fe_elements{q}"]["value"],
-            ref[f"vcr_modes{q}"]["value"],
-            ref["fe_order"]["value"],
+            ref.value("vcr_fe_elements", quick),
+            ref.value("vcr_modes", quick),
+            ref.value("fe_order"),
             roundoff=1e-11,
         )
         studies.append(st)
         checks += study_checks(
-            st, f"vcr{np.degrees(a):.0f}", ref["order_tol"]["value"], ref["fe_order"]["source"]
+            st, f"vcr{np.degrees(a):.0f}", ref.value("order_tol"), ref.source("fe_order")
         )
     return studies, checks
 
 
 def lco_study() -> tuple[Study, list]:
     """(c) the eta(1) amplitude of the limit cycle at alpha = 0, v = 10 (full suite)."""
-    from .dynamic_runs import cycle_on
-
-    ref = load_references(CASE)
-    a, v = ref["lco"]["value"]["alpha"], ref["lco"]["value"]["v"]
+    ref = CASE.references
+    a, v = ref.value("lco")["alpha"], ref.value("lco")["v"]
     seed_disc = FiniteElement(8, 3)
     seed = cycle_on(seed_disc, a, v)
     guess = (seed.q0, seed.qdot0, seed.period)
@@ -266,12 +275,12 @@ def lco_study() -> tuple[Study, list]:
     st = run_study(
         "limit-cycle amplitude of η(1), α = 0, v = 10",
         compute,
-        ref["lco_fe_elements"]["value"],
-        ref["lco_modes"]["value"],
-        ref["fe_order"]["value"],
-        roundoff=ref["lco_floor"]["value"],
+        ref.value("lco_fe_elements"),
+        ref.value("lco_modes"),
+        ref.value("fe_order"),
+        roundoff=ref.value("lco_floor"),
     )
-    checks = study_checks(st, "lco", ref["order_tol"]["value"], ref["fe_order"]["source"])
+    checks = study_checks(st, "lco", ref.value("order_tol"), ref.source("fe_order"))
     return st, checks
 
 
@@ -348,22 +357,21 @@ def _reference_table(studies: Sequence[Study]) -> Table:
 
 
 def run(quick: bool = False) -> CaseResult:
-    """The studies whose solvers are available (static always; v_cr, limit cycle when built)."""
+    """The static and v_cr studies; the limit-cycle study in the full suite only."""
     t0 = time.perf_counter()
+    ref = CASE.references
+    requires = study_names("static", ref.value("fe_elements", quick))
+    for a in ref.value("vcr_alpha", quick):
+        requires += study_names(f"vcr{np.degrees(a):.0f}", ref.value("vcr_fe_elements", quick))
     studies, checks = [], []
     st, ch = static_study(quick)
     studies.append(st)
     checks += ch
-    try:
-        import fempipe.limit_cycle  # noqa: F401 - the dynamics are optional until built
-    except ImportError:
-        have_dynamics = False
-    else:
-        have_dynamics = True
     sts, ch = vcr_studies(quick)
     studies += sts
     checks += ch
-    if have_dynamics and not quick:
+    if not quick:
+        requires += study_names("lco", ref.value("lco_fe_elements"))
         st, ch = lco_study()
         studies.append(st)
         checks += ch
@@ -373,12 +381,11 @@ def run(quick: bool = False) -> CaseResult:
         ("quantity", "series", "dofs", "value", "|error|"),
         rows,
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        requires=requires,
         tables=(
             _paper_table(studies),
             _reference_table(studies),
@@ -386,8 +393,6 @@ def run(quick: bool = False) -> CaseResult:
             data_table,
         ),
         data={"studies": studies},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
     )
 
 

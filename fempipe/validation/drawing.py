@@ -10,7 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LINESTYLES", "draw_shapes", "new_figure", "style_for"]
+__all__ = [
+    "LINESTYLES",
+    "draw_diagram",
+    "draw_orbit_shapes",
+    "draw_shapes",
+    "new_figure",
+    "plot_shape_panels",
+    "style_for",
+]
 
 LINESTYLES = {"FE": "-", "N = 3": "--", "N = 4": ":", "N = 2": "-."}
 
@@ -91,3 +99,39 @@ def plot_shape_panels(result, fig, title, **figure_options):
         ax.set_title(title(p))
     fig.tight_layout()
     return fig
+
+
+def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
+    """Tip extrema against v: FE open circles, N = 3 '+', N = 4 'x'."""
+    marks = {"FE": ("o", 4), "N = 3": ("+", 7), "N = 4": ("x", 6)}
+    for label, pts in sweeps.items():
+        mk, ms = marks["FE" if label.startswith("FE") else label]
+        v = np.array([p.v for p in pts])
+        lo = np.array([getattr(p, key)[0] for p in pts])
+        hi = np.array([getattr(p, key)[1] for p in pts])
+        line = ax.plot(v, hi, mk, ms=ms, label=label, mfc="none" if mk == "o" else None)[0]
+        ax.plot(v, lo, mk, ms=ms, color=line.get_color(), mfc="none" if mk == "o" else None)
+    ax.set_xlabel("v")
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
+
+
+def draw_orbit_shapes(ax, shapes: dict):
+    """Oscillating shapes (or the static shape) in the global frame, one colour per v."""
+    import matplotlib.pyplot as plt
+
+    colors = plt.cm.viridis(np.linspace(0, 0.85, max(len(shapes), 1)))
+    for c, (v, orb) in zip(colors, shapes.items(), strict=False):
+        for i, (z, x) in enumerate(orb.shapes):
+            ax.plot(z, x, color=c, lw=0.8, label=f"v = {v:g}" if i == 0 else None)
+    ax.plot([0], [0], "ks", ms=4)
+    ax.set_aspect("equal", adjustable="datalim")
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()
+    ax.set_xlabel(r"$Z_g$")
+    ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax

@@ -18,20 +18,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bifurcation import sweep
 from ..discretization import Modal, parse_discretization
-from ..kinematics import shape
+from ..dynamics import initial_state, simulate
+from ..kinematics import shape, tip_velocity
+from ..limit_cycle import ShootingError, find_attractor, shoot, tip_coordinates
 from ..operators import PipeModel
-from ..params import Params
-from .static_shapes import PAPER_MODES
+from ..params import PAPER_CASE, Params
+from .static_shapes import PAPER_MODES, static_shapes
 
 __all__ = [
     "DYN_FE",
     "DYN_FE_QUICK",
-    "PAPER_PARAMS",
     "Orbit",
     "attractor",
+    "cycle_on",
+    "cycle_traces",
+    "cycles_at",
     "dyn_discretizations",
+    "model_for",
     "orbit",
+    "project",
     "sweep_up",
 ]
 
@@ -39,8 +46,6 @@ __all__ = [
 #: P3:8 agrees with P3:16 to ~1e-6 (convergence case); quick runs use P3:4 (~2e-4).
 DYN_FE = "P3:8"
 DYN_FE_QUICK = "P3:4"
-#: The paper's Section 5 parameters (Paidoussis & Semler's silicone-rubber pipe).
-PAPER_PARAMS = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 
 
 def dyn_discretizations(quick: bool) -> dict:
@@ -53,7 +58,8 @@ def dyn_discretizations(quick: bool) -> dict:
 
 
 def model_for(disc, alpha: float, v: float) -> PipeModel:
-    return PipeModel(disc, Params(alpha=alpha, v=v, **PAPER_PARAMS))
+    """The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at (alpha, v)."""
+    return PipeModel(disc, Params(alpha=alpha, v=v, **PAPER_CASE))
 
 
 def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
@@ -65,29 +71,16 @@ def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
     the straight pipe and the +mode-1 kick selects the left buckled branch
     (Z_g < 0), the one the paper plots.
     """
-    from ..bifurcation import sweep
-    from ..dynamics import initial_state
-    from .static_shapes import static_shapes
-
     values = sorted(float(v) for v in values)
     m = model_for(disc, alpha, values[0])
-    st = static_shapes(
-        disc,
-        alpha,
-        PAPER_PARAMS["gamma"],
-        [values[0]],
-        beta=PAPER_PARAMS["beta"],
-        mu=PAPER_PARAMS["mu"],
-        n_points=3,
-    )
+    gamma, beta, mu = PAPER_CASE["gamma"], PAPER_CASE["beta"], PAPER_CASE["mu"]
+    st = static_shapes(disc, alpha, gamma, [values[0]], beta=beta, mu=mu, n_points=3)
     q0, qdot0 = initial_state(m, 1, perturbation, q_static=st.q[0])
     return sweep(m, values, "up", q0=q0, qdot0=qdot0, perturbation=perturbation)
 
 
 @functools.lru_cache(maxsize=64)
 def _attractor_cached(spec: str, alpha: float, v: float):
-    from ..limit_cycle import find_attractor
-
     disc = _disc_from_spec(spec)
     return find_attractor(model_for(disc, alpha, v))
 
@@ -135,10 +128,6 @@ def orbit(
     n_shapes: int = 12,
 ) -> Orbit:
     """Resample ``periods`` periods from a state on the attractor (or the static shape)."""
-    from ..dynamics import simulate
-    from ..kinematics import tip_velocity
-    from ..limit_cycle import tip_coordinates
-
     m = model_for(disc, alpha, v)
     if period is None:  # an equilibrium: a single shape
         s = shape(disc, q, alpha)
@@ -183,8 +172,6 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
     integrate past the transient with :func:`fempipe.limit_cycle.find_attractor`.
     Returns None if the attractor is not periodic.
     """
-    from ..limit_cycle import ShootingError, find_attractor, shoot
-
     m = model_for(disc, alpha, v)
     if guess is not None:
         q0, p0, period = guess
@@ -220,9 +207,6 @@ def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
 
 def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
     """Tip coordinates and their rates along ``periods`` periods of a cycle."""
-    from ..kinematics import tip_velocity
-    from ..limit_cycle import tip_coordinates
-
     q, p = cycle.orbit_q[:-1], cycle.orbit_qdot[:-1]  # the last sample repeats the first
     tip = tip_coordinates(disc, alpha, q)
     rates = [tip_velocity(disc, a, b, alpha) for a, b in zip(q, p, strict=True)]

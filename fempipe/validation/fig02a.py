@@ -13,48 +13,46 @@ import time
 
 import numpy as np
 
-from .checks import CaseResult, holds, load_references
-from .static_shapes import panel_checks, panel_table, static_panel
+from .case import Case
+from .checks import CaseResult, holds
+from .static_shapes import PANEL_CHECKS, panel_checks, panel_table, static_panel
 
-CASE = "fig02a"
-FIGURE = "Fig. 2(a)"
-TITLE = "Static shapes, γ = 18.9, α = π/3: convergence in the number of modes N"
-PAPER_SHOWS = (
-    "N = 3 modes are enough for the static shapes (Sec. 3.1)",
-    "the modal shapes converge as N grows",
+CASE = Case(
+    name="fig02a",
+    figure="Fig. 2(a)",
+    title="Static shapes, γ = 18.9, α = π/3: convergence in the number of modes N",
+    paper_shows=(
+        "N = 3 modes are enough for the static shapes (Sec. 3.1)",
+        "the modal shapes converge as N grows",
+    ),
+    requires=(*PANEL_CHECKS, "modal_converges"),
 )
 
 
 def run(quick: bool = False) -> CaseResult:
     """Shapes and checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    v = ref["v_quick" if quick else "v"]["value"]
-    alpha, gamma = ref["alpha"]["value"], ref["gamma"]["value"]
-    panel = static_panel("α = π/3", alpha, gamma, v, extra_modes=ref["modes"]["value"])
+    ref = CASE.references
+    v = ref.value("v", quick)
+    alpha, gamma, modes = ref.value("alpha"), ref.value("gamma"), ref.value("modes")
+    panel = static_panel("α = π/3", alpha, gamma, v, extra_modes=modes)
     checks = panel_checks([panel])
-    errs = [panel.modal_error[f"N = {n}"] for n in ref["modes"]["value"]]
+    errs = [panel.modal_error[f"N = {n}"] for n in modes]
     checks.append(
         holds(
             "modal_converges",
             "the modal shape error decreases as N grows (N = 2, 3, 4)",
             bool(np.all(np.diff(errs) < 0)),
-            ", ".join(
-                f"N = {n}: {e:.3g}" for n, e in zip(ref["modes"]["value"], errs, strict=True)
-            ),
+            ", ".join(f"N = {n}: {e:.3g}" for n, e in zip(modes, errs, strict=True)),
             source="paper Sec. 3.1, Fig. 2(a)",
         )
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(panel_table([panel], "Tip values, γ = 18.9, α = π/3"),),
         data={"panels": [panel]},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
     )
 
 

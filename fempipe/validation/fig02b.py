@@ -25,69 +25,51 @@ import numpy as np
 
 from ..params import PipeSI
 from .bvp import solve_static_bvp
-from .checks import CaseResult, Table, below, close, holds, load_references
-from .static_shapes import discretizations, refined, static_shapes
+from .case import Case
+from .checks import CaseResult, Table, below, holds
+from .static_shapes import PAPER_MODES, discretizations, refined, static_shapes
 
-CASE = "fig02b"
-FIGURE = "Fig. 2(b)"
-TITLE = "Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)"
-PAPER_SHOWS = (
-    "β = 0.2673, γ = 9.8129, v = 1.6874 U for the Texier-Dorbolo pipe (Eq. (29))",
-    "the model agrees with Texier & Dorbolo's theory and experiment",
-    "the largest static deformation is at v = 0; the pipe straightens as the flow grows",
+CASE = Case(
+    name="fig02b",
+    figure="Fig. 2(b)",
+    title="Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)",
+    paper_shows=(
+        "β = 0.2673, γ = 9.8129, v = 1.6874 U for the Texier-Dorbolo pipe (Eq. (29))",
+        "the model agrees with Texier & Dorbolo's theory and experiment",
+        "the largest static deformation is at v = 0; the pipe straightens as the flow grows",
+    ),
+    requires=(
+        "beta",
+        "gamma",
+        "v_over_U",
+        "fe_mesh_converged",
+        "fe_vs_bvp",
+        "max_at_rest",
+        "straightens",
+        *(f"modal_{n}_shape" for n in PAPER_MODES),
+    ),
 )
 
 
 def pipe() -> PipeSI:
     """The Texier-Dorbolo pipe of Sec. 3.1 in SI units."""
-    ref = load_references(CASE)
-    return PipeSI(
-        L=ref["L"]["value"],
-        EI=ref["EI"]["value"],
-        m=ref["m"]["value"],
-        M=ref["M"]["value"],
-        g=ref["g"]["value"],
-        alpha=ref["alpha"]["value"],
-    )
+    ref = CASE.references
+    return PipeSI(**{k: ref.value(k) for k in ("L", "EI", "m", "M", "g", "alpha")})
 
 
 def run(quick: bool = False) -> CaseResult:
     """Compute the shapes and the checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
+    ref = CASE.references
     si = pipe()
     p = si.params(0.0)
-    U = np.array(ref["U_quick" if quick else "U"]["value"])
+    U = np.array(ref.value("U", quick))
     v = np.array([si.v_of_U(u) for u in U])
-    src = ref["_about"]
+    printed = "half a unit of the 4th decimal printed"
     checks = [
-        close(
-            "beta",
-            "Eq. (29a) β",
-            p.beta,
-            ref["beta"]["value"],
-            atol=5e-5,
-            why="half a unit of the 4th decimal printed",
-            source=ref["beta"]["source"],
-        ),
-        close(
-            "gamma",
-            "Eq. (29b) γ",
-            p.gamma,
-            ref["gamma"]["value"],
-            atol=5e-5,
-            why="half a unit of the 4th decimal printed",
-            source=ref["gamma"]["source"],
-        ),
-        close(
-            "v_over_U",
-            "Eq. (29c) v/U (s/m)",
-            si.v_of_U(1.0),
-            ref["v_over_U"]["value"],
-            atol=5e-5,
-            why="half a unit of the 4th decimal printed",
-            source=ref["v_over_U"]["source"],
-        ),
+        ref.close("beta", "Eq. (29a) β", p.beta, atol=5e-5, why=printed),
+        ref.close("gamma", "Eq. (29b) γ", p.gamma, atol=5e-5, why=printed),
+        ref.close("v_over_U", "Eq. (29c) v/U (s/m)", si.v_of_U(1.0), atol=5e-5, why=printed),
     ]
     discs = discretizations()
     fams = {
@@ -200,21 +182,17 @@ def run(quick: bool = False) -> CaseResult:
         ("modes", "U (m/s)", "v", "tip drop (mm)", "|tip drop error| (mm)", "max shape error (mm)"),
         tuple(rows),
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table_fe, table_modal),
         findings=(
             "Texier & Dorbolo's measured shapes are not available to fempipe, so the "
             "experimental comparison of Fig. 2(b) is not repeated; the model (Eq. (31a)) is "
             "verified against an independent strong-form solver instead.",
         ),
-        data={"fams": fams, "U": U, "L": si.L, "source": src},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
+        data={"fams": fams, "U": U, "L": si.L},
     )
 
 

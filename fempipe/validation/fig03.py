@@ -14,15 +14,19 @@ import time
 
 import numpy as np
 
-from .checks import CaseResult, Table, holds, load_references
-from .static_shapes import panel_checks, panel_table, static_panel
+from .case import Case
+from .checks import CaseResult, Table, holds
+from .static_shapes import PANEL_CHECKS, panel_checks, panel_table, static_panel
 
-CASE = "fig03"
-FIGURE = "Fig. 3"
-TITLE = "Static shapes, α = π/2, γ = 10, 30, 100: the effect of gravity"
-PAPER_SHOWS = (
-    "the deformation becomes larger as γ increases (Sec. 3.2)",
-    "for sufficiently large γ the pipe is close to a plumb line, θ ≈ -α (Sec. 3.2)",
+CASE = Case(
+    name="fig03",
+    figure="Fig. 3",
+    title="Static shapes, α = π/2, γ = 10, 30, 100: the effect of gravity",
+    paper_shows=(
+        "the deformation becomes larger as γ increases (Sec. 3.2)",
+        "for sufficiently large γ the pipe is close to a plumb line, θ ≈ -α (Sec. 3.2)",
+    ),
+    requires=(*PANEL_CHECKS, "grows_with_gamma", "plumb_line"),
 )
 
 
@@ -34,10 +38,10 @@ def _plumb_distance(fam, alpha: float) -> np.ndarray:
 def run(quick: bool = False) -> CaseResult:
     """Shapes and checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    v = ref["v_quick" if quick else "v"]["value"]
-    alpha = ref["alpha"]["value"]
-    gammas = ref["gamma"]["value"]
+    ref = CASE.references
+    v = ref.value("v", quick)
+    alpha = ref.value("alpha")
+    gammas = ref.value("gamma")
     panels = [static_panel(f"γ = {g:g}", alpha, g, v) for g in gammas]
     checks = panel_checks(panels)
     drop = np.array([p.fe.tips["X_tip"] for p in panels])  # (n_gamma, n_v)
@@ -72,16 +76,12 @@ def run(quick: bool = False) -> CaseResult:
         tuple((g, *plumb[i]) for i, g in enumerate(gammas)),
         note="||θ + α|| = 0 would be a vertical line; θ(0) = 0 keeps a boundary layer at the clamp.",
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(plumb_table, panel_table(panels, "Tip values, α = π/2")),
         data={"panels": panels},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
     )
 
 

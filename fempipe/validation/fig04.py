@@ -14,28 +14,37 @@ import time
 import numpy as np
 
 from ..discretization import parse_discretization
-from .checks import CaseResult, below, holds, load_references
-from .static_shapes import CONVERGED_FE, panel_checks, panel_table, static_panel, static_shapes
-
-CASE = "fig04"
-FIGURE = "Fig. 4"
-TITLE = "Static shapes, γ = 18.9, α = π/2, 3π/4, 9π/10: the effect of inclination"
-PAPER_SHOWS = (
-    "the inclination α has a significant effect on the static deformation (Sec. 3.3)",
-    "the static deformation is hardly affected by the mass ratio β (conclusion (ii))",
+from .case import Case, alpha_name
+from .checks import CaseResult, below, holds
+from .static_shapes import (
+    CONVERGED_FE,
+    PANEL_CHECKS,
+    panel_checks,
+    panel_table,
+    static_panel,
+    static_shapes,
 )
 
-_NAMES = {1.5707963267948966: "π/2", 2.356194490192345: "3π/4", 2.827433388230814: "9π/10"}
+CASE = Case(
+    name="fig04",
+    figure="Fig. 4",
+    title="Static shapes, γ = 18.9, α = π/2, 3π/4, 9π/10: the effect of inclination",
+    paper_shows=(
+        "the inclination α has a significant effect on the static deformation (Sec. 3.3)",
+        "the static deformation is hardly affected by the mass ratio β (conclusion (ii))",
+    ),
+    requires=(*PANEL_CHECKS, "alpha_matters", "beta_independent"),
+)
 
 
 def run(quick: bool = False) -> CaseResult:
     """Shapes and checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    v = ref["v_quick" if quick else "v"]["value"]
-    gamma = ref["gamma"]["value"]
-    alphas = ref["alpha"]["value"]
-    panels = [static_panel(f"α = {_NAMES.get(a, f'{a:.4f}')}", a, gamma, v) for a in alphas]
+    ref = CASE.references
+    v = ref.value("v", quick)
+    gamma = ref.value("gamma")
+    alphas = ref.value("alpha")
+    panels = [static_panel(f"α = {alpha_name(a)}", a, gamma, v) for a in alphas]
     checks = panel_checks(panels)
     # "Strongly dependent on alpha": the tip angle relative to gravity, theta(1) + alpha,
     # and the tip position differ by O(1) between the panels.
@@ -59,7 +68,7 @@ def run(quick: bool = False) -> CaseResult:
     )
     # beta independence: Eq. (31a) has no beta.
     fe = parse_discretization(fe=CONVERGED_FE)
-    betas = ref["beta"]["value"]
+    betas = ref.value("beta")
     a_mid = alphas[1]
     tips = [static_shapes(fe, a_mid, gamma, v, beta=b).tips["X_tip"] for b in betas]
     dev = float(max(np.max(np.abs(t - tips[0])) for t in tips))
@@ -79,17 +88,13 @@ def run(quick: bool = False) -> CaseResult:
         f"measured: tip positions for β = {', '.join(map(str, betas))} differ by {dev:.1e}. "
         "β changes the static shape only through v = (M/EI)^½ U L when the SI flow U is held fixed.",
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(panel_table(panels, "Tip values, γ = 18.9"),),
         findings=findings,
         data={"panels": panels},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
     )
 
 

@@ -1,7 +1,7 @@
 """Fig. 5: eigenvalues Omega against v (Argand diagrams) for several alpha.
 
 Root loci of the four lowest modes about the gravity-sagged static state,
-with mode numbers carried by continuity (:func:`fempipe.stability.root_locus`),
+with the mode numbers of :func:`fempipe.stability.root_locus`,
 for the converged FE mesh and the paper's N = 3 and N = 4; every stability
 event on the static branches (:func:`fempipe.stability.stability_analysis`).
 The paper plots Omega = -i lambda: Im Omega < 0 is unstable.
@@ -20,52 +20,58 @@ import numpy as np
 
 from ..discretization import parse_discretization
 from ..operators import PipeModel
-from ..params import Params
-from .checks import CaseResult, Table, below, holds, load_references
+from ..params import PAPER_CASE, Params
+from ..stability import root_locus, stability_analysis
+from .case import Case, alpha_name, label_tag
+from .checks import CaseResult, Table, holds
 from .dynamic_runs import dyn_discretizations
-from .fig11 import alpha_name
 from .onset import critical_velocity as independent_vcr
 
-CASE = "fig05"
-FIGURE = "Fig. 5"
-TITLE = (
-    "Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilisation, flutter"
+CASE = Case(
+    name="fig05",
+    figure="Fig. 5",
+    title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilisation, "
+    "flutter",
+    paper_shows=(
+        "for α ≠ π the pipe loses stability by flutter in the second mode (Figs. 5(a)-(c))",
+        "for α = π: buckling in the first mode, regained stability, flutter in the second mode "
+        "(Fig. 5(d))",
+    ),
 )
-PAPER_SHOWS = (
-    "for α ≠ π the pipe loses stability by flutter in the second mode (Figs. 5(a)-(c))",
-    "for α = π: buckling in the first mode, regained stability, flutter in the second mode (Fig. 5(d))",
-)
-PARAMS = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 
 
-def _events(model, follow: bool, v_max: float):
-    from ..stability import stability_analysis
-
-    return stability_analysis(model, v_max=v_max, follow_bifurcations=follow)
+def _first_flutter(res) -> float:
+    """v of the first flutter of a stable state on the primary branch (NaN if none)."""
+    prim = next(b for b in res.branches if b.name == "primary")
+    return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
 
 
 def run(quick: bool = False) -> CaseResult:
     """Loci, events and checks; see the module docstring."""
-    from ..stability import root_locus
-
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    alphas = ref["alpha_quick" if quick else "alpha"]["value"]
-    v_max = ref["v_max"]["value"]
-    dv = ref["dv_quick" if quick else "dv"]["value"]
+    ref = CASE.references
+    alphas = ref.value("alpha", quick)
+    v_max = ref.value("v_max")
+    dv = ref.value("dv", quick)
     values = np.round(np.arange(0.0, v_max + 1e-9, dv), 10)
     discs = dyn_discretizations(quick=False)  # P3:8, N = 3, N = 4 (cheap for spectra)
     fe_label = next(iter(discs))
-    checks, rows, loci = [], [], {}
+    checks, rows, loci, requires = [], [], {}, []
     for a in alphas:
         name = alpha_name(a)
         is_pi = abs(a - np.pi) < 1e-12
+        if is_pi:
+            requires += ["pi_sequence"]
+        else:
+            requires += [f"second_mode_{name}_{label_tag(lb)}" for lb in discs]
+            requires += [f"vcr_two_ways_{name}"]
+        requires += [f"fe_mesh_{name}"]
         loci[name] = {}
         results = {}
         for label, d in discs.items():
-            m = PipeModel(d, Params(alpha=a, **PARAMS))
-            loci[name][label] = root_locus(m, values, n_modes=ref["n_modes"]["value"])
-            results[label] = _events(m, follow=is_pi, v_max=v_max)
+            m = PipeModel(d, Params(alpha=a, **PAPER_CASE))
+            loci[name][label] = root_locus(m, values, n_modes=ref.value("n_modes"))
+            results[label] = stability_analysis(m, v_max=v_max, follow_bifurcations=is_pi)
             for br in results[label].branches:
                 for ev in br.events:
                     rows.append((name, label, br.name, ev.type, ev.v, ev.mode, ev.frequency))
@@ -76,7 +82,7 @@ def run(quick: bool = False) -> CaseResult:
                 ok = c is not None and c.type == "flutter" and c.mode == 2
                 checks.append(
                     holds(
-                        f"second_mode_{name}_{label.replace(' ', '').replace('=', '')}",
+                        f"second_mode_{name}_{label_tag(label)}",
                         f"α = {name}, {label}: the first instability is flutter in mode 2",
                         ok,
                         "none" if c is None else f"{c.type} in mode {c.mode} at v = {c.v:.6f}",
@@ -85,20 +91,21 @@ def run(quick: bool = False) -> CaseResult:
                         category="paper",
                     )
                 )
-            ind = independent_vcr(discs[fe_label], a, **PARAMS)
+            ind = independent_vcr(discs[fe_label], a, **PAPER_CASE)
             checks.append(
-                below(
+                ref.below(
                     f"vcr_two_ways_{name}",
                     f"α = {name}: v_cr of fempipe.stability equals the independent onset",
                     abs(fe.v_cr - ind.v_cr),
-                    ref["onset_tol"]["value"],
-                    why=ref["onset_tol"]["source"],
+                    "onset_tol",
                     source="fempipe.validation.onset (Brent on the spectral abscissa)",
                 )
             )
         else:
             prim = next(b for b in fe.branches if b.name == "primary")
-            seq = [(e.type, e.mode) for e in prim.events]
+            # The whole system's changes of stability (an event of one mode while
+            # another keeps the state unstable is not one).
+            seq = [(e.type, e.mode) for e in prim.events if e.stable_before != e.stable_after]
             want = [("divergence", 1), ("restabilization", 1), ("flutter", 2)]
             checks.append(
                 holds(
@@ -110,21 +117,15 @@ def run(quick: bool = False) -> CaseResult:
                     source="paper Sec. 4, Fig. 5(d)",
                 )
             )
-        # Mesh convergence of the first event on the primary branch (or the flutter at pi).
-        fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PARAMS))
-        rf = _events(fine, follow=False, v_max=v_max)
-
-        def key(res):
-            prim = next(b for b in res.branches if b.name == "primary")
-            return next((e.v for e in prim.events if e.type == "flutter"), float("nan"))
-
+        # Mesh convergence of the first flutter on the primary branch.
+        fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PAPER_CASE))
+        rf = stability_analysis(fine, v_max=v_max, follow_bifurcations=False)
         checks.append(
-            below(
+            ref.below(
                 f"fe_mesh_{name}",
                 f"α = {name}: flutter velocity of {fe_label[3:]} equals P3:16",
-                abs(key(fe) - key(rf)),
-                ref["mesh_tol"]["value"],
-                why=ref["mesh_tol"]["source"],
+                abs(_first_flutter(fe) - _first_flutter(rf)),
+                "mesh_tol",
                 source="fempipe, refined mesh (P3:16)",
             )
         )
@@ -135,16 +136,13 @@ def run(quick: bool = False) -> CaseResult:
         note="primary: the gravity-loaded branch (α = π: the straight pipe); B1±: the buckled "
         "branches born at its branch point. Events located to 1e-10 in v.",
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table,),
         data={"loci": loci},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
+        requires=requires,
     )
 
 

@@ -5,7 +5,7 @@ gamma = 18.9) and several gravity parameters (Fig. 6(b), beta = 0.142), by
 the converged FE mesh, with the paper's N = 3 and N = 4 overlaid for the
 reference case.  v_cr comes from :func:`fempipe.validation.onset.critical_velocity`
 (Brent's method on the spectral abscissa), independent of
-:mod:`fempipe.stability`; where that module is available the two are compared.
+:mod:`fempipe.stability`; the two are compared.
 
 Checks the paper's statements of Sec. 4: flutter (a complex pair) for
 alpha != pi; v_cr falls as alpha grows; v_cr rises with beta; the effect of
@@ -18,21 +18,28 @@ import time
 
 import numpy as np
 
+from .. import stability
 from ..discretization import Modal, parse_discretization
-from .checks import CaseResult, Table, below, holds, load_references
-from .onset import critical_velocity
+from ..operators import PipeModel
+from ..params import PAPER_CASE, Params
+from .case import Case
+from .checks import CaseResult, Check, Table, below, holds
+from .onset import Onset, critical_velocity
 
-CASE = "fig06"
-FIGURE = "Fig. 6"
-TITLE = "Critical flow velocity v_cr against α for several β and γ"
-PAPER_SHOWS = (
-    "flutter is the instability for α ≠ π (Sec. 4)",
-    "the stability is weakened as α increases: v_cr falls with α (Sec. 4)",
-    "the stability is enhanced as β increases: v_cr rises with β (Sec. 4)",
-    "γ raises v_cr for small α and may lower it for large α (Sec. 4)",
+CASE = Case(
+    name="fig06",
+    figure="Fig. 6",
+    title="Critical flow velocity v_cr against α for several β and γ",
+    paper_shows=(
+        "flutter is the instability for α ≠ π (Sec. 4)",
+        "the stability is weakened as α increases: v_cr falls with α (Sec. 4)",
+        "the stability is enhanced as β increases: v_cr rises with β (Sec. 4)",
+        "γ raises v_cr for small α and may lower it for large α (Sec. 4)",
+    ),
+    requires=("fe_mesh", "flutter", "rises_with_beta", "gamma_sign_change", "vs_stability_module"),
 )
 FE = "P3:8"
-BASE_BETA, BASE_GAMMA, MU = 0.142, 18.9, 5e-3
+BASE_BETA, BASE_GAMMA, MU = PAPER_CASE["beta"], PAPER_CASE["gamma"], PAPER_CASE["mu"]
 
 
 def _deg(a: float) -> str:
@@ -42,10 +49,9 @@ def _deg(a: float) -> str:
 def run(quick: bool = False) -> CaseResult:
     """v_cr curves and checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    q = "_quick" if quick else ""
-    alphas = np.array(ref[f"alpha{q}"]["value"])
-    betas, gammas = ref[f"beta{q}"]["value"], ref[f"gamma{q}"]["value"]
+    ref = CASE.references
+    alphas = np.array(ref.value("alpha", quick))
+    betas, gammas = ref.value("beta", quick), ref.value("gamma", quick)
     fe = parse_discretization(fe=FE)
 
     def curve(disc, beta, gamma):
@@ -70,12 +76,11 @@ def run(quick: bool = False) -> CaseResult:
         for i in idx
     )
     checks.append(
-        below(
+        ref.below(
             "fe_mesh",
             f"{FE} v_cr equals P3:16 (α = {', '.join(_deg(alphas[i]) for i in idx)})",
             dmesh,
-            ref["mesh_tol"]["value"],
-            why=ref["mesh_tol"]["source"],
+            "mesh_tol",
             source="fempipe, refined mesh (P3:16)",
         )
     )
@@ -164,10 +169,7 @@ def run(quick: bool = False) -> CaseResult:
             source="paper Sec. 4, Fig. 6(b)",
         )
     )
-    # Cross-check with fempipe.stability where it exists.
-    cross = _stability_cross_check(fe, alphas, base)
-    if cross is not None:
-        checks.append(cross)
+    checks.append(_stability_cross_check(fe, alphas, base))
     rows = []
     for i, a in enumerate(alphas):
         fe_v = base[i].v_cr
@@ -198,19 +200,19 @@ def run(quick: bool = False) -> CaseResult:
         "to the 'fe_mesh' check.",
     )
     grid = Table(
-        "v_cr (FE) for all β (γ = 18.9) and γ (β = 0.142)",
+        f"v_cr (FE) for all β (γ = {BASE_GAMMA:g}) and γ (β = {BASE_BETA:g})",
         ("α", *[f"β = {b:g}" for b in betas], *[f"γ = {g:g}" for g in gammas]),
         tuple(
             (_deg(a), *[by_beta[b][i].v_cr for b in betas], *[by_gamma[g][i].v_cr for g in gammas])
             for i, a in enumerate(alphas)
         ),
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    requires = [f"falls_with_alpha_b{b:g}" for b in betas]
+    requires += [f"falls_with_alpha_g{g:g}" for g in gammas if g != BASE_GAMMA]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table, grid),
         data={
             "alphas": alphas,
@@ -218,33 +220,16 @@ def run(quick: bool = False) -> CaseResult:
             "by_gamma": {g: vc(c) for g, c in by_gamma.items()},
             "modal": {k: vc(c) for k, c in modal.items()},
         },
-        quick=quick,
-        runtime=time.perf_counter() - t0,
+        requires=requires,
     )
 
 
-def _stability_cross_check(fe, alphas, base):
-    """Compare with fempipe.stability's v_cr, if the module and a known entry point exist."""
-    try:
-        from .. import stability
-    except ImportError:
-        return None
-    fn = getattr(stability, "critical_velocity", None)
-    if fn is None:
-        return None
-    from ..operators import PipeModel
-    from ..params import Params
-
+def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Check:
+    """v_cr of :func:`fempipe.stability.critical_velocity` against the independent onset."""
     diffs = []
     for i in (0, len(alphas) // 2):
-        try:
-            res = fn(
-                PipeModel(fe, Params(alpha=alphas[i], beta=BASE_BETA, gamma=BASE_GAMMA, mu=MU))
-            )
-        except TypeError:
-            return None
-        v = getattr(res, "v_cr", res)
-        diffs.append(abs(float(v) - base[i].v_cr))
+        model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
+        diffs.append(abs(stability.critical_velocity(model).v_cr - base[i].v_cr))
     return below(
         "vs_stability_module",
         "v_cr equals fempipe.stability's (two implementations)",
@@ -265,14 +250,15 @@ def plot(result: CaseResult, fig=None):
     else:
         axes = list(fig.subplots(1, 2).ravel())
     a = d["alphas"] / np.pi
+    reference = f"β = {BASE_BETA:g}, γ = {BASE_GAMMA:g}"
     for ax, fam, sym, tag in (
         (axes[0], d["by_beta"], "β", "a"),
         (axes[1], d["by_gamma"], "γ", "b"),
     ):
         for val, v in fam.items():
             ax.plot(a, v, "o-", ms=3, label=f"{sym} = {val:g} (FE)")
-        ax.plot(a, d["modal"]["N = 3"], "k--", lw=1, label="N = 3 (β = 0.142, γ = 18.9)")
-        ax.plot(a, d["modal"]["N = 4"], "k:", lw=1, label="N = 4 (β = 0.142, γ = 18.9)")
+        for n, ls in ((3, "k--"), (4, "k:")):
+            ax.plot(a, d["modal"][f"N = {n}"], ls, lw=1, label=f"N = {n} ({reference})")
         ax.set_xlabel(r"$\alpha / \pi$")
         ax.set_ylabel(r"$v_{cr}$")
         ax.set_title(f"Fig. 6({tag}): critical flow velocity for flutter", fontsize=9)

@@ -18,27 +18,38 @@ import time
 
 import numpy as np
 
-from .checks import CaseResult, Table, below, holds, load_references
+from .case import Case, label_tag
+from .checks import CaseResult, Table, below, holds
 from .dynamic_runs import attractor, dyn_discretizations, orbit, sweep_up
 from .onset import critical_velocity
+from .static_shapes import PAPER_MODES
 
-CASE = "fig07"
-FIGURE = "Fig. 7"
-TITLE = "Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE"
-PAPER_SHOWS = (
-    "the pipe is stable below v_cr and oscillates on a limit cycle above (Sec. 5)",
-    "the onset agrees with the linear stability analysis (Sec. 5)",
-    "N = 3 and N = 4 agree well, so N = 3 is acceptable (Sec. 5)",
-    "the oscillation amplitudes are large",
+CASE = Case(
+    name="fig07",
+    figure="Fig. 7",
+    title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
+    paper_shows=(
+        "the pipe is stable below v_cr and oscillates on a limit cycle above (Sec. 5)",
+        "the onset agrees with the linear stability analysis (Sec. 5)",
+        "N = 3 and N = 4 agree well, so N = 3 is acceptable (Sec. 5)",
+        "the oscillation amplitudes are large",
+    ),
+    requires=(
+        "period_one",
+        "paper_bracket",
+        "n3_vs_n4",
+        *(f"n{n}_vs_fe" for n in PAPER_MODES),
+        "large_amplitude",
+    ),
 )
 
 
-def _amp(p) -> float:
+def eta_amplitude(p) -> float:
     """Half the peak-to-peak range of eta(1): the oscillation amplitude."""
     return 0.5 * (p.eta_tip[1] - p.eta_tip[0])
 
 
-def _bracket(points) -> tuple[float, float]:
+def onset_bracket(points) -> tuple[float, float]:
     """(last v with an equilibrium before the first periodic point, that first periodic v)."""
     lo, hi = float("nan"), float("nan")
     for p in points:
@@ -52,21 +63,22 @@ def _bracket(points) -> tuple[float, float]:
 def run(quick: bool = False) -> CaseResult:
     """Sweeps, onsets and checks; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    alpha = ref["alpha"]["value"]
-    values = ref["v_quick" if quick else "v"]["value"]
+    ref = CASE.references
+    alpha = ref.value("alpha")
+    values = ref.value("v", quick)
     discs = dyn_discretizations(quick)
+    requires = [f"onset_{label_tag(lb)}" for lb in discs] + ([] if quick else ["fe_mesh"])
     fe_label = next(iter(discs))
     sweeps = {label: sweep_up(d, alpha, values) for label, d in discs.items()}
     checks, rows = [], []
     onsets = {}
     for label, d in discs.items():
-        lo, hi = _bracket(sweeps[label])
+        lo, hi = onset_bracket(sweeps[label])
         v_lin = critical_velocity(d, alpha).v_cr
         onsets[label] = (lo, hi, v_lin)
         checks.append(
             holds(
-                f"onset_{label.replace(' ', '').replace('=', '')}",
+                f"onset_{label_tag(label)}",
                 f"{label}: the limit cycle appears where the linear analysis loses stability",
                 bool(np.isfinite(v_lin) and lo <= v_lin <= hi),
                 f"sweep: equilibrium at v = {lo:g}, periodic at v = {hi:g}; linear v_cr = {v_lin:.4f}",
@@ -99,34 +111,31 @@ def run(quick: bool = False) -> CaseResult:
             source="paper Fig. 7 caption (shapes at v = 6.3, 6.5, 10)",
         )
     )
-    tol = ref["amplitude_tol"]["value"]
-    amps = {lb: np.array([_amp(p) for p in pts]) for lb, pts in sweeps.items()}
+    amps = {lb: np.array([eta_amplitude(p) for p in pts]) for lb, pts in sweeps.items()}
     d34 = float(np.max(np.abs(amps["N = 3"] - amps["N = 4"])))
     checks.append(
-        below(
+        ref.below(
             "n3_vs_n4",
             "N = 3 and N = 4 agree (largest difference of the η(1) amplitude)",
             d34,
-            tol,
-            why=ref["amplitude_tol"]["source"],
+            "amplitude_tol",
             source="paper Sec. 5, Fig. 7",
             category="paper",
         )
     )
-    for n in (3, 4):
+    for n in PAPER_MODES:
         dn = float(np.max(np.abs(amps[f"N = {n}"] - amps[fe_label])))
         checks.append(
-            below(
+            ref.below(
                 f"n{n}_vs_fe",
                 f"N = {n} reproduces the converged η(1) amplitude",
                 dn,
-                tol,
-                why=ref["amplitude_tol"]["source"],
+                "amplitude_tol",
                 source=f"fempipe converged FE ({fe_label})",
                 category="paper",
             )
         )
-    a10 = _amp(fe_pts[10.0])
+    a10 = eta_amplitude(fe_pts[10.0])
     checks.append(
         holds(
             "large_amplitude",
@@ -162,7 +171,7 @@ def run(quick: bool = False) -> CaseResult:
                 v_lin,
                 lo,
                 hi,
-                _amp(p10),
+                eta_amplitude(p10),
                 p10.period,
                 p10.X_tip[0],
                 p10.X_tip[1],
@@ -186,62 +195,23 @@ def run(quick: bool = False) -> CaseResult:
         note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ.",
     )
     shapes = {}
-    for v in ref["shape_v"]["value"]:
+    for v in ref.value("shape_v"):
         p = fe_pts.get(v)
         if p is not None:
             shapes[v] = orbit(fe_label, discs[fe_label], alpha, v, p.q, p.qdot, p.period)
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table,),
         data={"sweeps": sweeps, "shapes": shapes, "alpha": alpha},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
+        requires=requires,
     )
-
-
-def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
-    """Tip extrema against v: FE filled circles, N = 3 '+', N = 4 'x'."""
-    marks = {"FE": ("o", 4), "N = 3": ("+", 7), "N = 4": ("x", 6)}
-    for label, pts in sweeps.items():
-        mk, ms = marks["FE" if label.startswith("FE") else label]
-        v = np.array([p.v for p in pts])
-        lo = np.array([getattr(p, key)[0] for p in pts])
-        hi = np.array([getattr(p, key)[1] for p in pts])
-        line = ax.plot(v, hi, mk, ms=ms, label=label, mfc="none" if mk == "o" else None)[0]
-        ax.plot(v, lo, mk, ms=ms, color=line.get_color(), mfc="none" if mk == "o" else None)
-    ax.set_xlabel("v")
-    ax.set_ylabel(ylabel)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    return ax
-
-
-def draw_orbit_shapes(ax, shapes: dict):
-    """Oscillating shapes (or the static shape) in the global frame, one colour per v."""
-    import matplotlib.pyplot as plt
-
-    colors = plt.cm.viridis(np.linspace(0, 0.85, max(len(shapes), 1)))
-    for c, (v, orb) in zip(colors, shapes.items(), strict=False):
-        for i, (z, x) in enumerate(orb.shapes):
-            ax.plot(z, x, color=c, lw=0.8, label=f"v = {v:g}" if i == 0 else None)
-    ax.plot([0], [0], "ks", ms=4)
-    ax.set_aspect("equal", adjustable="datalim")
-    if not ax.yaxis_inverted():
-        ax.invert_yaxis()
-    ax.set_xlabel(r"$Z_g$")
-    ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    return ax
 
 
 def plot(result: CaseResult, fig=None):
     """(a) η(1), (b) X_g(1), (c) Z_g(1) extrema against v; (d) shapes at v = 6.3, 6.5, 10 (FE)."""
-    from .drawing import new_figure
+    from .drawing import draw_diagram, draw_orbit_shapes, new_figure
 
     if fig is None:
         fig, axes = new_figure(4, ncols=2, size=4.0)

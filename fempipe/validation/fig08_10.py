@@ -16,31 +16,41 @@ import time
 import numpy as np
 
 from ..operators import PipeModel
-from ..params import Params
-from .checks import CaseResult, Table, below, holds, load_references
-from .dynamic_runs import PAPER_PARAMS, dyn_discretizations, orbit, sweep_up
-from .fig07 import _amp, _bracket, draw_diagram, draw_orbit_shapes
+from ..params import PAPER_CASE, Params
+from ..stability import stability_analysis
+from .case import Case, alpha_name, label_tag
+from .checks import CaseResult, Check, Table, holds
+from .dynamic_runs import dyn_discretizations, orbit, sweep_up
+from .fig07 import eta_amplitude, onset_bracket
 from .onset import critical_velocity
+from .static_shapes import PAPER_MODES
 
-CASE = "fig08_10"
-FIGURE = "Figs. 8-10"
-TITLE = "Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π"
-PAPER_SHOWS = (
-    "stable below v_cr, period-1 limit cycles above, onset as in the stability analysis",
-    "α = π: buckling, regained stability, then flutter as v grows",
-    "the oscillation amplitude at v = 10 is close to the pipe length",
+CASE = Case(
+    name="fig08_10",
+    figure="Figs. 8-10",
+    title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
+    paper_shows=(
+        "stable below v_cr, period-1 limit cycles above, onset as in the stability analysis",
+        "α = π: buckling, regained stability, then flutter as v grows",
+        "the oscillation amplitude at v = 10 is close to the pipe length",
+    ),
 )
-_NAMES = ["π/4", "π/2", "3π/4", "π"]
-
-
-def _name(alpha: float) -> str:
-    return _NAMES[int(round(alpha / (np.pi / 4))) - 1]
 
 
 def parts(quick: bool = False) -> list[int]:
     """Independent parts (one per alpha) the suite may run in parallel, see ``run(part=...)``."""
-    ref = load_references(CASE)
-    return list(range(len(ref["alpha_quick" if quick else "alpha"]["value"])))
+    return list(range(len(CASE.references.value("alpha", quick))))
+
+
+def _required(name: str, is_pi: bool, labels) -> list[str]:
+    """The checks one inclination emits."""
+    if is_pi:
+        own = ["pi_sequence", "pi_fold_vs_sweep", "pi_flutter_vs_sweep", "pi_shape_velocities"]
+    else:
+        own = [f"onset_{name}_{label_tag(lb)}" for lb in labels] + [f"paper_bracket_{name}"]
+    return (
+        own + [f"period_one_{name}", f"large_{name}"] + [f"n{n}_vs_fe_{name}" for n in PAPER_MODES]
+    )
 
 
 def run(quick: bool = False, part: int | None = None) -> CaseResult:
@@ -50,37 +60,38 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     suite merges the parts with :func:`fempipe.validation.checks.merge_results`.
     """
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    all_alphas = ref["alpha"]["value"]
-    alphas = ref["alpha_quick"]["value"] if quick else all_alphas
+    ref = CASE.references
+    all_alphas = ref.value("alpha")
+    alphas = ref.value("alpha", quick)
     if part is not None:
         alphas = [alphas[part]]
     discs = dyn_discretizations(quick)
     fe_label = next(iter(discs))
-    tol = ref["amplitude_tol"]["value"]
-    checks, rows, panels = [], [], {}
+    checks, rows, panels, requires = [], [], {}, []
     for alpha in alphas:
-        name = _name(alpha)
-        shape_v = ref["shape_v"]["value"][all_alphas.index(alpha)]
+        name = alpha_name(alpha)
+        is_pi = abs(alpha - np.pi) < 1e-12
+        requires += _required(name, is_pi, discs)
+        shape_v = ref.value("shape_v")[all_alphas.index(alpha)]
         if quick:
             values = sorted(set(shape_v))
         else:
-            values = set(ref["v"]["value"]) | set(shape_v)
-            if abs(alpha - np.pi) < 1e-12:
-                values |= set(ref["v_fine_pi"]["value"])
+            values = set(ref.value("v")) | set(shape_v)
+            if is_pi:
+                values |= set(ref.value("v_fine_pi"))
             values = sorted(values)
         sweeps = {label: sweep_up(d, alpha, values) for label, d in discs.items()}
         fe_pts = {p.v: p for p in sweeps[fe_label]}
-        is_pi = abs(alpha - np.pi) < 1e-12
-        # Onset against the linear analysis (alpha = pi: the buckled branch; not checked here).
+        # Onset against the linear analysis (alpha = pi: against the events of
+        # the stability analysis, in _pi_cross_checks).
         for label, d in discs.items():
-            lo, hi = _bracket(sweeps[label])
+            lo, hi = onset_bracket(sweeps[label])
             v_lin = float("nan")
-            if not is_pi and np.isfinite(lo) and np.isfinite(hi):
+            if not is_pi:
                 v_lin = critical_velocity(d, alpha).v_cr
                 checks.append(
                     holds(
-                        f"onset_{name}_{label.replace(' ', '').replace('=', '')}",
+                        f"onset_{name}_{label_tag(label)}",
                         f"α = {name}, {label}: the limit cycle appears where the linear "
                         "analysis loses stability",
                         bool(np.isfinite(v_lin) and lo <= v_lin <= hi),
@@ -103,7 +114,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     p10.period,
                     p10.X_tip[1] - p10.X_tip[0],
                     p10.Z_tip[1] - p10.Z_tip[0],
-                    _amp(p10),
+                    eta_amplitude(p10),
                 )
             )
         # The paper's shape velocities.
@@ -169,20 +180,21 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         )
         p10 = fe_pts[10.0]
         excursion = max(p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0])
+        large = ref.value("large")
         checks.append(
             holds(
                 f"large_{name}",
-                f"α = {name}: tip excursion at v = 10 close to L (≥ {ref['large']['value']:g} L)",
-                excursion >= ref["large"]["value"],
+                f"α = {name}: tip excursion at v = 10 close to L (≥ {large:g} L)",
+                excursion >= large,
                 f"X_g(1) range {p10.X_tip[1] - p10.X_tip[0]:.3f}, Z_g(1) range "
                 f"{p10.Z_tip[1] - p10.Z_tip[0]:.3f}",
-                reference=f"≥ {ref['large']['value']:g}",
-                why=ref["large"]["source"],
+                reference=f"≥ {large:g}",
+                why=ref.source("large"),
                 source="paper Sec. 5, Fig. 9",
             )
         )
-        # N = 3 / N = 4 against FE on the periodic points both have.
-        for n in (3, 4):
+        # N = 3 / N = 4 against FE at every v of the sweep.
+        for n in PAPER_MODES:
             other = {p.v: p for p in sweeps[f"N = {n}"]}
             diffs = []
             for v, p in fe_pts.items():
@@ -192,12 +204,11 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     diffs.append(max(abs(a[0] - b[0]), abs(a[1] - b[1])))
             worst = float(np.nanmax(diffs))
             checks.append(
-                below(
+                ref.below(
                     f"n{n}_vs_fe_{name}",
                     f"α = {name}: N = {n} reproduces the converged tip extrema X_g(1), Z_g(1)",
                     worst,
-                    tol,
-                    why=ref["amplitude_tol"]["source"],
+                    "amplitude_tol",
                     source=f"fempipe converged FE ({fe_label})",
                     category="paper",
                 )
@@ -233,42 +244,40 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         note="Ranges are peak-to-peak (units of L); α = π: the first periodic v follows the "
         "buckled branch and the restabilised straight state (see checks).",
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table,),
         data={"panels": panels},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
+        requires=requires,
     )
 
 
-def _pi_cross_checks(disc, pts) -> list:
-    """alpha = pi: the sweep's jumps against the stability module's events (if available).
+def _pi_cross_checks(disc, pts) -> list[Check]:
+    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.stability.stability_analysis`.
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
     the buckled branch (a subcritical pitchfork makes the straight state
     stable a little earlier, at the restabilisation), jumps to the straight
-    pipe, and starts to oscillate at the flutter of the straight pipe.
+    pipe, and starts to oscillate at the flutter of the straight pipe.  A
+    sweep without the buckled, straight or periodic states emits no check for
+    that jump: the case's declaration then fails it as not computed.
     """
-    try:
-        from ..stability import stability_analysis
-    except ImportError:
-        return []
-    m = PipeModel(disc, Params(alpha=np.pi, **PAPER_PARAMS))
+    m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = stability_analysis(m, v_max=6.0, follow_bifurcations=True)
     prim = next(b for b in res.branches if b.name == "primary")
-    flutter = next((e.v for e in prim.events if e.type == "flutter"), float("nan"))
+    # The flutter that destabilises the restabilised straight pipe.
+    flutter = next(
+        (e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan")
+    )
     folds = [f for b in res.branches if b.name != "primary" for f in b.folds]
     fold = min(folds) if folds else float("nan")
     buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
     straight = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) < 1e-3]
     periodic = [p.v for p in pts if p.attractor == "periodic"]
     out = []
-    if buckled and straight:
+    if buckled and straight and max(straight) > max(buckled):
         lo, hi = max(buckled), min(v for v in straight if v > max(buckled))
         out.append(
             holds(
@@ -283,7 +292,7 @@ def _pi_cross_checks(disc, pts) -> list:
                 category="numerics",
             )
         )
-    if straight and periodic:
+    if straight and periodic and min(straight) < min(periodic):
         lo = max(v for v in straight if v < min(periodic))
         hi = min(periodic)
         out.append(
@@ -304,6 +313,8 @@ def _pi_cross_checks(disc, pts) -> list:
 def plot(result: CaseResult, fig=None):
     """Rows: α; columns: η(1) (Fig. 8), X_g(1) (Fig. 9), Z_g(1) (Fig. 10), shapes (Fig. 9 insets)."""
     import matplotlib.pyplot as plt
+
+    from .drawing import draw_diagram, draw_orbit_shapes
 
     panels = result.data["panels"]
     n = len(panels)

@@ -10,8 +10,9 @@ with each trial static state solved by Newton from the nearest state already
 known.  Kelvin-Voigt damping (mu > 0) gives the unresolved high modes of a
 fine mesh large negative real parts, so they never decide the sign.
 
-This is a second, deliberately simple implementation: where the stability
-module exists, the Fig. 6 case compares the two.
+This is a second, deliberately simple implementation of what
+:func:`fempipe.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
+cases compare the two.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..operators import PipeModel
-from ..params import Params
+from ..params import PAPER_CASE, Params
 from ..static import NewtonError, solve_static
 
 __all__ = ["Onset", "critical_velocity", "spectrum"]
@@ -98,9 +99,9 @@ class Onset:
 def critical_velocity(
     disc,
     alpha: float,
-    beta: float = 0.142,
-    gamma: float = 18.9,
-    mu: float = 5e-3,
+    beta: float = PAPER_CASE["beta"],
+    gamma: float = PAPER_CASE["gamma"],
+    mu: float = PAPER_CASE["mu"],
     v_max: float = 14.0,
     dv: float = 0.5,
     xtol: float = 1e-10,
@@ -111,6 +112,8 @@ def critical_velocity(
     ----------
     disc : FiniteElement or Modal
     alpha, beta, gamma, mu : float
+        Inclination and the groups of Eq. (19) (default: the paper's
+        reference case, :data:`fempipe.params.PAPER_CASE`).
     v_max, dv : float
         The bracketing grid 0, dv, 2 dv, ... up to v_max.
     xtol : float

@@ -17,15 +17,23 @@ import numpy as np
 from ..discretization import FiniteElement, Modal, parse_discretization
 from ..kinematics import shape, tip_values
 from ..operators import PipeModel
-from ..params import Params
+from ..params import PAPER_CASE, Params
 from ..static import solve_path
+from .bvp import solve_static_bvp
+from .checks import Check, Table, below
 
 __all__ = [
     "CONVERGED_FE",
+    "PANEL_CHECKS",
     "PAPER_MODES",
+    "Panel",
     "StaticShapes",
     "discretizations",
+    "panel_checks",
+    "panel_table",
+    "refined",
     "shape_distance",
+    "static_panel",
     "static_shapes",
 ]
 
@@ -34,6 +42,8 @@ __all__ = [
 CONVERGED_FE = "P3:16"
 #: The paper's truncations.
 PAPER_MODES = (3, 4)
+#: The checks :func:`panel_checks` emits.
+PANEL_CHECKS = ("fe_mesh_converged", "fe_vs_bvp", *(f"modal_{n}_shape" for n in PAPER_MODES))
 
 
 def discretizations(extra_modes: Sequence[int] = ()) -> dict[str, object]:
@@ -92,8 +102,8 @@ def static_shapes(
     alpha: float,
     gamma: float,
     v_values: Sequence[float],
-    beta: float = 0.142,
-    mu: float = 5e-3,
+    beta: float = PAPER_CASE["beta"],
+    mu: float = PAPER_CASE["mu"],
     name: str = "",
     n_gamma_steps: int = 8,
     n_points: int = 201,
@@ -104,6 +114,8 @@ def static_shapes(
     ----------
     disc : FiniteElement or Modal
     alpha, gamma, beta, mu : float
+        Inclination and the dimensionless groups of Eq. (19) (default: the
+        paper's reference case, :data:`fempipe.params.PAPER_CASE`).
     v_values : sequence of float
     n_gamma_steps : int
         Newton steps of the continuation in gamma from 0 at v = 0.
@@ -188,7 +200,6 @@ def static_panel(
     gamma: float,
     v_values: Sequence[float],
     extra_modes: Sequence[int] = (),
-    bvp: bool = True,
     max_doublings: int = 3,
 ) -> Panel:
     """Shapes by converged FE and modal N, plus the mesh and BVP cross-checks.
@@ -198,8 +209,6 @@ def static_panel(
     the panel keeps the last mesh and its change under doubling as
     ``mesh_error``.
     """
-    from .bvp import solve_static_bvp
-
     discs = discretizations(extra_modes)
     fams = {
         label: static_shapes(d, alpha, gamma, v_values, name=label) for label, d in discs.items()
@@ -221,17 +230,13 @@ def static_panel(
         fe_label = f"FE {fe_disc.name}"
         fams = {fe_label: replace(fe, name=fe_label), **fams}
         fe = fams[fe_label]
-    bvp_err = float("nan")
-    if bvp:
-        errs = []
-        for i, v in enumerate(fe.v):
-            sol = solve_static_bvp(
-                alpha, gamma, v, guess=lambda x, t=fe.theta[i]: np.interp(x, fe.xi, t)
-            )
-            errs.append(
-                max(abs(sol.X_tip - fe.tips["X_tip"][i]), abs(sol.Z_tip - fe.tips["Z_tip"][i]))
-            )
-        bvp_err = float(max(errs))
+    errs = []
+    for i, v in enumerate(fe.v):
+        sol = solve_static_bvp(
+            alpha, gamma, v, guess=lambda x, t=fe.theta[i]: np.interp(x, fe.xi, t)
+        )
+        errs.append(max(abs(sol.X_tip - fe.tips["X_tip"][i]), abs(sol.Z_tip - fe.tips["Z_tip"][i])))
+    bvp_err = float(max(errs))
     modal_err = {
         label: float(np.max(shape_distance(fam, fe)))
         for label, fam in fams.items()
@@ -240,11 +245,9 @@ def static_panel(
     return Panel(title, alpha, gamma, fams, mesh_err, bvp_err, modal_err)
 
 
-def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list:
-    """The standard checks of a static figure (mesh, BVP, N = 3 and N = 4)."""
-    from .checks import below
-
-    checks = [
+def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list[Check]:
+    """The standard checks of a static figure (mesh, BVP, N = 3 and N = 4): :data:`PANEL_CHECKS`."""
+    return [
         below(
             "fe_mesh_converged",
             "converged FE tip positions equal the 2x refined mesh (all panels)",
@@ -254,43 +257,37 @@ def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list:
             source="fempipe, 2x refined mesh ("
             + ", ".join(sorted({next(iter(p.fams))[3:] for p in panels}))
             + " doubled)",
-        )
+        ),
+        below(
+            "fe_vs_bvp",
+            "FE tip positions equal an independent strong-form solution (all panels)",
+            max(p.bvp_error for p in panels),
+            1e-8,
+            why="solve_bvp tolerance 1e-10; both discretisation errors far below 1e-8",
+            source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
+        ),
+        *(_modal_check(panels, n, modal_tol) for n in PAPER_MODES),
     ]
-    bvp = [p.bvp_error for p in panels if np.isfinite(p.bvp_error)]
-    if bvp:
-        checks.append(
-            below(
-                "fe_vs_bvp",
-                "FE tip positions equal an independent strong-form solution (all panels)",
-                max(bvp),
-                1e-8,
-                why="solve_bvp tolerance 1e-10; both discretisation errors far below 1e-8",
-                source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
-            )
-        )
-    for n in PAPER_MODES:
-        label = f"N = {n}"
-        worst = max(panels, key=lambda p: p.modal_error[label])
-        checks.append(
-            below(
-                f"modal_{n}_shape",
-                f"{label} (the paper's truncation) reproduces the converged shapes to the "
-                "resolution of the figures",
-                worst.modal_error[label],
-                modal_tol,
-                why=f"{modal_tol:g} L, about a line width on the paper's axes "
-                f"(worst panel: {worst.title})",
-                source="fempipe converged FE (this case)",
-                category="paper",
-            )
-        )
-    return checks
 
 
-def panel_table(panels: Sequence[Panel], title: str):
+def _modal_check(panels: Sequence[Panel], n: int, modal_tol: float) -> Check:
+    """N = n against the converged FE shapes, judged on the worst panel."""
+    label = f"N = {n}"
+    worst = max(panels, key=lambda p: p.modal_error[label])
+    return below(
+        f"modal_{n}_shape",
+        f"{label} (the paper's truncation) reproduces the converged shapes to the "
+        "resolution of the figures",
+        worst.modal_error[label],
+        modal_tol,
+        why=f"{modal_tol:g} L, about a line width on the paper's axes (worst panel: {worst.title})",
+        source="fempipe converged FE (this case)",
+        category="paper",
+    )
+
+
+def panel_table(panels: Sequence[Panel], title: str) -> Table:
     """Tip values of every panel and discretisation, with the modal errors."""
-    from .checks import Table
-
     rows = []
     for p in panels:
         fe = p.fe

@@ -1,9 +1,10 @@
 """Run the validation cases (in parallel) and collect their results.
 
 :func:`run_suite` runs each case of :data:`fempipe.validation.CASES` in its
-own worker process, draws its figure there (matplotlib, Agg backend) and
-returns a :class:`SuiteResult`; :func:`fempipe.validation.report.write_report`
-turns that into the Markdown report.  A case that raises is recorded with its
+own worker process (:func:`fempipe.parallel.run_tasks`), draws its figure
+there (matplotlib, Agg backend) and returns a :class:`SuiteResult`;
+:func:`fempipe.validation.report.write_report` turns that into the Markdown
+report.  A case that raises (an import error included) is recorded with its
 error and the suite goes on: what finished is kept.
 """
 
@@ -14,11 +15,12 @@ import os
 import time
 import traceback
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from . import CASES, load_case, missing_dependencies
+from ..parallel import run_tasks
+from . import CASES, load_case
 from .checks import CaseResult
 
 __all__ = ["CaseOutcome", "SuiteResult", "run_case", "run_suite"]
@@ -59,13 +61,25 @@ def run_group(names: tuple[str, ...], quick: bool, out) -> list[CaseOutcome]:
     return [run_case(n, quick, out) for n in names]
 
 
+def _run_task(names: tuple[str, ...], quick: bool, out, part):
+    """One task of :func:`run_suite`: a group of cases, or one part of a split case."""
+    if part is None:
+        return run_group(names, quick, out)
+    return run_part(names[0], quick, part)
+
+
+def _format(exc: BaseException) -> str:
+    """The traceback of an exception a task returned (a worker's is chained as its cause)."""
+    return "".join(traceback.format_exception(exc))
+
+
 @dataclass(frozen=True)
 class CaseOutcome:
     """One case of a suite run: its result, or why there is none.
 
-    ``status`` is ``"ok"`` (ran; see ``result``), ``"error"`` (raised;
-    ``error`` holds the traceback) or ``"skipped"`` (a module it needs is
-    missing; ``error`` names it).  ``figure`` is the PNG file name, if drawn.
+    ``status`` is ``"ok"`` (ran; see ``result``) or ``"error"`` (raised,
+    an import error included; ``error`` holds the traceback).  ``figure`` is
+    the PNG file name, if drawn.
     """
 
     name: str
@@ -105,7 +119,7 @@ class SuiteResult:
     @property
     def ok(self) -> bool:
         """No case errored and every numerics check of every case passed."""
-        return all(o.ok or o.status == "skipped" for o in self.outcomes)
+        return all(o.ok for o in self.outcomes)
 
     def checks(self, category: str | None = None):
         for o in self.outcomes:
@@ -178,9 +192,6 @@ def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = Non
     Never raises for a failing case: the outcome records the error.
     """
     t0 = time.perf_counter()
-    missing = missing_dependencies(name)
-    if missing:
-        return CaseOutcome(name, "skipped", error=f"needs {', '.join(missing)} (not available)")
     try:
         module = load_case(name)
         result = module.run(quick=quick)
@@ -203,8 +214,6 @@ def run_part(name: str, quick: bool, part) -> tuple[str, object]:
 
 def _parts(name: str, quick: bool) -> list | None:
     """The parts of a case that defines ``parts(quick)`` (run in parallel), else None."""
-    if missing_dependencies(name):
-        return None
     fn = getattr(load_case(name), "parts", None)
     return list(fn(quick)) if fn is not None else None
 
@@ -279,7 +288,8 @@ def run_suite(
     out : path, optional
         Directory for the case figures (PNG).  Nothing is written without it.
     workers : int
-        Worker processes (1: run in this process).  Cases are independent;
+        Worker processes of :func:`fempipe.parallel.process_pool` (1: run in
+        this process).  Cases are independent;
         the most expensive start first.  A case that defines ``parts(quick)``
         (Figs. 8-10: one part per alpha) is run part by part in parallel and
         merged (:func:`fempipe.validation.checks.merge_results`) before its
@@ -311,49 +321,34 @@ def run_suite(
         if callback:
             callback(outcome)
 
-    tasks = _tasks([n for n in order if n not in split])
-    if executor is None and workers == 1:
-        for n, parts in split.items():
-            t1 = time.perf_counter()
-            pieces = [run_part(n, quick, k) for k in parts]
-            finished(_merge_parts(n, quick, out, pieces, time.perf_counter() - t1))
-        for task in tasks:
-            for outcome in run_group(task, quick, out):
-                finished(outcome)
-    else:
-        own = executor is None
-        pool = executor or ProcessPoolExecutor(max_workers=int(workers))
-        try:
-            futures = {}
-            pieces: dict[str, dict] = {n: {} for n in split}
-            started_at = {n: time.perf_counter() for n in split}
-            # The parts of the split (longest) cases first, then the rest by cost.
-            for n, parts in split.items():
-                for k in parts:
-                    futures[pool.submit(run_part, n, quick, k)] = ("part", n, k)
-            for task in tasks:
-                futures[pool.submit(run_group, task, quick, out)] = ("group", task, None)
-            for fut in as_completed(futures):
-                kind, key, k = futures[fut]
-                if kind == "part":
-                    try:
-                        pieces[key][k] = fut.result()
-                    except Exception:  # a crashed worker
-                        pieces[key][k] = ("error", traceback.format_exc())
-                    if len(pieces[key]) == len(split[key]):
-                        ordered = [pieces[key][j] for j in split[key]]
-                        wall = time.perf_counter() - started_at[key]
-                        finished(_merge_parts(key, quick, out, ordered, wall))
-                    continue
-                try:
-                    outcomes = fut.result()
-                except Exception:  # a crashed worker
-                    outcomes = [CaseOutcome(n, "error", error=traceback.format_exc()) for n in key]
-                for outcome in outcomes:
-                    finished(outcome)
-        finally:
-            if own:
-                pool.shutdown()
+    # The parts of the split (longest) cases first, then the rest by cost.
+    tasks = [((n,), quick, out, k) for n, parts in split.items() for k in parts]
+    tasks += [(group, quick, out, None) for group in _tasks([n for n in order if n not in split])]
+    pieces: dict[str, dict] = {n: {} for n in split}
+
+    def task_done(i: int, result) -> None:
+        group, _, _, part = tasks[i]
+        if part is not None:
+            name = group[0]
+            if isinstance(result, BaseException):  # the worker itself failed
+                result = ("error", _format(result))
+            pieces[name][part] = result
+            if len(pieces[name]) == len(split[name]):
+                ordered = [pieces[name][k] for k in split[name]]
+                finished(_merge_parts(name, quick, out, ordered, time.perf_counter() - t0))
+            return
+        if isinstance(result, BaseException):
+            result = [CaseOutcome(n, "error", error=_format(result)) for n in group]
+        for outcome in result:
+            finished(outcome)
+
+    run_tasks(
+        _run_task,
+        tasks,
+        workers=None if executor is not None else int(workers),
+        executor=executor,
+        on_result=task_done,
+    )
     return SuiteResult(
         outcomes=tuple(done[n] for n in names),
         quick=quick,

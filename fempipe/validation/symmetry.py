@@ -33,15 +33,20 @@ from ..kinematics import shape
 from ..operators import PipeModel
 from ..params import Params
 from ..static import solve_static
-from .checks import CaseResult, Table, below, holds, load_references
+from .case import Case, alpha_name
+from .checks import CaseResult, Table, below, holds
 from .static_shapes import CONVERGED_FE, static_shapes
 
-CASE = "symmetry"
-FIGURE = "Sec. 5 (end)"
-TITLE = "Symmetries: α → −α is a mirror symmetry; α → α − π is not"
-PAPER_SHOWS = (
-    "the solution for α is antisymmetric with the solution for α − π (Sec. 5, end)",
-    "at α = 0 or π the problem is symmetric; the buckled branches at α = π come in mirror pairs",
+CASE = Case(
+    name="symmetry",
+    figure="Sec. 5 (end)",
+    title="Symmetries: α → −α is a mirror symmetry; α → α − π is not",
+    paper_shows=(
+        "the solution for α is antisymmetric with the solution for α − π (Sec. 5, end)",
+        "at α = 0 or π the problem is symmetric; the buckled branches at α = π come in mirror "
+        "pairs",
+    ),
+    requires=("mirror_symmetry", "paper_alpha_minus_pi", "buckled_exists", "buckled_mirror"),
 )
 
 
@@ -50,37 +55,25 @@ def _l2(disc, q) -> float:
     return float(np.sqrt(disc.quad.w @ th**2))
 
 
-def _name(a: float) -> str:
-    """alpha as a multiple of pi (``3π/4``, ``-π/3``) when it is one."""
-    from fractions import Fraction
-
-    k = Fraction(a / np.pi).limit_denominator(12)
-    if abs(float(k) * np.pi - a) > 1e-12:
-        return f"{a:.4f}"
-    sign = "-" if k < 0 else ""
-    num, den = abs(k.numerator), k.denominator
-    return f"{sign}{'' if num == 1 else num}π{'' if den == 1 else f'/{den}'}"
-
-
 def run(quick: bool = False) -> CaseResult:
     """Static states for the symmetry pairs; see the module docstring."""
     t0 = time.perf_counter()
-    ref = load_references(CASE)
-    gamma, v = ref["gamma"]["value"], ref["v"]["value"]
+    ref = CASE.references
+    gamma, v = ref.value("gamma"), ref.value("v")
     disc = parse_discretization(fe=CONVERGED_FE)
-    pairs = ref["alpha_pairs"]["value"][: 1 if quick else None]
-    a_m = ref["alpha_mirror"]["value"]
+    pairs = ref.value("alpha_pairs")[: 1 if quick else None]
+    a_m = ref.value("alpha_mirror")
 
     def state(alpha):
         return static_shapes(disc, alpha, gamma, [v])
 
     rows, shapes = [], {}
     mirror = [state(a_m), state(-a_m)]
-    shapes[_name(a_m)], shapes[_name(-a_m)] = mirror
+    shapes[alpha_name(a_m)], shapes[alpha_name(-a_m)] = mirror
     mirror_dev = _l2(disc, mirror[0].q[0] + mirror[1].q[0])
     rows.append(
         (
-            f"{_name(a_m)} vs {_name(-a_m)}",
+            f"{alpha_name(a_m)} vs {alpha_name(-a_m)}",
             "true: (θ, α) → (−θ, −α)",
             _l2(disc, mirror[0].q[0]),
             mirror_dev,
@@ -89,19 +82,21 @@ def run(quick: bool = False) -> CaseResult:
     paper_dev = []
     for a, b in pairs:
         sa, sb = state(a), state(b)
-        shapes.setdefault(_name(a), sa)
-        shapes.setdefault(_name(b), sb)
+        shapes.setdefault(alpha_name(a), sa)
+        shapes.setdefault(alpha_name(b), sb)
         dev = _l2(disc, sa.q[0] + sb.q[0])
         paper_dev.append(dev)
-        rows.append((f"{_name(a)} vs {_name(b)}", "paper: α → α − π", _l2(disc, sa.q[0]), dev))
+        rows.append(
+            (f"{alpha_name(a)} vs {alpha_name(b)}", "paper: α → α − π", _l2(disc, sa.q[0]), dev)
+        )
     checks = [
         below(
             "mirror_symmetry",
-            f"θ(α = {_name(a_m)}) = −θ(α = {_name(-a_m)}) (static, v = {v:g}, γ = {gamma:g})",
+            f"θ(α = {alpha_name(a_m)}) = −θ(α = {alpha_name(-a_m)}) (static, v = {v:g}, γ = {gamma:g})",
             mirror_dev,
             1e-10,
             why="Eq. (20) is exactly odd under (θ, α) → (−θ, −α); only Newton's tolerance differs",
-            source="SPEC §2; every term of Eq. (20) is odd under the map",
+            source="README, The model (the symmetry); every term of Eq. (20) is odd under the map",
         ),
         holds(
             "paper_alpha_minus_pi",
@@ -114,7 +109,7 @@ def run(quick: bool = False) -> CaseResult:
         ),
     ]
     # alpha = pi: mirror buckled states.
-    bk = ref["buckled"]["value"]
+    bk = ref.value("buckled")
     model = PipeModel(disc, Params(alpha=bk["alpha"], gamma=bk["gamma"], v=bk["v"]))
     # Guess theta = +/- 2.5 sin(pi xi / 2) (least squares on the quadrature
     # points): smaller guesses let Newton fall back onto the straight state.
@@ -144,7 +139,7 @@ def run(quick: bool = False) -> CaseResult:
             buck_dev,
             1e-10,
             why="θ → −θ maps Eq. (20) at α = π onto itself",
-            source="paper Sec. 5 ('two symmetric branches'); SPEC §2",
+            source="paper Sec. 5 ('two symmetric branches'); README, The model (the symmetry)",
         )
     )
     buckled = {
@@ -156,7 +151,7 @@ def run(quick: bool = False) -> CaseResult:
         "term (γ → −γ), it is not a symmetry. Measured on static states (γ = "
         f"{gamma:g}, v = {v:g}): ||θ_α + θ_(α−π)||_L2 = "
         + ", ".join(f"{d:.3f}" for d in paper_dev)
-        + f" for the pairs {', '.join(f'({_name(a)}, {_name(b)})' for a, b in pairs)}, whereas "
+        + f" for the pairs {', '.join(f'({alpha_name(a)}, {alpha_name(b)})' for a, b in pairs)}, whereas "
         f"the true symmetry (θ, α) → (−θ, −α) holds to {mirror_dev:.1e}. The paper's conclusion "
         "that 0 ≤ α ≤ π suffices survives, by the true symmetry.",
     )
@@ -166,18 +161,14 @@ def run(quick: bool = False) -> CaseResult:
         tuple(rows),
         note="Zero in the last column means the two states are mirror images.",
     )
-    return CaseResult(
-        case=CASE,
-        figure=FIGURE,
-        title=TITLE,
-        paper_shows=PAPER_SHOWS,
-        checks=tuple(checks),
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
         tables=(table,),
         findings=findings,
         explained=("paper_alpha_minus_pi",),
         data={"shapes": shapes, "pairs": pairs, "mirror": a_m, "buckled": buckled},
-        quick=quick,
-        runtime=time.perf_counter() - t0,
     )
 
 
@@ -191,10 +182,10 @@ def plot(result: CaseResult, fig=None):
     else:
         axes = list(fig.subplots(1, 3, squeeze=False).ravel())
     sh = d["shapes"]
-    a = _name(d["mirror"])
+    a = alpha_name(d["mirror"])
     groups = [
-        ([a, _name(-d["mirror"])], "true symmetry: α ↔ −α"),
-        ([n for pair in d["pairs"] for n in map(_name, pair)], "paper's claim: α ↔ α − π"),
+        ([a, alpha_name(-d["mirror"])], "true symmetry: α ↔ −α"),
+        ([n for pair in d["pairs"] for n in map(alpha_name, pair)], "paper's claim: α ↔ α − π"),
     ]
     for ax, (names, title) in zip(axes[:2], groups, strict=True):
         for n in names:
