@@ -74,8 +74,7 @@ class Params:
             raise ParamError(
                 "gamma",
                 f"gamma must be >= 0, got {self.gamma}; a pipe standing up is alpha = pi "
-                f"with gamma > 0 (this input is alpha = {self.alpha + math.pi:.6g}, "
-                f"gamma = {-self.gamma:g})",
+                "with gamma > 0",
             )
         if self.mu < 0.0:
             raise ParamError("mu", f"mu must be >= 0, got {self.mu}")

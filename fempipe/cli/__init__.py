@@ -33,12 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"fempipe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in SUBCOMMANDS.items():
-        try:
-            mod = importlib.import_module(module)
-        except ModuleNotFoundError as exc:
-            if exc.name != module:
-                raise
-            continue  # subcommand not built yet
+        mod = importlib.import_module(module)
         p = sub.add_parser(name, help=help_, description=help_)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
@@ -46,23 +41,37 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit code (0 ok, 1 failure, 2 bad input)."""
+    """Entry point; returns the exit code.
+
+    0 ok, 1 a solver failed (:class:`fempipe.errors.SolverError`), 2 bad input
+    (:class:`~fempipe.cli.common.CLIError` or argparse), 130 / 143 interrupted
+    by SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
+    """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: --help, --version (0) or bad input (2)
+        return 0 if exc.code is None else int(exc.code)
     if not getattr(args, "_run", None):
         parser.print_help(sys.stderr)
         return 2
     from fempipe.cli.common import CLIError
-    from fempipe.static import NewtonError
+    from fempipe.errors import SolverError
+    from fempipe.parallel import Interrupted, interruptible
 
+    prefix = f"fempipe {args.command}: error:"
     try:
-        return int(args._run(args) or 0)
+        with interruptible():
+            return int(args._run(args) or 0)
     except CLIError as exc:  # bad input: one line naming the option, exit 2
-        print(f"fempipe {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{prefix} {exc}", file=sys.stderr)
         return 2
-    except NewtonError as exc:  # a solver failed: say where, exit 1
-        print(f"fempipe {args.command}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+    except SolverError as exc:  # a solver failed: say where, exit 1
+        print(f"{prefix} {' '.join(str(exc).split())}", file=sys.stderr)
         return 1
+    except Interrupted as exc:  # SIGINT or SIGTERM: workers are stopped by now
+        print(f"fempipe {args.command}: {exc}", file=sys.stderr)
+        return exc.exit_code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -10,7 +10,6 @@ writes the same to DIR/bench.json.
 from __future__ import annotations
 
 import argparse
-import sys
 
 from fempipe.cli import common
 from fempipe.cli.common import CLIError
@@ -33,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from fempipe import bench
-    from fempipe.io import json_dumps, write_json
+    from fempipe.io import json_dumps
 
     table = bench.available()
     if args.list:
@@ -52,16 +51,15 @@ def run(args: argparse.Namespace) -> int:
     n = len(names) if names else len(table)
     with common.progress(args, n, "bench") as bar:
         result = bench.run(names, quick=args.quick, callback=lambda name, res: bar.update())
-    if args.out is not None:
-        from pathlib import Path
-
-        path = write_json(Path(args.out) / "bench.json", result)
-        if not args.json:
-            print(f"wrote {path}", file=sys.stderr)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        output.json("bench.json", result)
     if args.json:
         print(json_dumps(result))
     else:
         _print(result)
+    if output is not None:
+        output.report(args)
     return 0
 
 

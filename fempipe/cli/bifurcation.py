@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
 from fempipe.cli import common
 from fempipe.cli.common import CLIError
@@ -42,18 +41,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="several inclinations swept independently (alpha spellings, e.g. 0,pi/4,pi/2); "
         "overrides --alpha",
     )
-    g.add_argument("--t-max", metavar="T", default="300", help="longest integration per point")
-    g.add_argument("--rtol", metavar="TOL", default="1e-5", help="transient tolerance (1e-5)")
+    num = common.number_type
+    g.add_argument(
+        "--t-max",
+        metavar="T",
+        type=num("--t-max", 0.0, strict_low=True),
+        default="300",
+        help=f"longest integration per point (300; above {common.T_MAX:g} needs --allow-large)",
+    )
+    g.add_argument(
+        "--rtol",
+        metavar="TOL",
+        type=num("--rtol", 0.0, 0.1, strict_low=True),
+        default="1e-5",
+        help="transient tolerance (1e-5)",
+    )
     g.add_argument(
         "--shoot-rtol",
         metavar="TOL",
+        type=num("--shoot-rtol", 0.0, 0.1, strict_low=True),
         default="1e-6",
         help="shooting tolerance; the tip extrema are accurate to ~1e-7 at 1e-6 (1e-6)",
     )
     par = parser.add_argument_group("parallel")
     ex = par.add_mutually_exclusive_group()
     ex.add_argument(
-        "--workers", metavar="N", default="1", help="local processes for independent sweeps (1)"
+        "--workers",
+        metavar="N",
+        type=common.workers_type,
+        default="1",
+        help="local processes for independent sweeps (1)",
     )
     ex.add_argument(
         "--dask",
@@ -65,18 +82,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_output_arguments(parser)
 
 
-def _positive(args, name: str, hi: float | None = None) -> float:
-    opt = "--" + name.replace("_", "-")
-    try:
-        x = common.parse_float(getattr(args, name), opt)
-    except ValueError as exc:
-        raise CLIError(opt, str(exc)) from None
-    if x <= 0 or (hi is not None and x > hi):
-        rng = f"0 < {opt} <= {hi:g}" if hi is not None else f"{opt} > 0"
-        raise CLIError(opt, f"must satisfy {rng}, got {x:g}")
-    return x
-
-
 def _parse(args):
     directions = [d.strip() for d in str(args.directions).split(",")]
     if not directions or any(d not in ("up", "down") for d in directions):
@@ -85,24 +90,28 @@ def _parse(args):
         raise CLIError("--directions", f"repeats a direction: {args.directions!r}")
     alphas = None
     if args.alphas is not None:
-        alphas = common.parse_alpha_list(args.alphas, "--alphas")
-    workers = common.parse_workers(args.workers)
-    return directions, alphas, workers
+        alphas = common.parse_alpha_list(args.alphas, "--alphas", common.allow_large(args))
+    return directions, alphas, args.workers
 
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.bifurcation import bifurcation_diagram
-    from fempipe.dynamics import IntegrationError
     from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
 
     setup = common.setup_from_args(args)
     directions, alphas, workers = _parse(args)
-    t_max = _positive(args, "t_max")
-    rtol = _positive(args, "rtol", 0.1)
-    shoot_rtol = _positive(args, "shoot_rtol", 0.1)
+    t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
+    large = common.allow_large(args)
+    common.check_count("--t-max", t_max, common.T_MAX, large, "time units")
     if not setup.v:
         raise CLIError("--v", "no flow velocities to sweep")
+    n_alpha = 1 if alphas is None else len(alphas)
+    total = len(setup.v) * len(directions) * n_alpha
+    flow_opt = "--U" if args.U is not None else "--v"
+    common.check_count(
+        flow_opt, total, common.MAX_VALUES, large, "points (v x directions x alphas)"
+    )
     executor = client = None
     if args.dask is not None:
         try:
@@ -122,8 +131,6 @@ def run(args: argparse.Namespace) -> int:
 
         store_dir = Path(args.out) / "points"
     model = PipeModel(setup.disc, setup.params)
-    n_alpha = 1 if alphas is None else len(alphas)
-    total = len(setup.v) * len(directions) * n_alpha
     try:
         with common.progress(args, total, "bifurcation") as bar:
             seen = [0]
@@ -151,13 +158,6 @@ def run(args: argparse.Namespace) -> int:
                 if "point store" in str(exc):
                     raise CLIError("--out", str(exc)) from None
                 raise
-            except IntegrationError as exc:
-                print(
-                    f"fempipe bifurcation: error: {' '.join(str(exc).split())}; "
-                    "finished points are kept in the point store",
-                    file=sys.stderr,
-                )
-                return 1
     finally:
         if client is not None:
             client.close()
@@ -168,27 +168,27 @@ def run(args: argparse.Namespace) -> int:
         result["params"]["alphas"] = alphas
     result["points"] = diagram.points
     result["wall_time"] = diagram.wall_time
-    if args.out is not None:
-        _write_outputs(args, result, alphas)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        output.record(store_dir)
+        _write_outputs(output, result)
     if args.json:
         print(json_dumps(result))
     else:
         _print_table(result)
+    if output is not None:
+        output.report(args)
     return 0
 
 
-def _write_outputs(args, result, alphas) -> None:
-    from pathlib import Path
-
+def _write_outputs(output: common.Output, result) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_figure, write_json
     from fempipe.plotting.dynamics import plot_bifurcation
 
-    out = Path(args.out)
     p = result["params"]
     figure = {"eta_tip": "Fig. 7", "X_tip": "Fig. 9", "Z_tip": "Fig. 10"}
     for key, fig_name in figure.items():
@@ -204,13 +204,10 @@ def _write_outputs(args, result, alphas) -> None:
                     title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
                     f"γ = {p['gamma']:.4g} (cf. {fig_name})",
                 )
-            write_figure(out / f"{key}.png", fig, dpi=130)
+            output.figure(f"{key}.png", fig, dpi=130)
         finally:
             plt.close(fig)
-    write_json(out / "bifurcation.json", result)
-    if not args.json and args.progress is not False:
-        for name in ("bifurcation.json", "eta_tip.png", "X_tip.png", "Z_tip.png", "points/"):
-            print(f"wrote {out / name}", file=sys.stderr)
+    output.json("bifurcation.json", result)
 
 
 def _print_table(result: dict) -> None:

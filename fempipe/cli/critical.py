@@ -19,7 +19,6 @@ events.csv and branches.png.
 from __future__ import annotations
 
 import argparse
-import sys
 
 from fempipe.cli import common
 from fempipe.cli.common import CLIError
@@ -38,6 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--ds-max",
         metavar="DS",
+        type=common.number_type("--ds-max", 0.0, 1.0, strict_low=True),
         default="0.1",
         help="largest continuation step; spectra are computed at every step (default 0.1)",
     )
@@ -56,12 +56,7 @@ def run(args: argparse.Namespace) -> int:
     v_min, v_max = min(setup.v), max(setup.v)
     if v_max <= v_min:
         raise CLIError(flow_opt, f"needs a range with two different values, got {v_min:g} only")
-    try:
-        ds_max = common.parse_float(args.ds_max, "--ds-max")
-    except ValueError as exc:
-        raise CLIError("--ds-max", str(exc)) from None
-    if not 0 < ds_max <= 1:
-        raise CLIError("--ds-max", f"must satisfy 0 < --ds-max <= 1, got {ds_max:g}")
+    ds_max = args.ds_max
     model = PipeModel(setup.disc, setup.params)
     with common.progress(args, None, "critical") as bar:
 
@@ -88,40 +83,36 @@ def run(args: argparse.Namespace) -> int:
         pipe = setup.pipe
         result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
         result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
-    if args.out is not None:
-        _write(args, result, res)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write(output, result, res)
     if args.json:
         print(json_dumps(result))
     else:
         _print(result, setup.pipe)
+    if output is not None:
+        output.report(args)
     return 0
 
 
-def _write(args, result: dict, res) -> None:
-    from pathlib import Path
-
+def _write(output: common.Output, result: dict, res) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_csv, write_figure, write_json
     from fempipe.plotting.stability import plot_branches
 
-    out = Path(args.out)
     rows = [ev.details() for ev in res.events]
     for r in rows:
         r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
     ax = plot_branches(res)
     try:
-        write_json(out / "critical.json", result)
-        write_csv(out / "events.csv", rows)
-        write_figure(out / "branches.png", ax.figure, dpi=150)
+        output.json("critical.json", result)
+        output.csv("events.csv", rows)
+        output.figure("branches.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
-    if not args.json and args.progress is not False:
-        for name in ("critical.json", "events.csv", "branches.png"):
-            print(f"wrote {out / name}", file=sys.stderr)
 
 
 def _print(result: dict, pipe) -> None:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 import time
 
 import numpy as np
@@ -34,21 +33,41 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_flow_arguments(parser, default="10")
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("time integration")
-    g.add_argument("--t-max", metavar="T", default="300", help="longest integration in tau (300)")
+    num = common.number_type
     g.add_argument(
-        "--rtol", metavar="TOL", default="1e-5", help="tolerance of the transient (1e-5)"
+        "--t-max",
+        metavar="T",
+        type=num("--t-max", 0.0, strict_low=True),
+        default="300",
+        help=f"longest integration in tau (300; above {common.T_MAX:g} needs --allow-large)",
+    )
+    g.add_argument(
+        "--rtol",
+        metavar="TOL",
+        type=num("--rtol", 0.0, 0.1, strict_low=True),
+        default="1e-5",
+        help="tolerance of the transient (1e-5)",
     )
     g.add_argument(
         "--shoot-rtol",
         metavar="TOL",
+        type=num("--shoot-rtol", 0.0, 0.1, strict_low=True),
         default="1e-7",
         help="integration tolerance of the shooting; sets the accuracy of the cycle (1e-7)",
     )
     g.add_argument(
-        "--mode", metavar="R", default="1", help="sine mode r of the initial perturbation (1)"
+        "--mode",
+        metavar="R",
+        type=common.option_type("--mode", _mode),
+        default="1",
+        help="sine mode r of the initial perturbation (1)",
     )
     g.add_argument(
-        "--amplitude", metavar="A", default="0.01", help="initial perturbation in rad (0.01)"
+        "--amplitude",
+        metavar="A",
+        type=num("--amplitude"),
+        default="0.01",
+        help="initial perturbation in rad (0.01)",
     )
     g.add_argument(
         "--no-shooting",
@@ -56,27 +75,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="accept a cycle when successive Poincare returns agree to 1e-6 (long integration)",
     )
     g.add_argument(
-        "--sigma", metavar="S", default="0", help="pulsating flow amplitude, 0 <= S <= 1 (0)"
+        "--sigma",
+        metavar="S",
+        type=num("--sigma", 0.0, 1.0),
+        default="0",
+        help="pulsating flow amplitude, 0 <= S <= 1 (0)",
     )
-    g.add_argument("--omega", metavar="W", default="0", help="pulsating flow frequency (0)")
+    g.add_argument(
+        "--omega",
+        metavar="W",
+        type=num("--omega", 0.0),
+        default="0",
+        help="pulsating flow frequency (0)",
+    )
     common.add_output_arguments(parser)
 
 
-def _float(args, name: str, lo: float | None = None, hi: float | None = None, strict=False):
-    opt = "--" + name.replace("_", "-")
+def _mode(text: str) -> int:
+    """``--mode``: a sine mode number >= 1."""
     try:
-        x = common.parse_float(getattr(args, name), opt)
-    except ValueError as exc:
-        raise CLIError(opt, str(exc)) from None
-    if lo is not None and (x < lo or (strict and x == lo)):
-        raise CLIError(opt, f"must be {'>' if strict else '>='} {lo:g}, got {x:g}")
-    if hi is not None and x > hi:
-        raise CLIError(opt, f"must be <= {hi:g}, got {x:g}")
-    return x
+        mode = int(text)
+    except ValueError:
+        raise ValueError(f"expects an integer >= 1, got {text!r}") from None
+    if mode < 1:
+        raise ValueError(f"expects an integer >= 1, got {mode}")
+    return mode
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.dynamics import IntegrationError, PulsatingFlow, initial_state, simulate
+    from fempipe.dynamics import PulsatingFlow, initial_state, simulate
     from fempipe.io import json_dumps
     from fempipe.limit_cycle import TIP_KEYS, find_attractor, tip_coordinates
     from fempipe.operators import PipeModel
@@ -86,18 +113,9 @@ def run(args: argparse.Namespace) -> int:
     if len(setup.v) != 1:
         opt = "--U" if args.U is not None else "--v"
         raise CLIError(opt, f"simulate takes a single flow velocity, got {len(setup.v)}")
-    t_max = _float(args, "t_max", 0.0, strict=True)
-    rtol = _float(args, "rtol", 0.0, 0.1, strict=True)
-    shoot_rtol = _float(args, "shoot_rtol", 0.0, 0.1, strict=True)
-    amplitude = _float(args, "amplitude")
-    sigma = _float(args, "sigma", 0.0, 1.0)
-    omega = _float(args, "omega", 0.0)
-    try:
-        mode = int(args.mode)
-    except ValueError:
-        raise CLIError("--mode", f"expects an integer >= 1, got {args.mode!r}") from None
-    if mode < 1:
-        raise CLIError("--mode", f"expects an integer >= 1, got {mode}")
+    t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
+    amplitude, sigma, omega, mode = args.amplitude, args.sigma, args.omega, args.mode
+    common.check_count("--t-max", t_max, common.T_MAX, common.allow_large(args), "time units")
 
     params, disc = setup.params, setup.disc
     model = PipeModel(disc, params)
@@ -113,27 +131,23 @@ def run(args: argparse.Namespace) -> int:
                 bar.update(k - last[0])
                 last[0] = k
 
-        try:
-            if sigma > 0:
-                flow = PulsatingFlow(params.v, sigma, omega)
-                traj = simulate(model, q0, p0, t_max, rtol=rtol, flow=flow, callback=on_time)
-                att = None
-            else:
-                att = find_attractor(
-                    model,
-                    q0,
-                    p0,
-                    t_max=t_max,
-                    rtol=rtol,
-                    shoot_rtol=shoot_rtol,
-                    use_shooting=not args.no_shooting,
-                    record=True,
-                    callback=on_time,
-                )
-                traj = att.trajectory
-        except IntegrationError as exc:
-            print(f"fempipe simulate: error: {' '.join(str(exc).split())}", file=sys.stderr)
-            return 1
+        if sigma > 0:
+            flow = PulsatingFlow(params.v, sigma, omega)
+            traj = simulate(model, q0, p0, t_max, rtol=rtol, flow=flow, callback=on_time)
+            att = None
+        else:
+            att = find_attractor(
+                model,
+                q0,
+                p0,
+                t_max=t_max,
+                rtol=rtol,
+                shoot_rtol=shoot_rtol,
+                use_shooting=not args.no_shooting,
+                record=True,
+                callback=on_time,
+            )
+            traj = att.trajectory
 
     result = setup.to_dict()
     result["params"]["v"] = params.v
@@ -160,12 +174,15 @@ def run(args: argparse.Namespace) -> int:
         result["period_s"] = result["period"] * ts if result.get("period") else None
         result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
 
-    if args.out is not None:
-        _write_outputs(args, result, model, traj, att)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write_outputs(output, result, model, traj, att)
     if args.json:
         print(json_dumps(result))
     else:
         _print_summary(result)
+    if output is not None:
+        output.report(args)
     return 0
 
 
@@ -184,15 +201,12 @@ def _display_states(att, traj, n_periods: int = 3):
     return t, q, p
 
 
-def _write_outputs(args, result, model, traj, att) -> None:
-    from pathlib import Path
-
+def _write_outputs(output: common.Output, result, model, traj, att) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_figure, write_json
     from fempipe.plotting.dynamics import (
         animate,
         plot_oscillating_shapes,
@@ -201,8 +215,7 @@ def _write_outputs(args, result, model, traj, att) -> None:
     )
     from fempipe.trajectory_io import write_trajectory
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    output.directory.mkdir(parents=True, exist_ok=True)
     disc, p = model.disc, model.params
     title = f"α = {math.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, v = {p.v:.4g}"
     t, q, qd = _display_states(att, traj)
@@ -223,26 +236,20 @@ def _write_outputs(args, result, model, traj, att) -> None:
         ax = plot_oscillating_shapes(disc, p.alpha, cq, title=title)
         figs.append(("oscillating_shapes.png", ax.figure))
         for name, fig in figs:
-            write_figure(out / name, fig, dpi=130)
+            output.figure(name, fig, dpi=130)
     finally:
         for _, fig in figs:
             plt.close(fig)
     frames = np.linspace(0, len(ct) - 1, min(48, len(ct))).round().astype(int)
-    animate(out / "pipe.gif", disc, p.alpha, ct[frames], cq[frames], fps=16, title=title)
+    gif = output.path("pipe.gif")
+    animate(gif, disc, p.alpha, ct[frames], cq[frames], fps=16, title=title)
+    output.record(gif)
     # At most 400 frames (every step of a long run would be thousands of files).
     keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
-    write_trajectory(out / "trajectory.pvd", disc, p.alpha, t[keep], q[keep], qd[keep])
-    write_json(out / "simulate.json", result)
-    if not args.json and args.progress is not False:
-        for name in (
-            "simulate.json",
-            "time_traces.png",
-            "phase_portrait.png",
-            "oscillating_shapes.png",
-            "pipe.gif",
-            "trajectory.pvd",
-        ):
-            print(f"wrote {out / name}", file=sys.stderr)
+    pvd = output.path("trajectory.pvd")
+    write_trajectory(pvd, disc, p.alpha, t[keep], q[keep], qd[keep])
+    output.record(pvd)
+    output.json("simulate.json", result)
 
 
 def _print_summary(r: dict) -> None:

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
 from fempipe.cli import common
 from fempipe.cli.common import CLIError
@@ -32,6 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--modes",
         metavar="N",
+        type=common.option_type("--modes", _modes),
         default="4",
         help="track and report modes 1..N (default 4); 'all' for every resolved mode",
     )
@@ -39,14 +39,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _modes(text: str) -> int | None:
+    """``--modes``: a number of modes >= 1, or None for 'all'."""
     if str(text).strip().lower() == "all":
         return None
     try:
         n = int(text)
     except ValueError:
-        raise CLIError("--modes", f"expects an integer >= 1 or 'all', got {text!r}") from None
+        raise ValueError(f"expects an integer >= 1 or 'all', got {text!r}") from None
     if n < 1:
-        raise CLIError("--modes", f"expects an integer >= 1 or 'all', got {n}")
+        raise ValueError(f"expects an integer >= 1 or 'all', got {n}")
     return n
 
 
@@ -56,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.stability import root_locus
 
     setup = common.setup_from_args(args)
-    n_modes = _modes(args.modes)
+    n_modes = args.modes
     values = list(setup.v)
     if not values:
         raise CLIError("--v", "no flow velocities given")
@@ -74,12 +75,15 @@ def run(args: argparse.Namespace) -> int:
     if setup.pipe is not None:
         for pt in result["points"]:
             pt["U"] = setup.pipe.U_of_v(pt["v"])
-    if args.out is not None:
-        _write(args, result, locus)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write(output, result, locus)
     if args.json:
         print(json_dumps(result))
     else:
         _print_table(result, locus)
+    if output is not None:
+        output.report(args)
     return 0
 
 
@@ -101,28 +105,21 @@ def _rows(result: dict) -> list[dict]:
     return rows
 
 
-def _write(args, result: dict, locus) -> None:
-    from pathlib import Path
-
+def _write(output: common.Output, result: dict, locus) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_csv, write_figure, write_json
     from fempipe.plotting.stability import plot_argand
 
-    out = Path(args.out)
     ax = plot_argand(locus)
     try:
-        write_json(out / "spectrum.json", result)
-        write_csv(out / "spectrum.csv", _rows(result))
-        write_figure(out / "argand.png", ax.figure, dpi=150)
+        output.json("spectrum.json", result)
+        output.csv("spectrum.csv", _rows(result))
+        output.figure("argand.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
-    if not args.json and args.progress is not False:
-        for name in ("spectrum.json", "spectrum.csv", "argand.png"):
-            print(f"wrote {out / name}", file=sys.stderr)
 
 
 def _print_table(result: dict, locus) -> None:

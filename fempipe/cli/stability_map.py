@@ -41,42 +41,41 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--betas",
         metavar="LIST",
+        type=common.option_type("--betas", lambda t: _list(t, "beta", 1.0)),
         default=None,
         help="mass ratios, one curve each at --gamma (Fig. 6(a)), e.g. 0.1,0.142,0.3,0.5",
     )
     g.add_argument(
         "--gammas",
         metavar="LIST",
+        type=common.option_type("--gammas", lambda t: _list(t, "gamma", common.GAMMA_MAX)),
         default=None,
         help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. 5,10,18.9,30",
     )
-    g.add_argument("--workers", metavar="N", default="1", help="local processes (default 1)")
+    g.add_argument(
+        "--workers",
+        metavar="N",
+        type=common.workers_type,
+        default="1",
+        help="local processes (default 1)",
+    )
     common.add_output_arguments(parser)
 
 
-def _alphas(text: str) -> list[float]:
-    return common.parse_alpha_list(text, "--alphas")
-
-
-def _list(args, name: str, low: float, high: float | None) -> list[float] | None:
-    text = getattr(args, name)
-    if text is None:
-        return None
-    opt = f"--{name}"
-    try:
-        values = common.parse_values(text, opt)
-    except ValueError as exc:
-        raise CLIError(opt, str(exc)) from None
-    for x in values:
-        if x < low or (high is not None and x > high):
-            rng = f"{low:g} <= value <= {high:g}" if high is not None else f"value >= {low:g}"
-            raise CLIError(opt, f"values must satisfy {rng}, got {x:g}")
-    return values
+def _list(text: str, field: str, high: float) -> common.ValueList:
+    """``--betas`` / ``--gammas``: a list whose values lie in [0, high]."""
+    opt = f"--{field}s"
+    spec = common.value_list(text, opt)
+    for x in (spec.low, spec.high):
+        if not 0 <= x <= high:
+            raise ValueError(f"values must satisfy 0 <= {field} <= {high:g}, got {x:g}")
+    return spec
 
 
 def _curves(args, setup) -> list[tuple[float, float]]:
-    betas = _list(args, "betas", 0.0, 1.0)
-    gammas = _list(args, "gammas", 0.0, None)
+    large = common.allow_large(args)
+    betas = None if args.betas is None else args.betas.values(large)
+    gammas = None if args.gammas is None else args.gammas.values(large)
     p = setup.params
     if setup.pipe is not None and (betas or gammas):
         opt = "--betas" if betas else "--gammas"
@@ -100,6 +99,8 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.io import json_dumps
     from fempipe.stability import stability_map
 
+    if args.alpha is not None:
+        raise CLIError("--alpha", "stability-map takes its inclinations from --alphas")
     setup = common.setup_from_args(args)
     flow_opt = "--U" if args.U is not None else "--v"
     if not setup.v or max(setup.v) <= 0:
@@ -107,10 +108,12 @@ def run(args: argparse.Namespace) -> int:
     v_max = max(setup.v)
     if min(setup.v) != 0:
         raise CLIError(flow_opt, "the map searches from v = 0: give a range starting at 0")
-    alphas = _alphas(args.alphas)
+    large = common.allow_large(args)
+    alphas = common.parse_alpha_list(args.alphas, "--alphas", large)
     curves = _curves(args, setup)
-    workers = common.parse_workers(args.workers)
+    workers = args.workers
     total = len(alphas) * len(curves)
+    common.check_count("--alphas", total, common.MAX_VALUES, large, "points (alphas x curves)")
     with common.progress(args, total, "stability map") as bar:
         smap = stability_map(
             setup.disc,
@@ -133,37 +136,33 @@ def run(args: argparse.Namespace) -> int:
             f"gamma={r['gamma']:g} failed: {r['error']}",
             file=sys.stderr,
         )
-    if args.out is not None:
-        _write(args, result, smap)
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write(output, result, smap)
     if args.json:
         print(json_dumps(result))
     else:
         _print(result)
+    if output is not None:
+        output.report(args)
     return 1 if failed and len(failed) == total else 0
 
 
-def _write(args, result: dict, smap) -> None:
-    from pathlib import Path
-
+def _write(output: common.Output, result: dict, smap) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_csv, write_figure, write_json
     from fempipe.plotting.stability import plot_stability_map
 
-    out = Path(args.out)
     ax = plot_stability_map(smap)
     try:
-        write_json(out / "stability_map.json", result)
-        write_csv(out / "stability_map.csv", result["points"])
-        write_figure(out / "stability_map.png", ax.figure, dpi=150)
+        output.json("stability_map.json", result)
+        output.csv("stability_map.csv", result["points"])
+        output.figure("stability_map.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
-    if not args.json and args.progress is not False:
-        for name in ("stability_map.json", "stability_map.csv", "stability_map.png"):
-            print(f"wrote {out / name}", file=sys.stderr)
 
 
 def _print(result: dict) -> None:

@@ -59,24 +59,21 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
             "--continuation",
             "gamma is fixed by the SI pipe (--length --EI --m --M --g); use dimensionless input",
         )
+    large = common.allow_large(args)
     if parameter == "alpha":
-        values = _parse_alpha_values(args.values)
+        values = common.parse_alpha_list(args.values, "--values", large)
     else:
         try:
-            values = common.parse_values(args.values, "--values")
+            spec = common.value_list(args.values, "--values")
         except ValueError as exc:
             raise CLIError("--values", str(exc)) from None
-    for x in values:
-        try:
-            replace(setup.params, **{parameter: x})
-        except ValueError as exc:
-            raise CLIError("--values", str(exc)) from None
+        for x in (spec.low, spec.high):
+            try:
+                common.check_gamma(x, "--values")
+            except ValueError as exc:
+                raise CLIError("--values", str(exc)) from None
+        values = spec.values(large)
     return parameter, values
-
-
-def _parse_alpha_values(text: str) -> list[float]:
-    """Alpha list: ``0,pi/4,pi/2`` or ``start:stop:count`` with alpha spellings."""
-    return common.parse_alpha_list(text, "--values")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -132,10 +129,10 @@ def run(args: argparse.Namespace) -> int:
         "discretization": result["discretization"],
     }
 
-    written = []
-    if args.out is not None:
+    output = common.Output(args.out) if args.out is not None else None
+    if output is not None:
         shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
-        written = _write_outputs(args.out, result, points, shapes, values, parameter, pipe)
+        _write_outputs(output, result, points, shapes, values, parameter, pipe)
 
     if args.json:
         from fempipe.io import json_dumps
@@ -144,9 +141,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_table(result, parameter, pipe)
         sys.stdout.flush()
-        if args.progress is not False:
-            for path in written:
-                print(f"wrote {path}", file=sys.stderr)
+    if output is not None:
+        output.report(args)
     return 0
 
 
@@ -199,19 +195,16 @@ def _labels(values, parameter: str, pipe) -> list[str]:
     return [f"v = {v:.4g}  (U = {pipe.U_of_v(v):.3g} m/s)" for v in values]
 
 
-def _write_outputs(out, result, points, shapes, values, parameter, pipe) -> list:
+def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> None:
     """Make everything in memory first, then write each file atomically."""
-    from pathlib import Path
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.io import write_csv, write_figure, write_json, write_shapes
+    from fempipe.io import write_shapes
     from fempipe.plotting.static import plot_shapes
 
-    out = Path(out)
     p = result["params"]
     if pipe is not None:
         title = (
@@ -234,19 +227,17 @@ def _write_outputs(out, result, points, shapes, values, parameter, pipe) -> list
     )
     fig = ax.figure
     try:
-        write_json(out / "static.json", result)
-        write_csv(out / "static.csv", points)
-        write_figure(out / "shapes.png", fig, dpi=150)
-        write_shapes(
-            out / "shapes.vtu",
-            shapes,
-            values,
-            parameter=parameter,
-            length=None if pipe is None else pipe.L,
+        output.json("static.json", result)
+        output.csv("static.csv", points)
+        output.figure("shapes.png", fig, dpi=150)
+        length = None if pipe is None else pipe.L
+        output.record(
+            write_shapes(
+                output.path("shapes.vtu"), shapes, values, parameter=parameter, length=length
+            )
         )
     finally:
         plt.close(fig)
-    return [out / name for name in ("static.json", "static.csv", "shapes.png", "shapes.vtu")]
 
 
 def _alphas(values, parameter: str, p: dict) -> list[float]:

@@ -28,6 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers",
         metavar="N",
+        type=common.workers_type,
         default=None,
         help="worker processes (default: the number of CPUs, at most 4)",
     )
@@ -39,29 +40,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run only this case (repeatable, or comma-separated); see --list",
     )
     parser.add_argument("--list", action="store_true", help="list the cases and exit")
-    common.add_output_arguments(parser)
-    for action in parser._actions:  # the report has a default directory
-        if action.dest == "out":
-            action.help = f"write REPORT.md, results.json and the PNG figures into DIR (default {DEFAULT_OUT})"
-
-
-def _workers(text) -> int:
-    if text is None:
-        return max(1, min(os.cpu_count() or 1, 4))
-    return common.parse_workers(text)
+    common.add_output_arguments(
+        parser,
+        out_help=f"write REPORT.md, results.json and the PNG figures into DIR "
+        f"(default {DEFAULT_OUT})",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.io import json_dumps
-    from fempipe.validation import CASES, missing_dependencies
+    from fempipe.validation import CASES
 
     if args.list:
         for name in CASES:
-            missing = missing_dependencies(name)
-            note = f"  (needs {', '.join(missing)})" if missing else ""
-            print(f"{name}{note}")
+            print(name)
         return 0
-    workers = _workers(args.workers)
+    workers = args.workers or max(1, min(os.cpu_count() or 1, 4))
     cases = None
     if args.case:
         cases = [c.strip() for item in args.case for c in item.split(",") if c.strip()]
