@@ -84,9 +84,13 @@ def _umask() -> int:
 
 
 def to_jsonable(obj):
-    """Recursively convert numpy types, tuples and non-finite floats for strict JSON.
+    """Recursively convert numpy types, tuples, paths and non-finite floats for strict JSON.
 
-    NaN and +-inf become ``None`` (JSON has no such numbers); arrays become lists.
+    Mappings become dicts with string keys, tuples and arrays become lists,
+    numpy scalars become Python scalars, NaN and +-inf become ``None`` (JSON
+    has no such numbers), :class:`~pathlib.Path` becomes ``str`` and an
+    object with ``to_dict()`` becomes that dict.  The one JSON sanitiser of
+    the package: result files, ``--json`` output and the validation report.
     """
     if isinstance(obj, Mapping):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
@@ -101,6 +105,8 @@ def to_jsonable(obj):
     if isinstance(obj, (float, np.floating)):
         x = float(obj)
         return x if math.isfinite(x) else None
+    if isinstance(obj, np.generic):  # other numpy scalars (str_, complex, ...)
+        return to_jsonable(obj.item())
     if isinstance(obj, Path):
         return str(obj)
     if hasattr(obj, "to_dict"):
