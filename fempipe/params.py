@@ -158,7 +158,7 @@ class PipeSI:
             gamma = math.inf
         try:
             mu = math.sqrt(self.EI / mt) * self.a / self.L**2
-        except OverflowError:
+        except (OverflowError, ZeroDivisionError):  # L**2 overflows or underflows to 0
             mu = math.inf
         return {"beta": (self.M / mt, "M"), "gamma": (gamma, "EI"), "mu": (mu, "a")}
 

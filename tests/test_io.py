@@ -86,3 +86,29 @@ def test_shapes_vtu_reads_back_with_meshio(tmp_path, two_shapes, length):
         np.testing.assert_allclose(d["points"][:, 0], s.X_g * scale, rtol=0, atol=1e-15)
         np.testing.assert_allclose(d["points"][:, 1], s.Z_g * scale, rtol=0, atol=1e-15)
         assert np.all(d["points"][:, 2] == 0)
+
+
+def test_to_jsonable_converts_every_numpy_scalar_and_container():
+    """The one sanitiser: numpy scalars of every kind, arrays, tuples, keys, NaN/inf, paths."""
+    from pathlib import Path
+
+    from fempipe.io import to_jsonable
+
+    got = to_jsonable(
+        {
+            1: (np.int64(3), np.bool_(True)),
+            "f": [np.float32(0.5), np.float64("nan"), -np.inf],
+            "a": np.array([[1.5, np.inf]]),
+            "s": np.str_("x"),
+            "p": Path("out/x.json"),
+        }
+    )
+    assert got == {
+        "1": [3, True],
+        "f": [0.5, None, None],
+        "a": [[1.5, None]],
+        "s": "x",
+        "p": "out/x.json",
+    }
+    assert type(got["1"][0]) is int and type(got["1"][1]) is bool
+    assert type(got["f"][0]) is float and type(got["s"]) is str

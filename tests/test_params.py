@@ -7,6 +7,7 @@ import math
 import pytest
 
 from fempipe import Params, PipeSI
+from fempipe.errors import ParamError
 
 #: Texier & Dorbolo's pipe as given in the paper, Section 3.1 (Fig. 2b), with g = 9.8 m/s^2.
 TD = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}
@@ -30,8 +31,16 @@ TD = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}
     ],
 )
 def test_params_rejects_bad_values_naming_the_field(kwargs, field):
-    with pytest.raises(ValueError, match=rf"^{field} "):
+    with pytest.raises(ValueError, match=rf"^{field} ") as info:
         Params(**kwargs)
+    assert isinstance(info.value, ParamError) and info.value.field == field
+
+
+def test_negative_gravity_says_a_standing_pipe_is_alpha_pi():
+    """gamma = (m+M) g L^3/EI is a magnitude: "upwards" gravity is the inclination alpha = pi."""
+    with pytest.raises(ParamError, match=r"standing up is alpha = pi with gamma > 0") as info:
+        Params(gamma=-10.0)
+    assert info.value.field == "gamma"
 
 
 @pytest.mark.parametrize("beta", [0.0, 1.0])
@@ -52,8 +61,22 @@ def test_params_accepts_the_ends_of_the_beta_range(beta):
     ],
 )
 def test_pipe_si_rejects_bad_values_naming_the_field(change, field):
-    with pytest.raises(ValueError, match=rf"^{field}"):
+    with pytest.raises(ValueError, match=rf"^{field}") as info:
         PipeSI(**{**TD, **change})
+    assert isinstance(info.value, ParamError) and info.value.field == field.split()[0]
+
+
+@pytest.mark.parametrize("change", [{"L": 1e200}, {"EI": 1e-320}, {"a": 1.0, "L": 1e-200}])
+def test_pipe_si_whose_groups_overflow_is_refused(change):
+    """L^3 of a float raises OverflowError (L^2 of a tiny one gives 0): refuse the pipe."""
+    with pytest.raises(ParamError, match="overflows"):
+        PipeSI(**{**TD, **change}).params()
+
+
+def test_flow_velocity_that_overflows_is_refused():
+    with pytest.raises(ParamError, match="overflows") as info:
+        PipeSI(**TD).v_of_U(1e308)
+    assert info.value.field == "U"
 
 
 @pytest.mark.parametrize("U", [-1.0, math.nan])
