@@ -12,13 +12,15 @@ cycle, the next point first shoots directly from it (natural-parameter
 continuation of the periodic orbit, chord-Newton); only if that fails, or
 gives an unstable or degenerate cycle, does it integrate past a transient.
 
-Independent sweeps (up and down, several alpha) run in parallel on any
-:class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``, or a Dask
-``Client.get_executor()``).  Every finished point is written at once as its own
-JSON file (atomically: temporary file + ``os.replace``) in a point store; a
-rerun on the same store loads the finished points, including the state each
-one ended on, and computes only the rest, so the chain of starting states and
-hence the results are the same as in an uninterrupted run.
+Independent sweeps (up and down, several alpha) run in parallel through
+:func:`fempipe.parallel.run_tasks`: local worker processes, or any
+:class:`concurrent.futures.Executor` (e.g. a Dask ``Client.get_executor()``).
+Every finished point is written at once as its own JSON file (atomically,
+:func:`fempipe.io.atomic_path`) in a point store; a rerun on the same store
+loads the finished points, including the state each one ended on, and
+computes only the rest, so the chain of starting states and hence the
+results are the same as in an uninterrupted run, however the first run ended
+(killed, interrupted, or a sweep that failed while the others went on).
 """
 
 from __future__ import annotations
@@ -30,15 +32,17 @@ import os
 import tempfile
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor
-from dataclasses import dataclass, field
+from concurrent.futures import Executor
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .dynamics import IntegrationError, initial_state
+from .io import atomic_path
 from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
 from .operators import PipeModel
+from .parallel import run_tasks
 
 __all__ = [
     "BifurcationPoint",
@@ -152,7 +156,7 @@ class PointStore:
                     f"(run.json differs); use another directory or delete it"
                 )
         else:
-            _atomic_write(path, json.dumps(self.manifest, indent=1))
+            _write_json(path, self.manifest, indent=1)
 
     def path(self, alpha_index: int, direction: str, index: int) -> Path:
         return self.directory / f"a{alpha_index:02d}-{direction}-{index:03d}.json"
@@ -164,25 +168,17 @@ class PointStore:
         return BifurcationPoint.from_dict(json.loads(p.read_text()))
 
     def save(self, alpha_index: int, point: BifurcationPoint) -> None:
-        _atomic_write(
-            self.path(alpha_index, point.direction, point.index),
-            json.dumps(point.to_dict(state=True)),
-        )
+        _write_json(self.path(alpha_index, point.direction, point.index), point.to_dict(state=True))
 
     def count(self) -> int:
+        """Number of finished points in the store (all sweeps)."""
+        # Temporary files of unfinished writes start with "." and do not match.
         return sum(1 for _ in self.directory.glob("a*-*-*.json"))
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+def _write_json(path: Path, obj, indent: int | None = None) -> None:
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=indent))
 
 
 def _ordered(values: Sequence[float], direction: str) -> list[float]:
@@ -355,10 +351,25 @@ def _continue_cycle(model, q, p, prev_cycle, options) -> Attractor | None:
     )
 
 
-def _sweep_task(model, values, direction, alpha_index, store_dir, manifest, options):
-    """One independent sweep in a worker process: rebuilds the store, runs, returns dicts."""
+def _sweep_task(
+    model: PipeModel,
+    values: list,
+    direction: str,
+    alpha_index: int,
+    store_dir: str,
+    manifest: dict,
+    options: dict,
+    on_point: Callable[[BifurcationPoint], None] | None = None,
+) -> list[dict]:
+    """One independent sweep (in a worker, or in this process with ``on_point``).
+
+    Opens the store itself (a worker cannot share the caller's object) and
+    returns the points as dicts without their states.
+    """
     store = PointStore(store_dir, manifest)
-    pts = sweep(model, values, direction, store=store, alpha_index=alpha_index, **options)
+    pts = sweep(
+        model, values, direction, store=store, alpha_index=alpha_index, progress=on_point, **options
+    )
     return [pt.to_dict(state=False) for pt in pts]
 
 
@@ -422,10 +433,12 @@ def bifurcation_diagram(
         ``Client.get_executor()``).  With a remote executor the store directory
         must be visible to the workers.
     workers : int, optional
-        Without an executor: > 1 starts a local ``ProcessPoolExecutor`` with
-        that many processes; 1 or None runs in this process.
+        Without an executor: > 1 runs the sweeps in that many local worker
+        processes (:func:`fempipe.parallel.process_pool`: they exit with this
+        process, however it ends); 1 or None runs in this process.
     progress : callable, optional
-        Called as ``progress(done, total)`` when points finish.
+        Called as ``progress(done, total)`` when points finish (or are loaded
+        from the store).
     **attractor_options
         Passed to :func:`fempipe.limit_cycle.find_attractor`.
 
@@ -433,6 +446,15 @@ def bifurcation_diagram(
     -------
     BifurcationDiagram
         Points ordered by alpha, direction, then sweep order.
+
+    Raises
+    ------
+    Exception
+        The error of the first sweep (in that order) that failed, once all
+        sweeps have ended; the points finished before it are in the store.
+    KeyboardInterrupt
+        Including :class:`fempipe.parallel.Interrupted`: the workers are
+        stopped first; rerun on the same store to resume.
     """
     t0 = time.perf_counter()
     directions = list(directions)
@@ -449,77 +471,55 @@ def bifurcation_diagram(
     if store_dir is None:
         tmp = tempfile.TemporaryDirectory(prefix="fempipe-sweep-")
         store_dir = tmp.name
-    store = PointStore(store_dir, manifest)
-    total = len(values) * len(directions) * len(alphas)
-    tasks = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]  # independent sweeps
-    results: dict = {}
-    own_pool = None
     try:
-        if executor is None and workers is not None and int(workers) > 1:
-            own_pool = ProcessPoolExecutor(max_workers=int(workers))
-            executor = own_pool
-        if executor is None:
-            done = 0
-            for ia, a, d in tasks:
-                m = model.with_params(_replace_alpha(model.params, a))
+        store = PointStore(store_dir, manifest)
+        total = len(values) * len(directions) * len(alphas)
+        sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
+        in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
+        done = 0
+        shown = -1
 
-                def on_point(_pt):
-                    nonlocal done
-                    done += 1
-                    if progress is not None:
-                        progress(done, total)
+        def on_point(_point: BifurcationPoint) -> None:  # in this process: every point
+            nonlocal done
+            done += 1
+            if progress is not None:
+                progress(done, total)
 
-                pts = sweep(
-                    m,
-                    values,
-                    d,
-                    store=store,
-                    alpha_index=ia,
-                    progress=on_point,
-                    **attractor_options,
-                )
-                results[(ia, d)] = [pt.to_dict() for pt in pts]
-        else:
-            futures = {}
-            for ia, a, d in tasks:
-                m = model.with_params(_replace_alpha(model.params, a))
-                fut = executor.submit(
-                    _sweep_task,
-                    m,
-                    list(values),
-                    d,
-                    ia,
-                    str(store_dir),
-                    manifest,
-                    dict(attractor_options),
-                )
-                futures[fut] = (ia, d)
-            pending = set(futures)
-            last = -1
-            while pending:
-                finished = {f for f in pending if f.done()}
-                pending -= finished
-                if progress is not None:
-                    n = store.count()
-                    if n != last:
-                        progress(n, total)
-                        last = n
-                if pending:
-                    time.sleep(0.2)
-            for fut, key in futures.items():
-                results[key] = fut.result()
-            if progress is not None and store.count() != last:
-                progress(store.count(), total)
+        def poll_store() -> None:  # in workers: count the files they have written
+            nonlocal shown
+            n = store.count()
+            if progress is not None and n != shown:
+                progress(n, total)
+                shown = n
+
+        args = [
+            (
+                model.with_params(replace(model.params, alpha=float(a))),
+                list(values),
+                d,
+                ia,
+                str(store_dir),
+                manifest,
+                dict(attractor_options),
+                on_point if in_process else None,
+            )
+            for ia, a, d in sweeps
+        ]
+        results = run_tasks(
+            _sweep_task,
+            args,
+            workers=None if in_process else workers,
+            executor=executor,
+            heartbeat=None if in_process else poll_store,
+        )
+        if not in_process:
+            poll_store()
     finally:
-        if own_pool is not None:
-            own_pool.shutdown()
         if tmp is not None:
             tmp.cleanup()
-    points = [pt for ia, _a, d in tasks for pt in results[(ia, d)]]
+    for r in results:
+        if isinstance(r, BaseException):
+            # The other sweeps ran to their end and their points are stored.
+            raise r
+    points = [pt for r in results for pt in r]
     return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)
-
-
-def _replace_alpha(params, alpha: float):
-    from dataclasses import replace
-
-    return replace(params, alpha=float(alpha))

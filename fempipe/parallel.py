@@ -13,7 +13,7 @@ they share one error policy and one worker lifecycle:
   failure means (record it, or raise it once all tasks are done).
 * **Interrupts stop everything.**  ``KeyboardInterrupt`` (and so
   :class:`Interrupted`) or ``SystemExit`` in the parent while tasks run, or an
-  exception raised by a callback, cancels the tasks not yet started,
+  exception raised by a callback, cancels what has not started yet,
   terminates the workers of a pool that :func:`run_tasks` started, and
   propagates.  :func:`interruptible` turns SIGINT and SIGTERM into
   :class:`Interrupted` so that a command-line run stops its workers and exits
@@ -32,7 +32,7 @@ they share one error policy and one worker lifecycle:
   thread, 18 s with two on a busy 2-core machine).  Parallelism comes from
   independent tasks instead.
 
-Any :class:`concurrent.futures.Executor` can run the tasks instead of a local
+Any :class:`concurrent.futures.Executor` can run them instead of a local
 pool (e.g. Dask's ``Client.get_executor()``); it is not shut down, and its
 workers' lifecycle is its owner's business.
 """
@@ -253,7 +253,7 @@ def run_tasks(
     Error policy (the same serially and in parallel): a task that raises an
     ``Exception`` leaves that exception in its slot and the other tasks run
     on; ``KeyboardInterrupt`` (:class:`Interrupted`), ``SystemExit`` or an
-    exception raised by a callback cancel the tasks not started, terminate
+    exception raised by a callback cancel what has not started, terminate
     the workers of the pool started here, and propagate.
 
     Parameters
@@ -269,15 +269,15 @@ def run_tasks(
     executor : concurrent.futures.Executor, optional
         Any executor (a :func:`process_pool`, Dask's
         ``Client.get_executor()``); it is not shut down, and on an interrupt
-        only the tasks not yet started are cancelled.
+        only what has not started yet is cancelled.
     callback : callable, optional
         ``callback(done, total, result)`` as each task finishes (progress).
     on_result : callable, optional
-        ``on_result(index, result)`` as each task finishes, with the task's
+        ``on_result(index, result)`` as each task finishes, with its
         position in ``tasks`` (to act on results before all are done).
     heartbeat : callable, optional
         Called without arguments every :data:`HEARTBEAT` seconds while
-        parallel tasks run (e.g. to report progress that the tasks write
+        parallel tasks run (e.g. to report progress that they write
         elsewhere, such as files).
 
     Returns

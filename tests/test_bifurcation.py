@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -52,53 +53,121 @@ def test_sweep_orders_values_and_finds_flutter(reference):
             np.testing.assert_allclose(p["eta_tip"], up[p["v"]]["eta_tip"], atol=1e-5)
 
 
-def test_resume_after_kill_gives_same_points_without_recomputation(tmp_path, reference):
-    """Kill a sweep in a subprocess once its first point is on disk, rerun, compare.
+def _children(pid: int) -> list[int]:
+    """Pids of the running child processes of ``pid`` (Linux /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
 
-    The rerun must load the finished points (not call find_attractor for them)
-    and give the same points as the uninterrupted run: each stored point holds
-    the exact (repr-round-tripped) state the next point starts from.
+
+def _running(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+@pytest.mark.parametrize(
+    "sig, workers", [(signal.SIGKILL, 1), (signal.SIGKILL, 2), (signal.SIGTERM, 2)]
+)
+def test_resume_after_kill_gives_same_points_without_recomputation(
+    tmp_path, reference, monkeypatch, sig, workers
+):
+    """Kill a run in a subprocess once its first point is on disk, rerun, compare.
+
+    The killed run's workers must be gone within seconds; the rerun must load
+    the finished points (compute and write only the others) and give the same
+    points as the uninterrupted run: each stored point holds the exact
+    (repr-round-tripped) state the next point starts from.
     """
     store = tmp_path / "points"
+    directions = ["up"] if workers == 1 else ["up", "down"]  # one sweep per worker
     script = textwrap.dedent(
         f"""
+        import sys
         from fempipe import Modal, Params, PipeModel
         from fempipe.bifurcation import bifurcation_diagram
+        from fempipe.parallel import Interrupted, interruptible
         m = PipeModel(Modal(2, n_cells=8), Params(alpha=0.0))
-        bifurcation_diagram(m, {VALUES!r}, ["up"], store_dir={str(store)!r}, **{OPTIONS!r})
+        try:
+            with interruptible():
+                bifurcation_diagram(
+                    m,
+                    {VALUES!r},
+                    {directions!r},
+                    store_dir={str(store)!r},
+                    workers={workers},
+                    **{OPTIONS!r},
+                )
+        except Interrupted as exc:
+            sys.exit(exc.exit_code)
         """
     )
     env = dict(os.environ, PYTHONPATH=str(Path(bif.__file__).parents[1]))
     proc = subprocess.Popen([sys.executable, "-c", script], env=env)
+    workers_seen: set[int] = set()
     try:
         deadline = time.time() + 120
-        while time.time() < deadline and not list(store.glob("a00-up-000.json")):
+        while time.time() < deadline and not list(store.glob("a00-*-000.json")):
+            workers_seen.update(_children(proc.pid))
             time.sleep(0.05)
-        proc.kill()
+        workers_seen.update(_children(proc.pid))
+        proc.send_signal(sig)
+        killed = time.time()
+        proc.wait(timeout=30)
+        while any(map(_running, workers_seen)) and time.time() - killed < 10:
+            time.sleep(0.05)
+        survivors = [p for p in workers_seen if _running(p)]
     finally:
-        proc.wait()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for p in workers_seen:
+            if _running(p):
+                os.kill(p, signal.SIGKILL)
+    assert proc.returncode == (-sig if sig == signal.SIGKILL else 128 + sig)
+    assert len(workers_seen) == (workers if workers > 1 else 0)
+    assert not survivors
+    total = len(directions) * len(VALUES)
     done = sorted(p.name for p in store.glob("a00-*.json"))
-    assert 1 <= len(done) < len(VALUES), done  # killed midway
+    assert 1 <= len(done) < total, done  # killed midway
     for name in done:  # finished points are complete JSON
         json.loads((store / name).read_text())
     mtimes = {n: (store / n).stat().st_mtime_ns for n in done}
 
-    calls = []
-    real = bif.find_attractor
+    saved, computed = [], []
+    real_save, real_find, real_continue = PointStore.save, bif.find_attractor, bif._continue_cycle
 
-    def counting(model, *a, **k):
-        calls.append(model.params.v)
-        return real(model, *a, **k)
+    def save(self, alpha_index, point):
+        saved.append(f"a{alpha_index:02d}-{point.direction}-{point.index:03d}.json")
+        real_save(self, alpha_index, point)
 
-    bif.find_attractor = counting
-    try:
-        d = bifurcation_diagram(_model(), VALUES, ["up"], store_dir=store, **OPTIONS)
-    finally:
-        bif.find_attractor = real
-    assert len(calls) == len(VALUES) - len(done)  # only the missing points
+    def find(model, *a, **k):
+        computed.append(model.params.v)
+        return real_find(model, *a, **k)
+
+    def cont(model, *a, **k):
+        computed.append(model.params.v)
+        return real_continue(model, *a, **k)
+
+    monkeypatch.setattr(PointStore, "save", save)
+    monkeypatch.setattr(bif, "find_attractor", find)
+    monkeypatch.setattr(bif, "_continue_cycle", cont)
+    d = bifurcation_diagram(_model(), VALUES, directions, store_dir=store, **OPTIONS)
+    # only the missing points were computed and written, the others loaded
+    assert sorted(saved) == sorted(set(saved)) and not set(saved) & set(done)
+    assert len(saved) == total - len(done)
+    assert set(computed) <= {json.loads((store / n).read_text())["v"] for n in saved}
     assert all((store / n).stat().st_mtime_ns == mtimes[n] for n in done)
-    ref_up = [p for p in reference.points if p["direction"] == "up"]
-    assert _strip(d.points) == _strip(ref_up)
+    ref = [p for p in reference.points if p["direction"] in directions]
+    assert _strip(d.points) == _strip(ref)
 
 
 def test_store_refuses_a_different_run(tmp_path):
