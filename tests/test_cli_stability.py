@@ -55,7 +55,7 @@ def test_critical_alpha_pi_lists_start_events_and_branches(capsys, tmp_path):
 
 
 def test_critical_si_pipe_reports_U_cr(capsys):
-    """Texier-Dorbolo's pipe (SPEC 5) in SI units: U_cr = v_cr / 1.6874 m/s."""
+    """Texier-Dorbolo's pipe (the paper's Sec. 3.1) in SI units: U_cr = v_cr / 1.6874 m/s."""
     argv = ["critical", "--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058"]
     argv += ["--alpha", "90deg", "--U", "0,6", "--no-branches", "--json", "--quiet"]
     d = run_json(capsys, argv)

@@ -30,11 +30,8 @@ SI_KEYS = {"U", "X_tip_m", "Z_tip_m", "eta_tip_m", "varsigma_tip_m", "tip_drop_m
 
 
 def run(argv, capsys):
-    """main(argv) -> (exit code, stdout, stderr); argparse's own errors exit via SystemExit."""
-    try:
-        code = main(argv)
-    except SystemExit as exc:
-        code = exc.code
+    """main(argv) -> (exit code, stdout, stderr); argparse's errors too return 2."""
+    code = main(argv)
     out = capsys.readouterr()
     return code, out.out, out.err
 
@@ -123,7 +120,7 @@ def test_json_si_input_reports_si_values(capsys):
     p0, p1 = d["points"]
     assert SI_KEYS <= set(p1)
     assert (p0["U"], p1["U"]) == (0.0, 1.0)
-    assert abs(p1["v"] - 1.6874) <= 0.5e-4  # SPEC section 5: v = 1.6874 U
+    assert abs(p1["v"] - 1.6874) <= 0.5e-4  # the paper, Sec. 3.1: v = 1.6874 U
     for p in (p0, p1):
         assert p["X_tip_m"] == pytest.approx(p["X_tip"] * L_TD, rel=1e-15)
         assert p["eta_tip_m"] == pytest.approx(p["eta_tip"] * L_TD, rel=1e-15)
