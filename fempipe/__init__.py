@@ -6,6 +6,7 @@ elements on a scikit-fem MeshLine or by the paper's sine modes.
 """
 
 from .discretization import FiniteElement, Modal, parse_discretization
+from .errors import ParamError, SolverError
 from .kinematics import shape, tip_values
 from .operators import PipeModel
 from .params import Params, PipeSI
@@ -18,6 +19,7 @@ __all__ = [
     "FiniteElement",
     "Modal",
     "NewtonError",
+    "ParamError",
     "Params",
     "PipeModel",
     "PipeSI",
@@ -27,6 +29,7 @@ __all__ = [
     "shape",
     "solve_path",
     "solve_static",
+    "SolverError",
     "spectrum",
     "stability_analysis",
     "switch_branch",

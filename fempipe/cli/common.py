@@ -28,7 +28,9 @@ command line accepts
 
 * ``0 <= v <= 50`` (:data:`V_MAX`; ``--U`` up to the U of v = 50),
 * ``0 <= gamma <= 2500`` (:data:`GAMMA_MAX` = 50^2),
-* ``0 <= mu <= 10`` (:data:`MU_MAX`; from mu ~ 2 on every mode is overdamped),
+* ``0 <= mu <= 10`` (:data:`MU_MAX`): without flow, mode r of the cantilever
+  has the damping ratio mu lambda_r^2 / 2 (lambda_1 = 1.875), so from
+  mu = 0.57 on every mode is overdamped; 10 leaves ample room,
 * ``-2 pi <= alpha <= 2 pi`` (:data:`ALPHA_MAX`; alpha is an angle).
 
 They are far beyond the paper's (v <= 20, gamma <= 100, mu = 5e-3) and beyond
@@ -54,7 +56,7 @@ Typical use in a subcommand module::
 
     def run(args):
         setup = common.setup_from_args(args)   # raises CLIError on bad input
-        params, pipe, v_values, disc = setup   # unpacks like a 4-tuple
+        model = PipeModel(setup.disc, setup.params)   # setup.v: the flow values
 """
 
 from __future__ import annotations
@@ -63,7 +65,7 @@ import argparse
 import math
 import re
 import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -110,6 +112,7 @@ T_MAX = 1e4
 
 _WHY_V = "the default mesh P3:16 resolves bending waves of length 1/v down to v = 50"
 _WHY_GAMMA = "the default mesh P3:16 resolves the clamp layer 1/sqrt(gamma) down to gamma = 2500"
+_WHY_MU = "every mode is overdamped from mu = 0.57 on"
 
 #: SI option -> PipeSI field.
 _SI_OPTIONS = {"--length": "L", "--EI": "EI", "--m": "m", "--M": "M", "--g": "g", "--a": "a"}
@@ -249,9 +252,6 @@ class ValueList:
     count: int
     low: float
     high: float
-
-    def __len__(self) -> int:
-        return self.count
 
     def values(self, allow_large: bool = False) -> list[float]:
         """The values; CLIError naming ``--allow-large`` past :data:`MAX_VALUES`."""
@@ -439,9 +439,10 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
         "physical parameters",
         f"dimensionless (Eq. (19)); defaults are the paper's case beta={DEFAULT_BETA:g}, "
         f"gamma={DEFAULT_GAMMA:g}, mu={DEFAULT_MU:g}, alpha=0. Give SI values instead to have "
-        "beta, gamma, mu computed. Accepted: gamma <= 2500 and (with --v) v <= 50, the narrowest "
-        "clamp layer 1/sqrt(gamma) and bending wave 1/v the default mesh P3:16 resolves "
-        "(node spacing 1/48); mu <= 10 (every mode overdamped well before).",
+        "beta, gamma, mu computed. Accepted: gamma <= 2500 and v <= 50, where the clamp layer "
+        "(width 1/sqrt(gamma)) and the bending waves of the flow (length 1/v) are as narrow as "
+        "the node spacing 1/48 of the default mesh P3:16; mu <= 10 (every mode is overdamped "
+        "from mu = 0.57 on).",
     )
     g.add_argument(
         "--alpha",
@@ -470,7 +471,7 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--mu",
         metavar="MU",
-        type=option_type("--mu", _param("mu", MU_MAX, "every mode is overdamped well before")),
+        type=option_type("--mu", _param("mu", MU_MAX, _WHY_MU)),
         default=None,
         help=f"Kelvin-Voigt damping, 0..{MU_MAX:g}",
     )
@@ -608,8 +609,6 @@ def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None =
 class Setup:
     """The validated problem behind a command line.
 
-    Unpacks like ``params, pipe, v, disc = setup``.
-
     Attributes
     ----------
     params : Params
@@ -629,9 +628,6 @@ class Setup:
     v: list[float]
     disc: object
     U: list[float] | None = None
-
-    def __iter__(self) -> Iterator:
-        return iter((self.params, self.pipe, self.v, self.disc))
 
     def to_dict(self) -> dict:
         """``params`` (with the ``pipe`` in SI when given) and ``discretization``."""
@@ -655,7 +651,7 @@ def allow_large(args: argparse.Namespace) -> bool:
 
 
 def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
-    """Turn parsed options into validated (Params, PipeSI | None, v list, disc).
+    """Turn parsed options into the validated :class:`Setup`.
 
     Parameters
     ----------
@@ -715,7 +711,7 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
             raise CLIError(
                 "--a",
                 f"the SI pipe has mu = sqrt(EI/(m+M)) a/L^2 = {base.mu:g}, outside "
-                f"0 <= mu <= {MU_MAX:g} (every mode is overdamped well before)",
+                f"0 <= mu <= {MU_MAX:g} ({_WHY_MU})",
             )
     else:
         vals = {"alpha": alpha, "beta": DEFAULT_BETA, "gamma": DEFAULT_GAMMA, "mu": DEFAULT_MU}
