@@ -161,3 +161,20 @@ def test_bifurcation_bad_input(capsys, argv, option):
     code = main(["bifurcation", *argv])
     err = capsys.readouterr().err
     assert code == 2 and option in err and err.count("\n") == 1
+
+
+def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypatch, capsys):
+    """A failed sweep ends with exit 1 and one line; with --out it says a rerun resumes."""
+    import fempipe.bifurcation
+    from fempipe.errors import SolverError
+
+    def fail(*args, **kwargs):
+        raise SolverError("integration failed at v = 9")
+
+    monkeypatch.setattr(fempipe.bifurcation, "bifurcation_diagram", fail)
+    out = tmp_path / "run"
+    code = main(["bifurcation", *CHEAP, "--v", "8,9", "--out", str(out), "--quiet"])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and len(lines) == 1
+    assert lines[0].startswith("fempipe bifurcation: error: integration failed at v = 9; ")
+    assert lines[0].endswith(f"kept in {out}/points; rerun the command to resume")

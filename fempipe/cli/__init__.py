@@ -7,7 +7,9 @@ import importlib
 import sys
 
 #: subcommand -> (module, one-line help).  Each module defines
-#: ``add_arguments(parser)`` and ``run(args) -> int``.
+#: ``add_arguments(parser)`` and ``run(args) -> int``, and optionally
+#: ``solver_error_hint(args) -> str | None``, a sentence added to the message
+#: of a solver failure (e.g. where finished work was kept).
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "static": ("fempipe.cli.static", "static large deformation against flow velocity"),
     "spectrum": ("fempipe.cli.spectrum", "eigenvalues of the linearised problem against v"),
@@ -36,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
         mod = importlib.import_module(module)
         p = sub.add_parser(name, help=help_, description=help_)
         mod.add_arguments(p)
-        p.set_defaults(_run=mod.run)
+        p.set_defaults(_run=mod.run, _hint=getattr(mod, "solver_error_hint", None))
     return parser
 
 
@@ -67,7 +69,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prefix} {exc}", file=sys.stderr)
         return 2
     except SolverError as exc:  # a solver failed: say where, exit 1
-        print(f"{prefix} {' '.join(str(exc).split())}", file=sys.stderr)
+        hint = args._hint(args) if args._hint is not None else None
+        message = " ".join(str(exc).split()) + (f"; {hint}" if hint else "")
+        print(f"{prefix} {message}", file=sys.stderr)
         return 1
     except Interrupted as exc:  # SIGINT or SIGTERM: workers are stopped by now
         print(f"fempipe {args.command}: {exc}", file=sys.stderr)

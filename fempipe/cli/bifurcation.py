@@ -82,6 +82,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_output_arguments(parser)
 
 
+def solver_error_hint(args: argparse.Namespace) -> str | None:
+    """After a failed sweep: the finished points are in the store, a rerun resumes."""
+    if args.out is None:
+        return None
+    return f"finished points are kept in {args.out}/points; rerun the command to resume"
+
+
 def _parse(args):
     directions = [d.strip() for d in str(args.directions).split(",")]
     if not directions or any(d not in ("up", "down") for d in directions):
