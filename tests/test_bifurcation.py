@@ -132,9 +132,9 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
         for p in workers_seen:
             if _running(p):
                 os.kill(p, signal.SIGKILL)
-    assert proc.returncode == (-sig if sig == signal.SIGKILL else 128 + sig)
     assert len(workers_seen) == (workers if workers > 1 else 0)
     assert not survivors
+    assert proc.returncode == (-sig if sig == signal.SIGKILL else 128 + sig)
     total = len(directions) * len(VALUES)
     done = sorted(p.name for p in store.glob("a00-*.json"))
     assert 1 <= len(done) < total, done  # killed midway

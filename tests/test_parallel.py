@@ -7,6 +7,7 @@ whether the parent could clean up (SIGTERM, SIGINT) or not (SIGKILL).
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import signal
@@ -188,16 +189,17 @@ def _alive(pid: int) -> bool:
 def _signal_parent(tmp_path, sig, *, handle=False, disarm=False):
     """Start the parent, wait for its two busy workers, send ``sig``.
 
-    Returns the parent's exit status, its stderr, and the seconds until the
-    last worker was gone (None if some survived ``GRACE`` seconds).
+    Returns the parent's exit status (None if it still runs after ``GRACE``
+    seconds), its stderr, and the seconds until the last worker was gone
+    (None if some survived ``GRACE`` seconds).
     """
     script = tmp_path / "parent.py"
     script.write_text(PARENT)
     env = dict(os.environ, PYTHONPATH=str(Path(fempipe.__file__).parents[1]))
     args = [str(tmp_path), "handle" if handle else "-", "disarm" if disarm else "-"]
-    proc = subprocess.Popen(
-        [sys.executable, str(script), *args], env=env, stderr=subprocess.PIPE, text=True
-    )
+    log = tmp_path / "stderr.txt"
+    with log.open("w") as err:
+        proc = subprocess.Popen([sys.executable, str(script), *args], env=env, stderr=err)
     pids: list[int] = []
     try:
         deadline = time.monotonic() + 60
@@ -207,12 +209,13 @@ def _signal_parent(tmp_path, sig, *, handle=False, disarm=False):
         assert len(pids) == 2, "the workers did not start"
         t0 = time.monotonic()
         proc.send_signal(sig)
-        _, err = proc.communicate(timeout=GRACE)
+        with contextlib.suppress(subprocess.TimeoutExpired):  # None: still running
+            proc.wait(timeout=GRACE)
         while any(_alive(p) for p in pids) and time.monotonic() - t0 < GRACE:
             time.sleep(0.02)
         gone = time.monotonic() - t0
         survivors = [p for p in pids if _alive(p)]
-        return proc.returncode, err, (None if survivors else gone)
+        return proc.poll(), log.read_text(), (None if survivors else gone)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -229,8 +232,8 @@ needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
 def test_workers_die_with_a_killed_parent(tmp_path):
     """SIGKILL: the parent cannot clean up; its workers must notice and exit."""
     rc, _, gone = _signal_parent(tmp_path, signal.SIGKILL)
-    assert rc == -signal.SIGKILL
     assert gone is not None and gone < GRACE
+    assert rc == -signal.SIGKILL
 
 
 @needs_proc
@@ -238,22 +241,22 @@ def test_workers_die_with_a_killed_parent(tmp_path):
 def test_the_watchdog_alone_ends_orphaned_workers(tmp_path):
     """Without the parent-death signal (other platforms), the watchdog thread does it."""
     rc, _, gone = _signal_parent(tmp_path, signal.SIGKILL, disarm=True)
-    assert rc == -signal.SIGKILL
     assert gone is not None and gone < GRACE
+    assert rc == -signal.SIGKILL
 
 
 @needs_proc
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_an_interrupted_parent_stops_its_workers_and_exits(tmp_path, sig, code):
     rc, err, gone = _signal_parent(tmp_path, sig, handle=True)
+    assert gone is not None and gone < GRACE
     assert rc == code
     assert f"stopped: interrupted by {signal.Signals(sig).name}" in err
-    assert gone is not None and gone < GRACE
 
 
 @needs_proc
 def test_plain_sigterm_leaves_no_workers(tmp_path):
     """SIGTERM's default action ends the parent at once; the workers follow."""
     rc, _, gone = _signal_parent(tmp_path, signal.SIGTERM)
-    assert rc == -signal.SIGTERM
     assert gone is not None and gone < GRACE
+    assert rc == -signal.SIGTERM
