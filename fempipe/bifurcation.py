@@ -102,6 +102,7 @@ class BifurcationPoint:
     qdot: np.ndarray = field(repr=False)
 
     def to_dict(self, state: bool = False) -> dict:
+        """Plain-JSON form; with ``state`` also q and qdot (as the point store keeps them)."""
         d = {
             "v": self.v,
             "direction": self.direction,
@@ -126,6 +127,7 @@ class BifurcationPoint:
 
     @classmethod
     def from_dict(cls, d: dict) -> BifurcationPoint:
+        """Inverse of ``to_dict(state=True)``."""
         kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot")}
         return cls(**kw, q=np.asarray(d["q"], dtype=float), qdot=np.asarray(d["qdot"], dtype=float))
 
@@ -159,15 +161,18 @@ class PointStore:
             _write_json(path, self.manifest, indent=1)
 
     def path(self, alpha_index: int, direction: str, index: int) -> Path:
+        """File of point ``index`` of the sweep ``direction`` at the ``alpha_index``-th alpha."""
         return self.directory / f"a{alpha_index:02d}-{direction}-{index:03d}.json"
 
     def load(self, alpha_index: int, direction: str, index: int) -> BifurcationPoint | None:
+        """The stored point, or None if it has not been finished."""
         p = self.path(alpha_index, direction, index)
         if not p.exists():
             return None
         return BifurcationPoint.from_dict(json.loads(p.read_text()))
 
     def save(self, alpha_index: int, point: BifurcationPoint) -> None:
+        """Write a finished point with its state (atomically: complete or absent)."""
         _write_json(self.path(alpha_index, point.direction, point.index), point.to_dict(state=True))
 
     def count(self) -> int:
@@ -389,7 +394,18 @@ def _manifest(model: PipeModel, values, directions, alphas, options) -> dict:
 
 @dataclass(frozen=True)
 class BifurcationDiagram:
-    """All points of a set of sweeps, with run diagnostics."""
+    """All points of a set of sweeps, with run diagnostics.
+
+    Attributes
+    ----------
+    points : list of dict
+        :meth:`BifurcationPoint.to_dict` of every point (without the states),
+        ordered by alpha, direction, then sweep order.
+    wall_time : float
+        Seconds for the whole run (loading stored points included).
+    manifest : dict
+        The run's description, as in the point store's ``run.json``.
+    """
 
     points: list
     wall_time: float
@@ -397,7 +413,7 @@ class BifurcationDiagram:
 
     def to_dict(self) -> dict:
         return {
-            "points": [p if isinstance(p, dict) else p.to_dict() for p in self.points],
+            "points": list(self.points),
             "wall_time": self.wall_time,
             "discretization": self.manifest["discretization"],
             "params": self.manifest["params"],

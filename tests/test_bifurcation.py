@@ -207,6 +207,23 @@ def test_several_alphas_are_independent_sweeps():
     assert abs(d.points[1]["Z_tip"][0]) > 0.1 > abs(d.points[0]["Z_tip"][0])
 
 
+def test_a_failed_sweep_does_not_stop_the_others(tmp_path, monkeypatch):
+    """The failure is raised once the other sweeps have ended and stored their points."""
+    real = bif.find_attractor
+
+    def fails_at_half(model, *a, **k):
+        if model.params.alpha == 0.5:
+            raise RuntimeError("injected failure")
+        return real(model, *a, **k)
+
+    monkeypatch.setattr(bif, "find_attractor", fails_at_half)
+    with pytest.raises(RuntimeError, match="injected failure"):
+        bifurcation_diagram(
+            _model(), [5.0], ["up"], alphas=[0.5, 0.0], store_dir=tmp_path, **OPTIONS
+        )
+    assert sorted(p.name for p in tmp_path.glob("a*.json")) == ["a01-up-000.json"]
+
+
 @pytest.mark.parametrize(
     "kwargs, word",
     [({"directions": ["sideways"]}, "direction"), ({"workers": 0}, "workers")],
