@@ -1,4 +1,4 @@
-"""Acceptance measurements of the nonlinear dynamics (issue 4).
+"""Acceptance measurements of the nonlinear dynamics (quoted in ``fempipe/dynamics.py``).
 
 Run ``python validation/dynamics_acceptance.py [--quick] [--out FILE.json]``.
 
@@ -6,8 +6,8 @@ Run ``python validation/dynamics_acceptance.py [--quick] [--out FILE.json]``.
    in the first sine mode, tau in [0, 2], rtol = 1e-6) on P3 with 8, 16, 32, 64
    elements and on the 4-mode Galerkin model: steps, rejected steps, wall time.
    The stiff rates grow 4096x from 8 to 64 elements; the step counts must not.
-2. ``cycles``: the limit cycle at v = 10 (beta = 0.142, gamma = 18.9,
-   mu = 5e-3) for alpha = 0, pi/4, pi/2 by shooting (rtol 1e-8) on
+2. ``cycles``: the limit cycle at v = 10 (the paper's reference case,
+   :data:`fempipe.params.PAPER_CASE`) for alpha = 0, pi/4, pi/2 by shooting (rtol 1e-8) on
    P3:8, 16, 32, 64 (mesh convergence: successive differences) and on the
    modal N = 3, 4 of the paper: period, tip extrema of eta(1), X_g(1), Z_g(1),
    largest non-trivial Floquet multiplier.
@@ -16,7 +16,6 @@ Run ``python validation/dynamics_acceptance.py [--quick] [--out FILE.json]``.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 
@@ -24,6 +23,7 @@ import numpy as np
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.dynamics import initial_state, simulate
+from fempipe.io import json_dumps, write_json
 from fempipe.limit_cycle import find_attractor
 
 
@@ -59,7 +59,7 @@ def cycles(alphas=(0.0, math.pi / 4, math.pi / 2), elements=(8, 16, 32, 64)) -> 
                 "wall_time": time.perf_counter() - t0,
             }
             rows.append(row)
-            print(json.dumps(row), flush=True)
+            print(json_dumps(row, indent=None), flush=True)
     return rows
 
 
@@ -86,10 +86,9 @@ def main() -> None:
     res["cycles"] = cycles(elements=elements)
     res["convergence"] = convergence_table(res["cycles"])
     for row in res["convergence"]:
-        print(json.dumps(row))
+        print(json_dumps(row, indent=None))
     if args.out:
-        with open(args.out, "w") as fh:
-            json.dump(res, fh, indent=1)
+        write_json(args.out, res)
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ __all__ = [
     "Table",
     "below",
     "close",
+    "format_cell",
     "holds",
     "merge_results",
 ]
@@ -82,7 +83,8 @@ class Check:
         return to_jsonable(asdict(self))
 
 
-def _fmt(x: Any) -> str:
+def format_cell(x: Any) -> str:
+    """A value as a Markdown table cell: floats to 8 significant digits, ``|`` escaped."""
     if isinstance(x, (float, np.floating)):
         return f"{float(x):.8g}"
     return str(x).replace("|", "\\|").replace("\n", " ")
@@ -165,9 +167,9 @@ class Table:
     note: str = ""
 
     def to_markdown(self) -> str:
-        head = "| " + " | ".join(_fmt(c) for c in self.columns) + " |"
+        head = "| " + " | ".join(format_cell(c) for c in self.columns) + " |"
         sep = "|" + "|".join("---" for _ in self.columns) + "|"
-        body = ["| " + " | ".join(_fmt(c) for c in row) + " |" for row in self.rows]
+        body = ["| " + " | ".join(format_cell(c) for c in row) + " |" for row in self.rows]
         out = [f"**{self.title}**", "", head, sep, *body]
         if self.note:
             out += ["", self.note]

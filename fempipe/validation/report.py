@@ -9,17 +9,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .checks import Check
+from .checks import Check, format_cell
 from .suite import SuiteResult
 
 __all__ = ["render_report", "write_report"]
-
-
-def _cell(x) -> str:
-    if isinstance(x, float):
-        return f"{x:.8g}"
-    s = str(x)
-    return s.replace("|", "\\|").replace("\n", " ")
 
 
 def _check_row(c: Check) -> str:
@@ -28,12 +21,12 @@ def _check_row(c: Check) -> str:
         mark,
         c.category,
         c.claim,
-        _cell(c.measured),
-        _cell(c.reference),
+        format_cell(c.measured),
+        format_cell(c.reference),
         c.tolerance,
         c.source,
     ]
-    return "| " + " | ".join(_cell(x) for x in cells) + " |"
+    return "| " + " | ".join(format_cell(x) for x in cells) + " |"
 
 
 def _minutes(t: float) -> str:
@@ -82,7 +75,7 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
         r = o.result
         if r is None:
             lines.append(
-                f"| [{o.name}](#{o.name}) | | | {o.status}: {_cell(o.error.splitlines()[-1] if o.error else '')} | | | |"
+                f"| [{o.name}](#{o.name}) | | | {o.status}: {format_cell(o.error.splitlines()[-1] if o.error else '')} | | | |"
             )
             continue
         n_ok = sum(c.passed for c in r.checks if c.category == "numerics")
@@ -91,7 +84,7 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
         p_all = sum(c.category == "paper" for c in r.checks)
         status = o.status if o.status != "ok" else ("ok" if r.numerics_passed else "FAIL")
         lines.append(
-            f"| [{o.name}](#{o.name}) | {r.figure} | {_cell(r.title)} | {status} | "
+            f"| [{o.name}](#{o.name}) | {r.figure} | {format_cell(r.title)} | {status} | "
             f"{n_ok}/{n_all} | {p_ok}/{p_all} | {r.runtime:.1f} s |"
         )
     # Findings: every disagreement with the paper, with its measurement.
@@ -108,8 +101,8 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
                 k += 1
                 lines.append(
                     f"{k}. **{o.result.figure}** ({o.name}): “{c.claim}” does not hold for the "
-                    f"converged model: measured {_cell(c.measured)}; criterion "
-                    f"{_cell(c.reference)} ({c.tolerance}). Reference: {c.source}."
+                    f"converged model: measured {format_cell(c.measured)}; criterion "
+                    f"{format_cell(c.reference)} ({c.tolerance}). Reference: {c.source}."
                 )
     if k == 0:
         lines.append("None.")
@@ -117,7 +110,8 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
     if failed:
         lines += ["", "### Failed numerics checks (bugs or unconverged settings in fempipe)", ""]
         lines += [
-            f"- {n}: {c.claim}: measured {_cell(c.measured)}; {c.tolerance}" for n, c in failed
+            f"- {n}: {c.claim}: measured {format_cell(c.measured)}; {c.tolerance}"
+            for n, c in failed
         ]
     # Per case.
     for o in suite.outcomes:

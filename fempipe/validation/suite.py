@@ -43,7 +43,7 @@ _COST = {
 _GROUPS = (("fig11", "fig12"),)
 
 
-def _tasks(order: list[str]) -> list[tuple[str, ...]]:
+def _case_groups(order: list[str]) -> list[tuple[str, ...]]:
     """Group the cases of ``order`` into worker tasks, keeping the order."""
     tasks, seen = [], set()
     for n in order:
@@ -323,7 +323,9 @@ def run_suite(
 
     # The parts of the split (longest) cases first, then the rest by cost.
     tasks = [((n,), quick, out, k) for n, parts in split.items() for k in parts]
-    tasks += [(group, quick, out, None) for group in _tasks([n for n in order if n not in split])]
+    tasks += [
+        (group, quick, out, None) for group in _case_groups([n for n in order if n not in split])
+    ]
     pieces: dict[str, dict] = {n: {} for n in split}
 
     def task_done(i: int, result) -> None:
