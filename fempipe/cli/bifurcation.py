@@ -31,6 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--directions",
         metavar="D",
+        type=common.option_type("--directions", _directions),
         default="up,down",
         help="sweep directions: up, down or up,down (default up,down)",
     )
@@ -89,12 +90,18 @@ def solver_error_hint(args: argparse.Namespace) -> str | None:
     return f"finished points are kept in {args.out}/points; rerun the command to resume"
 
 
-def _parse(args):
-    directions = [d.strip() for d in str(args.directions).split(",")]
-    if not directions or any(d not in ("up", "down") for d in directions):
-        raise CLIError("--directions", f"expects up, down or up,down, got {args.directions!r}")
+def _directions(text: str) -> list[str]:
+    """``--directions``: up, down or both, each once."""
+    directions = [d.strip() for d in str(text).split(",")]
+    if any(d not in ("up", "down") for d in directions):
+        raise ValueError(f"expects up, down or up,down, got {text!r}")
     if len(set(directions)) != len(directions):
-        raise CLIError("--directions", f"repeats a direction: {args.directions!r}")
+        raise ValueError(f"repeats a direction: {text!r}")
+    return directions
+
+
+def _parse(args):
+    directions = args.directions
     alphas = None
     if args.alphas is not None:
         alphas = common.parse_alpha_list(args.alphas, "--alphas", common.allow_large(args))

@@ -36,8 +36,8 @@ command line accepts
 At the ends P3:16 is still close to P3:64: 6e-5 in the static tip X_tip at
 gamma = 2500 (alpha = pi/2; 4e-8 at gamma = 100) and 3 % in the first
 eigenvalue at v = 50 (alpha = 0; 8e-7 at v = 10); refine ``--fe`` for accuracy
-there.  The ranges are far beyond the paper's figures (v <= 12, gamma <= 100,
-mu = 5e-3) and beyond what a soft plug-flow pipe is: v = 50 is U = 30 m/s in
+there.  The ranges are far beyond the paper's figures (v <= 12, gamma <= 100)
+and beyond what a soft plug-flow pipe is: v = 50 is U = 30 m/s in
 Texier & Dorbolo's pipe.
 
 Work limits

@@ -43,14 +43,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="LIST",
         type=common.option_type("--betas", lambda t: _list(t, "beta", 1.0)),
         default=None,
-        help="mass ratios, one curve each at --gamma (Fig. 6(a)), e.g. 0.1,0.142,0.3,0.5",
+        help="mass ratios, one curve each at --gamma (Fig. 6(a)), e.g. "
+        f"0.1,{common.DEFAULT_BETA:g},0.3,0.5",
     )
     g.add_argument(
         "--gammas",
         metavar="LIST",
         type=common.option_type("--gammas", lambda t: _list(t, "gamma", common.GAMMA_MAX)),
         default=None,
-        help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. 5,10,18.9,30",
+        help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. "
+        f"5,10,{common.DEFAULT_GAMMA:g},30",
     )
     g.add_argument(
         "--workers",
