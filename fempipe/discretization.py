@@ -1,15 +1,19 @@
 """The two discretisations of theta(xi) behind one contract.
 
 A discretisation represents theta = sum_j phi_j(xi) q_j with theta(0) = 0
-built in, and supplies everything the residual of Eq. (20) needs:
+built in, and supplies everything the solvers use (:class:`Discretization`;
+nothing else is ever asked of it):
 
+``n``          number of unknowns q_j;
 ``quad``       :class:`~fempipe.quadrature.LineQuadrature` (points, weights,
                integration operators);
 ``Phi``        basis values at the quadrature points, shape (n_q, n);
-``dPhi``       their xi-derivatives, shape (n_q, n);
 ``tip``        phi_j(1), shape (n,);
 ``K``          bending stiffness ``\\int phi_i' phi_j'``, shape (n, n);
-``sparse``     whether ``Phi``, ``dPhi`` and ``K`` are scipy sparse matrices;
+``gram``       L2 Gram matrix ``\\int phi_i phi_j``, shape (n, n): the metric
+               of theta (arclength of continuation, L2 projections);
+``sparse``     whether ``Phi``, ``K`` and ``gram`` are scipy sparse matrices;
+``name``       the CLI spelling (``P3:16``, ``modal:4``);
 ``evaluate``   theta at arbitrary points, for post-processing;
 ``to_dict``    a JSON-able description.
 
@@ -34,13 +38,18 @@ __all__ = ["Discretization", "FiniteElement", "Modal", "parse_discretization"]
 
 @runtime_checkable
 class Discretization(Protocol):
-    quad: LineQuadrature
-    Phi: object
-    dPhi: object
-    tip: np.ndarray
-    K: object
-    sparse: bool
+    """What every solver of the package uses of a discretisation (module docstring)."""
+
     n: int
+    quad: LineQuadrature
+    Phi: np.ndarray | sp.csr_matrix
+    tip: np.ndarray
+    K: np.ndarray | sp.csr_matrix
+    gram: np.ndarray | sp.csr_matrix
+    sparse: bool
+
+    @property
+    def name(self) -> str: ...
 
     def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray: ...
 
@@ -68,8 +77,12 @@ class FiniteElement:
 
     Notes
     -----
-    The Dirichlet condition theta(0) = 0 is imposed by removing the dof of the
-    node at xi = 0; theta'(1) = 0 is natural in the weak form.
+    scikit-fem assembles with the package's own Gauss rule (passed to
+    ``Basis`` as ``quadrature``), so its forms (``K``, ``gram``) and the
+    nonlinear terms integrated on :attr:`quad` use the same points and weights.
+    The Dirichlet condition theta(0) = 0 is imposed by removing the dofs of
+    the boundary named ``clamp`` (``basis.get_dofs``); theta'(1) = 0 is
+    natural in the weak form.
     """
 
     def __init__(
@@ -79,7 +92,14 @@ class FiniteElement:
         nodes: np.ndarray | None = None,
         n_gauss: int | None = None,
     ) -> None:
-        from skfem import Basis, BilinearForm, ElementLineP1, ElementLineP2, ElementLinePp, MeshLine
+        from skfem import (
+            Basis,
+            BilinearForm,
+            ElementLineP1,
+            ElementLineP2,
+            ElementLinePp,
+            MeshLine,
+        )
 
         degree = int(degree)
         if not 1 <= degree <= 10:
@@ -106,53 +126,35 @@ class FiniteElement:
             )
         element = {1: ElementLineP1, 2: ElementLineP2}.get(degree)
         element = element() if element is not None else ElementLinePp(degree)
-        self.mesh = MeshLine(nodes)
-        t = self.mesh.t
-        if not (
-            np.all(self.mesh.p[0, t[0]] < self.mesh.p[0, t[1]])
-            and np.all(np.diff(self.mesh.p[0, t[0]]) > 0)
-        ):
-            raise RuntimeError("MeshLine cells are not ordered left to right")
-        self.basis = Basis(self.mesh, element, intorder=2 * self.n_gauss - 1)
-        ref = self.basis.X[0]
-        if ref.size != self.n_gauss:
-            raise RuntimeError("scikit-fem quadrature is not the expected Gauss rule")
         self.quad = LineQuadrature(nodes, self.n_gauss)
-        if not np.allclose(np.sort(ref), self.quad.ref_points, atol=1e-13):
-            raise RuntimeError("scikit-fem quadrature points differ from Gauss-Legendre")
-        order = np.argsort(ref)
-
-        # Global quadrature index of (element e, point k) is e * n_g + k.
-        n_g, n_el, n_b = self.n_gauss, self.n_elements, self.basis.Nbfun
-        rows = np.broadcast_to(
-            (np.arange(n_el)[:, None] * n_g + np.arange(n_g)[None, :])[None], (n_b, n_el, n_g)
+        self.mesh = MeshLine(nodes).with_boundaries(
+            {"clamp": lambda x: x[0] == 0.0, "free_end": lambda x: x[0] == 1.0}
         )
-        cols = np.broadcast_to(self.basis.element_dofs[:, :, None], (n_b, n_el, n_g))
-        vals = np.stack([np.asarray(self.basis.basis[i][0])[:, order] for i in range(n_b)])
-        ders = np.stack([self.basis.basis[i][0].grad[0][:, order] for i in range(n_b)])
+        # The reference cell of MeshLine is [0, 1], that of LineQuadrature too.
+        self.basis = Basis(
+            self.mesh, element, quadrature=(self.quad.ref_points[None, :], self.quad.ref_weights)
+        )
         N_all = self.basis.N
-        shape = (self.quad.n_q, N_all)
-        Phi_all = sp.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=shape)
-        dPhi_all = sp.csr_matrix((ders.ravel(), (rows.ravel(), cols.ravel())), shape=shape)
-
-        clamped = int(np.argmin(self.mesh.p[0]))
-        free_end = int(np.argmax(self.mesh.p[0]))
-        # Vertex dofs come first in scikit-fem's numbering, one per vertex.
-        self.clamped_dof = clamped
-        self.free = np.setdiff1d(np.arange(N_all), [clamped])
         self.n_all = N_all
+        self.free = self.basis.complement_dofs(self.basis.get_dofs("clamp"))
         self.n = self.free.size
-        self.Phi = Phi_all[:, self.free].tocsr()
-        self.dPhi = dPhi_all[:, self.free].tocsr()
+        self.Phi = self.basis.probes(self.quad.x[None, :]).tocsr()[:, self.free]
+        # A Lagrange vertex dof is the value of theta there: theta(1) is the
+        # dof of the free end.
         tip = np.zeros(N_all)
-        tip[free_end] = 1.0
+        tip[self.basis.get_dofs("free_end").all()] = 1.0
         self.tip = tip[self.free]
 
         @BilinearForm
         def bending(u, v, w):
             return u.grad[0] * v.grad[0]
 
+        @BilinearForm
+        def l2(u, v, w):
+            return u * v
+
         self.K = bending.assemble(self.basis)[self.free][:, self.free].tocsr()
+        self.gram = l2.assemble(self.basis)[self.free][:, self.free].tocsr()
         self.sparse = True
 
     @property
@@ -223,10 +225,12 @@ class Modal:
         self.k = (2.0 * np.arange(1, n_modes + 1) - 1.0) * np.pi / 2.0
         x = self.quad.x
         self.Phi = np.sin(np.outer(x, self.k))
-        self.dPhi = np.cos(np.outer(x, self.k)) * self.k
         self.tip = np.sin(self.k)
         # \int_0^1 phi_i' phi_j' = k_i^2 / 2 delta_ij (orthogonal cosines).
         self.K = np.diag(self.k**2 / 2.0)
+        # \int_0^1 phi_i phi_j = delta_ij / 2 as well; summed by the quadrature
+        # like every integral of the nonlinear terms.
+        self.gram = (self.Phi.T * self.quad.w) @ self.Phi
         self.sparse = False
 
     @property

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .discretization import Discretization
 from .quadrature import lagrange_integrals
 
 __all__ = ["Shape", "shape", "tip_values", "tip_velocity"]
@@ -39,19 +40,8 @@ class Shape:
     X_g: np.ndarray
     Z_g: np.ndarray
 
-    def scaled(self, L: float) -> dict[str, np.ndarray]:
-        """Lengths in metres for a pipe of length L (theta stays in rad)."""
-        return {
-            "x0": self.xi * L,
-            "theta": self.theta,
-            "u": self.varsigma * L,
-            "w": self.eta * L,
-            "X_g": self.X_g * L,
-            "Z_g": self.Z_g * L,
-        }
 
-
-def _edge_points(disc, points_per_cell: int) -> np.ndarray:
+def _edge_points(disc: Discretization, points_per_cell: int) -> np.ndarray:
     """Points at which shapes are sampled: every cell edge plus interior points."""
     edges = disc.quad.edges
     if points_per_cell <= 1:
@@ -61,7 +51,7 @@ def _edge_points(disc, points_per_cell: int) -> np.ndarray:
     return np.append(inner, 1.0)
 
 
-def shape(disc, q: np.ndarray, alpha: float, points_per_cell: int = 4) -> Shape:
+def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: int = 4) -> Shape:
     """Centreline of the state q.
 
     Parameters
@@ -104,33 +94,67 @@ def shape(disc, q: np.ndarray, alpha: float, points_per_cell: int = 4) -> Shape:
     )
 
 
-def tip_values(disc, q: np.ndarray, alpha: float) -> dict[str, float]:
+def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
     """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
 
-    Exact integrals of the interpolated integrands over [0, 1] (Gauss sums).
+    The displacements (Eq. (5)) and global coordinates (Eq. (28)) at xi = 1
+    are the integrals of cos theta, sin theta over [0, 1], summed exactly on
+    the interpolated integrands by the discretisation's Gauss rule.  The one
+    place the package computes the tip's geometry.
+
+    Parameters
+    ----------
+    disc : Discretization
+    q : ndarray, shape (n,) or (m, n)
+        One state or m states.
+    alpha : float
+        Inclination, rad.
+
+    Returns
+    -------
+    dict
+        Floats for one state, arrays of shape (m,) for m states.
     """
-    quad = disc.quad
     q = np.asarray(q)
-    th = disc.Phi @ q
-    w = quad.w
-    return {
-        "theta_tip": float(disc.tip @ q),
-        "varsigma_tip": float(w @ np.cos(th)) - 1.0,
-        "eta_tip": float(w @ np.sin(th)),
-        "X_tip": float(w @ np.cos(th + alpha)),
-        "Z_tip": float(w @ np.sin(th + alpha)),
+    th = disc.Phi @ q.T  # (n_q,) or (n_q, m)
+    w = disc.quad.w
+    out = {
+        "theta_tip": disc.tip @ q.T,
+        "varsigma_tip": w @ np.cos(th) - 1.0,
+        "eta_tip": w @ np.sin(th),
+        "X_tip": w @ np.cos(th + alpha),
+        "Z_tip": w @ np.sin(th + alpha),
     }
+    if q.ndim == 1:
+        return {k: float(val) for k, val in out.items()}
+    return {k: np.asarray(val) for k, val in out.items()}
 
 
-def tip_velocity(disc, q: np.ndarray, qdot: np.ndarray, alpha: float) -> dict[str, float]:
-    """Tip velocities (d/dtau of eta_tip, X_tip, Z_tip), Eq. (27)."""
-    quad = disc.quad
-    th = disc.Phi @ np.asarray(q)
-    thd = disc.Phi @ np.asarray(qdot)
-    w = quad.w
-    return {
-        "varsigma_tip": float(-(w @ (thd * np.sin(th)))),
-        "eta_tip": float(w @ (thd * np.cos(th))),
-        "X_tip": float(-(w @ (thd * np.sin(th + alpha)))),
-        "Z_tip": float(w @ (thd * np.cos(th + alpha))),
+def tip_velocity(disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float) -> dict:
+    """Tip velocities, d/dtau of varsigma_tip, eta_tip, X_tip, Z_tip (Eq. (27)).
+
+    Parameters
+    ----------
+    disc : Discretization
+    q, qdot : ndarray, shape (n,) or (m, n)
+        One state or m states.
+    alpha : float
+
+    Returns
+    -------
+    dict
+        Floats for one state, arrays of shape (m,) for m states.
+    """
+    q, qdot = np.asarray(q), np.asarray(qdot)
+    th = disc.Phi @ q.T
+    thd = disc.Phi @ qdot.T
+    w = disc.quad.w
+    out = {
+        "varsigma_tip": -(w @ (thd * np.sin(th))),
+        "eta_tip": w @ (thd * np.cos(th)),
+        "X_tip": -(w @ (thd * np.sin(th + alpha))),
+        "Z_tip": w @ (thd * np.cos(th + alpha)),
     }
+    if q.ndim == 1:
+        return {k: float(val) for k, val in out.items()}
+    return {k: np.asarray(val) for k, val in out.items()}

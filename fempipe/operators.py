@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .discretization import Discretization
 from .params import Params
 
 __all__ = ["Fields", "PipeModel"]
@@ -46,14 +47,25 @@ __all__ = ["Fields", "PipeModel"]
 
 @dataclass(frozen=True)
 class Fields:
-    """theta and its time derivatives at the quadrature points."""
+    """theta, its time derivatives and the local frame at the quadrature points.
+
+    Attributes
+    ----------
+    theta, theta_dot, theta_ddot : ndarray, shape (n_q,)
+    theta_tip : float
+        theta(1).
+    tangent : ndarray, shape (n_q, 2)
+        t = (cos theta, sin theta).
+    normal : ndarray, shape (n_q, 2)
+        n = (-sin theta, cos theta).
+    """
 
     theta: np.ndarray
     theta_dot: np.ndarray
     theta_ddot: np.ndarray
     theta_tip: float
-    t: np.ndarray  # tangent (cos, sin), shape (n_q, 2)
-    n: np.ndarray  # normal (-sin, cos), shape (n_q, 2)
+    tangent: np.ndarray
+    normal: np.ndarray
 
 
 def _rows(d: np.ndarray, A):
@@ -85,7 +97,7 @@ class PipeModel:
     every dof with every other; they cost O(n_q n) to form.
     """
 
-    def __init__(self, disc, params: Params) -> None:
+    def __init__(self, disc: Discretization, params: Params) -> None:
         self.disc = disc
         self.params = params
         self.quad = disc.quad
@@ -106,6 +118,7 @@ class PipeModel:
 
     # ------------------------------------------------------------------
     def fields(self, q, qdot=None, qddot=None) -> Fields:
+        """theta, its rates and the local frame at the quadrature points."""
         Phi = self.disc.Phi
         theta = Phi @ np.asarray(q)
         zero = np.zeros_like(theta)
@@ -117,8 +130,8 @@ class PipeModel:
             theta_dot=th_d,
             theta_ddot=th_dd,
             theta_tip=float(self.disc.tip @ np.asarray(q)),
-            t=np.stack([c, s], axis=1),
-            n=np.stack([-s, c], axis=1),
+            tangent=np.stack([c, s], axis=1),
+            normal=np.stack([-s, c], axis=1),
         )
 
     def _test(self, f: np.ndarray) -> np.ndarray:
@@ -128,17 +141,17 @@ class PipeModel:
     def _project(self, F: np.ndarray, fl: Fields) -> np.ndarray:
         """``\\int phi_i n . C^R F`` for a vector field F, shape (n_q, 2)."""
         G = self.quad.from_tip(F)
-        return self._test(np.einsum("qc,qc->q", fl.n, G))
+        return self._test(np.einsum("qc,qc->q", fl.normal, G))
 
     def _project_jac(self, dF: np.ndarray, fl: Fields) -> np.ndarray:
         """Derivative of ``\\int phi_i n . C^R F`` through F: dF shape (n_q, 2, n)."""
         G = self.quad.from_tip(dF)
-        return self._test(np.einsum("qc,qcj->qj", fl.n, G))
+        return self._test(np.einsum("qc,qcj->qj", fl.normal, G))
 
     def _normal_weight(self, F: np.ndarray, fl: Fields) -> np.ndarray:
         """Derivative of ``\\int phi_i n . C^R F`` through n(theta) (dn = -t dtheta):
         ``Phi^T diag(d) Phi`` with the d returned here."""
-        return -np.einsum("qc,qc->q", fl.t, self.quad.from_tip(F)) * self.w
+        return -np.einsum("qc,qc->q", fl.tangent, self.quad.from_tip(F)) * self.w
 
     @property
     def _Phi_dense(self) -> np.ndarray:
@@ -178,7 +191,9 @@ class PipeModel:
 
     def follower(self, fl: Fields) -> np.ndarray:
         """Eq. (20) v^2 sin(theta(1) - theta): the jet's reaction at the free end, Eq. (14)."""
-        return self.params.v**2 * self._test(np.sin(fl.theta_tip - fl.theta))
+        # v * v, not v**2: a product overflows to inf (caught by the solvers as
+        # a non-finite residual) where a power raises OverflowError.
+        return self.params.v * self.params.v * self._test(np.sin(fl.theta_tip - fl.theta))
 
     def _follower_weights(self, fl: Fields) -> tuple[np.ndarray, np.ndarray]:
         """d(follower)/dq = ``Phi^T diag(d) Phi + tip_col tip^T``: (d, tip_col).
@@ -186,7 +201,7 @@ class PipeModel:
         The theta(1) dependence couples every row to the tip dofs: a rank-one
         update, which is one extra column for finite elements.
         """
-        v2 = self.params.v**2
+        v2 = self.params.v * self.params.v
         c = np.cos(fl.theta_tip - fl.theta)
         return -v2 * self.w * c, v2 * self._test(c)
 
@@ -202,22 +217,22 @@ class PipeModel:
     # ------------------------------------------------- nonlocal terms --
     def inertia(self, fl: Fields) -> np.ndarray:
         """Eq. (20) theta_ddot terms of the double integrals: ``M(q) q''``."""
-        return self._project(self.quad.cumulative(fl.theta_ddot[:, None] * fl.n), fl)
+        return self._project(self.quad.cumulative(fl.theta_ddot[:, None] * fl.normal), fl)
 
     def centripetal(self, fl: Fields) -> np.ndarray:
         """Eq. (20) theta_dot^2 terms of the double integrals (N_2 of Eq. (24e))."""
-        return self._project(-self.quad.cumulative(fl.theta_dot[:, None] ** 2 * fl.t), fl)
+        return self._project(-self.quad.cumulative(fl.theta_dot[:, None] ** 2 * fl.tangent), fl)
 
     def coriolis(self, fl: Fields) -> np.ndarray:
         """Eq. (20) 2 v sqrt(beta) [sin theta \\int theta_dot sin + cos theta \\int theta_dot cos]."""
         p = self.params
-        return 2.0 * p.v * np.sqrt(p.beta) * self._project(fl.theta_dot[:, None] * fl.n, fl)
+        return 2.0 * p.v * np.sqrt(p.beta) * self._project(fl.theta_dot[:, None] * fl.normal, fl)
 
     def flow_acceleration(self, fl: Fields, v_dot: float) -> np.ndarray:
         """Eq. (20) v_dot sqrt(beta) [-sin theta \\int cos + cos theta \\int sin]."""
         if v_dot == 0.0:
             return np.zeros(self.n)
-        return v_dot * np.sqrt(self.params.beta) * self._project(fl.t, fl)
+        return v_dot * np.sqrt(self.params.beta) * self._project(fl.tangent, fl)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """``M_ij = \\int_0^1 (C phi_i n).(C phi_j n)``, dense SPD, shape (n, n).
@@ -226,7 +241,7 @@ class PipeModel:
         the symmetry exact.
         """
         fl = self.fields(q)
-        B = self.quad.cumulative(self._phi_field(fl.n))  # (n_q, 2, n)
+        B = self.quad.cumulative(self._phi_field(fl.normal))  # (n_q, 2, n)
         M = np.einsum("qcj,qck->jk", B * self.w[:, None, None], B)
         return 0.5 * (M + M.T)
 
@@ -245,6 +260,21 @@ class PipeModel:
     def static_residual(self, q: np.ndarray) -> np.ndarray:
         """Eq. (31a) in weak form: R(q, 0, 0)."""
         return self.residual(q)
+
+    def static_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The three forces of R(q, 0, 0): (bending, gravity, follower).
+
+        Their sum, in this order, is :meth:`static_residual` to the last bit;
+        their sizes say how small the residual must be to call q an
+        equilibrium (:func:`fempipe.static.solve_static`).
+        """
+        fl = self.fields(q)
+        return self.bending(q), self.gravity(fl), self.follower(fl)
+
+    def gravity_load(self) -> float:
+        """``gamma ||\\int phi_i (1 - xi)||``: the size of the gravity term whatever its
+        lever arm sin(theta + alpha) (a norm of the weak-form vector, like R)."""
+        return self.params.gamma * float(np.linalg.norm(self._test(1.0 - self.x)))
 
     def static_jacobian(self, q: np.ndarray):
         """dR(q, 0, 0)/dq: sparse for finite elements, dense for modes."""
@@ -279,14 +309,16 @@ class PipeModel:
         th_d, th_dd = fl.theta_dot, fl.theta_ddot
 
         # Total inner field F of the projection n . C^R F, to differentiate n.
-        F = self.quad.cumulative(th_dd[:, None] * fl.n - th_d[:, None] ** 2 * fl.t)
-        F = F + cv * th_d[:, None] * fl.n + v_dot * np.sqrt(p.beta) * fl.t
+        F = self.quad.cumulative(th_dd[:, None] * fl.normal - th_d[:, None] ** 2 * fl.tangent)
+        F = F + cv * th_d[:, None] * fl.normal + v_dot * np.sqrt(p.beta) * fl.tangent
 
         # d/dq: through n(theta) in front, and through n, t inside F.
         dF = self.quad.cumulative(
-            self._phi_field(-th_dd[:, None] * fl.t - th_d[:, None] ** 2 * fl.n)
+            self._phi_field(-th_dd[:, None] * fl.tangent - th_d[:, None] ** 2 * fl.normal)
         )
-        dF = dF + self._phi_field(-cv * th_d[:, None] * fl.t + v_dot * np.sqrt(p.beta) * fl.n)
+        dF = dF + self._phi_field(
+            -cv * th_d[:, None] * fl.tangent + v_dot * np.sqrt(p.beta) * fl.normal
+        )
         # The gravity, follower (local part) and normal-derivative terms are all
         # Phi^T diag(d) Phi: one dense product instead of three small sparse
         # ones (scipy.sparse overhead dominated the time-integration cost).
@@ -300,8 +332,8 @@ class PipeModel:
             + self._project_jac(dF, fl)
         )
         # d/dq': centripetal and Coriolis, plus Kelvin-Voigt.
-        dFd = self.quad.cumulative(self._phi_field(-2.0 * th_d[:, None] * fl.t))
-        dFd = dFd + self._phi_field(cv * fl.n)
+        dFd = self.quad.cumulative(self._phi_field(-2.0 * th_d[:, None] * fl.tangent))
+        dFd = dFd + self._phi_field(cv * fl.normal)
         Jqd = p.mu * _dense(self.disc.K) + self._project_jac(dFd, fl)
         M = self.mass_matrix(q)
         return Jq, Jqd, M
@@ -310,7 +342,7 @@ class PipeModel:
     def kinetic_energy(self, q, qdot) -> float:
         """T = (1/2) \\int_0^1 |r_dot|^2 = (1/2) q'^T M(q) q'."""
         fl = self.fields(q, qdot)
-        rdot = self.quad.cumulative(fl.theta_dot[:, None] * fl.n)
+        rdot = self.quad.cumulative(fl.theta_dot[:, None] * fl.normal)
         return 0.5 * float(self.w @ np.einsum("qc,qc->q", rdot, rdot))
 
     def potential_energy(self, q) -> float:
@@ -325,5 +357,8 @@ class PipeModel:
         return 0.5 * float(q @ (self.disc.K @ q)) + p.gamma * float(grav)
 
     def energy(self, q, qdot) -> float:
-        """E of SPEC section 2, conserved for v = 0 and mu = 0."""
+        """Total mechanical energy E = T + V, conserved for v = 0 and mu = 0.
+
+        See :func:`fempipe.dynamics.power_terms` for dE/dtau in general.
+        """
         return self.kinetic_energy(q, qdot) + self.potential_energy(q)

@@ -32,10 +32,14 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .discretization import Discretization
+
 __all__ = ["frame_data", "write_trajectory", "read_trajectory"]
 
 
-def frame_data(disc, alpha: float, q: np.ndarray, qdot: np.ndarray, points_per_cell: int = 4):
+def frame_data(
+    disc: Discretization, alpha: float, q: np.ndarray, qdot: np.ndarray, points_per_cell: int = 4
+):
     """Points (m, 3) and point data of one frame (see module docstring)."""
     from .kinematics import shape
 
@@ -64,7 +68,7 @@ def frame_data(disc, alpha: float, q: np.ndarray, qdot: np.ndarray, points_per_c
 
 def write_trajectory(
     path: str | os.PathLike,
-    disc,
+    disc: Discretization,
     alpha: float,
     t: Sequence[float],
     q: np.ndarray,

@@ -19,6 +19,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from fempipe.discretization import Discretization
+
 __all__ = [
     "plot_time_traces",
     "plot_phase_portrait",
@@ -38,20 +40,21 @@ def _axes(ax, figsize=(6, 4)):
     return ax
 
 
-def _tip_series(disc, alpha: float, q: np.ndarray, qdot: np.ndarray | None = None) -> dict:
-    from fempipe.limit_cycle import tip_coordinates
+def _tip_series(
+    disc: Discretization, alpha: float, q: np.ndarray, qdot: np.ndarray | None = None
+) -> dict:
+    """Tip coordinates (and their rates X_dot, Z_dot) of the states q, shape (m, n)."""
+    from fempipe.kinematics import tip_values, tip_velocity
 
-    out = tip_coordinates(disc, alpha, np.atleast_2d(q))
+    out = tip_values(disc, np.atleast_2d(q), alpha)
     if qdot is not None:
-        th = disc.Phi @ np.atleast_2d(q).T
-        thd = disc.Phi @ np.atleast_2d(qdot).T
-        w = disc.quad.w
-        out["Z_dot"] = w @ (thd * np.cos(th + alpha))
-        out["X_dot"] = -(w @ (thd * np.sin(th + alpha)))
+        rates = tip_velocity(disc, np.atleast_2d(q), np.atleast_2d(qdot), alpha)
+        out["Z_dot"] = rates["Z_tip"]
+        out["X_dot"] = rates["X_tip"]
     return out
 
 
-def plot_time_traces(disc, alpha: float, t, q, ax=None, title: str | None = None):
+def plot_time_traces(disc: Discretization, alpha: float, t, q, ax=None, title: str | None = None):
     """Tip position in the global frame against time, Fig. 11.
 
     Parameters
@@ -75,7 +78,14 @@ def plot_time_traces(disc, alpha: float, t, q, ax=None, title: str | None = None
 
 
 def plot_phase_portrait(
-    disc, alpha: float, q, qdot, ax=None, coordinate: str = "Z_tip", label=None, title=None
+    disc: Discretization,
+    alpha: float,
+    q,
+    qdot,
+    ax=None,
+    coordinate: str = "Z_tip",
+    label=None,
+    title=None,
 ):
     """Phase trajectory of a tip coordinate (Z_g(1) by default), Fig. 12."""
     if coordinate not in ("Z_tip", "X_tip"):
@@ -94,7 +104,9 @@ def plot_phase_portrait(
     return ax
 
 
-def plot_oscillating_shapes(disc, alpha: float, q, ax=None, n_shapes: int = 12, title=None):
+def plot_oscillating_shapes(
+    disc: Discretization, alpha: float, q, ax=None, n_shapes: int = 12, title=None
+):
     """Overlaid centrelines in the global frame: Z_g across, X_g (gravity) down the page.
 
     Parameters
@@ -162,7 +174,13 @@ def plot_bifurcation(points: Sequence[dict], key: str = "eta_tip", ax=None, labe
 
 
 def animate(
-    path: str | os.PathLike, disc, alpha: float, t, q, fps: int = 20, title: str | None = None
+    path: str | os.PathLike,
+    disc: Discretization,
+    alpha: float,
+    t,
+    q,
+    fps: int = 20,
+    title: str | None = None,
 ):
     """Animated GIF of the moving pipe in the global frame (matplotlib PillowWriter).
 
