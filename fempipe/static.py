@@ -27,6 +27,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .errors import SolverError
 from .operators import PipeModel
 from .params import Params
 
@@ -49,8 +50,8 @@ log = logging.getLogger(__name__)
 CONTINUATION_PARAMETERS = ("v", "gamma", "alpha")
 
 
-class NewtonError(RuntimeError):
-    """Newton's method did not converge.
+class NewtonError(SolverError):
+    """Newton's method did not converge, or met a non-finite residual.
 
     Attributes
     ----------
@@ -101,10 +102,43 @@ def _solve(J, b: np.ndarray) -> np.ndarray:
     return np.linalg.solve(J, b)
 
 
-def _residual_scale(model: PipeModel) -> float:
-    """A natural force scale: the loads acting on the straight pipe."""
+def _balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """R(q, 0, 0), its norm, and the size of the forces it balances.
+
+    R = bending + gravity + follower.  A state is an equilibrium when R is
+    small compared with each of these forces as they act at q:
+    ``||R|| <= tol (||bending|| + gravity load + ||follower||)``.
+
+    * Bending, K q, and the follower term, v^2 \\int phi_i sin(theta(1) - theta),
+      vanish with q, exactly also in floating point: they are measured as
+      they are.
+    * Gravity, gamma \\int phi_i (1 - xi) sin(theta + alpha), is measured by its
+      load ``gamma ||\\int phi_i (1 - xi)||`` (:meth:`PipeModel.gravity_load`)
+      whatever the lever arm: sin(theta + alpha) carries an absolute
+      round-off error of ~1e-16 at every angle (sin(pi) = 1.2e-16), so the
+      straight column at alpha = pi is an equilibrium to that accuracy.
+
+    Scaling by the load coefficients (1 + gamma + v^2) instead would accept an
+    unbalanced load whenever another coefficient is huge: at v = 1e100 the
+    straight pipe, where the follower term vanishes, would "converge" with
+    the whole gravity load unbalanced.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # reported as non-finite
+        b, g, f = model.static_terms(q)
+        r = b + g + f
+    size = float(np.linalg.norm(b)) + model.gravity_load() + float(np.linalg.norm(f))
+    return r, float(np.linalg.norm(r)), size
+
+
+def _not_finite(model: PipeModel, iterations: int) -> NewtonError:
     p = model.params
-    return 1.0 + p.gamma + p.v**2
+    return NewtonError(
+        f"static residual is not finite at alpha={p.alpha:.6g}, gamma={p.gamma:.6g}, "
+        f"v={p.v:.6g} (v^2 = {p.v * p.v:.3g}): the loads are outside floating-point range",
+        params=p,
+        iterations=iterations,
+        residual=float("nan"),
+    )
 
 
 def solve_static(
@@ -121,9 +155,10 @@ def solve_static(
     q0 : ndarray, shape (n,), optional
         Initial guess (default: the straight pipe, theta = 0).
     tol : float
-        Convergence when ``||R|| <= tol * (1 + gamma + v^2)`` and the last
-        Newton step is below ``1e-9 (1 + ||q||)``; relative to the loads
-        because R is a force.
+        Convergence when ``||R|| <= tol (||bending|| + gravity load +
+        ||follower||)``, each term of R measured at the state (see
+        :func:`_balance`), and the last Newton step is below
+        ``1e-9 (1 + ||q||)``.
     max_iter : int
 
     Returns
@@ -133,7 +168,8 @@ def solve_static(
     Raises
     ------
     NewtonError
-        Naming the parameter point, iterations and residual.
+        Naming the parameter point, iterations and residual; also when the
+        residual is not finite (loads beyond floating-point range).
 
     Notes
     -----
@@ -141,9 +177,9 @@ def solve_static(
     between the many equilibria of a large-deformation problem.
     """
     q = np.zeros(model.n) if q0 is None else np.array(q0, dtype=float)
-    scale = _residual_scale(model)
-    r = model.static_residual(q)
-    rn = float(np.linalg.norm(r))
+    r, rn, scale = _balance(model, q)
+    if not (math.isfinite(rn) and math.isfinite(scale)):
+        raise _not_finite(model, 0)
     if rn <= 1e-3 * tol * scale:
         # Already a solution (e.g. a located branch point, where the Jacobian
         # is singular and a Newton step would be meaningless).
@@ -156,12 +192,13 @@ def solve_static(
         lam = 1.0
         while True:
             q_new = q + lam * dq
-            r_new = model.static_residual(q_new)
-            rn_new = float(np.linalg.norm(r_new))
+            r_new, rn_new, scale_new = _balance(model, q_new)
             if rn_new < (1.0 - 1e-4 * lam) * rn or lam < 1e-3 or rn < tol * scale:
                 break
             lam *= 0.5
-        q, r, rn = q_new, r_new, rn_new
+        q, r, rn, scale = q_new, r_new, rn_new, scale_new
+        if not (math.isfinite(rn) and math.isfinite(scale)):
+            raise _not_finite(model, it)
         if rn <= tol * scale and lam * np.linalg.norm(dq) <= 1e-9 * (1.0 + np.linalg.norm(q)):
             return StaticSolution(q=q, params=model.params, iterations=it, residual_norm=rn)
     p = model.params
@@ -256,8 +293,17 @@ class Branch:
         return replace(self.base, **{self.parameter: value})
 
 
-class _Continuation:
-    """Shared machinery of the arclength solvers on one model and parameter."""
+class _Family:
+    """The pipe models along one parameter: the physics a continuation walks through.
+
+    The arclength engine (:class:`_Continuation`) asks only for the model at a
+    parameter value and for dR/dlambda; what a value means for the pipe is
+    said here.  v and gamma are physical only when >= 0, but a branch may pass
+    through 0 (a buckled branch at alpha = pi returns to v = 0), so the
+    corrector may ask for negative values.  They are mapped to their mirror
+    images: R depends on v only through v^2, and gamma < 0 is |gamma| with
+    alpha + pi.  dR/dlambda carries the sign of the map.
+    """
 
     def __init__(self, model: PipeModel, parameter: str) -> None:
         if parameter not in CONTINUATION_PARAMETERS:
@@ -266,22 +312,9 @@ class _Continuation:
             )
         self.model = model
         self.parameter = parameter
-        disc = model.disc
-        Phi = disc.Phi
-        G = Phi.T @ (sp.diags(disc.quad.w) @ Phi) if disc.sparse else (Phi.T * disc.quad.w) @ Phi
-        # L2 Gram matrix of theta: the arclength metric.
-        self.G = G.tocsr() if sp.issparse(G) else np.asarray(G)
-        self.sparse = disc.sparse
 
     def at(self, value: float) -> PipeModel:
-        """The model at parameter ``value``.
-
-        v and gamma are physical only when >= 0, but a branch may pass
-        through 0 (a buckled branch at alpha = pi returns to v = 0).  The
-        corrector may therefore evaluate negative values, which are mapped to
-        their mirror images: R depends on v only through v^2, and gamma < 0 is
-        |gamma| with alpha + pi.  :meth:`dR_dlambda` carries the sign.
-        """
+        """The model at parameter ``value`` (negative v, gamma mirrored)."""
         p = self.model.params
         if self.parameter == "v":
             p = replace(p, v=abs(value))
@@ -295,8 +328,25 @@ class _Continuation:
         d = self.at(value).static_parameter_derivative(q, self.parameter)
         return -d if (value < 0 and self.parameter != "alpha") else d
 
+
+class _Continuation:
+    """Pseudo-arclength machinery for R(q, lambda) = 0 on any one-parameter family.
+
+    ``family.at(lambda)`` gives an object with ``static_residual``,
+    ``static_jacobian`` and ``static_terms`` (a :class:`PipeModel`);
+    ``family.dR_dlambda(q, lambda)`` the parameter derivative.  Arclength is
+    measured with the L2 Gram matrix of theta, ``metric``.
+    """
+
+    def __init__(self, family: _Family, metric, n: int) -> None:
+        self.at = family.at
+        self.dR_dlambda = family.dR_dlambda
+        self.G = metric
+        self.sparse = sp.issparse(metric)
+        self.n = n
+
     def dot(self, a: np.ndarray, b: np.ndarray) -> float:
-        n = self.model.n
+        n = self.n
         return float(a[:n] @ (self.G @ b[:n]) + a[n] * b[n])
 
     def normalize(self, t: np.ndarray) -> np.ndarray:
@@ -307,7 +357,7 @@ class _Continuation:
         m = self.at(value)
         J = m.static_jacobian(q)
         Rl = self.dR_dlambda(q, value)
-        n = self.model.n
+        n = self.n
         row = np.append(self.G @ t[:n], t[n])
         if self.sparse:
             A = sp.vstack([sp.hstack([J, sp.csc_matrix(Rl[:, None])]), sp.csr_matrix(row[None, :])])
@@ -317,7 +367,7 @@ class _Continuation:
     def tangent(self, q: np.ndarray, value: float, t_prev: np.ndarray) -> tuple[np.ndarray, int]:
         """Unit tangent oriented along t_prev, and the sign of det(bordered)."""
         A = self.bordered(q, value, t_prev)
-        rhs = np.zeros(self.model.n + 1)
+        rhs = np.zeros(self.n + 1)
         rhs[-1] = 1.0
         t, sign = _solve_with_sign(A, rhs)
         t = self.normalize(t)
@@ -329,14 +379,12 @@ class _Continuation:
         self, y_pred: np.ndarray, t: np.ndarray, tol: float, max_iter: int = 12
     ) -> tuple[np.ndarray, int, float] | None:
         """Newton on [R(q, lambda); <t, y - y_pred>] = 0 from y_pred."""
-        n = self.model.n
+        n = self.n
         y = y_pred.copy()
         for it in range(1, max_iter + 1):
             m = self.at(y[n])
             r = m.static_residual(y[:n])
             g = np.append(r, self.dot(t, y - y_pred))
-            scale = _residual_scale(m)
-            rn = float(np.linalg.norm(r))
             A = self.bordered(y[:n], y[n], t)
             dy = _solve(A, -g)
             if not np.all(np.isfinite(dy)):
@@ -344,12 +392,17 @@ class _Continuation:
             y = y + dy
             step = np.sqrt(abs(self.dot(dy, dy)))
             if step < 1e-10 * (1.0 + np.sqrt(self.dot(y, y))):
-                rn = float(np.linalg.norm(self.at(y[n]).static_residual(y[:n])))
+                _, rn, scale = _balance(self.at(y[n]), y[:n])
                 if rn <= tol * scale:
                     return y, it, rn
             if step > 1e3:
                 return None
         return None
+
+
+def _pipe_continuation(model: PipeModel, parameter: str) -> _Continuation:
+    """The arclength engine on the pipe models along ``parameter`` (:class:`_Family`)."""
+    return _Continuation(_Family(model, parameter), model.disc.gram, model.n)
 
 
 def _perm_sign(perm: np.ndarray) -> int:
@@ -435,7 +488,7 @@ def continuation(
         If the first point does not converge, or the step size falls below
         ``ds_min`` (with the parameter value reached).
     """
-    cont = _Continuation(model, parameter)
+    cont = _pipe_continuation(model, parameter)
     n = model.n
     start_value = float(getattr(model.params, parameter))
     if parameter in ("v", "gamma") and stop < 0:
@@ -518,7 +571,7 @@ def _detect(
     tol: float,
 ) -> None:
     """Locate a fold (t_lambda changes sign) or a bifurcation (det sign flip) in [a, b]."""
-    n = cont.model.n
+    n = cont.n
     idx = len(branch.points) - 1
     if a.tangent[n] * b.tangent[n] < 0:
         sp_ = _bisect(cont, a, b, lambda y, t, s: t[n], locate_tol, tol)
@@ -542,7 +595,7 @@ def _detect(
 
 def _bisect(cont: _Continuation, a: BranchPoint, b: BranchPoint, f, locate_tol: float, tol: float):
     """Bisection in arclength along the secant from a, for a sign change of f."""
-    n = cont.model.n
+    n = cont.n
     ya = np.append(a.q, a.value)
     yb = np.append(b.q, b.value)
     chord = yb - ya
@@ -712,7 +765,7 @@ def switch_branch(
     (Branch, Branch)
         The branches leaving along +phi and -phi.
     """
-    cont = _Continuation(model, parameter)
+    cont = _pipe_continuation(model, parameter)
     n = model.n
     m = cont.at(point.value)
     J = m.static_jacobian(point.q)

@@ -14,7 +14,7 @@ from fempipe.static import (
     switch_branch,
 )
 
-#: Texier & Dorbolo's pipe (SPEC section 5), with the paper's g = 9.8 m/s^2.
+#: Texier & Dorbolo's pipe (the paper's Section 3.1, Fig. 2(b)), with the paper's g = 9.8 m/s^2.
 TEXIER = PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=np.pi / 2)
 TIP_KEYS = ("theta_tip", "eta_tip", "X_tip")
 
@@ -204,6 +204,38 @@ def test_newton_failure_names_the_parameters():
     msg = str(err.value)
     assert "v=2" in msg and "gamma=18.9" in msg and "iterations" in msg
     assert err.value.iterations == 1 and err.value.residual > 0
+
+
+def test_converged_state_balances_every_load_even_at_huge_v():
+    """v = 1e100, alpha = pi/2: on the straight pipe the follower term vanishes
+    and gravity, ||R|| ~ gamma, is wholly unbalanced.  Measured against the
+    load coefficients 1 + gamma + v^2 = 1e200 that residual is round-off; a
+    converged state must balance the gravity force it carries."""
+    model = PipeModel(FiniteElement(16, 3), Params(alpha=np.pi / 2, gamma=18.9, v=1e100))
+    straight = np.zeros(model.n)
+    gravity = np.linalg.norm(model.gravity(model.fields(straight)))
+    assert np.linalg.norm(model.static_residual(straight)) == pytest.approx(gravity)
+    sol = solve_static(model)
+    assert np.any(sol.q != 0.0)
+    load = np.linalg.norm(model.gravity(model.fields(sol.q)))
+    assert np.linalg.norm(model.static_residual(sol.q)) <= 1e-10 * load
+
+
+@pytest.mark.parametrize("v", [1e160, 1e300])
+def test_loads_beyond_floating_point_range_raise_newton_error(v):
+    """v^2 overflows: a NewtonError naming v, not an OverflowError or a NaN state."""
+    model = PipeModel(FiniteElement(4, 2), Params(alpha=np.pi / 2, v=v))
+    with pytest.raises(NewtonError, match="not finite") as err:
+        solve_static(model)
+    assert f"v={v:.6g}" in str(err.value)
+    with pytest.raises(NewtonError, match="not finite"):
+        solve_path(model, [v])
+
+
+def test_newton_error_is_a_solver_error():
+    from fempipe.errors import SolverError
+
+    assert issubclass(NewtonError, SolverError) and issubclass(NewtonError, RuntimeError)
 
 
 def test_solve_path_matches_pointwise_solves():
