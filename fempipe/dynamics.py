@@ -57,8 +57,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse.linalg as spla
 
+from .errors import SolverError
 from .operators import PipeModel
+from .parallel import single_blas_thread
 
 __all__ = [
     "PulsatingFlow",
@@ -76,6 +79,15 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 # --- Radau IIA (s = 3) tableau -------------------------------------------
+# The constants of this block, the Newton tolerance and iteration limit, the
+# step-size limits and safety factor and the predictive controller
+# (:func:`_predict_factor`) are those of Hairer & Wanner's RADAU5 as
+# transcribed in scipy.integrate.Radau (scipy/integrate/_ivp/radau.py: C, E,
+# MU_REAL, NEWTON_MAXITER, MIN_FACTOR, MAX_FACTOR, predict_factor); see
+# E. Hairer, G. Wanner, Solving Ordinary Differential Equations II,
+# Sec. IV.8.  A and its eigendecomposition are computed here instead of
+# scipy's tabulated T, TI, because the stages are solved for the
+# accelerations of the second-order system, not for first-order increments.
 _S6 = math.sqrt(6.0)
 C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])
 A = np.array(
@@ -110,7 +122,7 @@ NEWTON_MAXITER = 6
 MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
 
 
-class IntegrationError(RuntimeError):
+class IntegrationError(SolverError):
     """Time integration failed: says where (tau, step size) and why."""
 
     def __init__(self, message: str, t: float, h: float) -> None:
@@ -165,17 +177,6 @@ class PulsatingFlow:
         return {"v0": self.v0, "sigma": self.sigma, "omega": self.omega}
 
 
-def _limit_blas_threads():
-    """One BLAS thread: the matrices are tiny and thread start-up triples the step cost."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - optional
-        import contextlib
-
-        return contextlib.nullcontext()
-    return threadpool_limits(1, user_api="blas")
-
-
 def acceleration(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0):
     """q'' from Eq. (20): solve ``M(q) q'' = -R(q, q', 0)`` (R is linear in q'').
 
@@ -203,8 +204,8 @@ def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
                            = sqrt(beta) v_dot \\int_0^1 t . r_dot  (swap the order),
 
     with r_dot(xi) = \\int_0^xi theta_dot n the centreline velocity and
-    t = (cos theta, sin theta) the tangent.  The first three are the issue's
-    power balance; the fourth is zero for steady flow.
+    t = (cos theta, sin theta) the tangent.  The first three are the power
+    balance of steady flow; the fourth is zero for steady flow.
 
     Returns
     -------
@@ -213,15 +214,15 @@ def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
     """
     p = model.params
     fl = model.fields(q, qdot)
-    rdot = model.quad.cumulative(fl.theta_dot[:, None] * fl.n)  # (n_q, 2)
-    rdot_tip = model.quad.integrate(fl.theta_dot[:, None] * fl.n)
+    rdot = model.quad.cumulative(fl.theta_dot[:, None] * fl.normal)  # (n_q, 2)
+    rdot_tip = model.quad.integrate(fl.theta_dot[:, None] * fl.normal)
     t_tip = np.array([math.cos(fl.theta_tip), math.sin(fl.theta_tip)])
     sb = math.sqrt(p.beta)
     terms = {
         "coriolis": p.v * sb * float(rdot_tip @ rdot_tip),
         "follower": p.v**2 * float(t_tip @ rdot_tip),
         "kelvin_voigt": p.mu * float(qdot @ (model.disc.K @ qdot)),
-        "flow_acceleration": sb * v_dot * float(model.w @ np.einsum("qc,qc->q", fl.t, rdot)),
+        "flow_acceleration": sb * v_dot * float(model.w @ np.einsum("qc,qc->q", fl.tangent, rdot)),
     }
     terms["dE_dtau"] = -sum(terms.values())
     return terms
@@ -266,11 +267,9 @@ def initial_state(
         q_static = solve_static(model).q
     disc = model.disc
     k = (2 * int(mode) - 1) * math.pi / 2.0
-    Phi = disc.Phi.toarray() if disc.sparse else np.asarray(disc.Phi)
-    w = model.w
-    G = Phi.T @ (w[:, None] * Phi)
-    b = Phi.T @ (w * np.sin(k * model.x))
-    pert = np.linalg.solve(G, b)
+    b = disc.Phi.T @ (model.w * np.sin(k * model.x))
+    gram = disc.gram
+    pert = spla.spsolve(gram.tocsc(), b) if disc.sparse else np.linalg.solve(gram, b)
     return np.asarray(q_static, dtype=float) + amplitude * pert, np.zeros(model.n)
 
 
@@ -364,7 +363,6 @@ class Radau:
         self.stats = _Stats()
         self.t = float(t0)
         self.q, self.qdot = q0, qdot0
-        self._model_t, self._vdot_t = self._model_at(self.t)
         self.qddot = self._acceleration(self.t, q0, qdot0)
         self._jac = None  # (K, D, M) at the last Jacobian point
         self._current_jac = False
@@ -584,8 +582,10 @@ class Radau:
         if self.h_fixed is None:
             recompute_jac = n_iter > 2 and rate is not None and rate > 1e-3
             factor = min(MAX_FACTOR, safety * _predict_factor(h, h_old, err, err_old))
+            # RADAU5 keeps h (and the factorisations) for factor < 1.2; a
+            # factor below 1 is applied here, so that the error stays controlled.
             if not recompute_jac and 1.0 <= factor < 1.2:
-                factor = 1.0  # keep h and the factorisations
+                factor = 1.0
             self._h_old, self._err_old = h, err
             self.h = min(h * factor, self.max_step)
             if recompute_jac:
@@ -645,13 +645,14 @@ class Radau:
 
         The initial state is not yielded.  Arrays are fresh copies.
         """
-        with _limit_blas_threads():
+        with single_blas_thread():
             while self.t < t_end - 10 * abs(np.nextafter(t_end, math.inf) - t_end):
                 self.step(t_end)
                 yield self.t, self.q.copy(), self.qdot.copy()
 
 
 def _predict_factor(h, h_old, err, err_old) -> float:
+    """Step-size factor of the predictive (Gustafsson) controller: scipy's RADAU5 ``predict_factor``."""
     if err_old is None or h_old is None or err == 0:
         multiplier = 1.0
     else:

@@ -35,8 +35,13 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import brentq
 
-from .dynamics import IntegrationError, Radau, Trajectory, _limit_blas_threads, initial_state
+from .discretization import Discretization
+from .dynamics import IntegrationError, Radau, Trajectory, initial_state
+from .errors import SolverError
+from .kinematics import tip_values
 from .operators import PipeModel
+from .parallel import single_blas_thread
+from .stability import spectrum
 
 __all__ = [
     "TIP_KEYS",
@@ -56,8 +61,8 @@ log = logging.getLogger(__name__)
 TIP_KEYS = ("eta_tip", "X_tip", "Z_tip")
 
 
-class ShootingError(RuntimeError):
-    """Newton's method on the periodic orbit did not converge."""
+class ShootingError(SolverError):
+    """Newton's method on the periodic orbit did not converge (or found an equilibrium)."""
 
     def __init__(self, message: str, iterations: int, residual: float) -> None:
         super().__init__(message)
@@ -65,43 +70,46 @@ class ShootingError(RuntimeError):
         self.residual = residual
 
 
-def tip_coordinates(disc, alpha: float, q: np.ndarray) -> dict[str, np.ndarray]:
-    """eta_tip, X_tip, Z_tip for one state (n,) or many (m, n), vectorised.
-
-    Same Gauss sums as :func:`fempipe.kinematics.tip_values`.
-    """
-    q = np.asarray(q)
-    th = disc.Phi @ q.T  # (n_q,) or (n_q, m)
-    w = disc.quad.w
-    return {
-        "eta_tip": w @ np.sin(th),
-        "X_tip": w @ np.cos(th + alpha),
-        "Z_tip": w @ np.sin(th + alpha),
-    }
+def tip_coordinates(disc: Discretization, alpha: float, q: np.ndarray) -> dict:
+    """The tip coordinates recorded on attractors (:data:`TIP_KEYS`) of one state
+    (n,) or many (m, n): those of :func:`fempipe.kinematics.tip_values`."""
+    tip = tip_values(disc, q, alpha)
+    return {k: tip[k] for k in TIP_KEYS}
 
 
-def _eta(disc, q: np.ndarray) -> float:
-    return float(disc.quad.w @ np.sin(disc.Phi @ q))
+def _eta(disc: Discretization, q: np.ndarray) -> float:
+    """eta_tip, the Poincare section coordinate (independent of alpha)."""
+    return tip_values(disc, q, 0.0)["eta_tip"]
 
 
-def _eta_gradient(disc, q: np.ndarray) -> np.ndarray:
+def _eta_gradient(disc: Discretization, q: np.ndarray) -> np.ndarray:
+    """d eta_tip / dq = \\int phi_j cos theta: the phase condition's row of the Jacobian."""
     th = disc.Phi @ q
     return np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(th)))
 
 
 def static_growth_rate(model: PipeModel, q_static: np.ndarray) -> float:
-    """Largest real part of the eigenvalues of the linearisation (Eqs. (31b)-(33)).
+    """Largest real part of the resolved eigenvalues of the linearisation (Eqs. (31b)-(33)).
 
-    The quadratic problem (lambda^2 M^d + lambda C^d + K^d) x = 0 at the static
-    state, solved as a first-order (companion) problem of size 2n.  Negative:
-    the static state is linearly stable.
+    The quantity :func:`fempipe.stability.spectrum` reports as ``max_real``:
+    eigenvalues of modes the discretisation does not resolve are left out, as
+    in every stability decision of the package.  Its sign is not the decision
+    itself (an exactly conservative problem, v = mu = 0, has Re lambda = 0 to
+    round-off): :func:`find_attractor` uses :func:`_linearly_stable`.
     """
-    K, D, M = model.jacobians(q_static)
-    n = model.n
-    Minv_K = np.linalg.solve(M, K)
-    Minv_D = np.linalg.solve(M, D)
-    Acomp = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_D]])
-    return float(np.max(np.linalg.eigvals(Acomp).real))
+    return spectrum(model, q_static).max_real
+
+
+def _linearly_stable(model: PipeModel, q_static: np.ndarray) -> bool:
+    """The stability criterion of :func:`fempipe.stability.spectrum` and ``critical``.
+
+    A discretisation that resolves no mode gives no decision, which counts as
+    not stable here: the attractor is then found by integration alone.
+    """
+    try:
+        return spectrum(model, q_static).stable
+    except ValueError:  # no resolved mode
+        return False
 
 
 @dataclass(frozen=True)
@@ -235,7 +243,9 @@ class Attractor:
 
 
 # ---------------------------------------------------------------------------
-def _extrema(disc, alpha: float, stepper: Radau, samples: list, per_step: int = 8) -> None:
+def _sample_tip(
+    disc: Discretization, alpha: float, stepper: Radau, samples: list, per_step: int = 8
+) -> None:
     """Append tip coordinates sampled on the last step's collocation polynomial."""
     t_old, t = stepper.t_old, stepper.t
     ts = np.linspace(t_old, t, per_step + 1)[1:]
@@ -330,7 +340,7 @@ def shoot(
     Phi = None
     res_prev = math.inf
     stale = False
-    with _limit_blas_threads():
+    with single_blas_thread():
         for it in range(1, max_iter + 1):
             need = Phi is None or not reuse_monodromy or stale
             stepper = Radau(model, q, p, 0.0, rtol=rtol, sensitivity=need)
@@ -338,7 +348,7 @@ def shoot(
             tt = np.linspace(0.0, T, n_samples)
             orbit_q, orbit_p, k = [q.copy()], [p.copy()], 1
             for t_now, q_now, p_now in stepper.steps(T):
-                _extrema(disc, alpha, stepper, samples)
+                _sample_tip(disc, alpha, stepper, samples)
                 while k < n_samples and tt[k] <= t_now + 1e-12:
                     a, b = stepper.dense(tt[k]) if tt[k] < t_now else (q_now, p_now)
                     orbit_q.append(a)
@@ -496,7 +506,7 @@ def find_attractor(
             q_s = solve_static(model).q
         except NewtonError:
             q_s = None
-    stable = q_s is not None and static_growth_rate(model, q_s) < 0
+    stable = q_s is not None and _linearly_stable(model, q_s)
     if q0 is None:
         if q_s is None:
             raise ValueError("no initial state given and the static problem has no solution")
@@ -546,7 +556,7 @@ def find_attractor(
             message=msg,
         )
 
-    with _limit_blas_threads():
+    with single_blas_thread():
         while stepper.t < t_max:
             try:
                 stepper.step(t_max)
@@ -560,7 +570,7 @@ def find_attractor(
                 rec_p.append(stepper.qdot.copy())
             if callback is not None:
                 callback(stepper.t)
-            _extrema(disc, alpha, stepper, samples, per_step=4)
+            _sample_tip(disc, alpha, stepper, samples, per_step=4)
             if len(samples) > max_samples:  # keep memory bounded on long runs
                 drop = len(samples) - max_samples
                 samples = samples[drop:]
@@ -577,7 +587,7 @@ def find_attractor(
                     if np.sqrt(np.mean(stepper.qdot**2)) < 1e-3:
                         try:
                             q_new = solve_static(model, stepper.q).q
-                            if static_growth_rate(model, q_new) < 0:
+                            if _linearly_stable(model, q_new):
                                 q_s, stable, d_prev = q_new, True, math.inf
                                 level = _eta(disc, q_s)
                         except NewtonError:
