@@ -15,12 +15,12 @@ and list that module in :data:`BENCHMARK_MODULES` so the CLI imports it.
 A result dict may carry a ``"table"`` (list of flat dicts), which the CLI
 prints as a table; everything else is printed as ``key: value``.
 
-The static benchmarks (issue 2):
+The static benchmarks:
 
 ``static_path``
     A 61-point path in v = 0..10 at the default discretisation, the paper's
-    case (beta = 0.142, gamma = 18.9, mu = 5e-3, alpha = pi/2) and the
-    Texier--Dorbolo pipe (SPEC section 5) at alpha = pi/2, through
+    case (:data:`fempipe.params.PAPER_CASE`) at alpha = pi/2 and the
+    Texier--Dorbolo pipe (the paper's Section 3.1, Fig. 2(b)) at alpha = pi/2, through
     :func:`fempipe.static.solve_path` (what ``fempipe static`` does) and,
     for comparison, the pseudo-arclength :func:`fempipe.static.continuation`
     from v = 0 to 10.
@@ -42,6 +42,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .params import PAPER_CASE
+
 __all__ = ["BENCHMARKS", "BENCHMARK_MODULES", "register", "run", "available"]
 
 log = logging.getLogger(__name__)
@@ -50,11 +52,10 @@ log = logging.getLogger(__name__)
 BENCHMARKS: dict[str, Callable[..., dict]] = {}
 
 #: Modules imported by :func:`available` so that their ``@register`` runs.
-#: Modules that do not exist (yet) are skipped.
 BENCHMARK_MODULES: tuple[str, ...] = ("fempipe.bench", "fempipe.bench_dynamics")
 
-#: The paper's reference case (Section 5) at alpha = pi/2.
-PAPER = {"alpha": math.pi / 2, "beta": 0.142, "gamma": 18.9, "mu": 5e-3}
+#: The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at alpha = pi/2.
+PAPER = {"alpha": math.pi / 2, **PAPER_CASE}
 #: Texier & Dorbolo's pipe (paper Section 3.1, Fig. 2b): SI values.
 TEXIER_DORBOLO = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}
 
@@ -74,12 +75,7 @@ def register(name: str) -> Callable[[Callable[..., dict]], Callable[..., dict]]:
 def available() -> dict[str, Callable[..., dict]]:
     """All registered benchmarks, after importing :data:`BENCHMARK_MODULES`."""
     for mod in BENCHMARK_MODULES:
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name != mod:
-                raise
-            log.debug("benchmark module %s not found, skipped", mod)
+        importlib.import_module(mod)
     return dict(BENCHMARKS)
 
 
@@ -245,7 +241,7 @@ def bench_static_scaling(quick: bool = False) -> dict:
 
 
 # ---------------------------------------------------------------------------
-# Stability benchmarks (issue 3)
+# Stability benchmarks
 # ---------------------------------------------------------------------------
 
 

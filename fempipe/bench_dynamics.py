@@ -1,11 +1,12 @@
-"""Benchmarks of the nonlinear dynamics (issue 4); not timed tests.
+"""Benchmarks of the nonlinear dynamics; not timed tests.
 
 Registered with :mod:`fempipe.bench` (``fempipe bench --only limit_cycle,fig7``);
 also ``python -m fempipe.bench_dynamics [--skip-fig7] [--workers 2] [--out FILE.json]``.
 
-* ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, paper's
-  beta, gamma, mu) from the static state + perturbation, transient and
-  shooting included.  Target: < 10 s at the default discretisation P3:16.
+* ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, the paper's
+  beta, gamma, mu: :data:`fempipe.params.PAPER_CASE`) from the static state
+  + perturbation, transient and shooting included.  Target: < 10 s at the
+  default discretisation P3:16.
 * ``fig7``: the Fig. 7 diagram, alpha = 0, 36 velocities from 5 to 12, swept up
   and down (the two sweeps in parallel).  Target: < 5 min on 2 cores.
 
@@ -24,6 +25,7 @@ import numpy as np
 from fempipe import Params, PipeModel, parse_discretization
 from fempipe.bench import register
 from fempipe.discretization import DEFAULT_FE
+from fempipe.params import PAPER_CASE
 
 
 def _disc(spec: str):
@@ -38,7 +40,7 @@ def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
     """One converged limit cycle at alpha = 0, v = 10; returns timing and the cycle."""
     from fempipe.limit_cycle import find_attractor
 
-    model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0))
+    model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0, **PAPER_CASE))
     t0 = time.perf_counter()
     att = find_attractor(model)
     wall = time.perf_counter() - t0
@@ -59,7 +61,7 @@ def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> 
     """The Fig. 7 sweep up and down in parallel; returns timing and a summary."""
     from fempipe.bifurcation import bifurcation_diagram
 
-    model = PipeModel(_disc(spec), Params(alpha=0.0))
+    model = PipeModel(_disc(spec), Params(alpha=0.0, **PAPER_CASE))
     values = np.linspace(5.0, 12.0, n_values)
     t0 = time.perf_counter()
     d = bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
