@@ -1,0 +1,74 @@
+"""The discretisation contract: basis values, clamp, tip, stiffness and Gram matrices.
+
+References are closed-form integrals of polynomials that the elements
+represent exactly (nodal interpolation at scikit-fem's dof locations) and the
+orthogonality of the sine modes.
+"""
+
+import numpy as np
+import pytest
+
+from fempipe.discretization import Discretization, FiniteElement, Modal
+
+FE = {
+    "P1:7": lambda: FiniteElement(7, 1),
+    "P2:graded": lambda: FiniteElement(nodes=[0, 0.1, 0.35, 0.6, 1.0], degree=2),
+    "P3:5": lambda: FiniteElement(5, 3),
+    "P6:2": lambda: FiniteElement(2, 6),
+}
+
+
+def _interpolate(disc: FiniteElement, f) -> np.ndarray:
+    """Coefficients of f (f(0) = 0, in the element space) on the free dofs, by least
+    squares on values at 3N points of [0, 1]: exact when f is represented."""
+    xs = np.linspace(0.0, 1.0, 3 * disc.n_all)
+    P = disc.basis.probes(xs[None, :]).toarray()
+    coef = np.linalg.lstsq(P, f(xs), rcond=None)[0]
+    assert abs(coef[np.setdiff1d(np.arange(disc.n_all), disc.free)]).max() < 1e-12
+    return coef[disc.free]
+
+
+@pytest.mark.parametrize("name", FE)
+def test_fe_integrals_of_a_represented_polynomial(name):
+    """theta = xi^k - xi / 2 (degree k, vanishing at 0) is represented exactly by P_k."""
+    disc = FE[name]()
+    k = disc.degree
+    q = _interpolate(disc, lambda x: x**k - 0.5 * x)
+    # \\int theta^2, \\int theta'^2 in closed form
+    gram = 1 / (2 * k + 1) - 1 / (k + 2) + 1 / 12
+    bending = k**2 / (2 * k - 1) - 1 + 0.25
+    assert q @ (disc.gram @ q) == pytest.approx(gram, rel=1e-13)
+    assert q @ (disc.K @ q) == pytest.approx(bending, rel=1e-13)
+    assert disc.tip @ q == pytest.approx(0.5, abs=1e-14)
+    x = disc.quad.x
+    np.testing.assert_allclose(disc.Phi @ q, x**k - 0.5 * x, atol=1e-14)
+    np.testing.assert_allclose(
+        disc.evaluate(q, [0.0, 0.3, 1.0]), [0.0, 0.3**k - 0.15, 0.5], atol=1e-14
+    )
+
+
+@pytest.mark.parametrize("name", FE)
+def test_fe_clamp_removes_exactly_the_dof_at_the_root(name):
+    """Every basis function vanishes at xi = 0; every other dof of scikit-fem is kept."""
+    disc = FE[name]()
+    assert np.all(disc.evaluate(np.eye(disc.n), 0.0) == 0.0)
+    assert disc.n == disc.n_all - 1
+    # ... and a function that does not vanish at 0 is not in the space.
+    xs = np.linspace(0.0, 1.0, 3 * disc.n_all)
+    P = disc.basis.probes(xs[None, :]).toarray()[:, disc.free]
+    residual = np.linalg.lstsq(P, 1.0 + xs, rcond=None)[1]
+    assert residual[0] > 1e-3
+
+
+def test_modal_gram_and_stiffness_are_diagonal():
+    """\\int phi_i phi_j = delta_ij / 2, \\int phi_i' phi_j' = k_i^2 / 2 delta_ij."""
+    disc = Modal(5)
+    np.testing.assert_allclose(disc.gram, 0.5 * np.eye(5), atol=1e-14)
+    k = (2 * np.arange(1, 6) - 1) * np.pi / 2
+    np.testing.assert_allclose(np.diag(disc.K), k**2 / 2, rtol=1e-15)
+
+
+@pytest.mark.parametrize("disc", [FiniteElement(3, 2), Modal(3)], ids=["fe", "modal"])
+def test_both_satisfy_the_protocol(disc):
+    assert isinstance(disc, Discretization)
+    assert disc.name in ("P2:3", "modal:3")
