@@ -149,16 +149,17 @@ def run(args: argparse.Namespace) -> int:
 def _stable(model, q) -> bool | None:
     """Linear stability of the static state (Eq. (32)); None if nothing is resolved.
 
+    :func:`fempipe.stability.linearly_stable`: the criterion of ``fempipe
+    spectrum`` and ``fempipe critical``, computed for large meshes from the few
+    lowest modes by sparse shift-invert (O(n) per point).
+
     A static state can be an equilibrium nobody observes: at alpha = pi with
     gamma > 7.837 the straight column is one.  ``fempipe critical`` follows
     the other branches.
     """
-    from fempipe.stability import spectrum
+    from fempipe.stability import linearly_stable
 
-    try:
-        return bool(spectrum(model, q).stable)
-    except ValueError:  # a discretisation too coarse to resolve any mode
-        return None
+    return linearly_stable(model, q)
 
 
 def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
