@@ -23,7 +23,9 @@ they share one error policy and one worker lifecycle:
   their parent is gone, even if the parent was killed with SIGKILL and could
   not clean up: on Linux the kernel sends them SIGKILL when the parent dies
   (``prctl(PR_SET_PDEATHSIG)``), and on every platform a watchdog thread
-  exits the worker when its parent process changes.
+  exits the worker when it is re-parented or the pool's creator is gone (the
+  only way with the "forkserver" start method, where the parent is the fork
+  server and outlives the creator while workers run).
 * **One BLAS thread per process** (:func:`single_blas_thread`): the dense
   matrices of the model are small (2n = 96 for P3:16), where a multi-threaded
   BLAS spends more time synchronising than computing (measured: 32 ms per
@@ -41,6 +43,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import multiprocessing.context
 import os
 import signal
 import sys
@@ -48,6 +51,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
+from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
@@ -149,20 +153,28 @@ def single_blas_thread() -> contextlib.AbstractContextManager:
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def _parent_died(parent: int) -> bool:
+def _running(pid: int) -> bool:
+    """True while process ``pid`` runs (on Linux a zombie awaiting its reaper is not)."""
     try:
-        os.kill(parent, 0)
-    except ProcessLookupError:
-        return True
-    except PermissionError:  # a process of another user took the pid
-        return True
-    return False
+        os.kill(pid, 0)
+    except (ProcessLookupError, PermissionError):  # gone, or the pid was reused by another user
+        return False
+    if sys.platform.startswith("linux"):
+        try:
+            stat = Path(f"/proc/{pid}/stat").read_text()
+        except FileNotFoundError:
+            return False
+        return stat.rsplit(")", 1)[1].split()[0] != "Z"
+    return True
 
 
-def _watch_parent(ppid: int) -> None:
+def _watch_parent(parent: int, ppid: int) -> None:
+    # Two checks: a worker whose parent died is re-parented (its ppid changes);
+    # a worker of the "forkserver" start method has the fork server as parent,
+    # which lives on while any worker does, so the pool's creator is watched too.
     while True:
         time.sleep(PARENT_POLL)
-        if os.getppid() != ppid:  # re-parented: the parent is gone
+        if os.getppid() != ppid or not _running(parent):
             os._exit(1)
 
 
@@ -179,29 +191,34 @@ def _init_worker(parent: int) -> None:
     # otherwise inherit the parent's Python-level handlers.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # A worker started by "spawn" or "forkserver" has not loaded numpy's and
+    # scipy's BLAS yet: load them, or the limit would miss them.
+    import scipy.linalg  # noqa: F401
+
     threadpool_limits(limits=1, user_api="blas")
     if sys.platform.startswith("linux"):
         libc = ctypes.CDLL(None, use_errno=True)
         if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0:
             err = ctypes.get_errno()
             raise OSError(err, f"prctl(PR_SET_PDEATHSIG): {os.strerror(err)}")
-    # The parent may have died before the death signal was armed.  With the
-    # "forkserver" start method the worker's parent is the fork server (it
-    # exits when the pool's creator does), hence the check on ``parent`` too.
+    # The parent may have died before the death signal was armed.
     ppid = os.getppid()
-    if ppid == 1 or _parent_died(parent):
+    if not _running(parent):
         os._exit(1)
     threading.Thread(
-        target=_watch_parent, args=(ppid,), name="parent-watchdog", daemon=True
+        target=_watch_parent, args=(parent, ppid), name="parent-watchdog", daemon=True
     ).start()
 
 
-def process_pool(workers: int) -> ProcessPoolExecutor:
+def process_pool(
+    workers: int, mp_context: multiprocessing.context.BaseContext | None = None
+) -> ProcessPoolExecutor:
     """A ``ProcessPoolExecutor`` whose workers never outlive this process.
 
     Each worker uses one BLAS thread, ignores SIGINT, dies on SIGTERM, and
     exits within about :data:`PARENT_POLL` seconds of this process's death
-    (on Linux at once, by a parent-death signal).  :func:`run_tasks` starts
+    (at once on Linux by a parent-death signal, with the "fork" and "spawn"
+    start methods).  :func:`run_tasks` starts
     one of these when asked for ``workers > 1``; build one yourself to reuse
     the workers for several calls (``executor=``).
 
@@ -213,11 +230,17 @@ def process_pool(workers: int) -> ProcessPoolExecutor:
     ----------
     workers : int
         Number of worker processes (>= 1).
+    mp_context : multiprocessing context, optional
+        How workers are started (``multiprocessing.get_context("spawn")``
+        ...); default: the platform's default.
     """
     if int(workers) < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     return ProcessPoolExecutor(
-        max_workers=int(workers), initializer=_init_worker, initargs=(os.getpid(),)
+        max_workers=int(workers),
+        mp_context=mp_context,
+        initializer=_init_worker,
+        initargs=(os.getpid(),),
     )
 
 

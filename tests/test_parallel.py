@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -110,8 +111,9 @@ def test_single_blas_thread_limits_and_restores():
     assert _blas_threads() == before
 
 
-def test_pool_workers_are_set_up_by_the_initializer():
-    with process_pool(1) as pool:
+@pytest.mark.parametrize("method", multiprocessing.get_all_start_methods())
+def test_pool_workers_are_set_up_by_the_initializer(method):
+    with process_pool(1, multiprocessing.get_context(method)) as pool:
         state = pool.submit(_worker_state, 0).result()
     assert set(state["blas"]) == {1}
     assert state["sigint"] == signal.SIG_IGN
@@ -148,7 +150,7 @@ def test_interrupted_is_a_keyboard_interrupt_with_the_shell_exit_code():
 
 PARENT = textwrap.dedent(
     """
-    import contextlib, ctypes, os, sys, time
+    import contextlib, ctypes, multiprocessing, os, sys, time
     from pathlib import Path
 
     from fempipe.parallel import Interrupted, interruptible, run_tasks
@@ -156,6 +158,7 @@ PARENT = textwrap.dedent(
     OUT = Path(sys.argv[1])
     HANDLE = sys.argv[2] == "handle"
     DISARM = sys.argv[3] == "disarm"
+    METHOD = sys.argv[4]
 
 
     def slow(i):
@@ -167,6 +170,7 @@ PARENT = textwrap.dedent(
 
 
     if __name__ == "__main__":
+        multiprocessing.set_start_method(METHOD)
         try:
             with interruptible() if HANDLE else contextlib.nullcontext():
                 run_tasks(slow, [(i,) for i in range(4)], workers=2)
@@ -186,7 +190,7 @@ def _alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
-def _signal_parent(tmp_path, sig, *, handle=False, disarm=False):
+def _signal_parent(tmp_path, sig, *, handle=False, disarm=False, method="fork"):
     """Start the parent, wait for its two busy workers, send ``sig``.
 
     Returns the parent's exit status (None if it still runs after ``GRACE``
@@ -196,7 +200,7 @@ def _signal_parent(tmp_path, sig, *, handle=False, disarm=False):
     script = tmp_path / "parent.py"
     script.write_text(PARENT)
     env = dict(os.environ, PYTHONPATH=str(Path(fempipe.__file__).parents[1]))
-    args = [str(tmp_path), "handle" if handle else "-", "disarm" if disarm else "-"]
+    args = [str(tmp_path), "handle" if handle else "-", "disarm" if disarm else "-", method]
     log = tmp_path / "stderr.txt"
     with log.open("w") as err:
         proc = subprocess.Popen([sys.executable, str(script), *args], env=env, stderr=err)
@@ -229,9 +233,14 @@ needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
 
 
 @needs_proc
-def test_workers_die_with_a_killed_parent(tmp_path):
-    """SIGKILL: the parent cannot clean up; its workers must notice and exit."""
-    rc, _, gone = _signal_parent(tmp_path, signal.SIGKILL)
+@pytest.mark.parametrize("method", multiprocessing.get_all_start_methods())
+def test_workers_die_with_a_killed_parent(tmp_path, method):
+    """SIGKILL: the parent cannot clean up; its workers must notice and exit.
+
+    With "forkserver" the workers' parent is the fork server, which exits
+    when the pool's creator does.
+    """
+    rc, _, gone = _signal_parent(tmp_path, signal.SIGKILL, method=method)
     assert gone is not None and gone < GRACE
     assert rc == -signal.SIGKILL
 
