@@ -51,7 +51,7 @@ def run(quick: bool = False) -> CaseResult:
         checks,
         quick=quick,
         started=t0,
-        tables=(panel_table([panel], "Tip values, γ = 18.9, α = π/3"),),
+        tables=(panel_table([panel], f"Tip values, γ = {gamma:g}, α = π/3"),),
         data={"panels": [panel]},
     )
 

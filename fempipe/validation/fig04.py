@@ -92,7 +92,7 @@ def run(quick: bool = False) -> CaseResult:
         checks,
         quick=quick,
         started=t0,
-        tables=(panel_table(panels, "Tip values, γ = 18.9"),),
+        tables=(panel_table(panels, f"Tip values, γ = {gamma:g}"),),
         findings=findings,
         data={"panels": panels},
     )
