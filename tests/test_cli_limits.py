@@ -16,7 +16,8 @@ import sys
 import pytest
 
 from fempipe.cli import build_parser, main
-from fempipe.cli.common import GAMMA_MAX, MAX_DOFS, MAX_VALUES, MU_MAX, V_MAX, setup_from_args
+from fempipe.cli.common import setup_from_args
+from fempipe.cli.parsing import GAMMA_MAX, MAX_DOFS, MAX_VALUES, MU_MAX, V_MAX
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fempipe.cli import main
-from fempipe.cli.common import parse_alpha, parse_values
+from fempipe.cli.parsing import parse_alpha, parse_values
 from fempipe.discretization import DEFAULT_FE
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]

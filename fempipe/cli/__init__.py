@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code.
 
     0 ok, 1 a solver failed (:class:`fempipe.errors.SolverError`), 2 bad input
-    (:class:`~fempipe.cli.common.CLIError` or argparse), 130 / 143 interrupted
+    (:class:`~fempipe.cli.parsing.CLIError` or argparse), 130 / 143 interrupted
     by SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
     """
     parser = build_parser()
@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help(sys.stderr)
         return 2
-    from fempipe.cli.common import CLIError
+    from fempipe.cli.parsing import CLIError
     from fempipe.errors import SolverError
     from fempipe.parallel import Interrupted, interruptible
 

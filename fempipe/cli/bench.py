@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -49,9 +49,9 @@ def run(args: argparse.Namespace) -> int:
                 "--only", f"unknown benchmark {unknown[0]!r}; known: {', '.join(sorted(table))}"
             )
     n = len(names) if names else len(table)
-    with common.progress(args, n, "bench") as bar:
+    with reporting.progress(args, n, "bench") as bar:
         result = bench.run(names, quick=args.quick, callback=lambda name, res: bar.update())
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         output.json("bench.json", result)
     if args.json:

@@ -19,8 +19,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -31,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--directions",
         metavar="D",
-        type=common.option_type("--directions", _directions),
+        type=parsing.option_type("--directions", _directions),
         default="up,down",
         help="sweep directions: up, down or up,down (default up,down)",
     )
@@ -42,13 +42,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="several inclinations swept independently (alpha spellings, e.g. 0,pi/4,pi/2); "
         "overrides --alpha",
     )
-    num = common.number_type
+    num = parsing.number_type
     g.add_argument(
         "--t-max",
         metavar="T",
         type=num("--t-max", 0.0, strict_low=True),
         default="300",
-        help=f"longest integration per point (300; above {common.T_MAX:g} needs --allow-large)",
+        help=f"longest integration per point (300; above {parsing.T_MAX:g} needs --allow-large)",
     )
     g.add_argument(
         "--rtol",
@@ -69,7 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     ex.add_argument(
         "--workers",
         metavar="N",
-        type=common.workers_type,
+        type=parsing.workers_type,
         default="1",
         help="local processes for independent sweeps (1)",
     )
@@ -104,7 +104,7 @@ def _parse(args):
     directions = args.directions
     alphas = None
     if args.alphas is not None:
-        alphas = common.parse_alpha_list(args.alphas, "--alphas", common.allow_large(args))
+        alphas = parsing.parse_alpha_list(args.alphas, "--alphas", parsing.allow_large(args))
     return directions, alphas, args.workers
 
 
@@ -116,15 +116,15 @@ def run(args: argparse.Namespace) -> int:
     setup = common.setup_from_args(args)
     directions, alphas, workers = _parse(args)
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
-    large = common.allow_large(args)
-    common.check_count("--t-max", t_max, common.T_MAX, large, "time units")
+    large = parsing.allow_large(args)
+    parsing.check_count("--t-max", t_max, parsing.T_MAX, large, "time units")
     if not setup.v:
         raise CLIError("--v", "no flow velocities to sweep")
     n_alpha = 1 if alphas is None else len(alphas)
     total = len(setup.v) * len(directions) * n_alpha
     flow_opt = "--U" if args.U is not None else "--v"
-    common.check_count(
-        flow_opt, total, common.MAX_VALUES, large, "points (v x directions x alphas)"
+    parsing.check_count(
+        flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions x alphas)"
     )
     executor = client = None
     if args.dask is not None:
@@ -146,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
         store_dir = Path(args.out) / "points"
     model = PipeModel(setup.disc, setup.params)
     try:
-        with common.progress(args, total, "bifurcation") as bar:
+        with reporting.progress(args, total, "bifurcation") as bar:
             seen = [0]
 
             def on_progress(done, _total):
@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
         result["params"]["alphas"] = alphas
     result["points"] = diagram.points
     result["wall_time"] = diagram.wall_time
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         output.record(store_dir)
         _write_outputs(output, result)
@@ -195,7 +195,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write_outputs(output: common.Output, result) -> None:
+def _write_outputs(output: reporting.Output, result) -> None:
     import matplotlib
 
     matplotlib.use("Agg")

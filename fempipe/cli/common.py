@@ -11,43 +11,13 @@ all four together, plus optional ``--g --a``, with ``--U`` in m/s for the
 flow), Eq. (19) of Chen, Hu, Dai & Wang (2020).
 
 Bad input is refused before any computation, with one line naming the
-option: a single option is checked by its argparse ``type=`` callable, what
-depends on several options (the SI pipe, ``--U``, the work limits) by
-:func:`setup_from_args`, which raises :class:`CLIError`.  The dispatcher
+option: a single option is checked by its argparse ``type=`` callable
+(:mod:`fempipe.cli.parsing`, which also states the accepted ranges and the
+work limits and why), what depends on several options (the SI pipe, ``--U``,
+the work limits) by :func:`setup_from_args`, which raises
+:class:`~fempipe.cli.parsing.CLIError`.  The dispatcher
 (:func:`fempipe.cli.main`) prints ``fempipe <cmd>: error: --option: message``
 on stderr and exits with code 2.
-
-Accepted ranges
----------------
-The default discretisation P3:16 has 48 unknowns, its nodes 1/48 apart.  The
-narrowest features of a state are the layer at the clamp where gravity takes
-over from bending, of width ~ 1/sqrt(gamma), and the bending waves of the
-follower force v^2 sin(theta(1) - theta) of Eq. (20), of length ~ 1/v.  They
-are resolved while they are no narrower than about one node spacing, so the
-command line accepts
-
-* ``0 <= v <= 50`` (:data:`V_MAX`; ``--U`` up to the U of v = 50),
-* ``0 <= gamma <= 2500`` (:data:`GAMMA_MAX` = 50^2),
-* ``0 <= mu <= 10`` (:data:`MU_MAX`): without flow, mode r of the cantilever
-  has the damping ratio mu lambda_r^2 / 2 (lambda_1 = 1.875), so from
-  mu = 0.57 on every mode is overdamped; 10 leaves ample room,
-* ``-2 pi <= alpha <= 2 pi`` (:data:`ALPHA_MAX`; alpha is an angle).
-
-At the ends P3:16 is still close to P3:64: 6e-5 in the static tip X_tip at
-gamma = 2500 (alpha = pi/2; 4e-8 at gamma = 100) and 3 % in the first
-eigenvalue at v = 50 (alpha = 0; 8e-7 at v = 10); refine ``--fe`` for accuracy
-there.  The ranges are far beyond the paper's figures (v <= 12, gamma <= 100)
-and beyond what a soft plug-flow pipe is: v = 50 is U = 30 m/s in
-Texier & Dorbolo's pipe.
-
-Work limits
------------
-More than :data:`MAX_VALUES` values in a list (``--v``, ``--U``, ``--values``,
-``--alphas``, ``--betas``, ``--gammas``, and their products in
-``stability-map`` and ``bifurcation``), more than :data:`MAX_DOFS` unknowns
-(``--fe Pk:n`` has n k, ``--modal N`` has N) or ``--t-max`` above
-:data:`T_MAX` need ``--allow-large``: a typing slip must not start hours of
-work.
 
 Typical use in a subcommand module::
 
@@ -65,57 +35,50 @@ Typical use in a subcommand module::
 from __future__ import annotations
 
 import argparse
-import math
 import re
-import sys
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from pathlib import Path
 
-from fempipe.discretization import _FE_RE, DEFAULT_FE, parse_discretization
+from fempipe.discretization import DEFAULT_FE, parse_discretization
 from fempipe.errors import ParamError
-from fempipe.params import PAPER_CASE, Params, PipeSI
+from fempipe.params import Params, PipeSI
+
+from .parsing import (
+    DEFAULT_BETA,
+    DEFAULT_G,
+    DEFAULT_GAMMA,
+    DEFAULT_MU,
+    GAMMA_MAX,
+    MAX_DOFS,
+    MAX_VALUES,
+    MU_MAX,
+    T_MAX,
+    V_MAX,
+    CLIError,
+    U_list_type,
+    ValueList,
+    allow_large,
+    alpha_type,
+    beta_type,
+    check_count,
+    check_si_groups,
+    check_U,
+    fe_type,
+    gamma_type,
+    modal_type,
+    mu_type,
+    number_type,
+    v_list_type,
+)
 
 __all__ = [
-    "CLIError",
     "ArgumentParser",
-    "Output",
     "Setup",
-    "ValueList",
-    "add_physical_arguments",
     "add_discretization_arguments",
     "add_flow_arguments",
     "add_output_arguments",
-    "number_type",
-    "option_type",
-    "parse_alpha",
-    "parse_alpha_list",
-    "parse_values",
-    "parse_float",
+    "add_physical_arguments",
     "setup_from_args",
-    "progress",
-    "workers_type",
 ]
-
-#: Defaults of the dimensionless options: the paper's reference case.
-DEFAULT_BETA = PAPER_CASE["beta"]
-DEFAULT_GAMMA = PAPER_CASE["gamma"]
-DEFAULT_MU = PAPER_CASE["mu"]
-DEFAULT_G = 9.81
-
-#: Accepted ranges (module docstring, "Accepted ranges").
-V_MAX = 50.0
-GAMMA_MAX = V_MAX**2
-MU_MAX = 10.0
-ALPHA_MAX = 2 * math.pi
-#: Work limits lifted by ``--allow-large`` (module docstring, "Work limits").
-MAX_VALUES = 1000
-MAX_DOFS = 1000
-T_MAX = 1e4
-
-_WHY_V = "the default mesh P3:16 resolves bending waves of length 1/v down to v = 50"
-_WHY_GAMMA = "the default mesh P3:16 resolves the clamp layer 1/sqrt(gamma) down to gamma = 2500"
-_WHY_MU = "every mode is overdamped from mu = 0.57 on"
 
 #: SI option -> PipeSI field.
 _SI_OPTIONS = {"--length": "L", "--EI": "EI", "--m": "m", "--M": "M", "--g": "g", "--a": "a"}
@@ -123,26 +86,6 @@ _SI_REQUIRED = ("--length", "--EI", "--m", "--M")
 #: Params / PipeSI field -> the option that sets it, to name it in errors.
 _DIMLESS_OPTION = {"alpha": "--alpha", "beta": "--beta", "gamma": "--gamma", "mu": "--mu"}
 _SI_FIELD_OPTION = {field: opt for opt, field in _SI_OPTIONS.items()} | {"alpha": "--alpha"}
-
-
-class CLIError(ValueError):
-    """Bad command-line input; ``str()`` is the one-line message naming the option.
-
-    Parameters
-    ----------
-    option : str
-        The offending option, e.g. ``"--alpha"``.
-    message : str
-        What is wrong and what is allowed.
-    """
-
-    def __init__(self, option: str, message: str) -> None:
-        message = " ".join(str(message).split())  # one line, always
-        if message.startswith(option):
-            message = message[len(option) :].lstrip(" :")
-        super().__init__(f"{option}: {message}")
-        self.option = option
-        self.message = message
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -158,273 +101,6 @@ class ArgumentParser(argparse.ArgumentParser):
         # like CLIError.
         message = re.sub(r"^argument (-[-\w]+)(?:/-[-\w]+)?: ", r"\1: ", message)
         self.exit(2, f"{self.prog}: error: {message}\n")
-
-
-def option_type(option: str, parse: Callable[[str], object]) -> Callable[[str], object]:
-    """An argparse ``type=`` callable: ``parse(text)``, its ValueError a one-line usage error."""
-
-    def convert(text: str):
-        try:
-            return parse(text)
-        except ValueError as exc:
-            raise argparse.ArgumentTypeError(CLIError(option, str(exc)).message) from None
-
-    convert.__name__ = option.lstrip("-")
-    return convert
-
-
-# ---------------------------------------------------------------------------
-# Value parsers (pure functions; ValueError names the option)
-# ---------------------------------------------------------------------------
-
-_NUMBER = r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
-_PI_RE = re.compile(rf"^([+-]?)\s*({_NUMBER})?\s*\*?\s*(?:pi|π)\s*(?:/\s*({_NUMBER}))?$")
-_DEG_RE = re.compile(rf"^([+-]?\s*{_NUMBER})\s*(?:deg|degrees?|°)$")
-_RAD_RE = re.compile(rf"^([+-]?\s*{_NUMBER})\s*(?:rad)?$")
-
-
-def parse_alpha(text: str) -> float:
-    """Parse an inclination alpha in rad, degrees or multiples of pi.
-
-    Accepted forms: ``1.5708`` or ``1.5708rad`` (radians), ``90deg``,
-    ``-45°`` (degrees), ``pi``, ``pi/2``, ``0.5pi``, ``-pi/4``, ``3pi/4``,
-    ``3*pi/4`` (multiples of pi).
-
-    Returns
-    -------
-    float
-        alpha in radians.
-
-    Raises
-    ------
-    ValueError
-        Naming ``--alpha`` and the accepted forms.
-    """
-    s = str(text).strip().lower()
-    value: float | None = None
-    if m := _PI_RE.match(s):
-        sign = -1.0 if m.group(1) == "-" else 1.0
-        num = float(m.group(2)) if m.group(2) else 1.0
-        den = float(m.group(3)) if m.group(3) else 1.0
-        if den != 0.0:
-            value = sign * num * math.pi / den
-    elif m := _DEG_RE.match(s):
-        value = math.radians(float(m.group(1).replace(" ", "")))
-    elif m := _RAD_RE.match(s):
-        value = float(m.group(1).replace(" ", ""))
-    if value is None or not math.isfinite(value):
-        raise ValueError(
-            f"--alpha expects radians (1.5708), degrees (90deg) or a multiple of pi "
-            f"(pi/2, 0.5pi, -pi/4, 3pi/4), got {text!r}"
-        )
-    return value
-
-
-def parse_float(text: str, option: str) -> float:
-    """A finite float, or ValueError naming ``option``."""
-    try:
-        value = float(str(text).strip())
-    except ValueError:
-        raise ValueError(f"{option} expects a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{option} must be finite, got {text!r}")
-    return value
-
-
-@dataclass(frozen=True)
-class ValueList:
-    """A list option as given (``0,2,4`` or ``start:stop:count``), not yet expanded.
-
-    Its length and extremes are known without building the list, so that a
-    count past :data:`MAX_VALUES` is refused before any memory is spent.
-
-    Attributes
-    ----------
-    option : str
-        The option, for messages.
-    text : str
-        The text as given.
-    count : int
-        Number of values.
-    low, high : float
-        Smallest and largest value.
-    """
-
-    option: str
-    text: str
-    count: int
-    low: float
-    high: float
-
-    def values(self, allow_large: bool = False) -> list[float]:
-        """The values; CLIError naming ``--allow-large`` past :data:`MAX_VALUES`."""
-        check_count(self.option, self.count, MAX_VALUES, allow_large, "values")
-        return parse_values(self.text, self.option)
-
-
-def check_count(option: str, count: float, limit: float, allow_large: bool, what: str) -> None:
-    """CLIError naming ``option``, ``--allow-large`` and ``limit`` if ``count > limit``."""
-    if count > limit and not allow_large:
-        raise CLIError(
-            option,
-            f"{_amount(count)} {what} is more than the limit {_amount(limit)}; "
-            "give --allow-large to run it anyway",
-        )
-
-
-def _amount(x: float) -> str:
-    return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"
-
-
-def _split_values(text: str, option: str) -> tuple[list[float] | None, float, float, int]:
-    """``(items, start, stop, count)``: items for ``0,2,4``, None for a range."""
-    s = str(text).strip()
-    forms = "a list 0,2,4 or start:stop:count such as 0:6:13"
-    if ":" in s:
-        parts = s.split(":")
-        if len(parts) != 3:
-            raise ValueError(f"{option} expects {forms}, got {text!r}")
-        try:
-            start, stop = float(parts[0]), float(parts[1])
-            count = int(parts[2])
-        except ValueError:
-            raise ValueError(f"{option} expects {forms} (count an integer), got {text!r}") from None
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            raise ValueError(f"{option} range ends must be finite, got {text!r}")
-        if count < 1:
-            raise ValueError(f"{option} count must be >= 1, got {count}")
-        if count == 1 and start != stop:
-            raise ValueError(f"{option} count 1 needs start == stop, got {text!r}")
-        return None, start, stop, count
-    out = []
-    for item in s.split(","):
-        if not item.strip():
-            raise ValueError(f"{option} expects {forms}; empty item in {text!r}")
-        try:
-            value = float(item)
-        except ValueError:
-            raise ValueError(
-                f"{option} expects {forms}; {item.strip()!r} is not a number"
-            ) from None
-        if not math.isfinite(value):
-            raise ValueError(f"{option} values must be finite, got {item.strip()!r}")
-        out.append(value)
-    return out, out[0], out[-1], len(out)
-
-
-def parse_values(text: str, option: str) -> list[float]:
-    """Parse a list of values: ``0,2,4``, ``3`` or ``start:stop:count``.
-
-    ``start:stop:count`` gives ``count`` equally spaced values including both
-    ends (``0:6:13`` is 0, 0.5, ..., 6), like ``numpy.linspace``.
-
-    Raises
-    ------
-    ValueError
-        Naming ``option`` and the allowed forms.
-    """
-    items, start, stop, count = _split_values(text, option)
-    if items is not None:
-        return items
-    if count == 1:
-        return [start]
-    step = (stop - start) / (count - 1)
-    # start + i*step, with the end hit exactly (no round-off past stop).
-    return [start + i * step for i in range(count - 1)] + [stop]
-
-
-def value_list(text: str, option: str) -> ValueList:
-    """Check the form of a list option without expanding it (ValueError naming it)."""
-    items, start, stop, count = _split_values(text, option)
-    ends = items if items is not None else [start, stop]
-    return ValueList(option, str(text), count, min(ends), max(ends))
-
-
-def _check_v(x: float, option: str = "--v") -> float:
-    """A dimensionless flow velocity in [0, :data:`V_MAX`] (ValueError naming ``option``)."""
-    try:
-        Params(v=x)
-    except ParamError as exc:
-        raise ValueError(f"{option}: {exc}") from None
-    if x > V_MAX:
-        raise ValueError(f"{option}: v = {x:g} is outside 0 <= v <= {V_MAX:g} ({_WHY_V})")
-    return x
-
-
-def check_gamma(x: float, option: str = "--gamma") -> float:
-    """A gravity parameter in [0, :data:`GAMMA_MAX`] (ValueError naming ``option``)."""
-    try:
-        return _check_param("gamma", x, GAMMA_MAX, _WHY_GAMMA)
-    except ValueError as exc:
-        raise ValueError(f"{option}: {exc}") from None
-
-
-def _v_list(text: str) -> ValueList:
-    values = value_list(text, "--v")
-    _check_v(values.low)
-    _check_v(values.high)
-    return values
-
-
-def _alpha(text: str) -> float:
-    alpha = parse_alpha(text)
-    if abs(alpha) > ALPHA_MAX:
-        raise ValueError(
-            f"--alpha {text!r} is outside -2pi <= alpha <= 2pi (alpha is an angle; "
-            f"take it modulo 2pi)"
-        )
-    return alpha
-
-
-def _check_param(field: str, x: float, high: float, why: str) -> float:
-    """``x`` as dimensionless ``field``: Params' own check, then ``<= high`` (ValueError)."""
-    try:
-        Params(**{field: x})
-    except ParamError as exc:
-        raise ValueError(str(exc)) from None
-    if x > high:
-        raise ValueError(f"{field} = {x:g} is outside 0 <= {field} <= {high:g} ({why})")
-    return x
-
-
-def _param(field: str, high: float, why: str) -> Callable[[str], float]:
-    """Parser of ``--field``: a finite number, checked by :func:`_check_param`."""
-    option = f"--{field}"
-    return lambda text: _check_param(field, parse_float(text, option), high, why)
-
-
-def number_type(
-    option: str,
-    low: float | None = None,
-    high: float | None = None,
-    strict_low: bool = False,
-) -> Callable[[str], float]:
-    """argparse ``type=``: a finite number, ``> low`` (strict) or ``>= low``, ``<= high``."""
-
-    def parse(text: str) -> float:
-        x = parse_float(text, option)
-        below = low is not None and (x < low or (strict_low and x == low))
-        if below or (high is not None and x > high):
-            lo = "" if low is None else f"{low:g} {'<' if strict_low else '<='} "
-            hi = "" if high is None else f" <= {high:g}"
-            raise ValueError(f"must satisfy {lo}{option}{hi}, got {x:g}")
-        return x
-
-    return option_type(option, parse)
-
-
-def _workers(text: str) -> int:
-    try:
-        n = int(str(text))
-    except ValueError:
-        raise ValueError(f"expects an integer >= 1, got {text!r}") from None
-    if n < 1:
-        raise ValueError(f"expects an integer >= 1, got {n}")
-    return n
-
-
-#: argparse ``type=`` of ``--workers``: a whole number of local processes >= 1.
-workers_type = option_type("--workers", _workers)
 
 
 # ---------------------------------------------------------------------------
@@ -450,7 +126,7 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--alpha",
         metavar="A",
-        type=option_type("--alpha", _alpha),
+        type=alpha_type,
         default=None,
         help="inclination from the downward vertical, -2pi..2pi: radians (1.5708), degrees "
         "(90deg) or a multiple of pi (pi/2, 0.5pi, 3pi/4); negative values as --alpha=-pi/4 "
@@ -459,14 +135,14 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--beta",
         metavar="B",
-        type=option_type("--beta", _param("beta", 1.0, "a mass ratio")),
+        type=beta_type,
         default=None,
         help="mass ratio M/(m+M) in [0, 1]",
     )
     g.add_argument(
         "--gamma",
         metavar="G",
-        type=option_type("--gamma", _param("gamma", GAMMA_MAX, _WHY_GAMMA)),
+        type=gamma_type,
         default=None,
         help=f"gravity (m+M) g L^3/EI, 0..{GAMMA_MAX:g} (a standing pipe is --alpha pi, not "
         "gamma < 0)",
@@ -474,7 +150,7 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--mu",
         metavar="MU",
-        type=option_type("--mu", _param("mu", MU_MAX, _WHY_MU)),
+        type=mu_type,
         default=None,
         help=f"Kelvin-Voigt damping, 0..{MU_MAX:g}",
     )
@@ -509,7 +185,7 @@ def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0
     ex.add_argument(
         "--v",
         metavar="LIST",
-        type=option_type("--v", _v_list),
+        type=v_list_type,
         default=None,
         help=f"dimensionless flow velocities, 0..{V_MAX:g}: 0,2,4 or start:stop:count like "
         f"0:6:13{d}",
@@ -517,7 +193,7 @@ def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0
     ex.add_argument(
         "--U",
         metavar="LIST",
-        type=option_type("--U", lambda text: value_list(text, "--U")),
+        type=U_list_type,
         default=None,
         help="flow velocities in m/s (needs the SI pipe; up to the U of v = "
         f"{V_MAX:g}): 0,0.5,1 or 0:3:7",
@@ -533,14 +209,14 @@ def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
     ex.add_argument(
         "--fe",
         metavar="Pk:n",
-        type=option_type("--fe", _fe_size),
+        type=fe_type,
         default=None,
         help=f"Lagrange elements of degree k (1..10) on n uniform elements (default {DEFAULT_FE})",
     )
     ex.add_argument(
         "--modal",
         metavar="N",
-        type=option_type("--modal", _modal_size),
+        type=modal_type,
         default=None,
         help="the paper's N sine modes sin((2r-1) pi xi/2) instead of finite elements",
     )
@@ -550,27 +226,6 @@ def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"accept more than {MAX_DOFS} unknowns (n k of Pk:n, N of --modal), lists of more "
         f"than {MAX_VALUES} values (or points of a map or sweep) and --t-max above {T_MAX:g}",
     )
-
-
-def _fe_size(text: str) -> tuple[str, int]:
-    """``(text, unknowns)`` of ``--fe Pk:n``, checked without building the mesh."""
-    m = _FE_RE.match(str(text).strip())
-    if not m or not 1 <= int(m.group(1)) <= 10 or int(m.group(2)) < 1:
-        parse_discretization(fe=text)  # raises, with the library's message
-        raise AssertionError(text)
-    return str(text), int(m.group(1)) * int(m.group(2))
-
-
-def _modal_size(text: str) -> tuple[str, int]:
-    """``(text, unknowns)`` of ``--modal N``."""
-    try:
-        n = int(str(text))
-    except ValueError:
-        n = 0
-    if n < 1:
-        parse_discretization(modal=text)  # raises, with the library's message
-        raise AssertionError(text)
-    return str(text), n
 
 
 def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None = None) -> None:
@@ -648,11 +303,6 @@ def _given(args: argparse.Namespace, dest: str):
     return getattr(args, dest, None)
 
 
-def allow_large(args: argparse.Namespace) -> bool:
-    """Whether ``--allow-large`` was given."""
-    return bool(getattr(args, "allow_large", False))
-
-
 def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
     """Turn parsed options into the validated :class:`Setup`.
 
@@ -703,19 +353,7 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
         except ParamError as exc:
             raise CLIError(_SI_FIELD_OPTION[exc.field], str(exc)) from None
         base = pipe.params(0.0)
-        si = "--length --EI --m --M --g"
-        if base.gamma > GAMMA_MAX:
-            raise CLIError(
-                si,
-                f"the SI pipe has gamma = (m+M) g L^3/EI = {base.gamma:g}, outside "
-                f"0 <= gamma <= {GAMMA_MAX:g} ({_WHY_GAMMA})",
-            )
-        if base.mu > MU_MAX:
-            raise CLIError(
-                "--a",
-                f"the SI pipe has mu = sqrt(EI/(m+M)) a/L^2 = {base.mu:g}, outside "
-                f"0 <= mu <= {MU_MAX:g} ({_WHY_MU})",
-            )
+        check_si_groups(base)
     else:
         vals = {"alpha": alpha, "beta": DEFAULT_BETA, "gamma": DEFAULT_GAMMA, "mu": DEFAULT_MU}
         for name in ("beta", "gamma", "mu"):
@@ -736,24 +374,13 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
                 "needs the SI pipe (--length --EI --m --M); use --v for dimensionless flow",
             )
         U_spec: ValueList = args.U
-        U_max = pipe.U_of_v(V_MAX)
-        for U in (U_spec.low, U_spec.high):
-            try:
-                v = pipe.v_of_U(U)
-            except ParamError as exc:
-                raise CLIError("--U", str(exc)) from None
-            if v > V_MAX:
-                raise CLIError(
-                    "--U",
-                    f"U = {U:g} m/s is outside 0 <= U <= {U_max:.6g} m/s, the U of "
-                    f"v = {V_MAX:g} for this pipe ({_WHY_V})",
-                )
+        check_U(pipe, U_spec)
         U_list = U_spec.values(large)
         v_list = [pipe.v_of_U(U) for U in U_list]
     else:
         spec = _given(args, "v")
         if spec is None and getattr(args, "_flow_default", None) is not None:
-            spec = _v_list(args._flow_default)
+            spec = v_list_type(args._flow_default)
         if spec is not None:
             v_list = spec.values(large)
         elif need_flow and hasattr(args, "_flow_default"):
@@ -776,114 +403,3 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
         raise CLIError(option, str(exc)) from None
 
     return Setup(params=params, pipe=pipe, v=v_list, disc=disc, U=U_list)
-
-
-# ---------------------------------------------------------------------------
-# Progress and output files
-# ---------------------------------------------------------------------------
-
-
-def progress(args: argparse.Namespace, total: int | None, desc: str):
-    """A tqdm bar on stderr if ``--progress`` (or a terminal without ``--quiet``).
-
-    Use as a context manager; call ``bar.update()`` from the library's
-    progress callback.  A disabled bar does nothing.
-    """
-    from tqdm import tqdm
-
-    show = getattr(args, "progress", None)
-    if show is None:
-        show = sys.stderr.isatty()
-    return tqdm(
-        total=total,
-        desc=desc,
-        file=sys.stderr,
-        leave=False,
-        dynamic_ncols=True,
-        disable=not show,
-    )
-
-
-class Output:
-    """The result files of one command in ``--out DIR``, recorded as they are written.
-
-    Every file goes through one of the methods, which write atomically
-    (:mod:`fempipe.io`) and record the path, so the "wrote ..." lines of
-    :meth:`report` are exactly the files written.
-
-    Parameters
-    ----------
-    directory : path-like
-        The ``--out`` directory.
-    """
-
-    def __init__(self, directory) -> None:
-        self.directory = Path(directory)
-        self.written: list[Path] = []
-
-    def path(self, name: str) -> Path:
-        """The destination of ``name``; call :meth:`record` once it is written."""
-        return self.directory / name
-
-    def record(self, path) -> Path:
-        """Record a path written by another writer (e.g. a GIF, a point store)."""
-        path = Path(path)
-        self.written.append(path)
-        return path
-
-    def json(self, name: str, obj) -> Path:
-        from fempipe.io import write_json
-
-        return self.record(write_json(self.path(name), obj))
-
-    def csv(self, name: str, rows, columns=None) -> Path:
-        from fempipe.io import write_csv
-
-        return self.record(write_csv(self.path(name), rows, columns))
-
-    def figure(self, name: str, fig, **savefig_kwargs) -> Path:
-        from fempipe.io import write_figure
-
-        return self.record(write_figure(self.path(name), fig, **savefig_kwargs))
-
-    def report(self, args: argparse.Namespace) -> None:
-        """``wrote PATH`` on stderr for each file, unless ``--json`` or ``--quiet``."""
-        if getattr(args, "json", False) or getattr(args, "progress", None) is False:
-            return
-        for path in self.written:
-            print(f"wrote {path}", file=sys.stderr)
-
-
-def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu")) -> tuple:
-    """``(discretisation label, "alpha = ..., beta = ...")`` for a table heading.
-
-    ``result`` is a subcommand's JSON dict with ``params`` and ``discretization``.
-    """
-    p, d = result["params"], result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
-    head = ", ".join(f"{k} = {p[k]:.6g}" for k in keys if k in p)
-    return disc, head
-
-
-def parse_alpha_list(text: str, option: str, allow_large: bool = False) -> list[float]:
-    """A list of inclinations: ``0,pi/4,pi/2`` or ``start:stop:count`` in any
-    :func:`parse_alpha` spelling (``0deg:180deg:7``); CLIError naming ``option``
-    (also past :data:`MAX_VALUES` values without ``allow_large``)."""
-    text = str(text)
-    try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError(f"{option} expects start:stop:count, got {text!r}")
-            start, stop = _alpha(parts[0]), _alpha(parts[1])
-            spec = value_list(f"{start!r}:{stop!r}:{parts[2]}", option)
-            return spec.values(allow_large)
-        items = text.split(",")
-        if any(not s.strip() for s in items):
-            raise ValueError(f"{option} has an empty item in {text!r}")
-        check_count(option, len(items), MAX_VALUES, allow_large, "values")
-        return [_alpha(s) for s in items]
-    except ValueError as exc:
-        if isinstance(exc, CLIError):
-            raise
-        raise CLIError(option, str(exc).replace("--alpha ", f"{option} ")) from None

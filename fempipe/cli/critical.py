@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import argparse
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--ds-max",
         metavar="DS",
-        type=common.number_type("--ds-max", 0.0, 1.0, strict_low=True),
+        type=parsing.number_type("--ds-max", 0.0, 1.0, strict_low=True),
         default="0.1",
         help="largest continuation step; spectra are computed at every step (default 0.1)",
     )
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(flow_opt, f"needs a range with two different values, got {v_min:g} only")
     ds_max = args.ds_max
     model = PipeModel(setup.disc, setup.params)
-    with common.progress(args, None, "critical") as bar:
+    with reporting.progress(args, None, "critical") as bar:
 
         def on_sample(branch: str, v: float) -> None:
             bar.update()
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         pipe = setup.pipe
         result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
         result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write(output, result, res)
     if args.json:
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write(output: common.Output, result: dict, res) -> None:
+def _write(output: reporting.Output, result: dict, res) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -116,7 +116,7 @@ def _write(output: common.Output, result: dict, res) -> None:
 
 
 def _print(result: dict, pipe) -> None:
-    disc, head = common.describe(result)
+    disc, head = reporting.describe(result)
     lo, hi = result["v_range"]
     print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretisation {disc}")
     v_cr = result["v_cr"]

@@ -24,8 +24,8 @@ import time
 
 import numpy as np
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,13 +33,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_flow_arguments(parser, default="10")
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("time integration")
-    num = common.number_type
+    num = parsing.number_type
     g.add_argument(
         "--t-max",
         metavar="T",
         type=num("--t-max", 0.0, strict_low=True),
         default="300",
-        help=f"longest integration in tau (300; above {common.T_MAX:g} needs --allow-large)",
+        help=f"longest integration in tau (300; above {parsing.T_MAX:g} needs --allow-large)",
     )
     g.add_argument(
         "--rtol",
@@ -58,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--mode",
         metavar="R",
-        type=common.option_type("--mode", _mode),
+        type=parsing.option_type("--mode", _mode),
         default="1",
         help="sine mode r of the initial perturbation (1)",
     )
@@ -115,14 +115,14 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(opt, f"simulate takes a single flow velocity, got {len(setup.v)}")
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
     amplitude, sigma, omega, mode = args.amplitude, args.sigma, args.omega, args.mode
-    common.check_count("--t-max", t_max, common.T_MAX, common.allow_large(args), "time units")
+    parsing.check_count("--t-max", t_max, parsing.T_MAX, parsing.allow_large(args), "time units")
 
     params, disc = setup.params, setup.disc
     model = PipeModel(disc, params)
     q_s = solve_static(model).q
     q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
     t_start = time.perf_counter()
-    with common.progress(args, 100, f"simulate v={params.v:g}") as bar:
+    with reporting.progress(args, 100, f"simulate v={params.v:g}") as bar:
         last = [0]
 
         def on_time(t):
@@ -174,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
         result["period_s"] = result["period"] * ts if result.get("period") else None
         result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
 
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write_outputs(output, result, model, traj, att)
     if args.json:
@@ -201,7 +201,7 @@ def _display_states(att, traj, n_periods: int = 3):
     return t, q, p
 
 
-def _write_outputs(output: common.Output, result, model, traj, att) -> None:
+def _write_outputs(output: reporting.Output, result, model, traj, att) -> None:
     import matplotlib
 
     matplotlib.use("Agg")

@@ -19,8 +19,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -31,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--modes",
         metavar="N",
-        type=common.option_type("--modes", _modes),
+        type=parsing.option_type("--modes", _modes),
         default="4",
         help="track and report modes 1..N (default 4); 'all' for every resolved mode",
     )
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     if not values:
         raise CLIError("--v", "no flow velocities given")
     model = PipeModel(setup.disc, setup.params)
-    with common.progress(args, len(values), "spectrum") as bar:
+    with reporting.progress(args, len(values), "spectrum") as bar:
         try:
             locus = root_locus(model, values, n_modes=n_modes, callback=lambda i, v: bar.update())
         except ValueError as exc:
@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     if setup.pipe is not None:
         for pt in result["points"]:
             pt["U"] = setup.pipe.U_of_v(pt["v"])
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write(output, result, locus)
     if args.json:
@@ -105,7 +105,7 @@ def _rows(result: dict) -> list[dict]:
     return rows
 
 
-def _write(output: common.Output, result: dict, locus) -> None:
+def _write(output: reporting.Output, result: dict, locus) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -123,7 +123,7 @@ def _write(output: common.Output, result: dict, locus) -> None:
 
 
 def _print_table(result: dict, locus) -> None:
-    disc, head = common.describe(result)
+    disc, head = reporting.describe(result)
     print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretisation {disc}")
     modes = sorted({int(m) for m in locus.modes})[:4]
     cols = "".join(f"   mode {m}: Re Omega  Im Omega" for m in modes)

@@ -22,8 +22,8 @@ import argparse
 import math
 import sys
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -41,33 +41,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--betas",
         metavar="LIST",
-        type=common.option_type("--betas", lambda t: _list(t, "beta", 1.0)),
+        type=parsing.option_type("--betas", lambda t: _list(t, "beta", 1.0)),
         default=None,
         help="mass ratios, one curve each at --gamma (Fig. 6(a)), e.g. "
-        f"0.1,{common.DEFAULT_BETA:g},0.3,0.5",
+        f"0.1,{parsing.DEFAULT_BETA:g},0.3,0.5",
     )
     g.add_argument(
         "--gammas",
         metavar="LIST",
-        type=common.option_type("--gammas", lambda t: _list(t, "gamma", common.GAMMA_MAX)),
+        type=parsing.option_type("--gammas", lambda t: _list(t, "gamma", parsing.GAMMA_MAX)),
         default=None,
         help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. "
-        f"5,10,{common.DEFAULT_GAMMA:g},30",
+        f"5,10,{parsing.DEFAULT_GAMMA:g},30",
     )
     g.add_argument(
         "--workers",
         metavar="N",
-        type=common.workers_type,
+        type=parsing.workers_type,
         default="1",
         help="local processes (default 1)",
     )
     common.add_output_arguments(parser)
 
 
-def _list(text: str, field: str, high: float) -> common.ValueList:
+def _list(text: str, field: str, high: float) -> parsing.ValueList:
     """``--betas`` / ``--gammas``: a list whose values lie in [0, high]."""
     opt = f"--{field}s"
-    spec = common.value_list(text, opt)
+    spec = parsing.value_list(text, opt)
     for x in (spec.low, spec.high):
         if not 0 <= x <= high:
             raise ValueError(f"values must satisfy 0 <= {field} <= {high:g}, got {x:g}")
@@ -75,7 +75,7 @@ def _list(text: str, field: str, high: float) -> common.ValueList:
 
 
 def _curves(args, setup) -> list[tuple[float, float]]:
-    large = common.allow_large(args)
+    large = parsing.allow_large(args)
     betas = None if args.betas is None else args.betas.values(large)
     gammas = None if args.gammas is None else args.gammas.values(large)
     p = setup.params
@@ -110,13 +110,13 @@ def run(args: argparse.Namespace) -> int:
     v_max = max(setup.v)
     if min(setup.v) != 0:
         raise CLIError(flow_opt, "the map searches from v = 0: give a range starting at 0")
-    large = common.allow_large(args)
-    alphas = common.parse_alpha_list(args.alphas, "--alphas", large)
+    large = parsing.allow_large(args)
+    alphas = parsing.parse_alpha_list(args.alphas, "--alphas", large)
     curves = _curves(args, setup)
     workers = args.workers
     total = len(alphas) * len(curves)
-    common.check_count("--alphas", total, common.MAX_VALUES, large, "points (alphas x curves)")
-    with common.progress(args, total, "stability map") as bar:
+    parsing.check_count("--alphas", total, parsing.MAX_VALUES, large, "points (alphas x curves)")
+    with reporting.progress(args, total, "stability map") as bar:
         smap = stability_map(
             setup.disc,
             alphas,
@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
             f"gamma={r['gamma']:g} failed: {r['error']}",
             file=sys.stderr,
         )
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write(output, result, smap)
     if args.json:
@@ -150,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
     return 1 if failed and len(failed) == total else 0
 
 
-def _write(output: common.Output, result: dict, smap) -> None:
+def _write(output: reporting.Output, result: dict, smap) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -168,7 +168,7 @@ def _write(output: common.Output, result: dict, smap) -> None:
 
 
 def _print(result: dict) -> None:
-    disc, _ = common.describe({"params": {}, "discretization": result["discretization"]})
+    disc, _ = reporting.describe({"params": {}, "discretization": result["discretization"]})
     print(f"critical flow velocity, mu = {result['mu']:g}, v <= {result['v_max']:g}; {disc}")
     print(
         f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} {'v_flutter':>14}"

@@ -16,8 +16,8 @@ import math
 import sys
 from dataclasses import replace
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 #: Tip quantities reported per point (dimensionless), in table order.
 TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
@@ -59,17 +59,17 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
             "--continuation",
             "gamma is fixed by the SI pipe (--length --EI --m --M --g); use dimensionless input",
         )
-    large = common.allow_large(args)
+    large = parsing.allow_large(args)
     if parameter == "alpha":
-        values = common.parse_alpha_list(args.values, "--values", large)
+        values = parsing.parse_alpha_list(args.values, "--values", large)
     else:
         try:
-            spec = common.value_list(args.values, "--values")
+            spec = parsing.value_list(args.values, "--values")
         except ValueError as exc:
             raise CLIError("--values", str(exc)) from None
         for x in (spec.low, spec.high):
             try:
-                common.check_gamma(x, "--values")
+                parsing.check_gamma(x, "--values")
             except ValueError as exc:
                 raise CLIError("--values", str(exc)) from None
         values = spec.values(large)
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
 
     model = PipeModel(disc, replace(base, **{parameter: values[0]}))
     solved = []
-    with common.progress(args, len(values), f"static ({parameter})") as bar:
+    with reporting.progress(args, len(values), f"static ({parameter})") as bar:
 
         def on_point(i, sol):
             solved.append(sol)
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
         "discretization": result["discretization"],
     }
 
-    output = common.Output(args.out) if args.out is not None else None
+    output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
         _write_outputs(output, result, points, shapes, values, parameter, pipe)
@@ -248,7 +248,7 @@ def _alphas(values, parameter: str, p: dict) -> list[float]:
 
 
 def _print_table(result: dict, parameter: str, pipe) -> None:
-    disc, head = common.describe(result, ("alpha", "beta", "gamma", "mu", "v"))
+    disc, head = reporting.describe(result, ("alpha", "beta", "gamma", "mu", "v"))
     print(f"static deformation, {head}; discretisation {disc}")
     if pipe is not None:
         print(

@@ -13,8 +13,8 @@ import argparse
 import os
 import sys
 
-from fempipe.cli import common
-from fempipe.cli.common import CLIError
+from fempipe.cli import common, parsing, reporting
+from fempipe.cli.parsing import CLIError
 
 DEFAULT_OUT = os.path.join("validation", "report")
 
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers",
         metavar="N",
-        type=common.workers_type,
+        type=parsing.workers_type,
         default=None,
         help="worker processes (default: the number of CPUs, at most 4)",
     )
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.validation.suite import run_suite
 
     n_cases = len(cases) if cases else len(CASES)
-    with common.progress(args, n_cases, "validate") as bar:
+    with reporting.progress(args, n_cases, "validate") as bar:
 
         def done(outcome) -> None:
             bar.update()
