@@ -11,8 +11,9 @@ This module finds it in three stages:
 2. **Recurrence**: the smallest n for which the section points x_k and
    x_{k-n} agree gives a period-n candidate (n distinct points on the
    section: period-1, period-2, ...).  Equilibria are recognised when the
-   state comes close to a linearly stable static state and keeps approaching
-   it; motion without recurrence until ``t_max`` is reported as non-periodic.
+   state comes close to a linearly stable static state (the criterion of
+   :func:`fempipe.stability.linearly_stable`, as for ``spectrum`` and
+   ``critical``) and keeps approaching it; motion without recurrence until ``t_max`` is reported as non-periodic.
 3. **Shooting**: Newton's method on ``phi_T(x0) - x0 = 0`` with the phase
    condition ``eta_tip(x0) = level``, unknowns (x0, T).  The Jacobian uses the
    monodromy matrix, the exact derivative of the discrete Radau flow map
@@ -41,7 +42,7 @@ from .errors import SolverError
 from .kinematics import tip_values
 from .operators import PipeModel
 from .parallel import single_blas_thread
-from .stability import spectrum
+from .stability import linearly_stable
 
 __all__ = [
     "TIP_KEYS",
@@ -51,7 +52,6 @@ __all__ = [
     "tip_coordinates",
     "shoot",
     "find_attractor",
-    "static_growth_rate",
 ]
 
 log = logging.getLogger(__name__)
@@ -88,28 +88,15 @@ def _eta_gradient(disc: Discretization, q: np.ndarray) -> np.ndarray:
     return np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(th)))
 
 
-def static_growth_rate(model: PipeModel, q_static: np.ndarray) -> float:
-    """Largest real part of the resolved eigenvalues of the linearisation (Eqs. (31b)-(33)).
-
-    The quantity :func:`fempipe.stability.spectrum` reports as ``max_real``:
-    eigenvalues of modes the discretisation does not resolve are left out, as
-    in every stability decision of the package.  Its sign is not the decision
-    itself (an exactly conservative problem, v = mu = 0, has Re lambda = 0 to
-    round-off): :func:`find_attractor` uses :func:`_linearly_stable`.
-    """
-    return spectrum(model, q_static).max_real
-
-
 def _linearly_stable(model: PipeModel, q_static: np.ndarray) -> bool:
-    """The stability criterion of :func:`fempipe.stability.spectrum` and ``critical``.
+    """The equilibrium test's criterion: :func:`fempipe.stability.linearly_stable`,
+    the decision of ``spectrum`` and ``critical``.
 
-    A discretisation that resolves no mode gives no decision, which counts as
-    not stable here: the attractor is then found by integration alone.
+    A discretisation that resolves no mode gives no decision (None), which
+    never lets the finder stop at an equilibrium: the attractor is then found
+    by integration alone.
     """
-    try:
-        return spectrum(model, q_static).stable
-    except ValueError:  # no resolved mode
-        return False
+    return linearly_stable(model, q_static) is True
 
 
 @dataclass(frozen=True)

@@ -7,8 +7,10 @@ The static residual is ``R(q, 0, 0; params)`` of :class:`~fempipe.operators.Pipe
     theta(0) = 0, theta'(1) = 0.
 
 Every solver here only uses the model's ``static_residual``,
-``static_jacobian`` and ``static_parameter_derivative``; it runs unchanged on
-finite elements and on sine modes.
+``static_jacobian``, ``static_parameter_derivative``, ``static_terms`` and
+``gravity_load`` (the sizes of the forces, for the convergence test) and the
+discretisation's Gram matrix; it runs unchanged on finite elements and on
+sine modes.
 
 Arclength is measured in the discretisation-independent norm
 ``||(theta, lambda)||^2 = \\int_0^1 theta^2 dxi + lambda^2``, so step sizes mean the
