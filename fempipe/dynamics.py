@@ -130,6 +130,10 @@ class IntegrationError(SolverError):
         self.t = t
         self.h = h
 
+    def __reduce__(self):
+        # Rebuilt from all the constructor's arguments (pickling across processes).
+        return type(self), (str(self), self.t, self.h)
+
 
 @dataclass(frozen=True)
 class PulsatingFlow:

@@ -69,6 +69,10 @@ class ShootingError(SolverError):
         self.iterations = iterations
         self.residual = residual
 
+    def __reduce__(self):
+        # Rebuilt from all the constructor's arguments (pickling across processes).
+        return type(self), (str(self), self.iterations, self.residual)
+
 
 def tip_coordinates(disc: Discretization, alpha: float, q: np.ndarray) -> dict:
     """The tip coordinates recorded on attractors (:data:`TIP_KEYS`) of one state

@@ -70,6 +70,11 @@ class NewtonError(SolverError):
         self.iterations = iterations
         self.residual = residual
 
+    def __reduce__(self):
+        # Rebuilt from all the constructor's arguments, so that the error of a
+        # worker process reaches its parent intact.
+        return type(self), (str(self), self.params, self.iterations, self.residual)
+
 
 @dataclass(frozen=True)
 class StaticSolution:

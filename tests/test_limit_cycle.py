@@ -101,12 +101,25 @@ def test_equilibrium_decision_is_the_stability_criterion():
     assert att.kind == "equilibrium"
 
 
-def test_solver_failures_share_one_base():
+def test_solver_failures_share_one_base_and_survive_pickling():
+    """One SolverError base; a failure raised in a worker process reaches the
+    parent with its message and attributes (pickle round trip)."""
+    import pickle
+
     from fempipe.dynamics import IntegrationError
     from fempipe.errors import SolverError
+    from fempipe.static import NewtonError
 
-    for exc in (ShootingError, IntegrationError):
-        assert issubclass(exc, SolverError) and issubclass(exc, RuntimeError)
+    errors = [
+        NewtonError("newton", Params(v=2.0), 3, 1e-3),
+        IntegrationError("integration", 1.5, 1e-9),
+        ShootingError("shooting", 4, 2e-2),
+    ]
+    for exc in errors:
+        assert isinstance(exc, SolverError) and isinstance(exc, RuntimeError)
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is type(exc) and str(back) == str(exc)
+        assert vars(back) == vars(exc)
 
 
 def test_shooting_equals_long_integration():
