@@ -3,7 +3,7 @@
 The post-flutter motion of the paper (Section 5, Figs. 7-12) is a limit cycle.
 This module finds it in three stages:
 
-1. **Integration past the transient** with :class:`fempipe.dynamics.Radau`,
+1. **Integration past the transient** with :class:`fempipe.radau.Radau`,
    recording a Poincare section of the tip motion: the upward crossings of
    the tip's lateral displacement eta(1) through a level (the static value,
    about which the Hopf cycle is born).  The full state at each crossing is
@@ -18,7 +18,7 @@ This module finds it in three stages:
    condition ``eta_tip(x0) = level``, unknowns (x0, T).  The Jacobian uses the
    monodromy matrix, the exact derivative of the discrete Radau flow map
    (accumulated step by step from the stage Jacobians, see
-   :meth:`fempipe.dynamics.Radau._accumulate_sensitivity`), so Newton converges
+   :meth:`fempipe.radau.Radau._accumulate_sensitivity`), so Newton converges
    quadratically and the eigenvalues of the matrix are the Floquet multipliers
    to the integration accuracy.  One multiplier is 1 (the phase along the
    orbit); the cycle is stable when all others are inside the unit circle.
@@ -37,11 +37,12 @@ import scipy.linalg as sla
 from scipy.optimize import brentq
 
 from .discretization import Discretization
-from .dynamics import IntegrationError, Radau, Trajectory, initial_state
+from .dynamics import Trajectory, initial_state
 from .errors import SolverError
 from .kinematics import tip_values
 from .operators import PipeModel
 from .parallel import single_blas_thread
+from .radau import IntegrationError, Radau
 from .stability import linearly_stable
 
 __all__ = [
