@@ -72,3 +72,32 @@ def test_modal_gram_and_stiffness_are_diagonal():
 def test_both_satisfy_the_protocol(disc):
     assert isinstance(disc, Discretization)
     assert disc.name in ("P2:3", "modal:3")
+
+
+def test_tip_values_closed_form_and_vectorised():
+    """theta = c xi (represented by P3): eta(1) = (1 - cos c)/c,
+    X_g(1) = (sin(c + alpha) - sin alpha)/c, Z_g(1) = (cos alpha - cos(c + alpha))/c,
+    varsigma(1) = sin(c)/c - 1 (Eqs. (5), (28)); m states at once give the same."""
+    from fempipe.kinematics import tip_values, tip_velocity
+
+    disc, alpha = FiniteElement(4, 3), 0.7
+    cs = np.array([0.4, -1.3, 2.0])
+    Q = np.array([_interpolate(disc, lambda x, c=c: c * x) for c in cs])
+    many = tip_values(disc, Q, alpha)
+    for i, c in enumerate(cs):
+        one = tip_values(disc, Q[i], alpha)
+        exact = {
+            "theta_tip": c,
+            "varsigma_tip": np.sin(c) / c - 1.0,
+            "eta_tip": (1.0 - np.cos(c)) / c,
+            "X_tip": (np.sin(c + alpha) - np.sin(alpha)) / c,
+            "Z_tip": (np.cos(alpha) - np.cos(c + alpha)) / c,
+        }
+        for key, val in exact.items():
+            assert isinstance(one[key], float)
+            assert one[key] == pytest.approx(val, abs=1e-12)
+            assert many[key][i] == pytest.approx(one[key], abs=1e-15)
+    # d/dtau at theta_dot = theta / c (the rate of c): d eta(1)/dc etc.
+    rates = tip_velocity(disc, Q, Q / cs[:, None], alpha)
+    c = cs
+    np.testing.assert_allclose(rates["eta_tip"], np.sin(c) / c - (1 - np.cos(c)) / c**2, atol=1e-12)
