@@ -538,8 +538,9 @@ def spectrum(
     if q is None:
         q = gravity_loaded_state(model).q
     e = _analyse(model, q, res, method)
-    idx = np.flatnonzero(e.resolved)
-    labels = _canonical_labels(e, idx)
+    tracker, _ = _reference_tracker(model, e, res, method)
+    keep = e.resolved[tracker.first_idx]
+    idx, labels = tracker.first_idx[keep], tracker.labels[keep]
     o = _order(e.lam[idx], labels)
     idx, labels = idx[o], labels[o]
     unres = e.lam.real[~e.resolved]
@@ -571,7 +572,8 @@ def growth_rate(model: PipeModel, q: np.ndarray, *, tolerance: float = RESOLUTIO
     conservative problem (v = mu = 0) has Re lambda = 0 to round-off; use
     :func:`linearly_stable`.
     """
-    return spectrum(model, q, tolerance=tolerance).max_real
+    res = resolution(model.disc, tolerance)
+    return _analyse(model, np.asarray(q, dtype=float), res, "auto").max_real
 
 
 def linearly_stable(
@@ -625,10 +627,12 @@ def linearly_stable(
         decision = _sparse_stable(model, np.asarray(q, dtype=float), tolerance)
         if decision is not _DENSE:
             return decision
-    try:
-        return spectrum(model, q, tolerance=tolerance).stable
-    except ValueError:  # nothing resolved: no decision
+    res = resolution(disc, tolerance)
+    if res.n_resolved == 0:
         return None
+    with _blas_threads(disc.n):
+        e = _analyse(model, np.asarray(q, dtype=float), res, "auto")
+    return not bool(e.unstable.any())
 
 
 #: Modes whose eigenvalues the sparse criterion computes (24 eigenvalues:
@@ -812,21 +816,23 @@ class _Tracker:
     """Carries mode numbers along a sequence of states by continuity.
 
     Tracked eigenvalue j is, at every state, one index into that state's
-    :class:`_Eig`; ``labels[j]`` is its mode number, fixed at the first state
-    (canonical assignment) and inherited by continuity afterwards.
+    :class:`_Eig`; ``labels[j]`` is its mode number, given at the first state
+    (``first_idx``) and inherited by continuity afterwards.
     """
 
-    def __init__(self, first: _Eig, n_modes: int | None = None) -> None:
+    def __init__(self, labels: np.ndarray, first_idx: np.ndarray) -> None:
+        self.labels = np.asarray(labels, dtype=int)
+        self.first_idx = np.asarray(first_idx, dtype=int)
+
+    @classmethod
+    def canonical(cls, first: _Eig) -> _Tracker:
+        """Every resolved eigenvalue of ``first``, numbered by canonical assignment."""
         idx = np.flatnonzero(first.resolved)
         labels = _canonical_labels(first, idx)
-        if n_modes is not None:
-            keep = labels <= n_modes
-            idx, labels = idx[keep], labels[keep]
         o = _order(first.lam[idx], labels)
-        self.labels = labels[o]
-        self.first_idx = idx[o]
+        return cls(labels[o], idx[o])
 
-    def match(self, prev: tuple[_Eig, np.ndarray], new: _Eig, pred: np.ndarray):
+    def match(self, new: _Eig, pred: np.ndarray):
         """Indices in ``new`` of the tracked eigenvalues, and an ambiguity flag per eigenvalue."""
         D = np.abs(pred[:, None] - new.lam[None, :])
         rows, cols = linear_sum_assignment(D)
@@ -875,13 +881,11 @@ class _Path:
         model: PipeModel,
         res: Resolution,
         method: str,
-        n_modes: int | None,
         max_depth: int = 6,
     ) -> None:
         self.model = model
         self.res = res
         self.method = method
-        self.n_modes = n_modes
         self.max_depth = max_depth
         self.samples: list[tuple[_Eig, np.ndarray]] = []
         self.tracker: _Tracker | None = None
@@ -913,12 +917,12 @@ class _Path:
     def add(self, e: _Eig, depth: int = 0) -> None:
         """Append the next state, halving the step while tracking is ambiguous."""
         if self.tracker is None:
-            self.tracker = _Tracker(e, self.n_modes)
+            self.tracker = _Tracker.canonical(e)
             self.samples.append((e, self.tracker.first_idx))
             return
         prev = self.samples[-1]
         pred = _predict(self.samples, e.s)
-        idx, amb = self.tracker.match(prev, e, pred)
+        idx, amb = self.tracker.match(e, pred)
         if amb.any() and depth < self.max_depth and not e.fold and not prev[0].fold:
             a = prev[0]
             vm = 0.5 * (a.v + e.v)
@@ -942,6 +946,83 @@ class _Path:
 
     def tracked_resolved(self) -> np.ndarray:
         return np.array([e.resolved[i] for e, i in self.samples])
+
+    def start_labelled(self, e: _Eig, tracker: _Tracker) -> None:
+        """Start at ``e`` with mode numbers given by ``tracker`` (indices into e)."""
+        self.tracker = tracker
+        self.samples = [(e, tracker.first_idx)]
+
+
+#: Largest arclength step of the reference path from v = 0 (mode numbers);
+#: the tracker halves it wherever the match is ambiguous.
+REFERENCE_STEP = 1.0
+
+
+def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
+    """Mode numbers of the resolved eigenvalues of ``e``, carried by continuity from v = 0.
+
+    The static branch through e is followed back to v = 0 by pseudo-arclength
+    continuation (steps up to :data:`REFERENCE_STEP`, folds passed); the
+    eigenvalues resolved there are numbered by canonical assignment and
+    tracked forward to e.  A branch that does not reach v = 0 is numbered at
+    the end of the backward continuation instead.  Returns the tracker
+    (indices into e) and the number of spectra solved.
+    """
+    if e.v == 0.0:
+        return _Tracker.canonical(e), 0
+    m = model.with_params(replace(model.params, v=e.v))
+    back = continuation(
+        m, "v", stop=0.0, q0=e.q, ds=REFERENCE_STEP, ds_max=REFERENCE_STEP, detect=False
+    )
+    if back.end_reason != "stop":
+        log.info(
+            "reference path: the branch through v=%.6g ends at v=%.6g (%s); mode numbers "
+            "assigned there",
+            e.v,
+            back.points[-1].value,
+            back.end_reason,
+        )
+    points = back.points[::-1][:-1]  # v = 0 first; the last point is e itself
+    path = _Path(model, res, method)
+    s, prev = 0.0, None
+    for pt in points:
+        if prev is not None:
+            s += abs(pt.value - prev[1]) + _l2(model, pt.q - prev[0])
+        prev = (pt.q, pt.value)
+        x = path.analyse(pt.q, pt.value)
+        x.s = s
+        path.add(x)
+    s += abs(e.v - prev[1]) + _l2(model, e.q - prev[0]) if prev is not None else 0.0
+    target = replace(e, s=s)
+    path.add(target)
+    last, idx = path.samples[-1]
+    if last is not target:  # pragma: no cover - add() always appends its argument last
+        raise RuntimeError("reference path: the target state is not the last sample")
+    return _complete(e, _Tracker(path.labels, idx)), path.n_spectra
+
+
+def _complete(e: _Eig, tracker: _Tracker) -> _Tracker:
+    """Add the resolved eigenvalues of e the tracker lacks, numbered on the free canonical slots.
+
+    An eigenvalue can be resolved at e and not where the numbering started;
+    it gets the canonical mode its eigenvector is made of among the slots (two
+    per mode) the tracked eigenvalues leave free.
+    """
+    tracked = set(tracker.first_idx.tolist())
+    extra = np.array([i for i in np.flatnonzero(e.resolved) if i not in tracked], dtype=int)
+    if extra.size == 0:
+        return tracker
+    n_can = e.weights.shape[0]
+    used = np.bincount(tracker.labels - 1, minlength=n_can)[:n_can]
+    free = np.maximum(0, 2 - used)
+    slots = np.repeat(np.arange(n_can), free)
+    cost = -e.weights[:, extra].T[:, slots]
+    rows, cols = linear_sum_assignment(cost)
+    labels = np.zeros(extra.size, dtype=int)
+    labels[rows] = slots[cols] + 1
+    return _Tracker(
+        np.concatenate([tracker.labels, labels]), np.concatenate([tracker.first_idx, extra])
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -1029,7 +1110,9 @@ def root_locus(
     q0 : ndarray, optional
         Static state at ``values[0]`` (default: :func:`gravity_loaded_state`).
     n_modes : int or None
-        Track modes 1..n_modes (None: every resolved mode).
+        Report modes 1..n_modes (None: every resolved mode); every mode that
+        is unstable at some v is reported too, whatever its number.  Every
+        resolved eigenvalue is tracked.
     callback : callable, optional
         ``callback(i, v)`` after each point (progress).
 
@@ -1049,7 +1132,7 @@ def root_locus(
     if q0 is None:
         q0 = gravity_loaded_state(m0).q
     states = solve_path(m0, values, q0=q0)
-    path = _Path(model, res, method, n_modes)
+    path = _Path(model, res, method)
     keep = []  # sample index of each requested value
     s = 0.0
     for i, sol in enumerate(states):
@@ -1057,21 +1140,33 @@ def root_locus(
             s += abs(values[i] - values[i - 1]) + _l2(model, sol.q - states[i - 1].q)
         e = path.analyse(sol.q, values[i])
         e.s = s
-        path.add(e)
+        if i == 0:
+            tracker, n_ref = _reference_tracker(model, e, res, method)
+            path.n_spectra += n_ref
+            path.start_labelled(e, tracker)
+        else:
+            path.add(e)
         keep.append(len(path.samples) - 1)
         if callback:
             callback(i, values[i])
     lam = path.tracked()[keep]
     resolved = path.tracked_resolved()[keep]
+    labels = path.labels
+    # Modes 1..n_modes, and every mode that is unstable at some point whatever
+    # its number (the eigenvalue that decides ``stable`` is always listed).
+    unstable = resolved & (lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(lam)))
+    cols = np.ones(labels.size, dtype=bool) if n_modes is None else labels <= int(n_modes)
+    cols = np.flatnonzero(cols | unstable.any(axis=0))
+    cols = cols[np.argsort(labels[cols], kind="stable")]
     max_real = np.array([path.samples[k][0].max_real for k in keep])
     stable = np.array([not path.samples[k][0].unstable.any() for k in keep])
     tips = np.array([float(model.disc.tip @ st.q) for st in states])
     return RootLocus(
         params=m0.params,
         v=np.array(values),
-        lam=lam,
-        modes=path.labels.copy(),
-        resolved=resolved,
+        lam=lam[:, cols],
+        modes=labels[cols].copy(),
+        resolved=resolved[:, cols],
         max_real=max_real,
         stable=stable,
         theta_tip=tips,
@@ -1083,9 +1178,6 @@ def root_locus(
 # Stability events along branches
 # ---------------------------------------------------------------------------
 
-#: The event types of :class:`StabilityEvent`.
-EVENT_TYPES = ("flutter", "divergence", "restabilization", "fold")
-
 
 @dataclass(frozen=True)
 class StabilityEvent:
@@ -1096,10 +1188,14 @@ class StabilityEvent:
     v : float
         Flow velocity, located to 1e-10 (Brent) for crossings; folds to the
         continuation's 1e-10 in arclength.
-    type : {'flutter', 'divergence', 'restabilization', 'fold'}
+    type : {'flutter', 'divergence', 'restabilization', 'mode_restabilization', 'fold'}
         As v increases: a complex pair crosses to Re lambda > 0 (flutter), a
-        real root does (divergence), an eigenvalue crosses back
-        (restabilization); or the branch turns back in v (fold).
+        real root does (divergence), an eigenvalue crosses back and the
+        branch is stable above the event (restabilization), an eigenvalue
+        crosses back while another one stays unstable, so the branch is not
+        stable above the event (mode_restabilization: a per-mode event, the
+        system does not restabilise); or the branch turns back in v (fold).
+        ``stable_before`` and ``stable_after`` say what the whole system does.
     branch : str
         Branch name (``"primary"``, ``"B1+"``, ...).
     frequency : float
@@ -1127,13 +1223,16 @@ class StabilityEvent:
     stable_after: bool = True
 
     def to_dict(self) -> dict:
-        """The contract of ``fempipe critical --json``: v, type, branch, frequency, mode."""
+        """The contract of ``fempipe critical --json``: v, type, branch, frequency, mode,
+        stable_before, stable_after (the whole system just below and above the event)."""
         return {
             "v": self.v,
             "type": self.type,
             "branch": self.branch,
             "frequency": self.frequency,
             "mode": self.mode,
+            "stable_before": self.stable_before,
+            "stable_after": self.stable_after,
         }
 
     def details(self) -> dict:
@@ -1142,8 +1241,6 @@ class StabilityEvent:
             {
                 "eigenvalue": [float(self.eigenvalue.real), float(self.eigenvalue.imag)],
                 "at_start": self.at_start,
-                "stable_before": self.stable_before,
-                "stable_after": self.stable_after,
             }
         )
         return d
@@ -1291,12 +1388,16 @@ class _BranchAnalysis:
         method: str,
         stop_at_first: bool = False,
         callback: Callable[[str, float], None] | None = None,
+        parent: _BranchAnalysis | None = None,
     ) -> None:
         self.model = model
+        self.res = res
+        self.method = method
         self.branch = branch
         self.name = name
         self.v_lo, self.v_hi = v_range
-        self.path = _Path(model, res, method, None)
+        self.path = _Path(model, res, method)
+        self.parent = parent
         self.stop_at_first = stop_at_first
         self.callback = callback
         # (position s, event, unstable count before, after) in branch order
@@ -1311,7 +1412,10 @@ class _BranchAnalysis:
             prev = (q, v)
             e = self.path.analyse(q, v)
             e.s, e.fold = s, is_fold
-            self.path.add(e)
+            if self.path.tracker is None:
+                self._number(e)
+            else:
+                self.path.add(e)
             if self.callback:
                 self.callback(self.name, v)
             if self.stop_at_first and _unstable_count(e) > 0:
@@ -1324,6 +1428,31 @@ class _BranchAnalysis:
                 self._fold_event(k)
         self._start_events()
         self.events.sort(key=lambda x: x[0])
+
+    def _number(self, first: _Eig) -> None:
+        """Mode numbers at the branch's first state (the package docstring, "Mode numbers").
+
+        Carried from v = 0 along the branch (:func:`_reference_tracker`); on a
+        branch born at a branch point, from the parent branch's sample nearest
+        the first state.
+        """
+        if self.parent is None:
+            tracker, n = _reference_tracker(self.model, first, self.res, self.method)
+        else:
+            tracker, n = self.parent.carry_to(first)
+        self.path.n_spectra += n
+        self.path.start_labelled(first, tracker)
+
+    def carry_to(self, e: _Eig) -> tuple[_Tracker, int]:
+        """Mode numbers of e (a state near this branch) by continuity from the nearest sample."""
+        dist = [abs(x.v - e.v) + _l2(self.model, x.q - e.q) for x, _ in self.path.samples]
+        k = int(np.argmin(dist))
+        ref, idx = self.path.samples[k]
+        path = _Path(self.model, self.res, self.method)
+        path.start_labelled(ref, _Tracker(self.path.labels, idx))
+        target = replace(e, s=ref.s + dist[k])
+        path.add(target)
+        return _complete(e, _Tracker(path.labels, path.samples[-1][1])), path.n_spectra
 
     def _retrack(self, eigs: list[_Eig]) -> None:
         self.path.samples = [(eigs[0], self.path.tracker.first_idx)]
@@ -1437,6 +1566,7 @@ class _BranchAnalysis:
         (a, ia), (b, ib) = self.path.samples[k - 1], self.path.samples[k]
         labels = self.path.labels
         ca, cb = _unstable_count(a), _unstable_count(b)
+        crossings = []
         for j in range(labels.size):
             la, lb = a.lam[ia[j]], b.lam[ib[j]]
             if (_state_sign(la) > 0) == (_state_sign(lb) > 0):
@@ -1453,20 +1583,30 @@ class _BranchAnalysis:
             real = abs(lam0.imag) <= IMAG_TOL * max(1.0, abs(lam0))
             # Unstable on the side of larger v?
             up = (_state_sign(lb) > 0) == (b.v > a.v)
-            typ = ("divergence" if real else "flutter") if up else "restabilization"
             s0 = a.s + (b.s - a.s) * (v0 - a.v) / (b.v - a.v)
-            c_lo, c_hi = (ca, cb) if b.v > a.v else (cb, ca)
+            crossings.append((float(v0), complex(lam0), j, up, real, s0))
+        # Whole-system stability on either side of each crossing: the unstable
+        # count at the lower-v sample, changed by each crossing in v order (a
+        # complex pair counts two, a real root one).
+        count = ca if b.v > a.v else cb
+        for v0, lam0, j, up, real, s0 in sorted(crossings):
+            after = max(0, count + (1 if real else 2) * (1 if up else -1))
+            if up:
+                typ = "divergence" if real else "flutter"
+            else:
+                typ = "restabilization" if after == 0 else "mode_restabilization"
             ev = StabilityEvent(
-                v=float(v0),
+                v=v0,
                 type=typ,
                 branch=self.name,
                 frequency=0.0 if real else float(abs(lam0.imag)),
                 mode=int(labels[j]),
                 eigenvalue=complex(lam0.real, abs(lam0.imag)),
-                stable_before=bool(c_lo == 0),
-                stable_after=bool(c_hi == 0),
+                stable_before=bool(count == 0),
+                stable_after=bool(after == 0),
             )
             self.events.append((s0, ev, ca, cb))
+            count = after
 
     def _fold_event(self, k: int) -> None:
         samples = self.path.samples
@@ -1738,7 +1878,15 @@ def stability_analysis(
             for sign, kid in zip("+-", kids, strict=True):
                 kname = f"B{k}{sign}" if name == "primary" else f"{name}.B{k}{sign}"
                 ka = _BranchAnalysis(
-                    model, res, _Pieces(kid), kname, (v_min, v_max), method, False, callback
+                    model,
+                    res,
+                    _Pieces(kid),
+                    kname,
+                    (v_min, v_max),
+                    method,
+                    False,
+                    callback,
+                    parent=parent_ana,
                 )
                 ka.run()
                 results.append(ka.finish(name, parent_ana.refined_bifurcation(bp.value)))
