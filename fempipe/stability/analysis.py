@@ -1,0 +1,241 @@
+"""The analysis driver: every stability event of the static branches over a v-range."""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from ..operators import PipeModel
+from ..static import Branch, NewtonError, continuation, sagged_state, solve_static, switch_branch
+from .events import StabilityResult, _BranchAnalysis
+from .linear import RESOLUTION_TOL, resolution, single_blas
+
+log = logging.getLogger(__name__)
+
+
+class _ChunkedBranch:
+    """A static branch continued in v piece by piece, seen as one branch.
+
+    With ``chunk`` set, the continuation advances ``chunk`` in v at a time and
+    only as far as the analysis asks (``stop_at_first``: no continuation
+    beyond the first loss of stability); otherwise in one piece.  Fold and
+    branch-point indices are renumbered to the concatenated point list.
+    """
+
+    def __init__(self, branch: Branch | None = None) -> None:
+        self.points: list = []
+        self.special: list = []
+        self.end_reason = "stop"
+        self._next = None
+        if branch is not None:
+            self._add(branch)
+
+    @classmethod
+    def follow(
+        cls,
+        model: PipeModel,
+        v_range: tuple[float, float],
+        ds_max: float,
+        q0: np.ndarray | None,
+        max_steps: int,
+        chunk: float | None = None,
+    ) -> _ChunkedBranch:
+        lo, hi = v_range
+        m = model.with_params(replace(model.params, v=lo))
+        q = sagged_state(m).q if q0 is None else solve_static(m, q0=q0).q
+        self = cls()
+        kw = {"ds": min(0.05, ds_max), "ds_max": ds_max, "max_steps": max_steps}
+
+        def advance(piece_start, tangent):
+            v_a, q_a = piece_start
+            stop = hi if chunk is None else min(hi, v_a + chunk)
+            ma = model.with_params(replace(model.params, v=v_a))
+            return continuation(ma, "v", stop=stop, q0=q_a, tangent=tangent, **kw)
+
+        self._next = lambda: advance((lo, q), None)
+        self._hi = hi
+        self._advance = advance
+        return self
+
+    def _add(self, branch: Branch) -> None:
+        skip = 1 if self.points else 0
+        offset = len(self.points) - skip
+        self.points.extend(branch.points[skip:])
+        self.special.extend(replace(s, index=s.index + offset) for s in branch.special)
+        self.end_reason = branch.end_reason
+
+    def more(self) -> bool:
+        """Continue one more piece; False when the branch is finished."""
+        if self._next is None:
+            return False
+        piece = self._next()
+        self._add(piece)
+        last = self.points[-1]
+        if piece.end_reason != "stop" or last.value >= self._hi:
+            self._next = None
+        else:
+            self._next = lambda: self._advance((last.value, last.q), last.tangent)
+        return True
+
+    @property
+    def folds(self) -> list:
+        return [s for s in self.special if s.kind == "fold"]
+
+    @property
+    def bifurcations(self) -> list:
+        return [s for s in self.special if s.kind == "bifurcation"]
+
+    def iter_points(self):
+        """(q, v, is_fold) in arclength order, continuing lazily."""
+        i = 0
+        while True:
+            while i < len(self.points):
+                # The folds located in segment [i - 1, i] come before point i.
+                for f in self.special:
+                    if f.kind == "fold" and f.index == i - 1:
+                        yield f.q, f.value, True
+                p = self.points[i]
+                yield p.q, p.value, False
+                i += 1
+            if not self.more():
+                return
+
+
+@single_blas
+def stability_analysis(
+    model: PipeModel,
+    v_max: float = 10.0,
+    v_min: float = 0.0,
+    *,
+    follow_bifurcations: bool = True,
+    max_depth: int = 1,
+    q0: np.ndarray | None = None,
+    ds_max: float = 0.1,
+    max_steps: int = 2000,
+    method: str = "auto",
+    tolerance: float = RESOLUTION_TOL,
+    stop_at_first: bool = False,
+    callback: Callable[[str, float], None] | None = None,
+) -> StabilityResult:
+    """Every stability event and fold of the static branches for v_min <= v <= v_max.
+
+    Parameters
+    ----------
+    model : PipeModel
+        alpha, beta, gamma, mu from ``model.params`` (its v is ignored).
+    v_max, v_min : float
+        The flow range, 0 <= v_min < v_max.
+    follow_bifurcations : bool
+        Follow the branches born at branch points (pitchforks at alpha = 0, pi)
+        with :func:`fempipe.static.switch_branch` and analyse them too.
+    max_depth : int
+        Generations of branches to follow (1: those born on the primary branch).
+    q0 : ndarray, optional
+        Initial guess of the primary state at v_min (default: gravity loading).
+    ds_max : float
+        Largest continuation step (arclength in (theta L2, v)); spectra are
+        computed at every point, so it bounds the sampling of the eigenvalue
+        paths; tracking inserts points where it is not clear and a peak check
+        catches a real part that touches zero between samples.
+    stop_at_first : bool
+        Stop analysing the primary branch after the first loss of stability
+        (enough for v_cr; events beyond it are not listed).
+    callback : callable, optional
+        ``callback(branch_name, v)`` after every sample (progress).
+
+    Returns
+    -------
+    StabilityResult
+
+    Raises
+    ------
+    NewtonError
+        If the static state cannot be followed (naming v and the residual).
+    """
+    v_min, v_max = float(v_min), float(v_max)
+    if not (math.isfinite(v_min) and math.isfinite(v_max)) or v_min < 0 or v_max <= v_min:
+        raise ValueError(f"need 0 <= v_min < v_max, got v_min={v_min}, v_max={v_max}")
+    if ds_max <= 0:
+        raise ValueError(f"ds_max must be > 0, got {ds_max}")
+    res = resolution(model.disc, tolerance)
+    if res.n_resolved == 0:
+        raise ValueError(f"discretisation {model.disc.name} resolves no mode; refine it")
+    # Piecewise continuation when only v_cr is wanted: nothing beyond it is computed.
+    chunk = 1.0 if stop_at_first else None
+    primary = _ChunkedBranch.follow(model, (v_min, v_max), ds_max, q0, max_steps, chunk)
+    ana = _BranchAnalysis(
+        model, res, primary, "primary", (v_min, v_max), method, stop_at_first, callback
+    )
+    ana.run()
+    results = [ana.finish(None, None)]
+    n_spectra = ana.path.n_spectra
+    first = ana.first_loss()
+    v_flutter = next((ev.v for _, ev, _, _ in ana.events if ev.type == "flutter"), None)
+    queue = [(primary, "primary", 1, ana)] if follow_bifurcations and not stop_at_first else []
+    while queue:
+        br, name, depth, parent_ana = queue.pop(0)
+        for k, bp in enumerate(br.bifurcations, start=1):
+            if not v_min <= bp.value <= v_max:
+                continue
+            try:
+                kids = switch_branch(
+                    model.with_params(replace(model.params, v=bp.value)),
+                    bp,
+                    "v",
+                    v_max,
+                    ds_max=ds_max,
+                    max_steps=max_steps,
+                )
+            except (NewtonError, np.linalg.LinAlgError) as exc:
+                log.warning("branch switching at v=%.8g on %s failed: %s", bp.value, name, exc)
+                continue
+            for sign, kid in zip("+-", kids, strict=True):
+                kname = f"B{k}{sign}" if name == "primary" else f"{name}.B{k}{sign}"
+                ka = _BranchAnalysis(
+                    model,
+                    res,
+                    _ChunkedBranch(kid),
+                    kname,
+                    (v_min, v_max),
+                    method,
+                    False,
+                    callback,
+                    parent=parent_ana,
+                )
+                ka.run()
+                results.append(ka.finish(name, parent_ana.refined_bifurcation(bp.value)))
+                n_spectra += ka.path.n_spectra
+                if depth < max_depth:
+                    queue.append((kid, kname, depth + 1, ka))
+    events = tuple(ev for b in results for ev in b.events)
+    return StabilityResult(
+        params=replace(model.params, v=v_min),
+        discretization=model.disc.to_dict(),
+        v_range=(v_min, v_max),
+        v_cr=None if first is None else float(first.v),
+        critical=first,
+        v_flutter=v_flutter,
+        events=events,
+        branches=tuple(results),
+        n_spectra=n_spectra,
+    )
+
+
+def critical_velocity(
+    model: PipeModel,
+    v_max: float = 10.0,
+    v_min: float = 0.0,
+    **kwargs,
+) -> StabilityResult:
+    """v_cr: the first loss of stability of the primary branch (no branch switching).
+
+    A shortcut for :func:`stability_analysis` with ``follow_bifurcations=False``
+    and ``stop_at_first=True``; its ``events`` stop at the critical one.
+    """
+    kwargs.setdefault("follow_bifurcations", False)
+    kwargs.setdefault("stop_at_first", True)
+    return stability_analysis(model, v_max, v_min, **kwargs)
