@@ -27,6 +27,7 @@ __all__ = [
     "plot_oscillating_shapes",
     "plot_bifurcation",
     "animate",
+    "animation_figure",
 ]
 
 _LABEL = {"eta_tip": r"$\eta(1)$", "X_tip": r"$X_{g}(1)$", "Z_tip": r"$Z_{g}(1)$"}
@@ -36,7 +37,8 @@ def _axes(ax, figsize=(6, 4)):
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=figsize)
+        # constrained layout keeps every label on the canvas.
+        _, ax = plt.subplots(figsize=figsize, layout="constrained")
     return ax
 
 
@@ -69,8 +71,8 @@ def plot_time_traces(disc: Discretization, alpha: float, t, q, ax=None, title: s
     ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
     ax.plot(t, tip["Z_tip"], label=_LABEL["Z_tip"] + " (horizontal)")
     ax.set_xlabel(r"$\tau$")
-    ax.set_ylabel("tip position")
-    ax.legend(loc="upper right", fontsize="small")
+    ax.set_ylabel(r"tip position ($/L$)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     ax.grid(alpha=0.3)
     if title:
         ax.set_title(title)
@@ -124,17 +126,22 @@ def plot_oscillating_shapes(
     cmap = plt.get_cmap("viridis")
     for j, k in enumerate(idx):
         s = shape(disc, q[k], alpha)
-        ax.plot(s.Z_g, s.X_g, color=cmap(j / max(len(idx) - 1, 1)), lw=1.2)
+        ax.plot(
+            s.Z_g,
+            s.X_g,
+            color=cmap(j / max(len(idx) - 1, 1)),
+            lw=1.2,
+            label="shapes over the shown time\n(colour: early to late)" if j == 0 else None,
+        )
     ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8, label="undeformed")
-    ax.plot([0], [0], "ks", ms=6)
+    ax.plot([0], [0], "ks", ms=6, label="clamp")
     ax.set_aspect("equal")
-    if not ax.yaxis_inverted():
-        ax.invert_yaxis()  # X_g points along gravity: down the page
-    ax.set_xlabel(r"$Z_g$")
-    ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
-    ax.set_xlim(-1.05, 1.05)
-    ax.set_ylim(1.05, -1.05)
+    ax.set_xlabel(r"$Z_g$ ($/L$)")
+    ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
+    ax.set_xlim(-1.1, 1.1)
+    ax.set_ylim(1.1, -1.1)  # X_g points along gravity: down the page
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
     if title:
         ax.set_title(title)
     return ax
@@ -173,6 +180,70 @@ def plot_bifurcation(points: Sequence[dict], key: str = "eta_tip", ax=None, labe
     return ax
 
 
+def _closed(q: np.ndarray) -> bool:
+    """Whether the last state repeats the first (a closed periodic orbit)."""
+    scale = max(float(np.max(np.abs(q))), 1e-300)
+    return q.shape[0] > 2 and float(np.max(np.abs(q[-1] - q[0]))) <= 1e-6 * scale
+
+
+def animation_figure(
+    disc: Discretization,
+    alpha: float,
+    t,
+    q,
+    title: str | None = None,
+):
+    """The figure of :func:`animate` and its frame function.
+
+    A closed orbit (the last state equal to the first, as a limit cycle is
+    stored) loses its last frame, so the looping GIF does not show the same
+    state twice; its frames are then labelled with the time since the start
+    of the shown period and the period T, so that the restart of the label is
+    the restart of the period.
+
+    Returns
+    -------
+    fig, draw, n_frames
+        ``draw(k)`` draws frame k and returns the changed artists.
+    """
+    import matplotlib.pyplot as plt
+
+    from fempipe.kinematics import shape
+
+    q = np.atleast_2d(q)
+    t = np.asarray(t, dtype=float)
+    period = None
+    if _closed(q):
+        period = float(t[-1] - t[0])
+        q, t = q[:-1], t[:-1]
+    fig, ax = plt.subplots(figsize=(4.4, 4.8), layout="constrained")
+    ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8)
+    ax.plot([0], [0], "ks", ms=6)
+    (line,) = ax.plot([], [], "C0", lw=2.5)
+    (tip,) = ax.plot([], [], "C3o", ms=5)
+    label = ax.text(0.03, 0.97, "", transform=ax.transAxes, va="top", fontsize=10)
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.1, 1.1)
+    ax.set_ylim(1.1, -1.1)  # gravity down the page
+    ax.set_xlabel(r"$Z_g$ ($/L$)")
+    ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
+
+    def draw(k):
+        s = shape(disc, q[k], alpha, points_per_cell=2)
+        line.set_data(s.Z_g, s.X_g)
+        tip.set_data([s.Z_g[-1]], [s.X_g[-1]])
+        if period is None:
+            label.set_text(rf"$\tau$ = {t[k]:.3f}")
+        else:
+            label.set_text(rf"$\tau - \tau_0$ = {t[k] - t[0]:.3f}  (T = {period:.3f})")
+        return line, tip, label
+
+    return fig, draw, q.shape[0]
+
+
 def animate(
     path: str | os.PathLike,
     disc: Discretization,
@@ -184,38 +255,19 @@ def animate(
 ):
     """Animated GIF of the moving pipe in the global frame (matplotlib PillowWriter).
 
-    Written atomically to ``path``.  Returns the path.
+    The figure is :func:`animation_figure` (a closed orbit is drawn without
+    its repeated last state).  Written atomically to ``path``.  Returns the
+    path.
     """
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     from fempipe.io import atomic_path
-    from fempipe.kinematics import shape
 
-    q = np.atleast_2d(q)
-    t = np.asarray(t)
-    fig, ax = plt.subplots(figsize=(4, 4.4))
-    ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8)
-    ax.plot([0], [0], "ks", ms=6)
-    (line,) = ax.plot([], [], "C0", lw=2.5)
-    (tip,) = ax.plot([], [], "C3o", ms=5)
-    label = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top")
-    ax.set_aspect("equal")
-    ax.set_xlim(-1.05, 1.05)
-    ax.set_ylim(1.05, -1.05)  # gravity down the page
-    ax.set_xlabel(r"$Z_g$")
-    ax.set_ylabel(r"$X_g$")
-    if title:
-        ax.set_title(title, fontsize="small")
-
-    def draw(k):
-        s = shape(disc, q[k], alpha, points_per_cell=2)
-        line.set_data(s.Z_g, s.X_g)
-        tip.set_data([s.Z_g[-1]], [s.X_g[-1]])
-        label.set_text(rf"$\tau$ = {t[k]:.3f}")
-        return line, tip, label
-
-    anim = FuncAnimation(fig, draw, frames=q.shape[0], blit=True)
+    fig, draw, n = animation_figure(disc, alpha, t, q, title=title)
+    # blit=False: every frame is drawn whole, so the layout (constrained) is
+    # the one the text checks see.
+    anim = FuncAnimation(fig, draw, frames=n, blit=False)
     try:
         with atomic_path(path) as tmp:
             anim.save(str(tmp), writer=PillowWriter(fps=fps))

@@ -17,7 +17,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_argand", "plot_stability_map", "plot_branches", "plot_mode_shape"]
+from .layout import declutter
+
+__all__ = [
+    "MODE_COLORS",
+    "mode_color",
+    "plot_argand",
+    "plot_stability_map",
+    "plot_branches",
+    "plot_mode_shape",
+]
 
 _EVENT_MARKERS = {"flutter": "o", "divergence": "s", "restabilization": "^", "fold": "D"}
 
@@ -26,7 +35,7 @@ def _axes(ax, size=(6.0, 4.5)):
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, ax = plt.subplots(figsize=size)
+        _, ax = plt.subplots(figsize=size, layout="constrained")
     return ax
 
 
@@ -50,34 +59,40 @@ def plot_argand(
     -------
     Axes
     """
-    import matplotlib.pyplot as plt
-
     ax = _axes(ax)
     v = np.asarray(locus.v)
     if mark_every is None:
         span = float(v.max() - v.min()) if v.size > 1 else 1.0
         mark_every = _nice_step(span / 6.0)
     Om = np.where(locus.resolved, locus.Omega, np.nan)
-    colors = plt.cm.tab10(np.arange(10))
     marks = np.isclose(np.mod(v + 1e-9, mark_every), 0.0, atol=1e-6)
     seen = set()
+    labels = []
     for j, mode in enumerate(locus.modes):
         z = Om[:, j]
         # One member of each conjugate pair: Re Omega = Im lambda >= 0.
         z = np.where(z.real >= -1e-12, z, np.nan)
         if np.all(np.isnan(z)):
             continue
-        c = colors[(int(mode) - 1) % 10]
+        c = mode_color(int(mode))
         ax.plot(
-            z.real, z.imag, "-", color=c, lw=1.2, label=None if mode in seen else f"mode {mode}"
+            z.real, z.imag, "-", color=c, lw=1.4, label=None if mode in seen else f"mode {mode}"
         )
         seen.add(int(mode))
+        _direction_arrow(ax, z, c)
         m = marks & ~np.isnan(z)
-        ax.plot(z.real[m], z.imag[m], "o", color=c, ms=3)
+        ax.plot(z.real[m], z.imag[m], "o", color=c, ms=3.5)
         if label_marks:
             for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
-                ax.annotate(
-                    f"{vv:g}", (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points"
+                labels.append(
+                    ax.annotate(
+                        f"{vv:g}",
+                        (x, y),
+                        fontsize=9,
+                        color=c,
+                        xytext=(3, 3),
+                        textcoords="offset points",
+                    )
                 )
     ax.axhline(0.0, color="0.4", lw=0.8)
     ax.set_xlabel(r"Re $\Omega$ = Im $\lambda$")
@@ -86,12 +101,42 @@ def plot_argand(
     ax.set_title(
         title
         or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
-        rf"$\mu$ = {p.mu:g}; marks every $\Delta v$ = {mark_every:g}",
-        fontsize=9,
+        rf"$\mu$ = {p.mu:g}"
+        + "\n"
+        + rf"dots every $\Delta v$ = {mark_every:g} (labelled with v), "
+        "arrows: v increasing",
+        fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9, loc="best")
+    # Labels that would pile up (a divergence pair on the imaginary axis) are dropped.
+    declutter(ax, labels, keep_clear=[ax.get_legend()])
     return ax
+
+
+#: Colour-blind-safe colours of modes 1, 2, 3, ... (Okabe & Ito).
+MODE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
+
+
+def mode_color(mode: int):
+    """The colour of a mode number in every stability figure."""
+    return MODE_COLORS[(mode - 1) % len(MODE_COLORS)]
+
+
+def _direction_arrow(ax, z: np.ndarray, color) -> None:
+    """An arrowhead half-way along a locus, pointing towards increasing v."""
+    ok = np.flatnonzero(~np.isnan(z))
+    if ok.size < 3:
+        return
+    k = ok[ok.size // 2]
+    if k + 1 > ok[-1] or np.isnan(z[k + 1]) or z[k + 1] == z[k]:
+        return
+    ax.annotate(
+        "",
+        xy=(z[k + 1].real, z[k + 1].imag),
+        xytext=(z[k].real, z[k].imag),
+        arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.2, "mutation_scale": 14},
+    )
 
 
 def _nice_step(x: float) -> float:
@@ -132,10 +177,10 @@ def plot_stability_map(smap, ax=None, title=None):
         title
         or rf"flutter velocity (○, $\mu$ = {smap.base.mu:g}); □ earlier loss of stability "
         "(divergence, fold)",
-        fontsize=9,
+        fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9)
     return ax
 
 
@@ -173,10 +218,10 @@ def plot_branches(result, ax=None, title=None):
         title
         or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}: "
         "solid stable, dashed unstable",
-        fontsize=9,
+        fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9)
     return ax
 
 
@@ -219,5 +264,5 @@ def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, ti
     ax.set_title(
         title or rf"mode {shape.mode}: $\lambda$ = {lam.real:.4g} {lam.imag:+.4g}i", fontsize=9
     )
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9)
     return ax

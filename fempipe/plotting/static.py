@@ -3,7 +3,10 @@
 Drawn the way the paper's Figs. 2-4 show them: gravity points down the page
 (X_g, the coordinate along gravity in Eq. (28), increases downward), Z_g is
 horizontal, both axes have the same scale so shapes are not distorted, one
-curve per flow velocity, the clamp at the origin.
+curve per flow velocity, the clamp at the origin.  A static state that is
+linearly unstable (some resolved eigenvalue of Eq. (32) with Re lambda > 0) is
+not what the pipe shows: it is drawn grey and dashed and said so in the
+legend, so that it cannot be read as an equilibrium one would observe.
 """
 
 from __future__ import annotations
@@ -12,7 +15,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["plot_shapes"]
+__all__ = ["UNSTABLE_COLOR", "plot_shapes"]
+
+#: Colour of linearly unstable static states (drawn dashed).
+UNSTABLE_COLOR = "0.55"
 
 
 def _as_list(alpha, n: int) -> list[float | None]:
@@ -37,6 +43,7 @@ def plot_shapes(
     alpha: float | Sequence[float] | None = None,
     max_labels: int = 12,
     title: str | None = None,
+    stable: Sequence[bool | None] | None = None,
 ):
     """Deformed centrelines (X_g, Z_g) with gravity pointing down.
 
@@ -56,6 +63,12 @@ def plot_shapes(
     max_labels : int
         At most this many legend entries (every k-th curve is labelled).
     title : str, optional
+    stable : sequence of bool or None, optional
+        Linear stability of each state (e.g. the ``stable`` flags of
+        ``fempipe static``, :func:`fempipe.stability.linearly_stable`).  States
+        flagged False are drawn grey and dashed, with "(unstable)" in their
+        legend entry and a legend key; None (the default, or an entry None)
+        draws the state as stable ones are drawn.
 
     Returns
     -------
@@ -74,6 +87,11 @@ def plot_shapes(
         a if a is not None else _clamp_angle(s)
         for a, s in zip(_as_list(alpha, n), shapes, strict=True)
     ]
+    if stable is None:
+        stable = [None] * n
+    elif len(stable) != n:
+        raise ValueError(f"got {n} shapes but {len(stable)} stability flags")
+    unstable = [flag is not None and not bool(flag) for flag in stable]
     cmap = colormaps["viridis"]
     colors = cmap(np.linspace(0.0, 0.9, n)) if n > 1 else [cmap(0.0)]
     every = max(1, int(np.ceil(n / max_labels)))
@@ -94,15 +112,29 @@ def plot_shapes(
 
     for i, s in enumerate(shapes):
         lab = labels[i] if labels is not None and (i % every == 0 or i == n - 1) else None
+        if lab is not None and unstable[i]:
+            lab = f"{lab} (unstable)"
+        color = UNSTABLE_COLOR if unstable[i] else colors[i]
         ax.plot(
             np.asarray(s.Z_g) * scale,
             np.asarray(s.X_g) * scale,
-            color=colors[i],
-            lw=1.6,
+            ls="--" if unstable[i] else "-",
+            color=color,
+            lw=1.2 if unstable[i] else 1.6,
             label=lab,
             zorder=2,
         )
-        ax.plot(s.Z_g[-1] * scale, s.X_g[-1] * scale, "o", ms=3, color=colors[i], zorder=3)
+        ax.plot(
+            s.Z_g[-1] * scale,
+            s.X_g[-1] * scale,
+            "o",
+            ms=3,
+            color=color,
+            mfc="none" if unstable[i] else color,
+            zorder=3,
+        )
+    if any(unstable):
+        ax.plot([], [], ls="--", color=UNSTABLE_COLOR, lw=1.2, label="grey dashed: unstable")
 
     ax.set_aspect("equal", adjustable="datalim")
     # Include the clamp and a margin so the clamp is never cut off.
@@ -126,7 +158,7 @@ def plot_shapes(
     )
     ax.text(0.95, 0.105, "$g$", transform=ax.transAxes, ha="right", va="center")
     if labels is not None or n:
-        ax.legend(fontsize="small", loc="best", framealpha=0.85)
+        ax.legend(fontsize=9, loc="best", framealpha=0.85)
     if title:
         ax.set_title(title)
     return ax

@@ -1,0 +1,311 @@
+"""Every figure the package draws: no text outside the canvas, no two texts overlapping.
+
+Each figure of the command-line tools is drawn by its plotting function on
+small, quick data (a 4-mode Galerkin model), and each validation figure from
+the quick validation results (computed once per session, shared with
+``tests/test_validation.py``).  A figure fails when a visible text artist
+(title, axis label, tick label, legend entry, annotation) extends outside the
+canvas or overlaps another one, measured on the renderer's window extents.
+This is a layout test, not a pixel baseline: it reads where matplotlib put the
+texts, so it fails on the faults a reader sees (cut labels, "N = 8N = 4").
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from dataclasses import replace
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
+
+from fempipe.discretization import Modal  # noqa: E402
+from fempipe.operators import PipeModel  # noqa: E402
+from fempipe.params import PAPER_CASE, Params  # noqa: E402
+
+#: Overlap below this many square pixels is anti-aliasing, not a collision.
+_MIN_OVERLAP_PX2 = 2.0
+
+
+def _axis_texts(axis) -> list[Text]:
+    # Only the tick labels matplotlib draws (ticks inside the view); the
+    # others keep stale positions.
+    ticks = axis._update_ticks()
+    out = []
+    for t in ticks:
+        out += [lab for lab in (t.label1, t.label2) if lab.get_visible()]
+    return out + [axis.label, axis.get_offset_text()]
+
+
+def drawn_texts(fig) -> list[Text]:
+    """The visible, non-empty text artists of a figure, after a draw."""
+    fig.canvas.draw()
+    texts: list[Text] = list(fig.texts)
+    if fig._suptitle is not None:
+        texts.append(fig._suptitle)
+    for leg in fig.legends:
+        texts += [*leg.get_texts(), leg.get_title()]
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        texts += [ax.title, ax._left_title, ax._right_title, *ax.texts]
+        texts += _axis_texts(ax.xaxis) + _axis_texts(ax.yaxis)
+        leg = ax.get_legend()
+        if leg is not None and leg.get_visible():
+            texts += [*leg.get_texts(), leg.get_title()]
+    return [t for t in texts if t.get_visible() and t.get_text().strip()]
+
+
+def text_faults(fig) -> list[str]:
+    """Texts outside the canvas and pairs of overlapping texts, as readable lines."""
+    texts = drawn_texts(fig)
+    renderer = fig.canvas.get_renderer()
+    width, height = fig.bbox.width, fig.bbox.height
+    boxes = [(t, t.get_window_extent(renderer)) for t in texts]
+    faults = []
+    for t, b in boxes:
+        if b.x0 < -0.5 or b.y0 < -0.5 or b.x1 > width + 0.5 or b.y1 > height + 0.5:
+            faults.append(
+                f"outside the canvas ({width:.0f} x {height:.0f} px): {t.get_text()!r} at "
+                f"x {b.x0:.0f}..{b.x1:.0f}, y {b.y0:.0f}..{b.y1:.0f}"
+            )
+    for (s, a), (t, b) in itertools.combinations(boxes, 2):
+        w = min(a.x1, b.x1) - max(a.x0, b.x0)
+        h = min(a.y1, b.y1) - max(a.y0, b.y0)
+        if w > 0 and h > 0 and w * h > _MIN_OVERLAP_PX2:
+            faults.append(f"overlap: {s.get_text()!r} and {t.get_text()!r} ({w:.0f} x {h:.0f} px)")
+    return faults
+
+
+def small_texts(fig, minimum: float = 9.0) -> list[str]:
+    """Texts set below ``minimum`` points."""
+    return [
+        f"{t.get_fontsize():.1f} pt: {t.get_text()!r}"
+        for t in drawn_texts(fig)
+        if t.get_fontsize() < minimum - 1e-9
+    ]
+
+
+# ---------------------------------------------------------------------------
+# The checker itself can fail.
+
+
+def test_checker_sees_overlap_and_clipping():
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.text(0.5, 0.5, "N = 8", transform=ax.transAxes)
+    ax.text(0.52, 0.5, "N = 4", transform=ax.transAxes)
+    ax.set_ylabel("a label that the canvas cuts", fontsize=20)
+    faults = text_faults(fig)
+    plt.close(fig)
+    assert any("overlap: 'N = 8' and 'N = 4'" in f for f in faults), faults
+    assert any("outside the canvas" in f for f in faults), faults
+
+
+def test_checker_passes_a_clean_figure():
+    fig, ax = plt.subplots(figsize=(4, 3), layout="constrained")
+    ax.plot([0, 1], [0, 1], label="a line")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.legend()
+    faults = text_faults(fig)
+    plt.close(fig)
+    assert not faults, faults
+
+
+# ---------------------------------------------------------------------------
+# The figures of the command-line tools, on quick data (4 sine modes).
+
+
+@functools.cache
+def _model(alpha: float, v: float = 0.0) -> PipeModel:
+    p = Params(
+        alpha=alpha, beta=PAPER_CASE["beta"], gamma=PAPER_CASE["gamma"], mu=PAPER_CASE["mu"], v=v
+    )
+    return PipeModel(Modal(4), p)
+
+
+def _shapes_figure():
+    from fempipe.kinematics import shape
+    from fempipe.plotting.static import plot_shapes
+    from fempipe.stability import linearly_stable
+    from fempipe.static import solve_path
+
+    model = _model(math.pi / 2)
+    values = np.linspace(0.0, 10.0, 11)
+    sols = solve_path(model, values, parameter="v")
+    shapes = [shape(model.disc, s.q, model.params.alpha) for s in sols]
+    stable = [
+        linearly_stable(model.with_params(replace(model.params, v=v)), s.q)
+        for v, s in zip(values, sols, strict=True)
+    ]
+    assert not all(stable)  # the figure must show both kinds
+    ax = plot_shapes(
+        shapes,
+        [f"v = {v:g}" for v in values],
+        alpha=math.pi / 2,
+        stable=stable,
+        title="α = 90°, β = 0.142, γ = 18.9",
+    )
+    return ax.figure
+
+
+def _argand_figure():
+    from fempipe.plotting.stability import plot_argand
+    from fempipe.stability import root_locus
+
+    locus = root_locus(_model(math.pi), np.linspace(0.0, 6.0, 31), n_modes=3)
+    return plot_argand(locus).figure
+
+
+def _branches_figure():
+    from fempipe.plotting.stability import plot_branches
+    from fempipe.stability import stability_analysis
+
+    res = stability_analysis(_model(math.pi), v_max=6.0, ds_max=0.3, max_depth=1)
+    return plot_branches(res).figure
+
+
+@functools.cache
+def _trajectory():
+    from fempipe.dynamics import initial_state, simulate
+    from fempipe.static import sagged_state
+
+    model = _model(0.0, v=10.0)
+    q0, qd0 = initial_state(model, q_static=sagged_state(model).q)
+    traj = simulate(model, q0, qd0, 12.0, n_out=400)
+    return model, traj
+
+
+def _time_traces_figure():
+    from fempipe.plotting.dynamics import plot_time_traces
+
+    model, tr = _trajectory()
+    title = "α = 0°, β = 0.142, γ = 18.9, v = 10"
+    return plot_time_traces(model.disc, 0.0, tr.t, tr.q, title=title).figure
+
+
+def _phase_portrait_figure():
+    from fempipe.plotting.dynamics import plot_phase_portrait
+
+    model, tr = _trajectory()
+    ax = plot_phase_portrait(model.disc, 0.0, tr.q, tr.qdot)
+    ax.set_title("α = 0°, β = 0.142, γ = 18.9, v = 10", fontsize="small")
+    return ax.figure
+
+
+def _oscillating_shapes_figure():
+    from fempipe.plotting.dynamics import plot_oscillating_shapes
+
+    model, tr = _trajectory()
+    half = tr.t >= 0.5 * tr.t[-1]
+    return plot_oscillating_shapes(
+        model.disc, 0.0, tr.q[half], title="α = 0°, β = 0.142, γ = 18.9, v = 10"
+    ).figure
+
+
+def _animation_frame_figure():
+    from fempipe.plotting.dynamics import animation_figure
+
+    model, tr = _trajectory()
+    fig, draw, n = animation_figure(
+        model.disc, 0.0, tr.t[-50:], tr.q[-50:], title="α = 0°, β = 0.142, γ = 18.9, v = 10"
+    )
+    draw(n - 1)
+    return fig
+
+
+def _bifurcation_figure():
+    from fempipe.plotting.dynamics import plot_bifurcation
+
+    pts = [
+        {"v": v, "direction": d, "attractor": "cycle", "eta_tip": [-a, a]}
+        for d in ("up", "down")
+        for v, a in zip(np.linspace(4, 9, 11), np.sqrt(np.linspace(0, 1, 11)), strict=True)
+    ]
+    return plot_bifurcation(pts, title="α = 0°, β = 0.142, γ = 18.9").figure
+
+
+CLI_FIGURES = {
+    "shapes.png": _shapes_figure,
+    "argand.png": _argand_figure,
+    "branches.png": _branches_figure,
+    "time_traces.png": _time_traces_figure,
+    "phase_portrait.png": _phase_portrait_figure,
+    "oscillating_shapes.png": _oscillating_shapes_figure,
+    "pipe.gif frame": _animation_frame_figure,
+    "bifurcation.png": _bifurcation_figure,
+}
+
+
+@pytest.mark.parametrize("name", list(CLI_FIGURES))
+def test_cli_figure_text_fits(name):
+    fig = CLI_FIGURES[name]()
+    try:
+        faults = text_faults(fig)
+    finally:
+        plt.close(fig)
+    assert not faults, "\n".join(faults)
+
+
+def test_unstable_static_states_look_different():
+    """shapes.png: the states flagged unstable are grey, dashed and named in the legend."""
+    from fempipe.plotting.static import UNSTABLE_COLOR
+
+    fig = _shapes_figure()
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("v = ")]
+    try:
+        unstable = [ln for ln in lines if "unstable" in ln.get_label()]
+        assert unstable and len(unstable) < len(lines)
+        for ln in unstable:
+            assert ln.get_linestyle() == "--"
+            assert matplotlib.colors.same_color(ln.get_color(), UNSTABLE_COLOR)
+        for ln in set(lines) - set(unstable):
+            assert ln.get_linestyle() == "-"
+        legend = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert any("unstable" in t for t in legend), legend
+    finally:
+        plt.close(fig)
+
+
+def test_animation_loops_without_a_repeated_frame():
+    """A closed orbit (last state = first) is animated without drawing its start twice."""
+    from fempipe.plotting.dynamics import animation_figure
+
+    model, tr = _trajectory()
+    q = np.concatenate([tr.q[-20:], tr.q[-20:][:1]])  # closed: last = first
+    t = np.concatenate([tr.t[-20:], [tr.t[-1] + (tr.t[1] - tr.t[0])]])
+    fig, _, n = animation_figure(model.disc, 0.0, t, q)
+    plt.close(fig)
+    assert n == len(q) - 1
+
+
+# ---------------------------------------------------------------------------
+# The validation figures, from the quick results of tests/test_validation.py.
+
+
+def _validation_cases():
+    from test_validation import CHEAP
+
+    return CHEAP
+
+
+@pytest.mark.parametrize("name", _validation_cases())
+def test_validation_figure_text_fits(name):
+    from test_validation import quick_result
+
+    from fempipe.validation import load_case
+
+    fig = load_case(name).plot(quick_result(name))
+    try:
+        faults = text_faults(fig) + [f"too small: {s}" for s in small_texts(fig)]
+    finally:
+        plt.close(fig)
+    assert not faults, "\n".join(faults)
