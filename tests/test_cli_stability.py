@@ -10,8 +10,8 @@ from fempipe import FiniteElement, Params, PipeModel
 from fempipe.cli import main
 from fempipe.stability import critical_velocity
 
-EVENT_KEYS = {"v", "type", "branch", "frequency", "mode"}
-EVENT_TYPES = {"flutter", "divergence", "restabilization", "fold"}
+EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after"}
+EVENT_TYPES = {"flutter", "divergence", "restabilization", "mode_restabilization", "fold"}
 
 
 def run_json(capsys, argv):
@@ -22,13 +22,14 @@ def run_json(capsys, argv):
 
 
 def test_critical_json_contract(capsys):
-    """The --json keys of the issue, and v_cr equal to the library's."""
+    """The --json contract of the README, and v_cr equal to the library's."""
     d = run_json(capsys, ["critical", "--alpha", "pi/2", "--v", "0,8", "--json", "--quiet"])
     assert isinstance(d["v_cr"], float)
     assert d["events"] and all(set(e) == EVENT_KEYS for e in d["events"])
     assert all(e["type"] in EVENT_TYPES for e in d["events"])
     first = d["events"][0]
     assert first["type"] == "flutter" and first["mode"] == 2 and first["branch"] == "primary"
+    assert first["stable_before"] is True and first["stable_after"] is False
     assert first["frequency"] > 0
     lib = critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2)), 8.0)
     assert d["v_cr"] == pytest.approx(lib.v_cr, abs=1e-12)

@@ -8,12 +8,17 @@ loss of stability of the primary branch as v_cr
 (:func:`fempipe.stability.stability_analysis`).
 
 ``--json`` prints ``{"v_cr": float or null, "events": [{"v", "type", "branch",
-"frequency", "mode"}, ...], "critical", "v_flutter", "v_range", "params",
-"discretization", "branches", ...}`` with type one of flutter, divergence,
-restabilization, fold and frequency = Im lambda = Re Omega at the crossing.
-An instability already present at the start of the range is listed at that v.
-With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes critical.json,
-events.csv and branches.png.
+"frequency", "mode", "stable_before", "stable_after"}, ...], "critical",
+"v_flutter", "v_range", "params", "discretization", "branches", ...}``.  The
+type is flutter, divergence (the system or a mode loses stability),
+restabilization (the system is stable above it), mode_restabilization (one
+mode gains stability while another stays unstable) or fold;
+``stable_before`` / ``stable_after`` say whether the whole system is stable
+just below and above the event; frequency = Im lambda = Re Omega at the
+crossing; mode numbers are those of ``fempipe spectrum`` (carried from
+v = 0).  An instability already present at the start of the range is listed
+at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
+critical.json, events.csv and branches.png.
 """
 
 from __future__ import annotations
@@ -130,9 +135,15 @@ def _print(result: dict, pipe) -> None:
         )
     if result["v_flutter"] is not None and result["v_flutter"] != v_cr:
         print(f"first flutter of the primary branch: v = {result['v_flutter']:.10f}")
-    print(f"{'branch':>8} {'type':>16} {'v':>15} {'mode':>5} {'Im lambda':>11}")
+    print(
+        f"{'branch':>8} {'type':>20} {'v':>15} {'mode':>5} {'Im lambda':>11}  system below -> above"
+    )
     for ev in result["events"]:
         mode = "-" if ev["mode"] is None else str(ev["mode"])
+        before, after = (
+            "stable" if ev[k] else "unstable" for k in ("stable_before", "stable_after")
+        )
         print(
-            f"{ev['branch']:>8} {ev['type']:>16} {ev['v']:15.10f} {mode:>5} {ev['frequency']:11.6f}"
+            f"{ev['branch']:>8} {ev['type']:>20} {ev['v']:15.10f} {mode:>5} "
+            f"{ev['frequency']:11.6f}  {before} -> {after}"
         )

@@ -2,8 +2,10 @@
 
 Follows the static branch (gravity loading, then the flow values of ``--v`` or
 ``--U`` in order) and computes the resolved eigenvalues of Eq. (32) at every
-value, with mode numbers carried by continuity
-(:func:`fempipe.stability.root_locus`).  Both conventions are given: lambda
+value (:func:`fempipe.stability.root_locus`).  Mode numbers are intrinsic:
+carried by continuity from the modes at v = 0, whatever the range start or
+the mesh; modes 1..``--modes`` are reported, and every mode that is unstable
+at some v whatever its number.  Both conventions are given: lambda
 (theta^d ∝ e^{lambda tau}, Re lambda > 0 unstable) and the paper's
 Omega = -i lambda (Im Omega < 0 unstable).
 
@@ -33,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         type=parsing.option_type("--modes", _modes),
         default="4",
-        help="track and report modes 1..N (default 4); 'all' for every resolved mode",
+        help="report modes 1..N (default 4) and every unstable one; 'all' for every resolved mode",
     )
     common.add_output_arguments(parser)
 
@@ -125,7 +127,10 @@ def _write(output: reporting.Output, result: dict, locus) -> None:
 def _print_table(result: dict, locus) -> None:
     disc, head = reporting.describe(result)
     print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretisation {disc}")
-    modes = sorted({int(m) for m in locus.modes})[:4]
+    # The first four modes and every unstable one (the table has one column each).
+    unstable = {e["mode"] for pt in result["points"] for e in pt["eigenvalues"] if e["re"] > 0}
+    labels = sorted({int(m) for m in locus.modes})
+    modes = sorted(set(labels[:4]) | {m for m in labels if m in unstable})
     cols = "".join(f"   mode {m}: Re Omega  Im Omega" for m in modes)
     print(f"{'v':>8} {'stable':>6} {'max Re lam':>11}{cols}")
     for pt in result["points"]:

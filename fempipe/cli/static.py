@@ -225,6 +225,7 @@ def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> N
         si_length=None if pipe is None else pipe.L,
         alpha=_alphas(values, parameter, p),
         title=title,
+        stable=[row["stable"] for row in points],
     )
     fig = ax.figure
     try:
