@@ -167,3 +167,25 @@ def test_stable_flag_of_a_3000_dof_state_takes_seconds():
     t = time.process_time()
     assert linearly_stable(model, q) is True
     assert time.process_time() - t < 10.0
+
+
+# ------------------------------------------------------- one criterion --
+@pytest.mark.parametrize(
+    "params",
+    [
+        Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, v=0.0),  # conservative: Re = 0 to round-off
+        Params(alpha=0.0, beta=0.65, gamma=10.0, mu=0.0, v=12.88),  # flutter
+        Params(alpha=np.pi, beta=0.2, gamma=40.0, mu=5e-3, v=1.0),  # divergence
+        Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, v=3.0),  # stable, deformed
+    ],
+    ids=["conservative", "flutter", "divergence", "deformed"],
+)
+def test_linearly_stable_is_the_spectrum_criterion(params):
+    """linearly_stable and growth_rate decide and measure as Spectrum.stable and max_real."""
+    from fempipe.stability import growth_rate, linearly_stable
+
+    model = PipeModel(P3_16, params)
+    q = sagged_state(model).q
+    spec = spectrum(model, q)
+    assert linearly_stable(model, q) is spec.stable
+    assert growth_rate(model, q) == pytest.approx(spec.max_real, rel=1e-9, abs=1e-12)

@@ -25,20 +25,19 @@ from .linear import (
     _analyse,
     cantilever_frequencies,
     resolution,
+    single_blas,
 )
 
-# ---------------------------------------------------------------------------
-# The stability criterion
-# ---------------------------------------------------------------------------
 
-
+@single_blas
 def growth_rate(model: PipeModel, q: np.ndarray, *, tolerance: float = RESOLUTION_TOL) -> float:
     """Largest Re lambda of the resolved eigenvalues of Eq. (32) at the static state q.
 
     The quantity :attr:`Spectrum.max_real` reports (-inf if no eigenvalue is
     resolved).  Its sign alone is not the stability decision: an exactly
     conservative problem (v = mu = 0) has Re lambda = 0 to round-off; use
-    :func:`linearly_stable`.
+    :func:`linearly_stable`.  Every resolved eigenvalue is computed (dense,
+    O(n^3)).
     """
     res = resolution(model.disc, tolerance)
     return _analyse(model, np.asarray(q, dtype=float), res, "auto").max_real
@@ -54,8 +53,8 @@ def linearly_stable(
     """Whether the static state q is linearly stable: the criterion of :func:`spectrum`.
 
     Stable when no resolved eigenvalue of Eq. (32) has
-    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (the module docstring,
-    "Resolved modes"); the same decision as ``spectrum(model, q).stable``,
+    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (package docstring,
+    "Linear stability"); the same decision as ``spectrum(model, q).stable``,
     :func:`critical_velocity` and :func:`stability_analysis`.
 
     For finite elements with more than ``QZ_MAX_N`` unknowns only the
