@@ -108,8 +108,11 @@ class ArgumentParser(argparse.ArgumentParser):
 # ---------------------------------------------------------------------------
 
 
-def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
+def add_physical_arguments(parser: argparse.ArgumentParser, alpha: bool = True) -> None:
     """Dimensionless ``--alpha --beta --gamma --mu`` or SI ``--length --EI --m --M --g --a``.
+
+    With ``alpha=False`` (a command with its own list of inclinations)
+    ``--alpha`` is not shown in ``--help``; the command refuses it.
 
     Each value is checked on its own by its ``type=``; the SI pipe as a whole
     by :func:`setup_from_args`.
@@ -130,7 +133,9 @@ def add_physical_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="inclination from the downward vertical, -2pi..2pi: radians (1.5708), degrees "
         "(90deg) or a multiple of pi (pi/2, 0.5pi, 3pi/4); negative values as --alpha=-pi/4 "
-        "(default 0; pi stands up)",
+        "(default 0; pi stands up)"
+        if alpha
+        else argparse.SUPPRESS,
     )
     g.add_argument(
         "--beta",

@@ -27,7 +27,7 @@ from fempipe.cli.parsing import CLIError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
+    common.add_physical_arguments(parser, alpha=False)
     common.add_flow_arguments(parser, default="0,10")
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("map")
