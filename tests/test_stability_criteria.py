@@ -84,14 +84,28 @@ def test_mode_number_does_not_depend_on_range_start_or_mesh(beta, v):
     assert labels[0] == labels[1] == labels[2]
 
 
-def test_critical_mode_from_v0_equals_from_vmin():
-    """v_cr and its mode do not depend on where the range starts (below v_cr)."""
-    model = PipeModel(P3_16, Params(alpha=0.0, beta=0.295, gamma=10.0, mu=0.0))
-    full = stability_analysis(model, 13.0, 0.0, follow_bifurcations=False, stop_at_first=True)
-    late = stability_analysis(model, 13.0, 7.0, follow_bifurcations=False, stop_at_first=True)
-    assert full.critical is not None and late.critical is not None
-    assert late.v_cr == pytest.approx(full.v_cr, abs=1e-8)
-    assert late.critical.mode == full.critical.mode
+@pytest.mark.parametrize(
+    ("params", "v_min", "v_max"),
+    [
+        (Params(alpha=0.0, beta=0.295, gamma=10.0, mu=0.0), 7.0, 13.0),
+        (Params(alpha=np.pi, beta=0.2, gamma=40.0, mu=0.0), 1.0, 4.0),
+    ],
+    ids=["hanging", "standing"],
+)
+def test_events_from_v0_equal_events_from_vmin(params, v_min, v_max):
+    """Events above v_min, with their mode numbers, do not depend on where the range starts."""
+    model = PipeModel(P3_16, params)
+
+    def events(lo):
+        res = stability_analysis(model, v_max, lo, follow_bifurcations=False)
+        return [
+            (e.type, e.mode, round(e.v, 8), e.stable_before, e.stable_after)
+            for e in res.events
+            if not e.at_start and e.v > v_min
+        ]
+
+    full, late = events(0.0), events(v_min)
+    assert full and late == full
 
 
 # ------------------------------------------------- whole-system events --

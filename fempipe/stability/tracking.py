@@ -209,7 +209,16 @@ def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
             back.points[-1].value,
             back.end_reason,
         )
-    points = back.points[::-1][:-1]  # v = 0 first; the last point is e itself
+    # v = 0 first; the last point is e itself.  Coincident points (the
+    # continuation can end with two points at the stop value) are dropped: a
+    # step of 1e-33 followed by a finite one would wreck the linear prediction.
+    points = []
+    for pt in back.points[::-1][:-1]:
+        last = points[-1] if points else None
+        if last is None or abs(pt.value - last.value) + _l2(model, pt.q - last.q) > 1e-8:
+            points.append(pt)
+    if points and abs(e.v - points[-1].value) + _l2(model, e.q - points[-1].q) <= 1e-8:
+        points.pop()
     path = _TrackedPath(model, res, method)
     s, prev = 0.0, None
     for pt in points:
