@@ -60,7 +60,8 @@ def drawn_texts(fig) -> list[Text]:
         leg = ax.get_legend()
         if leg is not None and leg.get_visible():
             texts += [*leg.get_texts(), leg.get_title()]
-    return [t for t in texts if t.get_visible() and t.get_text().strip()]
+    unique = list({id(t): t for t in texts}.values())  # the suptitle is also in fig.texts
+    return [t for t in unique if t.get_visible() and t.get_text().strip()]
 
 
 def text_faults(fig) -> list[str]:

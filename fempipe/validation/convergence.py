@@ -417,7 +417,17 @@ def draw_study(study: Study, ax=None):
             ax.loglog(s.dofs[list(s.fit)], s.errors[list(s.fit)], "k-", lw=2.5, alpha=0.25)
     for n, val in study.paper_modes.items():
         e = abs(val - study.reference)
-        ax.annotate(f"N = {n}", (n, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        # N = 3 and N = 4 lie one dof apart: N = 3 is labelled on the left, the others right.
+        left = n == min(study.paper_modes)
+        ax.annotate(
+            f"N = {n}",
+            (n, e),
+            textcoords="offset points",
+            xytext=(-5, 4) if left else (5, -4),
+            ha="right" if left else "left",
+            va="bottom" if left else "top",
+            fontsize=9,
+        )
     if study.reference_error > 0:
         ax.axhline(
             study.reference_error, color="0.5", ls=":", lw=1, label="reference error estimate"
@@ -427,9 +437,9 @@ def draw_study(study: Study, ax=None):
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("degrees of freedom")
     ax.set_ylabel("|error|")
-    ax.set_title(study.quantity, fontsize=8)
+    ax.set_title(study.quantity, fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6)
+    ax.legend(fontsize=9)
     return ax
 
 
@@ -447,9 +457,9 @@ def draw_orders(studies: Sequence[Study], ax=None):
         ax.axhline(p, color="0.6", lw=0.8, ls=":")
     ax.set_xlabel("α (degrees)")
     ax.set_ylabel("observed order p")
-    ax.set_title("v_cr: observed orders against α (theory 2, 4, 6)", fontsize=8)
+    ax.set_title("v_cr: observed orders against α (theory 2, 4, 6)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6)
+    ax.legend(fontsize=9)
     return ax
 
 
@@ -470,5 +480,7 @@ def plot(result: CaseResult, fig=None):
         draw_study(s, ax=ax)
     if len(vc) > 1:
         draw_orders(studies, ax=axes[len(shown)])
-    fig.tight_layout()
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

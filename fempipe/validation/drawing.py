@@ -8,6 +8,8 @@ dotted, one colour per flow velocity.
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 __all__ = [
@@ -15,6 +17,7 @@ __all__ = [
     "draw_diagram",
     "draw_orbit_shapes",
     "draw_shapes",
+    "finish_figure",
     "new_figure",
     "plot_shape_panels",
     "style_for",
@@ -36,14 +39,38 @@ def new_figure(n_panels: int, ncols: int | None = None, size: float = 3.6):
 
     ncols = ncols or min(n_panels, 2)
     nrows = int(np.ceil(n_panels / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(size * ncols, size * nrows), squeeze=False)
+    fig, axes = plt.subplots(
+        nrows, ncols, figsize=(size * ncols, size * nrows), squeeze=False, layout="constrained"
+    )
     axes = list(axes.ravel())
     for ax in axes[n_panels:]:
         ax.set_visible(False)
     return fig, axes[:n_panels]
 
 
-def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=None):
+def finish_figure(fig, title: str):
+    """The report style: one title per figure, panels lettered (a), (b), ...
+
+    Panel titles keep what differs between panels; the figure title says
+    what they share.  The layout is constrained so that no label leaves the
+    canvas.
+    """
+    axes = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
+    if len(axes) > 1:
+        for k, ax in enumerate(axes):
+            ax.set_title(f"({chr(ord('a') + k)}) {ax.get_title()}".rstrip(), fontsize=10)
+    else:
+        for ax in axes:
+            ax.set_title(ax.get_title(), fontsize=10)
+    # Wrapped to the figure's width (about 0.6 em per character at 12 pt).
+    chars = max(20, int(fig.get_figwidth() * 72 / (0.62 * 12)))
+    fig.suptitle(textwrap.fill(title, chars), fontsize=12)
+    if fig.get_layout_engine() is None:
+        fig.set_layout_engine("constrained")
+    return fig
+
+
+def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=None, stable=None):
     """Overlay the centrelines of several discretisations.
 
     Parameters
@@ -56,21 +83,32 @@ def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=
         Axis unit text.
     v_label : callable, optional
         ``v_label(i, v) -> str`` for the legend (default ``v = ...``).
+    stable : sequence of bool, optional
+        Linear stability of the state at each v: unstable ones are drawn
+        grey (every discretisation) and named "(unstable)" in the legend.
     """
     import matplotlib.pyplot as plt
 
+    from ..plotting.static import UNSTABLE_COLOR
+
     first = next(iter(families.values()))
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(first.v)))
+    unstable = [False] * len(first.v) if stable is None else [not s for s in stable]
     for label, fam in families.items():
         ls = style_for(label)
         for i, v in enumerate(fam.v):
             lab = None
             if label.startswith("FE"):
                 lab = v_label(i, v) if v_label else f"v = {v:g}"
-            ax.plot(fam.Z_g[i] * scale, fam.X_g[i] * scale, ls, color=colors[i], lw=1.2, label=lab)
+                if unstable[i]:
+                    lab += " (unstable)"
+            color = UNSTABLE_COLOR if unstable[i] else colors[i]
+            ax.plot(fam.Z_g[i] * scale, fam.X_g[i] * scale, ls, color=color, lw=1.2, label=lab)
     # one legend entry per discretisation style
     for label in families:
         ax.plot([], [], style_for(label), color="k", lw=1.0, label=label)
+    if any(unstable):
+        ax.plot([], [], "-", color=UNSTABLE_COLOR, lw=1.2, label="grey: unstable state")
     ax.plot([0], [0], "ks", ms=4)
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
@@ -79,15 +117,17 @@ def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=
     ax.set_xlabel(r"$Z_g$" + u)
     ax.set_ylabel(r"$X_g$" + u + r"  (gravity $\downarrow$)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6, loc="best")
+    ax.legend(fontsize=9, loc="best")
     return ax
 
 
-def plot_shape_panels(result, fig, title, **figure_options):
+def plot_shape_panels(result, fig, title, figure_title: str, **figure_options):
     """One panel of overlaid shapes per entry of ``result.data["panels"]``.
 
-    ``title(panel)`` gives each panel's title; ``figure_options`` go to
-    :func:`new_figure` when ``fig`` is None.  Returns the figure.
+    ``title(panel)`` gives each panel's title, ``figure_title`` the figure's;
+    ``figure_options`` go to :func:`new_figure` when ``fig`` is None.
+    Linearly unstable states (``panel.stable``) are drawn grey.  Returns the
+    figure.
     """
     panels = result.data["panels"]
     if fig is None:
@@ -95,9 +135,9 @@ def plot_shape_panels(result, fig, title, **figure_options):
     else:
         axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
     for ax, p in zip(axes, panels, strict=False):
-        draw_shapes(ax, p.fams)
+        draw_shapes(ax, p.fams, stable=p.stable or None)
         ax.set_title(title(p))
-    fig.tight_layout()
+    finish_figure(fig, figure_title)
     return fig
 
 
@@ -114,7 +154,7 @@ def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
     ax.set_xlabel("v")
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9)
     return ax
 
 
@@ -133,5 +173,5 @@ def draw_orbit_shapes(ax, shapes: dict):
     ax.set_xlabel(r"$Z_g$")
     ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=9)
     return ax

@@ -61,5 +61,9 @@ def plot(result: CaseResult, fig=None):
     from .drawing import plot_shape_panels
 
     return plot_shape_panels(
-        result, fig, lambda p: f"Fig. 2(a): γ = {p.gamma:g}, {p.title}", size=5.0
+        result,
+        fig,
+        lambda p: f"γ = {p.gamma:g}, {p.title}",
+        f"{CASE.figure}: {CASE.title}",
+        size=5.0,
     )

@@ -212,6 +212,8 @@ def plot(result: CaseResult, fig=None):
         unit="mm",
         v_label=lambda i, v: f"U = {U[i]:g} m/s",
     )
-    axes[0].set_title("Fig. 2(b): Texier-Dorbolo pipe, α = π/2")
-    fig.tight_layout()
+    axes[0].set_title("Texier-Dorbolo pipe, α = π/2")
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

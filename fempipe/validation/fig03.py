@@ -90,5 +90,9 @@ def plot(result: CaseResult, fig=None):
     from .drawing import plot_shape_panels
 
     return plot_shape_panels(
-        result, fig, lambda p: f"Fig. 3: α = π/2, {p.title}", ncols=len(result.data["panels"])
+        result,
+        fig,
+        lambda p: f"α = π/2, {p.title}",
+        f"{CASE.figure}: {CASE.title}",
+        ncols=len(result.data["panels"]),
     )

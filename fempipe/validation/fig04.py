@@ -105,6 +105,7 @@ def plot(result: CaseResult, fig=None):
     return plot_shape_panels(
         result,
         fig,
-        lambda p: f"Fig. 4: γ = {p.gamma:g}, {p.title}",
+        lambda p: f"γ = {p.gamma:g}, {p.title}",
+        f"{CASE.figure}: {CASE.title}",
         ncols=len(result.data["panels"]),
     )

@@ -186,10 +186,10 @@ def plot(result: CaseResult, fig=None):
         ax.axhline(0.0, color="0.5", lw=0.8)
         ax.set_xlabel(r"Re $\Omega$")
         ax.set_ylabel(r"Im $\Omega$  (< 0 unstable)")
-        ax.set_title(
-            f"Fig. 5: α = {name} (modes 1-4 by colour; dots at v = 0, 2, 4, ...)", fontsize=8
-        )
+        ax.set_title(f"α = {name} (modes 1-4 by colour; dots at v = 0, 2, 4, ...)", fontsize=8)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        ax.legend(fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -219,6 +219,8 @@ def run(quick: bool = False) -> CaseResult:
             "by_beta": {b: vc(c) for b, c in by_beta.items()},
             "by_gamma": {g: vc(c) for g, c in by_gamma.items()},
             "modal": {k: vc(c) for k, c in modal.items()},
+            "kind_by_beta": {b: [o.kind for o in c] for b, c in by_beta.items()},
+            "kind_by_gamma": {g: [o.kind for o in c] for g, c in by_gamma.items()},
         },
         requires=requires,
     )
@@ -240,6 +242,11 @@ def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Check:
     )
 
 
+#: Colour-blind-safe colours (Okabe & Ito) of the non-reference curves; the
+#: reference case (beta = 0.142, gamma = 18.9) is black in both panels.
+CURVE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")
+
+
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) for each β, (b) for each γ; N = 3 dashed and N = 4 dotted on the reference."""
     from .drawing import new_figure
@@ -251,18 +258,42 @@ def plot(result: CaseResult, fig=None):
         axes = list(fig.subplots(1, 2).ravel())
     a = d["alphas"] / np.pi
     reference = f"β = {BASE_BETA:g}, γ = {BASE_GAMMA:g}"
-    for ax, fam, sym, tag in (
-        (axes[0], d["by_beta"], "β", "a"),
-        (axes[1], d["by_gamma"], "γ", "b"),
+    for ax, fam, kinds, sym, fixed in (
+        (axes[0], d["by_beta"], d.get("kind_by_beta", {}), "β", f"γ = {BASE_GAMMA:g}"),
+        (axes[1], d["by_gamma"], d.get("kind_by_gamma", {}), "γ", f"β = {BASE_BETA:g}"),
     ):
-        for val, v in fam.items():
-            ax.plot(a, v, "o-", ms=3, label=f"{sym} = {val:g} (FE)")
-        for n, ls in ((3, "k--"), (4, "k:")):
-            ax.plot(a, d["modal"][f"N = {n}"], ls, lw=1, label=f"N = {n} ({reference})")
+        folds = False
+        for k, (val, v) in enumerate(fam.items()):
+            v = np.asarray(v, dtype=float)
+            # The reference case has the same colour in both panels.
+            is_ref = val == (BASE_BETA if sym == "β" else BASE_GAMMA)
+            color = "k" if is_ref else CURVE_COLORS[k % len(CURVE_COLORS)]
+            flutter = np.array([kd == "flutter" for kd in kinds.get(val, ["flutter"] * len(v))])
+            # A first instability that is not flutter (a fold) is not on the flutter curve.
+            ax.plot(
+                a,
+                np.where(flutter, v, np.nan),
+                "o-",
+                ms=3.5,
+                lw=1.4,
+                color=color,
+                label=f"{sym} = {val:g}" + (" (reference)" if is_ref else ""),
+            )
+            if not flutter.all():
+                folds = True
+                ax.plot(a[~flutter], v[~flutter], "D", ms=7, mfc="none", mew=1.5, color=color)
+        for n, ls in ((3, "--"), (4, ":")):
+            ax.plot(
+                a, d["modal"][f"N = {n}"], ls, color="0.45", lw=1.2, label=f"N = {n} ({reference})"
+            )
+        if folds:
+            ax.plot([], [], "D", ms=7, mfc="none", mew=1.5, color="0.3", label="fold, not flutter")
         ax.set_xlabel(r"$\alpha / \pi$")
         ax.set_ylabel(r"$v_{cr}$")
-        ax.set_title(f"Fig. 6({tag}): critical flow velocity for flutter", fontsize=9)
+        ax.set_title(f"{fixed}, several {sym}", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
-    fig.tight_layout()
+        ax.legend(fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -218,7 +218,7 @@ def plot(result: CaseResult, fig=None):
     else:
         axes = list(fig.subplots(2, 2).ravel())
     d = result.data
-    for ax, key, lab, tag in zip(
+    for ax, key, lab, _tag in zip(
         axes[:3],
         ("eta_tip", "X_tip", "Z_tip"),
         (r"$\eta(1)$", r"$X_g(1)$", r"$Z_g(1)$"),
@@ -226,8 +226,10 @@ def plot(result: CaseResult, fig=None):
         strict=True,
     ):
         draw_diagram(ax, d["sweeps"], key, lab)
-        ax.set_title(f"Fig. 7({tag}): α = 0, tip extrema", fontsize=9)
+        ax.set_title("α = 0, tip extrema", fontsize=9)
     draw_orbit_shapes(axes[3], d["shapes"])
-    axes[3].set_title("Fig. 7(c) inset: shapes (converged FE)", fontsize=9)
-    fig.tight_layout()
+    axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

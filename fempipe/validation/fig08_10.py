@@ -332,6 +332,8 @@ def plot(result: CaseResult, fig=None):
             draw_diagram(ax, pan["sweeps"], key, lab)
             ax.set_title(f"Fig. {fno}: α = {name}", fontsize=9)
         draw_orbit_shapes(row[3], pan["shapes"])
-        row[3].set_title(f"Fig. 9 inset: α = {name}, shapes (FE)", fontsize=9)
-    fig.tight_layout()
+        row[3].set_title(f"inset: α = {name}, shapes (FE)", fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

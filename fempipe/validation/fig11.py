@@ -198,8 +198,10 @@ def plot(result: CaseResult, fig=None):
         for ax, lab in zip(row, (r"$X_g(1)$", r"$Z_g(1)$"), strict=True):
             ax.set_xlabel(r"$\tau$ (from a section crossing)")
             ax.set_ylabel(lab)
-            ax.set_title(f"Fig. 11: α = {name}, v = {result.data['v']:g}", fontsize=9)
+            ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=9)
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
-    fig.tight_layout()
+            ax.legend(fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

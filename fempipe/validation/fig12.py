@@ -143,8 +143,10 @@ def plot(result: CaseResult, fig=None):
             ax.plot(t_["Z_tip"], t_["Z_tip_rate"], style_for(lb), lw=1.2, label=lb)
         ax.set_xlabel(r"$Z_g(1)$")
         ax.set_ylabel(r"$\mathrm{d}Z_g(1)/\mathrm{d}\tau$")
-        ax.set_title(f"Fig. 12: α = {name}, v = {result.data['v']:g}", fontsize=9)
+        ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        ax.legend(fontsize=9)
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -178,7 +178,10 @@ class Panel:
     :class:`StaticShapes`; ``mesh_error`` is the largest tip-position change
     under 2x refinement of the FE mesh; ``bvp_error`` the largest tip-position
     difference from the independent collocation solver; ``modal_error`` maps
-    the modal labels to the largest centreline distance from the FE result.
+    the modal labels to the largest centreline distance from the FE result;
+    ``stable`` the linear stability of each FE state
+    (:func:`fempipe.stability.linearly_stable`, Eq. (32)), so that a figure
+    can draw an unstable equilibrium differently.
     """
 
     title: str
@@ -188,6 +191,7 @@ class Panel:
     mesh_error: float
     bvp_error: float
     modal_error: dict
+    stable: tuple = ()
 
     @property
     def fe(self) -> StaticShapes:
@@ -242,7 +246,18 @@ def static_panel(
         for label, fam in fams.items()
         if label != fe_label
     }
-    return Panel(title, alpha, gamma, fams, mesh_err, bvp_err, modal_err)
+    return Panel(title, alpha, gamma, fams, mesh_err, bvp_err, modal_err, _stability(fe_disc, fe))
+
+
+def _stability(disc, fam: StaticShapes) -> tuple[bool, ...]:
+    """Linear stability of each state of a family (the criterion of ``fempipe critical``)."""
+    from ..stability import linearly_stable
+
+    model = PipeModel(disc, fam.params)
+    return tuple(
+        bool(linearly_stable(model.with_params(replace(fam.params, v=float(v))), q))
+        for v, q in zip(fam.v, fam.q, strict=True)
+    )
 
 
 def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list[Check]:

@@ -202,7 +202,9 @@ def plot(result: CaseResult, fig=None):
         ax.invert_yaxis()
         ax.set_xlabel(r"$Z_g$")
         ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=9)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
+    from .drawing import finish_figure
+
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig
