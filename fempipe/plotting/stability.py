@@ -79,7 +79,7 @@ def plot_argand(
             z.real, z.imag, "-", color=c, lw=1.4, label=None if mode in seen else f"mode {mode}"
         )
         seen.add(int(mode))
-        _direction_arrow(ax, z, c)
+        direction_arrow(ax, z, c)
         m = marks & ~np.isnan(z)
         ax.plot(z.real[m], z.imag[m], "o", color=c, ms=3.5)
         if label_marks:
@@ -123,7 +123,7 @@ def mode_color(mode: int):
     return MODE_COLORS[(mode - 1) % len(MODE_COLORS)]
 
 
-def _direction_arrow(ax, z: np.ndarray, color) -> None:
+def direction_arrow(ax, z: np.ndarray, color) -> None:
     """An arrowhead half-way along a locus, pointing towards increasing v."""
     ok = np.flatnonzero(~np.isnan(z))
     if ok.size < 3:

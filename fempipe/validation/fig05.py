@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ..discretization import parse_discretization
+from ..discretization import Modal, parse_discretization
 from ..operators import PipeModel
 from ..params import PAPER_CASE, Params
 from ..stability import root_locus, stability_analysis
@@ -26,6 +26,10 @@ from .case import Case, alpha_name, label_tag
 from .checks import CaseResult, Table, holds
 from .dynamic_runs import dyn_discretizations
 from .onset import critical_velocity as independent_vcr
+
+#: Resolution tolerance of the drawn-only modal loci: admits the N-th sine
+#: mode (8-9 % off the clamped-free beam's frequency).
+TOP_MODE_TOL = 0.1
 
 CASE = Case(
     name="fig05",
@@ -65,7 +69,7 @@ def run(quick: bool = False) -> CaseResult:
     values = np.round(np.arange(0.0, v_max + 1e-9, dv), 10)
     discs = dyn_discretizations(quick=False)  # P3:8, N = 3, N = 4 (cheap for spectra)
     fe_label = next(iter(discs))
-    checks, rows, loci, requires = [], [], {}, []
+    checks, rows, loci, requires, top = [], [], {}, [], {}
     for a in alphas:
         name = alpha_name(a)
         is_pi = abs(a - np.pi) < 1e-12
@@ -80,6 +84,13 @@ def run(quick: bool = False) -> CaseResult:
         for label, d in discs.items():
             m = PipeModel(d, Params(alpha=a, **PAPER_CASE))
             loci[name][label] = root_locus(m, values, n_modes=ref.value("n_modes"))
+            if isinstance(d, Modal):
+                # For the figure only: the paper draws all N modes of its N-mode
+                # model, including the N-th, which is ~9 % off the beam's
+                # frequency and so outside the resolved set used by the checks.
+                top[(name, label)] = root_locus(
+                    m, values, n_modes=d.n_modes, tolerance=TOP_MODE_TOL
+                )
             results[label] = stability_analysis(m, v_max=v_max, follow_bifurcations=is_pi)
             for br in results[label].branches:
                 for ev in br.events:
@@ -148,48 +159,85 @@ def run(quick: bool = False) -> CaseResult:
         quick=quick,
         started=t0,
         tables=(table,),
-        data={"loci": loci},
+        data={"loci": loci, "top_modes": top},
         requires=requires,
     )
 
 
 def plot(result: CaseResult, fig=None):
-    """Argand diagrams: Re Ω against Im Ω of modes 1-4, FE solid, N = 3 dashed, N = 4 dotted."""
-    import matplotlib.pyplot as plt
+    """Argand diagrams: Re Ω against Im Ω of modes 1-4, FE solid, N = 3 dashed, N = 4 dotted.
 
-    from .drawing import new_figure, style_for
+    Colours are modes (as in every stability figure), line styles
+    discretisations, arrows the direction of increasing v, black dots
+    v = 0, 2, 4, ...  At α = π a last panel shows the growth rate Re λ of
+    modes 1 and 2 against v, where the buckling, restabilisation and flutter
+    of the straight pipe, squeezed onto Re Ω = 0 in the Argand diagram, are
+    seen apart.
+    """
+    from matplotlib.lines import Line2D
+
+    from ..plotting.stability import direction_arrow, mode_color
+    from .drawing import finish_figure, new_figure, style_for
 
     loci = result.data["loci"]
+    top = result.data.get("top_modes", {})
+    has_pi = "π" in loci
+    n = len(loci) + int(has_pi)
     if fig is None:
-        fig, axes = new_figure(len(loci), ncols=2, size=4.5)
+        fig, axes = new_figure(n, ncols=2, size=4.8)
     else:
-        axes = list(fig.subplots(1, len(loci), squeeze=False).ravel())
-    colors = plt.cm.tab10(np.arange(10))
+        axes = list(fig.subplots(1, n, squeeze=False).ravel())
+    modes_seen = set()
     for ax, (name, fams) in zip(axes, loci.items(), strict=False):
         for label, rl in fams.items():
-            Om = rl.Omega
+            rl = top.get((name, label), rl)
             for j, mode in enumerate(rl.modes):
-                z = np.where(rl.resolved[:, j], Om[:, j], np.nan)
+                z = np.where(rl.resolved[:, j], rl.Omega[:, j], np.nan)
                 keep = z.real >= 0  # the paper shows Re Ω >= 0 (one of each pair)
                 z = np.where(keep, z, np.nan)
-                ax.plot(
-                    z.real,
-                    z.imag,
-                    style_for(label),
-                    color=colors[(mode - 1) % 10],
-                    lw=1.0,
-                    label=f"{label}" if (j == 0) else None,
-                )
+                c = mode_color(int(mode))
+                modes_seen.add(int(mode))
+                ax.plot(z.real, z.imag, style_for(label), color=c, lw=1.2)
                 if label.startswith("FE"):
+                    direction_arrow(ax, z, c)
                     marks = np.isclose(rl.v % 2.0, 0.0) & keep
-                    ax.plot(z.real[marks], z.imag[marks], "k.", ms=3)
+                    ax.plot(z.real[marks], z.imag[marks], "k.", ms=4)
         ax.axhline(0.0, color="0.5", lw=0.8)
         ax.set_xlabel(r"Re $\Omega$")
         ax.set_ylabel(r"Im $\Omega$  (< 0 unstable)")
-        ax.set_title(f"α = {name} (modes 1-4 by colour; dots at v = 0, 2, 4, ...)", fontsize=8)
+        ax.set_title(f"α = {name}", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=9)
-    from .drawing import finish_figure
-
+    handles = [
+        Line2D([], [], color=mode_color(m), lw=2, label=f"mode {m}") for m in sorted(modes_seen)
+    ]
+    handles += [
+        Line2D([], [], ls=style_for(lb), color="k", lw=1.2, label=lb)
+        for lb in next(iter(loci.values()))
+    ]
+    handles.append(Line2D([], [], ls="", marker=".", color="k", ms=6, label="v = 0, 2, 4, ..."))
+    if has_pi:
+        _growth_panel(axes[len(loci)], loci["π"], mode_color, style_for)
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig
+
+
+def _growth_panel(ax, fams: dict, mode_color, style_for) -> None:
+    """Re λ = -Im Ω of modes 1 and 2 against v at α = π (largest of each mode's roots)."""
+    for label, rl in fams.items():
+        for mode in (1, 2):
+            cols = np.flatnonzero(np.asarray(rl.modes) == mode)
+            if not cols.size:
+                continue
+            lam_re = -np.where(rl.resolved[:, cols], rl.Omega[:, cols], np.nan).imag
+            ax.plot(
+                rl.v, np.nanmax(lam_re, axis=1), style_for(label), color=mode_color(mode), lw=1.2
+            )
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    # Zoomed on the sign changes (buckling, restabilisation, flutter); the
+    # decay rates of the stable roots far below are not the point.
+    ax.set_ylim(-8.0, 8.0)
+    ax.set_xlabel("v")
+    ax.set_ylabel(r"growth rate Re $\lambda$ = $-$Im $\Omega$  (> 0 unstable)")
+    ax.set_title("α = π: growth rate of modes 1 and 2", fontsize=10)
+    ax.grid(alpha=0.3)
