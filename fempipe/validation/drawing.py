@@ -70,7 +70,15 @@ def finish_figure(fig, title: str):
     return fig
 
 
-def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=None, stable=None):
+def draw_shapes(
+    ax,
+    families: dict,
+    scale: float = 1.0,
+    unit: str = "",
+    v_label=None,
+    stable=None,
+    legend: bool = True,
+):
     """Overlay the centrelines of several discretisations.
 
     Parameters
@@ -86,6 +94,9 @@ def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=
     stable : sequence of bool, optional
         Linear stability of the state at each v: unstable ones are drawn
         grey (every discretisation) and named "(unstable)" in the legend.
+    legend : bool
+        Draw the axes' legend (False when the figure has one legend for
+        all panels).
     """
     import matplotlib.pyplot as plt
 
@@ -113,11 +124,12 @@ def draw_shapes(ax, families: dict, scale: float = 1.0, unit: str = "", v_label=
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
         ax.invert_yaxis()  # X_g along gravity: down
-    u = f" ({unit})" if unit else ""
+    u = f" ({unit})" if unit else r" ($/L$)"
     ax.set_xlabel(r"$Z_g$" + u)
     ax.set_ylabel(r"$X_g$" + u + r"  (gravity $\downarrow$)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9, loc="best")
+    if legend:
+        ax.legend(fontsize=9, loc="best")
     return ax
 
 
@@ -135,10 +147,34 @@ def plot_shape_panels(result, fig, title, figure_title: str, **figure_options):
     else:
         axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
     for ax, p in zip(axes, panels, strict=False):
-        draw_shapes(ax, p.fams, stable=p.stable or None)
+        draw_shapes(ax, p.fams, stable=p.stable or None, legend=False)
         ax.set_title(title(p))
+    _shape_legend(fig, panels)
     finish_figure(fig, figure_title)
     return fig
+
+
+def _shape_legend(fig, panels) -> None:
+    """One legend below the panels: colours are v, line styles discretisations."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    from ..plotting.static import UNSTABLE_COLOR
+
+    v = panels[0].fe.v
+    colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(v)))
+    handles = [
+        Line2D([], [], color=c, lw=2, label=f"v = {x:g}") for c, x in zip(colors, v, strict=True)
+    ]
+    meshes = ", ".join(dict.fromkeys(next(iter(p.fams))[3:] for p in panels))
+    handles.append(Line2D([], [], color="k", lw=1.2, label=f"FE {meshes} (converged)"))
+    for label in list(panels[0].fams)[1:]:
+        handles.append(Line2D([], [], ls=style_for(label), color="k", lw=1.2, label=label))
+    if any(not s for p in panels for s in p.stable):
+        handles.append(
+            Line2D([], [], color=UNSTABLE_COLOR, lw=2, label="grey: linearly unstable state")
+        )
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
 
 
 def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
