@@ -139,6 +139,9 @@ def spectrum(
     ------
     ValueError
         If the discretisation resolves no mode at all.
+    NewtonError
+        If q is not a static state from which its branch can be continued
+        back towards v = 0 (the mode numbers).
     """
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
