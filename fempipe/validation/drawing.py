@@ -13,7 +13,10 @@ import textwrap
 import numpy as np
 
 __all__ = [
+    "DISC_COLORS",
     "LINESTYLES",
+    "color_for",
+    "discretization_legend",
     "draw_diagram",
     "draw_orbit_shapes",
     "draw_shapes",
@@ -24,6 +27,24 @@ __all__ = [
 ]
 
 LINESTYLES = {"FE": "-", "N = 3": "--", "N = 4": ":", "N = 2": "-."}
+#: Colours of the discretisations where colour does not already mean v or a
+#: mode (Okabe & Ito, colour-blind safe): the converged FE black.
+DISC_COLORS = {"FE": "k", "N = 3": "#D55E00", "N = 4": "#0072B2", "N = 2": "#009E73"}
+
+
+def color_for(label: str) -> str:
+    """Colour by discretisation label (FE black, N = 3 vermilion, N = 4 blue)."""
+    return DISC_COLORS["FE" if label.startswith("FE") else label]
+
+
+def discretization_legend(fig, labels) -> None:
+    """One legend below the panels for the discretisations (style and colour)."""
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], ls=style_for(lb), color=color_for(lb), lw=1.4, label=lb) for lb in labels
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=9)
 
 
 def style_for(label: str) -> str:

@@ -181,27 +181,40 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def plot(result: CaseResult, fig=None):
-    """One row per α: X_g(1)(τ) and Z_g(1)(τ); FE solid, N = 3 dashed, N = 4 dotted."""
+    """One row per α: X_g(1)(τ) and Z_g(1)(τ); FE solid, N = 3 dashed, N = 4 dotted.
+
+    Every discretisation is drawn over the same τ window (the shortest of
+    the computed ones), so that the drift of the modal periods is seen.
+    """
     import matplotlib.pyplot as plt
 
-    from .drawing import style_for
+    from .drawing import color_for, discretization_legend, finish_figure, style_for
 
     traces = result.data["traces"]
     n = max(len(traces), 1)
     if fig is None:
-        fig = plt.figure(figsize=(10, 2.8 * n))
+        fig = plt.figure(figsize=(10, 2.6 * n + 0.8), layout="constrained")
     axes = np.atleast_2d(fig.subplots(n, 2, squeeze=False))
+    window = min((float(t_["t"][-1]) for tr in traces.values() for t_ in tr.values()), default=0)
+    labels: dict = {}
     for row, (name, tr) in zip(axes, traces.items(), strict=False):
         for lb, t_ in tr.items():
+            labels[lb] = None
+            keep = np.asarray(t_["t"]) <= window * (1 + 1e-12)
             for ax, key in zip(row, ("X_tip", "Z_tip"), strict=True):
-                ax.plot(t_["t"], t_[key], style_for(lb), lw=1.2, label=lb)
-        for ax, lab in zip(row, (r"$X_g(1)$", r"$Z_g(1)$"), strict=True):
+                ax.plot(
+                    np.asarray(t_["t"])[keep],
+                    np.asarray(t_[key])[keep],
+                    style_for(lb),
+                    color=color_for(lb),
+                    lw=1.3,
+                )
+        for ax, lab in zip(row, (r"$X_g(1)$ ($/L$)", r"$Z_g(1)$ ($/L$)"), strict=True):
             ax.set_xlabel(r"$\tau$ (from a section crossing)")
             ax.set_ylabel(lab)
-            ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=9)
+            ax.set_xlim(0.0, window)
+            ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=9)
-    from .drawing import finish_figure
-
+    discretization_legend(fig, labels)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

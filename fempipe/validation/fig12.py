@@ -131,7 +131,7 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """One panel per α: dZ_g(1)/dτ against Z_g(1); FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import new_figure, style_for
+    from .drawing import color_for, discretization_legend, new_figure, style_for
 
     loops = result.data["loops"]
     if fig is None:
@@ -140,12 +140,12 @@ def plot(result: CaseResult, fig=None):
         axes = list(fig.subplots(1, max(len(loops), 1), squeeze=False).ravel())
     for ax, (name, tr) in zip(axes, loops.items(), strict=False):
         for lb, t_ in tr.items():
-            ax.plot(t_["Z_tip"], t_["Z_tip_rate"], style_for(lb), lw=1.2, label=lb)
-        ax.set_xlabel(r"$Z_g(1)$")
+            ax.plot(t_["Z_tip"], t_["Z_tip_rate"], style_for(lb), color=color_for(lb), lw=1.3)
+        ax.set_xlabel(r"$Z_g(1)$ ($/L$)")
         ax.set_ylabel(r"$\mathrm{d}Z_g(1)/\mathrm{d}\tau$")
-        ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=9)
+        ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=9)
+    discretization_legend(fig, next(iter(loops.values()), {}))
     from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
