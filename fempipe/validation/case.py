@@ -154,6 +154,10 @@ class Case:
         Names of checks every run must emit; checks that depend on the run
         (one per inclination, the full suite only) are passed to
         :meth:`result` by the run that knows them.
+    caption : str
+        The figure's caption in the report: parameters, flow velocities,
+        discretisations in words, the key of colours, line styles and
+        markers, which shapes are static and which oscillate.
     """
 
     name: str
@@ -161,6 +165,7 @@ class Case:
     title: str
     paper_shows: tuple[str, ...]
     requires: tuple[str, ...] = ()
+    caption: str = ""
 
     @property
     def references(self) -> References:
@@ -202,6 +207,7 @@ class Case:
             figure=self.figure,
             title=self.title,
             paper_shows=self.paper_shows,
+            caption=self.caption,
             checks=checks + missing,
             tables=tuple(tables),
             findings=tuple(findings),

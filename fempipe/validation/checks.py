@@ -205,6 +205,8 @@ class CaseResult:
         Whether the quick (coarser) version ran.
     runtime : float
         Wall time of ``run``, s.
+    caption : str
+        The figure's caption (see :class:`fempipe.validation.case.Case`).
     """
 
     case: str
@@ -218,6 +220,7 @@ class CaseResult:
     explained: tuple[str, ...] = ()
     quick: bool = False
     runtime: float = 0.0
+    caption: str = ""
 
     @property
     def numerics_passed(self) -> bool:
@@ -239,6 +242,7 @@ class CaseResult:
             "checks": [c.to_dict() for c in self.checks],
             "tables": [t.to_dict() for t in self.tables],
             "findings": list(self.findings),
+            "caption": self.caption,
         }
 
 
@@ -247,7 +251,8 @@ def merge_results(results: list[CaseResult]) -> CaseResult:
 
     Checks and findings are concatenated, tables with the same title get their
     rows concatenated, ``data`` dicts are merged (dict values merged key by
-    key), runtimes are summed.
+    key), runtimes are summed (the compute time of the case, whatever ran in
+    parallel).
     """
     if not results:
         raise ValueError("nothing to merge")
@@ -278,4 +283,5 @@ def merge_results(results: list[CaseResult]) -> CaseResult:
         quick=first.quick,
         runtime=sum(r.runtime for r in results),
         explained=tuple(e for r in results for e in r.explained),
+        caption=first.caption,
     )

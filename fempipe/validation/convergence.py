@@ -44,6 +44,7 @@ from .static_shapes import static_shapes
 
 CASE = Case(
     name="convergence",
+    caption="Convergence of fempipe's discretisations: absolute error against the number of degrees of freedom (log-log) for the static tip position, v_cr at α = 0 and 90°, and the limit cycle, each against a finer reference. Markers: P1 (o), P2 (□), P3 (△) finite elements (linear, quadratic, cubic elements), modal sine bases (◇, dashed); thick grey lines: the points used for the fitted order p given in the legend; N = 3, N = 4: the paper's truncations; dotted line: the error estimate of the reference. Last panel: observed orders of v_cr against α (theory: 2, 4, 6 for P1, P2, P3).",
     figure="Convergence study",
     title="Error against degrees of freedom: FE P1, P2, P3 and modal N",
     paper_shows=(

@@ -209,26 +209,40 @@ def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
         line = ax.plot(v, hi, mk, ms=ms, label=label, mfc="none" if mk == "o" else None)[0]
         ax.plot(v, lo, mk, ms=ms, color=line.get_color(), mfc="none" if mk == "o" else None)
     ax.set_xlabel("v")
-    ax.set_ylabel(ylabel)
+    ax.set_ylabel(ylabel + r" ($/L$)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
     return ax
 
 
 def draw_orbit_shapes(ax, shapes: dict):
-    """Oscillating shapes (or the static shape) in the global frame, one colour per v."""
+    """Oscillating shapes and static shapes in the global frame, one colour per v.
+
+    An oscillation is a bundle of thin lines (shapes at equally spaced
+    phases of one period); a static state is one thick line drawn above the
+    bundles, so that it is never hidden under them.
+    """
     import matplotlib.pyplot as plt
 
     colors = plt.cm.viridis(np.linspace(0, 0.85, max(len(shapes), 1)))
     for c, (v, orb) in zip(colors, shapes.items(), strict=False):
+        static = len(orb.shapes) == 1
+        kind = "static" if static else "oscillating"
         for i, (z, x) in enumerate(orb.shapes):
-            ax.plot(z, x, color=c, lw=0.8, label=f"v = {v:g}" if i == 0 else None)
-    ax.plot([0], [0], "ks", ms=4)
+            ax.plot(
+                z,
+                x,
+                color=c,
+                lw=2.4 if static else 0.8,
+                zorder=4 if static else 2,
+                label=f"v = {v:g} ({kind})" if i == 0 else None,
+            )
+    ax.plot([0], [0], "ks", ms=4, zorder=5)
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
         ax.invert_yaxis()
-    ax.set_xlabel(r"$Z_g$")
-    ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
+    ax.set_xlabel(r"$Z_g$ ($/L$)")
+    ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
     return ax

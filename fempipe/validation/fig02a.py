@@ -19,6 +19,7 @@ from .static_shapes import PANEL_CHECKS, panel_checks, panel_table, static_panel
 
 CASE = Case(
     name="fig02a",
+    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one colour per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4; dash-dot: N = 2. γ = 18.9, α = π/3, v = 0, 2, 4, 6 (quick suite: fewer v). All shapes are static equilibria; a linearly unstable one would be grey.",
     figure="Fig. 2(a)",
     title="Static shapes, γ = 18.9, α = π/3: convergence in the number of modes N",
     paper_shows=(

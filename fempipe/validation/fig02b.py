@@ -31,6 +31,7 @@ from .static_shapes import PAPER_MODES, discretizations, refined, static_shapes
 
 CASE = Case(
     name="fig02b",
+    caption="Static shapes of the Texier & Dorbolo pipe in mm (L = 94 mm, EI = 1.8e-5 N m², m = 15.9 g/m, M = 5.8 g/m; β = 0.2673, γ = 9.81, α = π/2), one colour per flow speed U = 0 … 3 m/s (v = 1.6874 U). Solid: converged FE (cubic elements); dashed: N = 3 sine modes; dotted: N = 4. Gravity down the page, clamp ■ at the origin. All shapes are static equilibria. The experimental shapes are not drawn: their data are not available.",
     figure="Fig. 2(b)",
     title="Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)",
     paper_shows=(

@@ -33,6 +33,7 @@ TOP_MODE_TOL = 0.1
 
 CASE = Case(
     name="fig05",
+    caption="Eigenvalues Ω = −iλ of the linearised motion about the static state as v grows from 0 to 10 (β = 0.142, γ = 18.9, μ = 0.005); Im Ω < 0 is unstable. Colours: modes 1-4 (key below); solid: FE (P3:8 = cubic elements, 8 elements), dashed: N = 3 sine modes, dotted: N = 4 (the N-th mode of an N-mode model is drawn although it is 8-9 % off the beam's frequency); arrows: direction of increasing v; black dots: v = 0, 2, 4, …. The last panel gives the growth rate Re λ of modes 1 and 2 at α = π against v: the straight standing pipe buckles (mode 1, Re λ > 0 at v = 0), regains stability and flutters in mode 2.",
     figure="Fig. 5",
     title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilisation, "
     "flutter",

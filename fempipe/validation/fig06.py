@@ -28,6 +28,7 @@ from .onset import Onset, critical_velocity
 
 CASE = Case(
     name="fig06",
+    caption="Critical flow velocity v_cr of the gravity-sagged static state against the inclination α (μ = 0.005), converged FE (cubic elements). (a) γ = 18.9, several β; (b) β = 0.142, several γ. The reference case β = 0.142, γ = 18.9 is black in both panels; grey dashed and dotted: N = 3 and N = 4 sine modes for the reference case. Filled circles joined by lines: flutter (a complex pair crossing); open diamond: the first loss of stability is a fold of the static branch (a real eigenvalue through zero), not flutter, and is not joined to the flutter curve.",
     figure="Fig. 6",
     title="Critical flow velocity v_cr against α for several β and γ",
     paper_shows=(

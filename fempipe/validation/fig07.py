@@ -26,6 +26,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
+    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005): extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) on the attractor reached from the sagged state at each v, sweeping v up. Open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One circle per v: a static state; two: the minimum and maximum of a limit cycle. (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(

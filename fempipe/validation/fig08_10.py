@@ -27,6 +27,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
+    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) on the attractor against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005). Open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One point per v: a static state; two: the minimum and maximum of a limit cycle. Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -86,8 +87,11 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         # the stability analysis, in _pi_cross_checks).
         for label, d in discs.items():
             lo, hi = onset_bracket(sweeps[label])
-            v_lin = float("nan")
-            if not is_pi:
+            if is_pi:
+                # The straight pipe buckles at v = 0; the onset of oscillation
+                # is the flutter of the restabilised straight pipe.
+                v_lin = _straight_flutter(d)
+            else:
                 v_lin = critical_velocity(d, alpha).v_cr
                 checks.append(
                     holds(
@@ -241,7 +245,8 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             "η(1) amplitude",
         ),
         tuple(rows),
-        note="Ranges are peak-to-peak (units of L); α = π: the first periodic v follows the "
+        note="Ranges are peak-to-peak (units of L); α = π: linear v_cr is the flutter of the "
+        "restabilised straight pipe (it buckles at v = 0), and the first periodic v follows the "
         "buckled branch and the restabilised straight state (see checks).",
     )
     return CASE.result(
@@ -252,6 +257,14 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         data={"panels": panels},
         requires=requires,
     )
+
+
+def _straight_flutter(disc) -> float:
+    """alpha = pi: v of the flutter that destabilises the restabilised straight pipe."""
+    m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
+    res = stability_analysis(m, v_max=6.0, follow_bifurcations=False)
+    prim = next(b for b in res.branches if b.name == "primary")
+    return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
 
 
 def _pi_cross_checks(disc, pts) -> list[Check]:
@@ -310,30 +323,51 @@ def _pi_cross_checks(disc, pts) -> list[Check]:
     return out
 
 
-def plot(result: CaseResult, fig=None):
-    """Rows: α; columns: η(1) (Fig. 8), X_g(1) (Fig. 9), Z_g(1) (Fig. 10), shapes (Fig. 9 insets)."""
+#: The paper's three figures drawn from this case: file stem -> (paper
+#: figure, tip quantity, its label).  Fig. 9 carries the shape insets.
+FIGURES = {
+    "fig08": ("Fig. 8", "eta_tip", r"$\eta(1)$", "transverse tip displacement η(1)"),
+    "fig09": ("Fig. 9", "X_tip", r"$X_g(1)$", "tip position X_g(1) along gravity"),
+    "fig10": ("Fig. 10", "Z_tip", r"$Z_g(1)$", "horizontal tip position Z_g(1)"),
+}
+
+
+def plot(result: CaseResult, fig=None, which: str = "fig09"):
+    """One of the paper's Figs. 8-10 (``which``, a key of :data:`FIGURES`).
+
+    One panel per α of the tip extrema against v (FE open circles, N = 3 +,
+    N = 4 x); Fig. 9 adds, beside each, the shapes (FE) at the paper's three
+    velocities: static states thick, oscillations as bundles.
+    """
     import matplotlib.pyplot as plt
 
-    from .drawing import draw_diagram, draw_orbit_shapes
+    from .drawing import draw_diagram, draw_orbit_shapes, finish_figure
 
+    paper, key, lab, what = FIGURES[which]
     panels = result.data["panels"]
     n = len(panels)
+    shapes = which == "fig09"
     if fig is None:
-        fig = plt.figure(figsize=(15, 3.6 * n))
-    axes = np.atleast_2d(fig.subplots(n, 4, squeeze=False))
-    for row, (name, pan) in zip(axes, panels.items(), strict=True):
-        for ax, key, lab, fno in zip(
-            row[:3],
-            ("eta_tip", "X_tip", "Z_tip"),
-            (r"$\eta(1)$", r"$X_g(1)$", r"$Z_g(1)$"),
-            (8, 9, 10),
-            strict=True,
-        ):
-            draw_diagram(ax, pan["sweeps"], key, lab)
-            ax.set_title(f"Fig. {fno}: α = {name}", fontsize=9)
-        draw_orbit_shapes(row[3], pan["shapes"])
-        row[3].set_title(f"inset: α = {name}, shapes (FE)", fontsize=9)
-    from .drawing import finish_figure
-
-    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+        fig = plt.figure(figsize=(10, 3.8 * n) if shapes else (10, 3.8 * ((n + 1) // 2)))
+    fig.set_layout_engine("constrained")
+    if shapes:
+        grid = np.atleast_2d(fig.subplots(n, 2, squeeze=False))
+        diag, insets = grid[:, 0], grid[:, 1]
+    else:
+        axes = list(fig.subplots((n + 1) // 2, 2, squeeze=False).ravel())
+        for ax in axes[n:]:
+            ax.set_visible(False)
+        diag, insets = axes[:n], [None] * n
+    for ax, inset, (name, pan) in zip(diag, insets, panels.items(), strict=True):
+        draw_diagram(ax, pan["sweeps"], key, lab)
+        ax.set_title(f"α = {name}: tip extrema", fontsize=10)
+        if inset is not None:
+            draw_orbit_shapes(inset, pan["shapes"])
+            inset.set_title(f"α = {name}: shapes (FE)", fontsize=10)
+    finish_figure(fig, f"{paper}: extrema of the {what} on the attractor against v")
     return fig
+
+
+def plots(result: CaseResult) -> dict:
+    """The paper's three figures, ``{"fig08": Figure, "fig09": ..., "fig10": ...}``."""
+    return {stem: plot(result, which=stem) for stem in FIGURES}

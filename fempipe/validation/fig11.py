@@ -21,6 +21,7 @@ from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations
 
 CASE = Case(
     name="fig11",
+    caption="Tip position X_g(1) (left) and Z_g(1) (right, units of L) against τ on the limit cycle at v = 10 (β = 0.142, γ = 18.9, μ = 0.005), one row per inclination α, over one common τ window starting at a Poincaré-section crossing. Black solid: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); vermilion dashed: N = 3 sine modes; blue dotted: N = 4.",
     figure="Fig. 11",
     title="Time traces of X_g(1), Z_g(1) at v = 10",
     paper_shows=(

@@ -17,6 +17,7 @@ from .dynamic_runs import cycle_traces, cycles_at, dyn_discretizations
 
 CASE = Case(
     name="fig12",
+    caption="Phase trajectories dZ_g(1)/dτ against Z_g(1) on the limit cycle at v = 10 (β = 0.142, γ = 18.9, μ = 0.005), one panel per inclination α. Black solid: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); vermilion dashed: N = 3 sine modes; blue dotted: N = 4.",
     figure="Fig. 12",
     title="Phase trajectories of Z_g(1) at v = 10",
     paper_shows=("the phase trajectories at v = 10 are closed: the motions are periodic (Sec. 5)",),

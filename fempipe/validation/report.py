@@ -33,8 +33,68 @@ def _minutes(t: float) -> str:
     return f"{t:.1f} s" if t < 120 else f"{t / 60:.1f} min ({t:.0f} s)"
 
 
-def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
-    """The report as Markdown text; figure links are relative to ``figures_dir``."""
+def _findings(suite: SuiteResult) -> list[str]:
+    """Every disagreement with the paper, with its measurement (first in the report)."""
+    lines = ["## Findings: where the converged model and the paper disagree", ""]
+    k = 0
+    for o in suite.outcomes:
+        if o.result is None:
+            continue
+        for f in o.result.findings:
+            k += 1
+            lines.append(f"{k}. **{o.result.figure}** ({o.name}): {f}")
+        for c in o.result.checks:
+            if c.category == "paper" and not c.passed and c.name not in o.result.explained:
+                k += 1
+                lines.append(
+                    f"{k}. **{o.result.figure}** ({o.name}): “{c.claim}” does not hold for the "
+                    f"converged model: measured {format_cell(c.measured)}; criterion "
+                    f"{format_cell(c.reference)} ({c.tolerance}). Reference: {c.source}."
+                )
+    if k == 0:
+        lines.append("None.")
+    return [*lines, ""]
+
+
+#: Tables longer than this go to a CSV file beside the report, linked.
+MAX_INLINE_ROWS = 30
+
+
+def _table(t, case: str, k: int, tables_dir: Path | None) -> list[str]:
+    """A table in Markdown, or a link to its CSV file when it is long."""
+    if len(t.rows) <= MAX_INLINE_ROWS or tables_dir is None:
+        return ["", t.to_markdown()]
+    name = f"{case}_table{k}.csv"
+    _write_csv(tables_dir / name, t)
+    out = ["", f"**{t.title}**: {len(t.rows)} rows in [{name}]({name}) (CSV)."]
+    if t.note:
+        out += ["", t.note]
+    return out
+
+
+def _write_csv(path: Path, t) -> None:
+    import csv
+    import io
+
+    from ..io import write_text
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(t.columns)
+    w.writerows(t.rows)
+    write_text(path, buf.getvalue())
+
+
+def render_report(
+    suite: SuiteResult, figures_dir: str = ".", tables_dir: str | os.PathLike | None = None
+) -> str:
+    """The report as Markdown text; figure links are relative to ``figures_dir``.
+
+    Tables longer than :data:`MAX_INLINE_ROWS` are written as CSV files into
+    ``tables_dir`` (the report's directory) and linked; without ``tables_dir``
+    they stay inline.
+    """
+    tables_path = None if tables_dir is None else Path(tables_dir)
     env = suite.environment
     num = [c for _, c in suite.checks("numerics")]
     pap = [c for _, c in suite.checks("paper")]
@@ -61,6 +121,15 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
         "with fempipe's converged answer. A paper check that does not hold is a *finding* "
         "(marked ⚠️), not a failure of fempipe.",
         "",
+        "Discretisations are named as on the command line: **P3:8** means cubic (P3) "
+        "finite elements, 8 elements along the pipe (P1, P2: linear, quadratic); **N = 3** "
+        "means the paper's Galerkin method with 3 sine modes. Eigenvalues are λ "
+        "(θ ∝ e^{λτ}, Re λ > 0 unstable) or the paper's Ω = −iλ; Floquet multipliers of "
+        "a limit cycle are written ρ (μ is the damping coefficient). Runtimes are compute "
+        "times of each case (summed over its parts where a case runs in parallel pieces), "
+        "so they may add up to more than the wall time of the suite.",
+        "",
+        *_findings(suite),
         "## Summary",
         "",
         f"- numerics checks passed: **{sum(c.passed for c in num)} / {len(num)}**",
@@ -68,7 +137,7 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
         f"- overall: **{'PASS' if suite.ok else 'FAIL'}** (PASS = every case ran and every "
         "numerics check passed; paper findings do not fail the suite)",
         "",
-        "| case | paper figure | what | status | numerics | paper | runtime |",
+        "| case | paper figure | what | status | numerics | paper | compute time |",
         "|---|---|---|---|---|---|---|",
     ]
     for o in suite.outcomes:
@@ -87,25 +156,6 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
             f"| [{o.name}](#{o.name}) | {r.figure} | {format_cell(r.title)} | {status} | "
             f"{n_ok}/{n_all} | {p_ok}/{p_all} | {r.runtime:.1f} s |"
         )
-    # Findings: every disagreement with the paper, with its measurement.
-    lines += ["", "## Findings: where the converged model and the paper disagree", ""]
-    k = 0
-    for o in suite.outcomes:
-        if o.result is None:
-            continue
-        for f in o.result.findings:
-            k += 1
-            lines.append(f"{k}. **{o.result.figure}** ({o.name}): {f}")
-        for c in o.result.checks:
-            if c.category == "paper" and not c.passed and c.name not in o.result.explained:
-                k += 1
-                lines.append(
-                    f"{k}. **{o.result.figure}** ({o.name}): “{c.claim}” does not hold for the "
-                    f"converged model: measured {format_cell(c.measured)}; criterion "
-                    f"{format_cell(c.reference)} ({c.tolerance}). Reference: {c.source}."
-                )
-    if k == 0:
-        lines.append("None.")
     failed = [(n, c) for n, c in suite.checks("numerics") if not c.passed]
     if failed:
         lines += ["", "### Failed numerics checks (bugs or unconverged settings in fempipe)", ""]
@@ -123,22 +173,24 @@ def render_report(suite: SuiteResult, figures_dir: str = ".") -> str:
         lines += [f"## {r.figure}: {r.title}", ""]
         lines += [
             f"Case `fempipe.validation.{o.name}` ({'quick' if r.quick else 'full'}), "
-            f"{r.runtime:.1f} s (with figure: {o.wall_time:.1f} s)."
+            f"compute time {r.runtime:.1f} s."
         ]
         if o.status == "error":
             lines += ["", "**Error:**", "", "```", o.error.strip(), "```"]
         lines += ["", "What the paper shows, checked here:", ""]
         lines += [f"- {s}" for s in r.paper_shows]
-        if o.figure:
-            lines += ["", f"![{r.figure}]({Path(figures_dir, o.figure).as_posix()})"]
+        for fig in o.figures or ((o.figure,) if o.figure else ()):
+            lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
+        if r.caption and (o.figures or o.figure):
+            lines += ["", f"*{r.figure}.* {r.caption}"]
         lines += [
             "",
             "| result | category | check | measured | reference | tolerance (why) | source |",
             "|---|---|---|---|---|---|---|",
             *[_check_row(c) for c in r.checks],
         ]
-        for t in r.tables:
-            lines += ["", t.to_markdown()]
+        for k, t in enumerate(r.tables, start=1):
+            lines += _table(t, o.name, k, tables_path)
     lines += [
         "",
         "## Reproduce",
@@ -161,4 +213,4 @@ def write_report(suite: SuiteResult, out: str | os.PathLike) -> Path:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "results.json", suite.to_dict())
-    return write_text(out / "REPORT.md", render_report(suite))
+    return write_text(out / "REPORT.md", render_report(suite, tables_dir=out))

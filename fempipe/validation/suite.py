@@ -79,7 +79,8 @@ class CaseOutcome:
 
     ``status`` is ``"ok"`` (ran; see ``result``) or ``"error"`` (raised,
     an import error included; ``error`` holds the traceback).  ``figure`` is
-    the PNG file name, if drawn.
+    the PNG file name, if drawn; ``figures`` every PNG of the case (a case
+    that reproduces several of the paper's figures draws one file each).
     """
 
     name: str
@@ -88,6 +89,7 @@ class CaseOutcome:
     figure: str | None = None
     error: str = ""
     wall_time: float = 0.0
+    figures: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -99,6 +101,7 @@ class CaseOutcome:
             "name": self.name,
             "status": self.status,
             "figure": self.figure,
+            "figures": list(self.figures),
             "error": self.error,
             "wall_time": self.wall_time,
             "result": self.result.to_dict() if self.result is not None else None,
@@ -145,8 +148,13 @@ class SuiteResult:
         }
 
 
-def _draw(name: str, module, result: CaseResult, out) -> str:
-    """Draw a case's figure into ``out/<name>.png``; return the file name."""
+def _draw(name: str, module, result: CaseResult, out) -> tuple[str, ...]:
+    """Draw a case's figures into ``out``; return the file names.
+
+    One file ``<name>.png`` from ``module.plot``, or, for a case that
+    defines ``plots`` (several of the paper's figures), one file per figure
+    it returns.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -154,19 +162,25 @@ def _draw(name: str, module, result: CaseResult, out) -> str:
 
     from ..io import write_figure
 
-    fig = module.plot(result)
-    figure = f"{name}.png"
-    write_figure(Path(out) / figure, fig, dpi=110)
-    plt.close(fig)
-    return figure
+    plots = getattr(module, "plots", None)
+    figs = plots(result) if plots is not None else {name: module.plot(result)}
+    files = []
+    try:
+        for stem, fig in figs.items():
+            files.append(f"{stem}.png")
+            write_figure(Path(out) / files[-1], fig, dpi=110)
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
+    return tuple(files)
 
 
 def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcome:
     """Draw the figure (if ``out``) and wrap the result without its arrays."""
-    figure = None
+    figures: tuple[str, ...] = ()
     if out is not None:
         try:
-            figure = _draw(name, module, result, out)
+            figures = _draw(name, module, result, out)
         except Exception:
             log.exception("figure of validation case %s failed", name)
             return CaseOutcome(
@@ -181,7 +195,8 @@ def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcom
         name,
         "ok",
         result=replace(result, data={}),
-        figure=figure,
+        figure=figures[0] if figures else None,
+        figures=figures,
         wall_time=time.perf_counter() - t0,
     )
 

@@ -39,6 +39,13 @@ from .static_shapes import CONVERGED_FE, static_shapes
 
 CASE = Case(
     name="symmetry",
+    caption=(
+        "Symmetry of the static states (β = 0.142, γ = 18.9, μ = 0.005, v = 3; FE with cubic "
+        "elements; all shapes static equilibria). (a) α and −α: mirror images in Z_g → −Z_g, "
+        "the true symmetry (θ, α) → (−θ, −α) of Eq. (20). (b) the pairs α and α − π of the "
+        "paper's symmetry remark: they do not coincide. (c) α = π, v = 1: the two buckled "
+        "states are mirror images. Clamp ■ at the origin, gravity down the page."
+    ),
     figure="Sec. 5 (end)",
     title="Symmetries: α → −α is a mirror symmetry; α → α − π is not",
     paper_shows=(
