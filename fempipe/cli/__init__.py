@@ -42,40 +42,70 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _subcommand(argv: list[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first known name), for error prefixes."""
+    return next((a for a in argv if a in SUBCOMMANDS), None)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code.
 
     0 ok, 1 a solver failed (:class:`fempipe.errors.SolverError`), 2 bad input
-    (:class:`~fempipe.cli.parsing.CLIError` or argparse), 130 / 143 interrupted
-    by SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
+    (:class:`~fempipe.cli.parsing.CLIError` or argparse, also an unusable
+    ``--out``, checked before any computation), 130 / 143 interrupted by
+    SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
+    Every error is one line ``fempipe COMMAND: error: --option: message``.
+    A command that fails or is interrupted leaves its ``--out`` directory as
+    it was (:class:`~fempipe.cli.reporting.Output`).
     """
+    argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
+    command = _subcommand(argv)
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:
+            # The top-level parser would say "fempipe: error: unrecognized
+            # arguments: ..."; name the subcommand and the option like every
+            # other message.
+            sub = f"fempipe {command}" if command else "fempipe"
+            print(f"{sub}: error: {extra[0]}: unrecognized argument", file=sys.stderr)
+            return 2
     except SystemExit as exc:  # argparse: --help, --version (0) or bad input (2)
         return 0 if exc.code is None else int(exc.code)
     if not getattr(args, "_run", None):
         parser.print_help(sys.stderr)
         return 2
     from fempipe.cli.parsing import CLIError
+    from fempipe.cli.reporting import check_out_dir, discard_pending
     from fempipe.errors import SolverError
     from fempipe.parallel import Interrupted, interruptible
 
     prefix = f"fempipe {args.command}: error:"
+
+    def hint() -> str:
+        text = args._hint(args) if args._hint is not None else None
+        return f"; {text}" if text else ""
+
     try:
+        if getattr(args, "out", None) is not None:
+            check_out_dir(args.out)
         with interruptible():
             return int(args._run(args) or 0)
     except CLIError as exc:  # bad input: one line naming the option, exit 2
         print(f"{prefix} {exc}", file=sys.stderr)
         return 2
     except SolverError as exc:  # a solver failed: say where, exit 1
-        hint = args._hint(args) if args._hint is not None else None
-        message = " ".join(str(exc).split()) + (f"; {hint}" if hint else "")
-        print(f"{prefix} {message}", file=sys.stderr)
+        print(f"{prefix} {' '.join(str(exc).split())}{hint()}", file=sys.stderr)
         return 1
     except Interrupted as exc:  # SIGINT or SIGTERM: workers are stopped by now
-        print(f"fempipe {args.command}: {exc}", file=sys.stderr)
+        print(f"fempipe {args.command}: {exc}{hint()}", file=sys.stderr)
         return exc.exit_code
+    except OSError as exc:  # e.g. the disk filled up while writing: one line, no traceback
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"{prefix} {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
+    finally:
+        discard_pending()
 
 
 if __name__ == "__main__":  # pragma: no cover

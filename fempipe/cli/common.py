@@ -339,8 +339,11 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
     if si_given:
         missing = [opt for opt in _SI_REQUIRED if _given(args, opt[2:]) is None]
         if missing:
+            # Blame the option that asked for the SI pipe when none of the
+            # required ones was given (--g 9.8 alone), else the first missing.
+            named = missing[0] if len(missing) < len(_SI_REQUIRED) else si_given[0]
             raise CLIError(
-                missing[0],
+                named,
                 f"the SI pipe needs {' '.join(_SI_REQUIRED)} together; missing {' '.join(missing)}",
             )
         for opt in ("--beta", "--gamma", "--mu"):

@@ -19,11 +19,19 @@ crossing; mode numbers are those of ``fempipe spectrum`` (carried from
 v = 0).  An instability already present at the start of the range is listed
 at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
 critical.json, events.csv and branches.png.
+
+The continuation's step budget follows from the range (:func:`step_budget`).
+Should the primary branch still stop before the end of the range (its JSON
+``end_reason`` is ``"max_steps"``), the command says so on stderr, with the v
+reached, and exits 1 (the files and the output cover the part that was
+followed); ``--allow-partial`` makes that exit 0, with the warning.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
@@ -46,7 +54,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="0.1",
         help="largest continuation step; spectra are computed at every step (default 0.1)",
     )
+    g.add_argument(
+        "--allow-partial",
+        action="store_true",
+        help="exit 0 (with a warning) if the continuation ran out of steps before the end "
+        "of the range",
+    )
     common.add_output_arguments(parser)
+
+
+def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
+    """Continuation steps allowed for the range: 4 steps of ``ds_max`` per unit of v, >= 2000.
+
+    The arclength step measures the change of (theta, v) together, so one
+    step advances v by at most ``ds_max``; the factor 4 leaves room for
+    stretches where the shape changes faster than v and for steps shortened
+    near events and folds.  The library's default of 2000 steps is kept as
+    the floor (it cut ``--v 0,300`` at v = 200 before the budget followed the
+    range).
+    """
+    return max(2000, math.ceil(4.0 * (v_max - v_min) / ds_max))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -76,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
                 v_min=v_min,
                 follow_bifurcations=not args.no_branches,
                 ds_max=ds_max,
+                max_steps=step_budget(v_min, v_max, ds_max),
                 callback=on_sample,
             )
         except ValueError as exc:
@@ -97,7 +125,21 @@ def run(args: argparse.Namespace) -> int:
         _print(result, setup.pipe)
     if output is not None:
         output.report(args)
-    return 0
+    return _check_coverage(args, result, v_max)
+
+
+def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int:
+    """Warn on stderr and return 1 if the primary branch ran out of steps (module docstring)."""
+    primary = next((b for b in result.get("branches", []) if b["name"] == "primary"), None)
+    if primary is None or primary["end_reason"] != "max_steps":
+        return 0
+    tail = "" if args.allow_partial else " (--allow-partial accepts this)"
+    print(
+        f"fempipe critical: warning: the primary branch ran out of continuation steps at "
+        f"v = {primary['v_max']:.6g} < {v_max:g}; events above it are not listed{tail}",
+        file=sys.stderr,
+    )
+    return 0 if args.allow_partial else 1
 
 
 def _write(output: reporting.Output, result: dict, res) -> None:

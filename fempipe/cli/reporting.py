@@ -1,62 +1,241 @@
-"""What a ``fempipe`` command shows and writes: progress bar, result files, headings."""
+"""What a ``fempipe`` command shows and writes: progress, result files, headings.
+
+Result files
+------------
+``--out DIR`` is checked before any computation (:func:`check_out_dir`): it
+must be a directory that exists or can be created, and writable; ``--out ''``
+is refused (it would scatter the files into the current directory).  The
+files of one run are written into a hidden staging directory inside DIR
+(:class:`Output`) and moved into place together at the end
+(:meth:`Output.commit`), so a run that fails or is interrupted part way
+leaves DIR as it was: every file of a run is written, or none.
+
+Progress
+--------
+With ``--progress`` (or when stderr is a terminal) a tqdm bar; otherwise,
+unless ``--quiet``, a one-line progress message on stderr at most every
+:data:`LOG_INTERVAL` seconds, so that a batch job's log shows that a long
+run is alive and how far it is.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import shutil
 import sys
+import tempfile
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
-__all__ = ["Output", "describe", "progress"]
+from .parsing import CLIError
+
+__all__ = ["LOG_INTERVAL", "Output", "check_out_dir", "describe", "discard_pending", "progress"]
+
+#: Seconds between two progress lines when stderr is not a terminal.
+LOG_INTERVAL = 20.0
+
+
+def check_out_dir(text: str, option: str = "--out") -> Path:
+    """Refuse an unusable output directory before any work is done.
+
+    ``text`` must be non-empty; the directory must exist or be creatable
+    (its nearest existing ancestor is a directory) and be writable, which is
+    tried by creating and removing a file in it.  Directories created for
+    the trial are removed again, so a refused or failed run leaves nothing.
+
+    Raises
+    ------
+    CLIError
+        Naming ``option``; the dispatcher prints it and exits 2.
+    """
+    if not text or not text.strip():
+        raise CLIError(option, "empty directory name; give a directory, e.g. --out results/")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise CLIError(option, f"{text} exists and is not a directory")
+    created: list[Path] = []
+    probe = path
+    while not probe.exists():
+        created.append(probe)
+        probe = probe.parent
+    if not probe.is_dir():
+        raise CLIError(option, f"cannot create {text}: {probe} is not a directory")
+    try:
+        for d in reversed(created):
+            try:
+                d.mkdir()
+            except OSError as exc:
+                raise CLIError(option, f"cannot create {text}: {exc.strerror or exc}") from None
+        fd, tmp = tempfile.mkstemp(prefix=".fempipe-probe-", dir=path)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise CLIError(option, f"cannot write into {text}: {exc.strerror or exc}") from None
+    finally:
+        for d in created:
+            with contextlib.suppress(OSError):
+                d.rmdir()
+    return path
 
 
 def progress(args: argparse.Namespace, total: int | None, desc: str):
-    """A tqdm bar on stderr if ``--progress`` (or a terminal without ``--quiet``).
+    """Progress on stderr: a tqdm bar, or a line every :data:`LOG_INTERVAL` s.
 
-    Use as a context manager; call ``bar.update()`` from the library's
-    progress callback.  A disabled bar does nothing.
+    A bar with ``--progress`` or when stderr is a terminal; nothing with
+    ``--quiet``; otherwise plain lines such as
+    ``fempipe: simulate: 12/40 (30 %), 61 s`` at a modest interval, for logs of
+    batch jobs.  Use as a context manager; call ``bar.update()`` (and
+    optionally ``bar.set_postfix_str``) from the library's progress callback.
     """
     from tqdm import tqdm
 
     show = getattr(args, "progress", None)
-    if show is None:
-        show = sys.stderr.isatty()
+    if show is None and not sys.stderr.isatty():
+        return _LogProgress(total, desc, LOG_INTERVAL)
     return tqdm(
         total=total,
         desc=desc,
         file=sys.stderr,
         leave=False,
         dynamic_ncols=True,
-        disable=not show,
+        disable=show is False,
     )
 
 
-class Output:
-    """The result files of one command in ``--out DIR``, recorded as they are written.
+class _LogProgress:
+    """tqdm's ``update`` / ``set_postfix_str`` as a line on stderr every ``interval`` s."""
 
-    Every file goes through one of the methods, which write atomically
-    (:mod:`fempipe.io`) and record the path, so the "wrote ..." lines of
-    :meth:`report` are exactly the files written.
+    def __init__(self, total: int | None, desc: str, interval: float) -> None:
+        self.total, self.desc, self.interval = total, desc, float(interval)
+        self.n = 0
+        self.postfix = ""
+        self.start = self.last = time.monotonic()
+
+    def __enter__(self) -> _LogProgress:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+        self.postfix = str(text)
+        self._maybe_print()
+
+    def update(self, n: float = 1) -> None:
+        self.n += n
+        self._maybe_print()
+
+    def _maybe_print(self) -> None:
+        now = time.monotonic()
+        if now - self.last < self.interval:
+            return
+        self.last = now
+        done = f"{self.n:g}"
+        if self.total:
+            done += f"/{self.total:g} ({100.0 * self.n / self.total:.0f} %)"
+        extra = f", {self.postfix}" if self.postfix else ""
+        print(f"fempipe: {self.desc}: {done}{extra}, {now - self.start:.0f} s", file=sys.stderr)
+
+
+#: Outputs created and not yet committed; :func:`discard_pending` removes
+#: their staging directories when a command fails or is interrupted.
+_PENDING: list[Output] = []
+
+
+def discard_pending() -> None:
+    """Remove the staging directory of every uncommitted :class:`Output`."""
+    while _PENDING:
+        _PENDING.pop().discard()
+
+
+class Output:
+    """The result files of one command in ``--out DIR``, all or none.
+
+    Every file goes into a hidden staging directory inside DIR (through one
+    of the methods, which write atomically with :mod:`fempipe.io`, or by
+    another writer at :meth:`path`, followed by :meth:`record`);
+    :meth:`commit` moves them into DIR together.  If the command fails
+    first, :func:`discard_pending` removes the staging directory and DIR is
+    left as it was.  The "wrote ..." lines of :meth:`report` are exactly the
+    files moved into DIR.
 
     Parameters
     ----------
     directory : path-like
-        The ``--out`` directory.
+        The ``--out`` directory (checked by :func:`check_out_dir`).
     """
 
     def __init__(self, directory) -> None:
         self.directory = Path(directory)
         self.written: list[Path] = []
+        self._staged: list[str] = []
+        self._stage: Path | None = None
+        _PENDING.append(self)
+
+    @property
+    def stage(self) -> Path:
+        """The staging directory (created on first use)."""
+        if self._stage is None:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            self._stage = Path(tempfile.mkdtemp(prefix=".fempipe-staging-", dir=self.directory))
+        return self._stage
 
     def path(self, name: str) -> Path:
-        """The destination of ``name``; call :meth:`record` once it is written."""
-        return self.directory / name
+        """Where to write ``name`` now; call :meth:`record` once it is written."""
+        return self.stage / name
 
     def record(self, path) -> Path:
-        """Record a path written by another writer (e.g. a GIF, a point store)."""
+        """Record a file (or directory) written at ``path`` (from :meth:`path`).
+
+        A path outside the staging directory is recorded as written in place.
+
+        Returns the final destination in DIR.
+        """
         path = Path(path)
-        self.written.append(path)
-        return path
+        if not path.is_relative_to(self.stage):
+            # Written in place on purpose (e.g. bifurcation's resumable point
+            # store, which keeps finished points when a run stops).
+            self.written.append(path)
+            return path
+        name = path.relative_to(self.stage).parts[0]
+        if name not in self._staged:
+            self._staged.append(name)
+        return self.directory / name
+
+    def commit(self) -> None:
+        """Move every staged file into DIR (replacing files of an earlier run)."""
+        if self in _PENDING:
+            _PENDING.remove(self)
+        if self._stage is None:
+            return
+        # Check every destination first, so that a clash moves nothing.
+        for name in self._staged:
+            src, dst = self._stage / name, self.directory / name
+            if dst.exists() and dst.is_dir() != src.is_dir():
+                kind = "a directory" if dst.is_dir() else "a file"
+                self.discard()
+                raise CLIError(
+                    "--out", f"{dst} is {kind} in the way; no file of this run was written"
+                )
+        for name in self._staged:
+            src, dst = self._stage / name, self.directory / name
+            if src.is_dir() and dst.is_dir():
+                shutil.rmtree(dst)
+            os.replace(src, dst)
+            self.written.append(dst)
+        shutil.rmtree(self._stage, ignore_errors=True)
+        self._stage = None
+
+    def discard(self) -> None:
+        """Remove the staging directory and everything in it."""
+        if self in _PENDING:
+            _PENDING.remove(self)
+        if self._stage is not None:
+            shutil.rmtree(self._stage, ignore_errors=True)
+            self._stage = None
 
     def json(self, name: str, obj) -> Path:
         from fempipe.io import write_json
@@ -74,7 +253,11 @@ class Output:
         return self.record(write_figure(self.path(name), fig, **savefig_kwargs))
 
     def report(self, args: argparse.Namespace) -> None:
-        """``wrote PATH`` on stderr for each file, unless ``--json`` or ``--quiet``."""
+        """:meth:`commit`, then ``wrote PATH`` on stderr for each file.
+
+        Nothing is printed with ``--json`` or ``--quiet``.
+        """
+        self.commit()
         if getattr(args, "json", False) or getattr(args, "progress", None) is False:
             return
         for path in self.written:

@@ -215,7 +215,6 @@ def _write_outputs(output: reporting.Output, result, model, traj, att) -> None:
     )
     from fempipe.trajectory_io import write_trajectory
 
-    output.directory.mkdir(parents=True, exist_ok=True)
     disc, p = model.disc, model.params
     title = f"α = {math.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, v = {p.v:.4g}"
     t, q, qd = _display_states(att, traj)
@@ -248,6 +247,7 @@ def _write_outputs(output: reporting.Output, result, model, traj, att) -> None:
     keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
     pvd = output.path("trajectory.pvd")
     write_trajectory(pvd, disc, p.alpha, t[keep], q[keep], qd[keep])
+    output.record(pvd.with_suffix(""))  # the frames, trajectory/frame_NNNNN.vtu
     output.record(pvd)
     output.json("simulate.json", result)
 
