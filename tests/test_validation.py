@@ -321,3 +321,48 @@ def test_full_suite(tmp_path):
     ]
     assert not bad, bad
     assert {o.name for o in suite.outcomes if o.status == "ok"} == set(CASES)
+
+
+def _truncation_suite() -> SuiteResult:
+    """A fake case with one real finding, the paper's truncations and a long table."""
+    checks = (
+        Check("x", "v_cr falls as α grows", "paper", False, "rises by 0.01", "falls", "tol", "s"),
+        Check("m3", "N = 3 reproduces the converged period", "paper", False, 0.03, 0.02, "t", "s"),
+        Check("m4", "N = 4 reproduces the converged period", "paper", True, 0.01, 0.02, "t", "s"),
+    )
+    res = CaseResult(
+        "fake",
+        "Fig. 0",
+        "fake case",
+        ("it shows",),
+        checks,
+        tables=(Table("long", ("i",), tuple((i,) for i in range(100))),),
+        caption="a caption",
+        not_checked=("an experiment",),
+    )
+    return SuiteResult(
+        (CaseOutcome("fake", "ok", result=res, figure="a.png", figures=("a.png", "b.png")),),
+        quick=True,
+        workers=1,
+        wall_time=1.5,
+        started="now",
+        environment={"workers": 1},
+    )
+
+
+def test_report_findings_first_and_truncations_in_one_table(tmp_path):
+    text = render_report(_truncation_suite(), tables_dir=tmp_path)
+    findings = text.split("## Findings")[1].split("## Summary")[0]
+    assert text.index("## Findings") < text.index("## Summary")
+    # the real finding is numbered, the truncation checks are one table row
+    assert "1. **Fig. 0** (fake): “v_cr falls as α grows”" in findings
+    assert "2. " not in findings
+    assert "| Fig. 0 | the converged period | 0.03 ⚠️ | 0.01 | 0.02 |" in findings
+    # statements not checked are said so, and counted nowhere
+    assert "Not checked" in text and "an experiment" in text
+    # every figure embedded, with its caption; a long table goes to a linked CSV
+    assert "![Fig. 0](a.png)" in text and "![Fig. 0](b.png)" in text
+    assert "*Fig. 0.* a caption" in text
+    assert "[fake_table1.csv](fake_table1.csv)" in text
+    rows = (tmp_path / "fake_table1.csv").read_text().splitlines()
+    assert rows[0] == "i" and len(rows) == 101

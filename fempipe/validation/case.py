@@ -154,6 +154,9 @@ class Case:
         Names of checks every run must emit; checks that depend on the run
         (one per inclination, the full suite only) are passed to
         :meth:`result` by the run that knows them.
+    not_checked : tuple of str
+        Statements of the paper this case cannot check (said so in the
+        report, never counted as reproduced).
     caption : str
         The figure's caption in the report: parameters, flow velocities,
         discretisations in words, the key of colours, line styles and
@@ -166,6 +169,7 @@ class Case:
     paper_shows: tuple[str, ...]
     requires: tuple[str, ...] = ()
     caption: str = ""
+    not_checked: tuple[str, ...] = ()
 
     @property
     def references(self) -> References:
@@ -208,6 +212,7 @@ class Case:
             title=self.title,
             paper_shows=self.paper_shows,
             caption=self.caption,
+            not_checked=self.not_checked,
             checks=checks + missing,
             tables=tuple(tables),
             findings=tuple(findings),

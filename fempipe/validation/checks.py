@@ -207,6 +207,8 @@ class CaseResult:
         Wall time of ``run``, s.
     caption : str
         The figure's caption (see :class:`fempipe.validation.case.Case`).
+    not_checked : tuple of str
+        Statements of the paper the case cannot check.
     """
 
     case: str
@@ -221,6 +223,7 @@ class CaseResult:
     quick: bool = False
     runtime: float = 0.0
     caption: str = ""
+    not_checked: tuple[str, ...] = ()
 
     @property
     def numerics_passed(self) -> bool:
@@ -243,6 +246,7 @@ class CaseResult:
             "tables": [t.to_dict() for t in self.tables],
             "findings": list(self.findings),
             "caption": self.caption,
+            "not_checked": list(self.not_checked),
         }
 
 
@@ -284,4 +288,5 @@ def merge_results(results: list[CaseResult]) -> CaseResult:
         runtime=sum(r.runtime for r in results),
         explained=tuple(e for r in results for e in r.explained),
         caption=first.caption,
+        not_checked=first.not_checked,
     )

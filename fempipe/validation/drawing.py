@@ -206,8 +206,10 @@ def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
         v = np.array([p.v for p in pts])
         lo = np.array([getattr(p, key)[0] for p in pts])
         hi = np.array([getattr(p, key)[1] for p in pts])
-        line = ax.plot(v, hi, mk, ms=ms, label=label, mfc="none" if mk == "o" else None)[0]
-        ax.plot(v, lo, mk, ms=ms, color=line.get_color(), mfc="none" if mk == "o" else None)
+        c = color_for(label)
+        mfc = "none" if mk == "o" else None
+        ax.plot(v, hi, mk, ms=ms, color=c, label=label, mfc=mfc)
+        ax.plot(v, lo, mk, ms=ms, color=c, mfc=mfc)
     ax.set_xlabel("v")
     ax.set_ylabel(ylabel + r" ($/L$)")
     ax.grid(alpha=0.3)

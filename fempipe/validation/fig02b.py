@@ -36,8 +36,13 @@ CASE = Case(
     title="Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)",
     paper_shows=(
         "β = 0.2673, γ = 9.8129, v = 1.6874 U for the Texier-Dorbolo pipe (Eq. (29))",
-        "the model agrees with Texier & Dorbolo's theory and experiment",
+        "the model agrees with Texier & Dorbolo's theory",
         "the largest static deformation is at v = 0; the pipe straightens as the flow grows",
+    ),
+    not_checked=(
+        "the model agrees with Texier & Dorbolo's experiment: their measured shapes are not "
+        "available, so the model (Eq. (31a)) is verified against an independent strong-form "
+        "solver instead and the experimental claim is neither reproduced nor contradicted",
     ),
     requires=(
         "beta",
@@ -188,11 +193,6 @@ def run(quick: bool = False) -> CaseResult:
         quick=quick,
         started=t0,
         tables=(table_fe, table_modal),
-        findings=(
-            "Texier & Dorbolo's measured shapes are not available to fempipe, so the "
-            "experimental comparison of Fig. 2(b) is not repeated; the model (Eq. (31a)) is "
-            "verified against an independent strong-form solver instead.",
-        ),
         data={"fams": fams, "U": U, "L": si.L},
     )
 

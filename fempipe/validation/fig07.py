@@ -190,7 +190,7 @@ def run(quick: bool = False) -> CaseResult:
             "period at v = 10",
             "X_g(1) min",
             "X_g(1) max",
-            "max |Floquet multiplier|",
+            "max |ρ| (Floquet multipliers)",
         ),
         tuple(rows),
         note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ.",

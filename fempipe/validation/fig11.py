@@ -60,13 +60,13 @@ def run(quick: bool = False) -> CaseResult:
                 ", ".join(
                     f"{lb}: "
                     + (
-                        f"|μ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
+                        f"|ρ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
                         if found[lb]
                         else "not periodic"
                     )
                     for lb in discs
                 ),
-                reference="periodic, |μ| < 1",
+                reference="periodic, |ρ| < 1",
                 why="Floquet multipliers from the monodromy matrix of the shooting",
                 source="paper Sec. 5, Fig. 11",
             )
@@ -166,7 +166,7 @@ def run(quick: bool = False) -> CaseResult:
             "X_g(1) max",
             "Z_g(1) min",
             "Z_g(1) max",
-            "max |Floquet multiplier|",
+            "max |ρ| (Floquet multipliers)",
         ),
         tuple(rows),
         note="Period in τ; positions in units of L; the trivial multiplier 1 is excluded.",

@@ -7,6 +7,7 @@ in the tables, the pass/fail marks, the runtimes.  Nothing is pasted.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 from .checks import Check, format_cell
@@ -33,10 +34,22 @@ def _minutes(t: float) -> str:
     return f"{t:.1f} s" if t < 120 else f"{t / 60:.1f} min ({t:.0f} s)"
 
 
+#: A paper check on the paper's modal truncation: "[α = ..: ]N = 3 [(the
+#: paper's truncation) ]reproduces <quantity>".
+_TRUNCATION = re.compile(
+    r"^(?P<pre>.*?)N = (?P<n>\d+)(?: \(the paper's truncation\))? reproduces (?P<what>.*)$"
+)
+
+
+def _truncation(c: Check) -> re.Match | None:
+    return _TRUNCATION.match(c.claim) if c.category == "paper" else None
+
+
 def _findings(suite: SuiteResult) -> list[str]:
-    """Every disagreement with the paper, with its measurement (first in the report)."""
+    """The disagreements with the paper first, then one table of the truncation errors."""
     lines = ["## Findings: where the converged model and the paper disagree", ""]
     k = 0
+    rows: dict = {}
     for o in suite.outcomes:
         if o.result is None:
             continue
@@ -44,6 +57,12 @@ def _findings(suite: SuiteResult) -> list[str]:
             k += 1
             lines.append(f"{k}. **{o.result.figure}** ({o.name}): {f}")
         for c in o.result.checks:
+            m = _truncation(c)
+            if m is not None:
+                key = (o.result.figure, f"{m['pre']}{m['what']}")
+                row = rows.setdefault(key, {"tolerance": format_cell(c.reference)})
+                row[m["n"]] = format_cell(c.measured) + ("" if c.passed else " ⚠️")
+                continue
             if c.category == "paper" and not c.passed and c.name not in o.result.explained:
                 k += 1
                 lines.append(
@@ -53,6 +72,25 @@ def _findings(suite: SuiteResult) -> list[str]:
                 )
     if k == 0:
         lines.append("None.")
+    if rows:
+        over = sum(v.endswith("⚠️") for r in rows.values() for v in r.values())
+        lines += [
+            "",
+            "### The paper's truncations against the converged finite elements",
+            "",
+            "Largest difference between the paper's Galerkin method (N = 3, N = 4 sine modes) "
+            "and the converged FE solution, per quantity (lengths in units of L, periods "
+            f"relative); ⚠️ marks the {over} entries larger than the tolerance, the resolution "
+            "at which the paper's figure can be read.",
+            "",
+            "| figure | quantity | N = 3 | N = 4 | tolerance |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {fig} | {format_cell(what)} | {r.get('3', '')} | {r.get('4', '')} | "
+            f"{r['tolerance']} |"
+            for (fig, what), r in rows.items()
+        ]
     return [*lines, ""]
 
 
@@ -179,6 +217,9 @@ def render_report(
             lines += ["", "**Error:**", "", "```", o.error.strip(), "```"]
         lines += ["", "What the paper shows, checked here:", ""]
         lines += [f"- {s}" for s in r.paper_shows]
+        if r.not_checked:
+            lines += ["", "Not checked (neither reproduced nor contradicted):", ""]
+            lines += [f"- {s}" for s in r.not_checked]
         for fig in o.figures or ((o.figure,) if o.figure else ()):
             lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
         if r.caption and (o.figures or o.figure):
