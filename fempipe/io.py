@@ -11,11 +11,23 @@ Formats
   become ``null`` (strict JSON).
 * CSV (:func:`write_csv`): one row per result, a header line.
 * Shapes (:func:`write_shapes`): deformed centrelines as a meshio VTU file
-  (VTK XML unstructured grid): line cells, the global-frame centreline
-  (X_g, Z_g, 0) as points, theta, varsigma, eta, X_g, Z_g, xi and the
-  continuation value as point data.  VTU was chosen by trying: it stores line
-  cells and point data and reads back with plain meshio (and opens in
-  ParaView); meshio's XDMF writer needs h5py, which is not a dependency.
+  (VTK XML unstructured grid): line cells, the centreline in the screen
+  frame as points, theta, varsigma, eta, X_g, Z_g, xi and the continuation
+  value as point data, the parameters as field data.  VTU was chosen by
+  trying: it stores line cells and point data and reads back with plain
+  meshio (and opens in ParaView); meshio's XDMF writer needs h5py, which is
+  not a dependency.
+
+The VTK frame
+-------------
+Every VTU file of the package (these shapes and the frames of
+:mod:`fempipe.trajectory_io`) uses one frame, the one of every figure:
+gravity along -y.  A centreline point is ``(x, y, z) = (Z_g, -X_g, 0)``
+(Eq. (28): X_g along gravity, Z_g horizontal), so shapes and trajectories
+opened together in ParaView overlap.  Every file has the point arrays
+:data:`SHAPE_FIELDS` (and ``theta_dot`` where the state has a velocity) and
+the time, v and the parameters as field data (:func:`write_vtu`; meshio's
+writer drops field data, so it is added to the XML here).
 """
 
 from __future__ import annotations
@@ -41,12 +53,68 @@ __all__ = [
     "write_text",
     "write_figure",
     "write_shapes",
+    "write_vtu",
     "read_shapes",
+    "read_field_data",
+    "screen_points",
     "SHAPE_FIELDS",
 ]
 
 #: Point-data fields of a shape file, in order (all dimensionless; theta in rad).
 SHAPE_FIELDS = ("xi", "theta", "varsigma", "eta", "X_g", "Z_g")
+
+
+def screen_points(X_g, Z_g, scale: float = 1.0) -> np.ndarray:
+    """Centreline points in the VTK frame (module docstring): ``(Z_g, -X_g, 0) * scale``."""
+    X, Z = np.asarray(X_g, dtype=float), np.asarray(Z_g, dtype=float)
+    return np.column_stack([Z, -X, np.zeros(X.size)]) * float(scale)
+
+
+def write_vtu(
+    path: str | os.PathLike,
+    points: np.ndarray,
+    lines: np.ndarray,
+    point_data: Mapping[str, np.ndarray],
+    field_data: Mapping[str, float | Sequence[float]] | None = None,
+) -> Path:
+    """Write line cells with point data and field data as a VTU file, atomically.
+
+    meshio writes the points, cells and point data; the field data (numbers
+    or lists of numbers, e.g. ``{"time": 1.5, "v": 4.0, "alpha": 0.0}``) go
+    into a ``<FieldData>`` block of the grid, which VTK's XML readers (and
+    ParaView) show as field data.  NaN values are written as ``nan``.
+    """
+    import meshio
+
+    mesh = meshio.Mesh(points, [("line", np.asarray(lines))], point_data=dict(point_data))
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, mesh, file_format="vtu")
+        if field_data:
+            arrays = []
+            for name, value in field_data.items():
+                vals = np.atleast_1d(np.asarray(value, dtype=float))
+                text = " ".join(repr(float(x)) for x in vals)
+                arrays.append(
+                    f'<DataArray type="Float64" Name="{name}" NumberOfTuples="{vals.size}" '
+                    f'format="ascii">{text}</DataArray>'
+                )
+            xml = tmp.read_text(encoding="utf-8")
+            block = "<FieldData>\n" + "\n".join(arrays) + "\n</FieldData>\n"
+            xml = xml.replace("<UnstructuredGrid>\n", "<UnstructuredGrid>\n" + block, 1)
+            tmp.write_text(xml, encoding="utf-8")
+    return Path(path)
+
+
+def read_field_data(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """The field data of a VTU file written by :func:`write_vtu` (name -> array)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    out = {}
+    for fd in root.iter("FieldData"):
+        for arr in fd.iter("DataArray"):
+            out[arr.get("Name")] = np.array([float(x) for x in (arr.text or "").split()])
+    return out
 
 
 @contextlib.contextmanager
@@ -179,11 +247,13 @@ def write_shapes(
     values: Sequence[float],
     parameter: str = "v",
     length: float | None = None,
+    params: Mapping[str, float] | None = None,
 ) -> Path:
-    """Write deformed centrelines to one VTU file (meshio), atomically.
+    """Write deformed centrelines to one VTU file, atomically.
 
-    Each shape becomes a polyline of ``line`` cells; all shapes share one file
-    and are told apart by the point data ``shape_index`` and ``parameter``.
+    Each shape becomes a polyline of ``line`` cells in the VTK frame of the
+    module docstring (gravity along -y); all shapes share one file and are
+    told apart by the point data ``shape_index`` and ``parameter``.
 
     Parameters
     ----------
@@ -199,13 +269,14 @@ def write_shapes(
     length : float, optional
         Pipe length in m: points are then in metres (the point data stay
         dimensionless, with ``X_g_m``, ``Z_g_m`` added).
+    params : mapping, optional
+        The fixed parameters (alpha, beta, gamma, mu, v, ...), written as field
+        data beside ``time`` = 0 and ``{parameter}_values`` (one per shape).
 
     Returns
     -------
     Path
     """
-    import meshio
-
     if len(shapes) != len(values):
         raise ValueError(f"got {len(shapes)} shapes but {len(values)} values")
     if not shapes:
@@ -215,10 +286,8 @@ def write_shapes(
     index, value = [], []
     offset = 0
     for i, (s, val) in enumerate(zip(shapes, values, strict=True)):
-        X, Z = np.asarray(s.X_g, dtype=float), np.asarray(s.Z_g, dtype=float)
-        m = X.size
-        # Eq. (28): X_g along gravity, Z_g horizontal; the third coordinate is 0.
-        pts.append(np.column_stack([X, Z, np.zeros(m)]) * scale)
+        m = np.asarray(s.X_g).size
+        pts.append(screen_points(s.X_g, s.Z_g, scale))
         lines.append(offset + np.column_stack([np.arange(m - 1), np.arange(1, m)]))
         for f in SHAPE_FIELDS:
             data[f].append(np.asarray(getattr(s, f), dtype=float))
@@ -231,12 +300,12 @@ def write_shapes(
     if length is not None:
         point_data["X_g_m"] = point_data["X_g"] * scale
         point_data["Z_g_m"] = point_data["Z_g"] * scale
-    mesh = meshio.Mesh(
-        np.concatenate(pts), [("line", np.concatenate(lines))], point_data=point_data
-    )
-    with atomic_path(path) as tmp:
-        meshio.write(tmp, mesh, file_format="vtu")
-    return Path(path)
+    field = {"time": 0.0}
+    field.update({k: float(x) for k, x in (params or {}).items() if k != parameter})
+    field[f"{parameter}_values"] = [float(x) for x in values]
+    if length is not None:
+        field["length_m"] = scale
+    return write_vtu(path, np.concatenate(pts), np.concatenate(lines), point_data, field)
 
 
 def read_shapes(path: str | os.PathLike) -> list[dict[str, np.ndarray]]:

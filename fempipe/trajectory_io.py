@@ -2,11 +2,13 @@
 
 Format: a ParaView collection ``NAME.pvd`` (a small XML list of
 ``(timestep, file)``) plus one VTU file per output time in ``NAME/``, written
-by meshio.  Each VTU holds the centreline in the global frame (x = Z_g
-horizontal, y = -X_g so that gravity points down the screen, z = 0) as
-``line`` cells, and as point data ``xi``, ``theta`` (rad), ``theta_dot``
-(rad per unit tau), ``velocity`` (the centreline velocity r_dot in the
-global frame, 3 components) and ``eta``.
+by meshio.  Each VTU holds the centreline in the package's one VTK frame
+(:mod:`fempipe.io`: x = Z_g horizontal, y = -X_g so that gravity points
+down the screen, z = 0) as ``line`` cells, as point data ``xi``, ``theta``
+(rad), ``varsigma``, ``eta``, ``X_g``, ``Z_g`` (the arrays of
+``shapes.vtu``), ``theta_dot`` (rad per unit tau) and ``velocity`` (the
+centreline velocity r_dot in the same frame, 3 components), and as field
+data ``time`` (tau), ``v`` and the parameters.
 
 Why not XDMF: tried and measured with meshio 5.3.5.  ``meshio.xdmf.TimeSeriesWriter``
 needs h5py (not a dependency of fempipe), writes line cells as a ``Polyline``
@@ -55,14 +57,12 @@ def frame_data(
     edges = quad.at_edges(f)
     vel_X = np.interp(xi, quad.edges, edges[:, 0])
     vel_Z = np.interp(xi, quad.edges, edges[:, 1])
-    points = np.stack([s.Z_g, -s.X_g, np.zeros_like(xi)], axis=1)
-    data = {
-        "xi": xi,
-        "theta": s.theta,
-        "theta_dot": disc.evaluate(qdot, xi),
-        "eta": s.eta,
-        "velocity": np.stack([vel_Z, -vel_X, np.zeros_like(xi)], axis=1),
-    }
+    from .io import SHAPE_FIELDS, screen_points
+
+    points = screen_points(s.X_g, s.Z_g)
+    data = {f: np.asarray(getattr(s, f), dtype=float) for f in SHAPE_FIELDS}
+    data["theta_dot"] = disc.evaluate(qdot, xi)
+    data["velocity"] = np.stack([vel_Z, -vel_X, np.zeros_like(xi)], axis=1)
     return points, data
 
 
@@ -74,6 +74,7 @@ def write_trajectory(
     q: np.ndarray,
     qdot: np.ndarray,
     points_per_cell: int = 4,
+    params=None,
 ) -> Path:
     """Write a trajectory as ``path`` (.pvd) plus one VTU per time in ``path``'s stem directory.
 
@@ -85,14 +86,14 @@ def write_trajectory(
     alpha : float
     t : sequence of float, shape (m,)
     q, qdot : ndarray, shape (m, n)
+    params : Params, optional
+        Written as field data (v, alpha, beta, gamma, mu) beside ``time``.
 
     Returns
     -------
     Path of the .pvd file.
     """
-    import meshio
-
-    from .io import atomic_path, write_text
+    from .io import write_text, write_vtu
 
     path = Path(path)
     if path.suffix != ".pvd":
@@ -102,16 +103,18 @@ def write_trajectory(
     t = np.asarray(t, dtype=float)
     if not (q.shape == qdot.shape and q.shape[0] == t.size):
         raise ValueError("t, q and qdot must describe the same number of frames")
+    field = {}
+    if params is not None:
+        field = {k: float(getattr(params, k)) for k in ("v", "alpha", "beta", "gamma", "mu")}
     frames_dir = path.with_suffix("")
     frames_dir.mkdir(parents=True, exist_ok=True)
     entries = []
     for k in range(t.size):
         pts, data = frame_data(disc, alpha, q[k], qdot[k], points_per_cell)
         m = pts.shape[0]
-        cells = [("line", np.stack([np.arange(m - 1), np.arange(1, m)], axis=1))]
+        cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
         name = f"frame_{k:05d}.vtu"
-        with atomic_path(frames_dir / name) as tmp:
-            meshio.write(str(tmp), meshio.Mesh(pts, cells, point_data=data), file_format="vtu")
+        write_vtu(frames_dir / name, pts, cells, data, {"time": float(t[k])} | field)
         entries.append((float(t[k]), f"{frames_dir.name}/{name}"))
     lines = ['<?xml version="1.0"?>']
     lines.append('<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">')

@@ -82,9 +82,9 @@ def test_shapes_vtu_reads_back_with_meshio(tmp_path, two_shapes, length):
         for f in SHAPE_FIELDS:
             np.testing.assert_array_equal(d[f], getattr(s, f))
         np.testing.assert_array_equal(d["v"], v)
-        # Points are the global-frame centreline (X_g, Z_g, 0), Eq. (28).
-        np.testing.assert_allclose(d["points"][:, 0], s.X_g * scale, rtol=0, atol=1e-15)
-        np.testing.assert_allclose(d["points"][:, 1], s.Z_g * scale, rtol=0, atol=1e-15)
+        # Points: the centreline with gravity along -y, (Z_g, -X_g, 0), Eq. (28).
+        np.testing.assert_allclose(d["points"][:, 0], s.Z_g * scale, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(d["points"][:, 1], -s.X_g * scale, rtol=0, atol=1e-15)
         assert np.all(d["points"][:, 2] == 0)
 
 

@@ -69,6 +69,18 @@ def _fmt(x) -> str:
     return str(x)
 
 
+def _print_value(key: str, value, indent: str) -> None:
+    """``key: value``; a dict one line per entry below it, a list of numbers formatted."""
+    if isinstance(value, dict):
+        print(f"{indent}{key}:")
+        for k, v in value.items():
+            _print_value(str(k), v, indent + "  ")
+    elif isinstance(value, (list, tuple)):
+        print(f"{indent}{key}: {', '.join(_fmt(x) for x in value)}")
+    else:
+        print(f"{indent}{key}: {_fmt(value)}")
+
+
 def _print(result: dict) -> None:
     env = result["environment"]
     print("environment: " + ", ".join(f"{k} {v}" for k, v in env.items()))
@@ -78,7 +90,7 @@ def _print(result: dict) -> None:
         print(f"\n== {name} ==")
         for k, v in res.items():
             if k != "table":
-                print(f"  {k}: {_fmt(v)}")
+                _print_value(k, v, "  ")
         rows = res.get("table")
         if rows:
             cols = list(dict.fromkeys(k for r in rows for k in r))

@@ -150,7 +150,7 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 
     from fempipe.plotting.stability import plot_branches
 
-    rows = [ev.details() for ev in res.events]
+    rows = sorted((ev.details() for ev in res.events), key=lambda r: r["v"])
     for r in rows:
         r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
     ax = plot_branches(res)

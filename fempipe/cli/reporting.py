@@ -133,11 +133,15 @@ class _LogProgress:
         if now - self.last < self.interval:
             return
         self.last = now
+        elapsed = now - self.start
         done = f"{self.n:g}"
         if self.total:
             done += f"/{self.total:g} ({100.0 * self.n / self.total:.0f} %)"
         extra = f", {self.postfix}" if self.postfix else ""
-        print(f"fempipe: {self.desc}: {done}{extra}, {now - self.start:.0f} s", file=sys.stderr)
+        eta = ""
+        if self.total and 0 < self.n < self.total:
+            eta = f", about {elapsed * (self.total - self.n) / self.n:.0f} s left"
+        print(f"fempipe: {self.desc}: {done}{extra}, {elapsed:.0f} s{eta}", file=sys.stderr)
 
 
 #: Outputs created and not yet committed; :func:`discard_pending` removes

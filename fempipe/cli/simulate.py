@@ -12,8 +12,10 @@ second half (``"attractor": "forced"``, no classification).
 "X_tip": [...], "Z_tip": [...]}, "floquet_multipliers", "steps",
 "rejected_steps", "wall_time", ...}``.  ``--out DIR`` writes simulate.json,
 time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
-oscillating_shapes.png, pipe.gif and trajectory.pvd (+ trajectory/ VTU frames,
-at most 400: the transient and three periods of the cycle).
+oscillating_shapes.png, pipe.gif, trajectory.pvd (+ the folder trajectory/
+of VTU frames, at most 400: the transient and three periods of the cycle) and
+tip.csv, the tip's time series over the integration (:func:`tip_rows`: at
+every accepted step, or on a uniform grid with ``--output-dt``).
 """
 
 from __future__ import annotations
@@ -89,6 +91,78 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="pulsating flow frequency (0)",
     )
     common.add_output_arguments(parser)
+    parser.add_argument(
+        "--output-dt",
+        metavar="DT",
+        type=num("--output-dt", 0.0, strict_low=True),
+        default=None,
+        help="tip.csv on a uniform grid of step DT in tau (default: every accepted step)",
+    )
+
+
+#: Columns of tip.csv; lengths are dimensionless (lengths / L), time tau = t / T
+#: with T = L^2 sqrt((m + M)/EI) (Eq. (19)), rates per unit tau.
+TIP_COLUMNS = (
+    "tau",
+    "theta_tip",
+    "eta_tip",
+    "X_tip",
+    "Z_tip",
+    "theta_tip_rate",
+    "eta_tip_rate",
+    "X_tip_rate",
+    "Z_tip_rate",
+)
+
+
+def tip_rows(disc, alpha: float, t, q, qdot, output_dt: float | None = None) -> list[dict]:
+    """The tip's time series: tau, theta(1), eta(1), X_g(1), Z_g(1) and their rates.
+
+    Parameters
+    ----------
+    disc : Discretization
+    alpha : float
+    t : ndarray, shape (m,)
+        Accepted step times of the integration.
+    q, qdot : ndarray, shape (m, n)
+    output_dt : float, optional
+        Uniform output step: the states between accepted steps are the cubic
+        Hermite interpolants through (q, qdot) at the steps (q exact to the
+        step's local error order 4, qdot its derivative).
+
+    Returns
+    -------
+    list of dict
+        Rows with the keys :data:`TIP_COLUMNS`, from
+        :func:`fempipe.kinematics.tip_values` and
+        :func:`~fempipe.kinematics.tip_velocity` (theta_tip_rate = theta_dot(1)).
+    """
+    from fempipe.kinematics import tip_values, tip_velocity
+
+    t, q, qdot = np.asarray(t, float), np.asarray(q, float), np.asarray(qdot, float)
+    if output_dt is not None:
+        from scipy.interpolate import CubicHermiteSpline
+
+        keep = np.concatenate([[True], np.diff(t) > 0])  # no zero-length steps
+        spline = CubicHermiteSpline(t[keep], q[keep], qdot[keep], axis=0)
+        n = int(math.floor((t[-1] - t[0]) / output_dt * (1 + 1e-12))) + 1
+        t = t[0] + output_dt * np.arange(n)
+        q, qdot = spline(t), spline.derivative()(t)
+    pos = tip_values(disc, q, alpha)
+    vel = tip_velocity(disc, q, qdot, alpha)
+    theta_rate = np.asarray(disc.tip @ qdot.T)
+    cols = {
+        "tau": t,
+        "theta_tip": pos["theta_tip"],
+        "eta_tip": pos["eta_tip"],
+        "X_tip": pos["X_tip"],
+        "Z_tip": pos["Z_tip"],
+        "theta_tip_rate": theta_rate,
+        "eta_tip_rate": vel["eta_tip"],
+        "X_tip_rate": vel["X_tip"],
+        "Z_tip_rate": vel["Z_tip"],
+    }
+    return [{k: float(cols[k][i]) for k in TIP_COLUMNS} for i in range(t.size)]
 
 
 def _mode(text: str) -> int:
@@ -105,7 +179,8 @@ def _mode(text: str) -> int:
 def run(args: argparse.Namespace) -> int:
     from fempipe.dynamics import PulsatingFlow, initial_state, simulate
     from fempipe.io import json_dumps
-    from fempipe.limit_cycle import TIP_KEYS, find_attractor, tip_coordinates
+    from fempipe.kinematics import tip_values
+    from fempipe.limit_cycle import TIP_KEYS, find_attractor
     from fempipe.operators import PipeModel
     from fempipe.static import solve_static
 
@@ -116,6 +191,14 @@ def run(args: argparse.Namespace) -> int:
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
     amplitude, sigma, omega, mode = args.amplitude, args.sigma, args.omega, args.mode
     parsing.check_count("--t-max", t_max, parsing.T_MAX, parsing.allow_large(args), "time units")
+    if args.output_dt is not None:
+        parsing.check_count(
+            "--output-dt",
+            t_max / args.output_dt,
+            100 * parsing.MAX_VALUES,
+            parsing.allow_large(args),
+            "rows of tip.csv",
+        )
 
     params, disc = setup.params, setup.disc
     model = PipeModel(disc, params)
@@ -153,7 +236,7 @@ def run(args: argparse.Namespace) -> int:
     result["params"]["v"] = params.v
     if att is None:
         half = traj.t >= 0.5 * traj.t[-1]
-        tc = tip_coordinates(disc, params.alpha, traj.q[half])
+        tc = tip_values(disc, traj.q[half], params.alpha)
         result.update(
             {
                 "attractor": "forced",
@@ -176,7 +259,7 @@ def run(args: argparse.Namespace) -> int:
 
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
-        _write_outputs(output, result, model, traj, att)
+        _write_outputs(output, result, model, traj, att, args.output_dt)
     if args.json:
         print(json_dumps(result))
     else:
@@ -201,7 +284,7 @@ def _display_states(att, traj, n_periods: int = 3):
     return t, q, p
 
 
-def _write_outputs(output: reporting.Output, result, model, traj, att) -> None:
+def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt=None) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -246,9 +329,11 @@ def _write_outputs(output: reporting.Output, result, model, traj, att) -> None:
     # At most 400 frames (every step of a long run would be thousands of files).
     keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
     pvd = output.path("trajectory.pvd")
-    write_trajectory(pvd, disc, p.alpha, t[keep], q[keep], qd[keep])
+    write_trajectory(pvd, disc, p.alpha, t[keep], q[keep], qd[keep], params=p)
     output.record(pvd.with_suffix(""))  # the frames, trajectory/frame_NNNNN.vtu
     output.record(pvd)
+    tip = tip_rows(disc, p.alpha, traj.t, traj.q, traj.qdot, output_dt)
+    output.csv("tip.csv", tip, TIP_COLUMNS)
     output.json("simulate.json", result)
 
 

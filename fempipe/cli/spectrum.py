@@ -92,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
 def _rows(result: dict) -> list[dict]:
     rows = []
     for pt in result["points"]:
-        for e in pt["eigenvalues"]:
+        members: dict = {}
+        for i, e in enumerate(pt["eigenvalues"]):
+            members[e["mode"]] = members.get(e["mode"], 0) + 1
             rows.append(
                 {
                     "v": pt["v"],
@@ -102,6 +104,9 @@ def _rows(result: dict) -> list[dict]:
                     "Omega_re": e["Omega_re"],
                     "Omega_im": e["Omega_im"],
                     "stable": pt["stable"],
+                    "eigenvalue_index": i,
+                    "pair_member": members[e["mode"]],
+                    "system_stable": pt["stable"],
                 }
             )
     return rows

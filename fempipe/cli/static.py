@@ -117,6 +117,11 @@ def run(args: argparse.Namespace) -> int:
             ) from exc
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
+    # solve_path reaches its first point by the gravity loading (gamma continued
+    # from 0, fempipe.static.sagged_state), whose Newton iterations are in that
+    # point's newton_iterations; the others are Newton from the previous point.
+    for i, row in enumerate(points):
+        row["includes_gravity_loading"] = i == 0
     for row, sol in zip(points, sols, strict=True):
         row["stable"] = _stable(model.with_params(sol.params), sol.q)
     result = setup.to_dict()
@@ -235,7 +240,12 @@ def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> N
         length = None if pipe is None else pipe.L
         output.record(
             write_shapes(
-                output.path("shapes.vtu"), shapes, values, parameter=parameter, length=length
+                output.path("shapes.vtu"),
+                shapes,
+                values,
+                parameter=parameter,
+                length=length,
+                params={k: x for k, x in p.items() if isinstance(x, (int, float))},
             )
         )
     finally:

@@ -1,0 +1,253 @@
+"""The command line at its edges: output paths, partial writes, cut ranges, signals, silence.
+
+In-process through ``fempipe.cli.main(argv)`` where possible; the signal
+test runs the command in a subprocess and interrupts it for real.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from fempipe.cli import main
+
+CHEAP = ["static", "--v", "0,1", "--modal", "2"]
+
+
+def run(argv, capsys):
+    code = main(argv)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def one_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+class ComputeStartedError(Exception):
+    """Raised by a stand-in solver: the command started computing."""
+
+
+@pytest.fixture
+def no_compute(monkeypatch):
+    import fempipe.static
+
+    def computed(*args, **kwargs):
+        raise ComputeStartedError
+
+    monkeypatch.setattr(fempipe.static, "solve_path", computed)
+
+
+# ---------------------------------------------------------------- --out --
+@pytest.mark.parametrize("kind", ["file", "under_file", "empty", "proc"])
+def test_unusable_out_is_refused_before_any_work(kind, tmp_path, monkeypatch, capsys, no_compute):
+    monkeypatch.chdir(tmp_path)
+    Path("f").write_text("x")
+    out = {"file": "f", "under_file": "f/sub", "empty": "", "proc": "/proc/fempipe-x/y"}[kind]
+    code, stdout, err = run([*CHEAP, "--out", out], capsys)
+    assert code == 2 and stdout == ""
+    line = one_line(err)
+    assert line.startswith("fempipe static: error: --out: ")
+    # Nothing was written into the current directory.
+    assert sorted(os.listdir()) == ["f"]
+
+
+def test_an_unwritable_out_is_found_before_computing(tmp_path, capsys, no_compute):
+    if os.geteuid() == 0:
+        pytest.skip("root may write into a read-only directory")
+    ro = tmp_path / "ro"
+    ro.mkdir(mode=0o500)
+    code, _, err = run([*CHEAP, "--out", str(ro / "x")], capsys)
+    assert code == 2 and "--out" in one_line(err)
+
+
+def test_a_clash_in_out_writes_no_file_of_the_run(tmp_path, capsys):
+    """A directory where a result file goes: exit 2, one line, and no other file appears."""
+    out = tmp_path / "o"
+    (out / "shapes.png").mkdir(parents=True)
+    code, _, err = run([*CHEAP, "--out", str(out)], capsys)
+    assert code == 2
+    assert "--out" in one_line(err) and "shapes.png" in err
+    assert sorted(p.name for p in out.iterdir()) == ["shapes.png"]
+
+
+def test_a_write_that_fails_part_way_leaves_the_directory_as_it_was(tmp_path, monkeypatch, capsys):
+    import fempipe.io
+
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "static.json").write_text("old")
+    real = fempipe.io.write_figure
+
+    def disk_full(path, fig, **kw):
+        real(path, fig, **kw)
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(fempipe.io, "write_figure", disk_full)
+    code, _, err = run([*CHEAP, "--out", str(out)], capsys)
+    assert code == 1
+    assert "No space left on device" in one_line(err)
+    # The old file is untouched, no new file and no staging directory is left.
+    assert [p.name for p in out.iterdir()] == ["static.json"]
+    assert (out / "static.json").read_text() == "old"
+
+
+# ------------------------------------------------------------- critical --
+def _short_budget(monkeypatch, seen: dict, cap: int | None):
+    import fempipe.stability
+
+    real = fempipe.stability.stability_analysis
+
+    def analysis(model, **kw):
+        seen.update(kw)
+        if cap is not None:
+            kw["max_steps"] = cap
+        return real(model, **kw)
+
+    monkeypatch.setattr(fempipe.stability, "stability_analysis", analysis)
+
+
+def test_critical_step_budget_follows_the_range(monkeypatch, capsys):
+    seen: dict = {}
+    _short_budget(monkeypatch, seen, cap=40)
+    argv = ["critical", "--modal", "2", "--v", "0,2", "--ds-max", "0.0005", "--no-branches"]
+    code, out, err = run([*argv, "--json"], capsys)
+    # The budget given to the library covers the range at --ds-max ...
+    assert seen["max_steps"] * seen["ds_max"] >= 2.0
+    # ... and a range that was not covered (here: budget cut to 40 steps) is
+    # a warning and exit 1, not a silent exit 0.
+    assert code == 1
+    line = one_line(err)
+    assert "warning" in line and "--allow-partial" in line
+    assert '"end_reason": "max_steps"' in out
+
+
+def test_critical_allow_partial_accepts_a_cut_range(monkeypatch, capsys):
+    _short_budget(monkeypatch, {}, cap=40)
+    argv = ["critical", "--modal", "2", "--v", "0,2", "--ds-max", "0.0005", "--no-branches"]
+    code, _, err = run([*argv, "--allow-partial", "--quiet"], capsys)
+    assert code == 0
+    assert "ran out of continuation steps" in one_line(err)
+
+
+# -------------------------------------------------------------- signals --
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_real_signal_ends_a_running_command_with_one_line(signum, code, tmp_path):
+    """A real SIGINT/SIGTERM during a two-worker map: one line, 130/143, --out untouched."""
+    out = tmp_path / "o"
+    cmd = [
+        sys.executable,
+        "-m",
+        "fempipe",
+        "stability-map",
+        "--alphas",
+        "0:pi:40",
+        "--workers",
+        "2",
+        "--out",
+        str(out),
+        "--quiet",
+    ]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(6.0)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code, err
+    line = one_line(err)
+    assert line.startswith("fempipe stability-map: interrupted by ")
+    assert not out.exists() or list(out.iterdir()) == []
+
+
+# ------------------------------------------------------------- progress --
+def test_progress_lines_outside_a_terminal(monkeypatch, capsys):
+    """stderr is not a terminal under pytest: plain progress lines, not silence."""
+    import fempipe.cli.reporting
+
+    monkeypatch.setattr(fempipe.cli.reporting, "LOG_INTERVAL", 0.0, raising=False)
+    code, _, err = run(["static", "--v", "0:1:3", "--modal", "2"], capsys)
+    assert code == 0
+    lines = [s for s in err.splitlines() if s.startswith("fempipe: static (v): ")]
+    assert [s.split(": ")[2].split()[0] for s in lines] == ["1/3", "2/3", "3/3"]
+    # --quiet silences them.
+    code, _, err = run(["static", "--v", "0:1:3", "--modal", "2", "--quiet"], capsys)
+    assert code == 0 and err == ""
+
+
+# ------------------------------------------------------------- messages --
+@pytest.mark.parametrize(
+    "argv, start",
+    [
+        (["static", "--bogus"], "fempipe static: error: --bogus: "),
+        (["critical", "--v", "0,1", "--frobnicate", "3"], "fempipe critical: error: --frobnicate"),
+        (["static", "--g", "9.8", "--v", "0,1"], "fempipe static: error: --g: "),
+        (["static", "--fe", "P3:4", "--modal", "3"], "fempipe static: error: --modal: "),
+    ],
+)
+def test_every_error_has_the_one_form(argv, start, capsys, no_compute):
+    code, out, err = run(argv, capsys)
+    assert code == 2 and out == ""
+    assert one_line(err).startswith(start), err
+
+
+# ------------------------------------------------------ documented facts --
+def test_validate_does_not_write_into_the_committed_report_by_default():
+    from fempipe.cli import build_parser
+    from fempipe.cli.validate import DEFAULT_OUT
+
+    args = build_parser().parse_args(["validate"])
+    assert args.out is None
+    assert Path(DEFAULT_OUT).parts[:2] != ("validation", "report")
+    # ... and the default folder is ignored by git.
+    root = Path(__file__).resolve().parents[1]
+    res = subprocess.run(
+        ["git", "check-ignore", "-q", str(root / DEFAULT_OUT / "REPORT.md")], cwd=root
+    )
+    assert res.returncode == 0
+
+
+def test_readme_example_output_folders_are_ignored_by_git():
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text(encoding="utf-8")
+    found = re.findall(r"--out ([a-z][\w.-]*(?:/[\w.-]+)*)/?(?=[\s`]|$)", readme)
+    folders = set(found) - {"validation/report"}
+    assert folders
+    for folder in sorted(folders):
+        res = subprocess.run(["git", "check-ignore", "-q", f"{folder}/x.json"], cwd=root)
+        assert res.returncode == 0, folder
+
+
+def test_bench_prints_nested_results_as_lines_not_a_python_dict(capsys):
+    from fempipe.cli.bench import _print
+
+    _print(
+        {
+            "environment": {"python": "3"},
+            "quick": True,
+            "benchmarks": {"fig07": {"wall_time": 1.5, "v_cr": {"P3:8": 1.25, "modal:4": 1.5}}},
+        }
+    )
+    out = capsys.readouterr().out
+    assert "{" not in out and "}" not in out
+    assert "P3:8: 1.25" in out
+
+
+def test_static_json_says_which_point_includes_the_gravity_loading(capsys):
+    import json
+
+    code, out, _ = run([*CHEAP, "--json"], capsys)
+    assert code == 0
+    points = json.loads(out)["points"]
+    assert [p["includes_gravity_loading"] for p in points] == [True, False]
+    assert all("newton_iterations" in p for p in points)
