@@ -357,7 +357,7 @@ def test_report_findings_first_and_truncations_in_one_table(tmp_path):
     # the real finding is numbered, the truncation checks are one table row
     assert "1. **Fig. 0** (fake): “v_cr falls as α grows”" in findings
     assert "2. " not in findings
-    assert "| Fig. 0 | the converged period | 0.03 ⚠️ | 0.01 | 0.02 |" in findings
+    assert "| Fig. 0 | the converged period | 0.03 ⚠️ | 0.01 | t |" in findings
     # statements not checked are said so, and counted nowhere
     assert "Not checked" in text and "an experiment" in text
     # every figure embedded, with its caption; a long table goes to a linked CSV

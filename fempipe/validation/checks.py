@@ -85,6 +85,8 @@ class Check:
 
 def format_cell(x: Any) -> str:
     """A value as a Markdown table cell: floats to 8 significant digits, ``|`` escaped."""
+    if isinstance(x, (bool, np.bool_)):
+        return "true" if x else "false"
     if isinstance(x, (float, np.floating)):
         return f"{float(x):.8g}"
     return str(x).replace("|", "\\|").replace("\n", " ")
@@ -128,7 +130,11 @@ def below(
     source: str,
     category: str = "numerics",
 ) -> Check:
-    """``measured <= limit`` (an error, a drift, a difference)."""
+    """``measured <= limit`` (an error, a drift, a difference).
+
+    The reference is the limit itself, a number (the relation is in the
+    tolerance text), so that ``results.json`` carries it as a number.
+    """
     measured = float(measured)
     return Check(
         name,
@@ -136,7 +142,7 @@ def below(
         category,
         bool(measured <= limit),
         measured,
-        f"≤ {limit:.3g}",
+        float(limit),
         f"≤ {limit:.3g}; {why}",
         source,
     )
@@ -148,7 +154,7 @@ def holds(
     ok: bool,
     measured: Any,
     *,
-    reference: Any = "true",
+    reference: Any = True,
     why: str = "qualitative statement",
     source: str,
     category: str = "paper",

@@ -60,7 +60,7 @@ def _findings(suite: SuiteResult) -> list[str]:
             m = _truncation(c)
             if m is not None:
                 key = (o.result.figure, f"{m['pre']}{m['what']}")
-                row = rows.setdefault(key, {"tolerance": format_cell(c.reference)})
+                row = rows.setdefault(key, {"tolerance": format_cell(c.tolerance.split(";")[0])})
                 row[m["n"]] = format_cell(c.measured) + ("" if c.passed else " ⚠️")
                 continue
             if c.category == "paper" and not c.passed and c.name not in o.result.explained:
