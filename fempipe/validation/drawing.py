@@ -17,6 +17,7 @@ __all__ = [
     "LINESTYLES",
     "color_for",
     "discretization_legend",
+    "legend_columns",
     "draw_diagram",
     "draw_orbit_shapes",
     "draw_shapes",
@@ -32,6 +33,18 @@ LINESTYLES = {"FE": "-", "N = 3": "--", "N = 4": ":", "N = 2": "-."}
 DISC_COLORS = {"FE": "k", "N = 3": "#D55E00", "N = 4": "#0072B2", "N = 2": "#009E73"}
 
 
+def legend_columns(fig, handles) -> int:
+    """Columns of a legend below the panels that fit the figure's width.
+
+    About 2.1 inches per entry at 9 pt: the longest labels used here
+    ("FE P3:32, P3:64 (converged)") take two columns' room only on the
+    widest figures.
+    """
+    longest = max((len(h.get_label()) for h in handles), default=1)
+    per_entry = 0.75 + 0.075 * longest  # inches: handle, gap, ~0.075 in per character at 9 pt
+    return max(1, min(len(handles), int(fig.get_figwidth() // per_entry)))
+
+
 def color_for(label: str) -> str:
     """Colour by discretisation label (FE black, N = 3 vermilion, N = 4 blue)."""
     return DISC_COLORS["FE" if label.startswith("FE") else label]
@@ -44,7 +57,9 @@ def discretization_legend(fig, labels) -> None:
     handles = [
         Line2D([], [], ls=style_for(lb), color=color_for(lb), lw=1.4, label=lb) for lb in labels
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=9)
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=legend_columns(fig, handles), fontsize=9
+    )
 
 
 def style_for(label: str) -> str:
@@ -195,7 +210,9 @@ def _shape_legend(fig, panels) -> None:
         handles.append(
             Line2D([], [], color=UNSTABLE_COLOR, lw=2, label="grey: linearly unstable state")
         )
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=legend_columns(fig, handles), fontsize=9
+    )
 
 
 def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):

@@ -178,7 +178,7 @@ def plot(result: CaseResult, fig=None):
     from matplotlib.lines import Line2D
 
     from ..plotting.stability import direction_arrow, mode_color
-    from .drawing import finish_figure, new_figure, style_for
+    from .drawing import finish_figure, legend_columns, new_figure, style_for
 
     loci = result.data["loci"]
     top = result.data.get("top_modes", {})
@@ -218,7 +218,9 @@ def plot(result: CaseResult, fig=None):
     handles.append(Line2D([], [], ls="", marker=".", color="k", ms=6, label="v = 0, 2, 4, ..."))
     if has_pi:
         _growth_panel(axes[len(loci)], loci["π"], mode_color, style_for)
-    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 5), fontsize=9)
+    fig.legend(
+        handles=handles, loc="outside lower center", ncols=legend_columns(fig, handles), fontsize=9
+    )
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig
 
