@@ -165,6 +165,47 @@ def tip_rows(disc, alpha: float, t, q, qdot, output_dt: float | None = None) -> 
     return [{k: float(cols[k][i]) for k in TIP_COLUMNS} for i in range(t.size)]
 
 
+#: The cost check of a long integration (see :func:`_cost_check`): after
+#: ``PROJECT_AFTER`` s of CPU time in the integration, the CPU time to reach
+#: ``--t-max`` is projected from the progress so far; above ``CPU_LIMIT`` s
+#: the run is refused (exit 2) unless ``--allow-large``.  CPU time, not wall
+#: time, so that a busy machine does not change the verdict.
+PROJECT_AFTER = 10.0
+CPU_LIMIT = 900.0
+
+
+def _cost_check(v: float, t_max: float, allow: bool):
+    """A callback ``(tau, cpu_seconds)`` that refuses a run projected to take over ``CPU_LIMIT``.
+
+    Why: at high flow the motion is fast and of large amplitude, and the
+    error-controlled step follows it: at v = 20 (alpha = 0, paper's case,
+    P3:16) the integrator takes about 900 steps per unit tau (about 160 per
+    oscillation of period ~0.17, with a Jacobian at most steps and 5 % of the
+    steps halved after a Newton failure) for about 4 CPU-s per unit tau, so the
+    default ``--t-max 300`` means 20 CPU-minutes.  A coarser mesh does not
+    help (P3:8 needs the same steps: the step follows the motion, not the
+    mesh).  The check is made once, from a measurement, so that a run which
+    finds its attractor early is never refused.
+    """
+    done = [False]
+
+    def check(t: float, elapsed: float) -> None:
+        if done[0] or allow or elapsed < PROJECT_AFTER or t <= 0:
+            return
+        done[0] = True
+        projected = elapsed * t_max / t
+        if projected > CPU_LIMIT:
+            raise CLIError(
+                "--t-max",
+                f"at v = {v:g} the integration reached tau = {t:.3g} in {elapsed:.0f} s of CPU; "
+                f"reaching --t-max {t_max:g} would take about {projected / 60:.0f} CPU-minutes "
+                f"(the step follows the fast large-amplitude motion); give a smaller --t-max, "
+                "--modal N, or --allow-large to run it",
+            )
+
+    return check
+
+
 def _mode(text: str) -> int:
     """``--mode``: a sine mode number >= 1."""
     try:
@@ -205,10 +246,14 @@ def run(args: argparse.Namespace) -> int:
     q_s = solve_static(model).q
     q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
     t_start = time.perf_counter()
+    cpu_start = time.process_time()
     with reporting.progress(args, 100, f"simulate v={params.v:g}") as bar:
         last = [0]
 
+        cost = _cost_check(params.v, t_max, parsing.allow_large(args))
+
         def on_time(t):
+            cost(t, time.process_time() - cpu_start)
             k = min(100, int(100 * t / t_max))
             if k > last[0]:
                 bar.update(k - last[0])
