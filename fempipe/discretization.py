@@ -33,7 +33,7 @@ import scipy.sparse as sp
 
 from .quadrature import LineQuadrature
 
-__all__ = ["Discretization", "FiniteElement", "Modal", "parse_discretization"]
+__all__ = ["Discretization", "FiniteElement", "Modal", "parse_discretization", "parse_fe_spec"]
 
 
 @runtime_checkable
@@ -264,6 +264,31 @@ class Modal:
 _FE_RE = re.compile(r"^[Pp](\d+)\s*:\s*(\d+)$")
 
 
+def parse_fe_spec(text: str) -> tuple[int, int]:
+    """``(degree, n_elements)`` of a finite-element spelling ``Pk:n`` (e.g. ``"P3:16"``).
+
+    Checked without building the mesh (the command line uses it to count the
+    unknowns k n before any work).
+
+    Raises
+    ------
+    ValueError
+        With a message naming ``--fe`` and the allowed form.
+    """
+    m = _FE_RE.match(str(text).strip())
+    if not m:
+        raise ValueError(
+            f"--fe expects Pk:n with degree k in 1..10 and n >= 1 elements (e.g. P2:16), "
+            f"got {text!r}"
+        )
+    degree, n_el = int(m.group(1)), int(m.group(2))
+    if not 1 <= degree <= 10:
+        raise ValueError(f"--fe element degree must be 1..10, got P{degree}")
+    if n_el < 1:
+        raise ValueError(f"--fe number of elements must be >= 1, got {n_el}")
+    return degree, n_el
+
+
 def parse_discretization(fe: str | None = None, modal: int | str | None = None):
     """Build a discretisation from the CLI spellings ``--fe P2:16`` / ``--modal 4``.
 
@@ -282,16 +307,7 @@ def parse_discretization(fe: str | None = None, modal: int | str | None = None):
         if n < 1:
             raise ValueError(f"--modal expects a number of modes >= 1, got {n}")
         return Modal(n)
-    m = _FE_RE.match(str(fe if fe is not None else DEFAULT_FE).strip())
-    if not m:
-        raise ValueError(
-            f"--fe expects Pk:n with degree k in 1..10 and n >= 1 elements (e.g. P2:16), got {fe!r}"
-        )
-    degree, n_el = int(m.group(1)), int(m.group(2))
-    if not 1 <= degree <= 10:
-        raise ValueError(f"--fe element degree must be 1..10, got P{degree}")
-    if n_el < 1:
-        raise ValueError(f"--fe number of elements must be >= 1, got {n_el}")
+    degree, n_el = parse_fe_spec(fe if fe is not None else DEFAULT_FE)
     return FiniteElement(n_el, degree)
 
 

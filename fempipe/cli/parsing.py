@@ -47,7 +47,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fempipe.discretization import _FE_RE, parse_discretization
+from fempipe.discretization import parse_discretization, parse_fe_spec
 from fempipe.errors import ParamError
 from fempipe.params import PAPER_CASE, Params, PipeSI
 
@@ -435,11 +435,8 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
 
 def _fe_size(text: str) -> tuple[str, int]:
     """``(text, unknowns)`` of ``--fe Pk:n``, checked without building the mesh."""
-    m = _FE_RE.match(str(text).strip())
-    if not m or not 1 <= int(m.group(1)) <= 10 or int(m.group(2)) < 1:
-        parse_discretization(fe=text)  # raises, with the library's message
-        raise AssertionError(text)
-    return str(text), int(m.group(1)) * int(m.group(2))
+    degree, n_el = parse_fe_spec(text)  # ValueError with the library's message
+    return str(text), degree * n_el
 
 
 def _modal_size(text: str) -> tuple[str, int]:
