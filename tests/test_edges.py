@@ -299,3 +299,47 @@ def test_simulate_writes_the_tip_time_series(tmp_path, capsys):
         assert np.abs(fd - rate).max() < 1e-2 * scale, name
     # The horizontal pipe: X_g along gravity, the tip below the clamp.
     assert np.all(cols["X_tip"] > 0)
+
+
+# ------------------------------------------------------------ CSV files --
+def test_events_csv_is_sorted_by_v(tmp_path, capsys):
+    """alpha = pi: the primary branch's events and the folds of its child branches, interleaved."""
+    import csv
+
+    argv = ["critical", "--alpha", "pi", "--v", "0,6", "--modal", "3", "--out", str(tmp_path)]
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    with (tmp_path / "events.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    v = [float(r["v"]) for r in rows]
+    assert len({r["branch"] for r in rows}) > 1  # events of more than one branch
+    assert v == sorted(v)
+
+
+def test_spectrum_csv_names_the_pair_member_and_the_system_stability(tmp_path, capsys):
+    import csv
+    from collections import Counter
+
+    argv = ["spectrum", "--alpha", "pi", "--v", "0:6:4", "--modal", "3", "--out", str(tmp_path)]
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    with (tmp_path / "spectrum.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    # The old columns are kept, the new ones added.
+    assert {"v", "mode", "lambda_re", "lambda_im", "stable"} <= set(rows[0])
+    assert all(r["system_stable"] == r["stable"] for r in rows)
+    # Each mode is a pair of eigenvalues at each v: members 1 and 2, and an
+    # index that numbers the eigenvalues at each v from 0.
+    members = Counter((r["v"], r["mode"]) for r in rows)
+    assert set(members.values()) == {2}
+    for (v, mode), _ in members.items():
+        got = sorted(r["pair_member"] for r in rows if (r["v"], r["mode"]) == (v, mode))
+        assert got == ["1", "2"]
+    for v in {r["v"] for r in rows}:
+        idx = [int(r["eigenvalue_index"]) for r in rows if r["v"] == v]
+        assert idx == list(range(len(idx)))
+    # system_stable is the whole system's: False as soon as any eigenvalue has Re > 0.
+    for v in {r["v"] for r in rows}:
+        at_v = [r for r in rows if r["v"] == v]
+        unstable = any(float(r["lambda_re"]) > 0 for r in at_v)
+        assert all(r["system_stable"] == str(not unstable) for r in at_v)
