@@ -24,7 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from matplotlib.text import Text  # noqa: E402
+from matplotlib.text import Annotation, Text  # noqa: E402
 
 from fempipe.discretization import Modal  # noqa: E402
 from fempipe.operators import PipeModel  # noqa: E402
@@ -45,8 +45,9 @@ def _axis_texts(axis) -> list[Text]:
 
 
 def drawn_texts(fig) -> list[Text]:
-    """The visible, non-empty text artists of a figure, after a draw."""
+    """The visible, non-empty text artists of a figure that a draw puts on the canvas."""
     fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
     texts: list[Text] = list(fig.texts)
     if fig._suptitle is not None:
         texts.append(fig._suptitle)
@@ -61,7 +62,14 @@ def drawn_texts(fig) -> list[Text]:
         if leg is not None and leg.get_visible():
             texts += [*leg.get_texts(), leg.get_title()]
     unique = list({id(t): t for t in texts}.values())  # the suptitle is also in fig.texts
-    return [t for t in unique if t.get_visible() and t.get_text().strip()]
+    # An annotation whose point is outside its axes is not drawn (annotation_clip).
+    return [
+        t
+        for t in unique
+        if t.get_visible()
+        and t.get_text().strip()
+        and not (isinstance(t, Annotation) and not t._check_xy(renderer))
+    ]
 
 
 def text_faults(fig) -> list[str]:
@@ -307,6 +315,28 @@ def test_validation_figure_text_fits(name):
     fig = load_case(name).plot(quick_result(name))
     try:
         faults = text_faults(fig) + [f"too small: {s}" for s in small_texts(fig)]
+    finally:
+        plt.close(fig)
+    assert not faults, "\n".join(faults)
+
+
+def test_convergence_labels_of_close_truncations_do_not_overlap():
+    """convergence.png: N = 3 and N = 4 lie one dof apart with nearly equal errors."""
+    from fempipe.validation.convergence import Series, Study, draw_study
+
+    dofs = np.array([8.0, 32.0, 128.0, 512.0, 2048.0])
+    errors = 0.3 * dofs**-4.0
+    modal_dofs = np.array([2.0, 3.0, 4.0, 6.0, 8.0, 16.0, 32.0])
+    modal_errors = 0.06 * modal_dofs**-1.0
+    series = {
+        "FE P3": Series("FE P3", dofs, 1.0 + errors, errors, 4.0, (2, 3, 4), 6.0),
+        "modal": Series("modal", modal_dofs, 1.0 + modal_errors, modal_errors, 1.0, (4, 5, 6)),
+    }
+    study = Study("v_cr, α = 0°", 1.0, 1e-12, series, {3: 1.0 + 0.021, 4: 1.0 + 0.019})
+    fig, ax = plt.subplots(figsize=(4.5, 4.5), layout="constrained")
+    draw_study(study, ax=ax)
+    try:
+        faults = text_faults(fig)
     finally:
         plt.close(fig)
     assert not faults, "\n".join(faults)
