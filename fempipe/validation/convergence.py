@@ -397,6 +397,10 @@ def run(quick: bool = False) -> CaseResult:
     )
 
 
+#: Colour-blind-safe colours (Okabe & Ito) of the discretisation families.
+SERIES_COLORS = {"FE P1": "#0072B2", "FE P2": "#E69F00", "FE P3": "#009E73", "modal": "#D55E00"}
+
+
 def draw_study(study: Study, ax=None):
     """Log-log error against dofs with the observed slopes in the legend."""
     import matplotlib.pyplot as plt
@@ -410,6 +414,7 @@ def draw_study(study: Study, ax=None):
             s.dofs[ok],
             s.errors[ok],
             markers.get(label, ".-"),
+            color=SERIES_COLORS.get(label),
             ms=4,
             label=f"{label}: p = {s.order:.2f}"
             + (f" (theory {s.expected:g})" if s.expected else ""),
@@ -453,14 +458,21 @@ def draw_orders(studies: Sequence[Study], ax=None):
     vc = [s for s in studies if s.quantity.startswith("v_cr")]
     alphas = [float(s.quantity.split("=")[1].strip().rstrip("°")) for s in vc]
     for label, mk in (("FE P1", "o-"), ("FE P2", "s-"), ("FE P3", "^-"), ("modal", "d--")):
-        ax.plot(alphas, [s.series[label].order for s in vc], mk, ms=4, label=label)
+        ax.plot(
+            alphas,
+            [s.series[label].order for s in vc],
+            mk,
+            color=SERIES_COLORS[label],
+            ms=4,
+            label=label,
+        )
     for p in (2, 4, 6):
         ax.axhline(p, color="0.6", lw=0.8, ls=":")
     ax.set_xlabel("α (degrees)")
     ax.set_ylabel("observed order p")
     ax.set_title("v_cr: observed orders against α (theory 2, 4, 6)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
+    ax.legend(fontsize=9, loc="center right")
     return ax
 
 
