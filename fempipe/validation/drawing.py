@@ -263,5 +263,6 @@ def draw_orbit_shapes(ax, shapes: dict):
     ax.set_xlabel(r"$Z_g$ ($/L$)")
     ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
+    # Below the axes: the bundles fill the frame wherever a legend would go.
+    ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2)
     return ax

@@ -227,7 +227,7 @@ def plot(result: CaseResult, fig=None):
         strict=True,
     ):
         draw_diagram(ax, d["sweeps"], key, lab)
-        ax.set_title("α = 0, tip extrema", fontsize=9)
+        ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])
     axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)
     from .drawing import finish_figure
