@@ -366,3 +366,5 @@ def test_report_findings_first_and_truncations_in_one_table(tmp_path):
     assert "[fake_table1.csv](fake_table1.csv)" in text
     rows = (tmp_path / "fake_table1.csv").read_text().splitlines()
     assert rows[0] == "i" and len(rows) == 101
+    # a source cited by three checks is defined once and cited by its label
+    assert "- **S1**: s" in text and text.count("[S1](#sources)") == 3

@@ -16,7 +16,17 @@ from .suite import SuiteResult
 __all__ = ["render_report", "write_report"]
 
 
-def _check_row(c: Check) -> str:
+def _source_labels(suite: SuiteResult) -> dict[str, str]:
+    """Sources cited by three or more checks, each defined once as [S1], [S2], ..."""
+    count: dict[str, int] = {}
+    for _, c in suite.checks():
+        count[c.source] = count.get(c.source, 0) + 1
+    repeated = [src for src, n in count.items() if n >= 3]
+    return {src: f"S{k}" for k, src in enumerate(repeated, start=1)}
+
+
+def _check_row(c: Check, sources: dict[str, str] | None = None) -> str:
+    """One check as a table row; a repeated source is cited by its label."""
     mark = "✅ pass" if c.passed else ("❌ FAIL" if c.category == "numerics" else "⚠️ differs")
     cells = [
         mark,
@@ -25,7 +35,7 @@ def _check_row(c: Check) -> str:
         format_cell(c.measured),
         format_cell(c.reference),
         c.tolerance,
-        c.source,
+        f"[{sources[c.source]}](#sources)" if sources and c.source in sources else c.source,
     ]
     return "| " + " | ".join(format_cell(x) for x in cells) + " |"
 
@@ -79,7 +89,7 @@ def _findings(suite: SuiteResult) -> list[str]:
             "### The paper's truncations against the converged finite elements",
             "",
             "Largest difference between the paper's Galerkin method (N = 3, N = 4 sine modes) "
-            "and the converged FE solution, per quantity (lengths in units of L, periods "
+            "and the converged FE solution, per quantity (lengths in units of L, in mm for Fig. 2(b); periods "
             f"relative); ⚠️ marks the {over} entries larger than the tolerance, the resolution "
             "at which the paper's figure can be read.",
             "",
@@ -201,6 +211,16 @@ def render_report(
             f"- {n}: {c.claim}: measured {format_cell(c.measured)}; {c.tolerance}"
             for n, c in failed
         ]
+    sources = _source_labels(suite)
+    if sources:
+        lines += [
+            "",
+            '<a id="sources"></a>',
+            "",
+            "### Sources cited by several checks",
+            "",
+            *[f"- **{label}**: {src}" for src, label in sources.items()],
+        ]
     # Per case.
     for o in suite.outcomes:
         lines += ["", f'<a id="{o.name}"></a>', ""]
@@ -228,7 +248,7 @@ def render_report(
             "",
             "| result | category | check | measured | reference | tolerance (why) | source |",
             "|---|---|---|---|---|---|---|",
-            *[_check_row(c) for c in r.checks],
+            *[_check_row(c, sources) for c in r.checks],
         ]
         for k, t in enumerate(r.tables, start=1):
             lines += _table(t, o.name, k, tables_path)
