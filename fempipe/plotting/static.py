@@ -58,7 +58,7 @@ def plot_shapes(
     si_length : float, optional
         Pipe length L in m: coordinates are then shown in mm.
     alpha : float or sequence of float, optional
-        Inclination(s), rad, for the dashed undeformed pipe and the clamp;
+        Inclination(s), rad, for the dotted undeformed pipe and the clamp;
         inferred from the first segment of each shape if None.
     max_labels : int
         At most this many legend entries (every k-th curve is labelled).
@@ -102,9 +102,9 @@ def plot_shapes(
         ax.plot(
             [0.0, tz * scale],
             [0.0, tx * scale],
-            ls="--",
-            color="0.6",
-            lw=1.0,
+            ls=":",
+            color="k",
+            lw=0.9,
             label="undeformed" if k == 0 else None,
             zorder=1,
         )
