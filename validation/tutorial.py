@@ -392,15 +392,19 @@ if __name__ == "__main__":
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(5.5, 4.2))
-    for (label, (d, e, p)), style in zip(results.items(), ["o-", "s-", "^-", "d--"], strict=True):
-        ax.loglog(d, e, style, ms=4, label=f"{label}: slope {p:.2f}")
+    from fempipe.validation.convergence import SERIES_COLORS
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.2), layout="constrained")
+    colors = list(SERIES_COLORS.values())
+    for (label, (d, e, p)), style, c in zip(
+        results.items(), ["o-", "s-", "^-", "d--"], colors, strict=True
+    ):
+        ax.loglog(d, e, style, color=c, ms=4, label=f"{label}: slope {p:.2f}")
     ax.set_xlabel("unknowns (degrees of freedom)")
     ax.set_ylabel(r"|error of tip drop $X_g(1)$| (units of $L$)")
-    ax.set_title("Texier-Dorbolo pipe, U = 2 m/s: convergence", fontsize=9)
+    ax.set_title("Texier-Dorbolo pipe, U = 2 m/s: convergence", fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    ax.legend(fontsize=9)
     out = Path(args.out) / "tutorial_convergence.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
