@@ -63,20 +63,27 @@ class StaticSolution:
     q : ndarray, shape (n,)
     params : Params
     iterations : int
-        Newton iterations used.
+        Newton iterations used, all of them: for a state reached by gravity
+        loading (:func:`fempipe.static.sagged_state`) those of the loading
+        included.
     residual_norm : float
         Euclidean norm of R(q, 0, 0) at return.
+    loading_iterations : int
+        The part of ``iterations`` spent on the gravity loading (the
+        continuation in gamma from 0); 0 for Newton from a neighbouring state.
     """
 
     q: np.ndarray
     params: Params
     iterations: int
     residual_norm: float
+    loading_iterations: int = 0
 
     def to_dict(self) -> dict:
         return {
             "params": self.params.to_dict(),
             "newton_iterations": self.iterations,
+            "gravity_loading_iterations": self.loading_iterations,
             "residual_norm": self.residual_norm,
         }
 

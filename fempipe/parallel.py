@@ -108,7 +108,9 @@ def interruptible() -> Iterator[None]:
     message is printed).  Inside it the signal unwinds the stack like Ctrl-C:
     :func:`run_tasks` terminates its workers on the way, ``finally`` blocks
     and context managers run.  A second signal while the first one unwinds is
-    ignored.  The previous handlers are restored on exit.
+    ignored.  A signal inherited as ignored (``SIG_IGN``: ``nohup``, a
+    background job of a script) stays ignored.  The previous handlers are
+    restored on exit.
 
     Signal handlers can only be installed in the main thread; elsewhere this
     context manager does nothing (signals are delivered to the main thread).
@@ -130,7 +132,13 @@ def interruptible() -> Iterator[None]:
         fired = True
         raise Interrupted(signum)
 
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    # A signal the process inherited as ignored (SIGINT of a job started with
+    # `&` from a non-interactive shell, nohup) stays ignored.
+    previous = {
+        s: signal.signal(s, handler)
+        for s in (signal.SIGINT, signal.SIGTERM)
+        if signal.getsignal(s) is not signal.SIG_IGN
+    }
     try:
         yield
     finally:

@@ -101,7 +101,7 @@ def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
     sol = solve_static(model, q0=q, tol=tol)
     # Report the Newton work of the whole gravity loading, not of the last polish.
     loading = sum(pt.iterations for pt in branch.points)
-    return replace(sol, iterations=sol.iterations + loading)
+    return replace(sol, iterations=sol.iterations + loading, loading_iterations=loading)
 
 
 def _loaded_plausible(model: PipeModel, q: np.ndarray) -> bool:

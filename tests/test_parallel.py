@@ -269,3 +269,23 @@ def test_plain_sigterm_leaves_no_workers(tmp_path):
     rc, _, gone = _signal_parent(tmp_path, signal.SIGTERM)
     assert gone is not None and gone < GRACE
     assert rc == -signal.SIGTERM
+
+
+def test_an_inherited_ignored_sigint_stays_ignored():
+    """A background job started from a script inherits SIGINT as SIG_IGN; keep it so."""
+    script = textwrap.dedent(
+        """
+        import os, signal, time
+        from fempipe.parallel import interruptible
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        with interruptible():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.2)
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        print("survived")
+        """
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "survived"

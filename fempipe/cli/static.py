@@ -120,8 +120,8 @@ def run(args: argparse.Namespace) -> int:
     # solve_path reaches its first point by the gravity loading (gamma continued
     # from 0, fempipe.static.sagged_state), whose Newton iterations are in that
     # point's newton_iterations; the others are Newton from the previous point.
-    for i, row in enumerate(points):
-        row["includes_gravity_loading"] = i == 0
+    for row, sol in zip(points, sols, strict=True):
+        row["includes_gravity_loading"] = sol.loading_iterations > 0
     for row, sol in zip(points, sols, strict=True):
         row["stable"] = _stable(model.with_params(sol.params), sol.q)
     result = setup.to_dict()
@@ -179,6 +179,7 @@ def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
     # whose tip sits at X_g = cos(alpha): positive = the tip moved down.
     row["tip_drop"] = tip["X_tip"] - math.cos(p.alpha)
     row["newton_iterations"] = sol.iterations
+    row["gravity_loading_iterations"] = sol.loading_iterations
     row["residual_norm"] = sol.residual_norm
     if pipe is not None:
         L = pipe.L

@@ -347,13 +347,17 @@ class _BranchAnalysis:
             if not unstable and -1 not in states:
                 continue  # on the imaginary axis to round-off (undamped): nothing to refine
             r = np.array([lam.real for lam in lams])
-            c = np.polyfit(x, r, 2)
+            # The parabola through the three samples, in t = (v - v_m)/h so that
+            # the Vandermonde system stays well conditioned for close samples.
+            h = 0.5 * (x.max() - x.min())
+            c = np.polyfit((x - x[1]) / h, r, 2)
             if c[0] == 0 or (c[0] < 0) == unstable:
                 continue  # the extremum points away from zero
-            vx = -c[1] / (2 * c[0])
+            tx = -c[1] / (2 * c[0])
+            vx = x[1] + h * tx
             if not x.min() < vx < x.max():
                 continue
-            ext, spread = np.polyval(c, vx), abs(r[1] - r[0]) + abs(r[2] - r[1])
+            ext, spread = np.polyval(c, tx), abs(r[1] - r[0]) + abs(r[2] - r[1])
             if (not unstable and ext < -0.5 * spread) or (unstable and ext > 0.5 * spread):
                 continue
             sgn = -1.0 if unstable else 1.0
