@@ -141,7 +141,7 @@ def plot_oscillating_shapes(
     ax.set_xlim(-1.1, 1.1)
     ax.set_ylim(1.1, -1.1)  # X_g points along gravity: down the page
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
+    ax.legend(fontsize=9, loc="best", framealpha=0.9)
     if title:
         ax.set_title(title)
     return ax
