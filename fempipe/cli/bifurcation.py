@@ -42,27 +42,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="several inclinations swept independently (alpha spellings, e.g. 0,pi/4,pi/2); "
         "overrides --alpha",
     )
-    num = parsing.number_type
-    g.add_argument(
-        "--t-max",
-        metavar="T",
-        type=num("--t-max", 0.0, strict_low=True),
-        default="300",
-        help=f"longest integration per point (300; above {parsing.T_MAX:g} needs --allow-large)",
-    )
-    g.add_argument(
-        "--rtol",
-        metavar="TOL",
-        type=num("--rtol", 0.0, 0.1, strict_low=True),
-        default="1e-5",
-        help="transient tolerance (1e-5)",
-    )
-    g.add_argument(
-        "--shoot-rtol",
-        metavar="TOL",
-        type=num("--shoot-rtol", 0.0, 0.1, strict_low=True),
-        default="1e-6",
-        help="shooting tolerance; the tip extrema are accurate to ~1e-7 at 1e-6 (1e-6)",
+    common.add_integration_arguments(
+        parser,
+        shoot_rtol="1e-6",
+        shoot_help="shooting tolerance; the tip extrema are accurate to ~1e-7 at 1e-6",
+        group=g,
+        per="per point",
     )
     par = parser.add_argument_group("parallel")
     ex = par.add_mutually_exclusive_group()

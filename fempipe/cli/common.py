@@ -233,6 +233,45 @@ def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_integration_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    shoot_rtol: str,
+    shoot_help: str,
+    group=None,
+    per: str = "in tau",
+):
+    """``--t-max``, ``--rtol``, ``--shoot-rtol``: the time integration of ``simulate`` and ``bifurcation``.
+
+    Returns the argument group (``group`` if given, else a new "time
+    integration" group) so that a subcommand can add its own options to it.
+    """
+    g = group if group is not None else parser.add_argument_group("time integration")
+    num = number_type
+    g.add_argument(
+        "--t-max",
+        metavar="T",
+        type=num("--t-max", 0.0, strict_low=True),
+        default="300",
+        help=f"longest integration {per} (300; above {T_MAX:g} needs --allow-large)",
+    )
+    g.add_argument(
+        "--rtol",
+        metavar="TOL",
+        type=num("--rtol", 0.0, 0.1, strict_low=True),
+        default="1e-5",
+        help="tolerance of the transient (1e-5)",
+    )
+    g.add_argument(
+        "--shoot-rtol",
+        metavar="TOL",
+        type=num("--shoot-rtol", 0.0, 0.1, strict_low=True),
+        default=shoot_rtol,
+        help=f"{shoot_help} ({shoot_rtol})",
+    )
+    return g
+
+
 def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None = None) -> None:
     """``--json``, ``--out DIR`` and ``--quiet`` / ``--progress``.
 

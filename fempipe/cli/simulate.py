@@ -34,29 +34,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_physical_arguments(parser)
     common.add_flow_arguments(parser, default="10")
     common.add_discretization_arguments(parser)
-    g = parser.add_argument_group("time integration")
+    g = common.add_integration_arguments(
+        parser,
+        shoot_rtol="1e-7",
+        shoot_help="integration tolerance of the shooting; sets the accuracy of the cycle",
+    )
     num = parsing.number_type
-    g.add_argument(
-        "--t-max",
-        metavar="T",
-        type=num("--t-max", 0.0, strict_low=True),
-        default="300",
-        help=f"longest integration in tau (300; above {parsing.T_MAX:g} needs --allow-large)",
-    )
-    g.add_argument(
-        "--rtol",
-        metavar="TOL",
-        type=num("--rtol", 0.0, 0.1, strict_low=True),
-        default="1e-5",
-        help="tolerance of the transient (1e-5)",
-    )
-    g.add_argument(
-        "--shoot-rtol",
-        metavar="TOL",
-        type=num("--shoot-rtol", 0.0, 0.1, strict_low=True),
-        default="1e-7",
-        help="integration tolerance of the shooting; sets the accuracy of the cycle (1e-7)",
-    )
     g.add_argument(
         "--mode",
         metavar="R",
