@@ -188,7 +188,7 @@ def _trajectory():
 
     model = _model(0.0, v=10.0)
     q0, qd0 = initial_state(model, q_static=sagged_state(model).q)
-    traj = simulate(model, q0, qd0, 12.0, n_out=400)
+    traj = simulate(model, q0, qd0, 2.0, n_out=400)
     return model, traj
 
 
@@ -303,20 +303,31 @@ def test_animation_loops_without_a_repeated_frame():
 def _validation_cases():
     from test_validation import CHEAP
 
-    return CHEAP
+    from fempipe.validation import CASES
+
+    # The quick Figs. 7 and 8-10 take about 40 s each: with the slow tests.
+    slow = [pytest.param(n, marks=pytest.mark.slow) for n in CASES if n not in CHEAP]
+    return [*CHEAP, *slow]
 
 
 @pytest.mark.parametrize("name", _validation_cases())
 def test_validation_figure_text_fits(name):
+    """Every figure of a case (Figs. 8-10: three), text >= 9 pt, nothing cut or overlapping."""
     from test_validation import quick_result
 
     from fempipe.validation import load_case
 
-    fig = load_case(name).plot(quick_result(name))
+    case = load_case(name)
+    result = quick_result(name)
+    figs = case.plots(result) if hasattr(case, "plots") else {name: case.plot(result)}
+    faults = []
     try:
-        faults = text_faults(fig) + [f"too small: {s}" for s in small_texts(fig)]
+        for stem, fig in figs.items():
+            faults += [f"{stem}: {f}" for f in text_faults(fig)]
+            faults += [f"{stem}: too small: {s}" for s in small_texts(fig)]
     finally:
-        plt.close(fig)
+        for fig in figs.values():
+            plt.close(fig)
     assert not faults, "\n".join(faults)
 
 
