@@ -46,6 +46,9 @@ def _axis_texts(axis) -> list[Text]:
 
 def drawn_texts(fig) -> list[Text]:
     """The visible, non-empty text artists of a figure that a draw puts on the canvas."""
+    # Twice: equal-aspect axes change their limits after the layout engine
+    # has run, so the second draw (as when saving) is the one a reader sees.
+    fig.canvas.draw()
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     texts: list[Text] = list(fig.texts)

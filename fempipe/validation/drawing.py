@@ -103,6 +103,9 @@ def finish_figure(fig, title: str):
     fig.suptitle(textwrap.fill(title, chars), fontsize=12)
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
+    # Room at the edges for half a tick label: equal-aspect panels widen their
+    # data limits after the layout is made, which can put a tick at the edge.
+    fig.get_layout_engine().set(w_pad=0.16, h_pad=0.06)
     return fig
 
 
