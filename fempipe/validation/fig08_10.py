@@ -347,14 +347,16 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
     panels = result.data["panels"]
     n = len(panels)
     shapes = which == "fig09"
+    ncols = 2 if shapes or n > 1 else 1
+    rows = n if shapes else (n + ncols - 1) // ncols
     if fig is None:
-        fig = plt.figure(figsize=(10, 3.8 * n) if shapes else (10, 3.8 * ((n + 1) // 2)))
+        fig = plt.figure(figsize=(5.0 * ncols, 3.8 * rows + 0.6))
     fig.set_layout_engine("constrained")
     if shapes:
         grid = np.atleast_2d(fig.subplots(n, 2, squeeze=False))
         diag, insets = grid[:, 0], grid[:, 1]
     else:
-        axes = list(fig.subplots((n + 1) // 2, 2, squeeze=False).ravel())
+        axes = list(fig.subplots(rows, ncols, squeeze=False).ravel())
         for ax in axes[n:]:
             ax.set_visible(False)
         diag, insets = axes[:n], [None] * n
