@@ -207,8 +207,8 @@ def plot(result: CaseResult, fig=None):
         ax.axvline(0.0, color="0.7", lw=0.8)
         ax.set_aspect("equal", adjustable="datalim")
         ax.invert_yaxis()
-        ax.set_xlabel(r"$Z_g$")
-        ax.set_ylabel(r"$X_g$ (gravity $\downarrow$)")
+        ax.set_xlabel(r"$Z_g$ ($/L$)")
+        ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
         ax.legend(fontsize=9)
         ax.grid(alpha=0.3)
     from .drawing import finish_figure
