@@ -97,7 +97,6 @@ class FiniteElement:
             BilinearForm,
             ElementLineP1,
             ElementLineP2,
-            ElementLinePp,
             MeshLine,
         )
 
@@ -125,7 +124,7 @@ class FiniteElement:
                 f"operators are exact for P{degree}, got {self.n_gauss}"
             )
         element = {1: ElementLineP1, 2: ElementLineP2}.get(degree)
-        element = element() if element is not None else ElementLinePp(degree)
+        element = element() if element is not None else _element_line_pp(degree)
         self.quad = LineQuadrature(nodes, self.n_gauss)
         self.mesh = MeshLine(nodes).with_boundaries(
             {"clamp": lambda x: x[0] == 0.0, "free_end": lambda x: x[0] == 1.0}
@@ -138,14 +137,19 @@ class FiniteElement:
         self.n_all = N_all
         self.free = self.basis.complement_dofs(self.basis.get_dofs("clamp"))
         self.n = self.free.size
-        # probes locates points by comparing each with every cell (scikit-fem's
-        # MeshLine.element_finder): O(n_q n_el) work, 0.05 s at P3:1000, 0.35 s
-        # at P3:3000; chunks keep its boolean table below 2^23 entries.
-        x, chunk = self.quad.x, max(1, 2**23 // self.n_elements)
-        Phi_all = sp.vstack(
-            [self.basis.probes(x[None, i : i + chunk]) for i in range(0, x.size, chunk)]
+        # The basis was built on the package's Gauss rule, so its shape-function
+        # values at its own quadrature points *are* Phi at the Gauss points, cell
+        # by cell in the order of LineQuadrature.x: no point location is needed
+        # (basis.probes, for arbitrary points, searches every cell for every
+        # point, O(n_q n_el)).
+        values = np.array([self.basis.basis[k][0].value for k in range(self.basis.Nbfun)])
+        n_el, n_qp = values.shape[1:]
+        rows = np.broadcast_to(np.arange(n_el * n_qp).reshape(n_el, n_qp), values.shape)
+        cols = np.broadcast_to(self.basis.element_dofs[:, :, None], values.shape)
+        Phi_all = sp.csr_matrix(
+            (values.ravel(), (rows.ravel(), cols.ravel())), shape=(n_el * n_qp, N_all)
         )
-        self.Phi = Phi_all.tocsr()[:, self.free]
+        self.Phi = Phi_all[:, self.free]
         # A Lagrange vertex dof is the value of theta there: theta(1) is the
         # dof of the free end.
         tip = np.zeros(N_all)
@@ -314,3 +318,38 @@ def parse_discretization(fe: str | None = None, modal: int | str | None = None):
 #: The default discretisation; its static tip error is below 1e-7 (see
 #: ``tests/test_static.py::test_default_discretization_accuracy``).
 DEFAULT_FE = "P3:16"
+
+
+def _element_line_pp(degree: int):
+    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points.
+
+    ``ElementLinePp`` caches its Legendre values and reuses them whenever the
+    next call has as many points along the second axis, whatever the points
+    and the array's shape: :meth:`FiniteElement.evaluate` at exactly as many
+    points as a cell has Gauss points (``basis.probes``, points shaped
+    (1, m, 1), after the assembly's (1, m)) then fails with a broadcasting
+    error (scikit-fem 12.0.2).  The subclass keys the cache by the shape and
+    the values of the points.  It is built on first use, so that importing
+    fempipe does not import scikit-fem, and found by name (module
+    ``__getattr__``) when a discretisation is unpickled in a worker process.
+    """
+    return __getattr__("_ElementLinePp")(degree)
+
+
+def __getattr__(name: str):
+    if name != "_ElementLinePp":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from skfem import ElementLinePp
+
+    class _ElementLinePp(ElementLinePp):
+        def lbasis(self, X, i):
+            key = (X.shape, X.tobytes())
+            if key != getattr(self, "_points_key", None):
+                self.P, self.dP = self._reval_legendre(X[0, :], self.p)
+                self._points_key = key
+            return self.P[i], self.dP[i]
+
+    _ElementLinePp.__module__ = __name__
+    _ElementLinePp.__qualname__ = name
+    globals()[name] = _ElementLinePp
+    return _ElementLinePp

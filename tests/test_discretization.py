@@ -101,3 +101,20 @@ def test_tip_values_closed_form_and_vectorised():
     rates = tip_velocity(disc, Q, Q / cs[:, None], alpha)
     c = cs
     np.testing.assert_allclose(rates["eta_tip"], np.sin(c) / c - (1 - np.cos(c)) / c**2, atol=1e-12)
+
+
+@pytest.mark.parametrize("n_elements", [1, 8])
+def test_evaluate_at_as_many_points_as_the_gauss_rule(n_elements):
+    """theta at m points does not depend on m, also when m equals the Gauss points of a cell.
+
+    scikit-fem's ElementLinePp reuses cached values for any call with that many
+    points (a broadcasting error before the fix); a P3 mesh of one element also
+    built its Phi that way.  The reference is the same points evaluated as
+    part of a larger array, and a cubic that P3 reproduces exactly.
+    """
+    disc = FiniteElement(n_elements, 3)
+    q = np.linalg.lstsq(disc.Phi.toarray(), disc.quad.x**3 - 3 * disc.quad.x, rcond=None)[0]
+    xs = np.linspace(0.0, 1.0, disc.n_gauss)
+    values = disc.evaluate(q, xs)
+    assert np.allclose(values, disc.evaluate(q, np.append(xs, 0.5))[:-1], atol=1e-14)
+    assert np.allclose(values, xs**3 - 3 * xs, atol=1e-12)
