@@ -9,7 +9,8 @@ Formats
 -------
 * JSON (:func:`write_json`): numpy scalars and arrays are converted, NaN/inf
   become ``null`` (strict JSON).
-* CSV (:func:`write_csv`): one row per result, a header line.
+* CSV (:func:`write_csv`, read back with :func:`read_csv`): one row per
+  result and a header line whose every cell is ``name [unit]`` (below).
 * Shapes (:func:`write_shapes`): deformed centrelines as a meshio VTU file
   (VTK XML unstructured grid): line cells, the centreline in the screen
   frame as points, theta, varsigma, eta, X_g, Z_g, xi and the continuation
@@ -28,6 +29,29 @@ opened together in ParaView overlap.  Every file has the point arrays
 :data:`SHAPE_FIELDS` (and ``theta_dot`` where the state has a velocity) and
 the time, v and the parameters as field data (:func:`write_vtu`; meshio's
 writer drops field data, so it is added to the XML here).
+
+CSV headers and units
+---------------------
+Each header cell is the column's name (the JSON key it comes from) and its
+unit in square brackets, separated by one space: ``theta_tip [rad]``,
+``X_tip [L]``, ``tau [T]``, ``U [m/s]``.  The unit of every column is stated
+once, in :data:`CSV_UNITS`; writing a column that is not there is an error.
+The units are
+
+* ``[L]``: a length divided by the pipe length L (Eq. (19));
+* ``[T]``: a time divided by the time scale T = L^2 sqrt((m + M)/EI)
+  (Eq. (19)), i.e. the dimensionless time tau; ``[1/T]``, ``[L/T]`` and
+  ``[rad/T]`` are rates per unit tau (eigenvalues lambda, Omega and their
+  frequencies; tip velocities);
+* ``[rad]``: an angle;
+* ``[1]``: any other dimensionless number (v, beta, gamma, mu, a residual
+  norm);
+* ``[m]``, ``[mm]``, ``[m/s]``: SI values (present with an SI pipe);
+* ``[-]``: not a quantity: a flag (True/False), a count, an index, a mode
+  number or a label (text).
+
+:func:`read_csv` returns the columns by their bare names, so a script reads a
+file in one line: ``fempipe.io.read_csv("out/static.csv")["X_tip"]``.
 """
 
 from __future__ import annotations
@@ -38,6 +62,7 @@ import io as _io
 import json
 import math
 import os
+import re
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -50,6 +75,9 @@ __all__ = [
     "json_dumps",
     "write_json",
     "write_csv",
+    "read_csv",
+    "csv_header",
+    "CSV_UNITS",
     "write_text",
     "write_figure",
     "write_shapes",
@@ -199,6 +227,83 @@ def write_json(path: str | os.PathLike, obj) -> Path:
     return write_text(path, json_dumps(obj) + "\n")
 
 
+#: The unit of every CSV column (module docstring, "CSV headers and units").
+CSV_UNITS: Mapping[str, str] = {
+    # flow, parameters and continuation values
+    "v": "1",
+    "alpha": "rad",
+    "beta": "1",
+    "gamma": "1",
+    "mu": "1",
+    "U": "m/s",
+    # tip of a static state (fempipe static)
+    "theta_tip": "rad",
+    "eta_tip": "L",
+    "X_tip": "L",
+    "Z_tip": "L",
+    "varsigma_tip": "L",
+    "tip_drop": "L",
+    "X_tip_m": "m",
+    "Z_tip_m": "m",
+    "eta_tip_m": "m",
+    "varsigma_tip_m": "m",
+    "tip_drop_mm": "mm",
+    "newton_iterations": "-",
+    "gravity_loading_iterations": "-",
+    "residual_norm": "1",
+    "includes_gravity_loading": "-",
+    "stable": "-",
+    # eigenvalues (fempipe spectrum): lambda and Omega = -i lambda per unit tau
+    "mode": "-",
+    "lambda_re": "1/T",
+    "lambda_im": "1/T",
+    "Omega_re": "1/T",
+    "Omega_im": "1/T",
+    "eigenvalue_index": "-",
+    "pair_member": "-",
+    "system_stable": "-",
+    # stability events (fempipe critical) and the stability map
+    "type": "-",
+    "branch": "-",
+    "frequency": "1/T",
+    "stable_before": "-",
+    "stable_after": "-",
+    "at_start": "-",
+    "eigenvalue_re": "1/T",
+    "eigenvalue_im": "1/T",
+    "v_cr": "1",
+    "v_flutter": "1",
+    "U_cr": "m/s",
+    "error": "-",
+    # the tip's time series (fempipe simulate)
+    "tau": "T",
+    "theta_tip_rate": "rad/T",
+    "eta_tip_rate": "L/T",
+    "X_tip_rate": "L/T",
+    "Z_tip_rate": "L/T",
+}
+
+_HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def csv_header(name: str) -> str:
+    """The header cell of column ``name``: ``"name [unit]"`` with the unit of :data:`CSV_UNITS`.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` has no unit in :data:`CSV_UNITS`.
+    """
+    try:
+        unit = CSV_UNITS[name]
+    except KeyError:
+        raise ValueError(
+            f"CSV column {name!r} has no unit: add it to fempipe.io.CSV_UNITS"
+        ) from None
+    return f"{name} [{unit}]"
+
+
 def write_csv(
     path: str | os.PathLike,
     rows: Sequence[Mapping],
@@ -206,23 +311,82 @@ def write_csv(
 ) -> Path:
     """Write a list of flat dicts as CSV with a header, atomically.
 
+    The header cells are :func:`csv_header` of the keys (``theta_tip [rad]``);
+    floats are written with all their digits (``repr``), ``None`` as an
+    empty cell.
+
     Parameters
     ----------
     rows : sequence of mapping
         One dict per row; missing keys give empty cells.
     columns : sequence of str, optional
         Column order (default: keys in order of first appearance).
+
+    Raises
+    ------
+    ValueError
+        If a column has no unit in :data:`CSV_UNITS` (nothing is written).
     """
     if columns is None:
         columns = []
         for row in rows:
             columns.extend(k for k in row if k not in columns)
+    header = [csv_header(k) for k in columns]
     buf = _io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(columns), extrasaction="ignore", lineterminator="\n")
-    w.writeheader()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
     for row in rows:
-        w.writerow({k: _csv_cell(row.get(k)) for k in columns})
+        w.writerow([_csv_cell(row.get(k)) for k in columns])
     return write_text(path, buf.getvalue())
+
+
+def read_csv(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """The columns of a CSV file written by :func:`write_csv`, by bare name.
+
+    Each header cell must be ``name [unit]`` (module docstring); the unit is
+    dropped, so ``read_csv(path)["X_tip"]`` is the column ``X_tip [L]``.  A
+    column of ``True``/``False`` becomes a bool array, one of integers an int
+    array, one of numbers a float array (an empty cell is NaN) and any other
+    a str array.
+
+    Raises
+    ------
+    ValueError
+        If a header cell has no unit or a name appears twice.
+
+    Examples
+    --------
+    >>> tip = read_csv("out/tip.csv")   # doctest: +SKIP
+    >>> tip["tau"], tip["X_tip"]        # doctest: +SKIP
+    """
+    with open(path, newline="", encoding="utf-8") as f:
+        table = list(csv.reader(f))
+    if not table:
+        raise ValueError(f"{path}: empty file, no header")
+    names = []
+    for cell in table[0]:
+        m = _HEADER_CELL.fullmatch(cell)
+        if m is None:
+            raise ValueError(f"{path}: header cell {cell!r} is not 'name [unit]'")
+        if m["name"] in names:
+            raise ValueError(f"{path}: column {m['name']!r} appears twice")
+        names.append(m["name"])
+    body = table[1:]
+    for i, row in enumerate(body, start=2):
+        if len(row) != len(names):
+            raise ValueError(f"{path}, line {i}: {len(row)} cells, the header has {len(names)}")
+    return {name: _csv_column([row[j] for row in body]) for j, name in enumerate(names)}
+
+
+def _csv_column(cells: list[str]) -> np.ndarray:
+    if cells and all(c in ("True", "False") for c in cells):
+        return np.array([c == "True" for c in cells], dtype=bool)
+    if cells and all(_INTEGER.fullmatch(c) for c in cells):
+        return np.array([int(c) for c in cells], dtype=int)
+    try:
+        return np.array([float(c) if c else math.nan for c in cells], dtype=float)
+    except ValueError:
+        return np.array(cells, dtype=str)
 
 
 def _csv_cell(x):

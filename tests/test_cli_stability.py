@@ -74,7 +74,7 @@ def test_spectrum_json_and_files(capsys, tmp_path):
     for name in ("spectrum.json", "spectrum.csv", "argand.png"):
         assert (tmp_path / name).stat().st_size > 0
     rows = (tmp_path / "spectrum.csv").read_text().splitlines()
-    assert rows[0].startswith("v,mode,lambda_re")
+    assert rows[0].startswith("v [1],mode [-],lambda_re [1/T]")
 
 
 def test_spectrum_table(capsys):

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 
@@ -12,6 +11,7 @@ import pytest
 from fempipe.cli import main
 from fempipe.cli.parsing import parse_alpha, parse_values
 from fempipe.discretization import DEFAULT_FE
+from fempipe.io import read_csv
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]
 L_TD = 0.094
@@ -194,12 +194,11 @@ def test_out_writes_the_four_files(td_out):
     ]
     assert td_out.joinpath("shapes.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     d = json.loads(td_out.joinpath("static.json").read_text())
-    with td_out.joinpath("static.csv").open() as f:
-        rows = list(csv.DictReader(f))
-    assert len(rows) == len(d["points"]) == 4
-    for row, p in zip(rows, d["points"], strict=True):
-        assert POINT_KEYS | SI_KEYS <= set(row)
-        assert float(row["theta_tip"]) == p["theta_tip"]  # full precision in the CSV
+    cols = read_csv(td_out / "static.csv")
+    assert POINT_KEYS | SI_KEYS <= set(cols)
+    assert len(cols["theta_tip"]) == len(d["points"]) == 4
+    for i, p in enumerate(d["points"]):
+        assert cols["theta_tip"][i] == p["theta_tip"]  # full precision in the CSV
 
 
 def test_out_shapes_read_back_with_meshio(td_out):

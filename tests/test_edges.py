@@ -277,16 +277,14 @@ def test_simulate_writes_the_tip_time_series(tmp_path, capsys):
     The rates are checked against finite differences of the positions on the
     uniform grid (independent of the analytic tip velocity).
     """
-    import csv
-
     import numpy as np
+
+    from fempipe.io import read_csv
 
     argv = ["simulate", "--v", "3", "--alpha", "pi/2", "--modal", "3", "--t-max", "4"]
     assert main([*argv, "--no-shooting", "--out", str(tmp_path), "--output-dt", "0.002"]) == 0
     capsys.readouterr()
-    with (tmp_path / "tip.csv").open() as f:
-        rows = list(csv.DictReader(f))
-    cols = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    cols = read_csv(tmp_path / "tip.csv")
     assert list(cols)[:5] == ["tau", "theta_tip", "eta_tip", "X_tip", "Z_tip"]
     tau = cols["tau"]
     np.testing.assert_allclose(np.diff(tau), 0.002, rtol=0, atol=1e-12)
@@ -304,27 +302,27 @@ def test_simulate_writes_the_tip_time_series(tmp_path, capsys):
 # ------------------------------------------------------------ CSV files --
 def test_events_csv_is_sorted_by_v(tmp_path, capsys):
     """alpha = pi: the primary branch's events and the folds of its child branches, interleaved."""
-    import csv
+    from fempipe.io import read_csv
 
     argv = ["critical", "--alpha", "pi", "--v", "0,6", "--modal", "3", "--out", str(tmp_path)]
     assert main([*argv, "--quiet"]) == 0
     capsys.readouterr()
-    with (tmp_path / "events.csv").open() as f:
-        rows = list(csv.DictReader(f))
-    v = [float(r["v"]) for r in rows]
-    assert len({r["branch"] for r in rows}) > 1  # events of more than one branch
+    cols = read_csv(tmp_path / "events.csv")
+    v = cols["v"].tolist()
+    assert len(set(cols["branch"])) > 1  # events of more than one branch
     assert v == sorted(v)
 
 
 def test_spectrum_csv_names_the_pair_member_and_the_system_stability(tmp_path, capsys):
-    import csv
     from collections import Counter
+
+    from fempipe.io import read_csv
 
     argv = ["spectrum", "--alpha", "pi", "--v", "0:6:4", "--modal", "3", "--out", str(tmp_path)]
     assert main([*argv, "--quiet"]) == 0
     capsys.readouterr()
-    with (tmp_path / "spectrum.csv").open() as f:
-        rows = list(csv.DictReader(f))
+    cols = read_csv(tmp_path / "spectrum.csv")
+    rows = [dict(zip(cols, values, strict=True)) for values in zip(*cols.values(), strict=True)]
     # The old columns are kept, the new ones added.
     assert {"v", "mode", "lambda_re", "lambda_im", "stable"} <= set(rows[0])
     assert all(r["system_stable"] == r["stable"] for r in rows)
@@ -334,7 +332,7 @@ def test_spectrum_csv_names_the_pair_member_and_the_system_stability(tmp_path, c
     assert set(members.values()) == {2}
     for (v, mode), _ in members.items():
         got = sorted(r["pair_member"] for r in rows if (r["v"], r["mode"]) == (v, mode))
-        assert got == ["1", "2"]
+        assert got == [1, 2]
     for v in {r["v"] for r in rows}:
         idx = [int(r["eigenvalue_index"]) for r in rows if r["v"] == v]
         assert idx == list(range(len(idx)))
@@ -342,4 +340,4 @@ def test_spectrum_csv_names_the_pair_member_and_the_system_stability(tmp_path, c
     for v in {r["v"] for r in rows}:
         at_v = [r for r in rows if r["v"] == v]
         unstable = any(float(r["lambda_re"]) > 0 for r in at_v)
-        assert all(r["system_stable"] == str(not unstable) for r in at_v)
+        assert all(r["system_stable"] == (not unstable) for r in at_v)

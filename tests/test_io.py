@@ -12,6 +12,7 @@ from fempipe.io import (
     SHAPE_FIELDS,
     atomic_path,
     json_dumps,
+    read_csv,
     read_shapes,
     write_csv,
     write_json,
@@ -39,9 +40,31 @@ def test_csv_round_trips_full_precision(tmp_path):
     x = 1.0 / 3.0
     path = write_csv(tmp_path / "x.csv", [{"v": 0.0, "theta_tip": x}, {"v": 1.0}])
     lines = path.read_text().splitlines()
-    assert lines[0] == "v,theta_tip"
+    assert lines[0] == "v [1],theta_tip [rad]"
     assert float(lines[1].split(",")[1]) == x  # repr keeps all digits
     assert lines[2] == "1.0,"
+    cols = read_csv(path)
+    assert list(cols) == ["v", "theta_tip"]
+    assert cols["v"].tolist() == [0.0, 1.0]
+    assert cols["theta_tip"][0] == x and np.isnan(cols["theta_tip"][1])
+
+
+def test_csv_column_types_read_back(tmp_path):
+    rows = [
+        {"mode": 1, "stable": True, "type": "flutter", "U": 0.5},
+        {"mode": 2, "stable": False, "type": "fold", "U": None},
+    ]
+    cols = read_csv(write_csv(tmp_path / "x.csv", rows))
+    assert cols["mode"].dtype == int and cols["mode"].tolist() == [1, 2]
+    assert cols["stable"].dtype == bool and cols["stable"].tolist() == [True, False]
+    assert cols["type"].tolist() == ["flutter", "fold"]
+    assert cols["U"][0] == 0.5 and np.isnan(cols["U"][1])
+
+
+def test_csv_column_without_a_unit_is_an_error(tmp_path):
+    with pytest.raises(ValueError, match="no unit.*CSV_UNITS"):
+        write_csv(tmp_path / "x.csv", [{"v": 1.0, "speed": 2.0}])
+    assert not (tmp_path / "x.csv").exists()
 
 
 def test_atomic_path_leaves_old_file_on_failure(tmp_path):
