@@ -9,6 +9,7 @@ import pytest
 
 from fempipe import FiniteElement, Params, PipeModel, solve_static
 from fempipe.io import (
+    CSV_UNITS,
     SHAPE_FIELDS,
     atomic_path,
     json_dumps,
@@ -59,6 +60,18 @@ def test_csv_column_types_read_back(tmp_path):
     assert cols["stable"].dtype == bool and cols["stable"].tolist() == [True, False]
     assert cols["type"].tolist() == ["flutter", "fold"]
     assert cols["U"][0] == 0.5 and np.isnan(cols["U"][1])
+
+
+def test_every_csv_unit_is_documented():
+    """Each unit of the table is explained in the io module docstring and the README."""
+    from pathlib import Path
+
+    import fempipe.io
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    for unit in set(CSV_UNITS.values()):
+        assert f"``[{unit}]``" in fempipe.io.__doc__, unit
+        assert f"`[{unit}]`" in readme, unit
 
 
 def test_csv_column_without_a_unit_is_an_error(tmp_path):

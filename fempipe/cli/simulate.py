@@ -84,7 +84,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Columns of tip.csv; lengths are dimensionless (lengths / L), time tau = t / T
-#: with T = L^2 sqrt((m + M)/EI) (Eq. (19)), rates per unit tau.
+#: with T = L^2 sqrt((m + M)/EI) (Eq. (19)), rates per unit tau.  The header
+#: cells carry these units (``tau [T]``, ``X_tip [L]``, ...: fempipe.io.CSV_UNITS).
 TIP_COLUMNS = (
     "tau",
     "theta_tip",
