@@ -142,7 +142,7 @@ class FiniteElement:
         # by cell in the order of LineQuadrature.x: no point location is needed
         # (basis.probes, for arbitrary points, searches every cell for every
         # point, O(n_q n_el)).
-        values = np.array([self.basis.basis[k][0].value for k in range(self.basis.Nbfun)])
+        values = np.array([np.asarray(self.basis.basis[k][0]) for k in range(self.basis.Nbfun)])
         n_el, n_qp = values.shape[1:]
         rows = np.broadcast_to(np.arange(n_el * n_qp).reshape(n_el, n_qp), values.shape)
         cols = np.broadcast_to(self.basis.element_dofs[:, :, None], values.shape)
