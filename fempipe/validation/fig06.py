@@ -293,7 +293,8 @@ def plot(result: CaseResult, fig=None):
         ax.set_ylabel(r"$v_{cr}$")
         ax.set_title(f"{fixed}, several {sym}", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=9)
+        # Below the panel: inside, the key would hide the beta = 0.5 and gamma = 5 curves.
+        ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
     from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
