@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from processes import alive, children, needs_proc
 
 import fempipe.bifurcation as bif
 from fempipe import Modal, Params, PipeModel
@@ -53,27 +54,7 @@ def test_sweep_orders_values_and_finds_flutter(reference):
             np.testing.assert_allclose(p["eta_tip"], up[p["v"]]["eta_tip"], atol=1e-5)
 
 
-def _children(pid: int) -> list[int]:
-    """Pids of the running child processes of ``pid`` (Linux /proc)."""
-    out = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except (FileNotFoundError, ProcessLookupError):
-            continue
-        if int(fields[1]) == pid and fields[0] != "Z":
-            out.append(int(stat.parent.name))
-    return out
-
-
-def _running(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
-
-
-@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+@needs_proc
 @pytest.mark.parametrize(
     "sig, workers", [(signal.SIGKILL, 1), (signal.SIGKILL, 2), (signal.SIGTERM, 2)]
 )
@@ -116,21 +97,21 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
     try:
         deadline = time.time() + 120
         while time.time() < deadline and not list(store.glob("a00-*-000.json")):
-            workers_seen.update(_children(proc.pid))
+            workers_seen.update(children(proc.pid))
             time.sleep(0.05)
-        workers_seen.update(_children(proc.pid))
+        workers_seen.update(children(proc.pid))
         proc.send_signal(sig)
         killed = time.time()
         proc.wait(timeout=30)
-        while any(map(_running, workers_seen)) and time.time() - killed < 10:
+        while any(map(alive, workers_seen)) and time.time() - killed < 10:
             time.sleep(0.05)
-        survivors = [p for p in workers_seen if _running(p)]
+        survivors = [p for p in workers_seen if alive(p)]
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
         for p in workers_seen:
-            if _running(p):
+            if alive(p):
                 os.kill(p, signal.SIGKILL)
     assert len(workers_seen) == (workers if workers > 1 else 0)
     assert not survivors

@@ -20,6 +20,7 @@ import traceback
 from pathlib import Path
 
 import pytest
+from processes import alive, needs_proc
 from threadpoolctl import threadpool_info
 
 import fempipe
@@ -181,15 +182,6 @@ PARENT = textwrap.dedent(
 )
 
 
-def _alive(pid: int) -> bool:
-    """True while ``pid`` runs (a zombie awaiting its reaper counts as gone)."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except FileNotFoundError:
-        return False
-    return stat.rsplit(")", 1)[1].split()[0] != "Z"
-
-
 def _signal_parent(tmp_path, sig, *, handle=False, disarm=False, method="fork"):
     """Start the parent, wait for its two busy workers, send ``sig``.
 
@@ -215,21 +207,18 @@ def _signal_parent(tmp_path, sig, *, handle=False, disarm=False, method="fork"):
         proc.send_signal(sig)
         with contextlib.suppress(subprocess.TimeoutExpired):  # None: still running
             proc.wait(timeout=GRACE)
-        while any(_alive(p) for p in pids) and time.monotonic() - t0 < GRACE:
+        while any(alive(p) for p in pids) and time.monotonic() - t0 < GRACE:
             time.sleep(0.02)
         gone = time.monotonic() - t0
-        survivors = [p for p in pids if _alive(p)]
+        survivors = [p for p in pids if alive(p)]
         return proc.poll(), log.read_text(), (None if survivors else gone)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
         for p in pids:
-            if _alive(p):
+            if alive(p):
                 os.kill(p, signal.SIGKILL)
-
-
-needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 
 
 @needs_proc
