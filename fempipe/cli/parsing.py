@@ -382,7 +382,8 @@ def number_type(
     return option_type(option, parse)
 
 
-def _workers(text: str) -> int:
+def positive_int(text: str) -> int:
+    """An integer >= 1 (``--workers``, ``--mode``)."""
     try:
         n = int(str(text))
     except ValueError:
@@ -393,7 +394,7 @@ def _workers(text: str) -> int:
 
 
 # argparse ``type=`` callables of the options shared by the subcommands.
-workers_type = option_type("--workers", _workers)
+workers_type = option_type("--workers", positive_int)
 alpha_type = option_type("--alpha", _alpha)
 beta_type = option_type("--beta", _param("beta", 1.0, "a mass ratio"))
 gamma_type = option_type("--gamma", _param("gamma", GAMMA_MAX, _WHY_GAMMA))

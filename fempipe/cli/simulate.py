@@ -43,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--mode",
         metavar="R",
-        type=parsing.option_type("--mode", _mode),
+        type=parsing.option_type("--mode", parsing.positive_int),
         default="1",
         help="sine mode r of the initial perturbation (1)",
     )
@@ -188,17 +188,6 @@ def _cost_check(v: float, t_max: float, allow: bool):
             )
 
     return check
-
-
-def _mode(text: str) -> int:
-    """``--mode``: a sine mode number >= 1."""
-    try:
-        mode = int(text)
-    except ValueError:
-        raise ValueError(f"expects an integer >= 1, got {text!r}") from None
-    if mode < 1:
-        raise ValueError(f"expects an integer >= 1, got {mode}")
-    return mode
 
 
 def run(args: argparse.Namespace) -> int:
