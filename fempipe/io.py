@@ -281,6 +281,23 @@ CSV_UNITS: Mapping[str, str] = {
     "eta_tip_rate": "L/T",
     "X_tip_rate": "L/T",
     "Z_tip_rate": "L/T",
+    # convergence studies (fempipe convergence): one row per member of a family,
+    # the value of the quantity under its own name and its distance to the
+    # reference as <quantity>_error
+    "family": "-",
+    "n": "-",
+    "dofs": "-",
+    "lc_amplitude": "L",
+    "lc_period": "T",
+    "theta_tip_error": "rad",
+    "X_tip_error": "L",
+    "Z_tip_error": "L",
+    "eta_tip_error": "L",
+    "v_cr_error": "1",
+    "frequency_error": "1/T",
+    "eigenvalue_error": "1/T",
+    "lc_amplitude_error": "L",
+    "lc_period_error": "T",
 }
 
 _HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")

@@ -25,6 +25,7 @@ from ..kinematics import shape, tip_velocity
 from ..limit_cycle import ShootingError, find_attractor, shoot, tip_coordinates
 from ..operators import PipeModel
 from ..params import PAPER_CASE, Params
+from ..projection import project
 from .static_shapes import PAPER_MODES, static_shapes
 
 __all__ = [
@@ -152,15 +153,6 @@ def orbit(
         s = shape(disc, traj.q[i], alpha)
         shapes.append((s.Z_g, s.X_g))
     return Orbit(label, alpha, v, period, traj.t - traj.t[0], tip, tip_rate, shapes)
-
-
-def project(src, q: np.ndarray, dst) -> np.ndarray:
-    """L2 projection of theta = src(q) onto the discretisation ``dst``."""
-    x, w = dst.quad.x, dst.quad.w
-    theta = src.evaluate(q, x)
-    Phi = dst.Phi.toarray() if dst.sparse else np.asarray(dst.Phi)
-    sw = np.sqrt(w)[:, None]
-    return np.linalg.lstsq(Phi * sw, theta * sw[:, 0], rcond=None)[0]
 
 
 def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
