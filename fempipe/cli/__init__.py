@@ -17,6 +17,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "stability-map": ("fempipe.cli.stability_map", "v_cr against alpha for lists of beta, gamma"),
     "simulate": ("fempipe.cli.simulate", "nonlinear time integration and limit cycle"),
     "bifurcation": ("fempipe.cli.bifurcation", "bifurcation diagram of the tip response"),
+    "convergence": (
+        "fempipe.cli.convergence",
+        "convergence study of one quantity: FE families and modal bases, observed orders",
+    ),
     "validate": ("fempipe.cli.validate", "run the validation suite and write the report"),
     "bench": ("fempipe.cli.bench", "performance benchmarks"),
 }

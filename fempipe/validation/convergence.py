@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..convergence import observed_order, richardson
 from ..discretization import FiniteElement, Modal
 from ..params import PAPER_CASE
 from .bvp import solve_static_bvp
@@ -84,27 +85,6 @@ class Study:
         for s in self.series.values():
             for d, v, e in zip(s.dofs, s.values, s.errors, strict=True):
                 yield (self.quantity, s.label, int(d), v, e)
-
-
-def observed_order(dofs: np.ndarray, errors: np.ndarray, floor: float) -> tuple[float, tuple]:
-    """Slope of log(err) vs log(dofs) over the last 3 points with err > floor.
-
-    Returns ``(order, indices)``; order is positive for a decaying error and
-    NaN if fewer than two usable points exist.
-    """
-    ok = np.flatnonzero(np.isfinite(errors) & (errors > floor))
-    # Use the finest usable points, which are consecutive refinements.
-    idx = tuple(int(i) for i in ok[-3:])
-    if len(idx) < 2:
-        return float("nan"), idx
-    slope = np.polyfit(np.log(dofs[list(idx)]), np.log(errors[list(idx)]), 1)[0]
-    return float(-slope), idx
-
-
-def richardson(coarse: float, fine: float, order: float, ratio: float = 2.0) -> tuple[float, float]:
-    """Richardson extrapolation and its error estimate (the size of the correction)."""
-    corr = (fine - coarse) / (ratio**order - 1.0)
-    return fine + corr, abs(corr)
 
 
 def run_study(
