@@ -458,7 +458,7 @@ class Reference:
     def to_dict(self) -> dict:
         return {
             "value": _number(self.value),
-            "error_estimate": self.error_estimate,
+            "error_estimate": float(self.error_estimate),
             "method": self.method,
             "family": self.family,
             "independent": [dict(d, value=_number(d["value"])) for d in self.independent],
@@ -646,14 +646,15 @@ def run_study(
                 cpu_time=cpu,
             )
         )
+    cpu = time.process_time() - t_start
+    if (workers or 1) > 1:
+        cpu += sum(s.cpu_time for s in series)  # the members ran in worker processes
     return ConvergenceStudy(
         quantity=quantity if isinstance(quantity, Quantity) else None,
         reference=reference,
         series=tuple(series),
         fit_floor=floor,
-        cpu_time=time.process_time()
-        - t_start
-        + sum(s.cpu_time for s in series) * (1.0 if (workers or 1) > 1 else 0.0),
+        cpu_time=cpu,
     )
 
 
