@@ -62,6 +62,7 @@ __all__ = [
     "describe",
     "estimate",
     "expected_order",
+    "match_events",
     "refine",
     "transfer",
 ]
@@ -265,6 +266,41 @@ def describe(disc, refined=None, floor: str = "") -> ErrorEstimate:
         ratio=RATIO,
         floor=floor,
     )
+
+
+def match_events(coarse, fine) -> tuple[list[int | None], list[int]]:
+    """Pair the stability events of two runs by what they are, not by list position.
+
+    Two events are the same when they have the same branch, type and mode
+    (``StabilityEvent`` attributes or dict keys ``branch``, ``type``,
+    ``mode``); the k-th such event of the coarse list (in its order: along
+    each branch) is paired with the k-th of the refined list.
+
+    Parameters
+    ----------
+    coarse, fine : sequence of StabilityEvent or dict
+
+    Returns
+    -------
+    pairs : list of int or None
+        For each coarse event, the index of its refined event, or None.
+    unmatched : list of int
+        Indices of the refined events that no coarse event is paired with.
+    """
+
+    def key(ev):
+        get = ev.get if isinstance(ev, dict) else lambda k: getattr(ev, k)
+        return (get("branch"), get("type"), get("mode"))
+
+    available: dict = {}
+    for j, ev in enumerate(fine):
+        available.setdefault(key(ev), []).append(j)
+    pairs: list[int | None] = []
+    for ev in coarse:
+        queue = available.get(key(ev))
+        pairs.append(queue.pop(0) if queue else None)
+    used = {j for j in pairs if j is not None}
+    return pairs, [j for j in range(len(fine)) if j not in used]
 
 
 def transfer(src, q: np.ndarray, dst) -> np.ndarray:

@@ -36,7 +36,8 @@ Each header cell is the column's name (the JSON key it comes from) and its
 unit in square brackets, separated by one space: ``theta_tip [rad]``,
 ``X_tip [L]``, ``tau [T]``, ``U [m/s]``.  The unit of every column is stated
 once, in :data:`CSV_UNITS`; writing a column that is not there is an error.
-The units are
+The error estimate of a column (``--error-estimate``), ``X_tip_error``, has
+the unit of the column: ``X_tip_error [L]``.  The units are
 
 * ``[L]``: a length divided by the pipe length L (Eq. (19));
 * ``[T]``: a time divided by the time scale T = L^2 sqrt((m + M)/EI)
@@ -78,6 +79,7 @@ __all__ = [
     "read_csv",
     "csv_header",
     "CSV_UNITS",
+    "ERROR_SUFFIX",
     "write_text",
     "write_figure",
     "write_shapes",
@@ -304,20 +306,28 @@ _HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
+#: The suffix of the column of an error estimate (``fempipe COMMAND --error-estimate``):
+#: ``X_tip_error`` has the unit of ``X_tip``.
+ERROR_SUFFIX = "_error"
+
+
 def csv_header(name: str) -> str:
     """The header cell of column ``name``: ``"name [unit]"`` with the unit of :data:`CSV_UNITS`.
+
+    The error estimate ``<name>_error`` of a column (:data:`ERROR_SUFFIX`)
+    has the unit of ``<name>``.
 
     Raises
     ------
     ValueError
         If ``name`` has no unit in :data:`CSV_UNITS`.
     """
-    try:
-        unit = CSV_UNITS[name]
-    except KeyError:
-        raise ValueError(
-            f"CSV column {name!r} has no unit: add it to fempipe.io.CSV_UNITS"
-        ) from None
+    unit = CSV_UNITS.get(name)
+    if unit is None and name.endswith(ERROR_SUFFIX):
+        # The error estimate of a column has the unit of the column.
+        unit = CSV_UNITS.get(name.removesuffix(ERROR_SUFFIX))
+    if unit is None:
+        raise ValueError(f"CSV column {name!r} has no unit: add it to fempipe.io.CSV_UNITS")
     return f"{name} [{unit}]"
 
 

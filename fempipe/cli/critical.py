@@ -20,6 +20,24 @@ v = 0).  An instability already present at the start of the range is listed
 at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
 critical.json, events.csv and branches.png.
 
+``--error-estimate`` runs the whole analysis again on the refined
+discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
+or twice the modes), pairs the events of the two runs by branch, type and
+mode (:func:`fempipe.error_estimate.match_events`, not by position) and adds
+beside ``v_cr``, ``v_flutter`` (and ``U_cr``), beside ``v`` and
+``frequency`` of every event and of ``critical``, the estimate ``Q_error`` =
+max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|)) (Roache's Grid
+Convergence Index, p = 2k for P_k, 3 for the sine modes; the floor is the
+1e-10 to which events are located) and ``Q_refined``.  Every event gets
+``error_note``: null, or why it has no estimate (no such event in the
+refined run); ``v_cr_error`` is null, with a note, when the refined run
+loses stability first by another event.  The top-level ``"error_estimate"``
+describes the method and lists the notes (also refined events the reported
+run lacks).  events.csv gains ``v_error`` and ``frequency_error`` after its
+columns; the text shows ``value ± error``.  It costs about one more run on
+the refined discretisation; the ``branches`` entries are those of the
+reported run, without estimates.
+
 The continuation's step budget follows from the range (:func:`step_budget`).
 Should the primary branch still stop before the end of the range (its JSON
 ``end_reason`` is ``"max_steps"``), the command says so on stderr, with the v
@@ -33,8 +51,12 @@ import argparse
 import math
 import sys
 
-from fempipe.cli import common, parsing, reporting
+from fempipe.cli import common, estimates, parsing, reporting
 from fempipe.cli.parsing import CLIError
+
+#: Events are located to 1e-10 in v (Brent; folds by the continuation): the
+#: floor of the error estimates, relative to max(1, |Q|).
+EVENT_TOL = 1e-10
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -61,6 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "of the range",
     )
     common.add_output_arguments(parser)
+    estimates.add_argument(parser, "v_cr, v_flutter and the v and frequency of every event")
 
 
 def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
@@ -90,6 +113,14 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(flow_opt, f"needs a range with two different values, got {v_min:g} only")
     ds_max = args.ds_max
     model = PipeModel(setup.disc, setup.params)
+    kwargs = {
+        "v_max": v_max,
+        "v_min": v_min,
+        "follow_bifurcations": not args.no_branches,
+        "ds_max": ds_max,
+        "max_steps": step_budget(v_min, v_max, ds_max),
+    }
+    refined = None
     with reporting.progress(args, None, "critical") as bar:
 
         def on_sample(branch: str, v: float) -> None:
@@ -97,17 +128,11 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{branch} v={v:.4f}")
 
         try:
-            res = stability_analysis(
-                model,
-                v_max=v_max,
-                v_min=v_min,
-                follow_bifurcations=not args.no_branches,
-                ds_max=ds_max,
-                max_steps=step_budget(v_min, v_max, ds_max),
-                callback=on_sample,
-            )
+            res = stability_analysis(model, callback=on_sample, **kwargs)
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
+        if args.error_estimate:
+            refined = _refined_run(model, kwargs, bar)
     head = setup.to_dict()
     result = res.to_dict()
     result["params"] = head["params"]
@@ -116,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
         pipe = setup.pipe
         result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
         result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
+    if refined is not None:
+        result = _with_errors(result, res, *refined, setup.pipe)
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write(output, result, res)
@@ -126,6 +153,112 @@ def run(args: argparse.Namespace) -> int:
     if output is not None:
         output.report(args)
     return _check_coverage(args, result, v_max)
+
+
+def _refined_run(model, kwargs: dict, bar) -> tuple:
+    """``(refined result or None, ErrorEstimate, notes)``: the analysis on the refined
+    discretisation, with the progress bar counting its samples too."""
+    from fempipe.error_estimate import describe, refine
+    from fempipe.errors import SolverError
+    from fempipe.operators import PipeModel
+    from fempipe.stability import stability_analysis
+
+    fine = refine(model.disc)
+    info = describe(model.disc, fine, floor=f"events located to {EVENT_TOL:g} max(1, |Q|)")
+
+    def on_sample(branch: str, v: float) -> None:
+        bar.update()
+        bar.set_postfix_str(f"refined {fine.name} {branch} v={v:.4f}")
+
+    try:
+        res = stability_analysis(PipeModel(fine, model.params), callback=on_sample, **kwargs)
+    except (SolverError, ValueError) as exc:
+        return None, info, [f"the refined run on {fine.name} failed ({exc}); no estimates"]
+    notes = []
+    primary = next((b for b in res.branches if b.name == "primary"), None)
+    if primary is not None and primary.end_reason == "max_steps":
+        notes.append(
+            f"the refined run's primary branch ran out of continuation steps at "
+            f"v = {float(primary.v.max()):.6g}"
+        )
+    return res, info, notes
+
+
+def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
+    """``result`` with ``Q_error``, ``Q_refined`` beside the numbers (module docstring)."""
+    from fempipe.error_estimate import match_events
+
+    notes = list(notes)
+    order, name = info.order, info.refined
+    fine_events = [] if fine_res is None else list(fine_res.events)
+    pairs, unmatched = match_events(res.events, fine_events)
+
+    def partner(ev):
+        """The refined event paired with the coarse event ``ev`` (a StabilityEvent)."""
+        i = next((i for i, e in enumerate(res.events) if e == ev), None)
+        return None if i is None or pairs[i] is None else fine_events[pairs[i]]
+
+    def add(d: dict, f) -> dict:
+        d = estimates.with_estimate(d, "v", None if f is None else f.v, order, EVENT_TOL)
+        return estimates.with_estimate(
+            d, "frequency", None if f is None else f.frequency, order, EVENT_TOL
+        )
+
+    events = []
+    for ev, d in zip(res.events, result["events"], strict=True):
+        f = partner(ev)
+        d = add(d, f)
+        d["error_note"] = None
+        if f is None and fine_res is not None:
+            d["error_note"] = (
+                f"no {ev.type} of mode {ev.mode} on branch {ev.branch} in the refined run ({name})"
+            )
+        events.append(d)
+    result["events"] = events
+    for j in unmatched:
+        f = fine_events[j]
+        notes.append(
+            f"the refined run ({name}) has a {f.type} of mode {f.mode} on branch {f.branch} "
+            f"at v = {f.v:.10g} that the reported run has not"
+        )
+
+    def first(key: str, coarse_ev, fine_value):
+        """``key`` (v_cr or v_flutter) with its estimate: only if both runs' event is one."""
+        f = None if coarse_ev is None else partner(coarse_ev)
+        same = f is not None and fine_value is not None and f.v == fine_value
+        if result[key] is not None and fine_res is not None and not same:
+            what = "none" if fine_value is None else f"v = {fine_value:.10g}"
+            notes.append(
+                f"{key}: the refined run ({name}) gives {what} by another event than the "
+                f"reported one; no estimate"
+            )
+        elif result[key] is None and fine_value is not None:
+            notes.append(f"{key}: none in the reported run, v = {fine_value:.10g} refined")
+        refined = fine_value if same else None
+        out = estimates.with_estimate(result, key, refined, order, EVENT_TOL)
+        out[key + estimates.REFINED] = fine_value
+        return out
+
+    v_flutter_ev = next(
+        (e for e in res.events if e.branch == "primary" and e.type == "flutter"), None
+    )
+    result = first("v_cr", res.critical, None if fine_res is None else fine_res.v_cr)
+    result = first("v_flutter", v_flutter_ev, None if fine_res is None else fine_res.v_flutter)
+    if result["critical"] is not None:
+        result["critical"] = add(result["critical"], partner(res.critical))
+    if pipe is not None and "U_cr" in result:
+        err, fine_v = result["v_cr" + estimates.ERROR], result["v_cr" + estimates.REFINED]
+        scale = pipe.U_of_v(1.0)
+        result = estimates.beside(
+            result,
+            "U_cr",
+            {
+                "U_cr" + estimates.ERROR: None if err is None else err * scale,
+                "U_cr" + estimates.REFINED: None if fine_v is None else pipe.U_of_v(fine_v),
+            },
+        )
+    result["error_estimate"] = estimates.header(info, notes)
+    return result
 
 
 def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int:
@@ -150,13 +283,18 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 
     from fempipe.plotting.stability import plot_branches
 
-    rows = sorted((ev.details() for ev in res.events), key=lambda r: r["v"])
+    rows = []
+    for ev, d in zip(res.events, result["events"], strict=True):
+        row = ev.details()
+        row.update({k: x for k, x in d.items() if k.endswith(estimates.ERROR)})
+        rows.append(row)
+    rows.sort(key=lambda r: r["v"])
     for r in rows:
         r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
     ax = plot_branches(res)
     try:
         output.json("critical.json", result)
-        output.csv("events.csv", rows)
+        output.csv("events.csv", rows, estimates.error_columns(rows))
         output.figure("branches.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
@@ -165,27 +303,46 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 def _print(result: dict, pipe) -> None:
     disc, head = reporting.describe(result)
     lo, hi = result["v_range"]
+    with_errors = "error_estimate" in result
+
+    def num(d: dict, key: str, spec: str) -> str:
+        if with_errors and key + estimates.ERROR in d:
+            return estimates.pm(d[key], d[key + estimates.ERROR], spec)
+        return spec.format(d[key])
+
     print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretisation {disc}")
     v_cr = result["v_cr"]
     if v_cr is None:
         print("v_cr: none (the primary branch is stable over the range)")
     else:
         c = result["critical"]
-        extra = f" (U = {result['U_cr']:.6g} m/s)" if pipe is not None else ""
+        extra = f" (U = {num(result, 'U_cr', '{:.6g}')} m/s)" if pipe is not None else ""
         print(
-            f"v_cr = {v_cr:.10f}{extra}: {c['type']} in mode {c['mode']}, Im lambda = {c['frequency']:.6f}"
+            f"v_cr = {num(result, 'v_cr', '{:.10f}')}{extra}: {c['type']} in mode {c['mode']}, "
+            f"Im lambda = {num(c, 'frequency', '{:.6f}')}"
         )
     if result["v_flutter"] is not None and result["v_flutter"] != v_cr:
-        print(f"first flutter of the primary branch: v = {result['v_flutter']:.10f}")
+        print(f"first flutter of the primary branch: v = {num(result, 'v_flutter', '{:.10f}')}")
+    w_v, w_f = (25, 21) if with_errors else (15, 11)
     print(
-        f"{'branch':>8} {'type':>20} {'v':>15} {'mode':>5} {'Im lambda':>11}  system below -> above"
+        f"{'branch':>8} {'type':>20} {'v':>{w_v}} {'mode':>5} {'Im lambda':>{w_f}}  "
+        "system below -> above"
     )
     for ev in result["events"]:
         mode = "-" if ev["mode"] is None else str(ev["mode"])
         before, after = (
             "stable" if ev[k] else "unstable" for k in ("stable_before", "stable_after")
         )
+        note = f"  ({ev['error_note']})" if ev.get("error_note") else ""
         print(
-            f"{ev['branch']:>8} {ev['type']:>20} {ev['v']:15.10f} {mode:>5} "
-            f"{ev['frequency']:11.6f}  {before} -> {after}"
+            f"{ev['branch']:>8} {ev['type']:>20} {num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
+            f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
         )
+    if with_errors:
+        est = result["error_estimate"]
+        print(
+            f"± error estimate: {est['method']} to {est['refined']}, {est['formula']} "
+            f"(floor: {est['floor']})"
+        )
+        for note in est["notes"]:
+            print(f"note: {note}")

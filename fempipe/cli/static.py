@@ -7,6 +7,20 @@ files (``--out DIR``: static.json, static.csv, shapes.png, shapes.vtu).
 
 ``--continuation gamma`` or ``--continuation alpha`` with ``--values LIST``
 follows the static state in gravity or inclination at one flow velocity instead.
+
+``--error-estimate`` also solves every point on the refined discretisation
+(:func:`fempipe.error_estimate.refine`: P_k elements halved, or twice the
+modes), by Newton from the coarse state transferred to it (the L2
+projection, exact for these nested spaces, so the refined state is the same
+branch), and adds beside each tip value Q of a point (``theta_tip``,
+``eta_tip``, ``X_tip``, ``Z_tip``, ``varsigma_tip``, ``tip_drop`` and the SI
+values) ``Q_error`` = max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|))
+(Roache's Grid Convergence Index with p = 2k for P_k, 3 for the sine modes;
+the floor is Newton's tolerance) and ``Q_refined``, and the top-level
+``"error_estimate"`` (method, refined discretisation, order, formula, notes).
+static.csv gains the ``Q_error`` columns after the others; the table shows
+``value ± error``.  The run costs about one more run on the refined
+discretisation.
 """
 
 from __future__ import annotations
@@ -16,11 +30,14 @@ import math
 import sys
 from dataclasses import replace
 
-from fempipe.cli import common, parsing, reporting
+from fempipe.cli import common, estimates, parsing, reporting
 from fempipe.cli.parsing import CLIError
 
 #: Tip quantities reported per point (dimensionless), in table order.
 TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
+#: Newton's tolerance of the static states (:func:`fempipe.static.solve_path`):
+#: the floor of the error estimates, relative to max(1, |Q|).
+NEWTON_TOL = 1e-10
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,6 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "e.g. 0,pi/4,pi/2 or 0deg:180deg:7)",
     )
     common.add_output_arguments(parser)
+    estimates.add_argument(parser, "each tip value of a point")
 
 
 def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple[str, list]:
@@ -96,7 +114,8 @@ def run(args: argparse.Namespace) -> int:
 
     model = PipeModel(disc, replace(base, **{parameter: values[0]}))
     solved = []
-    with reporting.progress(args, len(values), f"static ({parameter})") as bar:
+    work = len(values) * (2 if args.error_estimate else 1)
+    with reporting.progress(args, work, f"static ({parameter})") as bar:
 
         def on_point(i, sol):
             solved.append(sol)
@@ -115,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 iterations=exc.iterations,
                 residual=exc.residual,
             ) from exc
+        refined = _refined_states(model, sols, bar) if args.error_estimate else None
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
     # solve_path reaches its first point by the gravity loading (gamma continued
@@ -133,6 +153,9 @@ def run(args: argparse.Namespace) -> int:
         "params": result["params"],
         "discretization": result["discretization"],
     }
+    if refined is not None:
+        result["points"] = points = _with_errors(disc, points, sols, refined, pipe, tip_values)
+        result["error_estimate"] = estimates.header(*refined[2:])
 
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
@@ -149,6 +172,74 @@ def run(args: argparse.Namespace) -> int:
     if output is not None:
         output.report(args)
     return 0
+
+
+def _refined_states(model, sols, bar) -> tuple:
+    """``(refined discretisation, states, ErrorEstimate, notes)``: each static state solved
+    again on the refined discretisation (None where Newton fails there, with a note).
+
+    Newton starts from the coarse state transferred to the refined space
+    (:func:`fempipe.error_estimate.transfer`), so each refined state is the
+    coarse one's, on the same branch, whatever the path.
+    """
+    from fempipe.error_estimate import describe, refine, transfer
+    from fempipe.operators import PipeModel
+    from fempipe.static import NewtonError, solve_static
+
+    disc = model.disc
+    fine = refine(disc)
+    info = describe(disc, fine, floor=f"Newton's tolerance {NEWTON_TOL:g} max(1, |Q|)")
+    fine_model = PipeModel(fine, model.params)
+    states, notes = [], []
+    bar.set_postfix_str(f"refined {fine.name}")
+    for sol in sols:
+        try:
+            q0 = transfer(disc, sol.q, fine)
+            states.append(solve_static(fine_model.with_params(sol.params), q0=q0, tol=NEWTON_TOL))
+        except NewtonError as exc:
+            states.append(None)
+            notes.append(f"v = {sol.params.v:.6g}: no refined state ({exc}); errors null")
+        bar.update()
+    return fine, states, info, notes
+
+
+def _with_errors(disc, points, sols, refined, pipe, tip_values) -> list[dict]:
+    """The points with ``Q_error`` and ``Q_refined`` beside each tip value Q."""
+    fine, states, info, _ = refined
+    out = []
+    for row, sol, fine_sol in zip(points, sols, states, strict=True):
+        alpha = sol.params.alpha
+        tip = None if fine_sol is None else tip_values(fine, fine_sol.q, alpha)
+        val = {k: None if tip is None else float(tip[k]) for k in TIP_KEYS}
+        val["tip_drop"] = None if tip is None else float(tip["X_tip"]) - math.cos(alpha)
+        for k in (*TIP_KEYS, "tip_drop"):
+            row = estimates.with_estimate(row, k, val[k], info.order, NEWTON_TOL)
+        if pipe is not None:
+            for k, base, scale in _SI_DERIVED:
+                row = estimates.beside(
+                    row,
+                    k,
+                    {
+                        k + estimates.ERROR: _scaled(row[base + estimates.ERROR], scale * pipe.L),
+                        k + estimates.REFINED: _scaled(val[base], scale * pipe.L),
+                    },
+                )
+        out.append(row)
+    return out
+
+
+#: The SI values of a point: (key, dimensionless key, factor times L).
+_SI_DERIVED = (
+    ("X_tip_m", "X_tip", 1.0),
+    ("Z_tip_m", "Z_tip", 1.0),
+    ("eta_tip_m", "eta_tip", 1.0),
+    ("varsigma_tip_m", "varsigma_tip", 1.0),
+    ("tip_drop_mm", "tip_drop", 1e3),
+)
+
+
+def _scaled(x, factor: float):
+    return None if x is None else x * factor
 
 
 def _stable(model, q) -> bool | None:
@@ -236,7 +327,7 @@ def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> N
     fig = ax.figure
     try:
         output.json("static.json", result)
-        output.csv("static.csv", points)
+        output.csv("static.csv", points, estimates.error_columns(points))
         output.figure("shapes.png", fig, dpi=150)
         length = None if pipe is None else pipe.L
         output.record(
@@ -282,11 +373,33 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
         cols.append(("tip_drop_mm", "drop [mm]", "{:+10.4f}"))
     cols += [("newton_iterations", "Newton", "{:6d}"), ("residual_norm", "residual", "{:9.2e}")]
     cols.append(("stable", "stable", "{!s:>6}"))
-    widths = [max(len(h), len(f.format(0 if "d}" in f else 0.0))) for _, h, f in cols]
+    with_errors = "error_estimate" in result
+
+    def cell(row, key, fmt):
+        if with_errors and key + estimates.ERROR in row:
+            return estimates.pm(row[key], row[key + estimates.ERROR], fmt)
+        return fmt.format(row[key])
+
+    sample = result["points"][0]
+    widths = [
+        max(
+            len(h),
+            len(cell(sample, k, f)) if with_errors else len(f.format(0 if "d}" in f else 0.0)),
+        )
+        for k, h, f in cols
+    ]
     print("  ".join(h.rjust(w) for (_, h, _), w in zip(cols, widths, strict=True)))
     for row in result["points"]:
-        cells = [f.format(row[k]).rjust(w) for (k, _, f), w in zip(cols, widths, strict=True)]
+        cells = [cell(row, k, f).rjust(w) for (k, h, f), w in zip(cols, widths, strict=True)]
         print("  ".join(cells))
+    if with_errors:
+        est = result["error_estimate"]
+        print(
+            f"± error estimate: {est['method']} to {est['refined']}, {est['formula']} "
+            f"(floor: {est['floor']})"
+        )
+        for note in est["notes"]:
+            print(f"note: {note}")
     if any(row["stable"] is False for row in result["points"]):
         print(
             "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)); "
