@@ -141,9 +141,9 @@ class Family:
         """Theoretical order of the error in dofs (2k for P_k; the modal basis's own)."""
         if self.kind == "fe":
             return 2.0 * self.degree
-        order = getattr(Modal, "expected_orders", {}).get(self.basis)
+        order = getattr(self.discretization(1), "expected_order", None)
         if order is None and self.basis == "sine":
-            order = 3.0
+            order = 3.0  # README, "Conventions and derivations"
         return None if order is None else float(order)
 
 
@@ -469,7 +469,7 @@ class Reference:
 class ConvergenceStudy:
     """Result of :func:`run_study`."""
 
-    quantity: Quantity
+    quantity: Quantity | Callable
     reference: Reference
     series: tuple[Series, ...]
     fit_floor: float
@@ -483,17 +483,20 @@ class ConvergenceStudy:
 
     def to_dict(self) -> dict:
         """The contract of ``fempipe convergence --json`` (see the README)."""
-        p = self.quantity.params.to_dict()
-        p.pop("v", None)
-        return {
-            "quantity": self.quantity.name,
-            "quantity_details": self.quantity.to_dict(),
+        q = self.quantity
+        out = {
+            "quantity": getattr(q, "name", None),
+            "quantity_details": q.to_dict() if isinstance(q, Quantity) else None,
             "reference": self.reference.to_dict(),
             "series": [s.to_dict() for s in self.series],
             "fit_floor": self.fit_floor,
-            "params": p,
+            "params": None,
             "cpu_time": self.cpu_time,
         }
+        if isinstance(q, Quantity):
+            out["params"] = q.params.to_dict()
+            out["params"].pop("v", None)
+        return out
 
 
 def _number(x):
@@ -650,7 +653,7 @@ def run_study(
     if (workers or 1) > 1:
         cpu += sum(s.cpu_time for s in series)  # the members ran in worker processes
     return ConvergenceStudy(
-        quantity=quantity if isinstance(quantity, Quantity) else None,
+        quantity=quantity,
         reference=reference,
         series=tuple(series),
         fit_floor=floor,
