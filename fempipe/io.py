@@ -300,6 +300,27 @@ CSV_UNITS: Mapping[str, str] = {
     "eigenvalue_error": "1/T",
     "lc_amplitude_error": "L",
     "lc_period_error": "T",
+    # comparisons of a user's values (fempipe compare): one row per data row and
+    # quantity; user, fempipe, difference, error_estimate and refined are in the
+    # unit of the row's quantity, stated in its column "unit", so their header
+    # carries "-"
+    "row": "-",
+    "label": "-",
+    "quantity": "-",
+    "unit": "-",
+    "user": "-",
+    "fempipe": "-",
+    "difference": "-",
+    "relative_difference": "1",
+    "error_estimate": "-",
+    "resolved": "-",
+    "refined": "-",
+    "v_min": "1",
+    "v_max": "1",
+    "U_min": "m/s",
+    "U_max": "m/s",
+    "failure": "-",
+    "note": "-",
 }
 
 _HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")

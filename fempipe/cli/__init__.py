@@ -21,6 +21,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
         "fempipe.cli.convergence",
         "convergence study of one quantity: FE families and modal bases, observed orders",
     ),
+    "compare": (
+        "fempipe.cli.compare",
+        "a user's results (CSV) against fempipe, with fempipe's error estimate",
+    ),
     "validate": ("fempipe.cli.validate", "run the validation suite and write the report"),
     "bench": ("fempipe.cli.bench", "performance benchmarks"),
 }
