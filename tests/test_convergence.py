@@ -216,3 +216,25 @@ def test_cli_bad_input_exits_2_naming_the_option(argv, option, tmp_path):
     lines = err.strip().splitlines()
     assert len(lines) == 1 and option in lines[0], err
     assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_bench_convergence_vcr_quick_measures_the_orders():
+    """The benchmark's study (quick: up to 8 elements) forms a reference that P3:32 confirms."""
+    code, out, err = run_cli(["bench", "--quick", "--only", "convergence_vcr", "--json"])
+    assert code == 0, err
+    d = json.loads(out)["benchmarks"]["convergence_vcr"]
+    rows = {r["family"]: r for r in d["table"]}
+    assert set(rows) == {"fe-P1", "fe-P2", "fe-P3", "modal-sine", "modal-beam"}
+    assert rows["fe-P3"]["finest_error"] < rows["fe-P2"]["finest_error"]
+    assert d["cpu_seconds"] > 0
+    # v_cr of the paper's horizontal pipe: the Richardson reference of P3:4, P3:8
+    # against P3:32 computed directly (1e-9 is P3:32's own error).
+    from fempipe.discretization import FiniteElement
+    from fempipe.operators import PipeModel
+    from fempipe.stability import critical_velocity
+
+    fine = critical_velocity(
+        PipeModel(FiniteElement(32, 3), Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3)),
+        10.0,
+    ).v_cr
+    assert abs(d["v_cr_reference"] - fine) <= d["reference_error_estimate"] + 1e-9
