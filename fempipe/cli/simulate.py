@@ -16,6 +16,27 @@ oscillating_shapes.png, pipe.gif, trajectory.pvd (+ the folder trajectory/
 of VTU frames, at most 400: the transient and three periods of the cycle) and
 tip.csv, the tip's time series over the integration (:func:`tip_rows`: at
 every accepted step, or on a uniform grid with ``--output-dt``).
+
+``--error-estimate`` computes the attractor again on the refined
+discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
+or twice the modes) without a new transient where it can: a limit cycle is
+shot from the coarse cycle transferred to the refined space (the L2
+projection :func:`fempipe.error_estimate.transfer`), an equilibrium solved by
+Newton from the coarse one (and its linear stability checked); only if that
+shooting fails is the refined attractor found by integration from the
+transferred state, and a pulsating flow is integrated again from the refined
+static state.  Beside ``period`` and ``tip`` (and ``period_s``, ``tip_m``)
+it adds ``period_error``, ``period_refined``, ``tip_error`` and
+``tip_refined`` (``{"eta_tip": [error of min, error of max], ...}``, the
+shape of ``tip``) and ``attractor_refined``; the error of Q is
+max(3 |Q - Q_refined| 2^p / (2^p - 1), tol max(1, |Q|)) (Roache's Grid
+Convergence Index, p = 2k for P_k, 3 for the sine modes; tol is
+``--shoot-rtol`` for a cycle, ``--rtol`` for a pulsating flow, Newton's
+1e-10 for an equilibrium).  If the attractors differ in kind (periodic,
+period-n, equilibrium; a refined cycle that is unstable) there is no error
+number (null) and ``"error_estimate"["notes"]`` says so; a non-periodic
+attractor gets none either.  It costs about the refined shooting (a
+transient only where needed).
 """
 
 from __future__ import annotations
@@ -26,7 +47,7 @@ import time
 
 import numpy as np
 
-from fempipe.cli import common, parsing, reporting
+from fempipe.cli import common, estimates, parsing, reporting
 from fempipe.cli.parsing import CLIError
 
 
@@ -81,6 +102,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="tip.csv on a uniform grid of step DT in tau (default: every accepted step)",
     )
+    estimates.add_argument(parser, "the period and each tip extremum")
 
 
 #: Columns of tip.csv; lengths are dimensionless (lengths / L), time tau = t / T
@@ -220,7 +242,9 @@ def run(args: argparse.Namespace) -> int:
     q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
     t_start = time.perf_counter()
     cpu_start = time.process_time()
-    with reporting.progress(args, 100, f"simulate v={params.v:g}") as bar:
+    work = 200 if args.error_estimate else 100
+    refined = None
+    with reporting.progress(args, work, f"simulate v={params.v:g}") as bar:
         last = [0]
 
         cost = _cost_check(params.v, t_max, parsing.allow_large(args))
@@ -249,6 +273,11 @@ def run(args: argparse.Namespace) -> int:
                 callback=on_time,
             )
             traj = att.trajectory
+        wall_time = time.perf_counter() - t_start
+        if last[0] < 100:
+            bar.update(100 - last[0])
+        if args.error_estimate:
+            refined = _refined_attractor(model, att, q_s, args, bar)
 
     result = setup.to_dict()
     result["params"]["v"] = params.v
@@ -269,11 +298,13 @@ def run(args: argparse.Namespace) -> int:
         d = att.to_dict()
         d.pop("params")
         result.update(d)
-    result["wall_time"] = time.perf_counter() - t_start
+    result["wall_time"] = wall_time
     if setup.pipe is not None:
         ts = setup.pipe.time_scale
         result["period_s"] = result["period"] * ts if result.get("period") else None
         result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
+    if refined is not None:
+        result = _with_errors(result, *refined, setup.pipe)
 
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
@@ -285,6 +316,183 @@ def run(args: argparse.Namespace) -> int:
     if output is not None:
         output.report(args)
     return 0
+
+
+def _refined_attractor(model, att, q_static, args, bar) -> tuple:
+    """The attractor on the refined discretisation (module docstring).
+
+    Returns ``(coarse, refined, ErrorEstimate, floor, notes)``: ``coarse`` and
+    ``refined`` are ``{"kind", "period", "tip"}`` (``refined`` None if there
+    is nothing to compare), ``floor`` the solver tolerance of the values.
+    The progress bar runs from 100 to 200 over this work.
+    """
+    from fempipe.dynamics import PulsatingFlow, initial_state, simulate
+    from fempipe.error_estimate import describe, refine, transfer
+    from fempipe.errors import SolverError
+    from fempipe.kinematics import tip_values
+    from fempipe.limit_cycle import TIP_KEYS
+    from fempipe.operators import PipeModel
+    from fempipe.stability import linearly_stable
+    from fempipe.static import solve_static
+
+    disc, params = model.disc, model.params
+    fine = refine(disc)
+    fine_model = PipeModel(fine, params)
+    bar.set_postfix_str(f"refined {fine.name}")
+    done = [0]
+
+    def on_time(t: float) -> None:
+        k = min(100, int(100 * t / args.t_max))
+        if k > done[0]:
+            bar.update(k - done[0])
+            done[0] = k
+
+    def summary(kind, period=None, period_n=None, tip=None) -> dict:
+        label = f"periodic (period-{period_n})" if kind == "periodic" and period_n else kind
+        return {"kind": kind, "label": label, "period": period, "tip": tip}
+
+    notes: list[str] = []
+    if att is None:  # a pulsating flow: the whole integration again
+        floor, what = args.rtol, f"--rtol {args.rtol:g}"
+        coarse = None  # filled in by _with_errors from the result
+    elif att.kind == "equilibrium":
+        floor, what = 1e-10, "Newton's tolerance 1e-10"
+        coarse = summary("equilibrium", tip=att.tip)
+    else:
+        floor, what = args.shoot_rtol, f"--shoot-rtol {args.shoot_rtol:g}"
+        coarse = summary(att.kind, att.period, att.period_n, att.tip)
+    info = describe(disc, fine, floor=f"{what} max(1, |Q|)")
+    refined = None
+    try:
+        if att is None:
+            q_s = solve_static(fine_model, transfer(disc, q_static, fine)).q
+            q0, p0 = initial_state(fine_model, args.mode, args.amplitude, q_static=q_s)
+            flow = PulsatingFlow(params.v, args.sigma, args.omega)
+            tr = simulate(
+                fine_model, q0, p0, args.t_max, rtol=args.rtol, flow=flow, callback=on_time
+            )
+            tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
+            tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
+            refined = summary("forced", tip=tip)
+        elif att.kind == "equilibrium":
+            q = solve_static(fine_model, transfer(disc, att.q, fine)).q
+            if linearly_stable(fine_model, q) is True:
+                tv = tip_values(fine, q, params.alpha)
+                refined = summary("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
+            else:
+                refined = summary("unstable equilibrium")
+        elif att.kind == "non-periodic":
+            notes.append("a non-periodic attractor has no error estimate; not refined")
+        else:
+            refined = _refined_cycle(disc, fine_model, att, args, on_time, summary, notes)
+    except SolverError as exc:
+        notes.append(f"the refined computation on {fine.name} failed ({exc}); no estimates")
+        refined = None
+    if done[0] < 100:
+        bar.update(100 - done[0])
+    return coarse, refined, info, floor, notes
+
+
+def _refined_cycle(disc, fine_model, att, args, on_time, summary, notes) -> dict:
+    """The refined limit cycle: shot from the coarse cycle, else found by integration."""
+    from fempipe.error_estimate import transfer
+    from fempipe.limit_cycle import ShootingError, find_attractor, shoot
+    from fempipe.radau import IntegrationError
+
+    fine = fine_model.disc
+    c = att.cycle
+    q0 = transfer(disc, att.q if c is None else c.q0, fine)
+    p0 = transfer(disc, att.qdot if c is None else c.qdot0, fine)
+    if c is not None:
+        try:
+            cyc = shoot(fine_model, q0, p0, c.period, rtol=args.shoot_rtol)
+        except (ShootingError, IntegrationError) as exc:
+            notes.append(
+                f"shooting on {fine.name} from the coarse cycle failed ({exc}); integrated"
+            )
+        else:
+            if not cyc.stable:
+                return summary("unstable periodic")
+            return summary("periodic", cyc.period, att.period_n, cyc.tip)
+    fa = find_attractor(
+        fine_model,
+        q0,
+        p0,
+        t_max=args.t_max,
+        rtol=args.rtol,
+        shoot_rtol=args.shoot_rtol,
+        use_shooting=not args.no_shooting,
+        callback=on_time,
+    )
+    return summary(fa.kind, fa.period, fa.period_n, fa.tip)
+
+
+def _with_errors(result: dict, coarse, refined, info, floor: float, notes: list, pipe) -> dict:
+    """``result`` with the estimates beside ``period`` and ``tip`` (module docstring)."""
+    from fempipe.error_estimate import estimate
+
+    notes = list(notes)
+    order = info.order
+    if coarse is None:  # a pulsating flow
+        coarse = {"kind": "forced", "label": "forced", "period": None, "tip": result["tip"]}
+    same = refined is not None and refined["label"] == coarse["label"]
+    if refined is not None and not same:
+        notes.append(
+            f"the attractors differ: {coarse['label']} on {info.discretization}, "
+            f"{refined['label']} on {info.refined}; no error estimate"
+        )
+
+    def err(a, b):
+        if a is None or b is None:
+            return None
+        return estimate(a, b, order, floor=floor * max(1.0, abs(a)))
+
+    fine_tip = refined["tip"] if same else None
+    fine_period = refined["period"] if same else None
+    tip_error = None
+    if fine_tip is not None:
+        tip_error = {
+            k: [err(a, b) for a, b in zip(lo_hi, fine_tip[k], strict=True)]
+            for k, lo_hi in result["tip"].items()
+        }
+    period_error = err(result.get("period"), fine_period)
+    result = estimates.beside(
+        result,
+        "period",
+        {"period" + estimates.ERROR: period_error, "period" + estimates.REFINED: fine_period},
+    )
+    result = estimates.beside(
+        result,
+        "tip",
+        {"tip" + estimates.ERROR: tip_error, "tip" + estimates.REFINED: fine_tip},
+    )
+    result = estimates.beside(
+        result, "attractor", {"attractor_refined": None if refined is None else refined["kind"]}
+    )
+    if pipe is not None:
+        ts, L = pipe.time_scale, pipe.L
+
+        def scaled(d):
+            return None if d is None else {k: [x * L for x in v] for k, v in d.items()}
+
+        result = estimates.beside(
+            result,
+            "period_s",
+            {
+                "period_s" + estimates.ERROR: None if period_error is None else period_error * ts,
+                "period_s" + estimates.REFINED: None if fine_period is None else fine_period * ts,
+            },
+        )
+        result = estimates.beside(
+            result,
+            "tip_m",
+            {
+                "tip_m" + estimates.ERROR: scaled(tip_error),
+                "tip_m" + estimates.REFINED: scaled(fine_tip),
+            },
+        )
+    result["error_estimate"] = estimates.header(info, notes)
+    return result
 
 
 def _display_states(att, traj, n_periods: int = 3):
@@ -361,15 +569,34 @@ def _print_summary(r: dict) -> None:
         f"alpha = {p['alpha']:.6g}, beta = {p['beta']:.6g}, gamma = {p['gamma']:.6g}, "
         f"mu = {p['mu']:.6g}, v = {p['v']:.6g}"
     )
+    with_errors = "error_estimate" in r
     line = f"attractor: {r['attractor']}"
     if r.get("period"):
-        line += f", period {r['period']:.8g}"
+        period = f"{r['period']:.8g}"
+        if with_errors:
+            period = estimates.pm(r["period"], r["period_error"], "{:.8g}")
+        line += f", period {period}"
         if r.get("period_n"):
             line += f" (period-{r['period_n']})"
     print(line)
+    errors = r.get("tip_error") if with_errors else None
     for k, (lo, hi) in r["tip"].items():
-        print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
+        if with_errors:
+            e_lo, e_hi = errors[k] if errors else (None, None)
+            lo_s, hi_s = estimates.pm(lo, e_lo, "{: .8f}"), estimates.pm(hi, e_hi, "{: .8f}")
+            print(f"  {k:8s} min {lo_s}  max {hi_s}")
+        else:
+            print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
     if r.get("floquet_multipliers"):
         mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"])
         print(f"  |Floquet multipliers| {mus}")
     print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")
+    if with_errors:
+        est = r["error_estimate"]
+        print(
+            f"± error estimate: {est['method']} to {est['refined']} "
+            f"(attractor there: {r['attractor_refined']}), {est['formula']} "
+            f"(floor: {est['floor']})"
+        )
+        for note in est["notes"]:
+            print(f"note: {note}")
