@@ -22,18 +22,15 @@ import time
 
 import numpy as np
 
-from fempipe import Params, PipeModel, parse_discretization
+from fempipe import Params, PipeModel
 from fempipe.bench import register
-from fempipe.discretization import DEFAULT_FE
+from fempipe.discretization import DEFAULT_FE, discretization_from_name
 from fempipe.params import PAPER_CASE
 
 
 def _disc(spec: str):
-    return (
-        parse_discretization(modal=spec.split(":")[1])
-        if spec.startswith("modal")
-        else (parse_discretization(fe=spec))
-    )
+    """The discretisation named ``spec`` (``disc.name``: ``P3:16``, ``modal:4``, ``modal-beam:4``)."""
+    return discretization_from_name(spec)
 
 
 def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:

@@ -152,6 +152,10 @@ class PointStore:
         path = self.directory / "run.json"
         if path.exists():
             old = json.loads(path.read_text())
+            disc = old.get("discretization", {})
+            if disc.get("kind") == "modal":
+                # Stores written before Modal had a basis hold sine-mode runs.
+                disc.setdefault("basis", "sine")
             if old != self.manifest:
                 raise ValueError(
                     f"point store {self.directory} holds a different run "

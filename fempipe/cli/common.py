@@ -38,7 +38,7 @@ import argparse
 import re
 from dataclasses import dataclass, replace
 
-from fempipe.discretization import DEFAULT_FE, parse_discretization
+from fempipe.discretization import DEFAULT_FE, Modal, parse_discretization
 from fempipe.errors import ParamError
 from fempipe.params import Params, PipeSI
 
@@ -207,8 +207,8 @@ def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0
 
 
 def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--fe Pk:n`` (default :data:`~fempipe.discretization.DEFAULT_FE`) or ``--modal N``,
-    and ``--allow-large``."""
+    """``--fe Pk:n`` (default :data:`~fempipe.discretization.DEFAULT_FE`) or ``--modal N``
+    with ``--basis sine|beam``, and ``--allow-large``."""
     g = parser.add_argument_group("discretisation and work limits")
     ex = g.add_mutually_exclusive_group()
     ex.add_argument(
@@ -223,7 +223,15 @@ def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         type=modal_type,
         default=None,
-        help="the paper's N sine modes sin((2r-1) pi xi/2) instead of finite elements",
+        help="N global modes instead of finite elements: the paper's sine modes "
+        "sin((2r-1) pi xi/2), or with --basis beam the slopes of the clamped-free beam modes",
+    )
+    g.add_argument(
+        "--basis",
+        choices=Modal.BASES,
+        default="sine",
+        help="the modes of --modal: sine (the paper's, Eq. (22); error ~ N^-3) or beam "
+        "(clamped-free Euler-Bernoulli beam modes; error ~ N^-4); default sine",
     )
     g.add_argument(
         "--allow-large",
@@ -438,13 +446,22 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
 
     # --- discretisation -----------------------------------------------
     fe, modal = _given(args, "fe"), _given(args, "modal")
+    basis = _given(args, "basis") or "sine"
+    if basis != "sine" and modal is None:
+        raise CLIError(
+            "--basis",
+            f"{basis} chooses the modes of --modal N and needs it"
+            + (" (finite elements --fe have no basis)" if fe is not None else ""),
+        )
     option, (text, unknowns) = (
         ("--modal", modal) if modal is not None else ("--fe", fe or (None, 0))
     )
     check_count(option, unknowns, MAX_DOFS, large, "unknowns")
     try:
         disc = parse_discretization(
-            fe=None if fe is None else fe[0], modal=None if modal is None else modal[0]
+            fe=None if fe is None else fe[0],
+            modal=None if modal is None else modal[0],
+            basis=basis,
         )
     except ValueError as exc:
         raise CLIError(option, str(exc)) from None

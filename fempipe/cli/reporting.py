@@ -274,6 +274,10 @@ def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu"
     ``result`` is a subcommand's JSON dict with ``params`` and ``discretization``.
     """
     p, d = result["params"], result["discretization"]
-    disc = f"P{d['degree']}:{d['n_elements']}" if d["kind"] == "fe" else f"modal:{d['n_modes']}"
+    if d["kind"] == "fe":
+        disc = f"P{d['degree']}:{d['n_elements']}"
+    else:
+        basis = d.get("basis", "sine")
+        disc = f"modal{'' if basis == 'sine' else '-' + basis}:{d['n_modes']}"
     head = ", ".join(f"{k} = {p[k]:.6g}" for k in keys if k in p)
     return disc, head

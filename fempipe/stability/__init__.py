@@ -30,7 +30,8 @@ modes approximate the continuum.  The rule used here (:func:`resolution`):
    (and so are all lower ones).  P3:16 resolves 27 modes, P3:256 423,
    modal N resolves N - 1: the N-th sine mode is always 8-9 % off
    because a sine basis has theta''(0) = 0 while the clamped-free beam's
-   modes do not (README, "Conventions and derivations").
+   modes do not (README, "Conventions and derivations"); the beam basis
+   (``Modal(N, basis="beam")``) is made of these modes and resolves all N.
 2. An eigenvector of the actual problem (any static state, any v) is expanded
    in the canonical modes (an M(0)-orthonormal basis).  The eigenvalue is
    *resolved* when at least half of the eigenvector's squared M(0)-norm (the

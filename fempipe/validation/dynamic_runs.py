@@ -14,12 +14,13 @@ The linear onset used to check the sweeps comes from
 from __future__ import annotations
 
 import functools
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..bifurcation import sweep
-from ..discretization import Modal, parse_discretization
+from ..discretization import Modal, discretization_from_name, parse_discretization
 from ..dynamics import initial_state, simulate
 from ..kinematics import shape, tip_velocity
 from ..limit_cycle import ShootingError, find_attractor, shoot, tip_coordinates
@@ -37,6 +38,7 @@ __all__ = [
     "cycle_traces",
     "cycles_at",
     "dyn_discretizations",
+    "modal_label",
     "model_for",
     "orbit",
     "project",
@@ -54,8 +56,15 @@ def dyn_discretizations(quick: bool) -> dict:
     fe = DYN_FE_QUICK if quick else DYN_FE
     out = {f"FE {fe}": parse_discretization(fe=fe)}
     for n in PAPER_MODES:
-        out[f"N = {n}"] = Modal(n)
+        disc = Modal(n)
+        out[modal_label(disc)] = disc
     return out
+
+
+def modal_label(disc: Modal) -> str:
+    """The label of a modal discretisation: ``N = 3`` (the paper's sine modes) or
+    ``N = 3 (beam)``; :func:`attractor` rebuilds the discretisation from it."""
+    return f"N = {disc.n_modes}" + ("" if disc.basis == "sine" else f" ({disc.basis})")
 
 
 def model_for(disc, alpha: float, v: float) -> PipeModel:
@@ -86,10 +95,16 @@ def _attractor_cached(spec: str, alpha: float, v: float):
     return find_attractor(model_for(disc, alpha, v))
 
 
+_MODAL_LABEL = re.compile(r"^N = (\d+)(?: \((\w+)\))?$")
+
+
 def _disc_from_spec(spec: str):
-    if spec.startswith("N = "):
-        return Modal(int(spec[4:]))
-    return parse_discretization(fe=spec.removeprefix("FE "))
+    """The discretisation of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`),
+    ``FE P3:8`` or any ``disc.name``."""
+    m = _MODAL_LABEL.match(spec)
+    if m:
+        return Modal(int(m.group(1)), basis=m.group(2) or "sine")
+    return discretization_from_name(spec.removeprefix("FE "))
 
 
 def attractor(label: str, alpha: float, v: float):

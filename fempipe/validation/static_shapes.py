@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..discretization import FiniteElement, Modal, parse_discretization
+from ..discretization import Modal, parse_discretization
 from ..kinematics import shape, tip_values
 from ..operators import PipeModel
 from ..params import PAPER_CASE, Params
@@ -164,10 +164,9 @@ def shape_distance(a: StaticShapes, b: StaticShapes) -> np.ndarray:
 
 
 def refined(disc):
-    """The 2x refined copy of a finite-element discretisation (modal: N doubled)."""
-    if isinstance(disc, FiniteElement):
-        return disc.refined(2)
-    return Modal(2 * disc.n_modes)
+    """The 2x refined copy of a discretisation: every element split in two, or twice
+    the modes of the same modal basis."""
+    return disc.refined(2)
 
 
 @dataclass(frozen=True)
