@@ -229,6 +229,7 @@ def run(args: argparse.Namespace) -> int:
 
         def on_member(done: int, total: int) -> None:
             bar.update()
+            bar.set_postfix_str(f"{done}/{total} members")
 
         study = run_study(
             quantity,
