@@ -308,6 +308,14 @@ def test_tutorial_runs(tmp_path):
     assert (tmp_path / "tutorial_convergence.png").exists()
     orders = [float(line.split("p =")[1]) for line in proc.stdout.splitlines() if "p =" in line]
     assert np.allclose(orders[:3], [2, 4, 6], atol=0.3)
+    # Section 9: the API study of the same case, sine and beam modes included.
+    api = {
+        line.split()[0]: float(line.split("observed order")[1].split()[0])
+        for line in proc.stdout.splitlines()
+        if "observed order" in line
+    }
+    expected = {"fe-P1": 2, "fe-P2": 4, "fe-P3": 6, "modal-sine": 3, "modal-beam": 4}
+    assert api == pytest.approx(expected, abs=0.3)
 
 
 @pytest.mark.slow

@@ -373,7 +373,60 @@ print(
     f"(= {modal_err[2] * pipe.L * 1e3:.2f} mm, {modal_err[3] * pipe.L * 1e3:.3f} mm)"
 )
 
-# %% 9. The plot
+# %% 9. The same study for your own case, through the API
+#
+# Section 8 wrote the study by hand.  fempipe.convergence does it for any
+# quantity of any case -- `fempipe convergence` on the command line -- and
+# forms its reference without knowing the answer: the Richardson
+# extrapolation of the two finest members of each family,
+# Q* = Q_f + (Q_f - Q_c) / (2^p - 1), the family with the smallest
+# correction giving the reference, the others (and solve_bvp) as checks.
+# Here it runs on the same pipe with a second modal basis, the slopes of the
+# clamped-free *beam* modes (Paidoussis's classical Galerkin basis, in theta).
+#
+# Why the orders come out as they do:
+#
+# * P_k: the error of theta is O(h^(k+1)) in L2 and O(h^k) in the energy
+#   norm; a tip value is a functional whose error is the product of two
+#   energy-norm errors (of the problem and of its adjoint), O(h^(2k)), and
+#   in 1-D the nodal values themselves are that accurate.
+# * sine modes: every mode has phi''(0) = 0, but the solution has
+#   theta''(0) = gamma sin(alpha) + v^2 sin(theta(1)) != 0 (Eq. (31a) at
+#   xi = 0).  Integrating a mode's coefficient by parts three times leaves a
+#   boundary term ~ theta''(0) / k_r^3, so the coefficients decay as r^-3,
+#   the energy-norm error of the truncation as N^(-3/2) and a functional's
+#   error as its square, N^-3.
+# * beam modes: psi_r = phi_r' / lambda_r with phi'''' = lambda^4 phi, so
+#   every mode has psi'''(0) = lambda_r^3 phi_r(0) = 0: the constraint comes
+#   one derivative later than the sine modes'.  The solution's
+#   theta'''(0) = -gamma sin(alpha) + (gamma cos(alpha) - v^2) theta'(0)
+#   (Eq. (31a) differentiated once) is not zero either, so the coefficients
+#   decay one power faster (r^-4) and functionals converge as N^-4: better
+#   than the sine modes, still algebraic.
+
+from fempipe.convergence import Family, Quantity, run_study
+
+study = run_study(
+    Quantity("X_tip", params),
+    [
+        Family("fe", (4, 8, 16, 32, 64), degree=1),
+        Family("fe", (2, 4, 8, 16), degree=2),
+        Family("fe", (2, 4, 8, 16), degree=3),
+        Family("modal", (2, 4, 8, 16, 32), basis="sine"),
+        Family("modal", (2, 4, 8, 16, 32), basis="beam"),
+    ],
+    independent=[("solve_bvp", bvp.X_tip)],
+)
+print(f"\nfempipe.convergence: reference {study.reference.value:.12f}")
+print(f"  formed by {study.reference.method}")
+print(f"  solve_bvp differs by {abs(study.reference.value - bvp.X_tip):.1e}")
+for s in study.series:
+    print(
+        f"  {s.family:11s} observed order {s.observed_order:.2f} in dofs "
+        f"(theory {s.expected_order:g}; fitted on n = {[int(s.n[i]) for i in s.fit]})"
+    )
+
+# %% 10. The plot
 #
 # Expected: slopes 2, 4, 6 for P1, P2, P3 and about 3 for the sine modes.
 # P3 reaches 1e-10 with about fifty unknowns; at slope 3 the sine modes
