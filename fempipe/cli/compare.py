@@ -246,7 +246,10 @@ class _Where:
         return CLIError(self.path, message)
 
     def header(self, column: str | None, message: str) -> CLIError:
-        where = "header" if column is None else f"header, column {column}"
+        if column is None:
+            where = "header"
+        else:
+            where = f"header, {'columns' if ', ' in column else 'column'} {column}"
         return CLIError(self.path, f"{where}: {message}")
 
     def cell(self, row: int, line: int, column: str | None, message: str) -> CLIError:
@@ -280,10 +283,12 @@ def _read_lines(path: str, where: _Where) -> list[tuple[int, list[str]]]:
         try:
             cells = next(csv.reader([line], strict=True))
         except csv.Error as exc:
-            raise where.file(f"line {number}: not CSV ({exc})") from None
+            if not out:
+                raise where.header(None, f"line {number} is not CSV ({exc})") from None
+            raise where.cell(len(out), number, None, f"not CSV ({exc})") from None
         out.append((number, [c.strip() for c in cells]))
     if not out:
-        raise where.file("empty: no header line (and no data)")
+        raise where.file("no header line: the file is empty or holds only comments")
     return out
 
 
@@ -337,7 +342,7 @@ def _parse_header(cells: list[str], where: _Where) -> list[str]:
         if missing:
             raise where.header(
                 ", ".join(missing),
-                f"missing: the SI pipe needs the columns {', '.join(_SI_REQUIRED)} together",
+                f"missing; the SI pipe needs the columns {', '.join(_SI_REQUIRED)} together",
             )
     return names
 
@@ -408,12 +413,17 @@ def _parse_row(names, cells, row, line, v_max_default, where) -> Case:  # noqa: 
     defaults: dict[str, float] = {}
     if "alpha_deg" in nums:
         if abs(nums["alpha_deg"]) > 360.0:
-            raise err("alpha_deg", f"{nums['alpha_deg']:g} is outside -360 <= alpha_deg <= 360")
+            raise err(
+                "alpha_deg",
+                f"alpha_deg = {nums['alpha_deg']:g} is outside -360 <= alpha_deg <= 360 (degrees)",
+            )
         alpha = math.radians(nums["alpha_deg"])
     elif "alpha" in nums:
         alpha = nums["alpha"]
         if abs(alpha) > parsing.ALPHA_MAX:
-            raise err("alpha", f"{alpha:g} is outside -2pi <= alpha <= 2pi (an angle, in rad)")
+            raise err(
+                "alpha", f"alpha = {alpha:g} is outside -2pi <= alpha <= 2pi (an angle, in rad)"
+            )
     else:
         alpha = 0.0
         defaults["alpha"] = 0.0
@@ -759,7 +769,9 @@ def _print(result: dict) -> None:
         f"{'rel. diff.':>11} {'error est.':>10} {'resolved':>8}"
     )
     for r in rows:
-        rel = _fmt(r["relative_difference"], "{:+.3%}")
+        rel = (
+            "-" if r["relative_difference"] is None else f"{100 * r['relative_difference']:+.3g} %"
+        )
         resolved = {True: "yes", False: "no", None: "-"}[r["resolved"]]
         print(
             f"{r['row']:>4} {r['quantity']:<12} {_fmt(r['user']):>15} {_fmt(r['fempipe']):>17} "

@@ -95,6 +95,7 @@ def plot_comparison(rows: Sequence[dict], caption: str = "", title: str | None =
         squeeze=False,
         gridspec_kw={"height_ratios": [1.6, 1.0] * blocks},
     )
+    labels = []
     for k in range(blocks * ncol):
         top = axes[2 * (k // ncol), k % ncol]
         bottom = axes[2 * (k // ncol) + 1, k % ncol]
@@ -104,20 +105,35 @@ def plot_comparison(rows: Sequence[dict], caption: str = "", title: str | None =
             continue
         name = quantities[k]
         sel = [r for r in rows if r["quantity"] == name and r["fempipe"] is not None]
-        _draw(top, bottom, name, sel, declutter)
+        labels.append((top, _draw(top, bottom, name, sel)))
     fig.suptitle(title or "user values against fempipe", fontsize=11)
     if caption:
         fig.supxlabel(textwrap.fill(caption, int(width * 14)), fontsize=9, ha="center")
+    # The row labels: one draw places every text, then those that collide go.
+    fig.canvas.draw()
+    for ax, texts in labels:
+        legend = ax.get_legend()
+        declutter(ax, texts, keep_clear=[] if legend is None else [legend], draw=False)
     return fig
 
 
-def _draw(top, bottom, name: str, rows: list[dict], declutter) -> None:
+def _draw(top, bottom, name: str, rows: list[dict]) -> list:
+    """Draw one quantity's panels; returns the row labels of the top panel."""
     label = LABELS.get(name, name)
     top.set_title(name, fontsize=10)
     if not rows:
-        top.text(0.5, 0.5, "no fempipe value", ha="center", va="center", transform=top.transAxes)
+        top.text(
+            0.5,
+            0.5,
+            "no fempipe value\n(failed)",
+            ha="center",
+            va="center",
+            transform=top.transAxes,
+        )
+        top.set_xticks([])
+        top.set_yticks([])
         bottom.set_visible(False)
-        return
+        return []
     x = np.array([r["fempipe"] for r in rows], dtype=float)
     y = np.array([r["user"] for r in rows], dtype=float)
     d = np.array([r["difference"] for r in rows], dtype=float)
@@ -157,7 +173,7 @@ def _draw(top, bottom, name: str, rows: list[dict], declutter) -> None:
     top.set_xlabel(f"fempipe: {label}", fontsize=9)
     top.set_ylabel(f"user: {label}", fontsize=9)
     top.grid(alpha=0.3, which="both")
-    top.legend(fontsize=8, loc="upper left", frameon=False)
+    top.legend(fontsize=8, loc="best", frameon=False)
     texts = [
         top.annotate(
             str(r["row"]),
@@ -175,4 +191,4 @@ def _draw(top, bottom, name: str, rows: list[dict], declutter) -> None:
     bottom.set_ylabel("user − fempipe", fontsize=9)
     bottom.grid(alpha=0.3, which="both")
     bottom.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
-    declutter(top, texts, keep_clear=[top.get_legend()])
+    return texts

@@ -14,7 +14,9 @@ from collections.abc import Sequence
 __all__ = ["declutter"]
 
 
-def declutter(ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = ()) -> list:
+def declutter(
+    ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = (), draw: bool = True
+) -> list:
     """Hide every text of ``texts`` that overlaps an earlier visible one.
 
     Parameters
@@ -27,6 +29,9 @@ def declutter(ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = ()) 
         Clearance between labels, pixels.
     keep_clear : sequence of Artist
         Artists (a legend) that no kept label may overlap.
+    draw : bool
+        Draw the figure first, to place every text (False: the caller has
+        just drawn it, e.g. once for the labels of several axes).
 
     Returns
     -------
@@ -34,7 +39,8 @@ def declutter(ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = ()) 
         The texts kept visible.
     """
     fig = ax.figure
-    fig.canvas.draw()
+    if draw:
+        fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     frame = ax.get_window_extent(renderer)
     kept = []
