@@ -71,7 +71,7 @@ def test_table_against_independent_solutions(tmp_path, capsys):
         "hanging,0,,,6.4,,",
         "",
         "# the next row is at 60 degrees",
-        "inclined,pi/3,18.9,2,,0.9,-0.8",
+        "inclined,pi/3,18.9,2,6.4,0.9,-0.8",
     )
     out = tmp_path / "out"
     code, res, err = run_json(["compare", path, "--modal", "3", "--out", str(out)], capsys)
@@ -79,11 +79,12 @@ def test_table_against_independent_solutions(tmp_path, capsys):
     rows = res["rows"]
     assert [(r["row"], r["quantity"]) for r in rows] == [
         (1, "v_cr"),
+        (2, "v_cr"),
         (2, "X_tip"),
         (2, "theta_tip"),
     ]
-    assert [r["line"] for r in rows] == [3, 6, 6]
-    assert [r["label"] for r in rows] == ["hanging", "inclined", "inclined"]
+    assert [r["line"] for r in rows] == [3, 6, 6, 6]
+    assert [r["label"] for r in rows] == ["hanging", "inclined", "inclined", "inclined"]
     for r in rows:
         assert set(CONTRACT) <= set(r), r
     assert res["discretization"]["name"] == "modal:3"
@@ -91,7 +92,7 @@ def test_table_against_independent_solutions(tmp_path, capsys):
     assert res["error_estimate"]["order"] == 3
 
     # v_cr: the value and the refined value from the independent implementation.
-    (vcr,) = rows_of(res, "v_cr")
+    vcr, vcr2 = rows_of(res, "v_cr")
     q3 = critical_velocity(Modal(3), alpha=0.0, v_max=15.0).v_cr
     q6 = critical_velocity(Modal(6), alpha=0.0, v_max=15.0).v_cr
     assert abs(vcr["fempipe"] - q3) < 1e-8
@@ -110,26 +111,30 @@ def test_table_against_independent_solutions(tmp_path, capsys):
         "v_min": 0.0,
         "v_max": 15.0,
     }
+    # Each entry gives the flow its quantity uses: the range for v_cr, v for the tip values.
+    assert (vcr2["v"], vcr2["v_min"], vcr2["v_max"]) == (None, 0.0, 15.0)
+    assert vcr2["defaults"] == {"beta": 0.142, "mu": 0.005, "v_min": 0.0, "v_max": 15.0}
 
     # Static tip values: the collocation solution lies within fempipe's estimate.
     bvp = solve_static_bvp(math.pi / 3, 18.9, 2.0, tol=1e-10)
     for name, exact in (("X_tip", bvp.X_tip), ("theta_tip", bvp.theta_tip)):
         (r,) = rows_of(res, name)
         assert r["alpha"] == pytest.approx(math.pi / 3, abs=1e-15)
-        assert r["v"] == 2.0 and r["v_min"] is None
+        assert r["v"] == 2.0 and r["v_min"] is None and r["v_max"] is None
+        assert r["defaults"] == {"beta": 0.142, "mu": 0.005}
         true_error = abs(r["fempipe"] - exact)
         assert 1e-4 < true_error < r["error_estimate"], (name, true_error, r["error_estimate"])
         assert abs(r["refined"] - exact) < true_error  # six modes are closer
         assert r["difference"] == r["user"] - r["fempipe"]
         assert r["resolved"] is (abs(r["difference"]) > r["error_estimate"])
-    assert res["summary"]["comparisons"] == 3 and res["summary"]["failed"] == 0
+    assert res["summary"]["comparisons"] == 4 and res["summary"]["failed"] == 0
 
     # The files: compare.csv holds the JSON's rows, the figure's texts fit.
     assert sorted(p.name for p in out.iterdir()) == ["compare.csv", "compare.json", "compare.png"]
     assert json.loads((out / "compare.json").read_text()) == res
     cols = read_csv(out / "compare.csv")
-    assert cols["row"].tolist() == [1, 2, 2]
-    assert cols["unit"].tolist() == ["1", "L", "rad"]
+    assert cols["row"].tolist() == [1, 2, 2, 2]
+    assert cols["unit"].tolist() == ["1", "1", "L", "rad"]
     for key in ("user", "fempipe", "difference", "relative_difference", "error_estimate"):
         assert cols[key].tolist() == [r[key] for r in rows], key
     assert cols["resolved"].tolist() == [r["resolved"] for r in rows]

@@ -81,6 +81,7 @@ from pathlib import Path
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+from fempipe.params import Params, PipeSI
 
 __all__ = ["COLUMNS", "DEFAULT_V_MAX", "Case", "add_arguments", "read_cases", "run"]
 
@@ -203,11 +204,11 @@ class Case:
     row: int
     line: int
     values: dict
-    params: object
+    params: Params
     v: float | None
     v_range: tuple[float, float] | None
     defaults: dict = field(default_factory=dict)
-    pipe: object = None
+    pipe: PipeSI | None = None
     U: float | None = None
     U_range: tuple[float, float] | None = None
     label: str | None = None
@@ -223,8 +224,14 @@ class Case:
             return Quantity(name, replace(self.params, v=lo), v_max=hi, shoot_rtol=shoot_rtol)
         return Quantity(name, self.params, shoot_rtol=shoot_rtol)
 
-    def to_dict(self) -> dict:
-        """The parameters of the row, flat (the keys of an output row after the comparison)."""
+    def to_dict(self, quantity: str | None = None) -> dict:
+        """The parameters of the row, flat (the keys of an output row after the comparison).
+
+        With ``quantity``, only the flow that quantity uses is given: ``v``
+        (``U``) for a static tip value or a limit cycle, ``v_min``, ``v_max``
+        (``U_min``, ``U_max``) for v_cr and frequency; the other keys are
+        None, and ``defaults`` lists only what the quantity uses.
+        """
         p = self.params
         out = {"alpha": p.alpha, "beta": p.beta, "gamma": p.gamma, "mu": p.mu, "v": self.v}
         out["v_min"], out["v_max"] = self.v_range if self.v_range else (None, None)
@@ -232,7 +239,14 @@ class Case:
             out["U"] = self.U
             out["U_min"], out["U_max"] = self.U_range if self.U_range else (None, None)
             out["pipe_SI"] = self.pipe.to_dict()
-        out["defaults"] = dict(self.defaults)
+        defaults = dict(self.defaults)
+        if quantity is not None:
+            unused = ("v", "U") if quantity in _CRITICAL else ("v_min", "v_max", "U_min", "U_max")
+            for key in unused:
+                if key in out:
+                    out[key] = None
+                defaults.pop(key, None)
+        out["defaults"] = defaults
         return out
 
 
@@ -372,11 +386,13 @@ def _check_group(name: str, x: float) -> float:
         raise ValueError(_strip_option(str(exc), name)) from None
 
 
-def _parse_row(names, cells, row, line, v_max_default, where) -> Case:  # noqa: C901
+def _parse_row(
+    names: list[str], cells: list[str], row: int, line: int, v_max_default: float, where: _Where
+) -> Case:
+    """One data row checked into a :class:`Case` (CLIError naming the row and column)."""
     from fempipe.errors import ParamError
-    from fempipe.params import Params, PipeSI
 
-    def err(column, message):
+    def err(column: str | None, message: str) -> CLIError:
         return where.cell(row, line, column, message)
 
     if len(cells) != len(names):
@@ -614,7 +630,7 @@ def run(args: argparse.Namespace) -> int:
         row |= {k: d[k] for k in ("relative_difference", "error_estimate", "resolved")}
         row |= {"unit": CSV_UNITS[name], "refined": d["refined"]}
         row |= {"failure": d["failure"], "note": d["note"]}
-        row |= case.to_dict()
+        row |= case.to_dict(name)
         row["cpu_time"] = d["cpu_time"]
         rows.append(row)
     quantities = list(dict.fromkeys(name for _, name in items))
