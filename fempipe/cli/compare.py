@@ -274,7 +274,7 @@ class _Where:
 
 
 def _norm_unit(unit: str) -> str:
-    return re.sub(r"[\s*·^]", "", unit)
+    return re.sub(r"[\s*·^]", "", unit).replace("²", "2")
 
 
 def _read_lines(path: str, where: _Where) -> list[tuple[int, list[str]]]:
