@@ -600,11 +600,13 @@ def run_study(
             "no family has two successful members: the reference cannot be formed "
             f"(failures: {[(f.label, fl) for f, _, fl, _ in raw if fl]})"
         )
-    best = min(usable, key=lambda k: usable[k][1])
-    ref, ref_err, how = usable[best]
+    # Smallest estimate; among estimates raised to the solver tolerance, the
+    # smallest correction.
+    best = min(usable, key=lambda k: (usable[k][1], usable[k][3]))
+    ref, ref_err, how, ref_raw = usable[best]
     scale = max(1.0, abs(ref))
     indep = []
-    for label, (val, err, _how) in usable.items():
+    for label, (val, err, _how, _raw) in usable.items():
         if label != best:
             indep.append(
                 {
@@ -626,7 +628,11 @@ def run_study(
     method = f"Richardson extrapolation of {best}: {how}"
     reference = Reference(ref, ref_err, method, best, tuple(indep))
 
-    floor = max(10.0 * ref_err, tol * scale)
+    # Fit only errors well above the reference's own (before it was raised to
+    # the solver tolerance) and above the solver tolerance: this leaves out
+    # the finest member of the reference family, whose error is the
+    # correction itself.
+    floor = max(10.0 * ref_raw, tol * scale)
     series = []
     for f, values, fails, cpu in raw:
         dofs = np.array([f.dofs(n) for n in f.sizes])
@@ -662,7 +668,10 @@ def run_study(
 
 
 def _extrapolate(f: Family, values: np.ndarray, tol: float):
-    """``(value, error_estimate, how)`` from the two finest usable members, or None."""
+    """``(value, error_estimate, how, raw)`` from the two finest usable members, or None.
+
+    ``raw`` is the estimate before it is raised to the solver tolerance.
+    """
     sizes = np.array(f.sizes, dtype=float)
     ok = np.flatnonzero(np.isfinite(values))
     if ok.size < 2 or ok[-1] != ok[-2] + 1:
@@ -675,20 +684,22 @@ def _extrapolate(f: Family, values: np.ndarray, tol: float):
     if p is None:
         if lo.size == 0 or not np.isfinite(lo[-1]) or lo[-1] <= 0:
             # No theory and no measured order: the last difference is the estimate.
-            err = max(float(abs(values[j] - values[i])), floor)
+            raw = float(abs(values[j] - values[i]))
             return (
                 complex(values[j]) if np.iscomplexobj(values) else float(values[j]),
-                err,
+                max(raw, floor),
                 (
                     f"finest member n = {f.sizes[j]}, estimate |Q(n={f.sizes[j]}) - "
                     f"Q(n={f.sizes[i]})| (no order known)"
                 ),
+                raw,
             )
         p = float(lo[-1])
         source = f"observed local order {p:.2f}"
     else:
         source = f"theoretical order {p:g}"
     val, corr = richardson(values[i], values[j], p, r)
+    raw = corr
     err = max(corr, floor)
     how = (
         f"n = {f.sizes[i]}, {f.sizes[j]} with the {source} (ratio {r:g}); error estimate "
@@ -698,9 +709,10 @@ def _extrapolate(f: Family, values: np.ndarray, tol: float):
     if lo.size and np.isfinite(lo[-1]) and abs(lo[-1] - p) > 0.5 * p and corr > floor:
         # Not yet asymptotic: the correction is no measure of the error; use
         # the last difference itself, a safer bound.
-        err = max(float(abs(values[j] - values[i])), floor)
+        raw = float(abs(values[j] - values[i]))
+        err = max(raw, floor)
         how += (
             f"; the last local order {lo[-1]:.2f} is far from {p:g} (not asymptotic), so the "
             f"estimate is the last difference {err:.2e}"
         )
-    return val, err, how
+    return val, err, how, raw
