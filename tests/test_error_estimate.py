@@ -212,8 +212,15 @@ def _static_reference(alpha, vs):
     return [tip_values(disc, s.q, alpha) for s in sols]
 
 
-@pytest.mark.parametrize("disc", [["--fe", "P2:4"], ["--modal", "3"]])
-def test_static_estimates_bound_the_true_error(capsys, disc):
+@pytest.mark.parametrize(
+    "disc, refined, order",
+    [
+        (["--fe", "P2:4"], "P2:8", 4),
+        (["--modal", "3"], "modal:6", 3),
+        (["--modal", "3", "--basis", "beam"], "modal-beam:6", 4),
+    ],
+)
+def test_static_estimates_bound_the_true_error(capsys, disc, refined, order):
     argv = ["static", *disc, "--alpha", "pi/2", "--v", "0,5"]
     d = run_json(capsys, [*argv, "--error-estimate"])
     ref = _static_reference(math.pi / 2, [0.0, 5.0])
@@ -223,8 +230,7 @@ def test_static_estimates_bound_the_true_error(capsys, disc):
             assert_bounds(pt[k + "_error"], pt[k], r[k], f"{k} at v = {pt['v']}")
         assert pt["tip_drop_error"] == pytest.approx(pt["X_tip_error"], rel=1e-9)
     est = d["error_estimate"]
-    assert est["refined"] == ("P2:8" if disc[0] == "--fe" else "modal:6")
-    assert est["order"] == (4 if disc[0] == "--fe" else 3) and est["notes"] == []
+    assert est["refined"] == refined and est["order"] == order and est["notes"] == []
     # The reported numbers are those of the run without the option.
     plain = run_json(capsys, argv)
     for a, b in zip(plain["points"], d["points"], strict=True):

@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 iterations=exc.iterations,
                 residual=exc.residual,
             ) from exc
-        refined = _refined_states(model, sols, bar) if args.error_estimate else None
+        refined = _refined_states(model, sols, parameter, bar) if args.error_estimate else None
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
     # solve_path reaches its first point by the gravity loading (gamma continued
@@ -174,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _refined_states(model, sols, bar) -> tuple:
+def _refined_states(model, sols, parameter: str, bar) -> tuple:
     """``(refined discretisation, states, ErrorEstimate, notes)``: each static state solved
     again on the refined discretisation (None where Newton fails there, with a note).
 
@@ -198,7 +198,8 @@ def _refined_states(model, sols, bar) -> tuple:
             states.append(solve_static(fine_model.with_params(sol.params), q0=q0, tol=NEWTON_TOL))
         except NewtonError as exc:
             states.append(None)
-            notes.append(f"v = {sol.params.v:.6g}: no refined state ({exc}); errors null")
+            value = getattr(sol.params, parameter)
+            notes.append(f"{parameter} = {value:.6g}: no refined state ({exc}); errors null")
         bar.update()
     return fine, states, info, notes
 
