@@ -13,14 +13,17 @@ nothing else is ever asked of it):
 ``gram``       L2 Gram matrix ``\\int phi_i phi_j``, shape (n, n): the metric
                of theta (arclength of continuation, L2 projections);
 ``sparse``     whether ``Phi``, ``K`` and ``gram`` are scipy sparse matrices;
-``name``       the CLI spelling (``P3:16``, ``modal:4``);
+``name``       the CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``;
+               :func:`discretization_from_name` is the inverse);
 ``evaluate``   theta at arbitrary points, for post-processing;
 ``to_dict``    a JSON-able description.
 
 :class:`FiniteElement` is the package's point: 1-D Lagrange elements of any
 degree on a scikit-fem ``MeshLine``.  :class:`Modal` is the paper's sine-mode
-Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2).  Solvers only use
-the contract and never ask which one they have.
+Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2), or with
+``basis="beam"`` the same method on the slopes of the clamped-free beam modes
+(error N^-4 instead of N^-3, :data:`EXPECTED_ORDER`).  Solvers only use the
+contract and never ask which one they have.
 """
 
 from __future__ import annotations
