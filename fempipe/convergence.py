@@ -516,8 +516,13 @@ def _number(x):
 
 def _member(quantity: Callable, family: Family, size: int) -> tuple[complex | float, float]:
     """Value of one member and its CPU seconds (a worker task)."""
+    from .parallel import single_blas_thread
+
     t0 = time.process_time()
-    value = quantity(family.discretization(size))
+    # The dense solves of a member are small: BLAS threads cost more than they
+    # give (up to 50x on a loaded machine for N = 32 modes).
+    with single_blas_thread():
+        value = quantity(family.discretization(size))
     return value, time.process_time() - t0
 
 
