@@ -79,6 +79,20 @@ def _dense(A) -> np.ndarray:
     return A.toarray() if sp.issparse(A) else np.asarray(A)
 
 
+#: Variant terms the model has (the others are refused, never ignored).
+IMPLEMENTED_VARIANTS: frozenset[str] = frozenset()
+
+
+def _check_implemented(params: Params) -> None:
+    missing = [
+        name
+        for name in ("end_mass", "external_damping", "hysteretic_damping", "springs")
+        if getattr(params, name) and name not in IMPLEMENTED_VARIANTS
+    ]
+    if missing:
+        raise NotImplementedError(f"the model has no {', '.join(missing)} term yet")
+
+
 class PipeModel:
     """Residual of the weak form of Eq. (20) and its analytic Jacobians.
 
@@ -98,6 +112,7 @@ class PipeModel:
     """
 
     def __init__(self, disc: Discretization, params: Params) -> None:
+        _check_implemented(params)
         self.disc = disc
         self.params = params
         self.quad = disc.quad
@@ -107,6 +122,7 @@ class PipeModel:
 
     def with_params(self, params: Params) -> PipeModel:
         """Return a model on the same discretisation with other parameters."""
+        _check_implemented(params)
         new = object.__new__(PipeModel)
         new.__dict__.update(self.__dict__)
         new.params = params

@@ -19,7 +19,12 @@ from dataclasses import asdict, dataclass, replace
 
 from .errors import ParamError
 
-__all__ = ["PAPER_CASE", "Params", "PipeSI"]
+__all__ = ["PAPER_CASE", "VARIANT_FIELDS", "Params", "PipeSI"]
+
+#: The fields of :class:`Params` that pose the classical variants of the pipe
+#: (end mass, external and hysteretic damping, intermediate springs); all zero
+#: (or empty) is the paper's pipe.
+VARIANT_FIELDS = ("end_mass", "external_damping", "hysteretic_damping", "springs")
 
 #: The paper's reference case (Chen et al. 2020, Secs. 4-5): mass ratio,
 #: gravity parameter and Kelvin--Voigt damping.  Stated here once; the
@@ -54,6 +59,18 @@ class Params:
         Kelvin--Voigt damping sqrt(EI/(m+M)) a / L^2 >= 0.
     v : float
         Flow velocity sqrt(M/EI) U L >= 0 (discharge at the free end).
+    end_mass : float
+        Point mass at the free end, Gamma = M_e / ((m+M) L) >= 0 (no fluid in
+        it; the jet leaves as before).
+    external_damping : float
+        Viscous damping by the surrounding fluid, a force -c r_dot per unit
+        length: sigma = c L^2 / sqrt(EI (m+M)) >= 0.
+    hysteretic_damping : float
+        Structural loss factor mu_h >= 0: EI -> EI (1 + i mu_h sgn(omega)) in
+        the linear stability problem only (no time-domain meaning).
+    springs : tuple of (kappa, xi_s)
+        Isotropic linear springs tying the pipe point at xi_s (0 < xi_s <= 1)
+        to its undeformed position, kappa = k L^3 / EI >= 0.
     """
 
     alpha: float = 0.0
@@ -61,10 +78,33 @@ class Params:
     gamma: float = PAPER_CASE["gamma"]
     mu: float = PAPER_CASE["mu"]
     v: float = 0.0
+    end_mass: float = 0.0
+    external_damping: float = 0.0
+    hysteretic_damping: float = 0.0
+    springs: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
-        for name in ("alpha", "beta", "gamma", "mu", "v"):
+        for name in ("alpha", "beta", "gamma", "mu", "v") + VARIANT_FIELDS[:3]:
             object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
+        for name in VARIANT_FIELDS[:3]:
+            if getattr(self, name) < 0.0:
+                raise ParamError(name, f"{name} must be >= 0, got {getattr(self, name)}")
+        springs = []
+        for item in self.springs:
+            try:
+                kappa, xi_s = item
+            except (TypeError, ValueError):
+                raise ParamError(
+                    "springs", f"each spring is a pair (kappa, xi_s), got {item!r}"
+                ) from None
+            kappa = _check_finite("springs", kappa)
+            xi_s = _check_finite("springs", xi_s)
+            if kappa < 0.0:
+                raise ParamError("springs", f"spring stiffness kappa must be >= 0, got {kappa}")
+            if not 0.0 < xi_s <= 1.0:
+                raise ParamError("springs", f"spring position xi_s must be in (0, 1], got {xi_s}")
+            springs.append((kappa, xi_s))
+        object.__setattr__(self, "springs", tuple(springs))
         if not 0.0 <= self.beta <= 1.0:
             raise ParamError("beta", f"beta must satisfy 0 <= beta <= 1, got {self.beta}")
         if self.gamma < 0.0:
@@ -87,8 +127,17 @@ class Params:
         """Return a copy with flow velocity ``v``."""
         return replace(self, v=v)
 
-    def to_dict(self) -> dict[str, float]:
-        return asdict(self)
+    @property
+    def is_variant(self) -> bool:
+        """Whether any variant term (end mass, damping, springs) is present."""
+        return bool(
+            self.end_mass or self.external_damping or self.hysteretic_damping or self.springs
+        )
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["springs"] = [list(s) for s in self.springs]
+        return d
 
 
 @dataclass(frozen=True)
@@ -188,6 +237,13 @@ class PipeSI:
     def U_of_v(self, v: float) -> float:
         """Flow velocity in m/s for dimensionless ``v``."""
         return v * self.velocity_scale if v else 0.0
+
+    def end_mass_ratio(self, M_e: float) -> float:
+        """Gamma = M_e / ((m+M) L) of an end mass ``M_e`` in kg."""
+        M_e = _check_finite("end_mass", M_e)
+        if M_e < 0:
+            raise ParamError("end_mass", f"the end mass must be >= 0 kg, got {M_e}")
+        return M_e / ((self.m + self.M) * self.L)
 
     def params(self, U: float = 0.0) -> Params:
         """Dimensionless :class:`Params` at flow velocity ``U`` (m/s), Eq. (19)."""

@@ -129,4 +129,14 @@ def test_with_flow_returns_a_modified_copy():
     p = Params(alpha=1.0)
     q = p.with_flow(3.0)
     assert (p.v, q.v, q.alpha) == (0.0, 3.0, 1.0)
-    assert q.to_dict() == {"alpha": 1.0, "beta": 0.142, "gamma": 18.9, "mu": 5e-3, "v": 3.0}
+    assert q.to_dict() == {
+        "alpha": 1.0,
+        "beta": 0.142,
+        "gamma": 18.9,
+        "mu": 5e-3,
+        "v": 3.0,
+        "end_mass": 0.0,
+        "external_damping": 0.0,
+        "hysteretic_damping": 0.0,
+        "springs": [],
+    }

@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
 
+    common.refuse_hysteretic(args, "bifurcation")
     setup = common.setup_from_args(args)
     directions, alphas, workers = _parse(args)
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol

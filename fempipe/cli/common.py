@@ -47,10 +47,14 @@ from .parsing import (
     DEFAULT_G,
     DEFAULT_GAMMA,
     DEFAULT_MU,
+    END_MASS_MAX,
+    EXTERNAL_DAMPING_MAX,
     GAMMA_MAX,
+    HYSTERETIC_MAX,
     MAX_DOFS,
     MAX_VALUES,
     MU_MAX,
+    SPRING_MAX,
     T_MAX,
     V_MAX,
     CLIError,
@@ -67,6 +71,7 @@ from .parsing import (
     modal_type,
     mu_type,
     number_type,
+    spring_type,
     v_list_type,
 )
 
@@ -173,6 +178,54 @@ def add_physical_arguments(parser: argparse.ArgumentParser, alpha: bool = True) 
         ("--a", "a", "Kelvin-Voigt retardation time, s (default 0)"),
     ):
         si.add_argument(opt, metavar=metavar, type=number_type(opt), default=None, help=text)
+    si.add_argument(
+        "--end-mass-kg",
+        metavar="KG",
+        type=number_type("--end-mass-kg", 0.0),
+        default=None,
+        help="point mass at the free end, kg (sets --end-mass = M_e / ((m+M) L))",
+    )
+    add_variant_arguments(parser)
+
+
+def add_variant_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--end-mass``, ``--external-damping``, ``--hysteretic-damping``, ``--spring``."""
+    g = parser.add_argument_group(
+        "variants of the pipe",
+        "dimensionless, scaled as Eq. (19); all zero is the paper's pipe",
+    )
+    g.add_argument(
+        "--end-mass",
+        metavar="GAMMA_E",
+        type=number_type("--end-mass", 0.0, END_MASS_MAX),
+        default=None,
+        help=f"point mass at the free end over the pipe's mass, M_e/((m+M) L), 0..{END_MASS_MAX:g}",
+    )
+    g.add_argument(
+        "--external-damping",
+        metavar="SIGMA",
+        type=number_type("--external-damping", 0.0, EXTERNAL_DAMPING_MAX),
+        default=None,
+        help="viscous damping by the surrounding fluid, a force -c r_dot per length: "
+        f"sigma = c L^2 / sqrt(EI (m+M)), 0..{EXTERNAL_DAMPING_MAX:g}",
+    )
+    g.add_argument(
+        "--hysteretic-damping",
+        metavar="MU_H",
+        type=number_type("--hysteretic-damping", 0.0, HYSTERETIC_MAX),
+        default=None,
+        help="structural loss factor, EI -> EI (1 + i MU_H sgn(omega)) in the linear stability "
+        f"problem only (spectrum, critical, stability-map), 0..{HYSTERETIC_MAX:g}",
+    )
+    g.add_argument(
+        "--spring",
+        metavar="KAPPA@XI_S",
+        action="append",
+        type=spring_type,
+        default=None,
+        help="linear spring tying the point xi_s (0 < XI_S <= 1) to its undeformed position, "
+        f"kappa = k L^3 / EI, 0..{SPRING_MAX:g}; repeat for several springs",
+    )
 
 
 def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0:10:11") -> None:
@@ -419,6 +472,9 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
         except ParamError as exc:
             raise CLIError(_DIMLESS_OPTION[exc.field], str(exc)) from None
 
+    # --- variants of the pipe -----------------------------------------
+    base = _with_variants(args, base, pipe)
+
     # --- flow ---------------------------------------------------------
     v_list: list[float] = []
     U_list: list[float] | None = None
@@ -467,3 +523,56 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
         raise CLIError(option, str(exc)) from None
 
     return Setup(params=params, pipe=pipe, v=v_list, disc=disc, U=U_list)
+
+
+def _with_variants(args: argparse.Namespace, base: Params, pipe: PipeSI | None) -> Params:
+    """``base`` with the end mass, dampings and springs of the command line."""
+    end_mass = _given(args, "end_mass")
+    end_mass_kg = _given(args, "end_mass_kg")
+    if end_mass_kg is not None:
+        if pipe is None:
+            raise CLIError(
+                "--end-mass-kg",
+                "needs the SI pipe (--length --EI --m --M); use "
+                "--end-mass for the dimensionless Gamma = M_e / ((m+M) L)",
+            )
+        if end_mass is not None:
+            raise CLIError("--end-mass-kg", "give --end-mass or --end-mass-kg, not both")
+        end_mass = pipe.end_mass_ratio(end_mass_kg)
+        if end_mass > END_MASS_MAX:
+            raise CLIError(
+                "--end-mass-kg",
+                f"M_e = {end_mass_kg:g} kg is Gamma = {end_mass:.6g} > {END_MASS_MAX:g} times "
+                "the pipe's mass",
+            )
+    kw = {
+        "end_mass": end_mass,
+        "external_damping": _given(args, "external_damping"),
+        "hysteretic_damping": _given(args, "hysteretic_damping"),
+        "springs": tuple(_given(args, "spring") or ()) or None,
+    }
+    kw = {k: x for k, x in kw.items() if x is not None}
+    if not kw:
+        return base
+    try:
+        return replace(base, **kw)
+    except ParamError as exc:
+        raise CLIError(_VARIANT_OPTION.get(exc.field, "--" + exc.field), str(exc)) from None
+
+
+_VARIANT_OPTION = {
+    "end_mass": "--end-mass",
+    "external_damping": "--external-damping",
+    "hysteretic_damping": "--hysteretic-damping",
+    "springs": "--spring",
+}
+
+
+def refuse_hysteretic(args: argparse.Namespace, command: str) -> None:
+    """Time-domain commands: hysteretic damping has no meaning there (one-line error)."""
+    if _given(args, "hysteretic_damping"):
+        raise CLIError(
+            "--hysteretic-damping",
+            f"has no time-domain meaning (EI (1 + i mu_h) acts on harmonic motion only); "
+            f"{command} cannot use it: use spectrum, critical or stability-map",
+        )

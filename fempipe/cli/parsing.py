@@ -483,3 +483,31 @@ def parse_alpha_list(text: str, option: str, allow_large: bool = False) -> list[
         if isinstance(exc, CLIError):
             raise
         raise CLIError(option, str(exc).replace("--alpha ", f"{option} ")) from None
+
+
+#: Ranges of the variant options.  Gamma_e <= 100: a tip mass a hundred times
+#: the pipe's is a pendulum on a massless spring, far outside the model's
+#: purpose; sigma <= 100 and kappa <= 1e5 (a spring that stiff pins the pipe:
+#: its first frequency is then within 1e-3 of the pinned one); mu_h <= 1 (loss
+#: factors of real materials are below 0.3).
+END_MASS_MAX = 100.0
+EXTERNAL_DAMPING_MAX = 100.0
+HYSTERETIC_MAX = 1.0
+SPRING_MAX = 1e5
+
+
+def _spring(text: str) -> tuple[float, float]:
+    """``KAPPA@XI_S`` of ``--spring``."""
+    kappa_text, sep, xi_text = str(text).partition("@")
+    if not sep:
+        raise ValueError(f"expects KAPPA@XI_S, e.g. 50@0.5, got {text!r}")
+    kappa = parse_float(kappa_text, "--spring")
+    xi_s = parse_float(xi_text, "--spring")
+    if not 0.0 <= kappa <= SPRING_MAX:
+        raise ValueError(f"stiffness kappa = {kappa:g} is outside 0 <= kappa <= {SPRING_MAX:g}")
+    if not 0.0 < xi_s <= 1.0:
+        raise ValueError(f"position xi_s = {xi_s:g} is outside 0 < xi_s <= 1")
+    return (kappa, xi_s)
+
+
+spring_type = option_type("--spring", _spring)

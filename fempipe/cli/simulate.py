@@ -220,6 +220,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.operators import PipeModel
     from fempipe.static import solve_static
 
+    common.refuse_hysteretic(args, "simulate")
     setup = common.setup_from_args(args)
     if len(setup.v) != 1:
         opt = "--U" if args.U is not None else "--v"
