@@ -51,13 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     par = parser.add_argument_group("parallel")
     ex = par.add_mutually_exclusive_group()
-    ex.add_argument(
-        "--workers",
-        metavar="N",
-        type=parsing.workers_type,
-        default="1",
-        help="local processes for independent sweeps (1)",
-    )
+    common.add_workers_argument(ex, "local processes for independent sweeps (1)")
     ex.add_argument(
         "--dask",
         metavar="ADDRESS",

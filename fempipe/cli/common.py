@@ -73,6 +73,7 @@ from .parsing import (
     number_type,
     spring_type,
     v_list_type,
+    workers_type,
 )
 
 __all__ = [
@@ -331,6 +332,22 @@ def add_integration_arguments(
         help=f"{shoot_help} ({shoot_rtol})",
     )
     return g
+
+
+def add_workers_argument(group, help: str, default: str | None = "1") -> None:
+    """``--workers N`` (a positive integer) in ``group`` (a parser or an argument group)."""
+    group.add_argument("--workers", metavar="N", type=workers_type, default=default, help=help)
+
+
+def add_shoot_rtol_argument(group, help: str, default: str = "1e-9") -> None:
+    """``--shoot-rtol TOL``: the integration tolerance of a limit cycle's shooting."""
+    group.add_argument(
+        "--shoot-rtol",
+        metavar="TOL",
+        type=number_type("--shoot-rtol", 0.0, 0.1, strict_low=True),
+        default=default,
+        help=f"{help} ({default})",
+    )
 
 
 def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None = None) -> None:

@@ -152,20 +152,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"end of the flow range of v_cr and frequency where a row has no v_max (or U_max) "
         f"cell (default {DEFAULT_V_MAX:g}; dimensionless v, also for an SI file)",
     )
-    g.add_argument(
-        "--shoot-rtol",
-        metavar="TOL",
-        type=parsing.number_type("--shoot-rtol", 0.0, 0.1, strict_low=True),
-        default="1e-9",
-        help="integration tolerance of the limit cycle's shooting (lc_amplitude, lc_period; 1e-9)",
+    common.add_shoot_rtol_argument(
+        g, "integration tolerance of the limit cycle's shooting (lc_amplitude, lc_period)"
     )
-    g.add_argument(
-        "--workers",
-        metavar="N",
-        type=parsing.workers_type,
-        default="1",
-        help="processes computing the comparisons in parallel (default 1)",
-    )
+    common.add_workers_argument(g, "processes computing the comparisons in parallel (default 1)")
     common.add_output_arguments(parser)
 
 
@@ -600,11 +590,10 @@ def read_cases(path: str, v_max: float = DEFAULT_V_MAX) -> list[Case]:
 
 
 def run(args: argparse.Namespace) -> int:
-    import os
     import time
 
     from fempipe.compare import compare_values, estimate_description
-    from fempipe.io import CSV_UNITS, json_dumps
+    from fempipe.io import CSV_UNITS
 
     t0 = time.process_time()
     setup = common.setup_from_args(args, need_flow=False)  # the discretisation
@@ -635,7 +624,6 @@ def run(args: argparse.Namespace) -> int:
         rows.append(row)
     quantities = list(dict.fromkeys(name for _, name in items))
     failed = [r for r in rows if r["failure"] is not None]
-    children = os.times()
     result = {
         "file": str(args.file),
         "rows": rows,
@@ -648,18 +636,11 @@ def run(args: argparse.Namespace) -> int:
             "no_estimate": sum(r["resolved"] is None and r["failure"] is None for r in rows),
             "failed": len(failed),
         },
-        "cpu_time": time.process_time()
-        - t0
-        + (children.children_user + children.children_system if args.workers > 1 else 0.0),
+        "cpu_time": reporting.cpu_seconds(t0),
     }
-    if output is not None:
-        _write(output, result)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print(result)
-    if output is not None:
-        output.report(args)
+    reporting.deliver(
+        args, result, output, write=lambda out: _write(out, result), text=lambda: _print(result)
+    )
     if failed:
         rows_failed = ", ".join(f"{r['row']} {r['quantity']}" for r in failed)
         print(

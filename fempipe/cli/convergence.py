@@ -136,20 +136,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="modal bases: sine (the paper's sin((2r-1) pi xi/2)), beam (slopes of the "
         "clamped-free beam modes), or sine,beam (default sine)",
     )
-    g.add_argument(
-        "--shoot-rtol",
-        metavar="TOL",
-        type=parsing.number_type("--shoot-rtol", 0.0, 0.1, strict_low=True),
-        default="1e-9",
-        help="integration tolerance of the limit cycle's shooting (lc_* quantities; 1e-9)",
+    common.add_shoot_rtol_argument(
+        g, "integration tolerance of the limit cycle's shooting (lc_* quantities)"
     )
-    g.add_argument(
-        "--workers",
-        metavar="N",
-        type=parsing.option_type("--workers", parsing.positive_int),
-        default="1",
-        help="processes computing members in parallel (1)",
-    )
+    common.add_workers_argument(g, "processes computing members in parallel (1)")
     g.add_argument(
         "--allow-large",
         action="store_true",
@@ -209,7 +199,6 @@ def run(args: argparse.Namespace) -> int:
 
     from fempipe.convergence import CYCLE_QUANTITIES, STATIC_QUANTITIES, run_study
     from fempipe.discretization import FiniteElement
-    from fempipe.io import json_dumps
 
     setup = common.setup_from_args(args, need_flow=False)
     quantity = _quantity(args, setup)
@@ -241,25 +230,15 @@ def run(args: argparse.Namespace) -> int:
     result = study.to_dict()
     head = setup.to_dict()
     result["params"] = head["params"]
-    result["cpu_time"] = _cpu_seconds(t0)
-    if output is not None:
-        _write(output, result, study)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print(result)
-    if output is not None:
-        output.report(args)
+    result["cpu_time"] = reporting.cpu_seconds(t0)
+    reporting.deliver(
+        args,
+        result,
+        output,
+        write=lambda out: _write(out, result, study),
+        text=lambda: _print(result),
+    )
     return 0
-
-
-def _cpu_seconds(t0: float) -> float:
-    """CPU seconds of this process since ``t0`` plus those of finished worker processes."""
-    import os
-    import time
-
-    children = os.times()
-    return time.process_time() - t0 + children.children_user + children.children_system
 
 
 def _bvp_value(quantity) -> tuple[str, float] | None:

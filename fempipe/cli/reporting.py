@@ -27,7 +27,7 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .parsing import CLIError
@@ -281,3 +281,31 @@ def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu"
         disc = f"modal{'' if basis == 'sine' else '-' + basis}:{d['n_modes']}"
     head = ", ".join(f"{k} = {p[k]:.6g}" for k in keys if k in p)
     return disc, head
+
+
+def cpu_seconds(t0: float) -> float:
+    """CPU seconds of this process since ``t0`` (``time.process_time()``) plus those of
+    the worker processes it has waited for (a finished process pool)."""
+    t = os.times()
+    return time.process_time() - t0 + t.children_user + t.children_system
+
+
+def deliver(
+    args: argparse.Namespace,
+    result: dict,
+    output: Output | None,
+    write: Callable[[Output], None] | None = None,
+    text: Callable[[], None] | None = None,
+) -> None:
+    """The end of a command: its files (``write(output)``), then JSON or text on stdout,
+    then the files moved into ``--out`` (:meth:`Output.report`)."""
+    from fempipe.io import json_dumps
+
+    if output is not None and write is not None:
+        write(output)
+    if args.json:
+        print(json_dumps(result))
+    elif text is not None:
+        text()
+    if output is not None:
+        output.report(args)

@@ -54,13 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. "
         f"5,10,{parsing.DEFAULT_GAMMA:g},30",
     )
-    g.add_argument(
-        "--workers",
-        metavar="N",
-        type=parsing.workers_type,
-        default="1",
-        help="local processes (default 1)",
-    )
+    common.add_workers_argument(g, "local processes (default 1)")
     common.add_output_arguments(parser)
 
 

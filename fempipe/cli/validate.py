@@ -13,7 +13,7 @@ import argparse
 import os
 import sys
 
-from fempipe.cli import common, parsing, reporting
+from fempipe.cli import common, reporting
 from fempipe.cli.parsing import CLIError
 
 #: Default ``--out``: a folder of the current directory that the repository's
@@ -28,12 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="the quick suite (coarser sweeps; about 3 minutes on 2 cores)",
     )
-    parser.add_argument(
-        "--workers",
-        metavar="N",
-        type=parsing.workers_type,
-        default=None,
-        help="worker processes (default: the number of CPUs, at most 4)",
+    common.add_workers_argument(
+        parser, "worker processes (default: the number of CPUs, at most 4)", default=None
     )
     parser.add_argument(
         "--case",
