@@ -16,6 +16,10 @@ nothing else is ever asked of it):
 ``name``       the CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``;
                :func:`discretization_from_name` is the inverse);
 ``evaluate``   theta at arbitrary points, for post-processing;
+``basis_values``
+               phi_j at arbitrary points, shape (m, n), sparse for finite
+               elements: the Gauss rule on [0, xi_s] of a spring inside a
+               cell (:meth:`~fempipe.operators.PipeModel.spring`);
 ``to_dict``    a JSON-able description.
 
 :class:`FiniteElement` is the package's point: 1-D Lagrange elements of any
@@ -65,6 +69,8 @@ class Discretization(Protocol):
     def name(self) -> str: ...
 
     def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray: ...
+
+    def basis_values(self, xi: np.ndarray) -> np.ndarray | sp.csr_matrix: ...
 
     def to_dict(self) -> dict: ...
 
@@ -198,6 +204,16 @@ class FiniteElement:
         P = self.basis.probes(xi[None, :])
         return P @ self.full(q)
 
+    def basis_values(self, xi: np.ndarray) -> sp.csr_matrix:
+        """phi_j(xi) of the free dofs at arbitrary points, sparse, shape (m, n).
+
+        ``basis.probes`` locates every point in every cell (O(m n_el)): meant
+        for a few points, built once (the Gauss rule of a part cell).
+        """
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        P = sp.csr_matrix(self.basis.probes(xi[None, :]))
+        return P[:, self.free]
+
     def refined(self, factor: int = 2) -> FiniteElement:
         """Return a copy with every element split into ``factor`` equal parts."""
         factor = int(factor)
@@ -326,6 +342,13 @@ class Modal:
         if self.basis == "sine":
             return np.sin(np.outer(xi, self.k)) @ np.asarray(q)
         return beam_mode_slopes(self.k, xi) @ np.asarray(q)
+
+    def basis_values(self, xi: np.ndarray) -> np.ndarray:
+        """phi_r(xi) at arbitrary points, analytic, shape (m, N)."""
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        if self.basis == "sine":
+            return np.sin(np.outer(xi, self.k))
+        return beam_mode_slopes(self.k, xi)
 
     def refined(self, factor: int = 2) -> Modal:
         """Return the same basis with ``factor`` times as many modes (default quadrature)."""

@@ -97,15 +97,16 @@ def _solve(J, b: np.ndarray) -> np.ndarray:
 def _balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
     """R(q, 0, 0), its norm, and the size of the forces it balances.
 
-    R = bending + gravity + follower.  A state is an equilibrium when R is
-    small compared with each of these forces as they act at q:
-    ``||R|| <= tol (||bending|| + gravity load + ||follower||)``.
+    R = bending + gravity + follower + springs.  A state is an equilibrium
+    when R is small compared with each of these forces as they act at q:
+    ``||R|| <= tol (||bending|| + gravity load + ||follower|| + ||springs||)``.
 
-    * Bending, K q, and the follower term, v^2 \\int phi_i sin(theta(1) - theta),
-      vanish with q, exactly also in floating point: they are measured as
-      they are.
-    * Gravity, gamma \\int phi_i (1 - xi) sin(theta + alpha), is measured by its
-      load ``gamma ||\\int phi_i (1 - xi)||`` (:meth:`PipeModel.gravity_load`)
+    * Bending, K q, the follower term, v^2 \\int phi_i sin(theta(1) - theta),
+      and the springs (:meth:`PipeModel.spring`) vanish with q, also in
+      floating point to round-off: they are measured as they are.
+    * Gravity, gamma \\int phi_i (1 - xi + Gamma) sin(theta + alpha) (the
+      pipe and its end mass), is measured by its load
+      ``gamma ||\\int phi_i (1 - xi + Gamma)||`` (:meth:`PipeModel.gravity_load`)
       whatever the lever arm: sin(theta + alpha) carries an absolute
       round-off error of ~1e-16 at every angle (sin(pi) = 1.2e-16), so the
       straight column at alpha = pi is an equilibrium to that accuracy.
@@ -116,9 +117,14 @@ def _balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]
     the whole gravity load unbalanced.
     """
     with np.errstate(over="ignore", invalid="ignore"):  # reported as non-finite
-        b, g, f = model.static_terms(q)
-        r = b + g + f
-    size = float(np.linalg.norm(b)) + model.gravity_load() + float(np.linalg.norm(f))
+        b, g, f, k = model.static_terms(q)
+        r = b + g + f + k
+    size = (
+        float(np.linalg.norm(b))
+        + model.gravity_load()
+        + float(np.linalg.norm(f))
+        + float(np.linalg.norm(k))
+    )
     return r, float(np.linalg.norm(r)), size
 
 
