@@ -43,6 +43,7 @@ from .io import atomic_path
 from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
 from .operators import PipeModel
 from .parallel import run_tasks
+from .radau import refuse_hysteretic
 
 __all__ = [
     "BifurcationPoint",
@@ -244,7 +245,13 @@ def sweep(
     Returns
     -------
     list of BifurcationPoint
+
+    Raises
+    ------
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
     """
+    refuse_hysteretic(model.params, "sweep")
     vals = _ordered(values, direction)
     if not vals:
         raise ValueError("values must not be empty")
@@ -469,6 +476,8 @@ def bifurcation_diagram(
 
     Raises
     ------
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
     Exception
         The error of the first sweep (in that order) that failed, once all
         sweeps have ended; the points finished before it are in the store.
@@ -476,6 +485,7 @@ def bifurcation_diagram(
         Including :class:`fempipe.parallel.Interrupted`: the workers are
         stopped first; rerun on the same store to resume.
     """
+    refuse_hysteretic(model.params, "bifurcation_diagram")
     t0 = time.perf_counter()
     directions = list(directions)
     for d in directions:

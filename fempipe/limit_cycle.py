@@ -42,7 +42,7 @@ from .errors import SolverError
 from .kinematics import tip_values
 from .operators import PipeModel
 from .parallel import single_blas_thread
-from .radau import IntegrationError, Radau
+from .radau import IntegrationError, Radau, refuse_hysteretic
 from .stability import linearly_stable
 
 __all__ = [
@@ -318,7 +318,10 @@ def shoot(
     ------
     ShootingError
         Naming v, the iterations and the last residual.
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
     """
+    refuse_hysteretic(model.params, "shoot")
     if not period > 0:
         raise ValueError(f"period must be > 0, got {period}")
     disc, alpha, n = model.disc, model.params.alpha, model.n
@@ -484,9 +487,15 @@ def find_attractor(
     Returns
     -------
     Attractor
+
+    Raises
+    ------
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
     """
     from .static import NewtonError, solve_static
 
+    refuse_hysteretic(model.params, "find_attractor")
     if not t_max > 0:
         raise ValueError(f"t_max must be > 0, got {t_max}")
     disc, alpha, n = model.disc, model.params.alpha, model.n

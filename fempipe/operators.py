@@ -103,7 +103,10 @@ def _dense(A) -> np.ndarray:
 
 
 #: Variant terms the model has (the others are refused, never ignored).
-IMPLEMENTED_VARIANTS: frozenset[str] = frozenset()
+#: hysteretic_damping has no term here: it acts in the linear stability
+#: problem only (fempipe.stability.linear.hysteretic_roots), and the
+#: time-domain solvers refuse it (fempipe.radau.refuse_hysteretic).
+IMPLEMENTED_VARIANTS: frozenset[str] = frozenset({"hysteretic_damping"})
 
 
 def _check_implemented(params: Params) -> None:

@@ -56,7 +56,7 @@ from .errors import SolverError
 from .operators import PipeModel
 from .parallel import single_blas_thread
 
-__all__ = ["Radau", "IntegrationError", "acceleration"]
+__all__ = ["Radau", "IntegrationError", "acceleration", "refuse_hysteretic"]
 
 # --- Radau IIA (s = 3) tableau -------------------------------------------
 # The constants of this block, the Newton tolerance and iteration limit, the
@@ -113,6 +113,38 @@ class IntegrationError(SolverError):
     def __reduce__(self):
         # Rebuilt from all the constructor's arguments (pickling across processes).
         return type(self), (str(self), self.t, self.h)
+
+
+def refuse_hysteretic(params, where: str) -> None:
+    """Raise ValueError if ``params`` has hysteretic damping: it has no time-domain meaning.
+
+    The loss factor mu_h multiplies EI by 1 + i mu_h sgn(omega), which is
+    defined for harmonic motion only (the linear stability problem,
+    :func:`fempipe.stability.linear.hysteretic_roots`); a time integration
+    would silently drop it.  Every time-domain entry point (:class:`Radau`
+    and so :func:`fempipe.dynamics.simulate`, the shooting and attractor
+    search of :mod:`fempipe.limit_cycle`, the sweeps of
+    :mod:`fempipe.bifurcation`) calls this first.
+
+    Parameters
+    ----------
+    params : Params
+    where : str
+        The refusing function, named in the message.
+
+    Raises
+    ------
+    ValueError
+        If ``params.hysteretic_damping > 0``.
+    """
+    mu_h = getattr(params, "hysteretic_damping", 0.0)
+    if mu_h:
+        raise ValueError(
+            f"{where}: hysteretic damping (mu_h = {mu_h:g}) has no time-domain meaning: "
+            "EI (1 + i mu_h sgn(omega)) acts on harmonic motion only; use it in the linear "
+            "stability problem (spectrum, critical_velocity, stability_map) or set "
+            "hysteretic_damping = 0"
+        )
 
 
 def acceleration(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0):
@@ -190,6 +222,7 @@ class Radau:
         h_fixed: float | None = None,
         sensitivity: bool = False,
     ) -> None:
+        refuse_hysteretic(model.params, "time integration (Radau)")
         n = model.n
         q0 = np.array(q0, dtype=float)
         qdot0 = np.zeros(n) if qdot0 is None else np.array(qdot0, dtype=float)

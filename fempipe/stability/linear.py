@@ -9,6 +9,7 @@ modes").
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import weakref
 from dataclasses import dataclass, field
@@ -22,6 +23,7 @@ from ..operators import PipeModel
 from ..parallel import single_blas_thread
 from ..params import Params
 
+log = logging.getLogger(__name__)
 #: Relative error of the clamped-free beam frequency up to which a
 #: discretisation is said to resolve a canonical mode.
 RESOLUTION_TOL = 0.05
@@ -205,6 +207,141 @@ def _eigen(K, C, M, method: str = "auto") -> tuple[np.ndarray, np.ndarray, str]:
     return lam, X, method
 
 
+#: A continuation step in mu_h is halved while a relevant root's match is
+#: farther than this fraction of the distance to the next candidate.
+HYSTERETIC_MATCH = 0.35
+#: Smallest continuation step, as a fraction of mu_h, and most eigenproblems
+#: solved per state; beyond, the nearest match is taken as it is.
+HYSTERETIC_MIN_STEP = 1.0 / 64.0
+HYSTERETIC_MAX_SOLVES = 16
+#: Share of an eigenvector on resolved canonical modes above which its match
+#: must be unambiguous (half of RESOLVED_SHARE: margin for the change of the
+#: eigenvector with mu_h).
+RELEVANT_SHARE = 0.25
+
+
+def _conjugate_partners(lam: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> np.ndarray:
+    """For each index in ``lower``, the position in ``upper`` of its complex conjugate.
+
+    The real eigensolvers return exact conjugate pairs; the optimal assignment
+    on |conj(lam_lower) - lam_upper| recovers them whatever their order.
+    """
+    if lower.size == 0:
+        return np.zeros(0, dtype=int)
+    D = np.abs(np.conj(lam[lower])[:, None] - lam[upper][None, :])
+    rows, cols = linear_sum_assignment(D)
+    out = np.empty(lower.size, dtype=int)
+    out[rows] = cols
+    return out
+
+
+def hysteretic_roots(
+    K: np.ndarray,
+    C: np.ndarray,
+    M: np.ndarray,
+    Kb: np.ndarray,
+    mu_h: float,
+    lam0: np.ndarray,
+    X0: np.ndarray,
+    *,
+    relevant: np.ndarray | None = None,
+    method: str = "auto",
+) -> tuple[np.ndarray, np.ndarray]:
+    """The roots of Eq. (32) with the hysteretic bending stiffness Kb (1 + i mu_h sgn(omega)).
+
+    With theta^d ∝ e^{lambda tau} = e^{i Omega tau} the frequency is
+    omega = Re Omega = Im lambda, and the quadratic eigenproblem becomes
+
+        (lambda^2 M + lambda C + K + i mu_h sgn(Im lambda) Kb) x = 0,
+
+    with K = K^d (bending Kb, gravity and follower parts) and sgn(0) = 0.
+    The problem is not analytic in lambda, so it is solved half by half,
+    starting from the roots ``lam0`` of the real problem (mu_h = 0) at the
+    same state:
+
+    * a real root of the real problem (no oscillation, sgn 0: divergence, an
+      overdamped mode) is a root of the hysteretic problem and is kept;
+    * a root with Im lambda > 0 is continued in mu_h' from 0 to mu_h along
+      the roots with Im lambda >= 0 of the complex quadratic problem with
+      stiffness K + i mu_h' Kb (each step: the optimal assignment to a linear
+      prediction, the step halved while a root whose eigenvector lies on
+      resolved modes is not matched clearly better than by its next
+      candidate);
+    * a root with Im lambda < 0 becomes the complex conjugate of its
+      partner's continuation (eigenvector conjugated too): the problem with
+      sgn = -1 is the conjugate of the one with sgn = +1.
+
+    The result has as many roots as ``lam0``, conjugate-symmetric, and is
+    continuous in mu_h.  A pair whose frequency goes to zero (a collision on
+    the real axis, as v varies) jumps there from its continued roots to the
+    two real roots of the real problem: the sgn(omega) law is discontinuous
+    at omega = 0.  The complex problem also has roots with Im lambda > 0 that
+    continue real roots of the real problem (a slow oscillation of a
+    non-oscillating mode); they are not reported, since the real root itself,
+    on which mu_h has no effect, stands for that mode.
+
+    Parameters
+    ----------
+    K, C, M : ndarray, shape (n, n)
+        K^d, C^d, M^d of Eqs. (33a)-(33c).
+    Kb : ndarray, shape (n, n)
+        The bending part of K^d (``disc.K``).
+    mu_h : float
+        Loss factor, > 0.
+    lam0 : ndarray, shape (m,)
+        Eigenvalues of the real problem (exact conjugate pairs, real roots
+        with Im = 0), as returned by :func:`_eigen`.
+    X0 : ndarray, shape (n, m)
+        Their theta-parts.
+    relevant : ndarray of bool, shape (m,), optional
+        Roots whose match must be unambiguous (default: all).
+    method : str
+        Eigensolver of :func:`_eigen`.
+
+    Returns
+    -------
+    lam : ndarray of complex, shape (m,)
+    X : ndarray of complex, shape (n, m)
+        Unit-norm theta-parts, in the order of ``lam0``.
+    """
+    lam0 = np.asarray(lam0, dtype=complex)
+    upper = np.flatnonzero(lam0.imag > 0.0)
+    lower = np.flatnonzero(lam0.imag < 0.0)
+    partner = _conjugate_partners(lam0, upper, lower)
+    rel = np.ones(upper.size, bool) if relevant is None else np.asarray(relevant)[upper]
+    cur, Xcur = lam0[upper], np.asarray(X0, dtype=complex)[:, upper]
+    mu, step, slope, solves = 0.0, float(mu_h), None, 0
+    while mu < mu_h and upper.size:
+        nxt = min(float(mu_h), mu + step)
+        lam, X, _ = _eigen(K + 1j * nxt * Kb, C, M, method)
+        solves += 1
+        cand = np.flatnonzero(lam.imag >= 0.0)
+        if cand.size < upper.size:  # pragma: no cover - fewer positive-frequency roots
+            log.warning("hysteretic damping: %d roots with Im >= 0 for %d", cand.size, upper.size)
+            cand = np.arange(lam.size)
+        pred = cur if slope is None else cur + (nxt - mu) * slope
+        D = np.abs(pred[:, None] - lam[cand][None, :])
+        rows, cols = linear_sum_assignment(D)
+        pick = np.empty(upper.size, dtype=int)
+        pick[rows] = cols
+        k = np.arange(upper.size)
+        d1 = D[k, pick]
+        D[k, pick] = np.inf
+        d2 = D.min(axis=1) if cand.size > 1 else np.full(upper.size, np.inf)
+        ambiguous = rel & (d1 > HYSTERETIC_MATCH * d2)
+        if ambiguous.any() and step > HYSTERETIC_MIN_STEP * mu_h and solves < HYSTERETIC_MAX_SOLVES:
+            step *= 0.5
+            continue
+        idx = cand[pick]
+        slope = (lam[idx] - cur) / (nxt - mu)
+        cur, Xcur, mu = lam[idx], X[:, idx], nxt
+    out = lam0.copy()
+    Xout = np.array(X0, dtype=complex)
+    out[upper], Xout[:, upper] = cur, Xcur
+    out[lower], Xout[:, lower] = np.conj(cur[partner]), np.conj(Xcur[:, partner])
+    return out, Xout
+
+
 @dataclass
 class _Eig:
     """All eigenvalues of one state with their resolved-share classification."""
@@ -230,13 +367,25 @@ class _Eig:
         return float(r.max()) if r.size else -math.inf
 
 
-def _analyse(model: PipeModel, q: np.ndarray, res: Resolution, method: str) -> _Eig:
-    K, C, M = linearized_matrices(model, q)
-    lam, X, used = _eigen(K, C, M, method)
+def _weights(res: Resolution, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Squared canonical coefficients of the columns of X (normalised) and their resolved share."""
     c = res.basis.T @ (res.mass @ X)
     W = np.abs(c) ** 2
     W = W / W.sum(axis=0)
-    share = W[: res.n_resolved].sum(axis=0)
+    return W, W[: res.n_resolved].sum(axis=0)
+
+
+def _analyse(model: PipeModel, q: np.ndarray, res: Resolution, method: str) -> _Eig:
+    K, C, M = linearized_matrices(model, q)
+    lam, X, used = _eigen(K, C, M, method)
+    W, share = _weights(res, X)
+    mu_h = model.params.hysteretic_damping
+    if mu_h > 0.0:
+        Kb = model.disc.K.toarray() if sp.issparse(model.disc.K) else np.asarray(model.disc.K)
+        lam, X = hysteretic_roots(
+            K, C, M, Kb, mu_h, lam, X, relevant=share >= RELEVANT_SHARE, method=used
+        )
+        W, share = _weights(res, X)
     return _Eig(
         v=model.params.v,
         q=np.asarray(q, dtype=float),
