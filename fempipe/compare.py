@@ -30,7 +30,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from .convergence import CYCLE_QUANTITIES, Quantity
-from .error_estimate import describe, estimate, expected_order, refine
+from .error_estimate import describe, estimate, expected_order, refine, refinement_ratio
 from .errors import SolverError
 
 __all__ = [
@@ -121,7 +121,8 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
     err = None
     if refined is not None:
         floor = quantity.tolerance * max(1.0, abs(value))
-        err = float(estimate(value, refined, expected_order(disc), floor=floor))
+        ratio = refinement_ratio(disc)
+        err = float(estimate(value, refined, expected_order(disc), ratio, floor=floor))
     return Evaluation(value, refined, err, note, time.process_time() - t0)
 
 

@@ -1,8 +1,9 @@
 """Transfer of a state between discretisations: the L2 projection of theta.
 
 Used wherever the result of one discretisation seeds a computation on
-another (a limit cycle shot on a refined mesh from a coarse one, the members
-of a convergence study started from one seed).
+another: a limit cycle shot on a refined mesh from a coarse one, the members
+of a convergence study started from one seed, the refined run of an error
+estimate started from the coarse state.
 """
 
 from __future__ import annotations
@@ -17,21 +18,29 @@ __all__ = ["project"]
 def project(src: Discretization, q: np.ndarray, dst: Discretization) -> np.ndarray:
     """Coefficients on ``dst`` of the L2 projection of theta = ``src``\\ (q).
 
-    Minimises ``\\int_0^1 (theta_dst - theta_src)^2 dxi`` summed by the Gauss
-    rule of ``dst`` (a weighted least-squares problem, so it does not need a
-    Gram matrix that ``dst`` might assemble with another rule).
+    Solves ``G c = \\int phi_i theta`` with the Gram matrix G of ``dst`` and
+    its quadrature.  When the space of ``src`` lies in that of ``dst`` (a
+    mesh and its refinement, the first N of more modes) and the quadrature of
+    ``dst`` integrates its functions exactly (elements) or to round-off
+    (modes), theta is transferred exactly.
 
     Parameters
     ----------
     src, dst : Discretization
-    q : ndarray, shape (src.n,)
+    q : ndarray, shape (src.n,) or (src.n, m)
+        One state or m states (columns).
 
     Returns
     -------
-    ndarray, shape (dst.n,)
+    ndarray, shape (dst.n,) or (dst.n, m)
     """
-    x, w = dst.quad.x, dst.quad.w
-    theta = src.evaluate(np.asarray(q, dtype=float), x)
-    Phi = dst.Phi.toarray() if dst.sparse else np.asarray(dst.Phi)
-    sw = np.sqrt(w)
-    return np.linalg.lstsq(Phi * sw[:, None], theta * sw, rcond=None)[0]
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    q = np.asarray(q, dtype=float)
+    theta = src.evaluate(q, dst.quad.x)
+    w = dst.quad.w if theta.ndim == 1 else dst.quad.w[:, None]
+    rhs = dst.Phi.T @ (w * theta)
+    if sp.issparse(dst.gram):
+        return np.asarray(spla.spsolve(dst.gram.tocsc(), rhs)).reshape(rhs.shape)
+    return np.linalg.solve(np.asarray(dst.gram), rhs)

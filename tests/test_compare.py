@@ -49,9 +49,9 @@ def rows_of(result, quantity):
     return [r for r in result["rows"] if r["quantity"] == quantity]
 
 
-def gci(coarse, fine, p):
-    """Roache's estimate of the coarse value's error, written out here (factor 3, ratio 2)."""
-    return 3.0 * abs(coarse - fine) * 2.0**p / (2.0**p - 1.0)
+def gci(coarse, fine, p, r=2.0):
+    """Roache's estimate of the coarse value's error, written out here (factor 3, ratio r)."""
+    return 3.0 * abs(coarse - fine) * r**p / (r**p - 1.0)
 
 
 # ---------------------------------------------------------------------------
@@ -88,16 +88,17 @@ def test_table_against_independent_solutions(tmp_path, capsys):
     for r in rows:
         assert set(CONTRACT) <= set(r), r
     assert res["discretization"]["name"] == "modal:3"
-    assert res["error_estimate"]["refined"] == "modal:6"
+    assert res["error_estimate"]["refined"] == "modal:7"
     assert res["error_estimate"]["order"] == 3
 
     # v_cr: the value and the refined value from the independent implementation.
     vcr, vcr2 = rows_of(res, "v_cr")
     q3 = critical_velocity(Modal(3), alpha=0.0, v_max=15.0).v_cr
-    q6 = critical_velocity(Modal(6), alpha=0.0, v_max=15.0).v_cr
+    # Three modes are refined to seven (odd N -> 2N + 1, ratio 7/3).
+    q6 = critical_velocity(Modal(7), alpha=0.0, v_max=15.0).v_cr
     assert abs(vcr["fempipe"] - q3) < 1e-8
     assert abs(vcr["refined"] - q6) < 1e-8
-    assert vcr["error_estimate"] == pytest.approx(gci(q3, q6, 3), rel=1e-6)
+    assert vcr["error_estimate"] == pytest.approx(gci(q3, q6, 3, 7 / 3), rel=1e-6)
     assert vcr["difference"] == pytest.approx(6.4 - q3, abs=1e-8)
     assert vcr["relative_difference"] == pytest.approx((6.4 - q3) / q3, abs=1e-8)
     assert vcr["resolved"] is (abs(6.4 - q3) > vcr["error_estimate"])
@@ -148,7 +149,7 @@ def test_text_table(tmp_path, capsys):
     assert main(["compare", path, "--modal", "3", "--quiet"]) == 0
     out = capsys.readouterr().out
     lines = out.splitlines()
-    assert "1 comparison on modal:3" in lines[0] and "modal:6" in lines[0]
+    assert "1 comparison on modal:3" in lines[0] and "modal:7" in lines[0]
     assert lines[1].split() == [
         "row",
         "quantity",
@@ -174,12 +175,12 @@ def test_same_numbers_as_fempipe_convergence(tmp_path, capsys):
     assert code == 0, err
     code, study, err = run_json(
         ["convergence", "--quantity", "Z_tip", "--alpha", "1.2", "--gamma", "30", "--v", "3"]
-        + ["--modal", "3,6"],
+        + ["--modal", "3,7"],
         capsys,
     )
     assert code == 0, err
     (series,) = study["series"]
-    assert series["n"] == [3, 6]
+    assert series["n"] == [3, 7]
     (r,) = res["rows"]
     assert [r["fempipe"], r["refined"]] == series["values"]
 

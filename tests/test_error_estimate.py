@@ -27,10 +27,11 @@ from fempipe.error_estimate import (
     expected_order,
     match_events,
     refine,
-    transfer,
+    refinement_ratio,
 )
 from fempipe.io import read_csv
 from fempipe.kinematics import tip_values
+from fempipe.projection import project
 from fempipe.static import solve_path
 
 TIP = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
@@ -112,14 +113,17 @@ def test_expected_order_modal():
     assert expected_order(Stated(3)) == 4.0
 
 
-def test_refine_halves_elements_and_doubles_modes():
+def test_refine_halves_elements_and_doubles_even_modes_odd_to_odd():
     fe = FiniteElement(4, 2, n_gauss=5)
     fine = refine(fe)
     assert (fine.degree, fine.n_elements, fine.n_gauss) == (2, 8, 5)
     np.testing.assert_allclose(fine.nodes[::2], fe.nodes, rtol=0, atol=1e-15)
     m = refine(Modal(3))
-    assert type(m) is Modal and m.n_modes == 6 and m.name == "modal:6"
+    # Odd N -> 2N + 1: the sine modes' error alternates with the parity of N.
+    assert type(m) is Modal and m.n_modes == 7 and m.name == "modal:7"
     np.testing.assert_allclose(m.k[:3], Modal(3).k)
+    assert refinement_ratio(Modal(3)) == pytest.approx(7 / 3)
+    assert refine(Modal(4)).n_modes == 8 and refinement_ratio(Modal(4)) == 2.0
 
 
 def test_refine_keeps_a_modal_basis():
@@ -128,7 +132,7 @@ def test_refine_keeps_a_modal_basis():
     except TypeError:
         pytest.skip("Modal has no basis option")
     fine = refine(beam)
-    assert fine.n_modes == 6 and fine.basis == "beam"
+    assert fine.n_modes == 7 and fine.basis == "beam"
     assert expected_order(beam) == beam.expected_order
 
 
@@ -172,15 +176,15 @@ def test_describe_to_dict():
 
 
 @pytest.mark.parametrize("coarse", [FiniteElement(4, 2), FiniteElement(3, 3), Modal(3)])
-def test_transfer_is_exact_between_nested_spaces(coarse):
+def test_projection_is_exact_between_nested_spaces(coarse):
     rng = np.random.default_rng(1)
     fine = refine(coarse)
     q = rng.standard_normal((coarse.n, 2))
     x = rng.uniform(0, 1, 17)
-    qf = transfer(coarse, q, fine)
+    qf = project(coarse, q, fine)
     assert qf.shape == (fine.n, 2)
     np.testing.assert_allclose(fine.evaluate(qf, x), coarse.evaluate(q, x), atol=1e-12)
-    np.testing.assert_allclose(transfer(coarse, q[:, 0], fine), qf[:, 0], atol=1e-14)
+    np.testing.assert_allclose(project(coarse, q[:, 0], fine), qf[:, 0], atol=1e-14)
 
 
 def test_match_events_by_branch_type_and_mode_not_position():
@@ -216,8 +220,8 @@ def _static_reference(alpha, vs):
     "disc, refined, order",
     [
         (["--fe", "P2:4"], "P2:8", 4),
-        (["--modal", "3"], "modal:6", 3),
-        (["--modal", "3", "--basis", "beam"], "modal-beam:6", 4),
+        (["--modal", "3"], "modal:7", 3),
+        (["--modal", "3", "--basis", "beam"], "modal-beam:7", 4),
     ],
 )
 def test_static_estimates_bound_the_true_error(capsys, disc, refined, order):
@@ -268,7 +272,7 @@ def test_static_csv_and_si_values(capsys, tmp_path):
 def test_static_table_shows_plus_minus(capsys):
     assert main(["static", "--modal", "3", "--v", "1", "--error-estimate", "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert out.count(" ± ") >= 4 and "N-doubling to modal:6" in out
+    assert out.count(" ± ") >= 4 and "N-doubling to modal:7" in out
 
 
 # -------------------------------------------------------------- critical --
@@ -338,7 +342,7 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
     monkeypatch.setattr(stability, "stability_analysis", fake)
     argv = ["critical", "--modal", "3", "--alpha", "pi/2", "--v", "0,8", "--no-branches"]
     d = run_json(capsys, [*argv, "--error-estimate"])
-    assert calls == ["modal:3", "modal:6"]
+    assert calls == ["modal:3", "modal:7"]
     ev = d["events"][0]
     assert ev["v_error"] is None and ev["v_refined"] is None
     assert "no flutter of mode 2" in ev["error_note"]
@@ -374,7 +378,7 @@ def test_simulate_cycle_estimates_bound_the_true_error(capsys):
         e_lo, e_hi = d["tip_error"][k]
         assert_bounds(e_lo, lo, ref.tip[k][0], f"{k} min")
         assert_bounds(e_hi, hi, ref.tip[k][1], f"{k} max")
-    assert d["error_estimate"]["refined"] == "modal:6" and d["error_estimate"]["notes"] == []
+    assert d["error_estimate"]["refined"] == "modal:7" and d["error_estimate"]["notes"] == []
 
 
 def test_simulate_equilibrium_and_without_the_option(capsys):

@@ -199,9 +199,11 @@ def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
         return None if i is None or pairs[i] is None else fine_events[pairs[i]]
 
     def add(d: dict, f) -> dict:
-        d = estimates.with_estimate(d, "v", None if f is None else f.v, order, EVENT_TOL)
+        d = estimates.with_estimate(
+            d, "v", None if f is None else f.v, order, EVENT_TOL, ratio=info.ratio
+        )
         return estimates.with_estimate(
-            d, "frequency", None if f is None else f.frequency, order, EVENT_TOL
+            d, "frequency", None if f is None else f.frequency, order, EVENT_TOL, ratio=info.ratio
         )
 
     events = []
@@ -235,7 +237,7 @@ def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
         elif result[key] is None and fine_value is not None:
             notes.append(f"{key}: none in the reported run, v = {fine_value:.10g} refined")
         refined = fine_value if same else None
-        out = estimates.with_estimate(result, key, refined, order, EVENT_TOL)
+        out = estimates.with_estimate(result, key, refined, order, EVENT_TOL, ratio=info.ratio)
         out[key + estimates.REFINED] = fine_value
         return out
 

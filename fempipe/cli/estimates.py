@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterable, Mapping
 
-from fempipe.error_estimate import ErrorEstimate, estimate
+from fempipe.error_estimate import RATIO, ErrorEstimate, estimate
 
 __all__ = [
     "ERROR",
@@ -72,6 +72,7 @@ def with_estimate(
     order: float | None,
     floor: float,
     scale: float = 1.0,
+    ratio: float = RATIO,
 ) -> dict:
     """``d`` with ``key_error`` and ``key_refined`` beside ``key``.
 
@@ -85,7 +86,7 @@ def with_estimate(
     if coarse is None or refined is None:
         err = None
     else:
-        err = estimate(coarse, refined, order, floor=floor * max(1.0, abs(coarse)))
+        err = estimate(coarse, refined, order, ratio, floor=floor * max(1.0, abs(coarse)))
     return beside(d, key, _pair(key, err, refined, scale))
 
 

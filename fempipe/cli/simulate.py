@@ -21,7 +21,7 @@ every accepted step, or on a uniform grid with ``--output-dt``).
 discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
 or twice the modes) without a new transient where it can: a limit cycle is
 shot from the coarse cycle transferred to the refined space (the L2
-projection :func:`fempipe.error_estimate.transfer`), an equilibrium solved by
+projection :func:`fempipe.projection.project`), an equilibrium solved by
 Newton from the coarse one (and its linear stability checked); only if that
 shooting fails is the refined attractor found by integration from the
 transferred state, and a pulsating flow is integrated again from the refined
@@ -328,11 +328,12 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
     The progress bar runs from 100 to 200 over this work.
     """
     from fempipe.dynamics import PulsatingFlow, initial_state, simulate
-    from fempipe.error_estimate import describe, refine, transfer
+    from fempipe.error_estimate import describe, refine
     from fempipe.errors import SolverError
     from fempipe.kinematics import tip_values
     from fempipe.limit_cycle import TIP_KEYS
     from fempipe.operators import PipeModel
+    from fempipe.projection import project
     from fempipe.stability import linearly_stable
     from fempipe.static import solve_static
 
@@ -366,7 +367,7 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
     refined = None
     try:
         if att is None:
-            q_s = solve_static(fine_model, transfer(disc, q_static, fine)).q
+            q_s = solve_static(fine_model, project(disc, q_static, fine)).q
             q0, p0 = initial_state(fine_model, args.mode, args.amplitude, q_static=q_s)
             flow = PulsatingFlow(params.v, args.sigma, args.omega)
             tr = simulate(
@@ -376,7 +377,7 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
             tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
             refined = summary("forced", tip=tip)
         elif att.kind == "equilibrium":
-            q = solve_static(fine_model, transfer(disc, att.q, fine)).q
+            q = solve_static(fine_model, project(disc, att.q, fine)).q
             if linearly_stable(fine_model, q) is True:
                 tv = tip_values(fine, q, params.alpha)
                 refined = summary("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
@@ -396,14 +397,14 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
 
 def _refined_cycle(disc, fine_model, att, args, on_time, summary, notes) -> dict:
     """The refined limit cycle: shot from the coarse cycle, else found by integration."""
-    from fempipe.error_estimate import transfer
     from fempipe.limit_cycle import ShootingError, find_attractor, shoot
+    from fempipe.projection import project
     from fempipe.radau import IntegrationError
 
     fine = fine_model.disc
     c = att.cycle
-    q0 = transfer(disc, att.q if c is None else c.q0, fine)
-    p0 = transfer(disc, att.qdot if c is None else c.qdot0, fine)
+    q0 = project(disc, att.q if c is None else c.q0, fine)
+    p0 = project(disc, att.qdot if c is None else c.qdot0, fine)
     if c is not None:
         try:
             cyc = shoot(fine_model, q0, p0, c.period, rtol=args.shoot_rtol)
@@ -446,7 +447,7 @@ def _with_errors(result: dict, coarse, refined, info, floor: float, notes: list,
     def err(a, b):
         if a is None or b is None:
             return None
-        return estimate(a, b, order, floor=floor * max(1.0, abs(a)))
+        return estimate(a, b, order, info.ratio, floor=floor * max(1.0, abs(a)))
 
     fine_tip = refined["tip"] if same else None
     fine_period = refined["period"] if same else None

@@ -8,7 +8,11 @@ stability of the gravity-loaded branch for v up to the largest ``--v``
 on ``--workers N`` processes; a failed point is reported and does not stop
 the others.
 
-``--json`` prints ``{"alphas", "curves": [{"beta", "gamma"}], "mu", "v_max",
+The variants of the pipe (``--end-mass``, ``--external-damping``,
+``--hysteretic-damping``, ``--spring``) apply to every point.
+
+``--json`` prints ``{"alphas", "curves": [{"beta", "gamma"}], "mu",
+"end_mass", "external_damping", "hysteretic_damping", "springs", "v_max",
 "discretization", "points": [{"alpha", "beta", "gamma", "v_cr", "type",
 "frequency", "mode", "v_flutter", "error"}, ...]}``.  ``--out DIR`` writes
 stability_map.json, stability_map.csv and stability_map.png.  At alpha = pi
@@ -24,6 +28,7 @@ import sys
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+from fempipe.params import VARIANT_FIELDS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -117,6 +122,7 @@ def run(args: argparse.Namespace) -> int:
             curves,
             mu=setup.params.mu,
             v_max=v_max,
+            variants={k: getattr(setup.params, k) for k in VARIANT_FIELDS},
             workers=workers,
             callback=lambda done, n, r: bar.update(),
         )
@@ -164,6 +170,9 @@ def _write(output: reporting.Output, result: dict, smap) -> None:
 def _print(result: dict) -> None:
     disc, _ = reporting.describe({"params": {}, "discretization": result["discretization"]})
     print(f"critical flow velocity, mu = {result['mu']:g}, v <= {result['v_max']:g}; {disc}")
+    variants = [f"{k} = {result[k]}" for k in VARIANT_FIELDS if result.get(k)]
+    if variants:
+        print("variants: " + ", ".join(variants))
     print(
         f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} {'v_flutter':>14}"
     )

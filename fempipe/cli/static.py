@@ -179,11 +179,12 @@ def _refined_states(model, sols, parameter: str, bar) -> tuple:
     again on the refined discretisation (None where Newton fails there, with a note).
 
     Newton starts from the coarse state transferred to the refined space
-    (:func:`fempipe.error_estimate.transfer`), so each refined state is the
+    (:func:`fempipe.projection.project`), so each refined state is the
     coarse one's, on the same branch, whatever the path.
     """
-    from fempipe.error_estimate import describe, refine, transfer
+    from fempipe.error_estimate import describe, refine
     from fempipe.operators import PipeModel
+    from fempipe.projection import project
     from fempipe.static import NewtonError, solve_static
 
     disc = model.disc
@@ -194,7 +195,7 @@ def _refined_states(model, sols, parameter: str, bar) -> tuple:
     bar.set_postfix_str(f"refined {fine.name}")
     for sol in sols:
         try:
-            q0 = transfer(disc, sol.q, fine)
+            q0 = project(disc, sol.q, fine)
             states.append(solve_static(fine_model.with_params(sol.params), q0=q0, tol=NEWTON_TOL))
         except NewtonError as exc:
             states.append(None)
@@ -214,7 +215,7 @@ def _with_errors(disc, points, sols, refined, pipe, tip_values) -> list[dict]:
         val = {k: None if tip is None else float(tip[k]) for k in TIP_KEYS}
         val["tip_drop"] = None if tip is None else float(tip["X_tip"]) - math.cos(alpha)
         for k in (*TIP_KEYS, "tip_drop"):
-            row = estimates.with_estimate(row, k, val[k], info.order, NEWTON_TOL)
+            row = estimates.with_estimate(row, k, val[k], info.order, NEWTON_TOL, ratio=info.ratio)
         if pipe is not None:
             for k, base, scale in _SI_DERIVED:
                 row = estimates.beside(
