@@ -100,15 +100,20 @@ def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
     ``kelvin_voigt``       mu q'^T K q',
     ``flow_acceleration``  sqrt(beta) v_dot \\int theta_dot n . \\int_xi^1 t
                            = sqrt(beta) v_dot \\int_0^1 t . r_dot  (swap the order),
+    ``external_damping``   sigma \\int theta_dot n . \\int_xi^1 r_dot
+                           = sigma \\int_0^1 |r_dot|^2  (swap the order),
 
     with r_dot(xi) = \\int_0^xi theta_dot n the centreline velocity and
     t = (cos theta, sin theta) the tangent.  The first three are the power
-    balance of steady flow; the fourth is zero for steady flow.
+    balance of steady flow; the fourth is zero for steady flow; the fifth is
+    the dissipation of the external viscous damping (zero for sigma = 0).  The
+    end mass and the springs are conservative: E includes their kinetic and
+    potential energies, and the jet leaves the end mass as it leaves the pipe.
 
     Returns
     -------
     dict
-        The four powers and ``"dE_dtau"`` = -(their sum).
+        The five powers and ``"dE_dtau"`` = -(their sum).
     """
     p = model.params
     fl = model.fields(q, qdot)
@@ -121,13 +126,15 @@ def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
         "follower": p.v**2 * float(t_tip @ rdot_tip),
         "kelvin_voigt": p.mu * float(qdot @ (model.disc.K @ qdot)),
         "flow_acceleration": sb * v_dot * float(model.w @ np.einsum("qc,qc->q", fl.tangent, rdot)),
+        "external_damping": p.external_damping * float(model.w @ np.einsum("qc,qc->q", rdot, rdot)),
     }
     terms["dE_dtau"] = -sum(terms.values())
     return terms
 
 
 def energy_rate(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0) -> float:
-    """dE/dtau = -[v sqrt(beta) |r_dot(1)|^2 + v^2 t(1).r_dot(1) + mu q'^T K q' + sqrt(beta) v_dot \\int t.r_dot]."""
+    """dE/dtau = -[v sqrt(beta) |r_dot(1)|^2 + v^2 t(1).r_dot(1) + mu q'^T K q'
+    + sqrt(beta) v_dot \\int t.r_dot + sigma \\int |r_dot|^2]."""
     return power_terms(model, q, qdot, v_dot)["dE_dtau"]
 
 

@@ -106,7 +106,9 @@ def _dense(A) -> np.ndarray:
 #: hysteretic_damping has no term here: it acts in the linear stability
 #: problem only (fempipe.stability.linear.hysteretic_roots), and the
 #: time-domain solvers refuse it (fempipe.radau.refuse_hysteretic).
-IMPLEMENTED_VARIANTS: frozenset[str] = frozenset({"hysteretic_damping"})
+IMPLEMENTED_VARIANTS: frozenset[str] = frozenset(
+    {"end_mass", "external_damping", "hysteretic_damping", "springs"}
+)
 
 
 def _check_implemented(params: Params) -> None:
@@ -408,7 +410,12 @@ class PipeModel:
             s, c = np.sin(th), np.cos(th)
             t = np.stack([c, s], axis=1)
             nrm = np.stack([-s, c], axis=1)
-            d = rule.w @ t - np.array([xi_s, 0.0])
+            # r(xi_s) - (xi_s, 0) = \int_0^xi_s (cos theta - 1, sin theta): the rule
+            # integrates 1 to xi_s, and 1 - cos = 2 sin^2(theta/2) has no
+            # cancellation, so the force vanishes at the straight pipe exactly
+            # (as bending and the follower term do: Newton's test measures it
+            # as it is).
+            d = rule.w @ np.stack([-2.0 * np.sin(0.5 * th) ** 2, s], axis=1)
             b = np.asarray(rule.Phi.T @ (rule.w[:, None] * nrm))
             out.append((kappa, rule, t, nrm, b, d))
         return out

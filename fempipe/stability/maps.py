@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
@@ -10,7 +10,7 @@ import numpy as np
 
 from ..operators import PipeModel
 from ..parallel import run_tasks
-from ..params import Params
+from ..params import VARIANT_FIELDS, Params
 from .analysis import critical_velocity, stability_analysis
 from .tracking import RootLocus, root_locus
 
@@ -45,7 +45,8 @@ class StabilityMap:
     alphas : ndarray, shape (n_alpha,)
     curves : tuple of (beta, gamma)
     base : Params
-        mu and the defaults.
+        mu, the variants of the pipe (end mass, dampings, springs) and the
+        defaults.
     v_max : float
         Upper end of the searched range (v_cr is None if stable up to it).
     points : list of list of dict
@@ -90,10 +91,12 @@ class StabilityMap:
         return rows
 
     def to_dict(self) -> dict:
+        variants = {k: x for k, x in self.base.to_dict().items() if k in VARIANT_FIELDS}
         return {
             "alphas": self.alphas.tolist(),
             "curves": [{"beta": b, "gamma": g} for b, g in self.curves],
             "mu": self.base.mu,
+            **variants,
             "v_max": self.v_max,
             "discretization": self.discretization,
             "points": self.rows(),
@@ -107,6 +110,7 @@ def stability_map(
     *,
     mu: float = 5e-3,
     v_max: float = 10.0,
+    variants: Mapping | None = None,
     workers: int | None = None,
     executor: Executor | None = None,
     callback: Callable[[int, int, object], None] | None = None,
@@ -119,6 +123,9 @@ def stability_map(
     (``ds_max`` defaults to 0.2 here: Brent locates v_cr to 1e-10 whatever the
     sampling, and the tracking and peak checks refine where needed).
     A point that fails is recorded with its error and does not stop the others.
+    ``variants`` gives the variant fields of :class:`~fempipe.params.Params`
+    (``end_mass``, ``external_damping``, ``hysteretic_damping``, ``springs``)
+    of every point; default none (the paper's pipe).
     """
     alphas = np.asarray([float(a) for a in alphas])
     curves = tuple((float(b), float(g)) for b, g in curves)
@@ -127,12 +134,18 @@ def stability_map(
     options.setdefault("ds_max", 0.2)
     if alphas.size == 0 or not curves:
         raise ValueError("need at least one alpha and one (beta, gamma) curve")
+    variants = dict(variants or {})
+    unknown = set(variants) - set(VARIANT_FIELDS)
+    if unknown:
+        raise ValueError(
+            f"variants are {', '.join(VARIANT_FIELDS)}; got {', '.join(sorted(unknown))}"
+        )
+    base = Params(alpha=0.0, beta=curves[0][0], gamma=curves[0][1], mu=mu, **variants)
     tasks = []
     for beta, gamma in curves:
         for a in alphas:
-            tasks.append(
-                (disc, Params(alpha=a, beta=beta, gamma=gamma, mu=mu, v=0.0), v_max, options)
-            )
+            p = replace(base, alpha=a, beta=beta, gamma=gamma, v=0.0)
+            tasks.append((disc, p, v_max, options))
     out = run_tasks(_map_point, tasks, workers=workers, executor=executor, callback=callback)
     points = []
     for c in range(len(curves)):
@@ -144,7 +157,7 @@ def stability_map(
     return StabilityMap(
         alphas=alphas,
         curves=curves,
-        base=Params(alpha=0.0, beta=curves[0][0], gamma=curves[0][1], mu=mu),
+        base=base,
         v_max=float(v_max),
         discretization=disc.to_dict(),
         points=points,

@@ -1,16 +1,26 @@
 """An independent solver of the static problem, for checking the weak form.
 
-Eq. (31a) in strong form is the two-point boundary-value problem
+Eq. (31a) in strong form, with the variants of the pipe (an end mass Gamma at
+xi = 1 and linear springs (kappa_j, xi_j); README, "Variants of the pipe"), is
+the boundary-value problem
 
-    theta'' = gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta),
+    theta'' = gamma (1 - xi + Gamma) sin(theta + alpha) + v^2 sin(theta(1) - theta)
+              + sum_j kappa_j H(xi_j - xi) n(theta) . (r(xi_j) - (xi_j, 0)),
     theta(0) = 0,  theta'(1) = 0,
 
-with theta(1) an unknown parameter p and the extra condition theta(1) = p.
+with n = (-sin theta, cos theta), r = \\int_0^xi (cos theta, sin theta) the
+centreline in the pipe's frame and H the unit step: each spring is a point
+force at xi_j, where theta'' jumps by kappa_j n . (r(xi_j) - (xi_j, 0)) and
+theta, theta' are continuous.  theta(1) and the spring points r(xi_j) are
+unknown parameters p with the extra conditions theta(1) = p_0, r(xi_j) = p_j.
 :func:`solve_static_bvp` integrates it with scipy's collocation solver
 ``solve_bvp`` (4th-order Lobatto IIIA, adaptive mesh), carrying the global
 coordinates X_g' = cos(theta + alpha), Z_g' = sin(theta + alpha) as two more
-states so that the tip position is part of the solution.  It shares no code
-with fempipe's discretisations, quadrature or residual: agreement to the BVP
+states so that the tip position is part of the solution.  With springs the
+interval is cut at their positions and the pieces, each mapped onto [0, 1],
+are solved as one system joined by continuity of (theta, theta', X_g, Z_g):
+the collocation never straddles the jump of theta''.  It shares no code with
+fempipe's discretisations, quadrature or residual: agreement to the BVP
 tolerance checks the weak form, the integration operators and Newton at once.
 """
 
@@ -39,6 +49,29 @@ class BVPSolution:
         """Lateral tip displacement in the local frame: (X, Z) rotated back by alpha."""
         return -np.sin(self.alpha) * self.X_tip + np.cos(self.alpha) * self.Z_tip
 
+    @property
+    def varsigma_tip(self) -> float:
+        """Axial tip displacement in the local frame: (X, Z) rotated back by alpha, minus 1."""
+        return np.cos(self.alpha) * self.X_tip + np.sin(self.alpha) * self.Z_tip - 1.0
+
+
+class _Pieces:
+    """``sol(xi)`` of a solution on pieces [b_k, b_(k+1)] mapped onto s in [0, 1]."""
+
+    def __init__(self, sol, breaks: np.ndarray) -> None:
+        self._sol = sol
+        self._b = breaks
+
+    def __call__(self, xi):
+        xi = np.asarray(xi, dtype=float)
+        flat = np.atleast_1d(xi)
+        b = self._b
+        k = np.clip(np.searchsorted(b, flat, side="right") - 1, 0, b.size - 2)
+        s = (flat - b[k]) / (b[k + 1] - b[k])
+        Y = self._sol(s)  # (4K, m)
+        out = np.stack([Y[4 * kk : 4 * kk + 4, i] for i, kk in enumerate(k)], axis=1)
+        return out[:, 0] if xi.ndim == 0 else out
+
 
 def solve_static_bvp(
     alpha: float,
@@ -46,6 +79,9 @@ def solve_static_bvp(
     v: float,
     guess=None,
     tol: float = 1e-10,
+    *,
+    end_mass: float = 0.0,
+    springs=(),
 ) -> BVPSolution:
     """Solve Eq. (31a) by collocation (scipy ``solve_bvp``).
 
@@ -58,6 +94,10 @@ def solve_static_bvp(
         equilibria for large gamma); default the straight pipe.
     tol : float
         Collocation residual tolerance of ``solve_bvp``.
+    end_mass : float
+        Gamma = M_e / ((m+M) L), a point mass at xi = 1.
+    springs : sequence of (kappa, xi_s)
+        Linear springs tying r(xi_s) to (xi_s, 0), 0 < xi_s <= 1.
 
     Raises
     ------
@@ -66,40 +106,72 @@ def solve_static_bvp(
     """
     from scipy.integrate import solve_bvp
 
-    def rhs(x, y, p):
-        th = y[0]
-        return np.vstack(
-            [
-                y[1],
-                gamma * (1.0 - x) * np.sin(th + alpha) + v**2 * np.sin(p[0] - th),
-                np.cos(th + alpha),
-                np.sin(th + alpha),
-            ]
-        )
+    springs = [(float(k), float(x)) for k, x in springs]
+    breaks = np.unique(np.r_[0.0, [x for _, x in springs if x < 1.0], 1.0])
+    K = breaks.size - 1
+    h = np.diff(breaks)
+    # Index of the piece that ends at each spring's position.
+    ends_at = [int(np.searchsorted(breaks, x)) - 1 for _, x in springs]
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    lever = 1.0 + end_mass
+
+    def rhs(s, y, p):
+        out = np.empty_like(y)
+        for k in range(K):
+            xi = breaks[k] + h[k] * s
+            th = y[4 * k]
+            f = gamma * (lever - xi) * np.sin(th + alpha) + v**2 * np.sin(p[0] - th)
+            for j, (kappa, xj) in enumerate(springs):
+                if xj >= breaks[k + 1]:  # the piece lies before the spring
+                    X, Z = p[1 + 2 * j], p[2 + 2 * j]
+                    r1, r2 = ca * X + sa * Z, -sa * X + ca * Z  # the pipe's frame
+                    f = f + kappa * (-np.sin(th) * (r1 - xj) + np.cos(th) * r2)
+            out[4 * k] = h[k] * y[4 * k + 1]
+            out[4 * k + 1] = h[k] * f
+            out[4 * k + 2] = h[k] * np.cos(th + alpha)
+            out[4 * k + 3] = h[k] * np.sin(th + alpha)
+        return out
 
     def bc(ya, yb, p):
-        return np.array([ya[0], yb[1], yb[0] - p[0], ya[2], ya[3]])
+        last = 4 * (K - 1)
+        res = [ya[0], yb[last + 1], yb[last] - p[0], ya[2], ya[3]]
+        for k in range(K - 1):
+            res.extend(yb[4 * k + i] - ya[4 * (k + 1) + i] for i in range(4))
+        for j, k in enumerate(ends_at):
+            res.extend([yb[4 * k + 2] - p[1 + 2 * j], yb[4 * k + 3] - p[2 + 2 * j]])
+        return np.array(res)
 
-    x = np.linspace(0.0, 1.0, 401)
-    th0 = np.zeros_like(x) if guess is None else np.asarray(guess(x), dtype=float)
-    dth0 = np.gradient(th0, x)
-    # Cumulative trapezoid for the initial positions.
-    c, s = np.cos(th0 + alpha), np.sin(th0 + alpha)
-    dx = np.diff(x)
-    X0 = np.concatenate([[0.0], np.cumsum(0.5 * dx * (c[1:] + c[:-1]))])
-    Z0 = np.concatenate([[0.0], np.cumsum(0.5 * dx * (s[1:] + s[:-1]))])
-    y0 = np.vstack([th0, dth0, X0, Z0])
-    res = solve_bvp(rhs, bc, x, y0, p=[th0[-1]], tol=tol, bc_tol=1e-12, max_nodes=500_000)
+    s = np.linspace(0.0, 1.0, 401 if K == 1 else 201)
+    y0 = np.empty((4 * K, s.size))
+    for k in range(K):
+        x = breaks[k] + h[k] * s
+        xf = np.linspace(0.0, x[-1], 401)  # the positions integrate from the clamp
+        th_f = np.zeros_like(xf) if guess is None else np.asarray(guess(xf), dtype=float)
+        th = np.interp(x, xf, th_f)
+        c, sn = np.cos(th_f + alpha), np.sin(th_f + alpha)
+        dx = np.diff(xf)
+        X = np.concatenate([[0.0], np.cumsum(0.5 * dx * (c[1:] + c[:-1]))])
+        Z = np.concatenate([[0.0], np.cumsum(0.5 * dx * (sn[1:] + sn[:-1]))])
+        y0[4 * k] = th
+        y0[4 * k + 1] = np.gradient(th, x)
+        y0[4 * k + 2] = np.interp(x, xf, X)
+        y0[4 * k + 3] = np.interp(x, xf, Z)
+    p0 = [y0[4 * (K - 1), -1]]
+    for k in ends_at:
+        p0 += [y0[4 * k + 2, -1], y0[4 * k + 3, -1]]
+    res = solve_bvp(rhs, bc, s, y0, p=p0, tol=tol, bc_tol=1e-12, max_nodes=500_000)
     if res.status != 0:
         raise RuntimeError(
             f"solve_bvp failed at alpha={alpha:.6g}, gamma={gamma:.6g}, v={v:.6g}: {res.message}"
         )
     yb = res.sol(1.0)
+    last = 4 * (K - 1)
+    sol = res.sol if K == 1 else _Pieces(res.sol, breaks)
     return BVPSolution(
         alpha=float(alpha),
         theta_tip=float(res.p[0]),
-        X_tip=float(yb[2]),
-        Z_tip=float(yb[3]),
+        X_tip=float(yb[last + 2]),
+        Z_tip=float(yb[last + 3]),
         n_nodes=int(res.x.size),
-        sol=res.sol,
+        sol=sol,
     )
