@@ -121,7 +121,9 @@ __all__ = [
     "discretisation",
     "eigenvalues",
     "heavy_column_buckling",
+    "large_damping_limit",
     "spectral_abscissa",
+    "stiffness_roots",
     "tip_mass_frequencies",
     "tip_spring_divergence",
 ]
@@ -710,3 +712,36 @@ def tip_spring_divergence(kappa: float) -> float:
     """
     r = _roots(lambda u: u**3 + kappa * (math.sin(u) - u * math.cos(u)), 0.1, 3 * math.pi, count=1)
     return float(r[0]) if r.size else float("nan")
+
+
+@_one_thread
+def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1e4) -> np.ndarray:
+    """The roots nu of K(v) x = nu M x (no damping, no Coriolis), |nu| < ``nu_max``.
+
+    When the damping is sigma times the mass (beta = 0, no Kelvin-Voigt, no end
+    mass), each nu = a + ib gives lambda^2 + sigma lambda + nu = 0, whose roots
+    are stable iff a > 0 and b^2 < sigma^2 a: the whole damped problem follows
+    from these roots, and for sigma -> infinity stability needs only a > 0.
+    """
+    K0, Kv, _, _, M = LegendreGalerkin(p).pencil(replace(pipe, sigma=0.0, mu=0.0, beta=0.0))
+    nu = np.linalg.eigvals(np.linalg.solve(M, K0 + v * v * Kv))
+    return nu[np.abs(nu) < nu_max]
+
+
+def large_damping_limit(pipe: StraightPipe, v_max: float, p: int = 16, step: float = 0.05) -> float:
+    """The v_cr of ``pipe`` as its external damping sigma -> infinity (damping = sigma M).
+
+    The first v at which a root nu of :func:`stiffness_roots` has Re nu < 0,
+    by a scan and Brent's method; nan if none up to ``v_max``.
+    """
+
+    def f(v):
+        return float(np.min(stiffness_roots(pipe, v, p).real))
+
+    vs = np.arange(0.0, v_max + step / 2, step)
+    prev = vs[0]
+    for v in vs[1:]:
+        if f(v) < 0.0:
+            return float(brentq(f, prev, v, xtol=1e-13))
+        prev = v
+    return float("nan")
