@@ -351,3 +351,14 @@ def test_external_damping_does_not_act_on_the_end_mass():
     w2 = tip_mass_frequencies(0.5, 3)
     wrong = -1.0 + 1j * np.sqrt(w2 - 1.0)
     assert np.abs(a - wrong).min() > 1e-2
+
+
+def test_divergence_with_kelvin_voigt_converges_in_p():
+    """A divergence (a real eigenvalue through zero) with Kelvin-Voigt damping, whose
+    overdamped stiff modes (lambda ~ -mu omega^2, up to 1e12 here) would swamp the
+    round-off of a direct companion form: the hanging pipe with a spring
+    kappa = 300 at xi_s = 0.75.  p = 12 ... 40 agree to 1e-10 (measured 1e-12)."""
+    pipe = StraightPipe(beta=0.142, gamma=18.9, mu=5e-3, springs=((300.0, 0.75),))
+    v = [critical_velocity(pipe, 12.0, method="legendre", n=p) for p in (12, 24, 40)]
+    assert all(o.kind == "divergence" for o in v)
+    assert max(o.v_cr for o in v) - min(o.v_cr for o in v) < 1e-10

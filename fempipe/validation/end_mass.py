@@ -1,0 +1,250 @@
+"""End mass: closed forms, the classical theory and Hill & Swanson's statement.
+
+A point mass Gamma = M_e/((m+M) L) at the free end (fempipe's ``end_mass``)
+adds its inertia at the tip and, under gravity, its weight: a tension
+gamma Gamma along the hanging pipe (a compression along the standing one).
+No printed critical flow velocity was found for this variant (Hill &
+Swanson's results are curves; see ``references/end_mass.json``), so this case
+checks fempipe (FE P3:16) against
+
+* Blevins's frequency equation of the cantilever with a tip mass (v = gamma
+  = 0: the inertia term alone);
+* the Bessel-function solution of the standing column (alpha = pi, v = 0)
+  buckling under its own weight and the end mass's
+  (:func:`fempipe.validation.classical.heavy_column_buckling`: the weight
+  term alone);
+* the classical linear theory's v_cr(Gamma) for the paper's hanging pipe and
+  for the horizontal pipe of Gregory & Paidoussis (both terms with the flow),
+  to 1e-6;
+
+and Hill & Swanson's statement that an end mass destabilises the horizontal
+undamped pipe, more for Gamma = 0.3 than 0.2 (a ``paper`` check).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..discretization import parse_discretization
+from ..operators import PipeModel
+from ..params import Params
+from ..stability import spectrum
+from . import classical
+from .case import Case
+from .checks import CaseResult, Table, below, holds
+from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
+
+CASE = Case(
+    name="end_mass",
+    figure="Païdoussis (1998) Sec. 3.6.3",
+    title="End mass: the tip-mass cantilever, the heavy column and v_cr against Γ",
+    caption=(
+        "Critical flow velocity v_cr against the end mass Γ = M_e/((m+M)L) of the straight pipe: "
+        "(a) the paper's hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005): inertia and "
+        "weight of the mass; (b) the horizontal undamped pipe of Gregory & Païdoussis "
+        "(γ = 0, β = 0.2), Hill & Swanson's system: inertia only. Lines: classical linear "
+        "theory (Legendre spectral elements in η); filled circles: fempipe, FE with cubic "
+        "elements; open diamonds in (b): Hill & Swanson's end masses 0.2 and 0.3."
+    ),
+    paper_shows=(
+        "an end mass destabilises the horizontal undamped cantilevered pipe, and raising it from "
+        "0.2 to 0.3 destabilises it further (Hill & Swanson 1970, in Païdoussis 1998, "
+        "pp. 165-166, Fig. 3.68)",
+    ),
+    requires=(
+        "blevins_frequencies_G0.2",
+        "blevins_frequencies_G1",
+        "heavy_column",
+        "classical_converged",
+        "fe_vs_classical_hanging_G0.3",
+        "fe_vs_classical_horizontal_G0.2",
+        "hill_swanson",
+    ),
+    not_checked=(
+        "Hill & Swanson's curves of Fig. 3.68 and their experiments: no number is printed",
+    ),
+)
+
+
+def _params(base: dict, end_mass: float, alpha: float = 0.0, **extra) -> Params:
+    return Params(alpha=alpha, end_mass=end_mass, **base, **extra)
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Closed forms, v_cr(Gamma) and Hill & Swanson; see the module docstring."""
+    t0 = time.perf_counter()
+    ref = CASE.references
+    disc = parse_discretization(fe=FE)
+    q0 = np.zeros(disc.n)
+    checks = []
+    # Blevins: the gravity-free cantilever with a tip mass at v = 0.
+    for G in ref.value("blevins_end_mass"):
+        exact = classical.tip_mass_frequencies(G, 3)
+        p = Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, end_mass=G)
+        lam = spectrum(PipeModel(disc, p), q0).lam
+        got = np.sort(lam.imag[lam.imag > 0])[:3]
+        checks.append(
+            below(
+                f"blevins_frequencies_G{G:g}",
+                f"v = γ = 0, Γ = {G:g}: fempipe's first three frequencies "
+                f"({', '.join(f'{w:.6f}' for w in got)}) solve 1 + cos l cosh l + Γ l (cos l sinh l "
+                f"- sin l cosh l) = 0, ω = l² ({', '.join(f'{w:.6f}' for w in exact)})",
+                float(np.max(np.abs(got / exact - 1.0))),
+                ref.value("frequency_rtol"),
+                why=ref.source("frequency_rtol"),
+                source="Blevins, Formulas for Natural Frequency and Mode Shape (1979): cantilever "
+                "with a tip mass; roots by fempipe.validation.classical.tip_mass_frequencies",
+            )
+        )
+    # The standing column under its weight and the end weight.
+    G = ref.value("heavy_column_end_mass")
+    exact = classical.heavy_column_buckling(G)
+
+    def max_real(g):
+        p = Params(alpha=np.pi, beta=0.142, gamma=g, mu=5e-3, end_mass=G)
+        return spectrum(PipeModel(disc, p), q0).max_real
+
+    g_fe = brentq(max_real, 0.8 * exact, 1.2 * exact, xtol=1e-12)
+    checks.append(
+        below(
+            "heavy_column",
+            f"α = π, v = 0, Γ = {G:g}: fempipe's straight column loses stability (a real "
+            f"eigenvalue through zero) at γ = {g_fe:.9f}, the Bessel solution's {exact:.9f}",
+            abs(g_fe / exact - 1.0),
+            ref.value("buckling_rtol"),
+            why=ref.source("buckling_rtol"),
+            source="y'' + γ (1 + Γ - ξ) y = 0, y(0) = 0, y'(1) = 0, solved with J_(±1/3) "
+            "(fempipe.validation.classical.heavy_column_buckling; Γ = 0: Greenhill's 7.837)",
+        )
+    )
+    # v_cr(Gamma): the hanging pipe and the horizontal one.
+    families = {}
+    fe = {}
+    requires = []
+    for fam, v_max in (("hanging", 12.0), ("horizontal", 12.0)):
+        base = ref.value(fam)
+        grid = sorted(set(ref.value(f"{fam}_curve", quick)) | set(ref.value(f"{fam}_fe", quick)))
+        families[fam] = {G: classical_onset(_params(base, G), v_max) for G in grid}
+        fe[fam] = {}
+        for G in ref.value(f"{fam}_fe", quick):
+            cl = families[fam][G]
+            f = fe_onset(_params(base, G), cl.v_cr + 0.5)
+            fe[fam][G] = f
+            name = f"fe_vs_classical_{fam}_G{G:g}"
+            requires.append(name)
+            what = f"{fam} pipe β = {base['beta']:g}, γ = {base['gamma']:g}, Γ = {G:g}"
+            checks.append(agreement_check(name, what, f, cl))
+    hb = ref.value("hanging")
+    checks.append(
+        converged_check("classical_converged", "hanging pipe, Γ = 0.3", _params(hb, 0.3), 12.0)
+    )
+    # Hill & Swanson: the end mass destabilises the horizontal undamped pipe.
+    masses = ref.value("hill_swanson_masses")
+    hs_rows, ok = [], True
+    horiz = ref.value("horizontal")
+    for beta in ref.value("hill_swanson_betas"):
+        base = dict(horiz, beta=beta)
+        v = [classical_onset(_params(base, G), 20.0).v_cr for G in (0.0, *masses)]
+        ok &= bool(v[0] > v[1] > v[2])
+        hs_rows.append((beta, *v))
+    checks.append(
+        holds(
+            "hill_swanson",
+            f"horizontal undamped pipe (γ = μ = 0): v_cr(Γ = 0) > v_cr(Γ = {masses[0]:g}) > "
+            f"v_cr(Γ = {masses[1]:g}) at β = "
+            + ", ".join(f"{b:g}" for b in ref.value("hill_swanson_betas")),
+            ok,
+            "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows),
+            why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
+            "(fe_vs_classical_horizontal_*)",
+            source=ref.source("hill_swanson_masses"),
+        )
+    )
+    tables = []
+    for fam in families:
+        base = ref.value(fam)
+        tables.append(
+            Table(
+                f"v_cr against Γ, {fam} pipe (β = {base['beta']:g}, γ = {base['gamma']:g}, "
+                f"μ = {base['mu']:g})",
+                ("Γ", "v_cr classical", "ω classical", f"v_cr FE {FE}"),
+                tuple(
+                    (
+                        G,
+                        o.v_cr,
+                        o.frequency,
+                        fe[fam][G].v_cr if G in fe[fam] else "—",
+                    )
+                    for G, o in families[fam].items()
+                ),
+            )
+        )
+    tables.append(
+        Table(
+            "Hill & Swanson's statement: v_cr of the horizontal undamped pipe (classical theory)",
+            ("β", "Γ = 0", f"Γ = {masses[0]:g}", f"Γ = {masses[1]:g}"),
+            tuple(hs_rows),
+        )
+    )
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=tuple(tables),
+        data={
+            "families": {
+                fam: {G: (o.v_cr, o.kind) for G, o in c.items()} for fam, c in families.items()
+            },
+            "fe": {fam: {G: f.v_cr for G, f in c.items()} for fam, c in fe.items()},
+            "params": {fam: ref.value(fam) for fam in families},
+            "masses": masses,
+        },
+        requires=requires,
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) v_cr(Γ) hanging, (b) v_cr(Γ) horizontal: classical lines, FE dots."""
+    from matplotlib.lines import Line2D
+
+    from .drawing import finish_figure, new_figure
+
+    d = result.data
+    if fig is None:
+        fig, axes = new_figure(2, ncols=2, size=4.2)
+    else:
+        axes = list(fig.subplots(1, 2).ravel())
+    for ax, fam in zip(axes, ("hanging", "horizontal"), strict=True):
+        curve = d["families"][fam]
+        G = sorted(curve)
+        ax.plot(G, [curve[g][0] for g in G], "-", color="#0072B2", lw=1.5)
+        fg = sorted(d["fe"][fam])
+        ax.plot(fg, [d["fe"][fam][g] for g in fg], "o", color="k", ms=6)
+        if fam == "horizontal":
+            ax.plot(
+                d["masses"],
+                [curve[g][0] for g in d["masses"]],
+                "D",
+                ms=9,
+                mfc="none",
+                mew=1.4,
+                color="#D55E00",
+            )
+        p = d["params"][fam]
+        ax.set_title(f"{fam}, β = {p['beta']:g}, γ = {p['gamma']:g}, μ = {p['mu']:g}", fontsize=10)
+        ax.set_xlabel(r"end mass $\Gamma = M_e/((m+M)L)$")
+        ax.set_ylabel(r"$v_{cr}$")
+        ax.grid(alpha=0.3)
+    handles = [
+        Line2D([], [], color="#0072B2", lw=1.5, label="classical theory"),
+        Line2D([], [], ls="", marker="o", color="k", label=f"fempipe FE {FE}"),
+        Line2D(
+            [], [], ls="", marker="D", mfc="none", color="#D55E00", label="Hill & Swanson's masses"
+        ),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    return fig

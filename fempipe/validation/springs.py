@@ -1,0 +1,275 @@
+"""Springs: Chen's spring-supported cantilever and a spring inside the hanging pipe.
+
+A linear spring kappa = k L^3/EI tying the point xi_s to its undeformed
+position (fempipe's ``springs``).  At the tip of the gravity-free pipe
+(Chen 1971a, Paidoussis 1998 p. 158) a soft spring delays flutter and a stiff
+one brings divergence instead, at the root of u^3 + kappa (sin u - u cos u)
+= 0 (Eq. (3.119)), whatever beta.  This case computes v_cr(kappa) with fempipe
+(FE P3:16) and with the classical theory of
+:mod:`fempipe.validation.classical`, checks that they agree to 1e-6 and that
+fempipe's divergence velocity is the root of Eq. (3.119), and checks Fig.
+3.62's picture (flutter at small kappa, divergence at large kappa) at two
+mass ratios.
+
+A spring inside the paper's hanging pipe (Sugiyama et al. 1985a) makes
+eta''' jump: fempipe against the classical theory again (springs on mesh
+nodes), and a table of how Paidoussis' beam-mode Galerkin method converges
+there (as N^-3: the beam functions are smooth across the spring).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..params import Params
+from . import classical
+from .case import Case
+from .checks import CaseResult, Table, below, holds
+from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
+
+CASE = Case(
+    name="springs",
+    figure="Païdoussis (1998) Eq. (3.119), Fig. 3.62",
+    title="Springs: the spring-supported cantilever (Chen) and a spring inside the hanging pipe",
+    caption=(
+        "(a) The gravity-free undamped pipe (β = 0.2) with a spring κ at its free end: v_cr "
+        "against κ (logarithmic). Line: classical linear theory (Legendre spectral elements in "
+        "η), circles where the first instability is flutter, squares where it is divergence; "
+        "dashed: the divergence condition u³ + κ(sin u − u cos u) = 0 (Païdoussis 1998, Eq. "
+        "(3.119)); filled black circles: fempipe, FE with cubic elements. (b) The paper's "
+        "hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005) with a spring at ξ_s = 0.5 (blue) "
+        "or 0.75 (vermilion): classical lines with the same markers, fempipe's FE in black."
+    ),
+    paper_shows=(
+        "with a spring at the free end, flutter for small K and divergence for larger K "
+        "(Païdoussis 1998, Fig. 3.62, Chen 1971a)",
+    ),
+    requires=(
+        "classical_converged",
+        "fe_vs_classical_tip_K100",
+        "divergence_eq_3_119_K100",
+        "fe_vs_classical_interior_K50_x0.5",
+        "flutter_then_divergence",
+    ),
+    not_checked=("Fig. 3.62's curves and Fig. 3.64's experiments: no number is printed",),
+)
+
+
+def _tip(base: dict, kappa: float) -> Params:
+    return Params(alpha=0.0, springs=((kappa, 1.0),), **base)
+
+
+def _interior(base: dict, kappa: float, xi_s: float) -> Params:
+    springs = ((kappa, xi_s),) if kappa else ()
+    return Params(alpha=0.0, springs=springs, **base)
+
+
+def run(quick: bool = False) -> CaseResult:
+    """v_cr(kappa) at the tip and inside; see the module docstring."""
+    t0 = time.perf_counter()
+    ref = CASE.references
+    tip = ref.value("tip")
+    kappas = sorted(
+        set(ref.value("tip_kappa_curve", quick)) | set(ref.value("tip_kappa_fe", quick))
+    )
+    tip_cl = {k: classical_onset(_tip(tip, k), 12.0) for k in kappas}
+    checks, requires = [], []
+    fe_tip = {}
+    for k in ref.value("tip_kappa_fe", quick):
+        f = fe_tip[k] = fe_onset(_tip(tip, k), tip_cl[k].v_cr + 0.5)
+        name = f"fe_vs_classical_tip_K{k:g}"
+        requires.append(name)
+        checks.append(
+            agreement_check(name, f"tip spring κ = {k:g}, β = {tip['beta']:g}", f, tip_cl[k])
+        )
+        root = classical.tip_spring_divergence(k)
+        if math.isfinite(root):
+            name = f"divergence_eq_3_119_K{k:g}"
+            requires.append(name)
+            checks.append(
+                below(
+                    name,
+                    f"κ = {k:g}: fempipe's pipe diverges ({f.kind} at v = {f.v_cr:.9f}) at the "
+                    f"root of u³ + κ(sin u − u cos u) = 0 ({root:.9f})",
+                    abs(f.v_cr - root) if f.kind == "divergence" else math.inf,
+                    1e-6,
+                    why="an exact condition of the linear theory; FE P3:16 and the root agree "
+                    "far below 1e-6 (the crossing located to ~1e-8)",
+                    source="Païdoussis (1998), p. 158, Eq. (3.119) (Chen 1971a)",
+                )
+            )
+    # Fig. 3.62: flutter for small kappa, divergence (at Eq. (3.119)) for large kappa.
+    kinds = {}
+    for beta in ref.value("kind_betas"):
+        base = dict(tip, beta=beta)
+        lo = classical_onset(_tip(base, kappas[0]), 12.0)
+        hi = classical_onset(_tip(base, kappas[-1]), 12.0)
+        kinds[beta] = (lo.kind, hi.kind, hi.v_cr, classical.tip_spring_divergence(kappas[-1]))
+    ok = all(
+        lo == "flutter" and hi == "divergence" and abs(v - r) < 1e-6
+        for lo, hi, v, r in kinds.values()
+    )
+    checks.append(
+        holds(
+            "flutter_then_divergence",
+            f"tip spring: flutter at κ = {kappas[0]:g}, divergence at κ = {kappas[-1]:g} (at the "
+            "root of Eq. (3.119)), for β = " + ", ".join(f"{b:g}" for b in kinds),
+            ok,
+            "; ".join(
+                f"β = {b:g}: {lo} / {hi} at {v:.6f} (Eq. (3.119): {r:.6f})"
+                for b, (lo, hi, v, r) in kinds.items()
+            ),
+            why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
+            "(fe_vs_classical_tip_*)",
+            source="Païdoussis (1998), p. 158, Fig. 3.62: flutter boundaries, shaded zones of "
+            "divergence at larger K (Chen 1971a)",
+        )
+    )
+    # Springs inside the hanging pipe.
+    hb = ref.value("interior")
+    grid = ref.value("interior_kappa_curve", quick)
+    positions = sorted({x for _, x in ref.value("interior_springs_fe")})
+    interior = {x: {k: classical_onset(_interior(hb, k, x), 15.0) for k in grid} for x in positions}
+    fe_int = {}
+    for k, x in ref.value("interior_springs_fe", quick):
+        cl = interior[x].get(k) or classical_onset(_interior(hb, k, x), 15.0)
+        interior[x][k] = cl
+        f = fe_int[(k, x)] = fe_onset(_interior(hb, k, x), cl.v_cr + 0.5)
+        name = f"fe_vs_classical_interior_K{k:g}_x{x:g}"
+        requires.append(name)
+        what = (
+            f"hanging pipe β = {hb['beta']:g}, γ = {hb['gamma']:g}, spring κ = {k:g} at ξ_s = {x:g}"
+        )
+        checks.append(agreement_check(name, what, f, cl))
+    k_c, x_c = ref.value("interior_springs_fe")[-1]
+    checks.append(
+        converged_check(
+            "classical_converged",
+            f"hanging pipe, spring κ = {k_c:g} at ξ_s = {x_c:g}",
+            _interior(hb, k_c, x_c),
+            15.0,
+        )
+    )
+    # Paidoussis' beam-mode Galerkin at the interior spring.
+    k_g, x_g = ref.value("interior_springs_fe")[0]
+    pipe = classical.StraightPipe.from_params(_interior(hb, k_g, x_g))
+    reference = interior[x_g][k_g].v_cr
+    modes = ref.value("beam_modes")
+    gal = [classical.critical_velocity(pipe, 15.0, method="galerkin", n=n).v_cr for n in modes]
+    tables = [
+        Table(
+            f"Tip spring, β = {tip['beta']:g}, γ = 0: v_cr against κ",
+            ("κ", "v_cr classical", "kind", "Eq. (3.119) root", f"v_cr FE {FE}"),
+            tuple(
+                (
+                    k,
+                    o.v_cr,
+                    o.kind,
+                    classical.tip_spring_divergence(k),
+                    fe_tip[k].v_cr if k in fe_tip else "—",
+                )
+                for k, o in tip_cl.items()
+            ),
+        ),
+        Table(
+            f"Spring inside the hanging pipe (β = {hb['beta']:g}, γ = {hb['gamma']:g}, "
+            f"μ = {hb['mu']:g}): v_cr against κ",
+            ("ξ_s", "κ", "v_cr classical", "kind", f"v_cr FE {FE}"),
+            tuple(
+                (x, k, o.v_cr, o.kind, fe_int[(k, x)].v_cr if (k, x) in fe_int else "—")
+                for x, c in interior.items()
+                for k, o in sorted(c.items())
+            ),
+        ),
+        Table(
+            f"Païdoussis' beam-mode Galerkin method with a spring κ = {k_g:g} at ξ_s = {x_g:g} "
+            "(hanging pipe)",
+            ("beam modes N", "v_cr", "error"),
+            tuple((n, v, v - reference) for n, v in zip(modes, gal, strict=True)),
+            note=f"reference: Legendre spectral elements, v_cr = {reference:.10f}; the beam "
+            "functions are smooth across the spring, where η‴ jumps, so the error falls as N⁻³.",
+        ),
+    ]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=tuple(tables),
+        data={
+            "tip": {k: (o.v_cr, o.kind) for k, o in tip_cl.items()},
+            "eq_3_119": {k: classical.tip_spring_divergence(k) for k in kappas},
+            "fe_tip": {k: f.v_cr for k, f in fe_tip.items()},
+            "interior": {
+                x: {k: (o.v_cr, o.kind) for k, o in sorted(c.items())} for x, c in interior.items()
+            },
+            "fe_interior": {key: f.v_cr for key, f in fe_int.items()},
+            "tip_params": tip,
+            "interior_params": hb,
+        },
+        requires=requires,
+    )
+
+
+def _curve(ax, points: dict, color: str, xfloor: float | None = None):
+    """A classical curve with circles (flutter) and squares (divergence)."""
+    ks = np.array(sorted(points))
+    x = ks if xfloor is None else np.where(ks > 0, ks, xfloor)
+    v = np.array([points[k][0] for k in ks])
+    div = np.array([points[k][1] == "divergence" for k in ks])
+    ax.plot(x, v, "-", color=color, lw=1.4)
+    ax.plot(x[~div], v[~div], "o", mfc="none", color=color, ms=5)
+    ax.plot(x[div], v[div], "s", mfc="none", color=color, ms=5)
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) v_cr(κ) with a tip spring, (b) v_cr(κ) with a spring inside the hanging pipe."""
+    from matplotlib.lines import Line2D
+
+    from .drawing import finish_figure, new_figure
+
+    d = result.data
+    if fig is None:
+        fig, axes = new_figure(2, ncols=2, size=4.2)
+    else:
+        axes = list(fig.subplots(1, 2).ravel())
+    ax = axes[0]
+    _curve(ax, d["tip"], "#0072B2")
+    ks = sorted(d["eq_3_119"])
+    ax.plot(ks, [d["eq_3_119"][k] for k in ks], "--", color="#D55E00", lw=1.3)
+    fk = sorted(d["fe_tip"])
+    ax.plot(fk, [d["fe_tip"][k] for k in fk], "o", color="k", ms=5)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"tip spring $\kappa = kL^3/EI$")
+    ax.set_ylabel(r"$v_{cr}$")
+    p = d["tip_params"]
+    ax.set_title(f"tip spring, β = {p['beta']:g}, γ = 0", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax = axes[1]
+    colors = {0.5: "#0072B2", 0.75: "#D55E00"}
+    floor = None
+    for x, pts in d["interior"].items():
+        ks = sorted(pts)
+        floor = min(k for k in ks if k > 0) / 3.0
+        _curve(ax, pts, colors.get(x, "0.4"), xfloor=floor)
+    for (k, _x), v in d["fe_interior"].items():
+        ax.plot(k if k > 0 else floor, v, "o", color="k", ms=5)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"spring $\kappa$ at $\xi_s$ ($\kappa = 0$ at the left edge)")
+    ax.set_ylabel(r"$v_{cr}$")
+    p = d["interior_params"]
+    ax.set_title(f"hanging, β = {p['beta']:g}, γ = {p['gamma']:g}", fontsize=10)
+    ax.grid(alpha=0.3)
+    handles = [
+        Line2D([], [], color="#0072B2", lw=1.4, label="classical, tip / ξ_s = 0.5"),
+        Line2D([], [], color="#D55E00", lw=1.4, label="classical, ξ_s = 0.75"),
+        Line2D([], [], ls="--", color="#D55E00", lw=1.3, label="Eq. (3.119), divergence"),
+        Line2D([], [], ls="", marker="o", mfc="none", color="0.3", label="flutter"),
+        Line2D([], [], ls="", marker="s", mfc="none", color="0.3", label="divergence"),
+        Line2D([], [], ls="", marker="o", color="k", label=f"fempipe FE {FE}"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    return fig
