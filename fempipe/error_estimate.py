@@ -7,8 +7,9 @@ stated for the coarse grid:
 
     err(Q_h) = Fs |Q_h - Q_{h/r}| r^p / (r^p - 1),     Fs = 3,
 
-with the refinement ratio r = 2 and the theoretical order p of the error in
-the refinement (:func:`expected_order`).  If the error of Q_h is C h^p and
+with the refinement ratio r (:func:`refinement_ratio`: 2, or (2N + 1)/N for
+an odd number of modes) and the theoretical order p of the error in the
+refinement (:func:`expected_order`).  If the error of Q_h is C h^p and
 that of Q_{h/r} is C (h/r)^p, then Q_h - Q_{h/r} = C h^p (1 - r^-p), so
 |Q_h - Q_{h/r}| r^p / (r^p - 1) is the error of Q_h itself once the sequence
 is in its asymptotic range; the safety factor Fs = 3 is Roache's for studies
@@ -26,7 +27,9 @@ tolerance of a limit cycle).
 
 Refinement (:func:`refine`): finite elements are h-refined (every element
 halved, the same degree); the modal Galerkin method doubles its number of
-modes, with the same basis.  Orders (:func:`expected_order`, README,
+modes, plus one for an odd N (the sine modes' tip error alternates with the
+parity of N, so an odd N is compared with an odd refinement), with the same
+basis.  Orders (:func:`expected_order`, README,
 "Conventions and derivations"): Lagrange P_k elements converge as h^(2k) in
 the static tip values (nodal superconvergence in 1-D), the eigenvalues and
 v_cr; the sine modes as N^-3; another modal basis as its class states

@@ -5,7 +5,7 @@ experiment), one case per row; for each row and each quantity given, fempipe
 computes the same quantity (:class:`fempipe.convergence.Quantity`, exactly
 as ``fempipe convergence`` does) on the chosen discretisation (``--fe``,
 default P3:16, or ``--modal N``) and again on the refined one (elements
-halved, twice the modes), and reports the user's value, fempipe's, the
+halved, twice the modes plus one for an odd N), and reports the user's value, fempipe's, the
 difference user - fempipe, the relative difference (over |fempipe|),
 fempipe's error estimate (the Grid Convergence Index of one refinement,
 :mod:`fempipe.error_estimate`) and whether the difference is *resolved*

@@ -22,7 +22,7 @@ critical.json, events.csv and branches.png.
 
 ``--error-estimate`` runs the whole analysis again on the refined
 discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
-or twice the modes), pairs the events of the two runs by branch, type and
+or twice the modes, plus one for an odd N), pairs the events of the two runs by branch, type and
 mode (:func:`fempipe.error_estimate.match_events`, not by position) and adds
 beside ``v_cr``, ``v_flutter`` (and ``U_cr``), beside ``v`` and
 ``frequency`` of every event and of ``critical``, the estimate ``Q_error`` =

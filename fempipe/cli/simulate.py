@@ -19,7 +19,7 @@ every accepted step, or on a uniform grid with ``--output-dt``).
 
 ``--error-estimate`` computes the attractor again on the refined
 discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
-or twice the modes) without a new transient where it can: a limit cycle is
+or twice the modes, plus one for an odd N) without a new transient where it can: a limit cycle is
 shot from the coarse cycle transferred to the refined space (the L2
 projection :func:`fempipe.projection.project`), an equilibrium solved by
 Newton from the coarse one (and its linear stability checked); only if that
