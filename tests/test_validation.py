@@ -42,6 +42,10 @@ CHEAP = [
     "fig06",
     "fig11",
     "fig12",
+    "end_mass",
+    "external_damping",
+    "hysteretic",
+    "springs",
 ]
 
 

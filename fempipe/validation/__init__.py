@@ -38,7 +38,7 @@ __all__ = [
     "load_references",
 ]
 
-#: Case modules in the paper's order.
+#: Case modules in the paper's order, then the variants of the pipe.
 CASES: tuple[str, ...] = (
     "fig02a",
     "fig02b",
@@ -52,6 +52,12 @@ CASES: tuple[str, ...] = (
     "fig12",
     "symmetry",
     "convergence",
+    # The classical variants of the straight pipe against the classical
+    # linear theory (fempipe.validation.classical) and the literature.
+    "end_mass",
+    "external_damping",
+    "hysteretic",
+    "springs",
 )
 
 

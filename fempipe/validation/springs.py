@@ -168,7 +168,7 @@ def run(quick: bool = False) -> CaseResult:
                     k,
                     o.v_cr,
                     o.kind,
-                    classical.tip_spring_divergence(k),
+                    _root_cell(classical.tip_spring_divergence(k)),
                     fe_tip[k].v_cr if k in fe_tip else "—",
                 )
                 for k, o in tip_cl.items()
@@ -211,6 +211,11 @@ def run(quick: bool = False) -> CaseResult:
         },
         requires=requires,
     )
+
+
+def _root_cell(root: float):
+    """A root of Eq. (3.119) for a table cell ("none" below 3 pi)."""
+    return root if math.isfinite(root) else "none"
 
 
 def _curve(ax, points: dict, color: str, xfloor: float | None = None):
