@@ -447,12 +447,12 @@ class PipeModel:
         J = sp.csr_matrix((n, n)) if sparse else np.zeros((n, n))
         for kappa, rule, t, _nrm, b, d in self._spring_states(q):
             wt = -kappa * rule.w * (t @ d)
+            local = rule.Phi.T @ _rows(wt, rule.Phi)  # banded for finite elements
             if sparse:
                 B = sp.csr_matrix(b)
-                J = J + rule.Phi.T @ _rows(wt, rule.Phi) + kappa * (B @ B.T)
+                J = J + local + kappa * (B @ B.T)
             else:
-                P = _dense(rule.Phi)
-                J = J + (P.T * wt) @ P + kappa * (b @ b.T)
+                J = J + _dense(local) + kappa * (b @ b.T)
         return J.tocsr() if sparse else J
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
