@@ -62,10 +62,14 @@ Two discretisations
     and e_sr = int (1 - xi + Gamma) phi_s' phi_r' (by parts, Paidoussis'
     b_sr - c_sr + d_sr plus the end mass's Gamma (phi_s(1) phi_r'(1) - c_sr)).  The integrals
     are Gauss-Legendre sums on 4N cells of 8 points, with the modes evaluated
-    in a form whose exponentials never exceed 1.  The basis satisfies
+    in a form whose exponentials never exceed 1.  Every basis function has
     eta'''(1) = 0, which the solution does not when Gamma, kappa_1 or gravity
-    with an end mass act there, nor at an interior spring: the Galerkin error
-    then falls as N^-3 instead of faster.
+    with an end mass act there, nor at an interior spring.  Measured errors of
+    v_cr for N = 10, 20, 40: plain pipe (gamma = 18.9) 2.1e-4, 1.3e-5,
+    7.5e-7 (N^-4); an end mass (Gamma = 0.3) 9.1e-3, 2.5e-3, 6.6e-4 and a tip
+    spring (kappa = 100) 2.0e-3, 7.2e-4, 2.1e-4 (N^-2); a spring at xi_s = 0.5
+    1.0e-3, 1.1e-4, 1.5e-5 (N^-3).  Frequencies at v = 0 with an end mass
+    converge as N^-3.
 :class:`LegendreGalerkin`
     The same weak form on spectral elements: one element per segment between
     springs, C^1 (eta and eta' continuous at the nodes, where the springs
