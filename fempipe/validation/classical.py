@@ -505,8 +505,17 @@ class LegendreGalerkin:
 
 
 def discretisation(method: str = "galerkin", n: int | None = None):
-    """A discretisation by name: ``"galerkin"`` (beam modes, default N = 20) or
-    ``"legendre"`` (spectral elements, default p = 24)."""
+    """A discretisation by name.
+
+    Parameters
+    ----------
+    method : {"galerkin", "legendre"}
+        Paidoussis' beam-mode Galerkin method (:class:`BeamGalerkin`, default
+        N = 20) or the spectral elements (:class:`LegendreGalerkin`, default
+        p = 24).
+    n : int, optional
+        N or p.
+    """
     if method == "galerkin":
         return BeamGalerkin(20 if n is None else n)
     if method == "legendre":
@@ -556,7 +565,19 @@ def eigenvalues(
 ) -> np.ndarray:
     """The consistent eigenvalues lambda (eta ~ e^{lambda tau}) at flow velocity ``v``.
 
-    Sorted by |lambda|; with hysteretic damping, see the module docstring.
+    Parameters
+    ----------
+    pipe : StraightPipe
+    v : float
+        Flow velocity.
+    method, n : str, int
+        The discretisation (:func:`discretisation`).
+
+    Returns
+    -------
+    ndarray of complex
+        Sorted by |lambda|; with hysteretic damping, those of the module
+        docstring (Im > 0 from 1 + i mu_h, their conjugates, the real ones).
     """
     lam = _Problem(pipe, discretisation(method, n)).eigenvalues(v)
     return lam[np.argsort(np.abs(lam))]
@@ -581,7 +602,23 @@ def spectral_abscissa(
 ) -> tuple[float, complex]:
     """The stability margin max(Re lambda - tol max(1, |lambda|)) and the eigenvalue attaining it.
 
-    Positive: unstable.  Only |lambda| < ``lam_max`` count (module docstring).
+    Parameters
+    ----------
+    pipe : StraightPipe
+    v : float
+        Flow velocity.
+    method, n : str, int
+        The discretisation (:func:`discretisation`).
+    lam_max, tol : float
+        Only |lambda| < ``lam_max`` count; an unstable real part exceeds
+        ``tol`` max(1, |lambda|) (module docstring).
+
+    Returns
+    -------
+    margin : float
+        Positive: unstable.
+    lam : complex
+        The eigenvalue attaining it.
     """
     return _abscissa(_Problem(pipe, discretisation(method, n)).eigenvalues(v), lam_max, tol)
 
