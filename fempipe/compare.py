@@ -122,7 +122,9 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
     if refined is not None:
         floor = quantity.tolerance * max(1.0, abs(value))
         ratio = refinement_ratio(disc)
-        err = float(estimate(value, refined, expected_order(disc), ratio, floor=floor))
+        err = float(
+            estimate(value, refined, expected_order(disc, quantity.params), ratio, floor=floor)
+        )
     return Evaluation(value, refined, err, note, time.process_time() - t0)
 
 

@@ -134,12 +134,14 @@ def refinement_ratio(disc) -> float:
     return RATIO
 
 
-def expected_order(disc) -> float | None:
+def expected_order(disc, params=None) -> float | None:
     """The theoretical order p of the error in the refinement of :func:`refine`.
 
     Parameters
     ----------
     disc : FiniteElement or Modal
+    params : Params, optional
+        The case: some variants of the pipe lower the order (below).
 
     Returns
     -------
@@ -147,8 +149,31 @@ def expected_order(disc) -> float | None:
         2k for Lagrange P_k elements (error ~ h^(2k) of tip values,
         eigenvalues and v_cr); 3 for the sine modes (error ~ N^-3); for
         another modal basis the class's ``expected_order`` if it states one,
-        else None (unknown).
+        else None (unknown).  With ``params``: a spring inside an element
+        makes the second derivative of theta jump inside it, and P_k then
+        converges as h^3 at best (min(2k, 3)); every beam mode has
+        theta''(1) = 0, which an end mass or a spring at the tip violates
+        (order 2), and a continuous third derivative, which a spring inside
+        the pipe violates (order 3).  The sine modes keep N^-3 (README,
+        "Variants of the pipe").
     """
+    base = _paper_order(disc)
+    if params is None or base is None:
+        return base
+    springs = [xi for kappa, xi in params.springs if kappa > 0.0]
+    if isinstance(disc, FiniteElement):
+        inside = any(not np.isclose(disc.nodes, xi, rtol=0.0, atol=1e-12).any() for xi in springs)
+        return min(base, 3.0) if inside else base
+    if _modal_basis(disc) == "beam":
+        if params.end_mass > 0.0 or any(xi == 1.0 for xi in springs):
+            return min(base, 2.0)
+        if springs:
+            return min(base, 3.0)
+    return base
+
+
+def _paper_order(disc) -> float | None:
+    """The order for the paper's pipe (no variant)."""
     if isinstance(disc, FiniteElement):
         return 2.0 * disc.degree
     if isinstance(disc, Modal):
@@ -259,7 +284,7 @@ class ErrorEstimate:
         }
 
 
-def describe(disc, refined=None, floor: str = "") -> ErrorEstimate:
+def describe(disc, refined=None, floor: str = "", params=None) -> ErrorEstimate:
     """The :class:`ErrorEstimate` of ``disc`` refined by :func:`refine`.
 
     Parameters
@@ -269,6 +294,8 @@ def describe(disc, refined=None, floor: str = "") -> ErrorEstimate:
         ``refine(disc)`` if already built.
     floor : str
         What sets the floor of the estimates (stated in the JSON).
+    params : Params, optional
+        The case, for the order (:func:`expected_order`).
     """
     refined = refine(disc) if refined is None else refined
     return ErrorEstimate(
@@ -276,7 +303,7 @@ def describe(disc, refined=None, floor: str = "") -> ErrorEstimate:
         discretization=disc.name,
         refined=refined.name,
         safety_factor=SAFETY_FACTOR,
-        order=expected_order(disc),
+        order=expected_order(disc, params),
         ratio=refinement_ratio(disc),
         floor=floor,
     )

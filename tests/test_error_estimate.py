@@ -457,3 +457,32 @@ def test_bound_measurement_on_a_small_subset():
     assert s["cases"] == 2 * 4 + 2 * 2 and s["no_estimate"] == 0
     assert s["resolvable"] == s["cases"] and s["bounded"] == s["cases"]
     assert 1.0 <= s["min_ratio"] <= s["max_pessimism"] <= 100.0
+
+
+def test_expected_order_with_the_variants_of_the_pipe():
+    """Variants that break the solution's smoothness lower the order the estimate assumes."""
+    fe = FiniteElement(4, 3)
+    assert expected_order(fe, Params(springs=((50.0, 0.5),))) == 6.0  # a node of P3:4
+    assert expected_order(fe, Params(springs=((50.0, 0.3),))) == 3.0  # inside an element
+    assert expected_order(FiniteElement(4, 1), Params(springs=((50.0, 0.3),))) == 2.0
+    assert expected_order(fe, Params(end_mass=0.5, external_damping=1.0)) == 6.0
+    beam = Modal(4, basis="beam")
+    assert expected_order(beam, Params(end_mass=0.2)) == 2.0
+    assert expected_order(beam, Params(springs=((50.0, 1.0),))) == 2.0
+    assert expected_order(beam, Params(springs=((50.0, 0.5),))) == 3.0
+    assert expected_order(Modal(4), Params(end_mass=0.2)) == 3.0
+
+
+def test_static_estimate_bounds_the_error_with_a_spring_inside_an_element(capsys):
+    """The estimate states order 3 (theta'' jumps inside an element) and bounds the error."""
+    argv = ["static", "--fe", "P3:4", "--alpha", "pi/2", "--spring", "30@0.3", "--v", "2"]
+    d = run_json(capsys, [*argv, "--error-estimate"])
+    assert d["error_estimate"]["order"] == 3
+    p = Params(alpha=math.pi / 2, springs=((30.0, 0.3),))
+    # P3 on 70 elements has a node at 0.3: the reference converges as h^6.
+    ref_disc = FiniteElement(70, 3)
+    (sol,) = solve_path(PipeModel(ref_disc, p), [0.0, 2.0])[-1:]
+    ref = tip_values(ref_disc, sol.q, p.alpha)
+    (pt,) = d["points"]
+    for k in TIP:
+        assert_bounds(pt[k + "_error"], pt[k], ref[k], k)

@@ -164,7 +164,12 @@ def _refined_run(model, kwargs: dict, bar) -> tuple:
     from fempipe.stability import stability_analysis
 
     fine = refine(model.disc)
-    info = describe(model.disc, fine, floor=f"events located to {EVENT_TOL:g} max(1, |Q|)")
+    info = describe(
+        model.disc,
+        fine,
+        floor=f"events located to {EVENT_TOL:g} max(1, |Q|)",
+        params=model.params,
+    )
 
     def on_sample(branch: str, v: float) -> None:
         bar.update()

@@ -363,7 +363,7 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
     else:
         floor, what = args.shoot_rtol, f"--shoot-rtol {args.shoot_rtol:g}"
         coarse = summary(att.kind, att.period, att.period_n, att.tip)
-    info = describe(disc, fine, floor=f"{what} max(1, |Q|)")
+    info = describe(disc, fine, floor=f"{what} max(1, |Q|)", params=params)
     refined = None
     try:
         if att is None:

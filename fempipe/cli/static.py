@@ -189,7 +189,9 @@ def _refined_states(model, sols, parameter: str, bar) -> tuple:
 
     disc = model.disc
     fine = refine(disc)
-    info = describe(disc, fine, floor=f"Newton's tolerance {NEWTON_TOL:g} max(1, |Q|)")
+    info = describe(
+        disc, fine, floor=f"Newton's tolerance {NEWTON_TOL:g} max(1, |Q|)", params=model.params
+    )
     fine_model = PipeModel(fine, model.params)
     states, notes = [], []
     bar.set_postfix_str(f"refined {fine.name}")
