@@ -241,3 +241,34 @@ def test_cli_startup_does_not_import_plotting_or_io_libraries():
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert res.stdout.strip() == "[]"
+
+
+# ---------------------------------------------------------------- variants --
+@pytest.mark.parametrize(
+    "command, argv, option, words",
+    [
+        ("static", ["--end-mass", "-0.1"], "--end-mass", ("0 <= --end-mass",)),
+        ("critical", ["--end-mass", "1e3"], "--end-mass", ("<= 100",)),
+        ("critical", ["--external-damping", "-1"], "--external-damping", ()),
+        ("spectrum", ["--hysteretic-damping", "-0.01"], "--hysteretic-damping", ()),
+        ("critical", ["--hysteretic-damping", "2"], "--hysteretic-damping", ("<= 1",)),
+        ("static", ["--spring=-5@0.5"], "--spring", ("kappa",)),
+        ("static", ["--spring", "5@0"], "--spring", ("0 < xi_s <= 1",)),
+        ("static", ["--spring", "5@1.2"], "--spring", ("0 < xi_s <= 1",)),
+        ("static", ["--spring", "5"], "--spring", ("KAPPA@XI_S",)),
+        ("static", ["--spring", "five@0.5"], "--spring", ()),
+        ("simulate", ["--hysteretic-damping", "0.01"], "--hysteretic-damping", ("time-domain",)),
+        ("bifurcation", ["--hysteretic-damping", "0.01"], "--hysteretic-damping", ("time-domain",)),
+        ("static", ["--end-mass-kg", "0.01"], "--end-mass-kg", ("SI pipe",)),
+        (
+            "static",
+            [*TD_ARGS, "--end-mass-kg", "0.01", "--end-mass", "0.1"],
+            "--end-mass-kg",
+            ("not both",),
+        ),
+        ("static", [*TD_ARGS, "--end-mass-kg", "-1"], "--end-mass-kg", ()),
+    ],
+)
+def test_bad_variant_values_are_refused(command, argv, option, words, capsys, no_compute):
+    code, out, err = run([command, *argv], capsys)
+    assert_refused(code, out, err, option, *words)
