@@ -238,3 +238,24 @@ def test_bench_convergence_vcr_quick_measures_the_orders():
         10.0,
     ).v_cr
     assert abs(d["v_cr_reference"] - fine) <= d["reference_error_estimate"] + 1e-9
+
+
+def test_cli_study_of_a_variant_pipe(capsys):
+    """v_cr of the hanging pipe with an end mass and a spring at a node: P2 still as h^4."""
+    code, out, err = run_cli(
+        ["convergence", "--quantity", "v_cr", "--v", "0,12", "--end-mass", "0.2"]
+        + ["--spring", "20@0.5", "--fe", "P2", "--elements", "2:32", "--json"]
+    )
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["params"]["end_mass"] == 0.2 and d["params"]["springs"] == [[20.0, 0.5]]
+    (s,) = d["series"]
+    assert s["expected_order"] == 4.0
+    assert s["observed_order"] == pytest.approx(4.0, abs=0.3)
+
+
+def test_cli_refuses_hysteretic_damping_for_a_limit_cycle():
+    code, out, err = run_cli(
+        ["convergence", "--quantity", "lc_period", "--v", "10", "--hysteretic-damping", "0.01"]
+    )
+    assert code == 2 and "--hysteretic-damping" in err and "time-domain" in err

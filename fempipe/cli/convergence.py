@@ -177,10 +177,12 @@ def _families(args: argparse.Namespace) -> list:
 def _quantity(args: argparse.Namespace, setup):
     from dataclasses import replace
 
-    from fempipe.convergence import CRITICAL_QUANTITIES, Quantity
+    from fempipe.convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
 
     name = args.quantity
     flow_opt = "--U" if getattr(args, "U", None) is not None else "--v"
+    if name in CYCLE_QUANTITIES:
+        common.refuse_hysteretic(args, f"--quantity {name} (a limit cycle)")
     if name in CRITICAL_QUANTITIES:
         if len(setup.v) < 2 or max(setup.v) <= min(setup.v):
             raise CLIError(flow_opt, f"--quantity {name} needs a flow range, e.g. --v 0,15")
