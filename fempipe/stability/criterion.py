@@ -19,10 +19,14 @@ from ..parallel import single_blas_thread
 from ..params import Params
 from .linear import (
     QZ_MAX_N,
+    RELEVANT_SHARE,
     RESOLUTION_TOL,
     RESOLVED_SHARE,
     STABILITY_TOL,
     _analyse,
+    _Halves,
+    _match,
+    _relevant,
     cantilever_frequencies,
     resolution,
     single_blas,
@@ -158,12 +162,16 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
         return _DENSE
     mu = model.params.mu
 
+    def op_parts(z):
+        # The right-hand side (M y + C x) of the operator below, for real z:
+        # every rate term of the model (Kelvin-Voigt, Coriolis, inertia, and
+        # the end mass's inertia and the external damping when present).
+        x, y = z[:n], z[n:]
+        return model.rate_terms(q, x, y)
+
     def op(z):
         # (A)^{-1} B z for A = [[0, I], [-K, -C]], B = diag(I, M): eigenvalue 1/lambda.
-        x, y = z[:n], z[n:]
-        fl = model.fields(q, qdot=x, qddot=y)
-        rhs = model.inertia(fl) + model.coriolis(fl) + mu * np.asarray(model.disc.K @ x)
-        return np.concatenate([-lu.solve(rhs), x])
+        return np.concatenate([-lu.solve(op_parts(z)), z[:n]])
 
     T = spla.LinearOperator((2 * n, 2 * n), matvec=lambda z: op(np.ravel(z)), dtype=float)
     # Kelvin-Voigt damping makes the modes with omega > 2 / mu overdamped, and
@@ -179,9 +187,62 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
     lam = 1.0 / nu
     X = Z[:n]
     M0 = _mass_operator(model0, np.zeros(n))
-    M0X = np.column_stack([M0 @ X[:, j].real + 1j * (M0 @ X[:, j].imag) for j in range(k)])
-    total = np.real(np.einsum("ij,ij->j", X.conj(), M0X))
-    low = np.abs(basis[:, :n_low].T @ M0X) ** 2
-    resolved = low.sum(axis=0) >= RESOLVED_SHARE * total
+
+    def energies(X):
+        # Squared M(0)-norm of each column, and its part on the resolved canonical modes.
+        M0X = np.column_stack([M0 @ X[:, j].real + 1j * (M0 @ X[:, j].imag) for j in range(k)])
+        total = np.real(np.einsum("ij,ij->j", X.conj(), M0X))
+        return (np.abs(basis[:, :n_low].T @ M0X) ** 2).sum(axis=0), total
+
+    low, total = energies(X)
+    mu_h = model.params.hysteretic_damping
+    if mu_h > 0.0:
+        relevant = low >= RELEVANT_SHARE * total
+        roots = _sparse_hysteretic(model, q, op_parts, lam, X, relevant, mu_h, k)
+        if roots is _DENSE:
+            return _DENSE
+        lam, X = roots
+        low, total = energies(X)
+    resolved = low >= RESOLVED_SHARE * total
     unstable = resolved & (lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(lam)))
     return not bool(unstable.any())
+
+
+def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
+    """The lowest roots with hysteretic damping, as :func:`~.linear.hysteretic_roots` does.
+
+    Real roots of the real problem are kept; each root with Im lambda > 0 is
+    matched to the nearest of the k roots nearest 0 of the complex problem
+    with stiffness K^d + i mu_h K_bend that have Im lambda >= 0 (one step in
+    mu_h: the shift-invert Arnoldi solve is the cost here); the roots with
+    Im lambda < 0 are their conjugates.  Where a relevant match is not clearly
+    better than the next candidate, :data:`_DENSE` (the dense criterion
+    continues in mu_h and decides).
+    """
+    n = model.n
+    try:
+        Kc = sp.csc_matrix(model.static_jacobian(q)) + 1j * mu_h * sp.csc_matrix(model.disc.K)
+        lu = spla.splu(sp.csc_matrix(Kc))
+    except RuntimeError:
+        return _DENSE
+
+    def op(z):
+        rhs = op_parts(z.real) + 1j * op_parts(z.imag)
+        return np.concatenate([-lu.solve(rhs), z[:n]])
+
+    T = spla.LinearOperator((2 * n, 2 * n), matvec=lambda z: op(np.ravel(z)), dtype=complex)
+    nu, Z = spla.eigs(T, k=k, which="LM", ncv=min(2 * n, 2 * k + 1))
+    lam, X = 1.0 / nu, Z[:n]
+    halves = _Halves.of(lam0, mu_h)
+    targets, Xt = halves.targets(lam0, X0)
+    matched = _match(
+        targets,
+        Xt / np.linalg.norm(Xt, axis=0),
+        lam,
+        X / np.linalg.norm(X, axis=0),
+        _relevant(targets, relevant[halves.pos]),
+    )
+    if matched is None or matched[1].any():
+        return _DENSE
+    idx = matched[0]
+    return halves.assemble(lam0, X0, lam[idx], X[:, idx])

@@ -220,19 +220,96 @@ HYSTERETIC_MAX_SOLVES = 16
 RELEVANT_SHARE = 0.25
 
 
-def _conjugate_partners(lam: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> np.ndarray:
-    """For each index in ``lower``, the position in ``upper`` of its complex conjugate.
+@dataclass(frozen=True)
+class _Halves:
+    """The roots of a real quadratic problem sorted by the sign of their frequency.
 
-    The real eigensolvers return exact conjugate pairs; the optimal assignment
-    on |conj(lam_lower) - lam_upper| recovers them whatever their order.
+    A root oscillates, for a loss factor mu_h, when its frequency exceeds
+    mu_h times its modulus: |Im lambda| > mu_h |lambda| (package docstring,
+    "Hysteretic damping").  ``pos`` are the oscillating roots represented on
+    the positive-frequency side: those with Im lambda > 0, and those with
+    Im lambda < 0 whose conjugate is missing (``flip``; only a partial
+    spectrum, such as Arnoldi's, can split a pair).  ``paired`` are the other
+    oscillating roots with Im lambda < 0, and ``partner`` the position in
+    ``pos`` of their conjugates.  The other roots are in neither.
     """
-    if lower.size == 0:
-        return np.zeros(0, dtype=int)
-    D = np.abs(np.conj(lam[lower])[:, None] - lam[upper][None, :])
+
+    pos: np.ndarray
+    flip: np.ndarray
+    paired: np.ndarray
+    partner: np.ndarray
+
+    @classmethod
+    def of(cls, lam: np.ndarray, mu_h: float) -> _Halves:
+        oscillating = np.abs(lam.imag) > mu_h * np.abs(lam)
+        upper = np.flatnonzero(oscillating & (lam.imag > 0.0))
+        lower = np.flatnonzero(oscillating & (lam.imag < 0.0))
+        partner = np.full(lower.size, -1)
+        if lower.size and upper.size:
+            # The real eigensolvers return exact conjugate pairs.
+            D = np.abs(np.conj(lam[lower])[:, None] - lam[upper][None, :])
+            rows, cols = linear_sum_assignment(D)
+            scale = np.maximum(1.0, np.abs(lam[lower][rows]))
+            ok = D[rows, cols] <= 1e-12 * scale
+            partner[rows[ok]] = cols[ok]
+        single = lower[partner < 0]
+        return cls(
+            pos=np.concatenate([upper, single]),
+            flip=np.concatenate([np.zeros(upper.size, bool), np.ones(single.size, bool)]),
+            paired=lower[partner >= 0],
+            partner=partner[partner >= 0],
+        )
+
+    def targets(self, lam: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The positive-frequency roots to continue, and their vectors."""
+        t, Xt = lam[self.pos].astype(complex), np.asarray(X, dtype=complex)[:, self.pos]
+        return np.where(self.flip, np.conj(t), t), np.where(self.flip, np.conj(Xt), Xt)
+
+    def assemble(self, lam, X, r, Xr) -> tuple[np.ndarray, np.ndarray]:
+        """``lam``, ``X`` with the pos roots replaced by r, Xr and the negative half conjugated."""
+        out, Xout = np.asarray(lam, dtype=complex).copy(), np.array(X, dtype=complex)
+        out[self.pos] = np.where(self.flip, np.conj(r), r)
+        Xout[:, self.pos] = np.where(self.flip, np.conj(Xr), Xr)
+        out[self.paired] = np.conj(r[self.partner])
+        Xout[:, self.paired] = np.conj(Xr[:, self.partner])
+        return out, Xout
+
+
+#: Damping ratio -Re lambda / |lambda| above which a root's match need not be
+#: unambiguous: such roots are far from instability, and where many crowd
+#: (the Kelvin-Voigt roots near -1/mu) no continuation can tell them apart.
+HYSTERETIC_HEAVY = 0.5
+
+
+def _relevant(targets: np.ndarray, relevant: np.ndarray | None) -> np.ndarray:
+    """The targets whose match must be unambiguous: ``relevant`` and not heavily damped."""
+    light = -targets.real < HYSTERETIC_HEAVY * np.abs(targets)
+    return light if relevant is None else light & relevant
+
+
+def _match(pred: np.ndarray, Xpred: np.ndarray, lam: np.ndarray, X: np.ndarray, relevant):
+    """Indices in ``lam`` (roots with Im >= 0 only) of the predicted roots, and ambiguity.
+
+    Optimal assignment on the cost ``min(1, |lambda - pred| / max(1, |pred|))
+    + 1 - |x_pred^H x|`` (unit vectors): the eigenvector tells apart roots
+    whose eigenvalues crowd, such as the overdamped roots of many modes near
+    -1/mu.  A relevant root is ambiguous when its cost exceeds
+    ``HYSTERETIC_MATCH`` times that of the next candidate.  Returns None when
+    there are fewer candidates than predictions.
+    """
+    cand = np.flatnonzero(lam.imag >= 0.0)
+    if cand.size < pred.size:
+        return None
+    dist = np.abs(pred[:, None] - lam[cand][None, :]) / np.maximum(1.0, np.abs(pred))[:, None]
+    D = np.minimum(1.0, dist) + 1.0 - np.abs(Xpred.conj().T @ X[:, cand])
     rows, cols = linear_sum_assignment(D)
-    out = np.empty(lower.size, dtype=int)
-    out[rows] = cols
-    return out
+    pick = np.empty(pred.size, dtype=int)
+    pick[rows] = cols
+    k = np.arange(pred.size)
+    d1 = D[k, pick]
+    D[k, pick] = np.inf
+    d2 = D.min(axis=1) if cand.size > 1 else np.full(pred.size, np.inf)
+    return cand[pick], relevant & (d1 > HYSTERETIC_MATCH * d2)
 
 
 def hysteretic_roots(
@@ -304,42 +381,27 @@ def hysteretic_roots(
     X : ndarray of complex, shape (n, m)
         Unit-norm theta-parts, in the order of ``lam0``.
     """
-    lam0 = np.asarray(lam0, dtype=complex)
-    upper = np.flatnonzero(lam0.imag > 0.0)
-    lower = np.flatnonzero(lam0.imag < 0.0)
-    partner = _conjugate_partners(lam0, upper, lower)
-    rel = np.ones(upper.size, bool) if relevant is None else np.asarray(relevant)[upper]
-    cur, Xcur = lam0[upper], np.asarray(X0, dtype=complex)[:, upper]
+    halves = _Halves.of(np.asarray(lam0), mu_h)
+    cur, Xcur = halves.targets(np.asarray(lam0), X0)
+    rel = _relevant(cur, None if relevant is None else np.asarray(relevant)[halves.pos])
     mu, step, slope, solves = 0.0, float(mu_h), None, 0
-    while mu < mu_h and upper.size:
+    while mu < mu_h and cur.size:
         nxt = min(float(mu_h), mu + step)
         lam, X, _ = _eigen(K + 1j * nxt * Kb, C, M, method)
         solves += 1
-        cand = np.flatnonzero(lam.imag >= 0.0)
-        if cand.size < upper.size:  # pragma: no cover - fewer positive-frequency roots
-            log.warning("hysteretic damping: %d roots with Im >= 0 for %d", cand.size, upper.size)
-            cand = np.arange(lam.size)
         pred = cur if slope is None else cur + (nxt - mu) * slope
-        D = np.abs(pred[:, None] - lam[cand][None, :])
-        rows, cols = linear_sum_assignment(D)
-        pick = np.empty(upper.size, dtype=int)
-        pick[rows] = cols
-        k = np.arange(upper.size)
-        d1 = D[k, pick]
-        D[k, pick] = np.inf
-        d2 = D.min(axis=1) if cand.size > 1 else np.full(upper.size, np.inf)
-        ambiguous = rel & (d1 > HYSTERETIC_MATCH * d2)
+        matched = _match(pred, Xcur, lam, X, rel)
+        if matched is None:  # pragma: no cover - fewer positive-frequency roots than pairs
+            raise np.linalg.LinAlgError(
+                f"hysteretic damping: fewer roots with Im lambda >= 0 than pairs at mu_h = {nxt:g}"
+            )
+        idx, ambiguous = matched
         if ambiguous.any() and step > HYSTERETIC_MIN_STEP * mu_h and solves < HYSTERETIC_MAX_SOLVES:
             step *= 0.5
             continue
-        idx = cand[pick]
         slope = (lam[idx] - cur) / (nxt - mu)
         cur, Xcur, mu = lam[idx], X[:, idx], nxt
-    out = lam0.copy()
-    Xout = np.array(X0, dtype=complex)
-    out[upper], Xout[:, upper] = cur, Xcur
-    out[lower], Xout[:, lower] = np.conj(cur[partner]), np.conj(Xcur[:, partner])
-    return out, Xout
+    return halves.assemble(lam0, X0, cur, Xcur)
 
 
 @dataclass
