@@ -209,15 +209,15 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
 
 
 def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
-    """The lowest roots with hysteretic damping, as :func:`~.linear.hysteretic_roots` does.
+    """The lowest roots with hysteretic damping, as :func:`~.linear.hysteretic_roots` finds them.
 
-    Real roots of the real problem are kept; each root with Im lambda > 0 is
-    matched to the nearest of the k roots nearest 0 of the complex problem
-    with stiffness K^d + i mu_h K_bend that have Im lambda >= 0 (one step in
-    mu_h: the shift-invert Arnoldi solve is the cost here); the roots with
-    Im lambda < 0 are their conjugates.  Where a relevant match is not clearly
-    better than the next candidate, :data:`_DENSE` (the dense criterion
-    continues in mu_h and decides).
+    Each root with Im lambda > 0 is matched (by eigenvalue and eigenvector)
+    to one of the k roots nearest 0 of the complex problem with stiffness
+    K^d + i mu_h K_bend, in one step of mu_h (one more shift-invert Arnoldi
+    solve); the roots with Im lambda < 0 are their conjugates; real roots,
+    and pairs whose match has Im lambda <= 0, are kept.  Where a relevant
+    match is not clearly better than the next candidate: :data:`_DENSE` (the
+    dense criterion continues in mu_h and decides).
     """
     n = model.n
     try:
@@ -233,16 +233,11 @@ def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: 
     T = spla.LinearOperator((2 * n, 2 * n), matvec=lambda z: op(np.ravel(z)), dtype=complex)
     nu, Z = spla.eigs(T, k=k, which="LM", ncv=min(2 * n, 2 * k + 1))
     lam, X = 1.0 / nu, Z[:n]
-    halves = _Halves.of(lam0, mu_h)
+    halves = _Halves.of(lam0)
     targets, Xt = halves.targets(lam0, X0)
-    matched = _match(
-        targets,
-        Xt / np.linalg.norm(Xt, axis=0),
-        lam,
-        X / np.linalg.norm(X, axis=0),
-        _relevant(targets, relevant[halves.pos]),
-    )
-    if matched is None or matched[1].any():
+    if targets.size > lam.size:
         return _DENSE
-    idx = matched[0]
-    return halves.assemble(lam0, X0, lam[idx], X[:, idx])
+    idx, ambiguous = _match(targets, Xt, lam, X, _relevant(targets, relevant[halves.pos]))
+    if ambiguous.any():
+        return _DENSE
+    return halves.assemble(lam0, X0, lam[idx], X[:, idx], lam[idx].imag <= 0.0)

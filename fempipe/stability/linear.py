@@ -215,7 +215,7 @@ HYSTERETIC_MATCH = 0.35
 HYSTERETIC_MIN_STEP = 1.0 / 64.0
 HYSTERETIC_MAX_SOLVES = 16
 #: Share of an eigenvector on resolved canonical modes above which its match
-#: must be unambiguous (half of RESOLVED_SHARE: margin for the change of the
+#: (if lightly damped) must be unambiguous (half of RESOLVED_SHARE: margin for the change of the
 #: eigenvector with mu_h).
 RELEVANT_SHARE = 0.25
 
@@ -224,14 +224,12 @@ RELEVANT_SHARE = 0.25
 class _Halves:
     """The roots of a real quadratic problem sorted by the sign of their frequency.
 
-    A root oscillates, for a loss factor mu_h, when its frequency exceeds
-    mu_h times its modulus: |Im lambda| > mu_h |lambda| (package docstring,
-    "Hysteretic damping").  ``pos`` are the oscillating roots represented on
-    the positive-frequency side: those with Im lambda > 0, and those with
-    Im lambda < 0 whose conjugate is missing (``flip``; only a partial
-    spectrum, such as Arnoldi's, can split a pair).  ``paired`` are the other
-    oscillating roots with Im lambda < 0, and ``partner`` the position in
-    ``pos`` of their conjugates.  The other roots are in neither.
+    ``pos`` are the roots represented on the positive-frequency side: those
+    with Im lambda > 0, and those with Im lambda < 0 whose conjugate is
+    missing (``flip``; only a partial spectrum, such as Arnoldi's, can split
+    a pair).  ``paired`` are the other roots with Im lambda < 0, and
+    ``partner`` the position in ``pos`` of their conjugates.  Real roots are
+    in neither.
     """
 
     pos: np.ndarray
@@ -240,10 +238,9 @@ class _Halves:
     partner: np.ndarray
 
     @classmethod
-    def of(cls, lam: np.ndarray, mu_h: float) -> _Halves:
-        oscillating = np.abs(lam.imag) > mu_h * np.abs(lam)
-        upper = np.flatnonzero(oscillating & (lam.imag > 0.0))
-        lower = np.flatnonzero(oscillating & (lam.imag < 0.0))
+    def of(cls, lam: np.ndarray) -> _Halves:
+        upper = np.flatnonzero(lam.imag > 0.0)
+        lower = np.flatnonzero(lam.imag < 0.0)
         partner = np.full(lower.size, -1)
         if lower.size and upper.size:
             # The real eigensolvers return exact conjugate pairs.
@@ -261,13 +258,18 @@ class _Halves:
         )
 
     def targets(self, lam: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The positive-frequency roots to continue, and their vectors."""
+        """The positive-frequency roots to continue, and their unit vectors."""
         t, Xt = lam[self.pos].astype(complex), np.asarray(X, dtype=complex)[:, self.pos]
+        Xt = Xt / np.linalg.norm(Xt, axis=0)
         return np.where(self.flip, np.conj(t), t), np.where(self.flip, np.conj(Xt), Xt)
 
-    def assemble(self, lam, X, r, Xr) -> tuple[np.ndarray, np.ndarray]:
-        """``lam``, ``X`` with the pos roots replaced by r, Xr and the negative half conjugated."""
+    def assemble(self, lam, X, r, Xr, keep) -> tuple[np.ndarray, np.ndarray]:
+        """``lam``, ``X`` with the pos roots replaced by r, Xr (except where ``keep``), the
+        negative half conjugated."""
         out, Xout = np.asarray(lam, dtype=complex).copy(), np.array(X, dtype=complex)
+        t, Xt = self.targets(lam, X)
+        r = np.where(keep, t, r)
+        Xr = np.where(keep, Xt, Xr)
         out[self.pos] = np.where(self.flip, np.conj(r), r)
         Xout[:, self.pos] = np.where(self.flip, np.conj(Xr), Xr)
         out[self.paired] = np.conj(r[self.partner])
@@ -288,28 +290,24 @@ def _relevant(targets: np.ndarray, relevant: np.ndarray | None) -> np.ndarray:
 
 
 def _match(pred: np.ndarray, Xpred: np.ndarray, lam: np.ndarray, X: np.ndarray, relevant):
-    """Indices in ``lam`` (roots with Im >= 0 only) of the predicted roots, and ambiguity.
+    """Indices in ``lam`` of the predicted roots, and which matches are ambiguous.
 
     Optimal assignment on the cost ``min(1, |lambda - pred| / max(1, |pred|))
     + 1 - |x_pred^H x|`` (unit vectors): the eigenvector tells apart roots
-    whose eigenvalues crowd, such as the overdamped roots of many modes near
-    -1/mu.  A relevant root is ambiguous when its cost exceeds
-    ``HYSTERETIC_MATCH`` times that of the next candidate.  Returns None when
-    there are fewer candidates than predictions.
+    whose eigenvalues crowd.  A relevant root is ambiguous when its cost
+    exceeds ``HYSTERETIC_MATCH`` times that of the next candidate.
     """
-    cand = np.flatnonzero(lam.imag >= 0.0)
-    if cand.size < pred.size:
-        return None
-    dist = np.abs(pred[:, None] - lam[cand][None, :]) / np.maximum(1.0, np.abs(pred))[:, None]
-    D = np.minimum(1.0, dist) + 1.0 - np.abs(Xpred.conj().T @ X[:, cand])
+    dist = np.abs(pred[:, None] - lam[None, :]) / np.maximum(1.0, np.abs(pred))[:, None]
+    Xu = X / np.linalg.norm(X, axis=0)
+    D = np.minimum(1.0, dist) + 1.0 - np.abs(Xpred.conj().T @ Xu)
     rows, cols = linear_sum_assignment(D)
     pick = np.empty(pred.size, dtype=int)
     pick[rows] = cols
     k = np.arange(pred.size)
     d1 = D[k, pick]
     D[k, pick] = np.inf
-    d2 = D.min(axis=1) if cand.size > 1 else np.full(pred.size, np.inf)
-    return cand[pick], relevant & (d1 > HYSTERETIC_MATCH * d2)
+    d2 = D.min(axis=1) if lam.size > 1 else np.full(pred.size, np.inf)
+    return pick, relevant & (d1 > HYSTERETIC_MATCH * d2)
 
 
 def hysteretic_roots(
@@ -332,30 +330,34 @@ def hysteretic_roots(
         (lambda^2 M + lambda C + K + i mu_h sgn(Im lambda) Kb) x = 0,
 
     with K = K^d (bending Kb, gravity and follower parts) and sgn(0) = 0.
-    The problem is not analytic in lambda, so it is solved half by half,
-    starting from the roots ``lam0`` of the real problem (mu_h = 0) at the
-    same state:
+    The problem is not analytic in lambda; it is solved from the roots
+    ``lam0`` of the real problem (mu_h = 0) at the same state (package
+    docstring, "Hysteretic damping"):
 
-    * a real root of the real problem (no oscillation, sgn 0: divergence, an
-      overdamped mode) is a root of the hysteretic problem and is kept;
     * a root with Im lambda > 0 is continued in mu_h' from 0 to mu_h along
-      the roots with Im lambda >= 0 of the complex quadratic problem with
-      stiffness K + i mu_h' Kb (each step: the optimal assignment to a linear
-      prediction, the step halved while a root whose eigenvector lies on
-      resolved modes is not matched clearly better than by its next
-      candidate);
+      the roots of the complex quadratic problem with stiffness
+      K + i mu_h' Kb (each step: the optimal assignment to a linear
+      prediction by eigenvalue and eigenvector, the step halved while a
+      lightly damped root whose eigenvector lies on resolved modes is not
+      matched clearly better than by its next candidate);
     * a root with Im lambda < 0 becomes the complex conjugate of its
       partner's continuation (eigenvector conjugated too): the problem with
-      sgn = -1 is the conjugate of the one with sgn = +1.
+      sgn = -1 is the conjugate of the one with sgn = +1;
+    * a real root (no oscillation, sgn 0: divergence, an overdamped mode) is
+      a root of the hysteretic problem as it is, and is kept; so is a pair
+      whose continuation reaches Im lambda <= 0, a root whose frequency is
+      smaller than the shift the loss would give it (in practice the nearly
+      real Kelvin-Voigt roots near -1/mu that the Coriolis force pairs up):
+      its frequency has no sign the loss could act on consistently, and it
+      is treated as not oscillating.
 
-    The result has as many roots as ``lam0``, conjugate-symmetric, and is
-    continuous in mu_h.  A pair whose frequency goes to zero (a collision on
-    the real axis, as v varies) jumps there from its continued roots to the
-    two real roots of the real problem: the sgn(omega) law is discontinuous
-    at omega = 0.  The complex problem also has roots with Im lambda > 0 that
-    continue real roots of the real problem (a slow oscillation of a
-    non-oscillating mode); they are not reported, since the real root itself,
-    on which mu_h has no effect, stands for that mode.
+    The result has as many roots as ``lam0`` and is conjugate-symmetric.  A
+    pair whose frequency goes to zero as v varies (a collision on the real
+    axis) jumps there from its continued roots to the real roots of the real
+    problem: the sgn(omega) law is discontinuous at omega = 0.  The complex
+    problem also has roots with Im lambda > 0 that continue real roots of the
+    real problem (a slow oscillation of a mode that does not oscillate); they
+    are not reported, since the real root itself stands for that mode.
 
     Parameters
     ----------
@@ -371,7 +373,7 @@ def hysteretic_roots(
     X0 : ndarray, shape (n, m)
         Their theta-parts.
     relevant : ndarray of bool, shape (m,), optional
-        Roots whose match must be unambiguous (default: all).
+        Roots whose match must be unambiguous if lightly damped (default: all).
     method : str
         Eigensolver of :func:`_eigen`.
 
@@ -381,27 +383,25 @@ def hysteretic_roots(
     X : ndarray of complex, shape (n, m)
         Unit-norm theta-parts, in the order of ``lam0``.
     """
-    halves = _Halves.of(np.asarray(lam0), mu_h)
-    cur, Xcur = halves.targets(np.asarray(lam0), X0)
+    lam0 = np.asarray(lam0)
+    halves = _Halves.of(lam0)
+    cur, Xcur = halves.targets(lam0, X0)
     rel = _relevant(cur, None if relevant is None else np.asarray(relevant)[halves.pos])
+    crossed = np.zeros(cur.size, bool)
     mu, step, slope, solves = 0.0, float(mu_h), None, 0
     while mu < mu_h and cur.size:
         nxt = min(float(mu_h), mu + step)
         lam, X, _ = _eigen(K + 1j * nxt * Kb, C, M, method)
         solves += 1
         pred = cur if slope is None else cur + (nxt - mu) * slope
-        matched = _match(pred, Xcur, lam, X, rel)
-        if matched is None:  # pragma: no cover - fewer positive-frequency roots than pairs
-            raise np.linalg.LinAlgError(
-                f"hysteretic damping: fewer roots with Im lambda >= 0 than pairs at mu_h = {nxt:g}"
-            )
-        idx, ambiguous = matched
+        idx, ambiguous = _match(pred, Xcur, lam, X, rel & ~crossed)
         if ambiguous.any() and step > HYSTERETIC_MIN_STEP * mu_h and solves < HYSTERETIC_MAX_SOLVES:
             step *= 0.5
             continue
         slope = (lam[idx] - cur) / (nxt - mu)
         cur, Xcur, mu = lam[idx], X[:, idx], nxt
-    return halves.assemble(lam0, X0, cur, Xcur)
+        crossed |= cur.imag <= 0.0
+    return halves.assemble(lam0, X0, cur, Xcur, crossed)
 
 
 @dataclass
