@@ -100,6 +100,26 @@ itself.  Branch points (pitchforks at alpha = 0, pi) are followed with
 way.  v_cr is the first velocity along the primary branch (the gravity-loaded
 state continued in v) at which it is not stable.
 
+Hysteretic damping
+------------------
+The structural loss factor mu_h (``Params.hysteretic_damping``) multiplies
+the bending stiffness by 1 + i mu_h sgn(omega) (Paidoussis' convention for
+harmonic motion): with theta^d ∝ e^{lambda tau} = e^{i Omega tau} the
+frequency is omega = Re Omega = Im lambda, a root with Im lambda > 0 solves
+Eq. (32) with K^d + i mu_h K_b, its mirror with K^d - i mu_h K_b, and a real
+root (sgn 0) is not affected.  K_b is the bending matrix alone (``disc.K``):
+gravity and the follower force are not the material's stiffness.  The roots
+are continued in mu_h from those of the real problem at the same state
+(:func:`~fempipe.stability.linear.hysteretic_roots`): the reported spectrum
+keeps 2n roots, conjugate symmetry and the mode numbers above; real roots,
+and pairs whose continuation would reach Im lambda <= 0 (the nearly real
+Kelvin-Voigt roots near -1/mu), are left as they are, so divergence, folds
+and branch points do not depend on mu_h.  Every function of this package
+applies it: spectra, root loci, events, v_cr, maps and the criterion
+(dense and sparse).  It has no time-domain meaning, and the time integrators
+refuse it (:func:`fempipe.radau.refuse_hysteretic`).  README, "Conventions
+and derivations", has the derivation and the checks.
+
 Modules
 -------
 ``linear``     linearised matrices, eigensolvers, resolution of a discretisation;

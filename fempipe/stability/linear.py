@@ -1,9 +1,9 @@
 """Linearised matrices, eigensolvers and the resolution of a discretisation.
 
 The linearisation of Eq. (20) about a static state, Eqs. (31b)-(33), its
-dense eigensolvers (QZ, shift-invert) and the canonical modes that decide
-which eigenvalues a discretisation resolves (package docstring, "Resolved
-modes").
+dense eigensolvers (QZ, shift-invert), the roots with hysteretic damping
+(:func:`hysteretic_roots`) and the canonical modes that decide which
+eigenvalues a discretisation resolves (package docstring, "Resolved modes").
 """
 
 from __future__ import annotations
