@@ -46,6 +46,8 @@ CASE = Case(
     paper_shows=(
         "Table 3.4, theory: u_cf = 6.15, 5.62 and ω_cf = 21.3, 19.5 without damping",
         "Table 3.4, theory: u_cf = 6.33, 5.79 and ω_cf = 19.7, 18.1 with hysteretic μ = 0.02",
+        "p. 118 (Païdoussis & Issid 1974, Fig. 3.34(b)): β = 0.65, γ = 10, hysteretic μ = 0.1 "
+        "flutters at u_cf ≃ 11 (12.88 undamped)",
     ),
     requires=(
         "classical_converged",
@@ -59,6 +61,8 @@ CASE = Case(
         "omega_cf_b2.03_mu0",
         "omega_cf_b0.23_muh",
         "omega_cf_b2.03_muh",
+        "fe_vs_classical_issid",
+        "u_cf_issid",
     ),
     not_checked=(
         "the experimental columns of Table 3.4 (u_cf = 6.33, 6.05; ω_cf = 18.0, 19.5): drawn, "
@@ -106,6 +110,7 @@ def run(quick: bool = False) -> CaseResult:
         what = f"β = {pipes[k]['beta']:g}, γ = {pipes[k]['gamma']:g}, μ_h = {dampings[d]:g}"
         checks.append(agreement_check(name, what, f, classical[(k, d)]))
     checks.append(_kelvin_voigt_check(pipes[1], mu_h, fe[(1, "muh")]))
+    checks += _issid_checks()
     # The printed theory against the converged answer (FE where computed).
     rows, findings, explained = [], [], []
     failed: dict = {}
@@ -199,6 +204,30 @@ def run(quick: bool = False) -> CaseResult:
         },
         requires=requires,
     )
+
+
+def _issid_checks() -> list:
+    """Paidoussis & Issid (1974) as quoted on p. 118 of the book: u_cf ~ 11 with mu_h = 0.1."""
+    ref = CASE.references
+    c = ref.value("issid")
+    p = Params(alpha=0.0, beta=c["beta"], gamma=c["gamma"], mu=0.0, hysteretic_damping=c["mu_h"])
+    f = fe_onset(p, c["v_max"])
+    cl = classical_onset(p, c["v_max"], step=0.05)
+    what = f"β = {c['beta']:g}, γ = {c['gamma']:g}, μ_h = {c['mu_h']:g}"
+    return [
+        agreement_check("fe_vs_classical_issid", what, f, cl),
+        close(
+            "u_cf_issid",
+            f"Païdoussis & Issid (1974): {what} flutters at u_cf ≃ {c['u_cf']:g} "
+            f"(FE {FE}: {f.v_cr:.4f})",
+            f.v_cr,
+            c["u_cf"],
+            atol=c["half_unit"],
+            why="printed as ≃ 11: half a unit of the last digit",
+            source=ref.source("issid"),
+            category="paper",
+        ),
+    ]
 
 
 def _finding(pipe: dict, mu_h: float, bad: list, cl, fe, v_max: float, exp: dict) -> str:
