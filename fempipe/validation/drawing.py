@@ -84,6 +84,14 @@ def new_figure(n_panels: int, ncols: int | None = None, size: float = 3.6):
     return fig, axes[:n_panels]
 
 
+def figure_panels(fig, n_panels: int, ncols: int | None = None, size: float = 3.6):
+    """``(fig, axes)``: a :func:`new_figure`, or ``n_panels`` axes in one row of ``fig``
+    (a figure the caller made, e.g. the report's)."""
+    if fig is None:
+        return new_figure(n_panels, ncols=ncols, size=size)
+    return fig, list(fig.subplots(1, n_panels, squeeze=False).ravel())
+
+
 def finish_figure(fig, title: str):
     """The report style: one title per figure, panels lettered (a), (b), ...
 

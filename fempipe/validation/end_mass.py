@@ -210,13 +210,10 @@ def plot(result: CaseResult, fig=None):
     """(a) v_cr(Γ) hanging, (b) v_cr(Γ) horizontal: classical lines, FE dots."""
     from matplotlib.lines import Line2D
 
-    from .drawing import finish_figure, new_figure
+    from .drawing import figure_panels, finish_figure
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(2, ncols=2, size=4.2)
-    else:
-        axes = list(fig.subplots(1, 2).ravel())
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     for ax, fam in zip(axes, ("hanging", "horizontal"), strict=True):
         curve = d["families"][fam]
         G = sorted(curve)

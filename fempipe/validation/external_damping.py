@@ -215,13 +215,10 @@ def plot(result: CaseResult, fig=None):
     """(a) v_cr²(σ) of Beck's column, (b) v_cr(σ) of the hanging pipe."""
     from matplotlib.lines import Line2D
 
-    from .drawing import finish_figure, new_figure
+    from .drawing import figure_panels, finish_figure
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(2, ncols=2, size=4.2)
-    else:
-        axes = list(fig.subplots(1, 2).ravel())
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     ax = axes[0]
     s = np.array(sorted(d["beck"]))
     floor = s[s > 0].min() / 3.0  # sigma = 0 drawn here, on the log axis

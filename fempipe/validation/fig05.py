@@ -205,16 +205,13 @@ def plot(result: CaseResult, fig=None):
     from matplotlib.lines import Line2D
 
     from ..plotting.stability import direction_arrow, mode_color
-    from .drawing import finish_figure, legend_columns, new_figure, style_for
+    from .drawing import figure_panels, finish_figure, legend_columns, style_for
 
     loci = result.data["loci"]
     top = result.data.get("top_modes", {})
     has_pi = "π" in loci
     n = len(loci) + int(has_pi)
-    if fig is None:
-        fig, axes = new_figure(n, ncols=2, size=4.8)
-    else:
-        axes = list(fig.subplots(1, n, squeeze=False).ravel())
+    fig, axes = figure_panels(fig, n, ncols=2, size=4.8)
     modes_seen = set()
     for ax, (name, fams) in zip(axes, loci.items(), strict=False):
         for label, rl in fams.items():

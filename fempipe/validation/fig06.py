@@ -250,13 +250,10 @@ CURVE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9"
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) for each β, (b) for each γ; N = 3 dashed and N = 4 dotted on the reference."""
-    from .drawing import new_figure
+    from .drawing import figure_panels
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(2, ncols=2, size=4.5)
-    else:
-        axes = list(fig.subplots(1, 2).ravel())
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.5)
     a = d["alphas"] / np.pi
     reference = f"β = {BASE_BETA:g}, γ = {BASE_GAMMA:g}"
     for ax, fam, kinds, sym, fixed in (

@@ -283,13 +283,10 @@ def _kelvin_voigt_check(pipe: dict, mu_h: float, onset) -> object:
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(μ_h), (b) ω_cf(μ_h): classical lines, FE dots, Table 3.4 crosses and squares."""
-    from .drawing import finish_figure, new_figure
+    from .drawing import figure_panels, finish_figure
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(2, ncols=2, size=4.2)
-    else:
-        axes = list(fig.subplots(1, 2).ravel())
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     colors = ("#0072B2", "#D55E00")
     hu, hw = d["half_units"]
     for j, (ax, ylabel, half) in enumerate(

@@ -233,13 +233,10 @@ def plot(result: CaseResult, fig=None):
     """(a) v_cr(κ) with a tip spring, (b) v_cr(κ) with a spring inside the hanging pipe."""
     from matplotlib.lines import Line2D
 
-    from .drawing import finish_figure, new_figure
+    from .drawing import figure_panels, finish_figure
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(2, ncols=2, size=4.2)
-    else:
-        axes = list(fig.subplots(1, 2).ravel())
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     ax = axes[0]
     _curve(ax, d["tip"], "#0072B2")
     ks = sorted(d["eq_3_119"])
