@@ -346,10 +346,4 @@ def _print(result: dict, pipe) -> None:
             f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
         )
     if with_errors:
-        est = result["error_estimate"]
-        print(
-            f"± error estimate: {est['method']} to {est['refined']}, {est['formula']} "
-            f"(floor: {est['floor']})"
-        )
-        for note in est["notes"]:
-            print(f"note: {note}")
+        estimates.print_footer(result["error_estimate"])

@@ -116,6 +116,19 @@ def header(info: ErrorEstimate, notes: list[str]) -> dict:
     return {**info.to_dict(), "notes": list(notes)}
 
 
+def print_footer(est: Mapping, where: str = "") -> None:
+    """The text output's last lines: how the estimates were formed, then the notes.
+
+    ``where`` is added after the refined discretisation (e.g. the attractor found there).
+    """
+    print(
+        f"± error estimate: {est['method']} to {est['refined']}{where}, {est['formula']} "
+        f"(floor: {est['floor']})"
+    )
+    for note in est["notes"]:
+        print(f"note: {note}")
+
+
 def pm(value, error, spec: str = "{:+.6f}") -> str:
     """``"value ± error"`` (the error with two digits); ``"value ± ?"`` without an error."""
     text = spec.format(value)

@@ -594,11 +594,6 @@ def _print_summary(r: dict) -> None:
         print(f"  |Floquet multipliers| {mus}")
     print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")
     if with_errors:
-        est = r["error_estimate"]
-        print(
-            f"± error estimate: {est['method']} to {est['refined']} "
-            f"(attractor there: {r['attractor_refined']}), {est['formula']} "
-            f"(floor: {est['floor']})"
+        estimates.print_footer(
+            r["error_estimate"], where=f" (attractor there: {r['attractor_refined']})"
         )
-        for note in est["notes"]:
-            print(f"note: {note}")

@@ -397,13 +397,7 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
         cells = [cell(row, k, f).rjust(w) for (k, h, f), w in zip(cols, widths, strict=True)]
         print("  ".join(cells))
     if with_errors:
-        est = result["error_estimate"]
-        print(
-            f"± error estimate: {est['method']} to {est['refined']}, {est['formula']} "
-            f"(floor: {est['floor']})"
-        )
-        for note in est["notes"]:
-            print(f"note: {note}")
+        estimates.print_footer(result["error_estimate"])
     if any(row["stable"] is False for row in result["points"]):
         print(
             "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)); "
