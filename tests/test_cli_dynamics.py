@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from clirun import run_json
 
 from fempipe.cli import main
 
@@ -13,15 +14,8 @@ from fempipe.cli import main
 CHEAP = ["--modal", "2"]
 
 
-def _json(capsys, argv):
-    code = main(argv)
-    out = capsys.readouterr()
-    assert code == 0, out.err
-    return json.loads(out.out)
-
-
 def test_simulate_json_contract(capsys):
-    d = _json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet"])
+    d = run_json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet"])
     for key in (
         "attractor",
         "period",
@@ -44,12 +38,12 @@ def test_simulate_json_contract(capsys):
 
 
 def test_simulate_equilibrium_below_flutter(capsys):
-    d = _json(capsys, ["simulate", *CHEAP, "--v", "3", "--json", "--quiet"])
+    d = run_json(capsys, ["simulate", *CHEAP, "--v", "3", "--json", "--quiet"])
     assert d["attractor"] == "equilibrium" and d["period"] is None
 
 
 def test_simulate_pulsating_flow(capsys):
-    d = _json(
+    d = run_json(
         capsys,
         [
             "simulate",
@@ -71,7 +65,7 @@ def test_simulate_pulsating_flow(capsys):
 
 def test_simulate_out_files(tmp_path, capsys):
     out = tmp_path / "run"
-    d = _json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet", "--out", str(out)])
+    d = run_json(capsys, ["simulate", *CHEAP, "--v", "9", "--json", "--quiet", "--out", str(out)])
     for name in (
         "simulate.json",
         "time_traces.png",
@@ -133,7 +127,7 @@ def test_bifurcation_json_contract_and_resume(tmp_path, capsys):
         "--workers",
         "2",
     ]
-    d = _json(capsys, argv)
+    d = run_json(capsys, argv)
     assert len(d["points"]) == 4
     for p in d["points"]:
         assert {"v", "direction", "attractor", "eta_tip", "X_tip", "Z_tip", "period"} <= set(p)
@@ -143,7 +137,7 @@ def test_bifurcation_json_contract_and_resume(tmp_path, capsys):
     stored = sorted((out / "points").glob("a00-*.json"))
     assert len(stored) == 4
     mtimes = [p.stat().st_mtime_ns for p in stored]
-    again = _json(capsys, argv)  # resumes: nothing recomputed, same answer
+    again = run_json(capsys, argv)  # resumes: nothing recomputed, same answer
     assert [p.stat().st_mtime_ns for p in stored] == mtimes
     assert [p["eta_tip"] for p in again["points"]] == [p["eta_tip"] for p in d["points"]]
 

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from clirun import run_json
 
 from fempipe import FiniteElement, Params, PipeModel
 from fempipe.cli import main
@@ -12,13 +13,6 @@ from fempipe.stability import critical_velocity
 
 EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after"}
 EVENT_TYPES = {"flutter", "divergence", "restabilization", "mode_restabilization", "fold"}
-
-
-def run_json(capsys, argv):
-    code = main(argv)
-    out = capsys.readouterr().out
-    assert code == 0
-    return json.loads(out)
 
 
 def test_critical_json_contract(capsys):

@@ -10,11 +10,11 @@ it was (the key sets of the existing contract).
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 from pathlib import Path
 
+import clirun
 import numpy as np
 import pytest
 
@@ -78,10 +78,7 @@ SIMULATE_KEYS = {
 
 
 def run_json(capsys, argv) -> dict:
-    code = main([*argv, "--json", "--quiet"])
-    out = capsys.readouterr()
-    assert code == 0, out.err
-    return json.loads(out.out)
+    return clirun.run_json(capsys, [*argv, "--json", "--quiet"])
 
 
 def assert_bounds(err, coarse, reference, what=""):

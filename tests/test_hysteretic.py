@@ -9,13 +9,13 @@ air, the dense criterion for the sparse one, the problem without mu_h for
 what mu_h must not change (real roots, divergence, folds).
 """
 
-import json
 import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from clirun import run_json
 from scipy.optimize import brentq
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
@@ -414,15 +414,12 @@ def test_time_domain_refuses_hysteretic_damping():
 # ----------------------------------------------------------------------------
 # Command line
 # ----------------------------------------------------------------------------
-def _json(capsys, argv):
-    assert main(argv) == 0
-    return json.loads(capsys.readouterr().out)
 
 
 def test_cli_critical(capsys):
     argv = ["critical", "--alpha", "pi/2", "--v", "0,9", "--modal", "4", "--json", "--quiet"]
-    d = _json(capsys, [*argv, "--hysteretic-damping", "0.01"])
-    plain = _json(capsys, argv)
+    d = run_json(capsys, [*argv, "--hysteretic-damping", "0.01"])
+    plain = run_json(capsys, argv)
     assert d["params"]["hysteretic_damping"] == 0.01
     lib = critical_velocity(
         PipeModel(Modal(4), Params(alpha=np.pi / 2, hysteretic_damping=0.01, **PAPER)), 9.0
@@ -433,20 +430,20 @@ def test_cli_critical(capsys):
 
 def test_cli_spectrum(capsys):
     argv = ["spectrum", "--v", "0,3", "--fe", "P2:4", "--json", "--quiet"]
-    d = _json(capsys, [*argv, "--hysteretic-damping", "0.05"])
+    d = run_json(capsys, [*argv, "--hysteretic-damping", "0.05"])
     assert d["params"]["hysteretic_damping"] == 0.05
     model = PipeModel(FiniteElement(4, 2), Params(alpha=0.0, v=3.0, hysteretic_damping=0.05))
     spec = spectrum(model, sagged_state(model).q)
     got = [complex(e["re"], e["im"]) for e in d["points"][1]["eigenvalues"]]
     ref = spec.lam[np.isin(spec.mode, d["modes"])]
     assert np.abs(np.sort_complex(np.array(got)) - np.sort_complex(ref)).max() < 1e-9
-    plain = _json(capsys, argv)
+    plain = run_json(capsys, argv)
     assert d["points"][1]["max_real"] < plain["points"][1]["max_real"]
 
 
 def test_cli_stability_map(capsys):
     argv = ["stability-map", "--alphas", "0,pi/2", "--v", "0,9", "--modal", "4", "--json"]
-    d = _json(capsys, [*argv, "--quiet", "--hysteretic-damping", "0.01"])
+    d = run_json(capsys, [*argv, "--quiet", "--hysteretic-damping", "0.01"])
     assert d["hysteretic_damping"] == 0.01
     lib = critical_velocity(
         PipeModel(Modal(4), Params(alpha=0.0, hysteretic_damping=0.01, **PAPER)), 9.0, ds_max=0.2
@@ -458,8 +455,8 @@ def test_cli_static_stable_flag(capsys):
     """fempipe static's stable flag decides with mu_h: the hanging paper pipe at
     v = 6.4 flutters without it and is stable with mu_h = 0.05."""
     argv = ["static", "--alpha", "0", "--v", "6.4", "--json", "--quiet"]
-    assert _json(capsys, argv)["points"][0]["stable"] is False
-    d = _json(capsys, [*argv, "--hysteretic-damping", "0.05"])
+    assert run_json(capsys, argv)["points"][0]["stable"] is False
+    d = run_json(capsys, [*argv, "--hysteretic-damping", "0.05"])
     assert d["points"][0]["stable"] is True and d["params"]["hysteretic_damping"] == 0.05
 
 

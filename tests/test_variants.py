@@ -11,16 +11,15 @@ computed trajectories.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from clirun import run_json
 from scipy.optimize import brentq
 
-from fempipe.cli import main
 from fempipe.discretization import FiniteElement, Modal
 from fempipe.dynamics import Radau, acceleration, initial_state, power_terms, simulate
 from fempipe.kinematics import tip_values
@@ -516,15 +515,10 @@ def test_fe_convergence_order_of_eigenvalues(variant, degree, order):
 
 
 # ------------------------------------------------------------------ CLI --
-def _run_json(capsys, argv):
-    code = main(argv)
-    out = capsys.readouterr()
-    assert code == 0, out.err
-    return json.loads(out.out)
 
 
 def test_cli_static_end_mass(capsys):
-    d = _run_json(
+    d = run_json(
         capsys,
         [
             "static",
@@ -564,7 +558,7 @@ def test_cli_critical_with_damping_and_spring(capsys):
         "--json",
         "--quiet",
     ]
-    d = _run_json(capsys, argv)
+    d = run_json(capsys, argv)
     assert d["params"]["external_damping"] == 0.1
     assert d["params"]["springs"] == [[50.0, 0.5]]
     from fempipe.stability import critical_velocity
@@ -581,7 +575,7 @@ def test_cli_simulate_end_mass(capsys):
     at v = 9 (0.3029 without it) is slower with the heavier tip."""
     from fempipe.limit_cycle import find_attractor
 
-    d = _run_json(
+    d = run_json(
         capsys,
         ["simulate", "--end-mass", "0.2", "--modal", "2", "--v", "9", "--t-max", "60"]
         + ["--json", "--quiet"],
@@ -595,7 +589,7 @@ def test_cli_simulate_end_mass(capsys):
 def test_cli_end_mass_kg_converts(capsys):
     """--end-mass-kg with the SI pipe: Gamma = M_e / ((m+M) L)."""
     si = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058"]
-    d = _run_json(
+    d = run_json(
         capsys,
         [
             "static",
@@ -635,7 +629,7 @@ def test_cli_stability_map_passes_the_variants(capsys):
         "--json",
         "--quiet",
     ]
-    d = _run_json(capsys, argv)
+    d = run_json(capsys, argv)
     assert d["end_mass"] == 0.2 and d["external_damping"] == 0.5
     assert d["springs"] == [[20.0, 0.5]]
     from fempipe.stability import critical_velocity
