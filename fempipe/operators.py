@@ -102,25 +102,6 @@ def _dense(A) -> np.ndarray:
     return A.toarray() if sp.issparse(A) else np.asarray(A)
 
 
-#: Variant terms the model has (the others are refused, never ignored).
-#: hysteretic_damping has no term here: it acts in the linear stability
-#: problem only (fempipe.stability.linear.hysteretic_roots), and the
-#: time-domain solvers refuse it (fempipe.radau.refuse_hysteretic).
-IMPLEMENTED_VARIANTS: frozenset[str] = frozenset(
-    {"end_mass", "external_damping", "hysteretic_damping", "springs"}
-)
-
-
-def _check_implemented(params: Params) -> None:
-    missing = [
-        name
-        for name in ("end_mass", "external_damping", "hysteretic_damping", "springs")
-        if getattr(params, name) and name not in IMPLEMENTED_VARIANTS
-    ]
-    if missing:
-        raise NotImplementedError(f"the model has no {', '.join(missing)} term yet")
-
-
 @dataclass(frozen=True)
 class _PartRule:
     """A Gauss rule on [0, xi_s] with the basis at its points (one per spring position).
@@ -161,10 +142,12 @@ class PipeModel:
     every dof with every other; they cost O(n_q n) to form.  A spring at
     xi_s couples every dof of [0, xi_s] with every other (a rank-2 block of
     the static Jacobian), so for finite elements that block is dense.
+    ``params.hysteretic_damping`` has no term here: it acts in the linear
+    stability problem only (:func:`fempipe.stability.linear.hysteretic_roots`),
+    and the time-domain solvers refuse it (:func:`fempipe.radau.refuse_hysteretic`).
     """
 
     def __init__(self, disc: Discretization, params: Params) -> None:
-        _check_implemented(params)
         self.disc = disc
         self.params = params
         self.quad = disc.quad
@@ -177,7 +160,6 @@ class PipeModel:
 
     def with_params(self, params: Params) -> PipeModel:
         """Return a model on the same discretisation with other parameters."""
-        _check_implemented(params)
         new = object.__new__(PipeModel)
         new.__dict__.update(self.__dict__)
         new.params = params

@@ -127,13 +127,6 @@ class Params:
         """Return a copy with flow velocity ``v``."""
         return replace(self, v=v)
 
-    @property
-    def is_variant(self) -> bool:
-        """Whether any variant term (end mass, damping, springs) is present."""
-        return bool(
-            self.end_mass or self.external_damping or self.hysteretic_damping or self.springs
-        )
-
     def to_dict(self) -> dict:
         d = asdict(self)
         d["springs"] = [list(s) for s in self.springs]
