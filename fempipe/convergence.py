@@ -136,12 +136,6 @@ class Family:
     def dofs(self, size: int) -> int:
         return int(size) * self.degree if self.kind == "fe" else int(size)
 
-    @property
-    def expected_order(self) -> float | None:
-        """Theoretical order of the error in dofs for the paper's pipe (2k for P_k, 3 for the
-        sine modes, the basis's own for another)."""
-        return self.order_for(None)
-
     def order_for(self, params: Params | None) -> float | None:
         """Theoretical order for the case ``params`` (variants can lower it, see
         :func:`fempipe.error_estimate.expected_order`), judged on the coarser of the two
@@ -320,21 +314,15 @@ def _static_tip(model, key: str) -> float:
 
 def _eigenvalue(model, mode: int) -> complex:
     from .stability import spectrum
-    from .static import sagged_state, solve_path
 
-    v = model.params.v
-    if v > 0:
-        values = np.linspace(0.0, v, max(2, math.ceil(v / 0.5) + 1))
-        q = solve_path(model.with_params(replace(model.params, v=0.0)), values)[-1].q
-    else:
-        q = sagged_state(model).q
+    q = _static_tip_state(model.disc, model.params)
     spec = spectrum(model, q)
     upper = [(m, lam) for m, lam in zip(spec.mode, spec.lam, strict=True) if lam.imag >= 0]
     for m, lam in upper:
         if int(m) == int(mode):
             return complex(lam)
     raise SolverError(
-        f"mode {mode} is not among the resolved modes of {model.disc.name} at v = {v:g} "
+        f"mode {mode} is not among the resolved modes of {model.disc.name} at v = {model.params.v:g} "
         f"(resolved: {sorted({int(m) for m, _ in upper})})"
     )
 
