@@ -135,6 +135,10 @@ def run(args: argparse.Namespace) -> int:
             refined = _refined_run(model, kwargs, bar)
     head = setup.to_dict()
     result = res.to_dict()
+    # Hopf criticality of the flutter events (fempipe.stability.hopf).
+    from fempipe.stability.hopf import decorate_events
+
+    result = decorate_events(result, model, res)
     result["params"] = head["params"]
     result["discretization"] = head["discretization"]
     if setup.pipe is not None:
@@ -341,9 +345,18 @@ def _print(result: dict, pipe) -> None:
             "stable" if ev[k] else "unstable" for k in ("stable_before", "stable_after")
         )
         note = f"  ({ev['error_note']})" if ev.get("error_note") else ""
+        if ev["type"] == "flutter":
+            note += reporting_hopf(ev)
         print(
             f"{ev['branch']:>8} {ev['type']:>20} {num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
             f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
         )
     if with_errors:
         estimates.print_footer(result["error_estimate"])
+
+
+def reporting_hopf(ev: dict) -> str:
+    """``"  (supercritical, l1 = ...)"`` for a flutter event (or the reason there is none)."""
+    if ev.get("criticality") is None:
+        return f"  (no Hopf normal form: {ev.get('hopf_note')})" if ev.get("hopf_note") else ""
+    return f"  ({ev['criticality']}, l1 = {ev['first_lyapunov_coefficient']:.6g})"
