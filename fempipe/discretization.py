@@ -33,12 +33,14 @@ contract and never ask which one they have.
 from __future__ import annotations
 
 import re
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
-import scipy.sparse as sp
 
 from .quadrature import LineQuadrature
+
+if TYPE_CHECKING:  # imported where used: importing fempipe does not load scipy
+    import scipy.sparse as sp
 
 __all__ = [
     "EXPECTED_ORDER",
@@ -111,6 +113,7 @@ class FiniteElement:
         nodes: np.ndarray | None = None,
         n_gauss: int | None = None,
     ) -> None:
+        import scipy.sparse as sp
         from skfem import (
             Basis,
             BilinearForm,
@@ -210,6 +213,8 @@ class FiniteElement:
         ``basis.probes`` locates every point in every cell (O(m n_el)): meant
         for a few points, built once (the Gauss rule of a part cell).
         """
+        import scipy.sparse as sp
+
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
         P = sp.csr_matrix(self.basis.probes(xi[None, :]))
         return P[:, self.free]

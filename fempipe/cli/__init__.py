@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from collections.abc import Collection
 
 #: subcommand -> (module, one-line help).  Each module defines
 #: ``add_arguments(parser)`` and ``run(args) -> int``, and optionally
@@ -30,7 +31,18 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser:
+    """The ``fempipe`` parser with one subparser per entry of :data:`SUBCOMMANDS`.
+
+    Parameters
+    ----------
+    only : collection of str, optional
+        Subcommands whose modules are imported and whose arguments are added;
+        the others get a bare subparser (named, with their one-line help, in
+        ``fempipe --help``).  None (the default): all of them.  :func:`main`
+        passes the subcommand it runs, so that starting the command imports
+        one subcommand module, not ten.
+    """
     from fempipe.cli.common import ArgumentParser  # one-line errors, exit 2
 
     parser = ArgumentParser(
@@ -43,8 +55,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"fempipe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in SUBCOMMANDS.items():
-        mod = importlib.import_module(module)
         p = sub.add_parser(name, help=help_, description=help_)
+        if only is not None and name not in only:
+            continue
+        mod = importlib.import_module(module)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run, _hint=getattr(mod, "solver_error_hint", None))
     return parser
@@ -67,10 +81,13 @@ def main(argv: list[str] | None = None) -> int:
     it was (:class:`~fempipe.cli.reporting.Output`).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser()
     command = _subcommand(argv)
+    parser = build_parser(only=() if command is None else (command,))
     try:
         args, extra = parser.parse_known_args(argv)
+        if args.command not in (None, command):  # pragma: no cover - argparse chose another
+            parser = build_parser()
+            args, extra = parser.parse_known_args(argv)
         if extra:
             # The top-level parser would say "fempipe: error: unrecognized
             # arguments: ..."; name the subcommand and the option like every

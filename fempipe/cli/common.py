@@ -38,7 +38,6 @@ import argparse
 import re
 from dataclasses import dataclass, replace
 
-from fempipe.discretization import DEFAULT_FE, Modal, parse_discretization
 from fempipe.errors import ParamError
 from fempipe.params import Params, PipeSI
 
@@ -263,6 +262,9 @@ def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0
 def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
     """``--fe Pk:n`` (default :data:`~fempipe.discretization.DEFAULT_FE`) or ``--modal N``
     with ``--basis sine|beam``, and ``--allow-large``."""
+    # Imported here: ``fempipe --help`` does not need numpy.
+    from fempipe.discretization import DEFAULT_FE, Modal
+
     g = parser.add_argument_group("discretisation and work limits")
     ex = g.add_mutually_exclusive_group()
     ex.add_argument(
@@ -446,6 +448,8 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
     CLIError
         Naming the offending option; the dispatcher prints it and exits 2.
     """
+    from fempipe.discretization import parse_discretization
+
     alpha = _given(args, "alpha")
     alpha = 0.0 if alpha is None else alpha
     large = allow_large(args)

@@ -47,7 +47,6 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fempipe.discretization import parse_discretization, parse_fe_spec
 from fempipe.errors import ParamError
 from fempipe.params import PAPER_CASE, Params, PipeSI
 
@@ -436,12 +435,16 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
 
 def _fe_size(text: str) -> tuple[str, int]:
     """``(text, unknowns)`` of ``--fe Pk:n``, checked without building the mesh."""
+    from fempipe.discretization import parse_fe_spec
+
     degree, n_el = parse_fe_spec(text)  # ValueError with the library's message
     return str(text), degree * n_el
 
 
 def _modal_size(text: str) -> tuple[str, int]:
     """``(text, unknowns)`` of ``--modal N``."""
+    from fempipe.discretization import parse_discretization
+
     try:
         n = int(str(text))
     except ValueError:

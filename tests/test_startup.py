@@ -1,0 +1,150 @@
+"""Start-up cost: what ``import fempipe`` and the ``fempipe`` command load before computing.
+
+Not timings (those are the ``startup`` benchmark, ``fempipe bench --only
+startup``): each check runs a fresh interpreter and looks at ``sys.modules``.
+scipy, scikit-fem and numpy cost 0.2-0.5 CPU-s to import; the plotting and
+I/O libraries more.  They must be imported inside the functions that use
+them (or by the lazy names of ``fempipe/__init__.py``), not at module level
+of anything the start-up path reaches.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import fempipe
+from fempipe.cli import SUBCOMMANDS
+
+#: Loaded only where a computation, a plot or a file format needs them.
+HEAVY = ("scipy", "skfem", "matplotlib", "meshio", "tqdm", "dask")
+
+
+def _fresh(code: str) -> dict:
+    """Run ``code`` in a new interpreter; it prints one JSON object as its last line."""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+_LOADED = (
+    "def loaded(names):\n"
+    "    return sorted(n for n in names if n in sys.modules)\n"
+    "def quiet(argv):\n"
+    "    import contextlib, io\n"
+    "    from fempipe.cli import main\n"
+    "    with contextlib.redirect_stdout(io.StringIO()), "
+    "contextlib.redirect_stderr(io.StringIO()):\n"
+    "        return main(argv)\n"
+)
+
+
+def test_import_and_top_level_help_load_no_numpy_scipy_or_plotting():
+    """``import fempipe`` and ``fempipe --help`` need none of the heavy libraries."""
+    code = (
+        "import json, sys\n" + _LOADED + f"heavy = {('numpy', *HEAVY)!r}\n"
+        "import fempipe\n"
+        "after_import = loaded(heavy)\n"
+        "code = quiet(['--help'])\n"
+        "print(json.dumps({'import': after_import, 'help': loaded(heavy), 'code': code}))\n"
+    )
+    got = _fresh(code)
+    assert got == {"import": [], "help": [], "code": 0}
+
+
+def test_subcommand_help_loads_no_scipy_or_plotting():
+    """``fempipe COMMAND --help`` for every command: numpy at most, no solver libraries."""
+    code = (
+        "import json, sys\n" + _LOADED + f"heavy = {HEAVY!r}\n"
+        f"out = {{name: [quiet([name, '--help']), loaded(heavy)]"
+        f" for name in {list(SUBCOMMANDS)!r}}}\n"
+        "print(json.dumps(out))\n"
+    )
+    got = _fresh(code)
+    assert got == {name: [0, []] for name in SUBCOMMANDS}
+
+
+def test_a_command_imports_only_its_own_subcommand_module():
+    code = (
+        "import json, sys\n" + _LOADED + "quiet(['critical', '--help'])\n"
+        f"print(json.dumps(loaded({[m for m, _ in SUBCOMMANDS.values()]!r})))\n"
+    )
+    assert _fresh(code) == ["fempipe.cli.critical"]
+
+
+# The public names of the package, as the eager ``__init__`` imported them.
+from fempipe.discretization import FiniteElement, Modal, parse_discretization  # noqa: E402
+from fempipe.errors import ParamError, SolverError  # noqa: E402
+from fempipe.kinematics import shape, tip_values  # noqa: E402
+from fempipe.operators import PipeModel  # noqa: E402
+from fempipe.params import Params, PipeSI  # noqa: E402
+from fempipe.stability import critical_velocity, spectrum, stability_analysis  # noqa: E402
+from fempipe.static import (  # noqa: E402
+    NewtonError,
+    continuation,
+    solve_path,
+    solve_static,
+    switch_branch,
+)
+
+PUBLIC = {
+    "FiniteElement": FiniteElement,
+    "Modal": Modal,
+    "parse_discretization": parse_discretization,
+    "ParamError": ParamError,
+    "SolverError": SolverError,
+    "shape": shape,
+    "tip_values": tip_values,
+    "PipeModel": PipeModel,
+    "Params": Params,
+    "PipeSI": PipeSI,
+    "critical_velocity": critical_velocity,
+    "spectrum": spectrum,
+    "stability_analysis": stability_analysis,
+    "NewtonError": NewtonError,
+    "continuation": continuation,
+    "solve_path": solve_path,
+    "solve_static": solve_static,
+    "switch_branch": switch_branch,
+}
+
+
+@pytest.mark.parametrize("name", sorted(PUBLIC))
+def test_public_names_are_the_defining_modules_objects(name):
+    assert getattr(fempipe, name) is PUBLIC[name]
+
+
+def test_all_and_dir_list_the_public_names():
+    assert sorted(fempipe.__all__) == sorted(PUBLIC)
+    assert set(fempipe.__all__) <= set(dir(fempipe))
+    namespace: dict = {}
+    exec("from fempipe import *", namespace)
+    assert {k: v for k, v in namespace.items() if k != "__builtins__"} == PUBLIC
+
+
+def test_an_unknown_name_is_an_attribute_error():
+    assert not hasattr(fempipe, "no_such_name")
+    with pytest.raises(AttributeError, match="no_such_name"):
+        fempipe.no_such_name  # noqa: B018
+
+
+def test_the_continuation_function_is_not_shadowed_by_the_submodule():
+    """``fempipe/continuation.py`` is a submodule; ``fempipe.continuation`` stays the function.
+
+    Imported first in a fresh interpreter, the submodule is bound on the
+    package by the import system; the eager ``__init__`` bound the function
+    of :mod:`fempipe.static` over it, and so must the lazy one.
+    """
+    code = (
+        "import json, types\n"
+        "import fempipe.continuation\n"
+        "import fempipe\n"
+        "from fempipe import continuation\n"
+        "from fempipe.static import continuation as fn\n"
+        "print(json.dumps([continuation is fn, fempipe.continuation is fn,"
+        " isinstance(fempipe.static, types.ModuleType)]))\n"
+    )
+    assert _fresh(code) == [True, True, True]
