@@ -90,11 +90,11 @@ def progress(args: argparse.Namespace, total: int | None, desc: str):
     batch jobs.  Use as a context manager; call ``bar.update()`` (and
     optionally ``bar.set_postfix_str``) from the library's progress callback.
     """
-    from tqdm import tqdm
-
     show = getattr(args, "progress", None)
     if show is None and not sys.stderr.isatty():
         return _LogProgress(total, desc, LOG_INTERVAL)
+    from tqdm import tqdm  # only for a bar: log lines do not need it
+
     return tqdm(
         total=total,
         desc=desc,
