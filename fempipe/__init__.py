@@ -6,8 +6,8 @@ elements on a scikit-fem MeshLine or by the paper's sine modes.
 
 The public names are loaded on first use (PEP 562 module ``__getattr__``), so
 ``import fempipe`` and the start of the ``fempipe`` command do not pay for
-scipy, scikit-fem and the solvers (about 0.4 CPU-s) until a computation needs
-them.
+numpy, scipy, scikit-fem and the solvers (0.6 CPU-s on a 2-core x86_64
+machine; ``fempipe bench --only startup``) until a computation needs them.
 """
 
 from __future__ import annotations

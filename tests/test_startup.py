@@ -148,3 +148,21 @@ def test_the_continuation_function_is_not_shadowed_by_the_submodule():
         " isinstance(fempipe.static, types.ModuleType)]))\n"
     )
     assert _fresh(code) == [True, True, True]
+
+
+def test_startup_benchmark_runs_every_command_once_when_quick():
+    """A smoke run of ``fempipe bench --only startup --quick`` (the numbers are not checked)."""
+    from fempipe.bench import available
+
+    res = available()["startup"](quick=True)
+    assert res["runs"] == 1
+    rows = {r["command"]: r for r in res["table"]}
+    assert list(rows) == [
+        "import numpy",
+        "import scipy.linalg",
+        "import fempipe",
+        "fempipe --help",
+        "fempipe critical --help",
+    ]
+    assert all(r["cpu_seconds"] > 0 for r in rows.values())
+    assert [c for c, r in rows.items() if "target_seconds" in r] == list(rows)[2:]
