@@ -117,6 +117,8 @@ def test_bifurcation_json_contract_and_resume(tmp_path, capsys):
     out = tmp_path / "bif"
     argv = [
         "bifurcation",
+        "--method",
+        "sweep",
         *CHEAP,
         "--v",
         "5,9",
@@ -167,7 +169,9 @@ def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypat
 
     monkeypatch.setattr(fempipe.bifurcation, "bifurcation_diagram", fail)
     out = tmp_path / "run"
-    code = main(["bifurcation", *CHEAP, "--v", "8,9", "--out", str(out), "--quiet"])
+    code = main(
+        ["bifurcation", "--method", "sweep", *CHEAP, "--v", "8,9", "--out", str(out), "--quiet"]
+    )
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(lines) == 1
     assert lines[0].startswith("fempipe bifurcation: error: integration failed at v = 9; ")

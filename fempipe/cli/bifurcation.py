@@ -1,6 +1,18 @@
-"""``fempipe bifurcation``: tip extrema on the attractor against v, swept up and down.
+"""``fempipe bifurcation``: tip extrema against v, by continuation (default) or by sweeps.
 
-Each point starts from the attractor of the previous one
+``--method continuation`` (the default) follows the equilibria of the primary
+static branch and the branch of periodic orbits born at every Hopf point
+(flutter event) by pseudo-arclength continuation
+(:func:`fempipe.periodic.cycle_diagram`): stable and unstable orbits, their
+Floquet multipliers, and the folds, period doublings and Neimark-Sacker points
+of the branches; every requested v is landed on exactly (``requested``: true,
+``source``: "grid"), the continuation's own points have ``requested``: false.
+Points gain ``stable``, ``branch`` and ``floquet_multipliers``; the result
+gains ``branches``, ``special_points``, ``hopf_points`` and ``errors``.  A
+branch that cannot be continued is reported (exit 1) after its finished
+points are written.  ``--directions`` has no meaning there.
+
+``--method sweep`` is the independent check.  Each point starts from the attractor of the previous one
 (:func:`fempipe.bifurcation.sweep`); up and down sweeps (and several
 inclinations given with ``--alphas``) are independent and run in parallel on
 ``--workers N`` local processes or on a Dask cluster (``--dask tcp://host:port``,
@@ -28,6 +40,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_flow_arguments(parser, default="5:12:36")
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("sweep")
+    g.add_argument(
+        "--method",
+        choices=("continuation", "sweep"),
+        default="continuation",
+        help="continuation of equilibria and periodic orbits (stable and unstable; default) "
+        "or sweeps of attractors up and down (the independent check)",
+    )
     g.add_argument(
         "--directions",
         metavar="D",
@@ -106,6 +125,8 @@ def run(args: argparse.Namespace) -> int:
     parsing.check_count(
         flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions x alphas)"
     )
+    if args.method == "continuation":
+        return _run_continuation(args, setup, alphas, workers)
     executor = client = None
     if args.dask is not None:
         try:
@@ -175,6 +196,67 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
+    """``--method continuation``: :func:`fempipe.periodic.cycle_diagram`."""
+    from fempipe.errors import SolverError
+    from fempipe.io import json_dumps
+    from fempipe.operators import PipeModel
+    from fempipe.periodic import cycle_diagram
+
+    flow_opt = "--U" if args.U is not None else "--v"
+    if len(set(setup.v)) < 2:
+        raise CLIError(flow_opt, "continuation needs a range of v (at least two values)")
+    if args.dask is not None:
+        raise CLIError("--dask", "runs sweeps only; use --method sweep or --workers")
+    store_dir = None
+    if args.out is not None:
+        from pathlib import Path
+
+        store_dir = Path(args.out) / "points"
+    model = PipeModel(setup.disc, setup.params)
+    with reporting.progress(args, None, "bifurcation") as bar:
+        try:
+            diagram = cycle_diagram(
+                model,
+                setup.v,
+                alphas=alphas,
+                store_dir=store_dir,
+                workers=workers,
+                progress=bar.update,
+                rtol=args.shoot_rtol,
+            )
+        except ValueError as exc:
+            if "point store" in str(exc):
+                raise CLIError("--out", str(exc)) from None
+            raise
+    result = setup.to_dict()
+    result["params"].pop("v", None)
+    if alphas is not None:
+        result["params"]["alphas"] = alphas
+    result["method"] = "continuation"
+    d = diagram.to_dict()
+    for key in ("points", "branches", "special_points", "hopf_points", "errors", "wall_time"):
+        result[key] = d[key]
+    output = reporting.Output(args.out) if args.out is not None else None
+    if output is not None:
+        output.record(store_dir)
+        _write_outputs(output, result)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print_table(result)
+        for sp in result["special_points"]:
+            print(
+                f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} "
+                f"v = {sp['v']:.6g}"
+            )
+    if output is not None:
+        output.report(args)
+    if result["errors"]:
+        raise SolverError("; ".join(result["errors"]))
+    return 0
+
+
 def _write_outputs(output: reporting.Output, result) -> None:
     import matplotlib
 
@@ -211,8 +293,14 @@ def _print_table(result: dict) -> None:
     )
     for pt in result["points"]:
         per = f"{pt['period']:.6g}" if pt["period"] else "-"
+        kind = pt["attractor"]
+        if "stable" in pt:
+            kind = ("" if pt["stable"] else "u-") + kind[:8]
+        direction = {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
+            pt["direction"], pt["direction"]
+        )
         print(
-            f"{pt['alpha']:8.4g} {pt['direction']:>4s} {pt['v']:8.4g} {pt['attractor']:>12s} "
+            f"{pt['alpha']:8.4g} {direction:>4s} {pt['v']:8.4g} {kind:>12s} "
             f"{per:>10s} {pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f} "
             f"{pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} {pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
         )
