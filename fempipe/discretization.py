@@ -570,7 +570,10 @@ def _element_line_pp(degree: int):
     fempipe does not import scikit-fem, and found by name (module
     ``__getattr__``) when a discretisation is unpickled in a worker process.
     """
-    return __getattr__("_ElementLinePp")(degree)
+    # Build the class once: a second class of the same qualified name would make
+    # every element made from the first one unpicklable.
+    cls = globals().get("_ElementLinePp") or __getattr__("_ElementLinePp")
+    return cls(degree)
 
 
 def __getattr__(name: str):

@@ -118,3 +118,16 @@ def test_evaluate_at_as_many_points_as_the_gauss_rule(n_elements):
     values = disc.evaluate(q, xs)
     assert np.allclose(values, disc.evaluate(q, np.append(xs, 0.5))[:-1], atol=1e-14)
     assert np.allclose(values, xs**3 - 3 * xs, atol=1e-12)
+
+
+def test_higher_degree_elements_stay_picklable():
+    """Building a second element of degree >= 3 must not make the first one's scikit-fem
+    basis unpicklable (one element class per process, found by name on unpickling)."""
+    import pickle
+
+    first = FiniteElement(3, 4)
+    second = FiniteElement(4, 2)
+    for disc in (first, second):
+        assert pickle.loads(pickle.dumps(disc)).name == disc.name
+        back = pickle.loads(pickle.dumps(disc.basis.elem))
+        assert type(back) is type(disc.basis.elem)
