@@ -125,8 +125,8 @@ def test_higher_degree_elements_stay_picklable():
     basis unpicklable (one element class per process, found by name on unpickling)."""
     import pickle
 
-    first = FiniteElement(3, 4)
-    second = FiniteElement(4, 2)
+    first = FiniteElement(n_elements=4, degree=3)
+    second = FiniteElement(n_elements=2, degree=4)
     for disc in (first, second):
         assert pickle.loads(pickle.dumps(disc)).name == disc.name
         back = pickle.loads(pickle.dumps(disc.basis.elem))
