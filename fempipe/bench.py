@@ -52,7 +52,11 @@ log = logging.getLogger(__name__)
 BENCHMARKS: dict[str, Callable[..., dict]] = {}
 
 #: Modules imported by :func:`available` so that their ``@register`` runs.
-BENCHMARK_MODULES: tuple[str, ...] = ("fempipe.bench", "fempipe.bench_dynamics")
+BENCHMARK_MODULES: tuple[str, ...] = (
+    "fempipe.bench",
+    "fempipe.bench_dynamics",
+    "fempipe.bench_stability",
+)
 
 #: The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at alpha = pi/2.
 PAPER = {"alpha": math.pi / 2, **PAPER_CASE}

@@ -22,7 +22,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .equilibrium import NewtonError, _balance, _solve, solve_static
+from .equilibrium import DENSE_MAX_N, NewtonError, _balance, _solve, solve_static
 from .operators import PipeModel
 from .params import Params
 
@@ -164,8 +164,9 @@ class _Continuation:
     def __init__(self, family: _Family, metric, n: int) -> None:
         self.at = family.at
         self.dR_dlambda = family.dR_dlambda
-        self.G = metric
-        self.sparse = sp.issparse(metric)
+        # Dense algebra up to DENSE_MAX_N unknowns (fempipe.equilibrium).
+        self.sparse = sp.issparse(metric) and n > DENSE_MAX_N
+        self.G = metric.toarray() if sp.issparse(metric) and not self.sparse else metric
         self.n = n
 
     def dot(self, a: np.ndarray, b: np.ndarray) -> float:
@@ -178,7 +179,7 @@ class _Continuation:
     def bordered(self, q: np.ndarray, value: float, t: np.ndarray):
         """[[dR/dq, dR/dlambda], [G t_q, t_lambda]]: the pseudo-arclength Jacobian."""
         m = self.at(value)
-        J = m.static_jacobian(q)
+        J = m.static_jacobian(q, dense=True) if not self.sparse else m.static_jacobian(q)
         Rl = self.dR_dlambda(q, value)
         n = self.n
         row = np.append(self.G @ t[:n], t[n])

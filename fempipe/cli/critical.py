@@ -74,7 +74,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DS",
         type=parsing.number_type("--ds-max", 0.0, 1.0, strict_low=True),
         default="0.1",
-        help="largest continuation step; spectra are computed at every step (default 0.1)",
+        help="largest continuation step; spectra are computed at every step (default 0.1; "
+        "on a straight branch, alpha = 0 or pi, every 3 DS at most)",
     )
     g.add_argument(
         "--allow-partial",

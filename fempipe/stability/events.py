@@ -215,6 +215,44 @@ def _unstable_count(e: _Eig) -> int:
     return int(e.unstable.sum())
 
 
+def _peak_candidates(x: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """The tracked eigenvalues that may pass the extremum test of ``_BranchAnalysis._peak``.
+
+    ``lam`` has shape (3, k): the tracked eigenvalues at the three samples
+    ``x``.  The same tests as the loop there (all three on one side of the
+    margin, the parabola's extremum inside the samples and pointing towards
+    zero, within half the spread of the samples), vectorised over the k
+    eigenvalues with the parabola in closed form and with a margin, so that
+    the exact per-eigenvalue test (``np.polyfit``) runs only on the few that
+    can pass it.
+    """
+    r = lam.real
+    tol = STABILITY_TOL * np.maximum(1.0, np.abs(lam))
+    states = np.where(r > tol, 1, np.where(r < -tol, -1, 0))
+    up = states > 0
+    same = (up == up[0]).all(axis=0)
+    unstable = up[0]
+    keep = same & (unstable | (states == -1).any(axis=0))
+    # The parabola through the three samples in t = (v - v_m)/h.
+    h = 0.5 * (x.max() - x.min())
+    t0, t2 = (x[0] - x[1]) / h, (x[2] - x[1]) / h
+    d0, d2 = r[0] - r[1], r[2] - r[1]
+    det = t0 * t2 * (t0 - t2)
+    c2 = (d0 * t2 - d2 * t0) / det
+    c1 = (d2 * t0 * t0 - d0 * t2 * t2) / det
+    spread = np.abs(r[1] - r[0]) + np.abs(r[2] - r[1])
+    slack = 1e-9 * (np.abs(r).max(axis=0) + spread) + 1e-300
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        points_to_zero = np.where(unstable, c2 > -slack, c2 < slack)
+        tx = -c1 / (2.0 * c2)
+        inside = (tx > min(t0, t2) - 1e-6) & (tx < max(t0, t2) + 1e-6)
+        ext = r[1] + c1 * tx + c2 * tx * tx
+        near = np.where(unstable, ext <= 0.5 * spread + slack, ext >= -0.5 * spread - slack)
+    # Non-finite values (c2 = 0) are left to the exact test.
+    test = ~np.isfinite(tx) | (points_to_zero & inside & near)
+    return np.flatnonzero(keep & test)
+
+
 def _state_sign(lam: complex) -> int:
     """+1 unstable, -1 stable, 0 marginal (|Re| within round-off)."""
     tol = STABILITY_TOL * max(1.0, abs(lam))
@@ -337,7 +375,7 @@ class _BranchAnalysis:
         if m.fold or a.fold or b.fold or not (a.v < m.v < b.v or a.v > m.v > b.v):
             return None
         x = np.array([a.v, m.v, b.v])
-        for j in range(self.path.labels.size):
+        for j in _peak_candidates(x, np.array([a.lam[ia], m.lam[im], b.lam[ib]])):
             lams = (a.lam[ia[j]], m.lam[im[j]], b.lam[ib[j]])
             states = [_state_sign(lam) for lam in lams]
             signs = [s > 0 for s in states]

@@ -12,7 +12,7 @@ import functools
 import logging
 import math
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -437,8 +437,73 @@ def _weights(res: Resolution, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return W, W[: res.n_resolved].sum(axis=0)
 
 
-def _analyse(model: PipeModel, q: np.ndarray, res: Resolution, method: str) -> _Eig:
-    K, C, M = linearized_matrices(model, q)
+class StraightPencil:
+    """K^d, C^d, M^d at the straight state theta = 0 as functions of v alone.
+
+    At q = 0 every term of Eqs. (33a)-(33c) is a fixed matrix times 1, v or
+    v^2 (fields at theta = 0 do not depend on v): the follower term carries
+    v^2, the Coriolis term 2 v sqrt(beta), everything else (bending, gravity
+    with cos(alpha), Kelvin-Voigt, external damping, end mass, springs) none.
+    So K = K0 + v^2 K2, C = C0 + v C1 and M are formed from three calls of
+    :func:`linearized_matrices` (at v = 0 and v = 1) and then cost two
+    matrix sums per state instead of a Jacobian assembly; they equal the
+    assembled ones to round-off.  This holds at q = 0 for any alpha; q = 0 is
+    a static state only where sin(alpha) = 0 (:func:`straight_is_static`).
+    """
+
+    def __init__(self, model: PipeModel) -> None:
+        n = model.n
+        q = np.zeros(n)
+        p = model.params
+        K0, C0, M = linearized_matrices(model.with_params(replace(p, v=0.0)), q)
+        K1, C1, _ = linearized_matrices(model.with_params(replace(p, v=1.0)), q)
+        self.K0, self.K2 = K0, K1 - K0
+        self.C0, self.C1 = C0, C1 - C0
+        self.M = M
+
+    def matrices(self, v: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """K, C, M at flow velocity v."""
+        return self.K0 + (v * v) * self.K2, self.C0 + v * self.C1, self.M
+
+    @staticmethod
+    def key(params: Params) -> Params:
+        """The parameters the pencil depends on (v set to 0)."""
+        return replace(params, v=0.0)
+
+
+_PENCIL_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def straight_pencil(model: PipeModel) -> StraightPencil:
+    """The :class:`StraightPencil` of ``model`` (cached per discretisation and parameters)."""
+    per_disc = _PENCIL_CACHE.setdefault(model.disc, {})
+    key = StraightPencil.key(model.params)
+    pencil = per_disc.get(key)
+    if pencil is None:
+        if len(per_disc) > 32:  # a stability map visits many parameter points
+            per_disc.clear()
+        pencil = per_disc[key] = StraightPencil(model)
+    return pencil
+
+
+def straight_is_static(params: Params) -> bool:
+    """Whether theta = 0 solves Eq. (31a) for every v: alpha = 0 or pi (mod 2 pi).
+
+    Then gravity acts along the straight pipe, the follower term
+    v^2 sin(theta(1) - theta) and the springs vanish with theta, and the
+    residual is zero (to the 1e-16 of sin(pi) at alpha = pi).
+    """
+    return abs(math.sin(params.alpha)) < 1e-12
+
+
+def _analyse(
+    model: PipeModel,
+    q: np.ndarray,
+    res: Resolution,
+    method: str,
+    matrices: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> _Eig:
+    K, C, M = linearized_matrices(model, q) if matrices is None else matrices
     lam, X, used = _eigen(K, C, M, method)
     W, share = _weights(res, X)
     mu_h = model.params.hysteretic_damping

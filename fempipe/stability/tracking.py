@@ -26,6 +26,7 @@ from .linear import (
     _order,
     resolution,
     single_blas,
+    straight_pencil,
 )
 
 log = logging.getLogger(__name__)
@@ -120,9 +121,11 @@ class _TrackedPath:
 
     def analyse(self, q: np.ndarray, v: float) -> _Eig:
         self.n_spectra += 1
-        return _analyse(
-            self.model.with_params(replace(self.model.params, v=v)), q, self.res, self.method
-        )
+        m = self.model.with_params(replace(self.model.params, v=v))
+        # At the straight state the matrices are known functions of v
+        # (StraightPencil): no Jacobian assembly.
+        matrices = None if q.any() else straight_pencil(m).matrices(v)
+        return _analyse(m, q, self.res, self.method, matrices)
 
     def static_between(self, a: _Eig, b: _Eig, v: float) -> np.ndarray | None:
         if a.v == b.v:

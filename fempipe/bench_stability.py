@@ -1,0 +1,130 @@
+"""Benchmark of ``fempipe critical`` against a classical beam-mode Galerkin (timings, not tests).
+
+Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classical``).
+
+``critical_vs_classical``
+    CPU seconds (user + system of a fresh process, the change of
+    ``getrusage(RUSAGE_CHILDREN)``, median of 5 runs; quick: 1) of
+
+    * ``fempipe critical --alpha 0 --beta 0.2 --gamma 10 --mu 0 --v 0,10 --json``
+      (the hanging pipe: default discretisation P3:16, branches followed,
+      every event to v = 10), and
+    * the classical linear Galerkin of the straight pipe as a user would
+      write it, ``python fempipe/validation/classical_baseline.py`` (numpy and
+      scipy only: clamped-free beam modes, Paidoussis' closed-form b_sr, c_sr,
+      d_sr, eigenvalues of the 2N first-order system on a scan of v with step
+      0.1, then Brent on the largest real part) with N = 40 and N = 20 modes,
+
+    each with its v_cr error against a converged reference computed here:
+    the classical theory on Legendre spectral elements of degree 24
+    (:mod:`fempipe.validation.classical`; degrees 12 to 40 agree to ~1e-12).
+    ``ratio`` is fempipe's CPU seconds over the 40-mode baseline's, whose
+    error (~3e-7 relative) is the accuracy fempipe's default must match or
+    beat; the target is ratio <= 1.
+
+    Second case, the paper's pipe at alpha = pi/2 (a curved static state, no
+    classical theory): ``fempipe critical --alpha pi/2 --v 0,10 --json``, its
+    CPU seconds and its v_cr error against P3:64 (quick: P3:32), computed
+    here by :func:`fempipe.stability.critical_velocity`.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .bench import register
+
+#: The reference case: the hanging pipe of the classical theory.
+REFERENCE_ARGS = ["--alpha", "0", "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v", "0,10"]
+#: The paper's case at alpha = pi/2 (beta, gamma, mu are the CLI's defaults).
+CURVED_ARGS = ["--alpha", "pi/2", "--v", "0,10"]
+#: The baseline script, run by its path (it imports nothing of fempipe).
+BASELINE = Path(__file__).resolve().parent / "validation" / "classical_baseline.py"
+#: fempipe's CPU seconds over the 40-mode baseline's must not exceed this.
+TARGET_RATIO = 1.0
+
+
+def _child(argv: list[str]) -> tuple[float, dict]:
+    """(user + system CPU seconds, parsed JSON stdout) of one fresh ``python argv``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    res = subprocess.run([sys.executable, *argv], capture_output=True, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if res.returncode != 0:
+        raise RuntimeError(f"python {' '.join(argv)} failed: {res.stderr.strip()[-500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, json.loads(res.stdout)
+
+
+def _row(label: str, argv: list[str], runs: int, reference: float) -> dict:
+    """Median CPU seconds of ``runs`` fresh processes, and the v_cr error of the last one."""
+    times, out = [], None
+    for _ in range(runs):
+        cpu, out = _child(argv)
+        times.append(cpu)
+    v_cr = out["v_cr"]
+    err = None if v_cr is None else abs(v_cr - reference)
+    return {
+        "command": label,
+        "cpu_seconds": round(float(np.median(times)), 3),
+        "min": round(min(times), 3),
+        "v_cr": None if v_cr is None else f"{v_cr:.10f}",
+        "abs_error": err,
+        "rel_error": None if err is None else err / abs(reference),
+    }
+
+
+def _classical_reference() -> float:
+    """v_cr of the hanging pipe (beta 0.2, gamma 10, mu 0): Legendre spectral elements, p = 24."""
+    from .validation.classical import StraightPipe, critical_velocity
+
+    pipe = StraightPipe(beta=0.2, gamma=10.0)
+    return float(critical_velocity(pipe, v_max=10.0, method="legendre", n=24).v_cr)
+
+
+def _curved_reference(spec: str) -> float:
+    """v_cr of the paper's case at alpha = pi/2 on the finite elements ``spec``."""
+    import math
+
+    from . import Params, PipeModel
+    from .discretization import discretization_from_name
+    from .params import PAPER_CASE
+    from .stability import critical_velocity
+
+    model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
+    return float(critical_velocity(model, v_max=10.0).v_cr)
+
+
+@register("critical_vs_classical")
+def bench_critical_vs_classical(quick: bool = False) -> dict:
+    """CPU seconds of ``fempipe critical`` and of the classical baseline, errors, their ratio."""
+    runs = 1 if quick else 5
+    ref = _classical_reference()
+    fem = ["-m", "fempipe", "critical", *REFERENCE_ARGS, "--json"]
+    base = [str(BASELINE), "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v-max", "10"]
+    rows = [
+        _row("fempipe critical (alpha 0, P3:16)", fem, runs, ref),
+        _row("baseline, 40 beam modes", [*base, "--n", "40"], runs, ref),
+        _row("baseline, 20 beam modes", [*base, "--n", "20"], runs, ref),
+    ]
+    curved_spec = "P3:32" if quick else "P3:64"
+    curved_ref = _curved_reference(curved_spec)
+    curved = ["-m", "fempipe", "critical", *CURVED_ARGS, "--json"]
+    rows.append(_row("fempipe critical (paper, alpha pi/2)", curved, runs, curved_ref))
+    ratio = rows[0]["cpu_seconds"] / rows[1]["cpu_seconds"]
+    return {
+        "runs": runs,
+        "reference_v_cr": ref,
+        "reference": "classical theory, Legendre spectral elements p = 24",
+        "curved_reference_v_cr": curved_ref,
+        "curved_reference": f"fempipe {curved_spec}",
+        "ratio_fempipe_over_baseline40": round(ratio, 3),
+        "target_ratio": TARGET_RATIO,
+        "meets_target": ratio <= TARGET_RATIO,
+        "table": rows,
+    }
