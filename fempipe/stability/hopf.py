@@ -70,14 +70,20 @@ for u = Re q, Im q.  Since B is symmetric and bilinear,
 B(q, y) = B(y, q) = (DJ[Re q] + i DJ[Im q]) y and B(qbar, y) = (DJ[Re q] -
 i DJ[Im q]) y; C(q, q, qbar) = D2J[q, qbar] q = (D2J[Re q, Re q] +
 D2J[Im q, Im q]) q (the mixed terms cancel).  Four Jacobians (plus A) give
-every term.  The errors are O(h^2) (truncation) and O(eps / h^2) (rounding
-of the second difference); with q of unit size the default h = 1e-4 balances
-them (~1e-8 relative).  The coefficient is computed again with 2 h: their
-difference (/3, Richardson) is the reported uncertainty, together with the
-rounding level 1e-10 of the size of the terms of c1.  An l1 within 10 times its
-uncertainty of zero is called ``"degenerate"`` (a Bautin point, or a
-cancellation this computation cannot resolve): neither criticality is
-claimed.
+every term.  The errors are O(h^2) (truncation) and O(eps |J| / h^2)
+(rounding of the second difference).  For the pipe the constant bending part
+of J (~h_mesh^-4 after M^{-1}) is not differenced (:func:`pipe_derivatives`);
+what rounding remains comes from the acceleration off the equilibrium (a sum
+of O(gamma, v^2) forces that cancel at x0) and grows with the mesh.  So the
+step is not fixed: l1 is computed on the ladder h = 1e-5 4^k, k = 0..5
+(q of unit size), and the flattest three consecutive values are taken (the
+middle one), their spread being the uncertainty, plus a rounding level 1e-10
+of the size of the terms of c1.  Measured at the paper's Hopf point at
+alpha = 0: l1 flat to 2e-6 relative for 1e-5 <= h <= 1e-3 on P3:4 to P3:32.
+A fixed ``step`` h uses h and 2 h, the uncertainty being their difference / 3
+(Richardson).  An l1 within 10 times its uncertainty of zero is called
+``"degenerate"`` (a Bautin point, or a cancellation this computation cannot
+resolve): neither criticality is claimed.
 
 Transversality
 --------------
@@ -108,6 +114,7 @@ from ..operators import PipeModel
 
 __all__ = [
     "DEGENERATE_FACTOR",
+    "STEP_LADDER",
     "HopfCoefficient",
     "HopfNormalForm",
     "lyapunov_coefficient",
@@ -123,8 +130,8 @@ __all__ = [
 
 #: |l1| <= DEGENERATE_FACTOR * uncertainty: "degenerate", no criticality claimed.
 DEGENERATE_FACTOR = 10.0
-#: Default difference step for B and C (q of unit size; module docstring).
-DEFAULT_STEP = 1e-4
+#: Difference steps tried for B and C (q of unit size; module docstring).
+STEP_LADDER = (1e-5, 4e-5, 1.6e-4, 6.4e-4, 2.56e-3, 1.024e-2)
 #: Relative rounding level of the terms of c1 added to the uncertainty.
 ROUNDING_LEVEL = 1e-10
 
@@ -138,7 +145,7 @@ class HopfCoefficient:
     l1 : float
         First Lyapunov coefficient Re(c1) / omega.
     uncertainty : float
-        |l1(h) - l1(2h)| / 3 plus the rounding level (module docstring).
+        Spread of l1 over the steps used, plus the rounding level (module docstring).
     c1 : complex
         Cubic coefficient of z' = lambda z + c1 |z|^2 z.
     eigenvalue : complex
@@ -148,11 +155,13 @@ class HopfCoefficient:
     q, p : ndarray of complex, shape (N,)
         Right and adjoint eigenvectors, p^H q = 1, q normalised by ``norm``.
     step : float
-        Difference step h.
+        The difference step h of ``l1``.
     l1_2h : float
-        l1 computed with 2 h (diagnostic).
+        l1 computed with the next larger step (diagnostic).
     terms : tuple of complex
         <p, C(q,q,qbar)>, -2 <p, B(q, A^-1 B(q,qbar))>, <p, B(qbar, (2iw-A)^-1 B(q,q))>.
+    ladder : tuple of (float, float)
+        (h, l1(h)) for every step tried: the plateau.
     """
 
     l1: float
@@ -162,9 +171,10 @@ class HopfCoefficient:
     omega: float
     q: np.ndarray = field(repr=False)
     p: np.ndarray = field(repr=False)
-    step: float = DEFAULT_STEP
+    step: float = math.nan
     l1_2h: float = math.nan
     terms: tuple = ()
+    ladder: tuple = ()
 
     @property
     def criticality(self) -> str:
@@ -211,7 +221,7 @@ def lyapunov_coefficient(
     *,
     omega: float | None = None,
     norm: np.ndarray | None = None,
-    step: float = DEFAULT_STEP,
+    step: float | None = None,
     derivatives: Callable[[np.ndarray, float], tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> HopfCoefficient:
     """First Lyapunov coefficient of x' = F(x) at the equilibrium x0 (Kuznetsov, Eq. (3.20)).
@@ -229,8 +239,9 @@ def lyapunov_coefficient(
     norm : ndarray, shape (N, N), optional
         Hermitian positive semi-definite G with q^H G q = 1 fixing the scale
         of q (and so of l1); default the identity.
-    step : float
-        Difference step h for q of that unit size, > 0 (default 1e-4).
+    step : float, optional
+        A fixed difference step h for q of that unit size, > 0; default the
+        ladder :data:`STEP_LADDER` (module docstring).
     derivatives : callable, optional
         ``(u, h) -> (DJ[u], D2J[u, u])`` for real u; default
         :func:`jacobian_differences`.  A problem-specific form can avoid the
@@ -240,8 +251,6 @@ def lyapunov_coefficient(
     -------
     HopfCoefficient
     """
-    if not step > 0:
-        raise ValueError(f"step must be > 0, got {step}")
     x0 = np.asarray(x0, dtype=float)
     A = np.asarray(jacobian(x0), dtype=float)
     if derivatives is None:
@@ -257,11 +266,31 @@ def lyapunov_coefficient(
     q = q * (abs(q[k]) / q[k])
     p = pl / np.conj(np.conj(pl) @ q)  # p^H q = 1
     w = float(lam.imag)
-    c1, terms = _c1(derivatives, A, q, p, w, step)
-    c1_2h, _ = _c1(derivatives, A, q, p, w, 2.0 * step)
-    l1, l1_2h = c1.real / w, c1_2h.real / w
+    if step is None:
+        ladder = STEP_LADDER
+    else:
+        if not step > 0:
+            raise ValueError(f"step must be > 0, got {step}")
+        ladder = (step, 2.0 * step)
+    runs = [_c1(derivatives, A, q, p, w, h) for h in ladder]
+    l1s = [c.real / w for c, _ in runs]
+    if len(ladder) == 2:
+        k, mid = 0, 0
+        spread = abs(l1s[0] - l1s[1]) / 3.0  # Richardson: the O(h^2) error at h
+    else:
+        # The flattest three consecutive steps: the middle one, their spread.
+        spreads = [
+            max(abs(l1s[i] - l1s[i + 1]), abs(l1s[i + 1] - l1s[i + 2]))
+            for i in range(len(ladder) - 2)
+        ]
+        k = int(np.argmin(spreads))
+        mid, spread = k + 1, spreads[k]
+    c1, terms = runs[mid]
+    l1 = l1s[mid]
     size = sum(abs(t) for t in terms) / (2.0 * w)
-    unc = abs(l1 - l1_2h) / 3.0 + ROUNDING_LEVEL * size
+    unc = spread + ROUNDING_LEVEL * size
+    step = ladder[mid]
+    l1_2h = l1s[mid + 1] if mid + 1 < len(l1s) else math.nan
     return HopfCoefficient(
         l1=float(l1),
         uncertainty=float(unc),
@@ -273,6 +302,7 @@ def lyapunov_coefficient(
         step=float(step),
         l1_2h=float(l1_2h),
         terms=terms,
+        ladder=tuple(zip(ladder, l1s, strict=True)),
     )
 
 
@@ -330,9 +360,9 @@ def _without_bending(model: PipeModel) -> PipeModel:
     disc = copy.copy(model.disc)
     K = model.disc.K
     disc.K = sp.csr_matrix(K.shape) if sp.issparse(K) else np.zeros(K.shape)
-    out = model.with_params(model.params)
-    out.disc = disc
-    return out
+    # A new model, not with_params: that would share the caches of the model's
+    # matrices (a dense copy of K among them).
+    return PipeModel(disc, model.params)
 
 
 def pipe_derivatives(
@@ -442,19 +472,30 @@ class HopfNormalForm:
     q_static: np.ndarray = field(repr=False)
     eigenvector: np.ndarray = field(repr=False)
     coefficient: HopfCoefficient = field(repr=False)
+    eta_gradient: np.ndarray = field(repr=False, default=None)
 
     def rho(self, v: float) -> float:
         """Predicted normal-form amplitude rho at v (nan on the side without cycles)."""
         r2 = self.rho2_slope * (v - self.v)
         return math.sqrt(r2) if r2 >= 0 else math.nan
 
-    def initial_state(self, v: float, phase: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
+    def initial_state(
+        self, v: float, phase: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, float]:
         """(q, q', T) on the predicted cycle at v: x0 + 2 rho Re(q e^{i phase}), T = 2 pi / omega.
 
         A starting guess for shooting (:func:`fempipe.limit_cycle.shoot`),
-        also of unstable cycles a transient never reaches.
+        also of unstable cycles a transient never reaches.  The default phase
+        puts the state where eta_tip crosses its static value upwards, the
+        Poincare section of :mod:`fempipe.limit_cycle` (at another phase the
+        section could be nearly tangent to the orbit).
         """
         n = self.q_static.size
+        if phase is None:
+            # eta_tip - eta0 ~ 2 rho Re(g e^{i phase}), g = d eta_tip . q_theta: zero
+            # and rising where g e^{i phase} = -i |g|.
+            g = complex(self.eta_gradient @ self.eigenvector[:n])
+            phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
         x = 2.0 * self.rho(v) * np.real(self.eigenvector * np.exp(1j * phase))
         return self.q_static + x[:n], x[n:], 2.0 * math.pi / self.omega
 
@@ -475,7 +516,7 @@ def first_lyapunov_coefficient(
     q_static: np.ndarray,
     *,
     omega: float | None = None,
-    step: float = DEFAULT_STEP,
+    step: float | None = None,
 ) -> HopfNormalForm:
     """The Hopf normal form of Eq. (20) at the static state q_static, v = model.params.v.
 
@@ -488,8 +529,8 @@ def first_lyapunov_coefficient(
     omega : float, optional
         Frequency of the crossing pair (the event's ``frequency``); default
         the pair nearest the imaginary axis.
-    step : float
-        Difference step h (module docstring), > 0.
+    step : float, optional
+        A fixed difference step h, > 0; default the ladder (module docstring).
 
     Returns
     -------
@@ -528,14 +569,13 @@ def first_lyapunov_coefficient(
     crit = hc.criticality
     slope = -dlam.real / (w * hc.l1) if hc.l1 != 0.0 else math.inf
     side, coef = None, {}
+    # d(theta_tip)/dq and d(eta_tip)/dq = int phi_j cos theta.
+    grads = {
+        "theta_tip": np.asarray(disc.tip, dtype=float),
+        "eta_tip": np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(disc.Phi @ q0))),
+    }
     if crit != "degenerate" and dlam.real != 0.0 and math.isfinite(slope):
         side = "above" if slope > 0 else "below"
-        # d(theta_tip)/dq and d(eta_tip)/dq = \int phi_j cos theta.
-        th = disc.Phi @ q0
-        grads = {
-            "theta_tip": np.asarray(disc.tip, dtype=float),
-            "eta_tip": np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(th))),
-        }
         r = math.sqrt(abs(slope))
         coef = {k: float(2.0 * abs(g @ q[:n]) * r) for k, g in grads.items()}
     return HopfNormalForm(
@@ -553,6 +593,7 @@ def first_lyapunov_coefficient(
         q_static=q0,
         eigenvector=q,
         coefficient=hc,
+        eta_gradient=grads["eta_tip"],
     )
 
 
