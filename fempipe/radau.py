@@ -98,7 +98,41 @@ _G, _T, _TI = _diagonalise_a()
 #: Cubic through (0, 0) and (c_i, Z_i): coefficients of theta, theta^2, theta^3.
 _DENSE = np.linalg.inv(np.vander(C, 4, increasing=True)[:, 1:])
 
+#: Nodes of the dense-output cubic and its barycentric-like weights 1 / prod(x_j - x_m).
+_NODES = np.r_[0.0, C]
+_LAGRANGE_W = np.array(
+    [1.0 / np.prod([_NODES[j] - _NODES[m] for m in range(4) if m != j]) for j in range(4)]
+)
+
+
+def _lu_factor(a: np.ndarray):
+    """LU factors of a real or complex square matrix: LAPACK getrf directly.
+
+    ``scipy.linalg.lu_factor`` / ``lu_solve`` do the same with argument checks
+    that cost as much as the factorisation itself at n = 48 (they run twice
+    per step and at every Newton iteration of the stage equations).
+    """
+    getrf = sla.lapack.zgetrf if np.iscomplexobj(a) else sla.lapack.dgetrf
+    lu, piv, info = getrf(a, overwrite_a=True)
+    if info < 0:  # pragma: no cover - a wrong argument, not a singular matrix
+        raise ValueError(f"getrf: illegal argument {-info}")
+    return lu, piv
+
+
+def _lu_solve(lu_piv, b: np.ndarray) -> np.ndarray:
+    """Solve with the factors of :func:`_lu_factor` (LAPACK getrs)."""
+    lu, piv = lu_piv
+    getrs = sla.lapack.zgetrs if np.iscomplexobj(lu) else sla.lapack.dgetrs
+    x, info = getrs(lu, piv, b)
+    if info != 0:  # pragma: no cover
+        raise ValueError(f"getrs: illegal argument {-info}")
+    return x
+
+
 NEWTON_MAXITER = 6
+#: A step whose Newton iteration needed more than two iterations at a
+#: contraction rate above this gets a fresh Jacobian (RADAU5's THET, 1e-3).
+JACOBIAN_RATE = 1e-3
 MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
 
 
@@ -157,6 +191,49 @@ def acceleration(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float
     M = model.mass_matrix(q)
     r = model.residual(q, qdot, None, v_dot)
     return -sla.cho_solve(sla.cho_factor(M), r)
+
+
+def _batched_residual(model: PipeModel):
+    """``R(Q_i, P_i, A_i)`` of the three stages in one evaluation, or None where unavailable.
+
+    The residual of :meth:`PipeModel.residual` costs about 0.25 ms on P3:16,
+    almost all of it call overhead of some forty small array operations on
+    n_q = 96 points; the three Radau stages evaluated together cost about one
+    evaluation (the stage residuals are 3/4 of an integration step).  The
+    terms are those of :meth:`PipeModel.residual` for the pipe without
+    variants and steady flow (v_dot = 0), summed in another order: bending
+    and Kelvin-Voigt ``K (q + mu q')``; gravity and follower, local; and the
+    three projections ``n . C^R F`` (inertia, centripetal, Coriolis) with the
+    one field F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
+    since the projection is linear in F.  The variants (end mass, external
+    damping, springs) and any subclass of PipeModel use the per-stage
+    residual (None here); ``tests/test_dynamics.py`` checks the two agree to
+    round-off.
+    """
+    p = model.params
+    if type(model) is not PipeModel or p.end_mass or p.external_damping or p.springs:
+        return None
+    disc, quad = model.disc, model.quad
+    Phi, K, tip = disc.Phi, disc.K, np.asarray(disc.tip)
+    lever = p.gamma * (1.0 - model.x)[:, None]
+    v2, cv, mu, alpha = p.v * p.v, 2.0 * p.v * math.sqrt(p.beta), p.mu, p.alpha
+
+    def residual(Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
+        # Stages in columns: theta etc. have shape (n_q, 3), frames (n_q, 2, 3).
+        th = np.asarray(Phi @ Q.T)
+        th_d = np.asarray(Phi @ P.T)
+        th_dd = np.asarray(Phi @ Acc.T)
+        s, c = np.sin(th), np.cos(th)
+        nrm = np.stack([-s, c], axis=1)
+        tng = np.stack([c, s], axis=1)
+        F = quad.cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
+        F = F + cv * th_d[:, None] * nrm
+        G = quad.from_tip(F)
+        local = lever * np.sin(th + alpha) + v2 * np.sin((Q @ tip)[None, :] - th)
+        local = local + np.einsum("qcs,qcs->qs", nrm, G)
+        return (np.asarray(K @ (Q + mu * P).T) + model._test(local)).T
+
+    return residual
 
 
 @dataclass
@@ -256,6 +333,10 @@ class Radau:
         self._lu = None  # (h, LU_real, LU_complex)
         self._h_old = None
         self._err_old = None
+        # RADAU5's FACCON: the contraction factor theta / (1 - theta) of the
+        # last converged Newton iteration, used to accept the first iterate
+        # of the next step (see :meth:`_newton`).
+        self._faccon = 1.0
         self._prev = None  # previous step (t_old, h, a_old, stage accelerations)
         self.last = None  # last accepted step: t_old, h, q_old, p_old, Q, P, Acc
         if h_fixed is not None:
@@ -269,6 +350,7 @@ class Radau:
             d1 = np.sqrt(np.mean(np.r_[qdot0, self.qddot] ** 2)) + 1e-12
             self.h = min(1e-2 * d0 / d1, 1e-2)
         self.h = min(self.h, self.max_step)
+        self._residual3 = None if flow is not None else _batched_residual(model)
         self.sensitivity = bool(sensitivity)
         self.sensitivity_matrix = np.eye(2 * n) if sensitivity else None
 
@@ -292,13 +374,13 @@ class Radau:
     def _factor(self, h: float):
         K, D, M = self._jac
         g0, g1 = _G[0].real, _G[1]
-        lu_r = sla.lu_factor(M + h * g0 * D + (h * g0) ** 2 * K, check_finite=False)
-        lu_c = sla.lu_factor(M + h * g1 * D + (h * g1) ** 2 * K, check_finite=False)
+        lu_r = _lu_factor(M + h * g0 * D + (h * g0) ** 2 * K)
+        lu_c = _lu_factor(M + h * g1 * D + (h * g1) ** 2 * K)
         self.stats.n_lu += 1
         self._lu = (h, lu_r, lu_c)
 
     def _scale(self, q, p):
-        return self.atol + self.rtol * np.abs(np.r_[q, p])
+        return self.atol + self.rtol * np.abs(np.concatenate([q, p]))
 
     # ------------------------------------------------------------------
     def _guess(self, t: float, h: float) -> np.ndarray:
@@ -306,15 +388,12 @@ class Radau:
         if self._prev is None:
             return np.tile(self.qddot, (3, 1))
         t_old, h_old, a_old, acc = self._prev
-        nodes = np.r_[0.0, C]
         vals = np.vstack([a_old, acc])
         s = (t + h * C - t_old) / h_old
-        # Lagrange extrapolation of the cubic through the 4 nodes.
-        L = np.ones((3, 4))
-        for j in range(4):
-            for m in range(4):
-                if m != j:
-                    L[:, j] *= (s - nodes[m]) / (nodes[j] - nodes[m])
+        # Lagrange extrapolation of the cubic through the 4 nodes (0, c_1, c_2, c_3).
+        d0, d1, d2, d3 = (s[:, None] - _NODES[None, :]).T
+        L = np.stack([d1 * d2 * d3, d0 * d2 * d3, d0 * d1 * d3, d0 * d1 * d2], axis=1)
+        L *= _LAGRANGE_W
         return L @ vals
 
     def _stages(self, h, acc):
@@ -323,23 +402,37 @@ class Radau:
         return Q, P
 
     def _newton(self, t: float, h: float, acc: np.ndarray, scale: np.ndarray, max_iter=None):
-        """Solve the stage equations; return (converged, iterations, acc, rate)."""
+        """Solve the stage equations; return (converged, iterations, acc, rate).
+
+        The iterate is accepted once the predicted remaining error
+        ``faccon * dnorm`` (faccon = rate / (1 - rate), the contraction of the
+        simplified Newton iteration) is below ``newton_tol``.  As in RADAU5,
+        the first iteration uses the factor of the previous step, raised to
+        the power 0.8 (Hairer & Wanner, Sec. IV.8, and the FACCON of radau5.f),
+        so that a step whose extrapolated guess is already good costs one
+        iteration (3 residuals) instead of two; scipy's Radau always does two.
+        With ``h_fixed`` (convergence-order studies) a rate is always measured.
+        """
         max_iter = NEWTON_MAXITER if max_iter is None else max_iter
         _, lu_r, lu_c = self._lu
         n = self.n
         dnorm_old, rate = None, None
+        faccon = max(self._faccon, np.finfo(float).eps) ** 0.8
         G = np.empty((3, n))
         for k in range(max_iter):
             Q, P = self._stages(h, acc)
-            for i in range(3):
-                m, vd = self._model_at(t + C[i] * h)
-                G[i] = m.residual(Q[i], P[i], acc[i], vd)
+            if self._residual3 is not None:
+                G = self._residual3(Q, P, acc)
+            else:
+                for i in range(3):
+                    m, vd = self._model_at(t + C[i] * h)
+                    G[i] = m.residual(Q[i], P[i], acc[i], vd)
             self.stats.n_residual += 3
             if not np.all(np.isfinite(G)):
                 return False, k + 1, acc, rate
             W = _TI @ G  # (3, n) complex
-            dV0 = sla.lu_solve(lu_r, W[0].real, check_finite=False)
-            dV1 = sla.lu_solve(lu_c, W[1], check_finite=False)
+            dV0 = _lu_solve(lu_r, W[0].real)
+            dV1 = _lu_solve(lu_c, W[1])
             dacc = -(np.outer(_T[:, 0].real, dV0) + 2.0 * np.real(np.outer(_T[:, 1], dV1)))
             dZ = np.hstack([h * h * (A2 @ dacc), h * (A @ dacc)])
             dnorm = float(np.sqrt(np.mean((dZ / scale) ** 2)))
@@ -350,7 +443,12 @@ class Radau:
             ):
                 return False, k + 1, acc, rate
             acc = acc + dacc
-            if dnorm == 0 or (rate is not None and rate / (1 - rate) * dnorm < self.newton_tol):
+            if rate is not None:
+                faccon = rate / (1 - rate)
+            if dnorm == 0 or (
+                (rate is not None or self.h_fixed is None) and faccon * dnorm < self.newton_tol
+            ):
+                self._faccon = faccon
                 return True, k + 1, acc, rate
             if self.h_fixed is not None and dnorm < 1e-3 * self.newton_tol:
                 return True, k + 1, acc, rate
@@ -377,15 +475,15 @@ class Radau:
             r_q = f_q + E @ Zq / h
             r_p = f_p + E @ Zp / h
             rhs = M @ r_p + (mu / h) * (M @ r_q) + D @ r_q
-            e_q = (h * g0) ** 2 * sla.lu_solve(lu_r, rhs, check_finite=False)
+            e_q = (h * g0) ** 2 * _lu_solve(lu_r, rhs)
             return e_q, (mu / h) * e_q - r_q
 
         e_q, e_p = solve(self.qdot, self.qddot)
-        err = float(np.sqrt(np.mean((np.r_[e_q, e_p] / scale) ** 2)))
+        err = float(np.sqrt(np.mean((np.concatenate([e_q, e_p]) / scale) ** 2)))
         if refine and err > 1:
             a = self._acceleration(t, self.q + e_q, self.qdot + e_p)
             e_q, e_p = solve(self.qdot + e_p, a)
-            err = float(np.sqrt(np.mean((np.r_[e_q, e_p] / scale) ** 2)))
+            err = float(np.sqrt(np.mean((np.concatenate([e_q, e_p]) / scale) ** 2)))
         return err
 
     # ------------------------------------------------------------------
@@ -447,7 +545,7 @@ class Radau:
                 err = 0.0
                 break
             scale = self.atol + self.rtol * np.maximum(
-                np.abs(np.r_[self.q, self.qdot]), np.abs(np.r_[Q[-1], P[-1]])
+                np.abs(np.concatenate([self.q, self.qdot])), np.abs(np.concatenate([Q[-1], P[-1]]))
             )
             err = self._error(t, h, Q, P, scale, refine=rejected or self._prev is None)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
@@ -467,7 +565,7 @@ class Radau:
         self.q, self.qdot, self.qddot = Q[-1].copy(), P[-1].copy(), acc[-1].copy()
         self.stats.steps += 1
         if self.h_fixed is None:
-            recompute_jac = n_iter > 2 and rate is not None and rate > 1e-3
+            recompute_jac = n_iter > 2 and rate is not None and rate > JACOBIAN_RATE
             factor = min(MAX_FACTOR, safety * _predict_factor(h, h_old, err, err_old))
             # RADAU5 keeps h (and the factorisations) for factor < 1.2; a
             # factor below 1 is applied here, so that the error stays controlled.
@@ -476,7 +574,10 @@ class Radau:
             self._h_old, self._err_old = h, err
             self.h = min(h * factor, self.max_step)
             if recompute_jac:
-                self._jac = self._jacobians(self.t, self.q, self.qdot, self.qddot)
+                if self.sensitivity:
+                    self._jac = self._stage3_jac  # evaluated at this very state
+                else:
+                    self._jac = self._jacobians(self.t, self.q, self.qdot, self.qddot)
                 self._current_jac = True
                 self._lu = None
             else:
@@ -493,24 +594,23 @@ class Radau:
         and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate).
         """
         n = self.n
-        big = np.empty((3 * n, 3 * n))
-        rhs = np.empty((3 * n, 2 * n))
-        for i in range(3):
-            K, D, M = self._jacobians(t + C[i] * h, Q[i], P[i], acc[i])
-            for j in range(3):
-                blk = h * A[i, j] * D + h * h * A2[i, j] * K
-                if i == j:
-                    blk = blk + M
-                big[i * n : (i + 1) * n, j * n : (j + 1) * n] = blk
-            rhs[i * n : (i + 1) * n, :n] = -K
-            rhs[i * n : (i + 1) * n, n:] = -(C[i] * h * K + D)
-        dA = np.linalg.solve(big, rhs).reshape(3, n, 2 * n)
+        jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
+        Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
+        # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
+        big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
+        big[np.arange(3), :, np.arange(3), :] += Ms
+        rhs = np.concatenate([-Ks, -(C[:, None, None] * h * Ks + Ds)], axis=2)
+        dA = np.linalg.solve(big.reshape(3 * n, 3 * n), rhs.reshape(3 * n, 2 * n))
+        dA = dA.reshape(3, n, 2 * n)
         S = np.zeros((2 * n, 2 * n))
         S[:n, :n] = np.eye(n)
         S[:n, n:] = h * np.eye(n)
         S[n:, n:] = np.eye(n)
         S[:n] += h * h * np.einsum("j,jab->ab", A2[2], dA)
         S[n:] += h * np.einsum("j,jab->ab", A[2], dA)
+        # The last stage is the end of the step (c_3 = 1): its Jacobians are
+        # those at the next step's start, where step() may want them.
+        self._stage3_jac = jac[2]
         self.sensitivity_matrix = S @ self.sensitivity_matrix
 
     # ------------------------------------------------------------------
