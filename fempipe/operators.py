@@ -57,6 +57,7 @@ implicit time integrators all use the same analytic Jacobians.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,6 +101,17 @@ def _rows(d: np.ndarray, A):
 
 def _dense(A) -> np.ndarray:
     return A.toarray() if sp.issparse(A) else np.asarray(A)
+
+
+_DENSE_FORMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _dense_forms(disc: Discretization) -> tuple[np.ndarray, np.ndarray]:
+    """(Phi, K) of ``disc`` as dense arrays, computed once per discretisation."""
+    forms = _DENSE_FORMS.get(disc)
+    if forms is None:
+        forms = _DENSE_FORMS[disc] = (_dense(disc.Phi), _dense(disc.K))
+    return forms
 
 
 @dataclass(frozen=True)
@@ -208,19 +220,14 @@ class PipeModel:
 
     @property
     def _Phi_dense(self) -> np.ndarray:
-        """Phi as a dense array, cached: the dense Jacobians use it every call."""
-        P = self.__dict__.get("_Phi_dense_cache")
-        if P is None:
-            P = self.__dict__["_Phi_dense_cache"] = _dense(self.disc.Phi)
-        return P
+        """Phi as a dense array, cached per discretisation: the dense Jacobians use it
+        every call, on models made by :meth:`with_params` (which share the discretisation)."""
+        return _dense_forms(self.disc)[0]
 
     @property
     def _K_dense(self) -> np.ndarray:
         """The bending matrix K as a dense array, cached like :attr:`_Phi_dense`."""
-        K = self.__dict__.get("_K_dense_cache")
-        if K is None:
-            K = self.__dict__["_K_dense_cache"] = _dense(self.disc.K)
-        return K
+        return _dense_forms(self.disc)[1]
 
     def _phi_field(self, coef: np.ndarray) -> np.ndarray:
         """(coef[:, c] * Phi) stacked as shape (n_q, 2, n)."""
