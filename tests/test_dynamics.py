@@ -248,3 +248,59 @@ def test_steps_independent_of_mesh_p3_8_to_64():
     rows = steps((8, 16, 32, 64))
     counts = [r["steps"] for r in rows if r["disc"].startswith("P3")]
     assert max(counts) <= 1.2 * min(counts), counts
+
+
+# ------------------------------------------------- batched stage residuals --
+@pytest.mark.parametrize(
+    "disc", [FiniteElement(4, 2), FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str
+)
+def test_batched_stage_residual_is_the_residual(disc):
+    """The integrator's one-call residual of the three Radau stages equals
+    PipeModel.residual stage by stage (another order of summation: round-off).
+    Every term enters: dropping any one (mu, v, gamma, beta) moves it by O(1)."""
+    from fempipe.radau import _batched_residual
+
+    rng = np.random.default_rng(3)
+    m = PipeModel(disc, Params(alpha=0.7, v=9.0, mu=0.02, beta=0.3, gamma=5.0))
+    k = (2 * np.arange(1, 4) - 1) * np.pi / 2
+    shape = np.linalg.lstsq(
+        np.asarray(disc.Phi.todense() if hasattr(disc.Phi, "todense") else disc.Phi),
+        np.sin(np.outer(m.x, k)),
+        rcond=None,
+    )[0]  # (n, 3): smooth states, as in the energy identity
+    Q, P, A = (rng.standard_normal((3, 3)) @ shape.T for _ in range(3))
+    G = _batched_residual(m)(Q, P, A)
+    ref = np.array([m.residual(Q[i], P[i], A[i]) for i in range(3)])
+    assert np.max(np.abs(G - ref)) < 1e-12 * np.max(np.abs(ref))
+
+
+@pytest.mark.parametrize(
+    "variant", [{"end_mass": 0.2}, {"external_damping": 0.3}, {"springs": ((5.0, 0.5),)}]
+)
+def test_variants_use_the_per_stage_residual(variant):
+    """The batched residual knows the pipe without variants only: with one it
+    declines (None) and Radau evaluates each stage with PipeModel.residual."""
+    from fempipe.radau import _batched_residual
+
+    m = PipeModel(FiniteElement(4, 2), Params(alpha=0.3, v=5.0, **variant))
+    assert _batched_residual(m) is None
+    assert Radau(m, np.full(m.n, 0.1))._residual3 is None
+    plain = PipeModel(FiniteElement(4, 2), Params(alpha=0.3, v=5.0))
+    assert Radau(plain, np.full(plain.n, 0.1))._residual3 is not None
+
+
+def test_batched_and_per_stage_integrations_agree():
+    """Radau with the batched stage residual follows the per-stage one (the same
+    steps, states to round-off amplified by the Newton iterations)."""
+    m = PipeModel(FiniteElement(4, 3), Params(alpha=0.0, v=10.0))
+    q0, p0 = initial_state(m, 1, 0.3)
+    runs = []
+    for batched in (True, False):
+        st = Radau(m, q0, p0, rtol=1e-6)
+        if not batched:
+            st._residual3 = None
+        for _ in st.steps(0.3):
+            pass
+        runs.append((st.stats.steps, st.q))
+    assert runs[0][0] == runs[1][0]
+    np.testing.assert_allclose(runs[0][1], runs[1][1], atol=1e-10)

@@ -193,3 +193,82 @@ def test_limit_cycle_mesh_converged(alpha):
     assert a.period == pytest.approx(b.period, abs=1e-6)
     for k in ("eta_tip", "X_tip", "Z_tip"):
         np.testing.assert_allclose(a.tip[k], b.tip[k], atol=1e-6)
+
+
+def _first_return(m, q0, p0, level: float, t_end: float):
+    """Independent check of a cycle: integrate from (q0, p0) at rtol 1e-9 to the
+    first upward crossing of eta_tip through ``level`` after a twentieth of
+    ``t_end``; return its time, the state there and the tip extrema on the way
+    (16 samples per step on the integrator's dense output)."""
+    from scipy.optimize import brentq
+
+    from fempipe.dynamics import Radau
+    from fempipe.limit_cycle import _eta, _sample_tip, _tip_ranges
+
+    st = Radau(m, q0, p0, rtol=1e-9)
+    samples: list = []
+    s_old = _eta(m.disc, st.q) - level
+    for t, q, _ in st.steps(t_end):
+        _sample_tip(m.disc, m.params.alpha, st, samples, per_step=16)
+        s_new = _eta(m.disc, q) - level
+        if t > t_end / 20 and s_old < 0 <= s_new:
+
+            def f(tt):
+                return _eta(m.disc, st.dense(tt)[0]) - level
+
+            t_c = brentq(f, st.t_old, st.t, xtol=1e-14)
+            return t_c, st.dense(t_c), _tip_ranges(samples)
+        s_old = s_new
+    return None, (None, None), None
+
+
+def test_cycle_from_the_short_transient_is_the_cycle():
+    """alpha = pi/4, v = 8 (an asymmetric cycle).  The transient is integrated
+    until the Poincare returns agree to 1e-3 and Newton needs one step and the
+    check (the fast start); shooting from the first recurrence at 2e-2 (the old
+    start, start_tol = recurrence_tol) gives the same cycle to the shooting
+    tolerance, with the same Floquet multipliers.  Independently, a tight
+    integration (rtol 1e-9) from the reported state comes back to the section
+    for the first time after the reported period (not half or twice it), to
+    the same state, through the same tip extrema (the cycle's are taken on the
+    quintic interpolant of its rtol 1e-5 steps): a wrong multiple of the
+    period, an unconverged orbit or wrong extrema fail here."""
+    m = PipeModel(DISC, Params(alpha=math.pi / 4, v=8.0))
+    fast = find_attractor(m)
+    old = find_attractor(m, start_tol=2e-2)
+    assert fast.kind == old.kind == "periodic" and fast.period_n == old.period_n == 1
+    assert fast.t_end > old.t_end  # the fast start did integrate on
+    assert fast.cycle.iterations <= 2 < old.cycle.iterations
+    assert fast.period == pytest.approx(old.period, rel=1e-6)
+    for k in ("eta_tip", "X_tip", "Z_tip"):
+        np.testing.assert_allclose(fast.tip[k], old.tip[k], rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(
+        np.abs(fast.cycle.floquet_multipliers[:4]),
+        np.abs(old.cycle.floquet_multipliers[:4]),
+        atol=1e-5,
+    )
+    c = fast.cycle
+    t_ret, (q_ret, p_ret), tip = _first_return(m, c.q0, c.qdot0, c.level, 1.2 * c.period)
+    assert t_ret == pytest.approx(c.period, rel=1e-6)
+    scale = c.period / (2 * math.pi)
+    assert np.sqrt(np.mean((q_ret - c.q0) ** 2) + np.mean(((p_ret - c.qdot0) * scale) ** 2)) < 1e-6
+    for k in ("eta_tip", "X_tip", "Z_tip"):
+        np.testing.assert_allclose(c.tip[k], tip[k], atol=1e-6)
+
+
+def test_quintic_orbit_reproduces_quintics():
+    """The interpolant through (q, q', q'') at the step ends is exact for
+    polynomials of degree 5 (the basis of the tip extrema on the cycle)."""
+    from fempipe.limit_cycle import _QuinticOrbit
+
+    rng = np.random.default_rng(5)
+    t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.2, 7)])
+    c = rng.standard_normal((6, 2))  # two components, degree 5
+
+    def poly(x, d=0):
+        P = np.polynomial.polynomial
+        return np.stack([P.polyval(x, P.polyder(c[:, j], d)) for j in range(2)], axis=-1)
+
+    orbit = _QuinticOrbit(t, poly(t), poly(t, 1), poly(t, 2))
+    x = np.linspace(t[0], t[-1], 101)
+    np.testing.assert_allclose(orbit(x), poly(x), atol=1e-12)
