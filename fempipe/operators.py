@@ -640,6 +640,35 @@ class PipeModel:
             Jq = Jq + self.spring_jacobian(q, dense=True)
         return Jq, Jqd, M
 
+    def static_jacobians(self, q):
+        """:meth:`jacobians` at the static state (q, 0, 0): K^d, C^d, M^d of Eqs. (31b)-(33).
+
+        The same terms with theta_dot = theta_ddot = 0 dropped before they are
+        formed: the inner field F of the projection and its q-derivative
+        vanish, so the normal-derivative weight, the q-derivative through F and
+        the end mass's acceleration terms are zero, and the two cumulative
+        integrals of (n_q, 2, n) fields they need are not computed.  Equal to
+        ``jacobians(q)`` (only exact zeros are left out); about half its cost.
+        """
+        fl = self.fields(q)
+        p = self.params
+        cv = 2.0 * p.v * np.sqrt(p.beta)
+        d_follower, tip_col = self._follower_weights(fl)
+        d = self._gravity_weight(fl) + d_follower
+        Phi = self._Phi_dense
+        Jqd = p.mu * self._K_dense + self._project_jac(self._phi_field(cv * fl.normal), fl)
+        M_pipe = self._pipe_mass(fl)
+        if p.external_damping:
+            Jqd = Jqd + p.external_damping * M_pipe
+        M = M_pipe
+        if p.end_mass:
+            b = self._end_vector(fl)
+            M = M + p.end_mass * (b @ b.T)
+        Jq = self._K_dense + (Phi.T * d) @ Phi + np.outer(tip_col, self.disc.tip)
+        if p.springs:
+            Jq = Jq + self.spring_jacobian(q, dense=True)
+        return Jq, Jqd, M
+
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, q, qdot) -> float:
         """T = (1/2) \\int_0^1 |r_dot|^2 + (Gamma/2) |r_dot(1)|^2 = (1/2) q'^T M(q) q'."""

@@ -130,6 +130,27 @@ def test_straight_pencil_is_the_assembled_linearisation():
                 assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
+def test_static_jacobians_are_the_jacobians_at_rest():
+    """PipeModel.static_jacobians (what the spectra use) against jacobians(q, 0, 0), at a
+    curved state with every variant."""
+    p = Params(
+        alpha=1.1,
+        beta=0.3,
+        gamma=7.0,
+        mu=0.01,
+        v=4.2,
+        end_mass=0.2,
+        external_damping=0.4,
+        springs=((20.0, 0.4), (3.0, 1.0)),
+    )
+    for disc in (FiniteElement(4, 3), Modal(5)):
+        model = PipeModel(disc, p)
+        q = 0.4 * np.sin(np.arange(disc.n) + 1.0)
+        zero = np.zeros(disc.n)
+        for got, ref in zip(model.static_jacobians(q), model.jacobians(q, zero, zero), strict=True):
+            assert np.abs(got - ref).max() <= 1e-13 * np.abs(ref).max()
+
+
 def test_straight_values_are_the_points_of_the_continuation():
     """The values of v the fast path uses with the continuation's ds_max are the ones the
     continuation itself visits on the straight branch, bit for bit."""

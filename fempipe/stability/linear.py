@@ -150,7 +150,9 @@ def linearized_matrices(model: PipeModel, q: np.ndarray):
 
     They are the analytic Jacobians dR/dq, dR/dq', dR/dq'' of the residual of
     Eq. (20) at (q, 0, 0): the same code that drives Newton's method and the
-    time integrators, so the physics is written once.
+    time integrators, so the physics is written once
+    (:meth:`~fempipe.operators.PipeModel.static_jacobians`, which leaves out
+    the terms of ``jacobians`` that vanish at q' = q'' = 0).
 
     Returns
     -------
@@ -158,7 +160,7 @@ def linearized_matrices(model: PipeModel, q: np.ndarray):
         Stiffness (bending, gravity, follower: not symmetric for v > 0),
         damping (Coriolis 2 v sqrt(beta) and Kelvin-Voigt mu), mass (SPD).
     """
-    return model.jacobians(np.asarray(q, dtype=float))
+    return model.static_jacobians(np.asarray(q, dtype=float))
 
 
 def _eigen(K, C, M, method: str = "auto") -> tuple[np.ndarray, np.ndarray, str]:
