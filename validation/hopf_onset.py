@@ -11,7 +11,11 @@ v = v_cr (1 +- eps) on the side where the cycles exist:
 * amplitude^2 is proportional to |v - v_cr|: slope 1 on log-log.
 
 Usage: python validation/hopf_onset.py [--fe P3:8] [--alpha A ...] [--beta B
---gamma G --mu M] [--eps 1e-3,4e-3,1.6e-2] [--json out.json]
+--gamma G --mu M --end-mass E] [--eps 1e-3,4e-3,1.6e-2] [--first-only] [--json out.json]
+
+The subcritical case (unstable cycles below v_cr):
+python validation/hopf_onset.py --alpha 0 --beta 0.15 --end-mass 0.5 --first-only
+--eps 2.5e-4,1e-3,4e-3
 """
 
 from __future__ import annotations
@@ -32,24 +36,40 @@ from fempipe.stability import stability_analysis
 from fempipe.stability.hopf import normal_forms
 
 
-def onset_table(model: PipeModel, v_max: float, eps_list, rtol: float = 1e-10, tol: float = 1e-9):
+def onset_table(
+    model: PipeModel,
+    v_max: float,
+    eps_list,
+    rtol: float = 1e-9,
+    tol: float = 1e-8,
+    first_only: bool = False,
+):
     """One row per (flutter event, eps): prediction, shot amplitude, ratio, period."""
     res = stability_analysis(model, v_max=v_max, follow_bifurcations=False)
     t0 = time.process_time()
     forms = normal_forms(model, res)
     cpu_l1 = time.process_time() - t0
     rows = []
-    for key, nf in forms.items():
+    items = sorted(forms.items(), key=lambda kv: kv[0][2])
+    for key, nf in items[:1] if first_only else items:
         if isinstance(nf, str):
             rows.append({"event": list(key), "note": nf})
             continue
         sign = 1.0 if nf.side == "above" else -1.0
         c = nf.amplitude_coefficients["eta_tip"]
-        amps = []
-        for eps in eps_list:
+        amps, prev = [], None
+        for eps in sorted(eps_list):
             v = nf.v * (1.0 + sign * eps)
             m = model.with_params(replace(model.params, v=v))
             q0, qd0, T = nf.initial_state(v)
+            if prev is not None:
+                # The deviation from the prediction grows like |v - v_cr|: start
+                # from the prediction corrected by the last one's deviation, so
+                # Newton does not fall onto the equilibrium (an unstable cycle
+                # is not an attractor of shooting either).
+                scale = 1.0 + prev[1] * eps / prev[0]
+                q0 = nf.q_static + scale * (q0 - nf.q_static)
+                qd0 = scale * qd0
             t1 = time.process_time()
             try:
                 cyc = shoot(m, q0, qd0, T, rtol=rtol, tol=tol, max_iter=20)
@@ -60,6 +80,7 @@ def onset_table(model: PipeModel, v_max: float, eps_list, rtol: float = 1e-10, t
             amp = 0.5 * (hi - lo)
             pred = c * math.sqrt(abs(v - nf.v))
             amps.append((abs(v - nf.v), amp))
+            prev = (eps, amp / pred - 1.0)
             rows.append(
                 {
                     "event": list(key),
@@ -74,6 +95,7 @@ def onset_table(model: PipeModel, v_max: float, eps_list, rtol: float = 1e-10, t
                     "ratio": amp / pred,
                     "period_ratio": cyc.period * nf.omega / (2 * math.pi),
                     "cycle_stable": bool(cyc.stable),
+                    "max_multiplier": cyc.max_nontrivial_multiplier,
                     "newton_iterations": cyc.iterations,
                     "cpu_shoot": time.process_time() - t1,
                 }
@@ -100,6 +122,8 @@ def main() -> None:
     ap.add_argument("--end-mass", type=float, default=0.0)
     ap.add_argument("--v-max", type=float, default=16.0)
     ap.add_argument("--eps", default="1e-3,4e-3,1.6e-2")
+    ap.add_argument("--rtol", type=float, default=1e-9)
+    ap.add_argument("--first-only", action="store_true")
     ap.add_argument("--json")
     args = ap.parse_args()
     disc = discretization_from_name(args.fe)
@@ -109,7 +133,14 @@ def main() -> None:
         p = Params(
             alpha=alpha, beta=args.beta, gamma=args.gamma, mu=args.mu, end_mass=args.end_mass
         )
-        rows = onset_table(PipeModel(disc, p), args.v_max, eps_list)
+        rows = onset_table(
+            PipeModel(disc, p),
+            args.v_max,
+            eps_list,
+            rtol=args.rtol,
+            tol=10 * args.rtol,
+            first_only=args.first_only,
+        )
         for r in rows:
             r["alpha"] = alpha
             print(json.dumps(r))
