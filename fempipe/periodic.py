@@ -19,8 +19,9 @@ Bifurcation and Stability Analysis*, Sec. 7.3)
     <t, W (u - u_pred)> = 0  or  v = v_g     (arclength, or a fixed v)
 
 in u = (x0, T, v): the phase condition puts x0 on the hyperplane through the
-predicted point x_ref orthogonal to the flow f_ref = F(x_ref) there (a
-Poincare section that the predicted orbit crosses), the last row is Keller's
+previous point's x_ref orthogonal to the flow f_ref = F(x_ref) there (a
+Poincare section that the next orbit crosses; through the predicted point on
+the first step, where the previous point is the equilibrium), the last row is Keller's
 pseudo-arclength condition with the unit tangent t of the weighted metric W
 (Keller 1977; Kuznetsov, *Elements of Applied Bifurcation Theory*, Sec.
 10.2), or, where v is a good local parameter and a requested v lies ahead, the
@@ -568,8 +569,11 @@ class _CorrectorError(Exception):
 class _Continuer:
     """Newton correctors and the stepping of one branch (see the module docstring)."""
 
-    def __init__(self, model: PipeModel, hopf: HopfPoint, rtol: float, tol: float, max_iter: int):
+    def __init__(
+        self, model: PipeModel, hopf: HopfPoint, rtol: float, tol: float, xtol: float, max_iter: int
+    ):
         self.model = model
+        self.xtol = xtol
         self.n = model.n
         self.hopf = hopf
         self.rtol, self.tol, self.max_iter = rtol, tol, max_iter
@@ -591,17 +595,28 @@ class _Continuer:
         s = T / (2 * math.pi)
         return float(np.sqrt(np.mean(r[:n] ** 2) + np.mean((r[n:] * s) ** 2)))
 
-    def correct(self, u_pred: np.ndarray, tangent: np.ndarray | None) -> tuple:
+    def correct(
+        self, u_pred: np.ndarray, tangent: np.ndarray | None, u_ref: np.ndarray | None = None
+    ) -> tuple:
         """Newton on the extended system from ``u_pred``: pseudo-arclength with the
         (z-space) ``tangent``, or at the fixed v of ``u_pred`` if ``tangent`` is None.
+
+        The phase section passes through the state of ``u_ref`` (the last point of
+        the branch; the predictor when None), orthogonal to the flow there: the
+        new x0 does not drift along the orbit from one point to the next, so
+        that secants measure the change of the orbit, not of its phase.
 
         Returns (u, flow of the last iterate, monodromy, iterations, rejected steps).
         """
         n2 = 2 * self.n
         u = u_pred.copy()
-        x_ref = u_pred[:n2]
-        m_ref = self.at(u_pred[-1])
+        u_ref = u_pred if u_ref is None else u_ref
+        x_ref = u_ref[:n2]
+        m_ref = self.at(u_ref[-1])
         f_ref = np.r_[x_ref[n2 // 2 :], acceleration(m_ref, x_ref[: n2 // 2], x_ref[n2 // 2 :])]
+        # Orthogonal in the metric: on a near-Hopf orbit, an ellipse in the
+        # plane of Re z, Im z, a section through a principal axis stays there.
+        f_ref = self.S[:n2] ** 2 * f_ref
         f_ref = f_ref / np.linalg.norm(f_ref)
         fixed_v = tangent is None
         J = None
@@ -626,9 +641,6 @@ class _Continuer:
             log.debug("corrector it %d need %s res %.3e g %.2e c %.2e", it, need, res, g, c)
             if need:
                 monodromy = fl.monodromy
-            if res < self.tol and abs(g) < self.tol and abs(c) < self.tol:
-                return u, fl, monodromy, it, rejected
-            if need:
                 k = n2 + (1 if fixed_v else 2)
                 J = np.zeros((k, k))
                 J[:n2, :n2] = fl.monodromy - np.eye(n2)
@@ -652,6 +664,19 @@ class _Continuer:
                 raise _CorrectorError("singular Jacobian") from None
             if not np.all(np.isfinite(du)):
                 raise _CorrectorError("non-finite Newton step")
+            # Converged when the residual is small and so is the correction it
+            # asks for: the error of this iterate (the residual alone hides it
+            # where a multiplier is near 1, e.g. close to the Hopf point).
+            correction = max(
+                self.residual_norm(du[:n2], T), abs(du[n2]) / T, 0.0 if fixed_v else abs(du[-1])
+            )
+            if (
+                res < self.tol
+                and abs(g) < self.tol
+                and abs(c) < self.tol
+                and correction < self.xtol
+            ):
+                return u, fl, monodromy, it, rejected
             size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
             lam = min(1.0, 0.3 / size) if size > 0 else 1.0
             if fixed_v:
@@ -702,6 +727,7 @@ def continue_cycles(
     name: str = "H1",
     rtol: float = 1e-6,
     tol: float = 1e-6,
+    xtol: float = 2e-7,
     ds: float = 0.05,
     ds_min: float = 1e-3,
     ds_max: float = 0.5,
@@ -735,6 +761,11 @@ def continue_cycles(
     tol : float
         Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi),
         on the phase and on the arclength conditions.
+    xtol : float
+        ... and on the Newton correction that residual asks for (the error of
+        the iterate: q in rad, q' scaled by T / 2 pi, T relative, v), which
+        the residual alone underestimates by 1 / (1 - mu) where a multiplier
+        mu is near 1 (near the Hopf point, near folds).
     ds, ds_min, ds_max : float
         First, smallest and largest arclength step (metric of the module docstring).
     max_steps : int
@@ -771,7 +802,7 @@ def continue_cycles(
         raise ValueError(f"tol and rtol must lie in (0, 1), got {tol}, {rtol}")
     t_start = time.perf_counter()
     grid = np.array(sorted(float(v) for v in values if v_lo <= v <= v_hi))
-    cont = _Continuer(model, hopf, rtol, tol, max_iter)
+    cont = _Continuer(model, hopf, rtol, tol, xtol, max_iter)
     n = model.n
     u_H = np.r_[hopf.q_static, np.zeros(n), cont.T_H, hopf.v]
     points: list[CyclePoint] = []
@@ -812,7 +843,13 @@ def continue_cycles(
         )
 
     us = [u_H] + [_u_of(p) for p in points]
-    z_hopf_dir = cont.S * np.r_[hopf.eigenvector.real, 0.0, 0.0]
+    # Rotate z so that Re z is the major axis of the ellipse Re(z e^{i omega tau})
+    # in the metric: the first orbit starts on it and later ones stay there
+    # (the phase section through a principal axis is orthogonal to the flow).
+    w = cont.S[: 2 * n]
+    a, b = w * hopf.eigenvector.real, w * hopf.eigenvector.imag
+    psi = 0.5 * math.atan2(-2.0 * float(a @ b), float(a @ a - b @ b))
+    z_hopf_dir = cont.S * np.r_[(hopf.eigenvector * np.exp(1j * psi)).real, 0.0, 0.0]
     z_hopf_dir /= np.linalg.norm(z_hopf_dir)
     with single_blas_thread():
         while True:
@@ -850,7 +887,16 @@ def continue_cycles(
                 use_tangent = tangent
                 source = "continuation"
             try:
-                u, fl, mono, it, rej = cont.correct(u_pred, use_tangent)
+                u, fl, mono, it, rej = cont.correct(
+                    u_pred, use_tangent, u_k if len(us) > 1 else None
+                )
+                d_new = cont.S * (u - u_k)
+                # (From the equilibrium to the first orbit is no secant of the family.)
+                if len(us) > 2:
+                    cosang = float(d_new @ tangent) / max(np.linalg.norm(d_new), 1e-300)
+                    turn = math.acos(max(-1.0, min(1.0, cosang)))
+                    if turn > MAX_ANGLE:
+                        raise _CorrectorError(f"the branch turned by {turn:.2f} rad in one step")
             except _CorrectorError as exc:
                 rejected += 1
                 ds = 0.5 * min(ds, abs(h))
@@ -880,15 +926,6 @@ def continue_cycles(
                             st["wall_time"],
                         ),
                     ) from None
-                continue
-            d_new = cont.S * (u - u_k)
-            turn = 0.0
-            if len(us) > 1:
-                cosang = float(d_new @ tangent) / max(np.linalg.norm(d_new), 1e-300)
-                turn = math.acos(max(-1.0, min(1.0, cosang)))
-            if turn > MAX_ANGLE:
-                rejected += 1
-                ds = 0.5 * min(ds, abs(h))
                 continue
             pt = cont.point(u, fl, mono, it, rej, source, t0)
             points.append(pt)
@@ -923,23 +960,25 @@ def continue_cycles(
 
 
 def _predict(S: np.ndarray, us: list, tangent: np.ndarray, h: float) -> np.ndarray:
-    """The point at arclength h ahead of the last one: on the parabola through the
-    last three points (parametrised by chord length in the metric), else on the tangent."""
-    if len(us) < 3:
-        return us[-1] + h * tangent / S
-    z = [S * u for u in us[-3:]]
-    s1 = float(np.linalg.norm(z[1] - z[0]))
-    s2 = s1 + float(np.linalg.norm(z[2] - z[1]))
-    if not (s1 >= 0.5 * (s2 - s1) and s2 - s1 >= 0.5 * s1 and abs(h) <= 1.5 * (s2 - s1)):
-        # Uneven nodes or a long reach: the parabola would amplify the noise.
-        return us[-1] + h * tangent / S
-    s = s2 + h
-    nodes = (0.0, s1, s2)
-    w = [
-        math.prod((s - nodes[m]) / (nodes[j] - nodes[m]) for m in range(3) if m != j)
-        for j in range(3)
-    ]
-    return (w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / S
+    """The point at arclength h ahead of the last one: on the polynomial through the
+    last four (or three) points, parametrised by chord length in the metric, when
+    they are about evenly spaced and h is not much longer than their spacing (as
+    on a run of requested v); else on the tangent."""
+    for m in (4, 3):
+        if len(us) < m:
+            continue
+        z = [S * u for u in us[-m:]]
+        gaps = np.array([np.linalg.norm(z[k + 1] - z[k]) for k in range(m - 1)])
+        if gaps.min() < 0.5 * gaps.max() or abs(h) > 1.5 * gaps[-1]:
+            continue
+        nodes = np.r_[0.0, np.cumsum(gaps)]
+        s = nodes[-1] + h
+        w = [
+            math.prod((s - nodes[q]) / (nodes[j] - nodes[q]) for q in range(m) if q != j)
+            for j in range(m)
+        ]
+        return sum(wj * zj for wj, zj in zip(w, z, strict=True)) / S
+    return us[-1] + h * tangent / S
 
 
 def _branch(name, hopf, points, reason, steps, rejected, its, wall) -> CycleBranch:
