@@ -241,3 +241,21 @@ def test_critical_json_has_the_hopf_keys(capsys):
             assert e["criticality"] == "supercritical" and e["first_lyapunov_coefficient"] < 0
         else:
             assert "criticality" not in e
+
+
+@pytest.mark.slow
+def test_subcritical_onset_with_an_end_mass():
+    """beta = 0.15, end mass Gamma = 0.5 (alpha = 0): l1 > 0, and Newton shooting from the
+    normal form finds the unstable cycles below v_cr (a transient would not), their
+    amplitude over the prediction tending to 1 linearly in v_cr - v."""
+    model = PipeModel(discretization_from_name("P3:4"), Params(alpha=0.0, beta=0.15, end_mass=0.5))
+    res = stability_analysis(model, v_max=6.0, follow_bifurcations=False)
+    ev = next(e for e in res.events if e.type == "flutter")
+    assert ev.stable_before
+    q = solve_path(model, np.linspace(0.0, ev.v, 6))[-1].q
+    m = model.with_params(replace(model.params, v=ev.v))
+    nf = first_lyapunov_coefficient(m, q, omega=ev.frequency)
+    assert nf.criticality == "subcritical" and nf.side == "below"
+    dev = _onset_deviations(m, nf, (6.25e-5, 2.5e-4), rtol=1e-9, stable=False)
+    assert abs(dev[0]) < 0.01
+    assert 3.0 < dev[1] / dev[0] < 5.0

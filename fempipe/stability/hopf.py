@@ -404,6 +404,11 @@ def pipe_derivatives(
         return M, np.hstack([Jq, Jqd])
 
     M0, X0 = parts(x0, 0.0)
+    # The split must be exact: the full model's Jacobians are Kc + X.
+    Jq, Jqd, _ = model.jacobians(x0[:n], x0[n:], np.zeros(n))
+    scale = np.abs(Kc).max() + np.abs(X0).max()
+    if np.abs(np.hstack([Jq, Jqd]) - Kc - X0).max() > 1e-12 * scale:
+        raise RuntimeError("the model without bending does not split the Jacobian as K + X")
     cf = sla.cho_factor(M0)
     Y = sla.cho_solve(cf, Kc + X0)
 
