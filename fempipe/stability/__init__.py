@@ -98,7 +98,12 @@ arclength; v at a fold agrees with the Moore-Spence extended system to
 itself.  Branch points (pitchforks at alpha = 0, pi) are followed with
 :func:`fempipe.static.switch_branch` and the new branches analysed the same
 way.  v_cr is the first velocity along the primary branch (the gravity-loaded
-state continued in v) at which it is not stable.
+state continued in v) at which it is not stable.  Where the primary branch is
+the straight pipe (alpha = 0 or pi) with no branch point in the range, it is
+not continued: theta = 0 is exact there, K^d, C^d are fixed matrices times 1,
+v and v^2 (:class:`~fempipe.stability.linear.StraightPencil`), and the
+spectra are taken every ``STRAIGHT_STEP * ds_max`` in v at most (the Notes of
+:func:`stability_analysis`).
 
 Hysteretic damping
 ------------------
