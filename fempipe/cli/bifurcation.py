@@ -279,11 +279,32 @@ def _write_outputs(output: reporting.Output, result) -> None:
                     ax=ax,
                     title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
                     f"γ = {p['gamma']:.4g} (cf. {fig_name})",
+                    special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
+                    caption=_caption(result),
                 )
             output.figure(f"{key}.png", fig, dpi=130)
         finally:
             plt.close(fig)
     output.json("bifurcation.json", result)
+
+
+def _caption(result: dict) -> str:
+    """The run's parameters, written under each diagram."""
+    p = result["params"]
+    disc = result.get("discretization", {})
+    if disc.get("kind") == "fe":
+        name = f"{disc.get('element')}:{disc.get('n_elements')}"
+    else:
+        name = f"{disc.get('kind', '')} {disc.get('n_modes', disc.get('n_dofs', ''))}"
+    text = f"μ = {p['mu']:.4g}, {name.strip()}; "
+    if result.get("method") == "continuation":
+        text += (
+            "continuation of equilibria and periodic orbits (solid stable, dashed unstable; "
+            "dots: requested v)"
+        )
+    else:
+        text += "sweeps of attractors up and down"
+    return text
 
 
 def _print_table(result: dict) -> None:

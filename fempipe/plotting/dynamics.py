@@ -5,7 +5,8 @@
 * :func:`plot_oscillating_shapes` - overlaid centrelines over one period in the
   global frame, gravity down the page, equal axes (the insets of Figs. 7, 9);
 * :func:`plot_bifurcation` - extrema of a tip coordinate against v, sweeps up
-  and down (Figs. 7, 9, 10);
+  and down or continued branches of equilibria and periodic orbits, unstable
+  ones dashed (Figs. 7, 9, 10);
 * :func:`animate` - an animated GIF of the moving pipe (matplotlib PillowWriter).
 
 matplotlib is imported inside each function; every function takes ``ax=None``
@@ -147,15 +148,32 @@ def plot_oscillating_shapes(
     return ax
 
 
-def plot_bifurcation(points: Sequence[dict], key: str = "eta_tip", ax=None, label=None, title=None):
-    """Extrema of a tip coordinate on the attractor against v (Figs. 7, 9, 10).
+def plot_bifurcation(
+    points: Sequence[dict],
+    key: str = "eta_tip",
+    ax=None,
+    label=None,
+    title=None,
+    special_points: Sequence[dict] = (),
+    caption: str | None = None,
+):
+    """Extrema of a tip coordinate against v (Figs. 7, 9, 10).
 
     Parameters
     ----------
     points : sequence of dict
-        ``{"v", "direction", "attractor", key: [min, max]}`` as produced by
-        :func:`fempipe.bifurcation.bifurcation_diagram` (``to_dict()``).
+        Sweep points ``{"v", "direction": "up"/"down", "attractor", key: [min, max]}``
+        (:func:`fempipe.bifurcation.bifurcation_diagram`), drawn as markers; and/or
+        continuation points (:func:`fempipe.periodic.cycle_diagram`): equilibria
+        (``direction="static"``) and periodic orbits (``direction="continuation"``,
+        by ``branch`` in arclength order), drawn as lines, solid where ``stable``
+        and dashed where not, with the requested v marked.
     key : {"eta_tip", "X_tip", "Z_tip"}
+    special_points : sequence of dict
+        ``{"v", "type", "branch"}`` of the continuation (folds, period doublings,
+        Neimark-Sacker points): vertical marks at their v.
+    caption : str, optional
+        Parameters written under the axes.
     """
     if key not in _LABEL:
         raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
@@ -171,13 +189,77 @@ def plot_bifurcation(points: Sequence[dict], key: str = "eta_tip", ax=None, labe
         lab = f"{label}: {text}" if label else text
         ax.plot(v, hi, marker, color=color, ms=5, mfc="none", label=lab)
         ax.plot(v, lo, marker, color=color, ms=5, mfc="none")
+    _plot_continuation(ax, points, key, label)
+    for k, sp in enumerate(special_points):
+        ax.axvline(
+            sp["v"], color="C2", lw=0.8, ls=":", label="cycle bifurcation" if k == 0 else None
+        )
+        ax.annotate(
+            sp["type"].replace("_", " "),
+            (sp["v"], 1.0),
+            xycoords=("data", "axes fraction"),
+            rotation=90,
+            va="top",
+            ha="right",
+            fontsize=7,
+            color="C2",
+        )
     ax.set_xlabel(r"$v$")
     ax.set_ylabel(_LABEL[key] + " extrema")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     if title:
         ax.set_title(title)
+    if caption:
+        # Inside the axes, bottom left: kept by any layout engine.
+        ax.text(0.01, 0.01, caption, transform=ax.transAxes, fontsize=6, va="bottom", wrap=True)
     return ax
+
+
+def _runs(flags: list) -> list[tuple[int, int]]:
+    """Index ranges [i, j] of equal consecutive flags, overlapping by one point
+    (so that a solid and a dashed piece meet)."""
+    out, start = [], 0
+    for k in range(1, len(flags) + 1):
+        if k == len(flags) or flags[k] != flags[start]:
+            out.append((start, min(k, len(flags) - 1)))
+            start = k
+    return out
+
+
+def _plot_continuation(ax, points: Sequence[dict], key: str, label) -> None:
+    """Equilibria and branches of periodic orbits: solid stable, dashed unstable."""
+    groups = {}
+    for p in points:
+        if p["direction"] == "static":
+            groups.setdefault(("static", "static"), []).append(p)
+        elif p["direction"] == "continuation":
+            groups.setdefault(("cycle", p.get("branch", "")), []).append(p)
+    shown = set()
+    for k, ((kind, name), pts) in enumerate(sorted(groups.items())):
+        if kind == "static":
+            pts = sorted(pts, key=lambda p: p["v"])
+        color = "k" if kind == "static" else f"C{(k % 8) + 1}"
+        v = np.array([p["v"] for p in pts])
+        lo = np.array([p[key][0] for p in pts], dtype=float)
+        hi = np.array([p[key][1] for p in pts], dtype=float)
+        flags = [bool(p.get("stable")) for p in pts]
+        for i, j in _runs(flags):
+            ls = "-" if flags[i] else "--"
+            what = "equilibria" if kind == "static" else f"orbits {name}"
+            text = f"{what}, {'stable' if flags[i] else 'unstable'}"
+            if label:
+                text = f"{label}: {text}"
+            lab = None if text in shown else text
+            shown.add(text)
+            sl = slice(i, j + 1)
+            ax.plot(v[sl], hi[sl], ls, color=color, lw=1.3, label=lab)
+            if kind == "cycle":
+                ax.plot(v[sl], lo[sl], ls, color=color, lw=1.3)
+        req = np.array([bool(p.get("requested", True)) for p in pts])
+        if kind == "cycle" and req.any():
+            ax.plot(v[req], hi[req], ".", color=color, ms=3)
+            ax.plot(v[req], lo[req], ".", color=color, ms=3)
 
 
 def _closed(q: np.ndarray) -> bool:

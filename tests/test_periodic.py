@@ -1,0 +1,227 @@
+"""Pseudo-arclength continuation of periodic orbits (fempipe.periodic, bifurcation --method
+continuation).
+
+The reference for the orbits is the independent attractor finder of the sweep
+(:func:`fempipe.limit_cycle.find_attractor`: a transient integration from the
+perturbed equilibrium, then shooting from the recurrent section point), which
+shares only the integrator with the continuation; the Hopf point and the
+equilibria's stability come from the linear stability analysis, checked here
+against the orbits' own limits (the period tends to 2 pi / omega, the swing to 0).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from clirun import run_json
+
+from fempipe.cli import main
+from fempipe.discretization import parse_discretization
+from fempipe.limit_cycle import find_attractor
+from fempipe.operators import PipeModel
+from fempipe.params import Params
+from fempipe.periodic import (
+    CycleContinuationError,
+    CyclePoint,
+    _special_points,
+    continue_cycles,
+    cycle_diagram,
+    hopf_points,
+)
+from fempipe.stability import linearly_stable
+from fempipe.static import solve_static
+
+# P2:4 flutters at v_H = 6.3398 (alpha = 0); the requested values straddle it.
+ARGV = ["bifurcation", "--fe", "P2:4", "--v", "6.0,6.65,6.95", "--json", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """One continuation run through the CLI, with its store."""
+    from contextlib import redirect_stdout
+    from io import StringIO
+
+    out = tmp_path_factory.mktemp("cycles") / "run"
+    buf = StringIO()  # capsys is function-scoped: capture by hand
+    with redirect_stdout(buf):
+        code = main([*ARGV, "--out", str(out)])
+    assert code == 0
+    return json.loads(buf.getvalue()), out
+
+
+def _cycles(d, requested=True):
+    return [
+        p
+        for p in d["points"]
+        if p["direction"] == "continuation" and (p["requested"] or not requested)
+    ]
+
+
+def test_json_contract(run):
+    d, out = run
+    assert d["method"] == "continuation"
+    keys = {"v", "direction", "index", "alpha", "attractor", "eta_tip", "X_tip", "Z_tip",
+            "period", "period_n", "max_multiplier", "steps", "rejected_steps", "wall_time",
+            "stable", "branch", "requested", "source", "floquet_multipliers"}  # fmt: skip
+    for p in d["points"]:
+        assert keys <= set(p)
+    eq = [p for p in d["points"] if p["direction"] == "static"]
+    assert [p["v"] for p in eq] == [6.0, 6.65, 6.95]
+    # Every requested v above the Hopf point is landed on exactly, once.
+    assert sorted(p["v"] for p in _cycles(d)) == [6.65, 6.95]
+    assert any(not p["requested"] for p in _cycles(d, requested=False))
+    assert [b["name"] for b in d["branches"]] == ["H1"] and d["errors"] == []
+    for name in ("eta_tip.png", "X_tip.png", "Z_tip.png", "bifurcation.json"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_stable_cycles_agree_with_the_sweep(run):
+    """Period and tip extrema of the continued orbits = those of the attractor finder."""
+    d, _ = run
+    disc = parse_discretization("P2:4")
+    for p in _cycles(d):
+        assert p["stable"] and p["max_multiplier"] < 1
+        m = PipeModel(disc, Params(alpha=0.0, v=p["v"]))
+        att = find_attractor(m, shoot_rtol=1e-6)
+        assert att.kind == "periodic"
+        assert abs(att.period - p["period"]) < 1e-6
+        for k in ("eta_tip", "X_tip", "Z_tip"):
+            assert np.max(np.abs(np.subtract(att.tip[k], p[k]))) < 1e-6, k
+
+
+def test_branch_starts_at_the_hopf_point(run):
+    """The first orbits: period -> 2 pi / omega and swing -> 0 as v -> v_H."""
+    d, _ = run
+    hopf = d["hopf_points"][0]
+    first = _cycles(d, requested=False)[0]
+    assert first["v"] > hopf["v"]  # supercritical: the orbits lie on the unstable side
+    assert first["eta_tip"][1] - first["eta_tip"][0] < 0.1
+    T_H = 2 * math.pi / hopf["omega"]
+    assert abs(first["period"] - T_H) < 0.01 * T_H
+
+
+def test_equilibria_stability_is_the_linear_criterion(run):
+    d, _ = run
+    disc = parse_discretization("P2:4")
+    for p in (p for p in d["points"] if p["direction"] == "static"):
+        m = PipeModel(disc, Params(alpha=0.0, v=p["v"]))
+        assert p["stable"] == linearly_stable(m, solve_static(m).q)
+
+
+def test_rerun_resumes_without_recomputing(run, capsys):
+    d, out = run
+    stored = sorted((out / "points").glob("*.json"))
+    mtimes = [f.stat().st_mtime_ns for f in stored]
+    again = run_json(capsys, [*ARGV, "--out", str(out)])
+    assert [f.stat().st_mtime_ns for f in stored] == mtimes
+    assert again["points"] == d["points"]
+    # A changed argument is refused, not mixed with the stored points.
+    code = main([*ARGV[:-2], "--shoot-rtol", "1e-7", "--json", "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "--out" in err and "different run" in err
+
+
+def test_interrupted_branch_resumes_to_the_same_points(run, tmp_path):
+    """Stop after a few points; the rerun continues from the stored state and
+    ends on the same orbits as the uninterrupted run."""
+    d, _ = run
+    model = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.0))
+    calls = []
+
+    class StopError(Exception):
+        pass
+
+    def stop_after_three():
+        calls.append(1)
+        if len(calls) == 4:  # the static part, then three orbits
+            raise StopError
+
+    values = [6.0, 6.65, 6.95]
+    with pytest.raises(StopError):
+        cycle_diagram(model, values, store_dir=tmp_path, progress=stop_after_three, rtol=1e-6)
+    branch = json.loads((tmp_path / "a00-H1.json").read_text())
+    assert len(branch["points"]) == 3 and branch["end_reason"] is None
+    diag = cycle_diagram(model, values, store_dir=tmp_path, rtol=1e-6)
+    got = [(p["v"], p["period"], p["eta_tip"]) for p in _cycles(diag.to_dict(), False)]
+    want = [(p["v"], p["period"], p["eta_tip"]) for p in _cycles(d, False)]
+    assert got == want
+
+
+def test_failure_names_v_and_step_and_keeps_the_points(monkeypatch):
+    import fempipe.periodic as per
+    from fempipe.radau import IntegrationError
+
+    model = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.0))
+    (hopf,), _ = hopf_points(model, 6.0, 7.0)
+    real = per._flow
+
+    def failing(m, x, T, rtol, sensitivity):
+        if m.params.v > hopf.v + 0.05:
+            raise IntegrationError("diverging", 0.0, 1e-9)
+        return real(m, x, T, rtol, sensitivity)
+
+    monkeypatch.setattr(per, "_flow", failing)
+    with pytest.raises(CycleContinuationError) as exc:
+        continue_cycles(model, hopf, (6.0, 7.0), [6.65])
+    msg = str(exc.value)
+    assert "cannot be continued beyond v = " in msg and "(step " in msg
+    kept = exc.value.branch.points
+    assert kept and all(p.v <= hopf.v + 0.05 for p in kept)
+
+
+def _pt(v, T, mu):
+    return CyclePoint(
+        v=v,
+        period=T,
+        q0=np.zeros(1),
+        qdot0=np.zeros(1),
+        tip={"eta_tip": [-v, v]},
+        multipliers=np.array([1.0, *mu], dtype=complex),
+    )
+
+
+def test_special_points_are_detected_and_located():
+    """A branch turning back in v (fold at the vertex of v(s)), a real multiplier
+    through -1 and a complex pair through the unit circle, each linear in v."""
+    # v rises, then falls: a fold between, at the vertex of the parabola (above 0.75).
+    sp = _special_points([_pt(0.0, 1.0, [0.5]), _pt(0.75, 1.0, [0.5]), _pt(0.74, 1.0, [0.5])])
+    assert [s.type for s in sp] == ["fold"] and sp[0].v > 0.75
+    # mu = -0.8 - 0.4 (v - 1): -1 at v = 1.5
+    pd = [_pt(1.0, 1.0, [-0.8]), _pt(2.0, 1.2, [-1.2])]
+    (s,) = _special_points(pd)
+    assert s.type == "period_doubling" and s.v == pytest.approx(1.5)
+    assert s.period == pytest.approx(1.1)
+    # |mu| = 0.9 + 0.2 (v - 1): 1 at v = 1.5
+    r0, r1 = 0.9, 1.1
+    ns = [_pt(1.0, 1.0, [r0 * 1j, -r0 * 1j]), _pt(2.0, 1.0, [r1 * 1j, -r1 * 1j])]
+    (s,) = _special_points(ns)
+    assert s.type == "neimark_sacker" and s.v == pytest.approx(1.5)
+    assert _special_points([pd[0], _pt(2.0, 1.0, [-0.9])]) == []
+
+
+@pytest.mark.slow
+def test_fig07_default_discretisation_agrees_with_the_sweep(capsys):
+    """P3:16, alpha = 0, v = 5:12:36: every stable orbit of the continuation
+    agrees with the sweep up to 1e-6 in the period and the tip extrema."""
+    argv = ["bifurcation", "--v", "5:12:36", "--json", "--quiet"]
+    cont = run_json(capsys, argv)
+    sweep = run_json(capsys, [*argv, "--method", "sweep", "--directions", "up"])
+    cyc = {round(p["v"], 9): p for p in _cycles(cont) if p["stable"]}
+    n = 0
+    for p in sweep["points"]:
+        if p["attractor"] != "periodic":
+            continue
+        q = cyc[round(p["v"], 9)]
+        n += 1
+        assert abs(p["period"] - q["period"]) < 1e-6
+        for k in ("eta_tip", "X_tip", "Z_tip"):
+            assert np.max(np.abs(np.subtract(p[k], q[k]))) < 1e-6
+    assert n >= 25
+    # Equilibria: stable below v_cr, unstable above, as the sweep finds them.
+    for p in sweep["points"]:
+        if p["attractor"] == "equilibrium":
+            eq = next(e for e in cont["points"] if e["direction"] == "static" and e["v"] == p["v"])
+            assert eq["stable"]
