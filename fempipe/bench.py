@@ -56,6 +56,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench",
     "fempipe.bench_dynamics",
     "fempipe.bench_stability",
+    "fempipe.bench_bifurcation",
 )
 
 #: The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at alpha = pi/2.
