@@ -656,9 +656,7 @@ def event_states(model: PipeModel, result) -> dict:
     )
     for ev in flutter:
         if ev.at_start:
-            out[_key(ev)] = (
-                "an instability present at the start of the range, not a crossing: no Hopf point"
-            )
+            out[_key(ev)] = "an instability present at the start of the range, not a crossing"
         elif ev.branch != "primary":
             out[_key(ev)] = f"the static state of branch {ev.branch} is not reconstructed"
     if not primary:
@@ -697,10 +695,7 @@ def normal_forms(model: PipeModel, result) -> dict:
         ``{(branch, type, v, mode): HopfNormalForm or str reason}``.
     """
     if model.params.hysteretic_damping > 0.0:
-        reason = (
-            "hysteretic damping is a frequency-domain model without equation of motion: "
-            "no Hopf normal form"
-        )
+        reason = "hysteretic damping is a frequency-domain model without an equation of motion"
         return {_key(ev): reason for ev in result.events if ev.type == "flutter"}
     out = {}
     for key, q in event_states(model, result).items():
