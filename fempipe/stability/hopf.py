@@ -45,8 +45,9 @@ z' = lambda(v) z + c1 |z|^2 z + O(|z|^4), so a periodic orbit has
     x(tau) - x0 = 2 rho Re(q e^{i omega tau}) + O(rho^2).
 
 It exists on the side of v_cr where Re(lambda') (v - v_cr) / l1 < 0.  (The
-brief form rho^2 = -Re(lambda') (v - v_cr) / l1 holds for Kuznetsov's
-normal form in the rescaled time omega tau; here tau is the time of Eq. (19).)
+shorter rho^2 = -Re(lambda') (v - v_cr) / l1 measures lambda in the time
+omega tau of Kuznetsov's topological normal form; here tau is the time of
+Eq. (19).)
 
 Normalisation
 -------------
