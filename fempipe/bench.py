@@ -57,6 +57,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench_dynamics",
     "fempipe.bench_stability",
     "fempipe.bench_bifurcation",
+    "fempipe.bench_hopf",
 )
 
 #: The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at alpha = pi/2.
