@@ -246,3 +246,20 @@ def test_baseline_critical_velocity_against_the_legendre_reference():
     assert v_cr == pytest.approx(ref.v_cr, rel=2e-5)
     assert abs(v_cr - ref.v_cr) > 1e-8  # a 20-mode Galerkin is not exact: the check can see
     assert freq == pytest.approx(ref.frequency, rel=2e-5)
+
+
+@pytest.mark.slow
+def test_bench_critical_vs_classical_quick_run():
+    """The benchmark's smoke run: fresh processes, errors against the references, the ratio.
+
+    fempipe's default P3:16 is within 1e-6 of the converged v_cr (measured 7e-10), the
+    40-mode baseline too (3e-7), the 20-mode one less accurate than the 40-mode one.
+    """
+    from fempipe.bench_stability import bench_critical_vs_classical
+
+    out = bench_critical_vs_classical(quick=True)
+    fem, b40, b20 = out["table"][0], out["table"][1], out["table"][2]
+    assert fem["rel_error"] < 1e-6 and b40["rel_error"] < 1e-6
+    assert b20["rel_error"] > b40["rel_error"]
+    assert out["table"][3]["rel_error"] < 1e-6
+    assert out["ratio_fempipe_over_baseline40"] > 0
