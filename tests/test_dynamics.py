@@ -304,3 +304,26 @@ def test_batched_and_per_stage_integrations_agree():
         runs.append((st.stats.steps, st.q))
     assert runs[0][0] == runs[1][0]
     np.testing.assert_allclose(runs[0][1], runs[1][1], atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    "disc", [FiniteElement(4, 2), FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str
+)
+def test_integrator_jacobians_are_the_model_jacobians(disc):
+    """Radau's Jacobians (matrix products instead of einsum, states stacked)
+    equal PipeModel.jacobians at each state, (dR/dq, dR/dq', M), to round-off;
+    its cumulative integrals equal LineQuadrature's."""
+    from fempipe.radau import _batched_jacobians, _cumulative, _from_tip
+
+    rng = np.random.default_rng(4)
+    m = PipeModel(disc, Params(alpha=0.7, v=9.0, mu=0.02, beta=0.3, gamma=5.0))
+    Q, P, A = (0.5 * rng.standard_normal((3, m.n)) for _ in range(3))
+    J = _batched_jacobians(m)(Q, P, A)
+    for i in range(3):
+        ref_i = m.jacobians(Q[i], P[i], A[i])
+        for got, ref in zip((J[0][i], J[1][i], J[2][i]), ref_i, strict=True):
+            assert np.max(np.abs(got - ref)) < 1e-13 * np.max(np.abs(ref))
+    f = rng.standard_normal((m.quad.n_q, 2, 3))
+    np.testing.assert_allclose(_cumulative(m.quad, f), m.quad.cumulative(f), atol=1e-14)
+    np.testing.assert_allclose(_from_tip(m.quad, f), m.quad.from_tip(f), atol=1e-14)
+    assert _batched_jacobians(PipeModel(disc, Params(v=9.0, end_mass=0.1))) is None
