@@ -226,9 +226,9 @@ def _batched_residual(model: PipeModel):
         s, c = np.sin(th), np.cos(th)
         nrm = np.stack([-s, c], axis=1)
         tng = np.stack([c, s], axis=1)
-        F = quad.cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
+        F = _cumulative(quad, th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
         F = F + cv * th_d[:, None] * nrm
-        G = quad.from_tip(F)
+        G = _from_tip(quad, F)
         local = lever * np.sin(th + alpha) + v2 * np.sin((Q @ tip)[None, :] - th)
         local = local + np.einsum("qcs,qcs->qs", nrm, G)
         return (np.asarray(K @ (Q + mu * P).T) + model._test(local)).T
