@@ -595,8 +595,25 @@ class _Continuer:
         s = T / (2 * math.pi)
         return float(np.sqrt(np.mean(r[:n] ** 2) + np.mean((r[n:] * s) ** 2)))
 
+    def rtol_after(self, previous: CyclePoint | None) -> float:
+        """Integration tolerance for the next point: ``rtol`` times the distance
+        of the previous orbit's nearest non-trivial multiplier from 1 (at least
+        a tenth).  An error e of the flow map moves the fixed point by about
+        e / |1 - mu|, so near the Hopf point and near folds (mu -> 1) the flow
+        is integrated more accurately (measured at P3:16, alpha = 0, v = 6.4,
+        mu = 0.87: tip error 1.4e-6 at rtol = 1e-5, 2e-7 at 1e-6)."""
+        if previous is None:
+            return 0.1 * self.rtol
+        mu = _nontrivial(previous.multipliers)
+        d = float(np.min(np.abs(1.0 - mu))) if mu.size else 1.0
+        return self.rtol * min(1.0, max(0.1, d))
+
     def correct(
-        self, u_pred: np.ndarray, tangent: np.ndarray | None, u_ref: np.ndarray | None = None
+        self,
+        u_pred: np.ndarray,
+        tangent: np.ndarray | None,
+        u_ref: np.ndarray | None = None,
+        rtol: float | None = None,
     ) -> tuple:
         """Newton on the extended system from ``u_pred``: pseudo-arclength with the
         (z-space) ``tangent``, or at the fixed v of ``u_pred`` if ``tangent`` is None.
@@ -609,6 +626,7 @@ class _Continuer:
         Returns (u, flow of the last iterate, monodromy, iterations, rejected steps).
         """
         n2 = 2 * self.n
+        rtol = self.rtol if rtol is None else rtol
         u = u_pred.copy()
         u_ref = u_pred if u_ref is None else u_ref
         x_ref = u_ref[:n2]
@@ -629,7 +647,7 @@ class _Continuer:
             need = J is None or stale
             m = self.at(v)
             try:
-                fl = _flow(m, x, T, self.rtol, sensitivity=need)
+                fl = _flow(m, x, T, rtol, sensitivity=need)
             except IntegrationError as exc:
                 raise _CorrectorError(str(exc)) from None
             self.integrations += 1
@@ -649,7 +667,7 @@ class _Continuer:
                 if not fixed_v:
                     dv = DV * (1.0 + abs(v))
                     try:
-                        fl2 = _flow(self.at(v + dv), x, T, self.rtol, sensitivity=False)
+                        fl2 = _flow(self.at(v + dv), x, T, rtol, sensitivity=False)
                     except IntegrationError as exc:
                         raise _CorrectorError(str(exc)) from None
                     self.integrations += 1
@@ -725,10 +743,10 @@ def continue_cycles(
     values: Sequence[float] = (),
     *,
     name: str = "H1",
-    rtol: float = 1e-6,
+    rtol: float = 1e-5,
     tol: float = 1e-6,
     xtol: float = 2e-7,
-    ds: float = 0.05,
+    ds: float = 0.1,
     ds_min: float = 1e-3,
     ds_max: float = 0.5,
     max_steps: int = 200,
@@ -757,7 +775,12 @@ def continue_cycles(
     name : str
         Branch name.
     rtol : float
-        Integration tolerance (as ``shoot_rtol`` of the sweep).
+        Integration tolerance of :class:`fempipe.radau.Radau`, scaled down by
+        the distance of the nearest non-trivial Floquet multiplier from 1 (down
+        to rtol / 10; see ``_Continuer.rtol_after``).  At the default 1e-5 the
+        periods and tip extrema of P3:16 orbits away from the Hopf point
+        (alpha = 0, pi/2, pi; v = 5 ... 12) were measured within 3e-8 of those at
+        rtol = 1e-9, with 55-60 % of the steps of rtol = 1e-6.
     tol : float
         Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi),
         on the phase and on the arclength conditions.
@@ -888,7 +911,10 @@ def continue_cycles(
                 source = "continuation"
             try:
                 u, fl, mono, it, rej = cont.correct(
-                    u_pred, use_tangent, u_k if len(us) > 1 else None
+                    u_pred,
+                    use_tangent,
+                    u_k if len(us) > 1 else None,
+                    cont.rtol_after(points[-1] if points else None),
                 )
                 d_new = cont.S * (u - u_k)
                 # (From the equilibrium to the first orbit is no secant of the family.)
