@@ -216,6 +216,7 @@ def _batched_residual(model: PipeModel):
     disc, quad = model.disc, model.quad
     Phi, K, tip = disc.Phi, disc.K, np.asarray(disc.tip)
     lever = p.gamma * (1.0 - model.x)[:, None]
+    cumulative, from_tip = _integrals(quad)
     v2, cv, mu, alpha = p.v * p.v, 2.0 * p.v * math.sqrt(p.beta), p.mu, p.alpha
 
     def residual(Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
@@ -226,9 +227,9 @@ def _batched_residual(model: PipeModel):
         s, c = np.sin(th), np.cos(th)
         nrm = np.stack([-s, c], axis=1)
         tng = np.stack([c, s], axis=1)
-        F = _cumulative(quad, th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
+        F = cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
         F = F + cv * th_d[:, None] * nrm
-        G = _from_tip(quad, F)
+        G = from_tip(F)
         local = lever * np.sin(th + alpha) + v2 * np.sin((Q @ tip)[None, :] - th)
         local = local + np.einsum("qcs,qcs->qs", nrm, G)
         return (np.asarray(K @ (Q + mu * P).T) + model._test(local)).T
@@ -252,6 +253,29 @@ def _from_tip(quad, f: np.ndarray) -> np.ndarray:
     """``LineQuadrature.from_tip`` (\\int_{x_q}^1 f) through :func:`_cumulative`."""
     fc = f.reshape(f.shape[0], -1)
     return (quad.w @ fc - _cumulative(quad, fc)).reshape(f.shape)
+
+
+#: Up to this many quadrature points the integration operators are applied as
+#: dense (n_q, n_q) matrices (one BLAS product; O(n_q^2) work, which beyond
+#: this is more than the O(n_q) of :func:`_cumulative`).
+DENSE_INTEGRALS_MAX = 512
+
+
+def _integrals(quad):
+    """(C, C^R): functions applying \\int_0^{x_q} and \\int_{x_q}^1 along axis 0."""
+    n_q = quad.n_q
+    if n_q > DENSE_INTEGRALS_MAX:
+        return (lambda f: _cumulative(quad, f)), (lambda f: _from_tip(quad, f))
+    eye = np.eye(n_q)
+    Cm, Rm = quad.cumulative(eye), quad.from_tip(eye)
+
+    def cumulative(f):
+        return (Cm @ f.reshape(n_q, -1)).reshape(f.shape)
+
+    def from_tip(f):
+        return (Rm @ f.reshape(n_q, -1)).reshape(f.shape)
+
+    return cumulative, from_tip
 
 
 def _batched_jacobians(model: PipeModel):
@@ -286,6 +310,7 @@ def _batched_jacobians(model: PipeModel):
     n_q, n = Phi.shape
     grav = p.gamma * w * (1.0 - model.x)
     v2, cv, mu, alpha = p.v * p.v, 2.0 * p.v * math.sqrt(p.beta), p.mu, p.alpha
+    cumulative, from_tip = _integrals(quad)
     PhiT_w = Phi.T * w  # (n, n_q): \\int phi_i f
 
     def field(coef):
@@ -298,7 +323,7 @@ def _batched_jacobians(model: PipeModel):
         s, c = np.sin(th), np.cos(th)
         t = np.stack([c, s], axis=1)  # (n_q, 2, S)
         nrm = np.stack([-s, c], axis=1)
-        F = _cumulative(quad, th_dd[:, None] * nrm - (th_d**2)[:, None] * t)
+        F = cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * t)
         F = F + cv * th_d[:, None] * nrm
         # The three C(phi ...) fields of dF/dq, dF/dq' and of the mass matrix in one call.
         inner = np.concatenate(
@@ -309,17 +334,17 @@ def _batched_jacobians(model: PipeModel):
             ],
             axis=2,
         )
-        C = _cumulative(quad, inner)  # (n_q, 2, 3 S, n)
+        C = cumulative(inner)  # (n_q, 2, 3 S, n)
         dF = C[:, :, :S] + field(-cv * th_d[:, None] * t)
         dFd = C[:, :, S : 2 * S] + field(cv * nrm)
         B = C[:, :, 2 * S :]
         # \\int phi_i n . C^R X for X = dF, dFd: (2 S, n, n)
-        G = _from_tip(quad, np.concatenate([dF, dFd], axis=2))
+        G = from_tip(np.concatenate([dF, dFd], axis=2))
         nn = np.concatenate([nrm, nrm], axis=2)
         proj = PhiT_w[None] @ np.einsum("qcs,qcsj->sqj", nn, G)
         cos_tip = np.cos((Q @ tip)[None, :] - th)  # (n_q, S)
         d = grav[:, None] * np.cos(th + alpha) - v2 * w[:, None] * cos_tip
-        d = d - np.einsum("qcs,qcs->qs", t, _from_tip(quad, F)) * w[:, None]
+        d = d - np.einsum("qcs,qcs->qs", t, from_tip(F)) * w[:, None]
         tip_col = v2 * (PhiT_w @ cos_tip)  # (n, S)
         Jq = K[None] + (Phi.T[None] * d.T[:, None, :]) @ Phi[None] + proj[:S]
         Jq = Jq + tip_col.T[:, :, None] * tip[None, None, :]
