@@ -41,7 +41,7 @@ Accuracy and cost (P3:16, the paper's beta, gamma, mu, alpha = 0, v = 10;
 ``fempipe.bench_dynamics``): with the default ``shoot_rtol`` 1e-5 the period
 is within 4e-9 and the tip extrema within 2e-7 (relative) of a cycle shot
 with ``shoot_rtol`` 1e-10; at v = 7, 12 and at alpha = pi/2, v = 10 within
-7e-8 and 4e-7.  The error control of Radau IIA bounds an embedded
+5e-8 and 5e-7.  The error control of Radau IIA bounds an embedded
 lower-order estimate and is conservative: rtol 1e-5 gives 55 steps per
 period, rtol 1e-7 172 for errors 100x below what is needed.
 """
@@ -604,9 +604,10 @@ def find_attractor(
         Tolerance of the transient integration.
     shoot_rtol, shoot_tol : float
         Integration tolerance and Newton tolerance of the shooting.  The
-        default 1e-5 gives the period to about 1e-8 and the tip extrema to
-        about 2e-7 (relative, measured; module docstring); it was 1e-7, whose
-        three times as many steps bought accuracy nobody could see.
+        default 1e-5 gives the period to 5e-8 and the tip extrema to 5e-7
+        (relative, measured at four flutter cycles; module docstring); it was
+        1e-7, three times the steps per period for 100x more accuracy than
+        the 1e-6 asked of the cycle.
     use_shooting : bool
         If False, a periodic orbit is accepted when successive section returns
         agree to ``converged_tol`` (plain long integration).

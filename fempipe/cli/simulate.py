@@ -71,7 +71,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         shoot_rtol="1e-5",
         shoot_help=(
             "integration tolerance of the shooting; sets the accuracy of the cycle "
-            "(1e-5: period to ~1e-8, tip extrema to ~2e-7 relative, measured)"
+            "(1e-5: period to ~5e-8, tip extrema to ~5e-7 relative, measured)"
         ),
     )
     num = parsing.number_type
