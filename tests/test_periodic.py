@@ -231,3 +231,27 @@ def test_fig07_default_discretisation_agrees_with_the_sweep(capsys):
         if p["attractor"] == "equilibrium":
             eq = next(e for e in cont["points"] if e["direction"] == "static" and e["v"] == p["v"])
             assert eq["stable"]
+
+
+@pytest.mark.slow
+def test_subcritical_branch_folds_where_the_attractor_finder_loses_the_cycle():
+    """A pipe with an end mass (beta = 0.15, Gamma = 0.5) flutters subcritically:
+    unstable orbits leave the Hopf point towards lower v and turn, stable, at a
+    cyclic fold.  Independently, the attractor finder started far from the
+    equilibrium finds a periodic attractor just above the fold and the
+    equilibrium just below it."""
+    model = PipeModel(
+        parse_discretization("P2:4"), Params(alpha=0.0, beta=0.15, end_mass=0.5, v=1.0)
+    )
+    (hopf,), _ = hopf_points(model, 1.0, 8.0)
+    br = continue_cycles(model, hopf, (hopf.v - 1.0, hopf.v + 0.5), [], ds_max=0.3)
+    assert not br.points[0].stable and br.points[0].v < hopf.v
+    assert br.points[-1].stable and br.points[-1].v > hopf.v
+    folds = [s for s in br.special_points if s.type == "fold"]
+    assert len(folds) == 1 and [s.type for s in br.special_points] == ["fold"]
+    v_fold = folds[0].v
+    big = br.points[-1]
+    for dv, kind in ((+0.004, "periodic"), (-0.01, "equilibrium")):
+        m = model.with_params(model.params.with_flow(v_fold + dv))
+        att = find_attractor(m, big.q0, big.qdot0, t_max=600.0)
+        assert att.kind == kind, (dv, att.kind)
