@@ -10,6 +10,7 @@ from clirun import run_json
 from fempipe import FiniteElement, Params, PipeModel
 from fempipe.cli import main
 from fempipe.stability import critical_velocity
+from fempipe.stability.hopf import EVENT_KEYS as HOPF_KEYS
 
 EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after"}
 EVENT_TYPES = {"flutter", "divergence", "restabilization", "mode_restabilization", "fold"}
@@ -19,7 +20,11 @@ def test_critical_json_contract(capsys):
     """The --json contract of the README, and v_cr equal to the library's."""
     d = run_json(capsys, ["critical", "--alpha", "pi/2", "--v", "0,8", "--json", "--quiet"])
     assert isinstance(d["v_cr"], float)
-    assert d["events"] and all(set(e) == EVENT_KEYS for e in d["events"])
+    # Flutter events also carry the Hopf keys (fempipe.stability.hopf.EVENT_KEYS).
+    hopf = set(HOPF_KEYS)
+    assert d["events"] and all(
+        set(e) == EVENT_KEYS | (hopf if e["type"] == "flutter" else set()) for e in d["events"]
+    )
     assert all(e["type"] in EVENT_TYPES for e in d["events"])
     first = d["events"][0]
     assert first["type"] == "flutter" and first["mode"] == 2 and first["branch"] == "primary"
