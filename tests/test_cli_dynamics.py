@@ -176,3 +176,20 @@ def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypat
     assert code == 1 and len(lines) == 1
     assert lines[0].startswith("fempipe bifurcation: error: integration failed at v = 9; ")
     assert lines[0].endswith(f"kept in {out}/points; rerun the command to resume")
+
+
+def test_simulate_shoot_rtol_default_is_tighter_with_error_estimate():
+    """--shoot-rtol defaults to 1e-5, and to 1e-7 with --error-estimate (the
+    shooting tolerance is the estimates' floor, which 1e-5 would put above
+    the discretisation error of a P3:16 cycle); a given value is kept."""
+    import argparse
+
+    from fempipe.cli import simulate as sim
+
+    parser = argparse.ArgumentParser()
+    sim.add_arguments(parser)
+    base = ["--modal", "2", "--v", "9"]
+    assert sim.shoot_rtol_of(parser.parse_args(base)) == 1e-5
+    assert sim.shoot_rtol_of(parser.parse_args([*base, "--error-estimate"])) == 1e-7
+    given = parser.parse_args([*base, "--error-estimate", "--shoot-rtol", "3e-6"])
+    assert sim.shoot_rtol_of(given) == 3e-6
