@@ -83,6 +83,11 @@ log = logging.getLogger(__name__)
 #: X_g(1) (along gravity) and Z_g(1) (horizontal) in the global frame, Eq. (28).
 TIP_KEYS = ("eta_tip", "X_tip", "Z_tip")
 
+#: Returns within ``recurrence_tol`` that :func:`find_attractor` integrates past
+#: (fast contraction, not yet within ``start_tol``) before it shoots anyway:
+#: from 2e-2, eight returns contracting 2x reach 8e-5, far below start_tol = 1e-3.
+MAX_WAITS = 8
+
 
 class ShootingError(SolverError):
     """Newton's method on the periodic orbit did not converge (or found an equilibrium)."""
@@ -678,7 +683,8 @@ def find_attractor(
     next_eq_check = 0.5
     d_prev = _state_distance(np.asarray(q0) - q_s, qdot0, 0.05) if q_s is not None else math.inf
     tried_tol = recurrence_tol
-    last_dist: dict[int, float] = {}  # return distance of period-n at the previous return
+    last_dist: dict[int, float] = {}  # return distance of period-n when last seen
+    waits = 0  # returns within recurrence_tol not shot from because they contract fast
     level_time = 0.0
     result = None
 
@@ -781,11 +787,15 @@ def find_attractor(
                     T_guess = sec_t[-1] - sec_t[-1 - nn]
                     qk, pk = sec_x[-1]
                     prev = last_dist.get(nn)
-                    last_dist = {nn: dist}
+                    last_dist[nn] = dist
                     # Integrate on while the returns contract fast and are not
                     # yet within start_tol (the first return has no rate yet).
                     fast = prev is None or dist < 0.5 * prev
-                    wait = fast and dist > start_tol
+                    # At most MAX_WAITS such returns (a period-n that keeps
+                    # changing its n never shows a rate: shoot as before then).
+                    wait = fast and dist > start_tol and waits < MAX_WAITS
+                    if use_shooting and dist < tried_tol and wait:
+                        waits += 1
                     if use_shooting and dist < tried_tol and not wait:
                         try:
                             cyc = shoot(
