@@ -666,6 +666,7 @@ class _Continuer:
                     raise _CorrectorError(f"Newton stalled at the residual {res:.1e}")
                 res_exact = res
                 monodromy = fl.monodromy
+                u_mono = u.copy()
                 k = n2 + (1 if fixed_v else 2)
                 J = np.zeros((k, k))
                 J[:n2, :n2] = fl.monodromy - np.eye(n2)
@@ -701,6 +702,16 @@ class _Continuer:
                 and abs(c) < self.tol
                 and correction < self.xtol
             ):
+                amplitude = self.residual_norm(fl.fT * T / (2 * math.pi), T)
+                if self.residual_norm(u[:n2] - u_mono[:n2], T) > 1e-3 * amplitude:
+                    # The multipliers of a matrix taken this far from the orbit
+                    # (small orbits near the Hopf point) would be off by as much
+                    # (measured: the trivial one at 1.03): once more at the orbit.
+                    fl = _flow(m, x, T, rtol, sensitivity=True)
+                    self.integrations += 1
+                    rejected += fl.rejected
+                    monodromy = fl.monodromy
+                    it += 1
                 return u, fl, monodromy, it, rejected
             size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
             lam = min(1.0, 0.3 / size) if size > 0 else 1.0
