@@ -42,18 +42,20 @@ workers' lifecycle is its owner's business.
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import multiprocessing.context
 import os
 import signal
 import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from threadpoolctl import threadpool_limits
+
+if TYPE_CHECKING:
+    import multiprocessing.context
+    from concurrent.futures import Executor, ProcessPoolExecutor
 
 __all__ = [
     "Interrupted",
@@ -205,6 +207,8 @@ def _init_worker(parent: int) -> None:
 
     threadpool_limits(limits=1, user_api="blas")
     if sys.platform.startswith("linux"):
+        import ctypes
+
         libc = ctypes.CDLL(None, use_errno=True)
         if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0:
             err = ctypes.get_errno()
@@ -242,6 +246,10 @@ def process_pool(
         How workers are started (``multiprocessing.get_context("spawn")``
         ...); default: the platform's default.
     """
+    # concurrent.futures and multiprocessing are imported here: a serial run does
+    # not pay for them at start-up.
+    from concurrent.futures import ProcessPoolExecutor
+
     if int(workers) < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     return ProcessPoolExecutor(
@@ -342,6 +350,8 @@ def run_tasks(
                 result = exc
             finish(i, result, i + 1)
         return out
+
+    from concurrent.futures import FIRST_COMPLETED, wait
 
     own = None
     if executor is None:

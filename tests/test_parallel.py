@@ -44,6 +44,8 @@ def _fails_on_negative(x):
 
 
 def _blas_threads() -> list[int]:
+    import numpy  # noqa: F401 - its BLAS is what the limit is about; fempipe loads it lazily
+
     return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
 
 
