@@ -18,6 +18,7 @@ __all__ = [
     "color_for",
     "discretization_legend",
     "legend_columns",
+    "draw_continued",
     "draw_diagram",
     "draw_orbit_shapes",
     "draw_shapes",
@@ -242,6 +243,83 @@ def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
     ax.set_ylabel(ylabel + r" ($/L$)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
+    return ax
+
+
+def _runs(stable: list) -> list[tuple[int, int, bool]]:
+    """(start, stop, stable) of the runs of equal stability; neighbouring runs share
+    their boundary point so that the drawn line has no gap."""
+    out, i = [], 0
+    while i < len(stable):
+        j = i
+        while j + 1 < len(stable) and stable[j + 1] == stable[i]:
+            j += 1
+        out.append((max(i - 1, 0) if out else i, j + 1, bool(stable[i])))
+        i = j + 1
+    return out
+
+
+def _with_hopf(static: list, hopf: list, key: str) -> list:
+    """(v, [lo, hi], stable) of the static points with the Hopf points inserted
+    (tip interpolated), so that the line changes style at v_H, not at a grid v."""
+    out = [(p.v, getattr(p, key), p.stable) for p in static]
+    for h in hopf:
+        vh = h["v"]
+        k = next((i for i, p in enumerate(out) if p[0] > vh), None)
+        if k is None or k == 0:
+            continue
+        (va, ya, sa), (vb, yb, _) = out[k - 1], out[k]
+        w = (vh - va) / (vb - va)
+        y = [(1 - w) * ya[0] + w * yb[0], (1 - w) * ya[1] + w * yb[1]]
+        out.insert(k, (vh, y, sa))
+    return out
+
+
+def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict | None = None):
+    """A continued bifurcation diagram (:class:`~fempipe.validation.dynamic_runs.ContinuedDiagram`
+    per discretisation): the static branch and the extrema of every branch of
+    periodic orbits as lines, solid where stable and dashed where unstable, and
+    the stable state at each requested v marked as :func:`draw_diagram` marks
+    a sweep (FE open circles, N = 3 '+', N = 4 'x'); Hopf points as filled dots.
+    ``attractors`` (label -> points) replaces the marked states (e.g. a sweep's
+    buckled equilibria at alpha = pi, which are not on the continued branch)."""
+    from matplotlib.lines import Line2D
+
+    marks = {"FE": ("o", 4), "N = 3": ("+", 7), "N = 4": ("x", 6)}
+    for label, dg in diagrams.items():
+        c = color_for(label)
+        lines = [_with_hopf(dg.static, dg.hopf, key)]
+        lines += [[(p.v, getattr(p, key), p.stable) for p in br] for br in dg.branches.values()]
+        for pts in lines:
+            if not pts:
+                continue
+            v = np.array([p[0] for p in pts])
+            st = [bool(p[2]) for p in pts]
+            for side in (0, 1):
+                y = np.array([p[1][side] for p in pts])
+                for a, b, ok in _runs(st):
+                    ax.plot(v[a:b], y[a:b], ls="-" if ok else "--", lw=0.9, color=c, alpha=0.8)
+        att = dg.attractors() if attractors is None else attractors[label]
+        att = [p for p in att if p is not None]
+        mk, ms = marks["FE" if label.startswith("FE") else label]
+        mfc = "none" if mk == "o" else None
+        v = np.array([p.v for p in att])
+        for side in (0, 1):
+            y = np.array([getattr(p, key)[side] for p in att])
+            ax.plot(v, y, mk, ms=ms, color=c, mfc=mfc, label=label if side else None)
+        for h in dg.hopf:
+            if dg.static:
+                y0 = getattr(min(dg.static, key=lambda p, h=h: abs(p.v - h["v"])), key)[0]
+                ax.plot([h["v"]], [y0], ".", ms=7, color=c)
+    ax.set_xlabel("v")
+    ax.set_ylabel(ylabel + r" ($/L$)")
+    ax.grid(alpha=0.3)
+    handles, _ = ax.get_legend_handles_labels()
+    handles += [
+        Line2D([], [], ls="-", color="0.4", label="stable"),
+        Line2D([], [], ls="--", color="0.4", label="unstable"),
+    ]
+    ax.legend(handles=handles, fontsize=8)
     return ax
 
 

@@ -1,11 +1,19 @@
 """Fig. 7: bifurcation diagram of the hanging pipe (alpha = 0), N = 3 against N = 4.
 
 The paper sweeps v for alpha = 0 with N = 3 and N = 4 modes and concludes
-from their agreement that N = 3 is acceptable.  This case sweeps the same
-range with the converged FE mesh as well, and checks
+from their agreement that N = 3 is acceptable.  This case follows the static
+branch and the periodic orbits over the same range by continuation, with the
+converged FE mesh as well, and checks
 
 * the onset of the limit cycle against the linear critical velocity of each
-  discretisation (an independent bisection on the spectrum);
+  discretisation (an independent bisection on the spectrum): the branch of
+  periodic orbits is continued from the Hopf point of the static branch
+  (:func:`fempipe.periodic.cycle_diagram`), so the onset is v_H itself, no
+  longer a bracket of sweep velocities;
+* the continuation against brute force: at v = 6.3, 6.5, 10 the attractor
+  reached by integration from the sagged state must be a stable continued
+  state (cycles to 1e-6 in period and tip extrema); one that is not is
+  flagged in the check;
 * the paper's statements: equilibrium below v_cr, period-1 limit cycle above,
   N = 3 and N = 4 agreeing, large amplitudes, and the bracket 6.3 < v_cr < 6.5
   implied by the shapes of Fig. 7(c);
@@ -19,14 +27,20 @@ import time
 import numpy as np
 
 from .case import Case, label_tag
-from .checks import CaseResult, Table, below, holds
-from .dynamic_runs import attractor, dyn_discretizations, orbit, sweep_up
+from .checks import CaseResult, Check, Table, below, holds
+from .dynamic_runs import (
+    attractor,
+    continued_diagram,
+    dyn_discretizations,
+    orbit,
+    sweep_check,
+)
 from .onset import critical_velocity
 from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
-    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005): extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) on the attractor reached from the sagged state at each v, sweeping v up. Open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One circle per v: a static state; two: the minimum and maximum of a limit cycle. (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(
@@ -54,6 +68,8 @@ def onset_bracket(points) -> tuple[float, float]:
     """(last v with an equilibrium before the first periodic point, that first periodic v)."""
     lo, hi = float("nan"), float("nan")
     for p in points:
+        if p is None:
+            continue
         if p.attractor == "periodic":
             hi = p.v
             break
@@ -61,52 +77,148 @@ def onset_bracket(points) -> tuple[float, float]:
     return lo, hi
 
 
+#: Largest |v_H - v_cr| between the Hopf point of the continuation (located by
+#: fempipe.stability on the static branch) and the linear v_cr of
+#: fempipe.validation.onset (Brent's method to 1e-10 on the spectral abscissa):
+#: two locations of the same root, each far more accurate than this.
+ONSET_TOL = 1e-6
+#: Largest difference in period and tip extrema between the attractor found by
+#: integration and the stable continued orbit at the same v.
+SWEEP_TOL = 1e-6
+
+
+def onset_check(name: str, claim: str, diag, v_lin: float, source: str) -> tuple:
+    """The onset of a continued diagram against a linear critical velocity.
+
+    Passes when the first Hopf point of the static branch is ``v_lin`` to
+    :data:`ONSET_TOL`, the equilibria at the requested v below it are stable
+    and the orbits born there are stable at the requested v above it (the
+    flutter is supercritical: the cycle appears where the equilibrium loses
+    stability).  Returns (check, v_H, last stable equilibrium v, first v
+    with a stable orbit).
+    """
+    v_h = diag.hopf[0]["v"] if diag.hopf else float("nan")
+    att = diag.attractors()
+    lo, hi = onset_bracket(att)
+    below_ok = all(diag.equilibrium_at(v).stable for v in diag.values if v < v_h)
+    above_ok = all(diag.cycles_at(v) for v in diag.values if v > v_h)
+    diff = abs(v_h - v_lin)
+    check = holds(
+        name,
+        claim,
+        bool(np.isfinite(diff) and diff <= ONSET_TOL and below_ok and above_ok),
+        f"Hopf point v_H = {v_h:.6f}, linear v_cr = {v_lin:.6f} (|difference| {diff:.1e}); "
+        f"stable equilibrium up to v = {lo:g}, stable limit cycle from v = {hi:g}",
+        reference=f"|v_H - v_cr| ≤ {ONSET_TOL:g}, equilibria stable below, cycles stable above",
+        why="the continuation starts the cycle branch at the Hopf point itself (no sweep "
+        "spacing any more); both are locations of the same root of Re λ(v), far more accurate "
+        "than the tolerance",
+        source=source,
+        category="numerics",
+    )
+    return check, v_h, lo, hi
+
+
+def sweep_agreement(name: str, claim: str, results: list) -> Check:
+    """The brute-force check: the attractors found by integration at a few v lie on
+    the stable continued states (:func:`~fempipe.validation.dynamic_runs.sweep_check`
+    results of several diagrams)."""
+    dT = max(r["period"] for r in results)
+    dtip = max(r["tip"] for r in results)
+    deq = max(r["eq_tip"] for r in results)
+    flagged = [f for r in results for f in r["flagged"]]
+    n = sum(len(r["attractors"]) for r in results)
+    return holds(
+        name,
+        claim,
+        not flagged and dT <= SWEEP_TOL and dtip <= SWEEP_TOL,
+        f"{n} attractors by integration: max |ΔT| {dT:.1e}, max |Δ tip extremum| {dtip:.1e} "
+        f"on cycles, {deq:.1e} on equilibria; not on a stable continued state: "
+        + ("; ".join(flagged) if flagged else "none"),
+        reference=f"cycles ≤ {SWEEP_TOL:g} in period and tip extrema; every attractor on a "
+        "stable continued state",
+        why="the integration (find_attractor, shooting at rtol 1e-7) and the continuation "
+        "(rtol 1e-5 scaled near multipliers 1, measured within 3e-8 of rtol 1e-9) are "
+        "independent computations of the same orbits; equilibria reached by integration stop "
+        "at the classification's radius, so only their identity is checked (1e-3)",
+        source="fempipe.limit_cycle.find_attractor against fempipe.periodic.cycle_diagram",
+        category="numerics",
+    )
+
+
 def run(quick: bool = False) -> CaseResult:
-    """Sweeps, onsets and checks; see the module docstring."""
+    """Diagrams by continuation, the brute-force check, onsets and checks; see the module
+    docstring."""
     t0 = time.perf_counter()
     ref = CASE.references
     alpha = ref.value("alpha")
     values = ref.value("v", quick)
     discs = dyn_discretizations(quick)
-    requires = [f"onset_{label_tag(lb)}" for lb in discs] + ([] if quick else ["fe_mesh"])
+    requires = [f"onset_{label_tag(lb)}" for lb in discs] + ["sweep_agreement"]
+    requires += [] if quick else ["fe_mesh"]
     fe_label = next(iter(discs))
-    sweeps = {label: sweep_up(d, alpha, values) for label, d in discs.items()}
+    diags = {label: continued_diagram(label, alpha, values) for label in discs}
+    # What a sweep up from the sagged state ends on at each v (the stable state).
+    sweeps = {label: dg.attractors() for label, dg in diags.items()}
+    shape_v = ref.value("shape_v")
+    checked = [sweep_check(dg, shape_v) for dg in diags.values()]
     checks, rows = [], []
     onsets = {}
     for label, d in discs.items():
-        lo, hi = onset_bracket(sweeps[label])
         v_lin = critical_velocity(d, alpha).v_cr
-        onsets[label] = (lo, hi, v_lin)
-        checks.append(
-            holds(
-                f"onset_{label_tag(label)}",
-                f"{label}: the limit cycle appears where the linear analysis loses stability",
-                bool(np.isfinite(v_lin) and lo <= v_lin <= hi),
-                f"sweep: equilibrium at v = {lo:g}, periodic at v = {hi:g}; linear v_cr = {v_lin:.4f}",
-                reference="lo ≤ v_cr ≤ hi",
-                why="the sweep resolves the onset only to its spacing",
-                source="fempipe.validation.onset: Brent's method on the spectral abscissa "
-                "of Eqs. (31b)-(33)",
-                category="numerics",
-            )
+        chk, v_h, lo, hi = onset_check(
+            f"onset_{label_tag(label)}",
+            f"{label}: the limit cycle appears where the linear analysis loses stability",
+            diags[label],
+            v_lin,
+            "fempipe.validation.onset: Brent's method on the spectral abscissa of Eqs. "
+            "(31b)-(33), against the Hopf point of fempipe.periodic (fempipe.stability)",
         )
-    periodic = [(lb, p) for lb, pts in sweeps.items() for p in pts if p.attractor == "periodic"]
+        checks.append(chk)
+        onsets[label] = (lo, hi, v_lin, v_h)
+    checks.append(
+        sweep_agreement(
+            "sweep_agreement",
+            f"the attractors found by integration at v = {', '.join(f'{v:g}' for v in shape_v)} "
+            "lie on the stable continued branches (every discretisation)",
+            checked,
+        )
+    )
+    cyc = [p for dg in diags.values() for pts in dg.branches.values() for p in pts]
+    stable_cyc = [p for p in cyc if p.stable and p.requested]
+    bif = [s for dg in diags.values() for s in dg.special if s["type"] != "fold"]
+    integ = [a for r in checked for a in r["attractors"].values() if a.kind == "periodic"]
     checks.append(
         holds(
             "period_one",
             "every post-flutter attractor is a period-1 limit cycle (Sec. 5)",
-            all(p.period_n == 1 for _, p in periodic) and bool(periodic),
-            f"{sum(p.period_n == 1 for _, p in periodic)} of {len(periodic)} periodic points are period-1",
+            bool(stable_cyc)
+            and not bif
+            and all(p.max_multiplier < 1 for p in stable_cyc)
+            and all(a.period_n == 1 for a in integ),
+            f"{len(stable_cyc)} stable continued cycles at the requested v, "
+            f"{len(bif)} period-doubling or Neimark-Sacker points on the branches; "
+            f"{sum(a.period_n == 1 for a in integ)} of {len(integ)} cycles found by "
+            "integration are period-1",
+            why="a stable period-1 orbit whose branch has no period doubling or torus "
+            "bifurcation stays the attractor; integration checks a few v",
             source="paper Sec. 5: 'all these nonlinear oscillations after flutter instability are period-1'",
         )
     )
-    fe_pts = {p.v: p for p in sweeps[fe_label]}
+    fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
+    fe_diag = diags[fe_label]
+    a63, a65 = fe_pts.get(6.3), fe_pts.get(6.5)
+    kind = {6.3: a63.attractor if a63 else "none", 6.5: a65.attractor if a65 else "none"}
     checks.append(
         holds(
             "paper_bracket",
             "equilibrium at v = 6.3 and limit cycle at v = 6.5 (converged FE)",
-            fe_pts[6.3].attractor == "equilibrium" and fe_pts[6.5].attractor == "periodic",
-            f"v = 6.3: {fe_pts[6.3].attractor}, v = 6.5: {fe_pts[6.5].attractor}",
+            kind[6.3] == "equilibrium"
+            and kind[6.5] == "periodic"
+            and not fe_diag.cycles_at(6.3)
+            and not fe_diag.equilibrium_at(6.5).stable,
+            f"v = 6.3: {kind[6.3]}, v = 6.5: {kind[6.5]} (stable states of the continuation; "
+            f"Hopf point v_H = {onsets[fe_label][3]:.4f})",
             reference="6.3 < v_cr < 6.5",
             why="inferred: the shapes of Fig. 7(c) at v = 6.3, 6.5 straddle v_cr",
             source="paper Fig. 7 caption (shapes at v = 6.3, 6.5, 10)",
@@ -163,8 +275,8 @@ def run(quick: bool = False) -> CaseResult:
             )
         )
     for label in discs:
-        lo, hi, v_lin = onsets[label]
-        pts = {p.v: p for p in sweeps[label]}
+        lo, hi, v_lin, v_h = onsets[label]
+        pts = {p.v: p for p in sweeps[label] if p is not None}
         p10 = pts[10.0]
         rows.append(
             (
@@ -177,6 +289,7 @@ def run(quick: bool = False) -> CaseResult:
                 p10.X_tip[0],
                 p10.X_tip[1],
                 p10.max_multiplier,
+                v_h,
             )
         )
     table = Table(
@@ -191,28 +304,38 @@ def run(quick: bool = False) -> CaseResult:
             "X_g(1) min",
             "X_g(1) max",
             "max |ρ| (Floquet multipliers)",
+            "Hopf point v_H",
         ),
         tuple(rows),
-        note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ.",
+        note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ. "
+        "The diagrams are continued (static branch and the orbits born at the Hopf point); "
+        "'last equilibrium' and 'first periodic' are the requested v on either side of v_H.",
     )
     shapes = {}
-    for v in ref.value("shape_v"):
-        p = fe_pts.get(v)
-        if p is not None:
-            shapes[v] = orbit(fe_label, discs[fe_label], alpha, v, p.q, p.qdot, p.period)
+    for v in shape_v:
+        att = checked[0]["attractors"][float(v)]
+        shapes[v] = orbit(
+            fe_label,
+            discs[fe_label],
+            alpha,
+            v,
+            att.q,
+            att.qdot,
+            att.period if att.kind == "periodic" else None,
+        )
     return CASE.result(
         checks,
         quick=quick,
         started=t0,
         tables=(table,),
-        data={"sweeps": sweeps, "shapes": shapes, "alpha": alpha},
+        data={"sweeps": sweeps, "diagrams": diags, "shapes": shapes, "alpha": alpha},
         requires=requires,
     )
 
 
 def plot(result: CaseResult, fig=None):
     """(a) η(1), (b) X_g(1), (c) Z_g(1) extrema against v; (d) shapes at v = 6.3, 6.5, 10 (FE)."""
-    from .drawing import draw_diagram, draw_orbit_shapes, new_figure
+    from .drawing import draw_continued, draw_orbit_shapes, new_figure
 
     if fig is None:
         fig, axes = new_figure(4, ncols=2, size=4.0)
@@ -226,7 +349,7 @@ def plot(result: CaseResult, fig=None):
         "abc",
         strict=True,
     ):
-        draw_diagram(ax, d["sweeps"], key, lab)
+        draw_continued(ax, d["diagrams"], key, lab)
         ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])
     axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)

@@ -2,8 +2,13 @@
 
 The tip response eta(1) (Fig. 8) and its global coordinates X_g(1) (Fig. 9)
 and Z_g(1) (Fig. 10) against v, for the converged FE mesh and the paper's
-N = 3 and N = 4.  Checks the onset against the linear critical velocity of
-each discretisation, and the paper's statements: period-1 cycles, the
+N = 3 and N = 4, by continuation of the static branch and of the periodic
+orbits born at its Hopf points (:func:`fempipe.periodic.cycle_diagram`; at
+alpha = pi the buckled equilibria below the flutter from a sweep up, which the
+continued straight branch does not contain).  The attractor found by
+integration at the shape velocities must be a stable continued state (to 1e-6
+in period and tip extrema).  Checks the onset (the Hopf point) against the
+linear critical velocity of each discretisation, and the paper's statements: period-1 cycles, the
 buckling / restabilisation / flutter sequence at alpha = pi, tip excursions
 close to the pipe length at v = 10, and the onset brackets implied by the
 shape velocities the paper chose for Fig. 9.
@@ -20,14 +25,14 @@ from ..params import PAPER_CASE, Params
 from ..stability import stability_analysis
 from .case import Case, alpha_name, label_tag
 from .checks import CaseResult, Check, Table, holds
-from .dynamic_runs import dyn_discretizations, orbit, sweep_up
-from .fig07 import eta_amplitude, onset_bracket
+from .dynamic_runs import continued_diagram, dyn_discretizations, orbit, sweep_check, sweep_up
+from .fig07 import eta_amplitude, onset_bracket, onset_check, sweep_agreement
 from .onset import critical_velocity
 from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
-    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) on the attractor against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005). Open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One point per v: a static state; two: the minimum and maximum of a limit cycle. Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -72,7 +77,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     for alpha in alphas:
         name = alpha_name(alpha)
         is_pi = abs(alpha - np.pi) < 1e-12
-        requires += _required(name, is_pi, discs)
+        requires += _required(name, is_pi, discs) + [f"sweep_agreement_{name}"]
         shape_v = ref.value("shape_v")[all_alphas.index(alpha)]
         if quick:
             values = sorted(set(shape_v))
@@ -81,32 +86,60 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             if is_pi:
                 values |= set(ref.value("v_fine_pi"))
             values = sorted(values)
-        sweeps = {label: sweep_up(d, alpha, values) for label, d in discs.items()}
-        fe_pts = {p.v: p for p in sweeps[fe_label]}
-        # Onset against the linear analysis (alpha = pi: against the events of
-        # the stability analysis, in _pi_cross_checks).
+        # The static branch and the orbits born at its Hopf points, by continuation.
+        diags = {label: continued_diagram(label, alpha, values) for label in discs}
+        hopf_v = {lb: dg.hopf[0]["v"] if dg.hopf else float("inf") for lb, dg in diags.items()}
+        # What a sweep up from the sagged state ends on at each v.  At alpha = pi
+        # the continued static branch is the straight pipe; below the flutter the
+        # pipe rests on the left buckled branch (not continued), so that part is a
+        # sweep, as before (equilibria only), checked against the continuation
+        # where the straight pipe is stable.
+        sweeps = {}
         for label, d in discs.items():
-            lo, hi = onset_bracket(sweeps[label])
+            att = diags[label].attractors()
+            if is_pi:
+                pre = [v for v in values if v < hopf_v[label]]
+                low = {p.v: p for p in sweep_up(d, alpha, pre)} if pre else {}
+                att = [low.get(v, p) for v, p in zip(values, att, strict=True)]
+            sweeps[label] = att
+        fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
+        # The independent check by integration at a few v of each diagram (at
+        # alpha = pi above the flutter: below it the sweep is the check).
+        check_v = list(shape_v)
+        if is_pi:
+            above = [v for v in values if v > hopf_v[fe_label]]
+            check_v = sorted({v for v in shape_v if v > hopf_v[fe_label]} | set(above[:1]))
+        checked = [sweep_check(dg, check_v) for dg in diags.values()]
+        checks.append(
+            sweep_agreement(
+                f"sweep_agreement_{name}",
+                f"α = {name}: the attractors found by integration at v = "
+                f"{', '.join(f'{v:g}' for v in check_v)} lie on the stable continued branches "
+                "(every discretisation)",
+                checked,
+            )
+        )
+        for label, d in discs.items():
+            dg = diags[label]
             if is_pi:
                 # The straight pipe buckles at v = 0; the onset of oscillation
                 # is the flutter of the restabilised straight pipe.
                 v_lin = _straight_flutter(d)
+                lo, hi = onset_bracket(sweeps[label])
+                v_h = hopf_v[label]
             else:
                 v_lin = critical_velocity(d, alpha).v_cr
-                checks.append(
-                    holds(
-                        f"onset_{name}_{label_tag(label)}",
-                        f"α = {name}, {label}: the limit cycle appears where the linear "
-                        "analysis loses stability",
-                        bool(np.isfinite(v_lin) and lo <= v_lin <= hi),
-                        f"equilibrium at v = {lo:g}, periodic at v = {hi:g}; linear v_cr = {v_lin:.4f}",
-                        reference="lo ≤ v_cr ≤ hi",
-                        why="the sweep resolves the onset only to its spacing",
-                        source="fempipe.validation.onset: Brent's method on the spectral abscissa",
-                        category="numerics",
-                    )
+                chk, v_h, lo, hi = onset_check(
+                    f"onset_{name}_{label_tag(label)}",
+                    f"α = {name}, {label}: the limit cycle appears where the linear "
+                    "analysis loses stability",
+                    dg,
+                    v_lin,
+                    "fempipe.validation.onset: Brent's method on the spectral abscissa, against "
+                    "the Hopf point of fempipe.periodic (fempipe.stability)",
                 )
-            p10 = {p.v: p for p in sweeps[label]}[10.0]
+                checks.append(chk)
+            p10 = {p.v: p for p in sweeps[label] if p is not None}[10.0]
             rows.append(
                 (
                     name,
@@ -119,6 +152,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     p10.X_tip[1] - p10.X_tip[0],
                     p10.Z_tip[1] - p10.Z_tip[0],
                     eta_amplitude(p10),
+                    v_h,
                 )
             )
         # The paper's shape velocities.
@@ -130,7 +164,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     f"paper_bracket_{name}",
                     f"α = {name}: equilibrium at v = {v1:g}, limit cycle at v = {v2:g} (FE)",
                     a1 == "equilibrium" and a2 == "periodic",
-                    f"v = {v1:g}: {a1}; v = {v2:g}: {a2}",
+                    f"v = {v1:g}: {a1}; v = {v2:g}: {a2} (Hopf point v_H = {hopf_v[fe_label]:.4f})",
                     reference=f"{v1:g} < v_cr < {v2:g}",
                     why="inferred: the text lists the shapes of Fig. 9 at these v; as for α = 0 "
                     "(6.3 static, 6.5 oscillating) we read the first as static, the second as "
@@ -139,14 +173,21 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                 )
             )
         else:
-            pts = sweeps[fe_label]
+            pts = [p for p in sweeps[fe_label] if p is not None]
+            fe_diag = diags[fe_label]
             buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
             straight = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) < 1e-3]
             flutter = [p.v for p in pts if p.attractor == "periodic"]
+            # The straight states the sweep rests on must be stable on the continued
+            # static branch, and the buckled ones where it is unstable.
+            consistent = all(fe_diag.equilibrium_at(v).stable for v in straight) and not any(
+                fe_diag.equilibrium_at(v).stable for v in buckled
+            )
             seq_ok = bool(
                 buckled
                 and straight
                 and flutter
+                and consistent
                 and max(buckled) < min(straight)
                 and max(straight) < min(flutter)
             )
@@ -154,14 +195,16 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                 holds(
                     "pi_sequence",
                     "α = π: buckled equilibrium, then the straight pipe regains stability, "
-                    "then flutter (FE sweep)",
+                    "then flutter (FE: sweep below the flutter, continuation above)",
                     seq_ok,
                     f"buckled at v = {buckled}; straight stable at v = {straight}; "
-                    f"periodic from v = {min(flutter) if flutter else None}",
+                    f"periodic from v = {min(flutter) if flutter else None}; straight pipe "
+                    f"{'stable' if consistent else 'NOT stable'} on the continued static branch "
+                    "exactly where the sweep rests on it",
                     source="paper Sec. 4-5, Figs. 5(d), 8(d)-10(d)",
                 )
             )
-            checks += _pi_cross_checks(discs[fe_label], pts)
+            checks += _pi_cross_checks(discs[fe_label], pts, fe_diag)
             checks.append(
                 holds(
                     "pi_shape_velocities",
@@ -172,13 +215,29 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     source="paper Sec. 5: shapes of Fig. 9(d) at v = 2.0, 4.1, 10",
                 )
             )
-        periodic = [p for pts in sweeps.values() for p in pts if p.attractor == "periodic"]
+        stable_cyc = [
+            p
+            for dg in diags.values()
+            for br in dg.branches.values()
+            for p in br
+            if p.stable and p.requested
+        ]
+        bif = [sp for dg in diags.values() for sp in dg.special if sp["type"] != "fold"]
+        integ = [a for r in checked for a in r["attractors"].values() if a.kind == "periodic"]
         checks.append(
             holds(
                 f"period_one_{name}",
                 f"α = {name}: every post-flutter attractor is period-1",
-                bool(periodic) and all(p.period_n == 1 for p in periodic),
-                f"{sum(p.period_n == 1 for p in periodic)} of {len(periodic)} periodic points",
+                bool(stable_cyc)
+                and not bif
+                and all(p.max_multiplier < 1 for p in stable_cyc)
+                and all(a.period_n == 1 for a in integ),
+                f"{len(stable_cyc)} stable continued cycles at the requested v, {len(bif)} "
+                f"period-doubling or Neimark-Sacker points on the branches; "
+                f"{sum(a.period_n == 1 for a in integ)} of {len(integ)} cycles found by "
+                "integration are period-1",
+                why="a stable period-1 orbit whose branch has no period doubling or torus "
+                "bifurcation stays the attractor; integration checks a few v",
                 source="paper Sec. 5",
             )
         )
@@ -197,13 +256,16 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                 source="paper Sec. 5, Fig. 9",
             )
         )
-        # N = 3 / N = 4 against FE at every v of the sweep.
+        # N = 3 / N = 4 against FE at every v of the diagram.
         for n in PAPER_MODES:
-            other = {p.v: p for p in sweeps[f"N = {n}"]}
+            other = {p.v: p for p in sweeps[f"N = {n}"] if p is not None}
             diffs = []
             for v, p in fe_pts.items():
-                q = other[v]
+                q = other.get(v)
                 for key in ("X_tip", "Z_tip"):
+                    if q is None:
+                        diffs.append(float("inf"))
+                        continue
                     a, b = getattr(p, key), getattr(q, key)
                     diffs.append(max(abs(a[0] - b[0]), abs(a[1] - b[1])))
             worst = float(np.nanmax(diffs))
@@ -219,17 +281,16 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             )
         shapes = {}
         for v in shape_v:
-            p = fe_pts[v]
-            shapes[v] = orbit(
-                fe_label,
-                discs[fe_label],
-                alpha,
-                v,
-                p.q,
-                p.qdot,
-                p.period if p.attractor == "periodic" else None,
-            )
-        panels[name] = {"alpha": alpha, "sweeps": sweeps, "shapes": shapes}
+            att = checked[0]["attractors"].get(float(v))
+            if att is None:  # alpha = pi below the flutter: the sweep's state
+                att = fe_pts[v]
+                q, qdot = att.q, att.qdot
+                per = att.period if att.attractor == "periodic" else None
+            else:
+                q, qdot = att.q, att.qdot
+                per = att.period if att.kind == "periodic" else None
+            shapes[v] = orbit(fe_label, discs[fe_label], alpha, v, q, qdot, per)
+        panels[name] = {"alpha": alpha, "sweeps": sweeps, "diagrams": diags, "shapes": shapes}
     table = Table(
         "Onsets and limit cycles at v = 10",
         (
@@ -243,11 +304,13 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             "X_g(1) range",
             "Z_g(1) range",
             "η(1) amplitude",
+            "Hopf point v_H",
         ),
         tuple(rows),
         note="Ranges are peak-to-peak (units of L); α = π: linear v_cr is the flutter of the "
         "restabilised straight pipe (it buckles at v = 0), and the first periodic v follows the "
-        "buckled branch and the restabilised straight state (see checks).",
+        "buckled branch and the restabilised straight state (see checks).  The diagrams are continued (static branch, orbits born at the Hopf "
+        "points); at α = π the buckled equilibria below the flutter come from a sweep.",
     )
     return CASE.result(
         checks,
@@ -267,7 +330,7 @@ def _straight_flutter(disc) -> float:
     return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
 
 
-def _pi_cross_checks(disc, pts) -> list[Check]:
+def _pi_cross_checks(disc, pts, diag) -> list[Check]:
     """alpha = pi: the sweep's jumps against the events of :func:`fempipe.stability.stability_analysis`.
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
@@ -308,15 +371,21 @@ def _pi_cross_checks(disc, pts) -> list[Check]:
     if straight and periodic and min(straight) < min(periodic):
         lo = max(v for v in straight if v < min(periodic))
         hi = min(periodic)
+        v_h = diag.hopf[0]["v"] if diag.hopf else float("nan")
+        # The orbits born at the Hopf point are the ones the integration reaches:
+        # stable at the first requested v above it.
+        born_stable = bool(diag.cycles_at(hi)) and not diag.equilibrium_at(hi).stable
         out.append(
             holds(
                 "pi_flutter_vs_sweep",
                 "α = π: the limit cycle appears at the flutter of the straight pipe",
-                lo <= flutter <= hi,
-                f"straight at v = {lo:g}, periodic at v = {hi:g}; flutter at v = {flutter:.6f}",
-                reference="lo ≤ v_flutter ≤ hi",
-                why="the sweep resolves the onset only to its spacing",
-                source="fempipe.stability.stability_analysis",
+                lo <= flutter <= hi and abs(v_h - flutter) <= 1e-6 and born_stable,
+                f"straight at v = {lo:g} (sweep), stable cycle at v = {hi:g} (continuation); "
+                f"flutter at v = {flutter:.6f}, cycle branch from the Hopf point v_H = {v_h:.6f}",
+                reference="lo ≤ v_flutter ≤ hi, |v_H - v_flutter| ≤ 1e-6, stable cycle at hi",
+                why="the continued cycle branch starts at the Hopf point itself; the "
+                "requested v bracket it to their spacing",
+                source="fempipe.stability.stability_analysis; fempipe.periodic",
                 category="numerics",
             )
         )
@@ -341,7 +410,7 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
     """
     import matplotlib.pyplot as plt
 
-    from .drawing import draw_diagram, draw_orbit_shapes, finish_figure
+    from .drawing import draw_continued, draw_orbit_shapes, finish_figure
 
     paper, key, lab, what = FIGURES[which]
     panels = result.data["panels"]
@@ -361,7 +430,7 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
             ax.set_visible(False)
         diag, insets = axes[:n], [None] * n
     for ax, inset, (name, pan) in zip(diag, insets, panels.items(), strict=True):
-        draw_diagram(ax, pan["sweeps"], key, lab)
+        draw_continued(ax, pan["diagrams"], key, lab, attractors=pan["sweeps"])
         ax.set_title(f"α = {name}: tip extrema", fontsize=10)
         if inset is not None:
             draw_orbit_shapes(inset, pan["shapes"])
