@@ -47,10 +47,12 @@ point is the pseudo-arclength corrector of x_H + ds Re z; its v comes out of
 the corrector, on whichever side of v_H the orbits lie).  Later tangents are
 secants of the last two points.
 
-Step control.  The step grows by 1.5 when the corrector needed at most two
-integrations with the monodromy, is halved when it needed more than four and
-when two consecutive secants turn by more than :data:`MAX_ANGLE`; a failed
-corrector halves the step (a rejected step).  Below ``ds_min`` the branch ends
+Step control.  The step grows by 1.5 when the corrector needed at most four
+integrations, is halved when it needed more than five, and a step is
+rejected (halved) when the corrector fails or the new secant turns from the
+last one by more than :data:`MAX_ANGLE`.  A corrector that stalls on the
+noise of the adaptive step sequence is first retried at a tenth of the
+integration tolerance.  Below ``ds_min`` the branch ends
 with :class:`CycleContinuationError`, naming v and the step; the finished
 points stay.
 
@@ -984,9 +986,9 @@ def continue_cycles(
             points.append(pt)
             us.append(u)
             steps += 1
-            if it <= 3:
+            if it <= 4:
                 ds = min(ds_max, 1.5 * max(ds, abs(h)))
-            elif it > 4:
+            elif it > 5:
                 ds = max(ds_min, 0.5 * ds)
             if on_point is not None:
                 on_point(state())
