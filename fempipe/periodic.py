@@ -1237,7 +1237,9 @@ def _alpha_task(
         "branches": [],
         "special_points": [],
         "errors": [],
-        "hopf_points": [dict(h.to_dict(), alpha=alpha) for h in hopf],
+        "hopf_points": [
+            dict(h.to_dict(), alpha=alpha, branch=f"H{k}") for k, h in enumerate(hopf, start=1)
+        ],
     }
     covered: list[tuple[float, float]] = []
     for k, h in enumerate(hopf, start=1):

@@ -279,7 +279,9 @@ def _write_outputs(output: reporting.Output, result) -> None:
     figure = {"eta_tip": "Fig. 7", "X_tip": "Fig. 9", "Z_tip": "Fig. 10"}
     for key, fig_name in figure.items():
         groups = sorted({pt["alpha"] for pt in result["points"]})
-        fig, axes = plt.subplots(1, len(groups), figsize=(5.5 * len(groups), 4), squeeze=False)
+        fig, axes = plt.subplots(
+            1, len(groups), figsize=(5.5 * len(groups), 4.3), squeeze=False, layout="constrained"
+        )
         try:
             for ax, a in zip(axes[0], groups, strict=True):
                 pts = [pt for pt in result["points"] if pt["alpha"] == a]
@@ -290,8 +292,9 @@ def _write_outputs(output: reporting.Output, result) -> None:
                     title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
                     f"γ = {p['gamma']:.4g} (cf. {fig_name})",
                     special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
-                    caption=_caption(result),
+                    hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
                 )
+            fig.suptitle(_caption(result), fontsize=9)
             output.figure(f"{key}.png", fig, dpi=130)
         finally:
             plt.close(fig)

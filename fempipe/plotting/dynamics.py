@@ -156,6 +156,7 @@ def plot_bifurcation(
     title=None,
     special_points: Sequence[dict] = (),
     caption: str | None = None,
+    hopf_points: Sequence[dict] = (),
 ):
     """Extrema of a tip coordinate against v (Figs. 7, 9, 10).
 
@@ -173,7 +174,11 @@ def plot_bifurcation(
         ``{"v", "type", "branch"}`` of the continuation (folds, period doublings,
         Neimark-Sacker points): vertical marks at their v.
     caption : str, optional
-        Parameters written under the axes.
+        Parameters, written small in the axes' corner (or pass them to the
+        figure's ``suptitle`` instead).
+    hopf_points : sequence of dict
+        ``{"v", "branch"}``: each branch of orbits is drawn from its Hopf point
+        on the line of equilibria, which is marked.
     """
     if key not in _LABEL:
         raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
@@ -189,7 +194,7 @@ def plot_bifurcation(
         lab = f"{label}: {text}" if label else text
         ax.plot(v, hi, marker, color=color, ms=5, mfc="none", label=lab)
         ax.plot(v, lo, marker, color=color, ms=5, mfc="none")
-    _plot_continuation(ax, points, key, label)
+    _plot_continuation(ax, points, key, label, hopf_points)
     for k, sp in enumerate(special_points):
         ax.axvline(
             sp["v"], color="C2", lw=0.8, ls=":", label="cycle bifurcation" if k == 0 else None
@@ -227,8 +232,19 @@ def _runs(flags: list) -> list[tuple[int, int]]:
     return out
 
 
-def _plot_continuation(ax, points: Sequence[dict], key: str, label) -> None:
-    """Equilibria and branches of periodic orbits: solid stable, dashed unstable."""
+def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> None:
+    """Equilibria and branches of periodic orbits: solid stable, dashed unstable;
+    each branch starts at its Hopf point on the (interpolated) line of equilibria."""
+    static = sorted((p for p in points if p["direction"] == "static"), key=lambda p: p["v"])
+    start = {}
+    if static:
+        sv = np.array([p["v"] for p in static])
+        sy = np.array([p[key][0] for p in static], dtype=float)
+        for k, h in enumerate(hopf):
+            if sv[0] <= h["v"] <= sv[-1]:
+                y = float(np.interp(h["v"], sv, sy))
+                start[h.get("branch")] = (h["v"], y)
+                ax.plot([h["v"]], [y], "D", color="k", ms=4, label="Hopf point" if k == 0 else None)
     groups = {}
     for p in points:
         if p["direction"] == "static":
@@ -244,6 +260,12 @@ def _plot_continuation(ax, points: Sequence[dict], key: str, label) -> None:
         lo = np.array([p[key][0] for p in pts], dtype=float)
         hi = np.array([p[key][1] for p in pts], dtype=float)
         flags = [bool(p.get("stable")) for p in pts]
+        if kind == "cycle" and name in start:
+            # From the Hopf point (amplitude 0) with the first orbit's stability.
+            hv, hy = start[name]
+            v, lo, hi = np.r_[hv, v], np.r_[hy, lo], np.r_[hy, hi]
+            flags = [flags[0], *flags]
+            pts = [pts[0], *pts]
         for i, j in _runs(flags):
             ls = "-" if flags[i] else "--"
             what = "equilibria" if kind == "static" else f"orbits {name}"
@@ -257,6 +279,8 @@ def _plot_continuation(ax, points: Sequence[dict], key: str, label) -> None:
             if kind == "cycle":
                 ax.plot(v[sl], lo[sl], ls, color=color, lw=1.3)
         req = np.array([bool(p.get("requested", True)) for p in pts])
+        if kind == "cycle" and name in start:
+            req[0] = False
         if kind == "cycle" and req.any():
             ax.plot(v[req], hi[req], ".", color=color, ms=3)
             ax.plot(v[req], lo[req], ".", color=color, ms=3)
