@@ -982,6 +982,33 @@ def continue_cycles(
                         ),
                     ) from None
                 continue
+            if source == "continuation" and grid.size:
+                # Requested v passed by this step (near the Hopf point or a fold,
+                # where v is no local parameter): landed on at fixed v from the
+                # secant between the two orbits around them.
+                lo_, hi_ = sorted((v_k, u[-1]))
+                crossed = grid[(grid > lo_ + 1e-9) & (grid < hi_ - 1e-9)]
+                for vg in crossed if u[-1] > v_k else crossed[::-1]:
+                    t1 = time.perf_counter()
+                    w = (vg - v_k) / (u[-1] - v_k)
+                    ug = u_k + w * (u - u_k)
+                    if len(us) == 1:
+                        # From the Hopf point the amplitude grows like sqrt(v - v_H).
+                        ug[: 2 * n] = u_k[: 2 * n] + math.sqrt(w) * (u - u_k)[: 2 * n]
+                    ug[-1] = vg
+                    try:
+                        got = cont.correct(ug, None, u_k if len(us) > 1 else None, rtol_k)
+                    except _CorrectorError as exc:
+                        log.warning(
+                            "%s: requested v = %.6g passed but not landed on (%s)", name, vg, exc
+                        )
+                        continue
+                    gpt = cont.point(*got, "grid", t1)
+                    if _swing(gpt) < MIN_SWING:
+                        log.warning("%s: v = %.6g converged to the equilibrium", name, vg)
+                        continue
+                    points.append(gpt)
+                    us.append(got[0])
             pt = cont.point(u, fl, mono, it, rej, source, t0)
             points.append(pt)
             us.append(u)
