@@ -455,10 +455,18 @@ def sweep_check(diag: ContinuedDiagram, vs) -> dict:
     equilibrium among the stable equilibria (tip compared).  Returns
     ``{"period": max |dT|, "tip": max |d tip extremum| over the orbits,
     "eq_tip": max over the equilibria, "flagged": [text of every attractor
-    found by integration that is on no stable continued state], "attractors":
-    {v: Attractor}}``.
+    found by integration that is on no stable continued state], "unsettled":
+    [integrations that found no attractor by their t_max, where the diagram has a
+    stable orbit: inconclusive, not a disagreement], "attractors": {v: Attractor}}``.
     """
-    out = {"period": 0.0, "tip": 0.0, "eq_tip": 0.0, "flagged": [], "attractors": {}}
+    out = {
+        "period": 0.0,
+        "tip": 0.0,
+        "eq_tip": 0.0,
+        "flagged": [],
+        "unsettled": [],
+        "attractors": {},
+    }
     for v in vs:
         att = checked_attractor(diag.label, diag.alpha, v)
         out["attractors"][float(v)] = att
@@ -488,5 +496,15 @@ def sweep_check(diag: ContinuedDiagram, vs) -> dict:
             else:
                 out["eq_tip"] = max(out["eq_tip"], d)
         else:
-            out["flagged"].append(f"{diag.label}, v = {v:g}: a {att.kind} attractor")
+            # No recurrence within the integration's t_max: inconclusive, listed.
+            # Next to v_H the orbit grows from the 0.01 rad kick at the rate
+            # Re lambda ~ (v - v_H) d Re lambda / dv, slower than t_max allows.
+            cyc = diag.cycles_at(v)
+            out["unsettled"].append(
+                f"{diag.label}, v = {v:g}: no attractor by τ = {att.t_end:.0f} (continued stable "
+                f"orbit there: {'yes' if cyc else 'none'}; v - v_H = "
+                f"{v - diag.hopf[0]['v'] if diag.hopf else float('nan'):.1e})"
+            )
+            if not cyc:
+                out["flagged"].append(f"{diag.label}, v = {v:g}: a {att.kind} attractor")
     return out

@@ -127,6 +127,7 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
     dtip = max(r["tip"] for r in results)
     deq = max(r["eq_tip"] for r in results)
     flagged = [f for r in results for f in r["flagged"]]
+    unsettled = [f for r in results for f in r.get("unsettled", [])]
     n = sum(len(r["attractors"]) for r in results)
     return holds(
         name,
@@ -134,13 +135,15 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
         not flagged and dT <= SWEEP_TOL and dtip <= SWEEP_TOL,
         f"{n} attractors by integration: max |ΔT| {dT:.1e}, max |Δ tip extremum| {dtip:.1e} "
         f"on cycles, {deq:.1e} on equilibria; not on a stable continued state: "
-        + ("; ".join(flagged) if flagged else "none"),
+        + ("; ".join(flagged) if flagged else "none")
+        + ("; inconclusive (integration unsettled): " + "; ".join(unsettled) if unsettled else ""),
         reference=f"cycles ≤ {SWEEP_TOL:g} in period and tip extrema; every attractor on a "
         "stable continued state",
         why="the integration (find_attractor, shooting at rtol 1e-7) and the continuation "
         "(rtol 1e-5 scaled near multipliers 1, measured within 3e-8 of rtol 1e-9) are "
         "independent computations of the same orbits; equilibria reached by integration stop "
-        "at the classification's radius, so only their identity is checked (1e-3)",
+        "at the classification's radius, so only their identity is checked (1e-3); an "
+        "integration that finds no attractor by its t_max next to v_H is listed as inconclusive",
         source="fempipe.limit_cycle.find_attractor against fempipe.periodic.cycle_diagram",
         category="numerics",
     )
