@@ -292,7 +292,7 @@ class _BranchAnalysis:
         self.branch = branch
         self.name = name
         self.v_lo, self.v_hi = v_range
-        self.path = _TrackedPath(model, res, method)
+        self.path = _TrackedPath(model, res, method, inherit=True)
         self.parent = parent
         self.stop_at_first = stop_at_first
         self.callback = callback

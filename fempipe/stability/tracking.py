@@ -20,6 +20,7 @@ from .linear import (
     STABILITY_TOL,
     Resolution,
     _analyse,
+    _analyse_inherited,
     _canonical_labels,
     _Eig,
     _eig_dict,
@@ -110,8 +111,12 @@ class _TrackedPath:
         res: Resolution,
         method: str,
         max_depth: int = 6,
+        inherit: bool = False,
     ) -> None:
         self.model = model
+        # Straight states may take their classification from the nearest
+        # straight sample (linear._analyse_inherited): eigenvalues only.
+        self.inherit = inherit
         self.res = res
         self.method = method
         self.max_depth = max_depth
@@ -124,7 +129,14 @@ class _TrackedPath:
         m = self.model.with_params(replace(self.model.params, v=v))
         # At the straight state the matrices are known functions of v
         # (StraightPencil): no Jacobian assembly.
-        matrices = None if q.any() else straight_pencil(m).matrices(v)
+        if q.any():
+            return _analyse(m, q, self.res, self.method)
+        matrices = straight_pencil(m).matrices(v)
+        if self.inherit:
+            near = [e for e, _ in self.samples if not e.q.any()]
+            if near:
+                ref = min(near, key=lambda e: abs(e.v - v))
+                return _analyse_inherited(m, q, self.res, self.method, matrices, ref)
         return _analyse(m, q, self.res, self.method, matrices)
 
     def static_between(self, a: _Eig, b: _Eig, v: float) -> np.ndarray | None:
