@@ -582,8 +582,10 @@ def first_lyapunov_coefficient(
     q, p, w = hc.q, hc.p, hc.omega
     # lambda'(v) = p^H (dA/dv) q along the branch, tangent q_v = -R_q^{-1} R_v.
     v = model.params.v
-    Rq = _dense(model.static_jacobian(q0))
-    qv = -np.linalg.solve(Rq, model.static_parameter_derivative(q0, "v"))
+    rv = model.static_parameter_derivative(q0, "v")
+    # R_v = 0 (the straight pipe at alpha = 0, pi stays static at every v):
+    # q_v = 0 without assembling and solving R_q.
+    qv = -np.linalg.solve(_dense(model.static_jacobian(q0)), rv) if rv.any() else np.zeros(n)
     xv = np.concatenate([qv, np.zeros(n)])
     hv = 1e-4 * max(1.0, abs(v))
     s = max(1.0, float(np.linalg.norm(xv)))  # a step of unit size in (x, v)
