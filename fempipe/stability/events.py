@@ -467,10 +467,12 @@ class _BranchAnalysis:
         labels = self.path.labels
         ca, cb = _unstable_count(a), _unstable_count(b)
         crossings = []
-        for j in range(labels.size):
+        # The eigenvalues unstable at one end only (_state_sign > 0, vectorised).
+        la_all, lb_all = a.lam[ia], b.lam[ib]
+        ua = la_all.real > STABILITY_TOL * np.maximum(1.0, np.abs(la_all))
+        ub = lb_all.real > STABILITY_TOL * np.maximum(1.0, np.abs(lb_all))
+        for j in np.flatnonzero(ua != ub):
             la, lb = a.lam[ia[j]], b.lam[ib[j]]
-            if (_state_sign(la) > 0) == (_state_sign(lb) > 0):
-                continue
             real_a = abs(la.imag) <= IMAG_TOL * max(1.0, abs(la))
             real_b = abs(lb.imag) <= IMAG_TOL * max(1.0, abs(lb))
             if not real_a and not real_b and la.imag < 0 and lb.imag < 0:

@@ -133,7 +133,8 @@ class _TrackedPath:
             return _analyse(m, q, self.res, self.method)
         matrices = straight_pencil(m).matrices(v)
         if self.inherit:
-            near = [e for e, _ in self.samples if not e.q.any()]
+            # (an inherited spectrum is a straight state: no test of its q)
+            near = [e for e, _ in self.samples if e.origin_v is not None or not e.q.any()]
             if near:
                 ref = min(near, key=lambda e: abs(e.v - v))
                 return _analyse_inherited(m, q, self.res, self.method, matrices, ref)
