@@ -265,7 +265,10 @@ def stability_analysis(
     ambiguous, and the peak check and Brent's method run as on any branch),
     and the spectra use K^d(v), C^d(v) formed from fixed matrices
     (:class:`~fempipe.stability.linear.StraightPencil`): no Newton
-    iteration, no Jacobian assembly.  The events agree with those of the
+    iteration, no Jacobian assembly.  Most of these spectra are solved without
+    eigenvectors, their resolved classification taken from the nearest sample
+    where it is unambiguous (:func:`~fempipe.stability.linear._analyse_inherited`;
+    a spectrum with eigenvectors at least every 1.0 in v).  The events agree with those of the
     general continuation to the 1e-10 to which both locate them
     (tests/test_stability_fast.py).  A sign change of det K^d on the points
     the continuation would visit (a branch point, where the general path
