@@ -375,7 +375,10 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
         # point v is no local parameter): shoot there from the orbit interpolated
         # between the two continued orbits around v.
         landed = {round(p.v, 9) for p in br if p.requested}
-        states = json.loads((store / f"a00-{name}.json").read_text())["points"]
+        path = store / f"a00-{name}.json"
+        if not path.exists():  # a store layout of another fempipe.periodic: nothing to fill
+            continue
+        states = json.loads(path.read_text())["points"]
         for v in values:
             if round(v, 9) in landed:
                 continue
