@@ -17,11 +17,8 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only fig07_continuation`
 from __future__ import annotations
 
 import json
-import resource
-import subprocess
-import sys
 
-from fempipe.bench import register
+from fempipe.bench import child_cpu_seconds, register
 
 #: Whole-process CPU target of Fig. 7 by continuation.
 FIG07_TARGET_S = 20.0
@@ -33,15 +30,8 @@ FIG08_10 = [*FIG07, "--alphas", "pi/4,pi/2,3pi/4,pi"]
 
 def _process_cpu(argv: list[str]) -> tuple[float, dict]:
     """CPU seconds (user + sys) of one finished ``python -m fempipe ARGV`` and its JSON."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run(
-        [sys.executable, "-m", "fempipe", *argv], capture_output=True, text=True, check=False
-    )
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    if out.returncode != 0:
-        raise RuntimeError(f"fempipe {' '.join(argv)} failed: {out.stderr.strip()}")
-    return cpu, json.loads(out.stdout)
+    cpu, out = child_cpu_seconds(["-m", "fempipe", *argv])
+    return cpu, json.loads(out)
 
 
 def _agreement(cont: dict, sweep: dict) -> dict:

@@ -24,16 +24,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import statistics
-import subprocess
-import sys
 import time
 
 import numpy as np
 
 from fempipe import Params, PipeModel
-from fempipe.bench import register
+from fempipe.bench import child_cpu_seconds, register
 from fempipe.discretization import DEFAULT_FE, discretization_from_name
 from fempipe.params import PAPER_CASE
 
@@ -102,13 +99,8 @@ ACCURACY_TARGET = 1e-6
 
 def _process_cpu(argv: list[str]) -> tuple[float, dict]:
     """CPU seconds (user + sys) of one finished ``python -m fempipe ARGV`` and its JSON."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run(
-        [sys.executable, "-m", "fempipe", *argv], capture_output=True, text=True, check=True
-    )
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return cpu, json.loads(out.stdout)
+    cpu, out = child_cpu_seconds(["-m", "fempipe", *argv])
+    return cpu, json.loads(out)
 
 
 def _relative_errors(d: dict, ref: dict) -> dict:

@@ -16,7 +16,7 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classic
       0.1, then Brent on the largest real part) with N = 40 and N = 20 modes,
 
     each with its v_cr error against a converged reference computed here
-    (the children load cached bytecode, :func:`_cached_bytecode_env`, after
+    (the children load cached bytecode, :func:`fempipe.bench.child_cpu_seconds`, after
     one untimed run of each command):
     the classical theory on Legendre spectral elements of degree 24
     (:mod:`fempipe.validation.classical`; degrees 12 to 40 agree to ~1e-12).
@@ -33,16 +33,11 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classic
 from __future__ import annotations
 
 import json
-import os
-import resource
-import subprocess
-import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from .bench import register
+from .bench import child_cpu_seconds, register
 
 #: The reference case: the hanging pipe of the classical theory.
 REFERENCE_ARGS = ["--alpha", "0", "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v", "0,10"]
@@ -54,24 +49,19 @@ BASELINE = Path(__file__).resolve().parent / "validation" / "classical_baseline.
 TARGET_RATIO = 1.0
 
 
-def _child(argv: list[str], env: dict) -> tuple[float, dict]:
+def _child(argv: list[str]) -> tuple[float, dict]:
     """(user + system CPU seconds, parsed JSON stdout) of one fresh ``python argv``."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    res = subprocess.run([sys.executable, *argv], capture_output=True, text=True, env=env)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if res.returncode != 0:
-        raise RuntimeError(f"python {' '.join(argv)} failed: {res.stderr.strip()[-500:]}")
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return cpu, json.loads(res.stdout)
+    cpu, out = child_cpu_seconds(argv)
+    return cpu, json.loads(out)
 
 
-def _row(label: str, argv: list[str], runs: int, reference: float, env: dict) -> dict:
+def _row(label: str, argv: list[str], runs: int, reference: float) -> dict:
     """Median CPU seconds of ``runs`` fresh processes (after one untimed run that fills the
     bytecode cache), and the v_cr error of the last one."""
-    _child(argv, env)
+    _child(argv)
     times, out = [], None
     for _ in range(runs):
-        cpu, out = _child(argv, env)
+        cpu, out = _child(argv)
         times.append(cpu)
     v_cr = out["v_cr"]
     err = None if v_cr is None else abs(v_cr - reference)
@@ -106,21 +96,6 @@ def _curved_reference(spec: str) -> float:
     return float(critical_velocity(model, v_max=10.0).v_cr)
 
 
-def _cached_bytecode_env(cache: str) -> dict:
-    """The environment of the children: compiled modules cached in ``cache``.
-
-    An installed package loads its modules from cached bytecode; with
-    PYTHONDONTWRITEBYTECODE set (as some harnesses do) fempipe's own modules
-    would be compiled from source at every start while numpy and scipy load
-    their installed .pyc files, which is not what a user's command costs.
-    Both commands are measured the same way.
-    """
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    env["PYTHONPYCACHEPREFIX"] = cache
-    return env
-
-
 @register("critical_vs_classical")
 def bench_critical_vs_classical(quick: bool = False) -> dict:
     """CPU seconds of ``fempipe critical`` and of the classical baseline, errors, their ratio."""
@@ -131,14 +106,12 @@ def bench_critical_vs_classical(quick: bool = False) -> dict:
     curved_spec = "P3:32" if quick else "P3:64"
     curved_ref = _curved_reference(curved_spec)
     curved = ["-m", "fempipe", "critical", *CURVED_ARGS, "--json"]
-    with tempfile.TemporaryDirectory(prefix="fempipe-bench-pycache-") as cache:
-        env = _cached_bytecode_env(cache)
-        rows = [
-            _row("fempipe critical (alpha 0, P3:16)", fem, runs, ref, env),
-            _row("baseline, 40 beam modes", [*base, "--n", "40"], runs, ref, env),
-            _row("baseline, 20 beam modes", [*base, "--n", "20"], runs, ref, env),
-            _row("fempipe critical (paper, alpha pi/2)", curved, runs, curved_ref, env),
-        ]
+    rows = [
+        _row("fempipe critical (alpha 0, P3:16)", fem, runs, ref),
+        _row("baseline, 40 beam modes", [*base, "--n", "40"], runs, ref),
+        _row("baseline, 20 beam modes", [*base, "--n", "20"], runs, ref),
+        _row("fempipe critical (paper, alpha pi/2)", curved, runs, curved_ref),
+    ]
     ratio = rows[0]["cpu_seconds"] / rows[1]["cpu_seconds"]
     return {
         "runs": runs,
