@@ -98,10 +98,17 @@ def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
     return sweep(m, values, "up", q0=q0, qdot0=qdot0, perturbation=perturbation)
 
 
+#: Shooting tolerance of every limit cycle found by integration here: 1e-7 puts
+#: its period and tip extrema within ~1e-8 of the converged cycle (the library's
+#: default 1e-5 only to ~5e-7 relative, too close to the 1e-6 asked of the
+#: agreement with the continuation and to the mesh differences the cases measure).
+CHECK_SHOOT_RTOL = 1e-7
+
+
 @functools.lru_cache(maxsize=64)
 def _attractor_cached(spec: str, alpha: float, v: float):
     disc = _disc_from_spec(spec)
-    return find_attractor(model_for(disc, alpha, v))
+    return find_attractor(model_for(disc, alpha, v), shoot_rtol=CHECK_SHOOT_RTOL)
 
 
 _MODAL_LABEL = re.compile(r"^N = (\d+)(?: \((\w+)\))?$")
@@ -117,7 +124,8 @@ def _disc_from_spec(spec: str):
 
 
 def attractor(label: str, alpha: float, v: float):
-    """The attractor reached from the static state + 0.01 rad in mode 1 (cached per process)."""
+    """The attractor reached from the static state + 0.01 rad in mode 1, cycles shot to
+    :data:`CHECK_SHOOT_RTOL` (cached per process)."""
     return _attractor_cached(label, float(alpha), float(v))
 
 
@@ -195,7 +203,7 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
             return shoot(m, project(guess_disc, q0, disc), project(guess_disc, p0, disc), period)
         except ShootingError:
             pass
-    att = find_attractor(m)
+    att = find_attractor(m, shoot_rtol=CHECK_SHOOT_RTOL)
     return att.cycle if att.kind == "periodic" else None
 
 
@@ -431,22 +439,10 @@ def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:
     return _continued_cached(label, float(alpha), tuple(sorted(float(v) for v in values)))
 
 
-#: Integration tolerance of the shooting of the independent check: 1e-7 puts
-#: its period and tip extrema within ~1e-8 of the converged cycle (the default
-#: 1e-5 only to ~5e-7 relative, too close to the 1e-6 asked of the agreement).
-CHECK_SHOOT_RTOL = 1e-7
-
-
-@functools.lru_cache(maxsize=64)
-def _checked_cached(label: str, alpha: float, v: float):
-    return find_attractor(model_for(_disc_from_spec(label), alpha, v), shoot_rtol=CHECK_SHOOT_RTOL)
-
-
 def checked_attractor(label: str, alpha: float, v: float):
     """The attractor reached by integration from the static state + 0.01 rad in
-    mode 1 (:func:`fempipe.limit_cycle.find_attractor`, cycles shot to
-    :data:`CHECK_SHOOT_RTOL`; cached per process)."""
-    return _checked_cached(label, float(alpha), float(v))
+    mode 1 (:func:`attractor`: cycles shot to :data:`CHECK_SHOOT_RTOL`; cached per process)."""
+    return attractor(label, alpha, v)
 
 
 def sweep_check(diag: ContinuedDiagram, vs) -> dict:
