@@ -149,6 +149,37 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
     )
 
 
+def period_one(name: str, claim: str, diags: dict, checked: list, source: str) -> Check:
+    """The post-flutter attractors are period-1: the stable continued cycles at the
+    requested v have every non-trivial multiplier inside the unit circle, their branches
+    no period doubling or Neimark-Sacker point, and every cycle found by integration
+    (``checked``, :func:`~fempipe.validation.dynamic_runs.sweep_check`) is period-1."""
+    stable_cyc = [
+        p
+        for dg in diags.values()
+        for br in dg.branches.values()
+        for p in br
+        if p.stable and p.requested
+    ]
+    bif = [sp for dg in diags.values() for sp in dg.special if sp["type"] != "fold"]
+    integ = [a for r in checked for a in r["attractors"].values() if a.kind == "periodic"]
+    return holds(
+        name,
+        claim,
+        bool(stable_cyc)
+        and not bif
+        and all(p.max_multiplier < 1 for p in stable_cyc)
+        and all(a.period_n == 1 for a in integ),
+        f"{len(stable_cyc)} stable continued cycles at the requested v, {len(bif)} "
+        f"period-doubling or Neimark-Sacker points on the branches; "
+        f"{sum(a.period_n == 1 for a in integ)} of {len(integ)} cycles found by "
+        "integration are period-1",
+        why="a stable period-1 orbit whose branch has no period doubling or torus "
+        "bifurcation stays the attractor; integration checks a few v",
+        source=source,
+    )
+
+
 def run(quick: bool = False) -> CaseResult:
     """Diagrams by continuation, the brute-force check, onsets and checks; see the module
     docstring."""
@@ -187,24 +218,12 @@ def run(quick: bool = False) -> CaseResult:
             checked,
         )
     )
-    cyc = [p for dg in diags.values() for pts in dg.branches.values() for p in pts]
-    stable_cyc = [p for p in cyc if p.stable and p.requested]
-    bif = [s for dg in diags.values() for s in dg.special if s["type"] != "fold"]
-    integ = [a for r in checked for a in r["attractors"].values() if a.kind == "periodic"]
     checks.append(
-        holds(
+        period_one(
             "period_one",
             "every post-flutter attractor is a period-1 limit cycle (Sec. 5)",
-            bool(stable_cyc)
-            and not bif
-            and all(p.max_multiplier < 1 for p in stable_cyc)
-            and all(a.period_n == 1 for a in integ),
-            f"{len(stable_cyc)} stable continued cycles at the requested v, "
-            f"{len(bif)} period-doubling or Neimark-Sacker points on the branches; "
-            f"{sum(a.period_n == 1 for a in integ)} of {len(integ)} cycles found by "
-            "integration are period-1",
-            why="a stable period-1 orbit whose branch has no period doubling or torus "
-            "bifurcation stays the attractor; integration checks a few v",
+            diags,
+            checked,
             source="paper Sec. 5: 'all these nonlinear oscillations after flutter instability are period-1'",
         )
     )
