@@ -118,7 +118,6 @@ def _parse(args):
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.bifurcation import bifurcation_diagram
-    from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
 
     common.refuse_hysteretic(args, "bifurcation")
@@ -193,23 +192,13 @@ def run(args: argparse.Namespace) -> int:
         result["params"]["alphas"] = alphas
     result["points"] = diagram.points
     result["wall_time"] = diagram.wall_time
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        output.record(store_dir)
-        _write_outputs(output, result)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_table(result)
-    if output is not None:
-        output.report(args)
+    _deliver(args, store_dir, result)
     return 0
 
 
 def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
     """``--method continuation``: :func:`fempipe.periodic.cycle_diagram`."""
     from fempipe.errors import SolverError
-    from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
     from fempipe.periodic import cycle_diagram
 
@@ -247,24 +236,20 @@ def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
     d = diagram.to_dict()
     for key in ("points", "branches", "special_points", "hopf_points", "errors", "wall_time"):
         result[key] = d[key]
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        output.record(store_dir)
-        _write_outputs(output, result)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_table(result)
-        for sp in result["special_points"]:
-            print(
-                f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} "
-                f"v = {sp['v']:.6g}"
-            )
-    if output is not None:
-        output.report(args)
+    _deliver(args, store_dir, result)
     if result["errors"]:
         raise SolverError("; ".join(result["errors"]))
     return 0
+
+
+def _deliver(args, store_dir, result: dict) -> None:
+    """The point store recorded in --out, then :func:`fempipe.cli.reporting.deliver`."""
+    output = reporting.Output(args.out) if args.out is not None else None
+    if output is not None:
+        output.record(store_dir)
+    reporting.deliver(
+        args, result, output, lambda out: _write_outputs(out, result), lambda: _print_table(result)
+    )
 
 
 def _write_outputs(output: reporting.Output, result) -> None:
@@ -337,4 +322,8 @@ def _print_table(result: dict) -> None:
             f"{pt['alpha']:8.4g} {direction:>4s} {pt['v']:8.4g} {kind:>12s} "
             f"{per:>10s} {pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f} "
             f"{pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} {pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
+        )
+    for sp in result.get("special_points", []):
+        print(
+            f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} v = {sp['v']:.6g}"
         )
