@@ -253,6 +253,8 @@ def _deliver(args, store_dir, result: dict) -> None:
 
 
 def _write_outputs(output: reporting.Output, result) -> None:
+    import textwrap
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -279,7 +281,8 @@ def _write_outputs(output: reporting.Output, result) -> None:
                     special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
                     hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
                 )
-            fig.suptitle(_caption(result), fontsize=9)
+            # Wrapped to the figure's width (about 70 characters of 9 pt per 5.5 in).
+            fig.suptitle(textwrap.fill(_caption(result), 70 * len(groups)), fontsize=9)
             output.figure(f"{key}.png", fig, dpi=130)
         finally:
             plt.close(fig)

@@ -255,6 +255,12 @@ def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> 
     for k, ((kind, name), pts) in enumerate(sorted(groups.items())):
         if kind == "static":
             pts = sorted(pts, key=lambda p: p["v"])
+            # The stability changes at a Hopf point between two equilibria, not at the
+            # next requested v: the Hopf point joins the line with the later state's flag.
+            for hv, hy in start.values():
+                k = int(np.searchsorted([p["v"] for p in pts], hv))
+                if 0 < k < len(pts) and pts[k - 1].get("stable") != pts[k].get("stable"):
+                    pts.insert(k, {**pts[k], "v": hv, key: [hy, hy], "requested": False})
         color = "k" if kind == "static" else f"C{(k % 8) + 1}"
         v = np.array([p["v"] for p in pts])
         lo = np.array([p[key][0] for p in pts], dtype=float)
