@@ -395,7 +395,7 @@ def beam_roots(n: int) -> np.ndarray:
     -------
     ndarray, shape (n,)
     """
-    from scipy.optimize import brentq
+    from .rootfinding import brentq
 
     out = np.empty(int(n))
     for r in range(1, int(n) + 1):

@@ -56,7 +56,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import brentq
 
 from .discretization import Discretization
 from .dynamics import Trajectory, initial_state
@@ -65,6 +64,7 @@ from .kinematics import tip_values
 from .operators import PipeModel
 from .parallel import single_blas_thread
 from .radau import IntegrationError, Radau, refuse_hysteretic
+from .rootfinding import brentq
 from .stability import linearly_stable
 
 __all__ = [

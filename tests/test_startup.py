@@ -75,6 +75,23 @@ def test_a_command_imports_only_its_own_subcommand_module():
     assert _fresh(code) == ["fempipe.cli.critical"]
 
 
+def test_critical_and_simulate_do_not_import_scipy_optimize():
+    """``scipy.optimize`` (with scipy.spatial, special, fft) is a third of their start-up.
+
+    Brent's method (:mod:`fempipe.rootfinding`) and the eigenvalue matching
+    (:mod:`fempipe.stability.matching`) stand in for its two functions they use.
+    """
+    code = (
+        "import json, sys\n" + _LOADED + "codes = [\n"
+        "    quiet(['critical', '--alpha', '0', '--fe', 'P2:4', '--v', '0,8']),\n"
+        "    quiet(['simulate', '--alpha', '0', '--v', '8', '--fe', 'P2:4', '--json']),\n"
+        "]\n"
+        "print(json.dumps([codes, loaded(['scipy.linalg', 'scipy.optimize', "
+        "'scipy.spatial', 'scipy.integrate'])]))\n"
+    )
+    assert _fresh(code) == [[0, 0], ["scipy.linalg"]]
+
+
 # The public names of the package, as the eager ``__init__`` imported them.
 from fempipe.discretization import FiniteElement, Modal, parse_discretization  # noqa: E402
 from fempipe.errors import ParamError, SolverError  # noqa: E402

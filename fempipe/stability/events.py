@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from ..operators import PipeModel
 from ..params import Params
+from ..rootfinding import brentq
 from ..static import NewtonError
 from .linear import STABILITY_TOL, Resolution, _Eig
 from .tracking import _complete, _l2, _reference_tracker, _TrackedPath, _Tracker
@@ -405,6 +405,8 @@ class _BranchAnalysis:
             def g(v: float, lo=lo, hi=hi, ilo=ilo, ihi=ihi, sgn=sgn) -> float:
                 e, kk = self._eig_at(lo, hi, ilo, ihi, v)
                 return -sgn * e.lam[kk].real
+
+            from scipy.optimize import minimize_scalar  # rare: a narrow window
 
             opt = minimize_scalar(g, bounds=(lo.v, hi.v), method="bounded", options={"xatol": 1e-7})
             e, kk = self._eig_at(lo, hi, ilo, ihi, float(opt.x))

@@ -17,11 +17,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from scipy.optimize import brentq, linear_sum_assignment
 
 from ..operators import PipeModel
 from ..parallel import single_blas_thread
 from ..params import Params
+from ..rootfinding import brentq
+from .matching import assignment
 
 log = logging.getLogger(__name__)
 #: Relative error of the clamped-free beam frequency up to which a
@@ -298,7 +299,7 @@ class _Halves:
         if lower.size and upper.size:
             # The real eigensolvers return exact conjugate pairs.
             D = np.abs(np.conj(lam[lower])[:, None] - lam[upper][None, :])
-            rows, cols = linear_sum_assignment(D)
+            rows, cols = assignment(D)
             scale = np.maximum(1.0, np.abs(lam[lower][rows]))
             ok = D[rows, cols] <= 1e-12 * scale
             partner[rows[ok]] = cols[ok]
@@ -353,7 +354,7 @@ def _match(pred: np.ndarray, Xpred: np.ndarray, lam: np.ndarray, X: np.ndarray, 
     dist = np.abs(pred[:, None] - lam[None, :]) / np.maximum(1.0, np.abs(pred))[:, None]
     Xu = X / np.linalg.norm(X, axis=0)
     D = np.minimum(1.0, dist) + 1.0 - np.abs(Xpred.conj().T @ Xu)
-    rows, cols = linear_sum_assignment(D)
+    rows, cols = assignment(D)
     pick = np.empty(pred.size, dtype=int)
     pick[rows] = cols
     k = np.arange(pred.size)
@@ -661,7 +662,7 @@ def _canonical_labels(e: _Eig, idx: np.ndarray) -> np.ndarray:
         return np.zeros(0, dtype=int)
     W = e.weights[:, idx].T  # (k, n_can)
     cost = -np.repeat(W, 2, axis=1)
-    rows, cols = linear_sum_assignment(cost)
+    rows, cols = assignment(cost)
     labels = np.empty(idx.size, dtype=int)
     labels[rows] = cols // 2 + 1
     return labels

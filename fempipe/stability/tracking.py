@@ -10,7 +10,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from ..operators import PipeModel
 from ..params import Params
@@ -29,6 +28,7 @@ from .linear import (
     single_blas,
     straight_pencil,
 )
+from .matching import assignment
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +64,7 @@ class _Tracker:
     def match(self, new: _Eig, pred: np.ndarray):
         """Indices in ``new`` of the tracked eigenvalues, and an ambiguity flag per eigenvalue."""
         D = np.abs(pred[:, None] - new.lam[None, :])
-        rows, cols = linear_sum_assignment(D)
+        rows, cols = assignment(D)
         idx = np.empty(pred.size, dtype=int)
         idx[rows] = cols
         d1 = D[np.arange(pred.size), idx]
@@ -269,7 +269,7 @@ def _complete(e: _Eig, tracker: _Tracker) -> _Tracker:
     free = np.maximum(0, 2 - used)
     slots = np.repeat(np.arange(n_can), free)
     cost = -e.weights[:, extra].T[:, slots]
-    rows, cols = linear_sum_assignment(cost)
+    rows, cols = assignment(cost)
     labels = np.zeros(extra.size, dtype=int)
     labels[rows] = slots[cols] + 1
     return _Tracker(
