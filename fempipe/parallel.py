@@ -51,8 +51,6 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from threadpoolctl import threadpool_limits
-
 if TYPE_CHECKING:
     import multiprocessing.context
     from concurrent.futures import Executor, ProcessPoolExecutor
@@ -160,7 +158,24 @@ def single_blas_thread() -> contextlib.AbstractContextManager:
     >>> with single_blas_thread():
     ...     pass
     """
-    return threadpool_limits(limits=1, user_api="blas")
+    return _blas_controller().limit(limits=1, user_api="blas")
+
+
+#: threadpoolctl's controllers by which of numpy and scipy.linalg (each with
+#: its own OpenBLAS) are loaded: a controller scans the process's shared
+#: libraries once, where ``threadpool_limits`` rescans them on every call
+#: (about 1 ms each, many calls per limit cycle).
+_CONTROLLERS: dict = {}
+
+
+def _blas_controller():
+    key = tuple(name in sys.modules for name in ("numpy", "scipy.linalg"))
+    ctl = _CONTROLLERS.get(key)
+    if ctl is None:
+        from threadpoolctl import ThreadpoolController
+
+        ctl = _CONTROLLERS[key] = ThreadpoolController()
+    return ctl
 
 
 def _running(pid: int) -> bool:
@@ -204,6 +219,7 @@ def _init_worker(parent: int) -> None:
     # A worker started by "spawn" or "forkserver" has not loaded numpy's and
     # scipy's BLAS yet: load them, or the limit would miss them.
     import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1, user_api="blas")
     if sys.platform.startswith("linux"):

@@ -8,6 +8,7 @@ whether the parent could clean up (SIGTERM, SIGINT) or not (SIGKILL).
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import multiprocessing
 import os
@@ -112,6 +113,24 @@ def test_single_blas_thread_limits_and_restores():
     with single_blas_thread():
         assert set(_blas_threads()) == {1}
     assert _blas_threads() == before
+
+
+def test_single_blas_thread_sees_a_blas_loaded_after_its_first_use():
+    """The cached controller is rescanned once scipy.linalg (its own OpenBLAS) is loaded."""
+    code = (
+        "import json, numpy\n"
+        "from threadpoolctl import threadpool_info\n"
+        "from fempipe.parallel import single_blas_thread\n"
+        "with single_blas_thread():\n"
+        "    pass\n"
+        "import scipy.linalg\n"
+        "with single_blas_thread():\n"
+        "    inside = [d['num_threads'] for d in threadpool_info() if d['user_api'] == 'blas']\n"
+        "print(json.dumps(inside))\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    inside = json.loads(res.stdout)
+    assert len(inside) >= 2 and set(inside) == {1}
 
 
 @pytest.mark.parametrize("method", multiprocessing.get_all_start_methods())

@@ -339,3 +339,4 @@ def test_bench_critical_vs_classical_quick_run():
     assert b20["rel_error"] > b40["rel_error"]
     assert out["table"][3]["rel_error"] < 1e-6
     assert out["ratio_fempipe_over_baseline40"] > 0
+    assert len(out["ratio_by_round"]) == out["runs"] == 1
