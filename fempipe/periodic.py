@@ -30,7 +30,10 @@ local parametrisation in Rheinboldt's sense).  The Jacobian of the first rows
 is [M - I, F(phi_T), d phi_T / dv] with M the monodromy matrix, the exact
 derivative of the discrete flow accumulated step by step by the integrator
 (``Radau(sensitivity=True)``, as :func:`fempipe.limit_cycle.shoot` uses it),
-and d phi_T / dv a one-sided difference in v (see :data:`DV`).  Newton's
+and d phi_T / dv accumulated in the same integration, exact for the discrete
+flow too (the residual of Eq. (20) is quadratic in v, so its v-derivative at
+each stage is exact from three values; :class:`fempipe.radau.Radau`,
+``velocity_sensitivity``): no second integration at a shifted v.  Newton's
 method reuses the monodromy matrix while the residual falls at least four
 times per iteration (chord Newton), as the sweep's shooting does.
 
@@ -112,14 +115,6 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Relative step of the one-sided difference d phi_T / dv.  The flow depends
-#: smoothly on v apart from the step-size sequence, whose jumps change phi_T by
-#: about the integration tolerance (1e-6 .. 1e-7); with dv = 1e-4 (1 + |v|)
-#: that noise is below 1e-2 of the column and the truncation error
-#: dv |d^2 phi / dv^2| is of the same size.  Only the arclength corrector uses
-#: the column; an error of this size slows Newton down but does not move the
-#: solution, which is a zero of the residual whatever the Jacobian.
-DV = 1e-4
 #: Largest turn of the branch (rad) between two consecutive secants before
 #: the step is rejected and halved.
 MAX_ANGLE = 0.5
@@ -484,6 +479,7 @@ class _Flow:
     xT: np.ndarray
     fT: np.ndarray
     monodromy: np.ndarray | None
+    dv: np.ndarray | None  # d phi_T(x) / dv at fixed x and T
     steps: int
     rejected: int
     record: list
@@ -501,6 +497,7 @@ def _flow(model: PipeModel, x: np.ndarray, T: float, rtol: float, sensitivity: b
         xT=np.r_[st.q, st.qdot],
         fT=np.r_[st.qdot, st.qddot],
         monodromy=st.sensitivity_matrix if sensitivity else None,
+        dv=st.velocity_sensitivity if sensitivity else None,
         steps=st.stats.steps,
         rejected=st.stats.rejected_steps,
         record=record,
@@ -675,13 +672,7 @@ class _Continuer:
                 J[:n2, n2] = fl.fT
                 J[n2, :n2] = f_ref
                 if not fixed_v:
-                    dv = DV * (1.0 + abs(v))
-                    try:
-                        fl2 = _flow(self.at(v + dv), x, T, rtol, sensitivity=False)
-                    except IntegrationError as exc:
-                        raise _CorrectorError(str(exc)) from None
-                    self.integrations += 1
-                    J[:n2, -1] = (fl2.xT - fl.xT) / dv
+                    J[:n2, -1] = fl.dv
                     J[-1] = tangent * self.S
             stale = not need and res > res_prev / 4
             res_prev = res

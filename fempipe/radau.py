@@ -47,7 +47,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -257,8 +257,12 @@ def _from_tip(quad, f: np.ndarray) -> np.ndarray:
 
 #: Up to this many quadrature points the integration operators are applied as
 #: dense (n_q, n_q) matrices (one BLAS product; O(n_q^2) work, which beyond
-#: this is more than the O(n_q) of :func:`_cumulative`).
-DENSE_INTEGRALS_MAX = 512
+#: this is more than the O(n_q) of :func:`_cumulative`).  Measured, one
+#: Jacobian evaluation (best of 5x50, one BLAS thread), dense against cell-wise:
+#: P3:4 (n_q = 24) 0.15 against 0.22 ms, P3:16 (96) 1.11 against 1.16 ms, the
+#: sine modes N = 3, 4 (256) 0.32-0.37 against 0.25-0.29 ms, P3:64 (384) 33
+#: against 27 ms.
+DENSE_INTEGRALS_MAX = 128
 
 
 def _integrals(quad):
@@ -357,6 +361,68 @@ def _batched_jacobians(model: PipeModel):
     return jacobians
 
 
+def _velocity_derivative(model: PipeModel):
+    """``(Q, P, Acc) -> dR_i/dv`` of the three stages, shape (3, n), for steady flow.
+
+    Only two terms of Eq. (20) depend on v: the follower force, v^2 times
+    :meth:`~fempipe.operators.PipeModel.follower` at v = 1, and the Coriolis
+    force, v times :meth:`~fempipe.operators.PipeModel.coriolis` at v = 1; so
+    dR/dv = 2 v follower_1 + coriolis_1, exactly (for the plain pipe the
+    three stages in one evaluation, as :func:`_batched_residual`).  A subclass of PipeModel
+    may add terms: for it the derivative is taken from R at v, v + 1, v + 2,
+    exact for any R of degree two in v, R'(v) = (-3 R(v) + 4 R(v + 1) - R(v + 2)) / 2
+    (``tests/test_dynamics.py`` checks that the two agree).
+    """
+    v = model.params.v
+    p = model.params
+    if type(model) is PipeModel and not (p.end_mass or p.external_damping or p.springs):
+        # Batched over the stages, as _batched_residual (same terms).
+        disc, quad = model.disc, model.quad
+        Phi, tip = disc.Phi, np.asarray(disc.tip)
+        _, from_tip = _integrals(quad)
+        two_v, c1 = 2.0 * v, 2.0 * math.sqrt(p.beta)
+
+        def batched(Q, P, Acc):
+            th = np.asarray(Phi @ Q.T)
+            th_d = np.asarray(Phi @ P.T)
+            nrm = np.stack([-np.sin(th), np.cos(th)], axis=1)
+            G = from_tip(c1 * th_d[:, None] * nrm)
+            local = two_v * np.sin((Q @ tip)[None, :] - th)
+            local = local + np.einsum("qcs,qcs->qs", nrm, G)
+            return model._test(local).T
+
+        return batched
+    if type(model) is PipeModel:
+        unit = model.with_params(replace(model.params, v=1.0))
+
+        def derivative(Q, P, Acc):
+            out = np.empty(Q.shape)
+            for i in range(3):
+                fl = unit.fields(Q[i], P[i])
+                out[i] = 2.0 * v * unit.follower(fl) + unit.coriolis(fl)
+            return out
+
+        return derivative
+    r0, r1, r2 = (
+        model.with_params(replace(model.params, v=v + k)).residual for k in (0.0, 1.0, 2.0)
+    )
+
+    def three_point(Q, P, Acc):
+        return np.stack(
+            [
+                0.5
+                * (
+                    4.0 * r1(Q[i], P[i], Acc[i])
+                    - 3.0 * r0(Q[i], P[i], Acc[i])
+                    - r2(Q[i], P[i], Acc[i])
+                )
+                for i in range(3)
+            ]
+        )
+
+    return three_point
+
+
 @dataclass
 class _Stats:
     steps: int = 0
@@ -395,7 +461,8 @@ class Radau:
     sensitivity : bool
         Accumulate the derivative of the discrete flow map with respect to
         the initial state (the monodromy matrix over a period; see
-        :attr:`sensitivity_matrix`).
+        :attr:`sensitivity_matrix`) and, with steady flow, with respect to
+        the flow velocity v at fixed initial state (:attr:`velocity_sensitivity`).
 
     Notes
     -----
@@ -475,6 +542,12 @@ class Radau:
         self._jacobians1 = None if flow is not None else _batched_jacobians(model)
         self.sensitivity = bool(sensitivity)
         self.sensitivity_matrix = np.eye(2 * n) if sensitivity else None
+        # d(q, q')/dv of the discrete flow map, steady flow only (a flow
+        # history has no single v to differentiate by).
+        self.velocity_sensitivity = np.zeros(2 * n) if sensitivity and flow is None else None
+        self._stage_residuals_v = (
+            _velocity_derivative(model) if self.velocity_sensitivity is not None else None
+        )
 
     # ------------------------------------------------------------------
     def _model_at(self, t: float) -> tuple[PipeModel, float]:
@@ -716,7 +789,10 @@ class Radau:
 
         Differentiating R(Q_i, P_i, A_i) = 0 with Q, P the stage formulas:
         [M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i] dA_j = -K_i dq0 - (c_i h K_i + D_i) dp0,
-        and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate).
+        and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate).  With steady
+        flow, the same matrix with the right side -dR_i/dv gives the
+        derivative by v at fixed y0 (:func:`_velocity_derivative`), chained
+        over the steps as dy_{k+1}/dv = S_k dy_k/dv + (dy_{k+1}/dv at fixed y_k).
         """
         n = self.n
         jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
@@ -725,18 +801,25 @@ class Radau:
         big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
         big[np.arange(3), :, np.arange(3), :] += Ms
         rhs = np.concatenate([-Ks, -(C[:, None, None] * h * Ks + Ds)], axis=2)
-        dA = np.linalg.solve(big.reshape(3 * n, 3 * n), rhs.reshape(3 * n, 2 * n))
-        dA = dA.reshape(3, n, 2 * n)
+        if self._stage_residuals_v is not None:
+            # dA/dv at fixed y0: the same matrix, the right side -dR_i/dv.
+            rhs = np.concatenate([rhs, -self._stage_residuals_v(Q, P, acc)[:, :, None]], axis=2)
+        dA = np.linalg.solve(big.reshape(3 * n, 3 * n), rhs.reshape(3 * n, -1))
+        dA = dA.reshape(3, n, -1)
+        dq = h * h * np.einsum("j,jab->ab", A2[2], dA)
+        dp = h * np.einsum("j,jab->ab", A[2], dA)
         S = np.zeros((2 * n, 2 * n))
         S[:n, :n] = np.eye(n)
         S[:n, n:] = h * np.eye(n)
         S[n:, n:] = np.eye(n)
-        S[:n] += h * h * np.einsum("j,jab->ab", A2[2], dA)
-        S[n:] += h * np.einsum("j,jab->ab", A[2], dA)
+        S[:n] += dq[:, : 2 * n]
+        S[n:] += dp[:, : 2 * n]
         # The last stage is the end of the step (c_3 = 1): its Jacobians are
         # those at the next step's start, where step() may want them.
         self._stage3_jac = jac[2]
         self.sensitivity_matrix = S @ self.sensitivity_matrix
+        if self._stage_residuals_v is not None:
+            self.velocity_sensitivity = S @ self.velocity_sensitivity + np.r_[dq[:, -1], dp[:, -1]]
 
     # ------------------------------------------------------------------
     def dense(self, t: float) -> tuple[np.ndarray, np.ndarray]:

@@ -327,3 +327,60 @@ def test_integrator_jacobians_are_the_model_jacobians(disc):
     np.testing.assert_allclose(_cumulative(m.quad, f), m.quad.cumulative(f), atol=1e-14)
     np.testing.assert_allclose(_from_tip(m.quad, f), m.quad.from_tip(f), atol=1e-14)
     assert _batched_jacobians(PipeModel(disc, Params(v=9.0, end_mass=0.1))) is None
+
+
+# ------------------------------------------------ sensitivity to the flow --
+class _Subclassed(PipeModel):
+    """A PipeModel subclass: its velocity derivative takes the three-point path."""
+
+
+@pytest.mark.parametrize(
+    "disc", [FiniteElement(4, 2), FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str
+)
+@pytest.mark.parametrize(
+    "extra, cls",
+    [({}, PipeModel), ({"end_mass": 0.2, "springs": ((5.0, 0.5),)}, PipeModel), ({}, _Subclassed)],
+    ids=["batched", "variants", "subclass"],
+)
+def test_velocity_derivative_of_the_stage_residuals(disc, extra, cls):
+    """dR/dv of the three stages (used for d phi_T/dv) against a central difference
+    of PipeModel.residual in v (exact for R quadratic in v, up to its rounding).
+    Every v-dependent term enters: Coriolis (beta) and follower (its v^2)."""
+    from fempipe.radau import _velocity_derivative
+
+    rng = np.random.default_rng(5)
+    base = dict(alpha=0.7, mu=0.02, beta=0.3, gamma=5.0, **extra)
+    m = cls(disc, Params(v=9.0, **base))
+    Q, P, A = (0.5 * rng.standard_normal((3, m.n)) for _ in range(3))
+    got = _velocity_derivative(m)(Q, P, A)
+    dv = 0.5  # R is quadratic in v: the central difference is exact for any dv
+    hi, lo = (cls(disc, Params(v=9.0 + s * dv, **base)) for s in (1.0, -1.0))
+    ref = np.array(
+        [(hi.residual(*z) - lo.residual(*z)) / (2 * dv) for z in zip(Q, P, A, strict=True)]
+    )
+    assert np.max(np.abs(got - ref)) < 1e-12 * np.max(np.abs(ref))
+
+
+@pytest.mark.parametrize("disc", [FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str)
+def test_velocity_sensitivity_of_the_flow_map(disc):
+    """Radau's d phi_T(x)/dv (accumulated with the monodromy) against a central
+    difference of the flow map replayed on the same steps, at v = 7 +- 1e-5."""
+    params = dict(alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3)
+    m = PipeModel(disc, Params(v=7.0, **params))
+    q0, p0 = initial_state(m, 1, 0.3)
+    st = Radau(m, q0, p0, rtol=1e-8, sensitivity=True)
+    hs = [st.last[1] for _ in st.steps(0.3)]
+
+    def flow(v):
+        s = Radau(m.with_params(Params(v=v, **params)), q0, p0, rtol=1e-8)
+        t = 0.0
+        for h in hs:
+            s.h, s._lu = h, None
+            s.step(t + h)
+            t += h
+        return np.r_[s.q, s.qdot]
+
+    fd = (flow(7.0 + 1e-5) - flow(7.0 - 1e-5)) / 2e-5
+    assert np.max(np.abs(st.velocity_sensitivity - fd)) < 1e-7 * np.max(np.abs(fd))
+    with_flow = Radau(m, q0, p0, sensitivity=True, flow=PulsatingFlow(7.0, 0.1, 2.0))
+    assert with_flow.velocity_sensitivity is None  # no single v to differentiate by
