@@ -193,6 +193,39 @@ def acceleration(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float
     return -sla.cho_solve(sla.cho_factor(M), r)
 
 
+#: Up to this many entries (n_q n) Phi, K and Phi^T W are applied as dense
+#: arrays in the batched stage functions: for the small systems of limit
+#: cycles and continuation (P3:16: 96 x 48) a dense product costs a few
+#: microseconds where scipy.sparse's dispatch alone costs about ten.
+DENSE_OPERATORS_MAX = 32768
+
+
+def _stage_operators(model: PipeModel):
+    """(Phi, K, Phi^T W): dense for small discretisations, else as the model has them."""
+    disc = model.disc
+    Phi, K, PhiT_W = disc.Phi, disc.K, model._PhiT_W
+    if model.quad.n_q * model.n <= DENSE_OPERATORS_MAX:
+        Phi, K, PhiT_W = (
+            np.asarray(a.toarray() if hasattr(a, "toarray") else a, dtype=float)
+            for a in (Phi, K, PhiT_W)
+        )
+    return Phi, K, PhiT_W
+
+
+def _rms(x: np.ndarray) -> float:
+    return math.sqrt(float(x @ x) / x.size)
+
+
+def _frames(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normal and tangent (n_q, 2, S) of angles th (n_q, S)."""
+    s, c = np.sin(th), np.cos(th)
+    nrm = np.empty((th.shape[0], 2, th.shape[1]))
+    tng = np.empty_like(nrm)
+    nrm[:, 0], nrm[:, 1] = -s, c
+    tng[:, 0], tng[:, 1] = c, s
+    return nrm, tng
+
+
 def _batched_residual(model: PipeModel):
     """``R(Q_i, P_i, A_i)`` of the three stages in one evaluation, or None where unavailable.
 
@@ -214,7 +247,8 @@ def _batched_residual(model: PipeModel):
     if type(model) is not PipeModel or p.end_mass or p.external_damping or p.springs:
         return None
     disc, quad = model.disc, model.quad
-    Phi, K, tip = disc.Phi, disc.K, np.asarray(disc.tip)
+    Phi, K, PhiT_W = _stage_operators(model)
+    tip = np.asarray(disc.tip)
     lever = p.gamma * (1.0 - model.x)[:, None]
     cumulative, from_tip = _integrals(quad)
     v2, cv, mu, alpha = p.v * p.v, 2.0 * p.v * math.sqrt(p.beta), p.mu, p.alpha
@@ -224,15 +258,13 @@ def _batched_residual(model: PipeModel):
         th = np.asarray(Phi @ Q.T)
         th_d = np.asarray(Phi @ P.T)
         th_dd = np.asarray(Phi @ Acc.T)
-        s, c = np.sin(th), np.cos(th)
-        nrm = np.stack([-s, c], axis=1)
-        tng = np.stack([c, s], axis=1)
+        nrm, tng = _frames(th)
         F = cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
         F = F + cv * th_d[:, None] * nrm
         G = from_tip(F)
         local = lever * np.sin(th + alpha) + v2 * np.sin((Q @ tip)[None, :] - th)
         local = local + np.einsum("qcs,qcs->qs", nrm, G)
-        return (np.asarray(K @ (Q + mu * P).T) + model._test(local)).T
+        return (np.asarray(K @ (Q + mu * P).T) + np.asarray(PhiT_W @ local)).T
 
     return residual
 
@@ -324,9 +356,7 @@ def _batched_jacobians(model: PipeModel):
     def jacobians(Q: np.ndarray, P: np.ndarray, Acc: np.ndarray):
         S = Q.shape[0]
         th, th_d, th_dd = Phi @ Q.T, Phi @ P.T, Phi @ Acc.T  # (n_q, S)
-        s, c = np.sin(th), np.cos(th)
-        t = np.stack([c, s], axis=1)  # (n_q, 2, S)
-        nrm = np.stack([-s, c], axis=1)
+        nrm, t = _frames(th)  # (n_q, 2, S)
         F = cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * t)
         F = F + cv * th_d[:, None] * nrm
         # The three C(phi ...) fields of dF/dq, dF/dq' and of the mass matrix in one call.
@@ -377,19 +407,19 @@ def _velocity_derivative(model: PipeModel):
     p = model.params
     if type(model) is PipeModel and not (p.end_mass or p.external_damping or p.springs):
         # Batched over the stages, as _batched_residual (same terms).
-        disc, quad = model.disc, model.quad
-        Phi, tip = disc.Phi, np.asarray(disc.tip)
-        _, from_tip = _integrals(quad)
+        Phi, _, PhiT_W = _stage_operators(model)
+        tip = np.asarray(model.disc.tip)
+        _, from_tip = _integrals(model.quad)
         two_v, c1 = 2.0 * v, 2.0 * math.sqrt(p.beta)
 
         def batched(Q, P, Acc):
             th = np.asarray(Phi @ Q.T)
             th_d = np.asarray(Phi @ P.T)
-            nrm = np.stack([-np.sin(th), np.cos(th)], axis=1)
+            nrm, _ = _frames(th)
             G = from_tip(c1 * th_d[:, None] * nrm)
             local = two_v * np.sin((Q @ tip)[None, :] - th)
             local = local + np.einsum("qcs,qcs->qs", nrm, G)
-            return model._test(local).T
+            return np.asarray(PhiT_W @ local).T
 
         return batched
     if type(model) is PipeModel:
@@ -633,7 +663,8 @@ class Radau:
             dV1 = _lu_solve(lu_c, W[1])
             dacc = -(np.outer(_T[:, 0].real, dV0) + 2.0 * np.real(np.outer(_T[:, 1], dV1)))
             dZ = np.hstack([h * h * (A2 @ dacc), h * (A @ dacc)])
-            dnorm = float(np.sqrt(np.mean((dZ / scale) ** 2)))
+            dz = (dZ / scale).ravel()
+            dnorm = math.sqrt(float(dz @ dz) / dz.size)
             if dnorm_old is not None:
                 rate = dnorm / dnorm_old
             if rate is not None and (
@@ -677,11 +708,11 @@ class Radau:
             return e_q, (mu / h) * e_q - r_q
 
         e_q, e_p = solve(self.qdot, self.qddot)
-        err = float(np.sqrt(np.mean((np.concatenate([e_q, e_p]) / scale) ** 2)))
+        err = _rms(np.concatenate([e_q, e_p]) / scale)
         if refine and err > 1:
             a = self._acceleration(t, self.q + e_q, self.qdot + e_p)
             e_q, e_p = solve(self.qdot + e_p, a)
-            err = float(np.sqrt(np.mean((np.concatenate([e_q, e_p]) / scale) ** 2)))
+            err = _rms(np.concatenate([e_q, e_p]) / scale)
         return err
 
     # ------------------------------------------------------------------
