@@ -497,3 +497,28 @@ def test_bad_input_names_the_parameter():
     with pytest.raises(ValueError, match="resolves no mode"):
         spectrum(PipeModel(FiniteElement(1, 1), Params(**PAPER)))
     assert STABILITY_TOL < 1e-6
+
+
+def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
+    """alpha = 3.14159265 (pi - 3.6e-9, as typed): the near-straight branch steps over
+    the imperfect pitchfork at the restabilisation, where Brent finds no static state
+    in the last ~1e-6 of its bracket.  The event is still reported, within that
+    bracket of the perfect case's (v = 3.00372, Eq. (31b)), with a warning instead
+    of a failure; the other events are those of alpha = pi."""
+    import logging
+
+    from fempipe.params import PAPER_CASE
+
+    def events(alpha):
+        m = PipeModel(FiniteElement(8, 3), Params(alpha=alpha, **PAPER_CASE))
+        res = stability_analysis(m, 6.0, follow_bifurcations=False)
+        return [(e.type, e.v) for e in res.events if e.branch == "primary"]
+
+    exact = events(np.pi)
+    with caplog.at_level(logging.WARNING, logger="fempipe.stability.events"):
+        hair = events(3.14159265)
+    assert [t for t, _ in hair] == [t for t, _ in exact]
+    assert "restabilization" in [t for t, _ in exact]
+    for (t, v_hair), (_, v_exact) in zip(hair, exact, strict=True):
+        assert abs(v_hair - v_exact) < (1e-5 if t == "restabilization" else 1e-6), t
+    assert "imperfect bifurcation" in caplog.text

@@ -457,7 +457,30 @@ class _BranchAnalysis:
             found[v] = e.lam[k]
             return float(e.lam[k].real - shift)
 
-        v0 = brentq(f, a.v, b.v, xtol=EVENT_XTOL, rtol=4 * np.finfo(float).eps)
+        try:
+            v0 = brentq(f, a.v, b.v, xtol=EVENT_XTOL, rtol=4 * np.finfo(float).eps)
+        except NewtonError as exc:
+            # No static state near the branch inside the bracket: the branch
+            # crosses a gap, as at an imperfect pitchfork (alpha a hair off 0
+            # or pi), where the continuation steps over the imperfection's
+            # fold.  The event lies in the last bracket; place it mid-way.
+            below = [w for w, lam in found.items() if np.sign(lam.real - shift) == np.sign(fa)]
+            above = [w for w, lam in found.items() if np.sign(lam.real - shift) == np.sign(fb)]
+            lo = max(below, key=lambda w: -abs(w - b.v), default=a.v)
+            hi = max(above, key=lambda w: -abs(w - a.v), default=b.v)
+            v0 = 0.5 * (lo + hi)
+            log.warning(
+                "branch %s: %s; the stability event is placed at v = %.10g, the middle of "
+                "the last bracket [%.10g, %.10g] (located to %.1e, not %.0e): the branch may "
+                "pass an imperfect bifurcation there",
+                self.name,
+                exc,
+                v0,
+                min(lo, hi),
+                max(lo, hi),
+                abs(hi - lo),
+                EVENT_XTOL,
+            )
         lam0 = found.get(v0)
         if lam0 is None:
             lam0 = a.lam[ia] if abs(v0 - a.v) <= abs(v0 - b.v) else b.lam[ib]
