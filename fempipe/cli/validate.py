@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="the quick suite (coarser sweeps; about 3 minutes on 2 cores)",
+        help="the quick suite (coarser sweeps; about a minute on 2 cores)",
     )
     common.add_workers_argument(
         parser, "worker processes (default: the number of CPUs, at most 4)", default=None
