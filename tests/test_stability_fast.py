@@ -140,14 +140,14 @@ def test_inherited_classification_is_that_of_the_eigenvectors(disc, params, monk
     model = PipeModel(disc, params)
     with monkeypatch.context() as mp:
         mp.setattr(tracking, "_analyse_inherited", check)
-        fast = stability_analysis(model, 12.0, 0.0)
+        fast = stability_analysis(model, 16.0, 0.0)
     with monkeypatch.context() as mp:
         mp.setattr(
             tracking,
             "_analyse_inherited",
             lambda m, q, r, meth, mat, ref: linear._analyse(m, q, r, meth, mat),
         )
-        general = stability_analysis(model, 12.0, 0.0)
+        general = stability_analysis(model, 16.0, 0.0)
     assert len(inherited) >= 10
     assert all(all(x) for x in inherited)
     a, b = _events(fast), _events(general)
