@@ -488,7 +488,9 @@ class _Flow:
 def _flow(model: PipeModel, x: np.ndarray, T: float, rtol: float, sensitivity: bool) -> _Flow:
     """phi_T(x) with the step data (for the tip extrema) and, if asked, the monodromy."""
     n = model.n
-    st = Radau(model, x[:n], x[n:], 0.0, rtol=rtol, sensitivity=sensitivity)
+    st = Radau(
+        model, x[:n], x[n:], 0.0, rtol=rtol, sensitivity=sensitivity, velocity_sensitivity=True
+    )
     record = []
     for _ in st.steps(T):
         t_old, h, q_old, p_old, Q, P, _acc = st.last

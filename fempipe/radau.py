@@ -491,8 +491,12 @@ class Radau:
     sensitivity : bool
         Accumulate the derivative of the discrete flow map with respect to
         the initial state (the monodromy matrix over a period; see
-        :attr:`sensitivity_matrix`) and, with steady flow, with respect to
-        the flow velocity v at fixed initial state (:attr:`velocity_sensitivity`).
+        :attr:`sensitivity_matrix`).
+    velocity_sensitivity : bool
+        With ``sensitivity`` and steady flow, also the derivative with respect
+        to the flow velocity v at fixed initial state
+        (:attr:`velocity_sensitivity`; the continuation of periodic orbits
+        needs it, shooting at fixed v does not).
 
     Notes
     -----
@@ -516,6 +520,7 @@ class Radau:
         first_step: float | None = None,
         h_fixed: float | None = None,
         sensitivity: bool = False,
+        velocity_sensitivity: bool = False,
     ) -> None:
         refuse_hysteretic(model.params, "time integration (Radau)")
         n = model.n
@@ -574,7 +579,9 @@ class Radau:
         self.sensitivity_matrix = np.eye(2 * n) if sensitivity else None
         # d(q, q')/dv of the discrete flow map, steady flow only (a flow
         # history has no single v to differentiate by).
-        self.velocity_sensitivity = np.zeros(2 * n) if sensitivity and flow is None else None
+        self.velocity_sensitivity = (
+            np.zeros(2 * n) if sensitivity and velocity_sensitivity and flow is None else None
+        )
         self._stage_residuals_v = (
             _velocity_derivative(model) if self.velocity_sensitivity is not None else None
         )

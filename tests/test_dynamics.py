@@ -368,7 +368,7 @@ def test_velocity_sensitivity_of_the_flow_map(disc):
     params = dict(alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3)
     m = PipeModel(disc, Params(v=7.0, **params))
     q0, p0 = initial_state(m, 1, 0.3)
-    st = Radau(m, q0, p0, rtol=1e-8, sensitivity=True)
+    st = Radau(m, q0, p0, rtol=1e-8, sensitivity=True, velocity_sensitivity=True)
     hs = [st.last[1] for _ in st.steps(0.3)]
 
     def flow(v):
@@ -382,5 +382,8 @@ def test_velocity_sensitivity_of_the_flow_map(disc):
 
     fd = (flow(7.0 + 1e-5) - flow(7.0 - 1e-5)) / 2e-5
     assert np.max(np.abs(st.velocity_sensitivity - fd)) < 1e-7 * np.max(np.abs(fd))
-    with_flow = Radau(m, q0, p0, sensitivity=True, flow=PulsatingFlow(7.0, 0.1, 2.0))
+    with_flow = Radau(
+        m, q0, p0, sensitivity=True, velocity_sensitivity=True, flow=PulsatingFlow(7.0, 0.1, 2.0)
+    )
     assert with_flow.velocity_sensitivity is None  # no single v to differentiate by
+    assert Radau(m, q0, p0, sensitivity=True).velocity_sensitivity is None  # only when asked
