@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .dynamics import IntegrationError, initial_state
-from .io import atomic_path
+from .io import write_text
 from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
 from .operators import PipeModel
 from .parallel import run_tasks
@@ -163,7 +163,7 @@ class PointStore:
                     f"(run.json differs); use another directory or delete it"
                 )
         else:
-            _write_json(path, self.manifest, indent=1)
+            write_text(path, json.dumps(self.manifest, indent=1))
 
     def path(self, alpha_index: int, direction: str, index: int) -> Path:
         """File of point ``index`` of the sweep ``direction`` at the ``alpha_index``-th alpha."""
@@ -178,17 +178,15 @@ class PointStore:
 
     def save(self, alpha_index: int, point: BifurcationPoint) -> None:
         """Write a finished point with its state (atomically: complete or absent)."""
-        _write_json(self.path(alpha_index, point.direction, point.index), point.to_dict(state=True))
+        write_text(
+            self.path(alpha_index, point.direction, point.index),
+            json.dumps(point.to_dict(state=True)),
+        )
 
     def count(self) -> int:
         """Number of finished points in the store (all sweeps)."""
         # Temporary files of unfinished writes start with "." and do not match.
         return sum(1 for _ in self.directory.glob("a*-*-*.json"))
-
-
-def _write_json(path: Path, obj, indent: int | None = None) -> None:
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=indent))
 
 
 def _ordered(values: Sequence[float], direction: str) -> list[float]:

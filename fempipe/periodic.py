@@ -88,12 +88,11 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
 from .errors import SolverError
-from .io import atomic_path
+from .io import write_text
 from .limit_cycle import TIP_KEYS, tip_coordinates
 from .operators import PipeModel
 from .parallel import run_tasks, single_blas_thread
@@ -1216,11 +1215,6 @@ class CycleDiagram:
         }
 
 
-def _write_json(path: Path, obj) -> None:
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj))
-
-
 def _alpha_task(
     model: PipeModel,
     values: list,
@@ -1244,14 +1238,12 @@ def _alpha_task(
     else:
         hopf, v_start, events = _analyse_static(model, v_lo, v_hi)
         eq_points = static_points(model, values, v_start, events)
-        _write_json(
-            static_path,
-            {
-                "hopf": [h.to_dict(state=True) for h in hopf],
-                "v_start": v_start,
-                "points": eq_points,
-            },
-        )
+        saved = {
+            "hopf": [h.to_dict(state=True) for h in hopf],
+            "v_start": v_start,
+            "points": eq_points,
+        }
+        write_text(static_path, json.dumps(saved))
     if on_point is not None:
         on_point()
     out = {
@@ -1273,7 +1265,7 @@ def _alpha_task(
         resume = json.loads(path.read_text()) if path.exists() else None
 
         def save(state: dict, path=path) -> None:
-            _write_json(path, state)
+            write_text(path, json.dumps(state))
             if on_point is not None:
                 on_point()
 
