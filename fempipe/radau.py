@@ -226,6 +226,13 @@ def _frames(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return nrm, tng
 
 
+def _batchable(model: PipeModel) -> bool:
+    """Whether the batched stage functions know every term of ``model``: the pipe
+    without variants (no end mass, external damping or springs), no subclass."""
+    p = model.params
+    return type(model) is PipeModel and not (p.end_mass or p.external_damping or p.springs)
+
+
 def _batched_residual(model: PipeModel):
     """``R(Q_i, P_i, A_i)`` of the three stages in one evaluation, or None where unavailable.
 
@@ -244,7 +251,7 @@ def _batched_residual(model: PipeModel):
     round-off.
     """
     p = model.params
-    if type(model) is not PipeModel or p.end_mass or p.external_damping or p.springs:
+    if not _batchable(model):
         return None
     disc, quad = model.disc, model.quad
     Phi, K, PhiT_W = _stage_operators(model)
@@ -336,7 +343,7 @@ def _batched_jacobians(model: PipeModel):
     ``tests/test_dynamics.py`` checks them against ``PipeModel.jacobians``.
     """
     p = model.params
-    if type(model) is not PipeModel or p.end_mass or p.external_damping or p.springs:
+    if not _batchable(model):
         return None
     disc, quad = model.disc, model.quad
     Phi = np.asarray(disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else disc.Phi)
@@ -397,60 +404,39 @@ def _velocity_derivative(model: PipeModel):
     Only two terms of Eq. (20) depend on v: the follower force, v^2 times
     :meth:`~fempipe.operators.PipeModel.follower` at v = 1, and the Coriolis
     force, v times :meth:`~fempipe.operators.PipeModel.coriolis` at v = 1; so
-    dR/dv = 2 v follower_1 + coriolis_1, exactly (for the plain pipe the
-    three stages in one evaluation, as :func:`_batched_residual`).  A subclass of PipeModel
-    may add terms: for it the derivative is taken from R at v, v + 1, v + 2,
-    exact for any R of degree two in v, R'(v) = (-3 R(v) + 4 R(v + 1) - R(v + 2)) / 2
-    (``tests/test_dynamics.py`` checks that the two agree).
+    dR/dv = 2 v follower_1 + coriolis_1, exactly.  For the pipe without
+    variants the three stages are evaluated in one call, as
+    :func:`_batched_residual` does (``tests/test_dynamics.py`` checks both
+    against a difference of :meth:`PipeModel.residual` in v).
     """
-    v = model.params.v
     p = model.params
-    if type(model) is PipeModel and not (p.end_mass or p.external_damping or p.springs):
-        # Batched over the stages, as _batched_residual (same terms).
-        Phi, _, PhiT_W = _stage_operators(model)
-        tip = np.asarray(model.disc.tip)
-        _, from_tip = _integrals(model.quad)
-        two_v, c1 = 2.0 * v, 2.0 * math.sqrt(p.beta)
+    v = p.v
+    if not _batchable(model):
+        unit = model.with_params(replace(p, v=1.0))
 
-        def batched(Q, P, Acc):
-            th = np.asarray(Phi @ Q.T)
-            th_d = np.asarray(Phi @ P.T)
-            nrm, _ = _frames(th)
-            G = from_tip(c1 * th_d[:, None] * nrm)
-            local = two_v * np.sin((Q @ tip)[None, :] - th)
-            local = local + np.einsum("qcs,qcs->qs", nrm, G)
-            return np.asarray(PhiT_W @ local).T
-
-        return batched
-    if type(model) is PipeModel:
-        unit = model.with_params(replace(model.params, v=1.0))
-
-        def derivative(Q, P, Acc):
+        def per_stage(Q, P, Acc):
             out = np.empty(Q.shape)
             for i in range(3):
                 fl = unit.fields(Q[i], P[i])
                 out[i] = 2.0 * v * unit.follower(fl) + unit.coriolis(fl)
             return out
 
-        return derivative
-    r0, r1, r2 = (
-        model.with_params(replace(model.params, v=v + k)).residual for k in (0.0, 1.0, 2.0)
-    )
+        return per_stage
+    Phi, _, PhiT_W = _stage_operators(model)
+    tip = np.asarray(model.disc.tip)
+    _, from_tip = _integrals(model.quad)
+    two_v, c1 = 2.0 * v, 2.0 * math.sqrt(p.beta)
 
-    def three_point(Q, P, Acc):
-        return np.stack(
-            [
-                0.5
-                * (
-                    4.0 * r1(Q[i], P[i], Acc[i])
-                    - 3.0 * r0(Q[i], P[i], Acc[i])
-                    - r2(Q[i], P[i], Acc[i])
-                )
-                for i in range(3)
-            ]
-        )
+    def batched(Q, P, Acc):
+        th = np.asarray(Phi @ Q.T)
+        th_d = np.asarray(Phi @ P.T)
+        nrm, _ = _frames(th)
+        G = from_tip(c1 * th_d[:, None] * nrm)
+        local = two_v * np.sin((Q @ tip)[None, :] - th)
+        local = local + np.einsum("qcs,qcs->qs", nrm, G)
+        return np.asarray(PhiT_W @ local).T
 
-    return three_point
+    return batched
 
 
 @dataclass
@@ -670,8 +656,7 @@ class Radau:
             dV1 = _lu_solve(lu_c, W[1])
             dacc = -(np.outer(_T[:, 0].real, dV0) + 2.0 * np.real(np.outer(_T[:, 1], dV1)))
             dZ = np.hstack([h * h * (A2 @ dacc), h * (A @ dacc)])
-            dz = (dZ / scale).ravel()
-            dnorm = math.sqrt(float(dz @ dz) / dz.size)
+            dnorm = _rms((dZ / scale).ravel())
             if dnorm_old is not None:
                 rate = dnorm / dnorm_old
             if rate is not None and (

@@ -331,7 +331,7 @@ def test_integrator_jacobians_are_the_model_jacobians(disc):
 
 # ------------------------------------------------ sensitivity to the flow --
 class _Subclassed(PipeModel):
-    """A PipeModel subclass: its velocity derivative takes the three-point path."""
+    """A PipeModel subclass: its velocity derivative takes the per-stage path."""
 
 
 @pytest.mark.parametrize(
