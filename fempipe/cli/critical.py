@@ -75,7 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.number_type("--ds-max", 0.0, 1.0, strict_low=True),
         default="0.1",
         help="largest continuation step; spectra are computed at every step (default 0.1; "
-        "on a straight branch, alpha = 0 or pi, every 3 DS at most)",
+        "on a straight branch, alpha = 0 or pi, every 4 DS)",
     )
     g.add_argument(
         "--allow-partial",

@@ -466,8 +466,9 @@ class _BranchAnalysis:
             # fold.  The event lies in the last bracket; place it mid-way.
             below = [w for w, lam in found.items() if np.sign(lam.real - shift) == np.sign(fa)]
             above = [w for w, lam in found.items() if np.sign(lam.real - shift) == np.sign(fb)]
-            lo = max(below, key=lambda w: -abs(w - b.v), default=a.v)
-            hi = max(above, key=lambda w: -abs(w - a.v), default=b.v)
+            # The innermost values on each side: nearest the other end.
+            lo = min(below, key=lambda w: abs(w - b.v), default=a.v)
+            hi = min(above, key=lambda w: abs(w - a.v), default=b.v)
             v0 = 0.5 * (lo + hi)
             log.warning(
                 "branch %s: %s; the stability event is placed at v = %.10g, the middle of "
