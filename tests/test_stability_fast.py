@@ -47,6 +47,17 @@ def _events(res):
     return [(e.branch, e.type, e.mode, e.v, e.frequency) for e in res.events]
 
 
+def _assert_same_events(fast, general, **tol):
+    """The same events (branch, type, mode) in order, at least one, v and frequency
+    within ``tol`` (pytest.approx keywords)."""
+    a, b = _events(fast), _events(general)
+    assert len(a) == len(b) >= 1
+    for x, y in zip(a, b, strict=True):
+        assert x[:3] == y[:3]
+        assert x[3] == pytest.approx(y[3], **tol)
+        assert x[4] == pytest.approx(y[4], **tol)
+
+
 def _analyse(model, forced_general: bool, monkeypatch, v_max: float):
     """stability_analysis, with the straight fast path allowed or switched off (then also
     the StraightPencil: every spectrum from the assembled Jacobians); and whether the fast
@@ -92,12 +103,7 @@ def test_straight_fast_path_agrees_with_the_general_continuation(params, monkeyp
     general, taken_general = _analyse(model, True, monkeypatch, 9.0)
     assert taken and not taken_general
     assert fast.v_cr is not None
-    a, b = _events(fast), _events(general)
-    assert len(a) == len(b) >= 1
-    for x, y in zip(a, b, strict=True):
-        assert x[:3] == y[:3]
-        assert x[3] == pytest.approx(y[3], abs=1e-9)
-        assert x[4] == pytest.approx(y[4], abs=1e-9)
+    _assert_same_events(fast, general, abs=1e-9)
     assert fast.v_cr == pytest.approx(general.v_cr, abs=1e-9)
 
 
@@ -150,12 +156,7 @@ def test_inherited_classification_is_that_of_the_eigenvectors(disc, params, monk
         general = stability_analysis(model, 16.0, 0.0)
     assert len(inherited) >= 10
     assert all(all(x) for x in inherited)
-    a, b = _events(fast), _events(general)
-    assert len(a) == len(b) >= 1
-    for x, y in zip(a, b, strict=True):
-        assert x[:3] == y[:3]
-        assert x[3] == pytest.approx(y[3], rel=1e-10)
-        assert x[4] == pytest.approx(y[4], rel=1e-10)
+    _assert_same_events(fast, general, rel=1e-10)
     assert np.array_equal(fast.branches[0].n_unstable, general.branches[0].n_unstable)
     assert fast.branches[0].max_real == pytest.approx(general.branches[0].max_real, rel=1e-10)
 
