@@ -380,8 +380,11 @@ _STARTUP_COMMANDS: tuple[tuple[str, list[str], bool], ...] = (
 _BYTECODE_CACHE: str | None = None
 
 
-def child_cpu_seconds(argv: list[str]) -> tuple[float, str]:
+def child_cpu_seconds(argv: list[str], env: dict | None = None) -> tuple[float, str]:
     """User + system CPU seconds and stdout of one fresh ``python ARGV`` (``sys.executable``).
+
+    ``env`` changes the child's environment: ``{name: value}``, a value of
+    None removes the variable.
 
     The CPU time is the change of ``getrusage(RUSAGE_CHILDREN)`` over the run.
     All children of a benchmark run share one bytecode cache
@@ -408,11 +411,16 @@ def child_cpu_seconds(argv: list[str]) -> tuple[float, str]:
     if _BYTECODE_CACHE is None:
         _BYTECODE_CACHE = tempfile.mkdtemp(prefix="fempipe-bench-pycache-")
         atexit.register(shutil.rmtree, _BYTECODE_CACHE, True)
-    env = dict(os.environ)
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
-    env["PYTHONPYCACHEPREFIX"] = _BYTECODE_CACHE
+    child_env = dict(os.environ)
+    child_env.pop("PYTHONDONTWRITEBYTECODE", None)
+    child_env["PYTHONPYCACHEPREFIX"] = _BYTECODE_CACHE
+    for name, value in (env or {}).items():
+        if value is None:
+            child_env.pop(name, None)
+        else:
+            child_env[name] = value
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    res = subprocess.run([sys.executable, *argv], capture_output=True, text=True, env=env)
+    res = subprocess.run([sys.executable, *argv], capture_output=True, text=True, env=child_env)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if res.returncode != 0:
         raise RuntimeError(f"python {' '.join(argv)} failed: {res.stderr.strip()[-500:]}")

@@ -341,3 +341,7 @@ def test_bench_critical_vs_classical_quick_run():
     assert out["table"][3]["rel_error"] < 1e-6
     assert out["ratio_fempipe_over_baseline40"] > 0
     assert len(out["ratio_by_round"]) == out["runs"] == 1
+    # The baseline once more with one BLAS thread: the same v_cr, a ratio of its own.
+    one = out["table"][4]
+    assert one["v_cr"] == b40["v_cr"]
+    assert out["ratio_one_thread"] > 0 and len(out["ratio_by_round_one_thread"]) == 1

@@ -183,3 +183,60 @@ def test_startup_benchmark_runs_every_command_once_when_quick():
     ]
     assert all(r["cpu_seconds"] > 0 for r in rows.values())
     assert [c for c, r in rows.items() if "target_seconds" in r] == list(rows)[2:]
+
+
+_BLAS_PROBE = (
+    "import json, os, sys\n"
+    "from fempipe.cli import BLAS_THREAD_VARIABLES, main\n"
+    "import contextlib, io\n"
+    "with contextlib.redirect_stdout(io.StringIO()):\n"
+    "    main(['critical', '--help'])\n"
+    "import numpy, scipy.linalg\n"
+    "from threadpoolctl import threadpool_info\n"
+    "threads = sorted({i['num_threads'] for i in threadpool_info() if i['user_api'] == 'blas'})\n"
+    "env = {k: os.environ.get(k) for k in BLAS_THREAD_VARIABLES}\n"
+    "print(json.dumps({'threads': threads, 'env': env}))\n"
+)
+
+
+def _blas_probe(env_changes: dict) -> dict:
+    import os
+
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    env.update(env_changes)
+    res = subprocess.run(
+        [sys.executable, "-c", _BLAS_PROBE], capture_output=True, text=True, env=env
+    )
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def test_command_line_starts_blas_with_one_thread_unless_the_user_set_it():
+    """``fempipe COMMAND`` sets the BLAS thread variables the user left unset to 1 before
+    numpy loads (no thread pools to start); a value the user set is kept."""
+    got = _blas_probe({})
+    assert got["threads"] == [1]
+    assert got["env"] == {
+        "OPENBLAS_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "BLIS_NUM_THREADS": "1",
+    }
+    mine = _blas_probe({"OPENBLAS_NUM_THREADS": "2"})
+    assert mine["threads"] == [2]
+    assert mine["env"]["OPENBLAS_NUM_THREADS"] == "2"
+    assert mine["env"]["MKL_NUM_THREADS"] == "1"
+
+
+def test_main_in_a_session_with_numpy_leaves_the_environment_alone(monkeypatch):
+    """Called from Python after numpy is loaded, ``main`` changes no variable: they would
+    not act on this process, and a session's environment is the user's."""
+    import os
+
+    import numpy  # noqa: F401
+
+    from fempipe import cli
+
+    for name in cli.BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    assert cli.one_blas_thread() == ()
+    assert all(name not in os.environ for name in cli.BLAS_THREAD_VARIABLES)
