@@ -27,6 +27,7 @@ from fempipe.stability.hopf import (
     first_lyapunov_coefficient,
     lyapunov_coefficient,
     normal_forms,
+    pipe_derivatives,
     pipe_jacobian,
 )
 from fempipe.stability.linear import _eigen, linearized_matrices
@@ -158,6 +159,45 @@ def test_mirror_symmetry_leaves_l1_unchanged(hopf_p34):
     assert nf_m.amplitude_coefficients["eta_tip"] == pytest.approx(
         nf.amplitude_coefficients["eta_tip"], rel=1e-7
     )
+
+
+@pytest.mark.parametrize("alpha", [0.0, math.pi])
+def test_straight_pipe_shortcut_equals_both_sided_differences(alpha):
+    """On the straight pipe at alpha = 0, pi the Jacobian is even (mirror symmetry), so the
+    normal form takes J(x0 - h u) = J(x0 + h u): the same D2J, B = 0, the same l1 as the
+    two-sided differences; with J(x0 - h u) computed the first derivative vanishes too."""
+    model = PipeModel(
+        discretization_from_name("P3:6"), Params(alpha=alpha, gamma=10.0, beta=0.2, v=6.0)
+    )
+    n = model.n
+    x0 = np.zeros(2 * n)
+    u = np.random.default_rng(3).normal(size=2 * n)
+    both = pipe_derivatives(model, x0, mirror=False)
+    short = pipe_derivatives(model, x0)  # detected
+    for h in (1e-4, 1e-3):
+        d1, d2 = both(u, h)
+        s1, s2 = short(u, h)
+        scale = np.abs(d2).max()
+        assert np.abs(s1).max() == 0.0 and np.abs(d1).max() <= 1e-10 * scale
+        assert np.abs(s2 - d2).max() <= 1e-10 * scale
+    # One Jacobian per direction instead of two.
+    calls = []
+    original = PipeModel.jacobians
+
+    def counted(self, *args, **kwargs):
+        calls.append(1)
+        return original(self, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(PipeModel, "jacobians", counted)
+        short(u, 1e-3)
+        n_short = len(calls)
+        both(u, 1e-3)
+    assert (n_short, len(calls) - n_short) == (1, 2)
+    # Off the straight pipe (alpha = 0.3) J is not even: the detection says so.
+    tilted = model.with_params(replace(model.params, alpha=0.3))
+    d1, _ = pipe_derivatives(tilted, x0)(u, 1e-3)
+    assert np.abs(d1).max() > 1e-3
 
 
 def test_amplitude_prediction_against_the_shot_cycle(hopf_p34):

@@ -71,7 +71,8 @@ for u = Re q, Im q.  Since B is symmetric and bilinear,
 B(q, y) = B(y, q) = (DJ[Re q] + i DJ[Im q]) y and B(qbar, y) = (DJ[Re q] -
 i DJ[Im q]) y; C(q, q, qbar) = D2J[q, qbar] q = (D2J[Re q, Re q] +
 D2J[Im q, Im q]) q (the mixed terms cancel).  Four Jacobians (plus A) give
-every term.  The errors are O(h^2) (truncation) and O(eps |J| / h^2)
+every term; two on the straight pipe at alpha = 0 or pi, where the mirror
+symmetry makes J even about x0 = 0, J(x0 - h u) = J(x0 + h u), and B = 0.  The errors are O(h^2) (truncation) and O(eps |J| / h^2)
 (rounding of the second difference).  For the pipe the constant bending part
 of J (~h_mesh^-4 after M^{-1}) is not differenced (:func:`pipe_derivatives`);
 what rounding remains comes from the acceleration off the equilibrium (a sum
@@ -382,8 +383,22 @@ def _without_bending(model: PipeModel) -> PipeModel:
     return PipeModel(disc, model.params)
 
 
+def _mirror_even(model: PipeModel, x0: np.ndarray) -> bool:
+    """Whether J is even about x0: the straight pipe x0 = 0 at alpha = 0 or pi.
+
+    The mirror symmetry (theta, alpha) -> (-theta, -alpha) of Eq. (20) maps
+    alpha = 0 and pi onto themselves, so there F is odd, F(-x) = -F(x) (every
+    term: gravity along the pipe, follower, Coriolis, inertia, the end mass,
+    external damping, springs tied to points of the axis), and its Jacobian
+    is even, J(-x) = J(x).  At alpha = pi the odd part of gravity is off by
+    sin(pi) ~ 1e-16.  A subclass of PipeModel may add terms that are not odd:
+    it takes the general path.
+    """
+    return type(model) is PipeModel and straight_is_static(model.params) and not np.any(x0)
+
+
 def pipe_derivatives(
-    model: PipeModel, x0: np.ndarray
+    model: PipeModel, x0: np.ndarray, mirror: bool | None = None
 ) -> Callable[[np.ndarray, float, float], tuple[np.ndarray, np.ndarray]]:
     """``(u, h, dv=0) -> (DJ[u], D2J[u, u])`` of :func:`pipe_jacobian` about x0, without
     differencing the bending matrix.
@@ -401,6 +416,11 @@ def pipe_derivatives(
     The rounding is then eps |M|, eps |X| over h^2 instead of eps |K| / h^2.
     ``dv`` moves v by ``h dv`` along with x (the derivative along the
     static branch, for lambda'(v)).
+
+    On the straight pipe at alpha = 0 or pi (``mirror``; default: detected,
+    :func:`_mirror_even`) J is even about x0 = 0, so J(x0 - h u) = J(x0 + h u):
+    DJ = 0 (B = 0) and D2J = 2 (J(x0 + h u) - J(x0)) / h^2 take one
+    evaluation instead of two (not for ``dv``, which moves v as well).
     """
     n = model.n
     bare = _without_bending(model)
@@ -427,10 +447,11 @@ def pipe_derivatives(
         raise RuntimeError("the model without bending does not split the Jacobian as K + X")
     cf = sla.cho_factor(M0)
     Y = sla.cho_solve(cf, Kc + X0)
+    even = _mirror_even(model, x0) if mirror is None else bool(mirror)
 
     def deriv(u: np.ndarray, h: float, dv: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         Mp, Xp = parts(x0 + h * u, h * dv)
-        Mm, Xm = parts(x0 - h * u, -h * dv)
+        Mm, Xm = (Mp, Xp) if even and not dv else parts(x0 - h * u, -h * dv)
         DM, DX = (Mp - Mm) / (2.0 * h), (Xp - Xm) / (2.0 * h)
         D2M, D2X = (Mp - 2.0 * M0 + Mm) / (h * h), (Xp - 2.0 * X0 + Xm) / (h * h)
         W = DM @ Y - DX
