@@ -329,8 +329,12 @@ def _batched_jacobians(model: PipeModel):
     ``PipeModel.jacobians`` at one state on P3:16 (0.66 against 1.3 ms,
     measured): matrix products instead of einsum over ``...`` in the
     cumulative integrals (:func:`_cumulative`) and the three integrals of
-    phi fields in one call.  Radau calls it one state at a time: with S = 3
-    the (n_q, 2, 3 S, n) temporaries made it slower than three calls.  Same terms (``operators.py``, ``jacobians``):
+    phi fields in one call.  Radau's Newton matrix takes one state; the
+    three stage Jacobians of the sensitivity take S = 3 on small
+    discretisations (:data:`BATCHED_STAGES_MAX`), where one call is cheaper
+    than three, and S = 1 three times on larger ones, where the
+    (n_q, 2, 3 S, n) temporaries make it dearer.  Same terms (``operators.py``,
+    ``jacobians``):
     with F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
 
     * dR/dq = K + Phi^T diag(d) Phi + (tip column) tip^T + the projection of
@@ -396,6 +400,17 @@ def _batched_jacobians(model: PipeModel):
         return Jq, Jqd, M
 
     return jacobians
+
+
+#: Up to this n_q * n the three stage Jacobians of the sensitivity are one
+#: batched evaluation (S = 3 in :func:`_batched_jacobians`), beyond it three
+#: (its (n_q, 2, 3 S, n) temporaries outgrow the call overhead saved).
+#: Measured (best of 5, one BLAS thread), three calls against one: P2:4 (128)
+#: 0.37 against 0.15 ms, P3:4 (288) 0.40 against 0.17, sine modes N = 3 on
+#: 96 points (288) 0.39 against 0.20, N = 4 on 128 (512) 0.47 against 0.30,
+#: P3:6 (648) 0.47 against 0.27; P3:8 (1152) 0.71 against 0.89, P3:16 (4608)
+#: 2.5 against 2.6.
+BATCHED_STAGES_MAX = 768
 
 
 def _velocity_derivative(model: PipeModel):
@@ -561,6 +576,9 @@ class Radau:
         self.h = min(self.h, self.max_step)
         self._residual3 = None if flow is not None else _batched_residual(model)
         self._jacobians1 = None if flow is not None else _batched_jacobians(model)
+        self._stages_batched = (
+            self._jacobians1 is not None and model.quad.n_q * n <= BATCHED_STAGES_MAX
+        )
         self.sensitivity = bool(sensitivity)
         self.sensitivity_matrix = np.eye(2 * n) if sensitivity else None
         # d(q, q')/dv of the discrete flow map, steady flow only (a flow
@@ -818,8 +836,13 @@ class Radau:
         over the steps as dy_{k+1}/dv = S_k dy_k/dv + (dy_{k+1}/dv at fixed y_k).
         """
         n = self.n
-        jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
-        Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
+        if self._stages_batched:
+            self.stats.n_jacobian += 3
+            Ks, Ds, Ms = self._jacobians1(Q, P, acc)  # (3, n, n) each
+            jac = [(Ks[i], Ds[i], Ms[i]) for i in range(3)]
+        else:
+            jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
+            Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
         # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
         big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
         big[np.arange(3), :, np.arange(3), :] += Ms

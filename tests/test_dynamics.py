@@ -362,6 +362,33 @@ def test_velocity_derivative_of_the_stage_residuals(disc, extra, cls):
 
 
 @pytest.mark.parametrize("disc", [FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str)
+def test_batched_stage_jacobians_give_the_same_sensitivities(disc, monkeypatch):
+    """The three stage Jacobians of the sensitivity in one batched call (small
+    discretisations) or three: the same monodromy and d phi/dv to round-off."""
+    import fempipe.radau as radau
+
+    m = PipeModel(disc, Params(v=7.0, alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3))
+    q0, p0 = initial_state(m, 1, 0.3)
+
+    def run():
+        st = Radau(m, q0, p0, rtol=1e-8, sensitivity=True, velocity_sensitivity=True)
+        for _ in st.steps(0.3):
+            pass
+        return st
+
+    batched = run()
+    assert batched._stages_batched
+    monkeypatch.setattr(radau, "BATCHED_STAGES_MAX", 0)
+    single = run()
+    assert not single._stages_batched
+    assert batched.stats.steps == single.stats.steps
+    S, S1 = batched.sensitivity_matrix, single.sensitivity_matrix
+    assert np.max(np.abs(S - S1)) < 1e-12 * np.max(np.abs(S1))
+    dv, dv1 = batched.velocity_sensitivity, single.velocity_sensitivity
+    assert np.max(np.abs(dv - dv1)) < 1e-12 * np.max(np.abs(dv1))
+
+
+@pytest.mark.parametrize("disc", [FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str)
 def test_velocity_sensitivity_of_the_flow_map(disc):
     """Radau's d phi_T(x)/dv (accumulated with the monodromy) against a central
     difference of the flow map replayed on the same steps, at v = 7 +- 1e-5."""
