@@ -47,6 +47,7 @@ __all__ = [
     "cycle_traces",
     "cycles_at",
     "dyn_discretizations",
+    "dyn_modal",
     "modal_label",
     "model_for",
     "orbit",
@@ -60,12 +61,27 @@ DYN_FE = "P3:8"
 DYN_FE_QUICK = "P3:4"
 
 
+def dyn_modal(n_modes: int, basis: str = "sine") -> Modal:
+    """The modal discretisation of the dynamic runs: N modes on max(8, 4 N) cells of
+    8 Gauss points.
+
+    The default quadrature of :class:`~fempipe.discretization.Modal`,
+    max(32, 4 N) cells, is as fine as it is for the shapes of Figs. 2 and 4,
+    sampled cell by cell; the dynamic runs need tip values only, and every
+    stage of a time step walks the quadrature points.  Measured on limit
+    cycles shot at rtol 1e-10 (alpha = 0, pi/2, pi; N = 3, 4): period and
+    tip extrema equal to those on 32 cells within 1.5e-14, a shot 3 to 6
+    times cheaper.
+    """
+    return Modal(n_modes, n_cells=max(8, 4 * n_modes), basis=basis)
+
+
 def dyn_discretizations(quick: bool) -> dict:
-    """``{"FE P3:8": ..., "N = 3": Modal(3), "N = 4": Modal(4)}``."""
+    """``{"FE P3:8": ..., "N = 3": dyn_modal(3), "N = 4": dyn_modal(4)}``."""
     fe = DYN_FE_QUICK if quick else DYN_FE
     out = {f"FE {fe}": parse_discretization(fe=fe)}
     for n in PAPER_MODES:
-        disc = Modal(n)
+        disc = dyn_modal(n)
         out[modal_label(disc)] = disc
     return out
 
@@ -115,11 +131,11 @@ _MODAL_LABEL = re.compile(r"^N = (\d+)(?: \((\w+)\))?$")
 
 
 def _disc_from_spec(spec: str):
-    """The discretisation of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`),
-    ``FE P3:8`` or any ``disc.name``."""
+    """The discretisation of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`,
+    on the quadrature of :func:`dyn_modal`), ``FE P3:8`` or any ``disc.name``."""
     m = _MODAL_LABEL.match(spec)
     if m:
-        return Modal(int(m.group(1)), basis=m.group(2) or "sine")
+        return dyn_modal(int(m.group(1)), basis=m.group(2) or "sine")
     return discretization_from_name(spec.removeprefix("FE "))
 
 
