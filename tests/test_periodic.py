@@ -96,6 +96,56 @@ def test_stable_cycles_agree_with_the_sweep(run):
             assert np.max(np.abs(np.subtract(att.tip[k], p[k]))) < 1e-6, k
 
 
+def test_multipliers_at_the_requested_v_are_those_of_the_orbit(run):
+    """The Floquet multipliers reported at a requested v are those of the converged orbit
+    (the monodromy of a shot at rtol 1e-10 from it): the trivial one at 1, the others
+    to 1e-6, not those of an earlier chord iterate (1e-3 off, see MONODROMY_NEAR)."""
+    from fempipe.limit_cycle import shoot
+
+    d, _ = run
+    disc = parse_discretization("P2:4")
+    for p in _cycles(d):
+        if p["v"] < 6.6:  # the attractor finder's transient is too slow this near v_H
+            continue
+        m = PipeModel(disc, Params(alpha=0.0, v=p["v"]))
+        att = find_attractor(m, shoot_rtol=1e-6)
+        c = shoot(m, att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-10)
+        ref = np.sort(np.abs(c.floquet_multipliers))[::-1][: len(p["floquet_multipliers"])]
+        got = np.sort(np.abs([complex(*z) for z in p["floquet_multipliers"]]))[::-1]
+        assert np.max(np.abs(got - ref)) < 1e-6, (p["v"], got[:3], ref[:3])
+
+
+def test_corrector_takes_the_monodromy_at_the_orbit_when_asked():
+    """From a predictor 1e-4 off the orbit the chord iteration keeps the monodromy of
+    its first iterate: 1e-3 of the amplitude away is near enough on the continuation's
+    own steps (MONODROMY_NEAR), not at a requested v (MONODROMY_AT_ORBIT), where one
+    more flow gives the multipliers of the converged orbit (shot at rtol 1e-10)."""
+    from fempipe.limit_cycle import shoot
+    from fempipe.periodic import MONODROMY_AT_ORBIT, MONODROMY_NEAR, HopfPoint, _Continuer
+
+    m = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.95))
+    c = shoot(*_orbit_guess(m), rtol=1e-10)
+    ref = np.sort(np.abs(c.floquet_multipliers))[::-1]
+    n = m.n
+    hopf = HopfPoint(6.34, 2 * math.pi / c.period, "flutter", np.zeros(n), np.zeros(2 * n))
+    u = np.r_[c.q0, c.qdot0, c.period, m.params.v]
+    off = u * (1.0 + 1e-4 * np.cos(np.arange(u.size)))
+    off[-1] = u[-1]
+    errors = {}
+    for near in (MONODROMY_NEAR, MONODROMY_AT_ORBIT):
+        cont = _Continuer(m, hopf, 1e-7, 1e-8, 1e-7, 12)
+        _, _, mono, _, _ = cont.correct(off, None, u, 1e-7, near)
+        got = np.sort(np.abs(np.linalg.eigvals(mono)))[::-1]
+        errors[near] = float(np.max(np.abs(got - ref)))
+    assert errors[MONODROMY_AT_ORBIT] < 1e-6
+    assert errors[MONODROMY_NEAR] > 10 * errors[MONODROMY_AT_ORBIT]
+
+
+def _orbit_guess(m):
+    att = find_attractor(m, shoot_rtol=1e-6)
+    return m, att.cycle.q0, att.cycle.qdot0, att.cycle.period
+
+
 def test_branch_starts_at_the_hopf_point(run):
     """The first orbits extrapolate to the Hopf point of the linear analysis: near it
     v - v_H and T - 2 pi / omega grow like the squared amplitude (Kuznetsov, Sec. 3.5)."""
