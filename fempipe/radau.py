@@ -95,6 +95,10 @@ def _diagonalise_a():
 
 
 _G, _T, _TI = _diagonalise_a()
+# The stage accelerations from the transformed increments (:meth:`Radau._newton`):
+# dacc = -(T_0 dV_0 + 2 Re(T_1 dV_1)), with T_0 real.
+_T0 = _T[:, 0].real[:, None]
+_T1R, _T1I = 2.0 * _T[:, 1].real[:, None], 2.0 * _T[:, 1].imag[:, None]
 #: Cubic through (0, 0) and (c_i, Z_i): coefficients of theta, theta^2, theta^3.
 _DENSE = np.linalg.inv(np.vander(C, 4, increasing=True)[:, 1:])
 
@@ -627,13 +631,14 @@ class Radau:
         if self._prev is None:
             return np.tile(self.qddot, (3, 1))
         t_old, h_old, a_old, acc = self._prev
-        vals = np.vstack([a_old, acc])
         s = (t + h * C - t_old) / h_old
         # Lagrange extrapolation of the cubic through the 4 nodes (0, c_1, c_2, c_3).
         d0, d1, d2, d3 = (s[:, None] - _NODES[None, :]).T
-        L = np.stack([d1 * d2 * d3, d0 * d2 * d3, d0 * d1 * d3, d0 * d1 * d2], axis=1)
+        d01, d23 = d0 * d1, d2 * d3
+        L = np.empty((3, 4))
+        L[:, 0], L[:, 1], L[:, 2], L[:, 3] = d1 * d23, d0 * d23, d01 * d3, d01 * d2
         L *= _LAGRANGE_W
-        return L @ vals
+        return L[:, :1] * a_old + L[:, 1:] @ acc
 
     def _stages(self, h, acc):
         P = self.qdot[None, :] + h * (A @ acc)
@@ -667,14 +672,17 @@ class Radau:
                     m, vd = self._model_at(t + C[i] * h)
                     G[i] = m.residual(Q[i], P[i], acc[i], vd)
             self.stats.n_residual += 3
-            if not np.all(np.isfinite(G)):
+            # (a sum is finite only if every term is)
+            if not math.isfinite(G.sum()):
                 return False, k + 1, acc, rate
             W = _TI @ G  # (3, n) complex
             dV0 = _lu_solve(lu_r, W[0].real)
             dV1 = _lu_solve(lu_c, W[1])
-            dacc = -(np.outer(_T[:, 0].real, dV0) + 2.0 * np.real(np.outer(_T[:, 1], dV1)))
-            dZ = np.hstack([h * h * (A2 @ dacc), h * (A @ dacc)])
-            dnorm = _rms((dZ / scale).ravel())
+            dacc = -(_T0 * dV0 + _T1R * dV1.real - _T1I * dV1.imag)
+            # RMS of the increments of (Q, P), scaled: h^2 A^2 dacc and h A dacc.
+            eq = (h * h) * (A2 @ dacc) / scale[:n]
+            ep = h * (A @ dacc) / scale[n:]
+            dnorm = math.sqrt((float(np.vdot(eq, eq)) + float(np.vdot(ep, ep))) / (6 * n))
             if dnorm_old is not None:
                 rate = dnorm / dnorm_old
             if rate is not None and (
@@ -846,26 +854,36 @@ class Radau:
         # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
         big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
         big[np.arange(3), :, np.arange(3), :] += Ms
-        rhs = np.concatenate([-Ks, -(C[:, None, None] * h * Ks + Ds)], axis=2)
-        if self._stage_residuals_v is not None:
+        with_v = self._stage_residuals_v is not None
+        rhs = np.empty((3, n, 2 * n + with_v))
+        np.negative(Ks, out=rhs[:, :, :n])
+        rhs[:, :, n : 2 * n] = -(C[:, None, None] * h * Ks + Ds)
+        if with_v:
             # dA/dv at fixed y0: the same matrix, the right side -dR_i/dv.
-            rhs = np.concatenate([rhs, -self._stage_residuals_v(Q, P, acc)[:, :, None]], axis=2)
-        dA = np.linalg.solve(big.reshape(3 * n, 3 * n), rhs.reshape(3 * n, -1))
+            rhs[:, :, -1] = -self._stage_residuals_v(Q, P, acc)
+        dA = _lu_solve(_lu_factor(big.reshape(3 * n, 3 * n)), rhs.reshape(3 * n, -1))
         dA = dA.reshape(3, n, -1)
-        dq = h * h * np.einsum("j,jab->ab", A2[2], dA)
-        dp = h * np.einsum("j,jab->ab", A[2], dA)
-        S = np.zeros((2 * n, 2 * n))
-        S[:n, :n] = np.eye(n)
-        S[:n, n:] = h * np.eye(n)
-        S[n:, n:] = np.eye(n)
-        S[:n] += dq[:, : 2 * n]
-        S[n:] += dp[:, : 2 * n]
+        # d y1 / d (y0, v) = [[I, h I], [0, I]] (the stage formulas at c_3 = 1)
+        # plus (dq, dp): the derivatives through the stage accelerations.
+        D = np.empty((2 * n, dA.shape[2]))
+        np.einsum("j,jab->ab", (h * h) * A2[2], dA, out=D[:n])
+        np.einsum("j,jab->ab", h * A[2], dA, out=D[n:])
         # The last stage is the end of the step (c_3 = 1): its Jacobians are
         # those at the next step's start, where step() may want them.
         self._stage3_jac = jac[2]
-        self.sensitivity_matrix = S @ self.sensitivity_matrix
-        if self._stage_residuals_v is not None:
-            self.velocity_sensitivity = S @ self.velocity_sensitivity + np.r_[dq[:, -1], dp[:, -1]]
+        # Chained with the derivatives so far, Y = [d y/d y0, d y/dv]:
+        # Y1 = [[I, h I], [0, I]] Y + D[:, :2n] Y (+ D[:, 2n] in the v column).
+        Y = self.sensitivity_matrix
+        if with_v:
+            Y = np.column_stack([Y, self.velocity_sensitivity])
+        new = D[:, : 2 * n] @ Y
+        new[:n] += Y[:n] + h * Y[n:]
+        new[n:] += Y[n:]
+        if with_v:
+            new[:, -1] += D[:, -1]
+            self.velocity_sensitivity = new[:, -1]
+            new = new[:, :-1]
+        self.sensitivity_matrix = new
 
     # ------------------------------------------------------------------
     def dense(self, t: float) -> tuple[np.ndarray, np.ndarray]:
