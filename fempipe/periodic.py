@@ -134,8 +134,12 @@ MIN_DV_DS = 0.2
 #: 0.157639 of a shot at rtol 1e-10, N = 4, alpha = 0, v = 10).
 MONODROMY_NEAR = 1e-3
 #: ... and within this fraction at the requested v, whose multipliers are
-#: reported (one more flow with the sensitivity where the chord iteration
-#: ended farther away).
+#: reported: the iterate predicted to be the last is integrated with the
+#: sensitivity, and one more such flow follows where the iteration still
+#: ended farther away.  Measured on Fig. 7 (P3:16, 36 v): the trivial
+#: multiplier within 1.7e-6 of 1 at every requested v (7.7e-4 with
+#: MONODROMY_NEAR), for 74 flows with the sensitivity and 54 without instead
+#: of 55 and 70, about 10 % more CPU.
 MONODROMY_AT_ORBIT = 1e-6
 
 
@@ -634,8 +638,10 @@ class _Continuer:
 
         The monodromy returned (and so the Floquet multipliers) is taken at an
         iterate within ``monodromy_at`` times the orbit's amplitude of the
-        converged orbit (the chord iteration reuses an older one; farther, one
-        more flow with the sensitivity is integrated at the orbit):
+        converged orbit (the chord iteration reuses an older one; for
+        :data:`MONODROMY_AT_ORBIT` the iterate predicted to be the last takes
+        the sensitivity, and where the converged orbit is still farther, one
+        more flow with the sensitivity is integrated at it):
         :data:`MONODROMY_NEAR` on the continuation's own steps,
         :data:`MONODROMY_AT_ORBIT` at the requested v, whose multipliers are
         reported.
@@ -664,9 +670,17 @@ class _Continuer:
         stale = False
         rejected = 0
         monodromy = None
+        # Where the multipliers are wanted at the orbit, the iterate predicted
+        # to be the last (the residual and the correction times the chord's
+        # contraction rate within tol and xtol) gets the sensitivity, once: it
+        # is then within about xtol of the converged orbit and no extra flow
+        # is needed after convergence.
+        at_orbit = monodromy_at < MONODROMY_NEAR
+        last_next = asked = False
         for it in range(1, self.max_iter + 1):
             x, T, v = u[:n2], u[n2], u[-1]
-            need = J is None or stale
+            need = J is None or stale or last_next
+            last_next = False
             m = self.at(v)
             try:
                 fl = _flow(m, x, T, rtol, sensitivity=need)
@@ -696,6 +710,7 @@ class _Continuer:
                     J[:n2, -1] = fl.dv
                     J[-1] = tangent * self.S
             stale = not need and res > res_prev / 4
+            rate = min(1.0, res / res_prev) if math.isfinite(res_prev) else 0.1
             res_prev = res
             rhs = -np.r_[r, g] if fixed_v else -np.r_[r, g, c]
             try:
@@ -727,6 +742,9 @@ class _Continuer:
                     monodromy = fl.monodromy
                     it += 1
                 return u, fl, monodromy, it, rejected
+            if at_orbit and not need and not asked:
+                last_next = rate * res < self.tol and rate * correction < self.xtol
+                asked = last_next
             size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
             lam = min(1.0, 0.3 / size) if size > 0 else 1.0
             if fixed_v:
