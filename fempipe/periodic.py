@@ -62,8 +62,12 @@ points stay.
 Stability and special points.  The eigenvalues of the monodromy matrix are the
 Floquet multipliers; the one closest to 1 is the trivial one (the phase along
 the orbit) and the orbit is stable when all others lie inside the unit circle.
-They come from the last Newton iterate where the matrix was computed, within
-one Newton step of the orbit.  Between two consecutive points the code
+They come from the Newton iterate where the matrix was last computed: on the
+continuation's own steps one within 1e-3 of the orbit's amplitude
+(:data:`MONODROMY_NEAR`; the multipliers are then off by about as much), at
+the requested v one within 1e-6 (:data:`MONODROMY_AT_ORBIT`), whose
+multipliers are those of the orbit (the trivial one within 2e-6 of 1 on
+Fig. 7).  Between two consecutive points the code
 reports (Kuznetsov, Ch. 4 and 5; Seydel, Sec. 7.4):
 
 * ``fold`` -- the branch turns back in v (a multiplier passes +1, the cyclic

@@ -29,7 +29,7 @@ from fempipe.validation.suite import CaseOutcome, SuiteResult, run_case, run_sui
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Quick cases run by the default tests (about a minute together); the
-#: quick Figs. 7 and 8-10 (~40 s each) run only in ``fempipe validate --quick``
+#: quick Figs. 7 and 8-10 (~15-20 CPU-s each) run only in ``fempipe validate --quick``
 #: and the slow full-suite test.
 CHEAP = [
     "fig02a",
