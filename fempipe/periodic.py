@@ -141,9 +141,11 @@ MONODROMY_NEAR = 1e-3
 #: reported: the iterate predicted to be the last is integrated with the
 #: sensitivity, and one more such flow follows where the iteration still
 #: ended farther away.  Measured on Fig. 7 (P3:16, 36 v): the trivial
-#: multiplier within 1.7e-6 of 1 at every requested v (7.7e-4 with
-#: MONODROMY_NEAR), for 74 flows with the sensitivity and 54 without instead
-#: of 55 and 70, about 10 % more CPU.
+#: multiplier within 1.3e-6 of 1 at every requested v (7.7e-4 with
+#: MONODROMY_NEAR).  With the landings seeded from the previous point
+#: (``seed`` of the corrector) the run takes 49 flows with the sensitivity
+#: and 108 without, against 55 and 70 with MONODROMY_NEAR and no seeding
+#: (74 and 54 with this constant but no seeding): about the same CPU.
 MONODROMY_AT_ORBIT = 1e-6
 #: The orbits at the requested v are integrated this much more accurately
 #: than the continuation's own steps (whose orbits only trace the branch).
