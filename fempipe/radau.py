@@ -847,7 +847,6 @@ class Radau:
         if self._stages_batched:
             self.stats.n_jacobian += 3
             Ks, Ds, Ms = self._jacobians1(Q, P, acc)  # (3, n, n) each
-            jac = [(Ks[i], Ds[i], Ms[i]) for i in range(3)]
         else:
             jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
             Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
@@ -870,7 +869,7 @@ class Radau:
         np.einsum("j,jab->ab", h * A[2], dA, out=D[n:])
         # The last stage is the end of the step (c_3 = 1): its Jacobians are
         # those at the next step's start, where step() may want them.
-        self._stage3_jac = jac[2]
+        self._stage3_jac = (Ks[2], Ds[2], Ms[2])
         # Chained with the derivatives so far, Y = [d y/d y0, d y/dv]:
         # Y1 = [[I, h I], [0, I]] Y + D[:, :2n] Y (+ D[:, 2n] in the v column).
         Y = self.sensitivity_matrix
