@@ -856,12 +856,13 @@ def continue_cycles(
     rtol : float
         Integration tolerance of :class:`fempipe.radau.Radau`, scaled down by
         the distance of the nearest non-trivial Floquet multiplier from 1 (down
-        to rtol / 10; see ``_Continuer.rtol_after``).  At the default 1e-5 the
-        periods and tip extrema of P3:16 orbits at alpha = 0, v = 6.4 ... 12
-        lie within 8.3e-7 of orbits shot at rtol = 1e-10 (measured at the 29
-        requested v of Fig. 7; the error is that of the flow integrated at
-        rtol ~ 1e-5 and moves between 2e-7 and 8e-7 with the step sequences),
-        with 55-60 % of the steps of rtol = 1e-6.
+        to rtol / 10; see ``_Continuer.rtol_after``); the orbits at the
+        requested v at :data:`GRID_RTOL_FACTOR` times that.  At the default
+        1e-5 the periods and tip extrema of P3:16 orbits at alpha = 0,
+        v = 6.4 ... 12 lie within 4.7e-8 and 4.1e-7 of orbits shot at
+        rtol = 1e-10 (measured at the 29 requested v of Fig. 7; the error is
+        that of the integrated flow and moves with the step sequences), with
+        55-60 % of the steps of rtol = 1e-6.
     tol : float
         Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi),
         on the phase and on the arclength conditions.

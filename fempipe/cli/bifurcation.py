@@ -76,7 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.number_type("--orbit-rtol", 0.0, 0.1, strict_low=True),
         default="1e-5",
         help="integration tolerance of the continuation (1e-5: periods and tip extrema within "
-        "1e-6 of rtol = 1e-10 at P3:16, 8.3e-7 measured; --shoot-rtol, --rtol, --t-max are "
+        "1e-6 of rtol = 1e-10 at P3:16, 4.1e-7 measured; --shoot-rtol, --rtol, --t-max are "
         "the sweep's)",
     )
     par = parser.add_argument_group("parallel")

@@ -72,7 +72,8 @@ B(q, y) = B(y, q) = (DJ[Re q] + i DJ[Im q]) y and B(qbar, y) = (DJ[Re q] -
 i DJ[Im q]) y; C(q, q, qbar) = D2J[q, qbar] q = (D2J[Re q, Re q] +
 D2J[Im q, Im q]) q (the mixed terms cancel).  Four Jacobians (plus A) give
 every term; two on the straight pipe at alpha = 0 or pi, where the mirror
-symmetry makes J even about x0 = 0, J(x0 - h u) = J(x0 + h u), and B = 0.  The errors are O(h^2) (truncation) and O(eps |J| / h^2)
+symmetry makes J even about x0 = 0, J(x0 - h u) = J(x0 + h u), and B = 0.
+The errors are O(h^2) (truncation) and O(eps |J| / h^2)
 (rounding of the second difference).  For the pipe the constant bending part
 of J (~h_mesh^-4 after M^{-1}) is not differenced (:func:`pipe_derivatives`);
 what rounding remains comes from the acceleration off the equilibrium (a sum

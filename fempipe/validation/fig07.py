@@ -140,7 +140,7 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
         reference=f"cycles ≤ {SWEEP_TOL:g} in period and tip extrema; every attractor on a "
         "stable continued state",
         why="the integration (find_attractor, shooting at rtol 1e-7) and the continuation "
-        "(rtol 1e-5 scaled near multipliers 1, measured within 8.3e-7 of shooting at rtol 1e-10) are "
+        "(rtol 1e-5 scaled near multipliers 1, measured within 4.1e-7 of shooting at rtol 1e-10) are "
         "independent computations of the same orbits; equilibria reached by integration stop "
         "at the classification's radius, so only their identity is checked (1e-3); an "
         "integration that finds no attractor by its t_max next to v_H is listed as inconclusive",
