@@ -325,30 +325,84 @@ def _integrals(quad):
     return cumulative, from_tip
 
 
+def _cumulative_adjoint(quad, g: np.ndarray) -> np.ndarray:
+    """``C^T g`` for the cumulative integral C of :func:`_cumulative` (quadrature
+    index on axis 0 of g, trailing axes flattened), O(n_q) per column.
+
+    In cell k at local point a, ``(C f)_{k,a} = h_k sum_b a_ab f_{k,b} +
+    sum_{k' < k} h_k' sum_b w_b f_{k',b}`` (w_b the reference weights), so
+    ``(C^T g)_{k,b} = h_k (sum_a a_ab g_{k,a} + w_b sum_{k' > k} sum_a g_{k',a})``.
+    """
+    nc, ng = quad.n_cells, quad.n_gauss
+    gc = g.reshape(nc, ng, -1)
+    out = np.matmul(quad._a.T, gc)
+    s = gc.sum(axis=1)
+    after = np.cumsum(s[::-1], axis=0)[::-1]
+    after -= s
+    for b in range(ng):
+        out[:, b] += quad.ref_weights[b] * after
+    out *= quad.h[:, None, None]
+    return out.reshape(g.shape)
+
+
+def _projection_fields(quad):
+    """``g -> (V, U)`` with ``V = (C^R)^T (w g)`` and ``U = C^T V``, along axis 0.
+
+    For a field X, ``sum_q w_q g_q (C^R X)_q = sum_q V_q X_q`` and
+    ``sum_q w_q g_q (C^R C X)_q = sum_q U_q X_q``: the projections of
+    :func:`_batched_jacobians` moved onto the test side.  Dense (one product
+    with the stacked operators) up to :data:`DENSE_INTEGRALS_MAX` points,
+    cell by cell beyond (``C^R = 1 w^T - C``, so ``(C^R)^T y = w (1^T y) - C^T y``).
+    """
+    n_q, w = quad.n_q, quad.w
+    if n_q <= DENSE_INTEGRALS_MAX:
+        eye = np.eye(n_q)
+        RwT = quad.from_tip(eye).T * w[None, :]
+        stacked = np.vstack([RwT, quad.cumulative(eye).T @ RwT])
+
+        def dense(g):
+            out = stacked @ g.reshape(n_q, -1)
+            return out[:n_q].reshape(g.shape), out[n_q:].reshape(g.shape)
+
+        return dense
+
+    def cells(g):
+        wg = w[:, None] * g.reshape(n_q, -1)
+        V = _cumulative_adjoint(quad, wg)
+        np.subtract(w[:, None] * wg.sum(axis=0)[None, :], V, out=V)
+        return V.reshape(g.shape), _cumulative_adjoint(quad, V).reshape(g.shape)
+
+    return cells
+
+
 def _batched_jacobians(model: PipeModel):
     """``(dR/dq, dR/dq', M)`` at several states in one evaluation, or None where unavailable.
 
     The Jacobians of :meth:`PipeModel.jacobians` for the pipe without
-    variants and steady flow, at S states (arrays (S, n)).  Half the cost of
-    ``PipeModel.jacobians`` at one state on P3:16 (0.66 against 1.3 ms,
-    measured): matrix products instead of einsum over ``...`` in the
-    cumulative integrals (:func:`_cumulative`) and the three integrals of
-    phi fields in one call.  Radau's Newton matrix takes one state; the
-    three stage Jacobians of the sensitivity take S = 3 on small
-    discretisations (:data:`BATCHED_STAGES_MAX`), where one call is cheaper
-    than three, and S = 1 three times on larger ones, where the
-    (n_q, 2, 3 S, n) temporaries make it dearer.  Same terms (``operators.py``,
-    ``jacobians``):
-    with F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
+    variants and steady flow, at S states (arrays (S, n)).  Radau's Newton
+    matrix takes one state; the three stage Jacobians of the sensitivity
+    take S = 3 on small discretisations (:data:`BATCHED_STAGES_MAX`), where
+    one call is cheaper than three, and S = 1 three times on larger ones.
+    Same terms as ``operators.py`` (``jacobians``): with
+    F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
 
-    * dR/dq = K + Phi^T diag(d) Phi + (tip column) tip^T + the projection of
-      dF/dq = C(phi (-theta_ddot t - theta_dot^2 n)) - 2 v sqrt(beta) theta_dot t phi,
+    * dR/dq = K + Phi^T diag(d) Phi + (tip column) tip^T + the projection
+      \\int phi_i n . C^R X_j of X_j = dF/dq_j = C(a phi_j) + b phi_j,
+      a = -theta_ddot t - theta_dot^2 n, b = -2 v sqrt(beta) theta_dot t,
       with d = gamma w (1 - xi) cos(theta + alpha) - v^2 w cos(theta(1) - theta)
       - w t . C^R F;
-    * dR/dq' = mu K + the projection of C(-2 theta_dot t phi) + 2 v sqrt(beta) n phi;
+    * dR/dq' = mu K + the same projection with a = -2 theta_dot t,
+      b = 2 v sqrt(beta) n;
     * M = \\int (C phi n) . (C phi n).
 
-    ``tests/test_dynamics.py`` checks them against ``PipeModel.jacobians``.
+    The projections are taken on the test side: with V = (C^R)^T (w n phi_i)
+    and U = C^T V (:func:`_projection_fields`), the (i, j) entry is
+    ``sum_q (a . U_i + b . V_i)_q phi_j(x_q)``, one (n_q, n) field per
+    Jacobian times Phi.  Integrating the n test fields once, instead of the
+    2 x 2 n trial fields of dF/dq and dF/dq' twice each, makes a Jacobian
+    about 35 % cheaper on P3:8 to P3:16 and half as dear on P3:32 (measured,
+    one BLAS thread).  ``tests/test_dynamics.py`` checks them against
+    ``PipeModel.jacobians``.
     """
     p = model.params
     if not _batchable(model):
@@ -362,11 +416,9 @@ def _batched_jacobians(model: PipeModel):
     grav = p.gamma * w * (1.0 - model.x)
     v2, cv, mu, alpha = p.v * p.v, 2.0 * p.v * math.sqrt(p.beta), p.mu, p.alpha
     cumulative, from_tip = _integrals(quad)
+    projection_fields = _projection_fields(quad)
     PhiT_w = Phi.T * w  # (n, n_q): \\int phi_i f
-
-    def field(coef):
-        """coef (n_q, 2, S) times phi_j: (n_q, 2, S, n), the dofs contiguous."""
-        return coef[..., None] * Phi[:, None, None, :]
+    w2 = np.repeat(w, 2)
 
     def jacobians(Q: np.ndarray, P: np.ndarray, Acc: np.ndarray):
         S = Q.shape[0]
@@ -374,23 +426,15 @@ def _batched_jacobians(model: PipeModel):
         nrm, t = _frames(th)  # (n_q, 2, S)
         F = cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * t)
         F = F + cv * th_d[:, None] * nrm
-        # The three C(phi ...) fields of dF/dq, dF/dq' and of the mass matrix in one call.
-        inner = np.concatenate(
-            [
-                field(-th_dd[:, None] * t - (th_d**2)[:, None] * nrm),
-                field(-2.0 * th_d[:, None] * t),
-                field(nrm),
-            ],
-            axis=2,
-        )
-        C = cumulative(inner)  # (n_q, 2, 3 S, n)
-        dF = C[:, :, :S] + field(-cv * th_d[:, None] * t)
-        dFd = C[:, :, S : 2 * S] + field(cv * nrm)
-        B = C[:, :, 2 * S :]
-        # \\int phi_i n . C^R X for X = dF, dFd: (2 S, n, n)
-        G = from_tip(np.concatenate([dF, dFd], axis=2))
-        nn = np.concatenate([nrm, nrm], axis=2)
-        proj = PhiT_w[None] @ np.einsum("qcs,qcsj->sqj", nn, G)
+        n_phi = nrm[..., None] * Phi[:, None, None, :]  # (n_q, 2, S, n): n phi_i
+        V, U = projection_fields(n_phi)
+        a = -th_dd[:, None] * t - (th_d**2)[:, None] * nrm
+        ad = -2.0 * th_d[:, None] * t
+        b, bd = -cv * th_d[:, None] * t, cv * nrm
+        Z = np.empty((2 * S, n_q, n))  # the test fields of dR/dq, then of dR/dq'
+        Z[:S] = np.einsum("qcs,qcsi->sqi", a, U) + np.einsum("qcs,qcsi->sqi", b, V)
+        Z[S:] = np.einsum("qcs,qcsi->sqi", ad, U) + np.einsum("qcs,qcsi->sqi", bd, V)
+        proj = Z.transpose(0, 2, 1) @ Phi
         cos_tip = np.cos((Q @ tip)[None, :] - th)  # (n_q, S)
         d = grav[:, None] * np.cos(th + alpha) - v2 * w[:, None] * cos_tip
         d = d - np.einsum("qcs,qcs->qs", t, from_tip(F)) * w[:, None]
@@ -398,8 +442,8 @@ def _batched_jacobians(model: PipeModel):
         Jq = K[None] + (Phi.T[None] * d.T[:, None, :]) @ Phi[None] + proj[:S]
         Jq = Jq + tip_col.T[:, :, None] * tip[None, None, :]
         Jqd = mu * K[None] + proj[S:]
-        Bs = B.transpose(2, 0, 1, 3).reshape(S, 2 * n_q, n)
-        M = (Bs * np.repeat(w, 2)[None, :, None]).transpose(0, 2, 1) @ Bs
+        Bs = cumulative(n_phi).transpose(2, 0, 1, 3).reshape(S, 2 * n_q, n)
+        M = (Bs * w2[None, :, None]).transpose(0, 2, 1) @ Bs
         M = 0.5 * (M + M.transpose(0, 2, 1))
         return Jq, Jqd, M
 
@@ -408,13 +452,14 @@ def _batched_jacobians(model: PipeModel):
 
 #: Up to this n_q * n the three stage Jacobians of the sensitivity are one
 #: batched evaluation (S = 3 in :func:`_batched_jacobians`), beyond it three
-#: (its (n_q, 2, 3 S, n) temporaries outgrow the call overhead saved).
-#: Measured (best of 5, one BLAS thread), three calls against one: P2:4 (128)
-#: 0.37 against 0.15 ms, P3:4 (288) 0.40 against 0.17, sine modes N = 3 on
-#: 96 points (288) 0.39 against 0.20, N = 4 on 128 (512) 0.47 against 0.30,
-#: P3:6 (648) 0.47 against 0.27; P3:8 (1152) 0.71 against 0.89, P3:16 (4608)
-#: 2.5 against 2.6.
-BATCHED_STAGES_MAX = 768
+#: (its (n_q, 2, S, n) temporaries outgrow the call overhead saved).
+#: Measured (best of 7, one BLAS thread), three calls against one: P2:4 (128)
+#: 0.15 against 0.07 ms, P3:4 (288) 0.16 against 0.08, sine modes N = 3 on
+#: 96 points (288) 0.21 against 0.13, N = 4 on 128 (512) 0.25 against 0.18,
+#: P3:8 (1152) 0.23 against 0.15, P3:12 (2592) 0.34 against 0.30, P3:16
+#: (4608) 0.60 against 0.55-0.58; P3:20 (7200) 1.02 against 1.43, P3:24
+#: (10368) 1.67 against 2.22.
+BATCHED_STAGES_MAX = 4608
 
 
 def _velocity_derivative(model: PipeModel):

@@ -306,15 +306,21 @@ def test_batched_and_per_stage_integrations_agree():
     np.testing.assert_allclose(runs[0][1], runs[1][1], atol=1e-10)
 
 
+@pytest.mark.parametrize("integrals", ["dense", "cells"])
 @pytest.mark.parametrize(
     "disc", [FiniteElement(4, 2), FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str
 )
-def test_integrator_jacobians_are_the_model_jacobians(disc):
-    """Radau's Jacobians (matrix products instead of einsum, states stacked)
-    equal PipeModel.jacobians at each state, (dR/dq, dR/dq', M), to round-off;
-    its cumulative integrals equal LineQuadrature's."""
+def test_integrator_jacobians_are_the_model_jacobians(disc, integrals, monkeypatch):
+    """Radau's Jacobians (projections moved onto the test side, states stacked)
+    equal PipeModel.jacobians at each state, (dR/dq, dR/dq', M), to round-off,
+    with the integration operators as dense matrices and cell by cell (the
+    path of meshes beyond DENSE_INTEGRALS_MAX points); its cumulative
+    integrals equal LineQuadrature's."""
+    from fempipe import radau
     from fempipe.radau import _batched_jacobians, _cumulative, _from_tip
 
+    if integrals == "cells":
+        monkeypatch.setattr(radau, "DENSE_INTEGRALS_MAX", 0)
     rng = np.random.default_rng(4)
     m = PipeModel(disc, Params(alpha=0.7, v=9.0, mu=0.02, beta=0.3, gamma=5.0))
     Q, P, A = (0.5 * rng.standard_normal((3, m.n)) for _ in range(3))
@@ -327,6 +333,18 @@ def test_integrator_jacobians_are_the_model_jacobians(disc):
     np.testing.assert_allclose(_cumulative(m.quad, f), m.quad.cumulative(f), atol=1e-14)
     np.testing.assert_allclose(_from_tip(m.quad, f), m.quad.from_tip(f), atol=1e-14)
     assert _batched_jacobians(PipeModel(disc, Params(v=9.0, end_mass=0.1))) is None
+
+
+def test_cumulative_adjoint_is_the_transpose_of_the_cumulative_integral():
+    """The cell-by-cell C^T g of the Jacobians equals the transpose of the dense
+    cumulative-integral matrix, on unequal cells (each cell's length enters)."""
+    from fempipe.quadrature import LineQuadrature
+    from fempipe.radau import _cumulative_adjoint
+
+    quad = LineQuadrature(np.array([0.0, 0.1, 0.35, 0.5, 0.8, 1.0]), 4)
+    g = np.random.default_rng(5).standard_normal((quad.n_q, 7))
+    Cm = quad.cumulative(np.eye(quad.n_q))
+    np.testing.assert_allclose(_cumulative_adjoint(quad, g), Cm.T @ g, atol=1e-14)
 
 
 # ------------------------------------------------ sensitivity to the flow --
