@@ -150,7 +150,7 @@ def test_a_real_signal_ends_a_running_command_with_one_line(signum, code, tmp_pa
         "fempipe",
         "stability-map",
         "--alphas",
-        "0:pi:40",
+        "0:pi:400",  # ~20 s on 2 cores (40 took < 6 s): still running at the signal
         "--workers",
         "2",
         "--out",

@@ -308,7 +308,7 @@ def _validation_cases():
 
     from fempipe.validation import CASES
 
-    # The quick Figs. 7 and 8-10 take about 40 s each: with the slow tests.
+    # The quick Figs. 7 and 8-10 take about 10 s each: with the slow tests.
     slow = [pytest.param(n, marks=pytest.mark.slow) for n in CASES if n not in CHEAP]
     return [*CHEAP, *slow]
 
@@ -332,6 +332,36 @@ def test_validation_figure_text_fits(name):
         for fig in figs.values():
             plt.close(fig)
     assert not faults, "\n".join(faults)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "fig05",
+        "fig11",
+        "fig12",
+        *(pytest.param(n, marks=pytest.mark.slow) for n in ("fig07", "fig08_10")),
+    ],
+)
+def test_dynamic_figures_carry_the_parameters(name):
+    """The figures of the paper's reference case say beta, gamma and mu on the
+    figure itself (under the title), not only in the report's caption."""
+    from test_validation import quick_result
+
+    from fempipe.validation import load_case
+
+    line = f"β = {PAPER_CASE['beta']:g}, γ = {PAPER_CASE['gamma']:g}, μ = {PAPER_CASE['mu']:g}"
+    case = load_case(name)
+    result = quick_result(name)
+    figs = case.plots(result) if hasattr(case, "plots") else {name: case.plot(result)}
+    try:
+        titles = {stem: fig.get_suptitle() for stem, fig in figs.items()}
+    finally:
+        for fig in figs.values():
+            plt.close(fig)
+    assert line == "β = 0.142, γ = 18.9, μ = 0.005"
+    for stem, title in titles.items():
+        assert title.splitlines()[-1] == line, (stem, title)
 
 
 def test_convergence_labels_of_close_truncations_do_not_overlap():

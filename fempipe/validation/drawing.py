@@ -93,12 +93,21 @@ def figure_panels(fig, n_panels: int, ncols: int | None = None, size: float = 3.
     return fig, list(fig.subplots(1, n_panels, squeeze=False).ravel())
 
 
-def finish_figure(fig, title: str):
+def paper_case_line() -> str:
+    """The paper's reference parameters as a line of a figure title:
+    ``β = 0.142, γ = 18.9, μ = 0.005`` (:data:`fempipe.params.PAPER_CASE`)."""
+    from ..params import PAPER_CASE
+
+    return f"β = {PAPER_CASE['beta']:g}, γ = {PAPER_CASE['gamma']:g}, μ = {PAPER_CASE['mu']:g}"
+
+
+def finish_figure(fig, title: str, parameters: str | None = None):
     """The report style: one title per figure, panels lettered (a), (b), ...
 
     Panel titles keep what differs between panels; the figure title says
-    what they share.  The layout is constrained so that no label leaves the
-    canvas.
+    what they share, and ``parameters`` (e.g. :func:`paper_case_line`), on a
+    line of its own under it, the parameters a reader of the figure alone
+    needs.  The layout is constrained so that no label leaves the canvas.
     """
     axes = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
     if len(axes) > 1:
@@ -109,7 +118,10 @@ def finish_figure(fig, title: str):
             ax.set_title(ax.get_title(), fontsize=10)
     # Wrapped to the figure's width (about 0.6 em per character at 12 pt).
     chars = max(20, int(fig.get_figwidth() * 72 / (0.62 * 12)))
-    fig.suptitle(textwrap.fill(title, chars), fontsize=12)
+    text = textwrap.fill(title, chars)
+    if parameters:
+        text += "\n" + parameters
+    fig.suptitle(text, fontsize=12)
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
     # Room at the edges for half a tick label: equal-aspect panels widen their
@@ -319,7 +331,7 @@ def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict |
         Line2D([], [], ls="-", color="0.4", label="stable"),
         Line2D([], [], ls="--", color="0.4", label="unstable"),
     ]
-    ax.legend(handles=handles, fontsize=8)
+    ax.legend(handles=handles, fontsize=9)
     return ax
 
 

@@ -205,7 +205,7 @@ def plot(result: CaseResult, fig=None):
     from matplotlib.lines import Line2D
 
     from ..plotting.stability import direction_arrow, mode_color
-    from .drawing import figure_panels, finish_figure, legend_columns, style_for
+    from .drawing import figure_panels, finish_figure, legend_columns, paper_case_line, style_for
 
     loci = result.data["loci"]
     top = result.data.get("top_modes", {})
@@ -245,7 +245,7 @@ def plot(result: CaseResult, fig=None):
     fig.legend(
         handles=handles, loc="outside lower center", ncols=legend_columns(fig, handles), fontsize=9
     )
-    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig
 
 

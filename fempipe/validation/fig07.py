@@ -375,7 +375,7 @@ def plot(result: CaseResult, fig=None):
         ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])
     axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)
-    from .drawing import finish_figure
+    from .drawing import finish_figure, paper_case_line
 
-    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig

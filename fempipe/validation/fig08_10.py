@@ -393,7 +393,7 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
     """
     import matplotlib.pyplot as plt
 
-    from .drawing import draw_continued, draw_orbit_shapes, finish_figure
+    from .drawing import draw_continued, draw_orbit_shapes, finish_figure, paper_case_line
 
     paper, key, lab, what = FIGURES[which]
     panels = result.data["panels"]
@@ -418,7 +418,9 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
         if inset is not None:
             draw_orbit_shapes(inset, pan["shapes"])
             inset.set_title(f"α = {name}: shapes (FE)", fontsize=10)
-    finish_figure(fig, f"{paper}: extrema of the {what} on the attractor against v")
+    finish_figure(
+        fig, f"{paper}: extrema of the {what} on the attractor against v", paper_case_line()
+    )
     return fig
 
 

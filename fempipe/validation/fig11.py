@@ -189,7 +189,7 @@ def plot(result: CaseResult, fig=None):
     """
     import matplotlib.pyplot as plt
 
-    from .drawing import color_for, discretization_legend, finish_figure, style_for
+    from .drawing import color_for, discretization_legend, finish_figure, paper_case_line, style_for
 
     traces = result.data["traces"]
     n = max(len(traces), 1)
@@ -217,5 +217,5 @@ def plot(result: CaseResult, fig=None):
             ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
             ax.grid(alpha=0.3)
     discretization_legend(fig, labels)
-    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig

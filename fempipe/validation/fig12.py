@@ -147,7 +147,7 @@ def plot(result: CaseResult, fig=None):
         ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
         ax.grid(alpha=0.3)
     discretization_legend(fig, next(iter(loops.values()), {}))
-    from .drawing import finish_figure
+    from .drawing import finish_figure, paper_case_line
 
-    finish_figure(fig, f"{CASE.figure}: {CASE.title}")
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig
