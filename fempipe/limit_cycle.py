@@ -51,6 +51,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -473,7 +474,14 @@ def shoot(
         J[-1, :n] = _eta_gradient(disc, q)
         rhs = -np.concatenate([stepper.q - q, stepper.qdot - p, [g]])
         try:
-            dx = sla.solve(J, rhs)
+            # Near an equilibrium (a decaying oscillation, the Hopf point) the
+            # bordered matrix is nearly singular; the step is still judged by
+            # the next period's residual, and an orbit that collapses to the
+            # equilibrium is refused below, so scipy's warning would only
+            # reach the user's terminal as noise.
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sla.LinAlgWarning)
+                dx = sla.solve(J, rhs)
         except (sla.LinAlgError, ValueError):
             return None
         return dx if np.all(np.isfinite(dx)) else None

@@ -293,3 +293,22 @@ def test_polish_lands_on_the_cycle():
     lo, hi = fine.tip["eta_tip"]
     assert abs(hi + lo) < 1e-7 < abs(sum(rough.tip["eta_tip"]))
     np.testing.assert_array_equal(fine.floquet_multipliers, rough.floquet_multipliers)
+
+
+def test_shooting_near_an_equilibrium_does_not_warn():
+    """A sweep's attractor search that ends on an equilibrium (alpha = pi, v = 1,
+    P3:8, the buckled pipe: the shooting's bordered matrix reaches rcond 2e-17
+    on the way) returns the equilibrium and lets no scipy LinAlgWarning reach
+    the user's terminal (it did, from ``fempipe validate``, before the
+    shooting's Newton step silenced it)."""
+    import warnings
+
+    import scipy.linalg as sla
+
+    from fempipe.validation.dynamic_runs import parse_discretization, sweep_up
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sla.LinAlgWarning)
+        (point,) = sweep_up(parse_discretization(fe="P3:8"), np.pi, [1.0])
+    assert point.attractor == "equilibrium"
+    assert point.eta_tip[0] == point.eta_tip[1] and abs(point.eta_tip[0]) > 0.5
