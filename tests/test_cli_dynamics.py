@@ -159,6 +159,27 @@ def test_bifurcation_bad_input(capsys, argv, option):
     assert code == 2 and option in err and err.count("\n") == 1
 
 
+def test_bifurcation_table_names_stability_and_the_continuations_own_points(capsys):
+    """The plain table: whole words for the attractor, a ``stable`` column and a
+    ``point`` column telling the requested v from the continuation's own steps,
+    each row agreeing with the JSON of the same run."""
+    argv = ["bifurcation", *CHEAP, "--alphas", "0", "--v", "5,6,8", "--quiet"]
+    assert main(argv) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    d = run_json(capsys, [*argv, "--json"])
+    header, rows = lines[0].split(), [ln.split() for ln in lines[1:]]
+    assert header[:6] == ["alpha", "branch", "v", "attractor", "stable", "point"]
+    rows = [r for r in rows if r[0] != "special"]
+    assert len(rows) == len(d["points"])
+    for r, p in zip(rows, d["points"], strict=True):
+        assert r[3] == p["attractor"]
+        assert r[4] == {True: "yes", False: "no"}[p["stable"]]
+        assert r[5] == ("requested" if p["requested"] else "step")
+        assert float(r[2]) == pytest.approx(p["v"], rel=1e-3)
+    assert {r[5] for r in rows} == {"requested", "step"}
+    assert {r[4] for r in rows} == {"yes", "no"}  # the straight pipe loses stability
+
+
 def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypatch, capsys):
     """A failed sweep ends with exit 1 and one line; with --out it says a rerun resumes."""
     import fempipe.bifurcation

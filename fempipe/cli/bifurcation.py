@@ -310,22 +310,28 @@ def _caption(result: dict) -> str:
 
 
 def _print_table(result: dict) -> None:
+    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle
+    branch's name (``H1``, ...) or the sweep's direction; ``stable``: from the
+    eigenvalues or Floquet multipliers (``-`` for a sweep's attractor, which is
+    not analysed); ``point``: ``requested`` (a v of ``--v``) or ``step`` (the
+    continuation's own)."""
     print(
-        f"{'alpha':>8s} {'dir':>4s} {'v':>8s} {'attractor':>12s} {'period':>10s} "
-        f"{'eta_min':>9s} {'eta_max':>9s} {'X_min':>9s} {'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}"
+        f"{'alpha':>8s} {'branch':>6s} {'v':>8s}  {'attractor':<12s} {'stable':<6s} "
+        f"{'point':<9s} {'period':>10s} {'eta_min':>9s} {'eta_max':>9s} {'X_min':>9s} "
+        f"{'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}"
     )
     for pt in result["points"]:
         per = f"{pt['period']:.6g}" if pt["period"] else "-"
-        kind = pt["attractor"]
-        if "stable" in pt:
-            kind = ("" if pt["stable"] else "u-") + kind[:8]
-        direction = {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
+        stable = {True: "yes", False: "no"}.get(pt.get("stable"), "-")
+        point = "requested" if pt.get("requested", True) else "step"
+        branch = {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
             pt["direction"], pt["direction"]
         )
         print(
-            f"{pt['alpha']:8.4g} {direction:>4s} {pt['v']:8.4g} {kind:>12s} "
-            f"{per:>10s} {pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f} "
-            f"{pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} {pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
+            f"{pt['alpha']:8.4g} {branch:>6s} {pt['v']:8.4g}  {pt['attractor']:<12s} "
+            f"{stable:<6s} {point:<9s} {per:>10s} {pt['eta_tip'][0]:9.5f} "
+            f"{pt['eta_tip'][1]:9.5f} {pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} "
+            f"{pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
         )
     for sp in result.get("special_points", []):
         print(
