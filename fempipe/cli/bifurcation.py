@@ -22,8 +22,9 @@ needs the optional extra ``fempipe[dask]``).
 
 ``--json`` prints ``{"points": [{"v", "direction", "attractor", "eta_tip":
 [min, max], "X_tip": [...], "Z_tip": [...], "period"}, ...]}``.  ``--out DIR``
-writes bifurcation.json, the diagrams eta_tip.png (Fig. 7), X_tip.png
-(Fig. 9), Z_tip.png (Fig. 10), and keeps the point store DIR/points/: every
+writes bifurcation.json, the diagrams eta_tip.png, X_tip.png and Z_tip.png
+(one panel per inclination; for the paper's case, each panel names the
+panel of the paper's Figs. 7-10 it redraws), and keeps the point store DIR/points/: every
 finished point is written at once, and rerunning the same command resumes,
 computing only the missing points.
 """
@@ -264,8 +265,7 @@ def _write_outputs(output: reporting.Output, result) -> None:
     from fempipe.plotting.dynamics import plot_bifurcation
 
     p = result["params"]
-    figure = {"eta_tip": "Fig. 7", "X_tip": "Fig. 9", "Z_tip": "Fig. 10"}
-    for key, fig_name in figure.items():
+    for key in ("eta_tip", "X_tip", "Z_tip"):
         groups = sorted({pt["alpha"] for pt in result["points"]})
         fig, axes = plt.subplots(
             1, len(groups), figsize=(5.5 * len(groups), 4.3), squeeze=False, layout="constrained"
@@ -278,7 +278,7 @@ def _write_outputs(output: reporting.Output, result) -> None:
                     key,
                     ax=ax,
                     title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
-                    f"γ = {p['gamma']:.4g} (cf. {fig_name})",
+                    f"γ = {p['gamma']:.4g}" + _paper_panel(key, a, p),
                     special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
                     hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
                 )
@@ -288,6 +288,31 @@ def _write_outputs(output: reporting.Output, result) -> None:
         finally:
             plt.close(fig)
     output.json("bifurcation.json", result)
+
+
+def _paper_panel(key: str, alpha: float, params: dict) -> str:
+    """`` (cf. Fig. 8(b))``: the panel of the paper's Figs. 7-10 that a diagram
+    redraws, or ``""`` where it redraws none (another case, another alpha).
+
+    Fig. 7 is alpha = 0 with (a) eta(1), (b) X_g(1), (c) Z_g(1); Figs. 8, 9 and
+    10 are eta(1), X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi,
+    all for the reference case beta = 0.142, gamma = 18.9, mu = 0.005.
+    """
+    from fempipe.params import PAPER_CASE
+
+    if any(not math.isclose(params.get(k, math.nan), v) for k, v in PAPER_CASE.items()):
+        return ""
+    if any(
+        params.get(k) for k in ("end_mass", "external_damping", "hysteretic_damping", "springs")
+    ):
+        return ""  # a variant of the pipe: the paper has no such figure
+    column = ("eta_tip", "X_tip", "Z_tip").index(key)
+    if math.isclose(alpha, 0.0, abs_tol=1e-12):
+        return f" (cf. Fig. 7({'abc'[column]}))"
+    for k in range(1, 5):
+        if math.isclose(alpha, k * math.pi / 4):
+            return f" (cf. Fig. {8 + column}({'abcd'[k - 1]}))"
+    return ""
 
 
 def _caption(result: dict) -> str:
