@@ -1298,6 +1298,13 @@ class CycleDiagram:
         }
 
 
+def _equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
+    """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
+    [min, max] form of the diagram's points (where a branch of orbits starts)."""
+    tip = tip_coordinates(model.disc, model.params.alpha, q)
+    return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
+
+
 def _alpha_task(
     model: PipeModel,
     values: list,
@@ -1335,7 +1342,8 @@ def _alpha_task(
         "special_points": [],
         "errors": [],
         "hopf_points": [
-            dict(h.to_dict(), alpha=alpha, branch=f"H{k}") for k, h in enumerate(hopf, start=1)
+            dict(h.to_dict(), alpha=alpha, branch=f"H{k}", **_equilibrium_tip(model, h.q_static))
+            for k, h in enumerate(hopf, start=1)
         ],
     }
     covered: list[tuple[float, float]] = []

@@ -287,6 +287,33 @@ def test_unstable_static_states_look_different():
         plt.close(fig)
 
 
+def test_a_hopf_point_below_the_requested_v_is_marked_where_its_branch_starts():
+    """bifurcation diagrams: a Hopf point below the requested v (alpha = pi, where
+    the straight pipe flutters at 4.15 and --v starts at 5) is marked at its
+    equilibrium from the JSON, and its branch of orbits is drawn from there."""
+    from fempipe.plotting.dynamics import plot_bifurcation
+
+    def point(v, direction, lo, hi, **kw):
+        return {"v": v, "direction": direction, "alpha": math.pi, "attractor": "periodic",
+                "eta_tip": [lo, hi], "X_tip": [lo, hi], "Z_tip": [lo, hi], "period": 0.5,
+                "stable": True, **kw}  # fmt: skip
+
+    pts = [point(v, "static", 0.0, 0.0, requested=True, stable=False) for v in (5.0, 6.0)]
+    pts += [point(v, "continuation", -a, a, branch="H1", requested=req)
+            for v, a, req in ((4.2, 0.1, False), (5.0, 0.5, True), (6.0, 0.6, True))]  # fmt: skip
+    hopf = {"v": 4.15, "branch": "H1", "eta_tip": [0.0, 0.0], "X_tip": [0.0, 0.0],
+            "Z_tip": [0.0, 0.0]}  # fmt: skip
+    fig, ax = plt.subplots()
+    try:
+        plot_bifurcation(pts, "eta_tip", ax=ax, hopf_points=[hopf])
+        marks = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
+        assert [list(ln.get_xdata()) for ln in marks] == [[4.15]]
+        starts = [ln.get_xdata()[0] for ln in ax.get_lines() if len(ln.get_xdata()) > 1]
+        assert 4.15 in starts  # the branch is joined to the Hopf point
+    finally:
+        plt.close(fig)
+
+
 def test_animation_loops_without_a_repeated_frame():
     """A closed orbit (last state = first) is animated without drawing its start twice."""
     from fempipe.plotting.dynamics import animation_figure

@@ -163,6 +163,27 @@ def test_branch_starts_at_the_hopf_point(run):
     assert abs(at_zero("period") - T_H) < 1e-3 * T_H
 
 
+def test_hopf_points_carry_the_equilibrium_where_the_branch_starts(run, capsys):
+    """Each Hopf point of the JSON carries the tip of its equilibrium ([y, y], as
+    the diagram's points): the straight pipe at alpha = 0, and at alpha = pi/2
+    the static solution at v_H solved on its own (the figures mark the Hopf
+    point there, also when v_H lies outside the requested v)."""
+    from fempipe.kinematics import tip_values
+
+    d, _ = run
+    (h,) = d["hopf_points"]
+    assert (h["eta_tip"], h["X_tip"], h["Z_tip"]) == ([0.0, 0.0], [1.0, 1.0], [0.0, 0.0])
+    argv = ["bifurcation", "--modal", "2", "--alphas", "pi/2", "--v", "6,7", "--json", "--quiet"]
+    (h,) = run_json(capsys, argv)["hopf_points"]
+    assert 6.0 < h["v"] < 7.0
+    disc = parse_discretization(modal=2)
+    m = PipeModel(disc, Params(alpha=math.pi / 2, v=h["v"]))
+    tip = tip_values(disc, solve_static(m).q, math.pi / 2)
+    for k in ("eta_tip", "X_tip", "Z_tip"):
+        assert h[k][0] == h[k][1]
+        assert abs(h[k][0] - tip[k]) < 1e-8, k
+
+
 def test_equilibria_stability_is_the_linear_criterion(run):
     d, _ = run
     disc = parse_discretization("P2:4")

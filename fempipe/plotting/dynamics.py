@@ -177,8 +177,9 @@ def plot_bifurcation(
         Parameters, written small in the axes' corner (or pass them to the
         figure's ``suptitle`` instead).
     hopf_points : sequence of dict
-        ``{"v", "branch"}``: each branch of orbits is drawn from its Hopf point
-        on the line of equilibria, which is marked.
+        ``{"v", "branch"}``, and the equilibrium's ``key`` (``[y, y]``) where
+        known: each branch of orbits is drawn from its Hopf point, which is
+        marked (without ``key``, on the line of equilibria, interpolated).
     """
     if key not in _LABEL:
         raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
@@ -237,14 +238,17 @@ def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> 
     each branch starts at its Hopf point on the (interpolated) line of equilibria."""
     static = sorted((p for p in points if p["direction"] == "static"), key=lambda p: p["v"])
     start = {}
-    if static:
-        sv = np.array([p["v"] for p in static])
-        sy = np.array([p[key][0] for p in static], dtype=float)
-        for k, h in enumerate(hopf):
-            if sv[0] <= h["v"] <= sv[-1]:
-                y = float(np.interp(h["v"], sv, sy))
-                start[h.get("branch")] = (h["v"], y)
-                ax.plot([h["v"]], [y], "D", color="k", ms=4, label="Hopf point" if k == 0 else None)
+    sv = np.array([p["v"] for p in static])
+    sy = np.array([p[key][0] for p in static], dtype=float)
+    for h in hopf:
+        if key in h:  # the equilibrium at the Hopf point, also outside the requested v
+            y = float(h[key][0])
+        elif static and sv[0] <= h["v"] <= sv[-1]:
+            y = float(np.interp(h["v"], sv, sy))
+        else:
+            continue
+        ax.plot([h["v"]], [y], "D", color="k", ms=4, label=None if start else "Hopf point")
+        start[h.get("branch")] = (h["v"], y)
     groups = {}
     for p in points:
         if p["direction"] == "static":
