@@ -314,6 +314,30 @@ def test_a_hopf_point_below_the_requested_v_is_marked_where_its_branch_starts():
         plt.close(fig)
 
 
+@pytest.mark.parametrize("method", ["continuation", "sweep"])
+def test_bifurcation_command_figures_have_one_legend_below_the_panels(method, capsys):
+    """eta_tip.png, X_tip.png, Z_tip.png of ``fempipe bifurcation``: one legend for
+    all panels, under them (inside the axes it covered the diagram), each entry
+    once, text >= 9 pt, nothing cut or overlapping."""
+    from clirun import run_json
+
+    from fempipe.cli.bifurcation import diagram_figure
+
+    argv = ["bifurcation", "--modal", "2", "--alphas", "0,pi/2", "--v", "6,7.5", "--json"]
+    result = run_json(capsys, [*argv, "--method", method, "--quiet"])
+    for key in ("eta_tip", "X_tip", "Z_tip"):
+        fig = diagram_figure(result, key)
+        try:
+            assert len(fig.axes) == 2 and all(ax.get_legend() is None for ax in fig.axes)
+            (legend,) = fig.legends
+            labels = [t.get_text() for t in legend.get_texts()]
+            assert len(labels) == len(set(labels)) >= 2, labels
+            assert not text_faults(fig), text_faults(fig)
+            assert not small_texts(fig), small_texts(fig)
+        finally:
+            plt.close(fig)
+
+
 def test_animation_loops_without_a_repeated_frame():
     """A closed orbit (last state = first) is animated without drawing its start twice."""
     from fempipe.plotting.dynamics import animation_figure

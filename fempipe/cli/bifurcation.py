@@ -255,39 +255,50 @@ def _deliver(args, store_dir, result: dict) -> None:
 
 
 def _write_outputs(output: reporting.Output, result) -> None:
-    import textwrap
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from fempipe.plotting.dynamics import plot_bifurcation
-
-    p = result["params"]
     for key in ("eta_tip", "X_tip", "Z_tip"):
-        groups = sorted({pt["alpha"] for pt in result["points"]})
-        fig, axes = plt.subplots(
-            1, len(groups), figsize=(5.5 * len(groups), 4.3), squeeze=False, layout="constrained"
-        )
+        fig = diagram_figure(result, key)
         try:
-            for ax, a in zip(axes[0], groups, strict=True):
-                pts = [pt for pt in result["points"] if pt["alpha"] == a]
-                plot_bifurcation(
-                    pts,
-                    key,
-                    ax=ax,
-                    title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
-                    f"γ = {p['gamma']:.4g}" + _paper_panel(key, a, p),
-                    special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
-                    hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
-                )
-            # Wrapped to the figure's width (about 70 characters of 9 pt per 5.5 in).
-            fig.suptitle(textwrap.fill(_caption(result), 70 * len(groups)), fontsize=9)
             output.figure(f"{key}.png", fig, dpi=130)
         finally:
             plt.close(fig)
     output.json("bifurcation.json", result)
+
+
+def diagram_figure(result: dict, key: str):
+    """The figure of ``key`` (``eta_tip``, ``X_tip``, ``Z_tip``): one panel per
+    inclination, the run's parameters above, one legend below the panels."""
+    import textwrap
+
+    import matplotlib.pyplot as plt
+
+    from fempipe.plotting.dynamics import plot_bifurcation
+    from fempipe.plotting.layout import shared_legend
+
+    p = result["params"]
+    groups = sorted({pt["alpha"] for pt in result["points"]})
+    fig, axes = plt.subplots(
+        1, len(groups), figsize=(5.5 * len(groups), 4.6), squeeze=False, layout="constrained"
+    )
+    for ax, a in zip(axes[0], groups, strict=True):
+        pts = [pt for pt in result["points"] if pt["alpha"] == a]
+        plot_bifurcation(
+            pts,
+            key,
+            ax=ax,
+            title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
+            f"γ = {p['gamma']:.4g}" + _paper_panel(key, a, p),
+            special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
+            hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
+        )
+    shared_legend(fig, axes[0])
+    # Wrapped to the figure's width (about 70 characters of 9 pt per 5.5 in).
+    fig.suptitle(textwrap.fill(_caption(result), 70 * len(groups)), fontsize=9)
+    return fig
 
 
 def _paper_panel(key: str, alpha: float, params: dict) -> str:

@@ -207,7 +207,7 @@ def plot_bifurcation(
             rotation=90,
             va="top",
             ha="right",
-            fontsize=7,
+            fontsize=9,
             color="C2",
         )
     ax.set_xlabel(r"$v$")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-__all__ = ["declutter"]
+__all__ = ["declutter", "shared_legend"]
 
 
 def declutter(
@@ -54,3 +54,33 @@ def declutter(
         else:
             t.set_visible(False)
     return kept
+
+
+def shared_legend(fig, axes: Sequence, fontsize: float = 9, max_columns: int = 4):
+    """One legend for panels that share their entries, below them.
+
+    The panels' own legends are removed (inside the axes they cover curves
+    wherever a diagram fills its frame); each label is listed once, with the
+    first handle drawn under it.  Needs a constrained layout (the legend is
+    placed ``outside lower center``).
+
+    Returns
+    -------
+    matplotlib Legend or None
+        None when no panel has a labelled artist.
+    """
+    handles: dict = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+        if ax.get_legend() is not None:
+            ax.get_legend().remove()
+    if not handles:
+        return None
+    return fig.legend(
+        list(handles.values()),
+        list(handles),
+        loc="outside lower center",
+        ncols=min(max_columns, len(handles)),
+        fontsize=fontsize,
+    )
