@@ -240,3 +240,31 @@ def test_simulate_shoot_rtol_default_is_tighter_with_error_estimate():
     assert sim.shoot_rtol_of(parser.parse_args([*base, "--error-estimate"])) == 1e-7
     given = parser.parse_args([*base, "--error-estimate", "--shoot-rtol", "3e-6"])
     assert sim.shoot_rtol_of(given) == 3e-6
+
+
+def test_simulate_figures_continue_the_transient_without_a_jump(monkeypatch, tmp_path):
+    """time_traces.png and trajectory.pvd: where the transient ends, the displayed
+    cycle goes on from the orbit's nearest point, so the join moves the state by
+    no more than a display step does (the orbit's own first sample lies up to
+    0.16 rad away at alpha = pi/2, v = 10, a jump in the traces)."""
+    import fempipe.cli.simulate as sim
+
+    seen = {}
+    display = sim._display_states
+
+    def spy(att, traj, n_periods=3):
+        t, q, p = display(att, traj, n_periods)
+        seen.update(n=traj.t.size, t=t, q=q, start=att.cycle.orbit_q[0], end=traj.q[-1])
+        return t, q, p
+
+    monkeypatch.setattr(sim, "_display_states", spy)
+    argv = ["simulate", "--alpha", "pi/2", "--v", "10", "--quiet", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    n, t, q = seen["n"], seen["t"], seen["q"]
+    assert np.all(np.diff(t) > 0)
+    steps = np.max(np.abs(np.diff(q[n:], axis=0)), axis=1)
+    join = np.max(np.abs(q[n] - q[n - 1]))
+    assert join < 2.0 * np.median(steps), (join, np.median(steps))
+    # The case (default P3:16) is one where the orbit's first sample is far from
+    # the transient's end.
+    assert np.max(np.abs(seen["start"] - seen["end"])) > 3.0 * join
