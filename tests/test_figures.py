@@ -244,6 +244,21 @@ def _bifurcation_figure():
     return plot_bifurcation(pts, title="α = 0°, β = 0.142, γ = 18.9").figure
 
 
+def _stability_map_figure():
+    from fempipe.plotting.stability import plot_stability_map
+    from fempipe.stability.maps import stability_map
+
+    smap = stability_map(Modal(2), np.linspace(0, np.pi, 5), [(0.142, 18.9)], workers=1)
+    ax = plot_stability_map(smap)
+    # The title's key: open circles for the flutter velocity, open squares for
+    # an earlier loss of stability (here alpha = pi: the straight pipe buckles).
+    assert "○" in ax.get_title() and "□" in ax.get_title()
+    marks = [ln for ln in ax.get_lines() if ln.get_marker() in ("o", "s")]
+    assert {ln.get_marker() for ln in marks} == {"o", "s"}
+    assert all(ln.get_markerfacecolor() == "none" for ln in marks)
+    return ax.figure
+
+
 CLI_FIGURES = {
     "shapes.png": _shapes_figure,
     "argand.png": _argand_figure,
@@ -253,6 +268,7 @@ CLI_FIGURES = {
     "oscillating_shapes.png": _oscillating_shapes_figure,
     "pipe.gif frame": _animation_frame_figure,
     "bifurcation.png": _bifurcation_figure,
+    "stability_map.png": _stability_map_figure,
 }
 
 

@@ -166,7 +166,13 @@ def plot_stability_map(smap, ax=None, title=None):
     flutter, vcr = smap.array("v_flutter"), smap.array("v_cr")
     for c, (beta, gamma) in enumerate(smap.curves):
         (line,) = ax.plot(
-            a, flutter[c], "o-", ms=3, lw=1.2, label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}"
+            a,
+            flutter[c],
+            "o-",
+            ms=4,
+            mfc="none",  # open, as the title's key says
+            lw=1.2,
+            label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}",
         )
         other = np.array([pt.get("type") in ("divergence", "fold") for pt in smap.points[c]])
         if other.any():
