@@ -367,9 +367,13 @@ def _tip_ranges(samples: list) -> dict:
     return {k: _refined_range(t, np.concatenate([s[1][k] for s in samples])) for k in TIP_KEYS}
 
 
-def _state_distance(dq: np.ndarray, dp: np.ndarray, timescale: float) -> float:
-    """RMS distance of two states; velocities scaled by a time scale (period / 2 pi)."""
-    return float(np.sqrt(np.mean(dq**2) + np.mean((dp * timescale) ** 2)))
+def _state_distance(dq: np.ndarray, dp: np.ndarray, timescale: float):
+    """RMS distance of two states; velocities scaled by a time scale (period / 2 pi).
+
+    Along the last axis: a float for one pair of states, an array for stacked ones.
+    """
+    d = np.sqrt(np.mean(dq**2, axis=-1) + np.mean((dp * timescale) ** 2, axis=-1))
+    return float(d) if d.ndim == 0 else d
 
 
 def shoot(

@@ -457,10 +457,9 @@ def static_points(
         t0 = time.perf_counter()
         m = model.with_params(replace(model.params, v=v))
         q = states[v]
-        tip = tip_coordinates(model.disc, model.params.alpha, q)
         stable = _stable_between_events(events, v) if events is not None else linearly_stable(m, q)
         d = _point_dict(v, "static", i, model.params.alpha, "equilibrium")
-        d.update({k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS})
+        d.update(_equilibrium_tip(model, q))
         d.update(
             stable=bool(stable) if stable is not None else None,
             branch="static",
@@ -471,6 +470,14 @@ def static_points(
         )
         out.append(d)
     return out
+
+
+def _equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
+    """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
+    [min, max] form of the diagram's points: the static points, and the Hopf points
+    where a branch of orbits starts."""
+    tip = tip_coordinates(model.disc, model.params.alpha, q)
+    return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 
 def _point_dict(v, direction, index, alpha, attractor) -> dict:
@@ -1296,13 +1303,6 @@ class CycleDiagram:
             "discretization": self.manifest["discretization"],
             "params": self.manifest["params"],
         }
-
-
-def _equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
-    """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
-    [min, max] form of the diagram's points (where a branch of orbits starts)."""
-    tip = tip_coordinates(model.disc, model.params.alpha, q)
-    return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 
 def _alpha_task(

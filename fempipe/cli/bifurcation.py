@@ -309,13 +309,11 @@ def _paper_panel(key: str, alpha: float, params: dict) -> str:
     10 are eta(1), X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi,
     all for the reference case beta = 0.142, gamma = 18.9, mu = 0.005.
     """
-    from fempipe.params import PAPER_CASE
+    from fempipe.params import PAPER_CASE, VARIANT_FIELDS
 
     if any(not math.isclose(params.get(k, math.nan), v) for k, v in PAPER_CASE.items()):
         return ""
-    if any(
-        params.get(k) for k in ("end_mass", "external_damping", "hysteretic_damping", "springs")
-    ):
+    if any(params.get(k) for k in VARIANT_FIELDS):
         return ""  # a variant of the pipe: the paper has no such figure
     column = ("eta_tip", "X_tip", "Z_tip").index(key)
     if math.isclose(alpha, 0.0, abs_tol=1e-12):
