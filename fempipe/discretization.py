@@ -9,6 +9,9 @@ nothing else is ever asked of it):
                integration operators);
 ``Phi``        basis values at the quadrature points, shape (n_q, n);
 ``tip``        phi_j(1), shape (n,);
+``dPhi``       basis derivatives phi_j' at the quadrature points, shape
+               (n_q, n) (the static curvature of the out-of-plane problem,
+               :mod:`fempipe.out_of_plane`);
 ``K``          bending stiffness ``\\int phi_i' phi_j'``, shape (n, n);
 ``gram``       L2 Gram matrix ``\\int phi_i phi_j``, shape (n, n): the metric
                of theta (arclength of continuation, L2 projections);
@@ -62,6 +65,7 @@ class Discretization(Protocol):
     n: int
     quad: LineQuadrature
     Phi: np.ndarray | sp.csr_matrix
+    dPhi: np.ndarray | sp.csr_matrix
     tip: np.ndarray
     K: np.ndarray | sp.csr_matrix
     gram: np.ndarray | sp.csr_matrix
@@ -172,6 +176,13 @@ class FiniteElement:
             (values.ravel(), (rows.ravel(), cols.ravel())), shape=(n_el * n_qp, N_all)
         )
         self.Phi = Phi_all[:, self.free]
+        grads = np.array(
+            [np.asarray(self.basis.basis[k][0].grad[0]) for k in range(self.basis.Nbfun)]
+        )
+        dPhi_all = sp.csr_matrix(
+            (grads.ravel(), (rows.ravel(), cols.ravel())), shape=(n_el * n_qp, N_all)
+        )
+        self.dPhi = dPhi_all[:, self.free]
         # A Lagrange vertex dof is the value of theta there: theta(1) is the
         # dof of the free end.
         tip = np.zeros(N_all)
@@ -314,12 +325,14 @@ class Modal:
         if basis == "sine":
             self.k = (2.0 * np.arange(1, n_modes + 1) - 1.0) * np.pi / 2.0
             self.Phi = np.sin(np.outer(x, self.k))
+            self.dPhi = np.cos(np.outer(x, self.k)) * self.k
             self.tip = np.sin(self.k)
             # \int_0^1 phi_i' phi_j' = k_i^2 / 2 delta_ij (orthogonal cosines).
             self.K = np.diag(self.k**2 / 2.0)
         else:
             self.k = beam_roots(n_modes)
             self.Phi = beam_mode_slopes(self.k, x)
+            self.dPhi = beam_mode_slopes(self.k, x, derivative=1)
             self.tip = beam_mode_slopes(self.k, [1.0])[0]
             # \int_0^1 psi_i' psi_j' = lambda_i^2 delta_ij (class docstring).
             self.K = np.diag(self.k**2)

@@ -170,11 +170,33 @@ class PipeModel:
         # models of with_params (same discretisation).
         self._part_rules: dict[float, _PartRule] = {}
 
+    #: The plane of the linear problem :meth:`linearization` gives: ``"in"``, the
+    #: plane of the static state (:class:`fempipe.out_of_plane.OutOfPlaneModel`
+    #: gives ``"out"``).
+    plane = "in"
+
     def with_params(self, params: Params) -> PipeModel:
-        """Return a model on the same discretisation with other parameters."""
-        new = object.__new__(PipeModel)
+        """Return a model of the same kind on the same discretisation with other parameters."""
+        new = object.__new__(type(self))
         new.__dict__.update(self.__dict__)
         new.params = params
+        return new
+
+    def with_plane(self, plane: str) -> PipeModel:
+        """The model of the same pipe whose linearisation is in (``"in"``) or out of
+        (``"out"``) the plane of its static states (:mod:`fempipe.out_of_plane`)."""
+        if plane == self.plane:
+            return self
+        if plane == "out":
+            from .out_of_plane import OutOfPlaneModel
+
+            cls = OutOfPlaneModel
+        elif plane == "in":
+            cls = PipeModel
+        else:
+            raise ValueError(f"plane must be 'in' or 'out', got {plane!r}")
+        new = object.__new__(cls)
+        new.__dict__.update(self.__dict__)
         return new
 
     @property
@@ -395,6 +417,14 @@ class PipeModel:
         rule = _PartRule(x=x, w=w, Phi=P.tocsr() if sp.issparse(P) else P, at_node=at_node)
         self._part_rules[xi_s] = rule
         return rule
+
+    def part_rule(self, xi_s: float) -> _PartRule:
+        """The Gauss rule on [0, xi_s] with the basis at its points (see :meth:`_part_rule`)."""
+        return self._part_rule(xi_s)
+
+    def spring_forces(self, q: np.ndarray) -> list[np.ndarray]:
+        """Per spring, its force on the pipe ``-kappa (r(xi_s) - (xi_s, 0))``, shape (2,)."""
+        return [-kappa * d for kappa, _r, _t, _n, _b, d in self._spring_states(q)]
 
     def _spring_states(self, q: np.ndarray):
         """Per spring: (kappa, rule, t, n, b_s, d) with d = r(xi_s) - (xi_s, 0) and
@@ -639,6 +669,15 @@ class PipeModel:
         if p.springs:
             Jq = Jq + self.spring_jacobian(q, dense=True)
         return Jq, Jqd, M
+
+    def linearization(self, q: np.ndarray):
+        """K^d, C^d, M^d of the linear problem about the static state q, in the plane
+        (:meth:`static_jacobians`); the stability solvers call this."""
+        return self.static_jacobians(q)
+
+    def hysteretic_stiffness(self, q: np.ndarray) -> np.ndarray:
+        """The stiffness the hysteretic loss factor multiplies: bending, ``disc.K`` (dense)."""
+        return self._K_dense
 
     def static_jacobians(self, q):
         """:meth:`jacobians` at the static state (q, 0, 0): K^d, C^d, M^d of Eqs. (31b)-(33).

@@ -94,7 +94,9 @@ def linearly_stable(
     disc = model.disc
     if sparse is None:
         sparse = bool(disc.sparse) and disc.n > QZ_MAX_N
-    if sparse:
+    # The sparse path applies the planar operators without forming them; the
+    # out-of-plane problem is formed densely (fempipe.out_of_plane).
+    if sparse and model.plane == "in":
         decision = _sparse_stable(model, np.asarray(q, dtype=float), tolerance)
         if decision is not _DENSE:
             return decision

@@ -161,7 +161,7 @@ def linearized_matrices(model: PipeModel, q: np.ndarray):
         Stiffness (bending, gravity, follower: not symmetric for v > 0),
         damping (Coriolis 2 v sqrt(beta) and Kelvin-Voigt mu), mass (SPD).
     """
-    return model.static_jacobians(np.asarray(q, dtype=float))
+    return model.linearization(np.asarray(q, dtype=float))
 
 
 _GEEV_LWORK: dict = {}
@@ -532,7 +532,7 @@ _PENCIL_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def straight_pencil(model: PipeModel) -> StraightPencil:
     """The :class:`StraightPencil` of ``model`` (cached per discretisation and parameters)."""
     per_disc = _PENCIL_CACHE.setdefault(model.disc, {})
-    key = StraightPencil.key(model.params)
+    key = (model.plane, StraightPencil.key(model.params))
     pencil = per_disc.get(key)
     if pencil is None:
         if len(per_disc) > 32:  # a stability map visits many parameter points
@@ -563,7 +563,7 @@ def _analyse(
     W, share = _weights(res, X)
     mu_h = model.params.hysteretic_damping
     if mu_h > 0.0:
-        Kb = model.disc.K.toarray() if sp.issparse(model.disc.K) else np.asarray(model.disc.K)
+        Kb = model.hysteretic_stiffness(q)
         lam, X = hysteretic_roots(
             K, C, M, Kb, mu_h, lam, X, relevant=share >= RELEVANT_SHARE, method=used
         )
