@@ -133,6 +133,8 @@ Modules
 ``tracking``   mode numbers by continuity, root loci (Fig. 5);
 ``events``     stability events along one branch;
 ``analysis``   :func:`stability_analysis`, :func:`critical_velocity`;
+``spatial``    both planes: :func:`spatial_stability_analysis` (the motion out of
+               the plane of the static state, :mod:`fempipe.out_of_plane`);
 ``maps``       v_cr against alpha (Fig. 6), several root loci, in parallel.
 """
 
@@ -149,6 +151,11 @@ from .linear import (
     resolution,
 )
 from .maps import StabilityMap, root_loci, stability_map
+from .spatial import (
+    SpatialStability,
+    spatial_critical_velocity,
+    spatial_stability_analysis,
+)
 from .spectrum import ModeShape, Spectrum, mode_shape, spectrum
 from .tracking import RootLocus, root_locus
 
@@ -163,6 +170,9 @@ __all__ = [
     "BranchStability",
     "StabilityResult",
     "StabilityMap",
+    "SpatialStability",
+    "spatial_stability_analysis",
+    "spatial_critical_velocity",
     "cantilever_frequencies",
     "resolution",
     "linearized_matrices",

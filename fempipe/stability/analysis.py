@@ -45,6 +45,9 @@ class _ChunkedBranch:
         self.special: list = []
         self.end_reason = "stop"
         self._next = None
+        # The straight pipe at every point (alpha = 0 or pi, no branch point):
+        # set by follow().
+        self.straight = False
         if branch is not None:
             self._add(branch)
 
@@ -63,6 +66,7 @@ class _ChunkedBranch:
         kw = {"ds": min(0.05, ds_max), "ds_max": ds_max, "max_steps": max_steps}
         if (q0 is None or not np.any(q0)) and _straight_without_branch_points(model, lo, hi, kw):
             q = np.zeros(model.n)
+            self.straight = True
 
             def advance(piece_start, tangent):
                 v_a = piece_start[0]
@@ -143,6 +147,15 @@ class _ChunkedBranch:
 #: growing to it from 0.05, leaves the events of the 55 cases and of the
 #: hanging pipe as they were (2.4e-11) with 7 % fewer spectra.
 STRAIGHT_STEP = 4.0
+
+
+#: Continuation points per out-of-plane sample when the in-plane analysis
+#: runs on the same branch (:func:`_run_planes`).  The events are located by
+#: Brent's method between samples whatever their spacing, the tracker inserts
+#: states where the match is unsure and the peak check catches a real part
+#: that touches zero between samples; measured in tests/test_spatial.py:
+#: the out-of-plane events of stride 2 are those of stride 1 to 1e-10.
+OUT_OF_PLANE_STRIDE = 2
 
 
 def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[float]:
@@ -287,6 +300,49 @@ def stability_analysis(
     NewtonError
         If the static state cannot be followed (naming v and the residual).
     """
+    planes = _run_planes(
+        [model],
+        v_min,
+        v_max,
+        follow_bifurcations,
+        max_depth,
+        q0,
+        ds_max,
+        max_steps,
+        method,
+        tolerance,
+        stop_at_first,
+        callback,
+    )
+    return planes[model.plane]
+
+
+def _run_planes(
+    models: list[PipeModel],
+    v_min: float,
+    v_max: float,
+    follow_bifurcations: bool,
+    max_depth: int,
+    q0: np.ndarray | None,
+    ds_max: float,
+    max_steps: int,
+    method: str,
+    tolerance: float,
+    stop_at_first: bool,
+    callback: Callable[[str, float], None] | None,
+) -> dict[str, StabilityResult]:
+    """:func:`stability_analysis` of one pipe in several planes, on shared static branches.
+
+    ``models`` are the same pipe (discretisation and parameters) with the
+    linearisations of their planes (``model.plane``); the static branches
+    are continued and switched once, with the first model, and every plane's
+    analysis runs along the same points (each inserts its own where its
+    tracking asks).  Beside the in-plane analysis the out-of-plane one takes
+    every :data:`OUT_OF_PLANE_STRIDE`-th point, and on a straight branch
+    (theta = 0 at every point: alpha = 0, or pi below buckling) it takes the
+    in-plane analysis as it is, the two pencils being the same matrices there.
+    """
+    model = models[0]
     v_min, v_max = float(v_min), float(v_max)
     if not (math.isfinite(v_min) and math.isfinite(v_max)) or v_min < 0 or v_max <= v_min:
         raise ValueError(f"need 0 <= v_min < v_max, got v_min={v_min}, v_max={v_max}")
@@ -300,17 +356,27 @@ def stability_analysis(
     # Piecewise continuation when only v_cr is wanted: nothing beyond it is computed.
     chunk = 1.0 if stop_at_first else None
     primary = _ChunkedBranch.follow(model, (v_min, v_max), ds_max, q0, max_steps, chunk)
-    ana = _BranchAnalysis(
-        model, res, primary, "primary", (v_min, v_max), method, stop_at_first, callback
-    )
-    ana.run()
-    results = [ana.finish(None, None)]
-    n_spectra = ana.path.n_spectra
-    first = ana.first_loss()
-    v_flutter = next((ev.v for _, ev, _, _ in ana.events if ev.type == "flutter"), None)
-    queue = [(primary, "primary", 1, ana)] if follow_bifurcations and not stop_at_first else []
+
+    def analyse(m, branch, name, stop, parent, done):
+        if m.plane != "in" and "in" in done and branch.straight:
+            # On the straight pipe the out-of-plane problem is the in-plane one,
+            # term by term (fempipe.out_of_plane): the same pencils, the same events.
+            return done["in"].as_plane(m)
+        stride = OUT_OF_PLANE_STRIDE if (m.plane != "in" and "in" in done) else 1
+        ana = _BranchAnalysis(
+            m, res, branch, name, (v_min, v_max), method, stop, callback, parent, stride
+        )
+        ana.run()
+        return ana
+
+    top: dict = {}
+    for m in models:
+        top[m.plane] = analyse(m, primary, "primary", stop_at_first, None, top)
+    results = {p: [a.finish(None, None)] for p, a in top.items()}
+    n_spectra = {p: a.path.n_spectra for p, a in top.items()}
+    queue = [(primary, "primary", 1, top)] if follow_bifurcations and not stop_at_first else []
     while queue:
-        br, name, depth, parent_ana = queue.pop(0)
+        br, name, depth, parents = queue.pop(0)
         for k, bp in enumerate(br.bifurcations, start=1):
             if not v_min <= bp.value <= v_max:
                 continue
@@ -328,34 +394,34 @@ def stability_analysis(
                 continue
             for sign, kid in zip("+-", kids, strict=True):
                 kname = f"B{k}{sign}" if name == "primary" else f"{name}.B{k}{sign}"
-                ka = _BranchAnalysis(
-                    model,
-                    res,
-                    _ChunkedBranch(kid),
-                    kname,
-                    (v_min, v_max),
-                    method,
-                    False,
-                    callback,
-                    parent=parent_ana,
-                )
-                ka.run()
-                results.append(ka.finish(name, parent_ana.refined_bifurcation(bp.value)))
-                n_spectra += ka.path.n_spectra
+                chunked = _ChunkedBranch(kid)
+                anas: dict = {}
+                for m in models:
+                    parent = parents[m.plane]
+                    anas[m.plane] = ka = analyse(m, chunked, kname, False, parent, anas)
+                    born = parents[models[0].plane].refined_bifurcation(bp.value)
+                    results[m.plane].append(ka.finish(name, born))
+                    n_spectra[m.plane] += ka.path.n_spectra
                 if depth < max_depth:
-                    queue.append((kid, kname, depth + 1, ka))
-    events = tuple(ev for b in results for ev in b.events)
-    return StabilityResult(
-        params=replace(model.params, v=v_min),
-        discretization=model.disc.to_dict(),
-        v_range=(v_min, v_max),
-        v_cr=None if first is None else float(first.v),
-        critical=first,
-        v_flutter=v_flutter,
-        events=events,
-        branches=tuple(results),
-        n_spectra=n_spectra,
-    )
+                    queue.append((kid, kname, depth + 1, anas))
+    out = {}
+    for m in models:
+        ana = top[m.plane]
+        first = ana.first_loss()
+        branches = results[m.plane]
+        out[m.plane] = StabilityResult(
+            params=replace(model.params, v=v_min),
+            discretization=model.disc.to_dict(),
+            v_range=(v_min, v_max),
+            v_cr=None if first is None else float(first.v),
+            critical=first,
+            v_flutter=next((ev.v for _, ev, _, _ in ana.events if ev.type == "flutter"), None),
+            events=tuple(ev for b in branches for ev in b.events),
+            branches=tuple(branches),
+            n_spectra=n_spectra[m.plane],
+            plane=m.plane,
+        )
+    return out
 
 
 def critical_velocity(

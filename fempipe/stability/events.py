@@ -7,6 +7,7 @@ are the results; :class:`_BranchAnalysis` computes them for one branch
 
 from __future__ import annotations
 
+import copy
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -67,7 +68,11 @@ class StabilityEvent:
         v-range (the event is listed at that v).
     stable_before, stable_after : bool
         Stability of the branch just below / above the event in v (for a fold:
-        on the branch piece arriving at / leaving the fold, in branch order).
+        on the branch piece arriving at / leaving the fold, in branch order),
+        in the event's plane.
+    plane : {'in', 'out'}
+        The motion that loses (or regains) stability: in the plane of the
+        static state (Eq. (32)) or out of it (:mod:`fempipe.out_of_plane`).
     """
 
     v: float
@@ -79,10 +84,12 @@ class StabilityEvent:
     at_start: bool = False
     stable_before: bool = True
     stable_after: bool = True
+    plane: str = "in"
 
     def to_dict(self) -> dict:
         """The contract of ``fempipe critical --json``: v, type, branch, frequency, mode,
-        stable_before, stable_after (the whole system just below and above the event)."""
+        stable_before, stable_after (the whole system of the event's plane just below
+        and above the event), plane."""
         return {
             "v": self.v,
             "type": self.type,
@@ -91,6 +98,7 @@ class StabilityEvent:
             "mode": self.mode,
             "stable_before": self.stable_before,
             "stable_after": self.stable_after,
+            "plane": self.plane,
         }
 
     def details(self) -> dict:
@@ -183,6 +191,8 @@ class StabilityResult:
     branches : tuple of BranchStability
     n_spectra : int
         Eigenproblems solved (diagnostic).
+    plane : {'in', 'out'}
+        The motion analysed: in the plane of the static states or out of it.
     """
 
     params: Params
@@ -194,6 +204,7 @@ class StabilityResult:
     events: tuple
     branches: tuple
     n_spectra: int
+    plane: str = "in"
 
     def to_dict(self, samples: bool = False) -> dict:
         p = self.params.to_dict()
@@ -285,8 +296,12 @@ class _BranchAnalysis:
         stop_at_first: bool = False,
         callback: Callable[[str, float], None] | None = None,
         parent: _BranchAnalysis | None = None,
+        stride: int = 1,
     ) -> None:
         self.model = model
+        # Every stride-th continuation point is a sample (folds and the last
+        # point always are); the tracker inserts states where it is unsure.
+        self.stride = int(stride)
         self.res = res
         self.method = method
         self.branch = branch
@@ -301,21 +316,20 @@ class _BranchAnalysis:
 
     # -- pass 1: samples ----------------------------------------------------
     def run(self) -> None:
-        s, prev = 0.0, None
-        for q, v, is_fold in self.branch.iter_points():
+        s, prev, skipped = 0.0, None, None
+        for k, (q, v, is_fold) in enumerate(self.branch.iter_points()):
             if prev is not None:
                 s += abs(v - prev[1]) + _l2(self.model, q - prev[0])
             prev = (q, v)
-            e = self.path.analyse(q, v)
-            e.s, e.fold = s, is_fold
-            if self.path.tracker is None:
-                self._number(e)
-            else:
-                self.path.add(e)
-            if self.callback:
-                self.callback(self.name, v)
-            if self.stop_at_first and _unstable_count(e) > 0:
+            if k % self.stride and not is_fold:
+                skipped = (q, v, s)
+                continue
+            skipped = None
+            if self._sample(q, v, s, is_fold):
                 break
+        else:
+            if skipped is not None:  # the branch's last point is always a sample
+                self._sample(*skipped, False)
         self._peaks()
         samples = self.path.samples
         for k in range(1, len(samples)):
@@ -324,6 +338,26 @@ class _BranchAnalysis:
                 self._fold_event(k)
         self._start_events()
         self.events.sort(key=lambda x: x[0])
+
+    def as_plane(self, model: PipeModel) -> _BranchAnalysis:
+        """This analysis as that of ``model``'s plane: the same samples and events (for a
+        branch on which the two planes' problems are the same matrices)."""
+        other = copy.copy(self)
+        other.model = model
+        other.events = [(s, replace(ev, plane=model.plane), a, b) for s, ev, a, b in self.events]
+        return other
+
+    def _sample(self, q: np.ndarray, v: float, s: float, is_fold: bool) -> bool:
+        """Analyse one point of the branch; True when the analysis stops there."""
+        e = self.path.analyse(q, v)
+        e.s, e.fold = s, is_fold
+        if self.path.tracker is None:
+            self._number(e)
+        else:
+            self.path.add(e)
+        if self.callback:
+            self.callback(self.name, v)
+        return bool(self.stop_at_first and _unstable_count(e) > 0)
 
     def _number(self, first: _Eig) -> None:
         """Mode numbers at the branch's first state (the package docstring, "Mode numbers").
@@ -532,6 +566,7 @@ class _BranchAnalysis:
                 eigenvalue=complex(lam0.real, abs(lam0.imag)),
                 stable_before=bool(count == 0),
                 stable_after=bool(after == 0),
+                plane=self.model.plane,
             )
             self.events.append((s0, ev, ca, cb))
             count = after
@@ -551,6 +586,7 @@ class _BranchAnalysis:
             eigenvalue=complex(f.lam[i_f][j]),
             stable_before=bool(before == 0),
             stable_after=bool(after == 0),
+            plane=self.model.plane,
         )
         self.events.append((f.s, ev, before, after))
 
@@ -577,6 +613,7 @@ class _BranchAnalysis:
                 at_start=True,
                 stable_before=False,
                 stable_after=False,
+                plane=self.model.plane,
             )
             self.events.append((end.s, ev, n_u, n_u))
 
