@@ -291,6 +291,61 @@ def bench_stability_vcr(quick: bool = False) -> dict:
     return out
 
 
+@register("critical_3d")
+def bench_critical_3d(quick: bool = False) -> dict:
+    """The analysis of ``fempipe critical`` in three dimensions against the planar one.
+
+    At alpha = pi/4, pi/2, 3pi/4 and pi (paper's case, default discretisation,
+    v in [0, 10], branches followed) the planar analysis
+    (:func:`~fempipe.stability.stability_analysis`, the command before the
+    out-of-plane analysis existed, and ``--planar``) and the analysis of
+    both planes (:func:`~fempipe.stability.spatial_stability_analysis`) are
+    timed in turn, in CPU seconds of this process (one BLAS thread), each the
+    minimum of its repeats.  Target: the ratio of the sums at most 1.5.
+    """
+    from fempipe.discretization import DEFAULT_FE, parse_discretization
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.stability import resolution, spatial_stability_analysis, stability_analysis
+
+    disc = parse_discretization(DEFAULT_FE)
+    resolution(disc)
+    repeats = 1 if quick else 3
+    cases = []
+    for alpha in (math.pi / 4, math.pi / 2, 3 * math.pi / 4, math.pi):
+        model = PipeModel(disc, Params(**{**PAPER, "alpha": alpha}))
+        t_in, t_3d, res3 = math.inf, math.inf, None
+        for _ in range(repeats):
+            t0 = time.process_time()
+            planar = stability_analysis(model, 10.0)
+            t_in = min(t_in, time.process_time() - t0)
+            t0 = time.process_time()
+            res3 = spatial_stability_analysis(model, 10.0)
+            t_3d = min(t_3d, time.process_time() - t0)
+        cases.append(
+            {
+                "alpha": alpha,
+                "v_cr_planar": planar.v_cr,
+                "v_cr_in_plane": res3.in_plane.v_cr,
+                "v_cr_out_of_plane": res3.out_of_plane.v_cr,
+                "first_plane": None if res3.critical is None else res3.critical.plane,
+                "cpu_planar": t_in,
+                "cpu_3d": t_3d,
+                "ratio": t_3d / t_in,
+            }
+        )
+    total_in = sum(c["cpu_planar"] for c in cases)
+    total_3d = sum(c["cpu_3d"] for c in cases)
+    return {
+        "discretization": disc.name,
+        "cases": cases,
+        "cpu_planar": total_in,
+        "cpu_3d": total_3d,
+        "ratio": total_3d / total_in,
+        "target_ratio": 1.5,
+    }
+
+
 @register("stability_curve")
 def bench_stability_curve(quick: bool = False) -> dict:
     """v_cr(alpha) at 37 inclinations 0..pi (Fig. 6) on 2 processes; target under 60 s."""

@@ -312,9 +312,9 @@ def describe(disc, refined=None, floor: str = "", params=None) -> ErrorEstimate:
 def match_events(coarse, fine) -> tuple[list[int | None], list[int]]:
     """Pair the stability events of two runs by what they are, not by list position.
 
-    Two events are the same when they have the same branch, type and mode
-    (``StabilityEvent`` attributes or dict keys ``branch``, ``type``,
-    ``mode``); the k-th such event of the coarse list (in its order: along
+    Two events are the same when they have the same branch, type, mode and
+    plane (``StabilityEvent`` attributes or dict keys ``branch``, ``type``,
+    ``mode``, ``plane``, "in" when absent); the k-th such event of the coarse list (in its order: along
     each branch) is paired with the k-th of the refined list.
 
     Parameters
@@ -331,7 +331,8 @@ def match_events(coarse, fine) -> tuple[list[int | None], list[int]]:
 
     def key(ev):
         get = ev.get if isinstance(ev, dict) else lambda k: getattr(ev, k)
-        return (get("branch"), get("type"), get("mode"))
+        plane = ev.get("plane", "in") if isinstance(ev, dict) else getattr(ev, "plane", "in")
+        return (get("branch"), get("type"), get("mode"), plane)
 
     available: dict = {}
     for j, ev in enumerate(fine):

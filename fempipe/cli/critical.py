@@ -4,8 +4,27 @@ Follows the gravity-loaded static branch in v over the range of ``--v`` (or
 ``--U``: their smallest and largest values), locates every change of stability
 and every fold to 1e-10 in v, follows the branches born at branch points
 (pitchforks at alpha = 0, pi; ``--no-branches`` to skip) and reports the first
-loss of stability of the primary branch as v_cr
-(:func:`fempipe.stability.stability_analysis`).
+loss of stability of the primary branch as v_cr.  The pipe is round: its
+motion in the plane of the static state (Eq. (32)) and out of it
+(:mod:`fempipe.out_of_plane`) are both analysed along the same branches
+(:func:`fempipe.stability.spatial_stability_analysis`), and v_cr is the first
+loss of stability in three dimensions.  ``--planar`` analyses the paper's
+planar model alone (:func:`fempipe.stability.stability_analysis`), every
+output as before the out-of-plane analysis existed (events gain ``plane``).
+
+In three dimensions the JSON also carries ``v_cr_in_plane``,
+``frequency_in_plane``, ``v_cr_out_of_plane``, ``frequency_out_of_plane``
+(null where that plane stays stable), ``first_instability`` ({``v``,
+``plane`` ("in" or "out"), ``type``, ``frequency``}, null if stable; where
+both planes lose stability at the same v, within 1e-9, as the straight
+hanging or standing pipe does in every plane through its axis, "in"),
+``v_flutter_in_plane``, ``v_flutter_out_of_plane``, ``critical_in_plane``,
+``critical_out_of_plane`` and ``branches_out_of_plane``; ``v_flutter`` is the
+first flutter in either plane, ``events`` lists both planes' events (each
+with ``plane``; a fold once, as an in-plane event), and with an SI pipe
+``U_cr_in_plane`` and ``U_cr_out_of_plane`` are added.  Out-of-plane flutter
+events have no Hopf normal form (it needs the three-dimensional nonlinear
+model): their ``hopf_note`` says so.
 
 ``--json`` prints ``{"v_cr": float or null, "events": [{"v", "type", "branch",
 "frequency", "mode", "stable_before", "stable_after"}, ...], "critical",
@@ -70,6 +89,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="do not follow the branches born at branch points (faster; v_cr is unaffected)",
     )
     g.add_argument(
+        "--planar",
+        action="store_true",
+        help="the paper's planar model only: no analysis of the motion out of the plane "
+        "(v_cr is then the in-plane critical velocity, every output as before)",
+    )
+    g.add_argument(
         "--ds-max",
         metavar="DS",
         type=parsing.number_type("--ds-max", 0.0, 1.0, strict_low=True),
@@ -103,7 +128,7 @@ def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
 def run(args: argparse.Namespace) -> int:
     from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
-    from fempipe.stability import stability_analysis
+    from fempipe.stability import spatial_stability_analysis, stability_analysis
 
     setup = common.setup_from_args(args)
     flow_opt = "--U" if args.U is not None else "--v"
@@ -129,23 +154,27 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{branch} v={v:.4f}")
 
         try:
-            res = stability_analysis(model, callback=on_sample, **kwargs)
+            analysis = stability_analysis if args.planar else spatial_stability_analysis
+            res = analysis(model, callback=on_sample, **kwargs)
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
         if args.error_estimate:
-            refined = _refined_run(model, kwargs, bar)
+            refined = _refined_run(model, kwargs, bar, analysis)
     head = setup.to_dict()
     result = res.to_dict()
     # Hopf criticality of the flutter events (fempipe.stability.hopf).
     from fempipe.stability.hopf import decorate_events
 
-    result = decorate_events(result, model, res)
+    result = decorate_events(result, model, res if args.planar else res.in_plane)
     result["params"] = head["params"]
     result["discretization"] = head["discretization"]
     if setup.pipe is not None:
         pipe = setup.pipe
         result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
         result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
+        for key in ("in_plane", "out_of_plane") if not args.planar else ():
+            v = result["v_cr_" + key]
+            result["U_cr_" + key] = None if v is None else pipe.U_of_v(v)
     if refined is not None:
         result = _with_errors(result, res, *refined, setup.pipe)
     output = reporting.Output(args.out) if args.out is not None else None
@@ -160,13 +189,12 @@ def run(args: argparse.Namespace) -> int:
     return _check_coverage(args, result, v_max)
 
 
-def _refined_run(model, kwargs: dict, bar) -> tuple:
+def _refined_run(model, kwargs: dict, bar, analysis) -> tuple:
     """``(refined result or None, ErrorEstimate, notes)``: the analysis on the refined
     discretisation, with the progress bar counting its samples too."""
     from fempipe.error_estimate import describe, refine
     from fempipe.errors import SolverError
     from fempipe.operators import PipeModel
-    from fempipe.stability import stability_analysis
 
     fine = refine(model.disc)
     info = describe(
@@ -181,11 +209,12 @@ def _refined_run(model, kwargs: dict, bar) -> tuple:
         bar.set_postfix_str(f"refined {fine.name} {branch} v={v:.4f}")
 
     try:
-        res = stability_analysis(PipeModel(fine, model.params), callback=on_sample, **kwargs)
+        res = analysis(PipeModel(fine, model.params), callback=on_sample, **kwargs)
     except (SolverError, ValueError) as exc:
         return None, info, [f"the refined run on {fine.name} failed ({exc}); no estimates"]
     notes = []
-    primary = next((b for b in res.branches if b.name == "primary"), None)
+    branches = res.branches if hasattr(res, "branches") else res.in_plane.branches
+    primary = next((b for b in branches if b.name == "primary"), None)
     if primary is not None and primary.end_reason == "max_steps":
         notes.append(
             f"the refined run's primary branch ran out of continuation steps at "
@@ -251,13 +280,26 @@ def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
         out[key + estimates.REFINED] = fine_value
         return out
 
-    v_flutter_ev = next(
-        (e for e in res.events if e.branch == "primary" and e.type == "flutter"), None
+    v_flutter_ev = min(
+        (e for e in res.events if e.branch == "primary" and e.type == "flutter"),
+        key=lambda e: e.v,
+        default=None,
     )
     result = first("v_cr", res.critical, None if fine_res is None else fine_res.v_cr)
     result = first("v_flutter", v_flutter_ev, None if fine_res is None else fine_res.v_flutter)
+    if hasattr(res, "in_plane"):
+        for plane in ("in_plane", "out_of_plane"):
+            coarse, fine = (
+                getattr(res, plane),
+                None if fine_res is None else getattr(fine_res, plane),
+            )
+            result = first("v_cr_" + plane, coarse.critical, None if fine is None else fine.v_cr)
     if result["critical"] is not None:
         result["critical"] = add(result["critical"], partner(res.critical))
+    for plane in ("in_plane", "out_of_plane") if hasattr(res, "in_plane") else ():
+        key = "critical_" + plane
+        if result.get(key) is not None:
+            result[key] = add(result[key], partner(getattr(res, plane).critical))
     if pipe is not None and "U_cr" in result:
         err, fine_v = result["v_cr" + estimates.ERROR], result["v_cr" + estimates.REFINED]
         scale = pipe.U_of_v(1.0)
@@ -303,7 +345,12 @@ def _write(output: reporting.Output, result: dict, res) -> None:
     rows.sort(key=lambda r: r["v"])
     for r in rows:
         r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
-    ax = plot_branches(res)
+    if hasattr(res, "in_plane"):
+        from fempipe.plotting.spatial import plot_spatial_branches
+
+        ax = plot_spatial_branches(res)
+    else:
+        ax = plot_branches(res)
     try:
         output.json("critical.json", result)
         output.csv("events.csv", rows, estimates.error_columns(rows))
@@ -333,11 +380,13 @@ def _print(result: dict, pipe) -> None:
             f"v_cr = {num(result, 'v_cr', '{:.10f}')}{extra}: {c['type']} in mode {c['mode']}, "
             f"Im lambda = {num(c, 'frequency', '{:.6f}')}"
         )
+    if "first_instability" in result:
+        _print_planes(result, num)
     if result["v_flutter"] is not None and result["v_flutter"] != v_cr:
         print(f"first flutter of the primary branch: v = {num(result, 'v_flutter', '{:.10f}')}")
     w_v, w_f = (25, 21) if with_errors else (15, 11)
     print(
-        f"{'branch':>8} {'type':>20} {'v':>{w_v}} {'mode':>5} {'Im lambda':>{w_f}}  "
+        f"{'branch':>8} {'plane':>5} {'type':>20} {'v':>{w_v}} {'mode':>5} {'Im lambda':>{w_f}}  "
         "system below -> above"
     )
     for ev in result["events"]:
@@ -349,11 +398,42 @@ def _print(result: dict, pipe) -> None:
         if ev["type"] == "flutter":
             note += reporting_hopf(ev)
         print(
-            f"{ev['branch']:>8} {ev['type']:>20} {num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
+            f"{ev['branch']:>8} {ev.get('plane', 'in'):>5} {ev['type']:>20} "
+            f"{num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
             f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
         )
     if with_errors:
         estimates.print_footer(result["error_estimate"])
+
+
+def _print_planes(result: dict, num) -> None:
+    """Which plane loses stability first, and by how much."""
+    vi, vo = result["v_cr_in_plane"], result["v_cr_out_of_plane"]
+    fi, fo = result["frequency_in_plane"], result["frequency_out_of_plane"]
+    for name, v, f, key in (
+        ("in the plane", vi, fi, "v_cr_in_plane"),
+        ("out of the plane", vo, fo, "v_cr_out_of_plane"),
+    ):
+        if v is None:
+            print(f"  {name}: stable over the range")
+        else:
+            print(f"  {name}: v_cr = {num(result, key, '{:.10f}')}, Im lambda = {f:.6f}")
+    first = result["first_instability"]
+    if first is None or vi is None or vo is None:
+        if first is not None:
+            print(f"the pipe first loses stability {_PLANE_WORDS[first['plane']]}")
+        return
+    if abs(vi - vo) <= 1e-9 * max(1.0, abs(vi)):
+        print("both planes lose stability at the same v (the straight pipe: every plane alike)")
+        return
+    gap = abs(vi - vo)
+    print(
+        f"the pipe first loses stability {_PLANE_WORDS[first['plane']]}, "
+        f"{gap:.6g} ({100.0 * gap / max(vi, vo):.3g} %) below the other plane's v_cr"
+    )
+
+
+_PLANE_WORDS = {"in": "in the plane", "out": "out of the plane"}
 
 
 def reporting_hopf(ev: dict) -> str:

@@ -793,6 +793,13 @@ def decorate_events(result_dict: dict, model: PipeModel, result) -> dict:
     def decorate(d: dict | None) -> None:
         if d is None or d.get("type") != "flutter":
             return
+        if d.get("plane", "in") != "in":
+            d.update(dict.fromkeys(EVENT_KEYS))
+            d["hopf_note"] = (
+                "a flutter out of the plane: its normal form needs the three-dimensional "
+                "nonlinear model"
+            )
+            return
         key = (d["branch"], d["type"], float(d["v"]), d["mode"])
         nf = forms.get(key, "no normal form computed for this event")
         if isinstance(nf, str):
@@ -805,7 +812,9 @@ def decorate_events(result_dict: dict, model: PipeModel, result) -> dict:
     for d in result_dict.get("events", []):
         decorate(d)
     decorate(result_dict.get("critical"))
-    for b in result_dict.get("branches", []):
+    for key in ("critical_in_plane", "critical_out_of_plane"):
+        decorate(result_dict.get(key))
+    for b in result_dict.get("branches", []) + result_dict.get("branches_out_of_plane", []):
         for d in b.get("events", []):
             decorate(d)
     return result_dict

@@ -1,0 +1,106 @@
+"""The static branches and their stability in three dimensions (``fempipe critical``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .stability import _EVENT_MARKERS, _axes, _edges
+
+
+def _out_unstable_at(branch_in, branch_out) -> np.ndarray:
+    """Per in-plane sample: unstable out of the plane, from the nearest out-of-plane sample.
+
+    The out-of-plane analysis samples the same branch (every other point and
+    its own insertions): each in-plane sample takes the verdict of the
+    out-of-plane sample nearest to it in (v, theta(1)).
+    """
+    if branch_out is None or branch_out.v.size == 0:
+        return np.zeros(branch_in.v.size, bool)
+    d = np.hypot(
+        branch_in.v[:, None] - branch_out.v[None, :],
+        branch_in.theta_tip[:, None] - branch_out.theta_tip[None, :],
+    )
+    return branch_out.n_unstable[np.argmin(d, axis=1)] > 0
+
+
+def plot_spatial_branches(result, ax=None, title=None):
+    """theta(1) of the static branches against v, stable in 3-D or not, and both planes' events.
+
+    Solid: stable in three dimensions; dashed: unstable in the plane; dotted:
+    stable in the plane, unstable out of it.  Events: open markers in the
+    plane, filled out of it (○ flutter, □ divergence, △ restabilisation,
+    ◇ fold).
+
+    Parameters
+    ----------
+    result : SpatialStability
+    ax : Axes, optional
+
+    Returns
+    -------
+    Axes
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    ax = _axes(ax, size=(6.4, 5.0))
+    colors = plt.cm.tab10(np.arange(10))
+    outs = {b.name: b for b in result.out_of_plane.branches}
+    for i, b in enumerate(result.in_plane.branches):
+        c = colors[i % 10]
+        bo = outs.get(b.name)
+        unstable_in = b.n_unstable > 0
+        unstable_out = _out_unstable_at(b, bo) & ~unstable_in
+        stable = ~unstable_in & ~unstable_out
+        ax.plot(
+            b.v,
+            np.where(stable | _edges(stable), b.theta_tip, np.nan),
+            "-",
+            color=c,
+            lw=1.3,
+            label=b.name,
+        )
+        ax.plot(
+            b.v,
+            np.where(unstable_in | _edges(unstable_in), b.theta_tip, np.nan),
+            "--",
+            color=c,
+            lw=1.3,
+        )
+        ax.plot(
+            b.v,
+            np.where(unstable_out | _edges(unstable_out), b.theta_tip, np.nan),
+            ":",
+            color=c,
+            lw=1.8,
+        )
+        for branch, fill in ((b, "none"), (bo, c)):
+            if branch is None:
+                continue
+            for ev in branch.events:
+                if ev.type == "fold" and fill != "none":
+                    continue
+                j = int(np.argmin(np.abs(b.v - ev.v)))
+                ax.plot(
+                    ev.v, b.theta_tip[j], _EVENT_MARKERS.get(ev.type, "x"), color=c, mfc=fill, ms=7
+                )
+    key = [
+        Line2D([], [], color="0.3", ls="-", label="stable (3-D)"),
+        Line2D([], [], color="0.3", ls="--", label="unstable in the plane"),
+        Line2D([], [], color="0.3", ls=":", lw=1.8, label="unstable out of the plane only"),
+        Line2D([], [], color="0.3", ls="", marker="o", mfc="none", label="event in the plane"),
+        Line2D([], [], color="0.3", ls="", marker="o", label="event out of the plane"),
+    ]
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + key, fontsize=9, loc="best")
+    ax.set_xlabel("v")
+    ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
+    p = result.in_plane.params
+    ax.set_title(
+        title
+        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
+        rf"$\mu$ = {p.mu:g}: stability in three dimensions",
+        fontsize=10,
+    )
+    ax.grid(alpha=0.3)
+    return ax
