@@ -111,6 +111,10 @@ class _ChunkedBranch:
             self._next = lambda: self._advance((last.value, last.q), last.tangent)
         return True
 
+    def is_straight(self) -> bool:
+        """Whether every point so far is the straight pipe theta = 0 (exactly)."""
+        return self.straight or (bool(self.points) and not any(np.any(p.q) for p in self.points))
+
     @property
     def folds(self) -> list:
         return [s for s in self.special if s.kind == "fold"]
@@ -154,8 +158,8 @@ STRAIGHT_STEP = 4.0
 #: Brent's method between samples whatever their spacing, the tracker inserts
 #: states where the match is unsure and the peak check catches a real part
 #: that touches zero between samples; measured in tests/test_spatial.py:
-#: the out-of-plane events of stride 2 are those of stride 1 to 1e-10.
-OUT_OF_PLANE_STRIDE = 2
+#: the out-of-plane events of stride 3 are those of stride 1 to 1e-10.
+OUT_OF_PLANE_STRIDE = 3
 
 
 def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[float]:
@@ -358,7 +362,7 @@ def _run_planes(
     primary = _ChunkedBranch.follow(model, (v_min, v_max), ds_max, q0, max_steps, chunk)
 
     def analyse(m, branch, name, stop, parent, done):
-        if m.plane != "in" and "in" in done and branch.straight:
+        if m.plane != "in" and "in" in done and branch.is_straight():
             # On the straight pipe the out-of-plane problem is the in-plane one,
             # term by term (fempipe.out_of_plane): the same pencils, the same events.
             return done["in"].as_plane(m)
