@@ -29,11 +29,14 @@ _LAZY: dict[str, str] = {
     "shape": "kinematics",
     "tip_values": "kinematics",
     "PipeModel": "operators",
+    "OutOfPlaneModel": "out_of_plane",
     "Params": "params",
     "PipeSI": "params",
     "critical_velocity": "stability",
     "spectrum": "stability",
     "stability_analysis": "stability",
+    "spatial_critical_velocity": "stability",
+    "spatial_stability_analysis": "stability",
     "NewtonError": "static",
     "continuation": "static",
     "solve_path": "static",
@@ -62,6 +65,7 @@ __all__ = [
     "FiniteElement",
     "Modal",
     "NewtonError",
+    "OutOfPlaneModel",
     "ParamError",
     "Params",
     "PipeModel",
@@ -73,6 +77,8 @@ __all__ = [
     "solve_path",
     "solve_static",
     "SolverError",
+    "spatial_critical_velocity",
+    "spatial_stability_analysis",
     "spectrum",
     "stability_analysis",
     "switch_branch",
@@ -84,8 +90,15 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from .errors import ParamError, SolverError
     from .kinematics import shape, tip_values
     from .operators import PipeModel
+    from .out_of_plane import OutOfPlaneModel
     from .params import Params, PipeSI
-    from .stability import critical_velocity, spectrum, stability_analysis
+    from .stability import (
+        critical_velocity,
+        spatial_critical_velocity,
+        spatial_stability_analysis,
+        spectrum,
+        stability_analysis,
+    )
     from .static import NewtonError, continuation, solve_path, solve_static, switch_branch
 
 
