@@ -97,8 +97,15 @@ from fempipe.discretization import FiniteElement, Modal, parse_discretization  #
 from fempipe.errors import ParamError, SolverError  # noqa: E402
 from fempipe.kinematics import shape, tip_values  # noqa: E402
 from fempipe.operators import PipeModel  # noqa: E402
+from fempipe.out_of_plane import OutOfPlaneModel  # noqa: E402
 from fempipe.params import Params, PipeSI  # noqa: E402
-from fempipe.stability import critical_velocity, spectrum, stability_analysis  # noqa: E402
+from fempipe.stability import (  # noqa: E402
+    critical_velocity,
+    spatial_critical_velocity,
+    spatial_stability_analysis,
+    spectrum,
+    stability_analysis,
+)
 from fempipe.static import (  # noqa: E402
     NewtonError,
     continuation,
@@ -121,6 +128,9 @@ PUBLIC = {
     "critical_velocity": critical_velocity,
     "spectrum": spectrum,
     "stability_analysis": stability_analysis,
+    "spatial_critical_velocity": spatial_critical_velocity,
+    "spatial_stability_analysis": spatial_stability_analysis,
+    "OutOfPlaneModel": OutOfPlaneModel,
     "NewtonError": NewtonError,
     "continuation": continuation,
     "solve_path": solve_path,
