@@ -1,0 +1,539 @@
+"""The motion out of the plane in strong form: an independent check of fempipe.out_of_plane.
+
+This module solves the classical fourth-order equation of the out-of-plane
+deflection w(xi, tau) of the pipe about a planar static state theta^s(xi)
+(Chen et al. 2020, Eq. (31a)), written from that equation alone: it knows
+neither the out-of-plane rotation psi = w' of :mod:`fempipe.out_of_plane` nor
+fempipe's discretisations, quadrature or operators.  The static state comes
+from :func:`fempipe.validation.bvp.solve_static_bvp` (scipy's ``solve_bvp``
+on the strong form of Eq. (31a)), which is independent of fempipe too.
+
+The equation
+------------
+Dimensionless (dot = d/dtau, prime = d/dxi), 0 < xi < 1:
+
+    w_ddot + sigma w_dot + 2 sqrt(beta) v w_dot' + v^2 w'' + w''''
+        + ((theta'^2 - N) w')' + mu KV[w_dot] + sum_s kappa_s w delta(xi - xi_s) = 0,
+
+    N(xi) = gamma (1 - xi + Gamma) cos(theta + alpha) + v^2 (1 - cos(theta(1) - theta))
+            + sum_s H(xi_s - xi) F_s . t,   F_s = -kappa_s (r(xi_s) - (xi_s, 0)),
+
+with theta = theta^s, t = (cos theta, sin theta), r = \\int_0^xi t (the
+pipe's frame): N is the axial force of the planar state (gravity beyond xi
+and of the end mass Gamma, the jet's reaction, the springs' static forces)
+and theta'^2 the softening of the curved pipe out of its plane.  The
+Kelvin-Voigt term acts on the co-rotational curvature rate: with psi = w',
+
+    chi = psi' + theta'(xi) \\int_0^xi theta' psi,
+    KV[w] = chi'' - (theta' \\int_xi^1 theta' chi)'      (w'''' on a straight pipe).
+
+Boundary conditions: w(0) = w'(0) = 0; the moment w''(1) + mu chi_dot(1) = 0
+(theta'(1) = 0, so chi(1) = w''(1)); the shear force
+
+    -(w''' + mu chi_dot')(1) + N(1) w'(1) + Gamma w_ddot(1) = 0,
+
+Newton's law of the end mass (the Kelvin-Voigt shear mu chi_dot'(1) is the
+classical E w'''(1), E = 1 + mu d/dtau, of the straight pipe; without damping
+it is the condition -w'''(1) + N(1) w'(1) + Gamma w_ddot(1) = 0).  A spring
+makes w''' jump by kappa_s w(xi_s).  Hysteretic damping is not modelled.
+
+The weak form (derived here)
+----------------------------
+Multiply by a test function u with u(0) = u'(0) = 0 and integrate over
+[0, 1].  By parts,
+
+* ``\\int u w'''' = u(1) w'''(1) - u'(1) w''(1) + \\int u'' w''``;
+* ``\\int u ((theta'^2 - N) w')' = -u(1) N(1) w'(1) - \\int u' (theta'^2 - N) w'``
+  (theta'(1) = 0);
+* ``\\int u v^2 w'' = v^2 u(1) w'(1) - v^2 \\int u' w'``: the follower force of
+  the jet keeps a boundary term (no condition carries it);
+* ``\\int u KV[w] = u(1) chi'(1) - u'(1) chi(1) + \\int u'' chi
+  + \\int u' theta' \\int_xi^1 theta' chi``, and exchanging the order of the
+  double integral, ``\\int u' theta' \\int_xi^1 theta' chi = \\int chi theta'
+  \\int_0^xi theta' u'``: the volume terms are ``\\int B u B w`` with
+  B w = chi, symmetric.
+
+The boundary terms at xi = 1 are u(1) [w''' + mu chi_dot' - N w'](1) -
+u'(1) [w'' + mu chi_dot](1) = u(1) Gamma w_ddot(1) by the natural conditions,
+so that for w = W(xi) e^{lambda tau}, (K + lambda C + lambda^2 M) a = 0 with
+
+    M = \\int u w + Gamma u(1) w(1),
+    C = sigma \\int u w + 2 sqrt(beta) v \\int u w' + mu \\int B u B w,
+    K = \\int u'' w'' + \\int (N - theta'^2) u' w' + v^2 (u(1) w'(1) - \\int u' w')
+        + sum_s kappa_s u(xi_s) w(xi_s).
+
+Only second derivatives appear: C^1 elements are conforming.
+
+Discretisation
+--------------
+:class:`HermiteSpectral`: spectral elements in w, C^1 (w and w' continuous
+at the nodes), each element carrying the Hermite cubics and the bubbles
+whose second derivatives are the Legendre polynomials P_2 ... P_p (the
+basis of :class:`fempipe.validation.classical.LegendreGalerkin`); a node at
+every spring (w''' jumps there, theta^s'' too).  Integrals by Gauss-Legendre
+on each element with p + 40 points (theta^s enters through cos and squares:
+the integrands are not polynomials); the inner integral of B by spectral
+integration on the same points (the Legendre series of the integrand,
+integrated exactly).  theta^s and theta^s' are the ``solve_bvp`` solution
+(a C^1 cubic on its adaptive mesh, tolerance 1e-10; its tip equals
+fempipe's P3:64 to 3e-13 at alpha = pi/2, v = 5.65).  The eigenvalues are
+those of the quadratic pencil in first-order form, in the M-orthonormal
+modes of the bending stiffness and with the shift of
+:func:`fempipe.validation.classical._quadratic_eigenvalues`.
+
+Stability
+---------
+:func:`critical_velocity` follows the static branch from v_min (the loaded
+state, gravity switched on in steps, :func:`loaded_state`) in steps of v,
+each static state started from the previous one, and locates the first v
+where an eigenvalue with |lambda| < ``lam_max`` crosses into Re lambda > 0 by
+Brent's method (as :func:`fempipe.validation.classical.critical_velocity`).
+
+Sanity checks (tests/test_out_of_plane_strong.py): alpha = 0 (theta^s = 0)
+is the classical hanging pipe of :mod:`fempipe.validation.classical`; at
+alpha = pi on a buckled state the rotated static shape W = eta^s =
+\\int_0^xi sin theta^s is a null vector: with w' = sin theta, the field
+operator is d/dxi [cos theta theta'' - (N - v^2) sin theta], and Eq. (31a)
+makes the bracket the constant v^2 sin theta(1); the conditions hold too.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.linalg as sla
+from numpy.polynomial import legendre as leg
+from scipy.optimize import brentq
+
+from .bvp import BVPSolution, solve_static_bvp
+from .classical import Onset, _local_basis, _one_thread
+
+__all__ = [
+    "HermiteSpectral",
+    "LateralProblem",
+    "Onset",
+    "StaticState",
+    "critical_velocity",
+    "eigen",
+    "loaded_state",
+    "static_state",
+]
+
+#: Only eigenvalues with |lambda| below this decide stability (the lowest
+#: eight modes or so), as in :mod:`fempipe.validation.classical`.
+LAM_MAX = 1000.0
+#: Relative size of a real part that counts as unstable at v = 0 without damping.
+TOL = 1e-9
+#: ``solve_bvp`` tolerance of the static states used in the eigenproblems.
+BVP_TOL = 1e-10
+#: ... and of those of the scan for the first unstable interval (measured at
+#: alpha = pi/2, v = 5.66: theta_tip within 5e-12 of the 1e-10 solution).
+SCAN_TOL = 1e-8
+
+
+# ---------------------------------------------------------------------------
+# The planar static state (independent: solve_bvp on Eq. (31a))
+
+
+@dataclass(frozen=True)
+class StaticState:
+    """A planar static state theta^s from ``solve_bvp``, and its axial force.
+
+    Attributes
+    ----------
+    params : Params
+        The pipe (alpha, gamma, end mass, springs) and its flow velocity v.
+    bvp : BVPSolution
+        ``bvp.sol(xi)`` gives (theta, theta', X_g, Z_g).
+    spring_forces : tuple of ndarray
+        F_s = -kappa_s (r(xi_s) - (xi_s, 0)) in the pipe's frame, per spring.
+    """
+
+    params: object
+    bvp: BVPSolution = field(repr=False)
+    spring_forces: tuple = ()
+
+    @property
+    def theta_tip(self) -> float:
+        return self.bvp.theta_tip
+
+    def theta(self, xi) -> np.ndarray:
+        """theta^s at ``xi``."""
+        return np.asarray(self.bvp.sol(np.asarray(xi, dtype=float))[0])
+
+    def dtheta(self, xi) -> np.ndarray:
+        """theta^s' at ``xi``."""
+        return np.asarray(self.bvp.sol(np.asarray(xi, dtype=float))[1])
+
+    def axial_force(self, xi) -> np.ndarray:
+        """N(xi) (module docstring); ``xi`` must not be a spring's position."""
+        p = self.params
+        xi = np.asarray(xi, dtype=float)
+        th = self.theta(xi)
+        N = p.gamma * (1.0 - xi + p.end_mass) * np.cos(th + p.alpha)
+        # 1 - cos(a) = 2 sin^2(a/2): no cancellation on a nearly straight pipe.
+        N = N + p.v**2 * 2.0 * np.sin(0.5 * (self.theta_tip - th)) ** 2
+        for (_, xs), F in zip(p.springs, self.spring_forces, strict=True):
+            N = N + np.where(xi < xs, F[0] * np.cos(th) + F[1] * np.sin(th), 0.0)
+        return N
+
+    def eta(self, xi) -> np.ndarray:
+        """The in-plane deflection eta^s = \\int_0^xi sin theta^s (rotated back from X_g, Z_g)."""
+        y = self.bvp.sol(np.asarray(xi, dtype=float))
+        a = self.params.alpha
+        return -math.sin(a) * y[2] + math.cos(a) * y[3]
+
+
+def static_state(params, guess=None, tol: float = BVP_TOL) -> StaticState:
+    """The static state of Eq. (31a) at ``params.v`` by ``solve_bvp``.
+
+    Parameters
+    ----------
+    params : Params
+        alpha, gamma, v, end_mass, springs are used.
+    guess : StaticState or callable, optional
+        A nearby state (its theta^s) or ``guess(xi) -> theta``: selects the branch.
+    tol : float
+        ``solve_bvp`` tolerance.
+    """
+    if isinstance(guess, StaticState):
+        guess = guess.theta
+    sol = solve_static_bvp(
+        params.alpha,
+        params.gamma,
+        params.v,
+        guess=guess,
+        tol=tol,
+        end_mass=params.end_mass,
+        springs=params.springs,
+    )
+    forces = []
+    ca, sa = math.cos(params.alpha), math.sin(params.alpha)
+    for kappa, xs in params.springs:
+        _, _, X, Z = sol.sol(np.array([xs]))[:, 0]
+        r = np.array([ca * X + sa * Z - xs, -sa * X + ca * Z])  # r(xi_s) - (xi_s, 0)
+        forces.append(-kappa * r)
+    return StaticState(params, sol, tuple(forces))
+
+
+def loaded_state(params, steps: int = 4, tol: float = BVP_TOL) -> StaticState:
+    """The state a pipe reaches when gravity is switched on: gamma from 0 in steps.
+
+    At gamma = 0 the straight pipe is the state; each step starts from the
+    previous one (loose tolerance on the way), so that the branch reached is
+    the loaded one, not a near-straight unstable equilibrium of the leaning
+    pipe (alpha near pi).  Gravity turns the pipe towards the plumb line,
+    theta(1) sin(alpha) < 0: a state that does not is loaded again with
+    twice the steps (up to 64).  At alpha = 0 and pi this is the straight pipe.
+    """
+    s = math.sin(params.alpha)
+    while True:
+        st = None
+        for g in np.linspace(0.0, params.gamma, steps + 1)[1:-1]:
+            st = static_state(replace(params, gamma=float(g)), guess=st, tol=1e-6)
+        st = static_state(params, guess=st, tol=tol)
+        if abs(s) < 1e-12 or params.gamma == 0.0 or st.theta_tip * s < 0.0 or steps >= 64:
+            return st
+        steps *= 2
+
+
+# ---------------------------------------------------------------------------
+# C^1 spectral elements in w
+
+
+@functools.cache
+def _reference(p: int, nq: int):
+    """Basis values and t-derivatives 0..2 at nq Gauss points, weights, integration matrix."""
+    t, w = leg.leggauss(nq)
+    basis = _local_basis(p)
+    vals = np.array([[b.deriv(k)(t) if k else b(t) for b in basis] for k in range(3)])
+    # S f = \int_{-1}^{t_i} f for f given at the Gauss points: its Legendre
+    # series (exact discrete transform for degree < nq), integrated exactly.
+    V = leg.legvander(t, nq - 1)  # (nq, nq)
+    coef = (V * w[:, None]).T * ((2.0 * np.arange(nq) + 1.0) / 2.0)[:, None]  # f -> c
+    S = np.stack(
+        [leg.legval(t, leg.legint(np.eye(nq)[k], lbnd=-1.0)) for k in range(nq)], axis=1
+    )  # (nq points, nq coefficients)
+    return t, w, vals.transpose(0, 2, 1), S @ coef
+
+
+class HermiteSpectral:
+    """C^1 spectral elements for the weak form of the module docstring.
+
+    Parameters
+    ----------
+    p : int
+        Highest Legendre degree of the bubbles' second derivatives (>= 2): each
+        element carries polynomials of degree p + 2.
+    elements : int
+        Elements of equal length (the springs' positions are added as nodes).
+    extra_points : int
+        Gauss points per element beyond p (the integrands carry theta^s).
+    """
+
+    name = "Hermite-Legendre spectral elements"
+
+    def __init__(self, p: int = 24, elements: int = 1, extra_points: int = 40) -> None:
+        self.p, self.elements, self.nq = int(p), int(elements), int(p) + int(extra_points)
+        if self.p < 2 or self.elements < 1:
+            raise ValueError(f"need p >= 2 and elements >= 1, got p={p}, elements={elements}")
+
+    def label(self) -> str:
+        return f"spectral elements p = {self.p}" + (
+            f" x {self.elements}" if self.elements > 1 else ""
+        )
+
+    def layout(self, params):
+        """Nodes (with the springs) and, at the quadrature points: xi, weights, element index,
+        and the basis values/first/second derivatives as (n_points, ndof) arrays."""
+        nodes = np.unique(
+            np.r_[np.linspace(0.0, 1.0, self.elements + 1), [x for _, x in params.springs]]
+        )
+        S = nodes.size - 1
+        nb = self.p - 1
+        ndof = 2 * S + S * nb
+        t, w, vals, _ = _reference(self.p, self.nq)
+        xs, ws, U = [], [], [np.zeros((S * self.nq, ndof)) for _ in range(3)]
+        for e in range(S):
+            a, b = nodes[e], nodes[e + 1]
+            h = b - a
+            xs.append(a + h * (t + 1.0) / 2.0)
+            ws.append(w * h / 2.0)
+            scale = np.ones(4 + nb)
+            scale[[1, 3]] = h / 2.0  # Hermite slope functions: d/dxi = 1 at the node
+            left = [2 * (e - 1), 2 * (e - 1) + 1] if e > 0 else [-1, -1]
+            idx = np.array(left + [2 * e, 2 * e + 1] + list(2 * S + e * nb + np.arange(nb)))
+            keep = idx >= 0  # node 0 is clamped: w = w' = 0
+            rows = slice(e * self.nq, (e + 1) * self.nq)
+            for k in range(3):
+                U[k][rows, idx[keep]] = (vals[k] * scale * (2.0 / h) ** k)[:, keep]
+        return nodes, np.concatenate(xs), np.concatenate(ws), U
+
+    def cumulative(self, nodes: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """``\\int_0^xi f`` at the quadrature points, for f (n_points, ...) given there."""
+        _, w, _, Sint = _reference(self.p, self.nq)
+        out = np.empty_like(f)
+        offset = np.zeros(f.shape[1:])
+        for e in range(nodes.size - 1):
+            h = nodes[e + 1] - nodes[e]
+            fe = f[e * self.nq : (e + 1) * self.nq]
+            out[e * self.nq : (e + 1) * self.nq] = offset + 0.5 * h * (Sint @ fe)
+            offset = offset + 0.5 * h * np.tensordot(w, fe, axes=(0, 0))
+        return out
+
+    def project(self, params, f) -> np.ndarray:
+        """The coefficients of the L2 projection of ``f(xi)`` (with f(0) = f'(0) = 0 in mind)."""
+        _, x, wq, (U0, _, _) = self.layout(params)
+        return np.linalg.solve((U0 * wq[:, None]).T @ U0, U0.T @ (wq * f(x)))
+
+    def values(self, params, a: np.ndarray, xi) -> np.ndarray:
+        """w(xi) of the coefficients ``a`` (xi inside the elements, or at their ends)."""
+        nodes, _, _, _ = self.layout(params)
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        basis = _local_basis(self.p)
+        S, nb = nodes.size - 1, self.p - 1
+        out = np.zeros(xi.shape, dtype=np.result_type(a, float))
+        for i, x in enumerate(xi):
+            e = min(int(np.searchsorted(nodes, x, side="right")) - 1, S - 1)
+            h = nodes[e + 1] - nodes[e]
+            t = 2.0 * (x - nodes[e]) / h - 1.0
+            loc = np.array([b(t) for b in basis])
+            loc[[1, 3]] *= h / 2.0
+            idx = [2 * (e - 1), 2 * (e - 1) + 1] if e > 0 else [-1, -1]
+            idx = np.array(idx + [2 * e, 2 * e + 1] + list(2 * S + e * nb + np.arange(nb)))
+            keep = idx >= 0
+            out[i] = loc[keep] @ a[idx[keep]]
+        return out
+
+    def matrices(self, state: StaticState):
+        """K, C, M (module docstring) about ``state`` at its v, and the tip and spring rows.
+
+        Returns
+        -------
+        K, C, M : ndarray, shape (ndof, ndof)
+        parts : dict
+            ``bending`` (\\int u'' w''), ``material`` (\\int B u B w), ``U0`` and ``x``
+            (basis values at the quadrature points), ``w`` (weights).
+        """
+        p = state.params
+        nodes, x, wq, (U0, U1, U2) = self.layout(p)
+        S = nodes.size - 1
+        tip = np.zeros(U0.shape[1])
+        tip[2 * (S - 1)] = 1.0  # w(1)
+        dtip = np.zeros(U0.shape[1])
+        dtip[2 * (S - 1) + 1] = 1.0  # w'(1)
+        dth = state.dtheta(x)
+
+        def gram(A, B, weight=1.0):
+            return (A * (wq * weight)[:, None]).T @ B
+
+        bending = gram(U2, U2)
+        slope = gram(U1, U1)
+        K = bending + gram(U1, U1, state.axial_force(x) - dth**2)
+        K += p.v**2 * (np.outer(tip, dtip) - slope)
+        for kappa, xs in p.springs:
+            e = np.zeros(U0.shape[1])
+            e[2 * (int(np.searchsorted(nodes, xs)) - 1)] = 1.0  # w(xi_s): a node
+            K += kappa * np.outer(e, e)
+        mass = gram(U0, U0)
+        M = mass + p.end_mass * np.outer(tip, tip)
+        # B w = w'' + theta' \int_0^xi theta' w': the co-rotational curvature.
+        Bw = U2 + dth[:, None] * self.cumulative(nodes, dth[:, None] * U1)
+        material = gram(Bw, Bw)
+        C = p.external_damping * mass + 2.0 * math.sqrt(p.beta) * p.v * gram(U0, U1)
+        C = C + p.mu * material
+        parts = {"bending": bending, "material": material, "U0": U0, "x": x, "w": wq}
+        return K, C, M, parts
+
+
+# ---------------------------------------------------------------------------
+# The quadratic eigenproblem
+
+
+def eigen(K, C, M, bending=None, vectors: bool = False):
+    """Eigenvalues lambda of (K + lambda C + lambda^2 M) a = 0 (and the vectors a).
+
+    In the M-orthonormal modes of ``bending`` (default K's symmetric part
+    plus M) the stiff bubbles decouple from the low modes; then the reversed
+    companion form with the shift s = -1 (lambda = s + 1/nu), whose norm is
+    of the order of the low modes' 1/|lambda - s| (classical.py).
+    """
+    Kb = 0.5 * (K + K.T) + M if bending is None else bending
+    d = 1.0 / np.sqrt(np.diag(M))
+    _, Q = sla.eigh(Kb * np.outer(d, d), M * np.outer(d, d))
+    Q = d[:, None] * Q
+    Kq, Cq, Mq = (Q.T @ A @ Q for A in (K, C, M))
+    n = M.shape[0]
+    for s in (-1.0, -1.37):
+        Ks = Kq + s * Cq + s * s * Mq
+        try:
+            X = np.linalg.solve(Ks, np.hstack([Mq, Cq + 2.0 * s * Mq]))
+        except np.linalg.LinAlgError:
+            continue
+        if np.all(np.isfinite(X)):
+            break
+    else:  # pragma: no cover - both shifts eigenvalues
+        raise np.linalg.LinAlgError("the quadratic pencil is singular at both shifts")
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -X[:, :n]
+    A[n:, n:] = -X[:, n:]
+    if not vectors:
+        nu = np.linalg.eigvals(A)
+        return s + 1.0 / nu[nu != 0.0]
+    nu, Z = np.linalg.eig(A)
+    keep = nu != 0.0
+    return s + 1.0 / nu[keep], Q @ Z[:n, keep]
+
+
+def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
+    """max Re lambda - tol max(1, |lambda|) over |lambda| < lam_max, and its eigenvalue."""
+    keep = lam[np.abs(lam) < lam_max]
+    score = keep.real - tol * np.maximum(1.0, np.abs(keep))
+    i = int(np.argmax(score))
+    return float(score[i]), complex(keep[i])
+
+
+class LateralProblem:
+    """A pipe on a discretisation, with its static branch followed in v.
+
+    Parameters
+    ----------
+    params : Params
+        The pipe; its v is ignored (``eigenvalues(v)``).  Hysteretic damping
+        is not modelled.
+    disc : HermiteSpectral
+    start : StaticState, optional
+        The state at the first v asked (default :func:`loaded_state` there);
+        each next v starts from the cached state nearest in v.
+    """
+
+    def __init__(self, params, disc: HermiteSpectral, start: StaticState | None = None) -> None:
+        if params.hysteretic_damping:
+            raise ValueError("the strong-form check does not model hysteretic damping")
+        self.params, self.disc = params, disc
+        self._states: dict[float, StaticState] = {}
+        self._tols: dict[float, float] = {}
+        if start is not None:
+            self._states[float(start.params.v)] = start
+            self._tols[float(start.params.v)] = 0.0
+
+    def state(self, v: float, tol: float = BVP_TOL) -> StaticState:
+        """The static state at ``v`` on the branch followed from the cached ones.
+
+        A cached state at ``v`` is reused if it was solved to ``tol`` or tighter.
+        """
+        v = float(v)
+        if v in self._states and self._tols.get(v, 0.0) <= tol:
+            return self._states[v]
+        p = replace(self.params, v=v)
+        if not self._states:
+            st = loaded_state(p, tol=tol)
+        else:
+            near = min(self._states, key=lambda u: abs(u - v))
+            st = static_state(p, guess=self._states[near], tol=tol)
+        self._states[v], self._tols[v] = st, tol
+        return st
+
+    def matrices(self, v: float, tol: float = BVP_TOL):
+        """K, C, M and the parts of :meth:`HermiteSpectral.matrices` at ``v``."""
+        return self.disc.matrices(self.state(v, tol))
+
+    def eigenvalues(self, v: float, vectors: bool = False, tol: float = BVP_TOL):
+        """The eigenvalues (and vectors) at ``v``, static state to ``tol``."""
+        K, C, M, parts = self.matrices(v, tol)
+        return eigen(K, C, M, bending=parts["bending"], vectors=vectors)
+
+
+@_one_thread
+def critical_velocity(
+    params,
+    v_max: float = 20.0,
+    v_min: float = 0.0,
+    disc: HermiteSpectral | None = None,
+    step: float = 0.25,
+    xtol: float = 1e-12,
+    lam_max: float = LAM_MAX,
+    tol: float = TOL,
+    start: StaticState | None = None,
+) -> Onset:
+    """The first flow velocity in [v_min, v_max] at which the motion out of the plane is unstable.
+
+    The static branch is followed from ``v_min`` (``start``, default the loaded
+    state) in steps ``step``; in the first interval where the stability margin
+    max(Re lambda - tol max(1, |lambda|)) over |lambda| < ``lam_max`` turns
+    positive, Brent's method to ``xtol`` on the largest Re lambda itself (the
+    jet damps every mode for v > 0, so it is negative below the crossing).
+
+    Returns
+    -------
+    Onset
+        As :func:`fempipe.validation.classical.critical_velocity`.
+    """
+    disc = HermiteSpectral() if disc is None else disc
+    prob = LateralProblem(params, disc, start)
+    label = disc.label()
+
+    def margin(v, t=tol, bvp_tol=BVP_TOL):
+        return _abscissa(prob.eigenvalues(v, tol=bvp_tol), lam_max, t)
+
+    f0, lam0 = margin(v_min)
+    if f0 > 0.0:
+        return Onset(v_min, lam0, "unstable at v_min", label)
+    v_prev = v_min
+    rtol = 4 * np.finfo(float).eps
+    for v in np.arange(v_min, v_max + step / 2, step)[1:]:
+        if margin(v, bvp_tol=SCAN_TOL)[0] > 0.0:
+            if margin(v_prev, 0.0)[0] < 0.0:
+                v_cr = brentq(lambda s: margin(s, 0.0)[0], v_prev, v, xtol=xtol, rtol=rtol)
+            else:  # undamped below: the margin
+                v_cr = brentq(lambda s: margin(s)[0], v_prev, v, xtol=xtol, rtol=rtol)
+            _, lam = margin(v_cr + 2 * xtol)
+            lam = complex(lam.real, abs(lam.imag))
+            kind = "flutter" if abs(lam.imag) > 1e-6 * max(1.0, abs(lam)) else "divergence"
+            return Onset(float(v_cr), lam, kind, label)
+        v_prev = float(v)
+    return Onset(float("nan"), complex("nan"), "stable", label)
