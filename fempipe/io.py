@@ -255,6 +255,11 @@ CSV_UNITS: Mapping[str, str] = {
     "residual_norm": "1",
     "includes_gravity_loading": "-",
     "stable": "-",
+    # stability in three dimensions: the verdict or value of each plane (in the
+    # plane of the static state or out of it), and which plane
+    "stable_in_plane": "-",
+    "stable_out_of_plane": "-",
+    "plane": "-",
     # eigenvalues (fempipe spectrum): lambda and Omega = -i lambda per unit tau
     "mode": "-",
     "lambda_re": "1/T",
@@ -276,6 +281,19 @@ CSV_UNITS: Mapping[str, str] = {
     "v_cr": "1",
     "v_flutter": "1",
     "U_cr": "m/s",
+    "v_cr_in_plane": "1",
+    "v_cr_out_of_plane": "1",
+    "frequency_in_plane": "1/T",
+    "frequency_out_of_plane": "1/T",
+    "type_in_plane": "-",
+    "type_out_of_plane": "-",
+    "mode_in_plane": "-",
+    "mode_out_of_plane": "-",
+    "v_flutter_in_plane": "1",
+    "v_flutter_out_of_plane": "1",
+    "first_plane": "-",
+    "U_cr_in_plane": "m/s",
+    "U_cr_out_of_plane": "m/s",
     "error": "-",
     # the tip's time series (fempipe simulate)
     "tau": "T",

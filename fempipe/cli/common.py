@@ -352,6 +352,20 @@ def add_shoot_rtol_argument(group, help: str, default: str = "1e-9") -> None:
     )
 
 
+def add_planar_argument(group, what: str) -> None:
+    """``--planar``: the paper's planar model alone, every output as before the
+    out-of-plane analysis existed (as ``fempipe critical --planar``).
+
+    ``what`` says what changes, e.g. "stable is the in-plane verdict".
+    """
+    group.add_argument(
+        "--planar",
+        action="store_true",
+        help="the paper's planar model only: no analysis of the motion out of the plane "
+        f"({what}, every output as before)",
+    )
+
+
 def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None = None) -> None:
     """``--json``, ``--out DIR`` and ``--quiet`` / ``--progress``.
 

@@ -9,11 +9,36 @@ at some v whatever its number.  Both conventions are given: lambda
 (theta^d ∝ e^{lambda tau}, Re lambda > 0 unstable) and the paper's
 Omega = -i lambda (Im Omega < 0 unstable).
 
+The pipe is round: the motion out of the plane of the static state
+(:mod:`fempipe.out_of_plane`) is analysed too, about the same static states
+(:func:`fempipe.stability.spatial_root_locus`), and ``stable`` is the verdict
+in three dimensions: stable in the plane and out of it.  ``--planar`` gives
+the paper's planar model alone, every output as before the out-of-plane
+analysis existed.
+
 ``--json`` prints ``{"points": [{"v", "stable", "max_real", "theta_tip",
-"eigenvalues": [{"mode", "re", "im", "Omega_re", "Omega_im"}, ...]}, ...],
-"modes", "params", "discretization"}``.  ``--out DIR`` writes spectrum.json,
-spectrum.csv (one row per v and eigenvalue) and argand.png (Re Omega against
-Im Omega with v marked along the loci, like Fig. 5).
+"eigenvalues": [{"mode", "re", "im", "Omega_re", "Omega_im", "plane"}, ...],
+"stable_in_plane", "stable_out_of_plane", "max_real_in_plane",
+"max_real_out_of_plane", "eigenvalues_out_of_plane": [...]}, ...], "modes",
+"modes_out_of_plane", "params", "discretization", "n_spectra",
+"n_spectra_in_plane", "n_spectra_out_of_plane"}``: ``eigenvalues`` are those
+of the motion in the plane (``plane`` "in"), ``eigenvalues_out_of_plane``
+those out of it (``plane`` "out", the same keys, their own mode numbers
+carried from v = 0), ``stable`` and ``max_real`` (the largest Re lambda)
+are those of both planes together.  On a buckled state of the standing pipe
+(alpha = pi) the out-of-plane spectrum has lambda = 0 exactly, the rotation
+of the buckled shape about the vertical: neutral, not unstable (README, "Out
+of the plane").  With ``--planar`` the points are ``{"v", "stable",
+"max_real", "theta_tip", "eigenvalues": [{"mode", "re", "im", "Omega_re",
+"Omega_im"}, ...]}`` and the top level ``"modes", "params",
+"discretization", "n_spectra"``, as before.
+
+``--out DIR`` writes spectrum.json, spectrum.csv (one row per v and in-plane
+eigenvalue; its ``stable`` and ``system_stable`` columns are the verdict in
+three dimensions), spectrum_out_of_plane.csv (the same columns and
+``plane``, one row per v and out-of-plane eigenvalue; not with
+``--planar``) and argand.png (Re Omega against Im Omega with v marked along
+the loci, like Fig. 5; the out-of-plane loci dashed with open triangles).
 """
 
 from __future__ import annotations
@@ -37,6 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="4",
         help="report modes 1..N (default 4) and every unstable one; 'all' for every resolved mode",
     )
+    common.add_planar_argument(g, "stable is then the verdict in the plane")
     common.add_output_arguments(parser)
 
 
@@ -56,7 +82,7 @@ def _modes(text: str) -> int | None:
 def run(args: argparse.Namespace) -> int:
     from fempipe.io import json_dumps
     from fempipe.operators import PipeModel
-    from fempipe.stability import root_locus
+    from fempipe.stability import root_locus, spatial_root_locus
 
     setup = common.setup_from_args(args)
     n_modes = args.modes
@@ -66,7 +92,15 @@ def run(args: argparse.Namespace) -> int:
     model = PipeModel(setup.disc, setup.params)
     with reporting.progress(args, len(values), "spectrum") as bar:
         try:
-            locus = root_locus(model, values, n_modes=n_modes, callback=lambda i, v: bar.update())
+            if args.planar:
+                locus = root_locus(
+                    model, values, n_modes=n_modes, callback=lambda i, v: bar.update()
+                )
+                out_locus = None
+            else:
+                locus, out_locus = spatial_root_locus(
+                    model, values, n_modes=n_modes, callback=lambda i, v: bar.update()
+                )
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
     head = setup.to_dict()
@@ -74,45 +108,80 @@ def run(args: argparse.Namespace) -> int:
     result["params"] = head["params"]
     result["discretization"] = head["discretization"]
     result["n_spectra"] = locus.n_spectra
+    if out_locus is not None:
+        result = _with_out_of_plane(result, locus, out_locus)
     if setup.pipe is not None:
         for pt in result["points"]:
             pt["U"] = setup.pipe.U_of_v(pt["v"])
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
-        _write(output, result, locus)
+        _write(output, result, locus, out_locus)
     if args.json:
         print(json_dumps(result))
     else:
-        _print_table(result, locus)
+        _print_table(result, locus, out_locus)
     if output is not None:
         output.report(args)
     return 0
 
 
-def _rows(result: dict) -> list[dict]:
+def _with_out_of_plane(result: dict, locus, out_locus) -> dict:
+    """The planar result with the out-of-plane spectrum and the verdict in three dimensions
+    (the keys of the module docstring)."""
+    out_points = out_locus.to_dict()["points"]
+    points = []
+    for pt, po in zip(result["points"], out_points, strict=True):
+        stable = pt["stable"] and po["stable"]
+        points.append(
+            {
+                "v": pt["v"],
+                "stable": stable,
+                "max_real": max(pt["max_real"], po["max_real"]),
+                "theta_tip": pt["theta_tip"],
+                "eigenvalues": [dict(e, plane="in") for e in pt["eigenvalues"]],
+                "stable_in_plane": pt["stable"],
+                "stable_out_of_plane": po["stable"],
+                "max_real_in_plane": pt["max_real"],
+                "max_real_out_of_plane": po["max_real"],
+                "eigenvalues_out_of_plane": [dict(e, plane="out") for e in po["eigenvalues"]],
+            }
+        )
+    out = {"params": result["params"], "modes": result["modes"], "points": points}
+    out["modes_out_of_plane"] = out_locus.modes.tolist()
+    out["discretization"] = result["discretization"]
+    out["n_spectra"] = locus.n_spectra + out_locus.n_spectra
+    out["n_spectra_in_plane"] = locus.n_spectra
+    out["n_spectra_out_of_plane"] = out_locus.n_spectra
+    return out
+
+
+def _rows(result: dict, key: str = "eigenvalues") -> list[dict]:
+    """One CSV row per v and eigenvalue of ``pt[key]``; ``stable`` and ``system_stable``
+    are the point's ``stable`` (in three dimensions unless ``--planar``)."""
     rows = []
     for pt in result["points"]:
         members: dict = {}
-        for i, e in enumerate(pt["eigenvalues"]):
+        for i, e in enumerate(pt[key]):
             members[e["mode"]] = members.get(e["mode"], 0) + 1
-            rows.append(
-                {
-                    "v": pt["v"],
-                    "mode": e["mode"],
-                    "lambda_re": e["re"],
-                    "lambda_im": e["im"],
-                    "Omega_re": e["Omega_re"],
-                    "Omega_im": e["Omega_im"],
-                    "stable": pt["stable"],
-                    "eigenvalue_index": i,
-                    "pair_member": members[e["mode"]],
-                    "system_stable": pt["stable"],
-                }
-            )
+            row = {
+                "v": pt["v"],
+                "mode": e["mode"],
+                "lambda_re": e["re"],
+                "lambda_im": e["im"],
+                "Omega_re": e["Omega_re"],
+                "Omega_im": e["Omega_im"],
+                "stable": pt["stable"],
+                "eigenvalue_index": i,
+                "pair_member": members[e["mode"]],
+                "system_stable": pt["stable"],
+            }
+            if key != "eigenvalues":
+                row["plane"] = e["plane"]
+            rows.append(row)
     return rows
 
 
-def _write(output: reporting.Output, result: dict, locus) -> None:
+def _write(output: reporting.Output, result: dict, locus, out_locus) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -120,34 +189,62 @@ def _write(output: reporting.Output, result: dict, locus) -> None:
 
     from fempipe.plotting.stability import plot_argand
 
-    ax = plot_argand(locus)
+    ax = plot_argand(locus, out_of_plane=out_locus)
     try:
         output.json("spectrum.json", result)
         output.csv("spectrum.csv", _rows(result))
+        if out_locus is not None:
+            output.csv("spectrum_out_of_plane.csv", _rows(result, "eigenvalues_out_of_plane"))
         output.figure("argand.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
 
 
-def _print_table(result: dict, locus) -> None:
+def _print_table(result: dict, locus, out_locus) -> None:
     disc, head = reporting.describe(result)
     print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretisation {disc}")
+    if out_locus is None:
+        _table(result, locus, "eigenvalues", "stable", "max_real")
+        return
+    print(
+        "in the plane of the static state (Eq. (32)); 'stable' is the verdict in three "
+        "dimensions, 'in' and 'out' each plane's, 'max Re lam' both planes'"
+    )
+    _table(result, locus, "eigenvalues", "stable", "max_real", planes=True)
+    print("out of the plane (README, 'Out of the plane'):")
+    _table(
+        result,
+        out_locus,
+        "eigenvalues_out_of_plane",
+        "stable_out_of_plane",
+        "max_real_out_of_plane",
+    )
+
+
+def _table(result: dict, locus, key: str, stable: str, max_real: str, planes: bool = False) -> None:
+    """One row per v: the verdict, the largest Re lambda and the modes' Omega."""
     # The first four modes and every unstable one (the table has one column each).
-    unstable = {e["mode"] for pt in result["points"] for e in pt["eigenvalues"] if e["re"] > 0}
+    unstable = {e["mode"] for pt in result["points"] for e in pt[key] if e["re"] > 0}
     labels = sorted({int(m) for m in locus.modes})
     modes = sorted(set(labels[:4]) | {m for m in labels if m in unstable})
     cols = "".join(f"   mode {m}: Re Omega  Im Omega" for m in modes)
-    print(f"{'v':>8} {'stable':>6} {'max Re lam':>11}{cols}")
+    verdicts = f" {'in':>5} {'out':>5}" if planes else ""
+    print(f"{'v':>8} {'stable':>6}{verdicts} {'max Re lam':>11}{cols}")
     for pt in result["points"]:
         cells = []
         for m in modes:
             # The member with Re Omega >= 0 (or the rightmost real root).
-            es = [e for e in pt["eigenvalues"] if e["mode"] == m]
+            es = [e for e in pt[key] if e["mode"] == m]
             if not es:
                 cells.append(" " * 29)
                 continue
             e = max(es, key=lambda e: (e["Omega_re"] >= 0, -e["Omega_im"]))
             cells.append(f"   {e['Omega_re']:>13.6f} {e['Omega_im']:>+11.6f}")
-        mr = pt["max_real"]
+        mr = pt[max_real]
         mr_s = f"{mr:+11.3e}" if math.isfinite(mr) else f"{'-':>11}"
-        print(f"{pt['v']:8.4f} {str(pt['stable']):>6} {mr_s}" + "".join(cells))
+        flags = (
+            f" {str(pt['stable_in_plane']):>5} {str(pt['stable_out_of_plane']):>5}"
+            if planes
+            else ""
+        )
+        print(f"{pt['v']:8.4f} {str(pt[stable]):>6}{flags} {mr_s}" + "".join(cells))

@@ -40,13 +40,20 @@ def _axes(ax, size=(6.0, 4.5)):
 
 
 def plot_argand(
-    locus, ax=None, mark_every: float | None = None, label_marks: bool = True, title=None
+    locus,
+    ax=None,
+    mark_every: float | None = None,
+    label_marks: bool = True,
+    title=None,
+    out_of_plane=None,
 ):
     """Argand diagram of a :class:`~fempipe.stability.RootLocus` (Fig. 5).
 
     Parameters
     ----------
     locus : RootLocus
+        The loci in the plane of the static states (Eq. (32)): solid lines,
+        dots every ``mark_every``.
     ax : Axes, optional
     mark_every : float, optional
         Mark the loci at multiples of this v (default: about six marks over
@@ -54,64 +61,134 @@ def plot_argand(
     label_marks : bool
         Write the v values next to the marks of each mode's locus.
     title : str, optional
+    out_of_plane : RootLocus, optional
+        The loci of the motion out of the plane about the same static states
+        (:func:`~fempipe.stability.spatial_root_locus`): drawn dashed in the
+        colour of their mode, marked with open triangles, and named in the
+        legend ("out of the plane").  Where they are the in-plane loci (the
+        straight pipe: alpha = 0, or alpha = pi before buckling) they are not
+        drawn again and the title says so.
 
     Returns
     -------
     Axes
     """
+    from matplotlib.lines import Line2D
+
     ax = _axes(ax)
     v = np.asarray(locus.v)
     if mark_every is None:
         span = float(v.max() - v.min()) if v.size > 1 else 1.0
         mark_every = _nice_step(span / 6.0)
-    Om = np.where(locus.resolved, locus.Omega, np.nan)
     marks = np.isclose(np.mod(v + 1e-9, mark_every), 0.0, atol=1e-6)
-    seen = set()
-    labels = []
-    for j, mode in enumerate(locus.modes):
-        z = Om[:, j]
-        # One member of each conjugate pair: Re Omega = Im lambda >= 0.
-        z = np.where(z.real >= -1e-12, z, np.nan)
-        if np.all(np.isnan(z)):
-            continue
-        c = mode_color(int(mode))
-        ax.plot(
-            z.real, z.imag, "-", color=c, lw=1.4, label=None if mode in seen else f"mode {mode}"
-        )
-        seen.add(int(mode))
-        direction_arrow(ax, z, c)
-        m = marks & ~np.isnan(z)
-        ax.plot(z.real[m], z.imag[m], "o", color=c, ms=3.5)
-        if label_marks:
-            for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
-                labels.append(
-                    ax.annotate(
-                        f"{vv:g}",
-                        (x, y),
-                        fontsize=9,
-                        color=c,
-                        xytext=(3, 3),
-                        textcoords="offset points",
+    seen: set = set()
+    labels: list = []
+    same = out_of_plane is not None and same_loci(locus, out_of_plane)
+    # The out-of-plane loci first, under the in-plane ones (whose dots then
+    # show inside the open triangles where the two meet); not drawn at all
+    # where they are the in-plane loci (the title says so).
+    styles = [(locus, "-", "o", None, 2.5)]
+    if out_of_plane is not None and not same:
+        styles.insert(0, (out_of_plane, "--", "^", "none", 2.0))
+    for loc, ls, marker, mfc, z_order in styles:
+        Om = np.where(loc.resolved, loc.Omega, np.nan)
+        for j, mode in enumerate(loc.modes):
+            z = Om[:, j]
+            # One member of each conjugate pair: Re Omega = Im lambda >= 0.
+            z = np.where(z.real >= -1e-12, z, np.nan)
+            if np.all(np.isnan(z)):
+                continue
+            c = mode_color(int(mode))
+            ax.plot(z.real, z.imag, ls, color=c, lw=1.4, zorder=z_order)
+            seen.add(int(mode))
+            direction_arrow(ax, z, c)
+            m = marks & ~np.isnan(z)
+            ax.plot(
+                z.real[m],
+                z.imag[m],
+                marker,
+                color=c,
+                ms=3.5 if mfc is None else 6.0,
+                mfc=mfc,
+                zorder=z_order,
+            )
+            if label_marks:
+                for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
+                    labels.append(
+                        ax.annotate(
+                            f"{vv:g}",
+                            (x, y),
+                            fontsize=9,
+                            color=c,
+                            xytext=(3, 3),
+                            textcoords="offset points",
+                        )
                     )
-                )
     ax.axhline(0.0, color="0.4", lw=0.8)
     ax.set_xlabel(r"Re $\Omega$ = Im $\lambda$")
     ax.set_ylabel(r"Im $\Omega$ = $-$Re $\lambda$   (< 0 unstable)")
     p = locus.params
+    head = (
+        rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
+        rf"$\mu$ = {p.mu:g}"
+    )
+    if same:
+        head += ": out of the plane the same loci"
     ax.set_title(
         title
-        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
-        rf"$\mu$ = {p.mu:g}"
+        or head
         + "\n"
         + rf"dots every $\Delta v$ = {mark_every:g} (labelled with v), "
         "arrows: v increasing",
         fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9, loc="best")
+    # One entry per mode (its colour), then the planes' line styles.
+    handles = [
+        Line2D([], [], color=mode_color(m), ls="-", lw=1.4, label=f"mode {m}") for m in sorted(seen)
+    ]
+    if out_of_plane is not None and not same:
+        handles += [
+            Line2D([], [], color="0.3", ls="-", marker="o", ms=3.5, label="in the plane"),
+            Line2D(
+                [],
+                [],
+                color="0.3",
+                ls="--",
+                marker="^",
+                ms=6.0,
+                mfc="none",
+                label="out of the plane",
+            ),
+        ]
+    ax.legend(handles=handles, fontsize=9, loc="best")
     # Labels that would pile up (a divergence pair on the imaginary axis) are dropped.
     declutter(ax, labels, keep_clear=[ax.get_legend()])
     return ax
+
+
+def same_loci(a, b, rtol: float = 1e-8) -> bool:
+    """Whether two root loci have the same eigenvalues, mode by mode (to ``rtol`` of |lambda|).
+
+    The members of a mode (a conjugate pair, two real roots) are compared as a
+    set: at each v, in the order that matches them best.
+    """
+    from itertools import permutations
+
+    if not np.array_equal(a.modes, b.modes) or not np.array_equal(a.resolved, b.resolved):
+        return False
+    la = np.where(a.resolved, a.lam, 0.0)
+    lb = np.where(b.resolved, b.lam, 0.0)
+    for mode in np.unique(a.modes):
+        cols = np.flatnonzero(a.modes == mode)
+        scale = rtol * np.maximum(1.0, np.abs(la[:, cols]))
+        worst = np.full(la.shape[0], np.inf)
+        for perm in permutations(cols):
+            excess = np.abs(la[:, cols] - lb[:, list(perm)]) - scale
+            worst = np.minimum(worst, excess.max(axis=1))
+        if np.any(worst > 0):
+            return False
+    return True
 
 
 #: Colour-blind-safe colours of modes 1, 2, 3, ... (Okabe & Ito).

@@ -134,7 +134,8 @@ Modules
 ``events``     stability events along one branch;
 ``analysis``   :func:`stability_analysis`, :func:`critical_velocity`;
 ``spatial``    both planes: :func:`spatial_stability_analysis` (the motion out of
-               the plane of the static state, :mod:`fempipe.out_of_plane`);
+               the plane of the static state, :mod:`fempipe.out_of_plane`;
+               :func:`spatial_root_locus` the root loci of both planes);
 ``maps``       v_cr against alpha (Fig. 6), several root loci, in parallel.
 """
 
@@ -157,7 +158,7 @@ from .spatial import (
     spatial_stability_analysis,
 )
 from .spectrum import ModeShape, Spectrum, mode_shape, spectrum
-from .tracking import RootLocus, root_locus
+from .tracking import RootLocus, root_locus, spatial_root_locus
 
 __all__ = [
     "RESOLUTION_TOL",
@@ -181,6 +182,7 @@ __all__ = [
     "linearly_stable",
     "mode_shape",
     "root_locus",
+    "spatial_root_locus",
     "root_loci",
     "stability_analysis",
     "critical_velocity",

@@ -306,6 +306,9 @@ class RootLocus:
         Static tip rotation (which branch).
     n_spectra : int
         Spectra computed, including the points inserted for tracking.
+    plane : {'in', 'out'}
+        The motion analysed: in the plane of the static states (Eq. (32)) or
+        out of it (:mod:`fempipe.out_of_plane`).
     """
 
     params: Params
@@ -317,6 +320,7 @@ class RootLocus:
     stable: np.ndarray
     theta_tip: np.ndarray
     n_spectra: int
+    plane: str = "in"
 
     @property
     def Omega(self) -> np.ndarray:
@@ -360,7 +364,9 @@ def root_locus(
     Parameters
     ----------
     model : PipeModel
-        Parameters other than v are taken from ``model.params``.
+        Parameters other than v are taken from ``model.params``; an
+        out-of-plane model (``model.with_plane("out")``) gives the loci of
+        the motion out of the plane of the static states.
     values : sequence of float
         Flow velocities, in the order the branch is followed.
     q0 : ndarray, optional
@@ -376,6 +382,42 @@ def root_locus(
     -------
     RootLocus
     """
+    return _loci([model], values, q0, n_modes, method, tolerance, callback)[0]
+
+
+@single_blas
+def spatial_root_locus(
+    model: PipeModel,
+    values: Sequence[float],
+    *,
+    q0: np.ndarray | None = None,
+    n_modes: int | None = 6,
+    method: str = "auto",
+    tolerance: float = RESOLUTION_TOL,
+    callback: Callable[[int, float], None] | None = None,
+) -> tuple[RootLocus, RootLocus]:
+    """:func:`root_locus` in and out of the plane, about the same static states.
+
+    The static branch is followed once; at every value the in-plane
+    spectrum (Eq. (32)) and the out-of-plane one (:mod:`fempipe.out_of_plane`)
+    are computed about the same state, each plane's mode numbers carried by
+    continuity from v = 0 along its own path.  ``callback(i, v)`` is called
+    once per value, after both planes.
+
+    Returns
+    -------
+    (RootLocus, RootLocus)
+        The in-plane loci (plane ``"in"``) and the out-of-plane ones (``"out"``).
+    """
+    planar = model.with_plane("in")
+    models = [planar, planar.with_plane("out")]
+    inp, out = _loci(models, values, q0, n_modes, method, tolerance, callback)
+    return inp, out
+
+
+def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[RootLocus]:
+    """The root loci of each model (one pipe, its planes) along one static path."""
+    model = models[0]
     values = [float(x) for x in values]
     if not values:
         raise ValueError("values must contain at least one flow velocity")
@@ -388,23 +430,32 @@ def root_locus(
     if q0 is None:
         q0 = sagged_state(m0).q
     states = solve_path(m0, values, q0=q0)
-    path = _TrackedPath(model, res, method)
-    keep = []  # sample index of each requested value
+    paths = [_TrackedPath(m, res, method) for m in models]
+    keep: list[list[int]] = [[] for _ in models]  # sample index of each requested value
     s = 0.0
     for i, sol in enumerate(states):
         if i:
             s += abs(values[i] - values[i - 1]) + _l2(model, sol.q - states[i - 1].q)
-        e = path.analyse(sol.q, values[i])
-        e.s = s
-        if i == 0:
-            tracker, n_ref = _reference_tracker(model, e, res, method)
-            path.n_spectra += n_ref
-            path.start_labelled(e, tracker)
-        else:
-            path.add(e)
-        keep.append(len(path.samples) - 1)
+        for m, path, kept in zip(models, paths, keep, strict=True):
+            e = path.analyse(sol.q, values[i])
+            e.s = s
+            if i == 0:
+                tracker, n_ref = _reference_tracker(m, e, res, method)
+                path.n_spectra += n_ref
+                path.start_labelled(e, tracker)
+            else:
+                path.add(e)
+            kept.append(len(path.samples) - 1)
         if callback:
             callback(i, values[i])
+    tips = np.array([float(model.disc.tip @ st.q) for st in states])
+    return [
+        _locus_of(m, path, kept, m0.params, values, tips, n_modes)
+        for m, path, kept in zip(models, paths, keep, strict=True)
+    ]
+
+
+def _locus_of(model, path, keep, params, values, tips, n_modes) -> RootLocus:
     lam = path.tracked()[keep]
     resolved = path.tracked_resolved()[keep]
     labels = path.labels
@@ -416,9 +467,8 @@ def root_locus(
     cols = cols[np.argsort(labels[cols], kind="stable")]
     max_real = np.array([path.samples[k][0].max_real for k in keep])
     stable = np.array([not path.samples[k][0].unstable.any() for k in keep])
-    tips = np.array([float(model.disc.tip @ st.q) for st in states])
     return RootLocus(
-        params=m0.params,
+        params=params,
         v=np.array(values),
         lam=lam[:, cols],
         modes=labels[cols].copy(),
@@ -427,4 +477,5 @@ def root_locus(
         stable=stable,
         theta_tip=tips,
         n_spectra=path.n_spectra,
+        plane=model.plane,
     )

@@ -1,0 +1,153 @@
+"""The commands in three dimensions: spectrum, static, stability-map, convergence, compare.
+
+The pipe is round: beside the motion in the plane of its static state (the
+paper's Eq. (32)) each command analyses the motion out of it
+(:mod:`fempipe.out_of_plane`), and its verdicts and critical velocities are
+those of three dimensions; ``--planar`` gives the paper's planar output as
+before.  Small discretisations (four sine modes, P3:8) keep each run to
+seconds.  The paper's case at alpha = pi/2 loses stability out of the plane
+first (Modal(4): flutter at 5.853 out of the plane, 6.241 in it); at
+alpha = 0 the two planes are the same problem.
+"""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import pytest  # noqa: E402
+from clirun import run_json  # noqa: E402
+
+from fempipe.io import read_csv  # noqa: E402
+
+#: The keys of ``fempipe spectrum --json`` before the out-of-plane analysis (and with --planar).
+SPECTRUM_KEYS = {"points", "modes", "params", "discretization", "n_spectra"}
+SPECTRUM_POINT_KEYS = {"v", "stable", "max_real", "theta_tip", "eigenvalues"}
+EIGENVALUE_KEYS = {"mode", "re", "im", "Omega_re", "Omega_im"}
+
+
+# ---------------------------------------------------------------------------
+# spectrum
+
+
+def test_spectrum_lists_both_planes_and_decides_in_three_dimensions(capsys, tmp_path):
+    """alpha = pi/2, Modal(4): at v = 6 the pipe is stable in its plane and flutters out of it."""
+    argv = ["spectrum", "--alpha", "pi/2", "--v", "0,3,6,6.5", "--modal", "4", "--json"]
+    d = run_json(capsys, [*argv, "--quiet", "--out", str(tmp_path)])
+    assert set(d) == SPECTRUM_KEYS | {
+        "modes_out_of_plane",
+        "n_spectra_in_plane",
+        "n_spectra_out_of_plane",
+    }
+    assert d["n_spectra"] == d["n_spectra_in_plane"] + d["n_spectra_out_of_plane"]
+    for pt in d["points"]:
+        assert pt["eigenvalues"] and pt["eigenvalues_out_of_plane"]
+        assert all(e["plane"] == "in" for e in pt["eigenvalues"])
+        assert all(e["plane"] == "out" for e in pt["eigenvalues_out_of_plane"])
+        assert all(set(e) == EIGENVALUE_KEYS | {"plane"} for e in pt["eigenvalues_out_of_plane"])
+        assert pt["stable"] == (pt["stable_in_plane"] and pt["stable_out_of_plane"])
+        assert pt["max_real"] == max(pt["max_real_in_plane"], pt["max_real_out_of_plane"])
+        # Each plane's verdict is its eigenvalues' (Re lambda > 0 unstable).
+        assert pt["stable_out_of_plane"] == all(
+            e["re"] <= 1e-8 * max(1.0, math.hypot(e["re"], e["im"]))
+            for e in pt["eigenvalues_out_of_plane"]
+        )
+    at = {pt["v"]: pt for pt in d["points"]}
+    assert at[3.0]["stable"] is True
+    assert at[6.0]["stable_in_plane"] is True and at[6.0]["stable_out_of_plane"] is False
+    assert at[6.0]["stable"] is False
+    assert at[6.5]["stable_in_plane"] is False
+    # The CSV files: spectrum.csv the in-plane rows with the 3-D verdict, the
+    # out-of-plane rows in their own file with the same columns and plane.
+    rows = read_csv(tmp_path / "spectrum.csv")
+    out = read_csv(tmp_path / "spectrum_out_of_plane.csv")
+    assert set(out) == set(rows) | {"plane"}
+    assert set(out["plane"]) == {"out"}
+    n_out = sum(len(pt["eigenvalues_out_of_plane"]) for pt in d["points"])
+    assert len(out["v"]) == n_out
+    assert list(out["stable"][out["v"] == 6.0]) == [False] * int((out["v"] == 6.0).sum())
+
+
+def test_spectrum_planes_coincide_on_the_hanging_pipe(capsys):
+    """alpha = 0: the straight pipe; every plane through its axis is alike."""
+    argv = ["spectrum", "--alpha", "0", "--v", "0:8:5", "--modal", "4", "--json", "--quiet"]
+    d = run_json(capsys, argv)
+    assert d["modes"] == d["modes_out_of_plane"]
+    for pt in d["points"]:
+        assert pt["stable_in_plane"] == pt["stable_out_of_plane"] == pt["stable"]
+        ins = sorted((e["mode"], e["im"], e["re"]) for e in pt["eigenvalues"])
+        outs = sorted((e["mode"], e["im"], e["re"]) for e in pt["eigenvalues_out_of_plane"])
+        assert [m for m, _, _ in ins] == [m for m, _, _ in outs]
+        for (_, a_im, a_re), (_, b_im, b_re) in zip(ins, outs, strict=True):
+            assert abs(a_im - b_im) + abs(a_re - b_re) <= 1e-8 * max(1.0, abs(a_im))
+
+
+def test_spectrum_planar_is_the_paper_output(capsys):
+    """--planar: the keys of the planar command, the in-plane values of the 3-D run."""
+    argv = ["spectrum", "--alpha", "pi/2", "--v", "0,6", "--modal", "4", "--json", "--quiet"]
+    planar = run_json(capsys, [*argv, "--planar"])
+    assert set(planar) == SPECTRUM_KEYS
+    for pt in planar["points"]:
+        assert set(pt) == SPECTRUM_POINT_KEYS
+        assert all(set(e) == EIGENVALUE_KEYS for e in pt["eigenvalues"])
+    spatial = run_json(capsys, argv)
+    assert planar["modes"] == spatial["modes"]
+    for p, s in zip(planar["points"], spatial["points"], strict=True):
+        assert p["stable"] == s["stable_in_plane"]
+        assert p["max_real"] == s["max_real_in_plane"]
+        assert p["eigenvalues"] == [
+            {k: x for k, x in e.items() if k != "plane"} for e in s["eigenvalues"]
+        ]
+    assert planar["points"][1]["stable"] is True  # in the plane, v = 6 is below v_cr
+
+
+def _legend_texts(ax) -> list[str]:
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_argand_marks_the_out_of_plane_loci():
+    """argand.png: the out-of-plane loci dashed with open triangles, named in the legend;
+    not drawn again where they are the in-plane loci (alpha = 0), which the title says."""
+    from test_figures import text_faults
+
+    from fempipe.discretization import Modal
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.plotting.stability import plot_argand
+    from fempipe.stability import spatial_root_locus
+
+    values = [0.0, 2.0, 4.0, 6.0]
+    loci = spatial_root_locus(PipeModel(Modal(4), Params(alpha=math.pi / 2)), values, n_modes=3)
+    ax = plot_argand(loci[0], out_of_plane=loci[1])
+    try:
+        legend = _legend_texts(ax)
+        assert {"in the plane", "out of the plane"} <= set(legend)
+        assert {"mode 1", "mode 2", "mode 3"} <= set(legend)
+        dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+        triangles = [ln for ln in ax.get_lines() if ln.get_marker() == "^"]
+        assert len(dashed) >= 3 and len(triangles) >= 3
+        assert all(ln.get_markerfacecolor() == "none" for ln in triangles)
+        assert not text_faults(ax.figure)
+    finally:
+        plt.close(ax.figure)
+    loci = spatial_root_locus(PipeModel(Modal(4), Params(alpha=0.0)), values, n_modes=3)
+    ax = plot_argand(loci[0], out_of_plane=loci[1])
+    try:
+        assert "out of the plane the same loci" in ax.get_title()
+        assert not any(ln.get_marker() == "^" for ln in ax.get_lines())
+        assert "out of the plane" not in _legend_texts(ax)
+    finally:
+        plt.close(ax.figure)
+
+
+@pytest.mark.parametrize("argv", [["--planar"], []])
+def test_spectrum_table(capsys, argv):
+    from fempipe.cli import main
+
+    assert main(["spectrum", "--alpha", "pi/2", "--v", "0,6", "--modal", "4", *argv]) == 0
+    out = capsys.readouterr().out
+    assert ("out of the plane" in out) == (not argv)
