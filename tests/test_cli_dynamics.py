@@ -144,6 +144,36 @@ def test_bifurcation_json_contract_and_resume(tmp_path, capsys):
     assert [p["eta_tip"] for p in again["points"]] == [p["eta_tip"] for p in d["points"]]
 
 
+def test_bifurcation_on_a_dask_cluster(capsys):
+    """``--dask ADDRESS``: the two sweeps (up, down) run as two tasks on the cluster
+    (here an in-process local cluster with one worker thread, on loopback) and
+    give the points of the serial run."""
+    from dask import distributed
+
+    argv = ["bifurcation", "--method", "sweep", *CHEAP, "--v", "5,9", "--json", "--quiet"]
+    with (
+        distributed.LocalCluster(
+            n_workers=1,
+            threads_per_worker=1,
+            processes=False,
+            protocol="tcp://",
+            host="127.0.0.1",
+            dashboard_address=None,
+        ) as cluster,
+        distributed.Client(cluster) as observer,
+        distributed.get_task_stream(client=observer) as tasks,
+    ):
+        d = run_json(capsys, [*argv, "--dask", cluster.scheduler_address])
+    assert len(tasks.data) == 2  # one task per sweep, run by the cluster's worker
+    serial = run_json(capsys, argv)
+
+    def strip(points):
+        return [{k: v for k, v in p.items() if k != "wall_time"} for p in points]
+
+    assert len(d["points"]) == 4
+    assert strip(d["points"]) == strip(serial["points"])
+
+
 @pytest.mark.parametrize(
     "argv, option",
     [
