@@ -151,3 +151,73 @@ def test_spectrum_table(capsys, argv):
     assert main(["spectrum", "--alpha", "pi/2", "--v", "0,6", "--modal", "4", *argv]) == 0
     out = capsys.readouterr().out
     assert ("out of the plane" in out) == (not argv)
+
+
+# ---------------------------------------------------------------------------
+# static
+
+STATIC_STABILITY = ("stable", "stable_in_plane", "stable_out_of_plane")
+
+
+def test_static_stable_in_three_dimensions(capsys, tmp_path):
+    """alpha = pi/2, Modal(4): v = 6 is stable in the plane, unstable out of it, so not
+    stable; the CSV has the three columns; --planar keeps the planar verdict alone."""
+    argv = ["static", "--alpha", "pi/2", "--v", "0,6,7", "--modal", "4", "--json", "--quiet"]
+    d = run_json(capsys, [*argv, "--out", str(tmp_path)])
+    flags = [tuple(pt[k] for k in STATIC_STABILITY) for pt in d["points"]]
+    assert flags == [(True, True, True), (False, True, False), (False, False, False)]
+    cols = read_csv(tmp_path / "static.csv")
+    for k in STATIC_STABILITY:
+        assert [bool(x) for x in cols[k]] == [pt[k] for pt in d["points"]]
+    planar = run_json(capsys, [*argv, "--planar"])
+    for p, s in zip(planar["points"], d["points"], strict=True):
+        assert set(s) - set(p) == {"stable_in_plane", "stable_out_of_plane"}
+        assert p["stable"] == s["stable_in_plane"]
+        assert {k: x for k, x in s.items() if k not in STATIC_STABILITY[1:]} == dict(
+            p, stable=s["stable"]
+        )
+    # The hanging pipe: both planes alike.
+    d = run_json(capsys, ["static", "--alpha", "0", "--v", "6,7", "--modal", "4", "--json"])
+    for pt in d["points"]:
+        assert pt["stable"] == pt["stable_in_plane"] == pt["stable_out_of_plane"]
+
+
+def test_shapes_tell_the_out_of_plane_instability():
+    """shapes.png: solid stable, grey dashed unstable in the plane, grey dash-dot unstable
+    out of the plane only, each kind named in the legend."""
+    from test_figures import text_faults
+
+    from fempipe.plotting.static import OUT_OF_PLANE_STYLE, UNSTABLE_COLOR, plot_shapes
+
+    shapes = _shapes([0.0, 6.0, 7.0])
+    ax = plot_shapes(
+        shapes,
+        ["v = 0", "v = 6", "v = 7"],
+        alpha=math.pi / 2,
+        stable=[True, False, False],
+        stable_in_plane=[True, True, False],
+    )
+    try:
+        lines = {ln.get_label(): ln for ln in ax.get_lines() if ln.get_label().startswith("v = ")}
+        assert lines["v = 0"].get_linestyle() == "-"
+        assert lines["v = 6 (unstable out of the plane)"].get_linestyle() == OUT_OF_PLANE_STYLE
+        assert lines["v = 7 (unstable in the plane)"].get_linestyle() == "--"
+        for k in ("v = 6 (unstable out of the plane)", "v = 7 (unstable in the plane)"):
+            assert matplotlib.colors.same_color(lines[k].get_color(), UNSTABLE_COLOR)
+        legend = _legend_texts(ax)
+        assert "grey dashed: unstable in the plane" in legend
+        assert "grey dash-dot: unstable out of the plane only" in legend
+        assert not text_faults(ax.figure)
+    finally:
+        plt.close(ax.figure)
+
+
+def _shapes(values):
+    from fempipe.discretization import Modal
+    from fempipe.kinematics import shape
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.static import solve_path
+
+    model = PipeModel(Modal(4), Params(alpha=math.pi / 2))
+    return [shape(model.disc, s.q, math.pi / 2) for s in solve_path(model, values)]

@@ -8,6 +8,14 @@ files (``--out DIR``: static.json, static.csv, shapes.png, shapes.vtu).
 ``--continuation gamma`` or ``--continuation alpha`` with ``--values LIST``
 follows the static state in gravity or inclination at one flow velocity instead.
 
+``stable`` is the linear stability of each state in three dimensions: the
+pipe is round, and a state is stable when its motion in the plane of the
+static state (Eq. (32)) and out of it (:mod:`fempipe.out_of_plane`) are both
+stable (:func:`fempipe.stability.linearly_stable` of ``model`` and of
+``model.with_plane("out")``); ``stable_in_plane`` and
+``stable_out_of_plane`` are each plane's verdict.  ``--planar`` decides in
+the plane alone, every output as before (``stable`` only).
+
 ``--error-estimate`` also solves every point on the refined discretisation
 (:func:`fempipe.error_estimate.refine`: P_k elements halved, or twice the
 modes), by Newton from the coarse state transferred to it (the L2
@@ -59,6 +67,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="values of the --continuation parameter (gamma: 0:100:11; alpha: items as in --alpha, "
         "e.g. 0,pi/4,pi/2 or 0deg:180deg:7)",
     )
+    g = parser.add_argument_group("stability")
+    common.add_planar_argument(g, "stable is then the verdict in the plane")
     common.add_output_arguments(parser)
     estimates.add_argument(parser, "each tip value of a point")
 
@@ -143,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
     for row, sol in zip(points, sols, strict=True):
         row["includes_gravity_loading"] = sol.loading_iterations > 0
     for row, sol in zip(points, sols, strict=True):
-        row["stable"] = _stable(model.with_params(sol.params), sol.q)
+        row.update(_stability(model.with_params(sol.params), sol.q, args.planar))
     result = setup.to_dict()
     result["params"].pop(parameter, None)
     if parameter != "v":
@@ -246,8 +256,29 @@ def _scaled(x, factor: float):
     return None if x is None else x * factor
 
 
+def _stability(model, q, planar: bool = False) -> dict:
+    """``{"stable"}`` with ``planar``, else ``{"stable", "stable_in_plane",
+    "stable_out_of_plane"}``: the verdict in three dimensions and each plane's.
+
+    Stable in three dimensions when stable in both planes; unstable when
+    unstable in either; None when neither says unstable and one resolves nothing.
+    """
+    inp = _stable(model, q)
+    if planar:
+        return {"stable": inp}
+    out = _stable(model.with_plane("out"), q)
+    if inp is False or out is False:
+        both = False
+    elif inp is None or out is None:
+        both = None
+    else:
+        both = True
+    return {"stable": both, "stable_in_plane": inp, "stable_out_of_plane": out}
+
+
 def _stable(model, q) -> bool | None:
-    """Linear stability of the static state (Eq. (32)); None if nothing is resolved.
+    """Linear stability of the static state in ``model``'s plane (Eq. (32) in it); None if
+    nothing is resolved.
 
     :func:`fempipe.stability.linearly_stable`: the criterion of ``fempipe
     spectrum`` and ``fempipe critical``, computed for large meshes from the few
@@ -327,6 +358,9 @@ def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> N
         alpha=_alphas(values, parameter, p),
         title=title,
         stable=[row["stable"] for row in points],
+        stable_in_plane=(
+            [row["stable_in_plane"] for row in points] if "stable_in_plane" in points[0] else None
+        ),
     )
     fig = ax.figure
     try:
@@ -356,7 +390,10 @@ def _alphas(values, parameter: str, p: dict) -> list[float]:
 
 def _print_table(result: dict, parameter: str, pipe) -> None:
     disc, head = reporting.describe(result, ("alpha", "beta", "gamma", "mu", "v"))
-    print(f"static deformation, {head}; discretisation {disc}")
+    spatial = "stable_in_plane" in result["points"][0]
+    # stable: linear stability in three dimensions; in, out: each plane's.
+    planes = "; stable in 3-D (in: in the plane, out: out of it)" if spatial else ""
+    print(f"static deformation, {head}; discretisation {disc}{planes}")
     if pipe is not None:
         print(
             f"SI pipe: L = {pipe.L:g} m, EI = {pipe.EI:g} N m^2, m = {pipe.m:g} kg/m, "
@@ -377,6 +414,8 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
         cols.append(("tip_drop_mm", "drop [mm]", "{:+10.4f}"))
     cols += [("newton_iterations", "Newton", "{:6d}"), ("residual_norm", "residual", "{:9.2e}")]
     cols.append(("stable", "stable", "{!s:>6}"))
+    if spatial:
+        cols += [("stable_in_plane", "in", "{!s:>5}"), ("stable_out_of_plane", "out", "{!s:>5}")]
     with_errors = "error_estimate" in result
 
     def cell(row, key, fmt):
@@ -400,6 +439,7 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
         estimates.print_footer(result["error_estimate"])
     if any(row["stable"] is False for row in result["points"]):
         print(
-            "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)); "
-            "`fempipe critical` lists the stability events and follows the other branches"
+            "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)"
+            + (" and out of the plane" if spatial else "")
+            + "); `fempipe critical` lists the stability events and follows the other branches"
         )

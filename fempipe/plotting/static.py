@@ -6,7 +6,10 @@ horizontal, both axes have the same scale so shapes are not distorted, one
 curve per flow velocity, the clamp at the origin.  A static state that is
 linearly unstable (some resolved eigenvalue of Eq. (32) with Re lambda > 0) is
 not what the pipe shows: it is drawn grey and dashed and said so in the
-legend, so that it cannot be read as an equilibrium one would observe.
+legend, so that it cannot be read as an equilibrium one would observe.  In
+three dimensions (``stable_in_plane`` given) a state that is stable in its
+plane but unstable out of it (:mod:`fempipe.out_of_plane`) is drawn grey and
+dash-dotted instead (dotted is the undeformed pipe), with its own legend key.
 """
 
 from __future__ import annotations
@@ -15,10 +18,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["UNSTABLE_COLOR", "plot_shapes"]
+__all__ = ["OUT_OF_PLANE_STYLE", "UNSTABLE_COLOR", "plot_shapes"]
 
 #: Colour of linearly unstable static states (drawn dashed).
 UNSTABLE_COLOR = "0.55"
+#: Line style of the states unstable out of the plane only (grey too).
+OUT_OF_PLANE_STYLE = "-."
 
 
 def _as_list(alpha, n: int) -> list[float | None]:
@@ -44,6 +49,7 @@ def plot_shapes(
     max_labels: int = 12,
     title: str | None = None,
     stable: Sequence[bool | None] | None = None,
+    stable_in_plane: Sequence[bool | None] | None = None,
 ):
     """Deformed centrelines (X_g, Z_g) with gravity pointing down.
 
@@ -69,6 +75,12 @@ def plot_shapes(
         flagged False are drawn grey and dashed, with "(unstable)" in their
         legend entry and a legend key; None (the default, or an entry None)
         draws the state as stable ones are drawn.
+    stable_in_plane : sequence of bool or None, optional
+        With ``stable`` the verdict in three dimensions (``fempipe static``'s
+        ``stable`` and ``stable_in_plane``): a state unstable but stable in its
+        plane is unstable out of the plane only, drawn grey and dash-dotted with
+        "(unstable out of the plane)" in its legend entry; the others unstable
+        dashed with "(unstable in the plane)"; each kind with a legend key.
 
     Returns
     -------
@@ -92,6 +104,14 @@ def plot_shapes(
     elif len(stable) != n:
         raise ValueError(f"got {n} shapes but {len(stable)} stability flags")
     unstable = [flag is not None and not bool(flag) for flag in stable]
+    if stable_in_plane is not None and len(stable_in_plane) != n:
+        raise ValueError(f"got {n} shapes but {len(stable_in_plane)} in-plane stability flags")
+    spatial = stable_in_plane is not None
+    # Unstable out of the plane only: unstable, and stable in the plane.
+    out_only = [
+        u and spatial and stable_in_plane[i] is not None and bool(stable_in_plane[i])
+        for i, u in enumerate(unstable)
+    ]
     cmap = colormaps["viridis"]
     colors = cmap(np.linspace(0.0, 0.9, n)) if n > 1 else [cmap(0.0)]
     every = max(1, int(np.ceil(n / max_labels)))
@@ -113,12 +133,14 @@ def plot_shapes(
     for i, s in enumerate(shapes):
         lab = labels[i] if labels is not None and (i % every == 0 or i == n - 1) else None
         if lab is not None and unstable[i]:
-            lab = f"{lab} (unstable)"
+            where = " out of the plane" if out_only[i] else " in the plane" if spatial else ""
+            lab = f"{lab} (unstable{where})"
         color = UNSTABLE_COLOR if unstable[i] else colors[i]
+        ls = OUT_OF_PLANE_STYLE if out_only[i] else "--" if unstable[i] else "-"
         ax.plot(
             np.asarray(s.Z_g) * scale,
             np.asarray(s.X_g) * scale,
-            ls="--" if unstable[i] else "-",
+            ls=ls,
             color=color,
             lw=1.2 if unstable[i] else 1.6,
             label=lab,
@@ -133,8 +155,19 @@ def plot_shapes(
             mfc="none" if unstable[i] else color,
             zorder=3,
         )
-    if any(unstable):
-        ax.plot([], [], ls="--", color=UNSTABLE_COLOR, lw=1.2, label="grey dashed: unstable")
+    in_plane = [u and not o for u, o in zip(unstable, out_only, strict=True)]
+    if any(in_plane):
+        key = "grey dashed: unstable in the plane" if spatial else "grey dashed: unstable"
+        ax.plot([], [], ls="--", color=UNSTABLE_COLOR, lw=1.2, label=key)
+    if any(out_only):
+        ax.plot(
+            [],
+            [],
+            ls=OUT_OF_PLANE_STYLE,
+            color=UNSTABLE_COLOR,
+            lw=1.2,
+            label="grey dash-dot: unstable out of the plane only",
+        )
 
     ax.set_aspect("equal", adjustable="datalim")
     # Include the clamp and a margin so the clamp is never cut off.
