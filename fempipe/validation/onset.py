@@ -12,7 +12,9 @@ fine mesh large negative real parts, so they never decide the sign.
 
 This is a second, deliberately simple implementation of what
 :func:`fempipe.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
-cases compare the two.
+cases compare the two.  With ``plane="out"`` the linearised problem is the
+motion out of the plane of the static state (:mod:`fempipe.out_of_plane`),
+the first instability of an inclined round pipe.
 """
 
 from __future__ import annotations
@@ -75,11 +77,20 @@ class _Branch:
         return q
 
 
-def spectrum(model: PipeModel, q_static: np.ndarray) -> np.ndarray:
-    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearisation, sorted by Re."""
+def spectrum(model: PipeModel, q_static: np.ndarray, plane: str = "in") -> np.ndarray:
+    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearisation, sorted by Re.
+
+    ``plane="out"``: of the motion out of the plane of the static state.
+    """
     import scipy.linalg as sla
 
-    K, D, M = model.jacobians(q_static)
+    if plane == "in":
+        K, D, M = model.jacobians(q_static)
+    else:
+        from ..out_of_plane import OutOfPlaneOperators
+
+        mats = OutOfPlaneOperators(model).matrices(q_static)
+        K, D, M = mats.K, mats.C, mats.M
     n = model.n
     # Generalised first-order form: no inverse of the (ill-conditioned) mass matrix.
     Z, eye = np.zeros((n, n)), np.eye(n)
@@ -114,6 +125,7 @@ def critical_velocity(
     v_max: float = 14.0,
     dv: float = 0.5,
     xtol: float = 1e-10,
+    plane: str = "in",
 ) -> Onset:
     """v_cr of the sagged static branch by bracketing and Brent's method.
 
@@ -127,6 +139,8 @@ def critical_velocity(
         The bracketing grid 0, dv, 2 dv, ... up to v_max.
     xtol : float
         Absolute tolerance in v of Brent's method.
+    plane : {"in", "out"}
+        The motion in the plane of the static state (Eq. (32)) or out of it.
     """
     br = _Branch(disc, alpha, beta, gamma, mu, 0.0)
     count = 0
@@ -134,7 +148,7 @@ def critical_velocity(
     def growth(v: float) -> float:
         nonlocal count
         count += 1
-        return float(spectrum(br.model(v), br.state(v))[0].real)
+        return float(spectrum(br.model(v), br.state(v), plane)[0].real)
 
     g_prev, v_prev = growth(0.0), 0.0
     if g_prev > 0:
@@ -158,14 +172,14 @@ def critical_velocity(
             else:
                 return Onset(float(lo), 0.0, "fold", count)
             v_cr = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
-            lam = spectrum(br.model(v_cr), br.state(v_cr))[0]
+            lam = spectrum(br.model(v_cr), br.state(v_cr), plane)[0]
             freq = abs(lam.imag)
             return Onset(
                 float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
             )
         if g > 0:
             v_cr = brentq(growth, v_prev, v, xtol=xtol, rtol=4 * np.finfo(float).eps)
-            lam = spectrum(br.model(v_cr), br.state(v_cr))[0]
+            lam = spectrum(br.model(v_cr), br.state(v_cr), plane)[0]
             freq = abs(lam.imag)
             return Onset(
                 float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
