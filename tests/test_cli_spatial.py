@@ -221,3 +221,75 @@ def _shapes(values):
 
     model = PipeModel(Modal(4), Params(alpha=math.pi / 2))
     return [shape(model.disc, s.q, math.pi / 2) for s in solve_path(model, values)]
+
+
+# ---------------------------------------------------------------------------
+# stability-map
+
+MAP_POINT_KEYS = {"alpha", "beta", "gamma", "v_cr", "type", "frequency", "mode", "v_flutter"}
+MAP_POINT_KEYS |= {"error"}
+
+
+def test_stability_map_in_three_dimensions(capsys, tmp_path):
+    """Both planes' v_cr per alpha, v_cr the first of the two: the same at alpha = 0, out of
+    the plane first at pi/2 (the library's spatial_critical_velocity); --planar as before."""
+    from fempipe.discretization import Modal
+    from fempipe.operators import PipeModel
+    from fempipe.params import Params
+    from fempipe.stability import spatial_critical_velocity
+
+    argv = ["stability-map", "--alphas", "0,pi/2", "--modal", "4", "--json", "--quiet"]
+    d = run_json(capsys, [*argv, "--out", str(tmp_path)])
+    a0, a90 = d["points"]
+    for pt in d["points"]:
+        assert pt["v_cr"] == min(pt["v_cr_in_plane"], pt["v_cr_out_of_plane"])
+        assert pt["v_flutter"] == min(pt["v_flutter_in_plane"], pt["v_flutter_out_of_plane"])
+        plane = "in_plane" if pt["first_plane"] == "in" else "out_of_plane"
+        for k in ("v_cr", "frequency", "type", "mode"):
+            assert pt[k] == pt[f"{k}_{plane}"]
+    assert a0["first_plane"] == "in"
+    assert a0["v_cr_in_plane"] == pytest.approx(a0["v_cr_out_of_plane"], abs=1e-9)
+    assert a0["frequency_in_plane"] == pytest.approx(a0["frequency_out_of_plane"], abs=1e-9)
+    assert a90["first_plane"] == "out" and a90["type"] == "flutter"
+    assert a90["v_cr_out_of_plane"] < a90["v_cr_in_plane"] - 0.3
+    lib = spatial_critical_velocity(
+        PipeModel(Modal(4), Params(alpha=math.pi / 2)), 10.0, ds_max=0.2
+    )
+    assert a90["v_cr_in_plane"] == pytest.approx(lib.in_plane.v_cr, abs=1e-12)
+    assert a90["v_cr_out_of_plane"] == pytest.approx(lib.out_of_plane.v_cr, abs=1e-12)
+    cols = read_csv(tmp_path / "stability_map.csv")
+    assert list(cols["first_plane"]) == ["in", "out"]
+    assert list(cols["v_cr_out_of_plane"]) == [pt["v_cr_out_of_plane"] for pt in d["points"]]
+    planar = run_json(capsys, [*argv, "--planar"])
+    for p, s in zip(planar["points"], d["points"], strict=True):
+        assert set(p) == MAP_POINT_KEYS
+        assert p["v_cr"] == s["v_cr_in_plane"] and p["frequency"] == s["frequency_in_plane"]
+    assert set(planar) == set(d)
+
+
+def test_stability_map_figure_shows_both_planes_and_the_first():
+    """stability_map.png in 3-D: per curve the in-plane line (○), the out-of-plane one
+    (dashed, △) and the band along v_cr in 3-D; the key in a legend below the axes."""
+    from test_figures import text_faults
+
+    from fempipe.discretization import Modal
+    from fempipe.plotting.stability import plot_stability_map
+    from fempipe.stability import stability_map
+
+    smap = stability_map(Modal(4), [0.0, math.pi / 2, math.pi], [(0.142, 18.9)], workers=1)
+    ax = plot_stability_map(smap)
+    try:
+        (legend,) = ax.figure.legends
+        texts = [t.get_text() for t in legend.get_texts()]
+        assert "in the plane" in texts and "out of the plane" in texts
+        assert any("3-D" in t for t in texts)
+        lines = ax.get_lines()
+        assert any(ln.get_marker() == "^" and ln.get_linestyle() == "--" for ln in lines)
+        assert any(ln.get_marker() == "o" and ln.get_linestyle() == "-" for ln in lines)
+        # The band follows v_cr in 3-D: the out-of-plane flutter at pi/2.
+        (band,) = [ln for ln in lines if ln.get_linewidth() > 5]
+        assert band.get_ydata()[1] == smap.points[0][1]["v_cr_out_of_plane"]
+        assert "○" in ax.get_title() and "△" in ax.get_title()
+        assert not text_faults(ax.figure)
+    finally:
+        plt.close(ax.figure)

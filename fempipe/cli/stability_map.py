@@ -11,13 +11,33 @@ the others.
 The variants of the pipe (``--end-mass``, ``--external-damping``,
 ``--hysteretic-damping``, ``--spring``) apply to every point.
 
+The pipe is round: each point analyses the motion in the plane of the
+static state and out of it (:mod:`fempipe.out_of_plane`) along the same
+static branch (:func:`fempipe.stability.spatial_critical_velocity`), and
+v_cr is the first loss of stability in three dimensions, the first of the
+two planes' (at alpha = 0 they are the same: "in").  ``--planar`` maps the
+paper's planar model alone, every output as before.
+
 ``--json`` prints ``{"alphas", "curves": [{"beta", "gamma"}], "mu",
 "end_mass", "external_damping", "hysteretic_damping", "springs", "v_max",
 "discretization", "points": [{"alpha", "beta", "gamma", "v_cr", "type",
-"frequency", "mode", "v_flutter", "error"}, ...]}``.  ``--out DIR`` writes
-stability_map.json, stability_map.csv and stability_map.png.  At alpha = pi
-the straight pipe can be unstable from v = 0 (divergence, v_cr = 0); its
-first flutter velocity is in "v_flutter".
+"frequency", "mode", "v_flutter", "error", "v_cr_in_plane",
+"frequency_in_plane", "type_in_plane", "mode_in_plane",
+"v_flutter_in_plane", "v_cr_out_of_plane", "frequency_out_of_plane",
+"type_out_of_plane", "mode_out_of_plane", "v_flutter_out_of_plane",
+"first_plane"}, ...]}``: v_cr, type, frequency and mode are those of the
+first loss of stability in three dimensions, v_flutter the first flutter
+in either plane, ``first_plane`` "in" or "out" (null if stable up to
+v_max); with the SI pipe also ``U_cr``, ``U_cr_in_plane``,
+``U_cr_out_of_plane``.  With ``--planar`` the points are ``{"alpha",
+"beta", "gamma", "v_cr", "type", "frequency", "mode", "v_flutter",
+"error"}`` (and ``U_cr``), as before.  ``--out DIR`` writes
+stability_map.json, stability_map.csv (one row per point, its keys) and
+stability_map.png (the flutter velocity against alpha: in the plane solid
+with open circles, out of it dashed with open triangles, an earlier loss of
+stability as open squares and diamonds, and a pale band along v_cr in three
+dimensions).  At alpha = pi the straight pipe can be unstable from v = 0
+(divergence, v_cr = 0); its first flutter velocity is in "v_flutter".
 """
 
 from __future__ import annotations
@@ -60,6 +80,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"5,10,{parsing.DEFAULT_GAMMA:g},30",
     )
     common.add_workers_argument(g, "local processes (default 1)")
+    common.add_planar_argument(g, "v_cr is then the in-plane critical velocity")
     common.add_output_arguments(parser)
 
 
@@ -125,12 +146,16 @@ def run(args: argparse.Namespace) -> int:
             variants={k: getattr(setup.params, k) for k in VARIANT_FIELDS},
             workers=workers,
             callback=lambda done, n, r: bar.update(),
+            planar=args.planar,
         )
     result = smap.to_dict()
     if setup.pipe is not None:
         result["pipe_SI"] = setup.pipe.to_dict()
+        keys = ("", "_in_plane", "_out_of_plane") if not args.planar else ("",)
         for row in result["points"]:
-            row["U_cr"] = None if row["v_cr"] is None else setup.pipe.U_of_v(row["v_cr"])
+            for k in keys:
+                v = row["v_cr" + k]
+                row["U_cr" + k] = None if v is None else setup.pipe.U_of_v(v)
     failed = [r for r in result["points"] if r.get("error")]
     for r in failed:
         print(
@@ -173,15 +198,32 @@ def _print(result: dict) -> None:
     variants = [f"{k} = {result[k]}" for k in VARIANT_FIELDS if result.get(k)]
     if variants:
         print("variants: " + ", ".join(variants))
+    spatial = any("first_plane" in r for r in result["points"])
+    if spatial:
+        print(
+            "v_cr: the first loss of stability in three dimensions (plane: in the plane of the "
+            "static state or out of it); in, out: each plane's v_cr"
+        )
+    planes = f" {'plane':>5} {'v_cr in':>14} {'v_cr out':>14}" if spatial else ""
     print(
-        f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} {'v_flutter':>14}"
+        f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} "
+        f"{'v_flutter':>14}{planes}"
     )
+
+    def num(x) -> str:
+        return "-" if x is None else f"{x:.10f}"
+
     for r in result["points"]:
-        v = "-" if r["v_cr"] is None else f"{r['v_cr']:.10f}"
-        vf = "-" if r.get("v_flutter") is None else f"{r['v_flutter']:.10f}"
         t = "error" if r.get("error") else (r.get("type") or "stable")
         mode = "-" if r.get("mode") is None else str(r["mode"])
+        cells = ""
+        if spatial:
+            plane = r.get("first_plane") or "-"
+            cells = (
+                f" {plane:>5} {num(r.get('v_cr_in_plane')):>14} "
+                f"{num(r.get('v_cr_out_of_plane')):>14}"
+            )
         print(
-            f"{r['alpha'] / math.pi:9.4f} {r['beta']:7.4g} {r['gamma']:7.4g} {v:>14} {t:>11} "
-            f"{mode:>5} {vf:>14}"
+            f"{r['alpha'] / math.pi:9.4f} {r['beta']:7.4g} {r['gamma']:7.4g} {num(r['v_cr']):>14} "
+            f"{t:>11} {mode:>5} {num(r.get('v_flutter')):>14}{cells}"
         )

@@ -232,12 +232,20 @@ def plot_stability_map(smap, ax=None, title=None):
     The lines are the first flutter velocity of the primary branch (what the
     paper's Fig. 6 plots); where the branch loses stability earlier by
     divergence or at a fold (at and near alpha = pi), v_cr is drawn as an open
-    square.
+    square.  A map in three dimensions (``smap.planar`` False) draws, in each
+    curve's colour, the plane of the static state so (solid, ○ and □) and
+    the motion out of it dashed with open triangles (△ flutter, ◇ an earlier
+    loss of stability out of the plane), and under them a wide pale band along
+    v_cr in three dimensions, the first of the two: where the band follows
+    the dashed curve the pipe first leaves its plane.  The key is in the
+    legend below the axes.
 
     Returns
     -------
     Axes
     """
+    if not getattr(smap, "planar", True):
+        return _plot_spatial_map(smap, ax, title)
     ax = _axes(ax)
     a = np.asarray(smap.alphas) / np.pi
     flutter, vcr = smap.array("v_flutter"), smap.array("v_cr")
@@ -264,6 +272,95 @@ def plot_stability_map(smap, ax=None, title=None):
     )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
+    return ax
+
+
+#: The band along v_cr in three dimensions (:func:`plot_stability_map`).
+_BAND = {"lw": 8.0, "alpha": 0.22, "solid_capstyle": "round"}
+
+
+def _plot_spatial_map(smap, ax, title):
+    """:func:`plot_stability_map` of a map in three dimensions (its docstring)."""
+    from matplotlib.lines import Line2D
+
+    ax = _axes(ax, size=(6.4, 5.4))
+    a = np.asarray(smap.alphas) / np.pi
+    vcr = smap.array("v_cr")
+    for c, (beta, gamma) in enumerate(smap.curves):
+        (line,) = ax.plot(
+            a,
+            smap.array("v_flutter_in_plane")[c],
+            "o-",
+            ms=4,
+            mfc="none",  # open, as the title's key says
+            lw=1.2,
+            zorder=3,
+            label=rf"$\beta$ = {beta:g}, $\gamma$ = {gamma:g}",
+        )
+        color = line.get_color()
+        ax.plot(
+            a,
+            smap.array("v_flutter_out_of_plane")[c],
+            "^--",
+            ms=5,
+            mfc="none",
+            lw=1.2,
+            color=color,
+            zorder=2.5,
+        )
+        for plane, marker in (("in_plane", "s"), ("out_of_plane", "D")):
+            other = np.array(
+                [pt.get(f"type_{plane}") in ("divergence", "fold") for pt in smap.points[c]]
+            )
+            if other.any():
+                v_plane = smap.array(f"v_cr_{plane}")[c]
+                ax.plot(
+                    a[other],
+                    v_plane[other],
+                    marker,
+                    ms=5 if marker == "s" else 4.5,
+                    mfc="none",
+                    color=color,
+                    zorder=3,
+                )
+        # The band joins flutter velocities only: v_cr jumps where the first loss
+        # becomes a divergence or a fold (alpha = pi), marked by a pale disc.
+        first = np.array([pt.get("type") == "flutter" for pt in smap.points[c]])
+        ax.plot(a, np.where(first, vcr[c], np.nan), "-", color=color, zorder=1, **_BAND)
+        if (~first).any():
+            ax.scatter(
+                a[~first],
+                vcr[c][~first],
+                s=(_BAND["lw"] + 2) ** 2,
+                linewidths=0,
+                color=color,
+                alpha=_BAND["alpha"],
+                zorder=1,
+            )
+    ax.set_xlabel(r"$\alpha/\pi$")
+    ax.set_ylabel(r"$v_{cr}$")
+    ax.set_title(
+        title
+        or rf"critical flow velocity, $\mu$ = {smap.base.mu:g}: in the plane ○ flutter, "
+        "□ earlier loss\n(divergence, fold); out of the plane △, ◇; band: the first of the two",
+        fontsize=10,
+    )
+    ax.grid(alpha=0.3)
+    handles, _ = ax.get_legend_handles_labels()
+    grey = "0.35"
+    handles += [
+        Line2D([], [], color=grey, ls="-", marker="o", ms=4, mfc="none", label="in the plane"),
+        Line2D([], [], color=grey, ls="--", marker="^", ms=5, mfc="none", label="out of the plane"),
+        Line2D([], [], color=grey, label=r"$v_{cr}$ in 3-D (first of the two)", **_BAND),
+    ]
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    if isinstance(ax.figure.get_layout_engine(), ConstrainedLayoutEngine):
+        ax.figure.legend(
+            handles=handles, loc="outside lower center", ncols=2, fontsize=9, frameon=False
+        )
+    else:  # "outside" needs the constrained layout
+        ax.legend(handles=handles, fontsize=9)
     return ax
 
 
