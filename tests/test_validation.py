@@ -46,6 +46,7 @@ CHEAP = [
     "external_damping",
     "hysteretic",
     "springs",
+    "out_of_plane",
 ]
 
 

@@ -33,6 +33,7 @@ _COST = {
     "convergence": 90,
     "fig07": 80,
     "fig06": 70,
+    "out_of_plane": 60,
     "fig11": 40,
     "fig12": 39,
     "fig05": 20,

@@ -1,0 +1,190 @@
+"""The motion out of the plane: a second computation, the symmetries, and the first instability.
+
+:mod:`fempipe.out_of_plane` linearises the motion out of the plane of a planar
+static state (README, "Out of the plane").  This case checks it four ways and
+reports what it finds:
+
+(a) **The straight pipe.**  Hanging (alpha = 0), and standing below buckling
+    (alpha = pi), a round straight pipe has no preferred plane: the
+    out-of-plane K, C, M (and the hysteretic stiffness) equal the in-plane
+    ones to round-off, and so do the spectra, on P3, sine and beam modes,
+    with every variant switched on.
+(b) **The buckled standing pipe** (alpha = pi, gamma above Greenhill's 7.837):
+    turning the buckled shape about the vertical costs nothing, so
+    lambda = 0 with the rotated static shape as eigenvector (w = eta^s,
+    psi = sin theta^s).  fempipe restores this null vector exactly (rank-one
+    correction); the residual ||K x|| of the uncorrected operator is its
+    discretisation error and must fall under refinement; the other
+    eigenvalues are stable, and equal the strong form's.
+(c) **An independent strong form.**  :mod:`fempipe.validation.lateral` solves
+    the fourth-order equation of the out-of-plane deflection w on C^1
+    spectral elements about the static state of ``solve_bvp``: the critical
+    velocities and flutter frequencies must agree to 1e-8 (absolute) at
+    alpha = pi/4, pi/2, 3pi/4 for the paper's case (mu = 0, 0.005) and for
+    Texier & Dorbolo's pipe, and the spectra of an inclined pipe with every
+    variant (springs' static forces in the axial force included) must agree.
+(d) **Convergence.**  The observed orders of the out-of-plane v_cr: h^2k for
+    P_k, N^-3 for the sine modes, N^-4 for the beam modes (those of the
+    planar problem).
+(e) **The finding.**  The out-of-plane v_cr against the in-plane one (the
+    paper's, Fig. 6) over alpha in [0, pi].
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import out_of_plane_runs as runs
+from .case import Case
+from .checks import CaseResult
+from .classical import _one_thread
+
+CASE = Case(
+    name="out_of_plane",
+    figure="Out of the plane (cf. Fig. 6)",
+    title="The motion out of the plane: strong form, symmetries and the first instability",
+    caption=(
+        "(a) Critical flow velocity of the paper's pipe (β = 0.142, γ = 18.9) against the "
+        "inclination α: in the plane (solid, the paper's problem) and out of the plane "
+        "(dashed), μ = 0 (blue) and μ = 0.005 (vermilion), FE with cubic elements; open black "
+        "circles: the out-of-plane v_cr of the independent strong form (spectral elements in "
+        "w about the solve_bvp static state). (b) Error of the out-of-plane v_cr (α = π/2, "
+        "μ = 0) against the number of unknowns, for FE P1, P2, P3 and the sine and beam "
+        "modes, against the strong form; the legend gives the last slope. At α = π (not "
+        "drawn) the straight standing pipe is buckled from v = 0 in every plane."
+    ),
+    paper_shows=(
+        "Fig. 6 and Sec. 4: the critical flow velocity v_cr(α) of the pipe, from the planar "
+        "linear problem (Eqs. (31b)-(33)); checked here against the motion out of the plane",
+    ),
+    requires=(
+        "identity_matrices_hanging",
+        "identity_spectrum_hanging",
+        "identity_matrices_standing",
+        "identity_spectrum_standing",
+        "neutral_eigenvalue",
+        "neutral_eigenvector",
+        "neutral_residual_order_P3",
+        "buckled_rest_stable",
+        "buckled_vs_strong",
+        "strong_neutral_mode",
+        "strong_converged",
+        "inclined_variants_vs_strong",
+        "order_P3",
+        "order_sine",
+        "planar_v_cr_is_first",
+    ),
+    not_checked=("the paper shows no out-of-plane result: its model is planar (Eq. (20))",),
+)
+
+
+@_one_thread
+def run(quick: bool = False) -> CaseResult:
+    """(a)-(e) of the module docstring."""
+    t0 = time.perf_counter()
+    ref = CASE.references
+    checks, tables, requires = [], [], []
+    c, t = runs.identity_checks(ref)
+    checks += c
+    tables += t
+    c, t = runs.buckled_checks(ref, quick)
+    checks += c
+    tables += t
+    c, t, req, strong = runs.agreement_checks(ref, quick)
+    checks += c
+    tables += t
+    requires += req
+    checks.append(runs.inclined_variants_check(ref))
+    key = ("paper", round(0.5 * math.pi, 12), 0.0)
+    c, t, req, order_curves = runs.order_checks(ref, quick, strong[key].v_cr)
+    checks += c
+    tables += t
+    requires += req
+    if not quick:
+        checks.append(runs.classical_check(ref))
+        requires.append("strong_vs_classical")
+    c, t, findings, explained, curves = runs.finding_checks(ref, quick)
+    checks += c
+    tables += t
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=tables,
+        findings=findings,
+        explained=explained,
+        requires=requires,
+        data={
+            "curves": curves,
+            "orders": order_curves,
+            "strong": {k: (s.v_cr, s.frequency) for k, s in strong.items()},
+            "paper_case": ref.value("paper_case"),
+        },
+    )
+
+
+# ---------------------------------------------------------------------------
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) v_cr(α) in and out of the plane; (b) convergence of the out-of-plane v_cr."""
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import NullFormatter
+
+    from .drawing import figure_panels, finish_figure
+
+    d = result.data
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
+    ax = axes[0]
+    colors = {0.0: "#0072B2", 0.005: "#D55E00"}
+    for mu, pts in d["curves"].items():
+        # The flutter onsets only: at alpha = pi the straight column is unstable from v = 0.
+        pts = [x for x in pts if x[1] > 0.0 and x[2] > 0.0]
+        a = np.degrees([x[0] for x in pts])
+        c = colors.get(mu, "0.4")
+        ax.plot(a, [x[1] for x in pts], "-", marker="o", ms=4, color=c, lw=1.4)
+        ax.plot(a, [x[2] for x in pts], "--", marker="s", ms=4, color=c, lw=1.4)
+    for (who, alpha, _mu), (v, _) in d["strong"].items():
+        if who == "paper":
+            ax.plot(np.degrees(alpha), v, "o", mfc="none", mec="k", ms=9, mew=1.2)
+    ax.set_xlim(-8.0, 188.0)
+    ax.set_xticks([0, 45, 90, 135, 180])
+    ax.set_xlabel("inclination α (degrees)")
+    ax.set_ylabel(r"$v_{cr}$")
+    ax.set_title("in and out of the plane", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax = axes[1]
+    styles = {"P1": "#009E73", "P2": "#CC79A7", "P3": "k", "sine": "#E69F00", "beam": "#56B4E9"}
+    handles = [
+        Line2D([], [], color="0.3", lw=1.4, label="in the plane"),
+        Line2D([], [], color="0.3", lw=1.4, ls="--", label="out of the plane"),
+        Line2D([], [], color="#0072B2", lw=1.4, label="μ = 0"),
+        Line2D([], [], color="#D55E00", lw=1.4, label="μ = 0.005"),
+        Line2D([], [], ls="", marker="o", mfc="none", mec="k", label="strong form"),
+    ]
+    for fam, (dofs, errs, slope) in d["orders"].items():
+        ax.loglog(dofs, errs, "-o", ms=4, color=styles.get(fam, "0.4"), lw=1.4)
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=styles.get(fam, "0.4"),
+                marker="o",
+                ms=4,
+                label=f"{fam} (slope {slope:.1f})",
+            )
+        )
+    # Minor ticks unlabelled: over less than a decade matplotlib labels them, overlapping.
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("unknowns")
+    ax.set_ylabel(r"$|v_{cr} - v_{ref}|$ out of the plane")
+    ax.set_title("convergence, α = π/2, μ = 0", fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    pc = d["paper_case"]
+    finish_figure(fig, CASE.title, parameters=f"β = {pc['beta']:g}, γ = {pc['gamma']:g}")
+    return fig
