@@ -65,15 +65,39 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "X_tip": ("static tip position X_g(1), down the plumb line", "L"),
     "Z_tip": ("static tip position Z_g(1), horizontal", "L"),
     "eta_tip": ("static lateral tip displacement eta(1)", "L"),
-    "v_cr": ("critical flow velocity (first loss of stability of the primary branch)", "1"),
-    "frequency": ("frequency Im(lambda) of the critical event", "1"),
+    "v_cr": (
+        "critical flow velocity (first loss of stability of the primary branch in three "
+        "dimensions, in the plane of the static state or out of it)",
+        "1",
+    ),
+    "frequency": ("frequency Im(lambda) of the critical event (in three dimensions)", "1"),
+    "v_cr_in_plane": (
+        "critical flow velocity in the plane of the static state (the paper's planar v_cr)",
+        "1",
+    ),
+    "v_cr_out_of_plane": (
+        "critical flow velocity of the motion out of the plane of the static state",
+        "1",
+    ),
+    "frequency_in_plane": ("frequency Im(lambda) of the critical event in the plane", "1"),
+    "frequency_out_of_plane": (
+        "frequency Im(lambda) of the critical event out of the plane",
+        "1",
+    ),
     "eigenvalue": ("k-th resolved eigenvalue lambda at one v (complex)", "1"),
     "lc_amplitude": ("limit-cycle amplitude (max - min) / 2 of eta(1)", "L"),
     "lc_period": ("limit-cycle period", "1"),
 }
 
 STATIC_QUANTITIES = ("theta_tip", "X_tip", "Z_tip", "eta_tip")
-CRITICAL_QUANTITIES = ("v_cr", "frequency")
+CRITICAL_QUANTITIES = (
+    "v_cr",
+    "frequency",
+    "v_cr_in_plane",
+    "frequency_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_out_of_plane",
+)
 CYCLE_QUANTITIES = ("lc_amplitude", "lc_period")
 
 #: Tolerances the quantities are computed to, relative to max(1, |Q|): below
@@ -173,6 +197,20 @@ class Quantity:
     seed : tuple, optional
         ``(disc, q0, qdot0, period)``: a limit cycle on another
         discretisation to start the shooting from (see :meth:`seeded`).
+    planar : bool
+        ``v_cr`` and ``frequency`` of the paper's planar model (the same
+        numbers as ``v_cr_in_plane`` and ``frequency_in_plane``) instead of
+        those of three dimensions; ``fempipe compare`` sets it for a user's
+        ``v_cr`` and ``frequency`` (its module docstring).
+
+    The critical quantities (:data:`CRITICAL_QUANTITIES`): ``v_cr`` and
+    ``frequency`` are those of the first loss of stability in three
+    dimensions, the earlier of the motion in the plane of the static state
+    and out of it (:func:`fempipe.stability.spatial_critical_velocity`);
+    ``*_in_plane`` those of the plane alone
+    (:func:`fempipe.stability.critical_velocity`), ``*_out_of_plane`` those
+    of the motion out of it (:func:`~fempipe.stability.critical_velocity` of
+    ``model.with_plane("out")``, the same static branch).
 
     Calling it on a discretisation returns the value (complex for
     ``eigenvalue``), or raises :class:`fempipe.errors.SolverError`.
@@ -184,6 +222,7 @@ class Quantity:
     mode: int = 1
     shoot_rtol: float = 1e-9
     seed: tuple | None = field(default=None, repr=False, compare=False)
+    planar: bool = False
 
     def __post_init__(self) -> None:
         if self.name not in QUANTITIES:
@@ -211,6 +250,8 @@ class Quantity:
     def describe(self) -> str:
         """One line: what is computed, at which v."""
         text, unit = QUANTITIES[self.name]
+        if self.planar and self.name in ("v_cr", "frequency"):
+            text = QUANTITIES[self.name + "_in_plane"][0]
         p = self.params
         if self.name in CRITICAL_QUANTITIES:
             where = f"over {p.v:g} <= v <= {self.v_max:g}"
@@ -227,15 +268,7 @@ class Quantity:
         if self.name in STATIC_QUANTITIES:
             return _static_tip(model, self.name)
         if self.name in CRITICAL_QUANTITIES:
-            from .stability import critical_velocity
-
-            res = critical_velocity(model, v_max=self.v_max, v_min=self.params.v)
-            if res.v_cr is None:
-                raise SolverError(
-                    f"the primary branch is stable over {self.params.v:g} <= v <= "
-                    f"{self.v_max:g} on {disc.name}: no v_cr in the range"
-                )
-            return float(res.v_cr if self.name == "v_cr" else res.critical.frequency)
+            return self._critical(model)
         if self.name == "eigenvalue":
             return _eigenvalue(model, self.mode)
         cycle = self.cycle(disc)
@@ -243,6 +276,29 @@ class Quantity:
             return float(cycle.period)
         lo, hi = cycle.tip["eta_tip"]
         return 0.5 * float(hi - lo)
+
+    def _critical(self, model) -> float:
+        """v_cr or the frequency of the critical event, in 3-D or in one plane."""
+        from .stability import critical_velocity, spatial_critical_velocity
+
+        name, plane = self.name, "3-D"
+        for suffix, which in (("_in_plane", "in"), ("_out_of_plane", "out")):
+            if name.endswith(suffix):
+                name, plane = name.removesuffix(suffix), which
+        if self.planar:
+            plane = "in"
+        kw = {"v_max": self.v_max, "v_min": self.params.v}
+        if plane == "3-D":
+            res = spatial_critical_velocity(model, **kw)
+        else:
+            res = critical_velocity(model.with_plane(plane), **kw)
+        if res.v_cr is None:
+            where = {"3-D": "", "in": " in its plane", "out": " out of its plane"}[plane]
+            raise SolverError(
+                f"the primary branch is stable{where} over {self.params.v:g} <= v <= "
+                f"{self.v_max:g} on {model.disc.name}: no v_cr in the range"
+            )
+        return float(res.v_cr if name == "v_cr" else res.critical.frequency)
 
     def cycle(self, disc):
         """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
@@ -289,6 +345,8 @@ class Quantity:
             out["mode"] = int(self.mode)
         if self.name in CYCLE_QUANTITIES:
             out["shoot_rtol"] = self.shoot_rtol
+        if self.planar and self.name in ("v_cr", "frequency"):
+            out["planar"] = True
         return out
 
 

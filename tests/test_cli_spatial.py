@@ -293,3 +293,56 @@ def test_stability_map_figure_shows_both_planes_and_the_first():
         assert not text_faults(ax.figure)
     finally:
         plt.close(ax.figure)
+
+
+# ---------------------------------------------------------------------------
+# convergence
+
+
+def test_convergence_of_each_plane_and_of_three_dimensions(capsys, tmp_path):
+    """alpha = pi/2, P3 on 2, 4, 8 elements: v_cr (3-D) is v_cr_out_of_plane member by
+    member, below v_cr_in_plane; each converges at P3's order."""
+    argv = ["convergence", "--alpha", "pi/2", "--v", "0,10", "--fe", "P3", "--elements", "2:8"]
+    runs = {}
+    for q in ("v_cr", "v_cr_in_plane", "v_cr_out_of_plane"):
+        out = tmp_path / q
+        runs[q] = d = run_json(
+            capsys, [*argv, "--quantity", q, "--json", "--quiet", "--out", str(out)]
+        )
+        assert d["quantity"] == q
+        cols = read_csv(out / "convergence.csv")
+        assert list(cols[q]) == d["series"][0]["values"]
+        assert f"{q}_error" in cols
+    vals = {q: d["series"][0]["values"] for q, d in runs.items()}
+    for v3, vi, vo in zip(
+        vals["v_cr"], vals["v_cr_in_plane"], vals["v_cr_out_of_plane"], strict=True
+    ):
+        assert v3 == pytest.approx(min(vi, vo), abs=1e-9)
+        assert vo < vi - 0.3
+    assert "three dimensions" in runs["v_cr"]["quantity_details"]["description"]
+    assert "out of the plane" in runs["v_cr_out_of_plane"]["quantity_details"]["description"]
+    ref = {q: d["reference"]["value"] for q, d in runs.items()}
+    assert ref["v_cr"] == pytest.approx(5.8208946, abs=2e-6)  # the P3:16 value of the README
+    assert ref["v_cr_in_plane"] == pytest.approx(6.2100953, abs=2e-6)
+
+
+def test_critical_quantities_coincide_on_the_hanging_pipe():
+    """alpha = 0: both planes the same problem; planar=True is the in-plane value."""
+    from fempipe.convergence import Quantity
+    from fempipe.discretization import Modal
+    from fempipe.params import Params
+
+    disc = Modal(4)
+    p = Params(alpha=0.0, v=0.0)
+    v = {
+        n: Quantity(n, p, v_max=10.0)(disc) for n in ("v_cr", "v_cr_in_plane", "v_cr_out_of_plane")
+    }
+    assert v["v_cr_in_plane"] == pytest.approx(v["v_cr_out_of_plane"], abs=1e-9)
+    assert v["v_cr"] == pytest.approx(v["v_cr_in_plane"], abs=1e-9)
+    f = [Quantity(n, p, v_max=10.0)(disc) for n in ("frequency_in_plane", "frequency_out_of_plane")]
+    assert f[0] == pytest.approx(f[1], abs=1e-8)
+    p = Params(alpha=math.pi / 2, v=0.0)
+    planar = Quantity("v_cr", p, v_max=10.0, planar=True)
+    assert planar(disc) == Quantity("v_cr_in_plane", p, v_max=10.0)(disc)
+    assert planar.to_dict()["planar"] is True
+    assert "planar" not in Quantity("v_cr", p, v_max=10.0).to_dict()

@@ -1,7 +1,8 @@
 """``fempipe convergence``: a convergence study of one quantity of the user's case.
 
 Computes ``--quantity`` (a static tip value at one v; v_cr or the frequency
-of the critical event over the ``--v`` range; the ``--mode``-th eigenvalue
+of the critical event over the ``--v`` range, in three dimensions or in one
+plane; the ``--mode``-th eigenvalue
 at one v; the amplitude or period of the limit cycle at one v) on FE meshes
 of doubling element counts (``--fe P1,P2,P3 --elements 2:64``) and on
 doubling numbers of modes (``--modal 2:32 --basis sine,beam``), forms the
@@ -10,6 +11,14 @@ the errors against the reference and the observed order with the points it
 used (:func:`fempipe.convergence.run_study`, whose docstring says how the
 reference is formed).  For the static tip values the strong form is also
 solved by collocation (scipy ``solve_bvp``) as an independent check.
+
+The critical quantities: ``v_cr`` and ``frequency`` are those of the first
+loss of stability of the round pipe in three dimensions, the earlier of the
+motion in the plane of the static state and out of it
+(:func:`fempipe.stability.spatial_critical_velocity`); ``v_cr_in_plane``,
+``frequency_in_plane`` those of the plane alone (the paper's planar v_cr),
+``v_cr_out_of_plane``, ``frequency_out_of_plane`` those of the motion out of
+the plane (:class:`fempipe.convergence.Quantity`).
 
 ``--json`` prints ``{"quantity", "reference": {"value", "error_estimate",
 "method", "family", "independent"}, "series": [{"family", "n", "dofs",
@@ -92,7 +101,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         required=True,
         choices=list(QUANTITIES),
         help="static tip values at one v (theta_tip, X_tip, Z_tip, eta_tip); v_cr and the "
-        "frequency of the critical event over the --v range; eigenvalue: the --mode-th "
+        "frequency of the critical event over the --v range (in three dimensions; "
+        "v_cr_in_plane, frequency_in_plane: in the plane of the static state, the paper's; "
+        "v_cr_out_of_plane, frequency_out_of_plane: out of it); eigenvalue: the --mode-th "
         "eigenvalue at one v; lc_amplitude, lc_period: the limit cycle at one v",
     )
     g.add_argument(
