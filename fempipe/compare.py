@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from .convergence import CYCLE_QUANTITIES, Quantity
+from .convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
 from .error_estimate import describe, estimate, expected_order, refine, refinement_ratio
 from .errors import SolverError
 
@@ -44,6 +44,9 @@ __all__ = [
 
 #: The quantities a user's value can be compared for (real numbers; the
 #: complex ``eigenvalue`` of :data:`fempipe.convergence.QUANTITIES` is not one).
+#: ``fempipe compare`` compares a user's ``v_cr`` and ``frequency`` with the
+#: planar model's (``Quantity(planar=True)``), the ``_in_plane`` and
+#: ``_out_of_plane`` forms with each plane's.
 COMPARABLE = (
     "v_cr",
     "frequency",
@@ -53,6 +56,10 @@ COMPARABLE = (
     "eta_tip",
     "lc_amplitude",
     "lc_period",
+    "v_cr_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_in_plane",
+    "frequency_out_of_plane",
 )
 
 
@@ -259,7 +266,7 @@ def estimate_description(
 
     floors = {}
     for name in quantities:
-        kw = {"v_max": 1.0} if name in ("v_cr", "frequency") else {}
+        kw = {"v_max": 1.0} if name in CRITICAL_QUANTITIES else {}
         floors[name] = Quantity(name, Params(), shoot_rtol=shoot_rtol, **kw).tolerance
     text = (
         "the solver tolerance of the quantity times max(1, |Q|): "

@@ -346,3 +346,32 @@ def test_critical_quantities_coincide_on_the_hanging_pipe():
     assert planar(disc) == Quantity("v_cr_in_plane", p, v_max=10.0)(disc)
     assert planar.to_dict()["planar"] is True
     assert "planar" not in Quantity("v_cr", p, v_max=10.0).to_dict()
+
+
+# ---------------------------------------------------------------------------
+# compare
+
+
+def test_compare_accepts_each_plane(capsys, tmp_path):
+    """v_cr_in_plane, v_cr_out_of_plane, frequency_out_of_plane as columns; a user's v_cr is
+    the planar model's, as before (the same number as v_cr_in_plane)."""
+    from fempipe.convergence import Quantity
+    from fempipe.discretization import Modal
+    from fempipe.params import Params
+
+    path = tmp_path / "user.csv"
+    path.write_text(
+        "alpha_deg,v_cr,v_cr_in_plane,v_cr_out_of_plane [1],frequency_out_of_plane [1/T]\n"
+        "90,6.24,6.24,5.85,14.4\n"
+    )
+    d = run_json(capsys, ["compare", str(path), "--modal", "4", "--json", "--quiet"])
+    rows = {r["quantity"]: r for r in d["rows"]}
+    assert list(rows) == ["v_cr", "v_cr_in_plane", "v_cr_out_of_plane", "frequency_out_of_plane"]
+    assert rows["v_cr"]["fempipe"] == rows["v_cr_in_plane"]["fempipe"]
+    assert rows["v_cr_out_of_plane"]["fempipe"] < rows["v_cr_in_plane"]["fempipe"] - 0.3
+    assert rows["frequency_out_of_plane"]["unit"] == "1/T"
+    p = Params(alpha=math.pi / 2, v=0.0)
+    lib = Quantity("v_cr_out_of_plane", p, v_max=15.0)(Modal(4))
+    assert rows["v_cr_out_of_plane"]["fempipe"] == pytest.approx(lib, abs=1e-12)
+    assert all(r["error_estimate"] is not None for r in d["rows"])
+    assert {"v_cr_in_plane", "v_cr_out_of_plane"} <= set(d["error_estimate"]["floors"])

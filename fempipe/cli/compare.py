@@ -25,7 +25,16 @@ Columns (:data:`COLUMNS`):
 * the quantities, one or more: ``v_cr``, ``frequency`` (Im lambda of the
   critical event, per unit tau), ``theta_tip`` (rad), ``X_tip``, ``Z_tip``,
   ``eta_tip`` (static tip values, divided by L), ``lc_amplitude`` (of
-  eta(1), L), ``lc_period`` (T); an empty cell: not given for that row;
+  eta(1), L), ``lc_period`` (T); an empty cell: not given for that row.
+  ``v_cr`` and ``frequency`` are compared, as they always were, with the
+  critical velocity of the paper's planar model, the motion in the plane of
+  the static state (what a planar code computes; the same numbers as
+  ``v_cr_in_plane``, ``frequency_in_plane``); ``v_cr_out_of_plane`` and
+  ``frequency_out_of_plane`` are those of the motion out of that plane
+  (:mod:`fempipe.out_of_plane`): the round pipe first loses stability at the
+  smaller of ``v_cr_in_plane`` and ``v_cr_out_of_plane``, which is
+  ``fempipe critical``'s and ``fempipe convergence``'s ``v_cr`` (README,
+  "Out of the plane");
 * the inclination ``alpha`` in rad (also ``pi/3``, ``60deg`` as for
   ``--alpha``) or ``alpha_deg`` in degrees, default 0;
 * dimensionless groups ``beta``, ``gamma``, ``mu`` (Eq. (19)) and the flow
@@ -36,7 +45,8 @@ Columns (:data:`COLUMNS`):
   (m/s^2, default 9.81), ``a`` (s, default 0) and the flow ``U`` (m/s),
   converted by :class:`fempipe.params.PipeSI` as the SI options are; a file
   is either dimensionless or SI (``alpha``/``alpha_deg`` belong to both);
-* the flow range of ``v_cr`` and ``frequency``: ``v_min`` (default 0),
+* the flow range of the critical quantities (``v_cr``, ``frequency`` and
+  their ``_in_plane``, ``_out_of_plane`` forms): ``v_min`` (default 0),
   ``v_max`` (default ``--v-max``, 15) or, SI, ``U_min``, ``U_max`` in m/s;
   ``v``/``U`` is then not needed.  The static tip values and the limit
   cycle are at the row's ``v`` (or ``U``), which they require;
@@ -91,7 +101,16 @@ DEFAULT_V_MAX = 15.0
 
 _QUANTITIES = ("v_cr", "frequency", "theta_tip", "X_tip", "Z_tip", "eta_tip")
 _QUANTITIES += ("lc_amplitude", "lc_period")
+_QUANTITIES += (
+    "v_cr_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_in_plane",
+    "frequency_out_of_plane",
+)
 _CRITICAL = ("v_cr", "frequency")
+_CRITICAL += ("v_cr_in_plane", "v_cr_out_of_plane", "frequency_in_plane", "frequency_out_of_plane")
+#: The user's v_cr and frequency are the planar model's (module docstring).
+_PLANAR = ("v_cr", "frequency")
 _DIMLESS = ("beta", "gamma", "mu", "v", "v_min", "v_max")
 _SI = ("length", "EI", "m", "M", "g", "a", "U", "U_min", "U_max")
 _SI_REQUIRED = ("length", "EI", "m", "M")
@@ -136,8 +155,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "file",
         metavar="FILE.csv",
-        help="the user's values: one case per row; columns: quantities (v_cr, frequency, "
-        "theta_tip, X_tip, Z_tip, eta_tip, lc_amplitude, lc_period), parameters (alpha or "
+        help="the user's values: one case per row; columns: quantities (v_cr, frequency "
+        "(in the plane, the paper's planar model), theta_tip, X_tip, Z_tip, eta_tip, "
+        "lc_amplitude, lc_period, v_cr_in_plane, v_cr_out_of_plane, frequency_in_plane, "
+        "frequency_out_of_plane), parameters (alpha or "
         "alpha_deg, beta, gamma, mu, v; or length, EI, m, M, g, a, U in SI), the flow range "
         "v_min, v_max (or U_min, U_max) of v_cr and frequency, label; '# ...' lines are "
         "comments (see README, 'fempipe compare')",
@@ -211,7 +232,13 @@ class Case:
 
         if name in _CRITICAL:
             lo, hi = self.v_range
-            return Quantity(name, replace(self.params, v=lo), v_max=hi, shoot_rtol=shoot_rtol)
+            return Quantity(
+                name,
+                replace(self.params, v=lo),
+                v_max=hi,
+                shoot_rtol=shoot_rtol,
+                planar=name in _PLANAR,
+            )
         return Quantity(name, self.params, shoot_rtol=shoot_rtol)
 
     def to_dict(self, quantity: str | None = None) -> dict:
@@ -761,8 +788,9 @@ def _print(result: dict) -> None:
         f"fempipe compare {result['file']}: {n} comparison{'s' if n != 1 else ''} on "
         f"{est['discretization']}; error estimate {est['formula']} from {est['refined']}"
     )
+    wq = max([12] + [len(r["quantity"]) for r in rows])
     print(
-        f"{'row':>4} {'quantity':<12} {'user':>15} {'fempipe':>17} {'difference':>11} "
+        f"{'row':>4} {'quantity':<{wq}} {'user':>15} {'fempipe':>17} {'difference':>11} "
         f"{'rel. diff.':>11} {'error est.':>10} {'resolved':>8}"
     )
     for r in rows:
@@ -771,7 +799,8 @@ def _print(result: dict) -> None:
         )
         resolved = {True: "yes", False: "no", None: "-"}[r["resolved"]]
         print(
-            f"{r['row']:>4} {r['quantity']:<12} {_fmt(r['user']):>15} {_fmt(r['fempipe']):>17} "
+            f"{r['row']:>4} {r['quantity']:<{wq}} {_fmt(r['user']):>15} "
+            f"{_fmt(r['fempipe']):>17} "
             f"{_fmt(r['difference'], '{:+.3e}'):>11} {rel:>11} "
             f"{_fmt(r['error_estimate'], '{:.1e}'):>10} {resolved:>8}"
         )

@@ -12,14 +12,19 @@ __all__ = ["plot_comparison"]
 
 #: Axis labels of the quantities (unit in brackets, as in the CSV files).
 LABELS = {
-    "v_cr": "v_cr [1]",
-    "frequency": "frequency Im λ [1/T]",
+    # fempipe compare: a user's v_cr and frequency are the planar model's (in the plane)
+    "v_cr": "v_cr (planar) [1]",
+    "frequency": "frequency Im λ (planar) [1/T]",
     "theta_tip": "θ(1) [rad]",
     "X_tip": "X_g(1) [L]",
     "Z_tip": "Z_g(1) [L]",
     "eta_tip": "η(1) [L]",
     "lc_amplitude": "limit-cycle amplitude of η(1) [L]",
     "lc_period": "limit-cycle period [T]",
+    "v_cr_in_plane": "v_cr in the plane [1]",
+    "v_cr_out_of_plane": "v_cr out of the plane [1]",
+    "frequency_in_plane": "frequency in the plane [1/T]",
+    "frequency_out_of_plane": "frequency out of the plane [1/T]",
 }
 
 _COLOR = "#0072B2"
