@@ -55,6 +55,30 @@ def _truncation(c: Check) -> re.Match | None:
     return _TRUNCATION.match(c.claim) if c.category == "paper" else None
 
 
+def _headline(suite: SuiteResult) -> list[str]:
+    """The round pipe's first instability, from the out-of-plane case and Fig. 6 (if run)."""
+    parts = [
+        o.result.data["headline"]
+        for o in suite.outcomes
+        if o.result is not None and o.result.data.get("headline")
+    ]
+    if not parts:
+        return []
+    return [
+        "## Headline: the round pipe first leaves the plane",
+        "",
+        "The paper, like every planar model, computes the flutter of the pipe in the plane of "
+        "its static deformation. A round pipe is free to leave that plane, and its motion out "
+        "of the plane (`fempipe.out_of_plane`, checked against an independent strong-form "
+        "solver to 1e-8) **loses stability first**: "
+        + "; ".join(parts)
+        + ". At α = 0, and on the straight standing pipe, the two planes coincide; the buckled "
+        "standing pipe is stable out of its plane apart from an exactly neutral mode, the "
+        "rotation of its shape about the vertical. See the cases `out_of_plane` and `fig06`.",
+        "",
+    ]
+
+
 def _findings(suite: SuiteResult) -> list[str]:
     """The disagreements with the paper first, then one table of the truncation errors."""
     lines = ["## Findings: where the converged model and the paper disagree", ""]
@@ -177,6 +201,7 @@ def render_report(
         "times of each case (summed over its parts where a case runs in parallel pieces), "
         "so they may add up to more than the wall time of the suite.",
         "",
+        *_headline(suite),
         *_findings(suite),
         "## Summary",
         "",

@@ -176,6 +176,11 @@ def _draw(name: str, module, result: CaseResult, out) -> tuple[str, ...]:
     return tuple(files)
 
 
+def _kept(result: CaseResult) -> dict:
+    """What of a case's data the report needs: its headline sentence, if it has one."""
+    return {"headline": result.data["headline"]} if "headline" in result.data else {}
+
+
 def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcome:
     """Draw the figure (if ``out``) and wrap the result without its arrays."""
     figures: tuple[str, ...] = ()
@@ -187,7 +192,7 @@ def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcom
             return CaseOutcome(
                 name,
                 "error",
-                result=replace(result, data={}),
+                result=replace(result, data=_kept(result)),
                 error="figure: " + traceback.format_exc(),
                 wall_time=time.perf_counter() - t0,
             )
@@ -195,7 +200,7 @@ def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcom
     return CaseOutcome(
         name,
         "ok",
-        result=replace(result, data={}),
+        result=replace(result, data=_kept(result)),
         figure=figures[0] if figures else None,
         figures=figures,
         wall_time=time.perf_counter() - t0,
