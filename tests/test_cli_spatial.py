@@ -375,3 +375,30 @@ def test_compare_accepts_each_plane(capsys, tmp_path):
     assert rows["v_cr_out_of_plane"]["fempipe"] == pytest.approx(lib, abs=1e-12)
     assert all(r["error_estimate"] is not None for r in d["rows"])
     assert {"v_cr_in_plane", "v_cr_out_of_plane"} <= set(d["error_estimate"]["floors"])
+
+
+@pytest.mark.parametrize("name", ["v_cr", "v_cr_in_plane", "frequency_out_of_plane"])
+def test_convergence_figure_title_fits(name):
+    """convergence.png: the longer descriptions of the 3-D quantities wrap inside the canvas."""
+    import numpy as np
+    from test_figures import text_faults
+
+    from fempipe.convergence import ConvergenceStudy, Quantity, Reference, Series
+    from fempipe.params import Params
+    from fempipe.plotting.convergence import plot_convergence
+
+    dofs = np.array([6, 12, 24])
+    errors = 1e-2 * (dofs / 6.0) ** -6.0
+    series = Series("fe-P3", np.array([2, 4, 8]), dofs, 5.8 + errors, errors, 6.0, (0, 1), 6.0)
+    study = ConvergenceStudy(
+        Quantity(name, Params(alpha=math.pi / 2, v=0.0), v_max=10.0),
+        Reference(5.8, 1e-8, "synthetic", "fe-P3"),
+        (series,),
+        1e-7,
+        0.0,
+    )
+    ax = plot_convergence(study)
+    try:
+        assert not text_faults(ax.figure)
+    finally:
+        plt.close(ax.figure)

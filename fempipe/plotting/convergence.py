@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 #: Colour-blind-safe colours (Okabe & Ito) and markers of the families.
@@ -72,8 +74,10 @@ def plot_convergence(study, ax=None, title: str | None = None):
     q = study.quantity
     if title is None and q is not None:
         p = q.params
+        # The description wrapped to the axes' width (the critical quantities'
+        # descriptions of three dimensions run to two lines).
         title = (
-            f"{q.describe()}\n"
+            textwrap.fill(q.describe(), 85) + "\n"
             rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, "
             rf"$\gamma$ = {p.gamma:g}, $\mu$ = {p.mu:g}; reference: {ref.family} (Richardson)"
         )
