@@ -12,7 +12,16 @@ from fempipe.cli import main
 from fempipe.stability import critical_velocity
 from fempipe.stability.hopf import EVENT_KEYS as HOPF_KEYS
 
-EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after"}
+EVENT_KEYS = {
+    "v",
+    "type",
+    "branch",
+    "frequency",
+    "mode",
+    "stable_before",
+    "stable_after",
+    "plane",
+}
 EVENT_TYPES = {"flutter", "divergence", "restabilization", "mode_restabilization", "fold"}
 
 
@@ -30,8 +39,14 @@ def test_critical_json_contract(capsys):
     assert first["type"] == "flutter" and first["mode"] == 2 and first["branch"] == "primary"
     assert first["stable_before"] is True and first["stable_after"] is False
     assert first["frequency"] > 0
-    lib = critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2)), 8.0)
-    assert d["v_cr"] == pytest.approx(lib.v_cr, abs=1e-12)
+    # v_cr is the first loss of stability in 3-D: out of the plane at alpha = pi/2
+    # (README, "Out of the plane"); the in-plane one is the planar library's.
+    model = PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2))
+    lib = critical_velocity(model, 8.0)
+    out = critical_velocity(model.with_plane("out"), 8.0)
+    assert first["plane"] == "out" and d["first_instability"]["plane"] == "out"
+    assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-12)
+    assert d["v_cr"] == d["v_cr_out_of_plane"] == pytest.approx(out.v_cr, abs=1e-9)
     assert d["discretization"]["n_elements"] == 16 and d["params"]["gamma"] == 18.9
 
 
@@ -43,9 +58,15 @@ def test_critical_alpha_pi_lists_start_events_and_branches(capsys, tmp_path):
         ["critical", "--alpha", "pi", "--v", "0,6", "--json", "--quiet", "--out", str(tmp_path)],
     )
     assert d["v_cr"] == 0.0
-    prim = [e for e in d["events"] if e["branch"] == "primary"]
+    prim = [e for e in d["events"] if e["branch"] == "primary" and e["plane"] == "in"]
     assert [e["type"] for e in prim] == ["divergence", "restabilization", "flutter"]
     assert prim[0]["v"] == 0.0
+    # The straight column: out of the plane the same events (every plane alike).
+    out = [e for e in d["events"] if e["branch"] == "primary" and e["plane"] == "out"]
+    assert [e["type"] for e in out] == [e["type"] for e in prim]
+    assert max(abs(a["v"] - b["v"]) for a, b in zip(out, prim, strict=True)) < 1e-9
+    # The buckled branches are stable out of their plane (the neutral rotation aside).
+    assert not [e for e in d["events"] if e["branch"] != "primary" and e["plane"] == "out"]
     folds = [e for e in d["events"] if e["type"] == "fold"]
     assert {e["branch"] for e in folds} == {"B1+", "B1-"}
     assert {b["name"] for b in d["branches"]} == {"primary", "B1+", "B1-"}

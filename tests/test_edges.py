@@ -105,15 +105,16 @@ def test_a_write_that_fails_part_way_leaves_the_directory_as_it_was(tmp_path, mo
 def _short_budget(monkeypatch, seen: dict, cap: int | None):
     import fempipe.stability
 
-    real = fempipe.stability.stability_analysis
+    for name in ("stability_analysis", "spatial_stability_analysis"):  # --planar and 3-D
+        real = getattr(fempipe.stability, name)
 
-    def analysis(model, **kw):
-        seen.update(kw)
-        if cap is not None:
-            kw["max_steps"] = cap
-        return real(model, **kw)
+        def analysis(model, real=real, **kw):
+            seen.update(kw)
+            if cap is not None:
+                kw["max_steps"] = cap
+            return real(model, **kw)
 
-    monkeypatch.setattr(fempipe.stability, "stability_analysis", analysis)
+        monkeypatch.setattr(fempipe.stability, name, analysis)
 
 
 def test_critical_step_budget_follows_the_range(monkeypatch, capsys):

@@ -74,11 +74,12 @@ def plot_spatial_branches(result, ax=None, title=None):
             color=c,
             lw=1.8,
         )
-        for branch, fill in ((b, "none"), (bo, c)):
+        for branch, out in ((b, False), (bo, True)):
             if branch is None:
                 continue
+            fill = c if out else "none"
             for ev in branch.events:
-                if ev.type == "fold" and fill != "none":
+                if ev.type == "fold" and out:  # the static branch's: drawn once
                     continue
                 j = int(np.argmin(np.abs(b.v - ev.v)))
                 ax.plot(
