@@ -8,16 +8,30 @@ from .stability import _EVENT_MARKERS, _axes, _edges
 
 
 def _out_unstable_at(branch_in, branch_out) -> np.ndarray:
-    """Per in-plane sample: unstable out of the plane, from the nearest out-of-plane sample.
+    """Per in-plane sample: unstable out of the plane.
 
-    The out-of-plane analysis samples the same branch (every other point and
-    its own insertions): each in-plane sample takes the verdict of the
-    out-of-plane sample nearest to it in (v, theta(1)).
+    The out-of-plane analysis samples the same branch (every third point and
+    its own insertions).  Where the branch is monotone in v, the verdict at
+    an in-plane sample is that after the last out-of-plane event below its v
+    (events are located to 1e-10); elsewhere (a branch through a fold) it is
+    that of the out-of-plane sample nearest in (v, theta(1)).
     """
     if branch_out is None or branch_out.v.size == 0:
         return np.zeros(branch_in.v.size, bool)
+    v = branch_in.v
+    dv = np.diff(v)
+    events = [e for e in branch_out.events if e.type != "fold" and not e.at_start]
+    if np.all(dv >= 0) or np.all(dv <= 0):
+        rising = v[-1] >= v[0]
+        order = sorted(events, key=lambda e: e.v, reverse=not rising)
+        start = branch_out.n_unstable[np.argmin(np.abs(branch_out.v - v[0]))] > 0
+        out = np.full(v.size, start)
+        for e in order:
+            past = v >= e.v if rising else v <= e.v
+            out[past] = not e.stable_after
+        return out
     d = np.hypot(
-        branch_in.v[:, None] - branch_out.v[None, :],
+        v[:, None] - branch_out.v[None, :],
         branch_in.theta_tip[:, None] - branch_out.theta_tip[None, :],
     )
     return branch_out.n_unstable[np.argmin(d, axis=1)] > 0
