@@ -59,7 +59,26 @@ CRITICAL_KEYS = {
     "branches",
     "n_spectra",
 }
-EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after"}
+#: What critical adds in three dimensions (README, "Out of the plane").
+SPATIAL_KEYS = {
+    "first_instability",
+    "v_cr_in_plane",
+    "frequency_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_out_of_plane",
+    "v_flutter_in_plane",
+    "v_flutter_out_of_plane",
+    "critical_in_plane",
+    "critical_out_of_plane",
+    "branches_out_of_plane",
+}
+SPATIAL_ERROR_KEYS = {
+    "v_cr_in_plane_error",
+    "v_cr_in_plane_refined",
+    "v_cr_out_of_plane_error",
+    "v_cr_out_of_plane_refined",
+}
+EVENT_KEYS = {"v", "type", "branch", "frequency", "mode", "stable_before", "stable_after", "plane"}
 SIMULATE_KEYS = {
     "params",
     "discretization",
@@ -274,12 +293,15 @@ def test_static_table_shows_plus_minus(capsys):
 # -------------------------------------------------------------- critical --
 @pytest.mark.parametrize("disc", [["--fe", "P2:4"], ["--modal", "3"]])
 def test_critical_v_cr_estimate_bounds_the_true_error(capsys, disc):
-    from fempipe.stability import critical_velocity
+    from fempipe.stability import spatial_critical_velocity
 
     argv = ["critical", *disc, "--alpha", "pi/2", "--v", "0,8", "--no-branches"]
     d = run_json(capsys, [*argv, "--error-estimate"])
-    ref = critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2)), 8.0)
+    ref = spatial_critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2)), 8.0)
     assert_bounds(d["v_cr_error"], d["v_cr"], ref.v_cr, "v_cr")
+    for plane in ("in_plane", "out_of_plane"):
+        key = "v_cr_" + plane
+        assert_bounds(d[key + "_error"], d[key], getattr(ref, plane).v_cr, key)
     c = d["critical"]
     assert_bounds(c["frequency_error"], c["frequency"], ref.critical.frequency, "frequency")
     assert c["v_error"] == d["v_cr_error"] == d["v_flutter_error"]
@@ -297,7 +319,7 @@ def test_critical_events_matched_by_kind_and_mode(capsys, tmp_path):
         ["critical", "--fe", "P2:4", "--alpha", "pi", "--v", "0,6", "--error-estimate"]
         + ["--out", str(tmp_path)],
     )
-    assert set(d) == CRITICAL_KEYS | {
+    assert set(d) == CRITICAL_KEYS | SPATIAL_KEYS | SPATIAL_ERROR_KEYS | {
         "v_cr_error",
         "v_cr_refined",
         "v_flutter_error",
@@ -336,7 +358,9 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
         return res
 
     monkeypatch.setattr(stability, "stability_analysis", fake)
-    argv = ["critical", "--modal", "3", "--alpha", "pi/2", "--v", "0,8", "--no-branches"]
+    # The planar analysis (the pairing of events is the same code in 3-D, by plane too).
+    argv = ["critical", "--planar", "--modal", "3", "--alpha", "pi/2", "--v", "0,8"]
+    argv += ["--no-branches"]
     d = run_json(capsys, [*argv, "--error-estimate"])
     assert calls == ["modal:3", "modal:7"]
     ev = d["events"][0]
@@ -349,7 +373,11 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
 
 def test_critical_without_the_option_is_unchanged(capsys):
     d = run_json(capsys, ["critical", "--modal", "3", "--alpha", "pi/2", "--v", "0,8"])
-    assert set(d) == CRITICAL_KEYS
+    assert set(d) == CRITICAL_KEYS | SPATIAL_KEYS
+    planar = run_json(
+        capsys, ["critical", "--modal", "3", "--alpha", "pi/2", "--v", "0,8"] + ["--planar"]
+    )
+    assert set(planar) == CRITICAL_KEYS
     # Flutter events also carry the Hopf keys (fempipe.stability.hopf.EVENT_KEYS).
     hopf = set(HOPF_KEYS)
     assert all(

@@ -276,11 +276,17 @@ def test_critical_json_has_the_hopf_keys(capsys):
     )
     assert d["critical"]["type"] == "flutter"
     for e in [d["critical"], *d["events"], *d["branches"][0]["events"]]:
-        if e["type"] == "flutter":
+        if e["type"] == "flutter" and e["plane"] == "in":
             assert set(EVENT_KEYS) <= set(e)
             assert e["criticality"] == "supercritical" and e["first_lyapunov_coefficient"] < 0
+        elif e["type"] == "flutter":
+            # out of the plane: the keys are there, null, with the reason
+            assert set(EVENT_KEYS) <= set(e) and e["criticality"] is None
+            assert "three-dimensional" in e["hopf_note"]
         else:
             assert "criticality" not in e
+    assert d["critical"]["plane"] == "out"  # alpha = 0.6: the pipe leaves its plane first
+    assert d["critical_in_plane"]["criticality"] == "supercritical"
 
 
 @pytest.mark.slow

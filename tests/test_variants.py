@@ -566,8 +566,11 @@ def test_cli_critical_with_damping_and_spring(capsys):
     p = Params(alpha=math.pi / 2, external_damping=0.1, springs=((50.0, 0.5),))
     lib = critical_velocity(PipeModel(FiniteElement(6, 2), p), 12.0)
     plain = critical_velocity(PipeModel(FiniteElement(6, 2), Params(alpha=math.pi / 2)), 12.0)
-    assert d["v_cr"] == pytest.approx(lib.v_cr, abs=1e-10)
+    assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-10)
     assert abs(lib.v_cr - plain.v_cr) > 1e-2
+    # v_cr is the 3-D one: the out-of-plane problem with the same variants
+    out = critical_velocity(PipeModel(FiniteElement(6, 2), p).with_plane("out"), 12.0)
+    assert d["v_cr"] == d["v_cr_out_of_plane"] == pytest.approx(out.v_cr, abs=1e-9)
 
 
 def test_cli_simulate_end_mass(capsys):
