@@ -259,7 +259,11 @@ def test_static_estimates_bound_the_true_error(capsys, disc, refined, order):
 def test_static_without_the_option_is_unchanged(capsys, tmp_path):
     d = run_json(capsys, ["static", "--fe", "P2:4", "--v", "0,1", "--out", str(tmp_path)])
     assert set(d) == {"points", "params", "discretization"}
-    assert all(set(p) == STATIC_POINT_KEYS for p in d["points"])
+    # stable is the 3-D verdict, with each plane's beside it (README, "Out of the plane")
+    keys = STATIC_POINT_KEYS | {"stable_in_plane", "stable_out_of_plane"}
+    assert all(set(p) == keys for p in d["points"])
+    planar = run_json(capsys, ["static", "--fe", "P2:4", "--v", "0,1", "--planar"])
+    assert all(set(p) == STATIC_POINT_KEYS for p in planar["points"])
     header = (tmp_path / "static.csv").read_text().splitlines()[0]
     assert "_error" not in header and "_refined" not in header
 

@@ -639,7 +639,10 @@ def test_cli_stability_map_passes_the_variants(capsys):
 
     p = Params(alpha=math.pi / 2, end_mass=0.2, external_damping=0.5, springs=((20.0, 0.5),))
     lib = critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2)
-    assert d["points"][0]["v_cr"] == pytest.approx(lib.v_cr, abs=1e-8)
+    assert d["points"][0]["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-8)
+    # the map's v_cr is the first loss in 3-D: out of the plane, with the same variants
+    out = critical_velocity(PipeModel(Modal(3), p).with_plane("out"), 10.0, ds_max=0.2)
+    assert d["points"][0]["v_cr"] == pytest.approx(out.v_cr, abs=1e-8)
 
 
 @pytest.mark.parametrize("disc_name", DISCS)

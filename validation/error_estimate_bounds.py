@@ -210,7 +210,7 @@ def critical_rows(alphas, discretizations, v_max: float = 8.0, n_reference: int 
         for name in discretizations:
             d = cli_json(
                 ["critical", *_disc_args(name), "--alpha", repr(alpha), "--v", f"0,{v_max:g}"]
-                + ["--no-branches", "--error-estimate"]
+                + ["--no-branches", "--error-estimate", "--planar"]
             )
             for k, (value, err, fine) in _critical_quantities(d, _standing(alpha)).items():
                 rows.append(
