@@ -389,7 +389,6 @@ def plot(result: CaseResult, fig=None):
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.5)
     a = d["alphas"] / np.pi
-    reference = f"β = {BASE_BETA:g}, γ = {BASE_GAMMA:g}"
     for ax, fam, kinds, sym, fixed, outs, out_kinds in (
         (
             axes[0],
@@ -436,12 +435,11 @@ def plot(result: CaseResult, fig=None):
                 ax.plot(a[~flutter], v[~flutter], "D", ms=7, mfc="none", mew=1.5, color=color)
         for n, ls in ((3, "--"), (4, ":")):
             ax.plot(
-                a, d["modal"][f"N = {n}"], ls, color="0.45", lw=1.2, label=f"N = {n} ({reference})"
+                a, d["modal"][f"N = {n}"], ls, color="0.45", lw=1.2, label=f"N = {n} (reference)"
             )
         if folds:
             ax.plot([], [], "D", ms=7, mfc="none", mew=1.5, color="0.3", label="fold, not flutter")
         if outs:
-            ax.plot([], [], "o-", ms=3.5, lw=1.4, color="0.3", label="in the plane")
             ax.plot([], [], "^-.", ms=4, mfc="none", lw=0.9, color="0.3", label="out of the plane")
         ax.set_xlabel(r"$\alpha / \pi$")
         ax.set_ylabel(r"$v_{cr}$")
