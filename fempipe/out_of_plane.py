@@ -79,7 +79,7 @@ import scipy.sparse as sp
 
 from .operators import PipeModel
 
-__all__ = ["OutOfPlaneMatrices", "OutOfPlaneModel", "OutOfPlaneOperators", "out_of_plane_model"]
+__all__ = ["OutOfPlaneMatrices", "OutOfPlaneModel", "OutOfPlaneOperators"]
 
 
 def _dense(A) -> np.ndarray:
@@ -353,15 +353,9 @@ class OutOfPlaneModel(PipeModel):
         return m.K, m.C, m.M
 
     def hysteretic_stiffness(self, q: np.ndarray) -> np.ndarray:
-        return self.operators.material_bending(self.operators.state(q))
+        ops = self.operators
+        return ops.material_bending(ops.state(q))
 
     def rate_terms(self, q, qdot, qddot) -> np.ndarray:
         _, C, M = self.linearization(q)
         return C @ np.asarray(qdot) + M @ np.asarray(qddot)
-
-
-def out_of_plane_model(model: PipeModel) -> OutOfPlaneModel:
-    """The out-of-plane model of ``model``'s pipe (same discretisation and parameters)."""
-    if isinstance(model, OutOfPlaneModel):
-        return model
-    return model.with_plane("out")

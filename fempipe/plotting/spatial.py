@@ -66,28 +66,14 @@ def plot_spatial_branches(result, ax=None, title=None):
         unstable_in = b.n_unstable > 0
         unstable_out = _out_unstable_at(b, bo) & ~unstable_in
         stable = ~unstable_in & ~unstable_out
-        ax.plot(
-            b.v,
-            np.where(stable | _edges(stable), b.theta_tip, np.nan),
-            "-",
-            color=c,
-            lw=1.3,
-            label=b.name,
-        )
-        ax.plot(
-            b.v,
-            np.where(unstable_in | _edges(unstable_in), b.theta_tip, np.nan),
-            "--",
-            color=c,
-            lw=1.3,
-        )
-        ax.plot(
-            b.v,
-            np.where(unstable_out | _edges(unstable_out), b.theta_tip, np.nan),
-            ":",
-            color=c,
-            lw=1.8,
-        )
+        # Each piece joined to its neighbours, so that the styles meet.
+        for mask, ls, lw, label in (
+            (stable, "-", 1.3, b.name),
+            (unstable_in, "--", 1.3, None),
+            (unstable_out, ":", 1.8, None),
+        ):
+            y = np.where(mask | _edges(mask), b.theta_tip, np.nan)
+            ax.plot(b.v, y, ls, color=c, lw=lw, label=label)
         for branch, out in ((b, False), (bo, True)):
             if branch is None:
                 continue

@@ -45,9 +45,6 @@ class _ChunkedBranch:
         self.special: list = []
         self.end_reason = "stop"
         self._next = None
-        # The straight pipe at every point (alpha = 0 or pi, no branch point):
-        # set by follow().
-        self.straight = False
         if branch is not None:
             self._add(branch)
 
@@ -66,7 +63,6 @@ class _ChunkedBranch:
         kw = {"ds": min(0.05, ds_max), "ds_max": ds_max, "max_steps": max_steps}
         if (q0 is None or not np.any(q0)) and _straight_without_branch_points(model, lo, hi, kw):
             q = np.zeros(model.n)
-            self.straight = True
 
             def advance(piece_start, tangent):
                 v_a = piece_start[0]
@@ -113,7 +109,7 @@ class _ChunkedBranch:
 
     def is_straight(self) -> bool:
         """Whether every point so far is the straight pipe theta = 0 (exactly)."""
-        return self.straight or (bool(self.points) and not any(np.any(p.q) for p in self.points))
+        return bool(self.points) and not any(np.any(p.q) for p in self.points)
 
     @property
     def folds(self) -> list:
@@ -154,7 +150,7 @@ STRAIGHT_STEP = 4.0
 
 
 #: Continuation points per out-of-plane sample when the in-plane analysis
-#: runs on the same branch (:func:`_run_planes`).  The events are located by
+#: runs on the same branch (:func:`analyse_planes`).  The events are located by
 #: Brent's method between samples whatever their spacing, the tracker inserts
 #: states where the match is unsure and the peak check catches a real part
 #: that touches zero between samples; measured in tests/test_spatial.py:
@@ -304,25 +300,26 @@ def stability_analysis(
     NewtonError
         If the static state cannot be followed (naming v and the residual).
     """
-    planes = _run_planes(
+    planes = analyse_planes(
         [model],
-        v_min,
-        v_max,
-        follow_bifurcations,
-        max_depth,
-        q0,
-        ds_max,
-        max_steps,
-        method,
-        tolerance,
-        stop_at_first,
-        callback,
+        v_min=v_min,
+        v_max=v_max,
+        follow_bifurcations=follow_bifurcations,
+        max_depth=max_depth,
+        q0=q0,
+        ds_max=ds_max,
+        max_steps=max_steps,
+        method=method,
+        tolerance=tolerance,
+        stop_at_first=stop_at_first,
+        callback=callback,
     )
     return planes[model.plane]
 
 
-def _run_planes(
+def analyse_planes(
     models: list[PipeModel],
+    *,
     v_min: float,
     v_max: float,
     follow_bifurcations: bool,
@@ -399,11 +396,10 @@ def _run_planes(
             for sign, kid in zip("+-", kids, strict=True):
                 kname = f"B{k}{sign}" if name == "primary" else f"{name}.B{k}{sign}"
                 chunked = _ChunkedBranch(kid)
+                born = parents[model.plane].refined_bifurcation(bp.value)
                 anas: dict = {}
                 for m in models:
-                    parent = parents[m.plane]
-                    anas[m.plane] = ka = analyse(m, chunked, kname, False, parent, anas)
-                    born = parents[models[0].plane].refined_bifurcation(bp.value)
+                    anas[m.plane] = ka = analyse(m, chunked, kname, False, parents[m.plane], anas)
                     results[m.plane].append(ka.finish(name, born))
                     n_spectra[m.plane] += ka.path.n_spectra
                 if depth < max_depth:

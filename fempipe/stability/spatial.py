@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..operators import PipeModel
-from .analysis import _run_planes
+from .analysis import analyse_planes
 from .events import StabilityEvent, StabilityResult
 from .linear import RESOLUTION_TOL, single_blas
 
@@ -144,19 +144,19 @@ def spatial_stability_analysis(
     out-of-plane analysis runs along the same points.
     """
     planar = model.with_plane("in")
-    planes = _run_planes(
+    planes = analyse_planes(
         [planar, planar.with_plane("out")],
-        v_min,
-        v_max,
-        follow_bifurcations,
-        max_depth,
-        q0,
-        ds_max,
-        max_steps,
-        method,
-        tolerance,
-        stop_at_first,
-        callback,
+        v_min=v_min,
+        v_max=v_max,
+        follow_bifurcations=follow_bifurcations,
+        max_depth=max_depth,
+        q0=q0,
+        ds_max=ds_max,
+        max_steps=max_steps,
+        method=method,
+        tolerance=tolerance,
+        stop_at_first=stop_at_first,
+        callback=callback,
     )
     return SpatialStability(in_plane=planes["in"], out_of_plane=planes["out"])
 
