@@ -13,51 +13,49 @@ machine; ``fempipe bench --only startup``) until a computation needs them.
 from __future__ import annotations
 
 import importlib
-import sys
-import types
 from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
 #: public name -> submodule that defines it
 _LAZY: dict[str, str] = {
-    "FiniteElement": "discretization",
-    "Modal": "discretization",
-    "parse_discretization": "discretization",
-    "ParamError": "errors",
-    "SolverError": "errors",
-    "shape": "kinematics",
-    "tip_values": "kinematics",
-    "PipeModel": "operators",
-    "OutOfPlaneModel": "out_of_plane",
-    "Params": "params",
-    "PipeSI": "params",
-    "critical_velocity": "stability",
-    "spectrum": "stability",
-    "stability_analysis": "stability",
-    "spatial_critical_velocity": "stability",
-    "spatial_stability_analysis": "stability",
-    "NewtonError": "static",
-    "continuation": "static",
-    "solve_path": "static",
-    "solve_static": "static",
-    "switch_branch": "static",
+    "FiniteElement": "model.discretization",
+    "Modal": "model.discretization",
+    "parse_discretization": "model.discretization",
+    "ParamError": "core.errors",
+    "SolverError": "core.errors",
+    "shape": "model.kinematics",
+    "tip_values": "model.kinematics",
+    "PipeModel": "model.operators",
+    "OutOfPlaneModel": "model.out_of_plane",
+    "Params": "model.params",
+    "PipeSI": "model.params",
+    "critical_velocity": "analyses.stability",
+    "spectrum": "analyses.stability",
+    "stability_analysis": "analyses.stability",
+    "spatial_critical_velocity": "analyses.stability",
+    "spatial_stability_analysis": "analyses.stability",
+    "NewtonError": "analyses.statics",
+    "continuation": "analyses.statics",
+    "solve_path": "analyses.statics",
+    "solve_static": "analyses.statics",
+    "switch_branch": "analyses.statics",
 }
 
-#: Submodules that ``import fempipe`` used to load eagerly, so that
-#: ``import fempipe; fempipe.static.solve_static`` keeps working.
+#: The layer subpackages, loaded on first attribute access
+#: (``import fempipe; fempipe.analyses.statics.solve_static``).
 _SUBMODULES = frozenset(
     {
-        "discretization",
-        "equilibrium",
-        "errors",
-        "kinematics",
-        "operators",
-        "parallel",
-        "params",
-        "quadrature",
-        "stability",
-        "static",
+        "core",
+        "model",
+        "solvers",
+        "analyses",
+        "studies",
+        "io",
+        "plotting",
+        "validation",
+        "bench",
+        "cli",
     }
 )
 
@@ -86,20 +84,26 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
-    from .discretization import FiniteElement, Modal, parse_discretization
-    from .errors import ParamError, SolverError
-    from .kinematics import shape, tip_values
-    from .operators import PipeModel
-    from .out_of_plane import OutOfPlaneModel
-    from .params import Params, PipeSI
-    from .stability import (
+    from fempipe.analyses.stability import (
         critical_velocity,
         spatial_critical_velocity,
         spatial_stability_analysis,
         spectrum,
         stability_analysis,
     )
-    from .static import NewtonError, continuation, solve_path, solve_static, switch_branch
+    from fempipe.analyses.statics import (
+        NewtonError,
+        continuation,
+        solve_path,
+        solve_static,
+        switch_branch,
+    )
+    from fempipe.core.errors import ParamError, SolverError
+    from fempipe.model.discretization import FiniteElement, Modal, parse_discretization
+    from fempipe.model.kinematics import shape, tip_values
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.out_of_plane import OutOfPlaneModel
+    from fempipe.model.params import Params, PipeSI
 
 
 def __getattr__(name: str) -> object:
@@ -116,22 +120,3 @@ def __getattr__(name: str) -> object:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__) | _SUBMODULES)
-
-
-class _Package(types.ModuleType):
-    """The package's module type: a public name is never shadowed by a submodule.
-
-    ``fempipe.continuation`` is the function of :mod:`fempipe.static`, but
-    there is also a submodule ``fempipe/continuation.py``; importing it makes
-    the import system bind it on the package (``setattr``), which would hide
-    the function from :func:`__getattr__`.  The eager ``__init__`` bound the
-    function last; this keeps that.
-    """
-
-    def __setattr__(self, name: str, value: object) -> None:
-        if name in _LAZY and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package

@@ -21,8 +21,9 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, critical_velocity, tip_values
+from fempipe.analyses.statics import sagged_state, solve_static
 from fempipe.cli import main
-from fempipe.discretization import (
+from fempipe.model.discretization import (
     EXPECTED_ORDER,
     Discretization,
     beam_mode_slopes,
@@ -30,9 +31,8 @@ from fempipe.discretization import (
     discretization_from_name,
     parse_discretization,
 )
-from fempipe.params import PAPER_CASE
-from fempipe.quadrature import LineQuadrature
-from fempipe.static import sagged_state, solve_static
+from fempipe.model.params import PAPER_CASE
+from fempipe.model.quadrature import LineQuadrature
 
 #: Blevins, Formulas for Natural Frequency and Mode Shape, Table 8-1
 #: (clamped-free beam), lambda_1..lambda_4.
@@ -46,7 +46,7 @@ CURVED = Params(alpha=math.pi / 2, v=3.0, **PAPER_CASE)
 def _one_blas_thread():
     """The dense modal Jacobians (n_q x N products) are 50x slower with threaded
     BLAS on a loaded 2-core machine (measured at N = 32); results are unchanged."""
-    from fempipe.parallel import single_blas_thread
+    from fempipe.core.parallel import single_blas_thread
 
     with single_blas_thread():
         yield
@@ -237,7 +237,7 @@ def test_parse_discretization_basis():
 
 
 def test_code_that_refines_or_relabels_a_modal_basis_keeps_it():
-    from fempipe.bench_dynamics import _disc
+    from fempipe.bench.dynamics import _disc
     from fempipe.cli.reporting import describe
     from fempipe.validation.dynamic_runs import _disc_from_spec, modal_label
     from fempipe.validation.static_shapes import refined
@@ -254,7 +254,7 @@ def test_code_that_refines_or_relabels_a_modal_basis_keeps_it():
 
 def test_point_store_of_an_older_sine_run_still_resumes(tmp_path):
     """A bifurcation store written before Modal.to_dict had "basis" is a sine-mode run."""
-    from fempipe.bifurcation import PointStore
+    from fempipe.analyses.bifurcation import PointStore
 
     manifest = {"discretization": Modal(2).to_dict(), "values": [1.0]}
     old = json.loads(json.dumps(manifest))
@@ -270,8 +270,8 @@ def test_point_store_of_an_older_sine_run_still_resumes(tmp_path):
 def test_linear_frequencies_at_rest_are_exact():
     """v = gamma = 0: the beam basis holds the exact modes, omega_r = lambda_r^2 for
     all N modes (the sine basis misses its N-th by 7-9 %)."""
-    from fempipe.stability import spectrum
-    from fempipe.stability.linear import cantilever_frequencies, resolution
+    from fempipe.analyses.stability import spectrum
+    from fempipe.analyses.stability.linear import cantilever_frequencies, resolution
 
     for n in (3, 6, 12):
         res = resolution(Modal(n, basis="beam"))
@@ -437,7 +437,7 @@ def test_limit_cycle_on_four_beam_modes():
     within 4.2e-4 of the amplitude of eta_tip (the sine modes: 6.4e-3) and 2e-4 of
     the period of the same cycle on the other discretisation, FE P5:4 (7e-8 and
     3e-8 from P3:32 at shoot_rtol = 1e-10)."""
-    from fempipe.limit_cycle import find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
 
     p = Params(alpha=0.0, v=10.0, **PAPER_CASE)
     fe = find_attractor(PipeModel(FiniteElement(4, 5), p))
@@ -453,7 +453,7 @@ def test_limit_cycle_on_four_beam_modes():
 def test_limit_cycle_converges_on_beam_modes():
     """alpha = 0, v = 10 (paper case): the flutter limit cycle on N = 4..8 beam modes
     approaches the P3:16 amplitude eta_tip (P3:8 agrees to 4e-6)."""
-    from fempipe.limit_cycle import find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
 
     p = Params(alpha=0.0, v=10.0, **PAPER_CASE)
 

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from processes import alive, children, needs_proc
 
-import fempipe.bifurcation as bif
+import fempipe.analyses.bifurcation as bif
 from fempipe import Modal, Params, PipeModel
-from fempipe.bifurcation import PointStore, bifurcation_diagram, sweep
+from fempipe.analyses.bifurcation import PointStore, bifurcation_diagram, sweep
 
 # Two sine modes on a coarse quadrature: the cheapest model that flutters
 # (v_cr ~ 6 at alpha = 0), so sweeps take seconds.
@@ -74,8 +74,8 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
         f"""
         import sys
         from fempipe import Modal, Params, PipeModel
-        from fempipe.bifurcation import bifurcation_diagram
-        from fempipe.parallel import Interrupted, interruptible
+        from fempipe.analyses.bifurcation import bifurcation_diagram
+        from fempipe.core.parallel import Interrupted, interruptible
         m = PipeModel(Modal(2, n_cells=8), Params(alpha=0.0))
         try:
             with interruptible():

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from fempipe.params import Params
+from fempipe.model.params import Params
 from fempipe.validation.classical import (
     BeamGalerkin,
     StraightPipe,

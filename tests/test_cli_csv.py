@@ -147,7 +147,7 @@ def test_stability_map_csv_si_pipe(tmp_path, capsys):
 def test_tip_csv(tmp_path, capsys):
     """tip.csv against the trajectory's VTU frames (one per accepted step here) and the
     step count of the JSON: the frames' tip point is the same state at the same tau."""
-    from fempipe.trajectory_io import read_trajectory
+    from fempipe.io.trajectory import read_trajectory
 
     argv = ["simulate", "--modal", "3", "--v", "3", "--alpha", "pi/2", "--t-max", "1"]
     out, header = _run(tmp_path, capsys, [*argv, "--no-shooting"], "tip.csv")

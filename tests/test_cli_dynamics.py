@@ -31,7 +31,7 @@ def test_simulate_json_contract(capsys):
     assert all(len(v) == 2 and v[0] <= v[1] for v in d["tip"].values())
     # the library gives the same cycle
     from fempipe import Modal, Params, PipeModel
-    from fempipe.limit_cycle import find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
 
     att = find_attractor(PipeModel(Modal(2), Params(v=9.0)))
     assert d["period"] == pytest.approx(att.period, rel=1e-6)
@@ -77,7 +77,7 @@ def test_simulate_out_files(tmp_path, capsys):
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "simulate.json").read_text())["period"] == d["period"]
     # The trajectory reads back with meshio: line cells, theta and velocity per point.
-    from fempipe.trajectory_io import read_trajectory
+    from fempipe.io.trajectory import read_trajectory
 
     times, meshes = read_trajectory(out / "trajectory.pvd")
     assert len(meshes) == times.size > 10 and np.all(np.diff(times) > 0)
@@ -216,7 +216,7 @@ def test_bifurcation_panels_name_the_papers_panel_only_for_the_papers_case():
     import math
 
     from fempipe.cli.bifurcation import _paper_panel
-    from fempipe.params import PAPER_CASE
+    from fempipe.model.params import PAPER_CASE
 
     p = dict(PAPER_CASE, end_mass=0.0, springs=[])
     keys = ("eta_tip", "X_tip", "Z_tip")
@@ -238,13 +238,13 @@ def test_bifurcation_panels_name_the_papers_panel_only_for_the_papers_case():
 
 def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypatch, capsys):
     """A failed sweep ends with exit 1 and one line; with --out it says a rerun resumes."""
-    import fempipe.bifurcation
-    from fempipe.errors import SolverError
+    import fempipe.analyses.bifurcation
+    from fempipe.core.errors import SolverError
 
     def fail(*args, **kwargs):
         raise SolverError("integration failed at v = 9")
 
-    monkeypatch.setattr(fempipe.bifurcation, "bifurcation_diagram", fail)
+    monkeypatch.setattr(fempipe.analyses.bifurcation, "bifurcation_diagram", fail)
     out = tmp_path / "run"
     code = main(
         ["bifurcation", "--method", "sweep", *CHEAP, "--v", "8,9", "--out", str(out), "--quiet"]

@@ -48,22 +48,22 @@ class ComputeStartedError(Exception):
 @pytest.fixture
 def no_compute(monkeypatch):
     """Every solver entry point the subcommands call fails the test if reached."""
-    import fempipe.bifurcation
-    import fempipe.limit_cycle
-    import fempipe.stability
-    import fempipe.static
+    import fempipe.analyses.bifurcation
+    import fempipe.analyses.limit_cycle
+    import fempipe.analyses.stability
+    import fempipe.analyses.statics
 
     def computed(*args, **kwargs):
         raise ComputeStartedError
 
     for module, name in (
-        (fempipe.static, "solve_path"),
-        (fempipe.static, "solve_static"),
-        (fempipe.stability, "root_locus"),
-        (fempipe.stability, "stability_analysis"),
-        (fempipe.stability, "stability_map"),
-        (fempipe.limit_cycle, "find_attractor"),
-        (fempipe.bifurcation, "bifurcation_diagram"),
+        (fempipe.analyses.statics, "solve_path"),
+        (fempipe.analyses.statics, "solve_static"),
+        (fempipe.analyses.stability, "root_locus"),
+        (fempipe.analyses.stability, "stability_analysis"),
+        (fempipe.analyses.stability, "stability_map"),
+        (fempipe.analyses.limit_cycle, "find_attractor"),
+        (fempipe.analyses.bifurcation, "bifurcation_diagram"),
     ):
         monkeypatch.setattr(module, name, computed)
 
@@ -191,13 +191,13 @@ def test_a_subcommand_that_fails_to_import_fails_loudly(monkeypatch):
 
 def test_every_solver_failure_exits_1_with_one_line(monkeypatch, capsys):
     """A SolverError of any solver is caught once, in main."""
-    import fempipe.limit_cycle
-    from fempipe.errors import SolverError
+    import fempipe.analyses.limit_cycle
+    from fempipe.core.errors import SolverError
 
     def fail(*args, **kwargs):
         raise SolverError("shooting did not converge\n  at v = 9")
 
-    monkeypatch.setattr(fempipe.limit_cycle, "find_attractor", fail)
+    monkeypatch.setattr(fempipe.analyses.limit_cycle, "find_attractor", fail)
     code, out, err = run(["simulate", "--modal", "2", "--v", "9"], capsys)
     assert code == 1 and out == ""
     assert err.strip().splitlines() == [
@@ -207,13 +207,13 @@ def test_every_solver_failure_exits_1_with_one_line(monkeypatch, capsys):
 
 @pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_sigterm_and_sigint_end_the_command_with_one_line(signum, code, monkeypatch, capsys):
-    import fempipe.static
+    import fempipe.analyses.statics
 
     def interrupted(*args, **kwargs):
         os.kill(os.getpid(), signum)
         raise AssertionError("the signal did not interrupt")  # pragma: no cover
 
-    monkeypatch.setattr(fempipe.static, "solve_path", interrupted)
+    monkeypatch.setattr(fempipe.analyses.statics, "solve_path", interrupted)
     got, out, err = run(["static", "--v", "0,1"], capsys)
     assert got == code and out == ""
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -2,7 +2,7 @@
 
 The pipe is round: beside the motion in the plane of its static state (the
 paper's Eq. (32)) each command analyses the motion out of it
-(:mod:`fempipe.out_of_plane`), and its verdicts and critical velocities are
+(:mod:`fempipe.model.out_of_plane`), and its verdicts and critical velocities are
 those of three dimensions; ``--planar`` gives the paper's planar output as
 before.  Small discretisations (four sine modes, P3:8) keep each run to
 seconds.  The paper's case at alpha = pi/2 loses stability out of the plane
@@ -114,11 +114,11 @@ def test_argand_marks_the_out_of_plane_loci():
     not drawn again where they are the in-plane loci (alpha = 0), which the title says."""
     from test_figures import text_faults
 
-    from fempipe.discretization import Modal
-    from fempipe.operators import PipeModel
-    from fempipe.params import Params
+    from fempipe.analyses.stability import spatial_root_locus
+    from fempipe.model.discretization import Modal
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
     from fempipe.plotting.stability import plot_argand
-    from fempipe.stability import spatial_root_locus
 
     values = [0.0, 2.0, 4.0, 6.0]
     loci = spatial_root_locus(PipeModel(Modal(4), Params(alpha=math.pi / 2)), values, n_modes=3)
@@ -213,11 +213,11 @@ def test_shapes_tell_the_out_of_plane_instability():
 
 
 def _shapes(values):
-    from fempipe.discretization import Modal
-    from fempipe.kinematics import shape
-    from fempipe.operators import PipeModel
-    from fempipe.params import Params
-    from fempipe.static import solve_path
+    from fempipe.analyses.statics import solve_path
+    from fempipe.model.discretization import Modal
+    from fempipe.model.kinematics import shape
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
 
     model = PipeModel(Modal(4), Params(alpha=math.pi / 2))
     return [shape(model.disc, s.q, math.pi / 2) for s in solve_path(model, values)]
@@ -233,10 +233,10 @@ MAP_POINT_KEYS |= {"error"}
 def test_stability_map_in_three_dimensions(capsys, tmp_path):
     """Both planes' v_cr per alpha, v_cr the first of the two: the same at alpha = 0, out of
     the plane first at pi/2 (the library's spatial_critical_velocity); --planar as before."""
-    from fempipe.discretization import Modal
-    from fempipe.operators import PipeModel
-    from fempipe.params import Params
-    from fempipe.stability import spatial_critical_velocity
+    from fempipe.analyses.stability import spatial_critical_velocity
+    from fempipe.model.discretization import Modal
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
 
     argv = ["stability-map", "--alphas", "0,pi/2", "--modal", "4", "--json", "--quiet"]
     d = run_json(capsys, [*argv, "--out", str(tmp_path)])
@@ -272,9 +272,9 @@ def test_stability_map_figure_shows_both_planes_and_the_first():
     (dashed, △) and the band along v_cr in 3-D; the key in a legend below the axes."""
     from test_figures import text_faults
 
-    from fempipe.discretization import Modal
+    from fempipe.analyses.stability import stability_map
+    from fempipe.model.discretization import Modal
     from fempipe.plotting.stability import plot_stability_map
-    from fempipe.stability import stability_map
 
     smap = stability_map(Modal(4), [0.0, math.pi / 2, math.pi], [(0.142, 18.9)], workers=1)
     ax = plot_stability_map(smap)
@@ -328,9 +328,9 @@ def test_convergence_of_each_plane_and_of_three_dimensions(capsys, tmp_path):
 
 def test_critical_quantities_coincide_on_the_hanging_pipe():
     """alpha = 0: both planes the same problem; planar=True is the in-plane value."""
-    from fempipe.convergence import Quantity
-    from fempipe.discretization import Modal
-    from fempipe.params import Params
+    from fempipe.model.discretization import Modal
+    from fempipe.model.params import Params
+    from fempipe.studies.convergence import Quantity
 
     disc = Modal(4)
     p = Params(alpha=0.0, v=0.0)
@@ -355,9 +355,9 @@ def test_critical_quantities_coincide_on_the_hanging_pipe():
 def test_compare_accepts_each_plane(capsys, tmp_path):
     """v_cr_in_plane, v_cr_out_of_plane, frequency_out_of_plane as columns; a user's v_cr is
     the planar model's, as before (the same number as v_cr_in_plane)."""
-    from fempipe.convergence import Quantity
-    from fempipe.discretization import Modal
-    from fempipe.params import Params
+    from fempipe.model.discretization import Modal
+    from fempipe.model.params import Params
+    from fempipe.studies.convergence import Quantity
 
     path = tmp_path / "user.csv"
     path.write_text(
@@ -383,9 +383,9 @@ def test_convergence_figure_title_fits(name):
     import numpy as np
     from test_figures import text_faults
 
-    from fempipe.convergence import ConvergenceStudy, Quantity, Reference, Series
-    from fempipe.params import Params
+    from fempipe.model.params import Params
     from fempipe.plotting.convergence import plot_convergence
+    from fempipe.studies.convergence import ConvergenceStudy, Quantity, Reference, Series
 
     dofs = np.array([6, 12, 24])
     errors = 1e-2 * (dofs / 6.0) ** -6.0

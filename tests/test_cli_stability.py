@@ -8,9 +8,9 @@ import pytest
 from clirun import run_json
 
 from fempipe import FiniteElement, Params, PipeModel
+from fempipe.analyses.stability import critical_velocity
+from fempipe.analyses.stability.hopf import EVENT_KEYS as HOPF_KEYS
 from fempipe.cli import main
-from fempipe.stability import critical_velocity
-from fempipe.stability.hopf import EVENT_KEYS as HOPF_KEYS
 
 EVENT_KEYS = {
     "v",
@@ -29,7 +29,7 @@ def test_critical_json_contract(capsys):
     """The --json contract of the README, and v_cr equal to the library's."""
     d = run_json(capsys, ["critical", "--alpha", "pi/2", "--v", "0,8", "--json", "--quiet"])
     assert isinstance(d["v_cr"], float)
-    # Flutter events also carry the Hopf keys (fempipe.stability.hopf.EVENT_KEYS).
+    # Flutter events also carry the Hopf keys (fempipe.analyses.stability.hopf.EVENT_KEYS).
     hopf = set(HOPF_KEYS)
     assert d["events"] and all(
         set(e) == EVENT_KEYS | (hopf if e["type"] == "flutter" else set()) for e in d["events"]

@@ -10,8 +10,8 @@ import pytest
 
 from fempipe.cli import main
 from fempipe.cli.parsing import parse_alpha, parse_values
-from fempipe.discretization import DEFAULT_FE
 from fempipe.io import read_csv
+from fempipe.model.discretization import DEFAULT_FE
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]
 L_TD = 0.094
@@ -273,8 +273,8 @@ def test_bad_input_exit_2_with_one_line_naming_the_option(argv, option, tmp_path
 def test_newton_failure_exit_1_names_where_and_writes_nothing(monkeypatch, tmp_path, capsys):
     """A genuine NewtonError (Newton limited to one iteration at v = 4) after one finished
     point: one line naming v, the iterations and the residual; exit 1; no files."""
-    import fempipe.static as static
-    from fempipe.static import solve_static
+    import fempipe.analyses.statics as static
+    from fempipe.analyses.statics import solve_static
 
     def failing_path(model, values, parameter="v", callback=None, **kw):
         first = solve_static(model)

@@ -60,7 +60,7 @@ def gci(coarse, fine, p, r=2.0):
 
 def test_table_against_independent_solutions(tmp_path, capsys):
     """Three sine modes: v_cr from the second implementation, tip values from collocation."""
-    from fempipe.discretization import Modal
+    from fempipe.model.discretization import Modal
     from fempipe.validation.bvp import solve_static_bvp
     from fempipe.validation.onset import critical_velocity
 
@@ -187,9 +187,9 @@ def test_same_numbers_as_fempipe_convergence(tmp_path, capsys):
 
 def test_resolved_separates_a_finer_mesh_from_a_wrong_value(tmp_path, capsys):
     """P2:4: the P2:16 value is within the estimate, 1 % off is resolved."""
-    from fempipe.convergence import Quantity
-    from fempipe.discretization import FiniteElement
-    from fempipe.params import Params
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.model.params import Params
+    from fempipe.studies.convergence import Quantity
     from fempipe.validation.onset import critical_velocity
 
     fine = FiniteElement(16, 2)
@@ -217,7 +217,7 @@ def test_resolved_separates_a_finer_mesh_from_a_wrong_value(tmp_path, capsys):
 
 def test_si_rows(tmp_path, capsys):
     """Texier & Dorbolo's pipe in SI units: the groups of PipeSI, U in m/s, v_cr up to U_max."""
-    from fempipe.params import PipeSI
+    from fempipe.model.params import PipeSI
     from fempipe.validation.bvp import solve_static_bvp
 
     pipe = PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=math.pi / 2)
@@ -304,13 +304,13 @@ class ComputeStartedError(Exception):
 
 @pytest.fixture
 def no_compute(monkeypatch):
-    import fempipe.compare
+    import fempipe.studies.compare
 
     def computed(*args, **kwargs):
         raise ComputeStartedError
 
-    monkeypatch.setattr(fempipe.compare, "evaluate", computed)
-    monkeypatch.setattr(fempipe.compare, "compare_values", computed)
+    monkeypatch.setattr(fempipe.studies.compare, "evaluate", computed)
+    monkeypatch.setattr(fempipe.studies.compare, "compare_values", computed)
 
 
 SI_HEAD = "length,EI,m,M,U,X_tip"

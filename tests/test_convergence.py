@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from fempipe.cli import main
-from fempipe.convergence import (
+from fempipe.core.errors import SolverError
+from fempipe.model.params import Params
+from fempipe.studies.convergence import (
     Family,
     Quantity,
     doubling,
@@ -20,8 +22,6 @@ from fempipe.convergence import (
     richardson,
     run_study,
 )
-from fempipe.errors import SolverError
-from fempipe.params import Params
 
 
 def run_cli(argv):
@@ -229,9 +229,9 @@ def test_bench_convergence_vcr_quick_measures_the_orders():
     assert d["cpu_seconds"] > 0
     # v_cr of the paper's horizontal pipe: the Richardson reference of P3:4, P3:8
     # against P3:16 computed directly (1e-9 bounds P3:16's own error, 2.5e-10).
-    from fempipe.discretization import FiniteElement
-    from fempipe.operators import PipeModel
-    from fempipe.stability import critical_velocity
+    from fempipe.analyses.stability import critical_velocity
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.model.operators import PipeModel
 
     fine = critical_velocity(
         PipeModel(FiniteElement(16, 3), Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3)),

@@ -8,7 +8,7 @@ orthogonality of the sine modes.
 import numpy as np
 import pytest
 
-from fempipe.discretization import Discretization, FiniteElement, Modal
+from fempipe.model.discretization import Discretization, FiniteElement, Modal
 
 FE = {
     "P1:7": lambda: FiniteElement(7, 1),
@@ -78,7 +78,7 @@ def test_tip_values_closed_form_and_vectorised():
     """theta = c xi (represented by P3): eta(1) = (1 - cos c)/c,
     X_g(1) = (sin(c + alpha) - sin alpha)/c, Z_g(1) = (cos alpha - cos(c + alpha))/c,
     varsigma(1) = sin(c)/c - 1 (Eqs. (5), (28)); m states at once give the same."""
-    from fempipe.kinematics import tip_values, tip_velocity
+    from fempipe.model.kinematics import tip_values, tip_velocity
 
     disc, alpha = FiniteElement(4, 3), 0.7
     cs = np.array([0.4, -1.3, 2.0])

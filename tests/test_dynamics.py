@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.dynamics import (
+from fempipe.analyses.dynamics import (
     IntegrationError,
     PulsatingFlow,
     Radau,
@@ -262,7 +262,7 @@ def test_batched_stage_residual_is_the_residual(disc):
     """The integrator's one-call residual of the three Radau stages equals
     PipeModel.residual stage by stage (another order of summation: round-off).
     Every term enters: dropping any one (mu, v, gamma, beta) moves it by O(1)."""
-    from fempipe.radau import _batched_residual
+    from fempipe.solvers.radau import _batched_residual
 
     rng = np.random.default_rng(3)
     m = PipeModel(disc, Params(alpha=0.7, v=9.0, mu=0.02, beta=0.3, gamma=5.0))
@@ -284,7 +284,7 @@ def test_batched_stage_residual_is_the_residual(disc):
 def test_variants_use_the_per_stage_residual(variant):
     """The batched residual knows the pipe without variants only: with one it
     declines (None) and Radau evaluates each stage with PipeModel.residual."""
-    from fempipe.radau import _batched_residual
+    from fempipe.solvers.radau import _batched_residual
 
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.3, v=5.0, **variant))
     assert _batched_residual(m) is None
@@ -320,8 +320,8 @@ def test_integrator_jacobians_are_the_model_jacobians(disc, integrals, monkeypat
     with the integration operators as dense matrices and cell by cell (the
     path of meshes beyond DENSE_INTEGRALS_MAX points); its cumulative
     integrals equal LineQuadrature's."""
-    from fempipe import radau
-    from fempipe.radau import _batched_jacobians, _cumulative, _from_tip
+    from fempipe.solvers import radau
+    from fempipe.solvers.radau import _batched_jacobians, _cumulative, _from_tip
 
     if integrals == "cells":
         monkeypatch.setattr(radau, "DENSE_INTEGRALS_MAX", 0)
@@ -342,8 +342,8 @@ def test_integrator_jacobians_are_the_model_jacobians(disc, integrals, monkeypat
 def test_cumulative_adjoint_is_the_transpose_of_the_cumulative_integral():
     """The cell-by-cell C^T g of the Jacobians equals the transpose of the dense
     cumulative-integral matrix, on unequal cells (each cell's length enters)."""
-    from fempipe.quadrature import LineQuadrature
-    from fempipe.radau import _cumulative_adjoint
+    from fempipe.model.quadrature import LineQuadrature
+    from fempipe.solvers.radau import _cumulative_adjoint
 
     quad = LineQuadrature(np.array([0.0, 0.1, 0.35, 0.5, 0.8, 1.0]), 4)
     g = np.random.default_rng(5).standard_normal((quad.n_q, 7))
@@ -368,7 +368,7 @@ def test_velocity_derivative_of_the_stage_residuals(disc, extra, cls):
     """dR/dv of the three stages (used for d phi_T/dv) against a central difference
     of PipeModel.residual in v (exact for R quadratic in v, up to its rounding).
     Every v-dependent term enters: Coriolis (beta) and follower (its v^2)."""
-    from fempipe.radau import _velocity_derivative
+    from fempipe.solvers.radau import _velocity_derivative
 
     rng = np.random.default_rng(5)
     base = dict(alpha=0.7, mu=0.02, beta=0.3, gamma=5.0, **extra)
@@ -387,7 +387,7 @@ def test_velocity_derivative_of_the_stage_residuals(disc, extra, cls):
 def test_batched_stage_jacobians_give_the_same_sensitivities(disc, monkeypatch):
     """The three stage Jacobians of the sensitivity in one batched call (small
     discretisations) or three: the same monodromy and d phi/dv to round-off."""
-    import fempipe.radau as radau
+    import fempipe.solvers.radau as radau
 
     m = PipeModel(disc, Params(v=7.0, alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3))
     q0, p0 = initial_state(m, 1, 0.3)

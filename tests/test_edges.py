@@ -39,12 +39,12 @@ class ComputeStartedError(Exception):
 
 @pytest.fixture
 def no_compute(monkeypatch):
-    import fempipe.static
+    import fempipe.analyses.statics
 
     def computed(*args, **kwargs):
         raise ComputeStartedError
 
-    monkeypatch.setattr(fempipe.static, "solve_path", computed)
+    monkeypatch.setattr(fempipe.analyses.statics, "solve_path", computed)
 
 
 # ---------------------------------------------------------------- --out --
@@ -103,10 +103,10 @@ def test_a_write_that_fails_part_way_leaves_the_directory_as_it_was(tmp_path, mo
 
 # ------------------------------------------------------------- critical --
 def _short_budget(monkeypatch, seen: dict, cap: int | None):
-    import fempipe.stability
+    import fempipe.analyses.stability
 
     for name in ("stability_analysis", "spatial_stability_analysis"):  # --planar and 3-D
-        real = getattr(fempipe.stability, name)
+        real = getattr(fempipe.analyses.stability, name)
 
         def analysis(model, real=real, **kw):
             seen.update(kw)
@@ -114,7 +114,7 @@ def _short_budget(monkeypatch, seen: dict, cap: int | None):
                 kw["max_steps"] = cap
             return real(model, **kw)
 
-        monkeypatch.setattr(fempipe.stability, name, analysis)
+        monkeypatch.setattr(fempipe.analyses.stability, name, analysis)
 
 
 def test_critical_step_budget_follows_the_range(monkeypatch, capsys):

@@ -1,4 +1,4 @@
-"""``fempipe.error_estimate`` and ``--error-estimate`` of static, critical and simulate.
+"""``fempipe.studies.error_estimate`` and ``--error-estimate`` of static, critical and simulate.
 
 The estimates are checked against the true error, measured on an
 independent fine discretisation computed here with the library (P3:64 for
@@ -20,8 +20,13 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
+from fempipe.analyses.stability.hopf import EVENT_KEYS as HOPF_KEYS
+from fempipe.analyses.statics import solve_path
 from fempipe.cli import main
-from fempipe.error_estimate import (
+from fempipe.io import read_csv
+from fempipe.model.kinematics import tip_values
+from fempipe.model.projection import project
+from fempipe.studies.error_estimate import (
     SAFETY_FACTOR,
     describe,
     estimate,
@@ -30,11 +35,6 @@ from fempipe.error_estimate import (
     refine,
     refinement_ratio,
 )
-from fempipe.io import read_csv
-from fempipe.kinematics import tip_values
-from fempipe.projection import project
-from fempipe.stability.hopf import EVENT_KEYS as HOPF_KEYS
-from fempipe.static import solve_path
 
 TIP = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
 #: The keys of a static point, of critical and of simulate before --error-estimate existed.
@@ -297,7 +297,7 @@ def test_static_table_shows_plus_minus(capsys):
 # -------------------------------------------------------------- critical --
 @pytest.mark.parametrize("disc", [["--fe", "P2:4"], ["--modal", "3"]])
 def test_critical_v_cr_estimate_bounds_the_true_error(capsys, disc):
-    from fempipe.stability import spatial_critical_velocity
+    from fempipe.analyses.stability import spatial_critical_velocity
 
     argv = ["critical", *disc, "--alpha", "pi/2", "--v", "0,8", "--no-branches"]
     d = run_json(capsys, [*argv, "--error-estimate"])
@@ -348,7 +348,7 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
     """An event missing in the refined run: null error, a note; no v_cr estimate."""
     import dataclasses
 
-    import fempipe.stability as stability
+    import fempipe.analyses.stability as stability
 
     real = stability.stability_analysis
     calls = []
@@ -382,7 +382,7 @@ def test_critical_without_the_option_is_unchanged(capsys):
         capsys, ["critical", "--modal", "3", "--alpha", "pi/2", "--v", "0,8"] + ["--planar"]
     )
     assert set(planar) == CRITICAL_KEYS
-    # Flutter events also carry the Hopf keys (fempipe.stability.hopf.EVENT_KEYS).
+    # Flutter events also carry the Hopf keys (fempipe.analyses.stability.hopf.EVENT_KEYS).
     hopf = set(HOPF_KEYS)
     assert all(
         set(e) == EVENT_KEYS | (hopf if e["type"] == "flutter" else set()) for e in d["events"]
@@ -406,7 +406,7 @@ def test_critical_text_shows_plus_minus(capsys):
 
 # -------------------------------------------------------------- simulate --
 def test_simulate_cycle_estimates_bound_the_true_error(capsys):
-    from fempipe.limit_cycle import find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
 
     d = run_json(capsys, ["simulate", "--modal", "3", "--v", "9", "--error-estimate"])
     assert d["attractor"] == d["attractor_refined"] == "periodic"

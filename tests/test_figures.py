@@ -26,9 +26,9 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.text import Annotation, Text  # noqa: E402
 
-from fempipe.discretization import Modal  # noqa: E402
-from fempipe.operators import PipeModel  # noqa: E402
-from fempipe.params import PAPER_CASE, Params  # noqa: E402
+from fempipe.model.discretization import Modal  # noqa: E402
+from fempipe.model.operators import PipeModel  # noqa: E402
+from fempipe.model.params import PAPER_CASE, Params  # noqa: E402
 
 #: Overlap below this many square pixels is anti-aliasing, not a collision.
 _MIN_OVERLAP_PX2 = 2.0
@@ -144,10 +144,10 @@ def _model(alpha: float, v: float = 0.0) -> PipeModel:
 
 
 def _shapes_figure():
-    from fempipe.kinematics import shape
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_path
+    from fempipe.model.kinematics import shape
     from fempipe.plotting.static import plot_shapes
-    from fempipe.stability import linearly_stable
-    from fempipe.static import solve_path
 
     model = _model(math.pi / 2)
     values = np.linspace(0.0, 10.0, 11)
@@ -169,16 +169,16 @@ def _shapes_figure():
 
 
 def _argand_figure():
+    from fempipe.analyses.stability import root_locus
     from fempipe.plotting.stability import plot_argand
-    from fempipe.stability import root_locus
 
     locus = root_locus(_model(math.pi), np.linspace(0.0, 6.0, 31), n_modes=3)
     return plot_argand(locus).figure
 
 
 def _branches_figure():
+    from fempipe.analyses.stability import stability_analysis
     from fempipe.plotting.stability import plot_branches
-    from fempipe.stability import stability_analysis
 
     res = stability_analysis(_model(math.pi), v_max=6.0, ds_max=0.3, max_depth=1)
     return plot_branches(res).figure
@@ -186,8 +186,8 @@ def _branches_figure():
 
 @functools.cache
 def _trajectory():
-    from fempipe.dynamics import initial_state, simulate
-    from fempipe.static import sagged_state
+    from fempipe.analyses.dynamics import initial_state, simulate
+    from fempipe.analyses.statics import sagged_state
 
     model = _model(0.0, v=10.0)
     q0, qd0 = initial_state(model, q_static=sagged_state(model).q)
@@ -245,8 +245,8 @@ def _bifurcation_figure():
 
 
 def _stability_map_figure():
+    from fempipe.analyses.stability.maps import stability_map
     from fempipe.plotting.stability import plot_stability_map
-    from fempipe.stability.maps import stability_map
 
     smap = stability_map(Modal(2), np.linspace(0, np.pi, 5), [(0.142, 18.9)], workers=1)
     ax = plot_stability_map(smap)

@@ -1,4 +1,4 @@
-"""Hopf criticality of the flutter events (fempipe.stability.hopf).
+"""Hopf criticality of the flutter events (fempipe.analyses.stability.hopf).
 
 The generic routine against a normal form in disguise (exact l1), the pipe's
 Jacobian against differences of its vector field, the mirror symmetry
@@ -16,12 +16,8 @@ import numpy as np
 import pytest
 from clirun import run_json
 
-from fempipe.discretization import discretization_from_name
-from fempipe.operators import PipeModel
-from fempipe.params import Params
-from fempipe.radau import acceleration
-from fempipe.stability import stability_analysis
-from fempipe.stability.hopf import (
+from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability.hopf import (
     EVENT_KEYS,
     decorate_events,
     first_lyapunov_coefficient,
@@ -30,8 +26,12 @@ from fempipe.stability.hopf import (
     pipe_derivatives,
     pipe_jacobian,
 )
-from fempipe.stability.linear import _eigen, linearized_matrices
-from fempipe.static import solve_path
+from fempipe.analyses.stability.linear import _eigen, linearized_matrices
+from fempipe.analyses.statics import solve_path
+from fempipe.model.discretization import discretization_from_name
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+from fempipe.solvers.radau import acceleration
 
 
 # ---------------------------------------------------------------- generic --
@@ -219,7 +219,7 @@ def test_amplitude_prediction_against_the_shot_cycle(hopf_p34):
 
 def _onset_deviations(m, nf, eps_list, rtol: float, stable: bool | None = True) -> list:
     """Shot eta_tip amplitude / prediction - 1 at v_cr (1 +- eps) on the cycles' side."""
-    from fempipe.limit_cycle import shoot
+    from fempipe.analyses.limit_cycle import shoot
 
     sign = 1.0 if nf.side == "above" else -1.0
     dev = []

@@ -1,6 +1,6 @@
 """Hysteretic (structural) damping: EI -> EI (1 + i mu_h sgn(omega)) in the linear stability problem.
 
-The references come from outside fempipe.stability: the undamped frequencies
+The references come from outside fempipe.analyses.stability: the undamped frequencies
 of the same discretisation and the exact clamped-free beam frequencies (at
 rest the hysteretic roots are known in closed form), a beam-mode Galerkin
 solution of the textbook lateral-displacement equation of the straight pipe
@@ -19,8 +19,7 @@ from clirun import run_json
 from scipy.optimize import brentq
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.cli import main
-from fempipe.stability import (
+from fempipe.analyses.stability import (
     cantilever_frequencies,
     critical_velocity,
     growth_rate,
@@ -29,7 +28,8 @@ from fempipe.stability import (
     spectrum,
     stability_analysis,
 )
-from fempipe.static import sagged_state
+from fempipe.analyses.statics import sagged_state
+from fempipe.cli import main
 
 P3_16 = FiniteElement(16, 3)
 PAPER = {"beta": 0.142, "gamma": 18.9}
@@ -305,7 +305,7 @@ def test_every_positive_frequency_root_solves_its_problem():
     real Kelvin-Voigt roots near -1/mu = -200 that the Coriolis force pairs up
     (|Im lambda| < 0.05): the loss would move them by -i mu_h / mu = -0.02 i,
     across the real axis; the oscillating modes 1-6 all solve the first problem."""
-    from fempipe.stability import linearized_matrices
+    from fempipe.analyses.stability import linearized_matrices
 
     mu_h = 0.01
     model = PipeModel(
@@ -380,7 +380,7 @@ def test_sparse_criterion_decides_as_the_dense_one(params, mu_h, stable_without,
     """P3:80 (n = 240, above the dense limit): the sparse shift-invert path with
     mu_h decides by itself (no fallback) and as the dense criterion, and mu_h
     changes the decision where it should."""
-    from fempipe.stability.criterion import _DENSE, _sparse_stable
+    from fempipe.analyses.stability.criterion import _DENSE, _sparse_stable
 
     disc = FiniteElement(80, 3)
     model = PipeModel(disc, params)
@@ -411,10 +411,10 @@ def test_linearly_stable_and_growth_rate_are_the_spectrum_criterion(disc):
 # Time domain: refused
 # ----------------------------------------------------------------------------
 def test_time_domain_refuses_hysteretic_damping():
-    from fempipe.bifurcation import bifurcation_diagram, sweep
-    from fempipe.dynamics import simulate
-    from fempipe.limit_cycle import find_attractor, shoot
-    from fempipe.radau import Radau
+    from fempipe.analyses.bifurcation import bifurcation_diagram, sweep
+    from fempipe.analyses.dynamics import simulate
+    from fempipe.analyses.limit_cycle import find_attractor, shoot
+    from fempipe.solvers.radau import Radau
 
     disc = Modal(4)
     model = PipeModel(disc, Params(v=8.0, hysteretic_damping=0.1))

@@ -19,7 +19,7 @@ from fempipe.io import (
     write_json,
     write_shapes,
 )
-from fempipe.kinematics import shape
+from fempipe.model.kinematics import shape
 
 
 def test_json_is_numpy_safe_and_strict(tmp_path):

@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.limit_cycle import (
+from fempipe.analyses.limit_cycle import (
     ShootingError,
     _recurrence,
     find_attractor,
     shoot,
     tip_coordinates,
 )
-from fempipe.stability import growth_rate, linearly_stable, spectrum
-from fempipe.static import solve_static
+from fempipe.analyses.stability import growth_rate, linearly_stable, spectrum
+from fempipe.analyses.statics import solve_static
 
 # P3 on 4 elements: v_cr within 1e-4 of the converged value (the stability
 # tests) and cheap enough for the default run.
@@ -24,8 +24,8 @@ DISC = FiniteElement(4, 3)
 
 
 def _v_cr(alpha: float = 0.0) -> float:
-    """Linear critical velocity from the quadratic eigenproblem (fempipe.stability)."""
-    from fempipe.stability import critical_velocity
+    """Linear critical velocity from the quadratic eigenproblem (fempipe.analyses.stability)."""
+    from fempipe.analyses.stability import critical_velocity
 
     return critical_velocity(PipeModel(DISC, Params(alpha=alpha)), v_max=8.0).v_cr
 
@@ -106,9 +106,9 @@ def test_solver_failures_share_one_base_and_survive_pickling():
     parent with its message and attributes (pickle round trip)."""
     import pickle
 
-    from fempipe.dynamics import IntegrationError
-    from fempipe.errors import SolverError
-    from fempipe.static import NewtonError
+    from fempipe.analyses.dynamics import IntegrationError
+    from fempipe.analyses.statics import NewtonError
+    from fempipe.core.errors import SolverError
 
     errors = [
         NewtonError("newton", Params(v=2.0), 3, 1e-3),
@@ -135,7 +135,7 @@ def test_shooting_equals_long_integration():
     for k in ("eta_tip", "X_tip", "Z_tip"):
         np.testing.assert_allclose(a.tip[k], b.tip[k], atol=1e-6)
     # and the cycle is a cycle: integrate one period from its start
-    from fempipe.dynamics import Radau
+    from fempipe.analyses.dynamics import Radau
 
     st = Radau(m, a.cycle.q0, a.cycle.qdot0, rtol=1e-9)
     for _ in st.steps(a.period):
@@ -202,8 +202,8 @@ def _first_return(m, q0, p0, level: float, t_end: float):
     (16 samples per step on the integrator's dense output)."""
     from scipy.optimize import brentq
 
-    from fempipe.dynamics import Radau
-    from fempipe.limit_cycle import _eta, _sample_tip, _tip_ranges
+    from fempipe.analyses.dynamics import Radau
+    from fempipe.analyses.limit_cycle import _eta, _sample_tip, _tip_ranges
 
     st = Radau(m, q0, p0, rtol=1e-9)
     samples: list = []
@@ -260,7 +260,7 @@ def test_cycle_from_the_short_transient_is_the_cycle():
 def test_quintic_orbit_reproduces_quintics():
     """The interpolant through (q, q', q'') at the step ends is exact for
     polynomials of degree 5 (the basis of the tip extrema on the cycle)."""
-    from fempipe.limit_cycle import _QuinticOrbit
+    from fempipe.analyses.limit_cycle import _QuinticOrbit
 
     rng = np.random.default_rng(5)
     t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.2, 7)])

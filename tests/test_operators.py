@@ -9,10 +9,10 @@ derivations"), and the energy/power identities.
 import numpy as np
 import pytest
 
-from fempipe.discretization import FiniteElement, Modal
-from fempipe.operators import PipeModel
-from fempipe.params import Params
-from fempipe.quadrature import LineQuadrature
+from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+from fempipe.model.quadrature import LineQuadrature
 
 DISCS = {
     "P1:9": lambda: FiniteElement(9, 1),

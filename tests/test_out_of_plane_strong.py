@@ -1,9 +1,9 @@
-"""The motion out of the plane: fempipe.out_of_plane against the strong form and its symmetries.
+"""The motion out of the plane: fempipe.model.out_of_plane against the strong form and its symmetries.
 
 :mod:`fempipe.validation.lateral` solves the out-of-plane problem in strong
 form (the deflection w on C^1 spectral elements about ``solve_bvp``'s static
 state), sharing no code with fempipe's discretisations, quadrature, operators
-or :mod:`fempipe.out_of_plane`.  Every reference below is an independent
+or :mod:`fempipe.model.out_of_plane`.  Every reference below is an independent
 computation (the strong form, the classical straight-pipe theory, the
 in-plane problem) or an exact symmetry; no number is pasted.
 """
@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from fempipe import stability
-from fempipe.discretization import FiniteElement, Modal
-from fempipe.operators import PipeModel
-from fempipe.out_of_plane import OutOfPlaneOperators
-from fempipe.params import Params
-from fempipe.static import solve_static
+from fempipe.analyses import stability
+from fempipe.analyses.statics import solve_static
+from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.params import Params
 from fempipe.validation import classical, lateral
 
 PAPER = {"beta": 0.142, "gamma": 18.9}

@@ -25,7 +25,7 @@ from processes import alive, needs_proc
 from threadpoolctl import threadpool_info
 
 import fempipe
-from fempipe.parallel import (
+from fempipe.core.parallel import (
     Interrupted,
     interruptible,
     process_pool,
@@ -120,7 +120,7 @@ def test_single_blas_thread_sees_a_blas_loaded_after_its_first_use():
     code = (
         "import json, numpy\n"
         "from threadpoolctl import threadpool_info\n"
-        "from fempipe.parallel import single_blas_thread\n"
+        "from fempipe.core.parallel import single_blas_thread\n"
         "with single_blas_thread():\n"
         "    pass\n"
         "import scipy.linalg\n"
@@ -175,7 +175,7 @@ PARENT = textwrap.dedent(
     import contextlib, ctypes, multiprocessing, os, sys, time
     from pathlib import Path
 
-    from fempipe.parallel import Interrupted, interruptible, run_tasks
+    from fempipe.core.parallel import Interrupted, interruptible, run_tasks
 
     OUT = Path(sys.argv[1])
     HANDLE = sys.argv[2] == "handle"
@@ -286,7 +286,7 @@ def test_an_inherited_ignored_sigint_stays_ignored():
     script = textwrap.dedent(
         """
         import os, signal, time
-        from fempipe.parallel import interruptible
+        from fempipe.core.parallel import interruptible
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         with interruptible():
             os.kill(os.getpid(), signal.SIGINT)

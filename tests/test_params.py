@@ -7,7 +7,7 @@ import math
 import pytest
 
 from fempipe import Params, PipeSI
-from fempipe.errors import ParamError
+from fempipe.core.errors import ParamError
 
 #: Texier & Dorbolo's pipe as given in the paper, Section 3.1 (Fig. 2b), with g = 9.8 m/s^2.
 TD = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}

@@ -1,8 +1,8 @@
-"""Pseudo-arclength continuation of periodic orbits (fempipe.periodic, bifurcation --method
+"""Pseudo-arclength continuation of periodic orbits (fempipe.analyses.periodic, bifurcation --method
 continuation).
 
 The reference for the orbits is the independent attractor finder of the sweep
-(:func:`fempipe.limit_cycle.find_attractor`: a transient integration from the
+(:func:`fempipe.analyses.limit_cycle.find_attractor`: a transient integration from the
 perturbed equilibrium, then shooting from the recurrent section point), which
 shares only the integrator with the continuation; the Hopf point and the
 equilibria's stability come from the linear stability analysis, checked here
@@ -18,12 +18,8 @@ import numpy as np
 import pytest
 from clirun import run_json
 
-from fempipe.cli import main
-from fempipe.discretization import parse_discretization
-from fempipe.limit_cycle import find_attractor
-from fempipe.operators import PipeModel
-from fempipe.params import Params
-from fempipe.periodic import (
+from fempipe.analyses.limit_cycle import find_attractor
+from fempipe.analyses.periodic import (
     CycleContinuationError,
     CyclePoint,
     _special_points,
@@ -31,8 +27,12 @@ from fempipe.periodic import (
     cycle_diagram,
     hopf_points,
 )
-from fempipe.stability import linearly_stable
-from fempipe.static import solve_static
+from fempipe.analyses.stability import linearly_stable
+from fempipe.analyses.statics import solve_static
+from fempipe.cli import main
+from fempipe.model.discretization import parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
 
 # P2:4 flutters at v_H = 6.3398 (alpha = 0); the requested values straddle it, and
 # 6.345 lies between v_H and the first orbit of the continuation (a step passes it).
@@ -100,7 +100,7 @@ def test_multipliers_at_the_requested_v_are_those_of_the_orbit(run):
     """The Floquet multipliers reported at a requested v are those of the converged orbit
     (the monodromy of a shot at rtol 1e-10 from it): the trivial one at 1, the others
     to 1e-6, not those of an earlier chord iterate (1e-3 off, see MONODROMY_NEAR)."""
-    from fempipe.limit_cycle import shoot
+    from fempipe.analyses.limit_cycle import shoot
 
     d, _ = run
     disc = parse_discretization("P2:4")
@@ -120,8 +120,8 @@ def test_corrector_takes_the_monodromy_at_the_orbit_when_asked():
     its first iterate: 1e-3 of the amplitude away is near enough on the continuation's
     own steps (MONODROMY_NEAR), not at a requested v (MONODROMY_AT_ORBIT), where one
     more flow gives the multipliers of the converged orbit (shot at rtol 1e-10)."""
-    from fempipe.limit_cycle import shoot
-    from fempipe.periodic import MONODROMY_AT_ORBIT, MONODROMY_NEAR, HopfPoint, _Continuer
+    from fempipe.analyses.limit_cycle import shoot
+    from fempipe.analyses.periodic import MONODROMY_AT_ORBIT, MONODROMY_NEAR, HopfPoint, _Continuer
 
     m = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.95))
     c = shoot(*_orbit_guess(m), rtol=1e-10)
@@ -168,7 +168,7 @@ def test_hopf_points_carry_the_equilibrium_where_the_branch_starts(run, capsys):
     the diagram's points): the straight pipe at alpha = 0, and at alpha = pi/2
     the static solution at v_H solved on its own (the figures mark the Hopf
     point there, also when v_H lies outside the requested v)."""
-    from fempipe.kinematics import tip_values
+    from fempipe.model.kinematics import tip_values
 
     d, _ = run
     (h,) = d["hopf_points"]
@@ -232,8 +232,8 @@ def test_interrupted_branch_resumes_to_the_same_points(run, tmp_path):
 
 
 def test_failure_names_v_and_step_and_keeps_the_points(monkeypatch):
-    import fempipe.periodic as per
-    from fempipe.radau import IntegrationError
+    import fempipe.analyses.periodic as per
+    from fempipe.solvers.radau import IntegrationError
 
     model = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.0))
     (hopf,), _ = hopf_points(model, 6.0, 7.0)

@@ -1,6 +1,6 @@
 """Brent's method and the eigenvalue assignment against scipy's, which they stand in for.
 
-:mod:`fempipe.rootfinding` and :mod:`fempipe.stability.matching` exist so that
+:mod:`fempipe.core.rootfinding` and :mod:`fempipe.core.matching` exist so that
 ``fempipe critical`` and ``fempipe simulate`` need not import
 :mod:`scipy.optimize`; the tests may.
 """
@@ -12,8 +12,8 @@ import pytest
 from scipy.optimize import brentq as scipy_brentq
 from scipy.optimize import linear_sum_assignment
 
-from fempipe.rootfinding import brentq
-from fempipe.stability.matching import assignment
+from fempipe.core.matching import assignment
+from fempipe.core.rootfinding import brentq
 
 
 def _functions(rng: np.random.Generator, n: int):

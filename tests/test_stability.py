@@ -1,6 +1,6 @@
 """Linear stability (Eqs. (31b)-(33)): matrices, spectra, critical velocities, events.
 
-Every reference number comes from outside fempipe.stability: finite
+Every reference number comes from outside fempipe.analyses.stability: finite
 differences of the residual, closed-form integrals of the sine modes, the
 Euler-Bernoulli cantilever, Beck's and Greenhill's columns, Gregory &
 Paidoussis' pipe, refined meshes, the other discretisation, a brute-force
@@ -15,8 +15,7 @@ from scipy.optimize import brentq
 from scipy.special import jv
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, solve_static
-from fempipe.kinematics import shape
-from fempipe.stability import (
+from fempipe.analyses.stability import (
     STABILITY_TOL,
     cantilever_frequencies,
     critical_velocity,
@@ -29,7 +28,8 @@ from fempipe.stability import (
     stability_analysis,
     stability_map,
 )
-from fempipe.static import sagged_state
+from fempipe.analyses.statics import sagged_state
+from fempipe.model.kinematics import shape
 
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 P3_16 = FiniteElement(16, 3)
@@ -303,7 +303,7 @@ def test_fine_mesh_stable_below_unstable_above_vcr(params, v_cr):
     without the mode numbers' path back to v = 0) about the static state of P3:16
     projected onto the fine mesh and corrected by Newton there (continuing the
     fine mesh from v = 0 took 11-14 s of the test's 28)."""
-    from fempipe.projection import project
+    from fempipe.model.projection import project
 
     disc = FiniteElement(128, 3)
     for f, stable in ((0.95, True), (1.05, False)):
@@ -409,7 +409,7 @@ def test_alpha_pi_events_on_every_branch():
     assert kids[0].events[0].v == pytest.approx(kids[1].events[0].v, abs=1e-10)
     assert np.allclose(kids[0].theta_tip, -kids[1].theta_tip, atol=1e-8)
     # The fold, independently.
-    from fempipe.static import continuation, switch_branch
+    from fempipe.analyses.statics import continuation, switch_branch
 
     br = continuation(model, "v", stop=6.0, ds_max=0.1)
     b1, _ = switch_branch(
@@ -527,7 +527,7 @@ def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
     of a failure; the other events are those of alpha = pi."""
     import logging
 
-    from fempipe.params import PAPER_CASE
+    from fempipe.model.params import PAPER_CASE
 
     def events(alpha):
         m = PipeModel(FiniteElement(8, 3), Params(alpha=alpha, **PAPER_CASE))
@@ -535,7 +535,7 @@ def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
         return [(e.type, e.v) for e in res.events if e.branch == "primary"]
 
     exact = events(np.pi)
-    with caplog.at_level(logging.WARNING, logger="fempipe.stability.events"):
+    with caplog.at_level(logging.WARNING, logger="fempipe.analyses.stability.events"):
         hair = events(3.14159265)
     assert [t for t, _ in hair] == [t for t, _ in exact]
     assert "restabilization" in [t for t, _ in exact]

@@ -1,7 +1,7 @@
 """One stability criterion, intrinsic mode numbers, whole-system events, cheap stability flag.
 
 References come from outside the code under test where they can: the dense
-eigenvalue criterion of :func:`fempipe.stability.spectrum` checks the sparse
+eigenvalue criterion of :func:`fempipe.analyses.stability.spectrum` checks the sparse
 one, a second mesh and the modal discretisation check the mode numbers, a
 spectrum just below and above an event checks its stable_before/stable_after.
 """
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, solve_static
-from fempipe.stability import STABILITY_TOL, root_locus, spectrum, stability_analysis
-from fempipe.static import sagged_state
+from fempipe.analyses.stability import STABILITY_TOL, root_locus, spectrum, stability_analysis
+from fempipe.analyses.statics import sagged_state
 
 P3_16 = FiniteElement(16, 3)
 
@@ -159,7 +159,7 @@ def _states():
 
 
 def test_sparse_criterion_decides_as_the_dense_one():
-    from fempipe.stability import linearly_stable
+    from fempipe.analyses.stability import linearly_stable
 
     decisions = []
     for model, q in _states():
@@ -172,7 +172,7 @@ def test_sparse_criterion_decides_as_the_dense_one():
 
 def test_stable_flag_of_a_3000_dof_state_takes_seconds():
     """P3:1000 (n = 3000): the dense criterion would solve a 6000 x 6000 eigenproblem."""
-    from fempipe.stability import linearly_stable
+    from fempipe.analyses.stability import linearly_stable
 
     disc = FiniteElement(1000, 3)
     model = PipeModel(disc, Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, v=1.0))
@@ -196,7 +196,7 @@ def test_stable_flag_of_a_3000_dof_state_takes_seconds():
 )
 def test_linearly_stable_is_the_spectrum_criterion(params):
     """linearly_stable and growth_rate decide and measure as Spectrum.stable and max_real."""
-    from fempipe.stability import growth_rate, linearly_stable
+    from fempipe.analyses.stability import growth_rate, linearly_stable
 
     model = PipeModel(P3_16, params)
     q = sagged_state(model).q

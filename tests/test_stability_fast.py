@@ -22,14 +22,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import fempipe.stability.analysis as analysis
-import fempipe.stability.linear as linear
-import fempipe.stability.tracking as tracking
+import fempipe.analyses.stability.analysis as analysis
+import fempipe.analyses.stability.linear as linear
+import fempipe.analyses.stability.tracking as tracking
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.continuation import continuation
-from fempipe.stability import linearized_matrices, spectrum, stability_analysis
-from fempipe.stability.events import STABILITY_TOL, _peak_candidates
-from fempipe.stability.linear import StraightPencil
+from fempipe.analyses.stability import linearized_matrices, spectrum, stability_analysis
+from fempipe.analyses.stability.events import STABILITY_TOL, _peak_candidates
+from fempipe.analyses.stability.linear import StraightPencil
+from fempipe.analyses.statics import continuation
 from fempipe.validation import classical
 
 BASELINE = Path(analysis.__file__).resolve().parents[1] / "validation" / "classical_baseline.py"
@@ -332,7 +332,7 @@ def test_bench_critical_vs_classical_quick_run():
     fempipe's default P3:16 is within 1e-6 of the converged v_cr (measured 7e-10), the
     40-mode baseline too (3e-7), the 20-mode one less accurate than the 40-mode one.
     """
-    from fempipe.bench_stability import bench_critical_vs_classical
+    from fempipe.bench.stability import bench_critical_vs_classical
 
     out = bench_critical_vs_classical(quick=True)
     fem, b40, b20 = out["table"][0], out["table"][1], out["table"][2]

@@ -78,8 +78,8 @@ def test_a_command_imports_only_its_own_subcommand_module():
 def test_critical_and_simulate_do_not_import_scipy_optimize():
     """``scipy.optimize`` (with scipy.spatial, special, fft) is a third of their start-up.
 
-    Brent's method (:mod:`fempipe.rootfinding`) and the eigenvalue matching
-    (:mod:`fempipe.stability.matching`) stand in for its two functions they use.
+    Brent's method (:mod:`fempipe.core.rootfinding`) and the eigenvalue matching
+    (:mod:`fempipe.core.matching`) stand in for its two functions they use.
     """
     code = (
         "import json, sys\n" + _LOADED + "codes = [\n"
@@ -93,26 +93,26 @@ def test_critical_and_simulate_do_not_import_scipy_optimize():
 
 
 # The public names of the package, as the eager ``__init__`` imported them.
-from fempipe.discretization import FiniteElement, Modal, parse_discretization  # noqa: E402
-from fempipe.errors import ParamError, SolverError  # noqa: E402
-from fempipe.kinematics import shape, tip_values  # noqa: E402
-from fempipe.operators import PipeModel  # noqa: E402
-from fempipe.out_of_plane import OutOfPlaneModel  # noqa: E402
-from fempipe.params import Params, PipeSI  # noqa: E402
-from fempipe.stability import (  # noqa: E402
+from fempipe.analyses.stability import (  # noqa: E402
     critical_velocity,
     spatial_critical_velocity,
     spatial_stability_analysis,
     spectrum,
     stability_analysis,
 )
-from fempipe.static import (  # noqa: E402
+from fempipe.analyses.statics import (  # noqa: E402
     NewtonError,
     continuation,
     solve_path,
     solve_static,
     switch_branch,
 )
+from fempipe.core.errors import ParamError, SolverError  # noqa: E402
+from fempipe.model.discretization import FiniteElement, Modal, parse_discretization  # noqa: E402
+from fempipe.model.kinematics import shape, tip_values  # noqa: E402
+from fempipe.model.operators import PipeModel  # noqa: E402
+from fempipe.model.out_of_plane import OutOfPlaneModel  # noqa: E402
+from fempipe.model.params import Params, PipeSI  # noqa: E402
 
 PUBLIC = {
     "FiniteElement": FiniteElement,
@@ -158,23 +158,28 @@ def test_an_unknown_name_is_an_attribute_error():
         fempipe.no_such_name  # noqa: B018
 
 
-def test_the_continuation_function_is_not_shadowed_by_the_submodule():
-    """``fempipe/continuation.py`` is a submodule; ``fempipe.continuation`` stays the function.
+def test_the_continuation_function_has_no_module_of_its_name():
+    """``fempipe.continuation`` is the function of :mod:`fempipe.analyses.statics`; the
+    engine lives in :mod:`fempipe.solvers.continuation`, so no submodule of the
+    package is named like a public function (and none can shadow it)."""
+    import importlib.util
 
-    Imported first in a fresh interpreter, the submodule is bound on the
-    package by the import system; the eager ``__init__`` bound the function
-    of :mod:`fempipe.static` over it, and so must the lazy one.
-    """
     code = (
-        "import json, types\n"
-        "import fempipe.continuation\n"
+        "import json, importlib.util\n"
+        "import fempipe.solvers.continuation\n"
         "import fempipe\n"
         "from fempipe import continuation\n"
-        "from fempipe.static import continuation as fn\n"
+        "from fempipe.analyses.statics import continuation as fn\n"
         "print(json.dumps([continuation is fn, fempipe.continuation is fn,"
-        " isinstance(fempipe.static, types.ModuleType)]))\n"
+        " importlib.util.find_spec('fempipe.continuation') is None]))\n"
     )
     assert _fresh(code) == [True, True, True]
+    names = set(fempipe.__all__)
+    clashes = [
+        m.name for m in __import__("pkgutil").iter_modules(fempipe.__path__) if m.name in names
+    ]
+    assert clashes == []
+    assert importlib.util.find_spec("fempipe.analyses.statics") is not None
 
 
 def test_startup_benchmark_runs_every_command_once_when_quick():

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, PipeSI, tip_values
-from fempipe.discretization import DEFAULT_FE, parse_discretization
-from fempipe.static import (
+from fempipe.analyses.statics import (
     NewtonError,
     continuation,
     sagged_state,
@@ -13,6 +12,7 @@ from fempipe.static import (
     solve_static,
     switch_branch,
 )
+from fempipe.model.discretization import DEFAULT_FE, parse_discretization
 
 #: Texier & Dorbolo's pipe (the paper's Section 3.1, Fig. 2(b)), with the paper's g = 9.8 m/s^2.
 TEXIER = PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=np.pi / 2)
@@ -237,7 +237,7 @@ def test_loads_beyond_floating_point_range_raise_newton_error(v):
 
 
 def test_newton_error_is_a_solver_error():
-    from fempipe.errors import SolverError
+    from fempipe.core.errors import SolverError
 
     assert issubclass(NewtonError, SolverError) and issubclass(NewtonError, RuntimeError)
 

@@ -136,11 +136,11 @@ def test_declared_check_not_emitted_fails_the_case():
 
 def test_import_error_fails_the_case(monkeypatch):
     """A module that does not import is an error of the case, never a skipped case."""
-    monkeypatch.setitem(sys.modules, "fempipe.stability", None)
+    monkeypatch.setitem(sys.modules, "fempipe.analyses.stability", None)
     monkeypatch.delitem(sys.modules, "fempipe.validation.fig05", raising=False)
     outcome = run_case("fig05", quick=True)
     assert outcome.status == "error"
-    assert "ModuleNotFoundError" in outcome.error and "fempipe.stability" in outcome.error
+    assert "ModuleNotFoundError" in outcome.error and "fempipe.analyses.stability" in outcome.error
     assert not outcome.ok
 
 

@@ -20,12 +20,12 @@ import scipy.linalg as sla
 from clirun import run_json
 from scipy.optimize import brentq
 
-from fempipe.discretization import FiniteElement, Modal
-from fempipe.dynamics import Radau, acceleration, initial_state, power_terms, simulate
-from fempipe.kinematics import tip_values
-from fempipe.operators import PipeModel
-from fempipe.params import Params, PipeSI
-from fempipe.static import sagged_state, solve_static
+from fempipe.analyses.dynamics import Radau, acceleration, initial_state, power_terms, simulate
+from fempipe.analyses.statics import sagged_state, solve_static
+from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.kinematics import tip_values
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params, PipeSI
 from fempipe.validation.bvp import solve_static_bvp
 
 DISCS = {
@@ -561,7 +561,7 @@ def test_cli_critical_with_damping_and_spring(capsys):
     d = run_json(capsys, argv)
     assert d["params"]["external_damping"] == 0.1
     assert d["params"]["springs"] == [[50.0, 0.5]]
-    from fempipe.stability import critical_velocity
+    from fempipe.analyses.stability import critical_velocity
 
     p = Params(alpha=math.pi / 2, external_damping=0.1, springs=((50.0, 0.5),))
     lib = critical_velocity(PipeModel(FiniteElement(6, 2), p), 12.0)
@@ -576,7 +576,7 @@ def test_cli_critical_with_damping_and_spring(capsys):
 def test_cli_simulate_end_mass(capsys):
     """The end mass reaches the time integration: the flutter cycle of two sine modes
     at v = 9 (0.3029 without it) is slower with the heavier tip."""
-    from fempipe.limit_cycle import find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
 
     d = run_json(
         capsys,
@@ -635,7 +635,7 @@ def test_cli_stability_map_passes_the_variants(capsys):
     d = run_json(capsys, argv)
     assert d["end_mass"] == 0.2 and d["external_damping"] == 0.5
     assert d["springs"] == [[20.0, 0.5]]
-    from fempipe.stability import critical_velocity
+    from fempipe.analyses.stability import critical_velocity
 
     p = Params(alpha=math.pi / 2, end_mass=0.2, external_damping=0.5, springs=((20.0, 0.5),))
     lib = critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2)
@@ -655,7 +655,7 @@ def test_basis_values_agree_with_evaluate(disc_name):
 
 
 def test_stability_map_refuses_unknown_variants():
-    from fempipe.stability import stability_map
+    from fempipe.analyses.stability import stability_map
 
     with pytest.raises(ValueError, match="variants are"):
         stability_map(Modal(2), [0.0], [(0.142, 18.9)], variants={"tip_mass": 1.0})
@@ -670,8 +670,8 @@ def test_sparse_stability_criterion_sees_the_variants(variant):
     operator once built C x + M y from the pipe's own terms only and decided
     both the other way round.
     """
-    from fempipe.stability import linearly_stable
-    from fempipe.static import solve_path
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_path
 
     p = Params(alpha=math.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, **variant)
     model = PipeModel(FiniteElement(70, 3), p)

@@ -1,4 +1,4 @@
-"""Acceptance measurements of the nonlinear dynamics (quoted in ``fempipe/dynamics.py``).
+"""Acceptance measurements of the nonlinear dynamics (quoted in ``fempipe/analyses/dynamics.py``).
 
 Run ``python validation/dynamics_acceptance.py [--quick] [--out FILE.json]``.
 
@@ -7,7 +7,7 @@ Run ``python validation/dynamics_acceptance.py [--quick] [--out FILE.json]``.
    elements and on the 4-mode Galerkin model: steps, rejected steps, wall time.
    The stiff rates grow 4096x from 8 to 64 elements; the step counts must not.
 2. ``cycles``: the limit cycle at v = 10 (the paper's reference case,
-   :data:`fempipe.params.PAPER_CASE`) for alpha = 0, pi/4, pi/2 by shooting (rtol 1e-8) on
+   :data:`fempipe.model.params.PAPER_CASE`) for alpha = 0, pi/4, pi/2 by shooting (rtol 1e-8) on
    P3:8, 16, 32, 64 (mesh convergence: successive differences) and on the
    modal N = 3, 4 of the paper: period, tip extrema of eta(1), X_g(1), Z_g(1),
    largest non-trivial Floquet multiplier.
@@ -22,9 +22,9 @@ import time
 import numpy as np
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.dynamics import initial_state, simulate
+from fempipe.analyses.dynamics import initial_state, simulate
+from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.io import json_dumps, write_json
-from fempipe.limit_cycle import find_attractor
 
 
 def steps(elements=(8, 16, 32, 64), t_end: float = 2.0) -> list[dict]:

@@ -43,10 +43,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from fempipe import FiniteElement, Params, PipeModel
+from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.statics import solve_path
 from fempipe.cli import main as cli_main
-from fempipe.kinematics import tip_values
-from fempipe.stability import stability_analysis
-from fempipe.static import solve_path
+from fempipe.model.kinematics import tip_values
 
 #: The paper's reference case.
 CASE = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}

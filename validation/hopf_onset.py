@@ -1,8 +1,8 @@
-"""Hopf normal form against the limit cycles shot near onset (fempipe.stability.hopf).
+"""Hopf normal form against the limit cycles shot near onset (fempipe.analyses.stability.hopf).
 
 For every flutter event of the primary branch over 0 <= v <= 16 the predicted
 cycle (first Lyapunov coefficient l1, Re lambda'(v_cr)) is compared with the
-periodic orbit computed by Newton shooting (fempipe.limit_cycle.shoot, started
+periodic orbit computed by Newton shooting (fempipe.analyses.limit_cycle.shoot, started
 from the normal-form prediction, so unstable cycles are found too) at
 v = v_cr (1 +- eps) on the side where the cycles exist:
 
@@ -28,12 +28,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from fempipe.discretization import discretization_from_name
-from fempipe.limit_cycle import shoot
-from fempipe.operators import PipeModel
-from fempipe.params import Params
-from fempipe.stability import stability_analysis
-from fempipe.stability.hopf import normal_forms
+from fempipe.analyses.limit_cycle import shoot
+from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability.hopf import normal_forms
+from fempipe.model.discretization import discretization_from_name
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
 
 
 def onset_table(

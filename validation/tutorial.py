@@ -220,7 +220,7 @@ assert abs(ours - bvp.X_tip) < 1e-6, "the tutorial's solver disagrees with the B
 # a tiny matrix per cell plus a cumulative sum.  fempipe's LineQuadrature
 # implements it; here we build it as a dense matrix to look at it.
 
-from fempipe.quadrature import lagrange_integrals
+from fempipe.model.quadrature import lagrange_integrals
 
 
 def cumulative_matrix(edges: np.ndarray, points: np.ndarray):
@@ -375,7 +375,7 @@ print(
 
 # %% 9. The same study for your own case, through the API
 #
-# Section 8 wrote the study by hand.  fempipe.convergence does it for any
+# Section 8 wrote the study by hand.  fempipe.studies.convergence does it for any
 # quantity of any case -- `fempipe convergence` on the command line -- and
 # forms its reference without knowing the answer: the Richardson
 # extrapolation of the two finest members of each family,
@@ -404,7 +404,7 @@ print(
 #   decay one power faster (r^-4) and functionals converge as N^-4: better
 #   than the sine modes, still algebraic.
 
-from fempipe.convergence import Family, Quantity, run_study
+from fempipe.studies.convergence import Family, Quantity, run_study
 
 study = run_study(
     Quantity("X_tip", params),

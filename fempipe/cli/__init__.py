@@ -78,7 +78,7 @@ def one_blas_thread() -> tuple[str, ...]:
     """One BLAS thread for this process and its workers, unless the user chose otherwise.
 
     fempipe's dense matrices are small and its parallelism is by processes
-    (:mod:`fempipe.parallel`, "One BLAS thread per process"); it limits the
+    (:mod:`fempipe.core.parallel`, "One BLAS thread per process"); it limits the
     BLAS to one thread around its computations already.  Setting the
     variables of :data:`BLAS_THREAD_VARIABLES` to 1 before numpy is loaded
     also spares the start-up of the thread pools: each OpenBLAS (numpy and
@@ -108,7 +108,7 @@ def _subcommand(argv: list[str]) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code.
 
-    0 ok, 1 a solver failed (:class:`fempipe.errors.SolverError`), 2 bad input
+    0 ok, 1 a solver failed (:class:`fempipe.core.errors.SolverError`), 2 bad input
     (:class:`~fempipe.cli.parsing.CLIError` or argparse, also an unusable
     ``--out``, checked before any computation), 130 / 143 interrupted by
     SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
@@ -139,8 +139,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     from fempipe.cli.parsing import CLIError
     from fempipe.cli.reporting import check_out_dir, discard_pending
-    from fempipe.errors import SolverError
-    from fempipe.parallel import Interrupted, interruptible
+    from fempipe.core.errors import SolverError
+    from fempipe.core.parallel import Interrupted, interruptible
 
     prefix = f"fempipe {args.command}: error:"
 

@@ -3,7 +3,7 @@
 ``--method continuation`` (the default) follows the equilibria of the primary
 static branch and the branch of periodic orbits born at every Hopf point
 (flutter event) by pseudo-arclength continuation
-(:func:`fempipe.periodic.cycle_diagram`): stable and unstable orbits, their
+(:func:`fempipe.analyses.periodic.cycle_diagram`): stable and unstable orbits, their
 Floquet multipliers, and the folds, period doublings and Neimark-Sacker points
 of the branches; every requested v is landed on exactly (``requested``: true,
 ``source``: "grid"), the continuation's own points have ``requested``: false.
@@ -15,7 +15,7 @@ is its integration tolerance (``--shoot-rtol``, ``--rtol`` and ``--t-max`` are
 the sweep's).
 
 ``--method sweep`` is the independent check.  Each point starts from the attractor of the previous one
-(:func:`fempipe.bifurcation.sweep`); up and down sweeps (and several
+(:func:`fempipe.analyses.bifurcation.sweep`); up and down sweeps (and several
 inclinations given with ``--alphas``) are independent and run in parallel on
 ``--workers N`` local processes or on a Dask cluster (``--dask tcp://host:port``,
 needs the optional extra ``fempipe[dask]``).
@@ -119,8 +119,8 @@ def _parse(args):
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.bifurcation import bifurcation_diagram
-    from fempipe.operators import PipeModel
+    from fempipe.analyses.bifurcation import bifurcation_diagram
+    from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "bifurcation")
     setup = common.setup_from_args(args)
@@ -199,10 +199,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
-    """``--method continuation``: :func:`fempipe.periodic.cycle_diagram`."""
-    from fempipe.errors import SolverError
-    from fempipe.operators import PipeModel
-    from fempipe.periodic import cycle_diagram
+    """``--method continuation``: :func:`fempipe.analyses.periodic.cycle_diagram`."""
+    from fempipe.analyses.periodic import cycle_diagram
+    from fempipe.core.errors import SolverError
+    from fempipe.model.operators import PipeModel
 
     flow_opt = "--U" if args.U is not None else "--v"
     if len(set(setup.v)) < 2:
@@ -309,7 +309,7 @@ def _paper_panel(key: str, alpha: float, params: dict) -> str:
     10 are eta(1), X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi,
     all for the reference case beta = 0.142, gamma = 18.9, mu = 0.005.
     """
-    from fempipe.params import PAPER_CASE, VARIANT_FIELDS
+    from fempipe.model.params import PAPER_CASE, VARIANT_FIELDS
 
     if any(not math.isclose(params.get(k, math.nan), v) for k, v in PAPER_CASE.items()):
         return ""

@@ -38,8 +38,8 @@ import argparse
 import re
 from dataclasses import dataclass, replace
 
-from fempipe.errors import ParamError
-from fempipe.params import Params, PipeSI
+from fempipe.core.errors import ParamError
+from fempipe.model.params import Params, PipeSI
 
 from .parsing import (
     DEFAULT_BETA,
@@ -260,10 +260,10 @@ def add_flow_arguments(parser: argparse.ArgumentParser, default: str | None = "0
 
 
 def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--fe Pk:n`` (default :data:`~fempipe.discretization.DEFAULT_FE`) or ``--modal N``
+    """``--fe Pk:n`` (default :data:`~fempipe.model.discretization.DEFAULT_FE`) or ``--modal N``
     with ``--basis sine|beam``, and ``--allow-large``."""
     # Imported here: ``fempipe --help`` does not need numpy.
-    from fempipe.discretization import DEFAULT_FE, Modal
+    from fempipe.model.discretization import DEFAULT_FE, Modal
 
     g = parser.add_argument_group("discretisation and work limits")
     ex = g.add_mutually_exclusive_group()
@@ -462,7 +462,7 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
     CLIError
         Naming the offending option; the dispatcher prints it and exits 2.
     """
-    from fempipe.discretization import parse_discretization
+    from fempipe.model.discretization import parse_discretization
 
     alpha = _given(args, "alpha")
     alpha = 0.0 if alpha is None else alpha

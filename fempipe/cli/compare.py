@@ -2,15 +2,15 @@
 
 The file holds the user's own numbers (from a modal code, another FE code, an
 experiment), one case per row; for each row and each quantity given, fempipe
-computes the same quantity (:class:`fempipe.convergence.Quantity`, exactly
+computes the same quantity (:class:`fempipe.studies.convergence.Quantity`, exactly
 as ``fempipe convergence`` does) on the chosen discretisation (``--fe``,
 default P3:16, or ``--modal N``) and again on the refined one (elements
 halved, twice the modes plus one for an odd N), and reports the user's value, fempipe's, the
 difference user - fempipe, the relative difference (over |fempipe|),
 fempipe's error estimate (the Grid Convergence Index of one refinement,
-:mod:`fempipe.error_estimate`) and whether the difference is *resolved*
+:mod:`fempipe.studies.error_estimate`) and whether the difference is *resolved*
 (|difference| > error estimate: fempipe's discretisation error cannot explain
-it).  See :mod:`fempipe.compare`.
+it).  See :mod:`fempipe.studies.compare`.
 
 Input file
 ----------
@@ -31,7 +31,7 @@ Columns (:data:`COLUMNS`):
   the static state (what a planar code computes; the same numbers as
   ``v_cr_in_plane``, ``frequency_in_plane``); ``v_cr_out_of_plane`` and
   ``frequency_out_of_plane`` are those of the motion out of that plane
-  (:mod:`fempipe.out_of_plane`): the round pipe first loses stability at the
+  (:mod:`fempipe.model.out_of_plane`): the round pipe first loses stability at the
   smaller of ``v_cr_in_plane`` and ``v_cr_out_of_plane``, which is
   ``fempipe critical``'s and ``fempipe convergence``'s ``v_cr`` (README,
   "Out of the plane");
@@ -43,7 +43,7 @@ Columns (:data:`COLUMNS`):
   output lists each value so taken (``defaults``);
 * or the SI pipe: ``length`` (m), ``EI`` (N m^2), ``m``, ``M`` (kg/m), ``g``
   (m/s^2, default 9.81), ``a`` (s, default 0) and the flow ``U`` (m/s),
-  converted by :class:`fempipe.params.PipeSI` as the SI options are; a file
+  converted by :class:`fempipe.model.params.PipeSI` as the SI options are; a file
   is either dimensionless or SI (``alpha``/``alpha_deg`` belong to both);
 * the flow range of the critical quantities (``v_cr``, ``frequency`` and
   their ``_in_plane``, ``_out_of_plane`` forms): ``v_min`` (default 0),
@@ -91,7 +91,7 @@ from pathlib import Path
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
-from fempipe.params import Params, PipeSI
+from fempipe.model.params import Params, PipeSI
 
 __all__ = ["COLUMNS", "DEFAULT_V_MAX", "Case", "add_arguments", "read_cases", "run"]
 
@@ -225,10 +225,10 @@ class Case:
     label: str | None = None
 
     def quantity(self, name: str, shoot_rtol: float = 1e-9):
-        """The :class:`~fempipe.convergence.Quantity` of column ``name`` for this row."""
+        """The :class:`~fempipe.studies.convergence.Quantity` of column ``name`` for this row."""
         from dataclasses import replace
 
-        from fempipe.convergence import Quantity
+        from fempipe.studies.convergence import Quantity
 
         if name in _CRITICAL:
             lo, hi = self.v_range
@@ -407,7 +407,7 @@ def _parse_row(
     names: list[str], cells: list[str], row: int, line: int, v_max_default: float, where: _Where
 ) -> Case:
     """One data row checked into a :class:`Case` (CLIError naming the row and column)."""
-    from fempipe.errors import ParamError
+    from fempipe.core.errors import ParamError
 
     def err(column: str | None, message: str) -> CLIError:
         return where.cell(row, line, column, message)
@@ -619,8 +619,8 @@ def read_cases(path: str, v_max: float = DEFAULT_V_MAX) -> list[Case]:
 def run(args: argparse.Namespace) -> int:
     import time
 
-    from fempipe.compare import compare_values, estimate_description
     from fempipe.io import CSV_UNITS
+    from fempipe.studies.compare import compare_values, estimate_description
 
     t0 = time.process_time()
     setup = common.setup_from_args(args, need_flow=False)  # the discretisation

@@ -8,17 +8,17 @@ of doubling element counts (``--fe P1,P2,P3 --elements 2:64``) and on
 doubling numbers of modes (``--modal 2:32 --basis sine,beam``), forms the
 reference by Richardson extrapolation and reports, per family, the values,
 the errors against the reference and the observed order with the points it
-used (:func:`fempipe.convergence.run_study`, whose docstring says how the
+used (:func:`fempipe.studies.convergence.run_study`, whose docstring says how the
 reference is formed).  For the static tip values the strong form is also
 solved by collocation (scipy ``solve_bvp``) as an independent check.
 
 The critical quantities: ``v_cr`` and ``frequency`` are those of the first
 loss of stability of the round pipe in three dimensions, the earlier of the
 motion in the plane of the static state and out of it
-(:func:`fempipe.stability.spatial_critical_velocity`); ``v_cr_in_plane``,
+(:func:`fempipe.analyses.stability.spatial_critical_velocity`); ``v_cr_in_plane``,
 ``frequency_in_plane`` those of the plane alone (the paper's planar v_cr),
 ``v_cr_out_of_plane``, ``frequency_out_of_plane`` those of the motion out of
-the plane (:class:`fempipe.convergence.Quantity`).
+the plane (:class:`fempipe.studies.convergence.Quantity`).
 
 ``--json`` prints ``{"quantity", "reference": {"value", "error_estimate",
 "method", "family", "independent"}, "series": [{"family", "n", "dofs",
@@ -58,7 +58,7 @@ def _degrees(text: str) -> list[int]:
 
 def _sizes(text: str) -> list[int]:
     """``LOW:HIGH`` (doubling from LOW up to HIGH) or ``a,b,c`` (increasing)."""
-    from fempipe.convergence import doubling
+    from fempipe.studies.convergence import doubling
 
     text = str(text).strip()
     try:
@@ -91,7 +91,7 @@ def _bases(text: str) -> list[str]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from fempipe.convergence import QUANTITIES
+    from fempipe.studies.convergence import QUANTITIES
 
     common.add_physical_arguments(parser)
     common.add_flow_arguments(parser, default=None)
@@ -160,7 +160,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _families(args: argparse.Namespace) -> list:
-    from fempipe.convergence import Family
+    from fempipe.studies.convergence import Family
 
     degrees, modes = args.fe_degrees, args.modal_sizes
     if degrees is None and modes is None:
@@ -188,7 +188,7 @@ def _families(args: argparse.Namespace) -> list:
 def _quantity(args: argparse.Namespace, setup):
     from dataclasses import replace
 
-    from fempipe.convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
+    from fempipe.studies.convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
 
     name = args.quantity
     flow_opt = "--U" if getattr(args, "U", None) is not None else "--v"
@@ -210,8 +210,8 @@ def _quantity(args: argparse.Namespace, setup):
 def run(args: argparse.Namespace) -> int:
     import time
 
-    from fempipe.convergence import CYCLE_QUANTITIES, STATIC_QUANTITIES, run_study
-    from fempipe.discretization import FiniteElement
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.studies.convergence import CYCLE_QUANTITIES, STATIC_QUANTITIES, run_study
 
     setup = common.setup_from_args(args, need_flow=False)
     quantity = _quantity(args, setup)
@@ -256,9 +256,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _bvp_value(quantity) -> tuple[str, float] | None:
     """The static tip value by collocation of the strong form, Eq. (31a), on the FE branch."""
-    from fempipe.convergence import _static_tip_state
-    from fempipe.discretization import FiniteElement
-    from fempipe.errors import SolverError
+    from fempipe.core.errors import SolverError
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.studies.convergence import _static_tip_state
     from fempipe.validation.bvp import solve_static_bvp
 
     p = quantity.params

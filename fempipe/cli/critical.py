@@ -6,10 +6,10 @@ and every fold to 1e-10 in v, follows the branches born at branch points
 (pitchforks at alpha = 0, pi; ``--no-branches`` to skip) and reports the first
 loss of stability of the primary branch as v_cr.  The pipe is round: its
 motion in the plane of the static state (Eq. (32)) and out of it
-(:mod:`fempipe.out_of_plane`) are both analysed along the same branches
-(:func:`fempipe.stability.spatial_stability_analysis`), and v_cr is the first
+(:mod:`fempipe.model.out_of_plane`) are both analysed along the same branches
+(:func:`fempipe.analyses.stability.spatial_stability_analysis`), and v_cr is the first
 loss of stability in three dimensions.  ``--planar`` analyses the paper's
-planar model alone (:func:`fempipe.stability.stability_analysis`), every
+planar model alone (:func:`fempipe.analyses.stability.stability_analysis`), every
 output as before the out-of-plane analysis existed (events gain ``plane``).
 
 In three dimensions the JSON also carries ``v_cr_in_plane``,
@@ -40,9 +40,9 @@ at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
 critical.json, events.csv and branches.png.
 
 ``--error-estimate`` runs the whole analysis again on the refined
-discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
+discretisation (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
 or twice the modes, plus one for an odd N), pairs the events of the two runs by branch, type and
-mode (:func:`fempipe.error_estimate.match_events`, not by position) and adds
+mode (:func:`fempipe.studies.error_estimate.match_events`, not by position) and adds
 beside ``v_cr``, ``v_flutter`` (and ``U_cr``), beside ``v`` and
 ``frequency`` of every event and of ``critical``, the estimate ``Q_error`` =
 max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|)) (Roache's Grid
@@ -126,9 +126,9 @@ def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    from fempipe.analyses.stability import spatial_stability_analysis, stability_analysis
     from fempipe.io import json_dumps
-    from fempipe.operators import PipeModel
-    from fempipe.stability import spatial_stability_analysis, stability_analysis
+    from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
     flow_opt = "--U" if args.U is not None else "--v"
@@ -162,8 +162,8 @@ def run(args: argparse.Namespace) -> int:
             refined = _refined_run(model, kwargs, bar, analysis)
     head = setup.to_dict()
     result = res.to_dict()
-    # Hopf criticality of the flutter events (fempipe.stability.hopf).
-    from fempipe.stability.hopf import decorate_events
+    # Hopf criticality of the flutter events (fempipe.analyses.stability.hopf).
+    from fempipe.analyses.stability.hopf import decorate_events
 
     result = decorate_events(result, model, res if args.planar else res.in_plane)
     result["params"] = head["params"]
@@ -192,9 +192,9 @@ def run(args: argparse.Namespace) -> int:
 def _refined_run(model, kwargs: dict, bar, analysis) -> tuple:
     """``(refined result or None, ErrorEstimate, notes)``: the analysis on the refined
     discretisation, with the progress bar counting its samples too."""
-    from fempipe.error_estimate import describe, refine
-    from fempipe.errors import SolverError
-    from fempipe.operators import PipeModel
+    from fempipe.core.errors import SolverError
+    from fempipe.model.operators import PipeModel
+    from fempipe.studies.error_estimate import describe, refine
 
     fine = refine(model.disc)
     info = describe(
@@ -225,7 +225,7 @@ def _refined_run(model, kwargs: dict, bar, analysis) -> tuple:
 
 def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
     """``result`` with ``Q_error``, ``Q_refined`` beside the numbers (module docstring)."""
-    from fempipe.error_estimate import match_events
+    from fempipe.studies.error_estimate import match_events
 
     notes = list(notes)
     order, name = info.order, info.refined

@@ -2,11 +2,11 @@
 
 With ``--error-estimate`` a command (``static``, ``critical``, ``simulate``)
 reruns its computation on the refined discretisation of
-:func:`fempipe.error_estimate.refine` and reports, beside each number ``Q``
+:func:`fempipe.studies.error_estimate.refine` and reports, beside each number ``Q``
 of its JSON, ``Q_error`` (the estimate of
-:func:`fempipe.error_estimate.estimate`) and ``Q_refined`` (the refined
+:func:`fempipe.studies.error_estimate.estimate`) and ``Q_refined`` (the refined
 value), plus a top-level ``"error_estimate"`` describing the method
-(:class:`fempipe.error_estimate.ErrorEstimate`) with the ``notes`` of the
+(:class:`fempipe.studies.error_estimate.ErrorEstimate`) with the ``notes`` of the
 comparison (an event found on one discretisation only, attractors of
 different kinds, a refined solve that failed).  CSV files gain only the
 ``Q_error`` columns, after the existing ones.  The text output shows
@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterable, Mapping
 
-from fempipe.error_estimate import RATIO, ErrorEstimate, estimate
+from fempipe.studies.error_estimate import RATIO, ErrorEstimate, estimate
 
 __all__ = [
     "ERROR",
@@ -76,7 +76,7 @@ def with_estimate(
 ) -> dict:
     """``d`` with ``key_error`` and ``key_refined`` beside ``key``.
 
-    The error is :func:`~fempipe.error_estimate.estimate` of ``d[key]``
+    The error is :func:`~fempipe.studies.error_estimate.estimate` of ``d[key]``
     against ``refined`` with the floor ``floor * max(1, |d[key]|)`` (a
     relative solver tolerance); None when either value is None.  ``scale``
     converts a derived quantity (an SI value, ``scale`` times a

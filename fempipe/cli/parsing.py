@@ -47,8 +47,8 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from fempipe.errors import ParamError
-from fempipe.params import PAPER_CASE, Params, PipeSI
+from fempipe.core.errors import ParamError
+from fempipe.model.params import PAPER_CASE, Params, PipeSI
 
 __all__ = [
     "ALPHA_MAX",
@@ -435,7 +435,7 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
 
 def _fe_size(text: str) -> tuple[str, int]:
     """``(text, unknowns)`` of ``--fe Pk:n``, checked without building the mesh."""
-    from fempipe.discretization import parse_fe_spec
+    from fempipe.model.discretization import parse_fe_spec
 
     degree, n_el = parse_fe_spec(text)  # ValueError with the library's message
     return str(text), degree * n_el
@@ -443,7 +443,7 @@ def _fe_size(text: str) -> tuple[str, int]:
 
 def _modal_size(text: str) -> tuple[str, int]:
     """``(text, unknowns)`` of ``--modal N``."""
-    from fempipe.discretization import parse_discretization
+    from fempipe.model.discretization import parse_discretization
 
     try:
         n = int(str(text))

@@ -30,10 +30,10 @@ animation are of the cycle.  The period, tip extrema and Floquet multipliers of 
 JSON are those of the cycle, never of the transient.
 
 ``--error-estimate`` computes the attractor again on the refined
-discretisation (:func:`fempipe.error_estimate.refine`: P_k elements halved,
+discretisation (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
 or twice the modes, plus one for an odd N) without a new transient where it can: a limit cycle is
 shot from the coarse cycle transferred to the refined space (the L2
-projection :func:`fempipe.projection.project`), an equilibrium solved by
+projection :func:`fempipe.model.projection.project`), an equilibrium solved by
 Newton from the coarse one (and its linear stability checked); only if that
 shooting fails is the refined attractor found by integration from the
 transferred state, and a pulsating flow is integrated again from the refined
@@ -180,10 +180,10 @@ def tip_rows(disc, alpha: float, t, q, qdot, output_dt: float | None = None) -> 
     -------
     list of dict
         Rows with the keys :data:`TIP_COLUMNS`, from
-        :func:`fempipe.kinematics.tip_values` and
-        :func:`~fempipe.kinematics.tip_velocity` (theta_tip_rate = theta_dot(1)).
+        :func:`fempipe.model.kinematics.tip_values` and
+        :func:`~fempipe.model.kinematics.tip_velocity` (theta_tip_rate = theta_dot(1)).
     """
-    from fempipe.kinematics import tip_values, tip_velocity
+    from fempipe.model.kinematics import tip_values, tip_velocity
 
     t, q, qdot = np.asarray(t, float), np.asarray(q, float), np.asarray(qdot, float)
     if output_dt is not None:
@@ -253,12 +253,12 @@ def _cost_check(v: float, t_max: float, allow: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.dynamics import PulsatingFlow, initial_state, simulate
+    from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
+    from fempipe.analyses.limit_cycle import TIP_KEYS, find_attractor
+    from fempipe.analyses.statics import solve_static
     from fempipe.io import json_dumps
-    from fempipe.kinematics import tip_values
-    from fempipe.limit_cycle import TIP_KEYS, find_attractor
-    from fempipe.operators import PipeModel
-    from fempipe.static import solve_static
+    from fempipe.model.kinematics import tip_values
+    from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "simulate")
     setup = common.setup_from_args(args)
@@ -368,15 +368,15 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
     is nothing to compare), ``floor`` the solver tolerance of the values.
     The progress bar runs from 100 to 200 over this work.
     """
-    from fempipe.dynamics import PulsatingFlow, initial_state, simulate
-    from fempipe.error_estimate import describe, refine
-    from fempipe.errors import SolverError
-    from fempipe.kinematics import tip_values
-    from fempipe.limit_cycle import TIP_KEYS
-    from fempipe.operators import PipeModel
-    from fempipe.projection import project
-    from fempipe.stability import linearly_stable
-    from fempipe.static import solve_static
+    from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
+    from fempipe.analyses.limit_cycle import TIP_KEYS
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_static
+    from fempipe.core.errors import SolverError
+    from fempipe.model.kinematics import tip_values
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.projection import project
+    from fempipe.studies.error_estimate import describe, refine
 
     disc, params = model.disc, model.params
     fine = refine(disc)
@@ -438,9 +438,9 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
 
 def _refined_cycle(disc, fine_model, att, args, on_time, summary, notes) -> dict:
     """The refined limit cycle: shot from the coarse cycle, else found by integration."""
-    from fempipe.limit_cycle import ShootingError, find_attractor, shoot
-    from fempipe.projection import project
-    from fempipe.radau import IntegrationError
+    from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
+    from fempipe.model.projection import project
+    from fempipe.solvers.radau import IntegrationError
 
     fine = fine_model.disc
     c = att.cycle
@@ -472,7 +472,7 @@ def _refined_cycle(disc, fine_model, att, args, on_time, summary, notes) -> dict
 
 def _with_errors(result: dict, coarse, refined, info, floor: float, notes: list, pipe) -> dict:
     """``result`` with the estimates beside ``period`` and ``tip`` (module docstring)."""
-    from fempipe.error_estimate import estimate
+    from fempipe.studies.error_estimate import estimate
 
     notes = list(notes)
     order = info.order
@@ -547,7 +547,7 @@ def _display_states(att, traj, n_periods: int = 3):
     tau, 0.16 rad at the tip, at alpha = pi/2, v = 10), and appending the orbit
     from that sample put a jump into the time traces and the animation.
     """
-    from fempipe.limit_cycle import _state_distance
+    from fempipe.analyses.limit_cycle import _state_distance
 
     t, q, p = traj.t, traj.q, traj.qdot
     if att is None or att.cycle is None:
@@ -568,13 +568,13 @@ def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from fempipe.io.trajectory import write_trajectory
     from fempipe.plotting.dynamics import (
         animate,
         plot_oscillating_shapes,
         plot_phase_portrait,
         plot_time_traces,
     )
-    from fempipe.trajectory_io import write_trajectory
 
     disc, p = model.disc, model.params
     title = f"α = {math.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, v = {p.v:.4g}"

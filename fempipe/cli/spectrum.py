@@ -2,7 +2,7 @@
 
 Follows the static branch (gravity loading, then the flow values of ``--v`` or
 ``--U`` in order) and computes the resolved eigenvalues of Eq. (32) at every
-value (:func:`fempipe.stability.root_locus`).  Mode numbers are intrinsic:
+value (:func:`fempipe.analyses.stability.root_locus`).  Mode numbers are intrinsic:
 carried by continuity from the modes at v = 0, whatever the range start or
 the mesh; modes 1..``--modes`` are reported, and every mode that is unstable
 at some v whatever its number.  Both conventions are given: lambda
@@ -10,8 +10,8 @@ at some v whatever its number.  Both conventions are given: lambda
 Omega = -i lambda (Im Omega < 0 unstable).
 
 The pipe is round: the motion out of the plane of the static state
-(:mod:`fempipe.out_of_plane`) is analysed too, about the same static states
-(:func:`fempipe.stability.spatial_root_locus`), and ``stable`` is the verdict
+(:mod:`fempipe.model.out_of_plane`) is analysed too, about the same static states
+(:func:`fempipe.analyses.stability.spatial_root_locus`), and ``stable`` is the verdict
 in three dimensions: stable in the plane and out of it.  ``--planar`` gives
 the paper's planar model alone, every output as before the out-of-plane
 analysis existed.
@@ -80,9 +80,9 @@ def _modes(text: str) -> int | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from fempipe.analyses.stability import root_locus, spatial_root_locus
     from fempipe.io import json_dumps
-    from fempipe.operators import PipeModel
-    from fempipe.stability import root_locus, spatial_root_locus
+    from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
     n_modes = args.modes

@@ -4,7 +4,7 @@ For every alpha of ``--alphas`` and every curve -- each beta of ``--betas`` at
 the gamma of ``--gamma``, and each gamma of ``--gammas`` at the beta of
 ``--beta`` (Fig. 6(a) and 6(b)) -- computes v_cr, the first loss of
 stability of the gravity-loaded branch for v up to the largest ``--v``
-(:func:`fempipe.stability.stability_map`).  Points are independent and run
+(:func:`fempipe.analyses.stability.stability_map`).  Points are independent and run
 on ``--workers N`` processes; a failed point is reported and does not stop
 the others.
 
@@ -12,8 +12,8 @@ The variants of the pipe (``--end-mass``, ``--external-damping``,
 ``--hysteretic-damping``, ``--spring``) apply to every point.
 
 The pipe is round: each point analyses the motion in the plane of the
-static state and out of it (:mod:`fempipe.out_of_plane`) along the same
-static branch (:func:`fempipe.stability.spatial_critical_velocity`), and
+static state and out of it (:mod:`fempipe.model.out_of_plane`) along the same
+static branch (:func:`fempipe.analyses.stability.spatial_critical_velocity`), and
 v_cr is the first loss of stability in three dimensions, the first of the
 two planes' (at alpha = 0 they are the same: "in").  ``--planar`` maps the
 paper's planar model alone, every output as before.
@@ -48,7 +48,7 @@ import sys
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
-from fempipe.params import VARIANT_FIELDS
+from fempipe.model.params import VARIANT_FIELDS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -118,8 +118,8 @@ def _curves(args, setup) -> list[tuple[float, float]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from fempipe.analyses.stability import stability_map
     from fempipe.io import json_dumps
-    from fempipe.stability import stability_map
 
     if args.alpha is not None:
         raise CLIError("--alpha", "stability-map takes its inclinations from --alphas")

@@ -1,7 +1,7 @@
 """``fempipe static``: large static deformation along a list of flow velocities.
 
 Solves Eq. (31a) at each value of ``--v`` (or ``--U`` in m/s) by Newton and
-continuation from the gravity-sagged state (:func:`fempipe.static.solve_path`),
+continuation from the gravity-sagged state (:func:`fempipe.analyses.statics.solve_path`),
 and reports the tip values (Eq. (28)) as a table, as JSON (``--json``) or as
 files (``--out DIR``: static.json, static.csv, shapes.png, shapes.vtu).
 
@@ -10,14 +10,14 @@ follows the static state in gravity or inclination at one flow velocity instead.
 
 ``stable`` is the linear stability of each state in three dimensions: the
 pipe is round, and a state is stable when its motion in the plane of the
-static state (Eq. (32)) and out of it (:mod:`fempipe.out_of_plane`) are both
-stable (:func:`fempipe.stability.linearly_stable` of ``model`` and of
+static state (Eq. (32)) and out of it (:mod:`fempipe.model.out_of_plane`) are both
+stable (:func:`fempipe.analyses.stability.linearly_stable` of ``model`` and of
 ``model.with_plane("out")``); ``stable_in_plane`` and
 ``stable_out_of_plane`` are each plane's verdict.  ``--planar`` decides in
 the plane alone, every output as before (``stable`` only).
 
 ``--error-estimate`` also solves every point on the refined discretisation
-(:func:`fempipe.error_estimate.refine`: P_k elements halved, or twice the
+(:func:`fempipe.studies.error_estimate.refine`: P_k elements halved, or twice the
 modes), by Newton from the coarse state transferred to it (the L2
 projection, exact for these nested spaces, so the refined state is the same
 branch), and adds beside each tip value Q of a point (``theta_tip``,
@@ -43,7 +43,7 @@ from fempipe.cli.parsing import CLIError
 
 #: Tip quantities reported per point (dimensionless), in table order.
 TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
-#: Newton's tolerance of the static states (:func:`fempipe.static.solve_path`):
+#: Newton's tolerance of the static states (:func:`fempipe.analyses.statics.solve_path`):
 #: the floor of the error estimates, relative to max(1, |Q|).
 NEWTON_TOL = 1e-10
 
@@ -105,9 +105,9 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.kinematics import shape, tip_values
-    from fempipe.operators import PipeModel
-    from fempipe.static import NewtonError, solve_path
+    from fempipe.analyses.statics import NewtonError, solve_path
+    from fempipe.model.kinematics import shape, tip_values
+    from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
     pipe, disc = setup.pipe, setup.disc
@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
     # solve_path reaches its first point by the gravity loading (gamma continued
-    # from 0, fempipe.static.sagged_state), whose Newton iterations are in that
+    # from 0, fempipe.analyses.statics.sagged_state), whose Newton iterations are in that
     # point's newton_iterations; the others are Newton from the previous point.
     for row, sol in zip(points, sols, strict=True):
         row["includes_gravity_loading"] = sol.loading_iterations > 0
@@ -189,13 +189,13 @@ def _refined_states(model, sols, parameter: str, bar) -> tuple:
     again on the refined discretisation (None where Newton fails there, with a note).
 
     Newton starts from the coarse state transferred to the refined space
-    (:func:`fempipe.projection.project`), so each refined state is the
+    (:func:`fempipe.model.projection.project`), so each refined state is the
     coarse one's, on the same branch, whatever the path.
     """
-    from fempipe.error_estimate import describe, refine
-    from fempipe.operators import PipeModel
-    from fempipe.projection import project
-    from fempipe.static import NewtonError, solve_static
+    from fempipe.analyses.statics import NewtonError, solve_static
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.projection import project
+    from fempipe.studies.error_estimate import describe, refine
 
     disc = model.disc
     fine = refine(disc)
@@ -280,7 +280,7 @@ def _stable(model, q) -> bool | None:
     """Linear stability of the static state in ``model``'s plane (Eq. (32) in it); None if
     nothing is resolved.
 
-    :func:`fempipe.stability.linearly_stable`: the criterion of ``fempipe
+    :func:`fempipe.analyses.stability.linearly_stable`: the criterion of ``fempipe
     spectrum`` and ``fempipe critical``, computed for large meshes from the few
     lowest modes by sparse shift-invert (O(n) per point).
 
@@ -288,7 +288,7 @@ def _stable(model, q) -> bool | None:
     gamma > 7.837 the straight column is one.  ``fempipe critical`` follows
     the other branches.
     """
-    from fempipe.stability import linearly_stable
+    from fempipe.analyses.stability import linearly_stable
 
     return linearly_stable(model, q)
 

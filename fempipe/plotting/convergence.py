@@ -1,4 +1,4 @@
-"""The log-log convergence plot of a :class:`~fempipe.convergence.ConvergenceStudy`."""
+"""The log-log convergence plot of a :class:`~fempipe.studies.convergence.ConvergenceStudy`."""
 
 from __future__ import annotations
 

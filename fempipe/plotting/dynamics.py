@@ -20,7 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from fempipe.discretization import Discretization
+from fempipe.model.discretization import Discretization
 
 __all__ = [
     "plot_time_traces",
@@ -47,7 +47,7 @@ def _tip_series(
     disc: Discretization, alpha: float, q: np.ndarray, qdot: np.ndarray | None = None
 ) -> dict:
     """Tip coordinates (and their rates X_dot, Z_dot) of the states q, shape (m, n)."""
-    from fempipe.kinematics import tip_values, tip_velocity
+    from fempipe.model.kinematics import tip_values, tip_velocity
 
     out = tip_values(disc, np.atleast_2d(q), alpha)
     if qdot is not None:
@@ -119,7 +119,7 @@ def plot_oscillating_shapes(
     """
     import matplotlib.pyplot as plt
 
-    from fempipe.kinematics import shape
+    from fempipe.model.kinematics import shape
 
     ax = _axes(ax, (4.5, 5))
     q = np.atleast_2d(q)
@@ -164,8 +164,8 @@ def plot_bifurcation(
     ----------
     points : sequence of dict
         Sweep points ``{"v", "direction": "up"/"down", "attractor", key: [min, max]}``
-        (:func:`fempipe.bifurcation.bifurcation_diagram`), drawn as markers; and/or
-        continuation points (:func:`fempipe.periodic.cycle_diagram`): equilibria
+        (:func:`fempipe.analyses.bifurcation.bifurcation_diagram`), drawn as markers; and/or
+        continuation points (:func:`fempipe.analyses.periodic.cycle_diagram`): equilibria
         (``direction="static"``) and periodic orbits (``direction="continuation"``,
         by ``branch`` in arclength order), drawn as lines, solid where ``stable``
         and dashed where not, with the requested v marked.
@@ -324,7 +324,7 @@ def animation_figure(
     """
     import matplotlib.pyplot as plt
 
-    from fempipe.kinematics import shape
+    from fempipe.model.kinematics import shape
 
     q = np.atleast_2d(q)
     t = np.asarray(t, dtype=float)

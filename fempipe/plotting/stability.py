@@ -47,7 +47,7 @@ def plot_argand(
     title=None,
     out_of_plane=None,
 ):
-    """Argand diagram of a :class:`~fempipe.stability.RootLocus` (Fig. 5).
+    """Argand diagram of a :class:`~fempipe.analyses.stability.RootLocus` (Fig. 5).
 
     Parameters
     ----------
@@ -63,7 +63,7 @@ def plot_argand(
     title : str, optional
     out_of_plane : RootLocus, optional
         The loci of the motion out of the plane about the same static states
-        (:func:`~fempipe.stability.spatial_root_locus`): drawn dashed in the
+        (:func:`~fempipe.analyses.stability.spatial_root_locus`): drawn dashed in the
         colour of their mode, marked with open triangles, and named in the
         legend ("out of the plane").  Where they are the in-plane loci (the
         straight pipe: alpha = 0, or alpha = pi before buckling) they are not
@@ -227,7 +227,7 @@ def _nice_step(x: float) -> float:
 
 
 def plot_stability_map(smap, ax=None, title=None):
-    """Flutter velocity against alpha for each (beta, gamma) of a :class:`~fempipe.stability.StabilityMap`.
+    """Flutter velocity against alpha for each (beta, gamma) of a :class:`~fempipe.analyses.stability.StabilityMap`.
 
     The lines are the first flutter velocity of the primary branch (what the
     paper's Fig. 6 plots); where the branch loses stability earlier by
@@ -365,7 +365,7 @@ def _plot_spatial_map(smap, ax, title):
 
 
 def plot_branches(result, ax=None, title=None):
-    """Static branches of a :class:`~fempipe.stability.StabilityResult`: theta_tip against v.
+    """Static branches of a :class:`~fempipe.analyses.stability.StabilityResult`: theta_tip against v.
 
     Solid where stable, dashed where some resolved eigenvalue has
     Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilisation,

@@ -8,7 +8,7 @@ linearly unstable (some resolved eigenvalue of Eq. (32) with Re lambda > 0) is
 not what the pipe shows: it is drawn grey and dashed and said so in the
 legend, so that it cannot be read as an equilibrium one would observe.  In
 three dimensions (``stable_in_plane`` given) a state that is stable in its
-plane but unstable out of it (:mod:`fempipe.out_of_plane`) is drawn grey and
+plane but unstable out of it (:mod:`fempipe.model.out_of_plane`) is drawn grey and
 dash-dotted instead (dotted is the undeformed pipe), with its own legend key.
 """
 
@@ -56,7 +56,7 @@ def plot_shapes(
     Parameters
     ----------
     shapes : sequence of Shape
-        :class:`fempipe.kinematics.Shape`, dimensionless (Eq. (28)).
+        :class:`fempipe.model.kinematics.Shape`, dimensionless (Eq. (28)).
     labels : sequence of str, optional
         One legend entry per shape (e.g. ``"v = 2"``, ``"v = 1.69 (U = 1 m/s)"``).
     ax : matplotlib Axes, optional
@@ -71,7 +71,7 @@ def plot_shapes(
     title : str, optional
     stable : sequence of bool or None, optional
         Linear stability of each state (e.g. the ``stable`` flags of
-        ``fempipe static``, :func:`fempipe.stability.linearly_stable`).  States
+        ``fempipe static``, :func:`fempipe.analyses.stability.linearly_stable`).  States
         flagged False are drawn grey and dashed, with "(unstable)" in their
         legend entry and a legend key; None (the default, or an entry None)
         draws the state as stable ones are drawn.

@@ -58,7 +58,7 @@ CASES: tuple[str, ...] = (
     "external_damping",
     "hysteretic",
     "springs",
-    # The motion out of the plane (fempipe.out_of_plane) against an
+    # The motion out of the plane (fempipe.model.out_of_plane) against an
     # independent strong form (fempipe.validation.lateral).
     "out_of_plane",
 )

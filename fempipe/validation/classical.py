@@ -6,14 +6,14 @@ Interactions: Slender Structures and Axial Flow*, vol. 1, Academic Press
 1998, Sec. 3.3.5, Eqs. (3.70)-(3.71); Gregory & Paidoussis 1966; Paidoussis
 1970), written here from that equation and nothing else of fempipe: it knows
 neither the rotation angle theta nor the geometrically exact weak form of
-:mod:`fempipe.operators`.  It is valid for the straight pipe only: hanging
+:mod:`fempipe.model.operators`.  It is valid for the straight pipe only: hanging
 (alpha = 0), standing (alpha = pi) or without gravity (gamma = 0).
 
 The equation
 ------------
 With fempipe's (and Paidoussis') scaling -- xi = x/L, tau = t (EI/(m+M))^(1/2)
 / L^2, v = (M/EI)^(1/2) U L, beta = M/(m+M), gamma = (m+M) g L^3/EI -- and the
-variant parameters of :class:`fempipe.params.Params` (end mass Gamma =
+variant parameters of :class:`fempipe.model.params.Params` (end mass Gamma =
 M_e/((m+M) L), external damping sigma = c L^2/(EI (m+M))^(1/2), hysteretic
 loss factor mu_h, springs kappa_s = k_s L^3/EI at xi_s), the hanging pipe
 obeys
@@ -196,7 +196,7 @@ class StraightPipe:
 
     @classmethod
     def from_params(cls, params) -> StraightPipe:
-        """The straight pipe of a :class:`fempipe.params.Params` (alpha = 0 or pi, or gamma = 0).
+        """The straight pipe of a :class:`fempipe.model.params.Params` (alpha = 0 or pi, or gamma = 0).
 
         Raises
         ------

@@ -14,7 +14,7 @@ element degree and for increasing numbers of sine modes, then
 * tabulates the error of the paper's N = 3 and N = 4 against the reference.
 
 FE tip values of P_k converge as h^(2k) (nodal superconvergence; kept by the
-Gauss integration operators, see :mod:`fempipe.quadrature`).  The sine modes
+Gauss integration operators, see :mod:`fempipe.model.quadrature`).  The sine modes
 sin(k_r xi), k_r = (2r - 1) pi / 2, converge only algebraically: each has
 phi''(0) = 0, whereas Eq. (31a) at xi = 0 gives
 theta''(0) = gamma sin(alpha) + v^2 sin(theta(1)) != 0.  Integrating the sine
@@ -32,9 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..convergence import observed_order, richardson
-from ..discretization import FiniteElement, Modal
-from ..params import PAPER_CASE
+from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.params import PAPER_CASE
+from fempipe.studies.convergence import observed_order, richardson
+
 from .bvp import solve_static_bvp
 from .case import Case
 from .checks import CaseResult, Check, Table, close, holds

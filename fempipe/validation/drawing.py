@@ -95,8 +95,8 @@ def figure_panels(fig, n_panels: int, ncols: int | None = None, size: float = 3.
 
 def paper_case_line() -> str:
     """The paper's reference parameters as a line of a figure title:
-    ``β = 0.142, γ = 18.9, μ = 0.005`` (:data:`fempipe.params.PAPER_CASE`)."""
-    from ..params import PAPER_CASE
+    ``β = 0.142, γ = 18.9, μ = 0.005`` (:data:`fempipe.model.params.PAPER_CASE`)."""
+    from fempipe.model.params import PAPER_CASE
 
     return f"β = {PAPER_CASE['beta']:g}, γ = {PAPER_CASE['gamma']:g}, μ = {PAPER_CASE['mu']:g}"
 

@@ -1,14 +1,14 @@
 """Shared computations of the nonlinear-oscillation cases (Figs. 7-12).
 
 Each discretisation (the converged FE mesh and the paper's N = 3, N = 4)
-gets the same treatment: sweeps in v with :func:`fempipe.bifurcation.sweep`
+gets the same treatment: sweeps in v with :func:`fempipe.analyses.bifurcation.sweep`
 (each point starts from the previous attractor), limit cycles with
-:func:`fempipe.limit_cycle.find_attractor` and one period of the cycle
-resampled with :func:`fempipe.dynamics.simulate` for time traces, phase
+:func:`fempipe.analyses.limit_cycle.find_attractor` and one period of the cycle
+resampled with :func:`fempipe.analyses.dynamics.simulate` for time traces, phase
 portraits and oscillating shapes.
 
 The linear onset used to check the sweeps comes from
-:mod:`fempipe.validation.onset` (independent of :mod:`fempipe.stability`).
+:mod:`fempipe.validation.onset` (independent of :mod:`fempipe.analyses.stability`).
 """
 
 from __future__ import annotations
@@ -22,15 +22,22 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bifurcation import sweep
-from ..discretization import Modal, discretization_from_name, parse_discretization
-from ..dynamics import initial_state, simulate
-from ..kinematics import shape, tip_velocity
-from ..limit_cycle import TIP_KEYS, ShootingError, find_attractor, shoot, tip_coordinates
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
-from ..periodic import cycle_diagram
-from ..projection import project
+from fempipe.analyses.bifurcation import sweep
+from fempipe.analyses.dynamics import initial_state, simulate
+from fempipe.analyses.limit_cycle import (
+    TIP_KEYS,
+    ShootingError,
+    find_attractor,
+    shoot,
+    tip_coordinates,
+)
+from fempipe.analyses.periodic import cycle_diagram
+from fempipe.model.discretization import Modal, discretization_from_name, parse_discretization
+from fempipe.model.kinematics import shape, tip_velocity
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.projection import project
+
 from .static_shapes import PAPER_MODES, static_shapes
 
 __all__ = [
@@ -65,7 +72,7 @@ def dyn_modal(n_modes: int, basis: str = "sine") -> Modal:
     """The modal discretisation of the dynamic runs: N modes on max(8, 4 N) cells of
     8 Gauss points.
 
-    The default quadrature of :class:`~fempipe.discretization.Modal`,
+    The default quadrature of :class:`~fempipe.model.discretization.Modal`,
     max(32, 4 N) cells, is as fine as it is for the shapes of Figs. 2 and 4,
     sampled cell by cell; the dynamic runs need tip values only, and every
     stage of a time step walks the quadrature points.  Measured on limit
@@ -93,7 +100,7 @@ def modal_label(disc: Modal) -> str:
 
 
 def model_for(disc, alpha: float, v: float) -> PipeModel:
-    """The paper's reference case (:data:`fempipe.params.PAPER_CASE`) at (alpha, v)."""
+    """The paper's reference case (:data:`fempipe.model.params.PAPER_CASE`) at (alpha, v)."""
     return PipeModel(disc, Params(alpha=alpha, v=v, **PAPER_CASE))
 
 
@@ -209,7 +216,7 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
     With ``guess = (q0, qdot0, period)`` on ``guess_disc`` (another
     discretisation's cycle), shoot from its L2 projection: a few Newton
     iterations instead of a transient.  Otherwise (or if shooting fails)
-    integrate past the transient with :func:`fempipe.limit_cycle.find_attractor`.
+    integrate past the transient with :func:`fempipe.analyses.limit_cycle.find_attractor`.
     Returns None if the attractor is not periodic.
     """
     m = model_for(disc, alpha, v)
@@ -262,7 +269,7 @@ def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
 
 
 # ---------------------------------------------------------------------------
-# Bifurcation diagrams by continuation (fempipe.periodic), checked by integration
+# Bifurcation diagrams by continuation (fempipe.analyses.periodic), checked by integration
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class DiagramPoint:
@@ -288,7 +295,7 @@ class DiagramPoint:
 @dataclass(frozen=True)
 class ContinuedDiagram:
     """The static branch and the cycle branches from each Hopf point of one
-    discretisation at one alpha (:func:`fempipe.periodic.cycle_diagram`).
+    discretisation at one alpha (:func:`fempipe.analyses.periodic.cycle_diagram`).
 
     ``static`` the equilibria at the requested v; ``branches`` name -> points in
     arclength order; ``hopf`` the Hopf points (dicts with ``v``, ``omega``);
@@ -296,7 +303,7 @@ class ContinuedDiagram:
     branches that could not be continued (their points are kept); ``filled``
     the orbits at requested v that the branch passed without landing on them
     (near a Hopf point, where v is no local parameter of the branch), shot
-    (:func:`fempipe.limit_cycle.shoot`) from the orbit interpolated between the
+    (:func:`fempipe.analyses.limit_cycle.shoot`) from the orbit interpolated between the
     two continued orbits around v (branch ``"H1 (shot)"``).
     """
 
@@ -400,7 +407,9 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
         # between the two continued orbits around v.
         landed = {round(p.v, 9) for p in br if p.requested}
         path = store / f"a00-{name}.json"
-        if not path.exists():  # a store layout of another fempipe.periodic: nothing to fill
+        if (
+            not path.exists()
+        ):  # a store layout of another fempipe.analyses.periodic: nothing to fill
             continue
         states = json.loads(path.read_text())["points"]
         for v in values:

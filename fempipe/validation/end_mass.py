@@ -28,10 +28,11 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from ..discretization import parse_discretization
-from ..operators import PipeModel
-from ..params import Params
-from ..stability import spectrum
+from fempipe.analyses.stability import spectrum
+from fempipe.model.discretization import parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
 from . import classical
 from .case import Case
 from .checks import CaseResult, Table, below, holds

@@ -4,7 +4,7 @@ A force -c r_dot per unit length (fempipe's ``external_damping`` sigma) on
 Beck's column (beta = gamma = mu = 0: the follower force v^2 = P L^2/EI
 alone) raises the flutter load from 20.05 at zero damping to 37.7 for large
 damping (Plaut & Infante 1970).  This case computes v_cr^2(sigma) with
-fempipe (FE P3:16, :func:`fempipe.stability.critical_velocity`) and with the
+fempipe (FE P3:16, :func:`fempipe.analyses.stability.critical_velocity`) and with the
 classical theory of :mod:`fempipe.validation.classical`, checks that the two
 agree to 1e-6 and compares them with the printed numbers.
 
@@ -27,7 +27,8 @@ import time
 
 import numpy as np
 
-from ..params import Params
+from fempipe.model.params import Params
+
 from . import classical
 from .case import Case
 from .checks import CaseResult, Table, below, close, holds

@@ -23,7 +23,8 @@ import time
 
 import numpy as np
 
-from ..params import PipeSI
+from fempipe.model.params import PipeSI
+
 from .bvp import solve_static_bvp
 from .case import Case
 from .checks import CaseResult, Table, below, holds

@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from ..discretization import parse_discretization
+from fempipe.model.discretization import parse_discretization
+
 from .case import Case, alpha_name
 from .checks import CaseResult, below, holds
 from .static_shapes import (

@@ -1,9 +1,9 @@
 """Fig. 5: eigenvalues Omega against v (Argand diagrams) for several alpha.
 
 Root loci of the four lowest modes about the gravity-sagged static state,
-with the mode numbers of :func:`fempipe.stability.root_locus`,
+with the mode numbers of :func:`fempipe.analyses.stability.root_locus`,
 for the converged FE mesh and the paper's N = 3 and N = 4; every stability
-event on the static branches (:func:`fempipe.stability.stability_analysis`).
+event on the static branches (:func:`fempipe.analyses.stability.stability_analysis`).
 The paper plots Omega = -i lambda: Im Omega < 0 is unstable.
 
 Checks: flutter in the second mode for alpha != pi; for alpha = pi the
@@ -18,10 +18,11 @@ import time
 
 import numpy as np
 
-from ..discretization import Modal, parse_discretization
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
-from ..stability import root_locus, stability_analysis
+from fempipe.analyses.stability import root_locus, stability_analysis
+from fempipe.model.discretization import Modal, parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+
 from .case import Case, alpha_name, label_tag
 from .checks import CaseResult, Table, holds
 from .dynamic_runs import dyn_discretizations
@@ -117,7 +118,7 @@ def run(quick: bool = False) -> CaseResult:
             checks.append(
                 ref.below(
                     f"vcr_two_ways_{name}",
-                    f"α = {name}: v_cr of fempipe.stability equals the independent onset",
+                    f"α = {name}: v_cr of fempipe.analyses.stability equals the independent onset",
                     abs(fe.v_cr - ind.v_cr),
                     "onset_tol",
                     source="fempipe.validation.onset (Brent on the spectral abscissa)",

@@ -5,7 +5,7 @@ gamma = 18.9) and several gravity parameters (Fig. 6(b), beta = 0.142), by
 the converged FE mesh, with the paper's N = 3 and N = 4 overlaid for the
 reference case.  v_cr comes from :func:`fempipe.validation.onset.critical_velocity`
 (Brent's method on the spectral abscissa), independent of
-:mod:`fempipe.stability`; the two are compared.
+:mod:`fempipe.analyses.stability`; the two are compared.
 
 Checks the paper's statements of Sec. 4: flutter (a complex pair) for
 alpha != pi; v_cr falls as alpha grows; v_cr rises with beta; the effect of
@@ -13,7 +13,7 @@ gamma on v_cr changes sign with alpha.  These are the paper's planar checks,
 on the in-plane v_cr.
 
 The figure also draws the critical velocity of the motion out of the plane
-(:mod:`fempipe.out_of_plane`), the same independent onset solver with
+(:mod:`fempipe.model.out_of_plane`), the same independent onset solver with
 ``plane="out"``: for the round pipe it is the first instability at every
 inclined alpha of the grid (checked), equal to the in-plane one at alpha = 0.
 """
@@ -24,10 +24,11 @@ import time
 
 import numpy as np
 
-from .. import stability
-from ..discretization import Modal, parse_discretization
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
+from fempipe.analyses import stability
+from fempipe.model.discretization import Modal, parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+
 from .case import Case
 from .checks import CaseResult, Check, Table, below, holds
 from .onset import Onset, critical_velocity
@@ -292,7 +293,7 @@ def _headline(alphas, by_beta, by_gamma, out_beta, out_gamma) -> str:
 
 def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> list[Check]:
     """The out-of-plane curves: first at every inclined α, equal at α = 0, and the
-    independent onset against fempipe.stability's analysis of both planes."""
+    independent onset against fempipe.analyses.stability's analysis of both planes."""
     curves = [(f"β = {b:g}", by_beta[b], out_beta[b]) for b in by_beta] + [
         (f"γ = {g:g}", by_gamma[g], out_gamma[g]) for g in by_gamma if g != BASE_GAMMA
     ]
@@ -341,7 +342,7 @@ def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> 
                 source="symmetry (every plane through the axis is alike)",
             )
         )
-    from ..stability import spatial_critical_velocity
+    from fempipe.analyses.stability import spatial_critical_velocity
 
     diffs = []
     for i in (len(alphas) // 2, len(alphas) - 1):
@@ -351,29 +352,29 @@ def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> 
     checks.append(
         below(
             "out_of_plane_vs_stability_module",
-            "out-of-plane v_cr equals fempipe.stability's (two implementations)",
+            "out-of-plane v_cr equals fempipe.analyses.stability's (two implementations)",
             max(diffs),
             1e-6,
             why="both locate the crossing to ≤ 1e-8",
-            source="fempipe.stability.spatial_critical_velocity",
+            source="fempipe.analyses.stability.spatial_critical_velocity",
         )
     )
     return checks
 
 
 def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Check:
-    """v_cr of :func:`fempipe.stability.critical_velocity` against the independent onset."""
+    """v_cr of :func:`fempipe.analyses.stability.critical_velocity` against the independent onset."""
     diffs = []
     for i in (0, len(alphas) // 2):
         model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
         diffs.append(abs(stability.critical_velocity(model).v_cr - base[i].v_cr))
     return below(
         "vs_stability_module",
-        "v_cr equals fempipe.stability's (two implementations)",
+        "v_cr equals fempipe.analyses.stability's (two implementations)",
         max(diffs),
         1e-6,
         why="both locate the crossing to ≤ 1e-8",
-        source="fempipe.stability.critical_velocity",
+        source="fempipe.analyses.stability.critical_velocity",
     )
 
 

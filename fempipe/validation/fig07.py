@@ -8,7 +8,7 @@ converged FE mesh as well, and checks
 * the onset of the limit cycle against the linear critical velocity of each
   discretisation (an independent bisection on the spectrum): the branch of
   periodic orbits is continued from the Hopf point of the static branch
-  (:func:`fempipe.periodic.cycle_diagram`), so the onset is v_H itself, no
+  (:func:`fempipe.analyses.periodic.cycle_diagram`), so the onset is v_H itself, no
   longer a bracket of sweep velocities;
 * the continuation against brute force: at v = 6.3, 6.5, 10 the attractor
   reached by integration from the sagged state must be a stable continued
@@ -40,7 +40,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
-    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(
@@ -78,7 +78,7 @@ def onset_bracket(points) -> tuple[float, float]:
 
 
 #: Largest |v_H - v_cr| between the Hopf point of the continuation (located by
-#: fempipe.stability on the static branch) and the linear v_cr of
+#: fempipe.analyses.stability on the static branch) and the linear v_cr of
 #: fempipe.validation.onset (Brent's method to 1e-10 on the spectral abscissa):
 #: two locations of the same root, each far more accurate than this.
 ONSET_TOL = 1e-6
@@ -144,7 +144,7 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
         "independent computations of the same orbits; equilibria reached by integration stop "
         "at the classification's radius, so only their identity is checked (1e-3); an "
         "integration that finds no attractor by its t_max next to v_H is listed as inconclusive",
-        source="fempipe.limit_cycle.find_attractor against fempipe.periodic.cycle_diagram",
+        source="fempipe.analyses.limit_cycle.find_attractor against fempipe.analyses.periodic.cycle_diagram",
         category="numerics",
     )
 
@@ -206,7 +206,7 @@ def run(quick: bool = False) -> CaseResult:
             diags[label],
             v_lin,
             "fempipe.validation.onset: Brent's method on the spectral abscissa of Eqs. "
-            "(31b)-(33), against the Hopf point of fempipe.periodic (fempipe.stability)",
+            "(31b)-(33), against the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
         )
         checks.append(chk)
         onsets[label] = (lo, hi, v_lin, v_h)

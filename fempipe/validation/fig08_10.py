@@ -3,7 +3,7 @@
 The tip response eta(1) (Fig. 8) and its global coordinates X_g(1) (Fig. 9)
 and Z_g(1) (Fig. 10) against v, for the converged FE mesh and the paper's
 N = 3 and N = 4, by continuation of the static branch and of the periodic
-orbits born at its Hopf points (:func:`fempipe.periodic.cycle_diagram`; at
+orbits born at its Hopf points (:func:`fempipe.analyses.periodic.cycle_diagram`; at
 alpha = pi the buckled equilibria below the flutter from a sweep up, which the
 continued straight branch does not contain).  The attractor found by
 integration at the shape velocities must be a stable continued state (to 1e-6
@@ -20,9 +20,10 @@ import time
 
 import numpy as np
 
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
-from ..stability import stability_analysis
+from fempipe.analyses.stability import stability_analysis
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+
 from .case import Case, alpha_name, label_tag
 from .checks import CaseResult, Check, Table, holds
 from .dynamic_runs import continued_diagram, dyn_discretizations, orbit, sweep_check, sweep_up
@@ -32,7 +33,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
-    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -136,7 +137,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                     dg,
                     v_lin,
                     "fempipe.validation.onset: Brent's method on the spectral abscissa, against "
-                    "the Hopf point of fempipe.periodic (fempipe.stability)",
+                    "the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
                 )
                 checks.append(chk)
             p10 = {p.v: p for p in sweeps[label] if p is not None}[10.0]
@@ -314,7 +315,7 @@ def _straight_flutter(disc) -> float:
 
 
 def _pi_cross_checks(disc, pts, diag) -> list[Check]:
-    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.stability.stability_analysis`.
+    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.analyses.stability.stability_analysis`.
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
     the buckled branch (a subcritical pitchfork makes the straight state
@@ -347,7 +348,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
                 f"v = {fold:.6f}",
                 reference="lo ≤ v_fold ≤ hi",
                 why="the sweep resolves the jump only to its spacing",
-                source="fempipe.stability.stability_analysis (branch switching, folds)",
+                source="fempipe.analyses.stability.stability_analysis (branch switching, folds)",
                 category="numerics",
             )
         )
@@ -368,7 +369,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
                 reference="lo ≤ v_flutter ≤ hi, |v_H - v_flutter| ≤ 1e-6, stable cycle at hi",
                 why="the continued cycle branch starts at the Hopf point itself; the "
                 "requested v bracket it to their spacing",
-                source="fempipe.stability.stability_analysis; fempipe.periodic",
+                source="fempipe.analyses.stability.stability_analysis; fempipe.analyses.periodic",
                 category="numerics",
             )
         )

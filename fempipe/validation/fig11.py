@@ -1,7 +1,7 @@
 """Fig. 11: time traces of the tip position at v = 10 for several alpha.
 
 The limit cycle at v = 10 of each inclination, computed by shooting
-(:func:`fempipe.limit_cycle.shoot`, Floquet multipliers from the monodromy
+(:func:`fempipe.analyses.limit_cycle.shoot`, Floquet multipliers from the monodromy
 matrix) for the converged FE mesh and for N = 3 and N = 4, drawn over three
 periods.  Checks: the cycles are periodic and stable, the tip excursion is
 close to the pipe length, and how well N = 3 and N = 4 reproduce the
@@ -14,7 +14,8 @@ import time
 
 import numpy as np
 
-from ..discretization import parse_discretization
+from fempipe.model.discretization import parse_discretization
+
 from .case import Case, alpha_name
 from .checks import CaseResult, Table, below, holds
 from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations

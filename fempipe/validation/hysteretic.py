@@ -4,7 +4,7 @@ Paidoussis (1998), Table 3.4, p. 143 (after Paidoussis 1970) gives the theory's
 critical flow velocity u_cf and frequency omega_cf of two hanging cantilevers
 (alpha = 0) without damping and with the hysteretic loss factor mu = 0.02,
 EI -> EI (1 + i mu sgn(omega)) (fempipe's ``hysteretic_damping``).  This case
-computes them with fempipe (FE P3:16, :func:`fempipe.stability.critical_velocity`)
+computes them with fempipe (FE P3:16, :func:`fempipe.analyses.stability.critical_velocity`)
 and with the classical theory of :mod:`fempipe.validation.classical`, checks
 that the two agree to 1e-6, and compares both with the printed numbers
 (``paper`` checks: a disagreement is a finding about the table, not a failure
@@ -22,10 +22,11 @@ import time
 
 import numpy as np
 
-from ..discretization import parse_discretization
-from ..operators import PipeModel
-from ..params import Params
-from ..stability import spectrum
+from fempipe.analyses.stability import spectrum
+from fempipe.model.discretization import parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
 from .case import Case
 from .checks import CaseResult, Table, below, close
 from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset

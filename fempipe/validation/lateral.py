@@ -1,9 +1,9 @@
-"""The motion out of the plane in strong form: an independent check of fempipe.out_of_plane.
+"""The motion out of the plane in strong form: an independent check of fempipe.model.out_of_plane.
 
 This module solves the classical fourth-order equation of the out-of-plane
 deflection w(xi, tau) of the pipe about a planar static state theta^s(xi)
 (Chen et al. 2020, Eq. (31a)), written from that equation alone: it knows
-neither the out-of-plane rotation psi = w' of :mod:`fempipe.out_of_plane` nor
+neither the out-of-plane rotation psi = w' of :mod:`fempipe.model.out_of_plane` nor
 fempipe's discretisations, quadrature or operators.  The static state comes
 from :func:`fempipe.validation.bvp.solve_static_bvp` (scipy's ``solve_bvp``
 on the strong form of Eq. (31a)), which is independent of fempipe too.

@@ -1,19 +1,19 @@
-"""Critical flow velocities, computed independently of :mod:`fempipe.stability`.
+"""Critical flow velocities, computed independently of :mod:`fempipe.analyses.stability`.
 
 v_cr is the first flow velocity at which the static state (on the
 gravity-sagged branch) loses linear stability: the spectral abscissa, the
 largest real part of the eigenvalues of the linearised problem
 (lambda^2 M^d + lambda C^d + K^d) x = 0 (Eqs. (31b)-(33), via
-:func:`fempipe.limit_cycle.static_growth_rate`), changes sign from negative
+:func:`fempipe.analyses.limit_cycle.static_growth_rate`), changes sign from negative
 to positive.  It is bracketed on a grid in v and located by Brent's method,
 with each trial static state solved by Newton from the nearest state already
 known.  Kelvin-Voigt damping (mu > 0) gives the unresolved high modes of a
 fine mesh large negative real parts, so they never decide the sign.
 
 This is a second, deliberately simple implementation of what
-:func:`fempipe.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
+:func:`fempipe.analyses.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
 cases compare the two.  With ``plane="out"`` the linearised problem is the
-motion out of the plane of the static state (:mod:`fempipe.out_of_plane`),
+motion out of the plane of the static state (:mod:`fempipe.model.out_of_plane`),
 the first instability of an inclined round pipe.
 """
 
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
-from ..static import NewtonError, solve_static
+from fempipe.analyses.statics import NewtonError, solve_static
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
 
 __all__ = ["Onset", "critical_velocity", "spectrum"]
 
@@ -87,7 +87,7 @@ def spectrum(model: PipeModel, q_static: np.ndarray, plane: str = "in") -> np.nd
     if plane == "in":
         K, D, M = model.jacobians(q_static)
     else:
-        from ..out_of_plane import OutOfPlaneOperators
+        from fempipe.model.out_of_plane import OutOfPlaneOperators
 
         mats = OutOfPlaneOperators(model).matrices(q_static)
         K, D, M = mats.K, mats.C, mats.M
@@ -134,7 +134,7 @@ def critical_velocity(
     disc : FiniteElement or Modal
     alpha, beta, gamma, mu : float
         Inclination and the groups of Eq. (19) (default: the paper's
-        reference case, :data:`fempipe.params.PAPER_CASE`).
+        reference case, :data:`fempipe.model.params.PAPER_CASE`).
     v_max, dv : float
         The bracketing grid 0, dv, 2 dv, ... up to v_max.
     xtol : float

@@ -1,6 +1,6 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
-:mod:`fempipe.out_of_plane` linearises the motion out of the plane of a planar
+:mod:`fempipe.model.out_of_plane` linearises the motion out of the plane of a planar
 static state (README, "Out of the plane").  This case checks it four ways and
 reports what it finds:
 

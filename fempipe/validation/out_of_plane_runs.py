@@ -19,12 +19,13 @@ from dataclasses import replace
 import numpy as np
 import scipy.linalg as sla
 
-from .. import stability
-from ..discretization import FiniteElement, Modal, discretization_from_name
-from ..operators import PipeModel
-from ..out_of_plane import OutOfPlaneOperators
-from ..params import Params
-from ..static import sagged_state, solve_static
+from fempipe.analyses import stability
+from fempipe.analyses.statics import sagged_state, solve_static
+from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
+from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.params import Params
+
 from . import classical, lateral
 from .case import alpha_name
 from .checks import Table, below, holds
@@ -147,7 +148,7 @@ def identity_checks(ref):
                 worst_m,
                 1e-13,
                 why="every out-of-plane term reduces to the planar one for theta^s = 0 "
-                "(module docstring of fempipe.out_of_plane): equal up to round-off",
+                "(module docstring of fempipe.model.out_of_plane): equal up to round-off",
                 source="the in-plane linearisation of the same model (Eqs. (31b)-(33))",
             )
         )
@@ -162,7 +163,7 @@ def identity_checks(ref):
                 why="the matrices agree to 1e-15; well-separated eigenvalues move by round-off "
                 "times their condition; the cluster of slow Kelvin-Voigt roots near -1/mu is "
                 "ill-conditioned (nearly coincident roots) and is reported, not checked",
-                source="fempipe.stability.spectrum of the in-plane model",
+                source="fempipe.analyses.stability.spectrum of the in-plane model",
             )
         )
     table = Table(
@@ -244,7 +245,7 @@ def buckled_checks(ref, quick: bool):
             0.0,
             why="the buckled state is the stable equilibrium of the standing pipe at this "
             "flow; out of the plane only the neutral rotation is not damped",
-            source="fempipe.out_of_plane on the buckled branch",
+            source="fempipe.model.out_of_plane on the buckled branch",
         )
     )
     # The strong form about solve_bvp's buckled state.
@@ -268,7 +269,7 @@ def buckled_checks(ref, quick: bool):
             1e-10,
             why="W = eta^s solves the strong form with lambda = 0 exactly (lateral's module "
             "docstring); the spectral elements resolve it to round-off",
-            source="fempipe.validation.lateral (independent of fempipe.out_of_plane)",
+            source="fempipe.validation.lateral (independent of fempipe.model.out_of_plane)",
         )
     )
     rest_s = np.delete(lam_s, j0)
@@ -645,7 +646,7 @@ def finding_checks(ref, quick: bool):
                 max(abs(r[8]) for r in at0),
                 1e-9,
                 why="identical spectra on the straight pipe (a); both located to 1e-10",
-                source="the in-plane analysis (fempipe.stability.critical_velocity)",
+                source="the in-plane analysis (fempipe.analyses.stability.critical_velocity)",
             )
         )
     return checks, [table], findings, explained, curves

@@ -24,7 +24,8 @@ import time
 
 import numpy as np
 
-from ..params import Params
+from fempipe.model.params import Params
+
 from . import classical
 from .case import Case
 from .checks import CaseResult, Table, below, holds

@@ -14,11 +14,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..discretization import Modal, parse_discretization
-from ..kinematics import shape, tip_values
-from ..operators import PipeModel
-from ..params import PAPER_CASE, Params
-from ..static import solve_path
+from fempipe.analyses.statics import solve_path
+from fempipe.model.discretization import Modal, parse_discretization
+from fempipe.model.kinematics import shape, tip_values
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+
 from .bvp import solve_static_bvp
 from .checks import Check, Table, below
 
@@ -115,7 +116,7 @@ def static_shapes(
     disc : FiniteElement or Modal
     alpha, gamma, beta, mu : float
         Inclination and the dimensionless groups of Eq. (19) (default: the
-        paper's reference case, :data:`fempipe.params.PAPER_CASE`).
+        paper's reference case, :data:`fempipe.model.params.PAPER_CASE`).
     v_values : sequence of float
     n_gamma_steps : int
         Newton steps of the continuation in gamma from 0 at v = 0.
@@ -179,7 +180,7 @@ class Panel:
     difference from the independent collocation solver; ``modal_error`` maps
     the modal labels to the largest centreline distance from the FE result;
     ``stable`` the linear stability of each FE state
-    (:func:`fempipe.stability.linearly_stable`, Eq. (32)), so that a figure
+    (:func:`fempipe.analyses.stability.linearly_stable`, Eq. (32)), so that a figure
     can draw an unstable equilibrium differently.
     """
 
@@ -250,7 +251,7 @@ def static_panel(
 
 def _stability(disc, fam: StaticShapes) -> tuple[bool, ...]:
     """Linear stability of each state of a family (the criterion of ``fempipe critical``)."""
-    from ..stability import linearly_stable
+    from fempipe.analyses.stability import linearly_stable
 
     model = PipeModel(disc, fam.params)
     return tuple(

@@ -1,7 +1,7 @@
 """Run the validation cases (in parallel) and collect their results.
 
 :func:`run_suite` runs each case of :data:`fempipe.validation.CASES` in its
-own worker process (:func:`fempipe.parallel.run_tasks`), draws its figure
+own worker process (:func:`fempipe.core.parallel.run_tasks`), draws its figure
 there (matplotlib, Agg backend) and returns a :class:`SuiteResult`;
 :func:`fempipe.validation.report.write_report` turns that into the Markdown
 report.  A case that raises (an import error included) is recorded with its
@@ -19,7 +19,8 @@ from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..parallel import run_tasks
+from fempipe.core.parallel import run_tasks
+
 from . import CASES, load_case
 from .checks import CaseResult
 
@@ -309,7 +310,7 @@ def run_suite(
     out : path, optional
         Directory for the case figures (PNG).  Nothing is written without it.
     workers : int
-        Worker processes of :func:`fempipe.parallel.process_pool` (1: run in
+        Worker processes of :func:`fempipe.core.parallel.process_pool` (1: run in
         this process).  Cases are independent;
         the most expensive start first.  A case that defines ``parts(quick)``
         (Figs. 8-10: one part per alpha) is run part by part in parallel and

@@ -28,11 +28,12 @@ import time
 
 import numpy as np
 
-from ..discretization import parse_discretization
-from ..kinematics import shape
-from ..operators import PipeModel
-from ..params import Params
-from ..static import solve_static
+from fempipe.analyses.statics import solve_static
+from fempipe.model.discretization import parse_discretization
+from fempipe.model.kinematics import shape
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
 from .case import Case, alpha_name
 from .checks import CaseResult, Table, below, holds
 from .static_shapes import CONVERGED_FE, static_shapes

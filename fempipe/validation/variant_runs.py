@@ -25,10 +25,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .. import stability
-from ..discretization import parse_discretization
-from ..operators import PipeModel
-from ..params import Params
+from fempipe.analyses import stability
+from fempipe.model.discretization import parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
 from . import classical
 from .checks import Check, below
 from .static_shapes import CONVERGED_FE
@@ -71,7 +72,7 @@ class FeOnset:
 
 
 def fe_onset(params: Params, v_max: float) -> FeOnset:
-    """v_cr of the primary branch by :func:`fempipe.stability.critical_velocity` on FE P3:16."""
+    """v_cr of the primary branch by :func:`fempipe.analyses.stability.critical_velocity` on FE P3:16."""
     model = PipeModel(parse_discretization(fe=FE), params)
     res = stability.critical_velocity(model, v_max)
     c = res.critical

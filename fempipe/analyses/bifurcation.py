@@ -1,0 +1,557 @@
+"""Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10).
+
+A sweep steps v up (or down) through a list of values; each point starts
+from the attractor of the previous one (plus a small perturbation when that
+attractor is an equilibrium, since an equilibrium of one v is not one of the
+next only approximately, and not at all at alpha = 0 where theta = 0 is static
+for every v) and records, with :func:`fempipe.analyses.limit_cycle.find_attractor`, the
+kind of attractor, its period and the extrema of eta(1), X_g(1), Z_g(1).
+Sweeping up and down shows hysteresis where a stable equilibrium and a stable
+cycle coexist (subcritical Hopf).  When the previous attractor is a stable
+cycle, the next point first shoots directly from it (natural-parameter
+continuation of the periodic orbit, chord-Newton); only if that fails, or
+gives an unstable or degenerate cycle, does it integrate past a transient.
+
+Independent sweeps (up and down, several alpha) run in parallel through
+:func:`fempipe.core.parallel.run_tasks`: local worker processes, or any
+:class:`concurrent.futures.Executor` (e.g. a Dask ``Client.get_executor()``).
+Every finished point is written at once as its own JSON file (atomically,
+:func:`fempipe.io.atomic_path`) in a point store; a rerun on the same store
+loads the finished points, including the state each one ended on, and
+computes only the rest, so the chain of starting states and hence the
+results are the same as in an uninterrupted run, however the first run ended
+(killed, interrupted, or a sweep that failed while the others went on).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from fempipe.core.parallel import run_tasks
+from fempipe.io import write_text
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.radau import refuse_hysteretic
+
+from .dynamics import IntegrationError, initial_state
+from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
+
+__all__ = [
+    "BifurcationPoint",
+    "PointStore",
+    "sweep",
+    "bifurcation_diagram",
+    "DIRECTIONS",
+    "BifurcationDiagram",
+]
+
+log = logging.getLogger(__name__)
+
+DIRECTIONS = ("up", "down")
+
+
+@dataclass(frozen=True)
+class BifurcationPoint:
+    """One point of a sweep.
+
+    Attributes
+    ----------
+    v : float
+    direction : str
+        ``"up"`` or ``"down"``.
+    index : int
+        Position in the sweep.
+    alpha : float
+    attractor : str
+        ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
+    eta_tip, X_tip, Z_tip : list of float
+        [min, max] on the attractor.
+    period : float or None
+    period_n : int or None
+    max_multiplier : float or None
+        Largest non-trivial Floquet multiplier modulus of a periodic attractor.
+    steps, rejected_steps : int
+    wall_time : float
+    q, qdot : ndarray
+        The state the point ended on (start of the next point).
+    """
+
+    v: float
+    direction: str
+    index: int
+    alpha: float
+    attractor: str
+    eta_tip: list
+    X_tip: list
+    Z_tip: list
+    period: float | None
+    period_n: int | None
+    max_multiplier: float | None
+    steps: int
+    rejected_steps: int
+    wall_time: float
+    q: np.ndarray = field(repr=False)
+    qdot: np.ndarray = field(repr=False)
+
+    def to_dict(self, state: bool = False) -> dict:
+        """Plain-JSON form; with ``state`` also q and qdot (as the point store keeps them)."""
+        d = {
+            "v": self.v,
+            "direction": self.direction,
+            "index": self.index,
+            "alpha": self.alpha,
+            "attractor": self.attractor,
+            "eta_tip": self.eta_tip,
+            "X_tip": self.X_tip,
+            "Z_tip": self.Z_tip,
+            "period": self.period,
+            "period_n": self.period_n,
+            "max_multiplier": self.max_multiplier,
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "wall_time": self.wall_time,
+        }
+        if state:
+            # repr-exact floats: a resumed sweep restarts from exactly this state.
+            d["q"] = [float(x) for x in self.q]
+            d["qdot"] = [float(x) for x in self.qdot]
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> BifurcationPoint:
+        """Inverse of ``to_dict(state=True)``."""
+        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot")}
+        return cls(**kw, q=np.asarray(d["q"], dtype=float), qdot=np.asarray(d["qdot"], dtype=float))
+
+
+class PointStore:
+    """A directory of finished points, one JSON file each, written atomically.
+
+    Parameters
+    ----------
+    directory : path
+        Created if missing.
+    manifest : dict
+        Describes the run (discretisation, parameters but v, values, options).
+        A store written by a different run is refused (ValueError), so that a
+        resume never mixes results.
+    """
+
+    def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.manifest = json.loads(json.dumps(manifest))
+        path = self.directory / "run.json"
+        if path.exists():
+            old = json.loads(path.read_text())
+            disc = old.get("discretization", {})
+            if disc.get("kind") == "modal":
+                # Stores written before Modal had a basis hold sine-mode runs.
+                disc.setdefault("basis", "sine")
+            if old != self.manifest:
+                raise ValueError(
+                    f"point store {self.directory} holds a different run "
+                    f"(run.json differs); use another directory or delete it"
+                )
+        else:
+            write_text(path, json.dumps(self.manifest, indent=1))
+
+    def path(self, alpha_index: int, direction: str, index: int) -> Path:
+        """File of point ``index`` of the sweep ``direction`` at the ``alpha_index``-th alpha."""
+        return self.directory / f"a{alpha_index:02d}-{direction}-{index:03d}.json"
+
+    def load(self, alpha_index: int, direction: str, index: int) -> BifurcationPoint | None:
+        """The stored point, or None if it has not been finished."""
+        p = self.path(alpha_index, direction, index)
+        if not p.exists():
+            return None
+        return BifurcationPoint.from_dict(json.loads(p.read_text()))
+
+    def save(self, alpha_index: int, point: BifurcationPoint) -> None:
+        """Write a finished point with its state (atomically: complete or absent)."""
+        write_text(
+            self.path(alpha_index, point.direction, point.index),
+            json.dumps(point.to_dict(state=True)),
+        )
+
+    def count(self) -> int:
+        """Number of finished points in the store (all sweeps)."""
+        # Temporary files of unfinished writes start with "." and do not match.
+        return sum(1 for _ in self.directory.glob("a*-*-*.json"))
+
+
+def _ordered(values: Sequence[float], direction: str) -> list[float]:
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
+    vals = sorted(float(v) for v in values)
+    return vals if direction == "up" else vals[::-1]
+
+
+def sweep(
+    model: PipeModel,
+    values: Sequence[float],
+    direction: str = "up",
+    *,
+    q0: np.ndarray | None = None,
+    qdot0: np.ndarray | None = None,
+    perturbation: float = 0.01,
+    store: PointStore | None = None,
+    alpha_index: int = 0,
+    progress: Callable[[BifurcationPoint], None] | None = None,
+    continue_cycles: bool = True,
+    **attractor_options,
+) -> list[BifurcationPoint]:
+    """Sweep the flow velocity, each point starting from the previous attractor.
+
+    Parameters
+    ----------
+    model : PipeModel
+        Its ``params.v`` is replaced by each value.
+    values : sequence of float
+        Flow velocities (sorted up or down according to ``direction``).
+    direction : {"up", "down"}
+    q0, qdot0 : ndarray, optional
+        Start of the first point (default: static state + perturbation).
+    perturbation : float
+        Amplitude (rad, first sine mode) added when the previous attractor is
+        an equilibrium.
+    store : PointStore, optional
+        Finished points are read from and written to it (resume).
+    alpha_index : int
+        Index of this sweep's alpha in the store's file names.
+    progress : callable, optional
+        Called with each finished (or loaded) point.
+    continue_cycles : bool
+        When the previous attractor is a stable cycle, first shoot directly
+        from it with its period (natural-parameter continuation of the periodic
+        orbit, no transient); accepted only if Newton converges to a stable
+        cycle of non-zero amplitude, else the point falls back to
+        :func:`~fempipe.analyses.limit_cycle.find_attractor` from the same state.
+    **attractor_options
+        Passed to :func:`fempipe.analyses.limit_cycle.find_attractor` (``t_max``,
+        ``rtol``, ``shoot_rtol`` ...).
+
+    Returns
+    -------
+    list of BifurcationPoint
+
+    Raises
+    ------
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
+    """
+    refuse_hysteretic(model.params, "sweep")
+    vals = _ordered(values, direction)
+    if not vals:
+        raise ValueError("values must not be empty")
+    q, p = q0, qdot0
+    previous_equilibrium = q0 is None
+    prev_cycle = None
+    points = []
+    for i, v in enumerate(vals):
+        m = model.with_params(model.params.with_flow(v))
+        if store is not None:
+            old = store.load(alpha_index, direction, i)
+            if old is not None:
+                if not math.isclose(old.v, v, rel_tol=0, abs_tol=1e-12):
+                    raise ValueError(
+                        f"stored point {i} ({direction}) has v = {old.v}, expected {v}"
+                    )
+                points.append(old)
+                q, p = old.q, old.qdot
+                previous_equilibrium = old.attractor == "equilibrium"
+                prev_cycle = (old.period, old.period_n) if old.attractor == "periodic" else None
+                if progress is not None:
+                    progress(old)
+                continue
+        if q is None:
+            q, p = initial_state(m, 1, perturbation)
+        elif previous_equilibrium:
+            dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
+            q, p = np.asarray(q) + dq, np.zeros(m.n)
+        t0 = time.perf_counter()
+        att = None
+        if (
+            continue_cycles
+            and prev_cycle is not None
+            and attractor_options.get("use_shooting", True)
+        ):
+            att = _continue_cycle(m, q, p, prev_cycle, attractor_options)
+        if att is None:
+            att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
+        point = BifurcationPoint(
+            v=float(v),
+            direction=direction,
+            index=i,
+            alpha=float(m.params.alpha),
+            attractor=att.kind,
+            eta_tip=att.tip["eta_tip"] if att.tip else [math.nan, math.nan],
+            X_tip=att.tip["X_tip"] if att.tip else [math.nan, math.nan],
+            Z_tip=att.tip["Z_tip"] if att.tip else [math.nan, math.nan],
+            period=att.period,
+            period_n=att.period_n,
+            max_multiplier=(att.cycle.max_nontrivial_multiplier if att.cycle else None),
+            steps=att.stats["steps"],
+            rejected_steps=att.stats["rejected_steps"],
+            wall_time=time.perf_counter() - t0,
+            q=np.asarray(att.q, dtype=float),
+            qdot=np.asarray(att.qdot, dtype=float),
+        )
+        log.info(
+            "%s v=%.4g: %s, eta_tip [%.4g, %.4g] (%.1f s)",
+            direction,
+            v,
+            att.kind,
+            point.eta_tip[0],
+            point.eta_tip[1],
+            point.wall_time,
+        )
+        if store is not None:
+            store.save(alpha_index, point)
+        points.append(point)
+        q, p = point.q, point.qdot
+        previous_equilibrium = att.kind == "equilibrium"
+        prev_cycle = (att.period, att.period_n) if att.cycle is not None else None
+        if progress is not None:
+            progress(point)
+    return points
+
+
+def _continue_cycle(model, q, p, prev_cycle, options) -> Attractor | None:
+    """Shoot from the previous point's cycle; None if that does not give a stable cycle."""
+    period, period_n = prev_cycle
+    try:
+        # A tenth of the shooting tolerance: the residual understates the error of
+        # the orbit by 1 / (1 - mu) for a multiplier mu near 1 (near the Hopf
+        # point: 2.2e-6 in eta_tip at v = 6.6, P3:16, with the residual below 1e-6).
+        cyc = shoot(
+            model,
+            q,
+            p,
+            period,
+            rtol=options.get("shoot_rtol", 1e-7),
+            tol=0.1 * options.get("shoot_tol", 1e-6),
+            max_iter=8,
+            reuse_monodromy=True,
+        )
+    except (ShootingError, IntegrationError) as exc:
+        log.info("cycle continuation failed at v = %.6g (%s); integrating", model.params.v, exc)
+        return None
+    if not cyc.stable:
+        log.info("continued cycle unstable at v = %.6g; integrating", model.params.v)
+        return None
+    return Attractor(
+        kind="periodic",
+        period=cyc.period,
+        period_n=period_n,
+        tip=cyc.tip,
+        cycle=cyc,
+        q=cyc.q0.copy(),
+        qdot=cyc.qdot0.copy(),
+        params=model.params,
+        t_end=0.0,
+        stats={
+            "steps": cyc.total_steps,
+            "rejected_steps": cyc.rejected_steps,
+            "wall_time": cyc.wall_time,
+        },
+        message="continued from the previous cycle by shooting",
+    )
+
+
+def _sweep_task(
+    model: PipeModel,
+    values: list,
+    direction: str,
+    alpha_index: int,
+    store_dir: str,
+    manifest: dict,
+    options: dict,
+    on_point: Callable[[BifurcationPoint], None] | None = None,
+) -> list[dict]:
+    """One independent sweep (in a worker, or in this process with ``on_point``).
+
+    Opens the store itself (a worker cannot share the caller's object) and
+    returns the points as dicts without their states.
+    """
+    store = PointStore(store_dir, manifest)
+    pts = sweep(
+        model, values, direction, store=store, alpha_index=alpha_index, progress=on_point, **options
+    )
+    return [pt.to_dict(state=False) for pt in pts]
+
+
+def _manifest(model: PipeModel, values, directions, alphas, options) -> dict:
+    p = model.params.to_dict()
+    p.pop("v")
+    p.pop("alpha")
+    return {
+        "discretization": model.disc.to_dict(),
+        "params": p,
+        "alphas": [float(a) for a in alphas],
+        "values": sorted(float(v) for v in values),
+        "directions": list(directions),
+        "options": {k: options[k] for k in sorted(options)},
+    }
+
+
+@dataclass(frozen=True)
+class BifurcationDiagram:
+    """All points of a set of sweeps, with run diagnostics.
+
+    Attributes
+    ----------
+    points : list of dict
+        :meth:`BifurcationPoint.to_dict` of every point (without the states),
+        ordered by alpha, direction, then sweep order.
+    wall_time : float
+        Seconds for the whole run (loading stored points included).
+    manifest : dict
+        The run's description, as in the point store's ``run.json``.
+    """
+
+    points: list
+    wall_time: float
+    manifest: dict
+
+    def to_dict(self) -> dict:
+        return {
+            "points": list(self.points),
+            "wall_time": self.wall_time,
+            "discretization": self.manifest["discretization"],
+            "params": self.manifest["params"],
+        }
+
+
+def bifurcation_diagram(
+    model: PipeModel,
+    values: Sequence[float],
+    directions: Sequence[str] = DIRECTIONS,
+    *,
+    alphas: Sequence[float] | None = None,
+    store_dir: str | os.PathLike | None = None,
+    executor: Executor | None = None,
+    workers: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    **attractor_options,
+) -> BifurcationDiagram:
+    """Sweeps up and/or down (for one or several alpha), in parallel.
+
+    Parameters
+    ----------
+    model : PipeModel
+    values : sequence of float
+        Flow velocities.
+    directions : sequence of {"up", "down"}
+    alphas : sequence of float, optional
+        Inclinations; default ``[model.params.alpha]``.
+    store_dir : path, optional
+        Point store (resume); a temporary directory if omitted.
+    executor : concurrent.futures.Executor, optional
+        Runs the independent sweeps (any Executor: process pool, Dask's
+        ``Client.get_executor()``).  With a remote executor the store directory
+        must be visible to the workers.
+    workers : int, optional
+        Without an executor: > 1 runs the sweeps in that many local worker
+        processes (:func:`fempipe.core.parallel.process_pool`: they exit with this
+        process, however it ends); 1 or None runs in this process.
+    progress : callable, optional
+        Called as ``progress(done, total)`` when points finish (or are loaded
+        from the store).
+    **attractor_options
+        Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
+
+    Returns
+    -------
+    BifurcationDiagram
+        Points ordered by alpha, direction, then sweep order.
+
+    Raises
+    ------
+    ValueError
+        If the model has hysteretic damping (no time-domain meaning).
+    Exception
+        The error of the first sweep (in that order) that failed, once all
+        sweeps have ended; the points finished before it are in the store.
+    KeyboardInterrupt
+        Including :class:`fempipe.core.parallel.Interrupted`: the workers are
+        stopped first; rerun on the same store to resume.
+    """
+    refuse_hysteretic(model.params, "bifurcation_diagram")
+    t0 = time.perf_counter()
+    directions = list(directions)
+    for d in directions:
+        if d not in DIRECTIONS:
+            raise ValueError(f"direction must be 'up' or 'down', got {d!r}")
+    if not len(values):
+        raise ValueError("values must not be empty")
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
+    manifest = _manifest(model, values, directions, alphas, attractor_options)
+    tmp = None
+    if store_dir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="fempipe-sweep-")
+        store_dir = tmp.name
+    try:
+        store = PointStore(store_dir, manifest)
+        total = len(values) * len(directions) * len(alphas)
+        sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
+        in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
+        done = 0
+        shown = -1
+
+        def on_point(_point: BifurcationPoint) -> None:  # in this process: every point
+            nonlocal done
+            done += 1
+            if progress is not None:
+                progress(done, total)
+
+        def poll_store() -> None:  # in workers: count the files they have written
+            nonlocal shown
+            n = store.count()
+            if progress is not None and n != shown:
+                progress(n, total)
+                shown = n
+
+        args = [
+            (
+                model.with_params(replace(model.params, alpha=float(a))),
+                list(values),
+                d,
+                ia,
+                str(store_dir),
+                manifest,
+                dict(attractor_options),
+                on_point if in_process else None,
+            )
+            for ia, a, d in sweeps
+        ]
+        results = run_tasks(
+            _sweep_task,
+            args,
+            workers=None if in_process else workers,
+            executor=executor,
+            heartbeat=None if in_process else poll_store,
+        )
+        if not in_process:
+            poll_store()
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    for r in results:
+        if isinstance(r, BaseException):
+            # The other sweeps ran to their end and their points are stored.
+            raise r
+    points = [pt for r in results for pt in r]
+    return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)

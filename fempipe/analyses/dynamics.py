@@ -1,0 +1,325 @@
+"""Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
+
+The time integration itself is :class:`fempipe.solvers.radau.Radau`, an L-stable
+Radau IIA method written on the second-order residual form of Eq. (20) (its
+module docstring says why); this module drives it: :func:`simulate` records a
+:class:`Trajectory`, :func:`integrate` yields the states step by step,
+:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`initial_state` a
+perturbed static state.  ``Radau``, ``IntegrationError`` and ``acceleration``
+are importable from here too.
+
+Energy
+------
+:func:`energy_rate` gives dE/dtau from the power of the non-conservative
+terms, derived from Eq. (20) (see its docstring); the tests check it against
+the residual at random states and along computed trajectories.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.radau import IntegrationError, Radau, acceleration
+
+__all__ = [
+    "PulsatingFlow",
+    "Radau",
+    "IntegrationError",
+    "Trajectory",
+    "integrate",
+    "simulate",
+    "initial_state",
+    "acceleration",
+    "energy_rate",
+    "power_terms",
+]
+
+
+@dataclass(frozen=True)
+class PulsatingFlow:
+    """Unsteady flow v(tau) = v0 (1 + sigma sin(omega tau)).
+
+    Parameters
+    ----------
+    v0 : float
+        Mean flow velocity (>= 0).
+    sigma : float
+        Relative pulsation amplitude, 0 <= sigma <= 1 (so that v >= 0, the
+        model assumes discharge at the free end).
+    omega : float
+        Pulsation frequency in units of 1/tau (>= 0).
+
+    Notes
+    -----
+    Its derivative v_dot = v0 sigma omega cos(omega tau) drives the
+    flow-acceleration terms of Eq. (20), which the paper writes and never uses.
+    """
+
+    v0: float
+    sigma: float = 0.0
+    omega: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("v0", "sigma", "omega"):
+            val = float(getattr(self, name))
+            if not math.isfinite(val):
+                raise ValueError(f"{name} must be finite, got {val}")
+            object.__setattr__(self, name, val)
+        if self.v0 < 0:
+            raise ValueError(f"v0 must be >= 0, got {self.v0}")
+        if not 0.0 <= self.sigma <= 1.0:
+            raise ValueError(f"sigma must satisfy 0 <= sigma <= 1, got {self.sigma}")
+        if self.omega < 0:
+            raise ValueError(f"omega must be >= 0, got {self.omega}")
+
+    def __call__(self, tau: float) -> tuple[float, float]:
+        """Return (v, v_dot) at time tau."""
+        s = self.sigma * math.sin(self.omega * tau)
+        return self.v0 * (1.0 + s), self.v0 * self.sigma * self.omega * math.cos(self.omega * tau)
+
+    def to_dict(self) -> dict:
+        return {"v0": self.v0, "sigma": self.sigma, "omega": self.omega}
+
+
+def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0) -> dict:
+    """Power of each non-conservative term of Eq. (20); dE/dtau = -sum.
+
+    With E = T + V (:meth:`PipeModel.energy`), the inertia terms are the
+    Lagrange derivative of T = (1/2) q'^T M(q) q' and bending plus gravity the
+    gradient of V, so q'^T R = dE/dtau + q'^T (non-conservative forces) = 0:
+
+    ``coriolis``           2 v sqrt(beta) \\int theta_dot n . \\int_xi^1 theta_dot n
+                           = v sqrt(beta) |r_dot(1)|^2  (symmetric double integral),
+    ``follower``           v^2 \\int theta_dot sin(theta(1) - theta) = v^2 t(1) . r_dot(1),
+    ``kelvin_voigt``       mu q'^T K q',
+    ``flow_acceleration``  sqrt(beta) v_dot \\int theta_dot n . \\int_xi^1 t
+                           = sqrt(beta) v_dot \\int_0^1 t . r_dot  (swap the order),
+    ``external_damping``   sigma \\int theta_dot n . \\int_xi^1 r_dot
+                           = sigma \\int_0^1 |r_dot|^2  (swap the order),
+
+    with r_dot(xi) = \\int_0^xi theta_dot n the centreline velocity and
+    t = (cos theta, sin theta) the tangent.  The first three are the power
+    balance of steady flow; the fourth is zero for steady flow; the fifth is
+    the dissipation of the external viscous damping (zero for sigma = 0).  The
+    end mass and the springs are conservative: E includes their kinetic and
+    potential energies, and the jet leaves the end mass as it leaves the pipe.
+
+    Returns
+    -------
+    dict
+        The five powers and ``"dE_dtau"`` = -(their sum).
+    """
+    p = model.params
+    fl = model.fields(q, qdot)
+    rdot = model.quad.cumulative(fl.theta_dot[:, None] * fl.normal)  # (n_q, 2)
+    rdot_tip = model.quad.integrate(fl.theta_dot[:, None] * fl.normal)
+    t_tip = np.array([math.cos(fl.theta_tip), math.sin(fl.theta_tip)])
+    sb = math.sqrt(p.beta)
+    terms = {
+        "coriolis": p.v * sb * float(rdot_tip @ rdot_tip),
+        "follower": p.v**2 * float(t_tip @ rdot_tip),
+        "kelvin_voigt": p.mu * float(qdot @ (model.disc.K @ qdot)),
+        "flow_acceleration": sb * v_dot * float(model.w @ np.einsum("qc,qc->q", fl.tangent, rdot)),
+        "external_damping": p.external_damping * float(model.w @ np.einsum("qc,qc->q", rdot, rdot)),
+    }
+    terms["dE_dtau"] = -sum(terms.values())
+    return terms
+
+
+def energy_rate(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0) -> float:
+    """dE/dtau = -[v sqrt(beta) |r_dot(1)|^2 + v^2 t(1).r_dot(1) + mu q'^T K q'
+    + sqrt(beta) v_dot \\int t.r_dot + sigma \\int |r_dot|^2]."""
+    return power_terms(model, q, qdot, v_dot)["dE_dtau"]
+
+
+def initial_state(
+    model: PipeModel,
+    mode: int = 1,
+    amplitude: float = 0.01,
+    q_static: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The static state plus a small perturbation in a chosen mode, at rest.
+
+    Parameters
+    ----------
+    model : PipeModel
+    mode : int
+        r >= 1: the perturbation is amplitude * sin((2r - 1) pi xi / 2) in
+        theta (the paper's r-th mode, Eq. (22)), L2-projected on the
+        discretisation.
+    amplitude : float
+        In rad.
+    q_static : ndarray, optional
+        The static state; solved with :func:`fempipe.analyses.statics.solve_static` if omitted.
+
+    Returns
+    -------
+    (q0, qdot0) : ndarrays, shape (n,)
+    """
+    if int(mode) < 1:
+        raise ValueError(f"mode must be an integer >= 1, got {mode}")
+    if not math.isfinite(amplitude):
+        raise ValueError(f"amplitude must be finite, got {amplitude}")
+    if q_static is None:
+        from fempipe.analyses.statics import solve_static
+
+        q_static = solve_static(model).q
+    disc = model.disc
+    k = (2 * int(mode) - 1) * math.pi / 2.0
+    b = disc.Phi.T @ (model.w * np.sin(k * model.x))
+    gram = disc.gram
+    pert = spla.spsolve(gram.tocsc(), b) if disc.sparse else np.linalg.solve(gram, b)
+    return np.asarray(q_static, dtype=float) + amplitude * pert, np.zeros(model.n)
+
+
+def integrate(
+    model: PipeModel,
+    q0: np.ndarray,
+    qdot0: np.ndarray | None,
+    t_end: float,
+    *,
+    t0: float = 0.0,
+    **options,
+) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
+    """Time stepping of Eq. (20) as a generator of (tau, q, q').
+
+    Yields the initial state first, then the state after every accepted step
+    of :class:`Radau` (options are passed on: ``rtol``, ``atol``, ``flow``,
+    ``max_step``, ``h_fixed``).
+    """
+    stepper = Radau(model, q0, qdot0, t0, **options)
+    yield stepper.t, stepper.q.copy(), stepper.qdot.copy()
+    yield from stepper.steps(t_end)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A computed trajectory with the integrator's diagnostics.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Output times tau.
+    q, qdot : ndarray, shape (m, n)
+    steps, rejected_steps, newton_failures : int
+    n_residual, n_jacobian, n_lu : int
+        Residual evaluations, Jacobian evaluations, factorisation pairs.
+    wall_time : float
+        Seconds spent stepping.
+    rtol : float
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    steps: int
+    rejected_steps: int
+    newton_failures: int
+    n_residual: int
+    n_jacobian: int
+    n_lu: int
+    wall_time: float
+    rtol: float
+    flow: dict | None = field(default=None)
+
+    @classmethod
+    def recorded(cls, t, q, qdot, stats, rtol: float, flow: dict | None = None) -> Trajectory:
+        """A trajectory from recorded samples and a stepper's running statistics."""
+        return cls(
+            t=np.asarray(t),
+            q=np.asarray(q),
+            qdot=np.asarray(qdot),
+            steps=stats.steps,
+            rejected_steps=stats.rejected_steps,
+            newton_failures=stats.newton_failures,
+            n_residual=stats.n_residual,
+            n_jacobian=stats.n_jacobian,
+            n_lu=stats.n_lu,
+            wall_time=stats.wall_time,
+            rtol=rtol,
+            flow=flow,
+        )
+
+    def stats(self) -> dict:
+        return {
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "newton_failures": self.newton_failures,
+            "n_residual": self.n_residual,
+            "n_jacobian": self.n_jacobian,
+            "n_lu": self.n_lu,
+            "wall_time": self.wall_time,
+        }
+
+    def to_dict(self) -> dict:
+        d = self.stats()
+        d.update({"rtol": self.rtol, "t_start": float(self.t[0]), "t_end": float(self.t[-1])})
+        d["n_samples"] = int(self.t.size)
+        if self.flow is not None:
+            d["flow"] = self.flow
+        return d
+
+
+def simulate(
+    model: PipeModel,
+    q0: np.ndarray,
+    qdot0: np.ndarray | None,
+    t_end: float,
+    *,
+    t0: float = 0.0,
+    n_out: int | None = None,
+    rtol: float = 1e-6,
+    atol: float | None = None,
+    flow: Callable[[float], tuple[float, float]] | None = None,
+    max_step: float = math.inf,
+    h_fixed: float | None = None,
+    callback: Callable[[float], None] | None = None,
+) -> Trajectory:
+    """Integrate Eq. (20) from tau = t0 to t_end.
+
+    Parameters
+    ----------
+    model, q0, qdot0, t0, t_end
+        Model, initial state and time span (t_end > t0).
+    n_out : int, optional
+        Number of equally spaced output times (dense output of the
+        collocation polynomial); default: every accepted step.
+    rtol, atol, flow, max_step, h_fixed
+        See :class:`Radau`.
+    callback : callable, optional
+        Called with tau after every step (progress).
+
+    Returns
+    -------
+    Trajectory
+    """
+    if not t_end > t0:
+        raise ValueError(f"t_end must be > t0 = {t0}, got {t_end}")
+    stepper = Radau(
+        model, q0, qdot0, t0, rtol=rtol, atol=atol, flow=flow, max_step=max_step, h_fixed=h_fixed
+    )
+    ts, qs, ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
+    grid = np.linspace(t0, t_end, n_out) if n_out else None
+    k = 1
+    for t, q, p in stepper.steps(t_end):
+        if grid is None:
+            ts.append(t)
+            qs.append(q)
+            ps.append(p)
+        else:
+            while k < grid.size and grid[k] <= t + 1e-14:
+                qq, pp = stepper.dense(grid[k]) if grid[k] < t else (q, p)
+                ts.append(grid[k])
+                qs.append(qq)
+                ps.append(pp)
+                k += 1
+        if callback is not None:
+            callback(t)
+    flow_dict = flow.to_dict() if hasattr(flow, "to_dict") else None
+    return Trajectory.recorded(ts, qs, ps, stepper.stats, rtol, flow_dict)

@@ -1,0 +1,259 @@
+"""The resolved spectrum of Eq. (32) about one static state, and its mode shapes."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fempipe.analyses.statics import sagged_state
+from fempipe.model.kinematics import shape
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
+from .linear import (
+    RESOLUTION_TOL,
+    STABILITY_TOL,
+    _analyse,
+    _eig_dict,
+    _order,
+    resolution,
+    single_blas,
+)
+from .tracking import _reference_tracker
+
+# ---------------------------------------------------------------------------
+# One spectrum
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """The resolved spectrum of Eq. (32) about one static state.
+
+    Attributes
+    ----------
+    params : Params
+    q : ndarray, shape (n,)
+        The static state theta^s.
+    lam : ndarray of complex, shape (m,)
+        Resolved eigenvalues lambda (theta^d ∝ e^{lambda tau}), sorted by mode
+        number, upper half-plane first.
+    mode : ndarray of int, shape (m,)
+        Mode numbers (1-based), carried by continuity from v = 0 (package
+        docstring, "Mode numbers").
+    vectors : ndarray of complex, shape (n, m)
+        theta-parts of the eigenvectors (unit Euclidean norm).
+    share : ndarray, shape (m,)
+        Share of each eigenvector on resolved canonical modes (>= 1/2).
+    n_computed : int
+        All eigenvalues computed (2 n).
+    n_resolved_modes : int
+        Canonical modes the discretisation resolves.
+    max_real_unresolved : float
+        Largest Re lambda among the discarded eigenvalues (diagnostic).
+    static_residual : float
+        Norm of the static residual at q (the linearisation assumes a state).
+    method : str
+        ``"qz"`` or ``"shift-invert"``.
+    """
+
+    params: Params
+    q: np.ndarray = field(repr=False)
+    lam: np.ndarray
+    mode: np.ndarray
+    vectors: np.ndarray = field(repr=False)
+    share: np.ndarray = field(repr=False)
+    n_computed: int
+    n_resolved_modes: int
+    max_real_unresolved: float
+    static_residual: float
+    method: str
+
+    @property
+    def Omega(self) -> np.ndarray:
+        """The paper's eigenvalues Omega = -i lambda (Im Omega < 0 unstable)."""
+        return -1j * self.lam
+
+    @property
+    def max_real(self) -> float:
+        """Largest Re lambda of the resolved eigenvalues."""
+        return float(self.lam.real.max()) if self.lam.size else -math.inf
+
+    @property
+    def unstable(self) -> np.ndarray:
+        """Mask of the unstable resolved eigenvalues (Re lambda > 1e-8 max(1, |lambda|))."""
+        return self.lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(self.lam))
+
+    @property
+    def stable(self) -> bool:
+        """No resolved eigenvalue is unstable (marginal counts as stable)."""
+        return not bool(self.unstable.any())
+
+    def to_dict(self) -> dict:
+        return {
+            "params": self.params.to_dict(),
+            "stable": self.stable,
+            "max_real": self.max_real,
+            "eigenvalues": [
+                _eig_dict(lam, int(m)) for lam, m in zip(self.lam, self.mode, strict=True)
+            ],
+            "n_computed": self.n_computed,
+            "n_resolved_modes": self.n_resolved_modes,
+            "max_real_unresolved": self.max_real_unresolved,
+            "static_residual": self.static_residual,
+            "method": self.method,
+        }
+
+
+@single_blas
+def spectrum(
+    model: PipeModel,
+    q: np.ndarray | None = None,
+    *,
+    method: str = "auto",
+    tolerance: float = RESOLUTION_TOL,
+) -> Spectrum:
+    """Resolved eigenvalues of the linearised problem, Eq. (32), about a static state.
+
+    Every resolved eigenvalue is listed.  At v != 0 the mode numbers cost a
+    path: the branch through q is continued back to v = 0 and the
+    eigenvalues tracked along it (package docstring, "Mode numbers"); for
+    the stability decision alone use :func:`linearly_stable`.
+
+    Parameters
+    ----------
+    model : PipeModel
+    q : ndarray, shape (n,), optional
+        The static state; default :func:`fempipe.analyses.statics.sagged_state`.
+    method : {'auto', 'qz', 'shift-invert'}
+        Dense eigensolver (see :func:`_eigen`).
+    tolerance : float
+        :data:`RESOLUTION_TOL`, the canonical-frequency error of a resolved mode.
+
+    Returns
+    -------
+    Spectrum
+
+    Raises
+    ------
+    ValueError
+        If the discretisation resolves no mode at all.
+    NewtonError
+        If q is not a static state from which its branch can be continued
+        back towards v = 0 (the mode numbers).
+    """
+    res = resolution(model.disc, tolerance)
+    if res.n_resolved == 0:
+        raise ValueError(
+            f"discretisation {model.disc.name} resolves no mode within {tolerance:.0%} "
+            "of the clamped-free beam frequencies; refine it"
+        )
+    if q is None:
+        q = sagged_state(model).q
+    e = _analyse(model, q, res, method)
+    tracker, _ = _reference_tracker(model, e, res, method)
+    keep = e.resolved[tracker.first_idx]
+    idx, labels = tracker.first_idx[keep], tracker.labels[keep]
+    o = _order(e.lam[idx], labels)
+    idx, labels = idx[o], labels[o]
+    unres = e.lam.real[~e.resolved]
+    return Spectrum(
+        params=model.params,
+        q=np.array(q, dtype=float),
+        lam=e.lam[idx],
+        mode=labels,
+        vectors=e.X[:, idx],
+        share=e.share[idx],
+        n_computed=int(e.lam.size),
+        n_resolved_modes=res.n_resolved,
+        max_real_unresolved=float(unres.max()) if unres.size else -math.inf,
+        static_residual=float(np.linalg.norm(model.static_residual(q))),
+        method=e.method,
+    )
+
+
+# ---------------------------------------------------------------------------
+# Mode shapes
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ModeShape:
+    """A mode shape about a static state, in theta and in the global frame.
+
+    The perturbation is ``Re(a e^{lambda tau})`` times the complex fields
+    below, normalised so that max |theta^d| = 1 and theta^d is real and
+    positive where it is largest.
+
+    Attributes
+    ----------
+    xi : ndarray, shape (m,)
+    theta : ndarray of complex, shape (m,)
+        theta^d(xi).
+    X_g, Z_g : ndarray of complex, shape (m,)
+        Displacement of the centreline in the global frame (Eq. (28)
+        linearised): dX_g = -int sin(theta^s + alpha) theta^d,
+        dZ_g = int cos(theta^s + alpha) theta^d.
+    X_static, Z_static : ndarray, shape (m,)
+        The static centreline.
+    lam : complex
+    mode : int
+    """
+
+    xi: np.ndarray
+    theta: np.ndarray
+    X_g: np.ndarray
+    Z_g: np.ndarray
+    X_static: np.ndarray
+    Z_static: np.ndarray
+    lam: complex
+    mode: int
+
+    def to_dict(self) -> dict:
+        return {
+            "mode": self.mode,
+            "lambda": [float(self.lam.real), float(self.lam.imag)],
+            "xi": self.xi.tolist(),
+            "theta_re": self.theta.real.tolist(),
+            "theta_im": self.theta.imag.tolist(),
+            "X_g_re": self.X_g.real.tolist(),
+            "X_g_im": self.X_g.imag.tolist(),
+            "Z_g_re": self.Z_g.real.tolist(),
+            "Z_g_im": self.Z_g.imag.tolist(),
+        }
+
+
+def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> ModeShape:
+    """Shape of the resolved eigenvalue ``spec.lam[index]`` in theta and in the global frame.
+
+    The global-frame displacement is the derivative of the centreline of
+    :func:`fempipe.model.kinematics.shape` in the direction of the mode, obtained by
+    complex-step differentiation of that same function (exact to round-off,
+    no second copy of Eq. (28)).
+    """
+    if not -spec.lam.size <= index < spec.lam.size:
+        raise ValueError(f"index must be in [0, {spec.lam.size}), got {index}")
+    x = spec.vectors[:, index]
+    alpha = spec.params.alpha
+    base = shape(disc, spec.q, alpha, points_per_cell)
+    theta = disc.evaluate(x, base.xi)
+    k = int(np.argmax(np.abs(theta)))
+    scale = np.abs(theta[k]) / theta[k] if theta[k] != 0 else 1.0
+    x = x * scale / np.abs(theta[k])
+    h = 1e-30  # complex step: Im f(q + i h d) / h = f'(q) d exactly
+    parts = []
+    for d in (x.real, x.imag):
+        s = shape(disc, spec.q + 1j * h * d, alpha, points_per_cell)
+        parts.append((np.imag(s.X_g) / h, np.imag(s.Z_g) / h))
+    return ModeShape(
+        xi=base.xi,
+        theta=disc.evaluate(x, base.xi),
+        X_g=parts[0][0] + 1j * parts[1][0],
+        Z_g=parts[0][1] + 1j * parts[1][1],
+        X_static=base.X_g,
+        Z_static=base.Z_g,
+        lam=complex(spec.lam[index]),
+        mode=int(spec.mode[index]),
+    )

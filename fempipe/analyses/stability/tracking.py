@@ -1,0 +1,488 @@
+"""Mode numbers by continuity along a path of static states, and root loci (Fig. 5).
+
+The numbering rule is the package docstring's ("Mode numbers").
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from fempipe.analyses.statics import (
+    NewtonError,
+    continuation,
+    sagged_state,
+    solve_path,
+    solve_static,
+)
+from fempipe.core.matching import assignment
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
+from .linear import (
+    RESOLUTION_TOL,
+    STABILITY_TOL,
+    Resolution,
+    _analyse,
+    _analyse_inherited,
+    _canonical_labels,
+    _Eig,
+    _eig_dict,
+    _order,
+    resolution,
+    single_blas,
+    straight_pencil,
+)
+
+log = logging.getLogger(__name__)
+
+#: Mode numbers up to which tracking ambiguities are refined (labels of higher
+#: modes, heavily damped for mu > 0, may swap without affecting any event).
+LABEL_MODES = 8
+
+# ---------------------------------------------------------------------------
+# Tracking eigenvalues along a path
+# ---------------------------------------------------------------------------
+
+
+class _Tracker:
+    """Carries mode numbers along a sequence of states by continuity.
+
+    Tracked eigenvalue j is, at every state, one index into that state's
+    :class:`_Eig`; ``labels[j]`` is its mode number, given at the first state
+    (``first_idx``) and inherited by continuity afterwards.
+    """
+
+    def __init__(self, labels: np.ndarray, first_idx: np.ndarray) -> None:
+        self.labels = np.asarray(labels, dtype=int)
+        self.first_idx = np.asarray(first_idx, dtype=int)
+
+    @classmethod
+    def canonical(cls, first: _Eig) -> _Tracker:
+        """Every resolved eigenvalue of ``first``, numbered by canonical assignment."""
+        idx = np.flatnonzero(first.resolved)
+        labels = _canonical_labels(first, idx)
+        o = _order(first.lam[idx], labels)
+        return cls(labels[o], idx[o])
+
+    def match(self, new: _Eig, pred: np.ndarray):
+        """Indices in ``new`` of the tracked eigenvalues, and an ambiguity flag per eigenvalue."""
+        D = np.abs(pred[:, None] - new.lam[None, :])
+        rows, cols = assignment(D)
+        idx = np.empty(pred.size, dtype=int)
+        idx[rows] = cols
+        d1 = D[np.arange(pred.size), idx]
+        # Distance to the nearest other candidate that is not the same mode's
+        # partner (swapping a conjugate pair or the two roots of one mode is harmless).
+        owner = np.full(new.lam.size, -1)
+        owner[idx] = self.labels
+        other = owner[None, :] != self.labels[:, None]
+        D2 = np.where(other, D, np.inf)
+        d2 = D2.min(axis=1)
+        relevant = (self.labels <= LABEL_MODES) | (new.lam[idx].real > -1.0)
+        ambiguous = relevant & (d1 > 0.35 * d2)
+        return idx, ambiguous
+
+
+def _predict(samples: list[tuple[_Eig, np.ndarray]], s: float) -> np.ndarray:
+    """Linear prediction of the tracked eigenvalues at position s."""
+    e1, i1 = samples[-1]
+    lam1 = e1.lam[i1]
+    if len(samples) < 2:
+        return lam1
+    e0, i0 = samples[-2]
+    lam0 = e0.lam[i0]
+    if e1.s == e0.s:
+        return lam1
+    return lam1 + (s - e1.s) / (e1.s - e0.s) * (lam1 - lam0)
+
+
+def _l2(model: PipeModel, dq: np.ndarray) -> float:
+    th = model.disc.Phi @ dq
+    return float(np.sqrt(model.w @ th**2))
+
+
+class _TrackedPath:
+    """Spectra along a sequence of static states, with tracking and refinement.
+
+    ``static_between(a, b, v)`` returns the static state at v between samples
+    a and b (both on the same monotone piece in v), or None.
+    """
+
+    def __init__(
+        self,
+        model: PipeModel,
+        res: Resolution,
+        method: str,
+        max_depth: int = 6,
+        inherit: bool = False,
+    ) -> None:
+        self.model = model
+        # Straight states may take their classification from the nearest
+        # straight sample (linear._analyse_inherited): eigenvalues only.
+        self.inherit = inherit
+        self.res = res
+        self.method = method
+        self.max_depth = max_depth
+        self.samples: list[tuple[_Eig, np.ndarray]] = []
+        self.tracker: _Tracker | None = None
+        self.n_spectra = 0
+
+    def analyse(self, q: np.ndarray, v: float) -> _Eig:
+        self.n_spectra += 1
+        m = self.model.with_params(replace(self.model.params, v=v))
+        # At the straight state the matrices are known functions of v
+        # (StraightPencil): no Jacobian assembly.
+        if q.any():
+            return _analyse(m, q, self.res, self.method)
+        matrices = straight_pencil(m).matrices(v)
+        if self.inherit:
+            # (an inherited spectrum is a straight state: no test of its q)
+            near = [e for e, _ in self.samples if e.origin_v is not None or not e.q.any()]
+            if near:
+                ref = min(near, key=lambda e: abs(e.v - v))
+                return _analyse_inherited(m, q, self.res, self.method, matrices, ref)
+        return _analyse(m, q, self.res, self.method, matrices)
+
+    def static_between(self, a: _Eig, b: _Eig, v: float) -> np.ndarray | None:
+        if a.v == b.v:
+            return None
+        t = (v - a.v) / (b.v - a.v)
+        m = self.model.with_params(replace(self.model.params, v=v))
+        guess = a.q + t * (b.q - a.q)
+        # An exact guess (the straight pipe at alpha = 0, pi) is kept as it is:
+        # at a branch point the Jacobian is singular and a Newton step from an
+        # exact solution would fail.
+        p = m.params
+        if np.linalg.norm(m.static_residual(guess)) <= 1e-13 * (1.0 + p.gamma + p.v**2):
+            return guess
+        try:
+            return solve_static(m, q0=guess).q
+        except NewtonError:
+            return None
+
+    def add(self, e: _Eig, depth: int = 0) -> None:
+        """Append the next state, halving the step while tracking is ambiguous."""
+        if self.tracker is None:
+            self.tracker = _Tracker.canonical(e)
+            self.samples.append((e, self.tracker.first_idx))
+            return
+        prev = self.samples[-1]
+        pred = _predict(self.samples, e.s)
+        idx, amb = self.tracker.match(e, pred)
+        if amb.any() and depth < self.max_depth and not e.fold and not prev[0].fold:
+            a = prev[0]
+            vm = 0.5 * (a.v + e.v)
+            qm = self.static_between(a, e, vm)
+            if qm is not None:
+                mid = self.analyse(qm, vm)
+                mid.s = 0.5 * (a.s + e.s)
+                self.add(mid, depth + 1)
+                self.add(e, depth + 1)
+                return
+        self.samples.append((e, idx))
+
+    # -- views ------------------------------------------------------------
+    @property
+    def labels(self) -> np.ndarray:
+        return self.tracker.labels
+
+    def tracked(self) -> np.ndarray:
+        """Tracked eigenvalues, shape (n_samples, k)."""
+        return np.array([e.lam[i] for e, i in self.samples])
+
+    def tracked_resolved(self) -> np.ndarray:
+        return np.array([e.resolved[i] for e, i in self.samples])
+
+    def start_labelled(self, e: _Eig, tracker: _Tracker) -> None:
+        """Start at ``e`` with mode numbers given by ``tracker`` (indices into e)."""
+        self.tracker = tracker
+        self.samples = [(e, tracker.first_idx)]
+
+
+#: Largest arclength step of the reference path from v = 0 (mode numbers);
+#: the tracker halves it wherever the match is ambiguous.
+REFERENCE_STEP = 1.0
+
+
+def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
+    """Mode numbers of the resolved eigenvalues of ``e``, carried by continuity from v = 0.
+
+    The static branch through e is followed back to v = 0 by pseudo-arclength
+    continuation (steps up to :data:`REFERENCE_STEP`, folds passed); the
+    eigenvalues resolved there are numbered by canonical assignment and
+    tracked forward to e.  A branch that does not reach v = 0 is numbered at
+    the end of the backward continuation instead.  Returns the tracker
+    (indices into e) and the number of spectra solved.
+    """
+    if e.v == 0.0:
+        return _Tracker.canonical(e), 0
+    m = model.with_params(replace(model.params, v=e.v))
+    back = continuation(
+        m, "v", stop=0.0, q0=e.q, ds=REFERENCE_STEP, ds_max=REFERENCE_STEP, detect=False
+    )
+    if back.end_reason != "stop":
+        log.info(
+            "reference path: the branch through v=%.6g ends at v=%.6g (%s); mode numbers "
+            "assigned there",
+            e.v,
+            back.points[-1].value,
+            back.end_reason,
+        )
+    # v = 0 first; the last point is e itself.  Coincident points (the
+    # continuation can end with two points at the stop value) are dropped: a
+    # step of 1e-33 followed by a finite one would wreck the linear prediction.
+    points = []
+    for pt in back.points[::-1][:-1]:
+        last = points[-1] if points else None
+        if last is None or abs(pt.value - last.value) + _l2(model, pt.q - last.q) > 1e-8:
+            points.append(pt)
+    if points and abs(e.v - points[-1].value) + _l2(model, e.q - points[-1].q) <= 1e-8:
+        points.pop()
+    path = _TrackedPath(model, res, method)
+    s, prev = 0.0, None
+    for pt in points:
+        if prev is not None:
+            s += abs(pt.value - prev[1]) + _l2(model, pt.q - prev[0])
+        prev = (pt.q, pt.value)
+        x = path.analyse(pt.q, pt.value)
+        x.s = s
+        path.add(x)
+    s += abs(e.v - prev[1]) + _l2(model, e.q - prev[0]) if prev is not None else 0.0
+    target = replace(e, s=s)
+    path.add(target)
+    last, idx = path.samples[-1]
+    if last is not target:  # pragma: no cover - add() always appends its argument last
+        raise RuntimeError("reference path: the target state is not the last sample")
+    return _complete(e, _Tracker(path.labels, idx)), path.n_spectra
+
+
+def _complete(e: _Eig, tracker: _Tracker) -> _Tracker:
+    """Add the resolved eigenvalues of e the tracker lacks, numbered on the free canonical slots.
+
+    An eigenvalue can be resolved at e and not where the numbering started;
+    it gets the canonical mode its eigenvector is made of among the slots (two
+    per mode) the tracked eigenvalues leave free.
+    """
+    tracked = set(tracker.first_idx.tolist())
+    extra = np.array([i for i in np.flatnonzero(e.resolved) if i not in tracked], dtype=int)
+    if extra.size == 0:
+        return tracker
+    n_can = e.weights.shape[0]
+    used = np.bincount(tracker.labels - 1, minlength=n_can)[:n_can]
+    free = np.maximum(0, 2 - used)
+    slots = np.repeat(np.arange(n_can), free)
+    cost = -e.weights[:, extra].T[:, slots]
+    rows, cols = assignment(cost)
+    labels = np.zeros(extra.size, dtype=int)
+    labels[rows] = slots[cols] + 1
+    return _Tracker(
+        np.concatenate([tracker.labels, labels]), np.concatenate([tracker.first_idx, extra])
+    )
+
+
+# ---------------------------------------------------------------------------
+# Root loci (Fig. 5)
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RootLocus:
+    """Eigenvalues against v with mode numbers carried by continuity (Fig. 5).
+
+    Modes 1..n_modes of :func:`root_locus`, and every mode that is unstable at
+    some v, whatever its number (so the eigenvalue behind ``stable = False``
+    is always listed).
+
+    Attributes
+    ----------
+    params : Params
+        The fixed parameters (v is the first value).
+    v : ndarray, shape (m,)
+    lam : ndarray of complex, shape (m, k)
+        Tracked eigenvalues; column j belongs to mode ``modes[j]``.
+    modes : ndarray of int, shape (k,)
+    resolved : ndarray of bool, shape (m, k)
+    max_real : ndarray, shape (m,)
+        Largest Re lambda of all resolved eigenvalues at each v.
+    stable : ndarray of bool, shape (m,)
+    theta_tip : ndarray, shape (m,)
+        Static tip rotation (which branch).
+    n_spectra : int
+        Spectra computed, including the points inserted for tracking.
+    plane : {'in', 'out'}
+        The motion analysed: in the plane of the static states (Eq. (32)) or
+        out of it (:mod:`fempipe.model.out_of_plane`).
+    """
+
+    params: Params
+    v: np.ndarray
+    lam: np.ndarray
+    modes: np.ndarray
+    resolved: np.ndarray
+    max_real: np.ndarray
+    stable: np.ndarray
+    theta_tip: np.ndarray
+    n_spectra: int
+    plane: str = "in"
+
+    @property
+    def Omega(self) -> np.ndarray:
+        return -1j * self.lam
+
+    def to_dict(self) -> dict:
+        p = self.params.to_dict()
+        p.pop("v", None)
+        points = []
+        for i, v in enumerate(self.v):
+            eig = [
+                _eig_dict(self.lam[i, j], int(self.modes[j]))
+                for j in range(self.modes.size)
+                if self.resolved[i, j]
+            ]
+            points.append(
+                {
+                    "v": float(v),
+                    "stable": bool(self.stable[i]),
+                    "max_real": float(self.max_real[i]),
+                    "theta_tip": float(self.theta_tip[i]),
+                    "eigenvalues": eig,
+                }
+            )
+        return {"params": p, "modes": self.modes.tolist(), "points": points}
+
+
+@single_blas
+def root_locus(
+    model: PipeModel,
+    values: Sequence[float],
+    *,
+    q0: np.ndarray | None = None,
+    n_modes: int | None = 6,
+    method: str = "auto",
+    tolerance: float = RESOLUTION_TOL,
+    callback: Callable[[int, float], None] | None = None,
+) -> RootLocus:
+    """Spectra along the static branch at the flow velocities ``values`` (Fig. 5).
+
+    Parameters
+    ----------
+    model : PipeModel
+        Parameters other than v are taken from ``model.params``; an
+        out-of-plane model (``model.with_plane("out")``) gives the loci of
+        the motion out of the plane of the static states.
+    values : sequence of float
+        Flow velocities, in the order the branch is followed.
+    q0 : ndarray, optional
+        Static state at ``values[0]`` (default: :func:`fempipe.analyses.statics.sagged_state`).
+    n_modes : int or None
+        Report modes 1..n_modes (None: every resolved mode); every mode that
+        is unstable at some v is reported too, whatever its number.  Every
+        resolved eigenvalue is tracked.
+    callback : callable, optional
+        ``callback(i, v)`` after each point (progress).
+
+    Returns
+    -------
+    RootLocus
+    """
+    return _loci([model], values, q0, n_modes, method, tolerance, callback)[0]
+
+
+@single_blas
+def spatial_root_locus(
+    model: PipeModel,
+    values: Sequence[float],
+    *,
+    q0: np.ndarray | None = None,
+    n_modes: int | None = 6,
+    method: str = "auto",
+    tolerance: float = RESOLUTION_TOL,
+    callback: Callable[[int, float], None] | None = None,
+) -> tuple[RootLocus, RootLocus]:
+    """:func:`root_locus` in and out of the plane, about the same static states.
+
+    The static branch is followed once; at every value the in-plane
+    spectrum (Eq. (32)) and the out-of-plane one (:mod:`fempipe.model.out_of_plane`)
+    are computed about the same state, each plane's mode numbers carried by
+    continuity from v = 0 along its own path.  ``callback(i, v)`` is called
+    once per value, after both planes.
+
+    Returns
+    -------
+    (RootLocus, RootLocus)
+        The in-plane loci (plane ``"in"``) and the out-of-plane ones (``"out"``).
+    """
+    planar = model.with_plane("in")
+    models = [planar, planar.with_plane("out")]
+    inp, out = _loci(models, values, q0, n_modes, method, tolerance, callback)
+    return inp, out
+
+
+def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[RootLocus]:
+    """The root loci of each model (one pipe, its planes) along one static path."""
+    model = models[0]
+    values = [float(x) for x in values]
+    if not values:
+        raise ValueError("values must contain at least one flow velocity")
+    if n_modes is not None and int(n_modes) < 1:
+        raise ValueError(f"n_modes must be >= 1 or None, got {n_modes}")
+    res = resolution(model.disc, tolerance)
+    if res.n_resolved == 0:
+        raise ValueError(f"discretisation {model.disc.name} resolves no mode; refine it")
+    m0 = model.with_params(replace(model.params, v=values[0]))
+    if q0 is None:
+        q0 = sagged_state(m0).q
+    states = solve_path(m0, values, q0=q0)
+    paths = [_TrackedPath(m, res, method) for m in models]
+    keep: list[list[int]] = [[] for _ in models]  # sample index of each requested value
+    s = 0.0
+    for i, sol in enumerate(states):
+        if i:
+            s += abs(values[i] - values[i - 1]) + _l2(model, sol.q - states[i - 1].q)
+        for m, path, kept in zip(models, paths, keep, strict=True):
+            e = path.analyse(sol.q, values[i])
+            e.s = s
+            if i == 0:
+                tracker, n_ref = _reference_tracker(m, e, res, method)
+                path.n_spectra += n_ref
+                path.start_labelled(e, tracker)
+            else:
+                path.add(e)
+            kept.append(len(path.samples) - 1)
+        if callback:
+            callback(i, values[i])
+    tips = np.array([float(model.disc.tip @ st.q) for st in states])
+    return [
+        _locus_of(m, path, kept, m0.params, values, tips, n_modes)
+        for m, path, kept in zip(models, paths, keep, strict=True)
+    ]
+
+
+def _locus_of(model, path, keep, params, values, tips, n_modes) -> RootLocus:
+    lam = path.tracked()[keep]
+    resolved = path.tracked_resolved()[keep]
+    labels = path.labels
+    # Modes 1..n_modes, and every mode that is unstable at some point whatever
+    # its number (the eigenvalue that decides ``stable`` is always listed).
+    unstable = resolved & (lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(lam)))
+    cols = np.ones(labels.size, dtype=bool) if n_modes is None else labels <= int(n_modes)
+    cols = np.flatnonzero(cols | unstable.any(axis=0))
+    cols = cols[np.argsort(labels[cols], kind="stable")]
+    max_real = np.array([path.samples[k][0].max_real for k in keep])
+    stable = np.array([not path.samples[k][0].unstable.any() for k in keep])
+    return RootLocus(
+        params=params,
+        v=np.array(values),
+        lam=lam[:, cols],
+        modes=labels[cols].copy(),
+        resolved=resolved[:, cols],
+        max_real=max_real,
+        stable=stable,
+        theta_tip=tips,
+        n_spectra=path.n_spectra,
+        plane=model.plane,
+    )

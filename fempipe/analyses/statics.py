@@ -1,0 +1,179 @@
+"""Static large deformation (Eq. (31a)): the gravity-loaded state and paths in a parameter.
+
+    -theta'' + gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta) = 0,
+    theta(0) = 0, theta'(1) = 0.
+
+Three layers, each usable on its own:
+
+* :mod:`fempipe.solvers.newton` -- one equilibrium by Newton's method
+  (:func:`solve_static`, :class:`NewtonError`, :class:`StaticSolution`);
+* :mod:`fempipe.solvers.continuation` -- pseudo-arclength continuation with fold and
+  bifurcation detection and branch switching (:func:`continuation`,
+  :func:`switch_branch`, :class:`Branch`);
+* this module -- the state a pipe reaches when gravity is switched on
+  (:func:`sagged_state`) and the states along a list of parameter values
+  (:func:`solve_path`), what ``fempipe static`` computes.
+
+Every solver only uses the model's ``static_residual``, ``static_jacobian``,
+``static_parameter_derivative``, ``static_terms`` and ``gravity_load`` and the
+discretisation's Gram matrix; it runs unchanged on finite elements and on
+sine modes.  The names of the first two layers are importable from here too.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.continuation import (
+    CONTINUATION_PARAMETERS,
+    Branch,
+    BranchPoint,
+    SpecialPoint,
+    continuation,
+    switch_branch,
+)
+from fempipe.solvers.newton import NewtonError, StaticSolution, solve_static
+
+__all__ = [
+    "NewtonError",
+    "StaticSolution",
+    "BranchPoint",
+    "Branch",
+    "SpecialPoint",
+    "solve_static",
+    "solve_path",
+    "sagged_state",
+    "continuation",
+    "switch_branch",
+    "CONTINUATION_PARAMETERS",
+]
+
+log = logging.getLogger(__name__)
+
+
+def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
+    """The static state reached by switching gravity on slowly: continuation in gamma from 0.
+
+    At gamma = 0 the straight pipe is the solution for every v and alpha;
+    following it to the actual gamma gives the state a pipe reaches when it
+    is loaded, which is the primary branch of every stability analysis.
+    Newton from the straight pipe is not used: for alpha >= ~150 deg and
+    gamma = 18.9 it converges to the nearly straight, unstable equilibrium
+    (theta_tip = +0.93 at 160 deg instead of -2.25).  At alpha = 0 and pi the
+    loaded state is the straight pipe (the pitchfork there is not taken).
+
+    Near alpha = pi the loaded branch turns sharply where the perfect column
+    would buckle (gamma = 7.837), and a large continuation step can land on
+    the unstable near-straight state or on the mirror-image (unfavoured)
+    lean.  The result is therefore checked -- for sin(alpha) != 0 gravity
+    rotates the pipe towards the plumb line, so theta_tip sin(alpha) < 0,
+    and at v = 0 the state must be a minimum of the potential energy (the
+    static Jacobian, symmetric there, positive definite) -- and the loading
+    is repeated with steps 1, 0.5, 0.1 and 0.02 until it passes (measured:
+    alpha = 179 deg needs 0.5, 179.99 deg needs 0.1).
+    """
+    p = model.params
+    if p.gamma == 0.0:
+        return solve_static(model, tol=tol)
+    start = model.with_params(replace(p, gamma=0.0))
+    q = None
+    for ds_max in (1.0, 0.5, 0.1, 0.02):
+        branch = continuation(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=ds_max)
+        if branch.end_reason != "stop":
+            raise NewtonError(
+                f"gravity loading did not reach gamma={p.gamma:.6g} at alpha={p.alpha:.6g}, "
+                f"v={p.v:.6g} ({branch.end_reason})",
+                params=p,
+                iterations=branch.steps,
+                residual=float("nan"),
+            )
+        q = branch.points[-1].q
+        if _loaded_plausible(model, q):
+            break
+        log.info("gravity loading with step %g landed on another branch; retrying", ds_max)
+    sol = solve_static(model, q0=q, tol=tol)
+    # Report the Newton work of the whole gravity loading, not of the last polish.
+    loading = sum(pt.iterations for pt in branch.points)
+    return replace(sol, iterations=sol.iterations + loading, loading_iterations=loading)
+
+
+def _loaded_plausible(model: PipeModel, q: np.ndarray) -> bool:
+    """theta_tip sin(alpha) < 0 and, at v = 0, a positive definite static Jacobian."""
+    p = model.params
+    s = math.sin(p.alpha)
+    if abs(s) < 1e-12:
+        return True  # alpha = 0 or pi: the straight pipe, by symmetry
+    if s * float(model.disc.tip @ q) >= 0.0:
+        return False
+    if p.v == 0.0:
+        J = model.static_jacobian(q)
+        J = J.toarray() if sp.issparse(J) else np.asarray(J)
+        return bool(np.linalg.eigvalsh(0.5 * (J + J.T)).min() > 0.0)
+    return True
+
+
+def solve_path(
+    model: PipeModel,
+    values: Sequence[float],
+    parameter: str = "v",
+    q0: np.ndarray | None = None,
+    tol: float = 1e-10,
+    callback: Callable[[int, StaticSolution], None] | None = None,
+) -> list[StaticSolution]:
+    """Static states at the given parameter values, following one branch.
+
+    The first value is solved by Newton from ``q0`` (default: the
+    gravity-sagged state of :func:`sagged_state`); each
+    next one starts from a linear extrapolation of the previous two.  If Newton
+    fails (a fast-changing or folded branch), the gap is bridged by
+    pseudo-arclength continuation, which passes folds.
+
+    Returns
+    -------
+    list of StaticSolution, one per value, in the given order.
+    """
+    values = [float(x) for x in values]
+    if not values:
+        return []
+    out: list[StaticSolution] = []
+    prev_q: list[np.ndarray] = []
+    prev_v: list[float] = []
+    guess = q0
+    for i, value in enumerate(values):
+        m = model.with_params(replace(model.params, **{parameter: value}))
+        if not prev_q and q0 is None:
+            sol = sagged_state(m, tol=tol)
+            out.append(sol)
+            prev_q.append(sol.q)
+            prev_v.append(value)
+            if callback:
+                callback(i, sol)
+            continue
+        if len(prev_q) >= 2 and prev_v[-1] != prev_v[-2]:
+            s = (value - prev_v[-1]) / (prev_v[-1] - prev_v[-2])
+            guess = prev_q[-1] + s * (prev_q[-1] - prev_q[-2])
+        elif prev_q:
+            guess = prev_q[-1]
+        try:
+            sol = solve_static(m, q0=guess, tol=tol)
+        except NewtonError:
+            if not prev_q:
+                raise
+            start = model.with_params(replace(model.params, **{parameter: prev_v[-1]}))
+            br = continuation(start, parameter, stop=value, q0=prev_q[-1], tol=tol, detect=False)
+            if br.points[-1].value != value:
+                raise
+            sol = solve_static(m, q0=br.points[-1].q, tol=tol)
+        out.append(sol)
+        prev_q.append(sol.q)
+        prev_v.append(value)
+        if callback:
+            callback(i, sol)
+    return out

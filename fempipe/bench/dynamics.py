@@ -1,0 +1,201 @@
+"""Benchmarks of the nonlinear dynamics; not timed tests.
+
+Registered with :mod:`fempipe.bench` (``fempipe bench --only limit_cycle,fig7``);
+also ``python -m fempipe.bench.dynamics [--skip-fig7] [--workers 2] [--out FILE.json]``.
+
+* ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, the paper's
+  beta, gamma, mu: :data:`fempipe.model.params.PAPER_CASE`) from the static state
+  + perturbation, transient and shooting included, as the user runs it: the
+  CPU seconds (user + sys, ``resource.getrusage`` of the finished children)
+  of whole ``fempipe simulate --alpha 0 --v 10 --json`` processes, start-up
+  included, median of 5; the period and tip extrema against the same command
+  with ``--shoot-rtol 1e-10`` (relative errors).  Target: < 2 CPU-s at the
+  default discretisation P3:16 with errors below 1e-6.  In-process rows
+  (wall time of :func:`fempipe.analyses.limit_cycle.find_attractor`) for P3:16 and the
+  paper's modal N = 4 follow.
+* ``fig7``: the Fig. 7 diagram, alpha = 0, 36 velocities from 5 to 12, swept up
+  and down (the two sweeps in parallel).  Target: < 5 min on 2 cores.
+
+Both run for the default finite elements and for the paper's modal N = 4 in
+the same invocation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+
+import numpy as np
+
+from fempipe import Params, PipeModel
+from fempipe.bench import child_cpu_seconds, register
+from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
+from fempipe.model.params import PAPER_CASE
+
+
+def _disc(spec: str):
+    """The discretisation named ``spec`` (``disc.name``: ``P3:16``, ``modal:4``, ``modal-beam:4``)."""
+    return discretization_from_name(spec)
+
+
+def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
+    """One converged limit cycle at alpha = 0, v = 10; returns timing and the cycle."""
+    from fempipe.analyses.limit_cycle import find_attractor
+
+    model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0, **PAPER_CASE))
+    t0 = time.perf_counter()
+    att = find_attractor(model)
+    wall = time.perf_counter() - t0
+    return {
+        "name": "limit_cycle",
+        "disc": spec,
+        "wall_time": wall,
+        "attractor": att.kind,
+        "period": att.period,
+        "eta_tip": att.tip["eta_tip"],
+        "steps": att.stats["steps"],
+        "shooting_iterations": att.cycle.iterations if att.cycle else None,
+    }
+
+
+def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> dict:
+    """The Fig. 7 sweep up and down in parallel; returns timing and a summary."""
+    from fempipe.analyses.bifurcation import bifurcation_diagram
+
+    model = PipeModel(_disc(spec), Params(alpha=0.0, **PAPER_CASE))
+    values = np.linspace(5.0, 12.0, n_values)
+    t0 = time.perf_counter()
+    d = bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
+    wall = time.perf_counter() - t0
+    pts = d.points
+    first_periodic = {
+        direction: min(
+            (p["v"] for p in pts if p["direction"] == direction and p["attractor"] == "periodic"),
+            default=None,
+        )
+        for direction in ("up", "down")
+    }
+    return {
+        "name": "fig7",
+        "disc": spec,
+        "workers": workers,
+        "wall_time": wall,
+        "target_s": 300.0,
+        "n_points": len(pts),
+        "kinds": {k: sum(p["attractor"] == k for p in pts) for k in {p["attractor"] for p in pts}},
+        "first_periodic_v": first_periodic,
+        "max_point_wall_time": max(p["wall_time"] for p in pts),
+        "eta_tip_at_v12": [p["eta_tip"] for p in pts if p["v"] == 12.0],
+    }
+
+
+#: Whole-process CPU target of ``fempipe simulate --alpha 0 --v 10 --json``.
+PROCESS_TARGET_S = 2.0
+#: Relative accuracy target of the period and the tip extrema.
+ACCURACY_TARGET = 1e-6
+
+
+def _process_cpu(argv: list[str]) -> tuple[float, dict]:
+    """CPU seconds (user + sys) of one finished ``python -m fempipe ARGV`` and its JSON."""
+    cpu, out = child_cpu_seconds(["-m", "fempipe", *argv])
+    return cpu, json.loads(out)
+
+
+def _relative_errors(d: dict, ref: dict) -> dict:
+    """|x / x_ref - 1| of the period and of every tip extremum."""
+    errs = {"period": abs(d["period"] / ref["period"] - 1.0)}
+    for key, (lo, hi) in d["tip"].items():
+        rlo, rhi = ref["tip"][key]
+        errs[key] = [abs(lo / rlo - 1.0), abs(hi / rhi - 1.0)]
+    return errs
+
+
+def bench_limit_cycle_process(alpha: float = 0.0, v: float = 10.0, runs: int = 5) -> dict:
+    """Whole ``fempipe simulate --alpha A --v V --json`` processes: median CPU-s, errors.
+
+    The reference is the same command with ``--shoot-rtol 1e-10`` (the same
+    discretisation), run once.
+    """
+    argv = ["simulate", "--alpha", repr(alpha), "--v", repr(v), "--json"]
+    _, ref = _process_cpu([*argv, "--shoot-rtol", "1e-10"])
+    cpus, d = [], None
+    for _ in range(runs):
+        cpu, d = _process_cpu(argv)
+        cpus.append(cpu)
+    errs = _relative_errors(d, ref)
+    worst = max([errs["period"], *(x for k in errs if k != "period" for x in errs[k])])
+    return {
+        "name": "limit_cycle_process",
+        "command": "fempipe " + " ".join(argv),
+        "cpu_s_median": statistics.median(cpus),
+        "cpu_s_runs": cpus,
+        "target_s": PROCESS_TARGET_S,
+        "meets_target": statistics.median(cpus) < PROCESS_TARGET_S and worst < ACCURACY_TARGET,
+        "attractor": d["attractor"],
+        "period": d["period"],
+        "period_reference": ref["period"],
+        "relative_errors": errs,
+        "max_relative_error": worst,
+        "accuracy_target": ACCURACY_TARGET,
+        "steps": d["steps"],
+        "t_transient": d["t_transient"],
+    }
+
+
+@register("limit_cycle")
+def limit_cycle(quick: bool = False) -> dict:
+    """One converged limit cycle: whole-process CPU-s of ``simulate --alpha 0 --v 10
+    --json`` (median of 5; errors against ``--shoot-rtol 1e-10``), then the
+    in-process find_attractor for P3:16 and modal N = 4 (quick: one process
+    run, P3:8 and modal N = 3 in-process)."""
+    proc = bench_limit_cycle_process(runs=1 if quick else 5)
+    specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
+    rows = [bench_limit_cycle(s) for s in specs]
+    return {
+        "target_s": PROCESS_TARGET_S,
+        "process_cpu_s_median": proc["cpu_s_median"],
+        "process_meets_target": proc["meets_target"],
+        "max_relative_error": proc["max_relative_error"],
+        "process": proc,
+        "table": rows,
+    }
+
+
+@register("fig7")
+def fig7(quick: bool = False) -> dict:
+    """The Fig. 7 sweep (36 v, up and down, 2 workers), P3:16 and modal N = 4.
+
+    quick: 4 velocities on P3:8 and modal N = 3.
+    """
+    specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
+    rows = [bench_fig7(s, workers=2, n_values=4 if quick else 36) for s in specs]
+    table = [
+        {k: r[k] for k in ("disc", "workers", "n_points", "wall_time", "target_s")} for r in rows
+    ]
+    return {"target_s": 300.0, "table": table, "details": rows}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--skip-fig7", action="store_true")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    rows = [bench_limit_cycle_process()]
+    print(json.dumps(rows[-1]), flush=True)
+    for spec in (DEFAULT_FE, "modal:4"):
+        rows.append(bench_limit_cycle(spec))
+        print(json.dumps(rows[-1]), flush=True)
+    if not args.skip_fig7:
+        for spec in (DEFAULT_FE, "modal:4"):
+            rows.append(bench_fig7(spec, workers=args.workers))
+            print(json.dumps(rows[-1]), flush=True)
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(rows, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,60 @@
+"""Benchmark of the Hopf criticality of the flutter events; not a timed test.
+
+Registered with :mod:`fempipe.bench` (``fempipe bench --only hopf``).
+
+* ``hopf``: the CPU seconds (``time.process_time``, median of 3) that
+  :func:`fempipe.analyses.stability.hopf.normal_forms` adds to the stability analysis
+  of ``fempipe critical --v 0,16`` (:func:`fempipe.analyses.stability.stability_analysis`)
+  for the paper's case on the default discretisation, at alpha = 0, pi/2, pi;
+  with l1 of the first flutter and its uncertainty.  Target: a small fraction
+  of the analysis (the hook runs on every ``fempipe critical``).
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+
+from fempipe.bench import register
+
+
+@register("hopf")
+def bench_hopf(quick: bool = False) -> dict:
+    """CPU-s of the normal forms of every flutter event against the stability analysis."""
+    from fempipe.analyses.stability import stability_analysis
+    from fempipe.analyses.stability.hopf import normal_forms
+    from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+
+    disc = discretization_from_name(DEFAULT_FE)
+    alphas = (0.0,) if quick else (0.0, math.pi / 2, math.pi)
+    repeats = 1 if quick else 3
+    table = []
+    for alpha in alphas:
+        model = PipeModel(disc, Params(alpha=alpha))
+        t_an, t_nf = [], []
+        for _ in range(repeats):
+            t0 = time.process_time()
+            res = stability_analysis(model, v_max=16.0)
+            t1 = time.process_time()
+            forms = normal_forms(model, res)
+            t2 = time.process_time()
+            t_an.append(t1 - t0)
+            t_nf.append(t2 - t1)
+        first = min(forms.items(), key=lambda kv: kv[0][2]) if forms else None
+        nf = None if first is None or isinstance(first[1], str) else first[1]
+        a, h = statistics.median(t_an), statistics.median(t_nf)
+        table.append(
+            {
+                "alpha": alpha,
+                "flutter_events": len(forms),
+                "analysis_cpu_s": a,
+                "hopf_cpu_s": h,
+                "hopf_share": h / a if a > 0 else math.nan,
+                "l1_first": None if nf is None else nf.l1,
+                "l1_uncertainty": None if nf is None else nf.uncertainty,
+            }
+        )
+    return {"discretization": disc.name, "table": table}

@@ -1,0 +1,178 @@
+"""Benchmark of ``fempipe critical`` against a classical beam-mode Galerkin (timings, not tests).
+
+Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classical``).
+
+``critical_vs_classical``
+    CPU seconds (user + system of a fresh process, the change of
+    ``getrusage(RUSAGE_CHILDREN)``, median of 7 runs; quick: 1) of
+
+    * ``fempipe critical --alpha 0 --beta 0.2 --gamma 10 --mu 0 --v 0,10 --json``
+      (the hanging pipe: default discretisation P3:16, branches followed,
+      every event to v = 10), and
+    * the classical linear Galerkin of the straight pipe as a user would
+      write it, ``python fempipe/validation/classical_baseline.py`` (numpy and
+      scipy only: clamped-free beam modes, Paidoussis' closed-form b_sr, c_sr,
+      d_sr, eigenvalues of the 2N first-order system on a scan of v with step
+      0.1, then Brent on the largest real part) with N = 40 and N = 20 modes,
+
+    each with its v_cr error against a converged reference computed here
+    (the children load cached bytecode, :func:`fempipe.bench.child_cpu_seconds`, after
+    one untimed run of each command):
+    the classical theory on Legendre spectral elements of degree 24
+    (:mod:`fempipe.validation.classical`; degrees 12 to 40 agree to ~1e-12).
+    ``ratio`` is fempipe's CPU seconds over the 40-mode baseline's, whose
+    error (~3e-7 relative) is the accuracy fempipe's default must match or
+    beat; the target is ratio <= 1.  The commands run in turns (each round
+    runs each once) so that the machine's drift in speed hits all alike;
+    ``ratio_by_round`` is the ratio within each round.
+
+    BLAS threads.  ``fempipe`` sets one BLAS thread for its process
+    (:func:`fempipe.cli.one_blas_thread`), which spares it the start-up of
+    the OpenBLAS thread pools (about 0.1 CPU-s for each of numpy's and
+    scipy's).  The baseline runs as written, with the default thread count
+    (the variables fempipe set in this process are removed from its
+    environment, those the user set are kept), and once more with
+    ``OPENBLAS_NUM_THREADS=1`` (and MKL's, BLIS's) in its environment: the
+    same saving, the baseline's best.  ``ratio_one_thread`` is fempipe's CPU
+    seconds over that run's, ``ratio_by_round_one_thread`` by round; its
+    row is the last of the table.
+
+    Second case, the paper's pipe at alpha = pi/2 (a curved static state, no
+    classical theory): ``fempipe critical --alpha pi/2 --v 0,10 --json``, its
+    CPU seconds and its v_cr error against P3:64 (quick: P3:32), computed
+    here by :func:`fempipe.analyses.stability.critical_velocity`.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from fempipe.bench import child_cpu_seconds, register
+
+#: The reference case: the hanging pipe of the classical theory.
+REFERENCE_ARGS = ["--alpha", "0", "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v", "0,10"]
+#: The paper's case at alpha = pi/2 (beta, gamma, mu are the CLI's defaults).
+CURVED_ARGS = ["--alpha", "pi/2", "--v", "0,10"]
+#: The baseline script, run by its path (it imports nothing of fempipe).
+BASELINE = Path(__file__).resolve().parent / "validation" / "classical_baseline.py"
+#: fempipe's CPU seconds over the 40-mode baseline's must not exceed this.
+TARGET_RATIO = 1.0
+
+
+def _child(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
+    """(user + system CPU seconds, parsed JSON stdout) of one fresh ``python argv``."""
+    cpu, out = child_cpu_seconds(argv, env)
+    return cpu, json.loads(out)
+
+
+def _blas_env(one_thread: bool) -> dict:
+    """The baseline's environment changes: one BLAS thread, or the defaults as written
+    (only the variables fempipe's command line set in this process are removed)."""
+    from fempipe.cli import BLAS_SET_BY_FEMPIPE, BLAS_THREAD_VARIABLES
+
+    if one_thread:
+        return dict.fromkeys(BLAS_THREAD_VARIABLES, "1")
+    return dict.fromkeys(BLAS_SET_BY_FEMPIPE)
+
+
+def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
+    """One row per (label, argv, reference, env): median CPU seconds of ``runs`` fresh processes
+    and the v_cr error of the last one; and the CPU seconds of every run, by round.
+
+    The commands run in turns (round k runs each once, in order), after one
+    untimed run each that fills the bytecode cache: this machine's speed
+    drifts by up to 2x over minutes, and turns put every command's runs in
+    the same minutes, so their ratios compare like with like.
+    """
+    for _, argv, _, env in commands:
+        _child(argv, env)
+    times: list[list[float]] = [[] for _ in commands]
+    outs: list = [None] * len(commands)
+    for _ in range(runs):
+        for i, (_, argv, _, env) in enumerate(commands):
+            cpu, outs[i] = _child(argv, env)
+            times[i].append(cpu)
+    rows = []
+    for (label, _, reference, _), t, out in zip(commands, times, outs, strict=True):
+        v_cr = out["v_cr"]
+        err = None if v_cr is None else abs(v_cr - reference)
+        rows.append(
+            {
+                "command": label,
+                "cpu_seconds": round(float(np.median(t)), 3),
+                "min": round(min(t), 3),
+                "v_cr": None if v_cr is None else f"{v_cr:.10f}",
+                "abs_error": err,
+                "rel_error": None if err is None else err / abs(reference),
+            }
+        )
+    return rows, times
+
+
+def _classical_reference() -> float:
+    """v_cr of the hanging pipe (beta 0.2, gamma 10, mu 0): Legendre spectral elements, p = 24."""
+    from fempipe.validation.classical import StraightPipe, critical_velocity
+
+    pipe = StraightPipe(beta=0.2, gamma=10.0)
+    return float(critical_velocity(pipe, v_max=10.0, method="legendre", n=24).v_cr)
+
+
+def _curved_reference(spec: str) -> float:
+    """v_cr of the paper's case at alpha = pi/2 on the finite elements ``spec``."""
+    import math
+
+    from fempipe import Params, PipeModel
+    from fempipe.analyses.stability import critical_velocity
+    from fempipe.model.discretization import discretization_from_name
+    from fempipe.model.params import PAPER_CASE
+
+    model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
+    return float(critical_velocity(model, v_max=10.0).v_cr)
+
+
+@register("critical_vs_classical")
+def bench_critical_vs_classical(quick: bool = False) -> dict:
+    """CPU seconds of ``fempipe critical`` and of the classical baseline, errors, their ratio."""
+    runs = 1 if quick else 7
+    ref = _classical_reference()
+    fem = ["-m", "fempipe", "critical", *REFERENCE_ARGS, "--json"]
+    base = [str(BASELINE), "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v-max", "10"]
+    curved_spec = "P3:32" if quick else "P3:64"
+    curved_ref = _curved_reference(curved_spec)
+    curved = ["-m", "fempipe", "critical", *CURVED_ARGS, "--json"]
+    as_written, one_thread = _blas_env(False), _blas_env(True)
+    rows, times = _rows(
+        [
+            ("fempipe critical (alpha 0, P3:16)", fem, ref, None),
+            ("baseline, 40 beam modes", [*base, "--n", "40"], ref, as_written),
+            ("baseline, 20 beam modes", [*base, "--n", "20"], ref, as_written),
+            ("fempipe critical (paper, alpha pi/2)", curved, curved_ref, None),
+            ("baseline, 40 beam modes, one BLAS thread", [*base, "--n", "40"], ref, one_thread),
+        ],
+        runs,
+    )
+    ratio = rows[0]["cpu_seconds"] / rows[1]["cpu_seconds"]
+    ratio1 = rows[0]["cpu_seconds"] / rows[4]["cpu_seconds"]
+    paired = [a / b for a, b in zip(times[0], times[1], strict=True)]
+    paired1 = [a / b for a, b in zip(times[0], times[4], strict=True)]
+    return {
+        "runs": runs,
+        "order": "in turns: each round runs every command once",
+        "bytecode": "cached (PYTHONPYCACHEPREFIX in a temporary directory, one untimed run "
+        "per command first)",
+        "reference_v_cr": ref,
+        "reference": "classical theory, Legendre spectral elements p = 24",
+        "curved_reference_v_cr": curved_ref,
+        "curved_reference": f"fempipe {curved_spec}",
+        "ratio_fempipe_over_baseline40": round(ratio, 3),
+        "ratio_by_round": [round(r, 3) for r in paired],
+        "ratio_one_thread": round(ratio1, 3),
+        "ratio_by_round_one_thread": [round(r, 3) for r in paired1],
+        "target_ratio": TARGET_RATIO,
+        "meets_target": ratio <= TARGET_RATIO,
+        "meets_target_one_thread": ratio1 <= TARGET_RATIO,
+        "table": rows,
+    }

@@ -1,0 +1,39 @@
+"""Exception types shared by the solvers and the command line.
+
+Every numerical failure -- a Newton iteration that does not converge
+(:class:`fempipe.analyses.statics.NewtonError`), a time integration that cannot
+continue (:class:`fempipe.analyses.dynamics.IntegrationError`), a shooting that finds
+no periodic orbit (:class:`fempipe.analyses.limit_cycle.ShootingError`) -- derives
+from :class:`SolverError`, so a caller (the ``fempipe`` command) catches them
+once.  Bad input derives from :class:`ValueError`; :class:`ParamError` names
+the parameter that is wrong.
+"""
+
+from __future__ import annotations
+
+__all__ = ["ParamError", "SolverError"]
+
+
+class SolverError(RuntimeError):
+    """A solver failed to produce a result it could vouch for.
+
+    ``str()`` says which solver, where (the parameters) and why; the
+    subclasses carry the details as attributes.
+    """
+
+
+class ParamError(ValueError):
+    """A physical parameter outside its allowed range.
+
+    Parameters
+    ----------
+    field : str
+        Name of the offending field (``"gamma"``, ``"v"``, ``"L"``, ...), so
+        a caller can point at the input that set it without parsing the text.
+    message : str
+        What is wrong and what is allowed.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field

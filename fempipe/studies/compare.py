@@ -1,0 +1,284 @@
+"""A user's numbers against fempipe: each value beside fempipe's and fempipe's error estimate.
+
+A user's result for one case -- a static tip value, the critical flow
+velocity or its frequency, a limit cycle's amplitude or period -- is set
+beside fempipe's value of the same :class:`~fempipe.studies.convergence.Quantity` on
+one discretisation (the reported value, computed exactly as ``fempipe
+convergence`` computes it), and the error of fempipe's value is estimated
+from one refinement (:mod:`fempipe.studies.error_estimate`: the value is computed
+again on ``refine(disc)`` and the Grid Convergence Index
+``max(3 |Q - Q_refined| r^p / (r^p - 1), floor)`` of the coarse value is
+its estimate, with the floor the quantity's solver tolerance
+``Quantity.tolerance * max(1, |Q|)``).
+
+The difference user - fempipe is **resolved** when it exceeds fempipe's
+error estimate: then fempipe's discretisation error cannot explain it, and
+the difference is the user's (their truncation, their model, their
+measurement).  An unresolved difference is within what fempipe's own
+discretisation could be off by; only a finer ``disc`` can tell.
+
+:func:`compare_values` runs the comparisons (in worker processes if asked,
+:func:`fempipe.core.parallel.run_tasks`); a comparison whose computation fails
+(Newton, no v_cr in the flow range, no limit cycle) is kept, with the
+failure's message and no fempipe value, and does not stop the others.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from fempipe.core.errors import SolverError
+
+from .convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
+from .error_estimate import describe, estimate, expected_order, refine, refinement_ratio
+
+__all__ = [
+    "COMPARABLE",
+    "Comparison",
+    "Evaluation",
+    "compare_values",
+    "estimate_description",
+    "evaluate",
+]
+
+#: The quantities a user's value can be compared for (real numbers; the
+#: complex ``eigenvalue`` of :data:`fempipe.studies.convergence.QUANTITIES` is not one).
+#: ``fempipe compare`` compares a user's ``v_cr`` and ``frequency`` with the
+#: planar model's (``Quantity(planar=True)``), the ``_in_plane`` and
+#: ``_out_of_plane`` forms with each plane's.
+COMPARABLE = (
+    "v_cr",
+    "frequency",
+    "theta_tip",
+    "X_tip",
+    "Z_tip",
+    "eta_tip",
+    "lc_amplitude",
+    "lc_period",
+    "v_cr_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_in_plane",
+    "frequency_out_of_plane",
+)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """fempipe's value of a quantity and its error estimate from one refinement.
+
+    Attributes
+    ----------
+    value : float
+        The quantity on the reported discretisation.
+    refined : float or None
+        The quantity on ``refine(disc)``; None if that computation failed.
+    error_estimate : float or None
+        :func:`fempipe.studies.error_estimate.estimate` of ``value`` against
+        ``refined`` (floor: ``Quantity.tolerance * max(1, |value|)``); None
+        without a refined value.
+    note : str or None
+        Why there is no estimate (the refined computation's failure).
+    cpu_time : float
+        CPU seconds of both computations.
+    """
+
+    value: float
+    refined: float | None
+    error_estimate: float | None
+    note: str | None = None
+    cpu_time: float = 0.0
+
+
+def evaluate(quantity: Quantity, disc) -> Evaluation:
+    """The quantity on ``disc`` and on ``refine(disc)``, and the error estimate of the first.
+
+    A limit cycle is found once on ``disc`` (a transient and a shooting) and
+    the refined shooting starts from it (:meth:`Quantity.seeded`), as in
+    ``fempipe convergence``.
+
+    Parameters
+    ----------
+    quantity : Quantity
+        A real quantity (:data:`COMPARABLE`).
+    disc : FiniteElement or Modal
+        The reported discretisation.
+
+    Returns
+    -------
+    Evaluation
+
+    Raises
+    ------
+    SolverError
+        If the value on ``disc`` cannot be computed (a failure on the refined
+        discretisation is recorded in :attr:`Evaluation.note` instead).
+    """
+    t0 = time.process_time()
+    if quantity.name in CYCLE_QUANTITIES:
+        quantity = quantity.seeded(disc)
+    value = float(quantity(disc))
+    fine = refine(disc)
+    try:
+        refined: float | None = float(quantity(fine))
+    except (SolverError, ValueError) as exc:
+        refined, note = None, f"no error estimate: the refined run on {fine.name} failed: {exc}"
+    else:
+        note = None
+    err = None
+    if refined is not None:
+        floor = quantity.tolerance * max(1.0, abs(value))
+        ratio = refinement_ratio(disc)
+        err = float(
+            estimate(value, refined, expected_order(disc, quantity.params), ratio, floor=floor)
+        )
+    return Evaluation(value, refined, err, note, time.process_time() - t0)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """A user's value of one quantity beside fempipe's.
+
+    Attributes
+    ----------
+    quantity : Quantity
+        What is compared, with the case's parameters.
+    user : float
+        The user's value.
+    evaluation : Evaluation or None
+        fempipe's value and estimate; None if the computation failed.
+    failure : str or None
+        The failure's message.
+    """
+
+    quantity: Quantity
+    user: float
+    evaluation: Evaluation | None
+    failure: str | None = None
+
+    @property
+    def fempipe(self) -> float | None:
+        """fempipe's value on the reported discretisation (None if it failed)."""
+        return None if self.evaluation is None else self.evaluation.value
+
+    @property
+    def difference(self) -> float | None:
+        """user - fempipe."""
+        return None if self.fempipe is None else self.user - self.fempipe
+
+    @property
+    def relative_difference(self) -> float | None:
+        """(user - fempipe) / |fempipe|; None where fempipe's value is 0 or missing."""
+        if self.fempipe is None or self.fempipe == 0.0:
+            return None
+        return self.difference / abs(self.fempipe)
+
+    @property
+    def error_estimate(self) -> float | None:
+        """fempipe's error estimate (None without a refined value)."""
+        return None if self.evaluation is None else self.evaluation.error_estimate
+
+    @property
+    def resolved(self) -> bool | None:
+        """|user - fempipe| > fempipe's error estimate; None without an estimate."""
+        if self.difference is None or self.error_estimate is None:
+            return None
+        return bool(abs(self.difference) > self.error_estimate)
+
+    def to_dict(self) -> dict:
+        """``{"quantity", "user", "fempipe", "difference", "relative_difference",
+        "error_estimate", "resolved", "refined", "failure", "note", "cpu_time"}``."""
+        ev = self.evaluation
+        return {
+            "quantity": self.quantity.name,
+            "user": self.user,
+            "fempipe": self.fempipe,
+            "difference": self.difference,
+            "relative_difference": self.relative_difference,
+            "error_estimate": self.error_estimate,
+            "resolved": self.resolved,
+            "refined": None if ev is None else ev.refined,
+            "failure": self.failure,
+            "note": None if ev is None else ev.note,
+            "cpu_time": None if ev is None else ev.cpu_time,
+        }
+
+
+def compare_values(
+    pairs: Sequence[tuple[Quantity, float]],
+    disc,
+    *,
+    workers: int | None = None,
+    callback: Callable[[int, int], None] | None = None,
+) -> list[Comparison]:
+    """Compare each user's value with fempipe's (:func:`evaluate`), in order.
+
+    Parameters
+    ----------
+    pairs : sequence of (Quantity, float)
+        What to compute and the user's value of it.
+    disc : FiniteElement or Modal
+        The reported discretisation (refined once for the estimates).
+    workers : int, optional
+        Processes computing the comparisons in parallel
+        (:func:`fempipe.core.parallel.run_tasks`).
+    callback : callable, optional
+        ``callback(done, total)`` as each comparison finishes.
+
+    Returns
+    -------
+    list of Comparison
+        One per pair, in order; a :class:`~fempipe.core.errors.SolverError` or
+        ``ValueError`` of a computation is that comparison's ``failure``.
+    """
+    from fempipe.core.parallel import run_tasks
+
+    for q, _ in pairs:
+        if q.name not in COMPARABLE:
+            raise ValueError(f"{q.name} cannot be compared; the quantities are {COMPARABLE}")
+    results = run_tasks(
+        evaluate,
+        [(q, disc) for q, _ in pairs],
+        workers=workers,
+        callback=None if callback is None else (lambda done, total, _r: callback(done, total)),
+    )
+    out = []
+    for (q, user), r in zip(pairs, results, strict=True):
+        if isinstance(r, SolverError | ValueError):
+            out.append(Comparison(q, float(user), None, " ".join(str(r).split())))
+        elif isinstance(r, BaseException):
+            raise r
+        else:
+            out.append(Comparison(q, float(user), r))
+    return out
+
+
+def estimate_description(
+    disc, quantities: Sequence[str] = COMPARABLE, shoot_rtol: float = 1e-9
+) -> dict:
+    """The top-level ``"error_estimate"`` of a comparison: method, formula, floors, criterion.
+
+    :meth:`fempipe.studies.error_estimate.ErrorEstimate.to_dict` of ``disc`` with
+    ``floors`` (quantity -> its relative solver tolerance,
+    :attr:`Quantity.tolerance`) and ``resolved`` (the criterion) added.
+    """
+    from fempipe.model.params import Params
+
+    floors = {}
+    for name in quantities:
+        kw = {"v_max": 1.0} if name in CRITICAL_QUANTITIES else {}
+        floors[name] = Quantity(name, Params(), shoot_rtol=shoot_rtol, **kw).tolerance
+    text = (
+        "the solver tolerance of the quantity times max(1, |Q|): "
+        + ", ".join(f"{k} {v:.0e}" for k, v in floors.items())
+        + " (Newton's 1e-12 on static states, events located to 1e-10 in v, 10 x the "
+        "shooting tolerance of limit cycles)"
+    )
+    info = describe(disc, floor=text).to_dict()
+    info["floors"] = floors
+    info["resolved"] = (
+        "|difference| > error_estimate: fempipe's discretisation error cannot explain the "
+        "difference"
+    )
+    return info
