@@ -91,7 +91,7 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
             sys.exit(exc.exit_code)
         """
     )
-    env = dict(os.environ, PYTHONPATH=str(Path(bif.__file__).parents[1]))
+    env = dict(os.environ, PYTHONPATH=str(Path(bif.__file__).parents[2]))
     proc = subprocess.Popen([sys.executable, "-c", script], env=env)
     workers_seen: set[int] = set()
     try:
