@@ -442,12 +442,12 @@ def test_simulate_equilibrium_and_without_the_option(capsys):
 
 
 def test_simulate_attractors_of_different_kinds_give_no_number(capsys, monkeypatch):
-    import fempipe.cli.simulate as sim
+    import fempipe.studies.estimates.attractor as attractor_estimates
 
-    def fake(disc, fine_model, att, args, on_time, summary, notes):
-        return summary("equilibrium", tip=att.tip)
+    def fake(model, att, fine_model, **kwargs):
+        return attractor_estimates.AttractorSummary.of("equilibrium", tip=att.tip), []
 
-    monkeypatch.setattr(sim, "_refined_cycle", fake)
+    monkeypatch.setattr(attractor_estimates, "refined_cycle", fake)
     d = run_json(capsys, ["simulate", "--modal", "2", "--v", "9", "--error-estimate"])
     assert d["attractor"] == "periodic" and d["attractor_refined"] == "equilibrium"
     assert d["period_error"] is None and d["tip_error"] is None
