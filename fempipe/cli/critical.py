@@ -55,7 +55,9 @@ describes the method and lists the notes (also refined events the reported
 run lacks).  events.csv gains ``v_error`` and ``frequency_error`` after its
 columns; the text shows ``value ± error``.  It costs about one more run on
 the refined discretisation; the ``branches`` entries are those of the
-reported run, without estimates.
+reported run, without estimates.  The library does it
+(:func:`fempipe.studies.estimates.refined_stability`,
+:func:`~fempipe.studies.estimates.with_stability_estimates`); this module shows it.
 
 The continuation's step budget follows from the range (:func:`step_budget`).
 Should the primary branch still stop before the end of the range (its JSON

@@ -48,7 +48,9 @@ Convergence Index, p = 2k for P_k, 3 for the sine modes; tol is
 period-n, equilibrium; a refined cycle that is unstable) there is no error
 number (null) and ``"error_estimate"["notes"]`` says so; a non-periodic
 attractor gets none either.  It costs about the refined shooting (a
-transient only where needed).
+transient only where needed).  The library does it
+(:func:`fempipe.studies.estimates.refined_attractor`,
+:func:`~fempipe.studies.estimates.with_attractor_estimates`); this module shows it.
 """
 
 from __future__ import annotations
@@ -254,10 +256,9 @@ def _cost_check(v: float, t_max: float, allow: bool):
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
-    from fempipe.analyses.limit_cycle import TIP_KEYS, find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
     from fempipe.analyses.statics import solve_static
     from fempipe.io import json_dumps
-    from fempipe.model.kinematics import tip_values
     from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "simulate")
@@ -322,6 +323,30 @@ def run(args: argparse.Namespace) -> int:
         if args.error_estimate:
             refined = _refined_attractor(model, att, q_s, flow, args, bar)
 
+    result = _result(setup, traj, att, wall_time, args)
+    if refined is not None:
+        from fempipe.studies.estimates import with_attractor_estimates
+
+        result = with_attractor_estimates(result, refined, setup.pipe)
+
+    output = reporting.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write_outputs(output, result, model, traj, att, args.output_dt)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print_summary(result)
+    if output is not None:
+        output.report(args)
+    return 0
+
+
+def _result(setup: common.Setup, traj, att, wall_time: float, args: argparse.Namespace) -> dict:
+    """The JSON of the run: the attractor (or the forced response), the steps, SI values."""
+    from fempipe.analyses.limit_cycle import TIP_KEYS
+    from fempipe.model.kinematics import tip_values
+
+    params, disc, sigma, omega = setup.params, setup.disc, args.sigma, args.omega
     result = setup.to_dict()
     result["params"]["v"] = params.v
     if att is None:
@@ -346,21 +371,7 @@ def run(args: argparse.Namespace) -> int:
         ts = setup.pipe.time_scale
         result["period_s"] = result["period"] * ts if result.get("period") else None
         result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
-    if refined is not None:
-        from fempipe.studies.estimates import with_attractor_estimates
-
-        result = with_attractor_estimates(result, refined, setup.pipe)
-
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write_outputs(output, result, model, traj, att, args.output_dt)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_summary(result)
-    if output is not None:
-        output.report(args)
-    return 0
+    return result
 
 
 def _refined_attractor(model, att, q_static, flow, args, bar):

@@ -28,7 +28,9 @@ the floor is Newton's tolerance) and ``Q_refined``, and the top-level
 ``"error_estimate"`` (method, refined discretisation, order, formula, notes).
 static.csv gains the ``Q_error`` columns after the others; the table shows
 ``value ± error``.  The run costs about one more run on the refined
-discretisation.
+discretisation.  The library does it
+(:func:`fempipe.studies.estimates.refined_static_states`,
+:func:`~fempipe.studies.estimates.with_static_estimates`); this module shows it.
 """
 
 from __future__ import annotations
