@@ -215,25 +215,25 @@ def test_bifurcation_panels_name_the_papers_panel_only_for_the_papers_case():
     Z_g with (a)-(d) alpha = pi/4 ... pi; another case or inclination gets no 'cf.'."""
     import math
 
-    from fempipe.cli.bifurcation import _paper_panel
+    from fempipe.cli.bifurcation import paper_panel
     from fempipe.model.params import PAPER_CASE
 
     p = dict(PAPER_CASE, end_mass=0.0, springs=[])
     keys = ("eta_tip", "X_tip", "Z_tip")
-    assert [_paper_panel(k, 0.0, p) for k in keys] == [
+    assert [paper_panel(k, 0.0, p) for k in keys] == [
         " (cf. Fig. 7(a))",
         " (cf. Fig. 7(b))",
         " (cf. Fig. 7(c))",
     ]
-    assert [_paper_panel(k, math.pi / 2, p) for k in keys] == [
+    assert [paper_panel(k, math.pi / 2, p) for k in keys] == [
         " (cf. Fig. 8(b))",
         " (cf. Fig. 9(b))",
         " (cf. Fig. 10(b))",
     ]
-    assert _paper_panel("Z_tip", math.pi, p) == " (cf. Fig. 10(d))"
-    assert _paper_panel("eta_tip", 0.3, p) == ""
-    assert _paper_panel("eta_tip", 0.0, dict(p, gamma=10.0)) == ""
-    assert _paper_panel("eta_tip", 0.0, dict(p, end_mass=0.2)) == ""
+    assert paper_panel("Z_tip", math.pi, p) == " (cf. Fig. 10(d))"
+    assert paper_panel("eta_tip", 0.3, p) == ""
+    assert paper_panel("eta_tip", 0.0, dict(p, gamma=10.0)) == ""
+    assert paper_panel("eta_tip", 0.0, dict(p, end_mass=0.2)) == ""
 
 
 def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypatch, capsys):

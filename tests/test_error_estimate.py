@@ -442,12 +442,12 @@ def test_simulate_equilibrium_and_without_the_option(capsys):
 
 
 def test_simulate_attractors_of_different_kinds_give_no_number(capsys, monkeypatch):
-    import fempipe.cli.simulate as sim
+    import fempipe.studies.estimates.attractor as attractor_estimates
 
-    def fake(disc, fine_model, att, args, on_time, summary, notes):
-        return summary("equilibrium", tip=att.tip)
+    def fake(model, att, fine_model, **kwargs):
+        return attractor_estimates.AttractorSummary.of("equilibrium", tip=att.tip), []
 
-    monkeypatch.setattr(sim, "_refined_cycle", fake)
+    monkeypatch.setattr(attractor_estimates, "refined_cycle", fake)
     d = run_json(capsys, ["simulate", "--modal", "2", "--v", "9", "--error-estimate"])
     assert d["attractor"] == "periodic" and d["attractor_refined"] == "equilibrium"
     assert d["period_error"] is None and d["tip_error"] is None
@@ -527,3 +527,36 @@ def test_static_estimate_bounds_the_error_with_a_spring_inside_an_element(capsys
     (pt,) = d["points"]
     for k in TIP:
         assert_bounds(pt[k + "_error"], pt[k], ref[k], k)
+
+
+# -------------------------------------------------------------- library --
+def test_library_attaches_the_static_estimates_of_the_cli(capsys):
+    """fempipe.studies.estimates gives a library user the numbers of --error-estimate."""
+    from fempipe.studies.estimates import (
+        ERROR,
+        REFINED,
+        STATIC_TIP_KEYS,
+        RefinedStatic,
+        refined_static_states,
+        with_static_estimates,
+    )
+
+    argv = ["static", "--modal", "3", "--alpha", "pi/2", "--v", "0,2", "--error-estimate"]
+    d = run_json(capsys, argv)
+    model = PipeModel(Modal(3), Params(alpha=math.pi / 2))
+    sols = solve_path(model, [0.0, 2.0])
+    seen = []
+    refined = refined_static_states(model, sols, callback=lambda i, s: seen.append(i))
+    assert isinstance(refined, RefinedStatic) and seen == [0, 1]
+    assert refined.discretization.name == "modal:7" and refined.notes == ()
+    points = []
+    for sol in sols:
+        tip = tip_values(model.disc, sol.q, math.pi / 2)
+        row = {k: tip[k] for k in STATIC_TIP_KEYS}
+        row["tip_drop"] = tip["X_tip"] - math.cos(math.pi / 2)
+        points.append(row)
+    result = with_static_estimates({"points": points}, sols, refined)
+    assert result["error_estimate"] == d["error_estimate"]
+    for mine, cli in zip(result["points"], d["points"], strict=True):
+        for k in (*STATIC_TIP_KEYS, "tip_drop"):
+            assert mine[k + ERROR] == cli[k + ERROR] and mine[k + REFINED] == cli[k + REFINED]

@@ -291,7 +291,7 @@ def diagram_figure(result: dict, key: str):
             key,
             ax=ax,
             title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
-            f"γ = {p['gamma']:.4g}" + _paper_panel(key, a, p),
+            f"γ = {p['gamma']:.4g}" + paper_panel(key, a, p),
             special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
             hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
         )
@@ -301,7 +301,7 @@ def diagram_figure(result: dict, key: str):
     return fig
 
 
-def _paper_panel(key: str, alpha: float, params: dict) -> str:
+def paper_panel(key: str, alpha: float, params: dict) -> str:
     """`` (cf. Fig. 8(b))``: the panel of the paper's Figs. 7-10 that a diagram
     redraws, or ``""`` where it redraws none (another case, another alpha).
 

@@ -36,10 +36,6 @@ from __future__ import annotations
 
 import argparse
 import re
-from dataclasses import dataclass, replace
-
-from fempipe.core.errors import ParamError
-from fempipe.model.params import Params, PipeSI
 
 from .parsing import (
     DEFAULT_BETA,
@@ -56,15 +52,9 @@ from .parsing import (
     SPRING_MAX,
     T_MAX,
     V_MAX,
-    CLIError,
     U_list_type,
-    ValueList,
-    allow_large,
     alpha_type,
     beta_type,
-    check_count,
-    check_si_groups,
-    check_U,
     fe_type,
     gamma_type,
     modal_type,
@@ -74,6 +64,7 @@ from .parsing import (
     v_list_type,
     workers_type,
 )
+from .setup import Setup, refuse_hysteretic, setup_from_args
 
 __all__ = [
     "ArgumentParser",
@@ -82,15 +73,9 @@ __all__ = [
     "add_flow_arguments",
     "add_output_arguments",
     "add_physical_arguments",
+    "refuse_hysteretic",
     "setup_from_args",
 ]
-
-#: SI option -> PipeSI field.
-_SI_OPTIONS = {"--length": "L", "--EI": "EI", "--m": "m", "--M": "M", "--g": "g", "--a": "a"}
-_SI_REQUIRED = ("--length", "--EI", "--m", "--M")
-#: Params / PipeSI field -> the option that sets it, to name it in errors.
-_DIMLESS_OPTION = {"alpha": "--alpha", "beta": "--beta", "gamma": "--gamma", "mu": "--mu"}
-_SI_FIELD_OPTION = {field: opt for opt, field in _SI_OPTIONS.items()} | {"alpha": "--alpha"}
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -394,220 +379,3 @@ def add_output_arguments(parser: argparse.ArgumentParser, out_help: str | None =
     ex.add_argument(
         "--quiet", dest="progress", action="store_false", help="no progress bar, no log output"
     )
-
-
-# ---------------------------------------------------------------------------
-# From parsed arguments to a validated problem
-# ---------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Setup:
-    """The validated problem behind a command line.
-
-    Attributes
-    ----------
-    params : Params
-        Dimensionless parameters; ``params.v`` is the first flow value (0 if none).
-    pipe : PipeSI or None
-        The SI pipe when SI input was given.
-    v : list of float
-        Dimensionless flow velocities (empty if the command has no flow list).
-    disc : FiniteElement or Modal
-    U : list of float or None
-        The flow velocities in m/s as given by ``--U`` (or converted from ``--v``
-        when the pipe is SI), else None.
-    """
-
-    params: Params
-    pipe: PipeSI | None
-    v: list[float]
-    disc: object
-    U: list[float] | None = None
-
-    def to_dict(self) -> dict:
-        """``params`` (with the ``pipe`` in SI when given) and ``discretization``."""
-        p = self.params.to_dict()
-        p.pop("v", None)
-        out: dict = {"params": p, "discretization": self.disc.to_dict()}
-        if self.pipe is not None:
-            out["params"]["pipe_SI"] = self.pipe.to_dict()
-            out["params"]["time_scale_s"] = self.pipe.time_scale
-            out["params"]["velocity_scale_m_per_s"] = self.pipe.velocity_scale
-        return out
-
-
-def _given(args: argparse.Namespace, dest: str):
-    return getattr(args, dest, None)
-
-
-def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
-    """Turn parsed options into the validated :class:`Setup`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        From a parser with :func:`add_physical_arguments`,
-        :func:`add_discretization_arguments` and optionally
-        :func:`add_flow_arguments`.
-    need_flow : bool
-        If False a missing flow list is allowed even without a default.
-
-    Returns
-    -------
-    Setup
-
-    Raises
-    ------
-    CLIError
-        Naming the offending option; the dispatcher prints it and exits 2.
-    """
-    from fempipe.model.discretization import parse_discretization
-
-    alpha = _given(args, "alpha")
-    alpha = 0.0 if alpha is None else alpha
-    large = allow_large(args)
-
-    # --- SI pipe or dimensionless groups ------------------------------
-    si_given = [opt for opt in _SI_OPTIONS if _given(args, opt[2:]) is not None]
-    pipe: PipeSI | None = None
-    if si_given:
-        missing = [opt for opt in _SI_REQUIRED if _given(args, opt[2:]) is None]
-        if missing:
-            # Blame the option that asked for the SI pipe when none of the
-            # required ones was given (--g 9.8 alone), else the first missing.
-            named = missing[0] if len(missing) < len(_SI_REQUIRED) else si_given[0]
-            raise CLIError(
-                named,
-                f"the SI pipe needs {' '.join(_SI_REQUIRED)} together; missing {' '.join(missing)}",
-            )
-        for opt in ("--beta", "--gamma", "--mu"):
-            if _given(args, opt[2:]) is not None:
-                raise CLIError(
-                    opt,
-                    f"cannot be combined with the SI pipe ({si_given[0]}): "
-                    "beta, gamma, mu follow from --length --EI --m --M --g --a",
-                )
-        kw = {f: _given(args, opt[2:]) for opt, f in _SI_OPTIONS.items()}
-        kw = {f: x for f, x in kw.items() if x is not None}
-        kw.setdefault("g", DEFAULT_G)
-        try:
-            pipe = PipeSI(alpha=alpha, **kw)
-        except ParamError as exc:
-            raise CLIError(_SI_FIELD_OPTION[exc.field], str(exc)) from None
-        base = pipe.params(0.0)
-        check_si_groups(base)
-    else:
-        vals = {"alpha": alpha, "beta": DEFAULT_BETA, "gamma": DEFAULT_GAMMA, "mu": DEFAULT_MU}
-        for name in ("beta", "gamma", "mu"):
-            if _given(args, name) is not None:
-                vals[name] = _given(args, name)
-        try:
-            base = Params(**vals)
-        except ParamError as exc:
-            raise CLIError(_DIMLESS_OPTION[exc.field], str(exc)) from None
-
-    # --- variants of the pipe -----------------------------------------
-    base = _with_variants(args, base, pipe)
-
-    # --- flow ---------------------------------------------------------
-    v_list: list[float] = []
-    U_list: list[float] | None = None
-    if _given(args, "U") is not None:
-        if pipe is None:
-            raise CLIError(
-                "--U",
-                "needs the SI pipe (--length --EI --m --M); use --v for dimensionless flow",
-            )
-        U_spec: ValueList = args.U
-        check_U(pipe, U_spec)
-        U_list = U_spec.values(large)
-        v_list = [pipe.v_of_U(U) for U in U_list]
-    else:
-        spec = _given(args, "v")
-        if spec is None and getattr(args, "_flow_default", None) is not None:
-            spec = v_list_type(args._flow_default)
-        if spec is not None:
-            v_list = spec.values(large)
-        elif need_flow and hasattr(args, "_flow_default"):
-            raise CLIError("--v", "give the flow velocities (--v or --U)")
-        if pipe is not None and v_list:
-            U_list = [pipe.U_of_v(v) for v in v_list]
-    params = replace(base, v=v_list[0]) if v_list else base
-
-    # --- discretisation -----------------------------------------------
-    fe, modal = _given(args, "fe"), _given(args, "modal")
-    basis = _given(args, "basis") or "sine"
-    if basis != "sine" and modal is None:
-        raise CLIError(
-            "--basis",
-            f"{basis} chooses the modes of --modal N and needs it"
-            + (" (finite elements --fe have no basis)" if fe is not None else ""),
-        )
-    option, (text, unknowns) = (
-        ("--modal", modal) if modal is not None else ("--fe", fe or (None, 0))
-    )
-    check_count(option, unknowns, MAX_DOFS, large, "unknowns")
-    try:
-        disc = parse_discretization(
-            fe=None if fe is None else fe[0],
-            modal=None if modal is None else modal[0],
-            basis=basis,
-        )
-    except ValueError as exc:
-        raise CLIError(option, str(exc)) from None
-
-    return Setup(params=params, pipe=pipe, v=v_list, disc=disc, U=U_list)
-
-
-def _with_variants(args: argparse.Namespace, base: Params, pipe: PipeSI | None) -> Params:
-    """``base`` with the end mass, dampings and springs of the command line."""
-    end_mass = _given(args, "end_mass")
-    end_mass_kg = _given(args, "end_mass_kg")
-    if end_mass_kg is not None:
-        if pipe is None:
-            raise CLIError(
-                "--end-mass-kg",
-                "needs the SI pipe (--length --EI --m --M); use "
-                "--end-mass for the dimensionless Gamma = M_e / ((m+M) L)",
-            )
-        if end_mass is not None:
-            raise CLIError("--end-mass-kg", "give --end-mass or --end-mass-kg, not both")
-        end_mass = pipe.end_mass_ratio(end_mass_kg)
-        if end_mass > END_MASS_MAX:
-            raise CLIError(
-                "--end-mass-kg",
-                f"M_e = {end_mass_kg:g} kg is Gamma = {end_mass:.6g} > {END_MASS_MAX:g} times "
-                "the pipe's mass",
-            )
-    kw = {
-        "end_mass": end_mass,
-        "external_damping": _given(args, "external_damping"),
-        "hysteretic_damping": _given(args, "hysteretic_damping"),
-        "springs": tuple(_given(args, "spring") or ()) or None,
-    }
-    kw = {k: x for k, x in kw.items() if x is not None}
-    if not kw:
-        return base
-    try:
-        return replace(base, **kw)
-    except ParamError as exc:
-        raise CLIError(_VARIANT_OPTION.get(exc.field, "--" + exc.field), str(exc)) from None
-
-
-_VARIANT_OPTION = {
-    "end_mass": "--end-mass",
-    "external_damping": "--external-damping",
-    "hysteretic_damping": "--hysteretic-damping",
-    "springs": "--spring",
-}
-
-
-def refuse_hysteretic(args: argparse.Namespace, command: str) -> None:
-    """Time-domain commands: hysteretic damping has no meaning there (one-line error)."""
-    if _given(args, "hysteretic_damping"):
-        raise CLIError(
-            "--hysteretic-damping",
-            f"has no time-domain meaning (EI (1 + i mu_h) acts on harmonic motion only); "
-            f"{command} cannot use it: use spectrum, critical or stability-map",
-        )

@@ -55,7 +55,9 @@ describes the method and lists the notes (also refined events the reported
 run lacks).  events.csv gains ``v_error`` and ``frequency_error`` after its
 columns; the text shows ``value ± error``.  It costs about one more run on
 the refined discretisation; the ``branches`` entries are those of the
-reported run, without estimates.
+reported run, without estimates.  The library does it
+(:func:`fempipe.studies.estimates.refined_stability`,
+:func:`~fempipe.studies.estimates.with_stability_estimates`); this module shows it.
 
 The continuation's step budget follows from the range (:func:`step_budget`).
 Should the primary branch still stop before the end of the range (its JSON
@@ -72,10 +74,6 @@ import sys
 
 from fempipe.cli import common, estimates, parsing, reporting
 from fempipe.cli.parsing import CLIError
-
-#: Events are located to 1e-10 in v (Brent; folds by the continuation): the
-#: floor of the error estimates, relative to max(1, |Q|).
-EVENT_TOL = 1e-10
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -159,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
         if args.error_estimate:
-            refined = _refined_run(model, kwargs, bar, analysis)
+            refined = _refined_run(model, kwargs, bar, args.planar)
     head = setup.to_dict()
     result = res.to_dict()
     # Hopf criticality of the flutter events (fempipe.analyses.stability.hopf).
@@ -176,7 +174,9 @@ def run(args: argparse.Namespace) -> int:
             v = result["v_cr_" + key]
             result["U_cr_" + key] = None if v is None else pipe.U_of_v(v)
     if refined is not None:
-        result = _with_errors(result, res, *refined, setup.pipe)
+        from fempipe.studies.estimates import with_stability_estimates
+
+        result = with_stability_estimates(result, res, refined, setup.pipe)
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         _write(output, result, res)
@@ -189,130 +189,19 @@ def run(args: argparse.Namespace) -> int:
     return _check_coverage(args, result, v_max)
 
 
-def _refined_run(model, kwargs: dict, bar, analysis) -> tuple:
-    """``(refined result or None, ErrorEstimate, notes)``: the analysis on the refined
-    discretisation, with the progress bar counting its samples too."""
-    from fempipe.core.errors import SolverError
-    from fempipe.model.operators import PipeModel
-    from fempipe.studies.error_estimate import describe, refine
+def _refined_run(model, kwargs: dict, bar, planar: bool):
+    """:func:`fempipe.studies.estimates.refined_stability`, the progress bar counting its
+    samples too."""
+    from fempipe.studies.error_estimate import refine
+    from fempipe.studies.estimates import refined_stability
 
     fine = refine(model.disc)
-    info = describe(
-        model.disc,
-        fine,
-        floor=f"events located to {EVENT_TOL:g} max(1, |Q|)",
-        params=model.params,
-    )
 
     def on_sample(branch: str, v: float) -> None:
         bar.update()
         bar.set_postfix_str(f"refined {fine.name} {branch} v={v:.4f}")
 
-    try:
-        res = analysis(PipeModel(fine, model.params), callback=on_sample, **kwargs)
-    except (SolverError, ValueError) as exc:
-        return None, info, [f"the refined run on {fine.name} failed ({exc}); no estimates"]
-    notes = []
-    branches = res.branches if hasattr(res, "branches") else res.in_plane.branches
-    primary = next((b for b in branches if b.name == "primary"), None)
-    if primary is not None and primary.end_reason == "max_steps":
-        notes.append(
-            f"the refined run's primary branch ran out of continuation steps at "
-            f"v = {float(primary.v.max()):.6g}"
-        )
-    return res, info, notes
-
-
-def _with_errors(result: dict, res, fine_res, info, notes: list, pipe) -> dict:
-    """``result`` with ``Q_error``, ``Q_refined`` beside the numbers (module docstring)."""
-    from fempipe.studies.error_estimate import match_events
-
-    notes = list(notes)
-    order, name = info.order, info.refined
-    fine_events = [] if fine_res is None else list(fine_res.events)
-    pairs, unmatched = match_events(res.events, fine_events)
-
-    def partner(ev):
-        """The refined event paired with the coarse event ``ev`` (a StabilityEvent)."""
-        i = next((i for i, e in enumerate(res.events) if e == ev), None)
-        return None if i is None or pairs[i] is None else fine_events[pairs[i]]
-
-    def add(d: dict, f) -> dict:
-        d = estimates.with_estimate(
-            d, "v", None if f is None else f.v, order, EVENT_TOL, ratio=info.ratio
-        )
-        return estimates.with_estimate(
-            d, "frequency", None if f is None else f.frequency, order, EVENT_TOL, ratio=info.ratio
-        )
-
-    events = []
-    for ev, d in zip(res.events, result["events"], strict=True):
-        f = partner(ev)
-        d = add(d, f)
-        d["error_note"] = None
-        if f is None and fine_res is not None:
-            d["error_note"] = (
-                f"no {ev.type} of mode {ev.mode} on branch {ev.branch} in the refined run ({name})"
-            )
-        events.append(d)
-    result["events"] = events
-    for j in unmatched:
-        f = fine_events[j]
-        notes.append(
-            f"the refined run ({name}) has a {f.type} of mode {f.mode} on branch {f.branch} "
-            f"at v = {f.v:.10g} that the reported run has not"
-        )
-
-    def first(key: str, coarse_ev, fine_value):
-        """``key`` (v_cr or v_flutter) with its estimate: only if both runs' event is one."""
-        f = None if coarse_ev is None else partner(coarse_ev)
-        same = f is not None and fine_value is not None and f.v == fine_value
-        if result[key] is not None and fine_res is not None and not same:
-            what = "none" if fine_value is None else f"v = {fine_value:.10g}"
-            notes.append(
-                f"{key}: the refined run ({name}) gives {what} by another event than the "
-                f"reported one; no estimate"
-            )
-        elif result[key] is None and fine_value is not None:
-            notes.append(f"{key}: none in the reported run, v = {fine_value:.10g} refined")
-        refined = fine_value if same else None
-        out = estimates.with_estimate(result, key, refined, order, EVENT_TOL, ratio=info.ratio)
-        out[key + estimates.REFINED] = fine_value
-        return out
-
-    v_flutter_ev = min(
-        (e for e in res.events if e.branch == "primary" and e.type == "flutter"),
-        key=lambda e: e.v,
-        default=None,
-    )
-    result = first("v_cr", res.critical, None if fine_res is None else fine_res.v_cr)
-    result = first("v_flutter", v_flutter_ev, None if fine_res is None else fine_res.v_flutter)
-    if hasattr(res, "in_plane"):
-        for plane in ("in_plane", "out_of_plane"):
-            coarse, fine = (
-                getattr(res, plane),
-                None if fine_res is None else getattr(fine_res, plane),
-            )
-            result = first("v_cr_" + plane, coarse.critical, None if fine is None else fine.v_cr)
-    if result["critical"] is not None:
-        result["critical"] = add(result["critical"], partner(res.critical))
-    for plane in ("in_plane", "out_of_plane") if hasattr(res, "in_plane") else ():
-        key = "critical_" + plane
-        if result.get(key) is not None:
-            result[key] = add(result[key], partner(getattr(res, plane).critical))
-    if pipe is not None and "U_cr" in result:
-        err, fine_v = result["v_cr" + estimates.ERROR], result["v_cr" + estimates.REFINED]
-        scale = pipe.U_of_v(1.0)
-        result = estimates.beside(
-            result,
-            "U_cr",
-            {
-                "U_cr" + estimates.ERROR: None if err is None else err * scale,
-                "U_cr" + estimates.REFINED: None if fine_v is None else pipe.U_of_v(fine_v),
-            },
-        )
-    result["error_estimate"] = estimates.header(info, notes)
-    return result
+    return refined_stability(model, planar=planar, fine=fine, callback=on_sample, **kwargs)
 
 
 def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int:

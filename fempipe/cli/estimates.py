@@ -1,4 +1,4 @@
-"""``--error-estimate``: the option and the shapes it adds to a command's output.
+"""``--error-estimate``: the option, and how a command shows the estimates.
 
 With ``--error-estimate`` a command (``static``, ``critical``, ``simulate``)
 reruns its computation on the refined discretisation of
@@ -8,9 +8,12 @@ of its JSON, ``Q_error`` (the estimate of
 value), plus a top-level ``"error_estimate"`` describing the method
 (:class:`fempipe.studies.error_estimate.ErrorEstimate`) with the ``notes`` of the
 comparison (an event found on one discretisation only, attractors of
-different kinds, a refined solve that failed).  CSV files gain only the
-``Q_error`` columns, after the existing ones.  The text output shows
-``value ± error``.  Without the option nothing of this is computed or shown.
+different kinds, a refined solve that failed).  The library attaches them
+(:mod:`fempipe.studies.estimates`); this module holds the option and the
+shapes of the other outputs: CSV files gain only the ``Q_error`` columns,
+after the existing ones (:func:`error_columns`), and the text output shows
+``value ± error`` (:func:`pm`, :func:`print_footer`).  Without the option
+nothing of this is computed or shown.
 """
 
 from __future__ import annotations
@@ -18,21 +21,16 @@ from __future__ import annotations
 import argparse
 from collections.abc import Iterable, Mapping
 
-from fempipe.studies.error_estimate import RATIO, ErrorEstimate, estimate
+from fempipe.studies.estimates import ERROR, REFINED
 
 __all__ = [
     "ERROR",
     "REFINED",
     "add_argument",
-    "beside",
     "error_columns",
-    "header",
     "pm",
-    "with_estimate",
+    "print_footer",
 ]
-
-#: Suffixes of the keys added beside a reported key.
-ERROR, REFINED = "_error", "_refined"
 
 
 def add_argument(parser: argparse.ArgumentParser, what: str) -> None:
@@ -49,54 +47,6 @@ def add_argument(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
-def beside(d: Mapping, key: str, extra: Mapping) -> dict:
-    """A copy of ``d`` with the items of ``extra`` inserted right after ``key``.
-
-    Keeps the JSON readable: ``v_cr``, ``v_cr_error``, ``v_cr_refined``.  If
-    ``key`` is absent the items are appended.
-    """
-    if key not in d:
-        return {**d, **extra}
-    out: dict = {}
-    for k, val in d.items():
-        out[k] = val
-        if k == key:
-            out.update(extra)
-    return out
-
-
-def with_estimate(
-    d: Mapping,
-    key: str,
-    refined: float | None,
-    order: float | None,
-    floor: float,
-    scale: float = 1.0,
-    ratio: float = RATIO,
-) -> dict:
-    """``d`` with ``key_error`` and ``key_refined`` beside ``key``.
-
-    The error is :func:`~fempipe.studies.error_estimate.estimate` of ``d[key]``
-    against ``refined`` with the floor ``floor * max(1, |d[key]|)`` (a
-    relative solver tolerance); None when either value is None.  ``scale``
-    converts a derived quantity (an SI value, ``scale`` times a
-    dimensionless one whose values are given).
-    """
-    coarse = d.get(key)
-    if coarse is None or refined is None:
-        err = None
-    else:
-        err = estimate(coarse, refined, order, ratio, floor=floor * max(1.0, abs(coarse)))
-    return beside(d, key, _pair(key, err, refined, scale))
-
-
-def _pair(key: str, err: float | None, refined: float | None, scale: float) -> dict:
-    return {
-        key + ERROR: None if err is None else err * scale,
-        key + REFINED: None if refined is None else refined * scale,
-    }
-
-
 def error_columns(rows: Iterable[Mapping]) -> list[str]:
     """The CSV columns of ``rows``: every key but ``*_refined`` and notes, errors last.
 
@@ -109,11 +59,6 @@ def error_columns(rows: Iterable[Mapping]) -> list[str]:
     errors = [k for k in keys if k.endswith(ERROR)]
     plain = [k for k in keys if not k.endswith((ERROR, REFINED)) and k != "error_note"]
     return plain + errors
-
-
-def header(info: ErrorEstimate, notes: list[str]) -> dict:
-    """The top-level ``"error_estimate"`` entry: the method and the notes."""
-    return {**info.to_dict(), "notes": list(notes)}
 
 
 def print_footer(est: Mapping, where: str = "") -> None:

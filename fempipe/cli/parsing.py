@@ -63,6 +63,9 @@ __all__ = [
     "MU_MAX",
     "T_MAX",
     "V_MAX",
+    "WHY_GAMMA",
+    "WHY_MU",
+    "WHY_V",
     "ValueList",
     "U_list_type",
     "allow_large",
@@ -71,7 +74,9 @@ __all__ = [
     "check_count",
     "check_U",
     "check_gamma",
+    "check_param",
     "check_si_groups",
+    "check_v",
     "fe_type",
     "gamma_type",
     "modal_type",
@@ -103,9 +108,10 @@ MAX_VALUES = 1000
 MAX_DOFS = 1000
 T_MAX = 1e4
 
-_WHY_V = "the default mesh P3:16 resolves bending waves of length 1/v down to v = 50"
-_WHY_GAMMA = "the default mesh P3:16 resolves the clamp layer 1/sqrt(gamma) down to gamma = 2500"
-_WHY_MU = "every mode is overdamped from mu = 0.57 on"
+#: Why each range ends where it does (the end of the messages of a value outside it).
+WHY_V = "the default mesh P3:16 resolves bending waves of length 1/v down to v = 50"
+WHY_GAMMA = "the default mesh P3:16 resolves the clamp layer 1/sqrt(gamma) down to gamma = 2500"
+WHY_MU = "every mode is overdamped from mu = 0.57 on"
 
 
 class CLIError(ValueError):
@@ -308,29 +314,29 @@ def value_list(text: str, option: str) -> ValueList:
     return ValueList(option, str(text), count, min(ends), max(ends))
 
 
-def _check_v(x: float, option: str = "--v") -> float:
+def check_v(x: float, option: str = "--v") -> float:
     """A dimensionless flow velocity in [0, :data:`V_MAX`] (ValueError naming ``option``)."""
     try:
         Params(v=x)
     except ParamError as exc:
         raise ValueError(f"{option}: {exc}") from None
     if x > V_MAX:
-        raise ValueError(f"{option}: v = {x:g} is outside 0 <= v <= {V_MAX:g} ({_WHY_V})")
+        raise ValueError(f"{option}: v = {x:g} is outside 0 <= v <= {V_MAX:g} ({WHY_V})")
     return x
 
 
 def check_gamma(x: float, option: str = "--gamma") -> float:
     """A gravity parameter in [0, :data:`GAMMA_MAX`] (ValueError naming ``option``)."""
     try:
-        return _check_param("gamma", x, GAMMA_MAX, _WHY_GAMMA)
+        return check_param("gamma", x, GAMMA_MAX, WHY_GAMMA)
     except ValueError as exc:
         raise ValueError(f"{option}: {exc}") from None
 
 
 def _v_list(text: str) -> ValueList:
     values = value_list(text, "--v")
-    _check_v(values.low)
-    _check_v(values.high)
+    check_v(values.low)
+    check_v(values.high)
     return values
 
 
@@ -344,7 +350,7 @@ def _alpha(text: str) -> float:
     return alpha
 
 
-def _check_param(field: str, x: float, high: float, why: str) -> float:
+def check_param(field: str, x: float, high: float, why: str) -> float:
     """``x`` as dimensionless ``field``: Params' own check, then ``<= high`` (ValueError)."""
     try:
         Params(**{field: x})
@@ -356,9 +362,9 @@ def _check_param(field: str, x: float, high: float, why: str) -> float:
 
 
 def _param(field: str, high: float, why: str) -> Callable[[str], float]:
-    """Parser of ``--field``: a finite number, checked by :func:`_check_param`."""
+    """Parser of ``--field``: a finite number, checked by :func:`check_param`."""
     option = f"--{field}"
-    return lambda text: _check_param(field, parse_float(text, option), high, why)
+    return lambda text: check_param(field, parse_float(text, option), high, why)
 
 
 def number_type(
@@ -396,8 +402,8 @@ def positive_int(text: str) -> int:
 workers_type = option_type("--workers", positive_int)
 alpha_type = option_type("--alpha", _alpha)
 beta_type = option_type("--beta", _param("beta", 1.0, "a mass ratio"))
-gamma_type = option_type("--gamma", _param("gamma", GAMMA_MAX, _WHY_GAMMA))
-mu_type = option_type("--mu", _param("mu", MU_MAX, _WHY_MU))
+gamma_type = option_type("--gamma", _param("gamma", GAMMA_MAX, WHY_GAMMA))
+mu_type = option_type("--mu", _param("mu", MU_MAX, WHY_MU))
 v_list_type = option_type("--v", _v_list)
 U_list_type = option_type("--U", lambda text: value_list(text, "--U"))
 
@@ -408,13 +414,13 @@ def check_si_groups(params: Params) -> None:
         raise CLIError(
             "--length --EI --m --M --g",
             f"the SI pipe has gamma = (m+M) g L^3/EI = {params.gamma:g}, outside "
-            f"0 <= gamma <= {GAMMA_MAX:g} ({_WHY_GAMMA})",
+            f"0 <= gamma <= {GAMMA_MAX:g} ({WHY_GAMMA})",
         )
     if params.mu > MU_MAX:
         raise CLIError(
             "--a",
             f"the SI pipe has mu = sqrt(EI/(m+M)) a/L^2 = {params.mu:g}, outside "
-            f"0 <= mu <= {MU_MAX:g} ({_WHY_MU})",
+            f"0 <= mu <= {MU_MAX:g} ({WHY_MU})",
         )
 
 
@@ -429,7 +435,7 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
             raise CLIError(
                 "--U",
                 f"U = {U:g} m/s is outside 0 <= U <= {pipe.U_of_v(V_MAX):.6g} m/s, the U of "
-                f"v = {V_MAX:g} for this pipe ({_WHY_V})",
+                f"v = {V_MAX:g} for this pipe ({WHY_V})",
             )
 
 

@@ -48,7 +48,9 @@ Convergence Index, p = 2k for P_k, 3 for the sine modes; tol is
 period-n, equilibrium; a refined cycle that is unstable) there is no error
 number (null) and ``"error_estimate"["notes"]`` says so; a non-periodic
 attractor gets none either.  It costs about the refined shooting (a
-transient only where needed).
+transient only where needed).  The library does it
+(:func:`fempipe.studies.estimates.refined_attractor`,
+:func:`~fempipe.studies.estimates.with_attractor_estimates`); this module shows it.
 """
 
 from __future__ import annotations
@@ -254,10 +256,9 @@ def _cost_check(v: float, t_max: float, allow: bool):
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
-    from fempipe.analyses.limit_cycle import TIP_KEYS, find_attractor
+    from fempipe.analyses.limit_cycle import find_attractor
     from fempipe.analyses.statics import solve_static
     from fempipe.io import json_dumps
-    from fempipe.model.kinematics import tip_values
     from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "simulate")
@@ -298,6 +299,7 @@ def run(args: argparse.Namespace) -> int:
                 bar.update(k - last[0])
                 last[0] = k
 
+        flow = None
         if sigma > 0:
             flow = PulsatingFlow(params.v, sigma, omega)
             traj = simulate(model, q0, p0, t_max, rtol=rtol, flow=flow, callback=on_time)
@@ -319,8 +321,32 @@ def run(args: argparse.Namespace) -> int:
         if last[0] < 100:
             bar.update(100 - last[0])
         if args.error_estimate:
-            refined = _refined_attractor(model, att, q_s, args, bar)
+            refined = _refined_attractor(model, att, q_s, flow, args, bar)
 
+    result = _result(setup, traj, att, wall_time, args)
+    if refined is not None:
+        from fempipe.studies.estimates import with_attractor_estimates
+
+        result = with_attractor_estimates(result, refined, setup.pipe)
+
+    output = reporting.Output(args.out) if args.out is not None else None
+    if output is not None:
+        _write_outputs(output, result, model, traj, att, args.output_dt)
+    if args.json:
+        print(json_dumps(result))
+    else:
+        _print_summary(result)
+    if output is not None:
+        output.report(args)
+    return 0
+
+
+def _result(setup: common.Setup, traj, att, wall_time: float, args: argparse.Namespace) -> dict:
+    """The JSON of the run: the attractor (or the forced response), the steps, SI values."""
+    from fempipe.analyses.limit_cycle import TIP_KEYS
+    from fempipe.model.kinematics import tip_values
+
+    params, disc, sigma, omega = setup.params, setup.disc, args.sigma, args.omega
     result = setup.to_dict()
     result["params"]["v"] = params.v
     if att is None:
@@ -345,42 +371,16 @@ def run(args: argparse.Namespace) -> int:
         ts = setup.pipe.time_scale
         result["period_s"] = result["period"] * ts if result.get("period") else None
         result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
-    if refined is not None:
-        result = _with_errors(result, *refined, setup.pipe)
-
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write_outputs(output, result, model, traj, att, args.output_dt)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_summary(result)
-    if output is not None:
-        output.report(args)
-    return 0
+    return result
 
 
-def _refined_attractor(model, att, q_static, args, bar) -> tuple:
-    """The attractor on the refined discretisation (module docstring).
+def _refined_attractor(model, att, q_static, flow, args, bar):
+    """:func:`fempipe.studies.estimates.refined_attractor` (module docstring), the
+    progress bar running from 100 to 200 over this work."""
+    from fempipe.studies.error_estimate import refine
+    from fempipe.studies.estimates import refined_attractor
 
-    Returns ``(coarse, refined, ErrorEstimate, floor, notes)``: ``coarse`` and
-    ``refined`` are ``{"kind", "period", "tip"}`` (``refined`` None if there
-    is nothing to compare), ``floor`` the solver tolerance of the values.
-    The progress bar runs from 100 to 200 over this work.
-    """
-    from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
-    from fempipe.analyses.limit_cycle import TIP_KEYS
-    from fempipe.analyses.stability import linearly_stable
-    from fempipe.analyses.statics import solve_static
-    from fempipe.core.errors import SolverError
-    from fempipe.model.kinematics import tip_values
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.projection import project
-    from fempipe.studies.error_estimate import describe, refine
-
-    disc, params = model.disc, model.params
-    fine = refine(disc)
-    fine_model = PipeModel(fine, params)
+    fine = refine(model.disc)
     bar.set_postfix_str(f"refined {fine.name}")
     done = [0]
 
@@ -390,152 +390,23 @@ def _refined_attractor(model, att, q_static, args, bar) -> tuple:
             bar.update(k - done[0])
             done[0] = k
 
-    def summary(kind, period=None, period_n=None, tip=None) -> dict:
-        label = f"periodic (period-{period_n})" if kind == "periodic" and period_n else kind
-        return {"kind": kind, "label": label, "period": period, "tip": tip}
-
-    notes: list[str] = []
-    if att is None:  # a pulsating flow: the whole integration again
-        floor, what = args.rtol, f"--rtol {args.rtol:g}"
-        coarse = None  # filled in by _with_errors from the result
-    elif att.kind == "equilibrium":
-        floor, what = 1e-10, "Newton's tolerance 1e-10"
-        coarse = summary("equilibrium", tip=att.tip)
-    else:
-        floor, what = args.shoot_rtol, f"--shoot-rtol {args.shoot_rtol:g}"
-        coarse = summary(att.kind, att.period, att.period_n, att.tip)
-    info = describe(disc, fine, floor=f"{what} max(1, |Q|)", params=params)
-    refined = None
-    try:
-        if att is None:
-            q_s = solve_static(fine_model, project(disc, q_static, fine)).q
-            q0, p0 = initial_state(fine_model, args.mode, args.amplitude, q_static=q_s)
-            flow = PulsatingFlow(params.v, args.sigma, args.omega)
-            tr = simulate(
-                fine_model, q0, p0, args.t_max, rtol=args.rtol, flow=flow, callback=on_time
-            )
-            tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
-            tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
-            refined = summary("forced", tip=tip)
-        elif att.kind == "equilibrium":
-            q = solve_static(fine_model, project(disc, att.q, fine)).q
-            if linearly_stable(fine_model, q) is True:
-                tv = tip_values(fine, q, params.alpha)
-                refined = summary("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
-            else:
-                refined = summary("unstable equilibrium")
-        elif att.kind == "non-periodic":
-            notes.append("a non-periodic attractor has no error estimate; not refined")
-        else:
-            refined = _refined_cycle(disc, fine_model, att, args, on_time, summary, notes)
-    except SolverError as exc:
-        notes.append(f"the refined computation on {fine.name} failed ({exc}); no estimates")
-        refined = None
-    if done[0] < 100:
-        bar.update(100 - done[0])
-    return coarse, refined, info, floor, notes
-
-
-def _refined_cycle(disc, fine_model, att, args, on_time, summary, notes) -> dict:
-    """The refined limit cycle: shot from the coarse cycle, else found by integration."""
-    from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
-    from fempipe.model.projection import project
-    from fempipe.solvers.radau import IntegrationError
-
-    fine = fine_model.disc
-    c = att.cycle
-    q0 = project(disc, att.q if c is None else c.q0, fine)
-    p0 = project(disc, att.qdot if c is None else c.qdot0, fine)
-    if c is not None:
-        try:
-            cyc = shoot(fine_model, q0, p0, c.period, rtol=args.shoot_rtol)
-        except (ShootingError, IntegrationError) as exc:
-            notes.append(
-                f"shooting on {fine.name} from the coarse cycle failed ({exc}); integrated"
-            )
-        else:
-            if not cyc.stable:
-                return summary("unstable periodic")
-            return summary("periodic", cyc.period, att.period_n, cyc.tip)
-    fa = find_attractor(
-        fine_model,
-        q0,
-        p0,
+    refined = refined_attractor(
+        model,
+        att,
+        q_static,
         t_max=args.t_max,
         rtol=args.rtol,
         shoot_rtol=args.shoot_rtol,
         use_shooting=not args.no_shooting,
+        mode=args.mode,
+        amplitude=args.amplitude,
+        flow=flow,
+        fine=fine,
         callback=on_time,
     )
-    return summary(fa.kind, fa.period, fa.period_n, fa.tip)
-
-
-def _with_errors(result: dict, coarse, refined, info, floor: float, notes: list, pipe) -> dict:
-    """``result`` with the estimates beside ``period`` and ``tip`` (module docstring)."""
-    from fempipe.studies.error_estimate import estimate
-
-    notes = list(notes)
-    order = info.order
-    if coarse is None:  # a pulsating flow
-        coarse = {"kind": "forced", "label": "forced", "period": None, "tip": result["tip"]}
-    same = refined is not None and refined["label"] == coarse["label"]
-    if refined is not None and not same:
-        notes.append(
-            f"the attractors differ: {coarse['label']} on {info.discretization}, "
-            f"{refined['label']} on {info.refined}; no error estimate"
-        )
-
-    def err(a, b):
-        if a is None or b is None:
-            return None
-        return estimate(a, b, order, info.ratio, floor=floor * max(1.0, abs(a)))
-
-    fine_tip = refined["tip"] if same else None
-    fine_period = refined["period"] if same else None
-    tip_error = None
-    if fine_tip is not None:
-        tip_error = {
-            k: [err(a, b) for a, b in zip(lo_hi, fine_tip[k], strict=True)]
-            for k, lo_hi in result["tip"].items()
-        }
-    period_error = err(result.get("period"), fine_period)
-    result = estimates.beside(
-        result,
-        "period",
-        {"period" + estimates.ERROR: period_error, "period" + estimates.REFINED: fine_period},
-    )
-    result = estimates.beside(
-        result,
-        "tip",
-        {"tip" + estimates.ERROR: tip_error, "tip" + estimates.REFINED: fine_tip},
-    )
-    result = estimates.beside(
-        result, "attractor", {"attractor_refined": None if refined is None else refined["kind"]}
-    )
-    if pipe is not None:
-        ts, L = pipe.time_scale, pipe.L
-
-        def scaled(d):
-            return None if d is None else {k: [x * L for x in v] for k, v in d.items()}
-
-        result = estimates.beside(
-            result,
-            "period_s",
-            {
-                "period_s" + estimates.ERROR: None if period_error is None else period_error * ts,
-                "period_s" + estimates.REFINED: None if fine_period is None else fine_period * ts,
-            },
-        )
-        result = estimates.beside(
-            result,
-            "tip_m",
-            {
-                "tip_m" + estimates.ERROR: scaled(tip_error),
-                "tip_m" + estimates.REFINED: scaled(fine_tip),
-            },
-        )
-    result["error_estimate"] = estimates.header(info, notes)
-    return result
+    if done[0] < 100:
+        bar.update(100 - done[0])
+    return refined
 
 
 def _display_states(att, traj, n_periods: int = 3):

@@ -28,7 +28,9 @@ the floor is Newton's tolerance) and ``Q_refined``, and the top-level
 ``"error_estimate"`` (method, refined discretisation, order, formula, notes).
 static.csv gains the ``Q_error`` columns after the others; the table shows
 ``value ± error``.  The run costs about one more run on the refined
-discretisation.
+discretisation.  The library does it
+(:func:`fempipe.studies.estimates.refined_static_states`,
+:func:`~fempipe.studies.estimates.with_static_estimates`); this module shows it.
 """
 
 from __future__ import annotations
@@ -40,12 +42,9 @@ from dataclasses import replace
 
 from fempipe.cli import common, estimates, parsing, reporting
 from fempipe.cli.parsing import CLIError
+from fempipe.studies.estimates import STATIC_TIP_KEYS
 
-#: Tip quantities reported per point (dimensionless), in table order.
-TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
-#: Newton's tolerance of the static states (:func:`fempipe.analyses.statics.solve_path`):
-#: the floor of the error estimates, relative to max(1, |Q|).
-NEWTON_TOL = 1e-10
+__all__ = ["STATIC_TIP_KEYS", "add_arguments", "run"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -164,8 +163,10 @@ def run(args: argparse.Namespace) -> int:
         "discretization": result["discretization"],
     }
     if refined is not None:
-        result["points"] = points = _with_errors(disc, points, sols, refined, pipe, tip_values)
-        result["error_estimate"] = estimates.header(*refined[2:])
+        from fempipe.studies.estimates import with_static_estimates
+
+        result = with_static_estimates(result, sols, refined, pipe)
+        points = result["points"]
 
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
@@ -184,76 +185,17 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _refined_states(model, sols, parameter: str, bar) -> tuple:
-    """``(refined discretisation, states, ErrorEstimate, notes)``: each static state solved
-    again on the refined discretisation (None where Newton fails there, with a note).
+def _refined_states(model, sols, parameter: str, bar):
+    """:func:`fempipe.studies.estimates.refined_static_states`, the progress bar counting
+    the refined states."""
+    from fempipe.studies.error_estimate import refine
+    from fempipe.studies.estimates import refined_static_states
 
-    Newton starts from the coarse state transferred to the refined space
-    (:func:`fempipe.model.projection.project`), so each refined state is the
-    coarse one's, on the same branch, whatever the path.
-    """
-    from fempipe.analyses.statics import NewtonError, solve_static
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.projection import project
-    from fempipe.studies.error_estimate import describe, refine
-
-    disc = model.disc
-    fine = refine(disc)
-    info = describe(
-        disc, fine, floor=f"Newton's tolerance {NEWTON_TOL:g} max(1, |Q|)", params=model.params
-    )
-    fine_model = PipeModel(fine, model.params)
-    states, notes = [], []
+    fine = refine(model.disc)
     bar.set_postfix_str(f"refined {fine.name}")
-    for sol in sols:
-        try:
-            q0 = project(disc, sol.q, fine)
-            states.append(solve_static(fine_model.with_params(sol.params), q0=q0, tol=NEWTON_TOL))
-        except NewtonError as exc:
-            states.append(None)
-            value = getattr(sol.params, parameter)
-            notes.append(f"{parameter} = {value:.6g}: no refined state ({exc}); errors null")
-        bar.update()
-    return fine, states, info, notes
-
-
-def _with_errors(disc, points, sols, refined, pipe, tip_values) -> list[dict]:
-    """The points with ``Q_error`` and ``Q_refined`` beside each tip value Q."""
-    fine, states, info, _ = refined
-    out = []
-    for row, sol, fine_sol in zip(points, sols, states, strict=True):
-        alpha = sol.params.alpha
-        tip = None if fine_sol is None else tip_values(fine, fine_sol.q, alpha)
-        val = {k: None if tip is None else float(tip[k]) for k in TIP_KEYS}
-        val["tip_drop"] = None if tip is None else float(tip["X_tip"]) - math.cos(alpha)
-        for k in (*TIP_KEYS, "tip_drop"):
-            row = estimates.with_estimate(row, k, val[k], info.order, NEWTON_TOL, ratio=info.ratio)
-        if pipe is not None:
-            for k, base, scale in _SI_DERIVED:
-                row = estimates.beside(
-                    row,
-                    k,
-                    {
-                        k + estimates.ERROR: _scaled(row[base + estimates.ERROR], scale * pipe.L),
-                        k + estimates.REFINED: _scaled(val[base], scale * pipe.L),
-                    },
-                )
-        out.append(row)
-    return out
-
-
-#: The SI values of a point: (key, dimensionless key, factor times L).
-_SI_DERIVED = (
-    ("X_tip_m", "X_tip", 1.0),
-    ("Z_tip_m", "Z_tip", 1.0),
-    ("eta_tip_m", "eta_tip", 1.0),
-    ("varsigma_tip_m", "varsigma_tip", 1.0),
-    ("tip_drop_mm", "tip_drop", 1e3),
-)
-
-
-def _scaled(x, factor: float):
-    return None if x is None else x * factor
+    return refined_static_states(
+        model, sols, parameter, fine=fine, callback=lambda i, state: bar.update()
+    )
 
 
 def _stability(model, q, planar: bool = False) -> dict:
@@ -300,7 +242,7 @@ def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
     row: dict = {"v": p.v}
     if parameter != "v":
         row[parameter] = getattr(p, parameter)
-    row.update({k: tip[k] for k in TIP_KEYS})
+    row.update({k: tip[k] for k in STATIC_TIP_KEYS})
     # Drop of the tip along gravity relative to the undeformed (straight) pipe,
     # whose tip sits at X_g = cos(alpha): positive = the tip moved down.
     row["tip_drop"] = tip["X_tip"] - math.cos(p.alpha)

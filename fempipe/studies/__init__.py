@@ -2,5 +2,6 @@
 
 Mesh and mode convergence (:mod:`~fempipe.studies.convergence`), a user's
 results against fempipe (:mod:`~fempipe.studies.compare`) and a posteriori
-error estimates (:mod:`~fempipe.studies.error_estimate`).
+error estimates (:mod:`~fempipe.studies.error_estimate`), attached to
+results by :mod:`~fempipe.studies.estimates`.
 """

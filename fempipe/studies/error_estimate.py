@@ -36,7 +36,10 @@ v_cr; the sine modes as N^-3; another modal basis as its class states
 (``expected_order``), else unknown.
 
 :class:`ErrorEstimate` describes how an estimate was formed, for the JSON
-of the commands (``"error_estimate": {...}``).
+of the commands (``"error_estimate": {...}``).  :mod:`fempipe.studies.estimates`
+uses this module to attach estimates to whole results (static states, stability
+events, attractors), as ``fempipe static``, ``critical`` and ``simulate`` report
+them with ``--error-estimate``.
 
 Examples
 --------
