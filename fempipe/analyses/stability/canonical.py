@@ -53,7 +53,7 @@ def cantilever_frequencies(n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Resolution:
-    """Which modes a discretisation resolves (see the module docstring).
+    """Which modes a discretisation resolves (the package docstring, "Resolved modes").
 
     Attributes
     ----------

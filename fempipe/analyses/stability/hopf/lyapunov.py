@@ -17,7 +17,7 @@ import scipy.linalg as sla
 
 #: |l1| <= DEGENERATE_FACTOR * uncertainty: "degenerate", no criticality claimed.
 DEGENERATE_FACTOR = 10.0
-#: Difference steps tried for B and C (q of unit size; module docstring).
+#: Difference steps tried for B and C (q of unit size; package docstring).
 STEP_LADDER = (1e-5, 4e-5, 1.6e-4, 6.4e-4, 2.56e-3)
 #: The ends of the ladder are added only when the middle three steps spread by
 #: more than this fraction of l1 (measured flat to ~2e-6 from P3:4 to P3:32).
@@ -35,7 +35,7 @@ class HopfCoefficient:
     l1 : float
         First Lyapunov coefficient Re(c1) / omega.
     uncertainty : float
-        Spread of l1 over the steps used, plus the rounding level (module docstring).
+        Spread of l1 over the steps used, plus the rounding level (package docstring).
     c1 : complex
         Cubic coefficient of z' = lambda z + c1 |z|^2 z.
     eigenvalue : complex
@@ -120,7 +120,7 @@ def lyapunov_coefficient(
     ----------
     jacobian : callable
         ``jacobian(x) -> ndarray (N, N)``, the analytic D_x F at any x (the
-        multilinear forms B, C are its differences, module docstring).
+        multilinear forms B, C are its differences, package docstring).
     x0 : ndarray, shape (N,)
         The equilibrium, F(x0) = 0, where A = jacobian(x0) has a pair +- i omega.
     omega : float, optional
@@ -131,7 +131,7 @@ def lyapunov_coefficient(
         of q (and so of l1); default the identity.
     step : float, optional
         A fixed difference step h for q of that unit size, > 0; default the
-        ladder :data:`STEP_LADDER` (module docstring).
+        ladder :data:`STEP_LADDER` (package docstring).
     derivatives : callable, optional
         ``(u, h) -> (DJ[u], D2J[u, u])`` for real u; default
         :func:`jacobian_differences`.  A problem-specific form can avoid the
@@ -206,7 +206,7 @@ def lyapunov_coefficient(
 
 
 def _c1(derivatives, A, q, p, w, h) -> tuple[complex, tuple]:
-    """c1 of the module docstring with difference step h."""
+    """c1 of the package docstring with difference step h."""
     DJr, D2r = derivatives(q.real, h)
     DJi, D2i = derivatives(q.imag, h)
     D2 = D2r + D2i  # D2J[q, qbar]
