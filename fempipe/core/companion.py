@@ -94,7 +94,7 @@ def first_order_matrix(
     Examples
     --------
     >>> import numpy as np
-    >>> first_order_matrix(4.0 * np.eye(1), np.eye(1), 2.0 * np.eye(1)).tolist()
+    >>> first_order_matrix(8.0 * np.eye(1), 2.0 * np.eye(1), 4.0 * np.eye(1)).tolist()
     [[0.0, 1.0], [-2.0, -0.5]]
     """
     n = K.shape[0]
