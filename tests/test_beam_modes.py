@@ -271,7 +271,7 @@ def test_linear_frequencies_at_rest_are_exact():
     """v = gamma = 0: the beam basis holds the exact modes, omega_r = lambda_r^2 for
     all N modes (the sine basis misses its N-th by 7-9 %)."""
     from fempipe.analyses.stability import spectrum
-    from fempipe.analyses.stability.linear import cantilever_frequencies, resolution
+    from fempipe.analyses.stability.canonical import cantilever_frequencies, resolution
 
     for n in (3, 6, 12):
         res = resolution(Modal(n, basis="beam"))

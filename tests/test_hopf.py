@@ -17,6 +17,7 @@ import pytest
 from clirun import run_json
 
 from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability.eigensolvers import quadratic_eigen
 from fempipe.analyses.stability.hopf import (
     EVENT_KEYS,
     decorate_events,
@@ -26,7 +27,7 @@ from fempipe.analyses.stability.hopf import (
     pipe_derivatives,
     pipe_jacobian,
 )
-from fempipe.analyses.stability.linear import _eigen, linearized_matrices
+from fempipe.analyses.stability.linear import linearized_matrices
 from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.operators import PipeModel
@@ -141,7 +142,7 @@ def test_transversality_against_differences_of_the_eigenvalue(hopf_p34):
     for v in (ev.v - dv, ev.v + dv):
         mv = m.with_params(replace(m.params, v=v))
         qv = solve_path(m, [ev.v, v], q0=q)[-1].q
-        ls, _, _ = _eigen(*linearized_matrices(mv, qv))
+        ls, _, _ = quadratic_eigen(*linearized_matrices(mv, qv))
         lam.append(ls[np.argmin(np.abs(ls - nf.eigenvalue))])
     fd = (lam[1] - lam[0]) / (2 * dv)
     assert nf.eigenvalue_derivative == pytest.approx(fd, rel=1e-6)

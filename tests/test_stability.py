@@ -535,7 +535,7 @@ def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
         return [(e.type, e.v) for e in res.events if e.branch == "primary"]
 
     exact = events(np.pi)
-    with caplog.at_level(logging.WARNING, logger="fempipe.analyses.stability.events"):
+    with caplog.at_level(logging.WARNING, logger="fempipe.analyses.stability.branch_analysis"):
         hair = events(3.14159265)
     assert [t for t, _ in hair] == [t for t, _ in exact]
     assert "restabilization" in [t for t, _ in exact]

@@ -22,17 +22,23 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import fempipe.analyses.stability.analysis as analysis
-import fempipe.analyses.stability.linear as linear
+import fempipe.analyses.stability.chunked_branch as chunked_branch
+import fempipe.analyses.stability.classified as classified
+import fempipe.analyses.stability.hysteretic as hysteretic
 import fempipe.analyses.stability.tracking as tracking
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.analyses.stability import linearized_matrices, spectrum, stability_analysis
-from fempipe.analyses.stability.events import STABILITY_TOL, _peak_candidates
+from fempipe.analyses.stability import (
+    STABILITY_TOL,
+    linearized_matrices,
+    spectrum,
+    stability_analysis,
+)
+from fempipe.analyses.stability.branch_analysis import peak_candidates
 from fempipe.analyses.stability.linear import StraightPencil
 from fempipe.analyses.statics import continuation
 from fempipe.validation import classical
 
-BASELINE = Path(analysis.__file__).resolve().parents[1] / "validation" / "classical_baseline.py"
+BASELINE = Path(classical.__file__).resolve().with_name("classical_baseline.py")
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 
 
@@ -63,7 +69,7 @@ def _analyse(model, forced_general: bool, monkeypatch, v_max: float):
     the StraightPencil: every spectrum from the assembled Jacobians); and whether the fast
     path built the primary branch."""
     taken = []
-    real_piece = analysis._straight_piece
+    real_piece = chunked_branch._straight_piece
 
     def spy(*args, **kwargs):
         taken.append(True)
@@ -80,9 +86,9 @@ def _analyse(model, forced_general: bool, monkeypatch, v_max: float):
             return linearized_matrices(m, np.zeros(m.n))
 
     with monkeypatch.context() as mp:
-        mp.setattr(analysis, "_straight_piece", spy)
+        mp.setattr(chunked_branch, "_straight_piece", spy)
         if forced_general:
-            mp.setattr(analysis, "_straight_without_branch_points", lambda *a, **k: False)
+            mp.setattr(chunked_branch, "_straight_without_branch_points", lambda *a, **k: False)
             mp.setattr(tracking, "straight_pencil", Assembled)
         res = stability_analysis(model, v_max, 0.0)
     return res, bool(taken)
@@ -119,21 +125,21 @@ def test_straight_fast_path_agrees_with_the_general_continuation(params, monkeyp
 )
 def test_inherited_classification_is_that_of_the_eigenvectors(disc, params, monkeypatch):
     """Spectra of the straight branch solved without eigenvectors take their resolved
-    classification from the nearest sample (linear._analyse_inherited): each is compared
+    classification from the nearest sample (classified.classify_inherited): each is compared
     with the full solve at the same v (every light root's class, the largest resolved real
     part, the unstable count), and the events with the full solve everywhere.  With
     Modal(5) the class of the nearest old root, taken without the safeguards, is wrong for
     light roots (measured: in 36 spectra up to v = 16); with beta = 0.9, mu = 0.05 the crowded
     heavy roots near -1/mu are exempt."""
-    real = tracking._analyse_inherited
+    real = tracking.classify_inherited
     inherited = []
 
     def check(model, q, res, method, matrices, ref):
         e = real(model, q, res, method, matrices, ref)
         if e.X is None:
-            full = linear._analyse(model, q, res, method, matrices)
+            full = classified.classify_spectrum(model, q, res, method, matrices)
             j = np.argmin(np.abs(e.lam[:, None] - full.lam[None, :]), axis=1)
-            light = -e.lam.real < linear.HYSTERETIC_HEAVY * np.abs(e.lam)
+            light = -e.lam.real < hysteretic.HYSTERETIC_HEAVY * np.abs(e.lam)
             inherited.append(
                 (
                     np.array_equal(e.resolved[light], full.resolved[j][light]),
@@ -145,13 +151,13 @@ def test_inherited_classification_is_that_of_the_eigenvectors(disc, params, monk
 
     model = PipeModel(disc, params)
     with monkeypatch.context() as mp:
-        mp.setattr(tracking, "_analyse_inherited", check)
+        mp.setattr(tracking, "classify_inherited", check)
         fast = stability_analysis(model, 16.0, 0.0)
     with monkeypatch.context() as mp:
         mp.setattr(
             tracking,
-            "_analyse_inherited",
-            lambda m, q, r, meth, mat, ref: linear._analyse(m, q, r, meth, mat),
+            "classify_inherited",
+            lambda m, q, r, meth, mat, ref: classified.classify_spectrum(m, q, r, meth, mat),
         )
         general = stability_analysis(model, 16.0, 0.0)
     assert len(inherited) >= 10
@@ -174,18 +180,18 @@ def test_a_branch_point_on_the_straight_branch_takes_the_general_path(monkeypatc
 
 @pytest.mark.parametrize("gamma", [2.0, 7.5, 7.9, 12.0])
 def test_branch_point_test_is_the_sign_of_the_assembled_determinant(gamma):
-    """analysis._straight_without_branch_points (one batched determinant of the pencil)
+    """chunked_branch._straight_without_branch_points (one batched determinant of the pencil)
     against det K^d of the assembled Jacobians at each point the continuation visits: the
     standing pipe below and above the heavy column's buckling load (gamma = 7.837)."""
     model = PipeModel(FiniteElement(4, 3), Params(alpha=math.pi, beta=0.142, gamma=gamma, mu=0.0))
     kw = {"ds": 0.05, "ds_max": 0.1, "max_steps": 2000}
     for lo, hi in ((0.0, 3.0), (0.0, 9.0), (2.0, 2.5)):
         signs = set()
-        for v in analysis._straight_values(lo, hi, kw["ds"], kw["ds_max"]):
+        for v in chunked_branch._straight_values(lo, hi, kw["ds"], kw["ds_max"]):
             m = model.with_params(replace(model.params, v=v))
             signs.add(float(np.sign(np.linalg.det(linearized_matrices(m, np.zeros(m.n))[0]))))
         want = len(signs) == 1 and 0.0 not in signs
-        assert analysis._straight_without_branch_points(model, lo, hi, kw) == want
+        assert chunked_branch._straight_without_branch_points(model, lo, hi, kw) == want
 
 
 def test_straight_pencil_is_the_assembled_linearisation():
@@ -235,11 +241,13 @@ def test_straight_values_are_the_points_of_the_continuation():
     for lo, hi, ds_max in ((0.0, 3.0, 0.1), (0.4, 2.0, 0.3)):
         m = model.with_params(replace(model.params, v=lo))
         br = continuation(m, "v", stop=hi, ds=min(0.05, ds_max), ds_max=ds_max)
-        assert br.values.tolist() == analysis._straight_values(lo, hi, min(0.05, ds_max), ds_max)
+        assert br.values.tolist() == chunked_branch._straight_values(
+            lo, hi, min(0.05, ds_max), ds_max
+        )
 
 
 def _exact_peak_test(x, lam):
-    """The per-eigenvalue narrow-window test of _BranchAnalysis._peak, up to the
+    """The per-eigenvalue narrow-window test of BranchAnalysis._peak, up to the
     minimisation: np.polyfit on the three samples."""
     out = []
     for j in range(lam.shape[1]):
@@ -279,7 +287,7 @@ def test_peak_prefilter_keeps_every_eigenvalue_the_exact_test_takes():
         lam = r + 1j * rng.uniform(0.0, 20.0, k)
         exact = set(_exact_peak_test(x, lam))
         taken += len(exact)
-        assert exact <= set(_peak_candidates(x, lam).tolist())
+        assert exact <= set(peak_candidates(x, lam).tolist())
     assert taken > 40  # the synthetic cases do exercise the test
 
 

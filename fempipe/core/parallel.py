@@ -26,7 +26,7 @@ they share one error policy and one worker lifecycle:
   exits the worker when it is re-parented or the pool's creator is gone (the
   only way with the "forkserver" start method, where the parent is the fork
   server and outlives the creator while workers run).
-* **One BLAS thread per process** (:func:`single_blas_thread`): the dense
+* **One BLAS thread per process** (:func:`single_blas_thread`, :func:`single_blas`): the dense
   matrices of the model are small (2n = 96 for P3:16), where a multi-threaded
   BLAS spends more time synchronising than computing (measured: 32 ms per
   spectrum with two OpenBLAS threads, 7 ms with one), and LAPACK's
@@ -42,6 +42,7 @@ workers' lifecycle is its owner's business.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import signal
 import sys
@@ -61,6 +62,7 @@ __all__ = [
     "process_pool",
     "run_tasks",
     "single_blas_thread",
+    "single_blas",
     "HEARTBEAT",
     "PARENT_POLL",
 ]
@@ -159,6 +161,30 @@ def single_blas_thread() -> contextlib.AbstractContextManager:
     ...     pass
     """
     return _blas_controller().limit(limits=1, user_api="blas")
+
+
+def single_blas(fn: Callable) -> Callable:
+    """Decorator: run ``fn`` under :func:`single_blas_thread`.
+
+    For functions whose work is small dense linear algebra, such as the
+    eigenproblems of the stability analysis (2n = 96 for P3:16), where one
+    BLAS thread is fastest (measurements in the module docstring).
+
+    Examples
+    --------
+    >>> @single_blas
+    ... def f():
+    ...     return 1
+    >>> f()
+    1
+    """
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with single_blas_thread():
+            return fn(*args, **kwargs)
+
+    return wrapper
 
 
 #: threadpoolctl's controllers by which of numpy and scipy.linalg (each with

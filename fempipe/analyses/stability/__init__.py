@@ -115,7 +115,7 @@ Eq. (32) with K^d + i mu_h K_b, its mirror with K^d - i mu_h K_b, and a real
 root (sgn 0) is not affected.  K_b is the bending matrix alone (``disc.K``):
 gravity and the follower force are not the material's stiffness.  The roots
 are continued in mu_h from those of the real problem at the same state
-(:func:`~fempipe.analyses.stability.linear.hysteretic_roots`): the reported spectrum
+(:func:`~fempipe.analyses.stability.hysteretic.hysteretic_roots`): the reported spectrum
 keeps 2n roots, conjugate symmetry and the mode numbers above; real roots,
 and pairs whose continuation would reach Im lambda <= 0 (the nearly real
 Kelvin-Voigt roots near -1/mu), are left as they are, so divergence, folds
@@ -127,38 +127,40 @@ and derivations", has the derivation and the checks.
 
 Modules
 -------
-``linear``     linearised matrices, eigensolvers, resolution of a discretisation;
-``criterion``  :func:`linearly_stable`, :func:`growth_rate` (dense and sparse);
-``spectrum``   :class:`Spectrum` at one state, mode shapes;
-``tracking``   mode numbers by continuity, root loci (Fig. 5);
-``events``     stability events along one branch;
-``analysis``   :func:`stability_analysis`, :func:`critical_velocity`;
-``spatial``    both planes: :func:`spatial_stability_analysis` (the motion out of
-               the plane of the static state, :mod:`fempipe.model.out_of_plane`;
-               :func:`spatial_root_locus` the root loci of both planes);
-``maps``       v_cr against alpha (Fig. 6), several root loci, in parallel.
+``linear``          linearised matrices K^d, C^d, M^d; the straight pencil;
+``eigensolvers``    the dense quadratic eigensolvers (QZ, shift-invert);
+``hysteretic``      the roots with hysteretic damping, continued in mu_h;
+``canonical``       canonical modes: what a discretisation resolves;
+``classified``      a spectrum classified by the canonical modes, mode numbers;
+``criterion``       :func:`linearly_stable`, :func:`growth_rate` (dense and sparse);
+``spectra``         :class:`Spectrum` at one state, mode shapes;
+``tracking``        mode numbers by continuity, root loci (Fig. 5);
+``events``          the results: events, branches, :class:`StabilityResult`;
+``chunked_branch``  a static branch continued piece by piece (or the straight one);
+``branch_analysis`` spectra, tracking and events along one branch;
+``analysis``        :func:`stability_analysis`, :func:`critical_velocity`;
+``spatial``         both planes: :func:`spatial_stability_analysis` (the motion out of
+                    the plane of the static state, :mod:`fempipe.model.out_of_plane`;
+                    :func:`spatial_root_locus` the root loci of both planes);
+``maps``            v_cr against alpha (Fig. 6), several root loci, in parallel;
+``hopf``            Hopf criticality of the flutter events (first Lyapunov coefficient).
 """
 
 from fempipe.core.parallel import run_tasks
 
 from .analysis import critical_velocity, stability_analysis
+from .canonical import RESOLUTION_TOL, Resolution, cantilever_frequencies, resolution
+from .classified import STABILITY_TOL
 from .criterion import growth_rate, linearly_stable
 from .events import BranchStability, StabilityEvent, StabilityResult
-from .linear import (
-    RESOLUTION_TOL,
-    STABILITY_TOL,
-    Resolution,
-    cantilever_frequencies,
-    linearized_matrices,
-    resolution,
-)
+from .linear import linearized_matrices
 from .maps import StabilityMap, root_loci, stability_map
 from .spatial import (
     SpatialStability,
     spatial_critical_velocity,
     spatial_stability_analysis,
 )
-from .spectrum import ModeShape, Spectrum, mode_shape, spectrum
+from .spectra import ModeShape, Spectrum, mode_shape, spectrum
 from .tracking import RootLocus, root_locus, spatial_root_locus
 
 __all__ = [

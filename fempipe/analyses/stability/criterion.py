@@ -14,24 +14,14 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from fempipe.core.parallel import single_blas_thread
+from fempipe.core.parallel import single_blas, single_blas_thread
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-from .linear import (
-    QZ_MAX_N,
-    RELEVANT_SHARE,
-    RESOLUTION_TOL,
-    RESOLVED_SHARE,
-    STABILITY_TOL,
-    _analyse,
-    _Halves,
-    _match,
-    _relevant,
-    cantilever_frequencies,
-    resolution,
-    single_blas,
-)
+from .canonical import RESOLUTION_TOL, RESOLVED_SHARE, cantilever_frequencies, resolution
+from .classified import STABILITY_TOL, classify_spectrum
+from .eigensolvers import QZ_MAX_N
+from .hysteretic import RELEVANT_SHARE, ConjugateHalves, match_roots, relevant_roots
 
 
 @single_blas
@@ -45,7 +35,7 @@ def growth_rate(model: PipeModel, q: np.ndarray, *, tolerance: float = RESOLUTIO
     O(n^3)).
     """
     res = resolution(model.disc, tolerance)
-    return _analyse(model, np.asarray(q, dtype=float), res, "auto").max_real
+    return classify_spectrum(model, np.asarray(q, dtype=float), res, "auto").max_real
 
 
 def linearly_stable(
@@ -105,7 +95,7 @@ def linearly_stable(
     if res.n_resolved == 0:
         return None
     with single_blas_thread():
-        e = _analyse(model, np.asarray(q, dtype=float), res, "auto")
+        e = classify_spectrum(model, np.asarray(q, dtype=float), res, "auto")
     return not bool(e.unstable.any())
 
 
@@ -212,7 +202,7 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
 
 
 def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
-    """The lowest roots with hysteretic damping, as :func:`~.linear.hysteretic_roots` finds them.
+    """The lowest roots with hysteretic damping, as :func:`~.hysteretic.hysteretic_roots` finds them.
 
     Each root with Im lambda > 0 is matched (by eigenvalue and eigenvector)
     to one of the k roots nearest 0 of the complex problem with stiffness
@@ -236,11 +226,11 @@ def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: 
     T = spla.LinearOperator((2 * n, 2 * n), matvec=lambda z: op(np.ravel(z)), dtype=complex)
     nu, Z = spla.eigs(T, k=k, which="LM", ncv=min(2 * n, 2 * k + 1))
     lam, X = 1.0 / nu, Z[:n]
-    halves = _Halves.of(lam0)
+    halves = ConjugateHalves.of(lam0)
     targets, Xt = halves.targets(lam0, X0)
     if targets.size > lam.size:
         return _DENSE
-    idx, ambiguous = _match(targets, Xt, lam, X, _relevant(targets, relevant[halves.pos]))
+    idx, ambiguous = match_roots(targets, Xt, lam, X, relevant_roots(targets, relevant[halves.pos]))
     if ambiguous.any():
         return _DENSE
     return halves.assemble(lam0, X0, lam[idx], X[:, idx], lam[idx].imag <= 0.0)

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 
 from .analysis import analyse_planes
+from .canonical import RESOLUTION_TOL
 from .events import StabilityEvent, StabilityResult
-from .linear import RESOLUTION_TOL, single_blas
 
 __all__ = [
     "SpatialStability",

@@ -19,23 +19,21 @@ from fempipe.analyses.statics import (
     solve_static,
 )
 from fempipe.core.matching import assignment
+from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-from .linear import (
-    RESOLUTION_TOL,
+from .canonical import RESOLUTION_TOL, Resolution, resolution
+from .classified import (
     STABILITY_TOL,
-    Resolution,
-    _analyse,
-    _analyse_inherited,
-    _canonical_labels,
-    _Eig,
-    _eig_dict,
-    _order,
-    resolution,
-    single_blas,
-    straight_pencil,
+    ClassifiedSpectrum,
+    canonical_labels,
+    classify_inherited,
+    classify_spectrum,
+    eigenvalue_dict,
+    mode_order,
 )
+from .linear import straight_pencil
 
 log = logging.getLogger(__name__)
 
@@ -48,11 +46,11 @@ LABEL_MODES = 8
 # ---------------------------------------------------------------------------
 
 
-class _Tracker:
+class ModeTracker:
     """Carries mode numbers along a sequence of states by continuity.
 
     Tracked eigenvalue j is, at every state, one index into that state's
-    :class:`_Eig`; ``labels[j]`` is its mode number, given at the first state
+    :class:`ClassifiedSpectrum`; ``labels[j]`` is its mode number, given at the first state
     (``first_idx``) and inherited by continuity afterwards.
     """
 
@@ -61,14 +59,14 @@ class _Tracker:
         self.first_idx = np.asarray(first_idx, dtype=int)
 
     @classmethod
-    def canonical(cls, first: _Eig) -> _Tracker:
+    def canonical(cls, first: ClassifiedSpectrum) -> ModeTracker:
         """Every resolved eigenvalue of ``first``, numbered by canonical assignment."""
         idx = np.flatnonzero(first.resolved)
-        labels = _canonical_labels(first, idx)
-        o = _order(first.lam[idx], labels)
+        labels = canonical_labels(first, idx)
+        o = mode_order(first.lam[idx], labels)
         return cls(labels[o], idx[o])
 
-    def match(self, new: _Eig, pred: np.ndarray):
+    def match(self, new: ClassifiedSpectrum, pred: np.ndarray):
         """Indices in ``new`` of the tracked eigenvalues, and an ambiguity flag per eigenvalue."""
         D = np.abs(pred[:, None] - new.lam[None, :])
         rows, cols = assignment(D)
@@ -87,7 +85,7 @@ class _Tracker:
         return idx, ambiguous
 
 
-def _predict(samples: list[tuple[_Eig, np.ndarray]], s: float) -> np.ndarray:
+def _predict(samples: list[tuple[ClassifiedSpectrum, np.ndarray]], s: float) -> np.ndarray:
     """Linear prediction of the tracked eigenvalues at position s."""
     e1, i1 = samples[-1]
     lam1 = e1.lam[i1]
@@ -100,12 +98,17 @@ def _predict(samples: list[tuple[_Eig, np.ndarray]], s: float) -> np.ndarray:
     return lam1 + (s - e1.s) / (e1.s - e0.s) * (lam1 - lam0)
 
 
-def _l2(model: PipeModel, dq: np.ndarray) -> float:
+def state_l2(model: PipeModel, dq: np.ndarray) -> float:
+    """The L2 norm of the theta field of dq, (int_0^1 theta_dq^2 dxi)^(1/2).
+
+    With |dv| it measures the distance between states along a path (the
+    arclength proxy ``s`` of :class:`~.classified.ClassifiedSpectrum`).
+    """
     th = model.disc.Phi @ dq
     return float(np.sqrt(model.w @ th**2))
 
 
-class _TrackedPath:
+class TrackedPath:
     """Spectra along a sequence of static states, with tracking and refinement.
 
     ``static_between(a, b, v)`` returns the static state at v between samples
@@ -122,32 +125,34 @@ class _TrackedPath:
     ) -> None:
         self.model = model
         # Straight states may take their classification from the nearest
-        # straight sample (linear._analyse_inherited): eigenvalues only.
+        # straight sample (classified.classify_inherited): eigenvalues only.
         self.inherit = inherit
         self.res = res
         self.method = method
         self.max_depth = max_depth
-        self.samples: list[tuple[_Eig, np.ndarray]] = []
-        self.tracker: _Tracker | None = None
+        self.samples: list[tuple[ClassifiedSpectrum, np.ndarray]] = []
+        self.tracker: ModeTracker | None = None
         self.n_spectra = 0
 
-    def analyse(self, q: np.ndarray, v: float) -> _Eig:
+    def analyse(self, q: np.ndarray, v: float) -> ClassifiedSpectrum:
         self.n_spectra += 1
         m = self.model.with_params(replace(self.model.params, v=v))
         # At the straight state the matrices are known functions of v
         # (StraightPencil): no Jacobian assembly.
         if q.any():
-            return _analyse(m, q, self.res, self.method)
+            return classify_spectrum(m, q, self.res, self.method)
         matrices = straight_pencil(m).matrices(v)
         if self.inherit:
             # (an inherited spectrum is a straight state: no test of its q)
             near = [e for e, _ in self.samples if e.origin_v is not None or not e.q.any()]
             if near:
                 ref = min(near, key=lambda e: abs(e.v - v))
-                return _analyse_inherited(m, q, self.res, self.method, matrices, ref)
-        return _analyse(m, q, self.res, self.method, matrices)
+                return classify_inherited(m, q, self.res, self.method, matrices, ref)
+        return classify_spectrum(m, q, self.res, self.method, matrices)
 
-    def static_between(self, a: _Eig, b: _Eig, v: float) -> np.ndarray | None:
+    def static_between(
+        self, a: ClassifiedSpectrum, b: ClassifiedSpectrum, v: float
+    ) -> np.ndarray | None:
         if a.v == b.v:
             return None
         t = (v - a.v) / (b.v - a.v)
@@ -164,10 +169,10 @@ class _TrackedPath:
         except NewtonError:
             return None
 
-    def add(self, e: _Eig, depth: int = 0) -> None:
+    def add(self, e: ClassifiedSpectrum, depth: int = 0) -> None:
         """Append the next state, halving the step while tracking is ambiguous."""
         if self.tracker is None:
-            self.tracker = _Tracker.canonical(e)
+            self.tracker = ModeTracker.canonical(e)
             self.samples.append((e, self.tracker.first_idx))
             return
         prev = self.samples[-1]
@@ -197,7 +202,7 @@ class _TrackedPath:
     def tracked_resolved(self) -> np.ndarray:
         return np.array([e.resolved[i] for e, i in self.samples])
 
-    def start_labelled(self, e: _Eig, tracker: _Tracker) -> None:
+    def start_labelled(self, e: ClassifiedSpectrum, tracker: ModeTracker) -> None:
         """Start at ``e`` with mode numbers given by ``tracker`` (indices into e)."""
         self.tracker = tracker
         self.samples = [(e, tracker.first_idx)]
@@ -208,7 +213,7 @@ class _TrackedPath:
 REFERENCE_STEP = 1.0
 
 
-def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
+def reference_tracker(model: PipeModel, e: ClassifiedSpectrum, res: Resolution, method: str):
     """Mode numbers of the resolved eigenvalues of ``e``, carried by continuity from v = 0.
 
     The static branch through e is followed back to v = 0 by pseudo-arclength
@@ -219,7 +224,7 @@ def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
     (indices into e) and the number of spectra solved.
     """
     if e.v == 0.0:
-        return _Tracker.canonical(e), 0
+        return ModeTracker.canonical(e), 0
     m = model.with_params(replace(model.params, v=e.v))
     back = continuation(
         m, "v", stop=0.0, q0=e.q, ds=REFERENCE_STEP, ds_max=REFERENCE_STEP, detect=False
@@ -238,29 +243,29 @@ def _reference_tracker(model: PipeModel, e: _Eig, res: Resolution, method: str):
     points = []
     for pt in back.points[::-1][:-1]:
         last = points[-1] if points else None
-        if last is None or abs(pt.value - last.value) + _l2(model, pt.q - last.q) > 1e-8:
+        if last is None or abs(pt.value - last.value) + state_l2(model, pt.q - last.q) > 1e-8:
             points.append(pt)
-    if points and abs(e.v - points[-1].value) + _l2(model, e.q - points[-1].q) <= 1e-8:
+    if points and abs(e.v - points[-1].value) + state_l2(model, e.q - points[-1].q) <= 1e-8:
         points.pop()
-    path = _TrackedPath(model, res, method)
+    path = TrackedPath(model, res, method)
     s, prev = 0.0, None
     for pt in points:
         if prev is not None:
-            s += abs(pt.value - prev[1]) + _l2(model, pt.q - prev[0])
+            s += abs(pt.value - prev[1]) + state_l2(model, pt.q - prev[0])
         prev = (pt.q, pt.value)
         x = path.analyse(pt.q, pt.value)
         x.s = s
         path.add(x)
-    s += abs(e.v - prev[1]) + _l2(model, e.q - prev[0]) if prev is not None else 0.0
+    s += abs(e.v - prev[1]) + state_l2(model, e.q - prev[0]) if prev is not None else 0.0
     target = replace(e, s=s)
     path.add(target)
     last, idx = path.samples[-1]
     if last is not target:  # pragma: no cover - add() always appends its argument last
         raise RuntimeError("reference path: the target state is not the last sample")
-    return _complete(e, _Tracker(path.labels, idx)), path.n_spectra
+    return complete_tracker(e, ModeTracker(path.labels, idx)), path.n_spectra
 
 
-def _complete(e: _Eig, tracker: _Tracker) -> _Tracker:
+def complete_tracker(e: ClassifiedSpectrum, tracker: ModeTracker) -> ModeTracker:
     """Add the resolved eigenvalues of e the tracker lacks, numbered on the free canonical slots.
 
     An eigenvalue can be resolved at e and not where the numbering started;
@@ -279,7 +284,7 @@ def _complete(e: _Eig, tracker: _Tracker) -> _Tracker:
     rows, cols = assignment(cost)
     labels = np.zeros(extra.size, dtype=int)
     labels[rows] = slots[cols] + 1
-    return _Tracker(
+    return ModeTracker(
         np.concatenate([tracker.labels, labels]), np.concatenate([tracker.first_idx, extra])
     )
 
@@ -339,7 +344,7 @@ class RootLocus:
         points = []
         for i, v in enumerate(self.v):
             eig = [
-                _eig_dict(self.lam[i, j], int(self.modes[j]))
+                eigenvalue_dict(self.lam[i, j], int(self.modes[j]))
                 for j in range(self.modes.size)
                 if self.resolved[i, j]
             ]
@@ -437,17 +442,17 @@ def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[Root
     if q0 is None:
         q0 = sagged_state(m0).q
     states = solve_path(m0, values, q0=q0)
-    paths = [_TrackedPath(m, res, method) for m in models]
+    paths = [TrackedPath(m, res, method) for m in models]
     keep: list[list[int]] = [[] for _ in models]  # sample index of each requested value
     s = 0.0
     for i, sol in enumerate(states):
         if i:
-            s += abs(values[i] - values[i - 1]) + _l2(model, sol.q - states[i - 1].q)
+            s += abs(values[i] - values[i - 1]) + state_l2(model, sol.q - states[i - 1].q)
         for m, path, kept in zip(models, paths, keep, strict=True):
             e = path.analyse(sol.q, values[i])
             e.s = s
             if i == 0:
-                tracker, n_ref = _reference_tracker(m, e, res, method)
+                tracker, n_ref = reference_tracker(m, e, res, method)
                 path.n_spectra += n_ref
                 path.start_labelled(e, tracker)
             else:

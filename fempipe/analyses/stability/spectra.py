@@ -8,20 +8,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fempipe.analyses.statics import sagged_state
+from fempipe.core.parallel import single_blas
 from fempipe.model.kinematics import shape
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-from .linear import (
-    RESOLUTION_TOL,
-    STABILITY_TOL,
-    _analyse,
-    _eig_dict,
-    _order,
-    resolution,
-    single_blas,
-)
-from .tracking import _reference_tracker
+from .canonical import RESOLUTION_TOL, resolution
+from .classified import STABILITY_TOL, classify_spectrum, eigenvalue_dict, mode_order
+from .tracking import reference_tracker
 
 # ---------------------------------------------------------------------------
 # One spectrum
@@ -97,7 +91,7 @@ class Spectrum:
             "stable": self.stable,
             "max_real": self.max_real,
             "eigenvalues": [
-                _eig_dict(lam, int(m)) for lam, m in zip(self.lam, self.mode, strict=True)
+                eigenvalue_dict(lam, int(m)) for lam, m in zip(self.lam, self.mode, strict=True)
             ],
             "n_computed": self.n_computed,
             "n_resolved_modes": self.n_resolved_modes,
@@ -128,7 +122,7 @@ def spectrum(
     q : ndarray, shape (n,), optional
         The static state; default :func:`fempipe.analyses.statics.sagged_state`.
     method : {'auto', 'qz', 'shift-invert'}
-        Dense eigensolver (see :func:`_eigen`).
+        Dense eigensolver (see :func:`quadratic_eigen`).
     tolerance : float
         :data:`RESOLUTION_TOL`, the canonical-frequency error of a resolved mode.
 
@@ -152,11 +146,11 @@ def spectrum(
         )
     if q is None:
         q = sagged_state(model).q
-    e = _analyse(model, q, res, method)
-    tracker, _ = _reference_tracker(model, e, res, method)
+    e = classify_spectrum(model, q, res, method)
+    tracker, _ = reference_tracker(model, e, res, method)
     keep = e.resolved[tracker.first_idx]
     idx, labels = tracker.first_idx[keep], tracker.labels[keep]
-    o = _order(e.lam[idx], labels)
+    o = mode_order(e.lam[idx], labels)
     idx, labels = idx[o], labels[o]
     unres = e.lam.real[~e.resolved]
     return Spectrum(

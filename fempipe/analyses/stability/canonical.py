@@ -1,0 +1,135 @@
+"""The canonical modes of a discretisation and the eigenvalues it resolves.
+
+The canonical modes are those of the straight, unloaded pipe, the
+clamped-free Euler-Bernoulli beam, whose exact frequencies are known: a
+discretisation resolves the leading ones it reproduces within
+:data:`RESOLUTION_TOL`, and an eigenvalue is resolved when its eigenvector
+lies mostly on those (package docstring, "Resolved modes").
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from fempipe.core.rootfinding import brentq
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
+#: Relative error of the clamped-free beam frequency up to which a
+#: discretisation is said to resolve a canonical mode.
+RESOLUTION_TOL = 0.05
+#: Share of an eigenvector's squared M(0)-norm that must lie on resolved
+#: canonical modes for its eigenvalue to be resolved.
+RESOLVED_SHARE = 0.5
+
+
+def cantilever_frequencies(n: int) -> np.ndarray:
+    """Exact frequencies beta_r^2 of the clamped-free Euler-Bernoulli beam, r = 1..n.
+
+    beta_r solves cos(beta) cosh(beta) = -1 (1.8751, 4.6941, 7.8548, ...);
+    written as cos(beta) + sech(beta) = 0 to avoid overflow.  For
+    beta > 40 the sech term is below 1e-17 and beta_r = (r - 1/2) pi.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Dimensionless angular frequencies (time scale of Eq. (19)).
+    """
+    out = np.empty(int(n))
+    for r in range(1, int(n) + 1):
+        c = (r - 0.5) * np.pi
+        if c > 40.0:
+            out[r - 1] = c**2
+            continue
+        b = brentq(lambda x: np.cos(x) + 1.0 / np.cosh(x), c - 0.4, c + 0.4, xtol=1e-15)
+        out[r - 1] = b**2
+    return out
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """Which modes a discretisation resolves (the package docstring, "Resolved modes").
+
+    Attributes
+    ----------
+    n_resolved : int
+        Number of leading canonical modes within ``tolerance`` of the exact
+        clamped-free beam frequencies.
+    frequencies, exact, rel_error : ndarray, shape (n,)
+        Discrete and exact canonical frequencies and |omega_h / omega - 1|.
+    tolerance : float
+    basis : ndarray, shape (n, n)
+        Canonical modes, M(0)-orthonormal (columns).
+    mass : ndarray, shape (n, n)
+        M(0), the mass matrix of the straight pipe.
+    """
+
+    n_resolved: int
+    frequencies: np.ndarray
+    exact: np.ndarray
+    rel_error: np.ndarray
+    tolerance: float
+    basis: np.ndarray = field(repr=False)
+    mass: np.ndarray = field(repr=False)
+
+    def to_dict(self) -> dict:
+        k = min(self.n_resolved + 1, self.frequencies.size)
+        return {
+            "n_resolved_modes": self.n_resolved,
+            "tolerance": self.tolerance,
+            "canonical_rel_error": self.rel_error[:k].tolist(),
+        }
+
+
+_RESOLUTION_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def resolution(disc, tolerance: float = RESOLUTION_TOL) -> Resolution:
+    """The canonical modes of ``disc`` and how many it resolves (cached per discretisation).
+
+    Parameters
+    ----------
+    disc : FiniteElement or Modal
+    tolerance : float
+        Relative frequency error allowed for a resolved canonical mode, in (0, 1).
+    """
+    if not 0.0 < tolerance < 1.0:
+        raise ValueError(f"tolerance must be in (0, 1), got {tolerance}")
+    per_disc = _RESOLUTION_CACHE.setdefault(disc, {})
+    if tolerance in per_disc:
+        return per_disc[tolerance]
+    model = PipeModel(disc, Params(alpha=0.0, beta=0.0, gamma=0.0, mu=0.0, v=0.0))
+    M0 = model.mass_matrix(np.zeros(disc.n))
+    K = disc.K.toarray() if sp.issparse(disc.K) else np.asarray(disc.K)
+    w2, basis = sla.eigh(K, M0)
+    omega = np.sqrt(np.maximum(w2, 0.0))
+    exact = cantilever_frequencies(omega.size)
+    err = np.abs(omega / exact - 1.0)
+    bad = np.flatnonzero(err > tolerance)
+    n_res = int(bad[0]) if bad.size else omega.size
+    res = Resolution(n_res, omega, exact, err, float(tolerance), basis, M0)
+    per_disc[tolerance] = res
+    return res
+
+
+def canonical_weights(res: Resolution, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Squared canonical coefficients of the columns of X and their share on resolved modes.
+
+    Returns
+    -------
+    W : ndarray, shape (n_canonical, m)
+        |c_rj|^2 of column j expanded in the M(0)-orthonormal canonical modes
+        (``res.basis``), normalised to sum 1 per column.
+    share : ndarray, shape (m,)
+        Sum of W over the resolved modes: an eigenvalue is resolved when its
+        share is at least :data:`RESOLVED_SHARE`.
+    """
+    c = res.basis.T @ (res.mass @ X)
+    W = np.abs(c) ** 2
+    W = W / W.sum(axis=0)
+    return W, W[: res.n_resolved].sum(axis=0)

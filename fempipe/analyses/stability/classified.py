@@ -1,0 +1,241 @@
+"""Spectra classified by the canonical modes: resolved eigenvalues and mode numbers.
+
+A :class:`ClassifiedSpectrum` holds every eigenvalue of one state with the
+share of its eigenvector on resolved canonical modes (package docstring,
+"Resolved modes"); :func:`canonical_labels` numbers eigenvalues by the
+canonical mode they are made of ("Mode numbers").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fempipe.core.matching import assignment
+from fempipe.model.operators import PipeModel
+
+from .canonical import RESOLVED_SHARE, Resolution, canonical_weights
+from .eigensolvers import quadratic_eigen
+from .hysteretic import HYSTERETIC_HEAVY, RELEVANT_SHARE, hysteretic_roots
+from .linear import linearized_matrices
+
+#: Re(lambda) <= STABILITY_TOL * max(1, |lambda|) counts as not unstable.
+STABILITY_TOL = 1e-8
+
+
+@dataclass
+class ClassifiedSpectrum:
+    """All eigenvalues of one state with their resolved-share classification.
+
+    The working record of the analyses (:func:`classify_spectrum`,
+    :func:`classify_inherited`); the public results are built from it
+    (:class:`~fempipe.analyses.stability.Spectrum`, root loci, events).
+
+    Attributes
+    ----------
+    v : float
+        Flow velocity of the state.
+    q : ndarray, shape (n,)
+        The static state.
+    lam : ndarray of complex, shape (m,)
+        Every eigenvalue computed (m <= 2n).
+    X : ndarray of complex, shape (n, m), or None
+        Theta-parts of the eigenvectors (unit norm); None when the
+        classification is inherited.
+    share : ndarray, shape (m,)
+        Share of each eigenvector on resolved canonical modes.
+    weights : ndarray, shape (n_canonical, m)
+        Squared canonical coefficients, normalised per eigenvalue.
+    resolved : ndarray of bool, shape (m,)
+        share >= RESOLVED_SHARE.
+    method : str
+        The eigensolver used.
+    s : float
+        Position along a path (arclength proxy), set by the caller.
+    fold : bool
+        The state is a fold of its branch.
+    origin_v : float or None
+        v of the eigenvectors an inherited classification comes from.
+    """
+
+    v: float
+    q: np.ndarray
+    lam: np.ndarray
+    X: np.ndarray | None  # None: classification inherited (:func:`classify_inherited`)
+    share: np.ndarray
+    weights: np.ndarray  # (n_canonical, m) squared canonical coefficients, normalised
+    resolved: np.ndarray
+    method: str
+    s: float = 0.0  # position along a path (arclength proxy)
+    fold: bool = False
+    origin_v: float | None = None  # v of the eigenvectors the classification comes from
+
+    @property
+    def unstable(self) -> np.ndarray:
+        """Mask of the resolved eigenvalues with Re lambda > STABILITY_TOL max(1, |lambda|)."""
+        return self.resolved & (self.lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(self.lam)))
+
+    @property
+    def max_real(self) -> float:
+        """Largest Re lambda of the resolved eigenvalues (-inf if none)."""
+        r = self.lam.real[self.resolved]
+        return float(r.max()) if r.size else -math.inf
+
+
+def classify_spectrum(
+    model: PipeModel,
+    q: np.ndarray,
+    res: Resolution,
+    method: str,
+    matrices: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> ClassifiedSpectrum:
+    """Every eigenvalue of Eq. (32) at the static state q, classified by the canonical modes.
+
+    Parameters
+    ----------
+    model : PipeModel
+        The pipe at the state's v (and plane).
+    q : ndarray, shape (n,)
+        The static state.
+    res : Resolution
+        The canonical modes of ``model.disc`` (:func:`~.canonical.resolution`).
+    method : {'auto', 'qz', 'shift-invert'}
+        Eigensolver (:func:`~.eigensolvers.quadratic_eigen`).
+    matrices : (K, C, M), optional
+        The linearised matrices if known (the straight pencil); default
+        :func:`~.linear.linearized_matrices` at q.
+
+    Returns
+    -------
+    ClassifiedSpectrum
+        With hysteretic damping, the roots continued in mu_h
+        (:func:`~.hysteretic.hysteretic_roots`) and classified by their eigenvectors.
+    """
+    K, C, M = linearized_matrices(model, q) if matrices is None else matrices
+    lam, X, used = quadratic_eigen(K, C, M, method)
+    W, share = canonical_weights(res, X)
+    mu_h = model.params.hysteretic_damping
+    if mu_h > 0.0:
+        Kb = model.hysteretic_stiffness(q)
+        lam, X = hysteretic_roots(
+            K, C, M, Kb, mu_h, lam, X, relevant=share >= RELEVANT_SHARE, method=used
+        )
+        W, share = canonical_weights(res, X)
+    return ClassifiedSpectrum(
+        v=model.params.v,
+        q=np.asarray(q, dtype=float),
+        lam=lam,
+        X=X,
+        share=share,
+        weights=W,
+        resolved=share >= RESOLVED_SHARE,
+        method=used,
+    )
+
+
+#: Classification inherited from a spectrum with eigenvectors only within
+#: this distance in v of it (:func:`classify_inherited`).  2.0 against 1.0 on
+#: 56 straight-branch cases (alpha 0 and pi, the variants): the same events
+#: (to 2.4e-11), 12 % fewer spectra with eigenvectors.
+INHERIT_SPAN = 2.0
+#: ... only from eigenvalues whose share is this far from RESOLVED_SHARE ...
+INHERIT_MARGIN = 0.2
+#: ... and only when every eigenvalue's nearest old one is closer than this
+#: fraction of the distance to the nearest old one classified otherwise.
+INHERIT_MATCH = 0.25
+
+
+def classify_inherited(
+    model: PipeModel,
+    q: np.ndarray,
+    res: Resolution,
+    method: str,
+    matrices: tuple[np.ndarray, np.ndarray, np.ndarray],
+    ref: ClassifiedSpectrum,
+) -> ClassifiedSpectrum:
+    """:func:`classify_spectrum` with eigenvalues only, the classification taken from a nearby spectrum.
+
+    Each eigenvalue takes the share and canonical weights of the nearest
+    eigenvalue of ``ref`` (a spectrum of the same straight pencil at a v at
+    most :data:`INHERIT_SPAN` from the one whose eigenvectors ``ref``'s
+    classification came from).  That needs, for every eigenvalue, a nearest
+    old one whose share is at least :data:`INHERIT_MARGIN` from
+    :data:`RESOLVED_SHARE`, and no old eigenvalue of the other class within
+    1 / :data:`INHERIT_MATCH` times that distance -- except for heavily damped
+    roots (-Re lambda >= :data:`HYSTERETIC_HEAVY` |lambda|), which are never
+    unstable and must lie below the largest real part of the light resolved
+    roots, so that their class changes neither an event nor ``max_real``
+    (measured: in the clusters near -1/mu the eigenvectors, and so the
+    shares, of the full solve are arbitrary mixes); otherwise (and with
+    hysteretic damping, whose roots are continued along their eigenvectors)
+    the spectrum is solved with its eigenvectors as in :func:`classify_spectrum`.
+    The dense eigensolver then skips the eigenvectors (40 % of its work).
+    """
+    origin = ref.v if ref.origin_v is None else ref.origin_v
+    if model.params.hysteretic_damping > 0.0 or abs(model.params.v - origin) > INHERIT_SPAN:
+        return classify_spectrum(model, q, res, method, matrices)
+    K, C, M = matrices
+    lam, _, used = quadratic_eigen(K, C, M, method, vectors=False)
+    if lam.size == ref.lam.size:
+        D = np.abs(lam[:, None] - ref.lam[None, :])
+        j = np.argmin(D, axis=1)
+        rows = np.arange(lam.size)
+        d1 = D[rows, j]
+        cls = ref.resolved[j]
+        other = np.where(ref.resolved[None, :] != cls[:, None], D, np.inf).min(axis=1)
+        sure = np.abs(ref.share[j] - RESOLVED_SHARE) >= INHERIT_MARGIN
+        # Heavily damped roots (the crowded Kelvin-Voigt roots near -1/mu,
+        # whose eigenvectors are arbitrary mixes of a nearly degenerate
+        # cluster) need not be sure: they are never unstable, and they may not
+        # reach the largest real part of the light resolved roots (max_real).
+        heavy = -lam.real >= HYSTERETIC_HEAVY * np.abs(lam)
+        light_res = cls & ~heavy
+        top = lam.real[light_res].max() if light_res.any() else -np.inf
+        ok = heavy | (sure & (d1 <= INHERIT_MATCH * other))
+        if np.all(ok) and np.all(lam.real[heavy] < top):
+            return ClassifiedSpectrum(
+                v=model.params.v,
+                q=np.asarray(q, dtype=float),
+                lam=lam,
+                X=None,
+                share=ref.share[j],
+                weights=ref.weights[:, j],
+                resolved=cls,
+                method=used,
+                origin_v=origin,
+            )
+    return classify_spectrum(model, q, res, method, matrices)
+
+
+def canonical_labels(e: ClassifiedSpectrum, idx: np.ndarray) -> np.ndarray:
+    """Mode numbers (1-based) of eigenvalues idx by optimal assignment to canonical modes.
+
+    Two slots per canonical mode (a conjugate pair, or two real roots of one
+    mode); the cost is minus the share of the eigenvector on that mode.
+    """
+    if idx.size == 0:
+        return np.zeros(0, dtype=int)
+    W = e.weights[:, idx].T  # (k, n_can)
+    cost = -np.repeat(W, 2, axis=1)
+    rows, cols = assignment(cost)
+    labels = np.empty(idx.size, dtype=int)
+    labels[rows] = cols // 2 + 1
+    return labels
+
+
+def mode_order(lam: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Sort by mode number, then upper half-plane first."""
+    return np.lexsort((-lam.imag, labels))
+
+
+def eigenvalue_dict(lam: complex, mode: int) -> dict:
+    """One eigenvalue in both conventions (JSON): lambda and Omega = -i lambda."""
+    return {
+        "mode": mode,
+        "re": float(lam.real),
+        "im": float(lam.imag),
+        "Omega_re": float(lam.imag),
+        "Omega_im": float(-lam.real),
+    }

@@ -1,0 +1,187 @@
+"""The Hopf normal forms of the flutter events of a stability analysis.
+
+The static state at each flutter event is reconstructed
+(:func:`event_states`), its normal form computed (:func:`normal_forms`) and
+added to the events of ``fempipe critical --json`` (:func:`decorate_events`,
+:data:`EVENT_KEYS`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from fempipe.core.parallel import single_blas
+from fempipe.model.operators import PipeModel
+
+from ..linear import straight_is_static
+from .normal_form import HopfNormalForm, first_lyapunov_coefficient
+
+#: Keys added to every flutter event of ``fempipe critical --json``.
+EVENT_KEYS = (
+    "first_lyapunov_coefficient",
+    "first_lyapunov_uncertainty",
+    "criticality",
+    "transversality",
+    "cycle_side",
+    "theta_tip_amplitude_coefficient",
+    "eta_tip_amplitude_coefficient",
+    "hopf_note",
+)
+#: The eigenvalue at the reconstructed state must be within this (relative to
+#: max(1, |lambda|)) of the event's to accept the state as the event's.
+STATE_MATCH_TOL = 1e-6
+#: Largest step in v of the static path to the flutter points.
+PATH_STEP = 1.0
+
+
+def _key(ev) -> tuple:
+    return (ev.branch, ev.type, float(ev.v), ev.mode)
+
+
+def event_states(model: PipeModel, result) -> dict:
+    """Static states at the flutter events of a :class:`~fempipe.analyses.stability.StabilityResult`.
+
+    The primary branch is followed again from its start (``result.v_range[0]``,
+    gravity loading, :func:`fempipe.analyses.statics.solve_path`, which passes folds by
+    continuation) through every flutter v in steps of at most
+    :data:`PATH_STEP`.  Events of other branches, and instabilities present at
+    the start of the range (no crossing), get a reason instead.
+    :func:`normal_forms` accepts a state only if its critical eigenvalue is
+    the event's to :data:`STATE_MATCH_TOL` (a Newton step onto another branch
+    would not pass).
+
+    Returns
+    -------
+    dict
+        ``{(branch, type, v, mode): ndarray q or str reason}`` for the flutter events.
+    """
+    from fempipe.analyses.statics import NewtonError, solve_path
+
+    out: dict = {}
+    flutter = [ev for ev in result.events if ev.type == "flutter"]
+    primary = sorted(
+        (ev for ev in flutter if ev.branch == "primary" and not ev.at_start), key=lambda e: e.v
+    )
+    for ev in flutter:
+        if ev.at_start:
+            out[_key(ev)] = "an instability present at the start of the range, not a crossing"
+        elif ev.branch != "primary":
+            out[_key(ev)] = f"the static state of branch {ev.branch} is not reconstructed"
+    if not primary:
+        return out
+    v_lo = float(result.v_range[0])
+    targets = sorted({float(ev.v) for ev in primary})
+    values, states = [v_lo], {}
+    for vt in targets:
+        k = max(1, math.ceil((vt - values[-1]) / PATH_STEP))
+        values.extend(np.linspace(values[-1], vt, k + 1)[1:].tolist())
+        values[-1] = vt
+    try:
+        sols = solve_path(model.with_params(replace(model.params, v=v_lo)), values)
+    except NewtonError as exc:
+        for ev in primary:
+            out[_key(ev)] = f"the static state was not found on the way to v = {ev.v:.10g} ({exc})"
+        return out
+    for v, sol in zip(values, sols, strict=True):
+        states[v] = sol.q
+    for ev in primary:
+        out[_key(ev)] = states[float(ev.v)]
+    return out
+
+
+@single_blas
+def normal_forms(model: PipeModel, result) -> dict:
+    """The Hopf normal form of every flutter event of ``result`` (a StabilityResult).
+
+    Returns
+    -------
+    dict
+        ``{(branch, type, v, mode): HopfNormalForm or str reason}``.
+    """
+    if model.params.hysteretic_damping > 0.0:
+        reason = "hysteretic damping is a frequency-domain model without an equation of motion"
+        return {_key(ev): reason for ev in result.events if ev.type == "flutter"}
+    out = {}
+    if straight_is_static(model.params):
+        # The straight pipe is a static state at every v (alpha = 0 or pi); when
+        # it carries the event's eigenvalue no path needs to be followed.
+        straight = {
+            _key(ev): np.zeros(model.n)
+            for ev in result.events
+            if ev.type == "flutter" and ev.branch == "primary" and not ev.at_start
+        }
+        for key, q in straight.items():
+            nf = _normal_form(model, result, key, q)
+            if not isinstance(nf, str):
+                out[key] = nf
+    states = None
+    for ev in result.events:
+        key = _key(ev)
+        if ev.type != "flutter" or key in out:
+            continue
+        if states is None:
+            states = event_states(model, result)
+        q = states[key]
+        out[key] = q if isinstance(q, str) else _normal_form(model, result, key, q)
+    return out
+
+
+def _normal_form(model: PipeModel, result, key: tuple, q: np.ndarray) -> HopfNormalForm | str:
+    """The normal form at the event ``key`` from the static state q, or why there is none."""
+    m = model.with_params(replace(model.params, v=key[2]))
+    ev = next(e for e in result.events if _key(e) == key)
+    try:
+        nf = first_lyapunov_coefficient(m, q, omega=float(ev.frequency))
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        return f"no normal form: {exc}"
+    # The state is the event's if its critical eigenvalue is the event's.
+    target = complex(ev.eigenvalue)
+    err = abs(nf.eigenvalue - target) / max(1.0, abs(target))
+    if err <= STATE_MATCH_TOL:
+        return nf
+    return (
+        f"the static state reconstructed at v = {ev.v:.10g} does not hold the event's "
+        f"eigenvalue (relative distance {err:.2g})"
+    )
+
+
+def decorate_events(result_dict: dict, model: PipeModel, result) -> dict:
+    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json``.
+
+    In ``events``, ``critical`` (when a flutter) and ``branches[*].events``;
+    ``hopf_note`` is null, or why the other keys are null (hysteretic
+    damping, a state not reconstructed).  ``result_dict`` is modified and returned.
+    """
+    forms = normal_forms(model, result)
+
+    def decorate(d: dict | None) -> None:
+        if d is None or d.get("type") != "flutter":
+            return
+        if d.get("plane", "in") != "in":
+            d.update(dict.fromkeys(EVENT_KEYS))
+            d["hopf_note"] = (
+                "a flutter out of the plane: its normal form needs the three-dimensional "
+                "nonlinear model"
+            )
+            return
+        key = (d["branch"], d["type"], float(d["v"]), d["mode"])
+        nf = forms.get(key, "no normal form computed for this event")
+        if isinstance(nf, str):
+            d.update(dict.fromkeys(EVENT_KEYS))
+            d["hopf_note"] = nf
+        else:
+            d.update(nf.to_dict())
+            d["hopf_note"] = None
+
+    for d in result_dict.get("events", []):
+        decorate(d)
+    decorate(result_dict.get("critical"))
+    for key in ("critical_in_plane", "critical_out_of_plane"):
+        decorate(result_dict.get(key))
+    for b in result_dict.get("branches", []) + result_dict.get("branches_out_of_plane", []):
+        for d in b.get("events", []):
+            decorate(d)
+    return result_dict

@@ -1,0 +1,111 @@
+"""The first-order (companion) form of a quadratic eigenproblem.
+
+With z = (x, lambda x) the quadratic eigenproblem
+
+    (lambda^2 M + lambda C + K) x = 0
+
+is the generalised one A z = lambda B z of the pencil
+
+    A = [[0, I], [-K, -C]],   B = [[I, 0], [0, M]],
+
+and, for an invertible M, the standard one of the matrix
+
+    B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]].
+
+Linear algebra only: these builders know nothing of the pipe.  Each keeps
+the exact floating-point operations of the code it was taken from, so that
+results are reproduced to the bit: :func:`first_order_pencil` does no
+arithmetic at all (the generalised eigensolvers factor B themselves);
+:func:`first_order_matrix` solves with M by one Cholesky factorisation or
+by LU per block.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+import scipy.linalg as sla
+
+__all__ = ["first_order_pencil", "first_order_matrix"]
+
+
+def first_order_pencil(K, C, M) -> tuple[np.ndarray, np.ndarray]:
+    """The pencil (A, B) of (lambda^2 M + lambda C + K) x = 0 in first-order form.
+
+    Parameters
+    ----------
+    K, C, M : ndarray, shape (n, n)
+        Dense stiffness, damping and mass matrices (real or complex).
+
+    Returns
+    -------
+    A, B : ndarray, shape (2n, 2n)
+        ``A = [[0, I], [-K, -C]]`` and ``B = [[I, 0], [0, M]]``:
+        A z = lambda B z with z = (x, lambda x).  No arithmetic beyond the
+        negations, so any eigensolver of the pencil sees exactly K, C and M.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A, B = first_order_pencil(np.eye(1), np.zeros((1, 1)), np.eye(1))
+    >>> A.tolist(), B.tolist()
+    ([[0.0, 1.0], [-1.0, -0.0]], [[1.0, 0.0], [0.0, 1.0]])
+    """
+    n = K.shape[0]
+    Z, I = np.zeros((n, n)), np.eye(n)
+    A = np.block([[Z, I], [-K, -C]])
+    B = np.block([[I, Z], [Z, M]])
+    return A, B
+
+
+def first_order_matrix(
+    K,
+    C,
+    M,
+    *,
+    factor: Literal["cholesky", "lu"] = "cholesky",
+    mass_factor: tuple | None = None,
+) -> np.ndarray:
+    """The matrix B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]] of the first-order form.
+
+    M^{-1} is never formed.
+
+    Parameters
+    ----------
+    K, C, M : ndarray, shape (n, n)
+        Dense real stiffness, damping and mass matrices.
+    factor : {'cholesky', 'lu'}
+        ``"cholesky"`` (M symmetric positive definite): one
+        :func:`scipy.linalg.cho_factor` of M and both blocks in one
+        :func:`scipy.linalg.cho_solve` of ``[K, C]``, written into a zero
+        matrix whose upper right block is set to I.  ``"lu"``: one
+        :func:`scipy.linalg.solve` per block (M factorised twice), the
+        matrix assembled by :func:`numpy.block`.  The two differ by
+        round-off.
+    mass_factor : tuple, optional
+        ``scipy.linalg.cho_factor(M)`` if the caller has it already
+        (``factor="cholesky"`` only); M is then not factorised again.
+
+    Returns
+    -------
+    ndarray, shape (2n, 2n)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> first_order_matrix(8.0 * np.eye(1), 2.0 * np.eye(1), 4.0 * np.eye(1)).tolist()
+    [[0.0, 1.0], [-2.0, -0.5]]
+    """
+    n = K.shape[0]
+    if factor == "cholesky":
+        cf = sla.cho_factor(M) if mass_factor is None else mass_factor
+        out = np.zeros((2 * n, 2 * n))
+        out[:n, n:] = np.eye(n)
+        out[n:] = -sla.cho_solve(cf, np.hstack([K, C]))
+        return out
+    if factor == "lu":
+        if mass_factor is not None:
+            raise ValueError("mass_factor is a Cholesky factorisation: only with factor='cholesky'")
+        return np.block([[np.zeros((n, n)), np.eye(n)], [-sla.solve(M, K), -sla.solve(M, C)]])
+    raise ValueError(f"factor must be 'cholesky' or 'lu', got {factor!r}")
