@@ -60,8 +60,18 @@ def run(problem, y0, direction, **options):
     return continue_curve(KellerPolicy(problem, first, **options), 0.1)
 
 
-def test_toy_problems_satisfy_the_protocol():
+def test_toy_and_package_problems_satisfy_the_protocol():
+    from fempipe.analyses.periodic import OrbitProblem
+    from fempipe.analyses.statics import StaticFamily
+    from fempipe.model.discretization import parse_discretization
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+
     assert isinstance(circle(), ContinuationProblem)
+    model = PipeModel(parse_discretization("P2:4"), Params(v=1.0))
+    assert isinstance(StaticFamily(model, "v"), ContinuationProblem)
+    names = ("residual", "derivatives", "solve_bordered", "inner", "dual")
+    assert all(callable(getattr(OrbitProblem, name, None)) for name in names)
 
 
 def test_circle_is_followed_around_both_folds():

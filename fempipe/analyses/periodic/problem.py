@@ -289,6 +289,8 @@ class CycleCorrector:
             x, T = u[:n2], u[n2]
             need = lin is None or stale or last_next
             last_next = False
+            # One integration gives the residual and, where needed, the
+            # derivatives (the section's residual() and derivatives() in one).
             try:
                 fl = section.flow(u, sensitivity=need)
             except IntegrationError as exc:

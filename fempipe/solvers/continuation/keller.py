@@ -371,5 +371,6 @@ class KellerPolicy:
         return self.end_reason
 
     def finish(self, reason: str, h: float):
+        """The policy itself, holding the branch (a subclass returns its own result)."""
         self.end_reason = reason
         return self
