@@ -63,6 +63,8 @@ def continue_curve(policy: ContinuationPolicy, h: float) -> Any:
         except CorrectorError as exc:
             failure = exc
         if failure is not None:
+            # (Outside the handler: the error of a stalled branch is not
+            # chained to the failure of its last step.)
             h = policy.reject(step, h, failure)
             continue
         point = policy.land(step, point)
