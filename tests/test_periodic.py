@@ -22,10 +22,10 @@ from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.analyses.periodic import (
     CycleContinuationError,
     CyclePoint,
-    _special_points,
     continue_cycles,
     cycle_diagram,
     hopf_points,
+    special_points,
 )
 from fempipe.analyses.stability import linearly_stable
 from fempipe.analyses.statics import solve_static
@@ -121,7 +121,12 @@ def test_corrector_takes_the_monodromy_at_the_orbit_when_asked():
     own steps (MONODROMY_NEAR), not at a requested v (MONODROMY_AT_ORBIT), where one
     more flow gives the multipliers of the converged orbit (shot at rtol 1e-10)."""
     from fempipe.analyses.limit_cycle import shoot
-    from fempipe.analyses.periodic import MONODROMY_AT_ORBIT, MONODROMY_NEAR, HopfPoint, _Continuer
+    from fempipe.analyses.periodic import (
+        MONODROMY_AT_ORBIT,
+        MONODROMY_NEAR,
+        CycleCorrector,
+        HopfPoint,
+    )
 
     m = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.95))
     c = shoot(*_orbit_guess(m), rtol=1e-10)
@@ -133,7 +138,7 @@ def test_corrector_takes_the_monodromy_at_the_orbit_when_asked():
     off[-1] = u[-1]
     errors = {}
     for near in (MONODROMY_NEAR, MONODROMY_AT_ORBIT):
-        cont = _Continuer(m, hopf, 1e-7, 1e-8, 1e-7, 12)
+        cont = CycleCorrector(m, hopf, 1e-7, 1e-8, 1e-7, 12)
         _, _, mono, _, _ = cont.correct(off, None, u, 1e-7, near)
         got = np.sort(np.abs(np.linalg.eigvals(mono)))[::-1]
         errors[near] = float(np.max(np.abs(got - ref)))
@@ -232,19 +237,19 @@ def test_interrupted_branch_resumes_to_the_same_points(run, tmp_path):
 
 
 def test_failure_names_v_and_step_and_keeps_the_points(monkeypatch):
-    import fempipe.analyses.periodic as per
+    import fempipe.analyses.periodic.problem as per
     from fempipe.solvers.radau import IntegrationError
 
     model = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.0))
     (hopf,), _ = hopf_points(model, 6.0, 7.0)
-    real = per._flow
+    real = per.period_flow
 
     def failing(m, x, T, rtol, sensitivity):
         if m.params.v > hopf.v + 0.05:
             raise IntegrationError("diverging", 0.0, 1e-9)
         return real(m, x, T, rtol, sensitivity)
 
-    monkeypatch.setattr(per, "_flow", failing)
+    monkeypatch.setattr(per, "period_flow", failing)
     with pytest.raises(CycleContinuationError) as exc:
         continue_cycles(model, hopf, (6.0, 7.0), [6.65])
     msg = str(exc.value)
@@ -268,19 +273,19 @@ def test_special_points_are_detected_and_located():
     """A branch turning back in v (fold at the vertex of v(s)), a real multiplier
     through -1 and a complex pair through the unit circle, each linear in v."""
     # v rises, then falls: a fold between, at the vertex of the parabola (above 0.75).
-    sp = _special_points([_pt(0.0, 1.0, [0.5]), _pt(0.75, 1.0, [0.5]), _pt(0.74, 1.0, [0.5])])
+    sp = special_points([_pt(0.0, 1.0, [0.5]), _pt(0.75, 1.0, [0.5]), _pt(0.74, 1.0, [0.5])])
     assert [s.type for s in sp] == ["fold"] and sp[0].v > 0.75
     # mu = -0.8 - 0.4 (v - 1): -1 at v = 1.5
     pd = [_pt(1.0, 1.0, [-0.8]), _pt(2.0, 1.2, [-1.2])]
-    (s,) = _special_points(pd)
+    (s,) = special_points(pd)
     assert s.type == "period_doubling" and s.v == pytest.approx(1.5)
     assert s.period == pytest.approx(1.1)
     # |mu| = 0.9 + 0.2 (v - 1): 1 at v = 1.5
     r0, r1 = 0.9, 1.1
     ns = [_pt(1.0, 1.0, [r0 * 1j, -r0 * 1j]), _pt(2.0, 1.0, [r1 * 1j, -r1 * 1j])]
-    (s,) = _special_points(ns)
+    (s,) = special_points(ns)
     assert s.type == "neimark_sacker" and s.v == pytest.approx(1.5)
-    assert _special_points([pd[0], _pt(2.0, 1.0, [-0.9])]) == []
+    assert special_points([pd[0], _pt(2.0, 1.0, [-0.9])]) == []
 
 
 @pytest.mark.slow

@@ -8,10 +8,10 @@ the weak form of
 
 the sum of three forces: bending, gravity and the follower force of the jet.
 :func:`solve_static` accepts a state only when the residual is small
-compared with each of them (:func:`_balance`), and reports loads beyond
-floating-point range as a :class:`NewtonError`.  Continuation
-(:mod:`fempipe.solvers.continuation`) and the paths of :mod:`fempipe.analyses.statics` are
-built on it.
+compared with each of them (:func:`force_balance`), and reports loads beyond
+floating-point range as a :class:`NewtonError`.  The branches and paths of
+:mod:`fempipe.analyses.statics` (continued by the engine of
+:mod:`fempipe.solvers.continuation`) are built on it.
 """
 
 from __future__ import annotations
@@ -27,7 +27,14 @@ from fempipe.core.errors import SolverError
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-__all__ = ["NewtonError", "StaticSolution", "solve_static"]
+__all__ = [
+    "DENSE_MAX_N",
+    "NewtonError",
+    "StaticSolution",
+    "force_balance",
+    "linear_solve",
+    "solve_static",
+]
 
 
 class NewtonError(SolverError):
@@ -95,13 +102,15 @@ class StaticSolution:
 DENSE_MAX_N = 400
 
 
-def _solve(J, b: np.ndarray) -> np.ndarray:
+def linear_solve(J, b: np.ndarray) -> np.ndarray:
+    """Solve J x = b: ``numpy.linalg.solve`` for a dense J, SuperLU (``spsolve``)
+    for a sparse one."""
     if sp.issparse(J):
         return spla.spsolve(J.tocsc(), b)
     return np.linalg.solve(J, b)
 
 
-def _balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
+def force_balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
     """R(q, 0, 0), its norm, and the size of the forces it balances.
 
     R = bending + gravity + follower + springs.  A state is an equilibrium
@@ -162,7 +171,7 @@ def solve_static(
     tol : float
         Convergence when ``||R|| <= tol (||bending|| + gravity load +
         ||follower||)``, each term of R measured at the state (see
-        :func:`_balance`), and the last Newton step is below
+        :func:`force_balance`), and the last Newton step is below
         ``1e-9 (1 + ||q||)``.
     max_iter : int
 
@@ -182,7 +191,7 @@ def solve_static(
     between the many equilibria of a large-deformation problem.
     """
     q = np.zeros(model.n) if q0 is None else np.array(q0, dtype=float)
-    r, rn, scale = _balance(model, q)
+    r, rn, scale = force_balance(model, q)
     if not (math.isfinite(rn) and math.isfinite(scale)):
         raise _not_finite(model, 0)
     if rn <= 1e-3 * tol * scale:
@@ -191,13 +200,13 @@ def solve_static(
         return StaticSolution(q=q, params=model.params, iterations=0, residual_norm=rn)
     it = 0
     for it in range(1, max_iter + 1):
-        dq = _solve(model.static_jacobian(q, dense=model.n <= DENSE_MAX_N), -r)
+        dq = linear_solve(model.static_jacobian(q, dense=model.n <= DENSE_MAX_N), -r)
         if not np.all(np.isfinite(dq)):
             break
         lam = 1.0
         while True:
             q_new = q + lam * dq
-            r_new, rn_new, scale_new = _balance(model, q_new)
+            r_new, rn_new, scale_new = force_balance(model, q_new)
             if rn_new < (1.0 - 1e-4 * lam) * rn or lam < 1e-3 or rn < tol * scale:
                 break
             lam *= 0.5

@@ -174,7 +174,7 @@ def _straight_without_branch_points(model: PipeModel, lo: float, hi: float, kw: 
     determinant at every point the continuation would visit: a sign change
     is a branch point (a pitchfork), where the general path locates it and
     switches branches.  The same test on the same points as
-    :func:`fempipe.solvers.continuation._detect`, whose bordered determinant is
+    :meth:`fempipe.solvers.continuation.KellerPolicy.detect`, whose bordered determinant is
     det K^d times the tangent's v component, 1, on this branch.
     """
     if not straight_is_static(model.params):

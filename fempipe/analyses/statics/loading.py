@@ -1,23 +1,11 @@
-"""Static large deformation (Eq. (31a)): the gravity-loaded state and paths in a parameter.
+"""The state a pipe reaches when gravity is switched on, and states along a path.
 
-    -theta'' + gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta) = 0,
-    theta(0) = 0, theta'(1) = 0.
-
-Three layers, each usable on its own:
-
-* :mod:`fempipe.solvers.newton` -- one equilibrium by Newton's method
-  (:func:`solve_static`, :class:`NewtonError`, :class:`StaticSolution`);
-* :mod:`fempipe.solvers.continuation` -- pseudo-arclength continuation with fold and
-  bifurcation detection and branch switching (:func:`continuation`,
-  :func:`switch_branch`, :class:`Branch`);
-* this module -- the state a pipe reaches when gravity is switched on
-  (:func:`sagged_state`) and the states along a list of parameter values
-  (:func:`solve_path`), what ``fempipe static`` computes.
-
-Every solver only uses the model's ``static_residual``, ``static_jacobian``,
-``static_parameter_derivative``, ``static_terms`` and ``gravity_load`` and the
-discretisation's Gram matrix; it runs unchanged on finite elements and on
-sine modes.  The names of the first two layers are importable from here too.
+:func:`sagged_state` follows the straight pipe at gamma = 0 to the actual
+gamma (the primary branch of every stability analysis); :func:`solve_path`
+gives the states along a list of parameter values, what ``fempipe static``
+computes, by Newton (:func:`fempipe.solvers.newton.solve_static`) bridged by
+continuation (:func:`~fempipe.analyses.statics.branches.continuation`) where
+Newton fails.
 """
 
 from __future__ import annotations
@@ -31,29 +19,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.continuation import (
-    CONTINUATION_PARAMETERS,
-    Branch,
-    BranchPoint,
-    SpecialPoint,
-    continuation,
-    switch_branch,
-)
 from fempipe.solvers.newton import NewtonError, StaticSolution, solve_static
 
-__all__ = [
-    "NewtonError",
-    "StaticSolution",
-    "BranchPoint",
-    "Branch",
-    "SpecialPoint",
-    "solve_static",
-    "solve_path",
-    "sagged_state",
-    "continuation",
-    "switch_branch",
-    "CONTINUATION_PARAMETERS",
-]
+from .branches import continuation
+
+__all__ = ["sagged_state", "solve_path"]
 
 log = logging.getLogger(__name__)
 

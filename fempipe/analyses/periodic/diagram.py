@@ -1,0 +1,303 @@
+"""Bifurcation diagrams by continuation: the static branch and every branch of
+periodic orbits, per alpha, resumable from a store."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, replace
+
+from fempipe.analyses.limit_cycle import TIP_KEYS
+from fempipe.core.parallel import run_tasks
+from fempipe.io import write_text
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.radau import refuse_hysteretic
+
+from .branch import continue_cycles
+from .hopf import analyse_static, equilibrium_tip, point_dict, static_points
+from .results import CycleContinuationError, CyclePoint, HopfPoint
+from .special import cycle_branch
+
+__all__ = ["N_MULTIPLIERS", "CycleDiagram", "cycle_diagram", "cycle_point_dict"]
+
+#: Floquet multipliers listed per point in the JSON (largest moduli).
+N_MULTIPLIERS = 8
+
+
+def cycle_point_dict(pt: CyclePoint, branch: str, index: int, alpha: float) -> dict:
+    """A cycle as a point of ``fempipe bifurcation --json`` (the sweep's keys plus
+    ``stable``, ``branch``, ``requested``, ``source``, ``floquet_multipliers``)."""
+    d = point_dict(pt.v, "continuation", index, alpha, "periodic")
+    d.update({k: list(pt.tip[k]) for k in TIP_KEYS})
+    d.update(
+        period=pt.period,
+        period_n=1,
+        max_multiplier=pt.max_multiplier,
+        steps=pt.steps,
+        rejected_steps=pt.rejected_steps,
+        wall_time=pt.wall_time,
+        stable=pt.stable,
+        branch=branch,
+        requested=pt.source == "grid",
+        source=pt.source,
+        floquet_multipliers=[
+            [float(z.real), float(z.imag)] for z in pt.multipliers[:N_MULTIPLIERS]
+        ],
+        newton_iterations=pt.iterations,
+        residual=pt.residual,
+    )
+    return d
+
+
+@dataclass(frozen=True)
+class CycleDiagram:
+    """A bifurcation diagram by continuation: equilibria and periodic orbits.
+
+    Attributes
+    ----------
+    points : list of dict
+        Equilibria (``direction="static"``) at the requested v, then the points
+        of every branch of periodic orbits (``direction="continuation"``) in
+        arclength order; by alpha.
+    branches : list of dict
+        :meth:`CycleBranch.to_dict` of every branch, with ``alpha``.
+    special_points : list of dict
+        Folds, period doublings, Neimark-Sacker points with ``alpha`` and ``branch``.
+    hopf_points : list of dict
+    errors : list of str
+        Branches that could not be continued (their finished points are kept).
+    wall_time : float
+    manifest : dict
+    """
+
+    points: list
+    branches: list
+    special_points: list
+    hopf_points: list
+    errors: list
+    wall_time: float
+    manifest: dict
+
+    def to_dict(self) -> dict:
+        return {
+            "points": list(self.points),
+            "branches": list(self.branches),
+            "special_points": list(self.special_points),
+            "hopf_points": list(self.hopf_points),
+            "errors": list(self.errors),
+            "wall_time": self.wall_time,
+            "discretization": self.manifest["discretization"],
+            "params": self.manifest["params"],
+        }
+
+
+def _alpha_task(
+    model: PipeModel,
+    values: list,
+    alpha_index: int,
+    store_dir: str,
+    manifest: dict,
+    options: dict,
+    on_point: Callable[[], None] | None = None,
+) -> dict:
+    """Static branch, Hopf points and all branches of periodic orbits at one alpha."""
+    from fempipe.analyses.bifurcation import PointStore
+
+    store = PointStore(store_dir, manifest)
+    alpha = float(model.params.alpha)
+    v_lo, v_hi = min(values), max(values)
+    static_path = store.directory / f"a{alpha_index:02d}-static.json"
+    if static_path.exists():
+        st = json.loads(static_path.read_text())
+        hopf = [HopfPoint.from_dict(h) for h in st["hopf"]]
+        eq_points = st["points"]
+    else:
+        hopf, v_start, events = analyse_static(model, v_lo, v_hi)
+        eq_points = static_points(model, values, v_start, events)
+        saved = {
+            "hopf": [h.to_dict(state=True) for h in hopf],
+            "v_start": v_start,
+            "points": eq_points,
+        }
+        write_text(static_path, json.dumps(saved))
+    if on_point is not None:
+        on_point()
+    out = {
+        "points": list(eq_points),
+        "branches": [],
+        "special_points": [],
+        "errors": [],
+        "hopf_points": [
+            dict(h.to_dict(), alpha=alpha, branch=f"H{k}", **equilibrium_tip(model, h.q_static))
+            for k, h in enumerate(hopf, start=1)
+        ],
+    }
+    covered: list[tuple[float, float]] = []
+    for k, h in enumerate(hopf, start=1):
+        name = f"H{k}"
+        if any(abs(h.v - a) < 1e-6 or abs(h.v - b) < 1e-6 for a, b in covered):
+            # The branch of an earlier Hopf point ended here: the same orbits.
+            continue
+        path = store.directory / f"a{alpha_index:02d}-{name}.json"
+        resume = json.loads(path.read_text()) if path.exists() else None
+
+        def save(state: dict, path=path) -> None:
+            write_text(path, json.dumps(state))
+            if on_point is not None:
+                on_point()
+
+        try:
+            if resume is not None and resume.get("end_reason") == "failed":
+                raise CycleContinuationError(
+                    resume["error"],
+                    cycle_branch(
+                        name,
+                        h,
+                        [CyclePoint.from_dict(d) for d in resume["points"]],
+                        "failed",
+                        resume["steps"],
+                        resume["rejected_steps"],
+                        resume["newton_iterations"],
+                        resume["wall_time"],
+                    ),
+                )
+            br = continue_cycles(
+                model,
+                h,
+                (v_lo, v_hi),
+                values,
+                name=name,
+                resume=resume,
+                on_point=save,
+                **options,
+            )
+        except CycleContinuationError as exc:
+            br = exc.branch
+            out["errors"].append(f"alpha = {alpha:.6g}: {exc}")
+        if br is None:
+            continue
+        if br.points and br.end_reason.startswith("returned to an equilibrium"):
+            covered.append((h.v, br.points[-1].v))
+            # The other end: the next Hopf point nearest to where the branch ended.
+            ends = [g.v for g in hopf if g is not h]
+            if ends:
+                near = min(ends, key=lambda x: abs(x - br.points[-1].v))
+                covered.append((near, near))
+        out["points"].extend(cycle_point_dict(p, name, i, alpha) for i, p in enumerate(br.points))
+        out["branches"].append(dict(br.to_dict(), alpha=alpha))
+        out["special_points"].extend(
+            dict(s.to_dict(), alpha=alpha, branch=name) for s in br.special_points
+        )
+    return out
+
+
+def _manifest(model: PipeModel, values, alphas, options) -> dict:
+    p = model.params.to_dict()
+    p.pop("v")
+    p.pop("alpha")
+    return {
+        "method": "continuation",
+        "discretization": model.disc.to_dict(),
+        "params": p,
+        "alphas": [float(a) for a in alphas],
+        "values": sorted(float(v) for v in values),
+        "options": {k: options[k] for k in sorted(options)},
+    }
+
+
+def cycle_diagram(
+    model: PipeModel,
+    values: Sequence[float],
+    *,
+    alphas: Sequence[float] | None = None,
+    store_dir: str | os.PathLike | None = None,
+    executor: Executor | None = None,
+    workers: int | None = None,
+    progress: Callable[[], None] | None = None,
+    **options,
+) -> CycleDiagram:
+    """Bifurcation diagram by continuation (Figs. 7-10): equilibria and periodic orbits.
+
+    For each alpha: the stability events of the primary static branch
+    (:func:`fempipe.analyses.stability.stability_analysis`), its equilibria at the
+    requested v with their linear stability, and the branch of periodic
+    orbits of Eq. (20) born at every Hopf point, by :func:`continue_cycles`.
+    A branch that ends at another Hopf point (a family joining flutter and
+    restabilisation) is not followed a second time from there.
+
+    Parameters
+    ----------
+    model : PipeModel
+    values : sequence of float
+        Requested flow velocities (the diagram's range is their min to max).
+    alphas : sequence of float, optional
+        Inclinations; default ``[model.params.alpha]``.
+    store_dir : path, optional
+        Resumable store: ``run.json`` (the run's manifest; a store of another
+        run is refused with ValueError), the static part and every branch's
+        state after each accepted point.  A rerun resumes where it stopped.
+    executor, workers
+        Run the alphas in parallel (as :func:`fempipe.analyses.bifurcation.bifurcation_diagram`).
+    progress : callable, optional
+        Called (in this process) whenever a point is finished.
+    **options
+        Passed to :func:`continue_cycles` (``rtol``, ``tol``, ``ds``, ``ds_max`` ...).
+
+    Returns
+    -------
+    CycleDiagram
+        Failed branches are listed in ``errors`` with their finished points kept.
+    """
+    import tempfile
+
+    refuse_hysteretic(model.params, "cycle_diagram")
+    t0 = time.perf_counter()
+    values = sorted(float(v) for v in values)
+    if len(values) < 2 or values[0] == values[-1]:
+        raise ValueError("values must span a range of v (at least two different values)")
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
+    manifest = _manifest(model, values, alphas, options)
+    tmp = None
+    if store_dir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="fempipe-cycles-")
+        store_dir = tmp.name
+    try:
+        from fempipe.analyses.bifurcation import PointStore
+
+        PointStore(store_dir, manifest)  # refuses a store of another run
+        in_process = executor is None and (workers is None or int(workers) == 1 or len(alphas) == 1)
+        tasks = [
+            (
+                model.with_params(replace(model.params, alpha=a)),
+                values,
+                ia,
+                str(store_dir),
+                manifest,
+                dict(options),
+                progress if in_process else None,
+            )
+            for ia, a in enumerate(alphas)
+        ]
+        results = run_tasks(
+            _alpha_task, tasks, workers=None if in_process else workers, executor=executor
+        )
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    for r in results:
+        if isinstance(r, BaseException):
+            raise r
+    return CycleDiagram(
+        points=[p for r in results for p in r["points"]],
+        branches=[b for r in results for b in r["branches"]],
+        special_points=[s for r in results for s in r["special_points"]],
+        hopf_points=[h for r in results for h in r["hopf_points"]],
+        errors=[e for r in results for e in r["errors"]],
+        wall_time=time.perf_counter() - t0,
+        manifest=manifest,
+    )

@@ -1,0 +1,180 @@
+"""Hopf points of the static branch, where branches of periodic orbits start,
+and the equilibria of the primary branch with their linear stability.
+
+The critical eigenvector (:func:`_critical_eigenvector`) comes from the
+first-order (companion) form of the linearisation, Eqs. (31b)-(33).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from fempipe.analyses.limit_cycle import TIP_KEYS, tip_coordinates
+from fempipe.model.operators import PipeModel
+
+from .results import HopfPoint
+
+__all__ = [
+    "analyse_static",
+    "equilibrium_tip",
+    "hopf_points",
+    "point_dict",
+    "static_points",
+]
+
+
+def _static_states(model: PipeModel, values: Sequence[float], v_start: float) -> dict:
+    """Static states of the primary branch (the gravity-loaded state continued in v,
+    as the stability analysis follows it) at ``values``, keyed by v."""
+    from fempipe.analyses.statics import solve_path
+
+    vals = sorted({float(v_start), *(float(v) for v in values)})
+    sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
+    return {v: s.q for v, s in zip(vals, sols, strict=True)}
+
+
+def _critical_eigenvector(
+    model: PipeModel, q: np.ndarray, omega: float
+) -> tuple[float, np.ndarray]:
+    """(omega, z): the eigenpair of the first-order form nearest to i omega."""
+    import scipy.linalg as sla
+
+    from fempipe.analyses.stability import linearized_matrices
+
+    K, Cd, M = (
+        np.asarray(a.toarray() if hasattr(a, "toarray") else a)
+        for a in linearized_matrices(model, q)
+    )
+    n = model.n
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-sla.solve(M, K), -sla.solve(M, Cd)]])
+    lam, Z = np.linalg.eig(A)
+    k = int(np.argmin(np.abs(lam - 1j * omega)))
+    z = Z[:, k]
+    z = z / np.sqrt(np.mean(np.abs(z[:n]) ** 2))
+    return float(lam[k].imag), z
+
+
+def hopf_points(
+    model: PipeModel, v_min: float, v_max: float, *, ds_max: float = 0.1
+) -> tuple[list[HopfPoint], float]:
+    """The Hopf points of the primary static branch in [0, v_max] that matter for [v_min, v_max].
+
+    The stability events of :func:`fempipe.analyses.stability.stability_analysis` of
+    type flutter, restabilization or mode_restabilization with a non-zero
+    frequency (a complex pair crossing Re lambda = 0) are Hopf points.  The
+    analysis starts at ``v_min``; if the primary branch is already unstable
+    there, it is repeated from v = 0 so that the Hopf points whose orbits
+    reach into the range are found too.
+
+    Returns
+    -------
+    hopf : list of HopfPoint, by increasing v
+    v_start : float
+        Start of the analysis (``v_min`` or 0).
+    """
+    hopf, v_start, _ = analyse_static(model, v_min, v_max, ds_max)
+    return hopf, v_start
+
+
+def analyse_static(model: PipeModel, v_min: float, v_max: float, ds_max: float = 0.1):
+    """(Hopf points, start of the analysis, events of the primary branch)."""
+    from fempipe.analyses.stability import stability_analysis
+
+    res = stability_analysis(model, v_max, v_min, follow_bifurcations=False, ds_max=ds_max)
+    v_start = v_min
+    if v_min > 0 and any(e.at_start for e in res.events):
+        v_start = 0.0
+        res = stability_analysis(model, v_max, 0.0, follow_bifurcations=False, ds_max=ds_max)
+    events = [
+        e
+        for e in res.events
+        if e.branch == "primary" and not e.at_start and e.frequency > 0 and e.type != "fold"
+    ]
+    states = _static_states(model, [e.v for e in events], v_start) if events else {}
+    out = []
+    for e in events:
+        m = model.with_params(replace(model.params, v=e.v))
+        omega, z = _critical_eigenvector(m, states[float(e.v)], abs(e.frequency))
+        out.append(HopfPoint(float(e.v), omega, e.type, states[float(e.v)], z))
+    primary = [e for e in res.events if e.branch == "primary"]
+    return out, v_start, primary
+
+
+def _stable_between_events(events: Sequence, v: float) -> bool:
+    """Linear stability of the primary branch at v from its events (stable_before/after)."""
+    before = [e for e in events if e.v <= v]
+    if before:
+        return bool(before[-1].stable_after)
+    after = [e for e in events if e.v > v]
+    return bool(after[0].stable_before) if after else True
+
+
+def static_points(
+    model: PipeModel,
+    values: Sequence[float],
+    v_start: float | None = None,
+    events: Sequence | None = None,
+) -> list[dict]:
+    """Equilibria of the primary branch at ``values`` with their linear stability.
+
+    Each dict has the keys of a bifurcation point (``attractor`` =
+    ``"equilibrium"``, ``direction`` = ``"static"``, tip [value, value], ...)
+    and ``stable``: from the primary branch's stability ``events`` of
+    :func:`fempipe.analyses.stability.stability_analysis` (``stable_before`` /
+    ``stable_after``) when given, else :func:`fempipe.analyses.stability.linearly_stable`
+    at each state (the same criterion).
+    """
+    from fempipe.analyses.stability import linearly_stable
+
+    vals = sorted(float(v) for v in values)
+    start = vals[0] if v_start is None else float(v_start)
+    states = _static_states(model, vals, start)
+    out = []
+    for i, v in enumerate(vals):
+        t0 = time.perf_counter()
+        m = model.with_params(replace(model.params, v=v))
+        q = states[v]
+        stable = _stable_between_events(events, v) if events is not None else linearly_stable(m, q)
+        d = point_dict(v, "static", i, model.params.alpha, "equilibrium")
+        d.update(equilibrium_tip(model, q))
+        d.update(
+            stable=bool(stable) if stable is not None else None,
+            branch="static",
+            requested=True,
+            source="grid",
+            floquet_multipliers=None,
+            wall_time=time.perf_counter() - t0,
+        )
+        out.append(d)
+    return out
+
+
+def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
+    """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
+    [min, max] form of the diagram's points: the static points, and the Hopf points
+    where a branch of orbits starts."""
+    tip = tip_coordinates(model.disc, model.params.alpha, q)
+    return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
+
+
+def point_dict(v, direction, index, alpha, attractor) -> dict:
+    return {
+        "v": float(v),
+        "direction": direction,
+        "index": index,
+        "alpha": float(alpha),
+        "attractor": attractor,
+        "eta_tip": None,
+        "X_tip": None,
+        "Z_tip": None,
+        "period": None,
+        "period_n": None,
+        "max_multiplier": None,
+        "steps": 0,
+        "rejected_steps": 0,
+        "wall_time": 0.0,
+    }

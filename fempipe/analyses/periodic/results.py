@@ -1,0 +1,226 @@
+"""The results of a continuation of periodic orbits: Hopf points, orbits, branches.
+
+The orbits carry their Floquet multipliers (the eigenvalues of the monodromy
+matrix, by decreasing modulus); the one closest to 1 is the trivial one (the
+phase along the orbit) and :func:`nontrivial_multipliers` removes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fempipe.core.errors import SolverError
+
+__all__ = [
+    "MIN_SWING",
+    "CycleBranch",
+    "CycleContinuationError",
+    "CyclePoint",
+    "CycleSpecialPoint",
+    "HopfPoint",
+    "nontrivial_multipliers",
+    "swing",
+]
+
+#: A computed orbit whose tip swings (max - min of eta_tip) less than this has
+#: come back to an equilibrium.
+MIN_SWING = 2e-3
+
+
+class CycleContinuationError(SolverError):
+    """A branch of periodic orbits could not be continued (the corrector failed
+    at the smallest step); ``branch`` holds the points finished before."""
+
+    def __init__(self, message: str, branch: CycleBranch | None = None) -> None:
+        super().__init__(message)
+        self.branch = branch
+
+    def __reduce__(self):
+        return type(self), (str(self), self.branch)
+
+
+@dataclass(frozen=True)
+class HopfPoint:
+    """A Hopf point of the static branch: a flutter-type event with its eigenvector.
+
+    Attributes
+    ----------
+    v, omega : float
+        Flow velocity and frequency Im lambda of the critical pair.
+    event_type : str
+        The stability event (``flutter``, ``restabilization``, ``mode_restabilization``).
+    q_static : ndarray, shape (n,)
+    eigenvector : ndarray, complex, shape (2 n,)
+        z = (q, i omega q) with A z = i omega z, scaled to unit RMS of its q part.
+    """
+
+    v: float
+    omega: float
+    event_type: str
+    q_static: np.ndarray = field(repr=False)
+    eigenvector: np.ndarray = field(repr=False)
+
+    def to_dict(self, state: bool = False) -> dict:
+        d = {"v": self.v, "omega": self.omega, "type": self.event_type}
+        if state:
+            d["q_static"] = [float(x) for x in self.q_static]
+            d["eigenvector_re"] = [float(x) for x in self.eigenvector.real]
+            d["eigenvector_im"] = [float(x) for x in self.eigenvector.imag]
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> HopfPoint:
+        z = np.asarray(d["eigenvector_re"]) + 1j * np.asarray(d["eigenvector_im"])
+        return cls(d["v"], d["omega"], d["type"], np.asarray(d["q_static"], dtype=float), z)
+
+
+@dataclass(frozen=True)
+class CyclePoint:
+    """One periodic orbit of a branch.
+
+    Attributes
+    ----------
+    v, period : float
+    q0, qdot0 : ndarray, shape (n,)
+        The orbit's state on the phase section.
+    tip : dict
+        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` over one period.
+    multipliers : ndarray, complex
+        Floquet multipliers by decreasing modulus (the trivial one included).
+    stable : bool
+        All non-trivial multipliers inside the unit circle.
+    source : str
+        ``"grid"`` (landed on a requested v) or ``"continuation"`` (a step of
+        its own).
+    iterations, residual : int, float
+        Newton iterations (integrations) and final RMS residual.
+    steps, rejected_steps : int
+        Integration steps of the last period and rejected ones over the corrector.
+    wall_time : float
+    """
+
+    v: float
+    period: float
+    q0: np.ndarray = field(repr=False)
+    qdot0: np.ndarray = field(repr=False)
+    tip: dict = field(default_factory=dict)
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0, complex), repr=False)
+    stable: bool = False
+    source: str = "continuation"
+    iterations: int = 0
+    residual: float = 0.0
+    steps: int = 0
+    rejected_steps: int = 0
+    wall_time: float = 0.0
+
+    @property
+    def max_multiplier(self) -> float:
+        """Largest modulus of the non-trivial multipliers."""
+        mu = nontrivial_multipliers(self.multipliers)
+        return float(np.max(np.abs(mu))) if mu.size else 0.0
+
+    def to_dict(self, state: bool = False) -> dict:
+        d = {
+            "v": self.v,
+            "period": self.period,
+            "tip": self.tip,
+            "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
+            "stable": self.stable,
+            "source": self.source,
+            "iterations": self.iterations,
+            "residual": self.residual,
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "wall_time": self.wall_time,
+        }
+        if state:
+            d["q0"] = [float(x) for x in self.q0]
+            d["qdot0"] = [float(x) for x in self.qdot0]
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> CyclePoint:
+        mu = np.array([complex(a, b) for a, b in d["multipliers"]], dtype=complex)
+        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q0", "qdot0", "multipliers")}
+        return cls(**kw, q0=np.asarray(d["q0"]), qdot0=np.asarray(d["qdot0"]), multipliers=mu)
+
+
+@dataclass(frozen=True)
+class CycleSpecialPoint:
+    """A bifurcation of periodic orbits located on a branch.
+
+    Attributes
+    ----------
+    v : float
+    type : {"fold", "period_doubling", "neimark_sacker"}
+    period : float
+        Interpolated at v.
+    index : int
+        Index of the branch point after which it lies.
+    """
+
+    v: float
+    type: str
+    period: float
+    index: int
+
+    def to_dict(self) -> dict:
+        return {"v": self.v, "type": self.type, "period": self.period, "index": self.index}
+
+
+@dataclass(frozen=True)
+class CycleBranch:
+    """A branch of periodic orbits born at a Hopf point, in arclength order.
+
+    Attributes
+    ----------
+    name : str
+        ``"H1"``, ``"H2"``, ... by increasing v_H.
+    hopf : HopfPoint
+    points : tuple of CyclePoint
+    special_points : tuple of CycleSpecialPoint
+    end_reason : str
+        Why the continuation stopped.
+    steps, rejected_steps, newton_iterations : int
+        Accepted continuation steps, rejected (halved) ones, and integrations
+        over all correctors.
+    wall_time : float
+    """
+
+    name: str
+    hopf: HopfPoint
+    points: tuple
+    special_points: tuple
+    end_reason: str
+    steps: int
+    rejected_steps: int
+    newton_iterations: int
+    wall_time: float
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name,
+            "hopf": self.hopf.to_dict(),
+            "special_points": [s.to_dict() for s in self.special_points],
+            "end_reason": self.end_reason,
+            "n_points": len(self.points),
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "newton_iterations": self.newton_iterations,
+            "wall_time": self.wall_time,
+        }
+
+
+def nontrivial_multipliers(mu: np.ndarray) -> np.ndarray:
+    """The multipliers without the trivial one (the one closest to 1)."""
+    if mu.size < 2:
+        return mu[:0]
+    return np.delete(mu, int(np.argmin(np.abs(mu - 1.0))))
+
+
+def swing(pt: CyclePoint) -> float:
+    """max - min of eta_tip over the orbit."""
+    lo, hi = pt.tip["eta_tip"]
+    return hi - lo

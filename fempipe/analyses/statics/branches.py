@@ -1,0 +1,324 @@
+"""Branches of static equilibria (Eq. (31a)) by pseudo-arclength continuation:
+folds, bifurcation points and branch switching at pitchforks.
+
+The branch is walked by the engine of :mod:`fempipe.solvers.continuation`
+with Keller's policy (:class:`fempipe.solvers.continuation.KellerPolicy`: the
+exact tangent, a Newton corrector on the bordered system) on the problem
+:class:`~fempipe.analyses.statics.family.StaticFamily`.  What is the pipe's
+own is said here: a point converges when the forces balance
+(:func:`fempipe.solvers.newton.force_balance`), the branch lands exactly on
+the requested parameter value, or on v = 0 (gamma = 0) when it leaves the
+physical range, and a stalled branch is a :class:`NewtonError`.  Folds are
+sign changes of the parameter component of the tangent; bifurcation points
+sign changes of the determinant of the bordered Jacobian, which keeps its
+sign at folds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+from fempipe.solvers.continuation import (
+    CurveEvent,
+    CurvePoint,
+    KellerPolicy,
+    KellerStep,
+    continue_curve,
+    correct,
+    normalize,
+)
+from fempipe.solvers.continuation import tangent as curve_tangent
+from fempipe.solvers.newton import NewtonError, solve_static
+
+from .family import StaticFamily
+
+__all__ = [
+    "BranchPoint",
+    "Branch",
+    "SpecialPoint",
+    "StaticBranchPolicy",
+    "continuation",
+    "switch_branch",
+]
+
+
+@dataclass(frozen=True)
+class BranchPoint(CurvePoint):
+    """One point of a continuation branch: ``q``, the parameter ``value``, the
+    unit ``tangent`` (dq, dlambda) in the arclength norm, the corrector's
+    ``iterations`` and ``residual_norm``, and ``det_sign``, the sign of det of
+    the bordered Jacobian (it flips at bifurcations)."""
+
+
+@dataclass(frozen=True)
+class SpecialPoint(CurveEvent):
+    """A fold or a branch point located on a branch.
+
+    ``kind`` is ``"fold"`` (the parameter turns back: a saddle-node of the
+    static problem) or ``"bifurcation"`` (a branch crosses; a pitchfork in the
+    symmetric cases alpha = 0, pi); ``index`` the branch segment
+    [index, index + 1] that contains it.
+    """
+
+    def to_dict(self, parameter: str) -> dict:
+        return {"type": self.kind, parameter: self.value}
+
+
+@dataclass
+class Branch:
+    """A branch of static solutions traced in ``parameter``.
+
+    Attributes
+    ----------
+    parameter : str
+        ``"v"``, ``"gamma"`` or ``"alpha"``.
+    points : list of BranchPoint
+    special : list of SpecialPoint
+        Folds and bifurcation points, located to ``locate_tol`` in arclength.
+    steps, rejected_steps : int
+        Continuation diagnostics.
+    end_reason : str
+        ``"stop"`` (reached the requested value), ``"returned to v = 0"``
+        (the branch folded back out of the physical range) or ``"max_steps"``.
+    """
+
+    parameter: str
+    base: Params
+    points: list[BranchPoint] = field(default_factory=list)
+    special: list[SpecialPoint] = field(default_factory=list)
+    steps: int = 0
+    rejected_steps: int = 0
+    end_reason: str = "max_steps"
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.array([p.value for p in self.points])
+
+    @property
+    def states(self) -> np.ndarray:
+        return np.array([p.q for p in self.points])
+
+    @property
+    def folds(self) -> list[SpecialPoint]:
+        return [s for s in self.special if s.kind == "fold"]
+
+    @property
+    def bifurcations(self) -> list[SpecialPoint]:
+        return [s for s in self.special if s.kind == "bifurcation"]
+
+    def params_at(self, value: float) -> Params:
+        return replace(self.base, **{self.parameter: value})
+
+
+class StaticBranchPolicy(KellerPolicy):
+    """Keller's policy with the pipe's convergence test, landing and errors.
+
+    A point converges when the forces balance to ``tol``; once the parameter
+    passes ``stop`` (or v, gamma pass 0 downwards, out of the physical range)
+    the last point is replaced by the state at exactly that value, by Newton
+    at fixed parameter from the interpolated state, and the branch ends.
+    """
+
+    point_type = BranchPoint
+    event_type = SpecialPoint
+
+    def __init__(self, family: StaticFamily, first: BranchPoint, stop: float, **options) -> None:
+        super().__init__(family, first, **options)
+        self.family = family
+        self.stop = stop
+        self.going_up = stop >= first.value
+
+    def converged(self, y: np.ndarray) -> float | None:
+        return self.family.balanced(y, self.tol)
+
+    def stalled(self, step: KellerStep) -> Exception:
+        parameter, prev = self.family.parameter, step.previous
+        return NewtonError(
+            f"continuation in {parameter} stalled at {parameter}={prev.value:.8g}: "
+            f"arclength step fell below {self.ds_min:g}",
+            params=replace(self.family.model.params, **{parameter: prev.value}),
+            iterations=0,
+            residual=float("nan"),
+        )
+
+    def land(self, step: KellerStep, new: BranchPoint) -> BranchPoint:
+        prev, stop, parameter = step.previous, self.stop, self.family.parameter
+        crossed = (new.value - stop) * (1 if self.going_up else -1) >= 0
+        left = parameter in ("v", "gamma") and new.value < 0 <= prev.value
+        if crossed or left:
+            # Land exactly on the stop value (or on the end of the physical
+            # range, 0) by Newton at fixed parameter.
+            target = stop if crossed else 0.0
+            end = solve_static(
+                self.family.at(target), q0=interp_state(prev, new, target), tol=self.tol
+            )
+            t_end, s_end, _ = curve_tangent(self.family, np.append(end.q, target), new.tangent)
+            new = BranchPoint(end.q, target, t_end, end.iterations, end.residual_norm, s_end)
+            self.end_reason = "stop" if crossed else f"returned to {parameter} = 0"
+        return new
+
+    def finish(self, reason: str, h: float) -> Branch:
+        self.end_reason = reason
+        return Branch(
+            parameter=self.family.parameter,
+            base=self.family.model.params,
+            points=self.points,
+            special=self.events,
+            steps=self.steps,
+            rejected_steps=self.rejected_steps,
+            end_reason=reason,
+        )
+
+
+def interp_state(a: CurvePoint, b: CurvePoint, value: float) -> np.ndarray:
+    """The state at parameter ``value`` interpolated linearly between a and b."""
+    if b.value == a.value:
+        return b.q
+    s = (value - a.value) / (b.value - a.value)
+    return a.q + s * (b.q - a.q)
+
+
+def continuation(
+    model: PipeModel,
+    parameter: str = "v",
+    stop: float = 10.0,
+    q0: np.ndarray | None = None,
+    ds: float = 0.1,
+    ds_min: float = 1e-6,
+    ds_max: float = 0.5,
+    max_steps: int = 2000,
+    tol: float = 1e-10,
+    direction: int | None = None,
+    detect: bool = True,
+    locate_tol: float = 1e-10,
+    tangent: np.ndarray | None = None,
+    callback: Callable[[BranchPoint], None] | None = None,
+) -> Branch:
+    """Pseudo-arclength continuation of static states in ``parameter``.
+
+    Starts at ``model.params`` (Newton from ``q0``), walks with adaptive
+    arclength steps until the parameter passes ``stop`` (the last point is
+    corrected to lie exactly at ``stop``) or ``max_steps`` is reached.  Folds
+    (the parameter turns back) and bifurcation points (sign change of the
+    determinant of the bordered Jacobian, which does not change at folds) are
+    detected and located by bisection in arclength.
+
+    Parameters
+    ----------
+    model : PipeModel
+    parameter : {'v', 'gamma', 'alpha'}
+    stop : float
+        Target parameter value (may be below the start value).
+    q0 : ndarray, optional
+        Initial guess for the first point.
+    ds, ds_min, ds_max : float
+        Initial, minimal and maximal arclength steps.
+    direction : {+1, -1}, optional
+        Initial direction in the parameter (default: towards ``stop``).
+    tangent : ndarray, shape (n + 1,), optional
+        Initial tangent (for branch switching); overrides ``direction``.
+    callback : callable, optional
+        Called with each accepted :class:`BranchPoint` (progress).
+
+    Returns
+    -------
+    Branch
+
+    Raises
+    ------
+    NewtonError
+        If the first point does not converge, or the step size falls below
+        ``ds_min`` (with the parameter value reached).
+    """
+    family = StaticFamily(model, parameter)
+    n = model.n
+    start_value = float(getattr(model.params, parameter))
+    if parameter in ("v", "gamma") and stop < 0:
+        raise ValueError(f"stop must be >= 0 for {parameter}, got {stop}")
+    first = solve_static(model, q0=q0, tol=tol)
+    if tangent is None:
+        sgn = direction if direction is not None else (1 if stop >= start_value else -1)
+        t0 = np.zeros(n + 1)
+        t0[n] = float(sgn)
+    else:
+        t0 = normalize(family, np.asarray(tangent, dtype=float))
+    t, sign, _ = curve_tangent(family, np.append(first.q, start_value), t0)
+    pt = BranchPoint(first.q, start_value, t, first.iterations, first.residual_norm, sign)
+    policy = StaticBranchPolicy(
+        family,
+        pt,
+        stop,
+        ds_min=ds_min,
+        ds_max=ds_max,
+        max_steps=max_steps,
+        tol=tol,
+        detect=detect,
+        locate_tol=locate_tol,
+        callback=callback,
+    )
+    if callback:
+        callback(pt)
+    return continue_curve(policy, ds)
+
+
+def switch_branch(
+    model: PipeModel,
+    point: SpecialPoint,
+    parameter: str,
+    stop: float,
+    ds: float = 0.05,
+    **kwargs,
+) -> tuple[Branch, Branch]:
+    """Follow both branches that cross ``point`` (a located bifurcation).
+
+    The bifurcating direction is the null vector of dR/dq orthogonal (in the
+    arclength metric) to the known branch's tangent; each new branch starts one
+    step ``ds`` away along ``+/-`` that direction and is then continued towards
+    ``stop``.  At the pitchforks of alpha = 0 and alpha = pi these are the two
+    mirror-image buckled branches theta and -theta.
+
+    Returns
+    -------
+    (Branch, Branch)
+        The branches leaving along +phi and -phi.
+    """
+    family = StaticFamily(model, parameter)
+    n = model.n
+    m = family.at(point.value)
+    J = m.static_jacobian(point.q)
+    Jd = J.toarray() if sp.issparse(J) else J
+    Rl = family.dR_dlambda(point.q, point.value)
+    # Null space of [J, R_lambda] (dimension 2 at a simple branch point).
+    A = np.hstack([Jd, Rl[:, None]])
+    _, _, Vt = np.linalg.svd(A)
+    N2 = Vt[-2:].T
+    # Remove the component along the known tangent, in the arclength metric.
+    t0 = point.tangent
+    dot = family.inner
+    cand = [N2[:, 0], N2[:, 1]]
+    cand = [c - dot(c, t0) / dot(t0, t0) * t0 for c in cand]
+    phi = max(cand, key=lambda c: dot(c, c))
+    phi = normalize(family, phi)
+    tol = kwargs.get("tol", 1e-10)
+    out = []
+    for sgn in (1.0, -1.0):
+        y0 = np.append(point.q, point.value) + sgn * ds * phi
+        res = correct(family, y0, sgn * phi, lambda y: family.balanced(y, tol))
+        if res is None:
+            raise NewtonError(
+                f"branch switching failed at {parameter}={point.value:.8g}",
+                params=family.at(point.value).params,
+                iterations=0,
+                residual=float("nan"),
+            )
+        y = res[0]
+        start = family.at(float(y[n]))
+        br = continuation(start, parameter, stop=stop, q0=y[:n], tangent=sgn * phi, ds=ds, **kwargs)
+        out.append(br)
+    return out[0], out[1]

@@ -1,0 +1,156 @@
+"""What the pseudo-arclength engine asks of a problem and of its policies.
+
+A one-parameter problem is a curve of zeros of F: R^(m+1) -> R^m in
+y = (x, lambda), the state x and the parameter lambda.  The engine
+(:func:`fempipe.solvers.continuation.continue_curve`) walks along it; all it
+needs of the problem is written down here as two protocols:
+
+* :class:`ContinuationProblem` -- the mathematics of the curve: F, its
+  derivatives in x and lambda, the bordered (extended) linear solve of
+  Keller's method and the inner product in which arclength is measured;
+* :class:`ContinuationPolicy` -- the algorithmic choices of one kind of
+  branch: how to predict, correct, accept and land a step, how to change the
+  step size, which special points to look for, when to stop.  They differ
+  legitimately between problems (the exact tangent of a cheap static problem,
+  the secant of an expensive shooting problem), so each problem brings its
+  own; :class:`fempipe.solvers.continuation.KellerPolicy` is the textbook one.
+
+The bordered system of pseudo-arclength continuation (Keller 1977;
+Kuznetsov, *Elements of Applied Bifurcation Theory*, Sec. 10.2) is
+
+    [ F_x    F_lambda ] [dx      ]   [ -F             ]
+    [ <t, .>          ] [dlambda ] = [ -<t, y - y_pred> ]
+
+with t the unit tangent; its last row is the linear form ``<t, .>`` of the
+problem's inner product, a row vector the problem builds with
+:meth:`ContinuationProblem.dual`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from fempipe.core.errors import SolverError
+
+__all__ = [
+    "BorderedSolution",
+    "ContinuationError",
+    "ContinuationPolicy",
+    "ContinuationProblem",
+    "CorrectorError",
+    "SharpTurnError",
+]
+
+
+class CorrectorError(Exception):
+    """A step failed: the corrector did not converge (or the integration inside
+    the residual failed).  The engine refuses the step and asks the policy for
+    a shorter one (:meth:`ContinuationPolicy.reject`)."""
+
+
+class SharpTurnError(CorrectorError):
+    """The corrected point was refused because the curve turned too sharply
+    from the last tangent: the corrector may have jumped to another branch."""
+
+
+class ContinuationError(SolverError):
+    """A curve could not be continued: the step fell below its minimum."""
+
+
+@dataclass(frozen=True)
+class BorderedSolution:
+    """The solution z of a bordered system and, if asked, its determinant.
+
+    Attributes
+    ----------
+    z : ndarray, shape (m + 1,)
+    det_sign : int or None
+        sign(det) of the bordered matrix (it flips at a simple branch point,
+        not at a fold).
+    log_abs_det : float or None
+        log|det| of the bordered matrix.
+    """
+
+    z: np.ndarray
+    det_sign: int | None = None
+    log_abs_det: float | None = None
+
+
+@runtime_checkable
+class ContinuationProblem(Protocol):
+    """A curve F(y) = 0 in R^(m+1), y = (x, lambda), as the engine sees it.
+
+    The parameter lambda is the last component of y.
+    """
+
+    def residual(self, y: np.ndarray) -> np.ndarray:
+        """F(y), shape (m,)."""
+
+    def derivatives(self, y: np.ndarray) -> Any:
+        """F_x and F_lambda at y, in whatever form :meth:`solve_bordered` takes
+        (dense or sparse matrices, a monodromy matrix and its companions ...)."""
+
+    def solve_bordered(
+        self, lin: Any, row: np.ndarray | None, rhs: np.ndarray, *, determinant: bool = False
+    ) -> BorderedSolution:
+        """Solve ``[[F_x, F_lambda], [row]] z = rhs`` with the derivatives ``lin``.
+
+        ``row`` None solves ``F_x z = rhs`` at fixed lambda (z of shape (m,)).
+        With ``determinant``, also sign and log|det| of the bordered matrix.
+        """
+
+    def inner(self, a: np.ndarray, b: np.ndarray) -> float:
+        """The inner product of arclength, <a, b>."""
+
+    def dual(self, t: np.ndarray) -> np.ndarray:
+        """The row vector of the linear form ``z -> <t, z>``."""
+
+
+class ContinuationPolicy(Protocol):
+    """The algorithmic choices of one kind of branch, called by the engine.
+
+    The engine passes back to the policy what the policy returned: a *step*
+    (whatever :meth:`predict` returns: the predicted point, its tangent, the
+    step length) and a *point* (whatever :meth:`correct` and :meth:`land`
+    return).  The policy keeps the branch (its points, counters, events).
+    """
+
+    def stop_before(self) -> str | None:
+        """Why the branch ends before the next step (e.g. ``max_steps``), or None."""
+
+    def predict(self, h: float) -> Any:
+        """The predictor for a step of arclength ``h``."""
+
+    def correct(self, step: Any) -> Any:
+        """The corrected point of ``step``; raises :class:`CorrectorError`."""
+
+    def accept(self, step: Any, point: Any) -> None:
+        """Refuse ``point`` by raising :class:`SharpTurnError` (or :class:`CorrectorError`)."""
+
+    def reject(self, step: Any, h: float, failure: CorrectorError) -> float:
+        """The shorter step after a failure; raises when it falls below the minimum."""
+
+    def land(self, step: Any, point: Any) -> Any:
+        """The point to keep: ``point``, or the point landed on a requested
+        parameter value that the step passed."""
+
+    def detect(self, step: Any, point: Any) -> None:
+        """Locate special points between the last point and ``point``."""
+
+    def append(self, point: Any) -> None:
+        """Add ``point`` to the branch."""
+
+    def next_step(self, step: Any, point: Any, h: float) -> float:
+        """The step length after an accepted step."""
+
+    def notify(self, point: Any, h: float) -> None:
+        """Report progress (callbacks, logging, a resumable state)."""
+
+    def stop_after(self, step: Any, point: Any) -> str | None:
+        """Why the branch ends after ``point``, or None."""
+
+    def finish(self, reason: str, h: float) -> Any:
+        """The result of the run, the branch ended for ``reason``."""
