@@ -15,7 +15,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from fempipe.core.version import __version__
 
 #: public name -> submodule that defines it
 _LAZY: dict[str, str] = {
