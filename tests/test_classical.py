@@ -19,7 +19,6 @@ from fempipe.model.params import Params
 from fempipe.validation.classical import (
     BeamGalerkin,
     StraightPipe,
-    _mode_coefficients,
     beam_mode_values,
     cantilever_roots,
     critical_velocity,
@@ -31,6 +30,7 @@ from fempipe.validation.classical import (
     tip_mass_frequencies,
     tip_spring_divergence,
 )
+from fempipe.validation.classical_galerkin import beam_mode_coefficients
 
 LEG = {"method": "legendre", "n": 16}
 
@@ -78,7 +78,7 @@ def test_paidoussis_integrals():
     n = 12
     g = BeamGalerkin(n)
     lam = cantilever_roots(n)
-    s = _mode_coefficients(lam)[2]
+    s = beam_mode_coefficients(lam)[2]
     S, R = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
     sgn = (-1.0) ** (S + R)
     ls, lr = lam[S], lam[R]
