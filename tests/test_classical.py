@@ -358,7 +358,7 @@ def test_divergence_with_kelvin_voigt_converges_in_p():
     overdamped stiff modes (lambda ~ -mu omega^2, up to 1e12 here) would swamp the
     round-off of a direct companion form: the hanging pipe with a spring
     kappa = 300 at xi_s = 0.75.  p = 12 ... 40 agree to 1e-10: the eigensolver's
-    shifted companion (_quadratic_eigenvalues) has a norm of the order of the low
+    shifted companion (quadratic_eigenvalues) has a norm of the order of the low
     modes', not of 1e12, so its round-off moves v_cr by ~eps, and each v_cr is
     Brent's to xtol = 1e-12 (measured 1.8e-14 to 2.0e-14 on the Haswell,
     Sandybridge and Prescott kernels)."""
