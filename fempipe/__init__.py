@@ -4,6 +4,14 @@ The geometrically exact model of Chen, Hu, Dai & Wang (Appl. Math. Mech.
 41(9) 1381-1400, 2020), Eq. (20), discretised by 1-D Lagrange finite
 elements on a scikit-fem MeshLine or by the paper's sine modes.
 
+The package is layered, lowest first: ``core`` < ``model`` < ``solvers`` <
+``analyses`` (statics < stability < dynamics < limit_cycle < bifurcation,
+periodic) < ``studies`` < ``io`` < ``plotting`` < ``validation`` < ``bench`` <
+``cli`` < this facade.  A module imports from its own layer or lower ones,
+never higher, and no private name of another module.  The layers are written
+down once, with what each holds, in :mod:`fempipe.core.layers`
+(``tests/test_layering.py`` keeps them).
+
 The public names are loaded on first use (PEP 562 module ``__getattr__``), so
 ``import fempipe`` and the start of the ``fempipe`` command do not pay for
 numpy, scipy, scikit-fem and the solvers (0.6 CPU-s on a 2-core x86_64
@@ -15,7 +23,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from fempipe.core.version import __version__ as __version__  # re-exported
 
 #: public name -> submodule that defines it
 _LAZY: dict[str, str] = {

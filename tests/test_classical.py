@@ -19,7 +19,6 @@ from fempipe.model.params import Params
 from fempipe.validation.classical import (
     BeamGalerkin,
     StraightPipe,
-    _mode_coefficients,
     beam_mode_values,
     cantilever_roots,
     critical_velocity,
@@ -31,6 +30,7 @@ from fempipe.validation.classical import (
     tip_mass_frequencies,
     tip_spring_divergence,
 )
+from fempipe.validation.classical_galerkin import beam_mode_coefficients
 
 LEG = {"method": "legendre", "n": 16}
 
@@ -78,7 +78,7 @@ def test_paidoussis_integrals():
     n = 12
     g = BeamGalerkin(n)
     lam = cantilever_roots(n)
-    s = _mode_coefficients(lam)[2]
+    s = beam_mode_coefficients(lam)[2]
     S, R = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
     sgn = (-1.0) ** (S + R)
     ls, lr = lam[S], lam[R]
@@ -358,7 +358,7 @@ def test_divergence_with_kelvin_voigt_converges_in_p():
     overdamped stiff modes (lambda ~ -mu omega^2, up to 1e12 here) would swamp the
     round-off of a direct companion form: the hanging pipe with a spring
     kappa = 300 at xi_s = 0.75.  p = 12 ... 40 agree to 1e-10: the eigensolver's
-    shifted companion (_quadratic_eigenvalues) has a norm of the order of the low
+    shifted companion (quadratic_eigenvalues) has a norm of the order of the low
     modes', not of 1e12, so its round-off moves v_cr by ~eps, and each v_cr is
     Brent's to xtol = 1e-12 (measured 1.8e-14 to 2.0e-14 on the Haswell,
     Sandybridge and Prescott kernels)."""

@@ -249,9 +249,9 @@ def test_main_in_a_session_with_numpy_leaves_the_environment_alone(monkeypatch):
 
     import numpy  # noqa: F401
 
-    from fempipe import cli
+    from fempipe.core import parallel
 
-    for name in cli.BLAS_THREAD_VARIABLES:
+    for name in parallel.BLAS_THREAD_VARIABLES:
         monkeypatch.delenv(name, raising=False)
-    assert cli.one_blas_thread() == ()
-    assert all(name not in os.environ for name in cli.BLAS_THREAD_VARIABLES)
+    assert parallel.one_blas_thread() == ()
+    assert all(name not in os.environ for name in parallel.BLAS_THREAD_VARIABLES)

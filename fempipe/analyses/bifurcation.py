@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fempipe.core.files import write_text
 from fempipe.core.parallel import run_tasks
-from fempipe.io import write_text
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import refuse_hysteretic
 

@@ -29,10 +29,10 @@ import time
 
 import numpy as np
 
-from fempipe import Params, PipeModel
 from fempipe.bench import child_cpu_seconds, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
-from fempipe.model.params import PAPER_CASE
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
 
 
 def _disc(spec: str):

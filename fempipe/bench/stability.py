@@ -27,7 +27,7 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classic
     ``ratio_by_round`` is the ratio within each round.
 
     BLAS threads.  ``fempipe`` sets one BLAS thread for its process
-    (:func:`fempipe.cli.one_blas_thread`), which spares it the start-up of
+    (:func:`fempipe.core.parallel.one_blas_thread`), which spares it the start-up of
     the OpenBLAS thread pools (about 0.1 CPU-s for each of numpy's and
     scipy's).  The baseline runs as written, with the default thread count
     (the variables fempipe set in this process are removed from its
@@ -40,7 +40,8 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classic
     Second case, the paper's pipe at alpha = pi/2 (a curved static state, no
     classical theory): ``fempipe critical --alpha pi/2 --v 0,10 --json``, its
     CPU seconds and its v_cr error against P3:64 (quick: P3:32), computed
-    here by :func:`fempipe.analyses.stability.critical_velocity`.
+    here by :func:`fempipe.analyses.stability.spatial_critical_velocity`, the
+    command's analysis (both planes: out of the plane first at this alpha).
 """
 
 from __future__ import annotations
@@ -71,11 +72,11 @@ def _child(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
 def _blas_env(one_thread: bool) -> dict:
     """The baseline's environment changes: one BLAS thread, or the defaults as written
     (only the variables fempipe's command line set in this process are removed)."""
-    from fempipe.cli import BLAS_SET_BY_FEMPIPE, BLAS_THREAD_VARIABLES
+    from fempipe.core import parallel
 
     if one_thread:
-        return dict.fromkeys(BLAS_THREAD_VARIABLES, "1")
-    return dict.fromkeys(BLAS_SET_BY_FEMPIPE)
+        return dict.fromkeys(parallel.BLAS_THREAD_VARIABLES, "1")
+    return dict.fromkeys(parallel.BLAS_SET_BY_FEMPIPE)
 
 
 def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
@@ -121,16 +122,17 @@ def _classical_reference() -> float:
 
 
 def _curved_reference(spec: str) -> float:
-    """v_cr of the paper's case at alpha = pi/2 on the finite elements ``spec``."""
+    """v_cr in three dimensions of the paper's case at alpha = pi/2 on the finite elements
+    ``spec`` (what ``fempipe critical`` computes without ``--planar``)."""
     import math
 
-    from fempipe import Params, PipeModel
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import spatial_critical_velocity
     from fempipe.model.discretization import discretization_from_name
-    from fempipe.model.params import PAPER_CASE
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import PAPER_CASE, Params
 
     model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
-    return float(critical_velocity(model, v_max=10.0).v_cr)
+    return float(spatial_critical_velocity(model, v_max=10.0).v_cr)
 
 
 @register("critical_vs_classical")

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import sys
 from collections.abc import Collection
+
+# The BLAS thread variables are set by main() before numpy loads;
+# fempipe.core.parallel imports only the standard library.  (Who set which
+# variable: fempipe.core.parallel.BLAS_SET_BY_FEMPIPE, rebound by the call.)
+from fempipe.core.parallel import BLAS_THREAD_VARIABLES, one_blas_thread
+
+__all__ = ["SUBCOMMANDS", "BLAS_THREAD_VARIABLES", "build_parser", "main", "one_blas_thread"]
 
 #: subcommand -> (module, one-line help).  Each module defines
 #: ``add_arguments(parser)`` and ``run(args) -> int``, and optionally
@@ -51,7 +57,7 @@ def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser
         description="Soft cantilevered pipe conveying fluid under gravity: "
         "finite elements and modal Galerkin (Chen et al. 2020, Eq. (20)).",
     )
-    from fempipe import __version__
+    from fempipe.core.version import __version__
 
     parser.add_argument("--version", action="version", version=f"fempipe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -63,41 +69,6 @@ def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run, _hint=getattr(mod, "solver_error_hint", None))
     return parser
-
-
-#: The thread-count variables of the BLAS libraries numpy and scipy load
-#: (OpenBLAS in the PyPI wheels, MKL, BLIS).
-BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
-#: Those of them that :func:`one_blas_thread` set in this process (the user had
-#: left them unset); ``fempipe bench`` unsets them again for the classical
-#: baseline it runs "as written".
-BLAS_SET_BY_FEMPIPE: tuple[str, ...] = ()
-
-
-def one_blas_thread() -> tuple[str, ...]:
-    """One BLAS thread for this process and its workers, unless the user chose otherwise.
-
-    fempipe's dense matrices are small and its parallelism is by processes
-    (:mod:`fempipe.core.parallel`, "One BLAS thread per process"); it limits the
-    BLAS to one thread around its computations already.  Setting the
-    variables of :data:`BLAS_THREAD_VARIABLES` to 1 before numpy is loaded
-    also spares the start-up of the thread pools: each OpenBLAS (numpy and
-    scipy load one each) starts its threads when it is loaded, and they
-    spin for a while before they sleep, about 0.1 CPU-s per library,
-    measured (``python -c "import scipy.linalg"``: 0.55 CPU-s, 0.36 with
-    ``OPENBLAS_NUM_THREADS=1``).  A variable the user set is left as it is,
-    and nothing is set once numpy is loaded (``main`` called from a Python
-    session): there the variables would no longer act on this process.
-    Returns the names set.
-    """
-    global BLAS_SET_BY_FEMPIPE
-    if "numpy" in sys.modules:
-        return ()
-    unset = tuple(name for name in BLAS_THREAD_VARIABLES if name not in os.environ)
-    for name in unset:
-        os.environ[name] = "1"
-    BLAS_SET_BY_FEMPIPE = unset
-    return unset
 
 
 def _subcommand(argv: list[str]) -> str | None:

@@ -57,6 +57,9 @@ if TYPE_CHECKING:
     from concurrent.futures import Executor, ProcessPoolExecutor
 
 __all__ = [
+    "BLAS_SET_BY_FEMPIPE",
+    "BLAS_THREAD_VARIABLES",
+    "one_blas_thread",
     "Interrupted",
     "interruptible",
     "process_pool",
@@ -428,3 +431,46 @@ def run_tasks(
         if own is not None:
             own.shutdown()
     return out
+
+
+#: The thread-count variables of the BLAS libraries numpy and scipy load
+#: (OpenBLAS in the PyPI wheels, MKL, BLIS).
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+#: Those of them that :func:`one_blas_thread` set in this process (the user had
+#: left them unset); ``fempipe bench`` unsets them again for the classical
+#: baseline it runs "as written".  Read it here, as
+#: ``fempipe.core.parallel.BLAS_SET_BY_FEMPIPE``, after the call: the function
+#: rebinds it.
+BLAS_SET_BY_FEMPIPE: tuple[str, ...] = ()
+
+
+def one_blas_thread() -> tuple[str, ...]:
+    """One BLAS thread for this process and its workers, unless the user chose otherwise.
+
+    fempipe's dense matrices are small and its parallelism is by processes
+    (module docstring, "One BLAS thread per process"); it limits the BLAS to
+    one thread around its computations already (:func:`single_blas_thread`).
+    Setting the variables of :data:`BLAS_THREAD_VARIABLES` to 1 before numpy
+    is loaded also spares the start-up of the thread pools: each OpenBLAS
+    (numpy and scipy load one each) starts its threads when it is loaded,
+    and they spin for a while before they sleep, about 0.1 CPU-s per
+    library, measured (``python -c "import scipy.linalg"``: 0.55 CPU-s, 0.36
+    with ``OPENBLAS_NUM_THREADS=1``).  A variable the user set is left as it
+    is, and nothing is set once numpy is loaded (the command line's ``main``
+    called from a Python session): there the variables would no longer act
+    on this process.  This module imports only the standard library, so the
+    command line calls it before anything loads numpy.
+
+    Returns
+    -------
+    tuple of str
+        The names set (also kept in :data:`BLAS_SET_BY_FEMPIPE`).
+    """
+    global BLAS_SET_BY_FEMPIPE
+    if "numpy" in sys.modules:
+        return ()
+    unset = tuple(name for name in BLAS_THREAD_VARIABLES if name not in os.environ)
+    for name in unset:
+        os.environ[name] = "1"
+    BLAS_SET_BY_FEMPIPE = unset
+    return unset

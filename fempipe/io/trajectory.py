@@ -93,7 +93,8 @@ def write_trajectory(
     -------
     Path of the .pvd file.
     """
-    from fempipe.io import write_text, write_vtu
+    from fempipe.core.files import write_text
+    from fempipe.io.meshes import write_vtu
 
     path = Path(path)
     if path.suffix != ".pvd":

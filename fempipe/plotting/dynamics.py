@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fempipe.model.discretization import Discretization
+from fempipe.plotting.style import new_axes
 
 __all__ = [
     "plot_time_traces",
@@ -32,15 +33,6 @@ __all__ = [
 ]
 
 _LABEL = {"eta_tip": r"$\eta(1)$", "X_tip": r"$X_{g}(1)$", "Z_tip": r"$Z_{g}(1)$"}
-
-
-def _axes(ax, figsize=(6, 4)):
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        # constrained layout keeps every label on the canvas.
-        _, ax = plt.subplots(figsize=figsize, layout="constrained")
-    return ax
 
 
 def _tip_series(
@@ -67,7 +59,7 @@ def plot_time_traces(disc: Discretization, alpha: float, t, q, ax=None, title: s
     t : ndarray, shape (m,)
     q : ndarray, shape (m, n)
     """
-    ax = _axes(ax, (7, 3.5))
+    ax = new_axes(ax, (7, 3.5))
     tip = _tip_series(disc, alpha, q)
     ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
     ax.plot(t, tip["Z_tip"], label=_LABEL["Z_tip"] + " (horizontal)")
@@ -93,7 +85,7 @@ def plot_phase_portrait(
     """Phase trajectory of a tip coordinate (Z_g(1) by default), Fig. 12."""
     if coordinate not in ("Z_tip", "X_tip"):
         raise ValueError(f"coordinate must be 'Z_tip' or 'X_tip', got {coordinate!r}")
-    ax = _axes(ax, (4.5, 4))
+    ax = new_axes(ax, (4.5, 4))
     tip = _tip_series(disc, alpha, q, qdot)
     dot = tip["Z_dot"] if coordinate == "Z_tip" else tip["X_dot"]
     ax.plot(tip[coordinate], dot, lw=1.0, label=label)
@@ -121,7 +113,7 @@ def plot_oscillating_shapes(
 
     from fempipe.model.kinematics import shape
 
-    ax = _axes(ax, (4.5, 5))
+    ax = new_axes(ax, (4.5, 5))
     q = np.atleast_2d(q)
     idx = np.linspace(0, q.shape[0] - 1, min(n_shapes, q.shape[0])).round().astype(int)
     cmap = plt.get_cmap("viridis")
@@ -183,7 +175,7 @@ def plot_bifurcation(
     """
     if key not in _LABEL:
         raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
-    ax = _axes(ax, (6, 4))
+    ax = new_axes(ax, (6, 4))
     style = {"up": ("o", "C0", "sweep up"), "down": ("x", "C3", "sweep down")}
     for direction, (marker, color, text) in style.items():
         pts = [p for p in points if p["direction"] == direction]

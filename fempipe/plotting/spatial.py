@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .stability import _EVENT_MARKERS, _axes, _edges
+from .style import EVENT_MARKERS, mask_edges, new_axes
 
 
 def _out_unstable_at(branch_in, branch_out) -> np.ndarray:
@@ -57,7 +57,7 @@ def plot_spatial_branches(result, ax=None, title=None):
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    ax = _axes(ax, size=(6.4, 5.0))
+    ax = new_axes(ax, size=(6.4, 5.0))
     colors = plt.cm.tab10(np.arange(10))
     outs = {b.name: b for b in result.out_of_plane.branches}
     for i, b in enumerate(result.in_plane.branches):
@@ -72,7 +72,7 @@ def plot_spatial_branches(result, ax=None, title=None):
             (unstable_in, "--", 1.3, None),
             (unstable_out, ":", 1.8, None),
         ):
-            y = np.where(mask | _edges(mask), b.theta_tip, np.nan)
+            y = np.where(mask | mask_edges(mask), b.theta_tip, np.nan)
             ax.plot(b.v, y, ls, color=c, lw=lw, label=label)
         for branch, out in ((b, False), (bo, True)):
             if branch is None:
@@ -83,7 +83,7 @@ def plot_spatial_branches(result, ax=None, title=None):
                     continue
                 j = int(np.argmin(np.abs(b.v - ev.v)))
                 ax.plot(
-                    ev.v, b.theta_tip[j], _EVENT_MARKERS.get(ev.type, "x"), color=c, mfc=fill, ms=7
+                    ev.v, b.theta_tip[j], EVENT_MARKERS.get(ev.type, "x"), color=c, mfc=fill, ms=7
                 )
     key = [
         Line2D([], [], color="0.3", ls="-", label="stable (3-D)"),

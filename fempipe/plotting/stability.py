@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .layout import declutter
+from .style import EVENT_MARKERS, mask_edges, new_axes
 
 __all__ = [
     "MODE_COLORS",
@@ -27,16 +28,6 @@ __all__ = [
     "plot_branches",
     "plot_mode_shape",
 ]
-
-_EVENT_MARKERS = {"flutter": "o", "divergence": "s", "restabilization": "^", "fold": "D"}
-
-
-def _axes(ax, size=(6.0, 4.5)):
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots(figsize=size, layout="constrained")
-    return ax
 
 
 def plot_argand(
@@ -75,7 +66,7 @@ def plot_argand(
     """
     from matplotlib.lines import Line2D
 
-    ax = _axes(ax)
+    ax = new_axes(ax)
     v = np.asarray(locus.v)
     if mark_every is None:
         span = float(v.max() - v.min()) if v.size > 1 else 1.0
@@ -246,7 +237,7 @@ def plot_stability_map(smap, ax=None, title=None):
     """
     if not getattr(smap, "planar", True):
         return _plot_spatial_map(smap, ax, title)
-    ax = _axes(ax)
+    ax = new_axes(ax)
     a = np.asarray(smap.alphas) / np.pi
     flutter, vcr = smap.array("v_flutter"), smap.array("v_cr")
     for c, (beta, gamma) in enumerate(smap.curves):
@@ -283,7 +274,7 @@ def _plot_spatial_map(smap, ax, title):
     """:func:`plot_stability_map` of a map in three dimensions (its docstring)."""
     from matplotlib.lines import Line2D
 
-    ax = _axes(ax, size=(6.4, 5.4))
+    ax = new_axes(ax, size=(6.4, 5.4))
     a = np.asarray(smap.alphas) / np.pi
     vcr = smap.array("v_cr")
     for c, (beta, gamma) in enumerate(smap.curves):
@@ -377,19 +368,19 @@ def plot_branches(result, ax=None, title=None):
     """
     import matplotlib.pyplot as plt
 
-    ax = _axes(ax)
+    ax = new_axes(ax)
     colors = plt.cm.tab10(np.arange(10))
     for i, b in enumerate(result.branches):
         c = colors[i % 10]
         stable = b.n_unstable == 0
         # Stable samples solid; unstable ones dashed, joined to their neighbours.
         ax.plot(b.v, np.where(stable, b.theta_tip, np.nan), "-", color=c, lw=1.2, label=b.name)
-        dashed = ~stable | _edges(~stable)
+        dashed = ~stable | mask_edges(~stable)
         ax.plot(b.v, np.where(dashed, b.theta_tip, np.nan), "--", color=c, lw=1.2)
         for ev in b.events:
             j = int(np.argmin(np.abs(b.v - ev.v)))
             ax.plot(
-                ev.v, b.theta_tip[j], _EVENT_MARKERS.get(ev.type, "x"), color=c, mfc="none", ms=6
+                ev.v, b.theta_tip[j], EVENT_MARKERS.get(ev.type, "x"), color=c, mfc="none", ms=6
             )
     ax.set_xlabel("v")
     ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
@@ -405,14 +396,6 @@ def plot_branches(result, ax=None, title=None):
     return ax
 
 
-def _edges(mask: np.ndarray) -> np.ndarray:
-    """Samples next to a True sample (so stable and unstable pieces join)."""
-    out = np.zeros_like(mask)
-    out[1:] |= mask[:-1]
-    out[:-1] |= mask[1:]
-    return out
-
-
 def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, title=None):
     """A mode about its static state in the global frame (gravity down the page).
 
@@ -423,7 +406,7 @@ def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, ti
     -------
     Axes
     """
-    ax = _axes(ax, size=(4.5, 5.0))
+    ax = new_axes(ax, size=(4.5, 5.0))
     ax.plot(shape.Z_static, shape.X_static, "k-", lw=2.0, label="static")
     for k, phi in enumerate(np.linspace(0.0, 2 * np.pi, phases, endpoint=False)):
         rot = np.exp(1j * phi)

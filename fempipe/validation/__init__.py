@@ -17,6 +17,11 @@ with its source.
 writes the Markdown report; ``fempipe validate`` is its command line.  Every
 case needs every part of fempipe: a module that fails to import fails the
 case loudly.
+
+This package is the suite.  The folder ``validation/`` at the top of the
+repository (not installed) holds what is made from it and around it: the
+committed report (``fempipe validate --out validation/report``), standalone
+scripts and the figure review.
 """
 
 from __future__ import annotations

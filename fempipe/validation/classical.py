@@ -79,11 +79,17 @@ Two discretisations
     power of p whatever the variant: p = 12 ... 40 agree to about 1e-12 in
     v_cr.  The reference of the validation cases.
 
+Both are in :mod:`fempipe.validation.classical_galerkin`; the closed forms
+the solvers are checked against (Greenhill's column, the tip-mass
+frequencies, the tip-spring divergence, the limit of large external damping)
+are in :mod:`fempipe.validation.classical_limits`.  This module re-exports
+them: ``fempipe.validation.classical`` is the one name to use.
+
 Both give a quadratic eigenproblem (K + lambda C + lambda^2 M) x = 0 for
 eta ~ exp(lambda tau) (Re lambda > 0 unstable; Paidoussis' omega = -i
 lambda, so his Re omega is Im lambda, the frequency), solved in first-order
 (companion) form for nu = 1/(lambda + 1), which keeps the round-off at the
-scale of the low modes (:func:`_quadratic_eigenvalues`).
+scale of the low modes (:func:`~fempipe.validation.classical_galerkin.quadratic_eigenvalues`).
 
 Hysteretic damping
 ------------------
@@ -110,14 +116,27 @@ crosses (tol |lambda| / c)^2 above it, Re lambda ~ c (v - v_cr)^(1/2)).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.linalg as sla
 from scipy.optimize import brentq
-from threadpoolctl import threadpool_limits
+
+from .classical_galerkin import (
+    BeamGalerkin,
+    LegendreGalerkin,
+    beam_mode_values,
+    cantilever_roots,
+    discretisation,
+    with_single_blas,
+)
+from .classical_limits import (
+    heavy_column_buckling,
+    large_damping_limit,
+    stiffness_roots,
+    tip_mass_frequencies,
+    tip_spring_divergence,
+)
 
 __all__ = [
     "BeamGalerkin",
@@ -135,6 +154,7 @@ __all__ = [
     "stiffness_roots",
     "tip_mass_frequencies",
     "tip_spring_divergence",
+    "with_single_blas",
 ]
 
 #: Relative size of a real part that counts as unstable (round-off of the
@@ -227,316 +247,7 @@ class StraightPipe:
 
 
 # ---------------------------------------------------------------------------
-# Clamped-free beam modes
-
-
-@functools.cache
-def cantilever_roots(n: int) -> np.ndarray:
-    """The first ``n`` roots lambda_r of cos(lambda) cosh(lambda) = -1.
-
-    Written as cos(lambda) + 1/cosh(lambda) = 0 (no overflow); root r lies
-    in [(r - 1) pi, r pi], where the left side changes sign once, and is
-    found by Brent's method to 1e-15.
-    """
-
-    def f(x):
-        return math.cos(x) + 1.0 / math.cosh(x)
-
-    roots = [brentq(f, (r - 1) * math.pi + 1e-9, r * math.pi, xtol=1e-15) for r in range(1, n + 1)]
-    return np.array(roots)
-
-
-def _mode_coefficients(lam: np.ndarray):
-    """a, b, s of phi = a e^{lam(x-1)} + b e^{-lam x} - cos(lam x) + s sin(lam x).
-
-    phi_r = cosh - cos - s (sinh - sin) with s = (cosh lam + cos lam)/(sinh lam
-    + sin lam); cosh(lam x) - s sinh(lam x) = a e^{lam (x - 1)} + b e^{-lam x}
-    with a = (1 - s) e^{lam}/2 and b = (1 + s)/2, all written with e^{-lam}.
-    """
-    em = np.exp(-lam)
-    s = (1.0 + em * em + 2.0 * np.cos(lam) * em) / (1.0 - em * em + 2.0 * np.sin(lam) * em)
-    # With the equivalent s = (sinh - sin)/(cosh + cos) (cos cosh = -1),
-    # 1 - s = (e^{-lam} + cos + sin)/(cosh + cos), hence a = (1 - s) e^{lam}/2:
-    a = (em + np.cos(lam) + np.sin(lam)) / (1.0 + em * em + 2.0 * np.cos(lam) * em)
-    b = (1.0 + s) / 2.0
-    return a, b, s
-
-
-def beam_mode_values(n: int, x: np.ndarray, derivative: int = 0) -> np.ndarray:
-    """The ``derivative``-th derivative of the first ``n`` clamped-free beam modes at ``x``.
-
-    Parameters
-    ----------
-    n : int
-        Number of modes.
-    x : array_like
-        Points in [0, 1].
-    derivative : int
-        0 ... 4.
-
-    Returns
-    -------
-    ndarray, shape (len(x), n)
-        phi_r^(k)(x_j), with int_0^1 phi_r^2 = 1 (the textbook normalisation,
-        |phi_r(1)| = 2).
-    """
-    lam = cantilever_roots(n)
-    a, b, s = _mode_coefficients(lam)
-    x = np.asarray(x, dtype=float)[:, None]
-    k = derivative
-    lx = lam * x
-    trig = -np.cos(lx + k * np.pi / 2) + s * np.sin(lx + k * np.pi / 2)
-    return lam**k * (a * np.exp(lam * (x - 1.0)) + (-1) ** k * b * np.exp(-lx) + trig)
-
-
-def _gauss(cells: int, points: int = 8):
-    g, w = np.polynomial.legendre.leggauss(points)
-    edges = np.linspace(0.0, 1.0, cells + 1)
-    h = np.diff(edges)[:, None]
-    x = (edges[:-1, None] + h * (g + 1.0) / 2.0).ravel()
-    return x, (h * w / 2.0).ravel()
-
-
-# ---------------------------------------------------------------------------
-# Discretisations
-
-
-#: Shifts of the reversed linearisation (the second if the first is an eigenvalue).
-_SHIFTS = (-1.0, -1.37)
-
-
-def _quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """The 2n roots lambda of det(lambda^2 M + lambda C + K) = 0.
-
-    With lambda = s + 1/nu (s = -1) the problem becomes
-    nu^2 K_s + nu C_s + M = 0, K_s = K + s C + s^2 M, C_s = C + 2 s M, whose
-    companion matrix [[0, I], [-K_s^-1 M, -K_s^-1 C_s]] has a norm of the
-    order of the largest 1/|lambda - s|.  Its round-off therefore stays at the
-    scale of the low modes whatever the discretisation: the direct companion
-    of (q, q') has a norm of the order of the stiffest mode's omega^2 (and
-    mu omega^2 with Kelvin-Voigt damping), whose round-off shifts an
-    eigenvalue near zero (a divergence) by 1e-6 at 40 modes and splits the
-    double eigenvalue of a coalescence (Beck's column) early.  K_s is
-    singular only if s is an eigenvalue (then the next shift is used).
-    """
-    n = M.shape[0]
-    for s in _SHIFTS:
-        Ks = K + s * C + (s * s) * M
-        try:
-            X = np.linalg.solve(Ks, np.hstack([M, C + (2.0 * s) * M]))
-        except np.linalg.LinAlgError:
-            continue
-        if np.all(np.isfinite(X)):
-            break
-    else:  # pragma: no cover - every shift an eigenvalue
-        raise np.linalg.LinAlgError("the quadratic eigenproblem has an eigenvalue at every shift")
-    A = np.zeros((2 * n, 2 * n), dtype=X.dtype)
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -X[:, :n]
-    A[n:, n:] = -X[:, n:]
-    nu = np.linalg.eigvals(A)
-    return s + 1.0 / nu[nu != 0.0]
-
-
-class BeamGalerkin:
-    """Paidoussis' Galerkin method on ``n`` clamped-free beam modes (module docstring).
-
-    Parameters
-    ----------
-    n : int
-        Number of modes.
-    """
-
-    name = "beam-mode Galerkin"
-
-    def __init__(self, n: int) -> None:
-        self.n = int(n)
-        x, w = _gauss(max(32, 4 * self.n))
-        self._x, self._w = x, w
-        phi = beam_mode_values(self.n, x)
-        d1 = beam_mode_values(self.n, x, 1)
-        d2 = beam_mode_values(self.n, x, 2)
-        pw = phi.T * w
-        self.lam4 = cantilever_roots(self.n) ** 4
-        self.gram = pw @ phi  # I to round-off
-        self.b = pw @ d1
-        self.c = pw @ d2
-        self.e_free = (d1.T * (w * (1.0 - x))) @ d1  # int (1 - xi) phi_s' phi_r'
-        self.e_tip = (d1.T * w) @ d1  # int phi_s' phi_r' (the end mass's tension)
-        self.tip = beam_mode_values(self.n, np.array([1.0]))[0]
-
-    def label(self) -> str:
-        """``beam modes N = n``."""
-        return f"beam modes N = {self.n}"
-
-    def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0):
-        """The v-independent pieces of K(v) = K0 + v^2 Kv, C(v) = C0 + v Cv and M.
-
-        Returns
-        -------
-        K0, Kv, C0, Cv, M : ndarray
-            K0 complex when ``pipe.mu_h`` > 0 (1 + i mu_h_sign mu_h).
-        """
-        L4 = np.diag(self.lam4)
-        K0 = (1.0 + 1j * mu_h_sign * pipe.mu_h) * L4 if pipe.mu_h else L4.astype(float)
-        K0 = K0 + pipe.sign * pipe.gamma * (self.e_free + pipe.end_mass * self.e_tip)
-        for kappa, xs in pipe.springs:
-            p = beam_mode_values(self.n, np.array([xs]))[0]
-            K0 = K0 + kappa * np.outer(p, p)
-        M = self.gram + pipe.end_mass * np.outer(self.tip, self.tip)
-        C0 = pipe.mu * L4 + pipe.sigma * self.gram
-        Cv = 2.0 * math.sqrt(pipe.beta) * self.b
-        return K0, self.c, C0, Cv, M
-
-    def solve(self, pieces, v: float) -> np.ndarray:
-        """All 2n eigenvalues at flow velocity ``v`` (see :func:`_quadratic_eigenvalues`)."""
-        K0, Kv, C0, Cv, M = pieces
-        return _quadratic_eigenvalues(K0 + v * v * Kv, C0 + v * Cv, M)
-
-
-def _local_basis(p: int):
-    """The C^1 basis of one element on t in [-1, 1], as Legendre series.
-
-    Four Hermite cubics (value and d/dt at t = -1, value and d/dt at t = 1)
-    and the bubbles psi_k, k = 2 ... p, with psi_k'' = P_k and
-    psi_k(-1) = psi_k'(-1) = 0; psi_k(1) = psi_k'(1) = 0 follows from the
-    orthogonality of P_k (k >= 2) to 1 and t.  The bending stiffness of the
-    bubbles is therefore diagonal, int psi_j'' psi_k'' = 2/(2k + 1) delta_jk.
-    """
-    from numpy.polynomial import Legendre, Polynomial
-
-    hermite = [
-        Polynomial([2.0, -3.0, 0.0, 1.0]) / 4.0,
-        Polynomial([1.0, -1.0, -1.0, 1.0]) / 4.0,
-        Polynomial([2.0, 3.0, 0.0, -1.0]) / 4.0,
-        Polynomial([-1.0, -1.0, 1.0, 1.0]) / 4.0,
-    ]
-    basis = [h.convert(kind=Legendre) for h in hermite]
-    basis += [Legendre.basis(k).integ(2, lbnd=-1.0) for k in range(2, p + 1)]
-    return basis
-
-
-class LegendreGalerkin:
-    """A spectral-element Galerkin method on the weak form (module docstring).
-
-    One element per segment between the springs (a spring sits on a node),
-    each carrying polynomials of degree p + 2: the Hermite cubics (eta and
-    eta' continuous at the nodes: C^1, conforming for the fourth-order
-    problem) and p - 1 bubbles whose second derivatives are the Legendre
-    polynomials P_2 ... P_p.  The integrands are polynomials, integrated
-    exactly by Gauss-Legendre with p + 6 points; the solution is analytic on
-    each element, so the error falls faster than any power of p.
-
-    Parameters
-    ----------
-    p : int
-        Highest Legendre degree of the bubbles' second derivatives (>= 2).
-    """
-
-    name = "Legendre spectral Galerkin"
-
-    def __init__(self, p: int) -> None:
-        self.p = int(p)
-        if self.p < 2:
-            raise ValueError(f"p must be >= 2, got {p}")
-        self.n = self.p
-        t, w = np.polynomial.legendre.leggauss(self.p + 6)
-        basis = _local_basis(self.p)
-        # values and t-derivatives 0..2 at the Gauss points, shape (3, q, nb)
-        self._t, self._w = t, w
-        self._vals = np.array([[b.deriv(k)(t) if k else b(t) for b in basis] for k in range(3)])
-        self._vals = self._vals.transpose(0, 2, 1)
-
-    def label(self) -> str:
-        """``Legendre p = p``."""
-        return f"Legendre p = {self.p}"
-
-    def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0):
-        """K0, Kv, C0, Cv, M as :meth:`BeamGalerkin.pencil`, in the M-orthonormal modes of
-        the bending stiffness."""
-        nodes = [0.0, *sorted({x for _, x in pipe.springs if x < 1.0}), 1.0]
-        S = len(nodes) - 1
-        nb = self.p - 1  # bubbles per element
-        ndof = 2 * S + S * nb  # (value, slope) at nodes 1..S, then the bubbles
-        Kb, Kg, Kv, Cv, Mm = (np.zeros((ndof, ndof)) for _ in range(5))
-        sg, g, G = pipe.sign, pipe.gamma, pipe.end_mass
-        for e in range(S):
-            a, b = nodes[e], nodes[e + 1]
-            h = b - a
-            xi = a + h * (self._t + 1.0) / 2.0
-            wq = self._w * h / 2.0
-            # Local functions: Hermite with xi-slope dofs (times h/2), then bubbles.
-            scale = np.ones(4 + nb)
-            scale[[1, 3]] = h / 2.0
-            f0, f1, f2 = (self._vals[k] * scale * (2.0 / h) ** k for k in range(3))
-            # Global indices of the local functions (-1: the clamped node 0).
-            left = [2 * (e - 1), 2 * (e - 1) + 1] if e > 0 else [-1, -1]
-            idx = np.array(left + [2 * e, 2 * e + 1] + list(2 * S + e * nb + np.arange(nb)))
-            keep = idx >= 0
-            ii = np.ix_(idx[keep], idx[keep])
-
-            def integral(u, vv, weight, keep=keep):
-                return ((u.T * weight) @ vv)[np.ix_(keep, keep)]
-
-            Kb[ii] += integral(f2, f2, wq)
-            Kg[ii] += integral(f1, f1, wq * (1.0 - xi + G))
-            Kv[ii] += integral(f0, f2, wq)
-            Cv[ii] += integral(f0, f1, wq)
-            Mm[ii] += integral(f0, f0, wq)
-        tip = 2 * (S - 1)  # eta(1)
-        Md = Mm.copy()
-        Mm[tip, tip] += G
-        Eb = (1.0 + 1j * mu_h_sign * pipe.mu_h) if pipe.mu_h else 1.0
-        K0 = Eb * Kb + sg * g * Kg
-        for kappa, xs in pipe.springs:
-            k = nodes.index(xs) - 1
-            K0[2 * k, 2 * k] += kappa
-        C0 = pipe.mu * Kb + pipe.sigma * Md
-        # Change to the M-orthonormal modes of (Kb, M), all of them: the same
-        # space, with the stiff bubbles decoupled from the low modes (M = I).
-        # Diagonal scaling first, for eigh's Cholesky.
-        d = 1.0 / np.sqrt(np.diag(Mm))
-        _, Q = sla.eigh(Kb * np.outer(d, d), Mm * np.outer(d, d))
-        Q = d[:, None] * Q
-        pieces = (K0, Kv, C0, 2.0 * math.sqrt(pipe.beta) * Cv, Mm)
-        return tuple(Q.T @ A @ Q for A in pieces)
-
-    solve = BeamGalerkin.solve
-
-
-def discretisation(method: str = "galerkin", n: int | None = None):
-    """A discretisation by name.
-
-    Parameters
-    ----------
-    method : {"galerkin", "legendre"}
-        Paidoussis' beam-mode Galerkin method (:class:`BeamGalerkin`, default
-        N = 20) or the spectral elements (:class:`LegendreGalerkin`, default
-        p = 24).
-    n : int, optional
-        N or p.
-    """
-    if method == "galerkin":
-        return BeamGalerkin(20 if n is None else n)
-    if method == "legendre":
-        return LegendreGalerkin(24 if n is None else n)
-    raise ValueError(f"method must be 'galerkin' or 'legendre', got {method!r}")
-
-
-# ---------------------------------------------------------------------------
 # Spectra and the critical velocity
-
-
-def _one_thread(func):
-    """Run ``func`` with one BLAS thread: the matrices are small (up to ~200),
-    and threads only contend (measured 10-20x slower on a loaded 2-core machine)."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with threadpool_limits(limits=1, user_api="blas"):
-            return func(*args, **kwargs)
-
-    return wrapper
 
 
 class _Problem:
@@ -559,7 +270,7 @@ class _Problem:
         return np.concatenate([up, up.conj(), real.astype(complex)])
 
 
-@_one_thread
+@with_single_blas
 def eigenvalues(
     pipe: StraightPipe, v: float, method: str = "galerkin", n: int | None = None
 ) -> np.ndarray:
@@ -591,7 +302,7 @@ def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
     return float(score[i]), complex(keep[i])
 
 
-@_one_thread
+@with_single_blas
 def spectral_abscissa(
     pipe: StraightPipe,
     v: float,
@@ -651,7 +362,7 @@ class Onset:
         return abs(self.lam.imag)
 
 
-@_one_thread
+@with_single_blas
 def critical_velocity(
     pipe: StraightPipe,
     v_max: float = 20.0,
@@ -714,109 +425,3 @@ def critical_velocity(
             return Onset(float(v_cr), lam, kind, label)
         v_prev = v
     return Onset(float("nan"), complex("nan"), "stable", label)
-
-
-# ---------------------------------------------------------------------------
-# Closed forms the solvers are checked against
-
-
-def _roots(f, a: float, b: float, n_grid: int = 4000, count: int | None = None) -> np.ndarray:
-    """The sign changes of ``f`` on a grid of [a, b], refined by Brent's method."""
-    x = np.linspace(a, b, n_grid)
-    y = np.array([f(t) for t in x])
-    idx = np.flatnonzero(np.sign(y[1:]) * np.sign(y[:-1]) < 0)
-    roots = [brentq(f, x[i], x[i + 1], xtol=1e-15, rtol=1e-15) for i in idx[:count]]
-    return np.array(roots)
-
-
-def tip_mass_frequencies(end_mass: float, n: int = 3) -> np.ndarray:
-    """Frequencies omega_r = l_r^2 of the gravity-free cantilever with a tip mass, at v = 0.
-
-    The roots of 1 + cos l cosh l + Gamma l (cos l sinh l - sin l cosh l) = 0
-    (Blevins, *Formulas for Natural Frequency and Mode Shape*, 1979:
-    cantilever with a mass at the free end), divided by cosh l so that
-    nothing overflows.
-    """
-
-    def f(x):
-        return (
-            1.0 / math.cosh(x)
-            + math.cos(x)
-            + end_mass * x * (math.cos(x) * math.tanh(x) - math.sin(x))
-        )
-
-    return _roots(f, 0.05, (n + 1) * math.pi, count=n) ** 2
-
-
-def heavy_column_buckling(end_mass: float) -> float:
-    """gamma at which the standing column (v = 0) buckles under its weight and the end mass's.
-
-    With y = eta' and s = 1 + Gamma - xi, the static equation integrates to
-    y'' + gamma s y = 0, y = 0 at the clamp (s = 1 + Gamma), dy/ds = 0 at the
-    free end (s = Gamma), whose solutions are y = s^(1/2) [A J_(1/3)(z) +
-    B J_(-1/3)(z)], z = (2/3) gamma^(1/2) s^(3/2).  The smallest gamma with a
-    nontrivial (A, B); for Gamma = 0 it is Greenhill's J_(-1/3)((2/3)
-    gamma^(1/2)) = 0, gamma = 7.8373.
-    """
-    from scipy.special import jv, jvp
-
-    if end_mass == 0.0:
-        return float(_roots(lambda g: jv(-1.0 / 3.0, 2.0 / 3.0 * math.sqrt(g)), 1.0, 12.0)[0])
-
-    def y(s, nu, g):
-        return math.sqrt(s) * jv(nu, 2.0 / 3.0 * math.sqrt(g) * s**1.5)
-
-    def dy(s, nu, g):
-        z = 2.0 / 3.0 * math.sqrt(g) * s**1.5
-        return jv(nu, z) / (2.0 * math.sqrt(s)) + math.sqrt(g) * s * jvp(nu, z)
-
-    def det(g):
-        top, tip = 1.0 + end_mass, end_mass
-        return y(top, 1 / 3, g) * dy(tip, -1 / 3, g) - y(top, -1 / 3, g) * dy(tip, 1 / 3, g)
-
-    return float(_roots(det, 1e-3, 8.0, count=1)[0])
-
-
-def tip_spring_divergence(kappa: float) -> float:
-    """The divergence velocity of the gravity-free cantilever with a spring kappa at its tip.
-
-    The smallest positive root of u^3 + kappa (sin u - u cos u) = 0
-    (Paidoussis 1998, Eq. (3.119), after Chen 1971a); nan when there is none
-    below 3 pi (small kappa: no divergence).  kappa -> infinity gives the
-    clamped-pinned pipe, tan u = u, u = 4.4934.
-    """
-    r = _roots(lambda u: u**3 + kappa * (math.sin(u) - u * math.cos(u)), 0.1, 3 * math.pi, count=1)
-    return float(r[0]) if r.size else float("nan")
-
-
-@_one_thread
-def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1e4) -> np.ndarray:
-    """The roots nu of K(v) x = nu M x (no damping, no Coriolis), |nu| < ``nu_max``.
-
-    When the damping is sigma times the mass (beta = 0, no Kelvin-Voigt, no end
-    mass), each nu = a + ib gives lambda^2 + sigma lambda + nu = 0, whose roots
-    are stable iff a > 0 and b^2 < sigma^2 a: the whole damped problem follows
-    from these roots, and for sigma -> infinity stability needs only a > 0.
-    """
-    K0, Kv, _, _, M = LegendreGalerkin(p).pencil(replace(pipe, sigma=0.0, mu=0.0, beta=0.0))
-    nu = np.linalg.eigvals(np.linalg.solve(M, K0 + v * v * Kv))
-    return nu[np.abs(nu) < nu_max]
-
-
-def large_damping_limit(pipe: StraightPipe, v_max: float, p: int = 16, step: float = 0.05) -> float:
-    """The v_cr of ``pipe`` as its external damping sigma -> infinity (damping = sigma M).
-
-    The first v at which a root nu of :func:`stiffness_roots` has Re nu < 0,
-    by a scan and Brent's method; nan if none up to ``v_max``.
-    """
-
-    def f(v):
-        return float(np.min(stiffness_roots(pipe, v, p).real))
-
-    vs = np.arange(0.0, v_max + step / 2, step)
-    prev = vs[0]
-    for v in vs[1:]:
-        if f(v) < 0.0:
-            return float(brentq(f, prev, v, xtol=1e-13))
-        prev = v
-    return float("nan")

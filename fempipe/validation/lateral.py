@@ -79,7 +79,7 @@ integrated exactly).  theta^s and theta^s' are the ``solve_bvp`` solution
 fempipe's P3:64 to 3e-13 at alpha = pi/2, v = 5.65).  The eigenvalues are
 those of the quadratic pencil in first-order form, in the M-orthonormal
 modes of the bending stiffness and with the shift of
-:func:`fempipe.validation.classical._quadratic_eigenvalues`.
+:func:`fempipe.validation.classical_galerkin.quadratic_eigenvalues`.
 
 Stability
 ---------
@@ -109,7 +109,8 @@ from numpy.polynomial import legendre as leg
 from scipy.optimize import brentq
 
 from .bvp import BVPSolution, solve_static_bvp
-from .classical import Onset, _local_basis, _one_thread
+from .classical import Onset
+from .classical_galerkin import legendre_local_basis, with_single_blas
 
 __all__ = [
     "HermiteSpectral",
@@ -248,7 +249,7 @@ def loaded_state(params, steps: int = 4, tol: float = BVP_TOL) -> StaticState:
 def _reference(p: int, nq: int):
     """Basis values and t-derivatives 0..2 at nq Gauss points, weights, integration matrix."""
     t, w = leg.leggauss(nq)
-    basis = _local_basis(p)
+    basis = legendre_local_basis(p)
     vals = np.array([[b.deriv(k)(t) if k else b(t) for b in basis] for k in range(3)])
     # S f = \int_{-1}^{t_i} f for f given at the Gauss points: its Legendre
     # series (exact discrete transform for degree < nq), integrated exactly.
@@ -333,7 +334,7 @@ class HermiteSpectral:
         """w(xi) of the coefficients ``a`` (xi inside the elements, or at their ends)."""
         nodes, _, _, _ = self.layout(params)
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
-        basis = _local_basis(self.p)
+        basis = legendre_local_basis(self.p)
         S, nb = nodes.size - 1, self.p - 1
         out = np.zeros(xi.shape, dtype=np.result_type(a, float))
         for i, x in enumerate(xi):
@@ -488,7 +489,7 @@ class LateralProblem:
         return eigen(K, C, M, bending=parts["bending"], vectors=vectors)
 
 
-@_one_thread
+@with_single_blas
 def critical_velocity(
     params,
     v_max: float = 20.0,

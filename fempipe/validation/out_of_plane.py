@@ -37,10 +37,11 @@ import time
 
 import numpy as np
 
+from . import out_of_plane_agreement as agreement
 from . import out_of_plane_runs as runs
 from .case import Case
 from .checks import CaseResult
-from .classical import _one_thread
+from .classical_galerkin import with_single_blas
 
 CASE = Case(
     name="out_of_plane",
@@ -81,7 +82,7 @@ CASE = Case(
 )
 
 
-@_one_thread
+@with_single_blas
 def run(quick: bool = False) -> CaseResult:
     """(a)-(e) of the module docstring."""
     t0 = time.perf_counter()
@@ -93,20 +94,20 @@ def run(quick: bool = False) -> CaseResult:
     c, t = runs.buckled_checks(ref, quick)
     checks += c
     tables += t
-    c, t, req, strong = runs.agreement_checks(ref, quick)
+    c, t, req, strong = agreement.agreement_checks(ref, quick)
     checks += c
     tables += t
     requires += req
-    checks.append(runs.inclined_variants_check(ref))
+    checks.append(agreement.inclined_variants_check(ref))
     key = ("paper", round(0.5 * math.pi, 12), 0.0)
-    c, t, req, order_curves = runs.order_checks(ref, quick, strong[key].v_cr)
+    c, t, req, order_curves = agreement.order_checks(ref, quick, strong[key].v_cr)
     checks += c
     tables += t
     requires += req
     if not quick:
-        checks.append(runs.classical_check(ref))
+        checks.append(agreement.classical_check(ref))
         requires.append("strong_vs_classical")
-    c, t, findings, explained, curves = runs.finding_checks(ref, quick)
+    c, t, findings, explained, curves = agreement.finding_checks(ref, quick)
     checks += c
     tables += t
     return CASE.result(

@@ -260,7 +260,7 @@ def _environment(workers: int) -> dict:
     import scipy
     import skfem
 
-    from .. import __version__
+    from ..core.version import __version__
 
     commit = None
     try:

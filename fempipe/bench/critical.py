@@ -1,0 +1,137 @@
+"""Benchmarks of the stability analysis in this process (registered with :mod:`fempipe.bench`).
+
+``stability_vcr``
+    v_cr at alpha = pi/2 on the default discretisation; target under 3 s.
+``critical_3d``
+    The analysis of both planes against the planar one; target ratio 1.5.
+``stability_curve``
+    v_cr(alpha) at 37 inclinations (Fig. 6) on 2 processes; target under 60 s.
+
+The whole command against a classical Galerkin is :mod:`fempipe.bench.stability`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from fempipe.bench import PAPER, best_time, register
+
+
+@register("stability_vcr")
+def bench_stability_vcr(quick: bool = False) -> dict:
+    """v_cr at alpha = pi/2 (paper's case) on the default discretisation, events to 1e-10 in v.
+
+    Target: under 3 s.  Accuracy: the relative difference to P3:32 (target 1e-6).
+    """
+    from fempipe.analyses.stability import critical_velocity, resolution
+    from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+
+    disc = parse_discretization(DEFAULT_FE)
+    resolution(disc)  # canonical modes, cached per discretisation
+    model = PipeModel(disc, Params(**PAPER))
+    t, res = best_time(lambda: critical_velocity(model, 10.0), 1 if quick else 3)
+    out = {
+        "discretization": disc.name,
+        "alpha": PAPER["alpha"],
+        "v_cr": res.v_cr,
+        "type": res.critical.type,
+        "mode": res.critical.mode,
+        "frequency": res.critical.frequency,
+        "n_spectra": res.n_spectra,
+        "seconds": t,
+        "target_seconds": 3.0,
+    }
+    if not quick:
+        fine = critical_velocity(PipeModel(FiniteElement(32, 3), Params(**PAPER)), 10.0)
+        out["v_cr_P3_32"] = fine.v_cr
+        out["rel_diff_vs_P3_32"] = abs(res.v_cr / fine.v_cr - 1.0)
+    return out
+
+
+@register("critical_3d")
+def bench_critical_3d(quick: bool = False) -> dict:
+    """The analysis of ``fempipe critical`` in three dimensions against the planar one.
+
+    At alpha = pi/4, pi/2, 3pi/4 and pi (paper's case, default discretisation,
+    v in [0, 10], branches followed) the planar analysis
+    (:func:`~fempipe.analyses.stability.stability_analysis`, the command before the
+    out-of-plane analysis existed, and ``--planar``) and the analysis of
+    both planes (:func:`~fempipe.analyses.stability.spatial_stability_analysis`) are
+    timed in turn, in CPU seconds of this process (one BLAS thread), each the
+    minimum of its repeats.  Target: the ratio of the sums at most 1.5.
+    """
+    from fempipe.analyses.stability import (
+        resolution,
+        spatial_stability_analysis,
+        stability_analysis,
+    )
+    from fempipe.model.discretization import DEFAULT_FE, parse_discretization
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+
+    disc = parse_discretization(DEFAULT_FE)
+    resolution(disc)
+    repeats = 1 if quick else 3
+    cases = []
+    for alpha in (math.pi / 4, math.pi / 2, 3 * math.pi / 4, math.pi):
+        model = PipeModel(disc, Params(**{**PAPER, "alpha": alpha}))
+        t_in, t_3d, res3 = math.inf, math.inf, None
+        for _ in range(repeats):
+            t0 = time.process_time()
+            planar = stability_analysis(model, 10.0)
+            t_in = min(t_in, time.process_time() - t0)
+            t0 = time.process_time()
+            res3 = spatial_stability_analysis(model, 10.0)
+            t_3d = min(t_3d, time.process_time() - t0)
+        cases.append(
+            {
+                "alpha": alpha,
+                "v_cr_planar": planar.v_cr,
+                "v_cr_in_plane": res3.in_plane.v_cr,
+                "v_cr_out_of_plane": res3.out_of_plane.v_cr,
+                "first_plane": None if res3.critical is None else res3.critical.plane,
+                "cpu_planar": t_in,
+                "cpu_3d": t_3d,
+                "ratio": t_3d / t_in,
+            }
+        )
+    total_in = sum(c["cpu_planar"] for c in cases)
+    total_3d = sum(c["cpu_3d"] for c in cases)
+    return {
+        "discretization": disc.name,
+        "cases": cases,
+        "cpu_planar": total_in,
+        "cpu_3d": total_3d,
+        "ratio": total_3d / total_in,
+        "target_ratio": 1.5,
+    }
+
+
+@register("stability_curve")
+def bench_stability_curve(quick: bool = False) -> dict:
+    """v_cr(alpha) at 37 inclinations 0..pi (Fig. 6) on 2 processes; target under 60 s."""
+    from fempipe.analyses.stability import stability_map
+    from fempipe.model.discretization import DEFAULT_FE, parse_discretization
+
+    n_alpha = 5 if quick else 37
+    alphas = np.linspace(0.0, math.pi, n_alpha)
+    disc = parse_discretization(DEFAULT_FE)
+    t0 = time.perf_counter()
+    smap = stability_map(
+        disc, alphas, [(PAPER["beta"], PAPER["gamma"])], mu=PAPER["mu"], v_max=10.0, workers=2
+    )
+    t = time.perf_counter() - t0
+    rows = smap.rows()
+    return {
+        "n_alpha": n_alpha,
+        "workers": 2,
+        "seconds": t,
+        "target_seconds": 60.0,
+        "failed_points": sum(1 for r in rows if r["error"]),
+        "table": [{k: r[k] for k in ("alpha", "v_cr", "type", "mode", "v_flutter")} for r in rows],
+    }

@@ -1,0 +1,97 @@
+"""The layers of the package, lowest first: a module imports from its own layer or lower ones.
+
+This module is data (and one lookup function): ``tests/test_layering.py``
+reads it without importing fempipe, parses every module of the package and
+fails on an import of a higher layer, on a private name (``_x``) imported
+from another module, and on a cycle of module-level imports.
+
+The layers, in rank order (:data:`LAYERS`):
+
+``core``
+    No physics, nothing of the pipe: errors, worker processes and BLAS
+    limits, Brent's root finder, the optimal assignment of eigenvalues,
+    atomic files and strict JSON, the version, this list.
+``model``
+    The pipe: parameters, quadrature, the discretisations (finite elements,
+    modal bases), the operators of Eq. (20) (residual, Jacobian, mass,
+    damping), the motion out of the plane, kinematics (Eq. (28)), the
+    projection between discretisations.
+``solvers``
+    Problem-agnostic numerics on a model: Newton, pseudo-arclength
+    continuation, the Radau IIA integrator.
+``analyses``
+    What a user asks of the pipe, in their own order (a later one may use an
+    earlier one): statics; linear stability; time integration; limit cycles;
+    bifurcation diagrams and branches of periodic orbits.  Each of these is
+    a layer of its own below (``analyses.statics`` ... ``analyses.branches``);
+    the package ``fempipe.analyses`` itself and an analysis not listed yet
+    rank with the statics.
+``studies``
+    Studies over many analyses: convergence, the comparison with a user's
+    results, the error estimate.
+``io``
+    Files: CSV tables, VTU shapes and trajectories, figures (the atomic
+    writers themselves are in the core).
+``plotting``
+    matplotlib figures of the results.
+``validation``
+    The validation suite (``fempipe validate``): one case per figure of the
+    paper, with its checks and references, and the independent classical
+    and strong-form solvers it compares with.
+``bench``
+    Performance benchmarks (``fempipe bench``).
+``cli``
+    The command line, one module per subcommand.
+``facade``
+    ``fempipe`` itself (the public names, loaded on first use) and
+    ``python -m fempipe``.  Nothing in the package imports it.
+"""
+
+from __future__ import annotations
+
+__all__ = ["FACADE", "LAYERS", "layer_of"]
+
+#: (layer name, module prefixes) in rank order, lowest first.  A module belongs
+#: to the layer of its longest matching prefix (the prefix itself or a module
+#: below it: ``fempipe.model`` holds ``fempipe.model.operators``).
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("core", ("fempipe.core",)),
+    ("model", ("fempipe.model",)),
+    ("solvers", ("fempipe.solvers",)),
+    ("analyses.statics", ("fempipe.analyses", "fempipe.analyses.statics")),
+    ("analyses.stability", ("fempipe.analyses.stability",)),
+    ("analyses.dynamics", ("fempipe.analyses.dynamics",)),
+    ("analyses.limit_cycle", ("fempipe.analyses.limit_cycle",)),
+    ("analyses.branches", ("fempipe.analyses.bifurcation", "fempipe.analyses.periodic")),
+    ("studies", ("fempipe.studies",)),
+    ("io", ("fempipe.io",)),
+    ("plotting", ("fempipe.plotting",)),
+    ("validation", ("fempipe.validation",)),
+    ("bench", ("fempipe.bench",)),
+    ("cli", ("fempipe.cli",)),
+    ("facade", ()),
+)
+
+#: The modules of the facade, matched exactly (every module starts with ``fempipe``).
+FACADE: tuple[str, ...] = ("fempipe", "fempipe.__main__")
+
+
+def layer_of(module: str) -> tuple[int, str] | None:
+    """The (rank, name) of the layer of ``module`` (a dotted name), or None if it has none.
+
+    Examples
+    --------
+    >>> layer_of("fempipe.model.operators")
+    (1, 'model')
+    >>> layer_of("fempipe")
+    (14, 'facade')
+    """
+    if module in FACADE:
+        return len(LAYERS) - 1, LAYERS[-1][0]
+    best: tuple[int, int, str] | None = None  # (prefix length, rank, name)
+    for rank, (name, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if module == prefix or module.startswith(prefix + "."):
+                if best is None or len(prefix) > best[0]:
+                    best = (len(prefix), rank, name)
+    return None if best is None else (best[1], best[2])

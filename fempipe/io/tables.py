@@ -1,0 +1,258 @@
+"""CSV tables: one row per result, a header cell ``name [unit]`` per column.
+
+The convention (the units ``[L]``, ``[T]``, ``[rad]``, ``[1]``, ``[-]``, ...)
+is described in :mod:`fempipe.io`; the unit of every column is stated once,
+in :data:`CSV_UNITS`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from fempipe.core.files import write_text
+
+__all__ = ["CSV_UNITS", "ERROR_SUFFIX", "csv_header", "write_csv", "read_csv"]
+
+
+#: The unit of every CSV column (module docstring, "CSV headers and units").
+CSV_UNITS: Mapping[str, str] = {
+    # flow, parameters and continuation values
+    "v": "1",
+    "alpha": "rad",
+    "beta": "1",
+    "gamma": "1",
+    "mu": "1",
+    "U": "m/s",
+    # tip of a static state (fempipe static)
+    "theta_tip": "rad",
+    "eta_tip": "L",
+    "X_tip": "L",
+    "Z_tip": "L",
+    "varsigma_tip": "L",
+    "tip_drop": "L",
+    "X_tip_m": "m",
+    "Z_tip_m": "m",
+    "eta_tip_m": "m",
+    "varsigma_tip_m": "m",
+    "tip_drop_mm": "mm",
+    "newton_iterations": "-",
+    "gravity_loading_iterations": "-",
+    "residual_norm": "1",
+    "includes_gravity_loading": "-",
+    "stable": "-",
+    # stability in three dimensions: the verdict or value of each plane (in the
+    # plane of the static state or out of it), and which plane
+    "stable_in_plane": "-",
+    "stable_out_of_plane": "-",
+    "plane": "-",
+    # eigenvalues (fempipe spectrum): lambda and Omega = -i lambda per unit tau
+    "mode": "-",
+    "lambda_re": "1/T",
+    "lambda_im": "1/T",
+    "Omega_re": "1/T",
+    "Omega_im": "1/T",
+    "eigenvalue_index": "-",
+    "pair_member": "-",
+    "system_stable": "-",
+    # stability events (fempipe critical) and the stability map
+    "type": "-",
+    "branch": "-",
+    "frequency": "1/T",
+    "stable_before": "-",
+    "stable_after": "-",
+    "at_start": "-",
+    "eigenvalue_re": "1/T",
+    "eigenvalue_im": "1/T",
+    "v_cr": "1",
+    "v_flutter": "1",
+    "U_cr": "m/s",
+    "v_cr_in_plane": "1",
+    "v_cr_out_of_plane": "1",
+    "frequency_in_plane": "1/T",
+    "frequency_out_of_plane": "1/T",
+    "type_in_plane": "-",
+    "type_out_of_plane": "-",
+    "mode_in_plane": "-",
+    "mode_out_of_plane": "-",
+    "v_flutter_in_plane": "1",
+    "v_flutter_out_of_plane": "1",
+    "first_plane": "-",
+    "U_cr_in_plane": "m/s",
+    "U_cr_out_of_plane": "m/s",
+    "error": "-",
+    # the tip's time series (fempipe simulate)
+    "tau": "T",
+    "theta_tip_rate": "rad/T",
+    "eta_tip_rate": "L/T",
+    "X_tip_rate": "L/T",
+    "Z_tip_rate": "L/T",
+    # convergence studies (fempipe convergence): one row per member of a family,
+    # the value of the quantity under its own name and its distance to the
+    # reference as <quantity>_error
+    "family": "-",
+    "n": "-",
+    "dofs": "-",
+    "lc_amplitude": "L",
+    "lc_period": "T",
+    "theta_tip_error": "rad",
+    "X_tip_error": "L",
+    "Z_tip_error": "L",
+    "eta_tip_error": "L",
+    "v_cr_error": "1",
+    "frequency_error": "1/T",
+    "eigenvalue_error": "1/T",
+    "lc_amplitude_error": "L",
+    "lc_period_error": "T",
+    # comparisons of a user's values (fempipe compare): one row per data row and
+    # quantity; user, fempipe, difference, error_estimate and refined are in the
+    # unit of the row's quantity, stated in its column "unit", so their header
+    # carries "-"
+    "row": "-",
+    "label": "-",
+    "quantity": "-",
+    "unit": "-",
+    "user": "-",
+    "fempipe": "-",
+    "difference": "-",
+    "relative_difference": "1",
+    "error_estimate": "-",
+    "resolved": "-",
+    "refined": "-",
+    "v_min": "1",
+    "v_max": "1",
+    "U_min": "m/s",
+    "U_max": "m/s",
+    "failure": "-",
+    "note": "-",
+}
+
+_HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+#: The suffix of the column of an error estimate (``fempipe COMMAND --error-estimate``):
+#: ``X_tip_error`` has the unit of ``X_tip``.
+ERROR_SUFFIX = "_error"
+
+
+def csv_header(name: str) -> str:
+    """The header cell of column ``name``: ``"name [unit]"`` with the unit of :data:`CSV_UNITS`.
+
+    The error estimate ``<name>_error`` of a column (:data:`ERROR_SUFFIX`)
+    has the unit of ``<name>``.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` has no unit in :data:`CSV_UNITS`.
+    """
+    unit = CSV_UNITS.get(name)
+    if unit is None and name.endswith(ERROR_SUFFIX):
+        # The error estimate of a column has the unit of the column.
+        unit = CSV_UNITS.get(name.removesuffix(ERROR_SUFFIX))
+    if unit is None:
+        raise ValueError(f"CSV column {name!r} has no unit: add it to fempipe.io.CSV_UNITS")
+    return f"{name} [{unit}]"
+
+
+def write_csv(
+    path: str | os.PathLike,
+    rows: Sequence[Mapping],
+    columns: Sequence[str] | None = None,
+) -> Path:
+    """Write a list of flat dicts as CSV with a header, atomically.
+
+    The header cells are :func:`csv_header` of the keys (``theta_tip [rad]``);
+    floats are written with all their digits (``repr``), ``None`` as an
+    empty cell.
+
+    Parameters
+    ----------
+    rows : sequence of mapping
+        One dict per row; missing keys give empty cells.
+    columns : sequence of str, optional
+        Column order (default: keys in order of first appearance).
+
+    Raises
+    ------
+    ValueError
+        If a column has no unit in :data:`CSV_UNITS` (nothing is written).
+    """
+    if columns is None:
+        columns = []
+        for row in rows:
+            columns.extend(k for k in row if k not in columns)
+    header = [csv_header(k) for k in columns]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for row in rows:
+        w.writerow([_csv_cell(row.get(k)) for k in columns])
+    return write_text(path, buf.getvalue())
+
+
+def read_csv(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """The columns of a CSV file written by :func:`write_csv`, by bare name.
+
+    Each header cell must be ``name [unit]`` (module docstring); the unit is
+    dropped, so ``read_csv(path)["X_tip"]`` is the column ``X_tip [L]``.  A
+    column of ``True``/``False`` becomes a bool array, one of integers an int
+    array, one of numbers a float array (an empty cell is NaN) and any other
+    a str array.
+
+    Raises
+    ------
+    ValueError
+        If a header cell has no unit or a name appears twice.
+
+    Examples
+    --------
+    >>> tip = read_csv("out/tip.csv")   # doctest: +SKIP
+    >>> tip["tau"], tip["X_tip"]        # doctest: +SKIP
+    """
+    with open(path, newline="", encoding="utf-8") as f:
+        table = list(csv.reader(f))
+    if not table:
+        raise ValueError(f"{path}: empty file, no header")
+    names = []
+    for cell in table[0]:
+        m = _HEADER_CELL.fullmatch(cell)
+        if m is None:
+            raise ValueError(f"{path}: header cell {cell!r} is not 'name [unit]'")
+        if m["name"] in names:
+            raise ValueError(f"{path}: column {m['name']!r} appears twice")
+        names.append(m["name"])
+    body = table[1:]
+    for i, row in enumerate(body, start=2):
+        if len(row) != len(names):
+            raise ValueError(f"{path}, line {i}: {len(row)} cells, the header has {len(names)}")
+    return {name: _csv_column([row[j] for row in body]) for j, name in enumerate(names)}
+
+
+def _csv_column(cells: list[str]) -> np.ndarray:
+    """One column of :func:`read_csv`: bool, int, float (empty is NaN) or str, the first that fits."""
+    if cells and all(c in ("True", "False") for c in cells):
+        return np.array([c == "True" for c in cells], dtype=bool)
+    if cells and all(_INTEGER.fullmatch(c) for c in cells):
+        return np.array([int(c) for c in cells], dtype=int)
+    try:
+        return np.array([float(c) if c else math.nan for c in cells], dtype=float)
+    except ValueError:
+        return np.array(cells, dtype=str)
+
+
+def _csv_cell(x):
+    """One cell of :func:`write_csv`: ``None`` empty, floats with all their digits."""
+    if x is None:
+        return ""
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x))  # round-trip precision
+    return x

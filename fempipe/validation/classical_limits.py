@@ -1,0 +1,134 @@
+"""Closed forms the classical solvers (:mod:`fempipe.validation.classical`) are checked against.
+
+Blevins's tip-mass frequencies, Greenhill's heavy column with an end weight
+(Bessel functions), the divergence of a pipe with a tip spring (Chen,
+Paidoussis Eq. (3.119)) and the limit of large external damping.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .classical_galerkin import LegendreGalerkin, with_single_blas
+
+if TYPE_CHECKING:
+    from .classical import StraightPipe
+
+__all__ = [
+    "heavy_column_buckling",
+    "large_damping_limit",
+    "stiffness_roots",
+    "tip_mass_frequencies",
+    "tip_spring_divergence",
+]
+
+
+# ---------------------------------------------------------------------------
+# Closed forms the solvers are checked against
+
+
+def _roots(f, a: float, b: float, n_grid: int = 4000, count: int | None = None) -> np.ndarray:
+    """The sign changes of ``f`` on a grid of [a, b], refined by Brent's method."""
+    x = np.linspace(a, b, n_grid)
+    y = np.array([f(t) for t in x])
+    idx = np.flatnonzero(np.sign(y[1:]) * np.sign(y[:-1]) < 0)
+    roots = [brentq(f, x[i], x[i + 1], xtol=1e-15, rtol=1e-15) for i in idx[:count]]
+    return np.array(roots)
+
+
+def tip_mass_frequencies(end_mass: float, n: int = 3) -> np.ndarray:
+    """Frequencies omega_r = l_r^2 of the gravity-free cantilever with a tip mass, at v = 0.
+
+    The roots of 1 + cos l cosh l + Gamma l (cos l sinh l - sin l cosh l) = 0
+    (Blevins, *Formulas for Natural Frequency and Mode Shape*, 1979:
+    cantilever with a mass at the free end), divided by cosh l so that
+    nothing overflows.
+    """
+
+    def f(x):
+        return (
+            1.0 / math.cosh(x)
+            + math.cos(x)
+            + end_mass * x * (math.cos(x) * math.tanh(x) - math.sin(x))
+        )
+
+    return _roots(f, 0.05, (n + 1) * math.pi, count=n) ** 2
+
+
+def heavy_column_buckling(end_mass: float) -> float:
+    """gamma at which the standing column (v = 0) buckles under its weight and the end mass's.
+
+    With y = eta' and s = 1 + Gamma - xi, the static equation integrates to
+    y'' + gamma s y = 0, y = 0 at the clamp (s = 1 + Gamma), dy/ds = 0 at the
+    free end (s = Gamma), whose solutions are y = s^(1/2) [A J_(1/3)(z) +
+    B J_(-1/3)(z)], z = (2/3) gamma^(1/2) s^(3/2).  The smallest gamma with a
+    nontrivial (A, B); for Gamma = 0 it is Greenhill's J_(-1/3)((2/3)
+    gamma^(1/2)) = 0, gamma = 7.8373.
+    """
+    from scipy.special import jv, jvp
+
+    if end_mass == 0.0:
+        return float(_roots(lambda g: jv(-1.0 / 3.0, 2.0 / 3.0 * math.sqrt(g)), 1.0, 12.0)[0])
+
+    def y(s, nu, g):
+        return math.sqrt(s) * jv(nu, 2.0 / 3.0 * math.sqrt(g) * s**1.5)
+
+    def dy(s, nu, g):
+        z = 2.0 / 3.0 * math.sqrt(g) * s**1.5
+        return jv(nu, z) / (2.0 * math.sqrt(s)) + math.sqrt(g) * s * jvp(nu, z)
+
+    def det(g):
+        top, tip = 1.0 + end_mass, end_mass
+        return y(top, 1 / 3, g) * dy(tip, -1 / 3, g) - y(top, -1 / 3, g) * dy(tip, 1 / 3, g)
+
+    return float(_roots(det, 1e-3, 8.0, count=1)[0])
+
+
+def tip_spring_divergence(kappa: float) -> float:
+    """The divergence velocity of the gravity-free cantilever with a spring kappa at its tip.
+
+    The smallest positive root of u^3 + kappa (sin u - u cos u) = 0
+    (Paidoussis 1998, Eq. (3.119), after Chen 1971a); nan when there is none
+    below 3 pi (small kappa: no divergence).  kappa -> infinity gives the
+    clamped-pinned pipe, tan u = u, u = 4.4934.
+    """
+    r = _roots(lambda u: u**3 + kappa * (math.sin(u) - u * math.cos(u)), 0.1, 3 * math.pi, count=1)
+    return float(r[0]) if r.size else float("nan")
+
+
+@with_single_blas
+def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1e4) -> np.ndarray:
+    """The roots nu of K(v) x = nu M x (no damping, no Coriolis), |nu| < ``nu_max``.
+
+    When the damping is sigma times the mass (beta = 0, no Kelvin-Voigt, no end
+    mass), each nu = a + ib gives lambda^2 + sigma lambda + nu = 0, whose roots
+    are stable iff a > 0 and b^2 < sigma^2 a: the whole damped problem follows
+    from these roots, and for sigma -> infinity stability needs only a > 0.
+    """
+    K0, Kv, _, _, M = LegendreGalerkin(p).pencil(replace(pipe, sigma=0.0, mu=0.0, beta=0.0))
+    nu = np.linalg.eigvals(np.linalg.solve(M, K0 + v * v * Kv))
+    return nu[np.abs(nu) < nu_max]
+
+
+def large_damping_limit(pipe: StraightPipe, v_max: float, p: int = 16, step: float = 0.05) -> float:
+    """The v_cr of ``pipe`` as its external damping sigma -> infinity (damping = sigma M).
+
+    The first v at which a root nu of :func:`stiffness_roots` has Re nu < 0,
+    by a scan and Brent's method; nan if none up to ``v_max``.
+    """
+
+    def f(v):
+        return float(np.min(stiffness_roots(pipe, v, p).real))
+
+    vs = np.arange(0.0, v_max + step / 2, step)
+    prev = vs[0]
+    for v in vs[1:]:
+        if f(v) < 0.0:
+            return float(brentq(f, prev, v, xtol=1e-13))
+        prev = v
+    return float("nan")
