@@ -39,81 +39,15 @@ layer_of = _LAYERS["layer_of"]
 REGISTRIES = frozenset({"SUBCOMMANDS", "BENCHMARK_MODULES", "CASES", "_LAZY"})
 
 #: (a) Imports of a higher layer: (importer, imported module).
-ALLOWED_UPWARD: frozenset[tuple[str, str]] = frozenset(
-    {
-        # write_text moves to fempipe.core.files (fempipe.io re-exports it);
-        # the import line of periodic changes with the restructure of periodic.
-        ("fempipe.analyses.periodic", "fempipe.io"),
-    }
-)
+ALLOWED_UPWARD: frozenset[tuple[str, str]] = frozenset()
 
 #: (b) Private names of another module: (importer, defining module, name).
 ALLOWED_PRIVATE: frozenset[tuple[str, str, str]] = frozenset(
     {
-        # public names of fempipe.analyses.statics / solvers.newton (force_balance, linear_solve)
-        ("fempipe.solvers.continuation", "fempipe.solvers.newton", "_balance"),
-        ("fempipe.solvers.continuation", "fempipe.solvers.newton", "_solve"),
-        # the classification of a spectrum, public in the stability package
-        (
-            "fempipe.analyses.stability.analysis",
-            "fempipe.analyses.stability.events",
-            "_BranchAnalysis",
-        ),
-        ("fempipe.analyses.stability.criterion", "fempipe.analyses.stability.linear", "_analyse"),
-        ("fempipe.analyses.stability.criterion", "fempipe.analyses.stability.linear", "_Halves"),
-        ("fempipe.analyses.stability.criterion", "fempipe.analyses.stability.linear", "_match"),
-        ("fempipe.analyses.stability.criterion", "fempipe.analyses.stability.linear", "_relevant"),
-        ("fempipe.analyses.stability.events", "fempipe.analyses.stability.linear", "_Eig"),
-        ("fempipe.analyses.stability.events", "fempipe.analyses.stability.tracking", "_complete"),
-        ("fempipe.analyses.stability.events", "fempipe.analyses.stability.tracking", "_l2"),
-        (
-            "fempipe.analyses.stability.events",
-            "fempipe.analyses.stability.tracking",
-            "_reference_tracker",
-        ),
-        (
-            "fempipe.analyses.stability.events",
-            "fempipe.analyses.stability.tracking",
-            "_TrackedPath",
-        ),
-        ("fempipe.analyses.stability.events", "fempipe.analyses.stability.tracking", "_Tracker"),
-        (
-            "fempipe.analyses.stability.events",
-            "fempipe.analyses.stability.analysis",
-            "_ChunkedBranch",
-        ),
-        ("fempipe.analyses.stability.spectrum", "fempipe.analyses.stability.linear", "_analyse"),
-        ("fempipe.analyses.stability.spectrum", "fempipe.analyses.stability.linear", "_eig_dict"),
-        ("fempipe.analyses.stability.spectrum", "fempipe.analyses.stability.linear", "_order"),
-        (
-            "fempipe.analyses.stability.spectrum",
-            "fempipe.analyses.stability.tracking",
-            "_reference_tracker",
-        ),
-        ("fempipe.analyses.stability.tracking", "fempipe.analyses.stability.linear", "_analyse"),
-        (
-            "fempipe.analyses.stability.tracking",
-            "fempipe.analyses.stability.linear",
-            "_analyse_inherited",
-        ),
-        (
-            "fempipe.analyses.stability.tracking",
-            "fempipe.analyses.stability.linear",
-            "_canonical_labels",
-        ),
-        ("fempipe.analyses.stability.tracking", "fempipe.analyses.stability.linear", "_Eig"),
-        ("fempipe.analyses.stability.tracking", "fempipe.analyses.stability.linear", "_eig_dict"),
-        ("fempipe.analyses.stability.tracking", "fempipe.analyses.stability.linear", "_order"),
         # public state_distance of the limit cycles
         ("fempipe.cli.simulate", "fempipe.analyses.limit_cycle", "_state_distance"),
         # public static_state of the convergence study
         ("fempipe.cli.convergence", "fempipe.studies.convergence", "_static_tip_state"),
-        # public check_param, check_v and the limits' reasons of the CLI's parser
-        ("fempipe.cli.compare", "fempipe.cli.parsing", "_check_param"),
-        ("fempipe.cli.compare", "fempipe.cli.parsing", "_check_v"),
-        ("fempipe.cli.compare", "fempipe.cli.parsing", "_WHY_GAMMA"),
-        ("fempipe.cli.compare", "fempipe.cli.parsing", "_WHY_MU"),
-        ("fempipe.cli.compare", "fempipe.cli.parsing", "_WHY_V"),
     }
 )
 
