@@ -11,8 +11,8 @@ from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
 from fempipe.analyses.limit_cycle import TIP_KEYS
-from fempipe.core.parallel import run_tasks
 from fempipe.core.files import write_text
+from fempipe.core.parallel import run_tasks
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import refuse_hysteretic
 
