@@ -256,9 +256,9 @@ def test_the_gitignore_reader_can_say_no():
 
 
 def test_bench_prints_nested_results_as_lines_not_a_python_dict(capsys):
-    from fempipe.cli.bench import _print
+    from fempipe.cli.bench import print_results
 
-    _print(
+    print_results(
         {
             "environment": {"python": "3"},
             "quick": True,

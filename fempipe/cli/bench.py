@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json_dumps(result))
     else:
-        _print(result)
+        print_results(result)
     if output is not None:
         output.report(args)
     return 0
@@ -81,7 +81,9 @@ def _print_value(key: str, value, indent: str) -> None:
         print(f"{indent}{key}: {_fmt(value)}")
 
 
-def _print(result: dict) -> None:
+def print_results(result: dict) -> None:
+    """Print a ``fempipe bench`` result: the environment, then each benchmark's values
+    one per line and its table in aligned columns."""
     env = result["environment"]
     print("environment: " + ", ".join(f"{k} {v}" for k, v in env.items()))
     if result["quick"]:

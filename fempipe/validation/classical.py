@@ -122,13 +122,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import brentq
 
+from fempipe.core.parallel import single_blas
+
 from .classical_galerkin import (
     BeamGalerkin,
     LegendreGalerkin,
     beam_mode_values,
     cantilever_roots,
     discretisation,
-    with_single_blas,
 )
 from .classical_limits import (
     heavy_column_buckling,
@@ -154,7 +155,6 @@ __all__ = [
     "stiffness_roots",
     "tip_mass_frequencies",
     "tip_spring_divergence",
-    "with_single_blas",
 ]
 
 #: Relative size of a real part that counts as unstable (round-off of the
@@ -270,7 +270,7 @@ class _Problem:
         return np.concatenate([up, up.conj(), real.astype(complex)])
 
 
-@with_single_blas
+@single_blas
 def eigenvalues(
     pipe: StraightPipe, v: float, method: str = "galerkin", n: int | None = None
 ) -> np.ndarray:
@@ -302,7 +302,7 @@ def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
     return float(score[i]), complex(keep[i])
 
 
-@with_single_blas
+@single_blas
 def spectral_abscissa(
     pipe: StraightPipe,
     v: float,
@@ -362,7 +362,7 @@ class Onset:
         return abs(self.lam.imag)
 
 
-@with_single_blas
+@single_blas
 def critical_velocity(
     pipe: StraightPipe,
     v_max: float = 20.0,

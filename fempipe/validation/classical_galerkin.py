@@ -18,8 +18,6 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import brentq
 
-from fempipe.core.parallel import single_blas_thread
-
 if TYPE_CHECKING:
     from .classical import StraightPipe
 
@@ -33,7 +31,6 @@ __all__ = [
     "gauss_cells",
     "legendre_local_basis",
     "quadratic_eigenvalues",
-    "with_single_blas",
 ]
 
 
@@ -332,20 +329,3 @@ def discretisation(method: str = "galerkin", n: int | None = None):
     if method == "legendre":
         return LegendreGalerkin(24 if n is None else n)
     raise ValueError(f"method must be 'galerkin' or 'legendre', got {method!r}")
-
-
-def with_single_blas(func):
-    """Decorator: run ``func`` with one BLAS thread.
-
-    The matrices of the classical solvers (and of :mod:`fempipe.validation.lateral`)
-    are small (up to ~200), and threads only contend (measured 10-20x slower on a
-    loaded 2-core machine).  The limit is
-    :func:`fempipe.core.parallel.single_blas_thread`, fempipe's own.
-    """
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with single_blas_thread():
-            return func(*args, **kwargs)
-
-    return wrapper

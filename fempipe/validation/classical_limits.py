@@ -14,7 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import brentq
 
-from .classical_galerkin import LegendreGalerkin, with_single_blas
+from fempipe.core.parallel import single_blas
+
+from .classical_galerkin import LegendreGalerkin
 
 if TYPE_CHECKING:
     from .classical import StraightPipe
@@ -101,7 +103,7 @@ def tip_spring_divergence(kappa: float) -> float:
     return float(r[0]) if r.size else float("nan")
 
 
-@with_single_blas
+@single_blas
 def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1e4) -> np.ndarray:
     """The roots nu of K(v) x = nu M x (no damping, no Coriolis), |nu| < ``nu_max``.
 

@@ -108,9 +108,11 @@ import scipy.linalg as sla
 from numpy.polynomial import legendre as leg
 from scipy.optimize import brentq
 
+from fempipe.core.parallel import single_blas
+
 from .bvp import BVPSolution, solve_static_bvp
 from .classical import Onset
-from .classical_galerkin import legendre_local_basis, with_single_blas
+from .classical_galerkin import legendre_local_basis
 
 __all__ = [
     "HermiteSpectral",
@@ -489,7 +491,7 @@ class LateralProblem:
         return eigen(K, C, M, bending=parts["bending"], vectors=vectors)
 
 
-@with_single_blas
+@single_blas
 def critical_velocity(
     params,
     v_max: float = 20.0,

@@ -37,11 +37,12 @@ import time
 
 import numpy as np
 
+from fempipe.core.parallel import single_blas
+
 from . import out_of_plane_agreement as agreement
 from . import out_of_plane_runs as runs
 from .case import Case
 from .checks import CaseResult
-from .classical_galerkin import with_single_blas
 
 CASE = Case(
     name="out_of_plane",
@@ -82,7 +83,7 @@ CASE = Case(
 )
 
 
-@with_single_blas
+@single_blas
 def run(quick: bool = False) -> CaseResult:
     """(a)-(e) of the module docstring."""
     t0 = time.perf_counter()

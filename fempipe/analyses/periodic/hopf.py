@@ -1,7 +1,7 @@
 """Hopf points of the static branch, where branches of periodic orbits start,
 and the equilibria of the primary branch with their linear stability.
 
-The critical eigenvector (:func:`_critical_eigenvector`) comes from the
+The critical eigenvector (:func:`critical_eigenvector`) comes from the
 first-order (companion) form of the linearisation, Eqs. (31b)-(33).
 """
 
@@ -37,20 +37,18 @@ def _static_states(model: PipeModel, values: Sequence[float], v_start: float) ->
     return {v: s.q for v, s in zip(vals, sols, strict=True)}
 
 
-def _critical_eigenvector(
-    model: PipeModel, q: np.ndarray, omega: float
-) -> tuple[float, np.ndarray]:
+def critical_eigenvector(model: PipeModel, q: np.ndarray, omega: float) -> tuple[float, np.ndarray]:
     """(omega, z): the eigenpair of the first-order form nearest to i omega."""
-    import scipy.linalg as sla
-
     from fempipe.analyses.stability import linearized_matrices
+    from fempipe.core.companion import first_order_matrix
 
     K, Cd, M = (
         np.asarray(a.toarray() if hasattr(a, "toarray") else a)
         for a in linearized_matrices(model, q)
     )
     n = model.n
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-sla.solve(M, K), -sla.solve(M, Cd)]])
+    # factor="lu": the two solves this start has always used (Cholesky differs by round-off)
+    A = first_order_matrix(K, Cd, M, factor="lu")
     lam, Z = np.linalg.eig(A)
     k = int(np.argmin(np.abs(lam - 1j * omega)))
     z = Z[:, k]
@@ -98,7 +96,7 @@ def analyse_static(model: PipeModel, v_min: float, v_max: float, ds_max: float =
     out = []
     for e in events:
         m = model.with_params(replace(model.params, v=e.v))
-        omega, z = _critical_eigenvector(m, states[float(e.v)], abs(e.frequency))
+        omega, z = critical_eigenvector(m, states[float(e.v)], abs(e.frequency))
         out.append(HopfPoint(float(e.v), omega, e.type, states[float(e.v)], z))
     primary = [e for e in res.events if e.branch == "primary"]
     return out, v_start, primary
