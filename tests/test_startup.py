@@ -93,49 +93,160 @@ def test_critical_and_simulate_do_not_import_scipy_optimize():
 
 
 # The public names of the package, as the eager ``__init__`` imported them.
+from fempipe.analyses.bifurcation import (  # noqa: E402
+    bifurcation_diagram,
+)
+from fempipe.analyses.dynamics import (  # noqa: E402
+    IntegrationError,
+    PulsatingFlow,
+    Trajectory,
+    initial_state,
+    integrate,
+    simulate,
+)
+from fempipe.analyses.limit_cycle import (  # noqa: E402
+    Attractor,
+    LimitCycle,
+    ShootingError,
+    find_attractor,
+    shoot,
+    tip_coordinates,
+)
+from fempipe.analyses.periodic import (  # noqa: E402
+    CycleBranch,
+    CycleDiagram,
+    continue_cycles,
+    cycle_diagram,
+    hopf_points,
+)
 from fempipe.analyses.stability import (  # noqa: E402
+    SpatialStability,
+    StabilityResult,
     critical_velocity,
+    root_locus,
     spatial_critical_velocity,
     spatial_stability_analysis,
     spectrum,
     stability_analysis,
+    stability_map,
 )
 from fempipe.analyses.statics import (  # noqa: E402
+    Branch,
     NewtonError,
+    StaticSolution,
     continuation,
+    sagged_state,
     solve_path,
     solve_static,
     switch_branch,
 )
-from fempipe.core.errors import ParamError, SolverError  # noqa: E402
-from fempipe.model.discretization import FiniteElement, Modal, parse_discretization  # noqa: E402
-from fempipe.model.kinematics import shape, tip_values  # noqa: E402
-from fempipe.model.operators import PipeModel  # noqa: E402
-from fempipe.model.out_of_plane import OutOfPlaneModel  # noqa: E402
-from fempipe.model.params import Params, PipeSI  # noqa: E402
+from fempipe.core.errors import (  # noqa: E402
+    ParamError,
+    SolverError,
+)
+from fempipe.model.discretization import (  # noqa: E402
+    FiniteElement,
+    Modal,
+    parse_discretization,
+)
+from fempipe.model.kinematics import (  # noqa: E402
+    shape,
+    tip_values,
+)
+from fempipe.model.operators import (  # noqa: E402
+    PipeModel,
+)
+from fempipe.model.out_of_plane import (  # noqa: E402
+    OutOfPlaneModel,
+)
+from fempipe.model.params import (  # noqa: E402
+    Params,
+    PipeSI,
+)
+from fempipe.studies.compare import (  # noqa: E402
+    Comparison,
+    compare_values,
+)
+from fempipe.studies.convergence import (  # noqa: E402
+    ConvergenceStudy,
+    Quantity,
+    observed_order,
+    richardson,
+    run_study,
+)
+from fempipe.studies.error_estimate import (  # noqa: E402
+    ErrorEstimate,
+)
+from fempipe.studies.estimates import (  # noqa: E402
+    refined_attractor,
+    refined_stability,
+    refined_static_states,
+    with_attractor_estimates,
+    with_stability_estimates,
+    with_static_estimates,
+)
 
 PUBLIC = {
+    "Params": Params,
+    "PipeSI": PipeSI,
     "FiniteElement": FiniteElement,
     "Modal": Modal,
     "parse_discretization": parse_discretization,
-    "ParamError": ParamError,
-    "SolverError": SolverError,
+    "PipeModel": PipeModel,
+    "OutOfPlaneModel": OutOfPlaneModel,
     "shape": shape,
     "tip_values": tip_values,
-    "PipeModel": PipeModel,
-    "Params": Params,
-    "PipeSI": PipeSI,
-    "critical_velocity": critical_velocity,
-    "spectrum": spectrum,
-    "stability_analysis": stability_analysis,
-    "spatial_critical_velocity": spatial_critical_velocity,
-    "spatial_stability_analysis": spatial_stability_analysis,
-    "OutOfPlaneModel": OutOfPlaneModel,
-    "NewtonError": NewtonError,
-    "continuation": continuation,
-    "solve_path": solve_path,
+    "ParamError": ParamError,
+    "SolverError": SolverError,
     "solve_static": solve_static,
+    "StaticSolution": StaticSolution,
+    "NewtonError": NewtonError,
+    "sagged_state": sagged_state,
+    "solve_path": solve_path,
+    "continuation": continuation,
     "switch_branch": switch_branch,
+    "Branch": Branch,
+    "spectrum": spectrum,
+    "root_locus": root_locus,
+    "stability_analysis": stability_analysis,
+    "critical_velocity": critical_velocity,
+    "StabilityResult": StabilityResult,
+    "stability_map": stability_map,
+    "spatial_stability_analysis": spatial_stability_analysis,
+    "spatial_critical_velocity": spatial_critical_velocity,
+    "SpatialStability": SpatialStability,
+    "simulate": simulate,
+    "integrate": integrate,
+    "initial_state": initial_state,
+    "Trajectory": Trajectory,
+    "PulsatingFlow": PulsatingFlow,
+    "IntegrationError": IntegrationError,
+    "shoot": shoot,
+    "find_attractor": find_attractor,
+    "LimitCycle": LimitCycle,
+    "Attractor": Attractor,
+    "ShootingError": ShootingError,
+    "tip_coordinates": tip_coordinates,
+    "hopf_points": hopf_points,
+    "continue_cycles": continue_cycles,
+    "CycleBranch": CycleBranch,
+    "cycle_diagram": cycle_diagram,
+    "CycleDiagram": CycleDiagram,
+    "bifurcation_diagram": bifurcation_diagram,
+    "run_study": run_study,
+    "ConvergenceStudy": ConvergenceStudy,
+    "Quantity": Quantity,
+    "observed_order": observed_order,
+    "richardson": richardson,
+    "compare_values": compare_values,
+    "Comparison": Comparison,
+    "ErrorEstimate": ErrorEstimate,
+    "refined_static_states": refined_static_states,
+    "with_static_estimates": with_static_estimates,
+    "refined_stability": refined_stability,
+    "with_stability_estimates": with_stability_estimates,
+    "refined_attractor": refined_attractor,
+    "with_attractor_estimates": with_attractor_estimates,
 }
 
 
