@@ -343,6 +343,7 @@ def tip_extrema(
         y = np.asarray(tips[key])
         lo, hi = (extremum(disc, orbit, alpha, key, ts, y, sign, int(fine)) for sign in (1.0, -1.0))
         if refine == "bounded":
+            # The bookkeeping of the branches of periodic orbits, kept for their bits.
             ext = [lo, hi]
             out[key] = [float(min(ext)), float(max(ext))]
         else:
