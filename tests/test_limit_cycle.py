@@ -10,8 +10,8 @@ import pytest
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.analyses.limit_cycle import (
     ShootingError,
-    _recurrence,
     find_attractor,
+    recurrence,
     shoot,
     tip_coordinates,
 )
@@ -176,7 +176,7 @@ def test_alpha_zero_cycle_is_symmetric():
 def test_recurrence_tells_period_n(returns, expected):
     x = [(np.array([r, 0.0]), np.zeros(2)) for r in returns]
     t = list(range(len(returns)))
-    n, d = _recurrence(t, x, n_max=4)
+    n, d = recurrence(t, x, n_max=4)
     assert n == expected and d == 0.0
 
 
@@ -203,21 +203,25 @@ def _first_return(m, q0, p0, level: float, t_end: float):
     from scipy.optimize import brentq
 
     from fempipe.analyses.dynamics import Radau
-    from fempipe.analyses.limit_cycle import _eta, _sample_tip, _tip_ranges
+    from fempipe.analyses.limit_cycle.tips import TipTrace, eta_tip, tip_extrema
 
     st = Radau(m, q0, p0, rtol=1e-9)
-    samples: list = []
-    s_old = _eta(m.disc, st.q) - level
+    trace = TipTrace(m.disc, m.params.alpha, per_step=16)
+    s_old = eta_tip(m.disc, st.q) - level
     for t, q, _ in st.steps(t_end):
-        _sample_tip(m.disc, m.params.alpha, st, samples, per_step=16)
-        s_new = _eta(m.disc, q) - level
+        trace.record(st)
+        s_new = eta_tip(m.disc, q) - level
         if t > t_end / 20 and s_old < 0 <= s_new:
 
             def f(tt):
-                return _eta(m.disc, st.dense(tt)[0]) - level
+                return eta_tip(m.disc, st.dense(tt)[0]) - level
 
             t_c = brentq(f, st.t_old, st.t, xtol=1e-14)
-            return t_c, st.dense(t_c), _tip_ranges(samples)
+            return (
+                t_c,
+                st.dense(t_c),
+                tip_extrema(m.disc, trace, m.params.alpha, per_step=16, fine=0),
+            )
         s_old = s_new
     return None, (None, None), None
 
@@ -260,7 +264,7 @@ def test_cycle_from_the_short_transient_is_the_cycle():
 def test_quintic_orbit_reproduces_quintics():
     """The interpolant through (q, q', q'') at the step ends is exact for
     polynomials of degree 5 (the basis of the tip extrema on the cycle)."""
-    from fempipe.analyses.limit_cycle import _QuinticOrbit
+    from fempipe.analyses.limit_cycle.tips import QuinticOrbit
 
     rng = np.random.default_rng(5)
     t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.2, 7)])
@@ -270,7 +274,7 @@ def test_quintic_orbit_reproduces_quintics():
         P = np.polynomial.polynomial
         return np.stack([P.polyval(x, P.polyder(c[:, j], d)) for j in range(2)], axis=-1)
 
-    orbit = _QuinticOrbit(t, poly(t), poly(t, 1), poly(t, 2))
+    orbit = QuinticOrbit(t, poly(t), poly(t, 1), poly(t, 2))
     x = np.linspace(t[0], t[-1], 101)
     np.testing.assert_allclose(orbit(x), poly(x), atol=1e-12)
 

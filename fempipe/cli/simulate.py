@@ -418,7 +418,7 @@ def _display_states(att, traj, n_periods: int = 3):
     tau, 0.16 rad at the tip, at alpha = pi/2, v = 10), and appending the orbit
     from that sample put a jump into the time traces and the animation.
     """
-    from fempipe.analyses.limit_cycle import _state_distance
+    from fempipe.analyses.limit_cycle import state_distance as _state_distance
 
     t, q, p = traj.t, traj.q, traj.qdot
     if att is None or att.cycle is None:

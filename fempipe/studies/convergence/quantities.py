@@ -1,0 +1,370 @@
+"""The quantities of a convergence study and the families of discretisations it runs on.
+
+A :class:`Quantity` is one number of the user's case as a function of the
+discretisation (a static tip value, the critical flow velocity or its
+frequency, an eigenvalue, a limit cycle's amplitude or period); a
+:class:`Family` is a sequence of discretisations of one kind.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from fempipe.core.errors import SolverError
+from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.params import Params
+
+__all__ = [
+    "QUANTITIES",
+    "STATIC_QUANTITIES",
+    "CRITICAL_QUANTITIES",
+    "CYCLE_QUANTITIES",
+    "STATIC_TOL",
+    "EVENT_TOL",
+    "Quantity",
+    "Family",
+    "doubling",
+    "static_tip_state",
+]
+
+#: quantity -> (description, unit).  The static tip values are those of
+#: :func:`fempipe.model.kinematics.tip_values` (Eq. (5), (28)).
+QUANTITIES: dict[str, tuple[str, str]] = {
+    "theta_tip": ("static tip rotation theta(1)", "rad"),
+    "X_tip": ("static tip position X_g(1), down the plumb line", "L"),
+    "Z_tip": ("static tip position Z_g(1), horizontal", "L"),
+    "eta_tip": ("static lateral tip displacement eta(1)", "L"),
+    "v_cr": (
+        "critical flow velocity (first loss of stability of the primary branch in three "
+        "dimensions, in the plane of the static state or out of it)",
+        "1",
+    ),
+    "frequency": ("frequency Im(lambda) of the critical event (in three dimensions)", "1"),
+    "v_cr_in_plane": (
+        "critical flow velocity in the plane of the static state (the paper's planar v_cr)",
+        "1",
+    ),
+    "v_cr_out_of_plane": (
+        "critical flow velocity of the motion out of the plane of the static state",
+        "1",
+    ),
+    "frequency_in_plane": ("frequency Im(lambda) of the critical event in the plane", "1"),
+    "frequency_out_of_plane": (
+        "frequency Im(lambda) of the critical event out of the plane",
+        "1",
+    ),
+    "eigenvalue": ("k-th resolved eigenvalue lambda at one v (complex)", "1"),
+    "lc_amplitude": ("limit-cycle amplitude (max - min) / 2 of eta(1)", "L"),
+    "lc_period": ("limit-cycle period", "1"),
+}
+
+STATIC_QUANTITIES = ("theta_tip", "X_tip", "Z_tip", "eta_tip")
+CRITICAL_QUANTITIES = (
+    "v_cr",
+    "frequency",
+    "v_cr_in_plane",
+    "frequency_in_plane",
+    "v_cr_out_of_plane",
+    "frequency_out_of_plane",
+)
+CYCLE_QUANTITIES = ("lc_amplitude", "lc_period")
+
+#: Tolerances the quantities are computed to, relative to max(1, |Q|): below
+#: them a difference between two discretisations is solver noise.  Newton
+#: (static, 1e-12 on the residual), Brent on v (1e-10, the events of
+#: :mod:`fempipe.analyses.stability`), the shooting's integration (``shoot_rtol``).
+STATIC_TOL = 1e-12
+EVENT_TOL = 1e-10
+
+
+def doubling(low: int, high: int) -> list[int]:
+    """``[low, 2 low, 4 low, ...]`` up to ``high`` (the sizes of ``--elements 2:128``)."""
+    low, high = int(low), int(high)
+    if low < 1 or high < low:
+        raise ValueError(f"need 1 <= low <= high, got {low}:{high}")
+    out = [low]
+    while out[-1] * 2 <= high:
+        out.append(out[-1] * 2)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Families of discretisations
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Family:
+    """A sequence of discretisations of one kind.
+
+    Parameters
+    ----------
+    kind : {'fe', 'modal'}
+    sizes : tuple of int
+        Element counts (fe) or numbers of modes (modal), each usually the
+        double of the last.
+    degree : int
+        Element degree k of P_k (fe).
+    basis : {'sine', 'beam'}
+        Modal basis (modal).
+    """
+
+    kind: str
+    sizes: tuple[int, ...]
+    degree: int = 3
+    basis: str = "sine"
+
+    @property
+    def label(self) -> str:
+        """``fe-P1`` ... ``fe-P10``, ``modal-sine``, ``modal-beam`` (the JSON ``family``)."""
+        return f"fe-P{self.degree}" if self.kind == "fe" else f"modal-{self.basis}"
+
+    def discretization(self, size: int):
+        if self.kind == "fe":
+            return FiniteElement(int(size), self.degree)
+        if self.basis == "sine":
+            return Modal(int(size))
+        return Modal(int(size), basis=self.basis)
+
+    def dofs(self, size: int) -> int:
+        return int(size) * self.degree if self.kind == "fe" else int(size)
+
+    def order_for(self, params: Params | None) -> float | None:
+        """Theoretical order for the case ``params`` (variants can lower it, see
+        :func:`fempipe.studies.error_estimate.expected_order`), judged on the coarser of the two
+        finest members (a spring is a mesh node there or not)."""
+        from ..error_estimate import expected_order
+
+        size = self.sizes[-2] if len(self.sizes) > 1 else self.sizes[-1]
+        return expected_order(self.discretization(size), params)
+
+
+# ---------------------------------------------------------------------------
+# Quantities
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One number of the user's case, as a function of the discretisation.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`QUANTITIES`.
+    params : Params
+        alpha, beta, gamma, mu and v (the flow velocity of static, eigenvalue
+        and limit-cycle quantities; the start of the range for v_cr and
+        frequency).
+    v_max : float, optional
+        End of the flow range of v_cr and frequency.
+    mode : int
+        Mode number k of ``eigenvalue`` (1-based, carried by continuity from
+        v = 0, see :mod:`fempipe.analyses.stability`).
+    shoot_rtol : float
+        Integration tolerance of the limit cycle's shooting (its accuracy).
+    seed : tuple, optional
+        ``(disc, q0, qdot0, period)``: a limit cycle on another
+        discretisation to start the shooting from (see :meth:`seeded`).
+    planar : bool
+        ``v_cr`` and ``frequency`` of the paper's planar model (the same
+        numbers as ``v_cr_in_plane`` and ``frequency_in_plane``) instead of
+        those of three dimensions; ``fempipe compare`` sets it for a user's
+        ``v_cr`` and ``frequency`` (its module docstring).
+
+    The critical quantities (:data:`CRITICAL_QUANTITIES`): ``v_cr`` and
+    ``frequency`` are those of the first loss of stability in three
+    dimensions, the earlier of the motion in the plane of the static state
+    and out of it (:func:`fempipe.analyses.stability.spatial_critical_velocity`);
+    ``*_in_plane`` those of the plane alone
+    (:func:`fempipe.analyses.stability.critical_velocity`), ``*_out_of_plane`` those
+    of the motion out of it (:func:`~fempipe.analyses.stability.critical_velocity` of
+    ``model.with_plane("out")``, the same static branch).
+
+    Calling it on a discretisation returns the value (complex for
+    ``eigenvalue``), or raises :class:`fempipe.core.errors.SolverError`.
+    """
+
+    name: str
+    params: Params
+    v_max: float | None = None
+    mode: int = 1
+    shoot_rtol: float = 1e-9
+    seed: tuple | None = field(default=None, repr=False, compare=False)
+    planar: bool = False
+
+    def __post_init__(self) -> None:
+        if self.name not in QUANTITIES:
+            raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, got {self.name!r}")
+        if self.name in CRITICAL_QUANTITIES:
+            if self.v_max is None or not self.v_max > self.params.v:
+                raise ValueError(
+                    f"{self.name} needs a flow range v_min < v_max, got "
+                    f"{self.params.v:g}, {self.v_max}"
+                )
+        if int(self.mode) < 1:
+            raise ValueError(f"mode must be >= 1, got {self.mode}")
+
+    @property
+    def tolerance(self) -> float:
+        """Relative accuracy the solver delivers (the noise floor of the study)."""
+        if self.name in STATIC_QUANTITIES:
+            return 10 * STATIC_TOL
+        if self.name in CRITICAL_QUANTITIES:
+            return EVENT_TOL
+        if self.name in CYCLE_QUANTITIES:
+            return 10 * self.shoot_rtol
+        return 1e-11
+
+    def describe(self) -> str:
+        """One line: what is computed, at which v."""
+        text, unit = QUANTITIES[self.name]
+        if self.planar and self.name in ("v_cr", "frequency"):
+            text = QUANTITIES[self.name + "_in_plane"][0]
+        p = self.params
+        if self.name in CRITICAL_QUANTITIES:
+            where = f"over {p.v:g} <= v <= {self.v_max:g}"
+        elif self.name == "eigenvalue":
+            where = f"mode {self.mode} at v = {p.v:g}"
+        else:
+            where = f"at v = {p.v:g}"
+        return f"{text} {where} [{unit}]"
+
+    def __call__(self, disc) -> float | complex:
+        from fempipe.model.operators import PipeModel
+
+        model = PipeModel(disc, self.params)
+        if self.name in STATIC_QUANTITIES:
+            return _static_tip(model, self.name)
+        if self.name in CRITICAL_QUANTITIES:
+            return self._critical(model)
+        if self.name == "eigenvalue":
+            return _eigenvalue(model, self.mode)
+        cycle = self.cycle(disc)
+        if self.name == "lc_period":
+            return float(cycle.period)
+        lo, hi = cycle.tip["eta_tip"]
+        return 0.5 * float(hi - lo)
+
+    def _critical(self, model) -> float:
+        """v_cr or the frequency of the critical event, in 3-D or in one plane."""
+        from fempipe.analyses.stability import critical_velocity, spatial_critical_velocity
+
+        name, plane = self.name, "3-D"
+        for suffix, which in (("_in_plane", "in"), ("_out_of_plane", "out")):
+            if name.endswith(suffix):
+                name, plane = name.removesuffix(suffix), which
+        if self.planar:
+            plane = "in"
+        kw = {"v_max": self.v_max, "v_min": self.params.v}
+        if plane == "3-D":
+            res = spatial_critical_velocity(model, **kw)
+        else:
+            res = critical_velocity(model.with_plane(plane), **kw)
+        if res.v_cr is None:
+            where = {"3-D": "", "in": " in its plane", "out": " out of its plane"}[plane]
+            raise SolverError(
+                f"the primary branch is stable{where} over {self.params.v:g} <= v <= "
+                f"{self.v_max:g} on {model.disc.name}: no v_cr in the range"
+            )
+        return float(res.v_cr if name == "v_cr" else res.critical.frequency)
+
+    def cycle(self, disc):
+        """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
+        from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
+        from fempipe.model.operators import PipeModel
+        from fempipe.model.projection import project
+
+        model = PipeModel(disc, self.params)
+        if self.seed is not None:
+            src, q0, p0, period = self.seed
+            try:
+                return shoot(
+                    model,
+                    project(src, q0, disc),
+                    project(src, p0, disc),
+                    period,
+                    rtol=self.shoot_rtol,
+                    tol=10 * self.shoot_rtol,
+                )
+            except ShootingError:
+                pass  # too far from the seed: find the attractor from the static state
+        att = find_attractor(model, shoot_rtol=self.shoot_rtol, shoot_tol=10 * self.shoot_rtol)
+        if att.kind != "periodic" or att.cycle is None:
+            raise SolverError(
+                f"no limit cycle at v = {self.params.v:g} on {disc.name}: the attractor is "
+                f"{att.kind}"
+            )
+        return att.cycle
+
+    def seeded(self, disc) -> Quantity:
+        """A copy whose limit cycles start from the cycle of ``disc`` (computed once)."""
+        if self.name not in CYCLE_QUANTITIES:
+            return self
+        c = self.cycle(disc)
+        return replace(self, seed=(disc, c.q0, c.qdot0, c.period))
+
+    def to_dict(self) -> dict:
+        out = {"name": self.name, "description": self.describe(), "unit": QUANTITIES[self.name][1]}
+        if self.name in CRITICAL_QUANTITIES:
+            out["v_range"] = [self.params.v, self.v_max]
+        else:
+            out["v"] = self.params.v
+        if self.name == "eigenvalue":
+            out["mode"] = int(self.mode)
+        if self.name in CYCLE_QUANTITIES:
+            out["shoot_rtol"] = self.shoot_rtol
+        if self.planar and self.name in ("v_cr", "frequency"):
+            out["planar"] = True
+        return out
+
+
+def static_tip_state(disc, params: Params) -> np.ndarray:
+    """Static state on the primary branch at ``params.v``, followed from v = 0.
+
+    Parameters
+    ----------
+    disc : Discretization
+    params : Params
+        The case; ``params.v`` is the flow velocity of the state.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The state of :func:`fempipe.analyses.statics.solve_path` (tolerance
+        :data:`STATIC_TOL`) at ``params.v``.
+    """
+    from fempipe.analyses.statics import solve_path
+    from fempipe.model.operators import PipeModel
+
+    v = params.v
+    # Steps of at most 0.5 in v keep the path on the branch the pipe follows
+    # as the flow is turned up (the branch of `fempipe static`).
+    values = np.linspace(0.0, v, max(2, math.ceil(v / 0.5) + 1)) if v > 0 else [0.0]
+    model = PipeModel(disc, replace(params, v=0.0))
+    return solve_path(model, values, tol=STATIC_TOL)[-1].q
+
+
+def _static_tip(model, key: str) -> float:
+    from fempipe.model.kinematics import tip_values
+
+    q = static_tip_state(model.disc, model.params)
+    return float(tip_values(model.disc, q, model.params.alpha)[key])
+
+
+def _eigenvalue(model, mode: int) -> complex:
+    from fempipe.analyses.stability import spectrum
+
+    q = static_tip_state(model.disc, model.params)
+    spec = spectrum(model, q)
+    upper = [(m, lam) for m, lam in zip(spec.mode, spec.lam, strict=True) if lam.imag >= 0]
+    for m, lam in upper:
+        if int(m) == int(mode):
+            return complex(lam)
+    raise SolverError(
+        f"mode {mode} is not among the resolved modes of {model.disc.name} at v = {model.params.v:g} "
+        f"(resolved: {sorted({int(m) for m, _ in upper})})"
+    )
