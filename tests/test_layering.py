@@ -42,14 +42,7 @@ REGISTRIES = frozenset({"SUBCOMMANDS", "BENCHMARK_MODULES", "CASES", "_LAZY"})
 ALLOWED_UPWARD: frozenset[tuple[str, str]] = frozenset()
 
 #: (b) Private names of another module: (importer, defining module, name).
-ALLOWED_PRIVATE: frozenset[tuple[str, str, str]] = frozenset(
-    {
-        # public state_distance of the limit cycles
-        ("fempipe.cli.simulate", "fempipe.analyses.limit_cycle", "_state_distance"),
-        # public static_state of the convergence study
-        ("fempipe.cli.convergence", "fempipe.studies.convergence", "_static_tip_state"),
-    }
-)
+ALLOWED_PRIVATE: frozenset[tuple[str, str, str]] = frozenset()
 
 #: (c) Cycles of module-level imports, each as the sorted tuple of its modules.
 ALLOWED_CYCLES: frozenset[tuple[str, ...]] = frozenset()

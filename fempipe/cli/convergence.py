@@ -258,13 +258,13 @@ def _bvp_value(quantity) -> tuple[str, float] | None:
     """The static tip value by collocation of the strong form, Eq. (31a), on the FE branch."""
     from fempipe.core.errors import SolverError
     from fempipe.model.discretization import FiniteElement
-    from fempipe.studies.convergence import static_tip_state as _static_tip_state
+    from fempipe.studies.convergence import static_tip_state
     from fempipe.validation.bvp import solve_static_bvp
 
     p = quantity.params
     disc = FiniteElement(32, 3)
     try:
-        q = _static_tip_state(disc, p)
+        q = static_tip_state(disc, p)
     except SolverError:
         return None
     # The FE state selects the branch (there are several equilibria at large gamma).

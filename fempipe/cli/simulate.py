@@ -418,7 +418,7 @@ def _display_states(att, traj, n_periods: int = 3):
     tau, 0.16 rad at the tip, at alpha = pi/2, v = 10), and appending the orbit
     from that sample put a jump into the time traces and the animation.
     """
-    from fempipe.analyses.limit_cycle import state_distance as _state_distance
+    from fempipe.analyses.limit_cycle import state_distance
 
     t, q, p = traj.t, traj.q, traj.qdot
     if att is None or att.cycle is None:
@@ -427,7 +427,7 @@ def _display_states(att, traj, n_periods: int = 3):
     # One period without its closing sample (orbit_t runs from 0 to T).
     ts, qs, ps = c.orbit_t[:-1], c.orbit_q[:-1], c.orbit_qdot[:-1]
     m = ts.size
-    k = int(np.argmin(_state_distance(qs - q[-1], ps - p[-1], c.period / (2 * math.pi))))
+    k = int(np.argmin(state_distance(qs - q[-1], ps - p[-1], c.period / (2 * math.pi))))
     j = np.arange(k + 1, k + 1 + n_periods * m)
     tt = t[-1] + (j // m) * c.period + ts[j % m] - ts[k]
     return np.r_[t, tt], np.vstack([q, qs[j % m]]), np.vstack([p, ps[j % m]])

@@ -84,8 +84,8 @@ reached another Hopf point), its period exceeds :data:`MAX_PERIOD_RATIO` T_H
 Modules: :mod:`~fempipe.analyses.periodic.results` (Hopf points, orbits,
 branches), :mod:`~fempipe.analyses.periodic.hopf` (the Hopf points and the
 equilibria of the static branch), :mod:`~fempipe.analyses.periodic.problem`
-(the shooting problem and its corrector), :mod:`~fempipe.analyses.periodic.tips`
-(the tip's extrema over a period), :mod:`~fempipe.analyses.periodic.branch`
+(the shooting problem and its corrector; the tip's extrema over a period by
+:func:`fempipe.analyses.limit_cycle.tips.tip_extrema`), :mod:`~fempipe.analyses.periodic.branch`
 (the continuation of one branch, by the engine of
 :mod:`fempipe.solvers.continuation`), :mod:`~fempipe.analyses.periodic.special`
 (folds, period doublings, Neimark-Sacker points) and

@@ -25,12 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fempipe.analyses.limit_cycle import state_distance
+from fempipe.analyses.limit_cycle.tips import CollocationOrbit, tip_extrema
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, CorrectorError
 from fempipe.solvers.radau import IntegrationError, Radau, acceleration
 
 from .results import CyclePoint, HopfPoint, nontrivial_multipliers
-from .tips import tip_extrema
 
 __all__ = [
     "MONODROMY_AT_ORBIT",
@@ -211,10 +212,17 @@ class CycleCorrector:
         return self.model.with_params(self.model.params.with_flow(float(v)))
 
     def residual_norm(self, r: np.ndarray, T: float) -> float:
-        """RMS of r = (q part, q' part), q' scaled by T / 2 pi."""
-        n = self.n
-        s = T / (2 * math.pi)
-        return float(np.sqrt(np.mean(r[:n] ** 2) + np.mean((r[n:] * s) ** 2)))
+        """RMS of r = (q part, q' part), q' scaled by T / 2 pi (the limit cycles'
+        :func:`~fempipe.analyses.limit_cycle.state_distance`)."""
+        return state_distance(r[: self.n], r[self.n :], T / (2 * math.pi))
+
+    def tip_extrema(self, v: float, record: list) -> dict:
+        """[min, max] of the tip coordinates over the period integrated in ``record``
+        (its Radau steps), at flow velocity v: the collocation polynomial of every
+        step sampled 8 times, each extremum refined by a bounded scalar minimisation
+        (:func:`~fempipe.analyses.limit_cycle.tips.tip_extrema`, ``refine="bounded"``)."""
+        m = self.at(v)
+        return tip_extrema(m.disc, CollocationOrbit(record), m.params.alpha, refine="bounded")
 
     def rtol_after(self, previous: CyclePoint | None) -> float:
         """Integration tolerance for the next point: ``rtol`` times the distance
@@ -376,7 +384,7 @@ class CycleCorrector:
             period=float(u[2 * n]),
             q0=u[:n].copy(),
             qdot0=u[n : 2 * n].copy(),
-            tip=tip_extrema(self.at(u[-1]), fl.record),
+            tip=self.tip_extrema(u[-1], fl.record),
             multipliers=mu,
             stable=bool(np.all(np.abs(nt) < 1.0)),
             source=source,
