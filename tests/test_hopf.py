@@ -31,7 +31,7 @@ from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.solvers.radau import acceleration
+from fempipe.model.dynamics_problem import acceleration
 
 
 # ---------------------------------------------------------------- generic --

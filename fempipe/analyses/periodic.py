@@ -98,9 +98,10 @@ import numpy as np
 from fempipe.core.errors import SolverError
 from fempipe.core.parallel import run_tasks, single_blas_thread
 from fempipe.io import write_text
+from fempipe.model.dynamics_problem import acceleration, refuse_hysteretic
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import C as _RADAU_NODES
-from fempipe.solvers.radau import IntegrationError, Radau, acceleration, refuse_hysteretic
+from fempipe.solvers.radau import IntegrationError, Radau
 
 from .limit_cycle import TIP_KEYS, tip_coordinates
 

@@ -156,7 +156,7 @@ class PipeModel:
     the static Jacobian), so for finite elements that block is dense.
     ``params.hysteretic_damping`` has no term here: it acts in the linear
     stability problem only (:func:`fempipe.analyses.stability.linear.hysteretic_roots`),
-    and the time-domain solvers refuse it (:func:`fempipe.solvers.radau.refuse_hysteretic`).
+    and the time-domain solvers refuse it (:func:`fempipe.model.dynamics_problem.refuse_hysteretic`).
     """
 
     def __init__(self, disc: Discretization, params: Params) -> None:
@@ -165,7 +165,7 @@ class PipeModel:
         self.quad = disc.quad
         self.x = disc.quad.x
         self.w = disc.quad.w
-        self._PhiT_W = (disc.Phi.T @ sp.diags(self.w)) if disc.sparse else disc.Phi.T * self.w
+        self.test_matrix = (disc.Phi.T @ sp.diags(self.w)) if disc.sparse else disc.Phi.T * self.w
         # Gauss rules on [0, xi_s], built on first use and shared by the
         # models of with_params (same discretisation).
         self._part_rules: dict[float, _PartRule] = {}
@@ -203,6 +203,18 @@ class PipeModel:
     def n(self) -> int:
         return self.disc.n
 
+    def dynamics_problem(self, flow=None):
+        """The equations of motion of this model as the integrator's problem.
+
+        Returns :class:`fempipe.model.dynamics_problem.PipeDynamics` ``(self, flow)``;
+        :class:`fempipe.solvers.radau.Radau` calls it when given a model instead
+        of a problem.  Imported here, not at the top: that module builds on this
+        one (its batched kernels know the plain PipeModel).
+        """
+        from .dynamics_problem import PipeDynamics
+
+        return PipeDynamics(self, flow)
+
     # ------------------------------------------------------------------
     def fields(self, q, qdot=None, qddot=None) -> Fields:
         """theta, its rates and the local frame at the quadrature points."""
@@ -223,7 +235,7 @@ class PipeModel:
 
     def _test(self, f: np.ndarray) -> np.ndarray:
         """``\\int phi_i f`` for f at the quadrature points."""
-        return np.asarray(self._PhiT_W @ f)
+        return np.asarray(self.test_matrix @ f)
 
     def _project(self, F: np.ndarray, fl: Fields) -> np.ndarray:
         """``\\int phi_i n . C^R F`` for a vector field F, shape (n_q, 2)."""
