@@ -77,3 +77,21 @@ def test_failure_names_the_problem():
     with pytest.raises(IntegrationError, match="oscillators"):
         for _ in st.steps(1.0):
             pass
+
+
+def test_the_integrator_imports_no_model():
+    """Rule 10: nothing in fempipe/solvers/radau/ imports fempipe.model (nor a
+    private name of another module)."""
+    import ast
+    from pathlib import Path
+
+    import fempipe.solvers.radau as pkg
+
+    for path in Path(pkg.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                module = node.module or ""
+                assert "model" not in module.split("."), (path.name, module)
+                assert not any(a.name.startswith("_") for a in node.names), (path.name, module)
+            elif isinstance(node, ast.Import):
+                assert not any("fempipe.model" in a.name for a in node.names), path.name
