@@ -23,7 +23,7 @@ The problem
    rejected step's error estimate.
 5. **Autonomy.** ``problem.autonomous`` is True when R does not depend on t.
    Only autonomous problems may provide rules 6-8 (the members are None
-   otherwise).
+   otherwise); the integrator ignores them for a non-autonomous problem.
 6. **Batched stages (optional).** ``problem.stage_residuals(Q, P, A) -> (S, n)``
    and ``problem.stage_jacobians(Q, P, A) -> ((S, n, n),) * 3`` take S states
    as rows of (S, n) arrays, or are None.  If present they equal rules 2 and

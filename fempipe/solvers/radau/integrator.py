@@ -21,6 +21,7 @@ from fempipe.core.parallel import single_blas_thread
 from .collocation import evaluate_increment, evaluate_lagrange
 from .contract import ImplicitSecondOrderProblem
 from .lapack import lu_factor, lu_solve
+from .sensitivity import chain_step, step_derivative
 from .tableau import (
     A2,
     EIGENVALUES,
@@ -223,8 +224,11 @@ class Radau:
             d1 = np.sqrt(np.mean(np.r_[qdot0, self.qddot] ** 2)) + 1e-12
             self.h = min(1e-2 * d0 / d1, 1e-2)
         self.h = min(self.h, self.max_step)
-        self._residual3 = problem.stage_residuals
-        self._jacobians1 = problem.stage_jacobians
+        # The optional members of contract rules 6-8, for autonomous problems only
+        # (they take no time).
+        autonomous = bool(problem.autonomous)
+        self._residual3 = problem.stage_residuals if autonomous else None
+        self._jacobians1 = problem.stage_jacobians if autonomous else None
         self._stages_batched = self._jacobians1 is not None and bool(
             problem.prefers_batched_stage_jacobians
         )
@@ -233,7 +237,9 @@ class Radau:
         # d(q, q')/dv of the discrete flow map, steady flow only (a flow
         # history has no single v to differentiate by: no parameter_derivative).
         self._stage_residuals_v = (
-            problem.parameter_derivative if sensitivity and velocity_sensitivity else None
+            problem.parameter_derivative
+            if autonomous and sensitivity and velocity_sensitivity
+            else None
         )
         self.velocity_sensitivity = np.zeros(2 * n) if self._stage_residuals_v is not None else None
 
@@ -463,56 +469,25 @@ class Radau:
         self.stats.wall_time += time.perf_counter() - t0_wall
 
     def _accumulate_sensitivity(self, t, h, Q, P, acc) -> None:
-        """Exact derivative of the step map y0 -> y1 (stage Jacobians, no freezing).
-
-        Differentiating R(Q_i, P_i, A_i) = 0 with Q, P the stage formulas:
-        [M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i] dA_j = -K_i dq0 - (c_i h K_i + D_i) dp0,
-        and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate).  With steady
-        flow, the same matrix with the right side -dR_i/dv gives the
-        derivative by v at fixed y0 (the problem's ``parameter_derivative``, contract
-        rule 8), chained
-        over the steps as dy_{k+1}/dv = S_k dy_k/dv + (dy_{k+1}/dv at fixed y_k).
-        """
-        n = self.n
+        """Chain the exact derivative of the step map y0 -> y1 (stage Jacobians, no
+        freezing; :mod:`~fempipe.solvers.radau.sensitivity`) into
+        :attr:`sensitivity_matrix` and :attr:`velocity_sensitivity`."""
         if self._stages_batched:
             self.stats.n_jacobian += 3
             Ks, Ds, Ms = self._jacobians1(Q, P, acc)  # (3, n, n) each
         else:
             jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
             Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
-        # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
-        big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
-        big[np.arange(3), :, np.arange(3), :] += Ms
         with_v = self._stage_residuals_v is not None
-        rhs = np.empty((3, n, 2 * n + with_v))
-        np.negative(Ks, out=rhs[:, :, :n])
-        rhs[:, :, n : 2 * n] = -(C[:, None, None] * h * Ks + Ds)
-        if with_v:
-            # dA/dv at fixed y0: the same matrix, the right side -dR_i/dv.
-            rhs[:, :, -1] = -self._stage_residuals_v(Q, P, acc)
-        dA = lu_solve(lu_factor(big.reshape(3 * n, 3 * n)), rhs.reshape(3 * n, -1))
-        dA = dA.reshape(3, n, -1)
-        # d y1 / d (y0, v) = [[I, h I], [0, I]] (the stage formulas at c_3 = 1)
-        # plus (dq, dp): the derivatives through the stage accelerations.
-        D = np.empty((2 * n, dA.shape[2]))
-        np.einsum("j,jab->ab", (h * h) * A2[2], dA, out=D[:n])
-        np.einsum("j,jab->ab", h * A[2], dA, out=D[n:])
+        D = step_derivative(h, Ks, Ds, Ms, self._stage_residuals_v(Q, P, acc) if with_v else None)
         # The last stage is the end of the step (c_3 = 1): its Jacobians are
         # those at the next step's start, where step() may want them.
         self._stage3_jac = (Ks[2], Ds[2], Ms[2])
-        # Chained with the derivatives so far, Y = [d y/d y0, d y/dv]:
-        # Y1 = [[I, h I], [0, I]] Y + D[:, :2n] Y (+ D[:, 2n] in the v column).
-        Y = self.sensitivity_matrix
+        self.sensitivity_matrix, dv = chain_step(
+            D, h, self.sensitivity_matrix, self.velocity_sensitivity if with_v else None
+        )
         if with_v:
-            Y = np.column_stack([Y, self.velocity_sensitivity])
-        new = D[:, : 2 * n] @ Y
-        new[:n] += Y[:n] + h * Y[n:]
-        new[n:] += Y[n:]
-        if with_v:
-            new[:, -1] += D[:, -1]
-            self.velocity_sensitivity = new[:, -1]
-            new = new[:, :-1]
-        self.sensitivity_matrix = new
+            self.velocity_sensitivity = dv
 
     # ------------------------------------------------------------------
     def dense(self, t: float) -> tuple[np.ndarray, np.ndarray]:
