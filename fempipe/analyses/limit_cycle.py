@@ -62,8 +62,8 @@ from fempipe.core.errors import SolverError
 from fempipe.core.parallel import single_blas_thread
 from fempipe.core.rootfinding import brentq
 from fempipe.model.discretization import Discretization
-from fempipe.model.kinematics import tip_values
 from fempipe.model.dynamics_problem import refuse_hysteretic
+from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
