@@ -18,7 +18,7 @@ from fempipe.analyses.limit_cycle.tips import (
     tip_coordinates,
     tip_extrema,
 )
-from fempipe.solvers.radau import Radau
+from fempipe.solvers.radau import Radau, StepRecord
 
 DISC = FiniteElement(4, 3)
 
@@ -205,7 +205,7 @@ def test_collocation_orbit_is_the_integrator_s_cubic(cycles):
     orbit = CollocationOrbit(record)
     t_old, h, q_old, Q = record[5]
     st = Radau(m, q_old, np.zeros(m.n), 0.0)
-    st.last = (t_old, h, q_old, np.zeros(m.n), Q, np.zeros_like(Q), None)
+    st.last = StepRecord(t_old, h, q_old, np.zeros(m.n), Q, np.zeros_like(Q), None)
     for s in (0.1, 0.5, 0.9):
         np.testing.assert_allclose(orbit(t_old + s * h), st.dense(t_old + s * h)[0], atol=1e-14)
     times = np.array([t_old + 0.5 * h, t_old + 1.5 * h])

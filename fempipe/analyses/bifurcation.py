@@ -40,8 +40,8 @@ import numpy as np
 
 from fempipe.core.files import write_text
 from fempipe.core.parallel import run_tasks
+from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.radau import refuse_hysteretic
 
 from .dynamics import IntegrationError, initial_state
 from .limit_cycle import Attractor, ShootingError, find_attractor, shoot

@@ -2,7 +2,9 @@
 
 The time integration itself is :class:`fempipe.solvers.radau.Radau`, an L-stable
 Radau IIA method written on the second-order residual form of Eq. (20) (its
-module docstring says why); this module drives it: :func:`simulate` records a
+module docstring says why), which takes the pipe as the problem
+:class:`fempipe.model.dynamics_problem.PipeDynamics` (model and flow) by the
+contract of :mod:`fempipe.solvers.radau.contract`; this module drives it: :func:`simulate` records a
 :class:`Trajectory`, :func:`integrate` yields the states step by step,
 :class:`PulsatingFlow` is an unsteady flow v(tau), :func:`initial_state` a
 perturbed static state.  ``Radau``, ``IntegrationError`` and ``acceleration``
@@ -24,8 +26,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from fempipe.model.dynamics_problem import PipeDynamics, acceleration
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.radau import IntegrationError, Radau, acceleration
+from fempipe.solvers.radau import IntegrationError, Radau
 
 __all__ = [
     "PulsatingFlow",
@@ -190,10 +193,11 @@ def integrate(
     """Time stepping of Eq. (20) as a generator of (tau, q, q').
 
     Yields the initial state first, then the state after every accepted step
-    of :class:`Radau` (options are passed on: ``rtol``, ``atol``, ``flow``,
-    ``max_step``, ``h_fixed``).
+    of :class:`Radau` (options are passed on: ``rtol``, ``atol``, ``max_step``,
+    ``h_fixed``; ``flow`` goes to the problem, :class:`PipeDynamics`).
     """
-    stepper = Radau(model, q0, qdot0, t0, **options)
+    problem = PipeDynamics(model, options.pop("flow", None))
+    stepper = Radau(problem, q0, qdot0, t0, **options)
     yield stepper.t, stepper.q.copy(), stepper.qdot.copy()
     yield from stepper.steps(t_end)
 
@@ -290,8 +294,11 @@ def simulate(
     n_out : int, optional
         Number of equally spaced output times (dense output of the
         collocation polynomial); default: every accepted step.
-    rtol, atol, flow, max_step, h_fixed
+    rtol, atol, max_step, h_fixed
         See :class:`Radau`.
+    flow : PulsatingFlow or callable tau -> (v, v_dot), optional
+        Unsteady flow (:class:`~fempipe.model.dynamics_problem.PipeDynamics`);
+        default the steady ``model.params.v``.
     callback : callable, optional
         Called with tau after every step (progress).
 
@@ -302,7 +309,14 @@ def simulate(
     if not t_end > t0:
         raise ValueError(f"t_end must be > t0 = {t0}, got {t_end}")
     stepper = Radau(
-        model, q0, qdot0, t0, rtol=rtol, atol=atol, flow=flow, max_step=max_step, h_fixed=h_fixed
+        PipeDynamics(model, flow),
+        q0,
+        qdot0,
+        t0,
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
+        h_fixed=h_fixed,
     )
     ts, qs, ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     grid = np.linspace(t0, t_end, n_out) if n_out else None

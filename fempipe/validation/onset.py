@@ -4,7 +4,7 @@ v_cr is the first flow velocity at which the static state (on the
 gravity-sagged branch) loses linear stability: the spectral abscissa, the
 largest real part of the eigenvalues of the linearised problem
 (lambda^2 M^d + lambda C^d + K^d) x = 0 (Eqs. (31b)-(33), via
-:func:`fempipe.analyses.limit_cycle.static_growth_rate`), changes sign from negative
+:func:`spectrum`, a dense QZ of the first-order pencil), changes sign from negative
 to positive.  It is bracketed on a grid in v and located by Brent's method,
 with each trial static state solved by Newton from the nearest state already
 known.  Kelvin-Voigt damping (mu > 0) gives the unresolved high modes of a

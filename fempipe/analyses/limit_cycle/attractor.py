@@ -15,8 +15,9 @@ import numpy as np
 
 from fempipe.core.parallel import single_blas_thread
 from fempipe.core.rootfinding import brentq
+from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.radau import IntegrationError, Radau, refuse_hysteretic
+from fempipe.solvers.radau import IntegrationError, Radau
 
 from ..dynamics import Trajectory, initial_state
 from ..stability import linearly_stable

@@ -20,8 +20,9 @@ import numpy as np
 import scipy.linalg as sla
 
 from fempipe.core.parallel import single_blas_thread
+from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.radau import Radau, refuse_hysteretic
+from fempipe.solvers.radau import Radau
 
 from .results import LimitCycle, ShootingError, state_distance
 from .tips import QuinticOrbit, eta_tip, eta_tip_gradient, tip_extrema

@@ -29,7 +29,7 @@ import numpy as np
 
 from fempipe.model.discretization import Discretization
 from fempipe.model.kinematics import tip_values
-from fempipe.solvers.radau import C as RADAU_NODES
+from fempipe.solvers.radau.collocation import product_weights
 
 __all__ = [
     "TIP_KEYS",
@@ -152,26 +152,6 @@ class QuinticOrbit:
         return ts, tip_coordinates(disc, alpha, self(ts))
 
 
-# Nodes of the collocation polynomial of a step on s = (t - t_old) / h: 0 and c_1..c_3.
-_NODES = np.r_[0.0, RADAU_NODES]
-
-
-def _lagrange(s: np.ndarray) -> np.ndarray:
-    """Weights (m, 4) of (q_old, Q_1..Q_3) in the cubic through (0, q_old), (c_i, Q_i).
-
-    The plain Lagrange products; the integrator's dense output evaluates the
-    same cubic in another floating-point form (equal to round-off, not bit
-    for bit), so the branches of periodic orbits keep this one.
-    """
-    s = np.atleast_1d(s)[:, None]
-    L = np.ones((s.shape[0], 4))
-    for j in range(4):
-        for m in range(4):
-            if m != j:
-                L[:, j] *= (s[:, 0] - _NODES[m]) / (_NODES[j] - _NODES[m])
-    return L
-
-
 class CollocationOrbit:
     """The collocation polynomials of the accepted steps of one period.
 
@@ -197,14 +177,14 @@ class CollocationOrbit:
         record = self.record
         k = int(np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0, len(record) - 1))
         t0, h, q_old, Q = record[k]
-        w = _lagrange(np.array([(t - t0) / h]))[0]
+        w = product_weights(np.array([(t - t0) / h]))[0]
         return w @ np.vstack([q_old[None, :], Q])
 
     def tip_samples(
         self, disc: Discretization, alpha: float, per_step: int
     ) -> tuple[np.ndarray, dict]:
         s = np.linspace(0.0, 1.0, per_step + 1)[:-1]
-        L = _lagrange(s)  # (per_step, 4)
+        L = product_weights(s)  # (per_step, 4)
         nodes = np.stack([np.vstack([q_old[None, :], Q]) for _, _, q_old, Q in self.record])
         qs = np.einsum("sj,mjn->msn", L, nodes).reshape(-1, nodes.shape[-1])
         h = np.array([r[1] for r in self.record])

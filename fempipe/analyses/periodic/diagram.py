@@ -13,8 +13,8 @@ from dataclasses import dataclass, replace
 from fempipe.analyses.limit_cycle import TIP_KEYS
 from fempipe.core.files import write_text
 from fempipe.core.parallel import run_tasks
+from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.radau import refuse_hysteretic
 
 from .branch import continue_cycles
 from .hopf import analyse_static, equilibrium_tip, point_dict, static_points

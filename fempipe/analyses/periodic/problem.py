@@ -27,9 +27,10 @@ import numpy as np
 
 from fempipe.analyses.limit_cycle import state_distance
 from fempipe.analyses.limit_cycle.tips import CollocationOrbit, tip_extrema
+from fempipe.model.dynamics_problem import acceleration
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, CorrectorError
-from fempipe.solvers.radau import IntegrationError, Radau, acceleration
+from fempipe.solvers.radau import IntegrationError, Radau
 
 from .results import CyclePoint, HopfPoint, nontrivial_multipliers
 

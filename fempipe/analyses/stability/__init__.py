@@ -122,7 +122,7 @@ Kelvin-Voigt roots near -1/mu), are left as they are, so divergence, folds
 and branch points do not depend on mu_h.  Every function of this package
 applies it: spectra, root loci, events, v_cr, maps and the criterion
 (dense and sparse).  It has no time-domain meaning, and the time integrators
-refuse it (:func:`fempipe.solvers.radau.refuse_hysteretic`).  README, "Conventions
+refuse it (:func:`fempipe.model.dynamics_problem.refuse_hysteretic`).  README, "Conventions
 and derivations", has the derivation and the checks.
 
 Modules

@@ -1,0 +1,273 @@
+"""The pipe's residual, Jacobians and dR/dv at several states in one call (the Radau stages).
+
+:meth:`PipeModel.residual <fempipe.model.operators.PipeModel.residual>` costs
+about 0.25 ms on P3:16, almost all of it call overhead of some forty small
+array operations on n_q = 96 points; the three Radau stages evaluated together
+cost about one evaluation (the stage residuals are 3/4 of an integration
+step).  :class:`StageKernels` evaluates the same terms of Eq. (20) for S states
+stacked in the rows of (S, n) arrays, summed in another order, for the pipe
+without variants and steady flow (v_dot = 0).  The variants (end mass,
+external damping, springs) and any subclass of PipeModel have no kernels
+(:meth:`StageKernels.for_model` returns None); their users evaluate
+:meth:`PipeModel.residual` and :meth:`PipeModel.jacobians` state by state
+(:class:`fempipe.model.dynamics_problem.PipeDynamics` chooses).
+``tests/test_batched.py`` checks every kernel against the plain terms.
+
+The integration operators C (``\\int_0^{x_q}``) and C^R (``\\int_{x_q}^1``)
+are applied as dense (n_q, n_q) matrices up to :data:`DENSE_INTEGRALS_MAX`
+points and cell by cell beyond (:func:`integral_operators`,
+:func:`projection_fields`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .operators import PipeModel
+from .quadrature import LineQuadrature
+
+__all__ = [
+    "DENSE_INTEGRALS_MAX",
+    "DENSE_OPERATORS_MAX",
+    "StageKernels",
+    "frames",
+    "integral_operators",
+    "projection_fields",
+    "stage_operators",
+]
+
+#: Up to this many entries (n_q n) Phi, K and Phi^T W are applied as dense
+#: arrays in the batched stage functions: for the small systems of limit
+#: cycles and continuation (P3:16: 96 x 48) a dense product costs a few
+#: microseconds where scipy.sparse's dispatch alone costs about ten.
+DENSE_OPERATORS_MAX = 32768
+
+#: Up to this many quadrature points the integration operators are applied as
+#: dense (n_q, n_q) matrices (one BLAS product; O(n_q^2) work, which beyond
+#: this is more than the O(n_q) of :meth:`LineQuadrature.cumulative_cells`).
+#: Measured, one Jacobian evaluation (best of 5x50, one BLAS thread), dense
+#: against cell-wise: P3:4 (n_q = 24) 0.15 against 0.22 ms, P3:16 (96) 1.11
+#: against 1.16 ms, the sine modes N = 3, 4 (256) 0.32-0.37 against 0.25-0.29
+#: ms, P3:64 (384) 33 against 27 ms.
+DENSE_INTEGRALS_MAX = 128
+
+
+def _as_dense(a) -> np.ndarray:
+    return np.asarray(a.toarray() if hasattr(a, "toarray") else a, dtype=float)
+
+
+def stage_operators(model: PipeModel):
+    """(Phi, K, Phi^T W): dense for small discretisations, else as the model has them.
+
+    Phi^T W is :attr:`PipeModel.test_matrix` (``\\int phi_i f`` of f at the
+    quadrature points); dense up to :data:`DENSE_OPERATORS_MAX` entries n_q n.
+    """
+    Phi, K, PhiT_W = model.disc.Phi, model.disc.K, model.test_matrix
+    if model.quad.n_q * model.n <= DENSE_OPERATORS_MAX:
+        Phi, K, PhiT_W = (_as_dense(a) for a in (Phi, K, PhiT_W))
+    return Phi, K, PhiT_W
+
+
+def frames(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normal and tangent, each (n_q, 2, S), of the angles th, shape (n_q, S)."""
+    s, c = np.sin(th), np.cos(th)
+    nrm = np.empty((th.shape[0], 2, th.shape[1]))
+    tng = np.empty_like(nrm)
+    nrm[:, 0], nrm[:, 1] = -s, c
+    tng[:, 0], tng[:, 1] = c, s
+    return nrm, tng
+
+
+def integral_operators(quad: LineQuadrature):
+    """(C, C^R): functions applying ``\\int_0^{x_q}`` and ``\\int_{x_q}^1`` along axis 0.
+
+    Dense matrices up to :data:`DENSE_INTEGRALS_MAX` points, else
+    :meth:`LineQuadrature.cumulative_cells` and :meth:`~LineQuadrature.from_tip_cells`.
+    """
+    n_q = quad.n_q
+    if n_q > DENSE_INTEGRALS_MAX:
+        return quad.cumulative_cells, quad.from_tip_cells
+    eye = np.eye(n_q)
+    Cm, Rm = quad.cumulative(eye), quad.from_tip(eye)
+
+    def cumulative(f):
+        return (Cm @ f.reshape(n_q, -1)).reshape(f.shape)
+
+    def from_tip(f):
+        return (Rm @ f.reshape(n_q, -1)).reshape(f.shape)
+
+    return cumulative, from_tip
+
+
+def projection_fields(quad: LineQuadrature):
+    """``g -> (V, U)`` with ``V = (C^R)^T (w g)`` and ``U = C^T V``, along axis 0.
+
+    For a field X, ``sum_q w_q g_q (C^R X)_q = sum_q V_q X_q`` and
+    ``sum_q w_q g_q (C^R C X)_q = sum_q U_q X_q``: the projections of
+    :meth:`StageKernels.jacobians` moved onto the test side.  Dense (one product
+    with the stacked operators) up to :data:`DENSE_INTEGRALS_MAX` points,
+    cell by cell beyond (``C^R = 1 w^T - C``, so ``(C^R)^T y = w (1^T y) - C^T y``).
+    """
+    n_q, w = quad.n_q, quad.w
+    if n_q <= DENSE_INTEGRALS_MAX:
+        eye = np.eye(n_q)
+        RwT = quad.from_tip(eye).T * w[None, :]
+        stacked = np.vstack([RwT, quad.cumulative(eye).T @ RwT])
+
+        def dense(g):
+            out = stacked @ g.reshape(n_q, -1)
+            return out[:n_q].reshape(g.shape), out[n_q:].reshape(g.shape)
+
+        return dense
+
+    def cells(g):
+        wg = w[:, None] * g.reshape(n_q, -1)
+        V = quad.cumulative_adjoint(wg)
+        np.subtract(w[:, None] * wg.sum(axis=0)[None, :], V, out=V)
+        return V.reshape(g.shape), quad.cumulative_adjoint(V).reshape(g.shape)
+
+    return cells
+
+
+class StageKernels:
+    """Residual, Jacobians and dR/dv of the pipe without variants at S stacked states.
+
+    Build it with :meth:`for_model`.  Each method takes the states as rows,
+    ``Q, P, A`` of shape (S, n) (q, q', q''), and equals the plain term of
+    :class:`~fempipe.model.operators.PipeModel` applied row by row, to round-off.
+
+    Parameters
+    ----------
+    model : PipeModel
+        A plain PipeModel (no subclass) without end mass, external damping or
+        springs; steady flow.
+    """
+
+    def __init__(self, model: PipeModel) -> None:
+        p = model.params
+        disc, quad = model.disc, model.quad
+        self.n = model.n
+        # The residual's operators (sparse on large discretisations) ...
+        self._res_ops = stage_operators(model)
+        # ... and the Jacobians' (always dense).
+        self._Phi = _as_dense(disc.Phi)
+        self._K = _as_dense(disc.K)
+        self._tip = np.asarray(disc.tip, dtype=float)
+        self._lever = p.gamma * (1.0 - model.x)[:, None]
+        self._w = model.w
+        self._grav = p.gamma * model.w * (1.0 - model.x)
+        self._v, self._v2, self._cv = p.v, p.v * p.v, 2.0 * p.v * math.sqrt(p.beta)
+        self._c1 = 2.0 * math.sqrt(p.beta)
+        self._mu, self._alpha = p.mu, p.alpha
+        self._cumulative, self._from_tip = integral_operators(quad)
+        self._projection_fields = projection_fields(quad)
+        self._PhiT_w = self._Phi.T * model.w  # (n, n_q): \int phi_i f
+        self._w2 = np.repeat(model.w, 2)
+
+    @staticmethod
+    def applies_to(model: PipeModel) -> bool:
+        """Whether the kernels know every term of ``model``: the pipe without
+        variants (no end mass, external damping or springs), no subclass."""
+        p = model.params
+        return type(model) is PipeModel and not (p.end_mass or p.external_damping or p.springs)
+
+    @classmethod
+    def for_model(cls, model: PipeModel) -> StageKernels | None:
+        """The kernels of ``model``, or None where :meth:`applies_to` is False."""
+        return cls(model) if cls.applies_to(model) else None
+
+    def residual(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
+        """``R(Q_s, P_s, A_s)``, shape (S, n): :meth:`PipeModel.residual` row by row.
+
+        The terms of the pipe without variants (v_dot = 0), summed in another
+        order: bending and Kelvin-Voigt ``K (q + mu q')``; gravity and
+        follower, local; and the three projections ``n . C^R F`` (inertia,
+        centripetal, Coriolis) with the one field
+        F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
+        since the projection is linear in F.
+        """
+        Phi, K, PhiT_W = self._res_ops
+        # Stages in columns: theta etc. have shape (n_q, S), frames (n_q, 2, S).
+        th = np.asarray(Phi @ Q.T)
+        th_d = np.asarray(Phi @ P.T)
+        th_dd = np.asarray(Phi @ Acc.T)
+        nrm, tng = frames(th)
+        F = self._cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * tng)
+        F = F + self._cv * th_d[:, None] * nrm
+        G = self._from_tip(F)
+        local = self._lever * np.sin(th + self._alpha) + self._v2 * np.sin(
+            (Q @ self._tip)[None, :] - th
+        )
+        local = local + np.einsum("qcs,qcs->qs", nrm, G)
+        return (np.asarray(K @ (Q + self._mu * P).T) + np.asarray(PhiT_W @ local)).T
+
+    def jacobians(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray):
+        """``(dR/dq, dR/dq', M)``, each (S, n, n): :meth:`PipeModel.jacobians` row by row.
+
+        Same terms as :meth:`PipeModel.jacobians`: with
+        F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
+
+        * dR/dq = K + Phi^T diag(d) Phi + (tip column) tip^T + the projection
+          \\int phi_i n . C^R X_j of X_j = dF/dq_j = C(a phi_j) + b phi_j,
+          a = -theta_ddot t - theta_dot^2 n, b = -2 v sqrt(beta) theta_dot t,
+          with d = gamma w (1 - xi) cos(theta + alpha) - v^2 w cos(theta(1) - theta)
+          - w t . C^R F;
+        * dR/dq' = mu K + the same projection with a = -2 theta_dot t,
+          b = 2 v sqrt(beta) n;
+        * M = \\int (C phi n) . (C phi n).
+
+        The projections are taken on the test side: with V = (C^R)^T (w n phi_i)
+        and U = C^T V (:func:`projection_fields`), the (i, j) entry is
+        ``sum_q (a . U_i + b . V_i)_q phi_j(x_q)``, one (n_q, n) field per
+        Jacobian times Phi.  Integrating the n test fields once, instead of the
+        2 x 2 n trial fields of dF/dq and dF/dq' twice each, makes a Jacobian
+        cheaper: 0.11 -> 0.08 ms on P3:8, 0.37 -> 0.23 ms on P3:16, 2.5 -> 1.1 ms
+        on P3:32 (best of 7, one BLAS thread).
+        """
+        Phi, K, tip, w = self._Phi, self._K, self._tip, self._w
+        n_q, n = Phi.shape
+        cv, v2 = self._cv, self._v2
+        S = Q.shape[0]
+        th, th_d, th_dd = Phi @ Q.T, Phi @ P.T, Phi @ Acc.T  # (n_q, S)
+        nrm, t = frames(th)  # (n_q, 2, S)
+        F = self._cumulative(th_dd[:, None] * nrm - (th_d**2)[:, None] * t)
+        F = F + cv * th_d[:, None] * nrm
+        n_phi = nrm[..., None] * Phi[:, None, None, :]  # (n_q, 2, S, n): n phi_i
+        V, U = self._projection_fields(n_phi)
+        a = -th_dd[:, None] * t - (th_d**2)[:, None] * nrm
+        ad = -2.0 * th_d[:, None] * t
+        b, bd = -cv * th_d[:, None] * t, cv * nrm
+        Z = np.empty((2 * S, n_q, n))  # the test fields of dR/dq, then of dR/dq'
+        Z[:S] = np.einsum("qcs,qcsi->sqi", a, U) + np.einsum("qcs,qcsi->sqi", b, V)
+        Z[S:] = np.einsum("qcs,qcsi->sqi", ad, U) + np.einsum("qcs,qcsi->sqi", bd, V)
+        proj = Z.transpose(0, 2, 1) @ Phi
+        cos_tip = np.cos((Q @ tip)[None, :] - th)  # (n_q, S)
+        d = self._grav[:, None] * np.cos(th + self._alpha) - v2 * w[:, None] * cos_tip
+        d = d - np.einsum("qcs,qcs->qs", t, self._from_tip(F)) * w[:, None]
+        tip_col = v2 * (self._PhiT_w @ cos_tip)  # (n, S)
+        Jq = K[None] + (Phi.T[None] * d.T[:, None, :]) @ Phi[None] + proj[:S]
+        Jq = Jq + tip_col.T[:, :, None] * tip[None, None, :]
+        Jqd = self._mu * K[None] + proj[S:]
+        Bs = self._cumulative(n_phi).transpose(2, 0, 1, 3).reshape(S, 2 * n_q, n)
+        M = (Bs * self._w2[None, :, None]).transpose(0, 2, 1) @ Bs
+        M = 0.5 * (M + M.transpose(0, 2, 1))
+        return Jq, Jqd, M
+
+    def velocity_derivative(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
+        """``dR/dv`` at the S states, shape (S, n), for steady flow.
+
+        Only two terms of Eq. (20) depend on v: the follower force, v^2 times
+        :meth:`~fempipe.model.operators.PipeModel.follower` at v = 1, and the
+        Coriolis force, v times :meth:`~fempipe.model.operators.PipeModel.coriolis`
+        at v = 1; so dR/dv = 2 v follower_1 + coriolis_1, exactly.
+        """
+        Phi, _, PhiT_W = self._res_ops
+        th = np.asarray(Phi @ Q.T)
+        th_d = np.asarray(Phi @ P.T)
+        nrm, _ = frames(th)
+        G = self._from_tip(self._c1 * th_d[:, None] * nrm)
+        local = (2.0 * self._v) * np.sin((Q @ np.asarray(self._tip))[None, :] - th)
+        local = local + np.einsum("qcs,qcs->qs", nrm, G)
+        return np.asarray(PhiT_W @ local).T

@@ -1,0 +1,228 @@
+"""Lagrange finite elements of any degree on a scikit-fem line mesh: :class:`FiniteElement`.
+
+One of the two discretisations behind the contract of
+:mod:`fempipe.model.discretization` (the package's point; the other is
+:class:`~fempipe.model.modal.Modal`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .quadrature import LineQuadrature
+
+if TYPE_CHECKING:  # imported where used: importing fempipe does not load scipy
+    import scipy.sparse as sp
+
+__all__ = ["FiniteElement"]
+
+
+class FiniteElement:
+    """Lagrange finite elements of degree ``degree`` on a line mesh of [0, 1].
+
+    Parameters
+    ----------
+    n_elements : int, optional
+        Number of uniform elements (ignored if ``nodes`` is given).
+    degree : int
+        Polynomial degree (1 to 10).  P1, P2 use scikit-fem's ``ElementLineP1``,
+        ``ElementLineP2``; higher degrees ``ElementLinePp``.
+    nodes : array_like, optional
+        Mesh nodes for graded meshes; must start at 0, end at 1, increase.
+    n_gauss : int, optional
+        Gauss points per element for all integrals.  The default ``2 * degree``
+        (at least 2) keeps the nodal superconvergence O(h^(2k)) of P_k in the
+        static tip values and eigenvalues: the integration operators interpolate
+        at the n_g Gauss points, so their local error is O(h^(n_g + 1)), and
+        the Gauss sums themselves are exact to degree 2 n_g - 1.
+
+    Notes
+    -----
+    scikit-fem assembles with the package's own Gauss rule (passed to
+    ``Basis`` as ``quadrature``), so its forms (``K``, ``gram``) and the
+    nonlinear terms integrated on :attr:`quad` use the same points and weights.
+    The Dirichlet condition theta(0) = 0 is imposed by removing the dofs of
+    the boundary named ``clamp`` (``basis.get_dofs``); theta'(1) = 0 is
+    natural in the weak form.
+    """
+
+    def __init__(
+        self,
+        n_elements: int = 16,
+        degree: int = 2,
+        nodes: np.ndarray | None = None,
+        n_gauss: int | None = None,
+    ) -> None:
+        import scipy.sparse as sp
+        from skfem import (
+            Basis,
+            BilinearForm,
+            ElementLineP1,
+            ElementLineP2,
+            MeshLine,
+        )
+
+        degree = int(degree)
+        if not 1 <= degree <= 10:
+            raise ValueError(f"degree must be an integer from 1 to 10, got {degree}")
+        if nodes is None:
+            if int(n_elements) < 1:
+                raise ValueError(f"n_elements must be >= 1, got {n_elements}")
+            nodes = np.linspace(0.0, 1.0, int(n_elements) + 1)
+        nodes = np.asarray(nodes, dtype=float)
+        if nodes.ndim != 1 or nodes.size < 2 or not np.all(np.diff(nodes) > 0):
+            raise ValueError("nodes must be a strictly increasing 1-D array of >= 2 points")
+        if abs(nodes[0]) > 1e-12 or abs(nodes[-1] - 1.0) > 1e-12:
+            raise ValueError("nodes must start at 0 and end at 1")
+        nodes = nodes.copy()
+        nodes[0], nodes[-1] = 0.0, 1.0
+        self.degree = degree
+        self.nodes = nodes
+        self.n_elements = nodes.size - 1
+        self.n_gauss = int(n_gauss) if n_gauss is not None else max(2, 2 * degree)
+        if self.n_gauss < degree + 1:
+            raise ValueError(
+                f"n_gauss must be >= degree + 1 = {degree + 1} so that the integration "
+                f"operators are exact for P{degree}, got {self.n_gauss}"
+            )
+        element = {1: ElementLineP1, 2: ElementLineP2}.get(degree)
+        element = element() if element is not None else _element_line_pp(degree)
+        self.quad = LineQuadrature(nodes, self.n_gauss)
+        self.mesh = MeshLine(nodes).with_boundaries(
+            {"clamp": lambda x: x[0] == 0.0, "free_end": lambda x: x[0] == 1.0}
+        )
+        # The reference cell of MeshLine is [0, 1], that of LineQuadrature too.
+        self.basis = Basis(
+            self.mesh, element, quadrature=(self.quad.ref_points[None, :], self.quad.ref_weights)
+        )
+        N_all = self.basis.N
+        self.n_all = N_all
+        self.free = self.basis.complement_dofs(self.basis.get_dofs("clamp"))
+        self.n = self.free.size
+        # The basis was built on the package's Gauss rule, so its shape-function
+        # values at its own quadrature points *are* Phi at the Gauss points, cell
+        # by cell in the order of LineQuadrature.x: no point location is needed
+        # (basis.probes, for arbitrary points, searches every cell for every
+        # point, O(n_q n_el)).
+        values = np.array([np.asarray(self.basis.basis[k][0]) for k in range(self.basis.Nbfun)])
+        n_el, n_qp = values.shape[1:]
+        rows = np.broadcast_to(np.arange(n_el * n_qp).reshape(n_el, n_qp), values.shape)
+        cols = np.broadcast_to(self.basis.element_dofs[:, :, None], values.shape)
+        Phi_all = sp.csr_matrix(
+            (values.ravel(), (rows.ravel(), cols.ravel())), shape=(n_el * n_qp, N_all)
+        )
+        self.Phi = Phi_all[:, self.free]
+        grads = np.array(
+            [np.asarray(self.basis.basis[k][0].grad[0]) for k in range(self.basis.Nbfun)]
+        )
+        dPhi_all = sp.csr_matrix(
+            (grads.ravel(), (rows.ravel(), cols.ravel())), shape=(n_el * n_qp, N_all)
+        )
+        self.dPhi = dPhi_all[:, self.free]
+        # A Lagrange vertex dof is the value of theta there: theta(1) is the
+        # dof of the free end.
+        tip = np.zeros(N_all)
+        tip[self.basis.get_dofs("free_end").all()] = 1.0
+        self.tip = tip[self.free]
+
+        @BilinearForm
+        def bending(u, v, w):
+            return u.grad[0] * v.grad[0]
+
+        @BilinearForm
+        def l2(u, v, w):
+            return u * v
+
+        self.K = bending.assemble(self.basis)[self.free][:, self.free].tocsr()
+        self.gram = l2.assemble(self.basis)[self.free][:, self.free].tocsr()
+        self.sparse = True
+
+    @property
+    def name(self) -> str:
+        return f"P{self.degree}:{self.n_elements}"
+
+    def full(self, q: np.ndarray) -> np.ndarray:
+        """All scikit-fem dofs, the clamped one set to zero; shape (N,) or (N, m)."""
+        q = np.asarray(q)
+        out = np.zeros((self.n_all,) + q.shape[1:], dtype=q.dtype)
+        out[self.free] = q
+        return out
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        """theta(xi) at arbitrary points in [0, 1]."""
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        P = self.basis.probes(xi[None, :])
+        return P @ self.full(q)
+
+    def basis_values(self, xi: np.ndarray) -> sp.csr_matrix:
+        """phi_j(xi) of the free dofs at arbitrary points, sparse, shape (m, n).
+
+        ``basis.probes`` locates every point in every cell (O(m n_el)): meant
+        for a few points, built once (the Gauss rule of a part cell).
+        """
+        import scipy.sparse as sp
+
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        P = sp.csr_matrix(self.basis.probes(xi[None, :]))
+        return P[:, self.free]
+
+    def refined(self, factor: int = 2) -> FiniteElement:
+        """Return a copy with every element split into ``factor`` equal parts."""
+        factor = int(factor)
+        x = self.nodes
+        fine = (x[:-1, None] + np.diff(x)[:, None] * np.arange(factor)[None, :] / factor).ravel()
+        return FiniteElement(degree=self.degree, nodes=np.append(fine, 1.0), n_gauss=self.n_gauss)
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": "fe",
+            "element": f"P{self.degree}",
+            "degree": self.degree,
+            "n_elements": self.n_elements,
+            "n_dofs": self.n,
+            "n_gauss": self.n_gauss,
+            "uniform": bool(np.allclose(np.diff(self.nodes), 1.0 / self.n_elements)),
+        }
+
+    def __repr__(self) -> str:
+        return f"FiniteElement(degree={self.degree}, n_elements={self.n_elements})"
+
+
+def _element_line_pp(degree: int):
+    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points.
+
+    ``ElementLinePp`` caches its Legendre values and reuses them whenever the
+    next call has as many points along the second axis, whatever the points
+    and the array's shape: :meth:`FiniteElement.evaluate` at exactly as many
+    points as a cell has Gauss points (``basis.probes``, points shaped
+    (1, m, 1), after the assembly's (1, m)) then fails with a broadcasting
+    error (scikit-fem 12.0.2).  The subclass keys the cache by the shape and
+    the values of the points.  It is built on first use, so that importing
+    fempipe does not import scikit-fem, and found by name (module
+    ``__getattr__``) when a discretisation is unpickled in a worker process.
+    """
+    # Build the class once: a second class of the same qualified name would make
+    # every element made from the first one unpicklable.
+    cls = globals().get("_ElementLinePp") or __getattr__("_ElementLinePp")
+    return cls(degree)
+
+
+def __getattr__(name: str):
+    if name != "_ElementLinePp":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from skfem import ElementLinePp
+
+    class _ElementLinePp(ElementLinePp):
+        def lbasis(self, X, i):
+            key = (X.shape, X.tobytes())
+            if key != getattr(self, "_points_key", None):
+                self.P, self.dP = self._reval_legendre(X[0, :], self.p)
+                self._points_key = key
+            return self.P[i], self.dP[i]
+
+    _ElementLinePp.__module__ = __name__
+    _ElementLinePp.__qualname__ = name
+    globals()[name] = _ElementLinePp
+    return _ElementLinePp

@@ -1,0 +1,239 @@
+"""The modal Galerkin discretisation (the paper's Eq. (22)): :class:`Modal` and the beam modes.
+
+One of the two discretisations behind the contract of
+:mod:`fempipe.model.discretization`: N global modes, the sine modes of the
+paper or the slopes of the clamped-free beam modes (:func:`beam_roots`,
+:func:`beam_mode_slopes`), with the orders of their errors
+(:data:`EXPECTED_ORDER`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .quadrature import LineQuadrature
+
+__all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
+
+
+class Modal:
+    """Modal Galerkin discretisation: N global modes of [0, 1].
+
+    The contract it fulfils is :class:`fempipe.model.discretization.Discretization`.
+
+    Two bases, both with theta(0) = 0 and theta'(1) = 0 built in:
+
+    ``basis="sine"`` (default): the paper's modes, Eq. (22),
+        phi_r(xi) = sin(k_r xi), k_r = (2r - 1) pi / 2, r = 1..N: the
+        clamped-free string modes.  They also have theta''(0) = 0, which the
+        true solution does not, so the method converges as N^-3 (README,
+        "Conventions and derivations").  K = diag(k_r^2 / 2).
+    ``basis="beam"``: the slopes of the clamped-free Euler-Bernoulli beam modes,
+        psi_r(xi) = phi_r'(xi) / lambda_r with
+        phi_r = cosh(lambda_r xi) - cos(lambda_r xi)
+        - s_r (sinh(lambda_r xi) - sin(lambda_r xi)),
+        s_r = (cosh lambda_r + cos lambda_r) / (sinh lambda_r + sin lambda_r)
+        and cos(lambda_r) cosh(lambda_r) = -1 (:func:`beam_roots`).  theta =
+        w' for the beam deflection w, so psi_r also has theta''(1) = 0 (no
+        shear force at the free end, which the true solution satisfies) and
+        theta'''(0) = 0 (from w(0) = 0 and w'''' = lambda^4 w) instead of
+        theta''(0) = 0.  The psi_r are the exact modes of the straight pipe
+        without flow and gravity, so the frequencies of the linear problem at
+        v = gamma = 0 are exact.  With ``\\int phi_r^2 = 1`` (the textbook
+        normalisation of phi_r), integrating by parts twice with the beam's
+        boundary conditions gives ``\\int psi_i' psi_j' =
+        \\int phi_i'' phi_j'' / (lambda_i lambda_j) = lambda_i^2 delta_ij``:
+        K = diag(lambda_r^2).  The Gram matrix is not diagonal.  The modes
+        are evaluated in a form without overflow or cancellation
+        (:func:`beam_mode_slopes`).
+
+    Parameters
+    ----------
+    n_modes : int
+        N >= 1.
+    n_cells, n_gauss : int, optional
+        The quadrature used for the nonlinear integrals.  The default
+        (max(32, 4N) cells of 8 Gauss points) integrates either basis and
+        the nonlinear terms to near round-off (for the beam modes also their
+        boundary layer e^{-lambda_r xi}: at N = 64, lambda_N h = 0.78), so
+        the error measured is the modal truncation alone.
+    basis : {"sine", "beam"}
+        Keyword only.
+
+    Attributes
+    ----------
+    k : ndarray, shape (N,)
+        Wavenumbers of the modes: k_r = (2r - 1) pi / 2 (sine) or
+        lambda_r (beam).
+    """
+
+    #: The accepted values of ``basis``.
+    BASES = ("sine", "beam")
+
+    def __init__(
+        self,
+        n_modes: int = 4,
+        n_cells: int | None = None,
+        n_gauss: int = 8,
+        *,
+        basis: str = "sine",
+    ) -> None:
+        n_modes = int(n_modes)
+        if n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {n_modes}")
+        if basis not in self.BASES:
+            raise ValueError(f"basis must be one of {', '.join(self.BASES)}, got {basis!r}")
+        self.n_modes = n_modes
+        self.n = n_modes
+        self.basis = basis
+        self.quad = LineQuadrature.uniform(n_cells or max(32, 4 * n_modes), n_gauss)
+        x = self.quad.x
+        if basis == "sine":
+            self.k = (2.0 * np.arange(1, n_modes + 1) - 1.0) * np.pi / 2.0
+            self.Phi = np.sin(np.outer(x, self.k))
+            self.dPhi = np.cos(np.outer(x, self.k)) * self.k
+            self.tip = np.sin(self.k)
+            # \int_0^1 phi_i' phi_j' = k_i^2 / 2 delta_ij (orthogonal cosines).
+            self.K = np.diag(self.k**2 / 2.0)
+        else:
+            self.k = beam_roots(n_modes)
+            self.Phi = beam_mode_slopes(self.k, x)
+            self.dPhi = beam_mode_slopes(self.k, x, derivative=1)
+            self.tip = beam_mode_slopes(self.k, [1.0])[0]
+            # \int_0^1 psi_i' psi_j' = lambda_i^2 delta_ij (class docstring).
+            self.K = np.diag(self.k**2)
+        # \int_0^1 phi_i phi_j (delta_ij / 2 for the sines); summed by the
+        # quadrature like every integral of the nonlinear terms.
+        self.gram = (self.Phi.T * self.quad.w) @ self.Phi
+        self.sparse = False
+
+    @property
+    def name(self) -> str:
+        return f"modal:{self.n_modes}" if self.basis == "sine" else f"modal-beam:{self.n_modes}"
+
+    @property
+    def expected_order(self) -> float:
+        """Order p of the error ~ N^-p in tip values, v_cr and eigenvalues.
+
+        :data:`EXPECTED_ORDER`: 3 for the sine modes, 4 for the beam modes
+        (README, "Convergence of the two modal bases").
+        """
+        return EXPECTED_ORDER[self.basis]
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        """theta(xi) at arbitrary points in [0, 1]."""
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        if self.basis == "sine":
+            return np.sin(np.outer(xi, self.k)) @ np.asarray(q)
+        return beam_mode_slopes(self.k, xi) @ np.asarray(q)
+
+    def basis_values(self, xi: np.ndarray) -> np.ndarray:
+        """phi_r(xi) at arbitrary points, analytic, shape (m, N)."""
+        xi = np.atleast_1d(np.asarray(xi, dtype=float))
+        if self.basis == "sine":
+            return np.sin(np.outer(xi, self.k))
+        return beam_mode_slopes(self.k, xi)
+
+    def refined(self, factor: int = 2) -> Modal:
+        """Return the same basis with ``factor`` times as many modes (default quadrature)."""
+        return Modal(int(factor) * self.n_modes, basis=self.basis)
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": "modal",
+            "n_modes": self.n_modes,
+            "n_dofs": self.n,
+            "n_cells": self.quad.n_cells,
+            "n_gauss": self.quad.n_gauss,
+            "basis": self.basis,
+        }
+
+    def __repr__(self) -> str:
+        return f"Modal(n_modes={self.n_modes}, basis={self.basis!r})"
+
+
+#: Order p of the error ~ N^-p of a modal discretisation in tip values, v_cr
+#: and eigenvalues, per basis (README, "Convergence of the two modal bases").
+EXPECTED_ORDER = {"sine": 3.0, "beam": 4.0}
+
+
+def beam_roots(n: int) -> np.ndarray:
+    """lambda_r, r = 1..n: the roots of cos(lambda) cosh(lambda) = -1.
+
+    Solved as cos(lambda) + 1 / cosh(lambda) = 0 (no overflow) by Brent's
+    method in [c - 0.4, c + 0.4], c = (2r - 1) pi / 2, to machine precision:
+    1.87510407, 4.69409113, 7.85475744, 10.99554073, ...  lambda_r - c is
+    about (-1)^(r+1) 2 e^{-c}, below the rounding of c from r = 13 on.
+
+    Parameters
+    ----------
+    n : int
+        Number of roots, >= 0.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    from fempipe.core.rootfinding import brentq
+
+    out = np.empty(int(n))
+    for r in range(1, int(n) + 1):
+        c = (2 * r - 1) * np.pi / 2.0
+        out[r - 1] = brentq(lambda x: np.cos(x) + 1.0 / np.cosh(x), c - 0.4, c + 0.4, xtol=1e-300)
+    return out
+
+
+def beam_mode_slopes(lam: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
+    """psi_r(xi) = phi_r'(xi) / lambda_r or a derivative, shape (len(xi), len(lam)).
+
+    phi_r is the clamped-free beam mode of :class:`Modal` (``basis="beam"``).
+    With E = e^{-lambda xi}, E+ = e^{lambda (xi - 1)}, E- = e^{-lambda (xi + 1)},
+    c = sin(lambda) - cos(lambda) - e^{-lambda} and
+    D = 1 - e^{-2 lambda} + 2 e^{-lambda} sin(lambda), so that
+    sinh(lambda) + sin(lambda) = e^lambda D / 2 and 1 - s = 2 c e^{-lambda} / D,
+    the textbook form becomes, with C = cos(lambda xi), S = sin(lambda xi),
+
+    ====================  =================================================
+    psi                   (C - E) + S + (c/D) (E+ + E- - 2 e^{-lambda} C)
+    psi' / lambda         E + C - S + (c/D) (E+ - E- + 2 e^{-lambda} S)
+    psi'' / lambda^2      -E - S - C + (c/D) (E+ + E- + 2 e^{-lambda} C)
+    psi''' / lambda^3     E - C + S + (c/D) (E+ - E- - 2 e^{-lambda} S)
+    ====================  =================================================
+
+    Every exponential is at most 1 and D >= 1 - 3 e^{-lambda_1} > 0.5, so
+    the values are accurate to round-off for any lambda and |psi| < 4;
+    psi(0) is exactly 0.  (The textbook form loses log10(cosh lambda) digits,
+    all of them from lambda ~ 37, r = 12, on, and overflows from r = 226.)
+
+    Parameters
+    ----------
+    lam : array_like, shape (N,)
+        Roots of cos(lambda) cosh(lambda) = -1 (:func:`beam_roots`).
+    xi : array_like, shape (m,)
+        Points of [0, 1].
+    derivative : int
+        0 to 3.
+
+    Returns
+    -------
+    ndarray, shape (m, N)
+    """
+    if derivative not in (0, 1, 2, 3):
+        raise ValueError(f"derivative must be 0, 1, 2 or 3, got {derivative}")
+    lam = np.atleast_1d(np.asarray(lam, dtype=float))[None, :]
+    xi = np.atleast_1d(np.asarray(xi, dtype=float))[:, None]
+    e1 = np.exp(-lam)
+    sl = np.sin(lam)
+    c_over_d = (sl - np.cos(lam) - e1) / (1.0 - e1 * e1 + 2.0 * e1 * sl)
+    lx = lam * xi
+    C, S, E = np.cos(lx), np.sin(lx), np.exp(-lx)
+    Ep, Em = np.exp(lam * (xi - 1.0)), np.exp(-lam * (xi + 1.0))
+    if derivative == 0:
+        return (C - E) + S + c_over_d * (Ep + Em - 2.0 * e1 * C)
+    if derivative == 1:
+        out = E + C - S + c_over_d * (Ep - Em + 2.0 * e1 * S)
+    elif derivative == 2:
+        out = -E - S - C + c_over_d * (Ep + Em + 2.0 * e1 * C)
+    else:
+        out = E - C + S + c_over_d * (Ep - Em - 2.0 * e1 * S)
+    return out * lam**derivative

@@ -1,0 +1,99 @@
+"""The collocation polynomial of one Radau IIA step: the integrator's one dense output.
+
+Inside an accepted step from t_old of size h, with s = (t - t_old)/h, the
+Radau IIA solution is the cubic y(s) through the four nodes
+(0, y_old), (c_1, Y_1), (c_2, Y_2), (c_3 = 1, Y_3) (:data:`NODES`): the
+positions, velocities or accelerations of the step's stages.  This module
+owns that polynomial.  It is evaluated in three floating-point forms, equal
+to round-off (``tests/test_collocation.py``: to 1e-15) and each kept because
+its users' results depend on its last bit:
+
+* **increment form** (:func:`increment_weights`, :func:`evaluate_increment`):
+  ``y_old + sum_i w_i(s) (Y_i - y_old)`` with the coefficients of the cubic
+  through (0, 0) and (c_i, Z_i) (:data:`INCREMENT_MATRIX`);
+  :meth:`Radau.dense <fempipe.solvers.radau.Radau.dense>`;
+* **barycentric Lagrange form** (:func:`lagrange_weights`,
+  :func:`evaluate_lagrange`): the products of the differences s - x_m times
+  the precomputed ``1 / prod(x_j - x_m)`` (:data:`LAGRANGE_WEIGHTS`); the
+  integrator's extrapolation of the stage accelerations into the next step
+  (Newton's starting guess);
+* **plain Lagrange product** (:func:`product_weights`,
+  :func:`evaluate_product`): ``prod_m (s - x_m)/(x_j - x_m)`` in a double loop,
+  the form of the tip extrema over a period of
+  :mod:`fempipe.analyses.periodic`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .tableau import C
+
+__all__ = [
+    "INCREMENT_MATRIX",
+    "LAGRANGE_WEIGHTS",
+    "NODES",
+    "evaluate_increment",
+    "evaluate_lagrange",
+    "evaluate_product",
+    "increment_weights",
+    "lagrange_weights",
+    "product_weights",
+]
+
+#: Nodes of the collocation polynomial on s = (t - t_old)/h: 0 and c_1, c_2, c_3 = 1.
+NODES = np.r_[0.0, C]
+#: Cubic through (0, 0) and (c_i, Z_i): coefficients of s, s^2, s^3 (rows) per Z_i.
+INCREMENT_MATRIX = np.linalg.inv(np.vander(C, 4, increasing=True)[:, 1:])
+#: Barycentric-like weights 1 / prod_{m != j} (x_j - x_m) of the nodes.
+LAGRANGE_WEIGHTS = np.array(
+    [1.0 / np.prod([NODES[j] - NODES[m] for m in range(4) if m != j]) for j in range(4)]
+)
+
+
+def increment_weights(s: float) -> np.ndarray:
+    """Weights of Y_i - y_old at one s, shape (3,) (increment form)."""
+    return np.array([s, s * s, s**3]) @ INCREMENT_MATRIX
+
+
+def evaluate_increment(s: float, y_old: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """y(s) at one s in the increment form; y_old shape (n,), Y shape (3, n)."""
+    return y_old + increment_weights(s) @ (Y - y_old)
+
+
+def lagrange_weights(s: np.ndarray) -> np.ndarray:
+    """Weights of (y_old, Y_1, Y_2, Y_3) at the points s, shape (m, 4) (barycentric form)."""
+    d0, d1, d2, d3 = (np.asarray(s)[:, None] - NODES[None, :]).T
+    d01, d23 = d0 * d1, d2 * d3
+    L = np.empty((d0.shape[0], 4))
+    L[:, 0], L[:, 1], L[:, 2], L[:, 3] = d1 * d23, d0 * d23, d01 * d3, d01 * d2
+    L *= LAGRANGE_WEIGHTS
+    return L
+
+
+def evaluate_lagrange(s: np.ndarray, y_old: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """y at the points s, shape (m, n), in the barycentric Lagrange form."""
+    L = lagrange_weights(s)
+    return L[:, :1] * y_old + L[:, 1:] @ Y
+
+
+def product_weights(s: np.ndarray) -> np.ndarray:
+    """Weights of (y_old, Y_1, Y_2, Y_3) at the points s, shape (m, 4) (plain product form).
+
+    ``L[:, j] = prod_{m != j} (s - x_m)/(x_j - x_m)``, multiplied in the order
+    m = 0, 1, 2, 3: the form the tip extrema of the branches of periodic orbits
+    are evaluated with (:class:`fempipe.analyses.limit_cycle.tips.CollocationOrbit`;
+    equal to the dense output's increment form to round-off, not bit for bit).
+    """
+    s = np.atleast_1d(s)[:, None]
+    L = np.ones((s.shape[0], 4))
+    for j in range(4):
+        for m in range(4):
+            if m != j:
+                L[:, j] *= (s[:, 0] - NODES[m]) / (NODES[j] - NODES[m])
+    return L
+
+
+def evaluate_product(s: np.ndarray, y_old: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """y at the points s, shape (m, n), in the plain product form (:func:`product_weights`)."""
+    return product_weights(s) @ np.vstack([y_old[None, :], Y])

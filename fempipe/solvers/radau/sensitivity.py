@@ -1,0 +1,86 @@
+"""The derivative of one Radau IIA step with respect to its initial state and a parameter.
+
+Differentiating the stage equations R(Q_i, P_i, A_i) = 0, with Q, P the
+stage formulas, gives
+
+    [M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i] dA_j = -K_i dq0 - (c_i h K_i + D_i) dp0,
+
+and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate): the exact derivative of
+the step map y0 -> y1 from the stage Jacobians (no freezing).  The same matrix
+with the right side -dR_i/dp gives the derivative by a parameter p at fixed
+y0 (contract rule 8), chained over the steps as
+dy_{k+1}/dp = S_k dy_k/dp + (dy_{k+1}/dp at fixed y_k).
+:class:`~fempipe.solvers.radau.Radau` accumulates these products into the
+monodromy matrix (``sensitivity=True``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .lapack import lu_factor, lu_solve
+from .tableau import A2, A, C
+
+__all__ = ["chain_step", "step_derivative"]
+
+
+def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np.ndarray:
+    """The part of d y1 / d (y0, p) through the stage accelerations.
+
+    Parameters
+    ----------
+    h : float
+        Step size.
+    Ks, Ds, Ms : ndarray, shape (3, n, n)
+        dR/dq, dR/dq', dR/dq'' at the three stages.
+    dR_dp : ndarray, shape (3, n), optional
+        dR/dp at the stages (the parameter column).
+
+    Returns
+    -------
+    ndarray, shape (2n, 2n) or (2n, 2n + 1)
+        (dq1, dp1) by (q0, p0[, p]); the whole derivative adds
+        ``[[I, h I], [0, I]]`` (the stage formulas at c_3 = 1, :func:`chain_step`).
+    """
+    n = Ks.shape[1]
+    # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
+    big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
+    big[np.arange(3), :, np.arange(3), :] += Ms
+    with_p = dR_dp is not None
+    rhs = np.empty((3, n, 2 * n + with_p))
+    np.negative(Ks, out=rhs[:, :, :n])
+    rhs[:, :, n : 2 * n] = -(C[:, None, None] * h * Ks + Ds)
+    if with_p:
+        # dA/dp at fixed y0: the same matrix, the right side -dR_i/dp.
+        rhs[:, :, -1] = -dR_dp
+    dA = lu_solve(lu_factor(big.reshape(3 * n, 3 * n)), rhs.reshape(3 * n, -1))
+    dA = dA.reshape(3, n, -1)
+    # d y1 / d (y0, p) = [[I, h I], [0, I]] (the stage formulas at c_3 = 1)
+    # plus (dq, dp): the derivatives through the stage accelerations.
+    D = np.empty((2 * n, dA.shape[2]))
+    np.einsum("j,jab->ab", (h * h) * A2[2], dA, out=D[:n])
+    np.einsum("j,jab->ab", h * A[2], dA, out=D[n:])
+    return D
+
+
+def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None = None):
+    """Chain one step's derivative D (:func:`step_derivative`) with the derivatives so far.
+
+    With Y = [d y/d y0, d y/dp]: Y1 = [[I, h I], [0, I]] Y + D[:, :2n] Y
+    (+ D[:, 2n] in the p column).
+
+    Returns
+    -------
+    (S1, dy_dp1)
+        d y1/d y0, shape (2n, 2n), and d y1/dp (None without ``dy_dp``).
+    """
+    n = S.shape[0] // 2
+    with_p = dy_dp is not None
+    Y = np.column_stack([S, dy_dp]) if with_p else S
+    new = D[:, : 2 * n] @ Y
+    new[:n] += Y[:n] + h * Y[n:]
+    new[n:] += Y[n:]
+    if with_p:
+        new[:, -1] += D[:, -1]
+        return new[:, :-1], new[:, -1]
+    return new, None
