@@ -42,7 +42,7 @@ def _cycle_tip_ranges(disc, alpha, t, q, p, a, per_step=8, fine=32):
     orbit = QuinticOrbit(t, q, p, a)
     s = np.linspace(0.0, 1.0, per_step + 1)[:-1]
     ts = np.append((orbit.t[:-1, None] + orbit.h[:, None] * s[None, :]).ravel(), orbit.t[-1])
-    coarse = tip_coordinates(disc, alpha, orbit(ts))
+    coarse = tip_coordinates(disc, orbit(ts), alpha)
     out = {}
     for key in TIP_KEYS:
         y = coarse[key]
@@ -50,7 +50,7 @@ def _cycle_tip_ranges(disc, alpha, t, q, p, a, per_step=8, fine=32):
         for k, sign in ((int(np.argmin(y)), 1.0), (int(np.argmax(y)), -1.0)):
             lo, hi = ts[max(k - 1, 0)], ts[min(k + 1, ts.size - 1)]
             tf = np.linspace(lo, hi, fine + 1)
-            r = _refined_range(tf, tip_coordinates(disc, alpha, orbit(tf))[key])
+            r = _refined_range(tf, tip_coordinates(disc, orbit(tf), alpha)[key])
             rng.append(r[0] if sign > 0 else r[1])
         out[key] = [min(rng[0], float(y.min())), max(rng[1], float(y.max()))]
     return out
@@ -129,7 +129,7 @@ def _collocation_tip_extrema(model, record, per_step=8):
     s = np.linspace(0.0, 1.0, per_step + 1)[:-1]
     nodes = np.stack([np.vstack([q_old[None, :], Q]) for _, _, q_old, Q in record])
     qs = np.einsum("sj,mjn->msn", lagrange(s), nodes).reshape(-1, model.n)
-    tips = tip_coordinates(disc, alpha, qs)
+    tips = tip_coordinates(disc, qs, alpha)
     ts = np.array([t0 + h * s for t0, h, _, _ in record]).ravel()
     t_end = record[-1][0] + record[-1][1]
     starts = np.array([r[0] for r in record])
@@ -148,7 +148,7 @@ def _collocation_tip_extrema(model, record, per_step=8):
             a = ts[k - 1] if k > 0 else ts[k]
             b = ts[k + 1] if k + 1 < ts.size else t_end
             r = minimize_scalar(
-                lambda t, key=key, sign=sign: sign * tip_coordinates(disc, alpha, state_at(t))[key],
+                lambda t, key=key, sign=sign: sign * tip_coordinates(disc, state_at(t), alpha)[key],
                 bounds=(a, b),
                 method="bounded",
                 options={"xatol": 1e-10 * max(1.0, t_end)},

@@ -200,14 +200,14 @@ def _time_traces_figure():
 
     model, tr = _trajectory()
     title = "α = 0°, β = 0.142, γ = 18.9, v = 10"
-    return plot_time_traces(model.disc, 0.0, tr.t, tr.q, title=title).figure
+    return plot_time_traces(model.disc, tr.t, tr.q, 0.0, title=title).figure
 
 
 def _phase_portrait_figure():
     from fempipe.plotting.dynamics import plot_phase_portrait
 
     model, tr = _trajectory()
-    ax = plot_phase_portrait(model.disc, 0.0, tr.q, tr.qdot)
+    ax = plot_phase_portrait(model.disc, tr.q, tr.qdot, 0.0)
     ax.set_title("α = 0°, β = 0.142, γ = 18.9, v = 10", fontsize="small")
     return ax.figure
 
@@ -218,7 +218,7 @@ def _oscillating_shapes_figure():
     model, tr = _trajectory()
     half = tr.t >= 0.5 * tr.t[-1]
     return plot_oscillating_shapes(
-        model.disc, 0.0, tr.q[half], title="α = 0°, β = 0.142, γ = 18.9, v = 10"
+        model.disc, tr.q[half], 0.0, title="α = 0°, β = 0.142, γ = 18.9, v = 10"
     ).figure
 
 
@@ -227,7 +227,7 @@ def _animation_frame_figure():
 
     model, tr = _trajectory()
     fig, draw, n = animation_figure(
-        model.disc, 0.0, tr.t[-50:], tr.q[-50:], title="α = 0°, β = 0.142, γ = 18.9, v = 10"
+        model.disc, tr.t[-50:], tr.q[-50:], 0.0, title="α = 0°, β = 0.142, γ = 18.9, v = 10"
     )
     draw(n - 1)
     return fig
@@ -361,7 +361,7 @@ def test_animation_loops_without_a_repeated_frame():
     model, tr = _trajectory()
     q = np.concatenate([tr.q[-20:], tr.q[-20:][:1]])  # closed: last = first
     t = np.concatenate([tr.t[-20:], [tr.t[-1] + (tr.t[1] - tr.t[0])]])
-    fig, _, n = animation_figure(model.disc, 0.0, t, q)
+    fig, _, n = animation_figure(model.disc, t, q, 0.0)
     plt.close(fig)
     assert n == len(q) - 1
 

@@ -80,8 +80,11 @@ def test_equilibrium_below_v_cr():
     m = PipeModel(DISC, Params(alpha=0.0, v=v))
     att = find_attractor(m)
     assert att.kind == "equilibrium"
-    tip = tip_coordinates(DISC, 0.0, solve_static(m).q)
+    q = solve_static(m).q
+    tip = tip_coordinates(DISC, q, 0.0)
     assert att.tip["X_tip"] == [pytest.approx(tip["X_tip"])] * 2
+    with pytest.raises(TypeError, match="alpha must be a scalar"):
+        tip_coordinates(DISC, 0.0, q)  # the old order (disc, alpha, q)
 
 
 def test_equilibrium_decision_is_the_stability_criterion():

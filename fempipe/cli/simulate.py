@@ -163,16 +163,16 @@ TIP_COLUMNS = (
 )
 
 
-def tip_rows(disc, alpha: float, t, q, qdot, output_dt: float | None = None) -> list[dict]:
+def tip_rows(disc, t, q, qdot, alpha: float, output_dt: float | None = None) -> list[dict]:
     """The tip's time series: tau, theta(1), eta(1), X_g(1), Z_g(1) and their rates.
 
     Parameters
     ----------
     disc : Discretization
-    alpha : float
     t : ndarray, shape (m,)
         Accepted step times of the integration.
     q, qdot : ndarray, shape (m, n)
+    alpha : float
     output_dt : float, optional
         Uniform output step: the states between accepted steps are the cubic
         Hermite interpolants through (q, qdot) at the steps (q exact to the
@@ -459,12 +459,12 @@ def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt
         ct, cq = t[half], q[half]
     figs = []
     try:
-        ax = plot_time_traces(disc, p.alpha, t, q, title=title)
+        ax = plot_time_traces(disc, t, q, p.alpha, title=title)
         figs.append(("time_traces.png", ax.figure))
-        ax = plot_phase_portrait(disc, p.alpha, q[t >= 0.5 * t[-1]], qd[t >= 0.5 * t[-1]])
+        ax = plot_phase_portrait(disc, q[t >= 0.5 * t[-1]], qd[t >= 0.5 * t[-1]], p.alpha)
         ax.set_title(title, fontsize="small")
         figs.append(("phase_portrait.png", ax.figure))
-        ax = plot_oscillating_shapes(disc, p.alpha, cq, title=title)
+        ax = plot_oscillating_shapes(disc, cq, p.alpha, title=title)
         figs.append(("oscillating_shapes.png", ax.figure))
         for name, fig in figs:
             output.figure(name, fig, dpi=130)
@@ -473,15 +473,15 @@ def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt
             plt.close(fig)
     frames = np.linspace(0, len(ct) - 1, min(48, len(ct))).round().astype(int)
     gif = output.path("pipe.gif")
-    animate(gif, disc, p.alpha, ct[frames], cq[frames], fps=16, title=title)
+    animate(gif, disc, ct[frames], cq[frames], p.alpha, fps=16, title=title)
     output.record(gif)
     # At most 400 frames (every step of a long run would be thousands of files).
     keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
     pvd = output.path("trajectory.pvd")
-    write_trajectory(pvd, disc, p.alpha, t[keep], q[keep], qd[keep], params=p)
+    write_trajectory(pvd, disc, t[keep], q[keep], qd[keep], p.alpha, params=p)
     output.record(pvd.with_suffix(""))  # the frames, trajectory/frame_NNNNN.vtu
     output.record(pvd)
-    tip = tip_rows(disc, p.alpha, traj.t, traj.q, traj.qdot, output_dt)
+    tip = tip_rows(disc, traj.t, traj.q, traj.qdot, p.alpha, output_dt)
     output.csv("tip.csv", tip, TIP_COLUMNS)
     output.json("simulate.json", result)
 

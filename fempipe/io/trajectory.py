@@ -40,7 +40,7 @@ __all__ = ["frame_data", "write_trajectory", "read_trajectory"]
 
 
 def frame_data(
-    disc: Discretization, alpha: float, q: np.ndarray, qdot: np.ndarray, points_per_cell: int = 4
+    disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float, points_per_cell: int = 4
 ):
     """Points (m, 3) and point data of one frame (see module docstring)."""
     from fempipe.model.kinematics import shape
@@ -69,10 +69,10 @@ def frame_data(
 def write_trajectory(
     path: str | os.PathLike,
     disc: Discretization,
-    alpha: float,
     t: Sequence[float],
     q: np.ndarray,
     qdot: np.ndarray,
+    alpha: float,
     points_per_cell: int = 4,
     params=None,
 ) -> Path:
@@ -83,9 +83,9 @@ def write_trajectory(
     path : path-like
         The collection file, ending in ``.pvd``.
     disc : Discretization
-    alpha : float
     t : sequence of float, shape (m,)
     q, qdot : ndarray, shape (m, n)
+    alpha : float
     params : Params, optional
         Written as field data (v, alpha, beta, gamma, mu) beside ``time``.
 
@@ -111,7 +111,7 @@ def write_trajectory(
     frames_dir.mkdir(parents=True, exist_ok=True)
     entries = []
     for k in range(t.size):
-        pts, data = frame_data(disc, alpha, q[k], qdot[k], points_per_cell)
+        pts, data = frame_data(disc, q[k], qdot[k], alpha, points_per_cell)
         m = pts.shape[0]
         cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
         name = f"frame_{k:05d}.vtu"

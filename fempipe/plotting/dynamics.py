@@ -35,9 +35,7 @@ __all__ = [
 _LABEL = {"eta_tip": r"$\eta(1)$", "X_tip": r"$X_{g}(1)$", "Z_tip": r"$Z_{g}(1)$"}
 
 
-def _tip_series(
-    disc: Discretization, alpha: float, q: np.ndarray, qdot: np.ndarray | None = None
-) -> dict:
+def _tip_series(disc: Discretization, q: np.ndarray, qdot: np.ndarray | None, alpha: float) -> dict:
     """Tip coordinates (and their rates X_dot, Z_dot) of the states q, shape (m, n)."""
     from fempipe.model.kinematics import tip_values, tip_velocity
 
@@ -49,18 +47,20 @@ def _tip_series(
     return out
 
 
-def plot_time_traces(disc: Discretization, alpha: float, t, q, ax=None, title: str | None = None):
+def plot_time_traces(disc: Discretization, t, q, alpha: float, ax=None, title: str | None = None):
     """Tip position in the global frame against time, Fig. 11.
 
     Parameters
     ----------
     disc : Discretization
-    alpha : float
     t : ndarray, shape (m,)
     q : ndarray, shape (m, n)
+    alpha : float
+        The inclination (a scalar; the arrays come first, as in
+        :func:`fempipe.model.kinematics.tip_values`).
     """
     ax = new_axes(ax, (7, 3.5))
-    tip = _tip_series(disc, alpha, q)
+    tip = _tip_series(disc, q, None, alpha)
     ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
     ax.plot(t, tip["Z_tip"], label=_LABEL["Z_tip"] + " (horizontal)")
     ax.set_xlabel(r"$\tau$")
@@ -74,9 +74,9 @@ def plot_time_traces(disc: Discretization, alpha: float, t, q, ax=None, title: s
 
 def plot_phase_portrait(
     disc: Discretization,
-    alpha: float,
     q,
     qdot,
+    alpha: float,
     ax=None,
     coordinate: str = "Z_tip",
     label=None,
@@ -86,7 +86,7 @@ def plot_phase_portrait(
     if coordinate not in ("Z_tip", "X_tip"):
         raise ValueError(f"coordinate must be 'Z_tip' or 'X_tip', got {coordinate!r}")
     ax = new_axes(ax, (4.5, 4))
-    tip = _tip_series(disc, alpha, q, qdot)
+    tip = _tip_series(disc, q, qdot, alpha)
     dot = tip["Z_dot"] if coordinate == "Z_tip" else tip["X_dot"]
     ax.plot(tip[coordinate], dot, lw=1.0, label=label)
     ax.set_xlabel(_LABEL[coordinate])
@@ -100,7 +100,7 @@ def plot_phase_portrait(
 
 
 def plot_oscillating_shapes(
-    disc: Discretization, alpha: float, q, ax=None, n_shapes: int = 12, title=None
+    disc: Discretization, q, alpha: float, ax=None, n_shapes: int = 12, title=None
 ):
     """Overlaid centrelines in the global frame: Z_g across, X_g (gravity) down the page.
 
@@ -296,9 +296,9 @@ def _closed(q: np.ndarray) -> bool:
 
 def animation_figure(
     disc: Discretization,
-    alpha: float,
     t,
     q,
+    alpha: float,
     title: str | None = None,
 ):
     """The figure of :func:`animate` and its frame function.
@@ -355,9 +355,9 @@ def animation_figure(
 def animate(
     path: str | os.PathLike,
     disc: Discretization,
-    alpha: float,
     t,
     q,
+    alpha: float,
     fps: int = 20,
     title: str | None = None,
 ):
@@ -372,7 +372,7 @@ def animate(
 
     from fempipe.io import atomic_path
 
-    fig, draw, n = animation_figure(disc, alpha, t, q, title=title)
+    fig, draw, n = animation_figure(disc, t, q, alpha, title=title)
     # blit=False: every frame is drawn whole, so the layout (constrained) is
     # the one the text checks see.
     anim = FuncAnimation(fig, draw, frames=n, blit=False)

@@ -187,7 +187,7 @@ def orbit(
     m = model_for(disc, alpha, v)
     if period is None:  # an equilibrium: a single shape
         s = shape(disc, q, alpha)
-        tip = {k: np.array([val]) for k, val in tip_coordinates(disc, alpha, q).items()}
+        tip = {k: np.array([val]) for k, val in tip_coordinates(disc, q, alpha).items()}
         return Orbit(
             label,
             alpha,
@@ -199,7 +199,7 @@ def orbit(
             [(s.Z_g, s.X_g)],
         )
     traj = simulate(m, q, qdot, periods * period, n_out=n_out, rtol=1e-8)
-    tip = tip_coordinates(disc, alpha, traj.q)
+    tip = tip_coordinates(disc, traj.q, alpha)
     rates = [tip_velocity(disc, qq, pp, alpha) for qq, pp in zip(traj.q, traj.qdot, strict=True)]
     tip_rate = {k: np.array([r[k] for r in rates]) for k in ("eta_tip", "X_tip", "Z_tip")}
     idx = np.linspace(0, np.searchsorted(traj.t, traj.t[0] + period) - 1, n_shapes).astype(int)
@@ -255,7 +255,7 @@ def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
 def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
     """Tip coordinates and their rates along ``periods`` periods of a cycle."""
     q, p = cycle.orbit_q[:-1], cycle.orbit_qdot[:-1]  # the last sample repeats the first
-    tip = tip_coordinates(disc, alpha, q)
+    tip = tip_coordinates(disc, q, alpha)
     rates = [tip_velocity(disc, a, b, alpha) for a, b in zip(q, p, strict=True)]
     dt = cycle.orbit_t[1] - cycle.orbit_t[0]
     m = q.shape[0]

@@ -334,7 +334,7 @@ class _AttractorSearch:
         if q_s is not None and self.stable:
             d = state_distance(stepper.q - q_s, stepper.qdot, 0.05)
             if d < self.equilibrium_radius and d <= self.d_prev:
-                tv = tip_coordinates(self.disc, self.alpha, q_s)
+                tv = tip_coordinates(self.disc, q_s, self.alpha)
                 tip = {k: [float(tv[k]), float(tv[k])] for k in TIP_KEYS}
                 return self._finish("equilibrium", tip=tip, q=q_s.copy(), p=np.zeros(self.n))
             self.d_prev = d if d < self.equilibrium_radius else math.inf

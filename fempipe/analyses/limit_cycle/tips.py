@@ -48,9 +48,17 @@ __all__ = [
 TIP_KEYS = ("eta_tip", "X_tip", "Z_tip")
 
 
-def tip_coordinates(disc: Discretization, alpha: float, q: np.ndarray) -> dict:
+def tip_coordinates(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
     """The tip coordinates recorded on attractors (:data:`TIP_KEYS`) of one state
-    (n,) or many (m, n): those of :func:`fempipe.model.kinematics.tip_values`."""
+    (n,) or many (m, n): those of :func:`fempipe.model.kinematics.tip_values`.
+
+    The arguments come in the package's one order: the discretization, the state
+    arrays, then alpha (a scalar; a call in another order raises TypeError).
+    """
+    if np.ndim(alpha) != 0:
+        raise TypeError(
+            "tip_coordinates(disc, q, alpha): alpha must be a scalar, the last argument"
+        )
     tip = tip_values(disc, q, alpha)
     return {k: tip[k] for k in TIP_KEYS}
 
@@ -149,7 +157,7 @@ class QuinticOrbit:
         self, disc: Discretization, alpha: float, per_step: int
     ) -> tuple[np.ndarray, dict]:
         ts = _step_times(self.t[:-1], self.h, per_step, end=self.t[-1])
-        return ts, tip_coordinates(disc, alpha, self(ts))
+        return ts, tip_coordinates(disc, self(ts), alpha)
 
 
 class CollocationOrbit:
@@ -188,7 +196,7 @@ class CollocationOrbit:
         nodes = np.stack([np.vstack([q_old[None, :], Q]) for _, _, q_old, Q in self.record])
         qs = np.einsum("sj,mjn->msn", L, nodes).reshape(-1, nodes.shape[-1])
         h = np.array([r[1] for r in self.record])
-        return _step_times(self.starts, h, per_step), tip_coordinates(disc, alpha, qs)
+        return _step_times(self.starts, h, per_step), tip_coordinates(disc, qs, alpha)
 
 
 class TipTrace:
@@ -216,7 +224,7 @@ class TipTrace:
         t_old, t = stepper.t_old, stepper.t
         ts = np.linspace(t_old, t, self.per_step + 1)[1:]
         qs = np.array([stepper.dense(s)[0] for s in ts[:-1]] + [stepper.q])
-        self.steps.append((ts, tip_coordinates(self.disc, self.alpha, qs)))
+        self.steps.append((ts, tip_coordinates(self.disc, qs, self.alpha)))
 
     def __len__(self) -> int:
         return len(self.steps)
@@ -345,7 +353,7 @@ def _parabola(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
     if fine > 0:
         a, b = _bracket(orbit, ts, k)
         ts = np.linspace(a, b, fine + 1)
-        y = tip_coordinates(disc, alpha, orbit(ts))[key]
+        y = tip_coordinates(disc, orbit(ts), alpha)[key]
         k = int(pick(y))
     v = _vertex(ts, y, k)
     return min(v, float(y.min())) if sign > 0 else max(v, float(y.max()))
@@ -358,7 +366,7 @@ def _bounded(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
     k = int(np.argmin(sign * y))
     a, b = _bracket(orbit, ts, k)
     r = minimize_scalar(
-        lambda t: sign * tip_coordinates(disc, alpha, orbit(t))[key],
+        lambda t: sign * tip_coordinates(disc, orbit(t), alpha)[key],
         bounds=(a, b),
         method="bounded",
         options={"xatol": 1e-10 * max(1.0, orbit.t_end)},

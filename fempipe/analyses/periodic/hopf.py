@@ -155,7 +155,7 @@ def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
     """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
     [min, max] form of the diagram's points: the static points, and the Hopf points
     where a branch of orbits starts."""
-    tip = tip_coordinates(model.disc, model.params.alpha, q)
+    tip = tip_coordinates(model.disc, q, model.params.alpha)
     return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 
