@@ -1,7 +1,7 @@
 """fempipe: finite elements and modal Galerkin for the soft pipe conveying fluid.
 
 The geometrically exact model of Chen, Hu, Dai & Wang (Appl. Math. Mech.
-41(9) 1381-1400, 2020), Eq. (20), discretised by 1-D Lagrange finite
+41(9) 1381-1400, 2020), Eq. (20), discretized by 1-D Lagrange finite
 elements on a scikit-fem MeshLine or by the paper's sine modes.
 
 The package is layered, lowest first: ``core`` < ``model`` < ``solvers`` <
@@ -27,7 +27,7 @@ from fempipe.core.version import __version__ as __version__  # re-exported
 
 #: public name -> submodule that defines it, by the user's task
 _LAZY: dict[str, str] = {
-    # The model: parameters, discretisations, the pipe's residual, the centreline
+    # The model: parameters, discretizations, the pipe's residual, the centerline
     "Params": "model.params",
     "PipeSI": "model.params",
     "FiniteElement": "model.discretization",

@@ -179,7 +179,7 @@ def test_velocity_derivative_of_the_stage_residuals(disc, extra, cls):
 @pytest.mark.parametrize("disc", [FiniteElement(4, 3), Modal(3, n_cells=8)], ids=str)
 def test_batched_stage_jacobians_give_the_same_sensitivities(disc, monkeypatch):
     """The three stage Jacobians of the sensitivity in one batched call (small
-    discretisations) or three: the same monodromy and d phi/dv to round-off."""
+    discretizations) or three: the same monodromy and d phi/dv to round-off."""
     m = PipeModel(disc, Params(v=7.0, alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3))
     q0, p0 = initial_state(m, 1, 0.3)
 

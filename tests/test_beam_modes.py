@@ -347,7 +347,7 @@ def test_beam_coefficients_decay_like_the_derivation():
 
 @functools.cache
 def _converged_v_cr(alpha: float) -> float:
-    """The paper case's in-plane v_cr from another discretisation: quintic elements
+    """The paper case's in-plane v_cr from another discretization: quintic elements
     P5:8, converged (P4:16 and P3:32 agree with it to 3e-12).  At alpha = 0 it is
     checked against the classical straight-pipe solver (below)."""
     p = Params(alpha=alpha, **PAPER_CASE)
@@ -371,7 +371,7 @@ def test_critical_velocity_converges_to_fe(alpha):
         classical = classical_v_cr(pipe, 8.0, method="legendre", n=16)
         assert classical.kind == "flutter" and abs(classical.v_cr - ref) < 1e-9
     fe = critical_velocity(PipeModel(FiniteElement(16, 3), p), v_max=7.0).critical
-    assert abs(fe.v - ref) < 1e-7  # P3:16's discretisation error
+    assert abs(fe.v - ref) < 1e-7  # P3:16's discretization error
     err = []
     for n in (8, 16):
         c = critical_velocity(PipeModel(Modal(n, basis="beam"), p), v_max=7.0).critical
@@ -435,7 +435,7 @@ def test_limit_cycle_on_four_beam_modes():
     """The whole dynamics chain (static state, transient, shooting) runs on the beam
     basis: N = 4 finds the flutter limit cycle of alpha = 0, v = 10 (paper case)
     within 4.2e-4 of the amplitude of eta_tip (the sine modes: 6.4e-3) and 2e-4 of
-    the period of the same cycle on the other discretisation, FE P5:4 (7e-8 and
+    the period of the same cycle on the other discretization, FE P5:4 (7e-8 and
     3e-8 from P3:32 at shoot_rtol = 1e-10)."""
     from fempipe.analyses.limit_cycle import find_attractor
 

@@ -7,7 +7,7 @@ Paidoussis' integrals, Beck's column, Gregory & Paidoussis' cantilever,
 Blevins' tip-mass cantilever, Greenhill's column and its version with a top
 load, Chen's tip-spring divergence, Plaut & Infante's externally damped Beck
 column, the hysteretic beam, and Paidoussis' hanging cantilevers conveying
-air.  The two discretisations (Paidoussis' beam-mode Galerkin and the
+air.  The two discretizations (Paidoussis' beam-mode Galerkin and the
 Legendre spectral elements) check each other where no closed form exists.
 """
 
@@ -93,7 +93,7 @@ def test_paidoussis_integrals():
 
 
 # ----------------------------------------------------------- classical pipes --
-def test_cantilever_frequencies_both_discretisations():
+def test_cantilever_frequencies_both_discretizations():
     """v = gamma = 0: omega_r = lambda_r^2 exactly for the beam modes (they are the
     modes), and to 1e-11 for the Legendre elements (p = 16, degree 18)."""
     exact = cantilever_roots(4) ** 2
@@ -237,7 +237,7 @@ def test_tip_spring_limit_is_clamped_pinned():
     assert abs(tip_spring_divergence(1e9) - 4.4934) < 1e-4
 
 
-def test_interior_spring_two_discretisations():
+def test_interior_spring_two_discretizations():
     """A spring inside the pipe (kappa = 50 at xi = 0.6, beta = 0.2, hanging
     gamma = 10): the Legendre elements cut at the spring converge (p = 12 and 24
     agree to 1e-10); the beam modes, smooth across the spring while eta''' jumps,

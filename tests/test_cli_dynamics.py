@@ -84,7 +84,7 @@ def test_simulate_out_files(tmp_path, capsys):
     mesh = meshes[-1]
     assert mesh.cells[0].type == "line"
     assert {"theta", "theta_dot", "velocity"} <= set(mesh.point_data)
-    # The clamp is at the origin and the centreline has unit length.
+    # The clamp is at the origin and the centerline has unit length.
     pts = mesh.points
     assert np.allclose(pts[0], 0.0)
     assert np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1)) == pytest.approx(1.0, abs=1e-3)
@@ -258,7 +258,7 @@ def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypat
 def test_simulate_shoot_rtol_default_is_tighter_with_error_estimate():
     """--shoot-rtol defaults to 1e-5, and to 1e-7 with --error-estimate (the
     shooting tolerance is the estimates' floor, which 1e-5 would put above
-    the discretisation error of a P3:16 cycle); a given value is kept."""
+    the discretization error of a P3:16 cycle); a given value is kept."""
     import argparse
 
     from fempipe.cli import simulate as sim

@@ -4,7 +4,7 @@ The pipe is round: beside the motion in the plane of its static state (the
 paper's Eq. (32)) each command analyses the motion out of it
 (:mod:`fempipe.model.out_of_plane`), and its verdicts and critical velocities are
 those of three dimensions; ``--planar`` gives the paper's planar output as
-before.  Small discretisations (four sine modes, P3:8) keep each run to
+before.  Small discretizations (four sine modes, P3:8) keep each run to
 seconds.  The paper's case at alpha = pi/2 loses stability out of the plane
 first (Modal(4): flutter at 5.853 out of the plane, 6.241 in it); at
 alpha = 0 the two planes are the same problem.

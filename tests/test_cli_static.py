@@ -223,7 +223,7 @@ def test_out_shapes_read_back_with_meshio(td_out):
         assert mesh.point_data["theta"][sel][tip] == pytest.approx(p["theta_tip"], abs=1e-12)
         assert mesh.point_data["v"][sel][0] == p["v"]
         pts = mesh.points[sel]
-        # Points: the centreline in metres, gravity along -y: (Z_g L, -X_g L, 0).
+        # Points: the centerline in metres, gravity along -y: (Z_g L, -X_g L, 0).
         assert pts[tip, 0] == pytest.approx(p["Z_tip_m"], abs=1e-12)
         assert pts[tip, 1] == pytest.approx(-p["X_tip_m"], abs=1e-12)
         assert np.all(pts[:, 2] == 0.0)

@@ -1,7 +1,7 @@
 """``fempipe compare``: a user's values against fempipe's, with fempipe's error estimate.
 
 Everything runs in-process through ``fempipe.cli.main``, on cheap
-discretisations (three sine modes, P2 on 4 elements); the expected numbers
+discretizations (three sine modes, P2 on 4 elements); the expected numbers
 come from independent computations: the second v_cr implementation of
 :mod:`fempipe.validation.onset`, the collocation solution of the strong form
 (:func:`fempipe.validation.bvp.solve_static_bvp`), a finer mesh, and

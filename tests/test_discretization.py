@@ -1,4 +1,4 @@
-"""The discretisation contract: basis values, clamp, tip, stiffness and Gram matrices.
+"""The discretization contract: basis values, clamp, tip, stiffness and Gram matrices.
 
 References are closed-form integrals of polynomials that the elements
 represent exactly (nodal interpolation at scikit-fem's dof locations) and the
@@ -74,7 +74,7 @@ def test_both_satisfy_the_protocol(disc):
     assert disc.name in ("P2:3", "modal:3")
 
 
-def test_tip_values_closed_form_and_vectorised():
+def test_tip_values_closed_form_and_vectorized():
     """theta = c xi (represented by P3): eta(1) = (1 - cos c)/c,
     X_g(1) = (sin(c + alpha) - sin alpha)/c, Z_g(1) = (cos alpha - cos(c + alpha))/c,
     varsigma(1) = sin(c)/c - 1 (Eqs. (5), (28)); m states at once give the same."""

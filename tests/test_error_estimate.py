@@ -1,7 +1,7 @@
 """``fempipe.studies.error_estimate`` and ``--error-estimate`` of static, critical and simulate.
 
 The estimates are checked against the true error, measured on an
-independent fine discretisation computed here with the library (P3:64 for
+independent fine discretization computed here with the library (P3:64 for
 static states, P3:16 for v_cr, P3:4 for a limit cycle: each at least 100x
 more accurate than the coarse case it judges): the estimate must bound it and
 be at most 100x larger.  Without the option the output must be exactly what
@@ -158,7 +158,7 @@ def test_estimate_is_the_grid_convergence_index():
     assert estimate(1.0, 1.5, 1.0, ratio=3.0) == pytest.approx(3 * 0.5 * 3 / 2, rel=1e-15)
     # Order unknown: the bracket is dropped.
     assert estimate(1.0, 1.5, None) == pytest.approx(1.5, rel=1e-15)
-    # Vectorised, with a floor (scalar or per element) and NaN passed through.
+    # Vectorized, with a floor (scalar or per element) and NaN passed through.
     e = estimate(np.array([1.0, 2.0, np.nan]), np.array([1.0 + 1e-3, 2.0, 0.0]), 6.0, floor=1e-10)
     np.testing.assert_allclose(e[:2], [3e-3 * 64 / 63, 1e-10], rtol=1e-12)
     assert np.isnan(e[2])
@@ -316,7 +316,7 @@ def test_critical_v_cr_estimate_bounds_the_true_error(capsys, disc):
 
 
 def test_critical_events_matched_by_kind_and_mode(capsys, tmp_path):
-    """alpha = pi: the start divergence, the restabilisation, the flutter and the folds
+    """alpha = pi: the start divergence, the restabilization, the flutter and the folds
     of both buckled branches all find their partner in the refined run."""
     d = run_json(
         capsys,

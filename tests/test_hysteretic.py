@@ -1,7 +1,7 @@
 """Hysteretic (structural) damping: EI -> EI (1 + i mu_h sgn(omega)) in the linear stability problem.
 
 The references come from outside fempipe.analyses.stability: the undamped frequencies
-of the same discretisation and the exact clamped-free beam frequencies (at
+of the same discretization and the exact clamped-free beam frequencies (at
 rest the hysteretic roots are known in closed form), a beam-mode Galerkin
 solution of the textbook lateral-displacement equation of the straight pipe
 written below, Paidoussis' published theory for hanging cantilevers conveying
@@ -161,7 +161,7 @@ def _at_rest(disc, mu_h, mu=0.0):
 def test_cantilever_at_rest_roots_are_the_undamped_ones_times_one_plus_i_mu_h(disc):
     """v = gamma = mu = 0: K^d is the bending matrix alone, so every resolved root
     obeys lambda^2 = -omega_r^2 (1 + i mu_h sgn(Im lambda)), omega_r the undamped
-    frequencies of the same discretisation (the roots i omega_r without mu_h).
+    frequencies of the same discretization (the roots i omega_r without mu_h).
     Measured 3.7e-10 relative at most (QZ round-off of the top resolved modes of
     P3:32; the symmetric eigensolver's omega_1 of the canonical modes is itself
     1.8e-8 off there, eps ||K|| / omega_1^2, so it is not the reference)."""
@@ -185,7 +185,7 @@ def test_cantilever_at_rest_roots_are_the_undamped_ones_times_one_plus_i_mu_h(di
 
 @pytest.mark.parametrize("disc", [FiniteElement(64, 3), Modal(12, basis="beam")], ids=str)
 def test_cantilever_at_rest_against_the_exact_beam_frequencies(disc):
-    """Converged discretisations: lambda^2 = -beta_r^4 (1 + i mu_h) with beta_r the
+    """Converged discretizations: lambda^2 = -beta_r^4 (1 + i mu_h) with beta_r the
     exact clamped-free roots (cos beta cosh beta = -1), to 1e-8 for the modes
     converged to that level (P3:64: modes 1-4; the beam basis: all twelve)."""
     mu_h = 0.05
@@ -336,7 +336,7 @@ def test_every_positive_frequency_root_solves_its_problem():
 
 
 def test_events_divergence_and_folds_stay_flutter_moves():
-    """alpha = pi, v <= 6: the divergence at v = 0, the restabilisation and the folds
+    """alpha = pi, v <= 6: the divergence at v = 0, the restabilization and the folds
     of the buckled branches are real-root events (to 1e-9 the same with mu_h =
     0.05); the flutter of mode 2 is located as usual (Re lambda of the tracked
     root through 0) and moves; just below and above it the spectrum says stable
@@ -367,14 +367,14 @@ def test_events_divergence_and_folds_stay_flutter_moves():
 @pytest.mark.parametrize(
     ("params", "mu_h", "stable_without", "stable_with"),
     [
-        # stabilising: the hanging paper pipe between v_cr = 6.3337 and 6.4446
+        # stabilizing: the hanging paper pipe between v_cr = 6.3337 and 6.4446
         (Params(alpha=0.0, mu=5e-3, v=6.4, **PAPER), 0.05, False, True),
-        # destabilising: beta = 0.65, where damping is known to destabilise
+        # destabilizing: beta = 0.65, where damping is known to destabilize
         (Params(alpha=0.0, beta=0.65, gamma=10.0, mu=0.0, v=12.0), 0.1, True, False),
         (Params(alpha=np.pi / 2, mu=5e-3, v=3.0, **PAPER), 0.05, True, True),
         (Params(alpha=np.pi, mu=5e-3, v=1.0, **PAPER), 0.05, False, False),
     ],
-    ids=["stabilised", "destabilised", "deformed", "diverging"],
+    ids=["stabilized", "destabilized", "deformed", "diverging"],
 )
 def test_sparse_criterion_decides_as_the_dense_one(params, mu_h, stable_without, stable_with):
     """P3:80 (n = 240, above the dense limit): the sparse shift-invert path with

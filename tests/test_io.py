@@ -118,7 +118,7 @@ def test_shapes_vtu_reads_back_with_meshio(tmp_path, two_shapes, length):
         for f in SHAPE_FIELDS:
             np.testing.assert_array_equal(d[f], getattr(s, f))
         np.testing.assert_array_equal(d["v"], v)
-        # Points: the centreline with gravity along -y, (Z_g, -X_g, 0), Eq. (28).
+        # Points: the centerline with gravity along -y, (Z_g, -X_g, 0), Eq. (28).
         np.testing.assert_allclose(d["points"][:, 0], s.Z_g * scale, rtol=0, atol=1e-15)
         np.testing.assert_allclose(d["points"][:, 1], -s.X_g * scale, rtol=0, atol=1e-15)
         assert np.all(d["points"][:, 2] == 0)

@@ -2,7 +2,7 @@
 
 :mod:`fempipe.validation.lateral` solves the out-of-plane problem in strong
 form (the deflection w on C^1 spectral elements about ``solve_bvp``'s static
-state), sharing no code with fempipe's discretisations, quadrature, operators
+state), sharing no code with fempipe's discretizations, quadrature, operators
 or :mod:`fempipe.model.out_of_plane`.  Every reference below is an independent
 computation (the strong form, the classical straight-pipe theory, the
 in-plane problem) or an exact symmetry; no number is pasted.
@@ -148,7 +148,7 @@ def test_buckled_standing_pipe_has_the_neutral_rotation_mode():
 
 
 def test_neutral_residual_falls_under_refinement():
-    """The uncorrected K on the projection of sin theta^s: the discretisation error."""
+    """The uncorrected K on the projection of sin theta^s: the discretization error."""
     res = [
         OutOfPlaneOperators(m).matrices(q).neutral_residual for _, m, q in map(_buckled, (8, 16))
     ]

@@ -289,7 +289,7 @@ def test_special_points_are_detected_and_located():
 
 
 @pytest.mark.slow
-def test_fig07_default_discretisation_agrees_with_the_sweep(capsys):
+def test_fig07_default_discretization_agrees_with_the_sweep(capsys):
     """P3:16, alpha = 0, v = 5:12:36: every stable orbit of the continuation
     agrees with the sweep up to 1e-6 in the period and the tip extrema."""
     argv = ["bifurcation", "--v", "5:12:36", "--json", "--quiet"]

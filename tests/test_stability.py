@@ -3,7 +3,7 @@
 Every reference number comes from outside fempipe.analyses.stability: finite
 differences of the residual, closed-form integrals of the sine modes, the
 Euler-Bernoulli cantilever, Beck's and Greenhill's columns, Gregory &
-Paidoussis' pipe, refined meshes, the other discretisation, a brute-force
+Paidoussis' pipe, refined meshes, the other discretization, a brute-force
 scan, an extended (Moore-Spence) fold system, symmetry.
 """
 
@@ -214,7 +214,7 @@ MESHES = {1: [16, 32, 64, 128], 2: [4, 8, 16, 32], 3: [4, 8, 16, 32]}
 
 @pytest.mark.parametrize("degree", [1, 2, 3])
 def test_eigenvalue_convergence_order(degree, reference_mode2):
-    """Eigenvalues (with the static state they linearise about) converge as
+    """Eigenvalues (with the static state they linearize about) converge as
     h^(2k) for P_k.  Measured slopes 2.00, 3.97, 5.8 (P3 pre-asymptotic on the
     coarse meshes); bound +-0.35."""
     errs = [
@@ -377,7 +377,7 @@ def moore_spence_fold(model, q, v, phi):
 
 def test_alpha_pi_events_on_every_branch():
     """alpha = pi, gamma = 18.9 > 7.837: the straight column is unstable at
-    v = 0 (divergence, mode 1), restabilises at a subcritical pitchfork, then
+    v = 0 (divergence, mode 1), restabilizes at a subcritical pitchfork, then
     flutters in mode 2 (paper Sec. 4, Fig. 5(d)); the two buckled branches are
     mirror images with a fold.  Independent checks: the pitchfork is where
     det K^d = 0 on the straight state (Brent on det K^d); the fold solves the Moore-Spence system."""
@@ -462,7 +462,7 @@ def test_root_locus_tracks_modes_by_continuity():
     assert fine.stable[fine.v < 6.33].all() and not fine.stable[fine.v > 6.34].any()
 
 
-def test_mode_shape_global_frame_is_the_derivative_of_the_centreline():
+def test_mode_shape_global_frame_is_the_derivative_of_the_centerline():
     """The global-frame mode shape equals a finite difference of
     kinematics.shape along the mode (step 1e-6: error ~1e-12 + 1e-10)."""
     model = PipeModel(P3_16, Params(alpha=np.pi / 4, v=3.0, **PAPER))
@@ -521,7 +521,7 @@ def test_bad_input_names_the_parameter():
 
 def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
     """alpha = 3.14159265 (pi - 3.6e-9, as typed): the near-straight branch steps over
-    the imperfect pitchfork at the restabilisation, where Brent finds no static state
+    the imperfect pitchfork at the restabilization, where Brent finds no static state
     in the last ~1e-6 of its bracket.  The event is still reported, within that
     bracket of the perfect case's (v = 3.00372, Eq. (31b)), with a warning instead
     of a failure; the other events are those of alpha = pi."""

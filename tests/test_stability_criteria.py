@@ -2,7 +2,7 @@
 
 References come from outside the code under test where they can: the dense
 eigenvalue criterion of :func:`fempipe.analyses.stability.spectrum` checks the sparse
-one, a second mesh and the modal discretisation check the mode numbers, a
+one, a second mesh and the modal discretization check the mode numbers, a
 spectrum just below and above an event checks its stable_before/stable_after.
 """
 
@@ -177,7 +177,7 @@ def test_stable_flag_of_a_3000_dof_state_takes_seconds():
     disc = FiniteElement(1000, 3)
     model = PipeModel(disc, Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, v=1.0))
     q = sagged_state(model).q
-    linearly_stable(model, q)  # the canonical modes, once per discretisation
+    linearly_stable(model, q)  # the canonical modes, once per discretization
     t = time.process_time()
     assert linearly_stable(model, q) is True
     assert time.process_time() - t < 10.0

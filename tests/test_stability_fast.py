@@ -6,7 +6,7 @@
   continuation forced on the same pipe, to the 1e-10 both locate them to.
 * :class:`StraightPencil` against the assembled Jacobians, the straight
   sample values against the continuation's own points.
-* The vectorised pre-filter of the narrow-window check never drops an
+* The vectorized pre-filter of the narrow-window check never drops an
   eigenvalue the exact per-eigenvalue test would take.
 * The classical baseline script (``fempipe/validation/classical_baseline.py``,
   the timing reference of ``fempipe bench``): its closed-form Paidoussis
@@ -194,7 +194,7 @@ def test_branch_point_test_is_the_sign_of_the_assembled_determinant(gamma):
         assert chunked_branch._straight_without_branch_points(model, lo, hi, kw) == want
 
 
-def test_straight_pencil_is_the_assembled_linearisation():
+def test_straight_pencil_is_the_assembled_linearization():
     p = Params(
         alpha=math.pi,
         beta=0.3,
@@ -248,7 +248,7 @@ def test_straight_values_are_the_points_of_the_continuation():
 
 def _exact_peak_test(x, lam):
     """The per-eigenvalue narrow-window test of BranchAnalysis._peak, up to the
-    minimisation: np.polyfit on the three samples."""
+    minimization: np.polyfit on the three samples."""
     out = []
     for j in range(lam.shape[1]):
         r = lam[:, j].real

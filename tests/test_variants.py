@@ -666,7 +666,7 @@ def test_sparse_stability_criterion_sees_the_variants(variant):
     """The shift-invert criterion of large FE meshes decides as the dense one.
 
     Horizontal pipe just above the paper's v_cr on P3:70 (210 unknowns, the
-    sparse path): sigma = 0.5 stabilises it, Gamma = 0.5 does not.  The sparse
+    sparse path): sigma = 0.5 stabilizes it, Gamma = 0.5 does not.  The sparse
     operator once built C x + M y from the pipe's own terms only and decided
     both the other way round.
     """

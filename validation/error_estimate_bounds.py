@@ -15,7 +15,7 @@ Cases (the paper's beta = 0.142, gamma = 18.9, mu = 5e-3):
 * static tip values theta_tip, X_tip, Z_tip, eta_tip at several alpha and v;
 * v_cr and the critical frequency for alpha = 0, pi/4, pi/2, 3pi/4; at
   alpha = pi, where v_cr = 0 (the standing pipe is unstable at v = 0), the
-  restabilisation, the first flutter and its frequency;
+  restabilization, the first flutter and its frequency;
 
 each on FE P1, P2, P3 at several mesh sizes and on the sine modes N = 2..16.
 
@@ -24,7 +24,7 @@ error when ratio >= 1, and ``ratio`` is its *pessimism*.  Where the true
 error is below the noise of the comparison (the solver tolerance that is the
 estimate's floor, or 10 times the reference's uncertainty) the ratio says
 nothing: those cases are counted apart.  A case whose estimate is null (the
-command found the event on one discretisation only and said so) is counted
+command found the event on one discretization only and said so) is counted
 apart as well.  :func:`summarize` gives, overall and per family, the number
 of cases, how many are bounded, and the largest pessimism and the smallest
 ratio over the resolvable cases.
@@ -134,7 +134,7 @@ def static_reference(alpha: float, vs: Sequence[float], n_elements: int = 128) -
 
 
 def static_rows(alphas, vs, discretizations, n_reference: int = 128) -> list[dict]:
-    """One row per (alpha, v, quantity, discretisation): ``fempipe static --error-estimate``."""
+    """One row per (alpha, v, quantity, discretization): ``fempipe static --error-estimate``."""
     rows = []
     v_arg = ",".join(repr(float(v)) for v in vs)
     for alpha in alphas:
@@ -203,7 +203,7 @@ def _standing(alpha: float) -> bool:
 
 
 def critical_rows(alphas, discretizations, v_max: float = 8.0, n_reference: int = 64) -> list:
-    """One row per (alpha, quantity, discretisation): ``fempipe critical --error-estimate``."""
+    """One row per (alpha, quantity, discretization): ``fempipe critical --error-estimate``."""
     rows = []
     for alpha in alphas:
         ref = critical_reference(alpha, v_max, n_reference)

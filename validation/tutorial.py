@@ -21,7 +21,7 @@ oscillation of soft pipes conveying fluid under gravity", Appl. Math. Mech.
 # A soft cantilevered pipe (length L, bending stiffness EI, mass per length
 # m) conveys fluid (mass per length M, velocity U).  It is inextensible, so
 # its shape is described by one function: the rotation angle theta(xi, tau)
-# of the centreline, xi = x0 / L in [0, 1] along the pipe.  The undeformed
+# of the centerline, xi = x0 / L in [0, 1] along the pipe.  The undeformed
 # pipe makes the angle alpha with the downward vertical.  After scaling
 # (Eq. (19): v = (M/EI)^(1/2) U L, gamma = (m+M) g L^3 / EI, beta = M/(m+M))
 # the static part of the governing equation (Eq. (31a)) is
@@ -196,7 +196,7 @@ bvp = solve_static_bvp(alpha, gamma, v, tol=1e-11)
 print(f"fempipe P2:16      : {fem:.10f}   (ours - fempipe = {ours - fem:.1e})")
 print(f"scipy solve_bvp    : {bvp.X_tip:.10f}   (ours - BVP     = {ours - bvp.X_tip:.1e})")
 # ours = fempipe to round-off (the same discrete problem); the difference from
-# the BVP is the P2:16 discretisation error, O(h^4) -- section 8 measures it.
+# the BVP is the P2:16 discretization error, O(h^4) -- section 8 measures it.
 assert abs(ours - bvp.X_tip) < 1e-6, "the tutorial's solver disagrees with the BVP"
 
 # %% 5. The dynamic terms: integrals along the pipe as operators
@@ -206,7 +206,7 @@ assert abs(ours - bvp.X_tip) < 1e-6, "the tutorial's solver disagrees with the B
 #
 #     sin(theta) int_xi^1 int_0^s (theta_tt sin theta + ...) dr ds + cos(theta) ...
 #
-# i.e. the acceleration of the centreline, r_tt(s) = int_0^s (...), summed
+# i.e. the acceleration of the centerline, r_tt(s) = int_0^s (...), summed
 # from xi to the tip: the force that the part of the pipe beyond xi needs to
 # accelerate.  Two integration operators do all of it, acting on values of a
 # field at the Gauss points of the mesh:
@@ -232,7 +232,7 @@ def cumulative_matrix(edges: np.ndarray, points: np.ndarray):
     x = (edges[:-1, None] + h[:, None] * points[None, :]).ravel()
     w = (h[:, None] * b[None, :]).ravel()
     C = np.zeros((k * n_c, k * n_c))
-    for c in range(n_c):  # a loop is fine for a picture; fempipe vectorises
+    for c in range(n_c):  # a loop is fine for a picture; fempipe vectorizes
         rows = slice(c * k, (c + 1) * k)
         C[rows, c * k : (c + 1) * k] = h[c] * a
         C[rows, : c * k] = w[: c * k]  # all earlier cells, fully
@@ -279,7 +279,7 @@ for name, pts in [
 # %% 7. The mass matrix is a Gram matrix
 #
 # Write the tangent t = (cos theta, sin theta) and normal n = (-sin, cos).
-# The velocity of the centreline is r_t(xi) = int_0^xi theta_t n, i.e.
+# The velocity of the centerline is r_t(xi) = int_0^xi theta_t n, i.e.
 # r_t = C(theta_t n), and the kinetic energy is (1/2) int |r_t|^2.  With
 # theta_t = sum_j phi_j qdot_j this is (1/2) qdot^T M qdot with
 #
@@ -334,7 +334,7 @@ print(
 
 # %% 8. Convergence: the payoff of a finite-element formulation
 #
-# Now the question the paper does not ask: how accurate is a discretisation?
+# Now the question the paper does not ask: how accurate is a discretization?
 # Refine the mesh, halve h each time, and watch the tip drop approach the
 # BVP answer.  Theory for a 1-D second-order problem: the nodal values (and
 # hence the tip values and integrals like X_g(1)) of P_k elements converge

@@ -106,7 +106,7 @@ def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
     ``external_damping``   sigma \\int theta_dot n . \\int_xi^1 r_dot
                            = sigma \\int_0^1 |r_dot|^2  (swap the order),
 
-    with r_dot(xi) = \\int_0^xi theta_dot n the centreline velocity and
+    with r_dot(xi) = \\int_0^xi theta_dot n the centerline velocity and
     t = (cos theta, sin theta) the tangent.  The first three are the power
     balance of steady flow; the fourth is zero for steady flow; the fifth is
     the dissipation of the external viscous damping (zero for sigma = 0).  The
@@ -155,7 +155,7 @@ def initial_state(
     mode : int
         r >= 1: the perturbation is amplitude * sin((2r - 1) pi xi / 2) in
         theta (the paper's r-th mode, Eq. (22)), L2-projected on the
-        discretisation.
+        discretization.
     amplitude : float
         In rad.
     q_static : ndarray, optional

@@ -3,7 +3,7 @@
 Registered with :mod:`fempipe.bench` (``fempipe bench --only fig07_continuation``).
 
 * ``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7:
-  alpha = 0, the paper's beta, gamma, mu, the default discretisation P3:16,
+  alpha = 0, the paper's beta, gamma, mu, the default discretization P3:16,
   ``--method continuation``, the default) as a fresh process: CPU seconds
   (user + sys of the finished child, ``resource.getrusage``), start-up
   included.  Target: < 20 CPU-s.  Not in quick mode: the same diagram by

@@ -1,7 +1,7 @@
 """Benchmarks of the stability analysis in this process (registered with :mod:`fempipe.bench`).
 
 ``stability_vcr``
-    v_cr at alpha = pi/2 on the default discretisation; target under 3 s.
+    v_cr at alpha = pi/2 on the default discretization; target under 3 s.
 ``critical_3d``
     The analysis of both planes against the planar one; target ratio 1.5.
 ``stability_curve``
@@ -22,7 +22,7 @@ from fempipe.bench import PAPER, best_time, register
 
 @register("stability_vcr")
 def bench_stability_vcr(quick: bool = False) -> dict:
-    """v_cr at alpha = pi/2 (paper's case) on the default discretisation, events to 1e-10 in v.
+    """v_cr at alpha = pi/2 (paper's case) on the default discretization, events to 1e-10 in v.
 
     Target: under 3 s.  Accuracy: the relative difference to P3:32 (target 1e-6).
     """
@@ -32,7 +32,7 @@ def bench_stability_vcr(quick: bool = False) -> dict:
     from fempipe.model.params import Params
 
     disc = parse_discretization(DEFAULT_FE)
-    resolution(disc)  # canonical modes, cached per discretisation
+    resolution(disc)  # canonical modes, cached per discretization
     model = PipeModel(disc, Params(**PAPER))
     t, res = best_time(lambda: critical_velocity(model, 10.0), 1 if quick else 3)
     out = {
@@ -57,7 +57,7 @@ def bench_stability_vcr(quick: bool = False) -> dict:
 def bench_critical_3d(quick: bool = False) -> dict:
     """The analysis of ``fempipe critical`` in three dimensions against the planar one.
 
-    At alpha = pi/4, pi/2, 3pi/4 and pi (paper's case, default discretisation,
+    At alpha = pi/4, pi/2, 3pi/4 and pi (paper's case, default discretization,
     v in [0, 10], branches followed) the planar analysis
     (:func:`~fempipe.analyses.stability.stability_analysis`, the command before the
     out-of-plane analysis existed, and ``--planar``) and the analysis of

@@ -10,7 +10,7 @@ also ``python -m fempipe.bench.dynamics [--skip-fig7] [--workers 2] [--out FILE.
   of whole ``fempipe simulate --alpha 0 --v 10 --json`` processes, start-up
   included, median of 5; the period and tip extrema against the same command
   with ``--shoot-rtol 1e-10`` (relative errors).  Target: < 2 CPU-s at the
-  default discretisation P3:16 with errors below 1e-6.  In-process rows
+  default discretization P3:16 with errors below 1e-6.  In-process rows
   (wall time of :func:`fempipe.analyses.limit_cycle.find_attractor`) for P3:16 and the
   paper's modal N = 4 follow.
 * ``fig7``: the Fig. 7 diagram, alpha = 0, 36 velocities from 5 to 12, swept up
@@ -36,7 +36,7 @@ from fempipe.model.params import PAPER_CASE, Params
 
 
 def _disc(spec: str):
-    """The discretisation named ``spec`` (``disc.name``: ``P3:16``, ``modal:4``, ``modal-beam:4``)."""
+    """The discretization named ``spec`` (``disc.name``: ``P3:16``, ``modal:4``, ``modal-beam:4``)."""
     return discretization_from_name(spec)
 
 
@@ -116,7 +116,7 @@ def bench_limit_cycle_process(alpha: float = 0.0, v: float = 10.0, runs: int = 5
     """Whole ``fempipe simulate --alpha A --v V --json`` processes: median CPU-s, errors.
 
     The reference is the same command with ``--shoot-rtol 1e-10`` (the same
-    discretisation), run once.
+    discretization), run once.
     """
     argv = ["simulate", "--alpha", repr(alpha), "--v", repr(v), "--json"]
     _, ref = _process_cpu([*argv, "--shoot-rtol", "1e-10"])

@@ -5,7 +5,7 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only hopf``).
 * ``hopf``: the CPU seconds (``time.process_time``, median of 3) that
   :func:`fempipe.analyses.stability.hopf.normal_forms` adds to the stability analysis
   of ``fempipe critical --v 0,16`` (:func:`fempipe.analyses.stability.stability_analysis`)
-  for the paper's case on the default discretisation, at alpha = 0, pi/2, pi;
+  for the paper's case on the default discretization, at alpha = 0, pi/2, pi;
   with l1 of the first flutter and its uncertainty.  Target: a small fraction
   of the analysis (the hook runs on every ``fempipe critical``).
 """

@@ -7,7 +7,7 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classic
     ``getrusage(RUSAGE_CHILDREN)``, median of 7 runs; quick: 1) of
 
     * ``fempipe critical --alpha 0 --beta 0.2 --gamma 10 --mu 0 --v 0,10 --json``
-      (the hanging pipe: default discretisation P3:16, branches followed,
+      (the hanging pipe: default discretization P3:16, branches followed,
       every event to v = 10), and
     * the classical linear Galerkin of the straight pipe as a user would
       write it, ``python fempipe/validation/classical_baseline.py`` (numpy and

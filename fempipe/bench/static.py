@@ -1,7 +1,7 @@
 """The static benchmarks (registered with :mod:`fempipe.bench`).
 
 ``static_path``
-    A 61-point path in v = 0..10 at the default discretisation, the paper's
+    A 61-point path in v = 0..10 at the default discretization, the paper's
     case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2 and the
     Texier--Dorbolo pipe (the paper's Section 3.1, Fig. 2(b)) at alpha = pi/2, through
     :func:`fempipe.analyses.statics.solve_path` (what ``fempipe static`` does) and,
@@ -59,7 +59,7 @@ def _path_case(name: str, params, disc, values: list[float], repeats: int) -> di
 
 @register("static_path")
 def bench_static_path(quick: bool = False) -> dict:
-    """61-point path in v = 0..10 at the default discretisation, two cases."""
+    """61-point path in v = 0..10 at the default discretization, two cases."""
     from fempipe.model.discretization import DEFAULT_FE, parse_discretization
     from fempipe.model.params import Params, PipeSI
 

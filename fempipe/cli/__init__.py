@@ -20,7 +20,7 @@ __all__ = ["SUBCOMMANDS", "BLAS_THREAD_VARIABLES", "build_parser", "main", "one_
 #: of a solver failure (e.g. where finished work was kept).
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "static": ("fempipe.cli.static", "static large deformation against flow velocity"),
-    "spectrum": ("fempipe.cli.spectrum", "eigenvalues of the linearised problem against v"),
+    "spectrum": ("fempipe.cli.spectrum", "eigenvalues of the linearized problem against v"),
     "critical": ("fempipe.cli.critical", "critical flow velocity and stability events"),
     "stability-map": ("fempipe.cli.stability_map", "v_cr against alpha for lists of beta, gamma"),
     "simulate": ("fempipe.cli.simulate", "nonlinear time integration and limit cycle"),

@@ -1,7 +1,7 @@
 """The one option parser shared by every ``fempipe`` subcommand.
 
 Every subcommand that solves the pipe takes the same physical parameters,
-discretisation, flow values and output options; they are declared here once
+discretization, flow values and output options; they are declared here once
 so that the spellings (``--alpha 90deg``, ``--fe P3:16``, ``--v 0:6:13``,
 ``--U 0,0.5,1``) and the error messages are the same everywhere.
 
@@ -250,7 +250,7 @@ def add_discretization_arguments(parser: argparse.ArgumentParser) -> None:
     # Imported here: ``fempipe --help`` does not need numpy.
     from fempipe.model.discretization import DEFAULT_FE, Modal
 
-    g = parser.add_argument_group("discretisation and work limits")
+    g = parser.add_argument_group("discretization and work limits")
     ex = g.add_mutually_exclusive_group()
     ex.add_argument(
         "--fe",

@@ -3,13 +3,13 @@
 The file holds the user's own numbers (from a modal code, another FE code, an
 experiment), one case per row; for each row and each quantity given, fempipe
 computes the same quantity (:class:`fempipe.studies.convergence.Quantity`, exactly
-as ``fempipe convergence`` does) on the chosen discretisation (``--fe``,
+as ``fempipe convergence`` does) on the chosen discretization (``--fe``,
 default P3:16, or ``--modal N``) and again on the refined one (elements
 halved, twice the modes plus one for an odd N), and reports the user's value, fempipe's, the
 difference user - fempipe, the relative difference (over |fempipe|),
 fempipe's error estimate (the Grid Convergence Index of one refinement,
 :mod:`fempipe.studies.error_estimate`) and whether the difference is *resolved*
-(|difference| > error estimate: fempipe's discretisation error cannot explain
+(|difference| > error estimate: fempipe's discretization error cannot explain
 it).  See :mod:`fempipe.studies.compare`.
 
 Input file
@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.studies.compare import compare_values, estimate_description
 
     t0 = time.process_time()
-    setup = common.setup_from_args(args, need_flow=False)  # the discretisation
+    setup = common.setup_from_args(args, need_flow=False)  # the discretization
     disc = setup.disc
     cases = read_cases(args.file, v_max=args.v_max)
     items = [(case, name) for case in cases for name in case.values]
@@ -264,7 +264,7 @@ def _common(rows: list[dict], key: str, fmt: str = "{:.6g}") -> str | None:
 
 
 def _caption(result: dict) -> str:
-    """The parameters every row shares, the discretisation and the estimate."""
+    """The parameters every row shares, the discretization and the estimate."""
     rows = result["rows"]
     est = result["error_estimate"]
     parts = []

@@ -40,7 +40,7 @@ at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
 critical.json, events.csv and branches.png.
 
 ``--error-estimate`` runs the whole analysis again on the refined
-discretisation (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
+discretization (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
 or twice the modes, plus one for an odd N), pairs the events of the two runs by branch, type and
 mode (:func:`fempipe.studies.error_estimate.match_events`, not by position) and adds
 beside ``v_cr``, ``v_flutter`` (and ``U_cr``), beside ``v`` and
@@ -54,7 +54,7 @@ loses stability first by another event.  The top-level ``"error_estimate"``
 describes the method and lists the notes (also refined events the reported
 run lacks).  events.csv gains ``v_error`` and ``frequency_error`` after its
 columns; the text shows ``value ± error``.  It costs about one more run on
-the refined discretisation; the ``branches`` entries are those of the
+the refined discretization; the ``branches`` entries are those of the
 reported run, without estimates.  The library does it
 (:func:`fempipe.studies.estimates.refined_stability`,
 :func:`~fempipe.studies.estimates.with_stability_estimates`); this module shows it.
@@ -258,7 +258,7 @@ def _print(result: dict, pipe) -> None:
             return estimates.pm(d[key], d[key + estimates.ERROR], spec)
         return spec.format(d[key])
 
-    print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretisation {disc}")
+    print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretization {disc}")
     v_cr = result["v_cr"]
     if v_cr is None:
         print("v_cr: none (the primary branch is stable over the range)")

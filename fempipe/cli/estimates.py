@@ -1,13 +1,13 @@
 """``--error-estimate``: the option, and how a command shows the estimates.
 
 With ``--error-estimate`` a command (``static``, ``critical``, ``simulate``)
-reruns its computation on the refined discretisation of
+reruns its computation on the refined discretization of
 :func:`fempipe.studies.error_estimate.refine` and reports, beside each number ``Q``
 of its JSON, ``Q_error`` (the estimate of
 :func:`fempipe.studies.error_estimate.estimate`) and ``Q_refined`` (the refined
 value), plus a top-level ``"error_estimate"`` describing the method
 (:class:`fempipe.studies.error_estimate.ErrorEstimate`) with the ``notes`` of the
-comparison (an event found on one discretisation only, attractors of
+comparison (an event found on one discretization only, attractors of
 different kinds, a refined solve that failed).  The library attaches them
 (:mod:`fempipe.studies.estimates`); this module holds the option and the
 shapes of the other outputs: CSV files gain only the ``Q_error`` columns,
@@ -39,7 +39,7 @@ def add_argument(parser: argparse.ArgumentParser, what: str) -> None:
     g.add_argument(
         "--error-estimate",
         action="store_true",
-        help=f"also run on the refined discretisation (FE: every element halved; modal: twice "
+        help=f"also run on the refined discretization (FE: every element halved; modal: twice "
         f"the modes) and report beside {what} its error estimate KEY_error = "
         "max(3 |Q - Q_refined| 2^p / (2^p - 1), solver tolerance) (Roache's Grid Convergence "
         "Index; p = 2k for Pk, 3 for sine modes, 4 for beam modes) and KEY_refined; costs about "
@@ -64,7 +64,7 @@ def error_columns(rows: Iterable[Mapping]) -> list[str]:
 def print_footer(est: Mapping, where: str = "") -> None:
     """The text output's last lines: how the estimates were formed, then the notes.
 
-    ``where`` is added after the refined discretisation (e.g. the attractor found there).
+    ``where`` is added after the refined discretization (e.g. the attractor found there).
     """
     print(
         f"± error estimate: {est['method']} to {est['refined']}{where}, {est['formula']} "

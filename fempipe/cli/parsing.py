@@ -8,7 +8,7 @@ which raises :class:`CLIError`.
 
 Accepted ranges
 ---------------
-The default discretisation P3:16 has 48 unknowns, its nodes 1/48 apart.  The
+The default discretization P3:16 has 48 unknowns, its nodes 1/48 apart.  The
 narrowest features of a state are the layer at the clamp where gravity takes
 over from bending, of width ~ 1/sqrt(gamma), and the bending waves of the
 follower force v^2 sin(theta(1) - theta) of Eq. (20), of length ~ 1/v.  They

@@ -269,7 +269,7 @@ class Output:
 
 
 def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu")) -> tuple:
-    """``(discretisation label, "alpha = ..., beta = ...")`` for a table heading.
+    """``(discretization label, "alpha = ..., beta = ...")`` for a table heading.
 
     ``result`` is a subcommand's JSON dict with ``params`` and ``discretization``.
     """

@@ -30,7 +30,7 @@ animation are of the cycle.  The period, tip extrema and Floquet multipliers of 
 JSON are those of the cycle, never of the transient.
 
 ``--error-estimate`` computes the attractor again on the refined
-discretisation (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
+discretization (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
 or twice the modes, plus one for an odd N) without a new transient where it can: a limit cycle is
 shot from the coarse cycle transferred to the refined space (the L2
 projection :func:`fempipe.model.projection.project`), an equilibrium solved by
@@ -69,7 +69,7 @@ from fempipe.cli.parsing import CLIError
 #: 12 and alpha = pi/2, v = 10 on P3:16).
 SHOOT_RTOL = 1e-5
 #: Default --shoot-rtol with --error-estimate: the estimates' floor is the
-#: shooting tolerance (README, Error estimates), and the discretisation error of
+#: shooting tolerance (README, Error estimates), and the discretization error of
 #: a P3:16 cycle is about 1e-7, so 1e-5 would hide it under the floor.
 ERROR_ESTIMATE_SHOOT_RTOL = 1e-7
 

@@ -1,4 +1,4 @@
-"""``fempipe spectrum``: eigenvalues of the linearised problem against the flow velocity.
+"""``fempipe spectrum``: eigenvalues of the linearized problem against the flow velocity.
 
 Follows the static branch (gravity loading, then the flow values of ``--v`` or
 ``--U`` in order) and computes the resolved eigenvalues of Eq. (32) at every
@@ -202,7 +202,7 @@ def _write(output: reporting.Output, result: dict, locus, out_locus) -> None:
 
 def _print_table(result: dict, locus, out_locus) -> None:
     disc, head = reporting.describe(result)
-    print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretisation {disc}")
+    print(f"spectrum (Omega = -i lambda; Im Omega < 0 unstable), {head}; discretization {disc}")
     if out_locus is None:
         _table(result, locus, "eigenvalues", "stable", "max_real")
         return

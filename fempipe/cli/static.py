@@ -16,7 +16,7 @@ stable (:func:`fempipe.analyses.stability.linearly_stable` of ``model`` and of
 ``stable_out_of_plane`` are each plane's verdict.  ``--planar`` decides in
 the plane alone, every output as before (``stable`` only).
 
-``--error-estimate`` also solves every point on the refined discretisation
+``--error-estimate`` also solves every point on the refined discretization
 (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved, or twice the
 modes), by Newton from the coarse state transferred to it (the L2
 projection, exact for these nested spaces, so the refined state is the same
@@ -25,10 +25,10 @@ branch), and adds beside each tip value Q of a point (``theta_tip``,
 values) ``Q_error`` = max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|))
 (Roache's Grid Convergence Index with p = 2k for P_k, 3 for the sine modes;
 the floor is Newton's tolerance) and ``Q_refined``, and the top-level
-``"error_estimate"`` (method, refined discretisation, order, formula, notes).
+``"error_estimate"`` (method, refined discretization, order, formula, notes).
 static.csv gains the ``Q_error`` columns after the others; the table shows
 ``value ± error``.  The run costs about one more run on the refined
-discretisation.  The library does it
+discretization.  The library does it
 (:func:`fempipe.studies.estimates.refined_static_states`,
 :func:`~fempipe.studies.estimates.with_static_estimates`); this module shows it.
 """
@@ -335,7 +335,7 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
     spatial = "stable_in_plane" in result["points"][0]
     # stable: linear stability in three dimensions; in, out: each plane's.
     planes = "; stable in 3-D (in: in the plane, out: out of it)" if spatial else ""
-    print(f"static deformation, {head}; discretisation {disc}{planes}")
+    print(f"static deformation, {head}; discretization {disc}{planes}")
     if pipe is not None:
         print(
             f"SI pipe: L = {pipe.L:g} m, EI = {pipe.EI:g} N m^2, m = {pipe.m:g} kg/m, "
@@ -381,7 +381,7 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
         estimates.print_footer(result["error_estimate"])
     if any(row["stable"] is False for row in result["points"]):
         print(
-            "note: states marked stable=False are unstable equilibria (linearised, Eq. (32)"
+            "note: states marked stable=False are unstable equilibria (linearized, Eq. (32)"
             + (" and out of the plane" if spatial else "")
             + "); `fempipe critical` lists the stability events and follows the other branches"
         )

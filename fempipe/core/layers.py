@@ -12,10 +12,10 @@ The layers, in rank order (:data:`LAYERS`):
     limits, Brent's root finder, the optimal assignment of eigenvalues,
     atomic files and strict JSON, the version, this list.
 ``model``
-    The pipe: parameters, quadrature, the discretisations (finite elements,
+    The pipe: parameters, quadrature, the discretizations (finite elements,
     modal bases), the operators of Eq. (20) (residual, Jacobian, mass,
     damping), the motion out of the plane, kinematics (Eq. (28)), the
-    projection between discretisations.
+    projection between discretizations.
 ``solvers``
     Problem-agnostic numerics on a model: Newton, pseudo-arclength
     continuation, the Radau IIA integrator.

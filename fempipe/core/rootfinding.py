@@ -1,6 +1,6 @@
 """Brent's bracketing root finder, without importing :mod:`scipy.optimize`.
 
-Importing :mod:`scipy.optimize` loads scipy's optimisers, sparse graph,
+Importing :mod:`scipy.optimize` loads scipy's optimizers, sparse graph,
 spatial and special-function packages, about a third of the start-up of a
 ``fempipe critical`` or ``fempipe simulate`` process, for the one scalar
 root finder those commands need.  :func:`brentq` is the algorithm of

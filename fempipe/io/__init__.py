@@ -17,8 +17,8 @@ Formats
   become ``null`` (strict JSON).
 * CSV (:func:`write_csv`, read back with :func:`read_csv`): one row per
   result and a header line whose every cell is ``name [unit]`` (below).
-* Shapes (:func:`write_shapes`): deformed centrelines as a meshio VTU file
-  (VTK XML unstructured grid): line cells, the centreline in the screen
+* Shapes (:func:`write_shapes`): deformed centerlines as a meshio VTU file
+  (VTK XML unstructured grid): line cells, the centerline in the screen
   frame as points, theta, varsigma, eta, X_g, Z_g, xi and the continuation
   value as point data, the parameters as field data.  VTU was chosen by
   trying: it stores line cells and point data and reads back with plain
@@ -29,7 +29,7 @@ The VTK frame
 -------------
 Every VTU file of the package (these shapes and the frames of
 :mod:`fempipe.io.trajectory`) uses one frame, the one of every figure:
-gravity along -y.  A centreline point is ``(x, y, z) = (Z_g, -X_g, 0)``
+gravity along -y.  A centerline point is ``(x, y, z) = (Z_g, -X_g, 0)``
 (Eq. (28): X_g along gravity, Z_g horizontal), so shapes and trajectories
 opened together in ParaView overlap.  Every file has the point arrays
 :data:`SHAPE_FIELDS` (and ``theta_dot`` where the state has a velocity) and

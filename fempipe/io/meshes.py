@@ -1,6 +1,6 @@
-"""Deformed centrelines as VTU files (meshio), in the VTK frame of :mod:`fempipe.io`.
+"""Deformed centerlines as VTU files (meshio), in the VTK frame of :mod:`fempipe.io`.
 
-Gravity along -y: a centreline point is ``(x, y, z) = (Z_g, -X_g, 0)``
+Gravity along -y: a centerline point is ``(x, y, z) = (Z_g, -X_g, 0)``
 (Eq. (28)), the frame of every figure and of :mod:`fempipe.io.trajectory`.
 """
 
@@ -29,7 +29,7 @@ SHAPE_FIELDS = ("xi", "theta", "varsigma", "eta", "X_g", "Z_g")
 
 
 def screen_points(X_g, Z_g, scale: float = 1.0) -> np.ndarray:
-    """Centreline points in the VTK frame (module docstring): ``(Z_g, -X_g, 0) * scale``."""
+    """Centerline points in the VTK frame (module docstring): ``(Z_g, -X_g, 0) * scale``."""
     X, Z = np.asarray(X_g, dtype=float), np.asarray(Z_g, dtype=float)
     return np.column_stack([Z, -X, np.zeros(X.size)]) * float(scale)
 
@@ -89,7 +89,7 @@ def write_shapes(
     length: float | None = None,
     params: Mapping[str, float] | None = None,
 ) -> Path:
-    """Write deformed centrelines to one VTU file, atomically.
+    """Write deformed centerlines to one VTU file, atomically.
 
     Each shape becomes a polyline of ``line`` cells in the VTK frame of the
     module docstring (gravity along -y); all shapes share one file and are

@@ -2,12 +2,12 @@
 
 Format: a ParaView collection ``NAME.pvd`` (a small XML list of
 ``(timestep, file)``) plus one VTU file per output time in ``NAME/``, written
-by meshio.  Each VTU holds the centreline in the package's one VTK frame
+by meshio.  Each VTU holds the centerline in the package's one VTK frame
 (:mod:`fempipe.io`: x = Z_g horizontal, y = -X_g so that gravity points
 down the screen, z = 0) as ``line`` cells, as point data ``xi``, ``theta``
 (rad), ``varsigma``, ``eta``, ``X_g``, ``Z_g`` (the arrays of
 ``shapes.vtu``), ``theta_dot`` (rad per unit tau) and ``velocity`` (the
-centreline velocity r_dot in the same frame, 3 components), and as field
+centerline velocity r_dot in the same frame, 3 components), and as field
 data ``time`` (tau), ``v`` and the parameters.
 
 Why not XDMF: tried and measured with meshio 5.3.5.  ``meshio.xdmf.TimeSeriesWriter``
@@ -47,7 +47,7 @@ def frame_data(
 
     s = shape(disc, q, alpha, points_per_cell=points_per_cell)
     xi = s.xi
-    # Centreline velocity r_dot(xi) = \int_0^xi theta_dot (-sin(theta+alpha), cos(theta+alpha))
+    # Centerline velocity r_dot(xi) = \int_0^xi theta_dot (-sin(theta+alpha), cos(theta+alpha))
     # in the global frame (X_g, Z_g): integrate at the quadrature points and
     # interpolate linearly to the sample points (post-processing only).
     quad = disc.quad

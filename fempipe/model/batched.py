@@ -59,7 +59,7 @@ def _as_dense(a) -> np.ndarray:
 
 
 def stage_operators(model: PipeModel):
-    """(Phi, K, Phi^T W): dense for small discretisations, else as the model has them.
+    """(Phi, K, Phi^T W): dense for small discretizations, else as the model has them.
 
     Phi^T W is :attr:`PipeModel.test_matrix` (``\\int phi_i f`` of f at the
     quadrature points); dense up to :data:`DENSE_OPERATORS_MAX` entries n_q n.
@@ -149,7 +149,7 @@ class StageKernels:
         p = model.params
         disc, quad = model.disc, model.quad
         self.n = model.n
-        # The residual's operators (sparse on large discretisations) ...
+        # The residual's operators (sparse on large discretizations) ...
         self._res_ops = stage_operators(model)
         # ... and the Jacobians' (always dense).
         self._Phi = _as_dense(disc.Phi)

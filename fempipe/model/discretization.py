@@ -1,6 +1,6 @@
-"""The two discretisations of theta(xi) behind one contract.
+"""The two discretizations of theta(xi) behind one contract.
 
-A discretisation represents theta = sum_j phi_j(xi) q_j with theta(0) = 0
+A discretization represents theta = sum_j phi_j(xi) q_j with theta(0) = 0
 built in, and supplies everything the solvers use (:class:`Discretization`;
 nothing else is ever asked of it):
 
@@ -34,7 +34,7 @@ contract and never ask which one they have.
 
 This module holds the contract (:class:`Discretization`) and the CLI
 spellings (:func:`parse_discretization`, :func:`discretization_from_name`);
-the two discretisations are in :mod:`fempipe.model.finite_element` and
+the two discretizations are in :mod:`fempipe.model.finite_element` and
 :mod:`fempipe.model.modal` (re-exported here).
 """
 
@@ -68,7 +68,7 @@ __all__ = [
 
 @runtime_checkable
 class Discretization(Protocol):
-    """What every solver of the package uses of a discretisation (module docstring)."""
+    """What every solver of the package uses of a discretization (module docstring)."""
 
     n: int
     quad: LineQuadrature
@@ -120,7 +120,7 @@ def parse_fe_spec(text: str) -> tuple[int, int]:
 def parse_discretization(
     fe: str | None = None, modal: int | str | None = None, basis: str = "sine"
 ) -> FiniteElement | Modal:
-    """Build a discretisation from the CLI spellings ``--fe P2:16`` / ``--modal 4 [--basis beam]``.
+    """Build a discretization from the CLI spellings ``--fe P2:16`` / ``--modal 4 [--basis beam]``.
 
     Parameters
     ----------
@@ -176,11 +176,11 @@ def discretization_from_name(name: str) -> FiniteElement | Modal:
         degree, n_el = parse_fe_spec(name)
     except ValueError:
         raise ValueError(
-            f"a discretisation name is Pk:n, modal:N or modal-beam:N, got {name!r}"
+            f"a discretization name is Pk:n, modal:N or modal-beam:N, got {name!r}"
         ) from None
     return FiniteElement(n_el, degree)
 
 
-#: The default discretisation; its static tip error is below 1e-7 (see
+#: The default discretization; its static tip error is below 1e-7 (see
 #: ``tests/test_static.py::test_default_discretization_accuracy``).
 DEFAULT_FE = "P3:16"

@@ -1,6 +1,6 @@
 """Lagrange finite elements of any degree on a scikit-fem line mesh: :class:`FiniteElement`.
 
-One of the two discretisations behind the contract of
+One of the two discretizations behind the contract of
 :mod:`fempipe.model.discretization` (the package's point; the other is
 :class:`~fempipe.model.modal.Modal`).
 """
@@ -201,7 +201,7 @@ def _element_line_pp(degree: int):
     error (scikit-fem 12.0.2).  The subclass keys the cache by the shape and
     the values of the points.  It is built on first use, so that importing
     fempipe does not import scikit-fem, and found by name (module
-    ``__getattr__``) when a discretisation is unpickled in a worker process.
+    ``__getattr__``) when a discretization is unpickled in a worker process.
     """
     # Build the class once: a second class of the same qualified name would make
     # every element made from the first one unpicklable.

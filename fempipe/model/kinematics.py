@@ -1,7 +1,7 @@
-"""Centreline geometry from the rotation angle (Eqs. (5), (27), (28)).
+"""Centerline geometry from the rotation angle (Eqs. (5), (27), (28)).
 
 The displacements and global coordinates are integrals of theta, evaluated
-with the discretisation's own integration operator so that they inherit its
+with the discretization's own integration operator so that they inherit its
 accuracy: exact integrals of the interpolant at cell edges.
 """
 
@@ -19,7 +19,7 @@ __all__ = ["Shape", "shape", "tip_values", "tip_velocity"]
 
 @dataclass(frozen=True)
 class Shape:
-    """A deformed centreline, dimensionless (divide by nothing, multiply by L for m).
+    """A deformed centerline, dimensionless (divide by nothing, multiply by L for m).
 
     Attributes
     ----------
@@ -52,7 +52,7 @@ def _edge_points(disc: Discretization, points_per_cell: int) -> np.ndarray:
 
 
 def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: int = 4) -> Shape:
-    """Centreline of the state q.
+    """Centerline of the state q.
 
     Parameters
     ----------
@@ -99,7 +99,7 @@ def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
 
     The displacements (Eq. (5)) and global coordinates (Eq. (28)) at xi = 1
     are the integrals of cos theta, sin theta over [0, 1], summed exactly on
-    the interpolated integrands by the discretisation's Gauss rule.  The one
+    the interpolated integrands by the discretization's Gauss rule.  The one
     place the package computes the tip's geometry.
 
     Parameters

@@ -1,6 +1,6 @@
-"""The modal Galerkin discretisation (the paper's Eq. (22)): :class:`Modal` and the beam modes.
+"""The modal Galerkin discretization (the paper's Eq. (22)): :class:`Modal` and the beam modes.
 
-One of the two discretisations behind the contract of
+One of the two discretizations behind the contract of
 :mod:`fempipe.model.discretization`: N global modes, the sine modes of the
 paper or the slopes of the clamped-free beam modes (:func:`beam_roots`,
 :func:`beam_mode_slopes`), with the orders of their errors
@@ -17,7 +17,7 @@ __all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
 
 
 class Modal:
-    """Modal Galerkin discretisation: N global modes of [0, 1].
+    """Modal Galerkin discretization: N global modes of [0, 1].
 
     The contract it fulfils is :class:`fempipe.model.discretization.Discretization`.
 
@@ -40,7 +40,7 @@ class Modal:
         theta''(0) = 0.  The psi_r are the exact modes of the straight pipe
         without flow and gravity, so the frequencies of the linear problem at
         v = gamma = 0 are exact.  With ``\\int phi_r^2 = 1`` (the textbook
-        normalisation of phi_r), integrating by parts twice with the beam's
+        normalization of phi_r), integrating by parts twice with the beam's
         boundary conditions gives ``\\int psi_i' psi_j' =
         \\int phi_i'' phi_j'' / (lambda_i lambda_j) = lambda_i^2 delta_ij``:
         K = diag(lambda_r^2).  The Gram matrix is not diagonal.  The modes
@@ -152,7 +152,7 @@ class Modal:
         return f"Modal(n_modes={self.n_modes}, basis={self.basis!r})"
 
 
-#: Order p of the error ~ N^-p of a modal discretisation in tip values, v_cr
+#: Order p of the error ~ N^-p of a modal discretization in tip values, v_cr
 #: and eigenvalues, per basis (README, "Convergence of the two modal bases").
 EXPECTED_ORDER = {"sine": 3.0, "beam": 4.0}
 

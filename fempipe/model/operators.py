@@ -5,11 +5,11 @@ term, named after it (the table and the derivations are in
 :mod:`fempipe.model.weak_form`; the terms in :mod:`~fempipe.model.local_terms`,
 :mod:`~fempipe.model.nonlocal_terms`, :mod:`~fempipe.model.variants` and
 :mod:`~fempipe.model.springs`): the residual R(q, q', q''), its Jacobians, the
-mass matrix, the static problem's residual and Jacobian, the linearisation
+mass matrix, the static problem's residual and Jacobian, the linearization
 and the energy.
 
 Each term also supplies its derivatives with respect to q, q' and q'' so that
-Newton's method, the linearised stability matrices (Eqs. (31b)-(33)) and the
+Newton's method, the linearized stability matrices (Eqs. (31b)-(33)) and the
 implicit time integrators all use the same analytic Jacobians.
 """
 
@@ -44,7 +44,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
     Attributes
     ----------
     disc, params, quad, x, w
-        The discretisation, the parameters, ``disc.quad`` and its points and
+        The discretization, the parameters, ``disc.quad`` and its points and
         weights.
     test_matrix : ndarray or scipy.sparse matrix, shape (n, n_q)
         ``Phi^T W``: ``test_matrix @ f`` is ``\\int phi_i f``
@@ -70,7 +70,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         self.w = disc.quad.w
         self.test_matrix = (disc.Phi.T @ sp.diags(self.w)) if disc.sparse else disc.Phi.T * self.w
         # Gauss rules on [0, xi_s], built on first use and shared by the
-        # models of with_params (same discretisation).
+        # models of with_params (same discretization).
         self._part_rules: dict[float, PartRule] = {}
 
     #: The plane of the linear problem :meth:`linearization` gives: ``"in"``, the
@@ -79,14 +79,14 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
     plane = "in"
 
     def with_params(self, params: Params) -> PipeModel:
-        """Return a model of the same kind on the same discretisation with other parameters."""
+        """Return a model of the same kind on the same discretization with other parameters."""
         new = object.__new__(type(self))
         new.__dict__.update(self.__dict__)
         new.params = params
         return new
 
     def with_plane(self, plane: str) -> PipeModel:
-        """The model of the same pipe whose linearisation is in (``"in"``) or out of
+        """The model of the same pipe whose linearization is in (``"in"``) or out of
         (``"out"``) the plane of its static states (:mod:`fempipe.model.out_of_plane`)."""
         if plane == self.plane:
             return self

@@ -1,8 +1,8 @@
-"""The linearised motion out of the plane of a planar static state, one operator per term.
+"""The linearized motion out of the plane of a planar static state, one operator per term.
 
 A round pipe is free to leave the plane of its static deformation.  This
 module gives the linear problem of that motion about any planar static state
-theta^s of Eq. (31a), on the same discretisations as the planar model; the
+theta^s of Eq. (31a), on the same discretizations as the planar model; the
 stability solvers run on it unchanged (:class:`OutOfPlaneModel`).  The
 derivation is in the README ("Out of the plane"); in short:
 
@@ -18,7 +18,7 @@ derivation is in the README ("Out of the plane"); in short:
   m = t x t' (EI = 1) is parallel to the curvature vector, so m . t' = 0;
   the moment balance m' + t x n = 0 then gives (m . t)' = m . t' = 0: the
   twisting moment is the same at every section, zero at the torque-free free
-  end, so the twist stays zero and GJ drops out.  The centreline alone is the
+  end, so the twist stays zero and GJ drops out.  The centerline alone is the
   state.  (The damping moment below is not parallel to the curvature; the
   twist it would cause is O(mu) and is taken as zero: the pipe is
   torsionally stiff against it, and the reaction torque does no work.)
@@ -40,7 +40,7 @@ derivation is in the README ("Out of the plane"); in short:
   the end mass adds Gamma w_ddot(1), a spring kappa w(xi_s).
 * **Kelvin-Voigt damping, objective**: the damping moment acts on the
   co-rotational rate of the curvature vector kappa = t x t', the rate seen in
-  the section's own (twist-free) frame.  Linearised it is chi_dot n^s with
+  the section's own (twist-free) frame.  Linearized it is chi_dot n^s with
 
       chi = psi' + theta^s'(xi) \\int_0^xi theta^s' psi
 
@@ -57,7 +57,7 @@ branch at alpha = pi).  On the buckled branches of the standing pipe
 (sin alpha = 0, theta^s != 0) the rotation of the buckled shape about the
 vertical is a neutral mode: psi = sin(theta^s) (w = eta^s, the rotated
 static shape) solves K psi = 0 exactly in the continuum (README).  A
-discretisation does not contain sin(theta^s) exactly: for its L2 projection
+discretization does not contain sin(theta^s) exactly: for its L2 projection
 x, ||K x|| / (||K|| ||x||) is O(h^4) on P1 to P3 elements (measured: 3.4e-3,
 2.7e-4, 1.7e-5, 1.1e-6 on P3 with 4 to 32 elements), and the smallest
 eigenvalue of K is O(h^2k) instead of 0 (P3: 1.2e-2, 1.5e-4, 2.5e-6,
@@ -113,7 +113,7 @@ class OutOfPlaneMatrices:
     neutral_residual : float or None
         ||K x|| / (||K_b||_2 ||x||) before the correction (K_b the bending
         matrix, the leading part of K): how far the
-        discretisation is from the continuum's exact neutral mode.
+        discretization is from the continuum's exact neutral mode.
     """
 
     K: np.ndarray
@@ -137,13 +137,13 @@ class OutOfPlaneOperators:
     Parameters
     ----------
     model : PipeModel
-        The planar pipe: its discretisation, parameters and static states.
+        The planar pipe: its discretization, parameters and static states.
 
     Notes
     -----
     The state-independent matrices (inertia, Coriolis, the follower's, the
-    plain integrals) depend on the discretisation only and are computed once
-    per discretisation; a spectrum then costs one O(n_q n^2) product for the
+    plain integrals) depend on the discretization only and are computed once
+    per discretization; a spectrum then costs one O(n_q n^2) product for the
     curvature-dependent terms.
     """
 
@@ -179,7 +179,7 @@ class OutOfPlaneOperators:
                 "K": _dense(self.disc.K),
             }
             # ||K||_2 of the bending matrix, the leading part of K at every state:
-            # the scale of neutral_residual, one SVD per discretisation.
+            # the scale of neutral_residual, one SVD per discretization.
             d["K_norm"] = float(np.linalg.norm(d["K"], 2))
         return d
 
@@ -331,7 +331,7 @@ def axisymmetric(params) -> bool:
 
 
 class OutOfPlaneModel(PipeModel):
-    """The planar pipe whose linearisation is the out-of-plane problem.
+    """The planar pipe whose linearization is the out-of-plane problem.
 
     Its static states, residual and static Jacobian are those of
     :class:`~fempipe.model.operators.PipeModel` (the static state of a round pipe

@@ -1,6 +1,6 @@
-"""Transfer of a state between discretisations: the L2 projection of theta.
+"""Transfer of a state between discretizations: the L2 projection of theta.
 
-Used wherever the result of one discretisation seeds a computation on
+Used wherever the result of one discretization seeds a computation on
 another: a limit cycle shot on a refined mesh from a coarse one, the members
 of a convergence study started from one seed, the refined run of an error
 estimate started from the coarse state.

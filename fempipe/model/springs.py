@@ -1,4 +1,4 @@
-"""Linear springs tying centreline points to their undeformed positions.
+"""Linear springs tying centerline points to their undeformed positions.
 
 The spring term of Eq. (20)'s variants (:mod:`fempipe.model.weak_form`):
 each spring (kappa, xi_s) is integrated over [0, xi_s] with a Gauss rule of
@@ -113,7 +113,7 @@ class SpringTerms(WeakForm):
     def spring(self, q: np.ndarray) -> np.ndarray:
         """Springs: ``sum kappa \\int_0^xi_s phi_i n . (r(xi_s) - (xi_s, 0))``.
 
-        Each spring (kappa, xi_s) ties the centreline point r(xi_s) =
+        Each spring (kappa, xi_s) ties the centerline point r(xi_s) =
         \\int_0^xi_s t (local frame of Eq. (5): r = (xi + varsigma, eta)) to its
         undeformed position (xi_s, 0) with the isotropic potential
         (kappa/2) |r(xi_s) - (xi_s, 0)|^2, kappa = k L^3/EI; this term is its

@@ -58,7 +58,7 @@ class ExternalDampingTerm(WeakForm):
     def external_damping(self, fl: Fields) -> np.ndarray:
         """External viscous damping: ``sigma \\int phi_i n . C^R C(theta_dot n)``.
 
-        The force -sigma r_dot per unit length on the centreline, r_dot =
+        The force -sigma r_dot per unit length on the centerline, r_dot =
         C(theta_dot n) its whole velocity (not only the lateral part), does
         the virtual work -sigma \\int_0^1 r_dot . delta r with delta r =
         C(delta theta n); exchanging the integrals gives the inertia projection

@@ -30,7 +30,7 @@ Here C and C^R are the integration operators from 0 and to 1
 (:mod:`fempipe.model.quadrature`).  Written with n and t the nested brackets of
 Eq. (20) read ``n(xi) . \\int_xi^1 r_ddot`` with
 ``r_ddot = \\int_0^s (theta_ddot n - theta_dot^2 t)`` the acceleration of the
-centreline: the generalised inertia force.  The mass matrix is therefore
+centerline: the generalised inertia force.  The mass matrix is therefore
 ``M_ij = \\int_0^1 (C phi_i n) . (C phi_j n)``, symmetric positive definite.
 
 The last four rows are the variants of the pipe (:class:`~fempipe.model.params.Params`,
@@ -51,7 +51,7 @@ scaled as Eq. (19); README, "Variants of the pipe"), each zero by default:
   Gauss rule of its own (:meth:`PipeModel.spring`).
 
 Each term also supplies its derivatives with respect to q, q' and q'' so that
-Newton's method, the linearised stability matrices (Eqs. (31b)-(33)) and the
+Newton's method, the linearized stability matrices (Eqs. (31b)-(33)) and the
 implicit time integrators all use the same analytic Jacobians.
 
 The terms are grouped by kind, one method per physical term, named after it:
@@ -119,7 +119,7 @@ _DENSE_FORMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _dense_forms(disc: Discretization) -> tuple[np.ndarray, np.ndarray]:
-    """(Phi, K) of ``disc`` as dense arrays, computed once per discretisation."""
+    """(Phi, K) of ``disc`` as dense arrays, computed once per discretization."""
     forms = _DENSE_FORMS.get(disc)
     if forms is None:
         forms = _DENSE_FORMS[disc] = (as_dense(disc.Phi), as_dense(disc.K))
@@ -196,8 +196,8 @@ class WeakForm:
 
     @property
     def _Phi_dense(self) -> np.ndarray:
-        """Phi as a dense array, cached per discretisation: the dense Jacobians use it
-        every call, on models made by :meth:`with_params` (which share the discretisation)."""
+        """Phi as a dense array, cached per discretization: the dense Jacobians use it
+        every call, on models made by :meth:`with_params` (which share the discretization)."""
         return _dense_forms(self.disc)[0]
 
     @property

@@ -1,2 +1,2 @@
-"""Figures a reader of the paper recognises.  matplotlib is imported lazily
+"""Figures a reader of the paper recognizes.  matplotlib is imported lazily
 inside each function; every function takes ``ax=None`` and returns the Axes."""

@@ -6,7 +6,7 @@ import textwrap
 
 import numpy as np
 
-#: Colour-blind-safe colours (Okabe & Ito) and markers of the families.
+#: Color-blind-safe colors (Okabe & Ito) and markers of the families.
 FAMILY_STYLE = {
     "fe-P1": ("#0072B2", "o-"),
     "fe-P2": ("#E69F00", "s-"),

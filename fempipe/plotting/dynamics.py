@@ -2,7 +2,7 @@
 
 * :func:`plot_time_traces` - tip position X_g(1), Z_g(1) against tau (Fig. 11);
 * :func:`plot_phase_portrait` - Z_g(1) against its velocity (Fig. 12);
-* :func:`plot_oscillating_shapes` - overlaid centrelines over one period in the
+* :func:`plot_oscillating_shapes` - overlaid centerlines over one period in the
   global frame, gravity down the page, equal axes (the insets of Figs. 7, 9);
 * :func:`plot_bifurcation` - extrema of a tip coordinate against v, sweeps up
   and down or continued branches of equilibria and periodic orbits, unstable
@@ -102,7 +102,7 @@ def plot_phase_portrait(
 def plot_oscillating_shapes(
     disc: Discretization, q, alpha: float, ax=None, n_shapes: int = 12, title=None
 ):
-    """Overlaid centrelines in the global frame: Z_g across, X_g (gravity) down the page.
+    """Overlaid centerlines in the global frame: Z_g across, X_g (gravity) down the page.
 
     Parameters
     ----------
@@ -124,7 +124,7 @@ def plot_oscillating_shapes(
             s.X_g,
             color=cmap(j / max(len(idx) - 1, 1)),
             lw=1.2,
-            label="shapes over the shown time\n(colour: early to late)" if j == 0 else None,
+            label="shapes over the shown time\n(color: early to late)" if j == 0 else None,
         )
     ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8, label="undeformed")
     ax.plot([0], [0], "ks", ms=6, label="clamp")

@@ -42,7 +42,7 @@ def plot_spatial_branches(result, ax=None, title=None):
 
     Solid: stable in three dimensions; dashed: unstable in the plane; dotted:
     stable in the plane, unstable out of it.  Events: open markers in the
-    plane, filled out of it (○ flutter, □ divergence, △ restabilisation,
+    plane, filled out of it (○ flutter, □ divergence, △ restabilization,
     ◇ fold).
 
     Parameters

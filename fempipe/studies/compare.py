@@ -3,7 +3,7 @@
 A user's result for one case -- a static tip value, the critical flow
 velocity or its frequency, a limit cycle's amplitude or period -- is set
 beside fempipe's value of the same :class:`~fempipe.studies.convergence.Quantity` on
-one discretisation (the reported value, computed exactly as ``fempipe
+one discretization (the reported value, computed exactly as ``fempipe
 convergence`` computes it), and the error of fempipe's value is estimated
 from one refinement (:mod:`fempipe.studies.error_estimate`: the value is computed
 again on ``refine(disc)`` and the Grid Convergence Index
@@ -12,10 +12,10 @@ its estimate, with the floor the quantity's solver tolerance
 ``Quantity.tolerance * max(1, |Q|)``).
 
 The difference user - fempipe is **resolved** when it exceeds fempipe's
-error estimate: then fempipe's discretisation error cannot explain it, and
+error estimate: then fempipe's discretization error cannot explain it, and
 the difference is the user's (their truncation, their model, their
 measurement).  An unresolved difference is within what fempipe's own
-discretisation could be off by; only a finer ``disc`` can tell.
+discretization could be off by; only a finer ``disc`` can tell.
 
 :func:`compare_values` runs the comparisons (in worker processes if asked,
 :func:`fempipe.core.parallel.run_tasks`); a comparison whose computation fails
@@ -71,7 +71,7 @@ class Evaluation:
     Attributes
     ----------
     value : float
-        The quantity on the reported discretisation.
+        The quantity on the reported discretization.
     refined : float or None
         The quantity on ``refine(disc)``; None if that computation failed.
     error_estimate : float or None
@@ -103,7 +103,7 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
     quantity : Quantity
         A real quantity (:data:`COMPARABLE`).
     disc : FiniteElement or Modal
-        The reported discretisation.
+        The reported discretization.
 
     Returns
     -------
@@ -113,7 +113,7 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
     ------
     SolverError
         If the value on ``disc`` cannot be computed (a failure on the refined
-        discretisation is recorded in :attr:`Evaluation.note` instead).
+        discretization is recorded in :attr:`Evaluation.note` instead).
     """
     t0 = time.process_time()
     if quantity.name in CYCLE_QUANTITIES:
@@ -159,7 +159,7 @@ class Comparison:
 
     @property
     def fempipe(self) -> float | None:
-        """fempipe's value on the reported discretisation (None if it failed)."""
+        """fempipe's value on the reported discretization (None if it failed)."""
         return None if self.evaluation is None else self.evaluation.value
 
     @property
@@ -219,7 +219,7 @@ def compare_values(
     pairs : sequence of (Quantity, float)
         What to compute and the user's value of it.
     disc : FiniteElement or Modal
-        The reported discretisation (refined once for the estimates).
+        The reported discretization (refined once for the estimates).
     workers : int, optional
         Processes computing the comparisons in parallel
         (:func:`fempipe.core.parallel.run_tasks`).
@@ -278,7 +278,7 @@ def estimate_description(
     info = describe(disc, floor=text).to_dict()
     info["floors"] = floors
     info["resolved"] = (
-        "|difference| > error_estimate: fempipe's discretisation error cannot explain the "
+        "|difference| > error_estimate: fempipe's discretization error cannot explain the "
         "difference"
     )
     return info

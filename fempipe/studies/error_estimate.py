@@ -1,6 +1,6 @@
 """Error estimates of reported numbers from one refinement (the Grid Convergence Index).
 
-A number Q computed on a discretisation (the *coarse*, reported value Q_h) is
+A number Q computed on a discretization (the *coarse*, reported value Q_h) is
 computed again on a refined one (Q_{h/r}, :func:`refine`), and the error of
 Q_h is estimated by Roache's Grid Convergence Index for a two-grid study,
 stated for the coarse grid:
@@ -20,7 +20,7 @@ Computational Science and Engineering*, Hermosa, 1998).  When the order is
 unknown the bracket is dropped (factor 1): Fs |Q_h - Q_{h/r}|.
 
 A difference below the solver's own tolerance says nothing about the
-discretisation, so the estimate is never below ``floor``, which the caller
+discretization, so the estimate is never below ``floor``, which the caller
 sets from the tolerance of the computation (Newton's 1e-10 of the static
 states, the 1e-10 in v of the located stability events, the shooting
 tolerance of a limit cycle).
@@ -97,7 +97,7 @@ def _modal_basis(disc: Modal) -> str:
 
 
 def refine(disc):
-    """The refined discretisation of the estimate.
+    """The refined discretization of the estimate.
 
     Parameters
     ----------
@@ -114,7 +114,7 @@ def refine(disc):
     Raises
     ------
     TypeError
-        For another kind of discretisation.
+        For another kind of discretization.
     """
     if isinstance(disc, FiniteElement):
         return disc.refined(int(RATIO))
@@ -199,7 +199,7 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
     Parameters
     ----------
     coarse, fine : float or array_like
-        The reported value and the value on the refined discretisation
+        The reported value and the value on the refined discretization
         (broadcast against each other).
     order : float or None
         Order p of the error in the refinement; None if unknown.
@@ -242,7 +242,7 @@ class ErrorEstimate:
     ----------
     method : {'h-refinement', 'N-doubling'}
     discretization, refined : str
-        The reported discretisation and the refined one (``P3:16``, ``P3:32``).
+        The reported discretization and the refined one (``P3:16``, ``P3:32``).
     safety_factor : float
     order : float or None
         The order p used (None: unknown, factor 1).

@@ -9,7 +9,7 @@ the boundary-value problem
     theta(0) = 0,  theta'(1) = 0,
 
 with n = (-sin theta, cos theta), r = \\int_0^xi (cos theta, sin theta) the
-centreline in the pipe's frame and H the unit step: each spring is a point
+centerline in the pipe's frame and H the unit step: each spring is a point
 force at xi_j, where theta'' jumps by kappa_j n . (r(xi_j) - (xi_j, 0)) and
 theta, theta' are continuous.  theta(1) and the spring points r(xi_j) are
 unknown parameters p with the extra conditions theta(1) = p_0, r(xi_j) = p_j.
@@ -20,7 +20,7 @@ states so that the tip position is part of the solution.  With springs the
 interval is cut at their positions and the pieces, each mapped onto [0, 1],
 are solved as one system joined by continuity of (theta, theta', X_g, Z_g):
 the collocation never straddles the jump of theta''.  It shares no code with
-fempipe's discretisations, quadrature or residual: agreement to the BVP
+fempipe's discretizations, quadrature or residual: agreement to the BVP
 tolerance checks the weak form, the integration operators and Newton at once.
 """
 

@@ -159,7 +159,7 @@ class Case:
         report, never counted as reproduced).
     caption : str
         The figure's caption in the report: parameters, flow velocities,
-        discretisations in words, the key of colours, line styles and
+        discretizations in words, the key of colors, line styles and
         markers, which shapes are static and which oscillate.
     """
 
@@ -239,5 +239,5 @@ def alpha_name(alpha: float) -> str:
 
 
 def label_tag(label: str) -> str:
-    """A discretisation label as it appears in check names: ``"FE P3:8"`` → ``"FEP3:8"``, ``"N = 3"`` → ``"N3"``."""
+    """A discretization label as it appears in check names: ``"FE P3:8"`` → ``"FEP3:8"``, ``"N = 3"`` → ``"N3"``."""
     return label.replace(" ", "").replace("=", "")

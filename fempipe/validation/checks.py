@@ -9,7 +9,7 @@ Checks come in two categories:
 
 ``numerics``
     fempipe against an independent computation (a refined mesh, the other
-    discretisation, an independent ODE boundary-value solver, a symmetry, a
+    discretization, an independent ODE boundary-value solver, a symmetry, a
     classical value).  These must pass; a failure is a bug in fempipe.
 ``paper``
     a statement or number of the paper (Chen, Hu, Dai & Wang 2020) against

@@ -45,7 +45,7 @@ no boundary term: with the pressure zero at the exit it is the v^2 eta'' of
 the field equation.  An interior spring makes eta''' jump:
 E [eta''']_{xi_s^-}^{xi_s^+} = -kappa_s eta(xi_s).
 
-Two discretisations
+Two discretizations
 -------------------
 :class:`BeamGalerkin`
     Paidoussis' classical method: eta = sum_r q_r phi_r(xi) with the
@@ -106,7 +106,7 @@ Stability
 An eigenvalue counts as unstable when Re lambda > ``tol`` max(1, |lambda|)
 (round-off of an undamped problem is below it); only eigenvalues with
 |lambda| < ``lam_max`` (the lowest eight or so modes, well resolved by every
-discretisation used) decide.  :func:`critical_velocity` scans v on a grid
+discretization used) decide.  :func:`critical_velocity` scans v on a grid
 with that margin, then locates the first crossing with Brent's method: on the
 largest Re lambda itself when it is negative below the crossing (a damped
 system: the exact zero), otherwise on the margin (an undamped system, whose
@@ -129,7 +129,7 @@ from .classical_galerkin import (
     LegendreGalerkin,
     beam_mode_values,
     cantilever_roots,
-    discretisation,
+    discretization,
 )
 from .classical_limits import (
     heavy_column_buckling,
@@ -147,7 +147,7 @@ __all__ = [
     "beam_mode_values",
     "cantilever_roots",
     "critical_velocity",
-    "discretisation",
+    "discretization",
     "eigenvalues",
     "heavy_column_buckling",
     "large_damping_limit",
@@ -251,7 +251,7 @@ class StraightPipe:
 
 
 class _Problem:
-    """A pipe on a discretisation, with the v-independent matrices formed once."""
+    """A pipe on a discretization, with the v-independent matrices formed once."""
 
     def __init__(self, pipe: StraightPipe, disc) -> None:
         self.pipe, self.disc = pipe, disc
@@ -282,7 +282,7 @@ def eigenvalues(
     v : float
         Flow velocity.
     method, n : str, int
-        The discretisation (:func:`discretisation`).
+        The discretization (:func:`discretization`).
 
     Returns
     -------
@@ -290,7 +290,7 @@ def eigenvalues(
         Sorted by |lambda|; with hysteretic damping, those of the module
         docstring (Im > 0 from 1 + i mu_h, their conjugates, the real ones).
     """
-    lam = _Problem(pipe, discretisation(method, n)).eigenvalues(v)
+    lam = _Problem(pipe, discretization(method, n)).eigenvalues(v)
     return lam[np.argsort(np.abs(lam))]
 
 
@@ -319,7 +319,7 @@ def spectral_abscissa(
     v : float
         Flow velocity.
     method, n : str, int
-        The discretisation (:func:`discretisation`).
+        The discretization (:func:`discretization`).
     lam_max, tol : float
         Only |lambda| < ``lam_max`` count; an unstable real part exceeds
         ``tol`` max(1, |lambda|) (module docstring).
@@ -331,7 +331,7 @@ def spectral_abscissa(
     lam : complex
         The eigenvalue attaining it.
     """
-    return _abscissa(_Problem(pipe, discretisation(method, n)).eigenvalues(v), lam_max, tol)
+    return _abscissa(_Problem(pipe, discretization(method, n)).eigenvalues(v), lam_max, tol)
 
 
 @dataclass(frozen=True)
@@ -348,7 +348,7 @@ class Onset:
     kind : str
         ``"flutter"``, ``"divergence"``, ``"unstable at v_min"`` or ``"stable"``.
     method : str
-        The discretisation's label.
+        The discretization's label.
     """
 
     v_cr: float
@@ -386,7 +386,7 @@ def critical_velocity(
     v_max, v_min : float
         The range of v.
     method, n : str, int
-        The discretisation (:func:`discretisation`).
+        The discretization (:func:`discretization`).
     step : float
         Scan step in v.
     xtol : float
@@ -394,7 +394,7 @@ def critical_velocity(
     lam_max, tol : float
         Which eigenvalues decide and the size of an unstable real part.
     """
-    prob = _Problem(pipe, discretisation(method, n))
+    prob = _Problem(pipe, discretization(method, n))
     label = prob.disc.label()
 
     def margin(v):

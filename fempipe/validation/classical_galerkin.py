@@ -1,4 +1,4 @@
-"""The two discretisations of the classical linear theory (:mod:`fempipe.validation.classical`).
+"""The two discretizations of the classical linear theory (:mod:`fempipe.validation.classical`).
 
 :class:`BeamGalerkin`, Paidoussis' Galerkin method on the clamped-free beam
 functions, and :class:`LegendreGalerkin`, C^1 Legendre spectral elements cut
@@ -27,7 +27,7 @@ __all__ = [
     "beam_mode_coefficients",
     "beam_mode_values",
     "cantilever_roots",
-    "discretisation",
+    "discretization",
     "gauss_cells",
     "legendre_local_basis",
     "quadratic_eigenvalues",
@@ -85,7 +85,7 @@ def beam_mode_values(n: int, x: np.ndarray, derivative: int = 0) -> np.ndarray:
     Returns
     -------
     ndarray, shape (len(x), n)
-        phi_r^(k)(x_j), with int_0^1 phi_r^2 = 1 (the textbook normalisation,
+        phi_r^(k)(x_j), with int_0^1 phi_r^2 = 1 (the textbook normalization,
         |phi_r(1)| = 2).
     """
     lam = cantilever_roots(n)
@@ -106,10 +106,10 @@ def gauss_cells(cells: int, points: int = 8):
 
 
 # ---------------------------------------------------------------------------
-# Discretisations
+# Discretizations
 
 
-#: Shifts of the reversed linearisation (the second if the first is an eigenvalue).
+#: Shifts of the reversed linearization (the second if the first is an eigenvalue).
 _SHIFTS = (-1.0, -1.37)
 
 
@@ -120,7 +120,7 @@ def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.nda
     nu^2 K_s + nu C_s + M = 0, K_s = K + s C + s^2 M, C_s = C + 2 s M, whose
     companion matrix [[0, I], [-K_s^-1 M, -K_s^-1 C_s]] has a norm of the
     order of the largest 1/|lambda - s|.  Its round-off therefore stays at the
-    scale of the low modes whatever the discretisation: the direct companion
+    scale of the low modes whatever the discretization: the direct companion
     of (q, q') has a norm of the order of the stiffest mode's omega^2 (and
     mu omega^2 with Kelvin-Voigt damping), whose round-off shifts an
     eigenvalue near zero (a divergence) by 1e-6 at 40 modes and splits the
@@ -312,8 +312,8 @@ class LegendreGalerkin:
     solve = BeamGalerkin.solve
 
 
-def discretisation(method: str = "galerkin", n: int | None = None):
-    """A discretisation by name.
+def discretization(method: str = "galerkin", n: int | None = None):
+    """A discretization by name.
 
     Parameters
     ----------

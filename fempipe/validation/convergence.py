@@ -46,12 +46,12 @@ from .static_shapes import static_shapes
 
 CASE = Case(
     name="convergence",
-    caption="Convergence of fempipe's discretisations: absolute error against the number of degrees of freedom (log-log) for the static tip position, v_cr at α = 0 and 90°, and the limit cycle, each against a finer reference. Markers: P1 (o), P2 (□), P3 (△) finite elements (linear, quadratic, cubic elements), modal sine bases (◇, dashed); thick grey lines: the points used for the fitted order p given in the legend; N = 3, N = 4: the paper's truncations; dotted line: the error estimate of the reference. Last panel: observed orders of v_cr against α (theory: 2, 4, 6 for P1, P2, P3).",
+    caption="Convergence of fempipe's discretizations: absolute error against the number of degrees of freedom (log-log) for the static tip position, v_cr at α = 0 and 90°, and the limit cycle, each against a finer reference. Markers: P1 (o), P2 (□), P3 (△) finite elements (linear, quadratic, cubic elements), modal sine bases (◇, dashed); thick grey lines: the points used for the fitted order p given in the legend; N = 3, N = 4: the paper's truncations; dotted line: the error estimate of the reference. Last panel: observed orders of v_cr against α (theory: 2, 4, 6 for P1, P2, P3).",
     figure="Convergence study",
     title="Error against degrees of freedom: FE P1, P2, P3 and modal N",
     paper_shows=(
         "N = 3 is converged for the static shapes (Sec. 3.1, Fig. 2(a))",
-        "the stability results are converged in the Galerkin discretisation (Sec. 4)",
+        "the stability results are converged in the Galerkin discretization (Sec. 4)",
         "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
     ),
     requires=("static_reference_vs_bvp",),
@@ -60,7 +60,7 @@ CASE = Case(
 
 @dataclass(frozen=True)
 class Series:
-    """One discretisation family: dofs, values, errors and the fitted order."""
+    """One discretization family: dofs, values, errors and the fitted order."""
 
     label: str
     dofs: np.ndarray
@@ -97,7 +97,7 @@ def run_study(
     paper_modes: Sequence[int] = (3, 4),
     roundoff: float = 1e-12,
 ) -> Study:
-    """Compute ``quantity`` on every discretisation and fit the orders.
+    """Compute ``quantity`` on every discretization and fit the orders.
 
     Parameters
     ----------
@@ -378,7 +378,7 @@ def run(quick: bool = False) -> CaseResult:
     )
 
 
-#: Colour-blind-safe colours (Okabe & Ito) of the discretisation families.
+#: Color-blind-safe colors (Okabe & Ito) of the discretization families.
 SERIES_COLORS = {"FE P1": "#0072B2", "FE P2": "#E69F00", "FE P3": "#009E73", "modal": "#D55E00"}
 
 

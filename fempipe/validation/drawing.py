@@ -3,7 +3,7 @@
 Conventions, as in the paper's figures: shapes in the global frame with Z_g
 horizontal and X_g pointing down (gravity down), equal axis scales; the
 mesh-converged FE result solid, the paper's modal N = 3 dashed and N = 4
-dotted, one colour per flow velocity.
+dotted, one color per flow velocity.
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ __all__ = [
 ]
 
 LINESTYLES = {"FE": "-", "N = 3": "--", "N = 4": ":", "N = 2": "-."}
-#: Colours of the discretisations where colour does not already mean v or a
-#: mode (Okabe & Ito, colour-blind safe): the converged FE black.
+#: Colors of the discretizations where color does not already mean v or a
+#: mode (Okabe & Ito, color-blind safe): the converged FE black.
 DISC_COLORS = {"FE": "k", "N = 3": "#D55E00", "N = 4": "#0072B2", "N = 2": "#009E73"}
 
 
@@ -47,12 +47,12 @@ def legend_columns(fig, handles) -> int:
 
 
 def color_for(label: str) -> str:
-    """Colour by discretisation label (FE black, N = 3 vermilion, N = 4 blue)."""
+    """Color by discretization label (FE black, N = 3 vermilion, N = 4 blue)."""
     return DISC_COLORS["FE" if label.startswith("FE") else label]
 
 
 def discretization_legend(fig, labels) -> None:
-    """One legend below the panels for the discretisations (style and colour)."""
+    """One legend below the panels for the discretizations (style and color)."""
     from matplotlib.lines import Line2D
 
     handles = [
@@ -64,7 +64,7 @@ def discretization_legend(fig, labels) -> None:
 
 
 def style_for(label: str) -> str:
-    """Line style by discretisation label (FE solid, N = 3 dashed, N = 4 dotted)."""
+    """Line style by discretization label (FE solid, N = 3 dashed, N = 4 dotted)."""
     if label.startswith("FE"):
         return LINESTYLES["FE"]
     return LINESTYLES.get(label, "-.")
@@ -139,7 +139,7 @@ def draw_shapes(
     stable=None,
     legend: bool = True,
 ):
-    """Overlay the centrelines of several discretisations.
+    """Overlay the centerlines of several discretizations.
 
     Parameters
     ----------
@@ -153,7 +153,7 @@ def draw_shapes(
         ``v_label(i, v) -> str`` for the legend (default ``v = ...``).
     stable : sequence of bool, optional
         Linear stability of the state at each v: unstable ones are drawn
-        grey (every discretisation) and named "(unstable)" in the legend.
+        grey (every discretization) and named "(unstable)" in the legend.
     legend : bool
         Draw the axes' legend (False when the figure has one legend for
         all panels).
@@ -175,7 +175,7 @@ def draw_shapes(
                     lab += " (unstable)"
             color = UNSTABLE_COLOR if unstable[i] else colors[i]
             ax.plot(fam.Z_g[i] * scale, fam.X_g[i] * scale, ls, color=color, lw=1.2, label=lab)
-    # one legend entry per discretisation style
+    # one legend entry per discretization style
     for label in families:
         ax.plot([], [], style_for(label), color="k", lw=1.0, label=label)
     if any(unstable):
@@ -215,7 +215,7 @@ def plot_shape_panels(result, fig, title, figure_title: str, **figure_options):
 
 
 def _shape_legend(fig, panels) -> None:
-    """One legend below the panels: colours are v, line styles discretisations."""
+    """One legend below the panels: colors are v, line styles discretizations."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
@@ -289,7 +289,7 @@ def _with_hopf(static: list, hopf: list, key: str) -> list:
 
 def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict | None = None):
     """A continued bifurcation diagram (:class:`~fempipe.validation.dynamic_runs.ContinuedDiagram`
-    per discretisation): the static branch and the extrema of every branch of
+    per discretization): the static branch and the extrema of every branch of
     periodic orbits as lines, solid where stable and dashed where unstable, and
     the stable state at each requested v marked as :func:`draw_diagram` marks
     a sweep (FE open circles, N = 3 '+', N = 4 'x'); Hopf points as filled dots.
@@ -336,7 +336,7 @@ def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict |
 
 
 def draw_orbit_shapes(ax, shapes: dict):
-    """Oscillating shapes and static shapes in the global frame, one colour per v.
+    """Oscillating shapes and static shapes in the global frame, one color per v.
 
     An oscillation is a bundle of thin lines (shapes at equally spaced
     phases of one period); a static state is one thick line drawn above the

@@ -1,6 +1,6 @@
 """Shared computations of the nonlinear-oscillation cases (Figs. 7-12).
 
-Each discretisation (the converged FE mesh and the paper's N = 3, N = 4)
+Each discretization (the converged FE mesh and the paper's N = 3, N = 4)
 gets the same treatment: sweeps in v with :func:`fempipe.analyses.bifurcation.sweep`
 (each point starts from the previous attractor), limit cycles with
 :func:`fempipe.analyses.limit_cycle.find_attractor` and one period of the cycle
@@ -69,7 +69,7 @@ DYN_FE_QUICK = "P3:4"
 
 
 def dyn_modal(n_modes: int, basis: str = "sine") -> Modal:
-    """The modal discretisation of the dynamic runs: N modes on max(8, 4 N) cells of
+    """The modal discretization of the dynamic runs: N modes on max(8, 4 N) cells of
     8 Gauss points.
 
     The default quadrature of :class:`~fempipe.model.discretization.Modal`,
@@ -94,8 +94,8 @@ def dyn_discretizations(quick: bool) -> dict:
 
 
 def modal_label(disc: Modal) -> str:
-    """The label of a modal discretisation: ``N = 3`` (the paper's sine modes) or
-    ``N = 3 (beam)``; :func:`attractor` rebuilds the discretisation from it."""
+    """The label of a modal discretization: ``N = 3`` (the paper's sine modes) or
+    ``N = 3 (beam)``; :func:`attractor` rebuilds the discretization from it."""
     return f"N = {disc.n_modes}" + ("" if disc.basis == "sine" else f" ({disc.basis})")
 
 
@@ -138,7 +138,7 @@ _MODAL_LABEL = re.compile(r"^N = (\d+)(?: \((\w+)\))?$")
 
 
 def _disc_from_spec(spec: str):
-    """The discretisation of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`,
+    """The discretization of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`,
     on the quadrature of :func:`dyn_modal`), ``FE P3:8`` or any ``disc.name``."""
     m = _MODAL_LABEL.match(spec)
     if m:
@@ -158,7 +158,7 @@ class Orbit:
 
     ``t`` (m,), ``tip`` dict of (m,) arrays (eta_tip, X_tip, Z_tip),
     ``tip_rate`` dict of (m,) arrays (their tau-derivatives), ``shapes`` a
-    list of (Z_g, X_g) centrelines at ``n_shapes`` phases.
+    list of (Z_g, X_g) centerlines at ``n_shapes`` phases.
     """
 
     label: str
@@ -214,7 +214,7 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
     """The limit cycle of ``disc`` at (alpha, v), as a LimitCycle.
 
     With ``guess = (q0, qdot0, period)`` on ``guess_disc`` (another
-    discretisation's cycle), shoot from its L2 projection: a few Newton
+    discretization's cycle), shoot from its L2 projection: a few Newton
     iterations instead of a transient.  Otherwise (or if shooting fails)
     integrate past the transient with :func:`fempipe.analyses.limit_cycle.find_attractor`.
     Returns None if the attractor is not periodic.
@@ -232,7 +232,7 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
 
 @functools.lru_cache(maxsize=4)
 def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
-    """Limit cycles at flow ``v`` for each alpha and discretisation (cached per process).
+    """Limit cycles at flow ``v`` for each alpha and discretization (cached per process).
 
     The FE cycle is found from the static state (transient, then shooting);
     N = 3 and N = 4 shoot from its projection.  Returns
@@ -295,7 +295,7 @@ class DiagramPoint:
 @dataclass(frozen=True)
 class ContinuedDiagram:
     """The static branch and the cycle branches from each Hopf point of one
-    discretisation at one alpha (:func:`fempipe.analyses.periodic.cycle_diagram`).
+    discretization at one alpha (:func:`fempipe.analyses.periodic.cycle_diagram`).
 
     ``static`` the equilibria at the requested v; ``branches`` name -> points in
     arclength order; ``hopf`` the Hopf points (dicts with ``v``, ``omega``);
@@ -457,7 +457,7 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
 
 
 def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:
-    """The bifurcation diagram of the discretisation ``label`` (as :func:`attractor`)
+    """The bifurcation diagram of the discretization ``label`` (as :func:`attractor`)
     at ``alpha`` by continuation: the primary static branch with its linear
     stability and every branch of periodic orbits born at its Hopf points,
     stable and unstable, landed on each requested v (cached per process)."""

@@ -3,7 +3,7 @@
 The paper's Fig. 2(a) overlays static shapes (gamma = 18.9) for several N
 and concludes "N = 3 is valid".  This case draws the shapes by the
 mesh-converged FE and by N = 2, 3, 4 modes, and measures how far each modal
-centreline is from the converged one.  FE is itself checked against a 2x
+centerline is from the converged one.  FE is itself checked against a 2x
 refined mesh and against an independent collocation solution of Eq. (31a).
 """
 
@@ -19,7 +19,7 @@ from .static_shapes import PANEL_CHECKS, panel_checks, panel_table, static_panel
 
 CASE = Case(
     name="fig02a",
-    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one colour per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4; dash-dot: N = 2. γ = 18.9, α = π/3, v = 0, 2, 4, 6 (quick suite: fewer v). All shapes are static equilibria; a linearly unstable one would be grey.",
+    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one color per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4; dash-dot: N = 2. γ = 18.9, α = π/3, v = 0, 2, 4, 6 (quick suite: fewer v). All shapes are static equilibria; a linearly unstable one would be grey.",
     figure="Fig. 2(a)",
     title="Static shapes, γ = 18.9, α = π/3: convergence in the number of modes N",
     paper_shows=(

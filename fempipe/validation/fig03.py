@@ -20,7 +20,7 @@ from .static_shapes import PANEL_CHECKS, panel_checks, panel_table, static_panel
 
 CASE = Case(
     name="fig03",
-    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one colour per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4. α = π/2 (horizontal clamp), β = 0.142, μ = 0.005, (a) γ = 10, (b) γ = 30, (c) γ = 100; v = 0, 2, 4, 6 (quick suite: 0 and 4). Linearly unstable states (some eigenvalue with Re λ > 0, Eq. (32)) are drawn grey: γ = 10, v = 6 is past v_cr = 5.61. All shapes are static equilibria; none oscillates.",
+    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one color per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4. α = π/2 (horizontal clamp), β = 0.142, μ = 0.005, (a) γ = 10, (b) γ = 30, (c) γ = 100; v = 0, 2, 4, 6 (quick suite: 0 and 4). Linearly unstable states (some eigenvalue with Re λ > 0, Eq. (32)) are drawn grey: γ = 10, v = 6 is past v_cr = 5.61. All shapes are static equilibria; none oscillates.",
     figure="Fig. 3",
     title="Static shapes, α = π/2, γ = 10, 30, 100: the effect of gravity",
     paper_shows=(

@@ -28,7 +28,7 @@ from .static_shapes import (
 
 CASE = Case(
     name="fig04",
-    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one colour per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4. γ = 18.9, β = 0.142, μ = 0.005; (a) α = π/2, (b) α = 3π/4, (c) α = 9π/10; v = 0, 2, 4, 6 (quick suite: fewer v). Linearly unstable states (past v_cr) are drawn grey. All shapes are static equilibria; none oscillates.",
+    caption="Static shapes of the cantilevered pipe in the global frame (gravity down the page, lengths in units of L, clamp ■ at the origin), one color per flow velocity v (legend below). Solid: converged finite elements (FE, cubic elements; the mesh, P3:n = n cubic elements, is given in the legend); dashed: the paper's Galerkin method with N = 3 sine modes; dotted: N = 4. γ = 18.9, β = 0.142, μ = 0.005; (a) α = π/2, (b) α = 3π/4, (c) α = 9π/10; v = 0, 2, 4, 6 (quick suite: fewer v). Linearly unstable states (past v_cr) are drawn grey. All shapes are static equilibria; none oscillates.",
     figure="Fig. 4",
     title="Static shapes, γ = 18.9, α = π/2, 3π/4, 9π/10: the effect of inclination",
     paper_shows=(

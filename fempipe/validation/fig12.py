@@ -109,7 +109,7 @@ def run(quick: bool = False) -> CaseResult:
         "Phase trajectories at v = 10",
         (
             "α",
-            "discretisation",
+            "discretization",
             "Z_g(1) range",
             "dZ_g(1)/dτ range",
             "turning points of Z_g(1) per period",

@@ -4,7 +4,7 @@ This module solves the classical fourth-order equation of the out-of-plane
 deflection w(xi, tau) of the pipe about a planar static state theta^s(xi)
 (Chen et al. 2020, Eq. (31a)), written from that equation alone: it knows
 neither the out-of-plane rotation psi = w' of :mod:`fempipe.model.out_of_plane` nor
-fempipe's discretisations, quadrature or operators.  The static state comes
+fempipe's discretizations, quadrature or operators.  The static state comes
 from :func:`fempipe.validation.bvp.solve_static_bvp` (scipy's ``solve_bvp``
 on the strong form of Eq. (31a)), which is independent of fempipe too.
 
@@ -64,7 +64,7 @@ so that for w = W(xi) e^{lambda tau}, (K + lambda C + lambda^2 M) a = 0 with
 
 Only second derivatives appear: C^1 elements are conforming.
 
-Discretisation
+Discretization
 --------------
 :class:`HermiteSpectral`: spectral elements in w, C^1 (w and w' continuous
 at the nodes), each element carrying the Hermite cubics and the bubbles
@@ -441,7 +441,7 @@ def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
 
 
 class LateralProblem:
-    """A pipe on a discretisation, with its static branch followed in v.
+    """A pipe on a discretization, with its static branch followed in v.
 
     Parameters
     ----------

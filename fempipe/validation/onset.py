@@ -2,7 +2,7 @@
 
 v_cr is the first flow velocity at which the static state (on the
 gravity-sagged branch) loses linear stability: the spectral abscissa, the
-largest real part of the eigenvalues of the linearised problem
+largest real part of the eigenvalues of the linearized problem
 (lambda^2 M^d + lambda C^d + K^d) x = 0 (Eqs. (31b)-(33), via
 :func:`spectrum`, a dense QZ of the first-order pencil), changes sign from negative
 to positive.  It is bracketed on a grid in v and located by Brent's method,
@@ -12,7 +12,7 @@ fine mesh large negative real parts, so they never decide the sign.
 
 This is a second, deliberately simple implementation of what
 :func:`fempipe.analyses.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
-cases compare the two.  With ``plane="out"`` the linearised problem is the
+cases compare the two.  With ``plane="out"`` the linearized problem is the
 motion out of the plane of the static state (:mod:`fempipe.model.out_of_plane`),
 the first instability of an inclined round pipe.
 """
@@ -78,7 +78,7 @@ class _Branch:
 
 
 def spectrum(model: PipeModel, q_static: np.ndarray, plane: str = "in") -> np.ndarray:
-    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearisation, sorted by Re.
+    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearization, sorted by Re.
 
     ``plane="out"``: of the motion out of the plane of the static state.
     """

@@ -1,6 +1,6 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
-:mod:`fempipe.model.out_of_plane` linearises the motion out of the plane of a planar
+:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane of a planar
 static state (README, "Out of the plane").  This case checks it four ways and
 reports what it finds:
 
@@ -14,7 +14,7 @@ reports what it finds:
     lambda = 0 with the rotated static shape as eigenvector (w = eta^s,
     psi = sin theta^s).  fempipe restores this null vector exactly (rank-one
     correction); the residual ||K x|| of the uncorrected operator is its
-    discretisation error and must fall under refinement; the other
+    discretization error and must fall under refinement; the other
     eigenvalues are stable, and equal the strong form's.
 (c) **An independent strong form.**  :mod:`fempipe.validation.lateral` solves
     the fourth-order equation of the out-of-plane deflection w on C^1

@@ -234,7 +234,7 @@ def order_checks(ref, quick: bool, v_ref: float):
     table = Table(
         f"(d) Error of the out-of-plane v_cr (α = π/2, μ = 0) against the strong form "
         f"({v_ref:.12f})",
-        ("discretisation", "elements / modes", "unknowns", "|v_cr − v_ref|"),
+        ("discretization", "elements / modes", "unknowns", "|v_cr − v_ref|"),
         tuple(rows),
     )
     return checks, [table], requires, curves

@@ -1,6 +1,6 @@
 """Static states on one branch for the figure cases of Section 3 (Figs. 2-4).
 
-Every discretisation follows the same branch: the gravity-sagged state is
+Every discretization follows the same branch: the gravity-sagged state is
 reached by continuation in gamma from the straight pipe at gamma = 0 (where
 theta = 0 is exact), then followed in v.  Starting Newton from theta = 0 at
 the target gamma instead may land on another equilibrium for a nearly upright
@@ -38,7 +38,7 @@ __all__ = [
     "static_shapes",
 ]
 
-#: The FE discretisation whose static tip values are converged to < 1e-8
+#: The FE discretization whose static tip values are converged to < 1e-8
 #: (each case checks this against a 2x refined mesh).
 CONVERGED_FE = "P3:16"
 #: The paper's truncations.
@@ -57,7 +57,7 @@ def discretizations(extra_modes: Sequence[int] = ()) -> dict[str, object]:
 
 @dataclass(frozen=True)
 class StaticShapes:
-    """Static states at several v on one branch, one discretisation.
+    """Static states at several v on one branch, one discretization.
 
     Attributes
     ----------
@@ -66,7 +66,7 @@ class StaticShapes:
     tips : dict of ndarray, shape (k,)
         theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
     X_g, Z_g, theta : ndarray, shape (k, m)
-        Centrelines on the common grid ``xi`` (m points).
+        Centerlines on the common grid ``xi`` (m points).
     xi : ndarray, shape (m,)
     newton_iterations : ndarray, shape (k,)
     """
@@ -84,7 +84,7 @@ class StaticShapes:
 
 
 def _common_grid(disc, q, alpha, xi):
-    """Centreline on a common grid: densely sampled shape, then interpolated.
+    """Centerline on a common grid: densely sampled shape, then interpolated.
 
     16 samples per quadrature cell make the linear interpolation error
     ~ (h/16)^2 / 8 * curvature < 1e-5 for the figures; precise comparisons use
@@ -121,7 +121,7 @@ def static_shapes(
     n_gamma_steps : int
         Newton steps of the continuation in gamma from 0 at v = 0.
     n_points : int
-        Points of the common xi grid for the centrelines.
+        Points of the common xi grid for the centerlines.
     """
     v_values = np.asarray(v_values, dtype=float)
     if np.any(np.diff(v_values) < 0) or np.any(v_values < 0):
@@ -165,20 +165,20 @@ def shape_distance(a: StaticShapes, b: StaticShapes) -> np.ndarray:
 
 
 def refined(disc):
-    """The 2x refined copy of a discretisation: every element split in two, or twice
+    """The 2x refined copy of a discretization: every element split in two, or twice
     the modes of the same modal basis."""
     return disc.refined(2)
 
 
 @dataclass(frozen=True)
 class Panel:
-    """One panel of a static figure: the shapes of every discretisation.
+    """One panel of a static figure: the shapes of every discretization.
 
     ``fams`` maps labels (``"FE P3:16"``, ``"N = 3"``, ...) to
     :class:`StaticShapes`; ``mesh_error`` is the largest tip-position change
     under 2x refinement of the FE mesh; ``bvp_error`` the largest tip-position
     difference from the independent collocation solver; ``modal_error`` maps
-    the modal labels to the largest centreline distance from the FE result;
+    the modal labels to the largest centerline distance from the FE result;
     ``stable`` the linear stability of each FE state
     (:func:`fempipe.analyses.stability.linearly_stable`, Eq. (32)), so that a figure
     can draw an unstable equilibrium differently.
@@ -278,7 +278,7 @@ def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list[Check
             "FE tip positions equal an independent strong-form solution (all panels)",
             max(p.bvp_error for p in panels),
             1e-8,
-            why="solve_bvp tolerance 1e-10; both discretisation errors far below 1e-8",
+            why="solve_bvp tolerance 1e-10; both discretization errors far below 1e-8",
             source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
         ),
         *(_modal_check(panels, n, modal_tol) for n in PAPER_MODES),
@@ -302,7 +302,7 @@ def _modal_check(panels: Sequence[Panel], n: int, modal_tol: float) -> Check:
 
 
 def panel_table(panels: Sequence[Panel], title: str) -> Table:
-    """Tip values of every panel and discretisation, with the modal errors."""
+    """Tip values of every panel and discretization, with the modal errors."""
     rows = []
     for p in panels:
         fe = p.fe
@@ -326,8 +326,8 @@ def panel_table(panels: Sequence[Panel], title: str) -> Table:
                 )
     return Table(
         title,
-        ("panel", "discretisation", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max distance to FE"),
+        ("panel", "discretization", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max distance to FE"),
         tuple(rows),
-        note="Dimensionless (lengths in units of L). Last column: largest centreline distance "
+        note="Dimensionless (lengths in units of L). Last column: largest centerline distance "
         "from the converged FE shape.",
     )

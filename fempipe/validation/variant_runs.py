@@ -45,7 +45,7 @@ __all__ = [
     "fe_onset",
 ]
 
-#: fempipe's converged discretisation for the variant cases.
+#: fempipe's converged discretization for the variant cases.
 FE = CONVERGED_FE
 #: Legendre degree of the classical solver (its v_cr converged to 1e-9).
 CLASSICAL_P = 16

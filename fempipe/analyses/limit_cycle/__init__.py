@@ -10,7 +10,7 @@ This module finds it in three stages:
    kept.
 2. **Recurrence**: the smallest n for which the section points x_k and
    x_{k-n} agree gives a period-n candidate (n distinct points on the
-   section: period-1, period-2, ...).  Equilibria are recognised when the
+   section: period-1, period-2, ...).  Equilibria are recognized when the
    state comes close to a linearly stable static state (the criterion of
    :func:`fempipe.analyses.stability.linearly_stable`, as for ``spectrum`` and
    ``critical``) and keeps approaching it; motion without recurrence until ``t_max`` is reported as non-periodic.

@@ -42,7 +42,7 @@ def _linearly_stable(model: PipeModel, q_static: np.ndarray) -> bool:
     """The equilibrium test's criterion: :func:`fempipe.analyses.stability.linearly_stable`,
     the decision of ``spectrum`` and ``critical``.
 
-    A discretisation that resolves no mode gives no decision (None), which
+    A discretization that resolves no mode gives no decision (None), which
     never lets the finder stop at an equilibrium: the attractor is then found
     by integration alone.
     """
@@ -104,7 +104,7 @@ def find_attractor(
     equilibrium_radius : float
         Within this RMS distance of a linearly stable static state, and still
         approaching it, the attractor is that equilibrium (its basin contains
-        this neighbourhood as long as the linearisation dominates; the
+        this neighbourhood as long as the linearization dominates; the
         criterion also asks the distance to decrease).
     n_max : int
         Largest period-n looked for.
@@ -217,7 +217,7 @@ class _AttractorSearch:
         return q0, qdot0
 
     def run(self, q0, qdot0, perturbation: float) -> Attractor:
-        """Integrate until the attractor is recognised or t_max is reached."""
+        """Integrate until the attractor is recognized or t_max is reached."""
         q0, qdot0 = self._static_start(q0, qdot0, perturbation)
         disc, q_s = self.disc, self.q_s
         self.stepper = stepper = Radau(self.model, q0, qdot0, 0.0, rtol=self.rtol)

@@ -141,7 +141,7 @@ class Attractor:
         A state on the attractor (to start the next point of a sweep from).
     params : Params
     t_end : float
-        Time integrated before the attractor was recognised.
+        Time integrated before the attractor was recognized.
     stats : dict
         Integration diagnostics summed over the transient and the shooting.
     trajectory : Trajectory or None

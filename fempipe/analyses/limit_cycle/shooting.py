@@ -176,7 +176,7 @@ class Shooter:
                 if dx is None:
                     break
                 # Trust region: a Newton step larger than ~0.3 rad RMS leaves the
-                # neighbourhood where the linearised map means anything.
+                # neighbourhood where the linearized map means anything.
                 size = state_distance(dx[:n], dx[n : 2 * n], scale)
                 lam = min(1.0, 0.3 / size) if size > 0 else 1.0
                 q = q + lam * dx[:n]

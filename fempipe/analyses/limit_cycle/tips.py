@@ -17,7 +17,7 @@ from one of three sources (the :class:`OrbitSamples` protocol):
 Each extremum of the samples is then refined, by a parabola through three
 samples (``refine="parabola"``: on ``fine + 1`` new samples between the
 neighbours of the extremum, or on the samples themselves if ``fine = 0``),
-or by a bounded scalar minimisation on the interpolant between the
+or by a bounded scalar minimization on the interpolant between the
 neighbours (``refine="bounded"``).
 """
 
@@ -302,7 +302,7 @@ def tip_extrema(
         ``"parabola"``: sample the interpolant ``fine`` times between the
         neighbours (``fine = 0``: keep the samples) and take the extremum of
         the parabola through the extreme sample and its neighbours.
-        ``"bounded"``: minimise the coordinate on the interpolant between the
+        ``"bounded"``: minimize the coordinate on the interpolant between the
         neighbours (``scipy.optimize.minimize_scalar``, ``xatol`` 1e-10 of
         max(1, t_end)); ``fine`` is not used.
     fine : int
@@ -360,7 +360,7 @@ def _parabola(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
 
 
 def _bounded(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
-    """The minimum (sign 1) or maximum (sign -1): bounded minimisation on the interpolant."""
+    """The minimum (sign 1) or maximum (sign -1): bounded minimization on the interpolant."""
     from scipy.optimize import minimize_scalar
 
     k = int(np.argmin(sign * y))

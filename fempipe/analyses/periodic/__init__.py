@@ -1,7 +1,7 @@
 """Branches of periodic orbits of Eq. (20) by pseudo-arclength continuation in v.
 
 A flutter event of the static branch (:mod:`fempipe.analyses.stability`) is a Hopf
-point: a complex pair lambda = +-i omega of the linearisation (Eqs.
+point: a complex pair lambda = +-i omega of the linearization (Eqs.
 (31b)-(33)) crosses the imaginary axis at v = v_H, and a family of periodic
 orbits is born there.  This module follows that family in v, stable and
 unstable orbits alike, which a sweep of attractors (:mod:`fempipe.analyses.bifurcation`)
@@ -26,7 +26,7 @@ pseudo-arclength condition with the unit tangent t of the weighted metric W
 (Keller 1977; Kuznetsov, *Elements of Applied Bifurcation Theory*, Sec.
 10.2), or, where v is a good local parameter and a requested v lies ahead, the
 condition v = v_g, so that every requested value is landed on exactly (a
-local parametrisation in Rheinboldt's sense).  The Jacobian of the first rows
+local parametrization in Rheinboldt's sense).  The Jacobian of the first rows
 is [M - I, F(phi_T), d phi_T / dv] with M the monodromy matrix, the exact
 derivative of the discrete flow accumulated step by step by the integrator
 (``Radau(sensitivity=True)``, as :func:`fempipe.analyses.limit_cycle.shoot` uses it),

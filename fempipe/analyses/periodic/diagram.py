@@ -226,7 +226,7 @@ def cycle_diagram(
     requested v with their linear stability, and the branch of periodic
     orbits of Eq. (20) born at every Hopf point, by :func:`continue_cycles`.
     A branch that ends at another Hopf point (a family joining flutter and
-    restabilisation) is not followed a second time from there.
+    restabilization) is not followed a second time from there.
 
     Parameters
     ----------

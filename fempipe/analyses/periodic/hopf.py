@@ -2,7 +2,7 @@
 and the equilibria of the primary branch with their linear stability.
 
 The critical eigenvector (:func:`critical_eigenvector`) comes from the
-first-order (companion) form of the linearisation, Eqs. (31b)-(33).
+first-order (companion) form of the linearization, Eqs. (31b)-(33).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Linear stability of the static states: spectra, critical velocities, events.
 
 Writing theta = theta^s(xi) + theta^d(xi, tau) in Eq. (20) and keeping the
-terms linear in theta^d gives Eq. (31b), discretised as Eq. (32):
+terms linear in theta^d gives Eq. (31b), discretized as Eq. (32):
 
     M^d q_ddot + C^d q_dot + K^d q = 0,
 
@@ -19,14 +19,14 @@ Im Omega < 0 unstable, Re Omega = Im lambda the frequency).
 
 Resolved modes
 --------------
-A discretisation with n unknowns has 2n eigenvalues, but only its lowest
+A discretization with n unknowns has 2n eigenvalues, but only its lowest
 modes approximate the continuum.  The rule used here (:func:`resolution`):
 
-1. The *canonical modes* of a discretisation are those of the straight,
+1. The *canonical modes* of a discretization are those of the straight,
    unloaded pipe (v = gamma = mu = 0): K phi = omega^2 M(0) phi, the
    clamped-free Euler-Bernoulli beam, whose exact frequencies beta_r^2
    (cos beta cosh beta = -1) are known.  Canonical mode r is *resolved* when
-   the discretisation reproduces omega_r within ``RESOLUTION_TOL`` = 5 %
+   the discretization reproduces omega_r within ``RESOLUTION_TOL`` = 5 %
    (and so are all lower ones).  P3:16 resolves 27 modes, P3:256 423,
    modal N resolves N - 1: the N-th sine mode is always 8-9 % off
    because a sine basis has theta''(0) = 0 while the clamped-free beam's
@@ -60,7 +60,7 @@ whatever its mode number.
 Mode numbers
 ------------
 A mode number names one physical eigenvalue, the same whatever the range of
-v asked for, the mesh or the discretisation:
+v asked for, the mesh or the discretization:
 
 1. At the reference state -- v = 0 with the same alpha, beta, gamma, mu, the
    gravity-loaded pipe, conservative apart from damping -- each resolved
@@ -127,10 +127,10 @@ and derivations", has the derivation and the checks.
 
 Modules
 -------
-``linear``          linearised matrices K^d, C^d, M^d; the straight pencil;
+``linear``          linearized matrices K^d, C^d, M^d; the straight pencil;
 ``eigensolvers``    the dense quadratic eigensolvers (QZ, shift-invert);
 ``hysteretic``      the roots with hysteretic damping, continued in mu_h;
-``canonical``       canonical modes: what a discretisation resolves;
+``canonical``       canonical modes: what a discretization resolves;
 ``classified``      a spectrum classified by the canonical modes, mode numbers;
 ``criterion``       :func:`linearly_stable`, :func:`growth_rate` (dense and sparse);
 ``spectra``         :class:`Spectrum` at one state, mode shapes;

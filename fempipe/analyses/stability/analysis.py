@@ -140,8 +140,8 @@ def analyse_planes(
 ) -> dict[str, StabilityResult]:
     """:func:`stability_analysis` of one pipe in several planes, on shared static branches.
 
-    ``models`` are the same pipe (discretisation and parameters) with the
-    linearisations of their planes (``model.plane``); the static branches
+    ``models`` are the same pipe (discretization and parameters) with the
+    linearizations of their planes (``model.plane``); the static branches
     are continued and switched once, with the first model, and every plane's
     analysis runs along the same points (each inserts its own where its
     tracking asks).  Beside the in-plane analysis the out-of-plane one takes
@@ -157,7 +157,7 @@ def analyse_planes(
         raise ValueError(f"ds_max must be > 0, got {ds_max}")
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
-        raise ValueError(f"discretisation {model.disc.name} resolves no mode; refine it")
+        raise ValueError(f"discretization {model.disc.name} resolves no mode; refine it")
     if method == "auto":
         method = "shift-invert"
     # Piecewise continuation when only v_cr is wanted: nothing beyond it is computed.

@@ -44,7 +44,7 @@ def peak_candidates(x: np.ndarray, lam: np.ndarray) -> np.ndarray:
     ``lam`` has shape (3, k): the tracked eigenvalues at the three samples
     ``x``.  The same tests as the loop there (all three on one side of the
     margin, the parabola's extremum inside the samples and pointing towards
-    zero, within half the spread of the samples), vectorised over the k
+    zero, within half the spread of the samples), vectorized over the k
     eigenvalues with the parabola in closed form and with a margin, so that
     the exact per-eigenvalue test (``np.polyfit``) runs only on the few that
     can pass it.
@@ -343,7 +343,7 @@ class BranchAnalysis:
         labels = self.path.labels
         ca, cb = _unstable_count(a), _unstable_count(b)
         crossings = []
-        # The eigenvalues unstable at one end only (_state_sign > 0, vectorised).
+        # The eigenvalues unstable at one end only (_state_sign > 0, vectorized).
         la_all, lb_all = a.lam[ia], b.lam[ib]
         ua = la_all.real > STABILITY_TOL * np.maximum(1.0, np.abs(la_all))
         ub = lb_all.real > STABILITY_TOL * np.maximum(1.0, np.abs(lb_all))

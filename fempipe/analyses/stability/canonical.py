@@ -1,8 +1,8 @@
-"""The canonical modes of a discretisation and the eigenvalues it resolves.
+"""The canonical modes of a discretization and the eigenvalues it resolves.
 
 The canonical modes are those of the straight, unloaded pipe, the
 clamped-free Euler-Bernoulli beam, whose exact frequencies are known: a
-discretisation resolves the leading ones it reproduces within
+discretization resolves the leading ones it reproduces within
 :data:`RESOLUTION_TOL`, and an eigenvalue is resolved when its eigenvector
 lies mostly on those (package docstring, "Resolved modes").
 """
@@ -21,7 +21,7 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
 #: Relative error of the clamped-free beam frequency up to which a
-#: discretisation is said to resolve a canonical mode.
+#: discretization is said to resolve a canonical mode.
 RESOLUTION_TOL = 0.05
 #: Share of an eigenvector's squared M(0)-norm that must lie on resolved
 #: canonical modes for its eigenvalue to be resolved.
@@ -53,7 +53,7 @@ def cantilever_frequencies(n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Resolution:
-    """Which modes a discretisation resolves (the package docstring, "Resolved modes").
+    """Which modes a discretization resolves (the package docstring, "Resolved modes").
 
     Attributes
     ----------
@@ -90,7 +90,7 @@ _RESOLUTION_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def resolution(disc, tolerance: float = RESOLUTION_TOL) -> Resolution:
-    """The canonical modes of ``disc`` and how many it resolves (cached per discretisation).
+    """The canonical modes of ``disc`` and how many it resolves (cached per discretization).
 
     Parameters
     ----------
@@ -124,7 +124,7 @@ def canonical_weights(res: Resolution, X: np.ndarray) -> tuple[np.ndarray, np.nd
     -------
     W : ndarray, shape (n_canonical, m)
         |c_rj|^2 of column j expanded in the M(0)-orthonormal canonical modes
-        (``res.basis``), normalised to sum 1 per column.
+        (``res.basis``), normalized to sum 1 per column.
     share : ndarray, shape (m,)
         Sum of W over the resolved modes: an eigenvalue is resolved when its
         share is at least :data:`RESOLVED_SHARE`.

@@ -47,7 +47,7 @@ class ClassifiedSpectrum:
     share : ndarray, shape (m,)
         Share of each eigenvector on resolved canonical modes.
     weights : ndarray, shape (n_canonical, m)
-        Squared canonical coefficients, normalised per eigenvalue.
+        Squared canonical coefficients, normalized per eigenvalue.
     resolved : ndarray of bool, shape (m,)
         share >= RESOLVED_SHARE.
     method : str
@@ -65,7 +65,7 @@ class ClassifiedSpectrum:
     lam: np.ndarray
     X: np.ndarray | None  # None: classification inherited (:func:`classify_inherited`)
     share: np.ndarray
-    weights: np.ndarray  # (n_canonical, m) squared canonical coefficients, normalised
+    weights: np.ndarray  # (n_canonical, m) squared canonical coefficients, normalized
     resolved: np.ndarray
     method: str
     s: float = 0.0  # position along a path (arclength proxy)
@@ -104,7 +104,7 @@ def classify_spectrum(
     method : {'auto', 'qz', 'shift-invert'}
         Eigensolver (:func:`~.eigensolvers.quadratic_eigen`).
     matrices : (K, C, M), optional
-        The linearised matrices if known (the straight pencil); default
+        The linearized matrices if known (the straight pencil); default
         :func:`~.linear.linearized_matrices` at q.
 
     Returns

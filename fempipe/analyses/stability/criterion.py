@@ -80,7 +80,7 @@ def linearly_stable(
     Returns
     -------
     bool or None
-        None when the discretisation resolves no mode at all.
+        None when the discretization resolves no mode at all.
     """
     disc = model.disc
     if sparse is None:

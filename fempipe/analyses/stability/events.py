@@ -35,7 +35,7 @@ class StabilityEvent:
         branch is stable above the event (restabilization), an eigenvalue
         crosses back while another one stays unstable, so the branch is not
         stable above the event (mode_restabilization: a per-mode event, the
-        system does not restabilise); or the branch turns back in v (fold).
+        system does not restabilize); or the branch turns back in v (fold).
         ``stable_before`` and ``stable_after`` say what the whole system does.
     branch : str
         Branch name (``"primary"``, ``"B1+"``, ...).

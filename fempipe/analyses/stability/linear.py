@@ -1,4 +1,4 @@
-"""The linearisation of Eq. (20) about a static state, Eqs. (31b)-(33).
+"""The linearization of Eq. (20) about a static state, Eqs. (31b)-(33).
 
 K^d, C^d, M^d at any static state (:func:`linearized_matrices`), and at the
 straight state theta = 0 as functions of v alone (:class:`StraightPencil`).
@@ -72,7 +72,7 @@ _PENCIL_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def straight_pencil(model: PipeModel) -> StraightPencil:
-    """The :class:`StraightPencil` of ``model`` (cached per discretisation and parameters)."""
+    """The :class:`StraightPencil` of ``model`` (cached per discretization and parameters)."""
     per_disc = _PENCIL_CACHE.setdefault(model.disc, {})
     key = (model.plane, StraightPencil.key(model.params))
     pencil = per_disc.get(key)

@@ -1,7 +1,7 @@
 """Stability in three dimensions: the motions in and out of the plane of the static state.
 
 A round pipe is free to leave the plane of its static deformation.  About a
-planar static state the linearised motion splits into the in-plane problem
+planar static state the linearized motion splits into the in-plane problem
 (Eq. (32)) and the out-of-plane one (:mod:`fempipe.model.out_of_plane`); the state
 is stable in three dimensions when it is stable in both, and the pipe's
 first loss of stability is the earlier of the two.

@@ -44,11 +44,11 @@ class Spectrum:
     n_computed : int
         All eigenvalues computed (2 n).
     n_resolved_modes : int
-        Canonical modes the discretisation resolves.
+        Canonical modes the discretization resolves.
     max_real_unresolved : float
         Largest Re lambda among the discarded eigenvalues (diagnostic).
     static_residual : float
-        Norm of the static residual at q (the linearisation assumes a state).
+        Norm of the static residual at q (the linearization assumes a state).
     method : str
         ``"qz"`` or ``"shift-invert"``.
     """
@@ -109,7 +109,7 @@ def spectrum(
     method: str = "auto",
     tolerance: float = RESOLUTION_TOL,
 ) -> Spectrum:
-    """Resolved eigenvalues of the linearised problem, Eq. (32), about a static state.
+    """Resolved eigenvalues of the linearized problem, Eq. (32), about a static state.
 
     Every resolved eigenvalue is listed.  At v != 0 the mode numbers cost a
     path: the branch through q is continued back to v = 0 and the
@@ -133,7 +133,7 @@ def spectrum(
     Raises
     ------
     ValueError
-        If the discretisation resolves no mode at all.
+        If the discretization resolves no mode at all.
     NewtonError
         If q is not a static state from which its branch can be continued
         back towards v = 0 (the mode numbers).
@@ -141,7 +141,7 @@ def spectrum(
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
         raise ValueError(
-            f"discretisation {model.disc.name} resolves no mode within {tolerance:.0%} "
+            f"discretization {model.disc.name} resolves no mode within {tolerance:.0%} "
             "of the clamped-free beam frequencies; refine it"
         )
     if q is None:
@@ -178,7 +178,7 @@ class ModeShape:
     """A mode shape about a static state, in theta and in the global frame.
 
     The perturbation is ``Re(a e^{lambda tau})`` times the complex fields
-    below, normalised so that max |theta^d| = 1 and theta^d is real and
+    below, normalized so that max |theta^d| = 1 and theta^d is real and
     positive where it is largest.
 
     Attributes
@@ -187,11 +187,11 @@ class ModeShape:
     theta : ndarray of complex, shape (m,)
         theta^d(xi).
     X_g, Z_g : ndarray of complex, shape (m,)
-        Displacement of the centreline in the global frame (Eq. (28)
-        linearised): dX_g = -int sin(theta^s + alpha) theta^d,
+        Displacement of the centerline in the global frame (Eq. (28)
+        linearized): dX_g = -int sin(theta^s + alpha) theta^d,
         dZ_g = int cos(theta^s + alpha) theta^d.
     X_static, Z_static : ndarray, shape (m,)
-        The static centreline.
+        The static centerline.
     lam : complex
     mode : int
     """
@@ -222,7 +222,7 @@ class ModeShape:
 def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> ModeShape:
     """Shape of the resolved eigenvalue ``spec.lam[index]`` in theta and in the global frame.
 
-    The global-frame displacement is the derivative of the centreline of
+    The global-frame displacement is the derivative of the centerline of
     :func:`fempipe.model.kinematics.shape` in the direction of the mode, obtained by
     complex-step differentiation of that same function (exact to round-off,
     no second copy of Eq. (28)).

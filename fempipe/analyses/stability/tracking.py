@@ -437,7 +437,7 @@ def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[Root
         raise ValueError(f"n_modes must be >= 1 or None, got {n_modes}")
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
-        raise ValueError(f"discretisation {model.disc.name} resolves no mode; refine it")
+        raise ValueError(f"discretization {model.disc.name} resolves no mode; refine it")
     m0 = model.with_params(replace(model.params, v=values[0]))
     if q0 is None:
         q0 = sagged_state(m0).q

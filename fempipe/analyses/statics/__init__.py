@@ -19,7 +19,7 @@ Three layers, each usable on its own:
 
 Every solver only uses the model's ``static_residual``, ``static_jacobian``,
 ``static_parameter_derivative``, ``static_terms`` and ``gravity_load`` and the
-discretisation's Gram matrix; it runs unchanged on finite elements and on
+discretization's Gram matrix; it runs unchanged on finite elements and on
 sine modes.  The names of the first two layers are importable from here too.
 """
 

@@ -4,9 +4,9 @@
 alpha, in the form the pseudo-arclength engine asks for
 (:class:`fempipe.solvers.continuation.ContinuationProblem`): y = (q, lambda),
 the residual, the derivatives ``(dR/dq, dR/dlambda)``, the bordered solve and
-the inner product.  Arclength is measured in the discretisation-independent
+the inner product.  Arclength is measured in the discretization-independent
 norm ``||(theta, lambda)||^2 = \\int_0^1 theta^2 dxi + lambda^2`` (the Gram
-matrix of the discretisation), so step sizes mean the same thing on every
+matrix of the discretization), so step sizes mean the same thing on every
 mesh.
 """
 

@@ -4,7 +4,7 @@ The building blocks, each on a
 :class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`:
 
 * :func:`tangent` -- the unit tangent t at y, the solution of the bordered
-  system ``[[F_x, F_lambda], [<t_prev, .>]] t = e_(m+1)`` normalised in the
+  system ``[[F_x, F_lambda], [<t_prev, .>]] t = e_(m+1)`` normalized in the
   inner product and oriented along ``t_prev``, with the sign and log|det| of
   the bordered matrix;
 * :func:`correct` -- Newton's method on ``[F(y); <t, y - y_pred>] = 0`` (a

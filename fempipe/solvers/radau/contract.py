@@ -42,7 +42,7 @@ The problem
    parameters at t; the integrator passes only t.
 10. **No other access.** The integrator uses only the members named in
     rules 1-9 and ``problem.describe()`` (rule 14).  It reads no
-    discretisation, quadrature or parameter attribute, never modifies the
+    discretization, quadrature or parameter attribute, never modifies the
     problem, and imports nothing from :mod:`fempipe.model`.
 11. **Validation belongs to the problem.** Refusals (the pipe's hysteretic
     damping, which has no time-domain meaning) happen when the problem is

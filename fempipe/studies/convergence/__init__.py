@@ -2,7 +2,7 @@
 
 A study computes one scalar :class:`Quantity` (a static tip value, the
 critical flow velocity or its frequency, an eigenvalue, a limit cycle's
-amplitude or period) on a sequence of discretisations of each
+amplitude or period) on a sequence of discretizations of each
 :class:`Family` -- Lagrange elements P_k on meshes of doubling element
 counts, sine or beam modes of doubling N -- and reports for each family the
 values, the errors against a reference and the observed order.

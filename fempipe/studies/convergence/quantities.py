@@ -1,9 +1,9 @@
-"""The quantities of a convergence study and the families of discretisations it runs on.
+"""The quantities of a convergence study and the families of discretizations it runs on.
 
 A :class:`Quantity` is one number of the user's case as a function of the
-discretisation (a static tip value, the critical flow velocity or its
+discretization (a static tip value, the critical flow velocity or its
 frequency, an eigenvalue, a limit cycle's amplitude or period); a
-:class:`Family` is a sequence of discretisations of one kind.
+:class:`Family` is a sequence of discretizations of one kind.
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ CRITICAL_QUANTITIES = (
 CYCLE_QUANTITIES = ("lc_amplitude", "lc_period")
 
 #: Tolerances the quantities are computed to, relative to max(1, |Q|): below
-#: them a difference between two discretisations is solver noise.  Newton
+#: them a difference between two discretizations is solver noise.  Newton
 #: (static, 1e-12 on the residual), Brent on v (1e-10, the events of
 #: :mod:`fempipe.analyses.stability`), the shooting's integration (``shoot_rtol``).
 STATIC_TOL = 1e-12
@@ -92,13 +92,13 @@ def doubling(low: int, high: int) -> list[int]:
 
 
 # ---------------------------------------------------------------------------
-# Families of discretisations
+# Families of discretizations
 # ---------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class Family:
-    """A sequence of discretisations of one kind.
+    """A sequence of discretizations of one kind.
 
     Parameters
     ----------
@@ -149,7 +149,7 @@ class Family:
 
 @dataclass(frozen=True)
 class Quantity:
-    """One number of the user's case, as a function of the discretisation.
+    """One number of the user's case, as a function of the discretization.
 
     Parameters
     ----------
@@ -168,7 +168,7 @@ class Quantity:
         Integration tolerance of the limit cycle's shooting (its accuracy).
     seed : tuple, optional
         ``(disc, q0, qdot0, period)``: a limit cycle on another
-        discretisation to start the shooting from (see :meth:`seeded`).
+        discretization to start the shooting from (see :meth:`seeded`).
     planar : bool
         ``v_cr`` and ``frequency`` of the paper's planar model (the same
         numbers as ``v_cr_in_plane`` and ``frequency_in_plane``) instead of
@@ -184,7 +184,7 @@ class Quantity:
     of the motion out of it (:func:`~fempipe.analyses.stability.critical_velocity` of
     ``model.with_plane("out")``, the same static branch).
 
-    Calling it on a discretisation returns the value (complex for
+    Calling it on a discretization returns the value (complex for
     ``eigenvalue``), or raises :class:`fempipe.core.errors.SolverError`.
     """
 

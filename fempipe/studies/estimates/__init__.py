@@ -1,7 +1,7 @@
 """Error estimates attached to results: the refined run and the ``Q_error`` keys beside ``Q``.
 
 A result (the static states of a path, the stability analysis of a branch, an
-attractor) is computed again on the refined discretisation of
+attractor) is computed again on the refined discretization of
 :func:`fempipe.studies.error_estimate.refine` (P_k elements halved, or twice the
 modes, plus one for an odd N), and beside each reported number ``Q`` of the
 result's JSON-ready dict two keys are inserted: ``Q_error``, the estimate of
@@ -11,11 +11,11 @@ the refined value.  The floor is the solver's tolerance on the value,
 relative: ``tol * max(1, |Q|)``.  A top-level ``"error_estimate"`` entry
 (:func:`header`) describes the method
 (:class:`fempipe.studies.error_estimate.ErrorEstimate`) with the ``notes`` of the
-comparison (an event found on one discretisation only, attractors of
+comparison (an event found on one discretization only, attractors of
 different kinds, a refined solve that failed).
 
 Each kind of result has two functions: ``refined_*`` repeats the computation
-on the refined discretisation and returns a typed :class:`Refined` record;
+on the refined discretization and returns a typed :class:`Refined` record;
 ``with_*_estimates`` pairs the coarse and the refined numbers and returns the
 result with the estimates beside its numbers:
 

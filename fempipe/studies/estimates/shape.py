@@ -74,12 +74,12 @@ def header(info: ErrorEstimate, notes: Sequence[str]) -> dict:
 
 @dataclass(frozen=True)
 class Refined:
-    """A computation repeated on the refined discretisation.
+    """A computation repeated on the refined discretization.
 
     Attributes
     ----------
     discretization : FiniteElement or Modal
-        The refined discretisation, :func:`~fempipe.studies.error_estimate.refine`
+        The refined discretization, :func:`~fempipe.studies.error_estimate.refine`
         of the reported one.
     info : ErrorEstimate
         How the estimates are formed (order, ratio, the floor's origin).

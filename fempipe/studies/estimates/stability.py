@@ -1,4 +1,4 @@
-"""Error estimates of a stability analysis: the analysis run again on the refined discretisation.
+"""Error estimates of a stability analysis: the analysis run again on the refined discretization.
 
 The events of the two runs are paired by what they are (branch, type, mode,
 plane), and beside v_cr, v_flutter and the ``v`` and ``frequency`` of every
@@ -39,7 +39,7 @@ def refined_stability(
     callback: Callable[[str, float], None] | None = None,
     **options,
 ) -> RefinedStability:
-    """The stability analysis run again on the refined discretisation.
+    """The stability analysis run again on the refined discretization.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Error estimates of static states: each state solved again on the refined discretisation.
+"""Error estimates of static states: each state solved again on the refined discretization.
 
 Newton starts from the coarse state transferred to the refined space, and
 beside each tip value Q of a point (:data:`STATIC_TIP_KEYS`, ``tip_drop`` and
@@ -34,7 +34,7 @@ STATIC_TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
 @dataclass(frozen=True)
 class RefinedStatic(Refined):
     """:func:`refined_static_states`: ``states`` holds one ``StaticSolution`` per
-    coarse state, None where Newton failed on the refined discretisation."""
+    coarse state, None where Newton failed on the refined discretization."""
 
     states: tuple = ()
 
@@ -47,7 +47,7 @@ def refined_static_states(
     fine=None,
     callback: Callable[[int, object], None] | None = None,
 ) -> RefinedStatic:
-    """Each static state solved again on the refined discretisation.
+    """Each static state solved again on the refined discretization.
 
     Newton starts from the coarse state transferred to the refined space
     (:func:`fempipe.model.projection.project`), so each refined state is the
@@ -56,7 +56,7 @@ def refined_static_states(
     Parameters
     ----------
     model : PipeModel
-        The reported model (its discretisation and parameters).
+        The reported model (its discretization and parameters).
     solutions : sequence of StaticSolution
         The reported states (:func:`fempipe.analyses.statics.solve_path`).
     parameter : str

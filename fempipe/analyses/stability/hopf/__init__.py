@@ -1,14 +1,14 @@
 """Hopf criticality of the flutter events: the first Lyapunov coefficient l1.
 
 A flutter event of ``fempipe critical`` is a Hopf bifurcation of the static
-state: one complex pair lambda(v) = mu(v) +- i omega(v) of the linearisation of
+state: one complex pair lambda(v) = mu(v) +- i omega(v) of the linearization of
 Eq. (20) (Eqs. (31b)-(33)) crosses the imaginary axis at v = v_cr.  Whether the
 periodic orbit born there is stable (supercritical, l1 < 0: a small limit
 cycle grows like sqrt(v - v_cr) on the unstable side) or unstable
 (subcritical, l1 > 0: an unstable cycle surrounds the still stable
 equilibrium on the stable side, and the motion jumps to a large cycle at
 v_cr) is decided by the sign of the first Lyapunov coefficient of the normal
-form on the centre manifold.
+form on the center manifold.
 
 First-order form
 ----------------
@@ -37,7 +37,7 @@ its n-dimensional form, Eq. (5.39)):
                + <p, B(qbar, (2 i omega I - A)^{-1} B(q, q))> ],
     l1 = Re(c1) / omega.
 
-On the centre manifold x = x0 + z q + zbar qbar + O(|z|^2) the flow is
+On the center manifold x = x0 + z q + zbar qbar + O(|z|^2) the flow is
 z' = lambda(v) z + c1 |z|^2 z + O(|z|^4), so a periodic orbit has
 |z|^2 = rho^2 = -mu(v) / (omega l1), and to leading order
 
@@ -49,12 +49,12 @@ shorter rho^2 = -Re(lambda') (v - v_cr) / l1 measures lambda in the time
 omega tau of Kuznetsov's topological normal form; here tau is the time of
 Eq. (19).)
 
-Normalisation
+Normalization
 -------------
-l1 scales with |q|^2, so its value depends on how q is normalised; its sign
+l1 scales with |q|^2, so its value depends on how q is normalized; its sign
 does not.  Here the theta-part q_theta of q has unit L2 norm,
-``\\int_0^1 |theta_q(xi)|^2 dxi = 1`` (the discretisation's Gram matrix), so
-that l1 and rho converge with the discretisation and rho is the amplitude of
+``\\int_0^1 |theta_q(xi)|^2 dxi = 1`` (the discretization's Gram matrix), so
+that l1 and rho converge with the discretization and rho is the amplitude of
 the theta field: theta(xi, tau) ~ theta0 + 2 rho Re(theta_q(xi) e^{i omega tau}).
 A tip quantity s(q) oscillates with (max - min)/2 = 2 rho |ds . q_theta| +
 O(rho^3) (the second harmonic shifts max and min alike), which gives the

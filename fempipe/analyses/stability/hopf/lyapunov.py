@@ -43,7 +43,7 @@ class HopfCoefficient:
     omega : float
         Im of it.
     q, p : ndarray of complex, shape (N,)
-        Right and adjoint eigenvectors, p^H q = 1, q normalised by ``norm``.
+        Right and adjoint eigenvectors, p^H q = 1, q normalized by ``norm``.
     step : float
         The difference step h of ``l1``.
     l1_2h : float
