@@ -523,20 +523,33 @@ def bifurcation_diagram(
         tmp = tempfile.TemporaryDirectory(prefix="fempipe-sweep-")
         store_dir = tmp.name
     try:
-        sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
+        store = PointStore(store_dir, manifest)
         total = len(values) * len(directions) * len(alphas)
-        results = _run_sweeps(
-            model,
-            values,
-            sweeps,
-            total,
-            store_dir,
-            manifest,
-            attractor_options,
-            executor,
-            workers,
-            progress,
+        sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
+        in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
+        counter = _ProgressCounter(store, total, progress)
+        args = [
+            (
+                model.with_params(replace(model.params, alpha=float(a))),
+                list(values),
+                d,
+                ia,
+                str(store_dir),
+                manifest,
+                dict(attractor_options),
+                counter.on_point if in_process else None,
+            )
+            for ia, a, d in sweeps
+        ]
+        results = run_tasks(
+            _sweep_task,
+            args,
+            workers=None if in_process else workers,
+            executor=executor,
+            heartbeat=None if in_process else counter.poll_store,
         )
+        if not in_process:
+            counter.poll_store()
     finally:
         if tmp is not None:
             tmp.cleanup()
@@ -546,52 +559,6 @@ def bifurcation_diagram(
             raise r
     points = [pt for r in results for pt in r]
     return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)
-
-
-def _run_sweeps(
-    model: PipeModel,
-    values,
-    sweeps: list,
-    total: int,
-    store_dir,
-    manifest: dict,
-    options: dict,
-    executor: Executor | None,
-    workers: int | None,
-    progress: Callable[[int, int], None] | None,
-) -> list:
-    """Run the sweeps ``(alpha index, alpha, direction)`` on the store; their results in order.
-
-    Each result is the list of point dicts of a sweep, or the exception it
-    ended with.  In this process (no executor, and one worker or one sweep)
-    progress counts every point; with workers it polls the store.
-    """
-    store = PointStore(store_dir, manifest)
-    in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
-    counter = _ProgressCounter(store, total, progress)
-    args = [
-        (
-            model.with_params(replace(model.params, alpha=float(a))),
-            list(values),
-            d,
-            ia,
-            str(store_dir),
-            manifest,
-            dict(options),
-            counter.on_point if in_process else None,
-        )
-        for ia, a, d in sweeps
-    ]
-    results = run_tasks(
-        _sweep_task,
-        args,
-        workers=None if in_process else workers,
-        executor=executor,
-        heartbeat=None if in_process else counter.poll_store,
-    )
-    if not in_process:
-        counter.poll_store()
-    return results
 
 
 def _check_diagram_args(values, directions: list, workers: int | None) -> None:
