@@ -260,25 +260,16 @@ def sweep(
     points = []
     for i, v in enumerate(vals):
         m = model.with_params(model.params.with_flow(v))
-        if store is not None:
-            old = store.load(alpha_index, direction, i)
-            if old is not None:
-                if not math.isclose(old.v, v, rel_tol=0, abs_tol=1e-12):
-                    raise ValueError(
-                        f"stored point {i} ({direction}) has v = {old.v}, expected {v}"
-                    )
-                points.append(old)
-                q, p = old.q, old.qdot
-                previous_equilibrium = old.attractor == "equilibrium"
-                prev_cycle = (old.period, old.period_n) if old.attractor == "periodic" else None
-                if progress is not None:
-                    progress(old)
-                continue
-        if q is None:
-            q, p = initial_state(m, 1, perturbation)
-        elif previous_equilibrium:
-            dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
-            q, p = np.asarray(q) + dq, np.zeros(m.n)
+        old = None if store is None else _stored_point(store, alpha_index, direction, i, v)
+        if old is not None:
+            points.append(old)
+            q, p = old.q, old.qdot
+            previous_equilibrium = old.attractor == "equilibrium"
+            prev_cycle = (old.period, old.period_n) if old.attractor == "periodic" else None
+            if progress is not None:
+                progress(old)
+            continue
+        q, p = _start_state(m, q, p, previous_equilibrium, perturbation)
         t0 = time.perf_counter()
         att = None
         if (
@@ -289,33 +280,7 @@ def sweep(
             att = _continue_cycle(m, q, p, prev_cycle, attractor_options)
         if att is None:
             att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
-        point = BifurcationPoint(
-            v=float(v),
-            direction=direction,
-            index=i,
-            alpha=float(m.params.alpha),
-            attractor=att.kind,
-            eta_tip=att.tip["eta_tip"] if att.tip else [math.nan, math.nan],
-            X_tip=att.tip["X_tip"] if att.tip else [math.nan, math.nan],
-            Z_tip=att.tip["Z_tip"] if att.tip else [math.nan, math.nan],
-            period=att.period,
-            period_n=att.period_n,
-            max_multiplier=(att.cycle.max_nontrivial_multiplier if att.cycle else None),
-            steps=att.stats["steps"],
-            rejected_steps=att.stats["rejected_steps"],
-            wall_time=time.perf_counter() - t0,
-            q=np.asarray(att.q, dtype=float),
-            qdot=np.asarray(att.qdot, dtype=float),
-        )
-        log.info(
-            "%s v=%.4g: %s, eta_tip [%.4g, %.4g] (%.1f s)",
-            direction,
-            v,
-            att.kind,
-            point.eta_tip[0],
-            point.eta_tip[1],
-            point.wall_time,
-        )
+        point = _new_point(att, m, direction, i, v, t0)
         if store is not None:
             store.save(alpha_index, point)
         points.append(point)
@@ -325,6 +290,66 @@ def sweep(
         if progress is not None:
             progress(point)
     return points
+
+
+def _start_state(m: PipeModel, q, p, previous_equilibrium: bool, perturbation: float):
+    """The state a point starts from: ``(q, p)``, perturbed after an equilibrium.
+
+    With no previous state, the static state of ``m`` plus the perturbation.
+    """
+    if q is None:
+        q, p = initial_state(m, 1, perturbation)
+    elif previous_equilibrium:
+        dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
+        q, p = np.asarray(q) + dq, np.zeros(m.n)
+    return q, p
+
+
+def _stored_point(
+    store: PointStore, alpha_index: int, direction: str, index: int, v: float
+) -> BifurcationPoint | None:
+    """The point ``index`` of a sweep from the store, None if not there yet.
+
+    Raises ValueError if the stored point is of another flow velocity.
+    """
+    old = store.load(alpha_index, direction, index)
+    if old is not None and not math.isclose(old.v, v, rel_tol=0, abs_tol=1e-12):
+        raise ValueError(f"stored point {index} ({direction}) has v = {old.v}, expected {v}")
+    return old
+
+
+def _new_point(
+    att: Attractor, m: PipeModel, direction: str, index: int, v: float, t0: float
+) -> BifurcationPoint:
+    """The point of an attractor found at v (``t0``: when its computation began); logged."""
+    point = BifurcationPoint(
+        v=float(v),
+        direction=direction,
+        index=index,
+        alpha=float(m.params.alpha),
+        attractor=att.kind,
+        eta_tip=att.tip["eta_tip"] if att.tip else [math.nan, math.nan],
+        X_tip=att.tip["X_tip"] if att.tip else [math.nan, math.nan],
+        Z_tip=att.tip["Z_tip"] if att.tip else [math.nan, math.nan],
+        period=att.period,
+        period_n=att.period_n,
+        max_multiplier=(att.cycle.max_nontrivial_multiplier if att.cycle else None),
+        steps=att.stats["steps"],
+        rejected_steps=att.stats["rejected_steps"],
+        wall_time=time.perf_counter() - t0,
+        q=np.asarray(att.q, dtype=float),
+        qdot=np.asarray(att.qdot, dtype=float),
+    )
+    log.info(
+        "%s v=%.4g: %s, eta_tip [%.4g, %.4g] (%.1f s)",
+        direction,
+        v,
+        att.kind,
+        point.eta_tip[0],
+        point.eta_tip[1],
+        point.wall_time,
+    )
+    return point
 
 
 def _continue_cycle(model, q, p, prev_cycle, options) -> Attractor | None:
@@ -490,13 +515,7 @@ def bifurcation_diagram(
     refuse_hysteretic(model.params, "bifurcation_diagram")
     t0 = time.perf_counter()
     directions = list(directions)
-    for d in directions:
-        if d not in DIRECTIONS:
-            raise ValueError(f"direction must be 'up' or 'down', got {d!r}")
-    if not len(values):
-        raise ValueError("values must not be empty")
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
+    _check_diagram_args(values, directions, workers)
     alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
     manifest = _manifest(model, values, directions, alphas, attractor_options)
     tmp = None
@@ -508,22 +527,7 @@ def bifurcation_diagram(
         total = len(values) * len(directions) * len(alphas)
         sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
         in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
-        done = 0
-        shown = -1
-
-        def on_point(_point: BifurcationPoint) -> None:  # in this process: every point
-            nonlocal done
-            done += 1
-            if progress is not None:
-                progress(done, total)
-
-        def poll_store() -> None:  # in workers: count the files they have written
-            nonlocal shown
-            n = store.count()
-            if progress is not None and n != shown:
-                progress(n, total)
-                shown = n
-
+        counter = _ProgressCounter(store, total, progress)
         args = [
             (
                 model.with_params(replace(model.params, alpha=float(a))),
@@ -533,7 +537,7 @@ def bifurcation_diagram(
                 str(store_dir),
                 manifest,
                 dict(attractor_options),
-                on_point if in_process else None,
+                counter.on_point if in_process else None,
             )
             for ia, a, d in sweeps
         ]
@@ -542,10 +546,10 @@ def bifurcation_diagram(
             args,
             workers=None if in_process else workers,
             executor=executor,
-            heartbeat=None if in_process else poll_store,
+            heartbeat=None if in_process else counter.poll_store,
         )
         if not in_process:
-            poll_store()
+            counter.poll_store()
     finally:
         if tmp is not None:
             tmp.cleanup()
@@ -555,3 +559,45 @@ def bifurcation_diagram(
             raise r
     points = [pt for r in results for pt in r]
     return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)
+
+
+def _check_diagram_args(values, directions: list, workers: int | None) -> None:
+    """ValueError for an unknown direction, no values, or fewer than one worker."""
+    for d in directions:
+        if d not in DIRECTIONS:
+            raise ValueError(f"direction must be 'up' or 'down', got {d!r}")
+    if not len(values):
+        raise ValueError("values must not be empty")
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+
+
+class _ProgressCounter:
+    """Reports ``progress(done, total)`` of a bifurcation diagram's points.
+
+    In this process every finished point is counted (:meth:`on_point`); with
+    workers the files they have written to the store are (:meth:`poll_store`,
+    reported only when the count changed).
+    """
+
+    def __init__(
+        self, store: PointStore, total: int, progress: Callable[[int, int], None] | None
+    ) -> None:
+        self.store = store
+        self.total = total
+        self.progress = progress
+        self.done = 0
+        self.shown = -1
+
+    def on_point(self, _point: BifurcationPoint) -> None:
+        """Count a point finished (or loaded) in this process."""
+        self.done += 1
+        if self.progress is not None:
+            self.progress(self.done, self.total)
+
+    def poll_store(self) -> None:
+        """Count the points the workers have written to the store."""
+        n = self.store.count()
+        if self.progress is not None and n != self.shown:
+            self.progress(n, self.total)
+            self.shown = n

@@ -64,8 +64,6 @@ def plot_argand(
     -------
     Axes
     """
-    from matplotlib.lines import Line2D
-
     ax = new_axes(ax)
     v = np.asarray(locus.v)
     if mark_every is None:
@@ -75,46 +73,15 @@ def plot_argand(
     seen: set = set()
     labels: list = []
     same = out_of_plane is not None and same_loci(locus, out_of_plane)
+    both_planes = out_of_plane is not None and not same
     # The out-of-plane loci first, under the in-plane ones (whose dots then
     # show inside the open triangles where the two meet); not drawn at all
     # where they are the in-plane loci (the title says so).
     styles = [(locus, "-", "o", None, 2.5)]
-    if out_of_plane is not None and not same:
+    if both_planes:
         styles.insert(0, (out_of_plane, "--", "^", "none", 2.0))
     for loc, ls, marker, mfc, z_order in styles:
-        Om = np.where(loc.resolved, loc.Omega, np.nan)
-        for j, mode in enumerate(loc.modes):
-            z = Om[:, j]
-            # One member of each conjugate pair: Re Omega = Im lambda >= 0.
-            z = np.where(z.real >= -1e-12, z, np.nan)
-            if np.all(np.isnan(z)):
-                continue
-            c = mode_color(int(mode))
-            ax.plot(z.real, z.imag, ls, color=c, lw=1.4, zorder=z_order)
-            seen.add(int(mode))
-            direction_arrow(ax, z, c)
-            m = marks & ~np.isnan(z)
-            ax.plot(
-                z.real[m],
-                z.imag[m],
-                marker,
-                color=c,
-                ms=3.5 if mfc is None else 6.0,
-                mfc=mfc,
-                zorder=z_order,
-            )
-            if label_marks:
-                for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
-                    labels.append(
-                        ax.annotate(
-                            f"{vv:g}",
-                            (x, y),
-                            fontsize=9,
-                            color=c,
-                            xytext=(3, 3),
-                            textcoords="offset points",
-                        )
-                    )
+        _draw_loci(ax, loc, v, marks, (ls, marker, mfc, z_order), label_marks, seen, labels)
     ax.axhline(0.0, color="0.4", lw=0.8)
     ax.set_xlabel(r"Re $\Omega$ = Im $\lambda$")
     ax.set_ylabel(r"Im $\Omega$ = $-$Re $\lambda$   (< 0 unstable)")
@@ -134,11 +101,62 @@ def plot_argand(
         fontsize=10,
     )
     ax.grid(alpha=0.3)
-    # One entry per mode (its colour), then the planes' line styles.
+    ax.legend(handles=_argand_handles(seen, both_planes), fontsize=9, loc="best")
+    # Labels that would pile up (a divergence pair on the imaginary axis) are dropped.
+    declutter(ax, labels, keep_clear=[ax.get_legend()])
+    return ax
+
+
+def _draw_loci(ax, loc, v, marks, style, label_marks: bool, seen: set, labels: list) -> None:
+    """Draw one root locus's modes: line, direction arrow, marks and their v labels.
+
+    ``style`` is ``(line style, marker, marker face colour, zorder)``; the
+    modes drawn are added to ``seen`` and the mark labels to ``labels``.
+    """
+    ls, marker, mfc, z_order = style
+    Om = np.where(loc.resolved, loc.Omega, np.nan)
+    for j, mode in enumerate(loc.modes):
+        z = Om[:, j]
+        # One member of each conjugate pair: Re Omega = Im lambda >= 0.
+        z = np.where(z.real >= -1e-12, z, np.nan)
+        if np.all(np.isnan(z)):
+            continue
+        c = mode_color(int(mode))
+        ax.plot(z.real, z.imag, ls, color=c, lw=1.4, zorder=z_order)
+        seen.add(int(mode))
+        direction_arrow(ax, z, c)
+        m = marks & ~np.isnan(z)
+        ax.plot(
+            z.real[m],
+            z.imag[m],
+            marker,
+            color=c,
+            ms=3.5 if mfc is None else 6.0,
+            mfc=mfc,
+            zorder=z_order,
+        )
+        if label_marks:
+            for x, y, vv in zip(z.real[m], z.imag[m], v[m], strict=True):
+                labels.append(
+                    ax.annotate(
+                        f"{vv:g}",
+                        (x, y),
+                        fontsize=9,
+                        color=c,
+                        xytext=(3, 3),
+                        textcoords="offset points",
+                    )
+                )
+
+
+def _argand_handles(seen: set, both_planes: bool) -> list:
+    """Legend handles: one per mode (its colour), then the planes' line styles."""
+    from matplotlib.lines import Line2D
+
     handles = [
         Line2D([], [], color=mode_color(m), ls="-", lw=1.4, label=f"mode {m}") for m in sorted(seen)
     ]
-    if out_of_plane is not None and not same:
+    if both_planes:
         handles += [
             Line2D([], [], color="0.3", ls="-", marker="o", ms=3.5, label="in the plane"),
             Line2D(
@@ -152,10 +170,7 @@ def plot_argand(
                 label="out of the plane",
             ),
         ]
-    ax.legend(handles=handles, fontsize=9, loc="best")
-    # Labels that would pile up (a divergence pair on the imaginary axis) are dropped.
-    declutter(ax, labels, keep_clear=[ax.get_legend()])
-    return ax
+    return handles
 
 
 def same_loci(a, b, rtol: float = 1e-8) -> bool:

@@ -87,7 +87,6 @@ def plot_shapes(
     matplotlib.axes.Axes
     """
     import matplotlib.pyplot as plt
-    from matplotlib import colormaps
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6.4, 5.6), layout="constrained")
@@ -99,22 +98,7 @@ def plot_shapes(
         a if a is not None else _clamp_angle(s)
         for a, s in zip(_as_list(alpha, n), shapes, strict=True)
     ]
-    if stable is None:
-        stable = [None] * n
-    elif len(stable) != n:
-        raise ValueError(f"got {n} shapes but {len(stable)} stability flags")
-    unstable = [flag is not None and not bool(flag) for flag in stable]
-    if stable_in_plane is not None and len(stable_in_plane) != n:
-        raise ValueError(f"got {n} shapes but {len(stable_in_plane)} in-plane stability flags")
-    spatial = stable_in_plane is not None
-    # Unstable out of the plane only: unstable, and stable in the plane.
-    out_only = [
-        u and spatial and stable_in_plane[i] is not None and bool(stable_in_plane[i])
-        for i, u in enumerate(unstable)
-    ]
-    cmap = colormaps["viridis"]
-    colors = cmap(np.linspace(0.0, 0.9, n)) if n > 1 else [cmap(0.0)]
-    every = max(1, int(np.ceil(n / max_labels)))
+    unstable, out_only, spatial = _instability_kinds(n, stable, stable_in_plane)
 
     # Undeformed pipe(s) and clamp(s), once per distinct inclination.
     for k, a in enumerate(dict.fromkeys(round(x, 12) for x in alphas)):
@@ -130,6 +114,45 @@ def plot_shapes(
         )
         _draw_clamp(ax, tx, tz, 0.06 * scale)
 
+    _draw_states(ax, shapes, labels, scale, max_labels, unstable, out_only, spatial)
+    _finish_axes(ax, scale, si_length)
+    if labels is not None or n:
+        ax.legend(fontsize=9, loc="best", framealpha=0.85)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def _instability_kinds(n: int, stable, stable_in_plane) -> tuple[list, list, bool]:
+    """Which states are unstable, which of them out of the plane only, and whether 3-D.
+
+    Returns ``(unstable, out_only, spatial)``: one flag per state each, and
+    whether in-plane verdicts were given (the three-dimensional legend).
+    """
+    if stable is None:
+        stable = [None] * n
+    elif len(stable) != n:
+        raise ValueError(f"got {n} shapes but {len(stable)} stability flags")
+    unstable = [flag is not None and not bool(flag) for flag in stable]
+    if stable_in_plane is not None and len(stable_in_plane) != n:
+        raise ValueError(f"got {n} shapes but {len(stable_in_plane)} in-plane stability flags")
+    spatial = stable_in_plane is not None
+    # Unstable out of the plane only: unstable, and stable in the plane.
+    out_only = [
+        u and spatial and stable_in_plane[i] is not None and bool(stable_in_plane[i])
+        for i, u in enumerate(unstable)
+    ]
+    return unstable, out_only, spatial
+
+
+def _draw_states(ax, shapes, labels, scale, max_labels, unstable, out_only, spatial) -> None:
+    """The deformed centrelines and their tips, then the legend keys of the unstable kinds."""
+    from matplotlib import colormaps
+
+    n = len(shapes)
+    cmap = colormaps["viridis"]
+    colors = cmap(np.linspace(0.0, 0.9, n)) if n > 1 else [cmap(0.0)]
+    every = max(1, int(np.ceil(n / max_labels)))
     for i, s in enumerate(shapes):
         lab = labels[i] if labels is not None and (i % every == 0 or i == n - 1) else None
         if lab is not None and unstable[i]:
@@ -169,6 +192,9 @@ def plot_shapes(
             label="grey dash-dot: unstable out of the plane only",
         )
 
+
+def _finish_axes(ax, scale: float, si_length: float | None) -> None:
+    """Equal scales, gravity down the page, axis labels, grid and the gravity arrow."""
     ax.set_aspect("equal", adjustable="datalim")
     # Include the clamp and a margin so the clamp is never cut off.
     ax.update_datalim([(-0.1 * scale, -0.1 * scale), (0.1 * scale, 0.1 * scale)])
@@ -190,11 +216,6 @@ def plot_shapes(
         arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 1.2},
     )
     ax.text(0.95, 0.105, "$g$", transform=ax.transAxes, ha="right", va="center")
-    if labels is not None or n:
-        ax.legend(fontsize=9, loc="best", framealpha=0.85)
-    if title:
-        ax.set_title(title)
-    return ax
 
 
 def _draw_clamp(ax, tx: float, tz: float, size: float) -> None:

@@ -468,13 +468,7 @@ def continue_cycles(
         For bad arguments or hysteretic damping (no time-domain meaning).
     """
     refuse_hysteretic(model.params, "continue_cycles")
-    v_lo, v_hi = (float(a) for a in v_range)
-    if not v_lo < v_hi:
-        raise ValueError(f"v_range must have v_min < v_max, got {v_range}")
-    if not 0 < ds_min <= ds <= ds_max:
-        raise ValueError(f"need 0 < ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
-    if not 0 < tol < 1 or not 0 < rtol < 1:
-        raise ValueError(f"tol and rtol must lie in (0, 1), got {tol}, {rtol}")
+    v_lo, v_hi = _checked_range(v_range, ds, ds_min, ds_max, tol, rtol)
     policy = CycleBranchPolicy(
         model,
         hopf,
@@ -496,6 +490,18 @@ def continue_cycles(
             return policy.branch(resume["end_reason"], policy.integ_before, policy.wall_before)
     with single_blas_thread():
         return continue_curve(policy, ds)
+
+
+def _checked_range(v_range, ds, ds_min, ds_max, tol, rtol) -> tuple[float, float]:
+    """``v_range`` as floats (v_min, v_max); ValueError for bad ranges, steps or tolerances."""
+    v_lo, v_hi = (float(a) for a in v_range)
+    if not v_lo < v_hi:
+        raise ValueError(f"v_range must have v_min < v_max, got {v_range}")
+    if not 0 < ds_min <= ds <= ds_max:
+        raise ValueError(f"need 0 < ds_min <= ds <= ds_max, got {ds_min}, {ds}, {ds_max}")
+    if not 0 < tol < 1 or not 0 < rtol < 1:
+        raise ValueError(f"tol and rtol must lie in (0, 1), got {tol}, {rtol}")
+    return v_lo, v_hi
 
 
 def predict(S: np.ndarray, us: list, tangent: np.ndarray, h: float) -> np.ndarray:

@@ -295,20 +295,11 @@ class CycleCorrector:
         at_orbit = monodromy_at < MONODROMY_NEAR
         last_next = asked = False
         for it in range(1, self.max_iter + 1):
-            x, T = u[:n2], u[n2]
+            T = u[n2]
             need = lin is None or stale or last_next
             last_next = False
-            # One integration gives the residual and, where needed, the
-            # derivatives (the section's residual() and derivatives() in one).
-            try:
-                fl = section.flow(u, sensitivity=need)
-            except IntegrationError as exc:
-                raise CorrectorError(str(exc)) from None
-            self.integrations += 1
+            fl, r, g, c = self._evaluate(section, u, u_pred, tangent, need)
             rejected += fl.rejected
-            r = fl.xT - x
-            g = section.phase(x)
-            c = 0.0 if fixed_v else float(tangent @ (self.S * (u - u_pred)))
             res = self.residual_norm(r, T)
             log.debug("corrector it %d need %s res %.3e g %.2e c %.2e", it, need, res, g, c)
             if need:
@@ -330,9 +321,7 @@ class CycleCorrector:
             # Converged when the residual is small and so is the correction it
             # asks for: the error of this iterate (the residual alone hides it
             # where a multiplier is near 1, e.g. close to the Hopf point).
-            correction = max(
-                self.residual_norm(du[:n2], T), abs(du[n2]) / T, 0.0 if fixed_v else abs(du[-1])
-            )
+            correction = self._correction_size(du, T, fixed_v)
             if (
                 res < self.tol
                 and abs(g) < self.tol
@@ -346,15 +335,44 @@ class CycleCorrector:
             if at_orbit and not need and not asked:
                 last_next = rate * res < self.tol and rate * correction < self.xtol
                 asked = last_next
-            size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
-            lam = min(1.0, 0.3 / size) if size > 0 else 1.0
-            if fixed_v:
-                u[: n2 + 1] += lam * du
-            else:
-                u += lam * du
-            if not u[n2] > 0:
-                raise CorrectorError("the period became negative")
+            self._damped_update(u, du, fixed_v)
         raise CorrectorError(f"no convergence in {self.max_iter} Newton iterations")
+
+    def _evaluate(self, section, u, u_pred, tangent, need: bool) -> tuple:
+        """(flow, r, g, c) at the iterate u: the flow's residual r = phi_T(x0) - x0,
+        the phase g and the arclength condition c (0 at a fixed v).
+
+        One integration gives the residual and, where ``need``, the derivatives
+        (the section's residual() and derivatives() in one).
+        """
+        n2 = 2 * self.n
+        x = u[:n2]
+        try:
+            fl = section.flow(u, sensitivity=need)
+        except IntegrationError as exc:
+            raise CorrectorError(str(exc)) from None
+        self.integrations += 1
+        r = fl.xT - x
+        g = section.phase(x)
+        c = 0.0 if tangent is None else float(tangent @ (self.S * (u - u_pred)))
+        return fl, r, g, c
+
+    def _correction_size(self, du: np.ndarray, T: float, fixed_v: bool) -> float:
+        """The size of a Newton correction: its state part (as the residual), T relative, v."""
+        n2 = 2 * self.n
+        return max(self.residual_norm(du[:n2], T), abs(du[n2]) / T, 0.0 if fixed_v else abs(du[-1]))
+
+    def _damped_update(self, u: np.ndarray, du: np.ndarray, fixed_v: bool) -> None:
+        """u += lam du in place, the step limited to 0.3 in the metric (the trust region)."""
+        n2 = 2 * self.n
+        size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
+        lam = min(1.0, 0.3 / size) if size > 0 else 1.0
+        if fixed_v:
+            u[: n2 + 1] += lam * du
+        else:
+            u += lam * du
+        if not u[n2] > 0:
+            raise CorrectorError("the period became negative")
 
     def _at_orbit(self, section, u, fl, u_mono, monodromy, monodromy_at, it, rejected):
         """(flow, monodromy, iterations, rejected steps) of a converged orbit: once

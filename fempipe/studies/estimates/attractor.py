@@ -127,47 +127,24 @@ def refined_attractor(
         ``floor``: ``rtol`` for a pulsating flow, Newton's 1e-10 for an
         equilibrium, ``shoot_rtol`` for a cycle.
     """
-    from fempipe.analyses.dynamics import initial_state, simulate
-    from fempipe.analyses.limit_cycle import TIP_KEYS
-    from fempipe.analyses.stability import linearly_stable
-    from fempipe.analyses.statics import solve_static
     from fempipe.core.errors import SolverError
-    from fempipe.model.kinematics import tip_values
     from fempipe.model.operators import PipeModel
-    from fempipe.model.projection import project
 
     att = attractor
     disc, params = model.disc, model.params
     fine = refine(disc) if fine is None else fine
     fine_model = PipeModel(fine, params)
-    summary = AttractorSummary.of
     notes: list[str] = []
-    if att is None:  # a pulsating flow: the whole integration again
-        floor, what = rtol, f"--rtol {rtol:g}"
-        coarse = None  # filled in by with_attractor_estimates from the result
-    elif att.kind == "equilibrium":
-        floor, what = 1e-10, "Newton's tolerance 1e-10"
-        coarse = summary("equilibrium", tip=att.tip)
-    else:
-        floor, what = shoot_rtol, f"--shoot-rtol {shoot_rtol:g}"
-        coarse = summary(att.kind, att.period, att.period_n, att.tip)
+    floor, what, coarse = _coarse_summary(att, rtol, shoot_rtol)
     info = describe(disc, fine, floor=f"{what} max(1, |Q|)", params=params)
     refined = None
     try:
         if att is None:
-            q_s = solve_static(fine_model, project(disc, q_static, fine)).q
-            q0, p0 = initial_state(fine_model, mode, amplitude, q_static=q_s)
-            tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
-            tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
-            tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
-            refined = summary("forced", tip=tip)
+            refined = _refined_forced(
+                model, fine_model, q_static, t_max, rtol, mode, amplitude, flow, callback
+            )
         elif att.kind == "equilibrium":
-            q = solve_static(fine_model, project(disc, att.q, fine)).q
-            if linearly_stable(fine_model, q) is True:
-                tv = tip_values(fine, q, params.alpha)
-                refined = summary("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
-            else:
-                refined = summary("unstable equilibrium")
+            refined = _refined_equilibrium(model, fine_model, att.q)
         elif att.kind == "non-periodic":
             notes.append("a non-periodic attractor has no error estimate; not refined")
         else:
@@ -186,6 +163,58 @@ def refined_attractor(
         notes.append(f"the refined computation on {fine.name} failed ({exc}); no estimates")
         refined = None
     return RefinedAttractor(fine, info, tuple(notes), coarse, refined, floor)
+
+
+def _coarse_summary(att, rtol: float, shoot_rtol: float) -> tuple:
+    """``(floor, floor's text, coarse summary)`` of a reported attractor (None: a pulsating flow)."""
+    summary = AttractorSummary.of
+    if att is None:  # a pulsating flow: the whole integration again
+        floor, what = rtol, f"--rtol {rtol:g}"
+        coarse = None  # filled in by with_attractor_estimates from the result
+    elif att.kind == "equilibrium":
+        floor, what = 1e-10, "Newton's tolerance 1e-10"
+        coarse = summary("equilibrium", tip=att.tip)
+    else:
+        floor, what = shoot_rtol, f"--shoot-rtol {shoot_rtol:g}"
+        coarse = summary(att.kind, att.period, att.period_n, att.tip)
+    return floor, what, coarse
+
+
+def _refined_forced(
+    model, fine_model, q_static, t_max, rtol, mode, amplitude, flow, callback
+) -> AttractorSummary:
+    """A pulsating flow integrated again from the refined static state: its tip extrema
+    over the second half of the run."""
+    from fempipe.analyses.dynamics import initial_state, simulate
+    from fempipe.analyses.limit_cycle import TIP_KEYS
+    from fempipe.analyses.statics import solve_static
+    from fempipe.model.kinematics import tip_values
+    from fempipe.model.projection import project
+
+    disc, fine, params = model.disc, fine_model.disc, model.params
+    q_s = solve_static(fine_model, project(disc, q_static, fine)).q
+    q0, p0 = initial_state(fine_model, mode, amplitude, q_static=q_s)
+    tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
+    tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
+    tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
+    return AttractorSummary.of("forced", tip=tip)
+
+
+def _refined_equilibrium(model, fine_model, q_coarse) -> AttractorSummary:
+    """The equilibrium solved by Newton on the refined discretisation from the coarse
+    one, with its tip values if it is linearly stable."""
+    from fempipe.analyses.limit_cycle import TIP_KEYS
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_static
+    from fempipe.model.kinematics import tip_values
+    from fempipe.model.projection import project
+
+    disc, fine, params = model.disc, fine_model.disc, model.params
+    q = solve_static(fine_model, project(disc, q_coarse, fine)).q
+    if linearly_stable(fine_model, q) is True:
+        tv = tip_values(fine, q, params.alpha)
+        return AttractorSummary.of("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
+    return AttractorSummary.of("unstable equilibrium")
 
 
 def refined_cycle(
