@@ -21,6 +21,7 @@ inclined alpha of the grid (checked), equal to the in-plane one at alpha = 0.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -63,6 +64,32 @@ def _deg(a: float) -> str:
     return f"{np.degrees(a):.0f}°"
 
 
+def _v_cr(onsets) -> np.ndarray:
+    """The critical velocities of a list of :class:`~fempipe.validation.onset.Onset`."""
+    return np.array([o.v_cr for o in onsets])
+
+
+@dataclass(frozen=True)
+class _Curves:
+    """The onsets of every curve of the figure, one :class:`Onset` per α of the grid.
+
+    Attributes
+    ----------
+    by_beta, by_gamma : dict
+        In the plane, FE, by β (γ = 18.9) and by γ (β = 0.142).
+    out_beta, out_gamma : dict
+        The same out of the plane.
+    modal : dict
+        In the plane, the reference case, by ``"N = 3"``, ``"N = 4"``.
+    """
+
+    by_beta: dict
+    by_gamma: dict
+    out_beta: dict
+    out_gamma: dict
+    modal: dict
+
+
 def run(quick: bool = False) -> CaseResult:
     """v_cr curves and checks; see the module docstring."""
     t0 = time.perf_counter()
@@ -70,6 +97,39 @@ def run(quick: bool = False) -> CaseResult:
     alphas = np.array(ref.value("alpha", quick))
     betas, gammas = ref.value("beta", quick), ref.value("gamma", quick)
     fe = parse_discretization(fe=FE)
+    cv = _curves(fe, alphas, betas, gammas)
+    base = cv.by_beta[BASE_BETA]
+    checks = [_mesh_check(alphas, base), _flutter_check(alphas, cv)]
+    checks += _trend_checks(alphas, betas, gammas, cv)
+    checks.append(_stability_cross_check(fe, alphas, base))
+    checks += _out_of_plane_checks(fe, alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma)
+    requires = [f"falls_with_alpha_b{b:g}" for b in betas]
+    requires += [f"falls_with_alpha_g{g:g}" for g in gammas if g != BASE_GAMMA]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=_tables(alphas, betas, gammas, cv),
+        data={
+            "alphas": alphas,
+            "by_beta": {b: _v_cr(c) for b, c in cv.by_beta.items()},
+            "by_gamma": {g: _v_cr(c) for g, c in cv.by_gamma.items()},
+            "modal": {k: _v_cr(c) for k, c in cv.modal.items()},
+            "kind_by_beta": {b: [o.kind for o in c] for b, c in cv.by_beta.items()},
+            "kind_by_gamma": {g: [o.kind for o in c] for g, c in cv.by_gamma.items()},
+            "out_by_beta": {b: _v_cr(c) for b, c in cv.out_beta.items()},
+            "out_by_gamma": {g: _v_cr(c) for g, c in cv.out_gamma.items()},
+            "headline": _headline(alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma),
+            "out_kind_by_beta": {b: [o.kind for o in c] for b, c in cv.out_beta.items()},
+            "out_kind_by_gamma": {g: [o.kind for o in c] for g, c in cv.out_gamma.items()},
+        },
+        requires=requires,
+    )
+
+
+def _curves(fe, alphas: np.ndarray, betas, gammas) -> _Curves:
+    """The onsets of every curve: FE in and out of the plane for every β and γ, and the
+    paper's N = 3 and N = 4 for the reference case (the reference curve computed once)."""
 
     def curve(disc, beta, gamma, plane="in"):
         return [
@@ -80,16 +140,17 @@ def run(quick: bool = False) -> CaseResult:
     by_gamma = {
         g: (by_beta[BASE_BETA] if g == BASE_GAMMA else curve(fe, BASE_BETA, g)) for g in gammas
     }
-    base = by_beta[BASE_BETA]
     out_beta = {b: curve(fe, b, BASE_GAMMA, "out") for b in betas}
     out_gamma = {
         g: (out_beta[BASE_BETA] if g == BASE_GAMMA else curve(fe, BASE_BETA, g, "out"))
         for g in gammas
     }
     modal = {f"N = {n}": curve(Modal(n), BASE_BETA, BASE_GAMMA) for n in (3, 4)}
-    vc = lambda onsets: np.array([o.v_cr for o in onsets])  # noqa: E731
-    checks = []
-    # Mesh convergence of the reference curve.
+    return _Curves(by_beta, by_gamma, out_beta, out_gamma, modal)
+
+
+def _mesh_check(alphas: np.ndarray, base: list[Onset]) -> Check:
+    """Mesh convergence of the reference curve: P3:8 against P3:16 at three α."""
     fine = parse_discretization(fe="P3:16")
     idx = [0, len(alphas) // 2, len(alphas) - 1]
     dmesh = max(
@@ -99,17 +160,19 @@ def run(quick: bool = False) -> CaseResult:
         )
         for i in idx
     )
-    checks.append(
-        ref.below(
-            "fe_mesh",
-            f"{FE} v_cr equals P3:16 (α = {', '.join(_deg(alphas[i]) for i in idx)})",
-            dmesh,
-            "mesh_tol",
-            source="fempipe, refined mesh (P3:16)",
-        )
+    return CASE.references.below(
+        "fe_mesh",
+        f"{FE} v_cr equals P3:16 (α = {', '.join(_deg(alphas[i]) for i in idx)})",
+        dmesh,
+        "mesh_tol",
+        source="fempipe, refined mesh (P3:16)",
     )
-    labelled = [(f"β = {b:g}, γ = {BASE_GAMMA:g}", c) for b, c in by_beta.items()] + [
-        (f"β = {BASE_BETA:g}, γ = {g:g}", c) for g, c in by_gamma.items() if g != BASE_GAMMA
+
+
+def _flutter_check(alphas: np.ndarray, cv: _Curves) -> Check:
+    """Every first instability in the plane (every β and γ) is flutter."""
+    labelled = [(f"β = {b:g}, γ = {BASE_GAMMA:g}", c) for b, c in cv.by_beta.items()] + [
+        (f"β = {BASE_BETA:g}, γ = {g:g}", c) for g, c in cv.by_gamma.items() if g != BASE_GAMMA
     ]
     other = [
         f"{lab}, α = {_deg(alphas[i])}: {o.kind} at v = {o.v_cr:.6f}"
@@ -117,57 +180,61 @@ def run(quick: bool = False) -> CaseResult:
         for i, o in enumerate(c)
         if o.kind != "flutter"
     ]
-    checks.append(
-        holds(
-            "flutter",
-            "every first instability for α < π is flutter (a complex pair crossing)",
-            not other,
-            "all flutter" if not other else "; ".join(other),
-            why="a fold of the static branch (saddle-node: a real eigenvalue through zero) "
-            "is a static instability, not flutter",
-            source="paper Sec. 4; abstract; conclusion (iii)",
-        )
+    return holds(
+        "flutter",
+        "every first instability for α < π is flutter (a complex pair crossing)",
+        not other,
+        "all flutter" if not other else "; ".join(other),
+        why="a fold of the static branch (saddle-node: a real eigenvalue through zero) "
+        "is a static instability, not flutter",
+        source="paper Sec. 4; abstract; conclusion (iii)",
     )
 
-    # v_cr falls with alpha.
-    def falls_with_alpha(name: str, label: str, v, source: str):
-        rises = [
-            (_deg(alphas[i]), _deg(alphas[i + 1]), v[i + 1] - v[i])
-            for i in range(len(v) - 1)
-            if v[i + 1] > v[i]
-        ]
-        return holds(
-            name,
-            label,
-            not rises,
-            "monotone decreasing"
-            if not rises
-            else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
-            source=source,
-        )
 
-    for b in betas:
-        checks.append(
-            falls_with_alpha(
-                f"falls_with_alpha_b{b:g}",
-                f"β = {b:g}, γ = {BASE_GAMMA:g}: v_cr falls as α grows (every step of the α grid)",
-                vc(by_beta[b]),
-                "paper Sec. 4, Fig. 6; conclusion (iii)",
-            )
+def _falls_with_alpha(alphas: np.ndarray, name: str, label: str, v, source: str) -> Check:
+    """v_cr falls with alpha: ``v`` decreases at every step of the α grid."""
+    rises = [
+        (_deg(alphas[i]), _deg(alphas[i + 1]), v[i + 1] - v[i])
+        for i in range(len(v) - 1)
+        if v[i + 1] > v[i]
+    ]
+    return holds(
+        name,
+        label,
+        not rises,
+        "monotone decreasing"
+        if not rises
+        else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
+        source=source,
+    )
+
+
+def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Check]:
+    """The paper's trends of Sec. 4: v_cr falls with α, rises with β, and the effect of γ
+    changes sign with α."""
+    checks = [
+        _falls_with_alpha(
+            alphas,
+            f"falls_with_alpha_b{b:g}",
+            f"β = {b:g}, γ = {BASE_GAMMA:g}: v_cr falls as α grows (every step of the α grid)",
+            _v_cr(cv.by_beta[b]),
+            "paper Sec. 4, Fig. 6; conclusion (iii)",
         )
-    for g in gammas:
-        if g == BASE_GAMMA:
-            continue
-        checks.append(
-            falls_with_alpha(
-                f"falls_with_alpha_g{g:g}",
-                f"γ = {g:g}, β = {BASE_BETA:g}: v_cr falls as α grows",
-                vc(by_gamma[g]),
-                "paper Sec. 4, Fig. 6",
-            )
+        for b in betas
+    ]
+    checks += [
+        _falls_with_alpha(
+            alphas,
+            f"falls_with_alpha_g{g:g}",
+            f"γ = {g:g}, β = {BASE_BETA:g}: v_cr falls as α grows",
+            _v_cr(cv.by_gamma[g]),
+            "paper Sec. 4, Fig. 6",
         )
+        for g in gammas
+        if g != BASE_GAMMA
+    ]
     # v_cr rises with beta at every alpha.
-    V = np.array([vc(by_beta[b]) for b in sorted(betas)])
+    V = np.array([_v_cr(cv.by_beta[b]) for b in sorted(betas)])
     ok = bool(np.all(np.diff(V, axis=0) > 0))
     worst = np.unravel_index(np.argmin(np.diff(V, axis=0)), (len(betas) - 1, len(alphas)))
     checks.append(
@@ -181,7 +248,7 @@ def run(quick: bool = False) -> CaseResult:
         )
     )
     # gamma effect changes sign with alpha.
-    G = np.array([vc(by_gamma[g]) for g in sorted(gammas)])
+    G = np.array([_v_cr(cv.by_gamma[g]) for g in sorted(gammas)])
     d_small, d_large = G[-1, 0] - G[0, 0], G[-1, -1] - G[0, -1]
     checks.append(
         holds(
@@ -193,12 +260,17 @@ def run(quick: bool = False) -> CaseResult:
             source="paper Sec. 4, Fig. 6(b)",
         )
     )
-    checks.append(_stability_cross_check(fe, alphas, base))
-    checks += _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma)
+    return checks
+
+
+def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Table, Table]:
+    """The reference case against the paper's modes, in and out of the plane, and the
+    v_cr grid of every β and γ."""
+    base, out = cv.by_beta[BASE_BETA], cv.out_beta[BASE_BETA]
     rows, out_rows = [], []
     for i, a in enumerate(alphas):
         fe_v = base[i].v_cr
-        o = out_beta[BASE_BETA][i]
+        o = out[i]
         out_rows.append(
             (_deg(a), fe_v, base[i].frequency, o.v_cr, o.frequency, (o.v_cr - fe_v) / fe_v)
         )
@@ -207,10 +279,10 @@ def run(quick: bool = False) -> CaseResult:
                 _deg(a),
                 fe_v,
                 base[i].frequency,
-                modal["N = 3"][i].v_cr,
-                modal["N = 3"][i].v_cr - fe_v,
-                modal["N = 4"][i].v_cr,
-                modal["N = 4"][i].v_cr - fe_v,
+                cv.modal["N = 3"][i].v_cr,
+                cv.modal["N = 3"][i].v_cr - fe_v,
+                cv.modal["N = 4"][i].v_cr,
+                cv.modal["N = 4"][i].v_cr - fe_v,
             )
         )
     table = Table(
@@ -232,7 +304,11 @@ def run(quick: bool = False) -> CaseResult:
         f"v_cr (FE) for all β (γ = {BASE_GAMMA:g}) and γ (β = {BASE_BETA:g})",
         ("α", *[f"β = {b:g}" for b in betas], *[f"γ = {g:g}" for g in gammas]),
         tuple(
-            (_deg(a), *[by_beta[b][i].v_cr for b in betas], *[by_gamma[g][i].v_cr for g in gammas])
+            (
+                _deg(a),
+                *[cv.by_beta[b][i].v_cr for b in betas],
+                *[cv.by_gamma[g][i].v_cr for g in gammas],
+            )
             for i, a in enumerate(alphas)
         ),
     )
@@ -250,28 +326,7 @@ def run(quick: bool = False) -> CaseResult:
         note="The round pipe first loses stability out of the plane of its static state at "
         "every inclined α: the paper's v_cr (in the plane) is not the pipe's.",
     )
-    requires = [f"falls_with_alpha_b{b:g}" for b in betas]
-    requires += [f"falls_with_alpha_g{g:g}" for g in gammas if g != BASE_GAMMA]
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table, out_table, grid),
-        data={
-            "alphas": alphas,
-            "by_beta": {b: vc(c) for b, c in by_beta.items()},
-            "by_gamma": {g: vc(c) for g, c in by_gamma.items()},
-            "modal": {k: vc(c) for k, c in modal.items()},
-            "kind_by_beta": {b: [o.kind for o in c] for b, c in by_beta.items()},
-            "kind_by_gamma": {g: [o.kind for o in c] for g, c in by_gamma.items()},
-            "out_by_beta": {b: vc(c) for b, c in out_beta.items()},
-            "out_by_gamma": {g: vc(c) for g, c in out_gamma.items()},
-            "headline": _headline(alphas, by_beta, by_gamma, out_beta, out_gamma),
-            "out_kind_by_beta": {b: [o.kind for o in c] for b, c in out_beta.items()},
-            "out_kind_by_gamma": {g: [o.kind for o in c] for g, c in out_gamma.items()},
-        },
-        requires=requires,
-    )
+    return table, out_table, grid
 
 
 def _headline(alphas, by_beta, by_gamma, out_beta, out_gamma) -> str:

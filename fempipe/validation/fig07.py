@@ -196,8 +196,37 @@ def run(quick: bool = False) -> CaseResult:
     sweeps = {label: dg.attractors() for label, dg in diags.items()}
     shape_v = ref.value("shape_v")
     checked = [sweep_check(dg, shape_v) for dg in diags.values()]
-    checks, rows = [], []
-    onsets = {}
+    checks, onsets = _onsets(discs, alpha, diags)
+    checks += _paper_checks(diags, sweeps, checked, onsets, shape_v, fe_label)
+    if not quick:  # mesh convergence of the FE amplitude (quick: see the convergence case)
+        a10 = eta_amplitude({p.v: p for p in sweeps[fe_label] if p is not None}[10.0])
+        checks.append(_mesh_check(alpha, fe_label, a10))
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=(_table(discs, onsets, sweeps),),
+        data={
+            "sweeps": sweeps,
+            "diagrams": diags,
+            "shapes": _shapes(discs, alpha, shape_v, checked),
+            "alpha": alpha,
+        },
+        requires=requires,
+    )
+
+
+def _onsets(discs: dict, alpha: float, diags: dict) -> tuple[list[Check], dict]:
+    """The linear v_cr of every discretisation and the onset check of its diagram.
+
+    Returns
+    -------
+    checks : list of Check
+        ``onset_<tag>`` of every discretisation (:func:`onset_check`).
+    onsets : dict
+        ``(last equilibrium v, first periodic v, linear v_cr, Hopf point v_H)`` by label.
+    """
+    checks, onsets = [], {}
     for label, d in discs.items():
         v_lin = critical_velocity(d, alpha).v_cr
         chk, v_h, lo, hi = onset_check(
@@ -210,23 +239,30 @@ def run(quick: bool = False) -> CaseResult:
         )
         checks.append(chk)
         onsets[label] = (lo, hi, v_lin, v_h)
-    checks.append(
+    return checks, onsets
+
+
+def _paper_checks(
+    diags: dict, sweeps: dict, checked: list, onsets: dict, shape_v, fe_label: str
+) -> list[Check]:
+    """The brute-force check and the paper's statements: period-1 cycles, the bracket
+    6.3 < v_cr < 6.5, N = 3 against N = 4 and against FE, the large amplitude."""
+    ref = CASE.references
+    checks = [
         sweep_agreement(
             "sweep_agreement",
             f"the attractors found by integration at v = {', '.join(f'{v:g}' for v in shape_v)} "
             "lie on the stable continued branches (every discretisation)",
             checked,
-        )
-    )
-    checks.append(
+        ),
         period_one(
             "period_one",
             "every post-flutter attractor is a period-1 limit cycle (Sec. 5)",
             diags,
             checked,
             source="paper Sec. 5: 'all these nonlinear oscillations after flutter instability are period-1'",
-        )
-    )
+        ),
+    ]
     fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
     fe_diag = diags[fe_label]
     a63, a65 = fe_pts.get(6.3), fe_pts.get(6.5)
@@ -283,19 +319,26 @@ def run(quick: bool = False) -> CaseResult:
             source="paper Sec. 5, Fig. 7",
         )
     )
-    if not quick:  # mesh convergence of the FE amplitude (quick: see the convergence case)
-        fine = attractor("FE P3:16", alpha, 10.0)
-        dmesh = abs(0.5 * (fine.tip["eta_tip"][1] - fine.tip["eta_tip"][0]) - a10)
-        checks.append(
-            below(
-                "fe_mesh",
-                f"{fe_label} limit-cycle amplitude at v = 10 equals P3:16",
-                dmesh,
-                1e-4,
-                why="P3 meshes; the limit cycle is computed by shooting to rtol 1e-8",
-                source="fempipe, refined mesh (P3:16)",
-            )
-        )
+    return checks
+
+
+def _mesh_check(alpha: float, fe_label: str, a10: float) -> Check:
+    """The FE limit-cycle amplitude ``a10`` at v = 10 against the P3:16 cycle."""
+    fine = attractor("FE P3:16", alpha, 10.0)
+    dmesh = abs(0.5 * (fine.tip["eta_tip"][1] - fine.tip["eta_tip"][0]) - a10)
+    return below(
+        "fe_mesh",
+        f"{fe_label} limit-cycle amplitude at v = 10 equals P3:16",
+        dmesh,
+        1e-4,
+        why="P3 meshes; the limit cycle is computed by shooting to rtol 1e-8",
+        source="fempipe, refined mesh (P3:16)",
+    )
+
+
+def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
+    """Onset (:func:`_onsets`) and the limit cycle at v = 10 of every discretisation."""
+    rows = []
     for label in discs:
         lo, hi, v_lin, v_h = onsets[label]
         pts = {p.v: p for p in sweeps[label] if p is not None}
@@ -314,7 +357,7 @@ def run(quick: bool = False) -> CaseResult:
                 v_h,
             )
         )
-    table = Table(
+    return Table(
         "Onset and the limit cycle at v = 10 (α = 0)",
         (
             "discretisation",
@@ -333,6 +376,12 @@ def run(quick: bool = False) -> CaseResult:
         "The diagrams are continued (static branch and the orbits born at the Hopf point); "
         "'last equilibrium' and 'first periodic' are the requested v on either side of v_H.",
     )
+
+
+def _shapes(discs: dict, alpha: float, shape_v, checked: list) -> dict:
+    """The FE shapes at ``shape_v``, on the attractors found by integration (the first
+    diagram's :func:`~fempipe.validation.dynamic_runs.sweep_check` in ``checked``)."""
+    fe_label = next(iter(discs))
     shapes = {}
     for v in shape_v:
         att = checked[0]["attractors"][float(v)]
@@ -345,14 +394,7 @@ def run(quick: bool = False) -> CaseResult:
             att.qdot,
             att.period if att.kind == "periodic" else None,
         )
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table,),
-        data={"sweeps": sweeps, "diagrams": diags, "shapes": shapes, "alpha": alpha},
-        requires=requires,
-    )
+    return shapes
 
 
 def plot(result: CaseResult, fig=None):

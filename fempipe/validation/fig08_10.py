@@ -17,6 +17,7 @@ shape velocities the paper chose for Fig. 9.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -60,6 +61,48 @@ def _required(name: str, is_pi: bool, labels) -> list[str]:
     )
 
 
+@dataclass
+class _Inclination:
+    """The computed parts of one α: the diagrams, the sweeps and the brute-force check.
+
+    Attributes
+    ----------
+    alpha : float
+    name : str
+        :func:`~fempipe.validation.case.alpha_name` of ``alpha``.
+    is_pi : bool
+        Whether ``alpha`` is π (the hanging-up pipe, which buckles).
+    shape_v : tuple of float
+        The paper's three shape velocities of Fig. 9.
+    values : list of float
+        The requested v of the diagrams.
+    diags : dict
+        The continued diagrams by discretisation label.
+    hopf_v : dict
+        The first Hopf point of each diagram (inf if none).
+    sweeps : dict
+        The stable state a sweep up ends on at each v, by label.
+    check_v : list of float
+        The v of the check by integration.
+    checked : list of dict
+        :func:`~fempipe.validation.dynamic_runs.sweep_check` of every diagram.
+    fe_pts : dict
+        The FE sweep's states by v.
+    """
+
+    alpha: float
+    name: str
+    is_pi: bool
+    shape_v: tuple
+    values: list
+    diags: dict
+    hopf_v: dict
+    sweeps: dict
+    check_v: list
+    checked: list
+    fe_pts: dict
+
+
 def run(quick: bool = False, part: int | None = None) -> CaseResult:
     """Sweeps and checks; see the module docstring.
 
@@ -67,215 +110,296 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     suite merges the parts with :func:`fempipe.validation.checks.merge_results`.
     """
     t0 = time.perf_counter()
-    ref = CASE.references
-    all_alphas = ref.value("alpha")
-    alphas = ref.value("alpha", quick)
+    alphas = CASE.references.value("alpha", quick)
     if part is not None:
         alphas = [alphas[part]]
     discs = dyn_discretizations(quick)
-    fe_label = next(iter(discs))
     checks, rows, panels, requires = [], [], {}, []
     for alpha in alphas:
-        name = alpha_name(alpha)
-        is_pi = abs(alpha - np.pi) < 1e-12
-        requires += _required(name, is_pi, discs) + [f"sweep_agreement_{name}"]
-        shape_v = ref.value("shape_v")[all_alphas.index(alpha)]
-        if quick:
-            values = sorted(set(shape_v))
-        else:
-            values = set(ref.value("v")) | set(shape_v)
-            if is_pi:
-                values |= set(ref.value("v_fine_pi"))
-            values = sorted(values)
-        # The static branch and the orbits born at its Hopf points, by continuation.
-        diags = {label: continued_diagram(label, alpha, values) for label in discs}
-        hopf_v = {lb: dg.hopf[0]["v"] if dg.hopf else float("inf") for lb, dg in diags.items()}
-        # What a sweep up from the sagged state ends on at each v.  At alpha = pi
-        # the continued static branch is the straight pipe; below the flutter the
-        # pipe rests on the left buckled branch (not continued), so that part is a
-        # sweep, as before (equilibria only), checked against the continuation
-        # where the straight pipe is stable.
-        sweeps = {}
-        for label, d in discs.items():
-            att = diags[label].attractors()
-            if is_pi:
-                pre = [v for v in values if v < hopf_v[label]]
-                low = {p.v: p for p in sweep_up(d, alpha, pre)} if pre else {}
-                att = [low.get(v, p) for v, p in zip(values, att, strict=True)]
-            sweeps[label] = att
-        fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
-        # The independent check by integration at a few v of each diagram (at
-        # alpha = pi above the flutter: below it the sweep is the check).
-        check_v = list(shape_v)
-        if is_pi:
-            above = [v for v in values if v > hopf_v[fe_label]]
-            check_v = sorted({v for v in shape_v if v > hopf_v[fe_label]} | set(above[:1]))
-        checked = [sweep_check(dg, check_v) for dg in diags.values()]
+        inc = _inclination(alpha, discs, quick)
+        requires += _required(inc.name, inc.is_pi, discs) + [f"sweep_agreement_{inc.name}"]
         checks.append(
             sweep_agreement(
-                f"sweep_agreement_{name}",
-                f"α = {name}: the attractors found by integration at v = "
-                f"{', '.join(f'{v:g}' for v in check_v)} lie on the stable continued branches "
+                f"sweep_agreement_{inc.name}",
+                f"α = {inc.name}: the attractors found by integration at v = "
+                f"{', '.join(f'{v:g}' for v in inc.check_v)} lie on the stable continued branches "
                 "(every discretisation)",
-                checked,
+                inc.checked,
             )
         )
-        for label, d in discs.items():
-            dg = diags[label]
-            if is_pi:
-                # The straight pipe buckles at v = 0; the onset of oscillation
-                # is the flutter of the restabilised straight pipe.
-                v_lin = _straight_flutter(d)
-                lo, hi = onset_bracket(sweeps[label])
-                v_h = hopf_v[label]
-            else:
-                v_lin = critical_velocity(d, alpha).v_cr
-                chk, v_h, lo, hi = onset_check(
-                    f"onset_{name}_{label_tag(label)}",
-                    f"α = {name}, {label}: the limit cycle appears where the linear "
-                    "analysis loses stability",
-                    dg,
-                    v_lin,
-                    "fempipe.validation.onset: Brent's method on the spectral abscissa, against "
-                    "the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
-                )
-                checks.append(chk)
-            p10 = {p.v: p for p in sweeps[label] if p is not None}[10.0]
-            rows.append(
-                (
-                    name,
-                    label,
-                    v_lin,
-                    lo,
-                    hi,
-                    p10.attractor,
-                    p10.period,
-                    p10.X_tip[1] - p10.X_tip[0],
-                    p10.Z_tip[1] - p10.Z_tip[0],
-                    eta_amplitude(p10),
-                    v_h,
-                )
-            )
-        # The paper's shape velocities.
-        v1, v2, _ = shape_v
-        a1, a2 = fe_pts[v1].attractor, fe_pts[v2].attractor
-        if not is_pi:
-            checks.append(
-                holds(
-                    f"paper_bracket_{name}",
-                    f"α = {name}: equilibrium at v = {v1:g}, limit cycle at v = {v2:g} (FE)",
-                    a1 == "equilibrium" and a2 == "periodic",
-                    f"v = {v1:g}: {a1}; v = {v2:g}: {a2} (Hopf point v_H = {hopf_v[fe_label]:.4f})",
-                    reference=f"{v1:g} < v_cr < {v2:g}",
-                    why="inferred: the text lists the shapes of Fig. 9 at these v; as for α = 0 "
-                    "(6.3 static, 6.5 oscillating) we read the first as static, the second as "
-                    "oscillating",
-                    source="paper Sec. 5, the v of the shapes added to Fig. 9",
-                )
-            )
+        onset_checks, onsets = _onsets(inc, discs)
+        checks += onset_checks
+        checks += _shape_velocity_checks(inc, discs)
+        checks += _attractor_checks(inc, next(iter(discs)))
+        rows += _rows(inc, discs, onsets)
+        panels[inc.name] = {
+            "alpha": alpha,
+            "sweeps": inc.sweeps,
+            "diagrams": inc.diags,
+            "shapes": _shapes(inc, discs),
+        }
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=(_table(rows),),
+        data={"panels": panels},
+        requires=requires,
+    )
+
+
+def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
+    """The diagrams of every discretisation at ``alpha``, the sweeps up, and the check
+    by integration at a few v."""
+    ref = CASE.references
+    is_pi = abs(alpha - np.pi) < 1e-12
+    shape_v = ref.value("shape_v")[ref.value("alpha").index(alpha)]
+    if quick:
+        values = sorted(set(shape_v))
+    else:
+        values = set(ref.value("v")) | set(shape_v)
+        if is_pi:
+            values |= set(ref.value("v_fine_pi"))
+        values = sorted(values)
+    # The static branch and the orbits born at its Hopf points, by continuation.
+    diags = {label: continued_diagram(label, alpha, values) for label in discs}
+    hopf_v = {lb: dg.hopf[0]["v"] if dg.hopf else float("inf") for lb, dg in diags.items()}
+    # What a sweep up from the sagged state ends on at each v.  At alpha = pi
+    # the continued static branch is the straight pipe; below the flutter the
+    # pipe rests on the left buckled branch (not continued), so that part is a
+    # sweep, as before (equilibria only), checked against the continuation
+    # where the straight pipe is stable.
+    sweeps = {}
+    for label, d in discs.items():
+        att = diags[label].attractors()
+        if is_pi:
+            pre = [v for v in values if v < hopf_v[label]]
+            low = {p.v: p for p in sweep_up(d, alpha, pre)} if pre else {}
+            att = [low.get(v, p) for v, p in zip(values, att, strict=True)]
+        sweeps[label] = att
+    fe_label = next(iter(discs))
+    # The independent check by integration at a few v of each diagram (at
+    # alpha = pi above the flutter: below it the sweep is the check).
+    check_v = list(shape_v)
+    if is_pi:
+        above = [v for v in values if v > hopf_v[fe_label]]
+        check_v = sorted({v for v in shape_v if v > hopf_v[fe_label]} | set(above[:1]))
+    return _Inclination(
+        alpha=alpha,
+        name=alpha_name(alpha),
+        is_pi=is_pi,
+        shape_v=shape_v,
+        values=values,
+        diags=diags,
+        hopf_v=hopf_v,
+        sweeps=sweeps,
+        check_v=check_v,
+        checked=[sweep_check(dg, check_v) for dg in diags.values()],
+        fe_pts={p.v: p for p in sweeps[fe_label] if p is not None},
+    )
+
+
+def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
+    """The linear onset of every discretisation and (α ≠ π) its check against the diagram.
+
+    Returns
+    -------
+    checks : list of Check
+        ``onset_<name>_<tag>`` of every discretisation (none at α = π).
+    onsets : dict
+        ``(linear v_cr, last equilibrium v, first periodic v, Hopf point v_H)`` by label.
+    """
+    checks, onsets = [], {}
+    for label, d in discs.items():
+        dg = inc.diags[label]
+        if inc.is_pi:
+            # The straight pipe buckles at v = 0; the onset of oscillation
+            # is the flutter of the restabilised straight pipe.
+            v_lin = _straight_flutter(d)
+            lo, hi = onset_bracket(inc.sweeps[label])
+            v_h = inc.hopf_v[label]
         else:
-            pts = [p for p in sweeps[fe_label] if p is not None]
-            fe_diag = diags[fe_label]
-            buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
-            straight = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) < 1e-3]
-            flutter = [p.v for p in pts if p.attractor == "periodic"]
-            # The straight states the sweep rests on must be stable on the continued
-            # static branch, and the buckled ones where it is unstable.
-            consistent = all(fe_diag.equilibrium_at(v).stable for v in straight) and not any(
-                fe_diag.equilibrium_at(v).stable for v in buckled
+            v_lin = critical_velocity(d, inc.alpha).v_cr
+            chk, v_h, lo, hi = onset_check(
+                f"onset_{inc.name}_{label_tag(label)}",
+                f"α = {inc.name}, {label}: the limit cycle appears where the linear "
+                "analysis loses stability",
+                dg,
+                v_lin,
+                "fempipe.validation.onset: Brent's method on the spectral abscissa, against "
+                "the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
             )
-            seq_ok = bool(
-                buckled
-                and straight
-                and flutter
-                and consistent
-                and max(buckled) < min(straight)
-                and max(straight) < min(flutter)
-            )
-            checks.append(
-                holds(
-                    "pi_sequence",
-                    "α = π: buckled equilibrium, then the straight pipe regains stability, "
-                    "then flutter (FE: sweep below the flutter, continuation above)",
-                    seq_ok,
-                    f"buckled at v = {buckled}; straight stable at v = {straight}; "
-                    f"periodic from v = {min(flutter) if flutter else None}; straight pipe "
-                    f"{'stable' if consistent else 'NOT stable'} on the continued static branch "
-                    "exactly where the sweep rests on it",
-                    source="paper Sec. 4-5, Figs. 5(d), 8(d)-10(d)",
-                )
-            )
-            checks += _pi_cross_checks(discs[fe_label], pts, fe_diag)
-            checks.append(
-                holds(
-                    "pi_shape_velocities",
-                    f"α = π: buckled at v = {v1:g}, and at v = {v2:g} (the paper's second shape)",
-                    a1 == "equilibrium" and abs(fe_pts[v1].Z_tip[0]) > 0.1,
-                    f"v = {v1:g}: {a1} (Z_g(1) = {fe_pts[v1].Z_tip[0]:.3f}); v = {v2:g}: {a2} "
-                    f"(Z_g(1) range [{fe_pts[v2].Z_tip[0]:.2e}, {fe_pts[v2].Z_tip[1]:.2e}])",
-                    source="paper Sec. 5: shapes of Fig. 9(d) at v = 2.0, 4.1, 10",
-                )
-            )
-        checks.append(
-            period_one(
-                f"period_one_{name}",
-                f"α = {name}: every post-flutter attractor is period-1",
-                diags,
-                checked,
-                source="paper Sec. 5",
-            )
-        )
-        p10 = fe_pts[10.0]
-        excursion = max(p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0])
-        large = ref.value("large")
-        checks.append(
+            checks.append(chk)
+        onsets[label] = (v_lin, lo, hi, v_h)
+    return checks, onsets
+
+
+def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Check]:
+    """The states at the paper's shape velocities (FE): the onset bracket they imply
+    (α ≠ π), or the buckling / restabilisation / flutter sequence and its jumps against
+    the stability analysis (α = π)."""
+    fe_label = next(iter(discs))
+    fe_pts = inc.fe_pts
+    v1, v2, _ = inc.shape_v
+    a1, a2 = fe_pts[v1].attractor, fe_pts[v2].attractor
+    if not inc.is_pi:
+        return [
             holds(
-                f"large_{name}",
-                f"α = {name}: tip excursion at v = 10 close to L (≥ {large:g} L)",
-                excursion >= large,
-                f"X_g(1) range {p10.X_tip[1] - p10.X_tip[0]:.3f}, Z_g(1) range "
-                f"{p10.Z_tip[1] - p10.Z_tip[0]:.3f}",
-                reference=f"≥ {large:g}",
-                why=ref.source("large"),
-                source="paper Sec. 5, Fig. 9",
+                f"paper_bracket_{inc.name}",
+                f"α = {inc.name}: equilibrium at v = {v1:g}, limit cycle at v = {v2:g} (FE)",
+                a1 == "equilibrium" and a2 == "periodic",
+                f"v = {v1:g}: {a1}; v = {v2:g}: {a2} (Hopf point v_H = {inc.hopf_v[fe_label]:.4f})",
+                reference=f"{v1:g} < v_cr < {v2:g}",
+                why="inferred: the text lists the shapes of Fig. 9 at these v; as for α = 0 "
+                "(6.3 static, 6.5 oscillating) we read the first as static, the second as "
+                "oscillating",
+                source="paper Sec. 5, the v of the shapes added to Fig. 9",
+            )
+        ]
+    pts = [p for p in inc.sweeps[fe_label] if p is not None]
+    fe_diag = inc.diags[fe_label]
+    buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
+    straight = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) < 1e-3]
+    flutter = [p.v for p in pts if p.attractor == "periodic"]
+    # The straight states the sweep rests on must be stable on the continued
+    # static branch, and the buckled ones where it is unstable.
+    consistent = all(fe_diag.equilibrium_at(v).stable for v in straight) and not any(
+        fe_diag.equilibrium_at(v).stable for v in buckled
+    )
+    seq_ok = bool(
+        buckled
+        and straight
+        and flutter
+        and consistent
+        and max(buckled) < min(straight)
+        and max(straight) < min(flutter)
+    )
+    checks = [
+        holds(
+            "pi_sequence",
+            "α = π: buckled equilibrium, then the straight pipe regains stability, "
+            "then flutter (FE: sweep below the flutter, continuation above)",
+            seq_ok,
+            f"buckled at v = {buckled}; straight stable at v = {straight}; "
+            f"periodic from v = {min(flutter) if flutter else None}; straight pipe "
+            f"{'stable' if consistent else 'NOT stable'} on the continued static branch "
+            "exactly where the sweep rests on it",
+            source="paper Sec. 4-5, Figs. 5(d), 8(d)-10(d)",
+        )
+    ]
+    checks += _pi_cross_checks(discs[fe_label], pts, fe_diag)
+    checks.append(
+        holds(
+            "pi_shape_velocities",
+            f"α = π: buckled at v = {v1:g}, and at v = {v2:g} (the paper's second shape)",
+            a1 == "equilibrium" and abs(fe_pts[v1].Z_tip[0]) > 0.1,
+            f"v = {v1:g}: {a1} (Z_g(1) = {fe_pts[v1].Z_tip[0]:.3f}); v = {v2:g}: {a2} "
+            f"(Z_g(1) range [{fe_pts[v2].Z_tip[0]:.2e}, {fe_pts[v2].Z_tip[1]:.2e}])",
+            source="paper Sec. 5: shapes of Fig. 9(d) at v = 2.0, 4.1, 10",
+        )
+    )
+    return checks
+
+
+def _attractor_checks(inc: _Inclination, fe_label: str) -> list[Check]:
+    """Period-1 attractors, the tip excursion at v = 10, and N = 3 / N = 4 against FE
+    at every v of the diagram."""
+    ref = CASE.references
+    name = inc.name
+    checks = [
+        period_one(
+            f"period_one_{name}",
+            f"α = {name}: every post-flutter attractor is period-1",
+            inc.diags,
+            inc.checked,
+            source="paper Sec. 5",
+        )
+    ]
+    p10 = inc.fe_pts[10.0]
+    excursion = max(p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0])
+    large = ref.value("large")
+    checks.append(
+        holds(
+            f"large_{name}",
+            f"α = {name}: tip excursion at v = 10 close to L (≥ {large:g} L)",
+            excursion >= large,
+            f"X_g(1) range {p10.X_tip[1] - p10.X_tip[0]:.3f}, Z_g(1) range "
+            f"{p10.Z_tip[1] - p10.Z_tip[0]:.3f}",
+            reference=f"≥ {large:g}",
+            why=ref.source("large"),
+            source="paper Sec. 5, Fig. 9",
+        )
+    )
+    for n in PAPER_MODES:
+        other = {p.v: p for p in inc.sweeps[f"N = {n}"] if p is not None}
+        diffs = []
+        for v, p in inc.fe_pts.items():
+            q = other.get(v)
+            for key in ("X_tip", "Z_tip"):
+                if q is None:
+                    diffs.append(float("inf"))
+                    continue
+                a, b = getattr(p, key), getattr(q, key)
+                diffs.append(max(abs(a[0] - b[0]), abs(a[1] - b[1])))
+        worst = float(np.nanmax(diffs))
+        checks.append(
+            ref.below(
+                f"n{n}_vs_fe_{name}",
+                f"α = {name}: N = {n} reproduces the converged tip extrema X_g(1), Z_g(1)",
+                worst,
+                "amplitude_tol",
+                source=f"fempipe converged FE ({fe_label})",
+                category="paper",
             )
         )
-        # N = 3 / N = 4 against FE at every v of the diagram.
-        for n in PAPER_MODES:
-            other = {p.v: p for p in sweeps[f"N = {n}"] if p is not None}
-            diffs = []
-            for v, p in fe_pts.items():
-                q = other.get(v)
-                for key in ("X_tip", "Z_tip"):
-                    if q is None:
-                        diffs.append(float("inf"))
-                        continue
-                    a, b = getattr(p, key), getattr(q, key)
-                    diffs.append(max(abs(a[0] - b[0]), abs(a[1] - b[1])))
-            worst = float(np.nanmax(diffs))
-            checks.append(
-                ref.below(
-                    f"n{n}_vs_fe_{name}",
-                    f"α = {name}: N = {n} reproduces the converged tip extrema X_g(1), Z_g(1)",
-                    worst,
-                    "amplitude_tol",
-                    source=f"fempipe converged FE ({fe_label})",
-                    category="paper",
-                )
+    return checks
+
+
+def _rows(inc: _Inclination, discs: dict, onsets: dict) -> list[tuple]:
+    """The table's rows of one α: onset (:func:`_onsets`) and the state at v = 10."""
+    rows = []
+    for label in discs:
+        v_lin, lo, hi, v_h = onsets[label]
+        p10 = {p.v: p for p in inc.sweeps[label] if p is not None}[10.0]
+        rows.append(
+            (
+                inc.name,
+                label,
+                v_lin,
+                lo,
+                hi,
+                p10.attractor,
+                p10.period,
+                p10.X_tip[1] - p10.X_tip[0],
+                p10.Z_tip[1] - p10.Z_tip[0],
+                eta_amplitude(p10),
+                v_h,
             )
-        shapes = {}
-        for v in shape_v:
-            att = checked[0]["attractors"].get(float(v))
-            if att is None:  # alpha = pi below the flutter: the sweep's state
-                att = fe_pts[v]
-                q, qdot = att.q, att.qdot
-                per = att.period if att.attractor == "periodic" else None
-            else:
-                q, qdot = att.q, att.qdot
-                per = att.period if att.kind == "periodic" else None
-            shapes[v] = orbit(fe_label, discs[fe_label], alpha, v, q, qdot, per)
-        panels[name] = {"alpha": alpha, "sweeps": sweeps, "diagrams": diags, "shapes": shapes}
-    table = Table(
+        )
+    return rows
+
+
+def _shapes(inc: _Inclination, discs: dict) -> dict:
+    """The FE shapes at the paper's shape velocities: on the attractor found by
+    integration, or (α = π below the flutter) on the sweep's state."""
+    fe_label = next(iter(discs))
+    shapes = {}
+    for v in inc.shape_v:
+        att = inc.checked[0]["attractors"].get(float(v))
+        if att is None:  # alpha = pi below the flutter: the sweep's state
+            att = inc.fe_pts[v]
+            q, qdot = att.q, att.qdot
+            per = att.period if att.attractor == "periodic" else None
+        else:
+            q, qdot = att.q, att.qdot
+            per = att.period if att.kind == "periodic" else None
+        shapes[v] = orbit(fe_label, discs[fe_label], inc.alpha, v, q, qdot, per)
+    return shapes
+
+
+def _table(rows: list[tuple]) -> Table:
+    """The table of onsets and limit cycles at v = 10 (rows of :func:`_rows`)."""
+    return Table(
         "Onsets and limit cycles at v = 10",
         (
             "α",
@@ -295,14 +419,6 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         "restabilised straight pipe (it buckles at v = 0), and the first periodic v follows the "
         "buckled branch and the restabilised straight state (see checks).  The diagrams are continued (static branch, orbits born at the Hopf "
         "points); at α = π the buckled equilibria below the flutter come from a sweep.",
-    )
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table,),
-        data={"panels": panels},
-        requires=requires,
     )
 
 

@@ -17,7 +17,7 @@ import numpy as np
 from fempipe.model.discretization import parse_discretization
 
 from .case import Case, alpha_name
-from .checks import CaseResult, Table, below, holds
+from .checks import CaseResult, Check, Table, below, holds
 from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations
 
 CASE = Case(
@@ -39,9 +39,81 @@ def run(quick: bool = False) -> CaseResult:
     v = ref.value("v")
     alphas = tuple(ref.value("alpha", quick))
     discs = dyn_discretizations(quick)
-    fe_label = next(iter(discs))
     cycles = cycles_at(alphas, v, quick)
-    checks, rows, traces, requires = [], [], {}, []
+    traces = _cycle_traces_at(alphas, discs, cycles)
+    # Mesh convergence of one cycle (full suite only).
+    fine = None if quick else _fine_cycle(v, discs, cycles)
+    checks, requires = _case_checks(alphas, discs, cycles, traces, fine)
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=(_cycle_table(alphas, discs, cycles, traces),),
+        data={"traces": traces, "v": v},
+        requires=requires,
+    )
+
+
+def _cycle_traces_at(alphas, discs: dict, cycles: dict) -> dict:
+    """The tip traces of every found cycle, by α name and discretisation label.
+
+    Parameters
+    ----------
+    alphas : sequence of float
+    discs : dict
+        Discretisations by label, the converged FE first.
+    cycles : dict
+        The limit cycles by (α, label) (None where none was found).
+
+    Returns
+    -------
+    dict
+        ``{α name: {label: trace}}``; an α whose FE cycle was not found is absent.
+    """
+    fe_label = next(iter(discs))
+    traces = {}
+    for a in alphas:
+        if cycles[(a, fe_label)] is None:
+            continue
+        traces[alpha_name(a)] = {
+            lb: cycle_traces(discs[lb], a, cycles[(a, lb)])
+            for lb in discs
+            if cycles[(a, lb)] is not None
+        }
+    return traces
+
+
+def _fine_cycle(v: float, discs: dict, cycles: dict):
+    """The α = π/2 cycle on P3:16, shot from the projection of the converged FE cycle."""
+    fe_label = next(iter(discs))
+    c8 = cycles[(np.pi / 2, fe_label)]
+    return cycle_on(
+        parse_discretization(fe="P3:16"),
+        np.pi / 2,
+        v,
+        discs[fe_label],
+        (c8.q0, c8.qdot0, c8.period),
+    )
+
+
+def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple[list, list]:
+    """The checks of every α (and of the mesh, if ``fine`` is given) and the names required.
+
+    Parameters
+    ----------
+    alphas, discs, cycles, traces
+        As :func:`_cycle_traces_at` and its result.
+    fine : limit cycle or None
+        :func:`_fine_cycle` (the full suite), None (the quick suite).
+
+    Returns
+    -------
+    checks : list of Check
+    requires : list of str
+    """
+    ref = CASE.references
+    fe_label = next(iter(discs))
+    checks, requires = [], []
     for a in alphas:
         name = alpha_name(a)
         # The FE cycle missing fails periodic_<name> (a finding); the
@@ -74,8 +146,7 @@ def run(quick: bool = False) -> CaseResult:
         )
         if fe is None:
             continue
-        tr = {lb: cycle_traces(discs[lb], a, cycles[(a, lb)]) for lb in discs if found[lb]}
-        traces[name] = tr
+        tr = traces[name]
         fx = tr[fe_label]
         xr, zr = np.ptp(fx["X_tip"]), np.ptp(fx["Z_tip"])
         large = ref.value("large")
@@ -91,10 +162,72 @@ def run(quick: bool = False) -> CaseResult:
             )
         )
         for lb in discs:
-            if not found[lb]:
-                continue
+            if found[lb] and lb != fe_label:
+                checks += _modal_checks(name, lb, cycles[(a, lb)], tr[lb], fe, fx, fe_label)
+    if fine is not None:
+        requires.append("fe_mesh_π/2")
+        checks.append(_mesh_check(cycles[(np.pi / 2, fe_label)], fine))
+    return checks, requires
+
+
+def _modal_checks(name: str, lb: str, c, t_: dict, fe, fx: dict, fe_label: str) -> list:
+    """Period and tip extrema of the modal cycle ``c`` (traces ``t_``) against the FE
+    cycle ``fe`` (traces ``fx``) at the inclination ``name``."""
+    ref = CASE.references
+    dev = max(
+        max(abs(t_[k].min() - fx[k].min()), abs(t_[k].max() - fx[k].max()))
+        for k in ("X_tip", "Z_tip")
+    )
+    return [
+        ref.below(
+            f"period_{name}_{lb[-1]}",
+            f"α = {name}: {lb} reproduces the converged period",
+            abs(c.period - fe.period) / fe.period,
+            "period_tol",
+            source=f"fempipe converged FE ({fe_label})",
+            category="paper",
+        ),
+        ref.below(
+            f"range_{name}_{lb[-1]}",
+            f"α = {name}: {lb} reproduces the converged tip extrema",
+            dev,
+            "amplitude_tol",
+            source=f"fempipe converged FE ({fe_label})",
+            category="paper",
+        ),
+    ]
+
+
+def _mesh_check(c8, c16) -> Check:
+    """The P3:8 cycle at α = π/2 (period, tip extrema) against P3:16."""
+    dev = max(
+        abs(c16.period - c8.period) / c8.period,
+        *(abs(c16.tip[k][j] - c8.tip[k][j]) for k in ("X_tip", "Z_tip") for j in (0, 1)),
+    )
+    return below(
+        "fe_mesh_π/2",
+        "α = π/2: the P3:8 cycle (period, tip extrema) equals P3:16",
+        dev,
+        1e-4,
+        why="relative period and tip extrema (units of L); shooting to rtol 1e-8",
+        source="fempipe, refined mesh (P3:16)",
+    )
+
+
+def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
+    """The table of every found cycle: period, its error against FE, tip extrema, |ρ|max."""
+    fe_label = next(iter(discs))
+    rows = []
+    for a in alphas:
+        name = alpha_name(a)
+        fe = cycles[(a, fe_label)]
+        if fe is None:
+            continue
+        for lb in discs:
             c = cycles[(a, lb)]
-            t_ = tr[lb]
+            if c is None:
+                continue
+            t_ = traces[name][lb]
             rows.append(
                 (
                     name,
@@ -108,55 +241,7 @@ def run(quick: bool = False) -> CaseResult:
                     c.max_nontrivial_multiplier,
                 )
             )
-            if lb == fe_label:
-                continue
-            checks.append(
-                ref.below(
-                    f"period_{name}_{lb[-1]}",
-                    f"α = {name}: {lb} reproduces the converged period",
-                    abs(c.period - fe.period) / fe.period,
-                    "period_tol",
-                    source=f"fempipe converged FE ({fe_label})",
-                    category="paper",
-                )
-            )
-            dev = max(
-                max(abs(t_[k].min() - fx[k].min()), abs(t_[k].max() - fx[k].max()))
-                for k in ("X_tip", "Z_tip")
-            )
-            checks.append(
-                ref.below(
-                    f"range_{name}_{lb[-1]}",
-                    f"α = {name}: {lb} reproduces the converged tip extrema",
-                    dev,
-                    "amplitude_tol",
-                    source=f"fempipe converged FE ({fe_label})",
-                    category="paper",
-                )
-            )
-    if not quick:
-        # Mesh convergence of one cycle: P3:8 against P3:16, shot from its projection.
-        requires.append("fe_mesh_π/2")
-        a = np.pi / 2
-        c8 = cycles[(a, fe_label)]
-        c16 = cycle_on(
-            parse_discretization(fe="P3:16"), a, v, discs[fe_label], (c8.q0, c8.qdot0, c8.period)
-        )
-        dev = max(
-            abs(c16.period - c8.period) / c8.period,
-            *(abs(c16.tip[k][j] - c8.tip[k][j]) for k in ("X_tip", "Z_tip") for j in (0, 1)),
-        )
-        checks.append(
-            below(
-                "fe_mesh_π/2",
-                "α = π/2: the P3:8 cycle (period, tip extrema) equals P3:16",
-                dev,
-                1e-4,
-                why="relative period and tip extrema (units of L); shooting to rtol 1e-8",
-                source="fempipe, refined mesh (P3:16)",
-            )
-        )
-    table = Table(
+    return Table(
         "Limit cycles at v = 10",
         (
             "α",
@@ -171,14 +256,6 @@ def run(quick: bool = False) -> CaseResult:
         ),
         tuple(rows),
         note="Period in τ; positions in units of L; the trivial multiplier 1 is excluded.",
-    )
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table,),
-        data={"traces": traces, "v": v},
-        requires=requires,
     )
 
 
