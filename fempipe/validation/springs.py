@@ -73,20 +73,20 @@ def _interior(base: dict, kappa: float, xi_s: float) -> Params:
 class _TipRuns:
     """The tip-spring part: classical v_cr(kappa), fempipe's FE at some kappa, Fig. 3.62's kinds."""
 
-    kappas: list
-    classical: dict
-    fe: dict
-    kinds: dict
+    kappas: list  # every kappa of the curve and of the FE points, sorted
+    classical: dict  # kappa -> classical onset
+    fe: dict  # kappa -> fempipe's FE onset (the FE points)
+    kinds: dict  # beta -> (kind at the smallest kappa, at the largest, its v_cr, Eq. (3.119) root)
 
 
 @dataclass(frozen=True)
 class _InteriorRuns:
     """The interior-spring part: classical and FE v_cr, and the beam-mode Galerkin v_cr."""
 
-    classical: dict
-    fe: dict
-    modes: tuple
-    galerkin: list
+    classical: dict  # xi_s -> {kappa -> classical onset}
+    fe: dict  # (kappa, xi_s) -> fempipe's FE onset
+    modes: list  # the numbers N of beam modes
+    galerkin: list  # the beam-mode Galerkin v_cr on N modes, at the first FE spring
 
 
 def run(quick: bool = False) -> CaseResult:
