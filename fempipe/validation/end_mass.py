@@ -34,7 +34,7 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
 from . import classical
-from .case import Case
+from .case import Case, References
 from .checks import CaseResult, Table, below, holds
 from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
 
@@ -80,90 +80,22 @@ def run(quick: bool = False) -> CaseResult:
     ref = CASE.references
     disc = parse_discretization(fe=FE)
     q0 = np.zeros(disc.n)
-    checks = []
-    # Blevins: the gravity-free cantilever with a tip mass at v = 0.
-    for G in ref.value("blevins_end_mass"):
-        exact = classical.tip_mass_frequencies(G, 3)
-        p = Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, end_mass=G)
-        lam = spectrum(PipeModel(disc, p), q0).lam
-        got = np.sort(lam.imag[lam.imag > 0])[:3]
-        checks.append(
-            below(
-                f"blevins_frequencies_G{G:g}",
-                f"v = γ = 0, Γ = {G:g}: fempipe's first three frequencies "
-                f"({', '.join(f'{w:.6f}' for w in got)}) solve 1 + cos l cosh l + Γ l (cos l sinh l "
-                f"- sin l cosh l) = 0, ω = l² ({', '.join(f'{w:.6f}' for w in exact)})",
-                float(np.max(np.abs(got / exact - 1.0))),
-                ref.value("frequency_rtol"),
-                why=ref.source("frequency_rtol"),
-                source="Blevins, Formulas for Natural Frequency and Mode Shape (1979): cantilever "
-                "with a tip mass; roots by fempipe.validation.classical.tip_mass_frequencies",
-            )
-        )
-    # The standing column under its weight and the end weight.
-    G = ref.value("heavy_column_end_mass")
-    exact = classical.heavy_column_buckling(G)
-
-    def max_real(g):
-        p = Params(alpha=np.pi, beta=0.142, gamma=g, mu=5e-3, end_mass=G)
-        return spectrum(PipeModel(disc, p), q0).max_real
-
-    g_fe = brentq(max_real, 0.8 * exact, 1.2 * exact, xtol=1e-12)
-    checks.append(
-        below(
-            "heavy_column",
-            f"α = π, v = 0, Γ = {G:g}: fempipe's straight column loses stability (a real "
-            f"eigenvalue through zero) at γ = {g_fe:.9f}, the Bessel solution's {exact:.9f}",
-            abs(g_fe / exact - 1.0),
-            ref.value("buckling_rtol"),
-            why=ref.source("buckling_rtol"),
-            source="y'' + γ (1 + Γ - ξ) y = 0, y(0) = 0, y'(1) = 0, solved with J_(±1/3) "
-            "(fempipe.validation.classical.heavy_column_buckling; Γ = 0: Greenhill's 7.837)",
-        )
-    )
-    # v_cr(Gamma): the hanging pipe and the horizontal one.
-    families = {}
-    fe = {}
+    checks = [*_blevins_checks(ref, disc, q0), _heavy_column_check(ref, disc, q0)]
+    families, fe = _families(ref, quick)
     requires = []
-    for fam, v_max in (("hanging", 12.0), ("horizontal", 12.0)):
+    for fam, runs in fe.items():
         base = ref.value(fam)
-        grid = sorted(set(ref.value(f"{fam}_curve", quick)) | set(ref.value(f"{fam}_fe", quick)))
-        families[fam] = {G: classical_onset(_params(base, G), v_max) for G in grid}
-        fe[fam] = {}
-        for G in ref.value(f"{fam}_fe", quick):
-            cl = families[fam][G]
-            f = fe_onset(_params(base, G), cl.v_cr + 0.5)
-            fe[fam][G] = f
+        for G, f in runs.items():
             name = f"fe_vs_classical_{fam}_G{G:g}"
             requires.append(name)
             what = f"{fam} pipe β = {base['beta']:g}, γ = {base['gamma']:g}, Γ = {G:g}"
-            checks.append(agreement_check(name, what, f, cl))
+            checks.append(agreement_check(name, what, f, families[fam][G]))
     hb = ref.value("hanging")
     checks.append(
         converged_check("classical_converged", "hanging pipe, Γ = 0.3", _params(hb, 0.3), 12.0)
     )
-    # Hill & Swanson: the end mass destabilises the horizontal undamped pipe.
-    masses = ref.value("hill_swanson_masses")
-    hs_rows, ok = [], True
-    horiz = ref.value("horizontal")
-    for beta in ref.value("hill_swanson_betas"):
-        base = dict(horiz, beta=beta)
-        v = [classical_onset(_params(base, G), 20.0).v_cr for G in (0.0, *masses)]
-        ok &= bool(v[0] > v[1] > v[2])
-        hs_rows.append((beta, *v))
-    checks.append(
-        holds(
-            "hill_swanson",
-            f"horizontal undamped pipe (γ = μ = 0): v_cr(Γ = 0) > v_cr(Γ = {masses[0]:g}) > "
-            f"v_cr(Γ = {masses[1]:g}) at β = "
-            + ", ".join(f"{b:g}" for b in ref.value("hill_swanson_betas")),
-            ok,
-            "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows),
-            why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
-            "(fe_vs_classical_horizontal_*)",
-            source=ref.source("hill_swanson_masses"),
-        )
-    )
+    hs_check, hs_table = _hill_swanson(ref)
+    checks.append(hs_check)
     tables = []
     for fam in families:
         base = ref.value(fam)
@@ -183,13 +115,7 @@ def run(quick: bool = False) -> CaseResult:
                 ),
             )
         )
-    tables.append(
-        Table(
-            "Hill & Swanson's statement: v_cr of the horizontal undamped pipe (classical theory)",
-            ("β", "Γ = 0", f"Γ = {masses[0]:g}", f"Γ = {masses[1]:g}"),
-            tuple(hs_rows),
-        )
-    )
+    tables.append(hs_table)
     return CASE.result(
         checks,
         quick=quick,
@@ -201,10 +127,100 @@ def run(quick: bool = False) -> CaseResult:
             },
             "fe": {fam: {G: f.v_cr for G, f in c.items()} for fam, c in fe.items()},
             "params": {fam: ref.value(fam) for fam in families},
-            "masses": masses,
+            "masses": ref.value("hill_swanson_masses"),
         },
         requires=requires,
     )
+
+
+def _blevins_checks(ref: References, disc, q0: np.ndarray) -> list:
+    """Blevins: the gravity-free cantilever with a tip mass at v = 0."""
+    checks = []
+    for G in ref.value("blevins_end_mass"):
+        exact = classical.tip_mass_frequencies(G, 3)
+        p = Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, end_mass=G)
+        lam = spectrum(PipeModel(disc, p), q0).lam
+        got = np.sort(lam.imag[lam.imag > 0])[:3]
+        checks.append(
+            below(
+                f"blevins_frequencies_G{G:g}",
+                f"v = γ = 0, Γ = {G:g}: fempipe's first three frequencies "
+                f"({', '.join(f'{w:.6f}' for w in got)}) solve 1 + cos l cosh l + Γ l (cos l sinh l "
+                f"- sin l cosh l) = 0, ω = l² ({', '.join(f'{w:.6f}' for w in exact)})",
+                float(np.max(np.abs(got / exact - 1.0))),
+                ref.value("frequency_rtol"),
+                why=ref.source("frequency_rtol"),
+                source="Blevins, Formulas for Natural Frequency and Mode Shape (1979): cantilever "
+                "with a tip mass; roots by fempipe.validation.classical.tip_mass_frequencies",
+            )
+        )
+    return checks
+
+
+def _heavy_column_check(ref: References, disc, q0: np.ndarray):
+    """The standing column under its weight and the end weight."""
+    G = ref.value("heavy_column_end_mass")
+    exact = classical.heavy_column_buckling(G)
+
+    def max_real(g):
+        p = Params(alpha=np.pi, beta=0.142, gamma=g, mu=5e-3, end_mass=G)
+        return spectrum(PipeModel(disc, p), q0).max_real
+
+    g_fe = brentq(max_real, 0.8 * exact, 1.2 * exact, xtol=1e-12)
+    return below(
+        "heavy_column",
+        f"α = π, v = 0, Γ = {G:g}: fempipe's straight column loses stability (a real "
+        f"eigenvalue through zero) at γ = {g_fe:.9f}, the Bessel solution's {exact:.9f}",
+        abs(g_fe / exact - 1.0),
+        ref.value("buckling_rtol"),
+        why=ref.source("buckling_rtol"),
+        source="y'' + γ (1 + Γ - ξ) y = 0, y(0) = 0, y'(1) = 0, solved with J_(±1/3) "
+        "(fempipe.validation.classical.heavy_column_buckling; Γ = 0: Greenhill's 7.837)",
+    )
+
+
+def _families(ref: References, quick: bool) -> tuple[dict, dict]:
+    """v_cr(Gamma) of the hanging pipe and the horizontal one: classical and FE onsets."""
+    families = {}
+    fe = {}
+    for fam, v_max in (("hanging", 12.0), ("horizontal", 12.0)):
+        base = ref.value(fam)
+        grid = sorted(set(ref.value(f"{fam}_curve", quick)) | set(ref.value(f"{fam}_fe", quick)))
+        families[fam] = {G: classical_onset(_params(base, G), v_max) for G in grid}
+        fe[fam] = {
+            G: fe_onset(_params(base, G), families[fam][G].v_cr + 0.5)
+            for G in ref.value(f"{fam}_fe", quick)
+        }
+    return families, fe
+
+
+def _hill_swanson(ref: References) -> tuple:
+    """Hill & Swanson: the end mass destabilises the horizontal undamped pipe (check, table)."""
+    masses = ref.value("hill_swanson_masses")
+    hs_rows, ok = [], True
+    horiz = ref.value("horizontal")
+    for beta in ref.value("hill_swanson_betas"):
+        base = dict(horiz, beta=beta)
+        v = [classical_onset(_params(base, G), 20.0).v_cr for G in (0.0, *masses)]
+        ok &= bool(v[0] > v[1] > v[2])
+        hs_rows.append((beta, *v))
+    check = holds(
+        "hill_swanson",
+        f"horizontal undamped pipe (γ = μ = 0): v_cr(Γ = 0) > v_cr(Γ = {masses[0]:g}) > "
+        f"v_cr(Γ = {masses[1]:g}) at β = "
+        + ", ".join(f"{b:g}" for b in ref.value("hill_swanson_betas")),
+        ok,
+        "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows),
+        why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
+        "(fe_vs_classical_horizontal_*)",
+        source=ref.source("hill_swanson_masses"),
+    )
+    table = Table(
+        "Hill & Swanson's statement: v_cr of the horizontal undamped pipe (classical theory)",
+        ("β", "Γ = 0", f"Γ = {masses[0]:g}", f"Γ = {masses[1]:g}"),
+        tuple(hs_rows),
+    )
+    return check, table
 
 
 def plot(result: CaseResult, fig=None):

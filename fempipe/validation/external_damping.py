@@ -30,7 +30,7 @@ import numpy as np
 from fempipe.model.params import Params
 
 from . import classical
-from .case import Case
+from .case import Case, References
 from .checks import CaseResult, Table, below, close, holds
 from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
 
@@ -80,19 +80,50 @@ def run(quick: bool = False) -> CaseResult:
     t0 = time.perf_counter()
     ref = CASE.references
     sig_curve = np.array(ref.value("sigma_curve", quick))
-    beck = {s: classical_onset(_beck(s), BECK_V_MAX) for s in sig_curve}
-    sig_fe = ref.value("sigma_fe", quick)
-    for s in sig_fe:
-        beck.setdefault(s, classical_onset(_beck(s), BECK_V_MAX))
-    fe_beck = {s: fe_onset(_beck(s), beck[s].v_cr + 0.5) for s in sig_fe}
+    beck, fe_beck = _onsets(_beck, sig_curve, ref.value("sigma_fe", quick), BECK_V_MAX)
     h = ref.value("hanging")
-    hs_curve = np.array(ref.value("hanging_sigma_curve", quick))
-    hanging = {s: classical_onset(_hanging(h, s), 12.0) for s in hs_curve}
-    hs_fe = ref.value("hanging_sigma_fe", quick)
-    for s in hs_fe:
-        hanging.setdefault(s, classical_onset(_hanging(h, s), 12.0))
-    fe_hanging = {s: fe_onset(_hanging(h, s), hanging[s].v_cr + 0.5) for s in hs_fe}
+    hanging, fe_hanging = _onsets(
+        lambda s: _hanging(h, s),
+        np.array(ref.value("hanging_sigma_curve", quick)),
+        ref.value("hanging_sigma_fe", quick),
+        12.0,
+    )
+    v_inf = classical.large_damping_limit(classical.StraightPipe(), BECK_V_MAX)
+    checks, requires = _agreement_checks(h, beck, fe_beck, hanging, fe_hanging)
+    checks += _limit_and_paper_checks(ref, beck, fe_beck, v_inf, float(sig_curve.max()))
+    sigmas = sorted(beck)
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=_tables(h, beck, fe_beck, hanging, fe_hanging, v_inf),
+        data={
+            "beck": {s: beck[s].v_cr for s in sigmas},
+            "fe_beck": {s: f.v_cr for s, f in fe_beck.items()},
+            "hanging": {s: hanging[s].v_cr for s in sorted(hanging)},
+            "fe_hanging": {s: f.v_cr for s, f in fe_hanging.items()},
+            "v_inf": v_inf,
+            "printed": (ref.value("beck_v2_zero"), ref.value("beck_v2_large")),
+            "hanging_params": h,
+        },
+        requires=requires,
+    )
 
+
+def _onsets(params, curve, fe_sigmas, v_max: float) -> tuple[dict, dict]:
+    """Classical onsets at ``curve`` and ``fe_sigmas``, and fempipe's FE onsets at ``fe_sigmas``.
+
+    ``params(sigma)`` is the pipe at the damping sigma; ``v_max`` bounds the classical search.
+    """
+    onsets = {s: classical_onset(params(s), v_max) for s in curve}
+    for s in fe_sigmas:
+        onsets.setdefault(s, classical_onset(params(s), v_max))
+    fe = {s: fe_onset(params(s), onsets[s].v_cr + 0.5) for s in fe_sigmas}
+    return onsets, fe
+
+
+def _agreement_checks(h: dict, beck, fe_beck, hanging, fe_hanging) -> tuple[list, list]:
+    """The classical theory converged, and fempipe's FE against it (with the check names)."""
     checks = [
         converged_check("classical_converged", "Beck's column, σ = 10", _beck(10.0), BECK_V_MAX)
     ]
@@ -106,10 +137,13 @@ def run(quick: bool = False) -> CaseResult:
         requires.append(name)
         what = f"hanging pipe β = {h['beta']:g}, γ = {h['gamma']:g}, μ = {h['mu']:g}, σ = {s:g}"
         checks.append(agreement_check(name, what, f, hanging[s]))
-    v_inf = classical.large_damping_limit(classical.StraightPipe(), BECK_V_MAX)
-    s_top = float(sig_curve.max())
+    return checks, requires
+
+
+def _limit_and_paper_checks(ref: References, beck, fe_beck, v_inf: float, s_top: float) -> list:
+    """The approach to the sigma -> infinity limit and Plaut & Infante's statements."""
     gap = v_inf**2 - beck[s_top].v_cr ** 2
-    checks.append(
+    checks = [
         below(
             "approaches_limit",
             f"at σ = {s_top:g} the classical v_cr² ({beck[s_top].v_cr ** 2:.5f}) lies below the "
@@ -120,7 +154,7 @@ def run(quick: bool = False) -> CaseResult:
             "as 1/σ (measured 0.055 at σ = 300, 0.0050 at σ = 1000, 0.0006 at σ = 3000)",
             source="the roots of K x = ν M x (fempipe.validation.classical.large_damping_limit)",
         )
-    )
+    ]
 
     # The printed numbers: FE where computed, otherwise the classical theory.
     def best(s):
@@ -171,6 +205,11 @@ def run(quick: bool = False) -> CaseResult:
             source="Plaut & Infante (1970), abstract: the critical load increases with damping",
         )
     )
+    return checks
+
+
+def _tables(h: dict, beck, fe_beck, hanging, fe_hanging, v_inf: float) -> tuple[Table, Table]:
+    """The tables of Beck's column and of the hanging pipe."""
     rows = [
         (
             s,
@@ -178,7 +217,7 @@ def run(quick: bool = False) -> CaseResult:
             fe_beck[s].v_cr ** 2 if s in fe_beck else "—",
             beck[s].frequency,
         )
-        for s in sigmas
+        for s in sorted(beck)
     ]
     table = Table(
         "Beck's column with external damping: v_cr² = P L²/EI",
@@ -194,22 +233,7 @@ def run(quick: bool = False) -> CaseResult:
             for s in sorted(hanging)
         ),
     )
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table, htab),
-        data={
-            "beck": {s: beck[s].v_cr for s in sigmas},
-            "fe_beck": {s: f.v_cr for s, f in fe_beck.items()},
-            "hanging": {s: hanging[s].v_cr for s in sorted(hanging)},
-            "fe_hanging": {s: f.v_cr for s, f in fe_hanging.items()},
-            "v_inf": v_inf,
-            "printed": (ref.value("beck_v2_zero"), ref.value("beck_v2_large")),
-            "hanging_params": h,
-        },
-        requires=requires,
-    )
+    return table, htab
 
 
 def plot(result: CaseResult, fig=None):

@@ -26,7 +26,7 @@ import numpy as np
 from fempipe.model.params import PipeSI
 
 from .bvp import solve_static_bvp
-from .case import Case
+from .case import Case, References
 from .checks import CaseResult, Table, below, holds
 from .static_shapes import PAPER_MODES, discretizations, refined, static_shapes
 
@@ -72,94 +72,15 @@ def run(quick: bool = False) -> CaseResult:
     p = si.params(0.0)
     U = np.array(ref.value("U", quick))
     v = np.array([si.v_of_U(u) for u in U])
-    printed = "half a unit of the 4th decimal printed"
-    checks = [
-        ref.close("beta", "Eq. (29a) β", p.beta, atol=5e-5, why=printed),
-        ref.close("gamma", "Eq. (29b) γ", p.gamma, atol=5e-5, why=printed),
-        ref.close("v_over_U", "Eq. (29c) v/U (s/m)", si.v_of_U(1.0), atol=5e-5, why=printed),
-    ]
-    discs = discretizations()
-    fams = {
-        label: static_shapes(d, p.alpha, p.gamma, v, beta=p.beta, mu=0.0, name=label)
-        for label, d in discs.items()
-    }
-    fe_label = next(iter(fams))
+    fams, fe_label, mesh_err = _shapes(p, v)
     fe = fams[fe_label]
-    fine = static_shapes(refined(discs[fe_label]), p.alpha, p.gamma, v, beta=p.beta, mu=0.0)
-    mesh_err = max(np.max(np.abs(fe.tips[k] - fine.tips[k])) for k in ("X_tip", "Z_tip"))
-    checks.append(
-        below(
-            "fe_mesh_converged",
-            f"{fe_label} tip position equals the 2x refined mesh",
-            mesh_err,
-            1e-8,
-            why="the P3 tip error is O(h^6); 1e-8 L = 1 nm here, far below anything plotted",
-            source="fempipe, 2x refined mesh (P3:32)",
-        )
-    )
-    bvp_X = np.empty_like(v)
-    bvp_Z = np.empty_like(v)
-    for i, vi in enumerate(v):
-        theta_fe = fe.theta[i]
-        sol = solve_static_bvp(
-            p.alpha, p.gamma, vi, guess=lambda x, t=theta_fe: np.interp(x, fe.xi, t)
-        )
-        bvp_X[i], bvp_Z[i] = sol.X_tip, sol.Z_tip
+    bvp_X, bvp_Z = _bvp_tips(p, v, fe)
     bvp_err = max(
         np.max(np.abs(fe.tips["X_tip"] - bvp_X)), np.max(np.abs(fe.tips["Z_tip"] - bvp_Z))
     )
-    checks.append(
-        below(
-            "fe_vs_bvp",
-            "FE tip position equals an independent strong-form solution",
-            bvp_err,
-            1e-8,
-            why="solve_bvp collocation tolerance 1e-10 on an adaptive mesh; both errors are "
-            "far below 1e-8",
-            source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
-        )
-    )
     drop_mm = fe.tips["X_tip"] * si.L * 1e3
-    checks.append(
-        holds(
-            "max_at_rest",
-            "largest deformation at v = 0 (Sec. 3.1)",
-            bool(np.argmax(drop_mm) == 0),
-            f"tip drop {drop_mm[0]:.3f} mm at U = 0, max over U at U = {U[np.argmax(drop_mm)]:g}",
-            source="paper Sec. 3.1, text after Eq. (29)",
-        )
-    )
-    checks.append(
-        holds(
-            "straightens",
-            "the pipe straightens as the flow velocity grows (Sec. 3.1)",
-            bool(np.all(np.diff(drop_mm) < 0)),
-            "tip drop (mm): " + ", ".join(f"{d:.2f}" for d in drop_mm),
-            source="paper Sec. 3.1, text after Eq. (29)",
-        )
-    )
-    rows = []
-    for label, fam in fams.items():
-        if label == fe_label:
-            continue
-        err_mm = np.abs(fam.tips["X_tip"] - fe.tips["X_tip"]) * si.L * 1e3
-        shape_mm = np.max(np.hypot(fam.X_g - fe.X_g, fam.Z_g - fe.Z_g), axis=1) * si.L * 1e3
-        checks.append(
-            below(
-                f"modal_{label[-1]}_shape",
-                f"{label} (the paper's truncation) reproduces the converged "
-                "shapes to the resolution of the figure",
-                float(np.max(shape_mm)),
-                0.01 * si.L * 1e3,
-                why="1% of L (0.94 mm): a line width on the paper's Fig. 2(b) axes",
-                source="fempipe converged FE (this case)",
-                category="paper",
-            )
-        )
-        for i in range(len(U)):
-            rows.append(
-                (label, U[i], v[i], fam.tips["X_tip"][i] * si.L * 1e3, err_mm[i], shape_mm[i])
-            )
+    checks = _fe_checks(ref, si, U, fe_label, mesh_err, bvp_err, drop_mm)
+    modal_checks, rows = _modal_checks(si, U, v, fams, fe_label)
     table_fe = Table(
         "Tip position of the Texier-Dorbolo pipe (converged FE)",
         (
@@ -190,12 +111,113 @@ def run(quick: bool = False) -> CaseResult:
         tuple(rows),
     )
     return CASE.result(
-        checks,
+        checks + modal_checks,
         quick=quick,
         started=t0,
         tables=(table_fe, table_modal),
         data={"fams": fams, "U": U, "L": si.L},
     )
+
+
+def _shapes(p, v: np.ndarray) -> tuple[dict, str, float]:
+    """The shapes on every discretisation (the converged FE first), and the FE's mesh error.
+
+    Returns the families by label, the FE's label and the largest tip difference from
+    the 2x refined mesh.
+    """
+    discs = discretizations()
+    fams = {
+        label: static_shapes(d, p.alpha, p.gamma, v, beta=p.beta, mu=0.0, name=label)
+        for label, d in discs.items()
+    }
+    fe_label = next(iter(fams))
+    fe = fams[fe_label]
+    fine = static_shapes(refined(discs[fe_label]), p.alpha, p.gamma, v, beta=p.beta, mu=0.0)
+    mesh_err = max(np.max(np.abs(fe.tips[k] - fine.tips[k])) for k in ("X_tip", "Z_tip"))
+    return fams, fe_label, mesh_err
+
+
+def _bvp_tips(p, v: np.ndarray, fe) -> tuple[np.ndarray, np.ndarray]:
+    """The tip position by the independent strong-form solver, started from the FE shapes."""
+    bvp_X = np.empty_like(v)
+    bvp_Z = np.empty_like(v)
+    for i, vi in enumerate(v):
+        theta_fe = fe.theta[i]
+        sol = solve_static_bvp(
+            p.alpha, p.gamma, vi, guess=lambda x, t=theta_fe: np.interp(x, fe.xi, t)
+        )
+        bvp_X[i], bvp_Z[i] = sol.X_tip, sol.Z_tip
+    return bvp_X, bvp_Z
+
+
+def _fe_checks(ref: References, si: PipeSI, U, fe_label: str, mesh_err, bvp_err, drop_mm) -> list:
+    """Eq. (29)'s numbers, the converged FE and the paper's statements on the tip drop."""
+    p = si.params(0.0)
+    printed = "half a unit of the 4th decimal printed"
+    return [
+        ref.close("beta", "Eq. (29a) β", p.beta, atol=5e-5, why=printed),
+        ref.close("gamma", "Eq. (29b) γ", p.gamma, atol=5e-5, why=printed),
+        ref.close("v_over_U", "Eq. (29c) v/U (s/m)", si.v_of_U(1.0), atol=5e-5, why=printed),
+        below(
+            "fe_mesh_converged",
+            f"{fe_label} tip position equals the 2x refined mesh",
+            mesh_err,
+            1e-8,
+            why="the P3 tip error is O(h^6); 1e-8 L = 1 nm here, far below anything plotted",
+            source="fempipe, 2x refined mesh (P3:32)",
+        ),
+        below(
+            "fe_vs_bvp",
+            "FE tip position equals an independent strong-form solution",
+            bvp_err,
+            1e-8,
+            why="solve_bvp collocation tolerance 1e-10 on an adaptive mesh; both errors are "
+            "far below 1e-8",
+            source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
+        ),
+        holds(
+            "max_at_rest",
+            "largest deformation at v = 0 (Sec. 3.1)",
+            bool(np.argmax(drop_mm) == 0),
+            f"tip drop {drop_mm[0]:.3f} mm at U = 0, max over U at U = {U[np.argmax(drop_mm)]:g}",
+            source="paper Sec. 3.1, text after Eq. (29)",
+        ),
+        holds(
+            "straightens",
+            "the pipe straightens as the flow velocity grows (Sec. 3.1)",
+            bool(np.all(np.diff(drop_mm) < 0)),
+            "tip drop (mm): " + ", ".join(f"{d:.2f}" for d in drop_mm),
+            source="paper Sec. 3.1, text after Eq. (29)",
+        ),
+    ]
+
+
+def _modal_checks(si: PipeSI, U, v, fams: dict, fe_label: str) -> tuple[list, list]:
+    """The paper's modal truncations against the converged FE: checks and table rows."""
+    fe = fams[fe_label]
+    checks, rows = [], []
+    for label, fam in fams.items():
+        if label == fe_label:
+            continue
+        err_mm = np.abs(fam.tips["X_tip"] - fe.tips["X_tip"]) * si.L * 1e3
+        shape_mm = np.max(np.hypot(fam.X_g - fe.X_g, fam.Z_g - fe.Z_g), axis=1) * si.L * 1e3
+        checks.append(
+            below(
+                f"modal_{label[-1]}_shape",
+                f"{label} (the paper's truncation) reproduces the converged "
+                "shapes to the resolution of the figure",
+                float(np.max(shape_mm)),
+                0.01 * si.L * 1e3,
+                why="1% of L (0.94 mm): a line width on the paper's Fig. 2(b) axes",
+                source="fempipe converged FE (this case)",
+                category="paper",
+            )
+        )
+        for i in range(len(U)):
+            rows.append(
+                (label, U[i], v[i], fam.tips["X_tip"][i] * si.L * 1e3, err_mm[i], shape_mm[i])
+            )
+    return checks, rows
 
 
 def plot(result: CaseResult, fig=None):

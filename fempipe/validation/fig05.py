@@ -23,7 +23,7 @@ from fempipe.model.discretization import Modal, parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
-from .case import Case, alpha_name, label_tag
+from .case import Case, References, alpha_name, label_tag
 from .checks import CaseResult, Table, holds
 from .dynamic_runs import dyn_discretizations
 from .onset import critical_velocity as independent_vcr
@@ -81,101 +81,15 @@ def run(quick: bool = False) -> CaseResult:
             requires += [f"second_mode_{name}_{label_tag(lb)}" for lb in discs]
             requires += [f"vcr_two_ways_{name}"]
         requires += [f"fe_mesh_{name}"]
-        loci[name] = {}
-        results = {}
-        for label, d in discs.items():
-            m = PipeModel(d, Params(alpha=a, **PAPER_CASE))
-            loci[name][label] = root_locus(m, values, n_modes=ref.value("n_modes"))
-            if isinstance(d, Modal):
-                # For the figure only: the paper draws all N modes of its N-mode
-                # model, including the N-th, which in the sine basis is ~9 % off
-                # the beam's frequency and so outside the resolved set used by
-                # the checks (in the beam basis every mode is resolved).
-                top[(name, label)] = root_locus(
-                    m, values, n_modes=d.n_modes, tolerance=TOP_MODE_TOL
-                )
-            results[label] = stability_analysis(m, v_max=v_max, follow_bifurcations=is_pi)
-            for br in results[label].branches:
-                for ev in br.events:
-                    rows.append((name, label, br.name, ev.type, ev.v, ev.mode, ev.frequency))
+        loci[name], top_a, results, rows_a = _alpha_runs(ref, discs, a, values, v_max, is_pi)
+        top.update(top_a)
+        rows += rows_a
         fe = results[fe_label]
         if not is_pi:
-            for label, res in results.items():
-                c = res.critical
-                ok = c is not None and c.type == "flutter" and c.mode == 2
-                checks.append(
-                    holds(
-                        f"second_mode_{name}_{label_tag(label)}",
-                        f"α = {name}, {label}: the first instability is flutter in mode 2",
-                        ok,
-                        "none" if c is None else f"{c.type} in mode {c.mode} at v = {c.v:.6f}",
-                        reference="flutter, mode 2",
-                        source="paper Sec. 4, Figs. 5(a)-(c)",
-                        category="paper",
-                    )
-                )
-            ind = independent_vcr(discs[fe_label], a, **PAPER_CASE)
-            checks.append(
-                ref.below(
-                    f"vcr_two_ways_{name}",
-                    f"α = {name}: v_cr of fempipe.analyses.stability equals the independent onset",
-                    abs(fe.v_cr - ind.v_cr),
-                    "onset_tol",
-                    source="fempipe.validation.onset (Brent on the spectral abscissa)",
-                )
-            )
+            checks += _flutter_checks(ref, a, results, fe_label, discs[fe_label])
         else:
-            prim = next(b for b in fe.branches if b.name == "primary")
-            seq = [(e.type, e.mode) for e in prim.events if _changes_stability(e)]
-            want = [("divergence", 1), ("restabilization", 1), ("flutter", 2)]
-            checks.append(
-                holds(
-                    "pi_sequence",
-                    "α = π, straight pipe: divergence in mode 1, restabilisation, flutter in mode 2",
-                    seq[:3] == want,
-                    "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events),
-                    reference="divergence(1), restabilization(1), flutter(2)",
-                    source="paper Sec. 4, Fig. 5(d)",
-                )
-            )
-            # Fig. 5(d) reads the pitchfork as the pipe regaining stability.  Where
-            # the buckled branches fold only beyond it (a subcritical pitchfork),
-            # a buckled pipe stays buckled up to the fold: hysteresis.
-            restab = next((e.v for e in prim.events if e.type == "restabilization"), float("nan"))
-            folds = [
-                e.v
-                for b in fe.branches
-                if b.name != "primary"
-                for e in b.events
-                if e.type == "fold"
-            ]
-            v_fold = max(folds) if folds else float("nan")
-            checks.append(
-                holds(
-                    "pi_no_hysteresis",
-                    "α = π: the buckled pipe straightens where the straight pipe regains "
-                    "stability (a supercritical pitchfork, no hysteresis)",
-                    bool(folds) and v_fold <= restab + ref.value("mesh_tol"),
-                    f"the straight pipe regains stability at v = {restab:.6f} (pitchfork); "
-                    f"the buckled branches stay stable up to their fold at v = {v_fold:.6f}: "
-                    f"both states are stable on a window of {v_fold - restab:.4f} "
-                    "(subcritical pitchfork, hysteresis)",
-                    reference="stability regained at the pitchfork, nothing else shown",
-                    source="paper Sec. 4, Fig. 5(d)",
-                )
-            )
-        # Mesh convergence of the first flutter on the primary branch.
-        fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PAPER_CASE))
-        rf = stability_analysis(fine, v_max=v_max, follow_bifurcations=False)
-        checks.append(
-            ref.below(
-                f"fe_mesh_{name}",
-                f"α = {name}: flutter velocity of {fe_label[3:]} equals P3:16",
-                abs(_first_flutter(fe) - _first_flutter(rf)),
-                "mesh_tol",
-                source="fempipe, refined mesh (P3:16)",
-            )
-        )
+            checks += _pi_checks(ref, fe)
+        checks.append(_mesh_check(ref, a, fe_label, fe, v_max))
     table = Table(
         "Stability events on the static branches (v ≤ 10)",
         ("α", "discretisation", "branch", "event", "v", "mode", "frequency Im λ"),
@@ -190,6 +104,113 @@ def run(quick: bool = False) -> CaseResult:
         tables=(table,),
         data={"loci": loci, "top_modes": top},
         requires=requires,
+    )
+
+
+def _alpha_runs(ref: References, discs: dict, a: float, values, v_max: float, is_pi: bool):
+    """Root loci and stability analyses at one alpha, on every discretisation.
+
+    Returns the loci by label, the figure's loci of all N modes by (alpha name,
+    label), the stability analyses by label and the event table's rows.
+    """
+    name = alpha_name(a)
+    loci, top, results, rows = {}, {}, {}, []
+    for label, d in discs.items():
+        m = PipeModel(d, Params(alpha=a, **PAPER_CASE))
+        loci[label] = root_locus(m, values, n_modes=ref.value("n_modes"))
+        if isinstance(d, Modal):
+            # For the figure only: the paper draws all N modes of its N-mode
+            # model, including the N-th, which in the sine basis is ~9 % off
+            # the beam's frequency and so outside the resolved set used by
+            # the checks (in the beam basis every mode is resolved).
+            top[(name, label)] = root_locus(m, values, n_modes=d.n_modes, tolerance=TOP_MODE_TOL)
+        results[label] = stability_analysis(m, v_max=v_max, follow_bifurcations=is_pi)
+        for br in results[label].branches:
+            for ev in br.events:
+                rows.append((name, label, br.name, ev.type, ev.v, ev.mode, ev.frequency))
+    return loci, top, results, rows
+
+
+def _flutter_checks(ref: References, a: float, results: dict, fe_label: str, fe_disc) -> list:
+    """alpha < pi: flutter in mode 2 on every discretisation, v_cr equal to the onset's."""
+    name = alpha_name(a)
+    checks = []
+    for label, res in results.items():
+        c = res.critical
+        ok = c is not None and c.type == "flutter" and c.mode == 2
+        checks.append(
+            holds(
+                f"second_mode_{name}_{label_tag(label)}",
+                f"α = {name}, {label}: the first instability is flutter in mode 2",
+                ok,
+                "none" if c is None else f"{c.type} in mode {c.mode} at v = {c.v:.6f}",
+                reference="flutter, mode 2",
+                source="paper Sec. 4, Figs. 5(a)-(c)",
+                category="paper",
+            )
+        )
+    fe = results[fe_label]
+    ind = independent_vcr(fe_disc, a, **PAPER_CASE)
+    checks.append(
+        ref.below(
+            f"vcr_two_ways_{name}",
+            f"α = {name}: v_cr of fempipe.analyses.stability equals the independent onset",
+            abs(fe.v_cr - ind.v_cr),
+            "onset_tol",
+            source="fempipe.validation.onset (Brent on the spectral abscissa)",
+        )
+    )
+    return checks
+
+
+def _pi_checks(ref: References, fe) -> list:
+    """alpha = pi: the straight pipe's sequence of events, and the pitchfork's hysteresis."""
+    prim = next(b for b in fe.branches if b.name == "primary")
+    seq = [(e.type, e.mode) for e in prim.events if _changes_stability(e)]
+    want = [("divergence", 1), ("restabilization", 1), ("flutter", 2)]
+    checks = [
+        holds(
+            "pi_sequence",
+            "α = π, straight pipe: divergence in mode 1, restabilisation, flutter in mode 2",
+            seq[:3] == want,
+            "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events),
+            reference="divergence(1), restabilization(1), flutter(2)",
+            source="paper Sec. 4, Fig. 5(d)",
+        )
+    ]
+    # Fig. 5(d) reads the pitchfork as the pipe regaining stability.  Where
+    # the buckled branches fold only beyond it (a subcritical pitchfork),
+    # a buckled pipe stays buckled up to the fold: hysteresis.
+    restab = next((e.v for e in prim.events if e.type == "restabilization"), float("nan"))
+    folds = [e.v for b in fe.branches if b.name != "primary" for e in b.events if e.type == "fold"]
+    v_fold = max(folds) if folds else float("nan")
+    checks.append(
+        holds(
+            "pi_no_hysteresis",
+            "α = π: the buckled pipe straightens where the straight pipe regains "
+            "stability (a supercritical pitchfork, no hysteresis)",
+            bool(folds) and v_fold <= restab + ref.value("mesh_tol"),
+            f"the straight pipe regains stability at v = {restab:.6f} (pitchfork); "
+            f"the buckled branches stay stable up to their fold at v = {v_fold:.6f}: "
+            f"both states are stable on a window of {v_fold - restab:.4f} "
+            "(subcritical pitchfork, hysteresis)",
+            reference="stability regained at the pitchfork, nothing else shown",
+            source="paper Sec. 4, Fig. 5(d)",
+        )
+    )
+    return checks
+
+
+def _mesh_check(ref: References, a: float, fe_label: str, fe, v_max: float):
+    """Mesh convergence of the first flutter on the primary branch."""
+    fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PAPER_CASE))
+    rf = stability_analysis(fine, v_max=v_max, follow_bifurcations=False)
+    return ref.below(
+        f"fe_mesh_{alpha_name(a)}",
+        f"α = {alpha_name(a)}: flutter velocity of {fe_label[3:]} equals P3:16",
+        abs(_first_flutter(fe) - _first_flutter(rf)),
+        "mesh_tol",
+        source="fempipe, refined mesh (P3:16)",
     )
 
 

@@ -27,7 +27,7 @@ from fempipe.model.discretization import parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-from .case import Case
+from .case import Case, References
 from .checks import CaseResult, Table, below, close
 from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
 
@@ -93,6 +93,49 @@ def run(quick: bool = False) -> CaseResult:
     }
     fe_points = [(1, "muh")] if quick else list(classical)
     fe = {key: fe_onset(_params(pipes[key[0]], dampings[key[1]]), v_max) for key in fe_points}
+    checks, requires = _agreement_checks(pipes, dampings, classical, fe, v_max)
+    if not quick:
+        # Paidoussis & Issid's pipe: a second onset up to v = 16 (full suite only).
+        checks += _issid_checks()
+        requires += ["fe_vs_classical_issid", "u_cf_issid"]
+    printed_checks, table, findings, explained = _table_3_4(ref, dampings, classical, fe)
+    checks += printed_checks
+    grid = np.array(ref.value("mu_h_curve", quick))
+    curves = {}
+    for k, p in enumerate(pipes):
+        ons = [classical_onset(_params(p, m), v_max, step=0.05) for m in grid]
+        curves[k] = (np.array([o.v_cr for o in ons]), np.array([o.frequency for o in ons]))
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=(table,),
+        findings=findings,
+        explained=explained,
+        data={
+            "pipes": pipes,
+            "grid": grid,
+            "curves": curves,
+            "fe": {key: (dampings[key[1]], f.v_cr, f.frequency) for key, f in fe.items()},
+            "printed": {
+                d: (dampings[d], ref.value(f"u_cf_{d}"), ref.value(f"omega_cf_{d}"))
+                for d in dampings
+            },
+            "experiment": (mu_h, ref.value("u_cf_exp"), ref.value("omega_cf_exp")),
+            "half_units": (ref.value("u_half_unit"), ref.value("omega_half_unit")),
+        },
+        requires=requires,
+    )
+
+
+def _agreement_checks(
+    pipes: list, dampings: dict, classical: dict, fe: dict, v_max: float
+) -> tuple[list, list]:
+    """The classical theory converged, fempipe's FE against it, Kelvin-Voigt against mu_h.
+
+    Returns the checks and the names of the FE checks this run must emit.
+    """
+    mu_h = dampings["muh"]
     checks = [
         converged_check(
             "classical_converged",
@@ -109,12 +152,17 @@ def run(quick: bool = False) -> CaseResult:
         what = f"β = {pipes[k]['beta']:g}, γ = {pipes[k]['gamma']:g}, μ_h = {dampings[d]:g}"
         checks.append(agreement_check(name, what, f, classical[(k, d)]))
     checks.append(_kelvin_voigt_check(pipes[1], mu_h, fe[(1, "muh")]))
-    if not quick:
-        # Paidoussis & Issid's pipe: a second onset up to v = 16 (full suite only).
-        checks += _issid_checks()
-        requires += ["fe_vs_classical_issid", "u_cf_issid"]
-    # The printed theory against the converged answer (FE where computed).
-    rows, findings, explained = [], [], []
+    return checks, requires
+
+
+def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict):
+    """The printed theory against the converged answer (FE where computed).
+
+    Returns the checks, the table, the findings on the printed numbers that are
+    not reproduced and the names of the checks those findings explain.
+    """
+    pipes, v_max = ref.value("pipes"), ref.value("v_max")
+    checks, rows, findings, explained = [], [], [], []
     failed: dict = {}
     for (k, d), cl in classical.items():
         f = fe.get((k, d))
@@ -180,32 +228,7 @@ def run(quick: bool = False) -> CaseResult:
         note="classical: Legendre spectral elements p = 16 (converged to 1e-9); FE computed at "
         "every point of the full run, at β = 2.03×10⁻³, μ_h = 0.02 in the quick one.",
     )
-    grid = np.array(ref.value("mu_h_curve", quick))
-    curves = {}
-    for k, p in enumerate(pipes):
-        ons = [classical_onset(_params(p, m), v_max, step=0.05) for m in grid]
-        curves[k] = (np.array([o.v_cr for o in ons]), np.array([o.frequency for o in ons]))
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=(table,),
-        findings=findings,
-        explained=explained,
-        data={
-            "pipes": pipes,
-            "grid": grid,
-            "curves": curves,
-            "fe": {key: (dampings[key[1]], f.v_cr, f.frequency) for key, f in fe.items()},
-            "printed": {
-                d: (dampings[d], ref.value(f"u_cf_{d}"), ref.value(f"omega_cf_{d}"))
-                for d in dampings
-            },
-            "experiment": (mu_h, ref.value("u_cf_exp"), ref.value("omega_cf_exp")),
-            "half_units": (ref.value("u_half_unit"), ref.value("omega_half_unit")),
-        },
-        requires=requires,
-    )
+    return checks, table, findings, explained
 
 
 def _issid_checks() -> list:

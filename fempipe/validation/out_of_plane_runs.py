@@ -14,7 +14,7 @@ the case's reference file (``references/out_of_plane.json``).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -201,13 +201,19 @@ def _buckled_fe(p: Params, name: str, tip: float):
     return m, q
 
 
-def buckled_checks(ref, quick: bool):
-    b = dict(ref.value("buckled"))
-    tip = b.pop("guess_tip")
-    p = Params(beta=ref.value("paper_case")["beta"], **b)
-    checks, tables = [], []
-    # fempipe on the reference mesh: lambda = 0 exactly, eigenvector the projection of sin theta.
-    m, q = _buckled_fe(p, ref.value("buckled_fe"), tip)
+@dataclass(frozen=True)
+class _NeutralSpectrum:
+    """A spectrum of the buckled pipe: its eigenvalue nearest zero and the others."""
+
+    where: str  # the pipe and discretisation, for the claims
+    lam0: complex  # the eigenvalue nearest zero
+    cos: float  # |cos angle| of its eigenvector with the expected neutral mode
+    others: np.ndarray  # the other eigenvalues (a window of them)
+
+
+def _fe_neutral(p: Params, name: str, tip: float) -> _NeutralSpectrum:
+    """fempipe on the reference mesh: lambda = 0 exactly, eigenvector the projection of sin theta."""
+    m, q = _buckled_fe(p, name, tip)
     ops = OutOfPlaneOperators(m)
     mats = ops.matrices(q)
     lam, X = pencil_eigenvalues(mats.K, mats.C, mats.M, vectors=True)
@@ -218,46 +224,14 @@ def buckled_checks(ref, quick: bool):
         f"buckled standing pipe (α = π, γ = {p.gamma:g}, v = {p.v:g}, μ = {p.mu:g}, "
         f"θ(1) = {float(m.disc.tip @ q):.6f}), {m.disc.name}"
     )
-    checks.append(
-        below(
-            "neutral_eigenvalue",
-            f"{where}: the out-of-plane spectrum has λ = 0 (|λ| of the smallest)",
-            abs(lam[i0]),
-            1e-10,
-            why="the rank-one correction makes the projection of sin theta^s an exact null "
-            "vector of K: lambda = 0 up to the eigensolver's round-off",
-            source="the rotation symmetry of the standing pipe about the vertical",
-        )
-    )
-    checks.append(
-        below(
-            "neutral_eigenvector",
-            f"{where}: its eigenvector is the L2 projection of sin θˢ (1 − |cos angle|)",
-            1.0 - cos,
-            1e-10,
-            why="a simple eigenvalue: its eigenvector is the null vector up to round-off",
-            source="OutOfPlaneOperators.neutral_mode (psi = sin theta^s: w = eta^s turned "
-            "out of the plane)",
-        )
-    )
     others = np.delete(lam, i0)
-    others = others[np.abs(others) < LAM_MAX]
-    checks.append(
-        below(
-            "buckled_rest_stable",
-            f"{where}: every other out-of-plane eigenvalue (|λ| < {LAM_MAX:g}) is stable "
-            "(largest Re λ)",
-            float(others.real.max()),
-            0.0,
-            why="the buckled state is the stable equilibrium of the standing pipe at this "
-            "flow; out of the plane only the neutral rotation is not damped",
-            source="fempipe.model.out_of_plane on the buckled branch",
-        )
-    )
-    # The strong form about solve_bvp's buckled state.
-    pp = ref.value("spectral_p")
+    return _NeutralSpectrum(where, lam[i0], cos, others[np.abs(others) < LAM_MAX])
+
+
+def _strong_neutral(p: Params, degree: int, tip: float) -> _NeutralSpectrum:
+    """The strong form about solve_bvp's buckled state (``where``: its discretisation)."""
     st = lateral.static_state(p, guess=lambda xi: tip * xi * (2.0 - xi))
-    disc = lateral.HermiteSpectral(pp[0])
+    disc = lateral.HermiteSpectral(degree)
     K, C, M, parts = disc.matrices(st)
     lam_s, W = lateral.eigen(K, C, M, bending=parts["bending"], vectors=True)
     j0 = int(np.argmin(np.abs(lam_s)))
@@ -265,36 +239,71 @@ def buckled_checks(ref, quick: bool):
     cos_s = abs(np.vdot(W[:, j0], M @ a)) / math.sqrt(
         abs(np.vdot(W[:, j0], M @ W[:, j0])) * (a @ M @ a)
     )
-    checks.append(
+    rest_s = np.delete(lam_s, j0)
+    rest_s = rest_s[np.abs(rest_s) < 100.0]  # the three lowest modes
+    where = f"{disc.label()}, θ(1) = {st.theta_tip:.6f} by solve_bvp"
+    return _NeutralSpectrum(where, lam_s[j0], cos_s, rest_s)
+
+
+def _neutral_checks(fe: _NeutralSpectrum, strong: _NeutralSpectrum) -> list:
+    """The neutral mode of fempipe and of the strong form, and their other eigenvalues."""
+    where = fe.where
+    return [
+        below(
+            "neutral_eigenvalue",
+            f"{where}: the out-of-plane spectrum has λ = 0 (|λ| of the smallest)",
+            abs(fe.lam0),
+            1e-10,
+            why="the rank-one correction makes the projection of sin theta^s an exact null "
+            "vector of K: lambda = 0 up to the eigensolver's round-off",
+            source="the rotation symmetry of the standing pipe about the vertical",
+        ),
+        below(
+            "neutral_eigenvector",
+            f"{where}: its eigenvector is the L2 projection of sin θˢ (1 − |cos angle|)",
+            1.0 - fe.cos,
+            1e-10,
+            why="a simple eigenvalue: its eigenvector is the null vector up to round-off",
+            source="OutOfPlaneOperators.neutral_mode (psi = sin theta^s: w = eta^s turned "
+            "out of the plane)",
+        ),
+        below(
+            "buckled_rest_stable",
+            f"{where}: every other out-of-plane eigenvalue (|λ| < {LAM_MAX:g}) is stable "
+            "(largest Re λ)",
+            float(fe.others.real.max()),
+            0.0,
+            why="the buckled state is the stable equilibrium of the standing pipe at this "
+            "flow; out of the plane only the neutral rotation is not damped",
+            source="fempipe.model.out_of_plane on the buckled branch",
+        ),
         below(
             "strong_neutral_mode",
-            f"strong form, same pipe ({disc.label()}, θ(1) = {st.theta_tip:.6f} by solve_bvp): "
-            f"the smallest |λ| ({abs(lam_s[j0]):.1e}) and 1 − |cos| of its eigenvector with the "
-            "projection of ηˢ = ∫ sin θˢ (largest of the two)",
-            max(abs(lam_s[j0]), 1.0 - cos_s),
+            f"strong form, same pipe ({strong.where}): "
+            f"the smallest |λ| ({abs(strong.lam0):.1e}) and 1 − |cos| of its eigenvector with "
+            "the projection of ηˢ = ∫ sin θˢ (largest of the two)",
+            max(abs(strong.lam0), 1.0 - strong.cos),
             1e-10,
             why="W = eta^s solves the strong form with lambda = 0 exactly (lateral's module "
             "docstring); the spectral elements resolve it to round-off",
             source="fempipe.validation.lateral (independent of fempipe.model.out_of_plane)",
-        )
-    )
-    rest_s = np.delete(lam_s, j0)
-    rest_s = rest_s[np.abs(rest_s) < 100.0]  # the three lowest modes
-    err = nearest_distance(others, rest_s)
-    checks.append(
+        ),
         below(
             "buckled_vs_strong",
             f"{where}: the other eigenvalues with |λ| < 100 equal the strong form's "
-            f"({rest_s.size} eigenvalues; relative)",
-            err,
+            f"({strong.others.size} eigenvalues; relative)",
+            nearest_distance(fe.others, strong.others),
             1e-8,
             why="P3:32 is within 3e-9 of the strong form here (measured; order 6)",
             source="fempipe.validation.lateral about the solve_bvp state",
-        )
-    )
-    # The residual of the uncorrected K on the projection of sin theta: its order.
+        ),
+    ]
+
+
+def _residual_orders(ref, p: Params, tip: float, quick: bool) -> tuple[list, Table]:
+    """The residual of the uncorrected K on the projection of sin theta: its order."""
     order = ref.value("neutral_order")
-    rows = []
+    rows, checks = [], []
     for deg, meshes in ref.value("neutral_meshes", quick).items():
         res = []
         for n in meshes:
@@ -329,12 +338,27 @@ def buckled_checks(ref, quick: bool):
                 category="numerics",
             )
         )
-    tables.append(
-        Table(
-            f"(b) Neutral mode of the buckled standing pipe (γ = {p.gamma:g}, v = {p.v:g}): "
-            "residual of the uncorrected stiffness on the projection of sin θˢ",
-            ("degree", "elements", "‖K x‖/(‖K‖ ‖x‖)", "slopes", "expected"),
-            tuple(rows),
-        )
+    table = Table(
+        f"(b) Neutral mode of the buckled standing pipe (γ = {p.gamma:g}, v = {p.v:g}): "
+        "residual of the uncorrected stiffness on the projection of sin θˢ",
+        ("degree", "elements", "‖K x‖/(‖K‖ ‖x‖)", "slopes", "expected"),
+        tuple(rows),
     )
-    return checks, tables
+    return checks, table
+
+
+def buckled_checks(ref, quick: bool):
+    """(b) The neutral rotation of the buckled standing pipe: its checks and table.
+
+    fempipe's out-of-plane spectrum has lambda = 0 with the projection of
+    sin theta^s as its eigenvector, and so has the strong form of
+    :mod:`fempipe.validation.lateral`; the other eigenvalues agree; the
+    residual of the uncorrected stiffness falls at its expected order.
+    """
+    b = dict(ref.value("buckled"))
+    tip = b.pop("guess_tip")
+    p = Params(beta=ref.value("paper_case")["beta"], **b)
+    fe = _fe_neutral(p, ref.value("buckled_fe"), tip)
+    strong = _strong_neutral(p, ref.value("spectral_p")[0], tip)
+    order_checks, table = _residual_orders(ref, p, tip, quick)
+    return _neutral_checks(fe, strong) + order_checks, [table]

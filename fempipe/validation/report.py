@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 from .checks import Check, format_cell
-from .suite import SuiteResult
+from .suite import CaseOutcome, SuiteResult
 
 __all__ = ["render_report", "write_report"]
 
@@ -167,12 +167,45 @@ def render_report(
     they stay inline.
     """
     tables_path = None if tables_dir is None else Path(tables_dir)
-    env = suite.environment
-    num = [c for _, c in suite.checks("numerics")]
-    pap = [c for _, c in suite.checks("paper")]
-    mode = "quick" if suite.quick else "full"
     cmd = "fempipe validate" + (" --quick" if suite.quick else "")
     lines = [
+        *_introduction(suite, cmd),
+        *_headline(suite),
+        *_findings(suite),
+        *_summary(suite),
+    ]
+    sources = _source_labels(suite)
+    if sources:
+        lines += [
+            "",
+            '<a id="sources"></a>',
+            "",
+            "### Sources cited by several checks",
+            "",
+            *[f"- **{label}**: {src}" for src, label in sources.items()],
+        ]
+    for o in suite.outcomes:
+        lines += _case_section(o, sources, figures_dir, tables_path)
+    lines += [
+        "",
+        "## Reproduce",
+        "",
+        "```",
+        f"pip install . && {cmd} --out validation/report",
+        "```",
+        "",
+        "Reference numbers and their sources: `fempipe/validation/references/*.json`. "
+        "The literate tutorial deriving the finite-element formulation: `validation/tutorial.py`.",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _introduction(suite: SuiteResult, cmd: str) -> list[str]:
+    """The title, the paper, how the report was generated and how to read it."""
+    env = suite.environment
+    mode = "quick" if suite.quick else "full"
+    return [
         "# fempipe validation report",
         "",
         "Chen, Hu, Dai & Wang (2020), *Extremely large-amplitude oscillation of soft pipes "
@@ -201,8 +234,14 @@ def render_report(
         "times of each case (summed over its parts where a case runs in parallel pieces), "
         "so they may add up to more than the wall time of the suite.",
         "",
-        *_headline(suite),
-        *_findings(suite),
+    ]
+
+
+def _summary(suite: SuiteResult) -> list[str]:
+    """The counts of passed checks, the table of cases and the failed numerics checks."""
+    num = [c for _, c in suite.checks("numerics")]
+    pap = [c for _, c in suite.checks("paper")]
+    lines = [
         "## Summary",
         "",
         f"- numerics checks passed: **{sum(c.passed for c in num)} / {len(num)}**",
@@ -236,60 +275,42 @@ def render_report(
             f"- {n}: {c.claim}: measured {format_cell(c.measured)}; {c.tolerance}"
             for n, c in failed
         ]
-    sources = _source_labels(suite)
-    if sources:
-        lines += [
-            "",
-            '<a id="sources"></a>',
-            "",
-            "### Sources cited by several checks",
-            "",
-            *[f"- **{label}**: {src}" for src, label in sources.items()],
-        ]
-    # Per case.
-    for o in suite.outcomes:
-        lines += ["", f'<a id="{o.name}"></a>', ""]
-        r = o.result
-        if r is None:
-            lines += [f"## {o.name}: {o.status}", "", "```", o.error.strip(), "```"]
-            continue
-        lines += [f"## {r.figure}: {r.title}", ""]
-        lines += [
-            f"Case `fempipe.validation.{o.name}` ({'quick' if r.quick else 'full'}), "
-            f"compute time {r.runtime:.1f} s."
-        ]
-        if o.status == "error":
-            lines += ["", "**Error:**", "", "```", o.error.strip(), "```"]
-        lines += ["", "What the paper shows, checked here:", ""]
-        lines += [f"- {s}" for s in r.paper_shows]
-        if r.not_checked:
-            lines += ["", "Not checked (neither reproduced nor contradicted):", ""]
-            lines += [f"- {s}" for s in r.not_checked]
-        for fig in o.figures or ((o.figure,) if o.figure else ()):
-            lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
-        if r.caption and (o.figures or o.figure):
-            lines += ["", f"*{r.figure}.* {r.caption}"]
-        lines += [
-            "",
-            "| result | category | check | measured | reference | tolerance (why) | source |",
-            "|---|---|---|---|---|---|---|",
-            *[_check_row(c, sources) for c in r.checks],
-        ]
-        for k, t in enumerate(r.tables, start=1):
-            lines += _table(t, o.name, k, tables_path)
+    return lines
+
+
+def _case_section(
+    o: CaseOutcome, sources: dict[str, str], figures_dir: str, tables_path: Path | None
+) -> list[str]:
+    """One case's section: what the paper shows, its figures, checks and tables."""
+    lines = ["", f'<a id="{o.name}"></a>', ""]
+    r = o.result
+    if r is None:
+        return lines + [f"## {o.name}: {o.status}", "", "```", o.error.strip(), "```"]
+    lines += [f"## {r.figure}: {r.title}", ""]
+    lines += [
+        f"Case `fempipe.validation.{o.name}` ({'quick' if r.quick else 'full'}), "
+        f"compute time {r.runtime:.1f} s."
+    ]
+    if o.status == "error":
+        lines += ["", "**Error:**", "", "```", o.error.strip(), "```"]
+    lines += ["", "What the paper shows, checked here:", ""]
+    lines += [f"- {s}" for s in r.paper_shows]
+    if r.not_checked:
+        lines += ["", "Not checked (neither reproduced nor contradicted):", ""]
+        lines += [f"- {s}" for s in r.not_checked]
+    for fig in o.figures or ((o.figure,) if o.figure else ()):
+        lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
+    if r.caption and (o.figures or o.figure):
+        lines += ["", f"*{r.figure}.* {r.caption}"]
     lines += [
         "",
-        "## Reproduce",
-        "",
-        "```",
-        f"pip install . && {cmd} --out validation/report",
-        "```",
-        "",
-        "Reference numbers and their sources: `fempipe/validation/references/*.json`. "
-        "The literate tutorial deriving the finite-element formulation: `validation/tutorial.py`.",
-        "",
+        "| result | category | check | measured | reference | tolerance (why) | source |",
+        "|---|---|---|---|---|---|---|",
+        *[_check_row(c, sources) for c in r.checks],
     ]
-    return "\n".join(lines)
+    for k, t in enumerate(r.tables, start=1):
+        lines += _table(t, o.name, k, tables_path)
+    return lines
 
 
 def write_report(suite: SuiteResult, out: str | os.PathLike) -> Path:

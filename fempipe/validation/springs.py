@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from fempipe.model.params import Params
 
 from . import classical
-from .case import Case
+from .case import Case, References
 from .checks import CaseResult, Table, below, holds
 from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
 
@@ -68,23 +69,104 @@ def _interior(base: dict, kappa: float, xi_s: float) -> Params:
     return Params(alpha=0.0, springs=springs, **base)
 
 
+@dataclass(frozen=True)
+class _TipRuns:
+    """The tip-spring part: classical v_cr(kappa), fempipe's FE at some kappa, Fig. 3.62's kinds."""
+
+    kappas: list  # every kappa of the curve and of the FE points, sorted
+    classical: dict  # kappa -> classical onset
+    fe: dict  # kappa -> fempipe's FE onset (the FE points)
+    kinds: dict  # beta -> (kind at the smallest kappa, at the largest, its v_cr, Eq. (3.119) root)
+
+
+@dataclass(frozen=True)
+class _InteriorRuns:
+    """The interior-spring part: classical and FE v_cr, and the beam-mode Galerkin v_cr."""
+
+    classical: dict  # xi_s -> {kappa -> classical onset}
+    fe: dict  # (kappa, xi_s) -> fempipe's FE onset
+    modes: list  # the numbers N of beam modes
+    galerkin: list  # the beam-mode Galerkin v_cr on N modes, at the first FE spring
+
+
 def run(quick: bool = False) -> CaseResult:
     """v_cr(kappa) at the tip and inside; see the module docstring."""
     t0 = time.perf_counter()
     ref = CASE.references
+    tip = _tip_runs(ref, quick)
+    inner = _interior_runs(ref, quick)
+    checks, requires = _checks(ref, tip, inner)
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=_tables(ref, tip, inner),
+        data={
+            "tip": {k: (o.v_cr, o.kind) for k, o in tip.classical.items()},
+            "eq_3_119": {k: classical.tip_spring_divergence(k) for k in tip.kappas},
+            "fe_tip": {k: f.v_cr for k, f in tip.fe.items()},
+            "interior": {
+                x: {k: (o.v_cr, o.kind) for k, o in sorted(c.items())}
+                for x, c in inner.classical.items()
+            },
+            "fe_interior": {key: f.v_cr for key, f in inner.fe.items()},
+            "tip_params": ref.value("tip"),
+            "interior_params": ref.value("interior"),
+        },
+        requires=requires,
+    )
+
+
+def _tip_runs(ref: References, quick: bool) -> _TipRuns:
+    """v_cr(kappa) of the gravity-free pipe with a tip spring: classical, FE, and the kinds."""
     tip = ref.value("tip")
     kappas = sorted(
         set(ref.value("tip_kappa_curve", quick)) | set(ref.value("tip_kappa_fe", quick))
     )
     tip_cl = {k: classical_onset(_tip(tip, k), 12.0) for k in kappas}
+    fe_tip = {
+        k: fe_onset(_tip(tip, k), tip_cl[k].v_cr + 0.5) for k in ref.value("tip_kappa_fe", quick)
+    }
+    # Fig. 3.62: flutter for small kappa, divergence (at Eq. (3.119)) for large kappa.
+    kinds = {}
+    for beta in ref.value("kind_betas"):
+        base = dict(tip, beta=beta)
+        lo = classical_onset(_tip(base, kappas[0]), 12.0)
+        hi = classical_onset(_tip(base, kappas[-1]), 12.0)
+        kinds[beta] = (lo.kind, hi.kind, hi.v_cr, classical.tip_spring_divergence(kappas[-1]))
+    return _TipRuns(kappas, tip_cl, fe_tip, kinds)
+
+
+def _interior_runs(ref: References, quick: bool) -> _InteriorRuns:
+    """v_cr(kappa) of the hanging pipe with a spring inside, and Paidoussis' beam-mode Galerkin."""
+    hb = ref.value("interior")
+    grid = ref.value("interior_kappa_curve", quick)
+    positions = sorted({x for _, x in ref.value("interior_springs_fe")})
+    interior = {x: {k: classical_onset(_interior(hb, k, x), 15.0) for k in grid} for x in positions}
+    fe_int = {}
+    for k, x in ref.value("interior_springs_fe", quick):
+        cl = interior[x].get(k) or classical_onset(_interior(hb, k, x), 15.0)
+        interior[x][k] = cl
+        fe_int[(k, x)] = fe_onset(_interior(hb, k, x), cl.v_cr + 0.5)
+    # Paidoussis' beam-mode Galerkin at the interior spring.
+    k_g, x_g = ref.value("interior_springs_fe")[0]
+    pipe = classical.StraightPipe.from_params(_interior(hb, k_g, x_g))
+    modes = ref.value("beam_modes")
+    gal = [classical.critical_velocity(pipe, 15.0, method="galerkin", n=n).v_cr for n in modes]
+    return _InteriorRuns(interior, fe_int, modes, gal)
+
+
+def _checks(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple[list, list]:
+    """The case's checks and the names this run must emit."""
+    base = ref.value("tip")
     checks, requires = [], []
-    fe_tip = {}
-    for k in ref.value("tip_kappa_fe", quick):
-        f = fe_tip[k] = fe_onset(_tip(tip, k), tip_cl[k].v_cr + 0.5)
+    for k, f in tip.fe.items():
         name = f"fe_vs_classical_tip_K{k:g}"
         requires.append(name)
         checks.append(
-            agreement_check(name, f"tip spring κ = {k:g}, β = {tip['beta']:g}", f, tip_cl[k])
+            agreement_check(
+                name, f"tip spring κ = {k:g}, β = {base['beta']:g}", f, tip.classical[k]
+            )
         )
         root = classical.tip_spring_divergence(k)
         if math.isfinite(root):
@@ -102,13 +184,7 @@ def run(quick: bool = False) -> CaseResult:
                     source="Païdoussis (1998), p. 158, Eq. (3.119) (Chen 1971a)",
                 )
             )
-    # Fig. 3.62: flutter for small kappa, divergence (at Eq. (3.119)) for large kappa.
-    kinds = {}
-    for beta in ref.value("kind_betas"):
-        base = dict(tip, beta=beta)
-        lo = classical_onset(_tip(base, kappas[0]), 12.0)
-        hi = classical_onset(_tip(base, kappas[-1]), 12.0)
-        kinds[beta] = (lo.kind, hi.kind, hi.v_cr, classical.tip_spring_divergence(kappas[-1]))
+    kappas, kinds = tip.kappas, tip.kinds
     ok = all(
         lo == "flutter" and hi == "divergence" and abs(v - r) < 1e-6
         for lo, hi, v, r in kinds.values()
@@ -131,20 +207,13 @@ def run(quick: bool = False) -> CaseResult:
     )
     # Springs inside the hanging pipe.
     hb = ref.value("interior")
-    grid = ref.value("interior_kappa_curve", quick)
-    positions = sorted({x for _, x in ref.value("interior_springs_fe")})
-    interior = {x: {k: classical_onset(_interior(hb, k, x), 15.0) for k in grid} for x in positions}
-    fe_int = {}
-    for k, x in ref.value("interior_springs_fe", quick):
-        cl = interior[x].get(k) or classical_onset(_interior(hb, k, x), 15.0)
-        interior[x][k] = cl
-        f = fe_int[(k, x)] = fe_onset(_interior(hb, k, x), cl.v_cr + 0.5)
+    for (k, x), f in inner.fe.items():
         name = f"fe_vs_classical_interior_K{k:g}_x{x:g}"
         requires.append(name)
         what = (
             f"hanging pipe β = {hb['beta']:g}, γ = {hb['gamma']:g}, spring κ = {k:g} at ξ_s = {x:g}"
         )
-        checks.append(agreement_check(name, what, f, cl))
+        checks.append(agreement_check(name, what, f, inner.classical[x][k]))
     k_c, x_c = ref.value("interior_springs_fe")[-1]
     checks.append(
         converged_check(
@@ -154,15 +223,17 @@ def run(quick: bool = False) -> CaseResult:
             15.0,
         )
     )
-    # Paidoussis' beam-mode Galerkin at the interior spring.
+    return checks, requires
+
+
+def _tables(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple[Table, ...]:
+    """The tip-spring, interior-spring and beam-mode Galerkin tables."""
+    base, hb = ref.value("tip"), ref.value("interior")
     k_g, x_g = ref.value("interior_springs_fe")[0]
-    pipe = classical.StraightPipe.from_params(_interior(hb, k_g, x_g))
-    reference = interior[x_g][k_g].v_cr
-    modes = ref.value("beam_modes")
-    gal = [classical.critical_velocity(pipe, 15.0, method="galerkin", n=n).v_cr for n in modes]
-    tables = [
+    reference = inner.classical[x_g][k_g].v_cr
+    return (
         Table(
-            f"Tip spring, β = {tip['beta']:g}, γ = 0: v_cr against κ",
+            f"Tip spring, β = {base['beta']:g}, γ = 0: v_cr against κ",
             ("κ", "v_cr classical", "kind", "Eq. (3.119) root", f"v_cr FE {FE}"),
             tuple(
                 (
@@ -170,9 +241,9 @@ def run(quick: bool = False) -> CaseResult:
                     o.v_cr,
                     o.kind,
                     _root_cell(classical.tip_spring_divergence(k)),
-                    fe_tip[k].v_cr if k in fe_tip else "—",
+                    tip.fe[k].v_cr if k in tip.fe else "—",
                 )
-                for k, o in tip_cl.items()
+                for k, o in tip.classical.items()
             ),
         ),
         Table(
@@ -180,8 +251,8 @@ def run(quick: bool = False) -> CaseResult:
             f"μ = {hb['mu']:g}): v_cr against κ",
             ("ξ_s", "κ", "v_cr classical", "kind", f"v_cr FE {FE}"),
             tuple(
-                (x, k, o.v_cr, o.kind, fe_int[(k, x)].v_cr if (k, x) in fe_int else "—")
-                for x, c in interior.items()
+                (x, k, o.v_cr, o.kind, inner.fe[(k, x)].v_cr if (k, x) in inner.fe else "—")
+                for x, c in inner.classical.items()
                 for k, o in sorted(c.items())
             ),
         ),
@@ -189,28 +260,10 @@ def run(quick: bool = False) -> CaseResult:
             f"Païdoussis' beam-mode Galerkin method with a spring κ = {k_g:g} at ξ_s = {x_g:g} "
             "(hanging pipe)",
             ("beam modes N", "v_cr", "error"),
-            tuple((n, v, v - reference) for n, v in zip(modes, gal, strict=True)),
+            tuple((n, v, v - reference) for n, v in zip(inner.modes, inner.galerkin, strict=True)),
             note=f"reference: Legendre spectral elements, v_cr = {reference:.10f}; the beam "
             "functions are smooth across the spring, where η‴ jumps, so the error falls as N⁻³.",
         ),
-    ]
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=tuple(tables),
-        data={
-            "tip": {k: (o.v_cr, o.kind) for k, o in tip_cl.items()},
-            "eq_3_119": {k: classical.tip_spring_divergence(k) for k in kappas},
-            "fe_tip": {k: f.v_cr for k, f in fe_tip.items()},
-            "interior": {
-                x: {k: (o.v_cr, o.kind) for k, o in sorted(c.items())} for x, c in interior.items()
-            },
-            "fe_interior": {key: f.v_cr for key, f in fe_int.items()},
-            "tip_params": tip,
-            "interior_params": hb,
-        },
-        requires=requires,
     )
 
 
