@@ -142,7 +142,7 @@ class PointStore:
     directory : path
         Created if missing.
     manifest : dict
-        Describes the run (discretisation, parameters but v, values, options).
+        Describes the run (discretization, parameters but v, values, options).
         A store written by a different run is refused (ValueError), so that a
         resume never mixes results.
     """

@@ -55,7 +55,7 @@ def plot_argand(
     out_of_plane : RootLocus, optional
         The loci of the motion out of the plane about the same static states
         (:func:`~fempipe.analyses.stability.spatial_root_locus`): drawn dashed in the
-        colour of their mode, marked with open triangles, and named in the
+        color of their mode, marked with open triangles, and named in the
         legend ("out of the plane").  Where they are the in-plane loci (the
         straight pipe: alpha = 0, or alpha = pi before buckling) they are not
         drawn again and the title says so.
@@ -110,7 +110,7 @@ def plot_argand(
 def _draw_loci(ax, loc, v, marks, style, label_marks: bool, seen: set, labels: list) -> None:
     """Draw one root locus's modes: line, direction arrow, marks and their v labels.
 
-    ``style`` is ``(line style, marker, marker face colour, zorder)``; the
+    ``style`` is ``(line style, marker, marker face color, zorder)``; the
     modes drawn are added to ``seen`` and the mark labels to ``labels``.
     """
     ls, marker, mfc, z_order = style
@@ -150,7 +150,7 @@ def _draw_loci(ax, loc, v, marks, style, label_marks: bool, seen: set, labels: l
 
 
 def _argand_handles(seen: set, both_planes: bool) -> list:
-    """Legend handles: one per mode (its colour), then the planes' line styles."""
+    """Legend handles: one per mode (its color), then the planes' line styles."""
     from matplotlib.lines import Line2D
 
     handles = [
@@ -197,12 +197,12 @@ def same_loci(a, b, rtol: float = 1e-8) -> bool:
     return True
 
 
-#: Colour-blind-safe colours of modes 1, 2, 3, ... (Okabe & Ito).
+#: Color-blind-safe colors of modes 1, 2, 3, ... (Okabe & Ito).
 MODE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
 
 
 def mode_color(mode: int):
-    """The colour of a mode number in every stability figure."""
+    """The color of a mode number in every stability figure."""
     return MODE_COLORS[(mode - 1) % len(MODE_COLORS)]
 
 
@@ -239,7 +239,7 @@ def plot_stability_map(smap, ax=None, title=None):
     paper's Fig. 6 plots); where the branch loses stability earlier by
     divergence or at a fold (at and near alpha = pi), v_cr is drawn as an open
     square.  A map in three dimensions (``smap.planar`` False) draws, in each
-    curve's colour, the plane of the static state so (solid, ○ and □) and
+    curve's color, the plane of the static state so (solid, ○ and □) and
     the motion out of it dashed with open triangles (△ flutter, ◇ an earlier
     loss of stability out of the plane), and under them a wide pale band along
     v_cr in three dimensions, the first of the two: where the band follows
@@ -374,7 +374,7 @@ def plot_branches(result, ax=None, title=None):
     """Static branches of a :class:`~fempipe.analyses.stability.StabilityResult`: theta_tip against v.
 
     Solid where stable, dashed where some resolved eigenvalue has
-    Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilisation,
+    Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilization,
     ◇ fold).
 
     Returns
@@ -414,7 +414,7 @@ def plot_branches(result, ax=None, title=None):
 def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, title=None):
     """A mode about its static state in the global frame (gravity down the page).
 
-    Draws the static centreline and ``X + amplitude Re(dX e^{i phi})`` for
+    Draws the static centerline and ``X + amplitude Re(dX e^{i phi})`` for
     ``phases`` phases over a period.
 
     Returns

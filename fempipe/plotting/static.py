@@ -1,4 +1,4 @@
-"""Figures of static deformation: deformed centrelines in the global frame.
+"""Figures of static deformation: deformed centerlines in the global frame.
 
 Drawn the way the paper's Figs. 2-4 show them: gravity points down the page
 (X_g, the coordinate along gravity in Eq. (28), increases downward), Z_g is
@@ -20,7 +20,7 @@ import numpy as np
 
 __all__ = ["OUT_OF_PLANE_STYLE", "UNSTABLE_COLOR", "plot_shapes"]
 
-#: Colour of linearly unstable static states (drawn dashed).
+#: Color of linearly unstable static states (drawn dashed).
 UNSTABLE_COLOR = "0.55"
 #: Line style of the states unstable out of the plane only (grey too).
 OUT_OF_PLANE_STYLE = "-."
@@ -51,7 +51,7 @@ def plot_shapes(
     stable: Sequence[bool | None] | None = None,
     stable_in_plane: Sequence[bool | None] | None = None,
 ):
-    """Deformed centrelines (X_g, Z_g) with gravity pointing down.
+    """Deformed centerlines (X_g, Z_g) with gravity pointing down.
 
     Parameters
     ----------
@@ -146,7 +146,7 @@ def _instability_kinds(n: int, stable, stable_in_plane) -> tuple[list, list, boo
 
 
 def _draw_states(ax, shapes, labels, scale, max_labels, unstable, out_only, spatial) -> None:
-    """The deformed centrelines and their tips, then the legend keys of the unstable kinds."""
+    """The deformed centerlines and their tips, then the legend keys of the unstable kinds."""
     from matplotlib import colormaps
 
     n = len(shapes)

@@ -17,7 +17,7 @@ checks fempipe (FE P3:16) against
   for the horizontal pipe of Gregory & Paidoussis (both terms with the flow),
   to 1e-6;
 
-and Hill & Swanson's statement that an end mass destabilises the horizontal
+and Hill & Swanson's statement that an end mass destabilizes the horizontal
 undamped pipe, more for Gamma = 0.3 than 0.2 (a ``paper`` check).
 """
 
@@ -51,8 +51,8 @@ CASE = Case(
         "elements; open diamonds in (b): Hill & Swanson's end masses 0.2 and 0.3."
     ),
     paper_shows=(
-        "an end mass destabilises the horizontal undamped cantilevered pipe, and raising it from "
-        "0.2 to 0.3 destabilises it further (Hill & Swanson 1970, in Païdoussis 1998, "
+        "an end mass destabilizes the horizontal undamped cantilevered pipe, and raising it from "
+        "0.2 to 0.3 destabilizes it further (Hill & Swanson 1970, in Païdoussis 1998, "
         "pp. 165-166, Fig. 3.68)",
     ),
     requires=(
@@ -195,7 +195,7 @@ def _families(ref: References, quick: bool) -> tuple[dict, dict]:
 
 
 def _hill_swanson(ref: References) -> tuple:
-    """Hill & Swanson: the end mass destabilises the horizontal undamped pipe (check, table)."""
+    """Hill & Swanson: the end mass destabilizes the horizontal undamped pipe (check, table)."""
     masses = ref.value("hill_swanson_masses")
     hs_rows, ok = [], True
     horiz = ref.value("horizontal")

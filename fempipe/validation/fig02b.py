@@ -32,7 +32,7 @@ from .static_shapes import PAPER_MODES, discretizations, refined, static_shapes
 
 CASE = Case(
     name="fig02b",
-    caption="Static shapes of the Texier & Dorbolo pipe in mm (L = 94 mm, EI = 1.8e-5 N m², m = 15.9 g/m, M = 5.8 g/m; β = 0.2673, γ = 9.81, α = π/2), one colour per flow speed U = 0 … 3 m/s (v = 1.6874 U). Solid: converged FE (cubic elements); dashed: N = 3 sine modes; dotted: N = 4. Gravity down the page, clamp ■ at the origin. All shapes are static equilibria. The experimental shapes are not drawn: their data are not available.",
+    caption="Static shapes of the Texier & Dorbolo pipe in mm (L = 94 mm, EI = 1.8e-5 N m², m = 15.9 g/m, M = 5.8 g/m; β = 0.2673, γ = 9.81, α = π/2), one color per flow speed U = 0 … 3 m/s (v = 1.6874 U). Solid: converged FE (cubic elements); dashed: N = 3 sine modes; dotted: N = 4. Gravity down the page, clamp ■ at the origin. All shapes are static equilibria. The experimental shapes are not drawn: their data are not available.",
     figure="Fig. 2(b)",
     title="Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)",
     paper_shows=(
@@ -120,7 +120,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _shapes(p, v: np.ndarray) -> tuple[dict, str, float]:
-    """The shapes on every discretisation (the converged FE first), and the FE's mesh error.
+    """The shapes on every discretization (the converged FE first), and the FE's mesh error.
 
     Returns the families by label, the FE's label and the largest tip difference from
     the 2x refined mesh.
@@ -221,7 +221,7 @@ def _modal_checks(si: PipeSI, U, v, fams: dict, fe_label: str) -> tuple[list, li
 
 
 def plot(result: CaseResult, fig=None):
-    """Shapes in mm, gravity down, one colour per U; FE solid, N = 3 dashed, N = 4 dotted."""
+    """Shapes in mm, gravity down, one color per U; FE solid, N = 3 dashed, N = 4 dotted."""
     from .drawing import draw_shapes, new_figure
 
     if fig is None:

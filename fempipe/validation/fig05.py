@@ -7,7 +7,7 @@ event on the static branches (:func:`fempipe.analyses.stability.stability_analys
 The paper plots Omega = -i lambda: Im Omega < 0 is unstable.
 
 Checks: flutter in the second mode for alpha != pi; for alpha = pi the
-sequence divergence (mode 1) -> restabilisation -> flutter (mode 2); v_cr
+sequence divergence (mode 1) -> restabilization -> flutter (mode 2); v_cr
 against the independent onset of :mod:`fempipe.validation.onset`; mesh
 convergence of the event velocities.
 """
@@ -34,9 +34,9 @@ TOP_MODE_TOL = 0.1
 
 CASE = Case(
     name="fig05",
-    caption="Eigenvalues Ω = −iλ of the linearised motion about the static state as v grows from 0 to 10 (β = 0.142, γ = 18.9, μ = 0.005); Im Ω < 0 is unstable. Colours: modes 1-4 (key below); solid: FE (P3:8 = cubic elements, 8 elements), dashed: N = 3 sine modes, dotted: N = 4 (the N-th mode of an N-mode model is drawn although it is 8-9 % off the beam's frequency); arrows: direction of increasing v; black dots: v = 0, 2, 4, …. The last panel gives the growth rate Re λ of modes 1 and 2 at α = π against v: the straight standing pipe buckles (mode 1, Re λ > 0 at v = 0), regains stability and flutters in mode 2.",
+    caption="Eigenvalues Ω = −iλ of the linearized motion about the static state as v grows from 0 to 10 (β = 0.142, γ = 18.9, μ = 0.005); Im Ω < 0 is unstable. Colors: modes 1-4 (key below); solid: FE (P3:8 = cubic elements, 8 elements), dashed: N = 3 sine modes, dotted: N = 4 (the N-th mode of an N-mode model is drawn although it is 8-9 % off the beam's frequency); arrows: direction of increasing v; black dots: v = 0, 2, 4, …. The last panel gives the growth rate Re λ of modes 1 and 2 at α = π against v: the straight standing pipe buckles (mode 1, Re λ > 0 at v = 0), regains stability and flutters in mode 2.",
     figure="Fig. 5",
-    title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilisation, "
+    title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilization, "
     "flutter",
     paper_shows=(
         "for α ≠ π the pipe loses stability by flutter in the second mode (Figs. 5(a)-(c))",
@@ -92,7 +92,7 @@ def run(quick: bool = False) -> CaseResult:
         checks.append(_mesh_check(ref, a, fe_label, fe, v_max))
     table = Table(
         "Stability events on the static branches (v ≤ 10)",
-        ("α", "discretisation", "branch", "event", "v", "mode", "frequency Im λ"),
+        ("α", "discretization", "branch", "event", "v", "mode", "frequency Im λ"),
         tuple(rows),
         note="primary: the gravity-loaded branch (α = π: the straight pipe); B1±: the buckled "
         "branches born at its branch point. Events located to 1e-10 in v.",
@@ -108,7 +108,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _alpha_runs(ref: References, discs: dict, a: float, values, v_max: float, is_pi: bool):
-    """Root loci and stability analyses at one alpha, on every discretisation.
+    """Root loci and stability analyses at one alpha, on every discretization.
 
     Returns the loci by label, the figure's loci of all N modes by (alpha name,
     label), the stability analyses by label and the event table's rows.
@@ -132,7 +132,7 @@ def _alpha_runs(ref: References, discs: dict, a: float, values, v_max: float, is
 
 
 def _flutter_checks(ref: References, a: float, results: dict, fe_label: str, fe_disc) -> list:
-    """alpha < pi: flutter in mode 2 on every discretisation, v_cr equal to the onset's."""
+    """alpha < pi: flutter in mode 2 on every discretization, v_cr equal to the onset's."""
     name = alpha_name(a)
     checks = []
     for label, res in results.items():
@@ -171,7 +171,7 @@ def _pi_checks(ref: References, fe) -> list:
     checks = [
         holds(
             "pi_sequence",
-            "α = π, straight pipe: divergence in mode 1, restabilisation, flutter in mode 2",
+            "α = π, straight pipe: divergence in mode 1, restabilization, flutter in mode 2",
             seq[:3] == want,
             "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events),
             reference="divergence(1), restabilization(1), flutter(2)",
@@ -217,10 +217,10 @@ def _mesh_check(ref: References, a: float, fe_label: str, fe, v_max: float):
 def plot(result: CaseResult, fig=None):
     """Argand diagrams: Re Ω against Im Ω of modes 1-4, FE solid, N = 3 dashed, N = 4 dotted.
 
-    Colours are modes (as in every stability figure), line styles
-    discretisations, arrows the direction of increasing v, black dots
+    Colors are modes (as in every stability figure), line styles
+    discretizations, arrows the direction of increasing v, black dots
     v = 0, 2, 4, ...  At α = π a last panel shows the growth rate Re λ of
-    modes 1 and 2 against v, where the buckling, restabilisation and flutter
+    modes 1 and 2 against v, where the buckling, restabilization and flutter
     of the straight pipe, squeezed onto Re Ω = 0 in the Argand diagram, are
     seen apart.
     """
@@ -283,7 +283,7 @@ def _growth_panel(ax, fams: dict, mode_color, style_for) -> None:
                 rl.v, np.nanmax(lam_re, axis=1), style_for(label), color=mode_color(mode), lw=1.2
             )
     ax.axhline(0.0, color="0.5", lw=0.8)
-    # Zoomed on the sign changes (buckling, restabilisation, flutter); the
+    # Zoomed on the sign changes (buckling, restabilization, flutter); the
     # decay rates of the stable roots far below are not the point.
     ax.set_ylim(-8.0, 8.0)
     ax.set_xlabel("v")

@@ -36,7 +36,7 @@ from .onset import Onset, critical_velocity
 
 CASE = Case(
     name="fig06",
-    caption="Critical flow velocity v_cr of the gravity-sagged static state against the inclination α (μ = 0.005), converged FE (cubic elements). (a) γ = 18.9, several β; (b) β = 0.142, several γ. The reference case β = 0.142, γ = 18.9 is black in both panels; grey dashed and dotted: N = 3 and N = 4 sine modes for the reference case. Filled circles joined by solid lines: flutter in the plane of the static state (the paper's v_cr; a complex pair crossing); open diamond: the first loss of stability in the plane is a fold of the static branch (a real eigenvalue through zero), not flutter, and is not joined to the flutter curve. Open triangles on thin dash-dotted lines, same colours: the flutter of the round pipe out of that plane, which comes first at every inclined α where the pipe flutters before its static branch folds (equal at α = 0).",
+    caption="Critical flow velocity v_cr of the gravity-sagged static state against the inclination α (μ = 0.005), converged FE (cubic elements). (a) γ = 18.9, several β; (b) β = 0.142, several γ. The reference case β = 0.142, γ = 18.9 is black in both panels; grey dashed and dotted: N = 3 and N = 4 sine modes for the reference case. Filled circles joined by solid lines: flutter in the plane of the static state (the paper's v_cr; a complex pair crossing); open diamond: the first loss of stability in the plane is a fold of the static branch (a real eigenvalue through zero), not flutter, and is not joined to the flutter curve. Open triangles on thin dash-dotted lines, same colors: the flutter of the round pipe out of that plane, which comes first at every inclined α where the pipe flutters before its static branch folds (equal at α = 0).",
     figure="Fig. 6",
     title="Critical flow velocity v_cr against α for several β and γ",
     paper_shows=(
@@ -433,7 +433,7 @@ def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Check:
     )
 
 
-#: Colour-blind-safe colours (Okabe & Ito) of the non-reference curves; the
+#: Color-blind-safe colors (Okabe & Ito) of the non-reference curves; the
 #: reference case (beta = 0.142, gamma = 18.9) is black in both panels.
 CURVE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9")
 
@@ -468,7 +468,7 @@ def plot(result: CaseResult, fig=None):
         folds = False
         for k, (val, v) in enumerate(fam.items()):
             v = np.asarray(v, dtype=float)
-            # The reference case has the same colour in both panels.
+            # The reference case has the same color in both panels.
             is_ref = val == (BASE_BETA if sym == "β" else BASE_GAMMA)
             color = "k" if is_ref else CURVE_COLORS[k % len(CURVE_COLORS)]
             flutter = np.array([kd == "flutter" for kd in kinds.get(val, ["flutter"] * len(v))])

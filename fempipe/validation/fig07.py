@@ -6,7 +6,7 @@ branch and the periodic orbits over the same range by continuation, with the
 converged FE mesh as well, and checks
 
 * the onset of the limit cycle against the linear critical velocity of each
-  discretisation (an independent bisection on the spectrum): the branch of
+  discretization (an independent bisection on the spectrum): the branch of
   periodic orbits is continued from the Hopf point of the static branch
   (:func:`fempipe.analyses.periodic.cycle_diagram`), so the onset is v_H itself, no
   longer a bracket of sweep velocities;
@@ -217,12 +217,12 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _onsets(discs: dict, alpha: float, diags: dict) -> tuple[list[Check], dict]:
-    """The linear v_cr of every discretisation and the onset check of its diagram.
+    """The linear v_cr of every discretization and the onset check of its diagram.
 
     Returns
     -------
     checks : list of Check
-        ``onset_<tag>`` of every discretisation (:func:`onset_check`).
+        ``onset_<tag>`` of every discretization (:func:`onset_check`).
     onsets : dict
         ``(last equilibrium v, first periodic v, linear v_cr, Hopf point v_H)`` by label.
     """
@@ -252,7 +252,7 @@ def _paper_checks(
         sweep_agreement(
             "sweep_agreement",
             f"the attractors found by integration at v = {', '.join(f'{v:g}' for v in shape_v)} "
-            "lie on the stable continued branches (every discretisation)",
+            "lie on the stable continued branches (every discretization)",
             checked,
         ),
         period_one(
@@ -337,7 +337,7 @@ def _mesh_check(alpha: float, fe_label: str, a10: float) -> Check:
 
 
 def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
-    """Onset (:func:`_onsets`) and the limit cycle at v = 10 of every discretisation."""
+    """Onset (:func:`_onsets`) and the limit cycle at v = 10 of every discretization."""
     rows = []
     for label in discs:
         lo, hi, v_lin, v_h = onsets[label]
@@ -360,7 +360,7 @@ def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
     return Table(
         "Onset and the limit cycle at v = 10 (α = 0)",
         (
-            "discretisation",
+            "discretization",
             "linear v_cr",
             "last equilibrium v",
             "first periodic v",

@@ -8,8 +8,8 @@ alpha = pi the buckled equilibria below the flutter from a sweep up, which the
 continued straight branch does not contain).  The attractor found by
 integration at the shape velocities must be a stable continued state (to 1e-6
 in period and tip extrema).  Checks the onset (the Hopf point) against the
-linear critical velocity of each discretisation, and the paper's statements: period-1 cycles, the
-buckling / restabilisation / flutter sequence at alpha = pi, tip excursions
+linear critical velocity of each discretization, and the paper's statements: period-1 cycles, the
+buckling / restabilization / flutter sequence at alpha = pi, tip excursions
 close to the pipe length at v = 10, and the onset brackets implied by the
 shape velocities the paper chose for Fig. 9.
 """
@@ -77,7 +77,7 @@ class _Inclination:
     values : list of float
         The requested v of the diagrams.
     diags : dict
-        The continued diagrams by discretisation label.
+        The continued diagrams by discretization label.
     hopf_v : dict
         The first Hopf point of each diagram (inf if none).
     sweeps : dict
@@ -123,7 +123,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
                 f"sweep_agreement_{inc.name}",
                 f"α = {inc.name}: the attractors found by integration at v = "
                 f"{', '.join(f'{v:g}' for v in inc.check_v)} lie on the stable continued branches "
-                "(every discretisation)",
+                "(every discretization)",
                 inc.checked,
             )
         )
@@ -149,7 +149,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
 
 
 def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
-    """The diagrams of every discretisation at ``alpha``, the sweeps up, and the check
+    """The diagrams of every discretization at ``alpha``, the sweeps up, and the check
     by integration at a few v."""
     ref = CASE.references
     is_pi = abs(alpha - np.pi) < 1e-12
@@ -200,12 +200,12 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
 
 
 def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
-    """The linear onset of every discretisation and (α ≠ π) its check against the diagram.
+    """The linear onset of every discretization and (α ≠ π) its check against the diagram.
 
     Returns
     -------
     checks : list of Check
-        ``onset_<name>_<tag>`` of every discretisation (none at α = π).
+        ``onset_<name>_<tag>`` of every discretization (none at α = π).
     onsets : dict
         ``(linear v_cr, last equilibrium v, first periodic v, Hopf point v_H)`` by label.
     """
@@ -214,7 +214,7 @@ def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
         dg = inc.diags[label]
         if inc.is_pi:
             # The straight pipe buckles at v = 0; the onset of oscillation
-            # is the flutter of the restabilised straight pipe.
+            # is the flutter of the restabilized straight pipe.
             v_lin = _straight_flutter(d)
             lo, hi = onset_bracket(inc.sweeps[label])
             v_h = inc.hopf_v[label]
@@ -236,7 +236,7 @@ def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
 
 def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Check]:
     """The states at the paper's shape velocities (FE): the onset bracket they imply
-    (α ≠ π), or the buckling / restabilisation / flutter sequence and its jumps against
+    (α ≠ π), or the buckling / restabilization / flutter sequence and its jumps against
     the stability analysis (α = π)."""
     fe_label = next(iter(discs))
     fe_pts = inc.fe_pts
@@ -403,7 +403,7 @@ def _table(rows: list[tuple]) -> Table:
         "Onsets and limit cycles at v = 10",
         (
             "α",
-            "discretisation",
+            "discretization",
             "linear v_cr",
             "last equilibrium v",
             "first periodic v",
@@ -416,14 +416,14 @@ def _table(rows: list[tuple]) -> Table:
         ),
         tuple(rows),
         note="Ranges are peak-to-peak (units of L); α = π: linear v_cr is the flutter of the "
-        "restabilised straight pipe (it buckles at v = 0), and the first periodic v follows the "
-        "buckled branch and the restabilised straight state (see checks).  The diagrams are continued (static branch, orbits born at the Hopf "
+        "restabilized straight pipe (it buckles at v = 0), and the first periodic v follows the "
+        "buckled branch and the restabilized straight state (see checks).  The diagrams are continued (static branch, orbits born at the Hopf "
         "points); at α = π the buckled equilibria below the flutter come from a sweep.",
     )
 
 
 def _straight_flutter(disc) -> float:
-    """alpha = pi: v of the flutter that destabilises the restabilised straight pipe."""
+    """alpha = pi: v of the flutter that destabilizes the restabilized straight pipe."""
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = stability_analysis(m, v_max=6.0, follow_bifurcations=False)
     prim = next(b for b in res.branches if b.name == "primary")
@@ -435,7 +435,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
     the buckled branch (a subcritical pitchfork makes the straight state
-    stable a little earlier, at the restabilisation), jumps to the straight
+    stable a little earlier, at the restabilization), jumps to the straight
     pipe, and starts to oscillate at the flutter of the straight pipe.  A
     sweep without the buckled, straight or periodic states emits no check for
     that jump: the case's declaration then fails it as not computed.
@@ -443,7 +443,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = stability_analysis(m, v_max=6.0, follow_bifurcations=True)
     prim = next(b for b in res.branches if b.name == "primary")
-    # The flutter that destabilises the restabilised straight pipe.
+    # The flutter that destabilizes the restabilized straight pipe.
     flutter = next(
         (e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan")
     )

@@ -55,13 +55,13 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _cycle_traces_at(alphas, discs: dict, cycles: dict) -> dict:
-    """The tip traces of every found cycle, by α name and discretisation label.
+    """The tip traces of every found cycle, by α name and discretization label.
 
     Parameters
     ----------
     alphas : sequence of float
     discs : dict
-        Discretisations by label, the converged FE first.
+        Discretizations by label, the converged FE first.
     cycles : dict
         The limit cycles by (α, label) (None where none was found).
 
@@ -127,7 +127,7 @@ def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple
         checks.append(
             holds(
                 f"periodic_{name}",
-                f"α = {name}: the attractor at v = 10 is a stable limit cycle (all discretisations)",
+                f"α = {name}: the attractor at v = 10 is a stable limit cycle (all discretizations)",
                 all(found.values())
                 and all(cycles[(a, lb)].max_nontrivial_multiplier < 1 for lb in discs),
                 ", ".join(
@@ -245,7 +245,7 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
         "Limit cycles at v = 10",
         (
             "α",
-            "discretisation",
+            "discretization",
             "period",
             "relative period error",
             "X_g(1) min",
@@ -262,7 +262,7 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
 def plot(result: CaseResult, fig=None):
     """One row per α: X_g(1)(τ) and Z_g(1)(τ); FE solid, N = 3 dashed, N = 4 dotted.
 
-    Every discretisation is drawn over the same τ window (the shortest of
+    Every discretization is drawn over the same τ window (the shortest of
     the computed ones), so that the drift of the modal periods is seen.
     """
     import matplotlib.pyplot as plt

@@ -52,7 +52,7 @@ LAM_MAX = 1000.0
 
 
 def _disc(name: str):
-    """The discretisation named ``name`` (``"P3:32"``, ``"modal:8"``)."""
+    """The discretization named ``name`` (``"P3:32"``, ``"modal:8"``)."""
     return discretization_from_name(name)
 
 
@@ -155,7 +155,7 @@ def identity_checks(ref):
                 1e-13,
                 why="every out-of-plane term reduces to the planar one for theta^s = 0 "
                 "(module docstring of fempipe.model.out_of_plane): equal up to round-off",
-                source="the in-plane linearisation of the same model (Eqs. (31b)-(33))",
+                source="the in-plane linearization of the same model (Eqs. (31b)-(33))",
             )
         )
         checks.append(
@@ -176,7 +176,7 @@ def identity_checks(ref):
         "(a) The straight pipe: out of the plane against in the plane (relative differences)",
         (
             "state",
-            "discretisation",
+            "discretization",
             "max |θˢ|",
             "K",
             "C",
@@ -205,7 +205,7 @@ def _buckled_fe(p: Params, name: str, tip: float):
 class _NeutralSpectrum:
     """A spectrum of the buckled pipe: its eigenvalue nearest zero and the others."""
 
-    where: str  # the pipe and discretisation, for the claims
+    where: str  # the pipe and discretization, for the claims
     lam0: complex  # the eigenvalue nearest zero
     cos: float  # |cos angle| of its eigenvector with the expected neutral mode
     others: np.ndarray  # the other eigenvalues (a window of them)
@@ -229,7 +229,7 @@ def _fe_neutral(p: Params, name: str, tip: float) -> _NeutralSpectrum:
 
 
 def _strong_neutral(p: Params, degree: int, tip: float) -> _NeutralSpectrum:
-    """The strong form about solve_bvp's buckled state (``where``: its discretisation)."""
+    """The strong form about solve_bvp's buckled state (``where``: its discretization)."""
     st = lateral.static_state(p, guess=lambda xi: tip * xi * (2.0 - xi))
     disc = lateral.HermiteSpectral(degree)
     K, C, M, parts = disc.matrices(st)

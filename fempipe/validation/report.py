@@ -221,12 +221,12 @@ def _introduction(suite: SuiteResult, cmd: str) -> list[str]:
         f"scikit-fem {env.get('scikit-fem')}.",
         "",
         "Two kinds of checks: **numerics** compare fempipe with an independent computation "
-        "(refined mesh, the other discretisation, an independent ODE solver, a symmetry, a "
+        "(refined mesh, the other discretization, an independent ODE solver, a symmetry, a "
         "classical value) and must pass; **paper** compare a statement or number of the paper "
         "with fempipe's converged answer. A paper check that does not hold is a *finding* "
         "(marked ⚠️), not a failure of fempipe.",
         "",
-        "Discretisations are named as on the command line: **P3:8** means cubic (P3) "
+        "Discretizations are named as on the command line: **P3:8** means cubic (P3) "
         "finite elements, 8 elements along the pipe (P1, P2: linear, quadratic); **N = 3** "
         "means the paper's Galerkin method with 3 sine modes. Eigenvalues are λ "
         "(θ ∝ e^{λτ}, Re λ > 0 unstable) or the paper's Ω = −iλ; Floquet multipliers of "

@@ -506,7 +506,7 @@ def _checked_range(v_range, ds, ds_min, ds_max, tol, rtol) -> tuple[float, float
 
 def predict(S: np.ndarray, us: list, tangent: np.ndarray, h: float) -> np.ndarray:
     """The point at arclength h ahead of the last one: on the polynomial through the
-    last four (or three) points, parametrised by chord length in the metric, when
+    last four (or three) points, parametrized by chord length in the metric, when
     they are about evenly spaced and h is not much longer than their spacing (as
     on a run of requested v); else on the tangent."""
     for m in (4, 3):

@@ -220,7 +220,7 @@ class CycleCorrector:
     def tip_extrema(self, v: float, record: list) -> dict:
         """[min, max] of the tip coordinates over the period integrated in ``record``
         (its Radau steps), at flow velocity v: the collocation polynomial of every
-        step sampled 8 times, each extremum refined by a bounded scalar minimisation
+        step sampled 8 times, each extremum refined by a bounded scalar minimization
         (:func:`~fempipe.analyses.limit_cycle.tips.tip_extrema`, ``refine="bounded"``)."""
         m = self.at(v)
         return tip_extrema(m.disc, CollocationOrbit(record), m.params.alpha, refine="bounded")
@@ -305,7 +305,7 @@ class CycleCorrector:
             if need:
                 if res > 0.5 * res_exact:
                     # An exact Newton step that did not halve the residual: the
-                    # integration noise, not the linearisation, limits it.
+                    # integration noise, not the linearization, limits it.
                     raise CorrectorError(f"Newton stalled at the residual {res:.1e}")
                 res_exact = res
                 monodromy = fl.monodromy

@@ -1,4 +1,4 @@
-"""Error estimates of an attractor: found again on the refined discretisation.
+"""Error estimates of an attractor: found again on the refined discretization.
 
 A limit cycle is shot from the coarse cycle transferred to the refined space,
 an equilibrium solved by Newton from the coarse one, a pulsating flow
@@ -65,7 +65,7 @@ class RefinedAttractor(Refined):
         The reported attractor (None for a pulsating flow: its tip extrema are
         the result's).
     refined : AttractorSummary or None
-        The attractor on the refined discretisation (None if there is nothing
+        The attractor on the refined discretization (None if there is nothing
         to compare).
     floor : float
         The relative solver tolerance of the values.
@@ -91,7 +91,7 @@ def refined_attractor(
     fine=None,
     callback: Callable[[float], None] | None = None,
 ) -> RefinedAttractor:
-    """The attractor found again on the refined discretisation, without a new transient
+    """The attractor found again on the refined discretization, without a new transient
     where it can.
 
     A limit cycle is shot from the coarse cycle transferred to the refined
@@ -201,7 +201,7 @@ def _refined_forced(
 
 
 def _refined_equilibrium(model, fine_model, q_coarse) -> AttractorSummary:
-    """The equilibrium solved by Newton on the refined discretisation from the coarse
+    """The equilibrium solved by Newton on the refined discretization from the coarse
     one, with its tip values if it is linearly stable."""
     from fempipe.analyses.limit_cycle import TIP_KEYS
     from fempipe.analyses.stability import linearly_stable
