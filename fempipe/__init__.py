@@ -12,7 +12,29 @@ never higher, and no private name of another module.  The layers are written
 down once, with what each holds, in :mod:`fempipe.core.layers`
 (``tests/test_layering.py`` keeps them).
 
-The public names are loaded on first use (PEP 562 module ``__getattr__``), so
+The public names, by what their users do (README, "Python API"):
+
+* the model: :class:`Params`, :class:`PipeSI`, :class:`FiniteElement`,
+  :class:`Modal`, :func:`parse_discretization`, :class:`PipeModel`,
+  :class:`OutOfPlaneModel`, :func:`shape`, :func:`tip_values`;
+* statics (Eq. (31a)): :func:`solve_static`, :func:`sagged_state`,
+  :func:`solve_path`, :func:`continuation`, :func:`switch_branch`;
+* linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`root_locus`,
+  :func:`stability_analysis`, :func:`critical_velocity`, :func:`stability_map`,
+  in three dimensions :func:`spatial_stability_analysis`,
+  :func:`spatial_critical_velocity`;
+* time integration: :func:`simulate`, :func:`integrate`, :func:`initial_state`,
+  :class:`PulsatingFlow`;
+* limit cycles and their continuation: :func:`shoot`, :func:`find_attractor`,
+  :func:`tip_coordinates`, :func:`hopf_points`, :func:`continue_cycles`,
+  :func:`cycle_diagram`, :func:`bifurcation_diagram`;
+* convergence studies: :func:`run_study`, :func:`observed_order`,
+  :func:`richardson`; a user's values against fempipe: :func:`compare_values`;
+* error estimates: :func:`refined_static_states` / :func:`with_static_estimates`,
+  :func:`refined_stability` / :func:`with_stability_estimates`,
+  :func:`refined_attractor` / :func:`with_attractor_estimates`;
+
+with their result and error classes.  They are loaded on first use (PEP 562 module ``__getattr__``), so
 ``import fempipe`` and the start of the ``fempipe`` command do not pay for
 numpy, scipy, scikit-fem and the solvers (0.6 CPU-s on a 2-core x86_64
 machine; ``fempipe bench --only startup``) until a computation needs them.
