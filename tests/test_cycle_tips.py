@@ -108,8 +108,8 @@ def test_trace_parabola_is_the_transient_s(cycles):
 
 
 def _collocation_tip_extrema(model, record, per_step=8):
-    """fempipe.analyses.periodic._tip_extrema as it was (a copy, for when periodic calls
-    tip_extrema itself)."""
+    """The tip extrema of the cycle branches as periodic computed them before it called
+    tip_extrema (a copy: the bit-for-bit reference of the bounded refinement)."""
     from scipy.optimize import minimize_scalar
 
     from fempipe.solvers.radau import C
