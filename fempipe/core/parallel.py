@@ -320,6 +320,13 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
         if p.is_alive():
             p.kill()
             p.join()
+    # Let the executor's manager thread finish now (it sees the dead workers and
+    # closes its wakeup pipe): before Python 3.12 the interpreter's exit handler
+    # may otherwise write to that pipe while the thread closes it, and print
+    # "Exception ignored ... Bad file descriptor" after an interrupted run's one line.
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(_TERMINATE_GRACE)
 
 
 def run_tasks(
