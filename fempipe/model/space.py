@@ -1,0 +1,404 @@
+"""The pipe in three dimensions: the geometrically exact weak form, one method per term.
+
+The planar model (Eq. (20), :mod:`fempipe.model.weak_form`) holds for motion
+in the plane of the clamp and gravity.  A round pipe may leave that plane;
+this module is the same pipe in space, under the same assumptions
+(inextensible, isotropic section, no twist, the same fluid terms, gravity,
+Kelvin-Voigt damping made objective, the end mass and external damping), on
+the same discretizations.  The tangent t(xi, tau) is the unknown, through the
+singularity-free chart of :mod:`fempipe.model.space_chart` with three fields
+u = (theta, a, b), stacked as U = (theta_dofs, a_dofs, b_dofs).
+
+The weak form
+-------------
+The virtual work of Eq. (20) written with vectors: for a variation delta u
+(the test functions phi_i on each field) the tangent varies by
+delta t = J delta u (J = dt/du) and the centerline by
+delta r = \\int_0^xi delta t.  Every force per unit length f(xi) then does the
+work ``\\int delta r . f = \\int delta t . C^R f`` (C^R the integral to the
+free end, :mod:`fempipe.model.quadrature`), so each term is a vector field G
+tested as ``\\int phi_i J_c . G``:
+
+=====================  ===================================================
+inertia                ``C^R C t_ddot`` (with its centripetal part)
+coriolis               ``2 v sqrt(beta) C^R t_dot``
+flow_acceleration      ``v_dot sqrt(beta) C^R t``
+follower               ``v^2 t(1)``
+gravity                ``-gamma (1 - xi + Gamma) g``, g = (cos alpha, -sin alpha, 0)
+end_mass_inertia       ``Gamma r_ddot(1)``, r_ddot(1) = \\int_0^1 t_ddot
+external_damping       ``sigma C^R C t_dot``
+=====================  ===================================================
+
+In the plane J_theta = n, t_ddot = theta_ddot n - theta_dot^2 t, and each row is
+the planar term of the same name (n . g = -sin(theta + alpha),
+n . t(1) = sin(theta(1) - theta)).  Two terms act on the curvature:
+
+* **bending**: the energy (1/2) \\int |t'|^2 (EI = 1), whose variation is
+  ``\\int t' . (dt'/du_c phi_i + J_c phi_i')`` (= \\int theta' phi_i' in the
+  plane);
+* **kelvin_voigt**, objective: the dissipation (mu/2) \\int |k|^2 of the
+  co-rotational rate of the curvature vector t x t', which for a section
+  frame without twist is k = omega', the xi-derivative of the frame's
+  angular velocity omega = t x t_dot + Omega t.  The compatibility of the
+  frame (d_xi of its angular velocity minus d_tau of its curvature equals
+  their cross product) and zero twist give
+  ``k = t x t_dot' + Omega t'``, ``Omega = \\int_0^xi t' . (t x t_dot)``
+  (the spin about the tangent that the frame acquires when a curved pipe
+  moves out of its plane).  Its variation with respect to u_dot is
+  ``mu \\int [delta t_dot' . (k x t) + delta t_dot . (t' x t) C^R(k . t')]``.
+  In the plane k = theta_dot' e_3: the planar mu K q'.  Linearized about a
+  planar state it is the out-of-plane model's damping
+  (:mod:`fempipe.model.out_of_plane`).
+
+The gauge
+---------
+Three fields describe two degrees of freedom: along the fiber f(u) the
+tangent does not move (:mod:`fempipe.model.space_chart`).  The term
+``gauge`` gives that direction an equation of its own,
+
+    r_g = d/dtau (f . u_dot) + c_g f . u_dot + k_g f . (0, a, b) = 0,
+
+tested with ``f . delta u``: a damped oscillator pulling the coordinates to
+the least |(a, b)| on each fiber.  It does not act on the physics in the
+continuum (a test in the physical directions has f . delta u = 0, a test
+along f sees no physical force), it is zero at every planar state
+(so the planar equations are exactly those of the planar model), and it
+makes the mass matrix definite.
+
+The Jacobians of every term are exact: the weak form is evaluated on
+:class:`~fempipe.core.dual.Dual` fields seeded with the derivatives of u,
+u_dot and u_ddot with respect to U, U_dot and U_ddot.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..core.dual import Dual, cross, dot, stack
+from .discretization import Discretization
+from .params import Params
+from .space_chart import SpaceFields, space_fields, tangent
+
+__all__ = ["GAUGE_DAMPING", "GAUGE_STIFFNESS", "SpaceModel", "planar_state", "plane_of"]
+
+#: c_g and k_g of the gauge equation: critically damped at unit frequency.
+GAUGE_DAMPING = 2.0
+GAUGE_STIFFNESS = 1.0
+
+_SEEDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _dense(A) -> np.ndarray:
+    return A.toarray() if hasattr(A, "toarray") else np.asarray(A, dtype=float)
+
+
+class _Seeds:
+    """Phi, dPhi, tip of a discretization (dense) and the seeds of the Dual fields."""
+
+    def __init__(self, disc: Discretization) -> None:
+        self.Phi = _dense(disc.Phi)
+        self.dPhi = _dense(disc.dPhi)
+        self.tip = np.asarray(disc.tip, dtype=float)
+        n_q, n = self.Phi.shape
+        N = 3 * n
+        # d u_c(x_q) / d U_(c', j) = delta_cc' Phi_qj, and the same for u'.
+        self.phi = np.zeros((n_q, 3, N))
+        self.dphi = np.zeros((n_q, 3, N))
+        self.tip_seed = np.zeros((1, 3, N))
+        for c in range(3):
+            self.phi[:, c, c * n : (c + 1) * n] = self.Phi
+            self.dphi[:, c, c * n : (c + 1) * n] = self.dPhi
+            self.tip_seed[0, c, c * n : (c + 1) * n] = self.tip
+
+    @classmethod
+    def of(cls, disc: Discretization) -> _Seeds:
+        s = _SEEDS.get(disc)
+        if s is None:
+            s = _SEEDS[disc] = cls(disc)
+        return s
+
+
+def planar_state(q: np.ndarray) -> np.ndarray:
+    """The 3-D state U = (q, 0, 0) of a planar state q (the exact planar reduction)."""
+    q = np.asarray(q, dtype=float)
+    return np.concatenate([q, np.zeros(2 * q.size)])
+
+
+def plane_of(U: np.ndarray) -> np.ndarray:
+    """The theta part of a 3-D state: the planar state when a = b = 0."""
+    U = np.asarray(U)
+    return U[: U.size // 3].copy()
+
+
+class SpaceModel:
+    """The residual of the 3-D weak form and its exact Jacobians (module docstring).
+
+    Parameters
+    ----------
+    disc : Discretization
+        The discretization of each of the three fields (as the planar model's
+        theta).
+    params : Params
+        Dimensionless parameters.  Springs and hysteretic damping are refused:
+        the springs have no 3-D term yet, hysteretic damping no time-domain
+        meaning.
+
+    Attributes
+    ----------
+    n : int
+        ``3 disc.n`` unknowns.
+    """
+
+    gauge_damping = GAUGE_DAMPING
+    gauge_stiffness = GAUGE_STIFFNESS
+
+    def __init__(self, disc: Discretization, params: Params) -> None:
+        if params.springs:
+            raise ValueError(
+                "the 3-D model has no spring term: springs = () is required "
+                f"(got springs = {params.springs!r})"
+            )
+        if params.hysteretic_damping:
+            raise ValueError(
+                "the 3-D model integrates in time: hysteretic damping (mu_h = "
+                f"{params.hysteretic_damping:g}) has no time-domain meaning; set it to 0"
+            )
+        self.disc = disc
+        self.params = params
+        self.quad = disc.quad
+        self.x = disc.quad.x
+        self.w = disc.quad.w
+        self.n_theta = disc.n
+        self.n = 3 * disc.n
+        self._seeds = _Seeds.of(disc)
+
+    def with_params(self, params: Params) -> SpaceModel:
+        """The model on the same discretization with other parameters."""
+        return SpaceModel(self.disc, params)
+
+    @property
+    def gravity_direction(self) -> np.ndarray:
+        """g = (cos alpha, -sin alpha, 0) in the pipe's frame: t . g = cos(theta + alpha)."""
+        a = self.params.alpha
+        return np.array([np.cos(a), -np.sin(a), 0.0])
+
+    # ------------------------------------------------------- fields --
+    def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> SpaceFields:
+        """The kinematics at the quadrature points, with derivatives along ``blocks``.
+
+        ``blocks`` names the unknowns to differentiate with respect to, in
+        order, among ``"q"`` (U), ``"qdot"`` (U_dot) and ``"qddot"`` (U_ddot);
+        the derivatives of every field have ``len(blocks) * n`` directions.
+        """
+        s = self._seeds
+        nt = self.n_theta
+        zero = np.zeros(self.n)
+        U = np.asarray(U, dtype=float)
+        Ud = zero if Ud is None else np.asarray(Ud, dtype=float)
+        Udd = zero if Udd is None else np.asarray(Udd, dtype=float)
+        K = len(blocks) * self.n
+
+        def field(basis, seed, values, name):
+            val = basis @ values.reshape(3, nt).T
+            if name not in blocks:
+                return Dual(val)
+            der = np.zeros(val.shape + (K,))
+            k = blocks.index(name) * self.n
+            der[..., k : k + self.n] = seed
+            return Dual(val, der)
+
+        return space_fields(
+            field(s.Phi, s.phi, U, "q"),
+            field(s.Phi, s.phi, Ud, "qdot"),
+            field(s.Phi, s.phi, Udd, "qddot"),
+            field(s.dPhi, s.dphi, U, "q"),
+            field(s.dPhi, s.dphi, Ud, "qdot"),
+            field(s.tip[None, :], s.tip_seed, U, "q"),
+        )
+
+    # ------------------------------------------- the terms: force fields G --
+    def inertia(self, fl: SpaceFields) -> Dual:
+        """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
+        return fl.t_ddot.linear(self.quad.cumulative_cells).linear(self.quad.from_tip_cells)
+
+    def coriolis(self, fl: SpaceFields) -> Dual:
+        """``2 v sqrt(beta) C^R t_dot``."""
+        p = self.params
+        return (2.0 * p.v * np.sqrt(p.beta)) * fl.t_dot.linear(self.quad.from_tip_cells)
+
+    def flow_acceleration(self, fl: SpaceFields, v_dot: float) -> Dual | None:
+        """``v_dot sqrt(beta) C^R t`` (unsteady flow)."""
+        if not v_dot:
+            return None
+        return (v_dot * np.sqrt(self.params.beta)) * fl.t.linear(self.quad.from_tip_cells)
+
+    def follower(self, fl: SpaceFields) -> Dual:
+        """``v^2 t(1)``: the jet's reaction and the fluid's centrifugal force, Eq. (14)."""
+        v = self.params.v
+        return (v * v) * fl.t_tip
+
+    def gravity(self) -> np.ndarray:
+        """``-gamma (1 - xi + Gamma) g``: the weight of the pipe and of the end mass beyond xi."""
+        p = self.params
+        lever = 1.0 - self.x + p.end_mass
+        return -p.gamma * lever[:, None] * self.gravity_direction[None, :]
+
+    def end_mass_inertia(self, fl: SpaceFields) -> Dual | None:
+        """``Gamma r_ddot(1)``: the end mass's inertia, felt by every section."""
+        G = self.params.end_mass
+        if not G:
+            return None
+        acc = fl.t_ddot.linear(self.quad.integrate)  # (3,)
+        return G * acc[None, :]
+
+    def external_damping(self, fl: SpaceFields) -> Dual | None:
+        """``sigma C^R C t_dot``: a viscous force -sigma r_dot along the pipe."""
+        sigma = self.params.external_damping
+        if not sigma:
+            return None
+        return sigma * fl.t_dot.linear(self.quad.cumulative_cells).linear(self.quad.from_tip_cells)
+
+    def bending(self, fl: SpaceFields) -> tuple[Dual, Dual]:
+        """(A, B): the variation of (1/2) \\int |t'|^2 is ``\\int A_c phi_i + B_c phi_i'``."""
+        tp = fl.t_prime
+        A = stack([dot(tp, fl.dt_prime[c]) for c in range(3)], axis=1)
+        B = stack([dot(tp, fl.J[c]) for c in range(3)], axis=1)
+        return A, B
+
+    def curvature_rate(self, fl: SpaceFields) -> Dual:
+        """k = t x t_dot' + Omega t': the co-rotational rate of the curvature vector."""
+        Omega = dot(fl.t_prime, cross(fl.t, fl.t_dot)).linear(self.quad.cumulative_cells)
+        return cross(fl.t, fl.t_dot_prime) + fl.t_prime * Omega[:, None]
+
+    def kelvin_voigt(self, fl: SpaceFields) -> tuple[Dual, Dual] | None:
+        """(A, B) of the objective Kelvin-Voigt damping (module docstring)."""
+        mu = self.params.mu
+        if not mu:
+            return None
+        k = self.curvature_rate(fl)
+        kxt = cross(k, fl.t)
+        tail = dot(k, fl.t_prime).linear(self.quad.from_tip_cells)
+        tpxt = cross(fl.t_prime, fl.t) * tail[:, None]
+        A = stack([dot(fl.dt_prime[c], kxt) + dot(fl.J[c], tpxt) for c in range(3)], axis=1)
+        B = stack([dot(fl.J[c], kxt) for c in range(3)], axis=1)
+        return mu * A, mu * B
+
+    def gauge(self, fl: SpaceFields) -> Dual:
+        """A of the gauge term: ``r_g f_c`` (module docstring)."""
+        f, u = fl.fiber, fl.u
+        rate = dot(f, fl.u_dot)
+        r = (
+            dot(f, fl.u_ddot)
+            + dot(fl.fiber_dot, fl.u_dot)
+            + self.gauge_damping * rate
+            + self.gauge_stiffness * (f[:, 1] * u[:, 1] + f[:, 2] * u[:, 2])
+        )
+        return f * r[:, None]
+
+    # ------------------------------------------------------- totals --
+    def force_field(self, fl: SpaceFields, v_dot: float = 0.0) -> Dual:
+        """The sum G of the force fields of all terms tested as ``\\int delta t . G``."""
+        G = self.inertia(fl) + self.coriolis(fl) + self.follower(fl) + self.gravity()
+        for extra in (
+            self.flow_acceleration(fl, v_dot),
+            self.end_mass_inertia(fl),
+            self.external_damping(fl),
+        ):
+            if extra is not None:
+                G = G + extra
+        return G
+
+    def _weak_form(self, fl: SpaceFields, v_dot: float) -> Dual:
+        """The residual (and its derivatives) as a Dual of shape (n,)."""
+        G = self.force_field(fl, v_dot)
+        A, B = self.bending(fl)
+        A = A + stack([dot(fl.J[c], G) for c in range(3)], axis=1) + self.gauge(fl)
+        kv = self.kelvin_voigt(fl)
+        if kv is not None:
+            A, B = A + kv[0], B + kv[1]
+        s = self._seeds
+        wA = A * self.w[:, None]
+        wB = B * self.w[:, None]
+
+        def assemble(a, b):
+            # (n_q, 3, ...) -> (3, n, ...) -> (3 n, ...); None: no dependence
+            r = 0.0
+            if a is not None:
+                r = np.tensordot(s.Phi, a, axes=(0, 0))
+            if b is not None:
+                r = r + np.tensordot(s.dPhi, b, axes=(0, 0))
+            r = np.moveaxis(r, 0, 1)
+            return r.reshape((self.n,) + r.shape[2:])
+
+        der = None if wA.der is None and wB.der is None else assemble(wA.der, wB.der)
+        return Dual(assemble(wA.val, wB.val), der)
+
+    def residual(self, U, Ud=None, Udd=None, v_dot: float = 0.0) -> np.ndarray:
+        """R(U, U', U''), shape (3 n,)."""
+        return self._weak_form(self.fields(U, Ud, Udd), v_dot).val
+
+    def jacobians(self, U, Ud=None, Udd=None, v_dot: float = 0.0):
+        """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized."""
+        fl = self.fields(U, Ud, Udd, blocks=("q", "qdot", "qddot"))
+        D = self._weak_form(fl, v_dot).der
+        n = self.n
+        M = D[:, 2 * n :]
+        return D[:, :n], D[:, n : 2 * n], 0.5 * (M + M.T)
+
+    def mass_matrix(self, U) -> np.ndarray:
+        """dR/dU'' (R is affine in U''), symmetric positive definite, shape (3 n, 3 n)."""
+        M = self._weak_form(self.fields(U, blocks=("qddot",)), 0.0).der
+        return 0.5 * (M + M.T)
+
+    def acceleration(self, U, Ud, v_dot: float = 0.0) -> np.ndarray:
+        """U'' from R = 0: ``M U'' = -R(U, U', 0)``."""
+        M = self.mass_matrix(U)
+        return -sla.cho_solve(sla.cho_factor(M), self.residual(U, Ud, None, v_dot))
+
+    # ------------------------------------------------------ geometry --
+    def centerline_velocity(self, fl: SpaceFields) -> np.ndarray:
+        """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
+        return self.quad.cumulative(fl.t_dot.val)
+
+    def tip_tangent(self, U) -> np.ndarray:
+        """t(1), shape (3,)."""
+        u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
+        return tangent(u1[None, :]).val[0]
+
+    # ------------------------------------------------------- energy --
+    def kinetic_energy(self, U, Ud) -> float:
+        """T = (1/2) \\int |r_dot|^2 + (Gamma/2) |r_dot(1)|^2."""
+        fl = self.fields(U, Ud)
+        rd = self.centerline_velocity(fl)
+        T = 0.5 * float(self.w @ np.einsum("qc,qc->q", rd, rd))
+        G = self.params.end_mass
+        if G:
+            tip = self.quad.integrate(fl.t_dot.val)
+            T += 0.5 * G * float(tip @ tip)
+        return T
+
+    def potential_energy(self, U) -> float:
+        """Bending and gravity: ``(1/2) \\int |t'|^2 + gamma [cos(alpha)/2 - \\int (1 - xi) t . g]
+        + gamma Gamma [cos(alpha) - \\int t . g]`` (zero for the straight pipe, as in the plane)."""
+        fl = self.fields(U)
+        p = self.params
+        tp = fl.t_prime.val
+        tg = fl.t.val @ self.gravity_direction
+        V = 0.5 * float(self.w @ np.einsum("qc,qc->q", tp, tp))
+        grav = 0.5 * np.cos(p.alpha) - self.w @ ((1.0 - self.x) * tg)
+        if p.end_mass:
+            grav = grav + p.end_mass * (np.cos(p.alpha) - self.w @ tg)
+        return V + p.gamma * float(grav)
+
+    def energy(self, U, Ud) -> float:
+        """E = T + V: conserved for v = 0, mu = 0, sigma = 0 (up to the gauge's work)."""
+        return self.kinetic_energy(U, Ud) + self.potential_energy(U)
+
+    def dynamics_problem(self, flow=None):
+        """The integrator's problem of this model (:class:`fempipe.model.space_dynamics.SpaceDynamics`)."""
+        from .space_dynamics import SpaceDynamics
+
+        return SpaceDynamics(self, flow)

@@ -1,0 +1,231 @@
+"""The tangent of the pipe in space from three fields, free of coordinate singularities.
+
+The 3-D model (:mod:`fempipe.model.space`) describes the centerline by its
+unit tangent t(xi, tau), as the planar model does by theta.  Its unknowns are
+three fields u = (theta, a, b), each discretized exactly like theta (the same
+:class:`~fempipe.model.discretization.Discretization`, u(0) = 0 at the clamp),
+and the tangent is the image of e_1 under the rotation of the unnormalized
+quaternion q(u) = (cos(theta/2), a, b, sin(theta/2)):
+
+    t = q e_1 q* / |q|^2
+      = (cos theta + a^2 - b^2,  sin theta + 2 a b,  2 (a s - b c)) / (1 + a^2 + b^2),
+
+with c = cos(theta/2), s = sin(theta/2), in the pipe's frame (e_1 along the
+clamp, e_2 the in-plane normal, e_3 out of the plane).
+
+Why this chart
+--------------
+* **Exact planar reduction.**  For a = b = 0 it is t = (cos theta, sin
+  theta, 0) with the same theta field: the planar states of the 3-D model are
+  the planar model's states, on the same discretization, and by the mirror
+  symmetry e_3 -> -e_3 (which maps (theta, a, b) to (theta, -a, -b)) a planar
+  state stays planar.
+* **No singular configuration.**  The map u -> t has rank 2 at every u: its
+  derivative through q has columns (1/2)(-s, 0, 0, c), e_x, e_y, which with
+  q itself (whose (w, z) part (c, s) is orthogonal to (-s, c)) span R^4, and
+  the only directions the map q -> q e_1 q* / |q|^2 ignores are q and q i
+  (scaling and twist about e_1).  Every direction t is reached (the twist of
+  a quaternion can always be chosen so that its (w, z) part is not zero), and
+  |q|^2 = 1 + a^2 + b^2 >= 1 never vanishes.  Two angles (theta and an
+  out-of-plane angle psi) would be singular where the tangent points along
+  e_3, a rotation vector normal to e_1 where it points back along -e_1; a
+  unit director needs a constraint per point.  Here three unknowns describe two
+  degrees of freedom with one free direction per point, the fiber.
+* **The fiber.**  Along f(u) = (a s - b c, c/2 + a g/2, s/2 + b g/2),
+  g = a c + b s (the twist q -> q (1 + i phi/2) brought back to the chart),
+  t does not change.  :mod:`fempipe.model.space` gives that direction an
+  equation of its own (the gauge), which leaves the physics untouched.  At a
+  planar state f = (0, c, s)/2 and the out-of-plane rotation is
+  psi = 2 (s a - c b) to first order.
+
+The time and space derivatives of t follow from the gradient and Hessian of
+the numerator P(u) and the denominator D(u) = 1 + a^2 + b^2 of t = P/D
+(:func:`_grad`, :func:`_hess`): with P = t D,
+
+    t_dot  = (P_dot - t D_dot) / D,
+    t_ddot = (P_ddot - 2 t_dot D_dot - t D_ddot) / D,
+    t_dot' = (P_dot' - t_dot D' - t' D_dot - t D_dot') / D,
+
+where P_dot = grad P [u_dot], P_ddot = grad P [u_ddot] + hess P [u_dot, u_dot]
+and so on.  Every quantity is a :class:`~fempipe.core.dual.Dual`: the same
+lines give the exact derivatives of the weak form.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.dual import Dual, stack
+
+__all__ = ["SpaceFields", "fiber_direction", "space_fields", "tangent"]
+
+
+def _vec(x, y, z) -> Dual:
+    return stack([x, y, z], axis=1)
+
+
+@dataclass(frozen=True)
+class _Point:
+    """theta, a, b at a set of points, with the trigonometric values the chart uses."""
+
+    th: Dual
+    a: Dual
+    b: Dual
+    c: Dual  # cos(theta/2)
+    s: Dual  # sin(theta/2)
+    ct: Dual  # cos(theta)
+    st: Dual  # sin(theta)
+
+    @classmethod
+    def of(cls, u: Dual) -> _Point:
+        th, a, b = u[:, 0], u[:, 1], u[:, 2]
+        half = th * 0.5
+        return cls(th, a, b, half.cos(), half.sin(), th.cos(), th.sin())
+
+    def numerator(self) -> tuple[Dual, Dual]:
+        """(P, D): t = P / D."""
+        a, b = self.a, self.b
+        P = _vec(self.ct + a * a - b * b, self.st + 2.0 * (a * b), 2.0 * (a * self.s - b * self.c))
+        return P, 1.0 + a * a + b * b
+
+
+def _grad(p: _Point, v: Dual) -> tuple[Dual, Dual]:
+    """(grad P [v], grad D [v]) for a field v of shape (m, 3)."""
+    vt, va, vb = v[:, 0], v[:, 1], v[:, 2]
+    a, b = p.a, p.b
+    dP = _vec(
+        2.0 * (a * va - b * vb) - p.st * vt,
+        p.ct * vt + 2.0 * (b * va + a * vb),
+        (a * p.c + b * p.s) * vt + 2.0 * (p.s * va - p.c * vb),
+    )
+    return dP, 2.0 * (a * va + b * vb)
+
+
+def _hess(p: _Point, v: Dual, w: Dual) -> tuple[Dual, Dual]:
+    """(hess P [v, w], hess D [v, w])."""
+    vt, va, vb = v[:, 0], v[:, 1], v[:, 2]
+    wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
+    tt = vt * wt
+    Pz4 = 0.5 * (p.a * p.s - p.b * p.c)  # P_z / 4
+    hP = _vec(
+        2.0 * (va * wa - vb * wb) - p.ct * tt,
+        2.0 * (va * wb + vb * wa) - p.st * tt,
+        p.c * (vt * wa + va * wt) + p.s * (vt * wb + vb * wt) - Pz4 * tt,
+    )
+    return hP, 2.0 * (va * wa + vb * wb)
+
+
+def _over(x: Dual, D: Dual) -> Dual:
+    return x * (1.0 / D)[:, None]
+
+
+def tangent(u) -> Dual:
+    """t(u) for u of shape (m, 3) (rows (theta, a, b)): the chart."""
+    P, D = _Point.of(u if isinstance(u, Dual) else Dual(u)).numerator()
+    return _over(P, D)
+
+
+def fiber_direction(p: _Point) -> Dual:
+    """f(u): the direction of u along which t does not change (module docstring)."""
+    g = p.a * p.c + p.b * p.s
+    return _vec(p.a * p.s - p.b * p.c, 0.5 * (p.c + p.a * g), 0.5 * (p.s + p.b * g))
+
+
+def _fiber_rate(p: _Point, ud: Dual) -> Dual:
+    """f_dot = grad f [u_dot]."""
+    thd, ad, bd = ud[:, 0], ud[:, 1], ud[:, 2]
+    a, b, c, s = p.a, p.b, p.c, p.s
+    cd, sd = -0.5 * s * thd, 0.5 * c * thd
+    g = a * c + b * s
+    gd = ad * c + a * cd + bd * s + b * sd
+    return _vec(
+        ad * s + a * sd - bd * c - b * cd,
+        0.5 * (cd + ad * g + a * gd),
+        0.5 * (sd + bd * g + b * gd),
+    )
+
+
+@dataclass(frozen=True)
+class SpaceFields:
+    """The kinematics of a 3-D state at the quadrature points (all (n_q, 3) Duals).
+
+    Attributes
+    ----------
+    u, u_dot, u_ddot, u_prime, u_dot_prime
+        The fields (theta, a, b) and their derivatives.
+    t, t_dot, t_ddot, t_prime, t_dot_prime
+        The tangent and its derivatives in time and xi.
+    J : list of Dual
+        ``J[c] = dt/du_c``: the variation of t under a test function on u_c is
+        ``J[c] phi``.
+    dt_prime : list of Dual
+        ``dt'/du_c`` (the variation of t' is ``dt_prime[c] phi + J[c] phi'``).
+    fiber, fiber_dot
+        f(u) and its rate.
+    t_tip : Dual
+        t(1), shape (1, 3).
+    """
+
+    u: Dual
+    u_dot: Dual
+    u_ddot: Dual
+    u_prime: Dual
+    u_dot_prime: Dual
+    t: Dual
+    t_dot: Dual
+    t_ddot: Dual
+    t_prime: Dual
+    t_dot_prime: Dual
+    J: list
+    dt_prime: list
+    fiber: Dual
+    fiber_dot: Dual
+    t_tip: Dual
+
+
+def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
+    """The kinematics of :class:`SpaceFields` from the fields at the quadrature points."""
+    p = _Point.of(u)
+    P, D = p.numerator()
+    t = _over(P, D)
+    Pd, Dd = _grad(p, u_dot)
+    td = _over(Pd - t * Dd[:, None], D)
+    Pdd, Ddd = _grad(p, u_ddot)
+    hP, hD = _hess(p, u_dot, u_dot)
+    tdd = _over(Pdd + hP - 2.0 * (td * Dd[:, None]) - t * (Ddd + hD)[:, None], D)
+    Pp, Dp = _grad(p, u_prime)
+    tp = _over(Pp - t * Dp[:, None], D)
+    Pdp, Ddp = _grad(p, u_dot_prime)
+    hPm, hDm = _hess(p, u_prime, u_dot)
+    tdp = _over(Pdp + hPm - td * Dp[:, None] - tp * Dd[:, None] - t * (Ddp + hDm)[:, None], D)
+    # The columns of dt/du and dt'/du: the gradient and Hessian along e_c.
+    m = t.shape[0]
+    J, dtp = [], []
+    for c in range(3):
+        e = np.zeros((m, 3))
+        e[:, c] = 1.0
+        e = Dual(e)
+        gP, gD = _grad(p, e)
+        Jc = _over(gP - t * gD[:, None], D)
+        hP, hD = _hess(p, e, u_prime)
+        dtp.append(_over(hP - Jc * Dp[:, None] - t * hD[:, None] - tp * gD[:, None], D))
+        J.append(Jc)
+    return SpaceFields(
+        u=u,
+        u_dot=u_dot,
+        u_ddot=u_ddot,
+        u_prime=u_prime,
+        u_dot_prime=u_dot_prime,
+        t=t,
+        t_dot=td,
+        t_ddot=tdd,
+        t_prime=tp,
+        t_dot_prime=tdp,
+        J=J,
+        dt_prime=dtp,
+        fiber=fiber_direction(p),
+        fiber_dot=_fiber_rate(p, u_dot),
+        t_tip=tangent(u_tip),
+    )

@@ -1,0 +1,92 @@
+"""The 3-D pipe's equations of motion as the integrator's problem.
+
+:class:`SpaceDynamics` implements the contract
+:class:`fempipe.solvers.radau.contract.ImplicitSecondOrderProblem` for a
+:class:`~fempipe.model.space.SpaceModel`, as
+:class:`~fempipe.model.dynamics_problem.PipeDynamics` does for the planar
+model: the Radau integrator, shooting and the Floquet multipliers run on it
+unchanged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from .space import SpaceModel
+
+__all__ = ["SpaceDynamics"]
+
+
+class _VelocityDerivative:
+    """dR/dv of the stages: R is quadratic in v, dR/dv = 2 v follower_1 + coriolis_1."""
+
+    def __init__(self, model: SpaceModel) -> None:
+        self.v = model.params.v
+        self.unit = model.with_params(replace(model.params, v=1.0))
+        self.zero = model.with_params(replace(model.params, v=0.0))
+
+    def __call__(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
+        out = np.empty(Q.shape)
+        for i in range(Q.shape[0]):
+            r1 = self.unit.residual(Q[i], P[i], Acc[i])
+            r0 = self.zero.residual(Q[i], P[i], Acc[i])
+            # R(v) = R0 + v R_c + v^2 R_f: with R(1) - R(0) = R_c + R_f and
+            # R_c linear in the rates, dR/dv = R_c + 2 v R_f.
+            rf = self.unit.residual(Q[i], np.zeros_like(P[i]), np.zeros_like(Acc[i]))
+            rf = rf - self.zero.residual(Q[i], np.zeros_like(P[i]), np.zeros_like(Acc[i]))
+            rc = (r1 - r0) - rf
+            out[i] = rc + 2.0 * self.v * rf
+        return out
+
+
+class SpaceDynamics:
+    """The 3-D weak form as an implicit second-order problem (the integrator's contract).
+
+    Parameters
+    ----------
+    model : SpaceModel
+    flow : callable tau -> (v, v_dot), optional
+        Unsteady flow (rule 9); default the steady ``model.params.v``.
+    """
+
+    stage_residuals = None
+    stage_jacobians = None
+    prefers_batched_stage_jacobians = False
+
+    def __init__(
+        self, model: SpaceModel, flow: Callable[[float], tuple[float, float]] | None = None
+    ) -> None:
+        self.model = model
+        self.flow = flow
+        self.n = model.n
+        self.autonomous = flow is None
+        self.parameter_derivative = _VelocityDerivative(model) if flow is None else None
+
+    def model_at(self, t: float) -> tuple[SpaceModel, float]:
+        """The model with the flow velocity at tau = t, and v_dot there."""
+        if self.flow is None:
+            return self.model, 0.0
+        v, v_dot = self.flow(t)
+        return self.model.with_params(self.model.params.with_flow(v)), float(v_dot)
+
+    def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
+        """R(t, q, q', q''), shape (n,) (rule 2)."""
+        m, vd = self.model_at(t)
+        return m.residual(q, qdot, qddot, vd)
+
+    def jacobians(self, t: float, q, qdot, qddot):
+        """(dR/dq, dR/dq', dR/dq''), dense (n, n) each (rule 3)."""
+        m, vd = self.model_at(t)
+        return m.jacobians(q, qdot, qddot, vd)
+
+    def acceleration(self, t: float, q, qdot) -> np.ndarray:
+        """q'' with R = 0 (rule 4)."""
+        m, vd = self.model_at(t)
+        return m.acceleration(q, qdot, vd)
+
+    def describe(self) -> str:
+        """The flow velocity, for error messages (rule 14)."""
+        return f"v = {self.model.params.v:.6g} (3-D)"
