@@ -27,7 +27,7 @@ from fempipe.core.version import __version__  # noqa: E402
 
 project = "fempipe"
 author = "fempipe authors"
-copyright = "2026, fempipe authors"  # noqa: A001 - Sphinx's name
+copyright = "2026, fempipe authors"
 release = __version__
 version = __version__
 
@@ -90,7 +90,7 @@ html_static_path: list[str] = []
 html_show_sourcelink = False
 
 
-def _gallery_toctree(app, docname, source):  # noqa: ANN001 - Sphinx's signature
+def _gallery_toctree(app, docname, source):
     """Fill the ``GALLERY-TOCTREE`` placeholder of index.rst with the built galleries."""
     if docname != "index":
         return
@@ -103,5 +103,5 @@ def _gallery_toctree(app, docname, source):  # noqa: ANN001 - Sphinx's signature
     source[0] = source[0].replace(".. GALLERY-TOCTREE\n", block)
 
 
-def setup(app):  # noqa: ANN001 - Sphinx's signature
+def setup(app):
     app.connect("source-read", _gallery_toctree)

@@ -129,11 +129,11 @@ def generate(docs_dir: Path, root: Path) -> list[str]:
     return cases
 
 
-def _builder_inited(app) -> None:  # noqa: ANN001 - Sphinx's signature
+def _builder_inited(app) -> None:
     docs_dir = Path(app.srcdir)
     generate(docs_dir, docs_dir.parent)
 
 
-def setup(app) -> dict:  # noqa: ANN001 - Sphinx's signature
+def setup(app) -> dict:
     app.connect("builder-inited", _builder_inited)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
