@@ -12,7 +12,7 @@ never higher, and no private name of another module.  The layers are written
 down once, with what each holds, in :mod:`fempipe.core.layers`
 (``tests/test_layering.py`` keeps them).
 
-The public names, by what their users do (README, "Python API"):
+The public names, by what their users do (docs, "API reference"):
 
 * the model: :class:`Params`, :class:`PipeSI`, :class:`FiniteElement`,
   :class:`Modal`, :func:`parse_discretization`, :class:`PipeModel`,

@@ -5,7 +5,7 @@ cos(l) cosh(l) = -1 from Blevins' tables, the textbook form of the modes
 evaluated in 150-digit decimal arithmetic, finite differences of
 ``evaluate``, the exact beam frequencies (:func:`cantilever_frequencies`) and
 converged finite elements (P3:16 to P3:64, whose errors are below 1e-8 here:
-the validation report's convergence study).  README, "Convergence of the two
+the validation report's convergence study).  docs, "Convergence of the two
 modal bases", derives the orders N^-4 (beam) and N^-3 (sine) tested here.
 """
 
@@ -317,7 +317,7 @@ def test_static_tip_converges_as_n_to_the_minus_4():
 def test_beam_coefficients_decay_like_the_derivation():
     """a_r = \\int theta' psi_r' / lambda_r^2 of the converged solution is
     2 theta'''(0) / lambda^4 + 2 theta''''(0) / lambda^5 + ..., with theta'''(0)
-    and theta''''(0) from differentiating Eq. (31a) at xi = 0 (README)."""
+    and theta''''(0) from differentiating Eq. (31a) at xi = 0 (docs)."""
     p, disc = CURVED, FiniteElement(64, 3)
     m = PipeModel(disc, p)
     q = solve_static(m, q0=sagged_state(m).q, tol=1e-12).q

@@ -149,7 +149,7 @@ def test_gregory_paidoussis_cantilever():
 
 def test_paper_case_hanging_pipe_matches_fempipe_readme():
     """alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3: fempipe's converged FE v_cr
-    is 6.3336872532 (README, Convergence of the two modal bases: P3:64).  A
+    is 6.3336872532 (docs, Convergence of the two modal bases: P3:64).  A
     different equation (eta, not theta) and method; the FE reference carries
     its own 1e-10."""
     o = critical_velocity(StraightPipe(beta=0.142, gamma=18.9, mu=5e-3), 10.0, **LEG)

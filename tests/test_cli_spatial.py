@@ -322,7 +322,7 @@ def test_convergence_of_each_plane_and_of_three_dimensions(capsys, tmp_path):
     assert "three dimensions" in runs["v_cr"]["quantity_details"]["description"]
     assert "out of the plane" in runs["v_cr_out_of_plane"]["quantity_details"]["description"]
     ref = {q: d["reference"]["value"] for q, d in runs.items()}
-    assert ref["v_cr"] == pytest.approx(5.8208946, abs=2e-6)  # the P3:16 value of the README
+    assert ref["v_cr"] == pytest.approx(5.8208946, abs=2e-6)  # the P3:16 value of the docs
     assert ref["v_cr_in_plane"] == pytest.approx(6.2100953, abs=2e-6)
 
 

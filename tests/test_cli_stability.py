@@ -26,7 +26,7 @@ EVENT_TYPES = {"flutter", "divergence", "restabilization", "mode_restabilization
 
 
 def test_critical_json_contract(capsys):
-    """The --json contract of the README, and v_cr equal to the library's."""
+    """The --json contract of the docs, and v_cr equal to the library's."""
     d = run_json(capsys, ["critical", "--alpha", "pi/2", "--v", "0,8", "--json", "--quiet"])
     assert isinstance(d["v_cr"], float)
     # Flutter events also carry the Hopf keys (fempipe.analyses.stability.hopf.EVENT_KEYS).
@@ -40,7 +40,7 @@ def test_critical_json_contract(capsys):
     assert first["stable_before"] is True and first["stable_after"] is False
     assert first["frequency"] > 0
     # v_cr is the first loss of stability in 3-D: out of the plane at alpha = pi/2
-    # (README, "Out of the plane"); the in-plane one is the planar library's.
+    # (docs, "Out of the plane"); the in-plane one is the planar library's.
     model = PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2))
     lib = critical_velocity(model, 8.0)
     out = critical_velocity(model.with_plane("out"), 8.0)

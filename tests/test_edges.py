@@ -217,11 +217,13 @@ def test_validate_does_not_write_into_the_committed_report_by_default():
 
 
 def test_readme_example_output_folders_are_ignored_by_git():
+    """... in the README and the docs pages, whose examples a user runs in the tree."""
     import re
 
     root = Path(__file__).resolve().parents[1]
-    readme = (root / "README.md").read_text(encoding="utf-8")
-    found = re.findall(r"--out ([a-z][\w.-]*(?:/[\w.-]+)*)/?(?=[\s`]|$)", readme)
+    pages = [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    text = "\n".join(p.read_text(encoding="utf-8") for p in pages)
+    found = re.findall(r"--out ([a-z][\w.-]*(?:/[\w.-]+)*)/?(?=[\s`]|$)", text)
     folders = set(found) - {"validation/report"}
     assert folders
     for folder in sorted(folders):

@@ -59,7 +59,7 @@ CRITICAL_KEYS = {
     "branches",
     "n_spectra",
 }
-#: What critical adds in three dimensions (README, "Out of the plane").
+#: What critical adds in three dimensions (docs, "Out of the plane").
 SPATIAL_KEYS = {
     "first_instability",
     "v_cr_in_plane",
@@ -259,7 +259,7 @@ def test_static_estimates_bound_the_true_error(capsys, disc, refined, order):
 def test_static_without_the_option_is_unchanged(capsys, tmp_path):
     d = run_json(capsys, ["static", "--fe", "P2:4", "--v", "0,1", "--out", str(tmp_path)])
     assert set(d) == {"points", "params", "discretization"}
-    # stable is the 3-D verdict, with each plane's beside it (README, "Out of the plane")
+    # stable is the 3-D verdict, with each plane's beside it (docs, "Out of the plane")
     keys = STATIC_POINT_KEYS | {"stable_in_plane", "stable_out_of_plane"}
     assert all(set(p) == keys for p in d["points"])
     planar = run_json(capsys, ["static", "--fe", "P2:4", "--v", "0,1", "--planar"])
@@ -481,7 +481,7 @@ def test_progress_counts_the_refined_work(monkeypatch, capsys):
 
 # ---------------------------------------------------------- measurement --
 def test_bound_measurement_on_a_small_subset():
-    """validation/error_estimate_bounds.py, the README's measurement, on four cases."""
+    """validation/error_estimate_bounds.py, the docs' measurement, on four cases."""
     sys.path.insert(0, str(Path(__file__).parents[1] / "validation"))
     from error_estimate_bounds import measure
 

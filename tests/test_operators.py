@@ -2,7 +2,7 @@
 
 Every reference here is independent of the code under test: closed-form
 integrals, central finite differences, a brute-force double quadrature of the
-kernel G(xi, r) = 1 - max(xi, r) of the double integral (README, "Conventions and
+kernel G(xi, r) = 1 - max(xi, r) of the double integral (docs, "Conventions and
 derivations"), and the energy/power identities.
 """
 
@@ -135,7 +135,7 @@ def test_mass_matrix_symmetric_positive_definite(name):
 
 
 def test_mass_matrix_matches_double_integral_kernel():
-    """README, "The mass matrix is symmetric": M_ij = \\int\\int phi_i(xi) phi_j(r) cos(theta(xi) - theta(r)) G(xi, r),
+    """docs, "The mass matrix is symmetric": M_ij = \\int\\int phi_i(xi) phi_j(r) cos(theta(xi) - theta(r)) G(xi, r),
     G = 1 - max(xi, r).  Brute-force midpoint double quadrature on a 4000^2 grid
     (error O(1/4000^2) ~ 1e-7 away from the kink, O(h) ~ 2.5e-4/4000 on it)."""
     disc = Modal(3)
@@ -231,7 +231,7 @@ def test_residual_odd_under_theta_alpha_reflection(name):
 
 
 def test_alpha_minus_pi_flips_gravity_only():
-    """README, "The symmetry": alpha -> alpha - pi is gamma -> -gamma, not an antisymmetry
+    """docs, "The symmetry": alpha -> alpha - pi is gamma -> -gamma, not an antisymmetry
     of solutions."""
     from dataclasses import replace
 

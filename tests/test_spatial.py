@@ -223,13 +223,14 @@ def test_with_params_keeps_the_plane():
 
 
 def test_readme_example_of_the_3d_stability_runs(capsys):
-    """The README's Python example of the 3-D stability runs and prints what it says."""
+    """The docs' Python example of the 3-D stability (docs/api/usage.md) runs and prints
+    what it says."""
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    block = text.split("Stability in three dimensions (README", 1)[1]
+    page = Path(__file__).resolve().parents[1] / "docs" / "api" / "usage.md"
+    block = page.read_text(encoding="utf-8").split("Stability in three dimensions (", 1)[1]
     code = block.split("```python\n", 1)[1].split("```", 1)[0]
-    exec(compile(code, "README.md", "exec"), {})
+    exec(compile(code, str(page), "exec"), {})
     lines = capsys.readouterr().out.splitlines()
     assert "'plane': 'out'" in lines[0] and "5.82089" in lines[0]
     assert lines[1].startswith("6.21009") and "5.82089" in lines[1]

@@ -1,4 +1,4 @@
-"""Does ``--error-estimate`` bound the true error?  The measurement behind the README's claim.
+"""Does ``--error-estimate`` bound the true error?  The measurement behind the claim of the docs (docs/cli/options.md, "How reliable").
 
 Run ``python validation/error_estimate_bounds.py [--quick] [--out FILE.json]``.
 

@@ -33,7 +33,7 @@ Columns (:data:`COLUMNS`):
   ``frequency_out_of_plane`` are those of the motion out of that plane
   (:mod:`fempipe.model.out_of_plane`): the round pipe first loses stability at the
   smaller of ``v_cr_in_plane`` and ``v_cr_out_of_plane``, which is
-  ``fempipe critical``'s and ``fempipe convergence``'s ``v_cr`` (README,
+  ``fempipe critical``'s and ``fempipe convergence``'s ``v_cr`` (docs,
   "Out of the plane");
 * the inclination ``alpha`` in rad (also ``pi/3``, ``60deg`` as for
   ``--alpha``) or ``alpha_deg`` in degrees, default 0;
@@ -101,7 +101,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "frequency_out_of_plane), parameters (alpha or "
         "alpha_deg, beta, gamma, mu, v; or length, EI, m, M, g, a, U in SI), the flow range "
         "v_min, v_max (or U_min, U_max) of v_cr and frequency, label; '# ...' lines are "
-        "comments (see README, 'fempipe compare')",
+        "comments (see the docs, 'fempipe compare')",
     )
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("comparison")

@@ -41,7 +41,7 @@ def add_argument(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"also run on the refined discretization (FE: every element halved; modal: twice "
         f"the modes) and report beside {what} its error estimate KEY_error = "
-        "max(3 |Q - Q_refined| 2^p / (2^p - 1), solver tolerance) (Roache's Grid Convergence "
+        "max(3 abs(Q - Q_refined) 2^p / (2^p - 1), solver tolerance) (Roache's Grid Convergence "
         "Index; p = 2k for Pk, 3 for sine modes, 4 for beam modes) and KEY_refined; costs about "
         "the refined run",
     )

@@ -69,7 +69,7 @@ from fempipe.cli.parsing import CLIError
 #: 12 and alpha = pi/2, v = 10 on P3:16).
 SHOOT_RTOL = 1e-5
 #: Default --shoot-rtol with --error-estimate: the estimates' floor is the
-#: shooting tolerance (README, Error estimates), and the discretization error of
+#: shooting tolerance (docs, Error estimates), and the discretization error of
 #: a P3:16 cycle is about 1e-7, so 1e-5 would hide it under the floor.
 ERROR_ESTIMATE_SHOOT_RTOL = 1e-7
 

@@ -27,7 +27,7 @@ those out of it (``plane`` "out", the same keys, their own mode numbers
 carried from v = 0), ``stable`` and ``max_real`` (the largest Re lambda)
 are those of both planes together.  On a buckled state of the standing pipe
 (alpha = pi) the out-of-plane spectrum has lambda = 0 exactly, the rotation
-of the buckled shape about the vertical: neutral, not unstable (README, "Out
+of the buckled shape about the vertical: neutral, not unstable (docs, "Out
 of the plane").  With ``--planar`` the points are ``{"v", "stable",
 "max_real", "theta_tip", "eigenvalues": [{"mode", "re", "im", "Omega_re",
 "Omega_im"}, ...]}`` and the top level ``"modes", "params",
@@ -211,7 +211,7 @@ def _print_table(result: dict, locus, out_locus) -> None:
         "dimensions, 'in' and 'out' each plane's, 'max Re lam' both planes'"
     )
     _table(result, locus, "eigenvalues", "stable", "max_real", planes=True)
-    print("out of the plane (README, 'Out of the plane'):")
+    print("out of the plane (docs, 'Out of the plane'):")
     _table(
         result,
         out_locus,

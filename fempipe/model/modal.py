@@ -26,7 +26,7 @@ class Modal:
     ``basis="sine"`` (default): the paper's modes, Eq. (22),
         phi_r(xi) = sin(k_r xi), k_r = (2r - 1) pi / 2, r = 1..N: the
         clamped-free string modes.  They also have theta''(0) = 0, which the
-        true solution does not, so the method converges as N^-3 (README,
+        true solution does not, so the method converges as N^-3 (docs,
         "Conventions and derivations").  K = diag(k_r^2 / 2).
     ``basis="beam"``: the slopes of the clamped-free Euler-Bernoulli beam modes,
         psi_r(xi) = phi_r'(xi) / lambda_r with
@@ -116,7 +116,7 @@ class Modal:
         """Order p of the error ~ N^-p in tip values, v_cr and eigenvalues.
 
         :data:`EXPECTED_ORDER`: 3 for the sine modes, 4 for the beam modes
-        (README, "Convergence of the two modal bases").
+        (docs, "Convergence of the two modal bases").
         """
         return EXPECTED_ORDER[self.basis]
 
@@ -153,7 +153,7 @@ class Modal:
 
 
 #: Order p of the error ~ N^-p of a modal discretization in tip values, v_cr
-#: and eigenvalues, per basis (README, "Convergence of the two modal bases").
+#: and eigenvalues, per basis (docs, "Convergence of the two modal bases").
 EXPECTED_ORDER = {"sine": 3.0, "beam": 4.0}
 
 

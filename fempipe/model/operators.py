@@ -338,7 +338,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, q, qdot) -> float:
-        """T = (1/2) \\int_0^1 |r_dot|^2 + (Gamma/2) |r_dot(1)|^2 = (1/2) q'^T M(q) q'."""
+        """``T = (1/2) \\int_0^1 |r_dot|^2 + (Gamma/2) |r_dot(1)|^2 = (1/2) q'^T M(q) q'``."""
         fl = self.fields(q, qdot)
         rdot = self.quad.cumulative(fl.theta_dot[:, None] * fl.normal)
         T = 0.5 * float(self.w @ np.einsum("qc,qc->q", rdot, rdot))

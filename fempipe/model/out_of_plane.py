@@ -4,7 +4,7 @@ A round pipe is free to leave the plane of its static deformation.  This
 module gives the linear problem of that motion about any planar static state
 theta^s of Eq. (31a), on the same discretizations as the planar model; the
 stability solvers run on it unchanged (:class:`OutOfPlaneModel`).  The
-derivation is in the README ("Out of the plane"); in short:
+derivation is in the docs ("Out of the plane"); in short:
 
 * **The unknown.**  The tangent of the deformed pipe is
   t = cos(psi) (cos theta, sin theta, 0) + sin(psi) e_3 in the pipe's frame
@@ -56,7 +56,7 @@ out-of-plane spectrum is the in-plane spectrum (alpha = 0, and the straight
 branch at alpha = pi).  On the buckled branches of the standing pipe
 (sin alpha = 0, theta^s != 0) the rotation of the buckled shape about the
 vertical is a neutral mode: psi = sin(theta^s) (w = eta^s, the rotated
-static shape) solves K psi = 0 exactly in the continuum (README).  A
+static shape) solves K psi = 0 exactly in the continuum (docs).  A
 discretization does not contain sin(theta^s) exactly: for its L2 projection
 x, ||K x|| / (||K|| ||x||) is O(h^4) on P1 to P3 elements (measured: 3.4e-3,
 2.7e-4, 1.7e-5, 1.1e-6 on P3 with 4 to 32 elements), and the smallest

@@ -1,6 +1,6 @@
 """The variant terms of the pipe: an end mass and external viscous damping.
 
-Zero by default (:class:`~fempipe.model.params.Params`; README, "Variants of
+Zero by default (:class:`~fempipe.model.params.Params`; docs, "Variants of
 the pipe"); the springs are :mod:`fempipe.model.springs`.  The derivations
 are in :mod:`fempipe.model.weak_form`.
 """

@@ -34,7 +34,7 @@ centerline: the generalised inertia force.  The mass matrix is therefore
 ``M_ij = \\int_0^1 (C phi_i n) . (C phi_j n)``, symmetric positive definite.
 
 The last four rows are the variants of the pipe (:class:`~fempipe.model.params.Params`,
-scaled as Eq. (19); README, "Variants of the pipe"), each zero by default:
+scaled as Eq. (19); docs, "Variants of the pipe"), each zero by default:
 
 * an end mass Gamma = M_e/((m+M) L) at xi = 1 (a point mass without fluid):
   its weight adds gamma Gamma sin(theta + alpha) to the gravity lever

@@ -169,7 +169,7 @@ class Comparison:
 
     @property
     def relative_difference(self) -> float | None:
-        """(user - fempipe) / |fempipe|; None where fempipe's value is 0 or missing."""
+        """``(user - fempipe) / |fempipe|``; None where fempipe's value is 0 or missing."""
         if self.fempipe is None or self.fempipe == 0.0:
             return None
         return self.difference / abs(self.fempipe)
@@ -181,7 +181,7 @@ class Comparison:
 
     @property
     def resolved(self) -> bool | None:
-        """|user - fempipe| > fempipe's error estimate; None without an estimate."""
+        """``|user - fempipe|`` > fempipe's error estimate; None without an estimate."""
         if self.difference is None or self.error_estimate is None:
             return None
         return bool(abs(self.difference) > self.error_estimate)

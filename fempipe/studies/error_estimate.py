@@ -29,7 +29,7 @@ Refinement (:func:`refine`): finite elements are h-refined (every element
 halved, the same degree); the modal Galerkin method doubles its number of
 modes, plus one for an odd N (the sine modes' tip error alternates with the
 parity of N, so an odd N is compared with an odd refinement), with the same
-basis.  Orders (:func:`expected_order`, README,
+basis.  Orders (:func:`expected_order`, docs,
 "Conventions and derivations"): Lagrange P_k elements converge as h^(2k) in
 the static tip values (nodal superconvergence in 1-D), the eigenvalues and
 v_cr; the sine modes as N^-3; another modal basis as its class states
@@ -77,7 +77,7 @@ __all__ = [
 SAFETY_FACTOR = 3.0
 #: The refinement ratio of :func:`refine`: elements halved, modes doubled.
 RATIO = 2.0
-#: The order of the sine modes in N (README, "Why the sine modes converge only
+#: The order of the sine modes in N (docs, "Why the sine modes converge only
 #: algebraically").
 SINE_ORDER = 3.0
 
@@ -157,7 +157,7 @@ def expected_order(disc, params=None) -> float | None:
         converges as h^3 at best (min(2k, 3)); every beam mode has
         theta''(1) = 0, which an end mass or a spring at the tip violates
         (order 2), and a continuous third derivative, which a spring inside
-        the pipe violates (order 3).  The sine modes keep N^-3 (README,
+        the pipe violates (order 3).  The sine modes keep N^-3 (docs,
         "Variants of the pipe").
     """
     base = _paper_order(disc)

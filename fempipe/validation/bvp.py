@@ -1,7 +1,7 @@
 """An independent solver of the static problem, for checking the weak form.
 
 Eq. (31a) in strong form, with the variants of the pipe (an end mass Gamma at
-xi = 1 and linear springs (kappa_j, xi_j); README, "Variants of the pipe"), is
+xi = 1 and linear springs (kappa_j, xi_j); docs, "Variants of the pipe"), is
 the boundary-value problem
 
     theta'' = gamma (1 - xi + Gamma) sin(theta + alpha) + v^2 sin(theta(1) - theta)

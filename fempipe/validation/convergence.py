@@ -21,7 +21,7 @@ theta''(0) = gamma sin(alpha) + v^2 sin(theta(1)) != 0.  Integrating the sine
 coefficient c_r = 2 int theta sin(k_r xi) by parts three times leaves
 c_r = -2 theta''(0) / k_r^3 + O(k_r^-4), so the truncation error in the
 energy norm is O(N^(-3/2)) and functionals and eigenvalues (the square of it)
-converge as N^-3 (README, The model: conventions and derivations).
+converge as N^-3 (docs, "Conventions and derivations").
 """
 
 from __future__ import annotations
@@ -164,7 +164,7 @@ def study_checks(study: Study, tag: str, order_tol: float, source_order: str) ->
             reference="0.5 < p < 6",
             why="θ''(0) = 0 of every sine mode is violated by the solution: algebraic, "
             "not spectral, convergence (order 3 in N)",
-            source="README, The model: why the sine modes converge only algebraically; "
+            source="docs, Conventions and derivations: why the sine modes converge only algebraically; "
             "measured here",
             category="numerics",
         )

@@ -1,7 +1,7 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
 :mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane of a planar
-static state (README, "Out of the plane").  This case checks it four ways and
+static state (docs, "Out of the plane").  This case checks it four ways and
 reports what it finds:
 
 (a) **The straight pipe.**  Hanging (alpha = 0), and standing below buckling

@@ -104,7 +104,7 @@ def run(quick: bool = False) -> CaseResult:
             mirror_dev,
             1e-10,
             why="Eq. (20) is exactly odd under (θ, α) → (−θ, −α); only Newton's tolerance differs",
-            source="README, The model (the symmetry); every term of Eq. (20) is odd under the map",
+            source="docs, Conventions and derivations (the symmetry); every term of Eq. (20) is odd under the map",
         ),
         holds(
             "paper_alpha_minus_pi",
@@ -147,7 +147,7 @@ def run(quick: bool = False) -> CaseResult:
             buck_dev,
             1e-10,
             why="θ → −θ maps Eq. (20) at α = π onto itself",
-            source="paper Sec. 5 ('two symmetric branches'); README, The model (the symmetry)",
+            source="paper Sec. 5 ('two symmetric branches'); docs, Conventions and derivations (the symmetry)",
         )
     )
     buckled = {

@@ -9,7 +9,7 @@ another method (spectral elements in eta).  Both are converged far below the
 agreement asked for:
 
 * fempipe's FE P3:16 (the suite's converged mesh): its v_cr of the paper's
-  hanging pipe equals P3:64 to 3e-10 (README), the variant terms converge at
+  hanging pipe equals P3:64 to 3e-10 (docs), the variant terms converge at
   the element order (end mass, damping, a spring on a node; a spring inside
   an element lowers the order to 3, so the cases put springs on nodes);
 * the classical solver on Legendre elements of degree p + 2 = 18: p = 16 and

@@ -5,7 +5,7 @@ terms linear in theta^d gives Eq. (31b), discretized as Eq. (32):
 
     M^d q_ddot + C^d q_dot + K^d q = 0,
 
-with M^d, C^d, K^d of Eqs. (33a)-(33c) (README, "The model").  They are the
+with M^d, C^d, K^d of Eqs. (33a)-(33c) (docs, "The model").  They are the
 Jacobians of the residual of Eq. (20) with respect to q'', q' and q at the
 static state, so they are taken from :meth:`fempipe.model.operators.PipeModel.jacobians`
 and never written a second time.  With theta^d ∝ e^{lambda tau} the quadratic
@@ -30,7 +30,7 @@ modes approximate the continuum.  The rule used here (:func:`resolution`):
    (and so are all lower ones).  P3:16 resolves 27 modes, P3:256 423,
    modal N resolves N - 1: the N-th sine mode is always 8-9 % off
    because a sine basis has theta''(0) = 0 while the clamped-free beam's
-   modes do not (README, "Conventions and derivations"); the beam basis
+   modes do not (docs, "Conventions and derivations"); the beam basis
    (``Modal(N, basis="beam")``) is made of these modes and resolves all N.
 2. An eigenvector of the actual problem (any static state, any v) is expanded
    in the canonical modes (an M(0)-orthonormal basis).  The eigenvalue is
@@ -122,7 +122,7 @@ Kelvin-Voigt roots near -1/mu), are left as they are, so divergence, folds
 and branch points do not depend on mu_h.  Every function of this package
 applies it: spectra, root loci, events, v_cr, maps and the criterion
 (dense and sparse).  It has no time-domain meaning, and the time integrators
-refuse it (:func:`fempipe.model.dynamics_problem.refuse_hysteretic`).  README, "Conventions
+refuse it (:func:`fempipe.model.dynamics_problem.refuse_hysteretic`).  docs, "Conventions
 and derivations", has the derivation and the checks.
 
 Modules

@@ -27,7 +27,7 @@ The observed order is the least-squares slope of log(error) against
 log(dofs) over the asymptotic range: the finest (at most three) consecutive
 members whose error is above ten times the reference's error estimate and
 the solver tolerance (so that the reference's own error does not bend the
-fit).  Theory (README, "Conventions and derivations"): P_k converges as
+fit).  Theory (docs, "Conventions and derivations"): P_k converges as
 h^(2k) in tip values, v_cr and eigenvalues (nodal superconvergence), the sine
 modes as N^-3, the beam modes as given by ``Modal.expected_order``.
 """

@@ -118,7 +118,7 @@ class ConvergenceStudy:
         raise KeyError(family)
 
     def to_dict(self) -> dict:
-        """The contract of ``fempipe convergence --json`` (see the README)."""
+        """The contract of ``fempipe convergence --json`` (see the docs)."""
         q = self.quantity
         out = {
             "quantity": getattr(q, "name", None),
