@@ -41,14 +41,17 @@ csv_file.write_text(
 # ``--fe P2:8`` keeps it quick (the default is P3:16); ``--json`` prints the contract's keys.
 buffer = io.StringIO()
 with contextlib.redirect_stdout(buffer):
-    status = fempipe_cli(["compare", str(csv_file), "--fe", "P2:8", "--json",
-                          "--out", str(workdir / "out")])
+    status = fempipe_cli(
+        ["compare", str(csv_file), "--fe", "P2:8", "--json", "--out", str(workdir / "out")]
+    )
 result = json.loads(buffer.getvalue())
 print(f"exit status {status}; files written: {sorted(p.name for p in (workdir / 'out').iterdir())}")
 for row in result["rows"]:
-    print(f"{row['label']:8s} {row['quantity']:9s} user {row['user']:.8f} fempipe "
-          f"{row['fempipe']:.8f} difference {row['difference']:+.2e} (estimate "
-          f"{row['error_estimate']:.1e}) {'resolved' if row['resolved'] else 'not resolved'}")
+    print(
+        f"{row['label']:8s} {row['quantity']:9s} user {row['user']:.8f} fempipe "
+        f"{row['fempipe']:.8f} difference {row['difference']:+.2e} (estimate "
+        f"{row['error_estimate']:.1e}) {'resolved' if row['resolved'] else 'not resolved'}"
+    )
 
 #: fempipe's v_cr of the hanging pipe on P2:8 (checked against the classical straight-pipe v_cr)
 RESULT = next(r["fempipe"] for r in result["rows"] if r["quantity"] == "v_cr")

@@ -26,8 +26,10 @@ x_fe, x_n3 = [], []
 for v, a, b in zip(flows, fe_sols, n3_sols, strict=True):
     x_fe.append(fempipe.tip_values(fe.disc, a.q, alpha)["X_tip"])
     x_n3.append(fempipe.tip_values(n3.disc, b.q, alpha)["X_tip"])
-    print(f"v = {v:.0f}: X_tip P3:8 = {x_fe[-1]:.8f}, N = 3 = {x_n3[-1]:.8f}, "
-          f"N = 3 error {x_n3[-1] - x_fe[-1]:+.2e} L")
+    print(
+        f"v = {v:.0f}: X_tip P3:8 = {x_fe[-1]:.8f}, N = 3 = {x_n3[-1]:.8f}, "
+        f"N = 3 error {x_n3[-1] - x_fe[-1]:+.2e} L"
+    )
 
 #: X_g(1) at v = 4 on P3:8 (checked against scipy's solve_bvp in tests/test_gallery.py)
 RESULT = x_fe[2]

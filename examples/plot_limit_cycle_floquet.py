@@ -24,8 +24,10 @@ model = fempipe.PipeModel(fempipe.Modal(3), params)
 att = fempipe.find_attractor(model, t_max=150.0)
 cycle = att.cycle
 mult = cycle.floquet_multipliers
-print(f"{att.kind} attractor, period T = {cycle.period:.6f}, tip eta(1) in "
-      f"[{cycle.tip['eta_tip'][0]:.5f}, {cycle.tip['eta_tip'][1]:.5f}]")
+print(
+    f"{att.kind} attractor, period T = {cycle.period:.6f}, tip eta(1) in "
+    f"[{cycle.tip['eta_tip'][0]:.5f}, {cycle.tip['eta_tip'][1]:.5f}]"
+)
 print("Floquet multipliers |m|:", ", ".join(f"{abs(m):.3e}" for m in mult))
 trivial = mult[np.argmin(abs(mult - 1.0))]
 
@@ -47,5 +49,6 @@ ax2.plot(circle.real, circle.imag, "k-", lw=0.6)
 ax2.plot(mult.real, mult.imag, "o", ms=4)
 ax2.set_aspect("equal")
 ax2.set_title("Floquet multipliers", fontsize=9)
-fig.suptitle("alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3, v = 7; N = 3 sine modes",
-             fontsize=9)
+fig.suptitle(
+    "alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3, v = 7; N = 3 sine modes", fontsize=9
+)

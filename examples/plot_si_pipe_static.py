@@ -35,8 +35,10 @@ drops_mm = []
 for u, sol in zip(U, sols, strict=True):
     tip = fempipe.tip_values(disc, sol.q, pipe.alpha)
     drops_mm.append(tip["X_tip"] * pipe.L * 1e3)
-    print(f"U = {u:.0f} m/s: tip {drops_mm[-1]:6.2f} mm below the clamp, theta(1) = "
-          f"{tip['theta_tip']:.4f} rad")
+    print(
+        f"U = {u:.0f} m/s: tip {drops_mm[-1]:6.2f} mm below the clamp, theta(1) = "
+        f"{tip['theta_tip']:.4f} rad"
+    )
 
 #: the tip drop at U = 2 m/s, in units of L (checked in tests/test_gallery.py)
 RESULT = drops_mm[2] / (pipe.L * 1e3)

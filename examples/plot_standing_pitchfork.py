@@ -38,8 +38,14 @@ tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=15.0, v=0.0))
 folds = []
 for branch, direction in ((right, -1), (left, 1)):
     arc = fempipe.continuation(
-        tilted, "alpha", stop=np.pi + 0.8 * direction, q0=branch.points[-1].q,
-        ds=0.05, ds_max=0.1, direction=direction, max_steps=200,
+        tilted,
+        "alpha",
+        stop=np.pi + 0.8 * direction,
+        q0=branch.points[-1].q,
+        ds=0.05,
+        ds_max=0.1,
+        direction=direction,
+        max_steps=200,
     )
     folds += [s.value for s in arc.special if s.kind == "fold"]
 print("folds at alpha =", ", ".join(f"{a:.6f}" for a in sorted(set(np.round(folds, 9)))))

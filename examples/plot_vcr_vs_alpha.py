@@ -25,8 +25,10 @@ for a in alphas_deg:
     res = fempipe.critical_velocity(fempipe.PipeModel(disc, fempipe.Params(alpha=np.radians(a))))
     v_cr.append(res.v_cr)
     kinds.append(res.critical.type)
-    print(f"alpha = {a:3d} deg: v_cr = {res.v_cr:.5f} ({res.critical.type}, branch "
-          f"{res.critical.branch})")
+    print(
+        f"alpha = {a:3d} deg: v_cr = {res.v_cr:.5f} ({res.critical.type}, branch "
+        f"{res.critical.branch})"
+    )
 
 #: v_cr of the hanging pipe, alpha = 0 (checked against the classical straight-pipe theory)
 RESULT = v_cr[0]
