@@ -3,11 +3,11 @@
 Each script sets a module-level ``RESULT``; the test runs the script as sphinx-gallery does
 (``runpy``, ``__main__``, the Agg backend, an empty temporary working directory that must
 stay empty) and checks ``RESULT`` against a value computed here by other means: a closed
-form, an independent solver of :mod:`fempipe.validation` (scipy's ``solve_bvp`` on the strong
-form of Eq. (31a), Paidoussis' straight-pipe theory on beam modes), a symmetry, or the
-theoretical order of a convergence study.  The tolerances say which discretization error
-they allow for.  The scripts take about 20 CPU-s together, so these runs are marked slow.
-"""
+form, an independent solver of :mod:`fempipe.validation` (scipy's ``solve_bvp`` on the
+strong form of Eq. (31a); Paidoussis' straight-pipe theory on Legendre spectral elements),
+a symmetry, or the theoretical order of a convergence study.  The tolerances say which
+discretization error they allow for.  The scripts take about 12 CPU-s together, so these
+runs are marked slow."""
 
 from __future__ import annotations
 
@@ -49,11 +49,14 @@ def run_example(name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> d
 @functools.cache
 def classical_v_cr() -> float:
     """v_cr of the paper's hanging pipe (beta 0.142, gamma 18.9, mu 5e-3) by the classical
-    linear theory of the straight pipe (Paidoussis' equation on 20 beam modes, converged to
-    about 1e-9): an implementation that shares no code with fempipe's solvers."""
+    linear theory of the straight pipe (Paidoussis' equation for the lateral displacement on
+    Legendre spectral elements, p = 24, converged to about 1e-9): an implementation that
+    shares no code with fempipe's solvers."""
     from fempipe.validation.classical import StraightPipe, critical_velocity
 
-    return critical_velocity(StraightPipe(beta=0.142, gamma=18.9, mu=5e-3), v_max=10.0).v_cr
+    return critical_velocity(
+        StraightPipe(beta=0.142, gamma=18.9, mu=5e-3), v_max=10.0, method="legendre"
+    ).v_cr
 
 
 def bvp_x_tip(alpha: float, gamma: float, v: float) -> float:
@@ -112,7 +115,9 @@ def test_spectrum_argand(tmp_path, monkeypatch):
     # beta = 0.2, gamma = 0, mu = 1e-3: the classical straight pipe's flutter
     from fempipe.validation.classical import StraightPipe, critical_velocity
 
-    ref = critical_velocity(StraightPipe(beta=0.2, gamma=0.0, mu=1e-3), v_max=8.0).v_cr
+    ref = critical_velocity(
+        StraightPipe(beta=0.2, gamma=0.0, mu=1e-3), v_max=8.0, method="legendre"
+    ).v_cr
     assert g["crit"].v_cr == pytest.approx(ref, abs=1e-4)
 
 

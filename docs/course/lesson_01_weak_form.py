@@ -30,6 +30,7 @@ reproduces a closed form, and fempipe agrees with an independent ODE solver.
 import numpy as np
 
 import fempipe
+from fempipe.validation.bvp import solve_static_bvp  # section 5
 
 # Texier & Dorbolo's horizontal silicone pipe (the paper's Sec. 3.1), in SI units
 pipe = fempipe.PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=np.pi / 2)
@@ -106,8 +107,6 @@ print(f"observed order in N: {galerkin_order:.2f}")
 # :class:`fempipe.PipeModel` is the weak form of Eq. (20), written once for finite elements
 # and modes.  scipy's collocation solver on the *strong* form (with theta(1) as an unknown
 # parameter) shares no code with it.
-from fempipe.validation.bvp import solve_static_bvp
-
 model = fempipe.PipeModel(fempipe.FiniteElement(16, 2), params)
 X_fe = fempipe.tip_values(model.disc, fempipe.solve_static(model).q, params.alpha)["X_tip"]
 X_bvp = solve_static_bvp(params.alpha, params.gamma, params.v, tol=1e-11).X_tip

@@ -46,7 +46,9 @@ gauss = 0.5 * (np.polynomial.legendre.leggauss(3)[0] + 1.0)
 C, x, w = cumulative_matrix(edges, gauss)
 exact_deg2 = np.max(np.abs(C @ x**2 - x**3 / 3))
 inexact_deg4 = np.max(np.abs(C @ x**4 - x**5 / 5))
-print(f"3 Gauss points, 4 cells: C x^2 - x^3/3: {exact_deg2:.1e}; C x^4 - x^5/5: {inexact_deg4:.1e}")
+print(
+    f"3 Gauss points, 4 cells: C x^2 - x^3/3: {exact_deg2:.1e}; C x^4 - x^5/5: {inexact_deg4:.1e}"
+)
 
 fig, ax = plt.subplots(figsize=(3.4, 3.2), layout="constrained")
 ax.spy(C, markersize=3)
@@ -87,7 +89,9 @@ disc = fempipe.FiniteElement(8, 2, n_gauss=12)  # many Gauss points: this state 
 M = fempipe.PipeModel(disc, params).mass_matrix(q_state)
 asymmetry = np.max(np.abs(M - M.T))
 eigs = np.linalg.eigvalsh(M)
-print(f"mass matrix P2:8: asymmetry {asymmetry:.0e}, eigenvalues in [{eigs[0]:.2e}, {eigs[-1]:.2e}]")
+print(
+    f"mass matrix P2:8: asymmetry {asymmetry:.0e}, eigenvalues in [{eigs[0]:.2e}, {eigs[-1]:.2e}]"
+)
 
 
 def kernel_mass(n_cells: int) -> np.ndarray:
@@ -108,7 +112,9 @@ def kernel_mass(n_cells: int) -> np.ndarray:
 
 d1, d2 = (np.max(np.abs(kernel_mass(n) - M)) for n in (200, 400))
 kernel_ratio = d1 / d2
-print(f"kernel form - Gram form: {d1:.1e} (200 cells), {d2:.1e} (400 cells), ratio {kernel_ratio:.2f}")
+print(
+    f"kernel form - Gram form: {d1:.1e} (200 cells), {d2:.1e} (400 cells), ratio {kernel_ratio:.2f}"
+)
 
 # %%
 # Exercises

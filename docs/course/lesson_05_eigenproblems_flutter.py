@@ -76,8 +76,10 @@ def growth(v: float) -> float:
 
 
 K, C, _ = fempipe.PipeModel(disc, flowing.with_flow(4.0)).linearization(np.zeros(disc.n))
-print(f"at v = 4: max |K - K^T| = {np.max(np.abs(K - K.T)):.2f}, max |C - C^T| = "
-      f"{np.max(np.abs(C - C.T)):.2f}")
+print(
+    f"at v = 4: max |K - K^T| = {np.max(np.abs(K - K.T)):.2f}, max |C - C^T| = "
+    f"{np.max(np.abs(C - C.T)):.2f}"
+)
 v_bisect = brentq(growth, 4.0, 7.0, xtol=1e-10)
 v_fempipe = fempipe.critical_velocity(fempipe.PipeModel(disc, flowing), v_max=8.0).v_cr
 print(f"flutter: bisection v_cr = {v_bisect:.8f}, fempipe.critical_velocity {v_fempipe:.8f}")
@@ -92,8 +94,7 @@ for j in range(3):
 ax.axvline(0, color="k", lw=0.6)
 ax.set_xlabel("Re lambda")
 ax.set_ylabel("Im lambda")
-ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0..7, P3:8: v_cr = {v_bisect:.4f}",
-             fontsize=9)
+ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0..7, P3:8: v_cr = {v_bisect:.4f}", fontsize=9)
 ax.legend(fontsize=8)
 
 # %%

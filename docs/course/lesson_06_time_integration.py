@@ -60,7 +60,7 @@ conservative = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0, mu=
 q0, qd0 = fempipe.initial_state(conservative, mode=1, amplitude=0.5)
 steps = (0.02, 0.01, 0.005, 0.0025)
 ends = [fempipe.simulate(conservative, q0, qd0, 1.0, h_fixed=h).q[-1] for h in steps]
-diffs = np.array([np.max(np.abs(a - b)) for a, b in zip(ends, ends[1:])])
+diffs = np.array([np.max(np.abs(a - b)) for a, b in zip(ends[:-1], ends[1:], strict=True)])
 radau_orders = np.log2(diffs[:-1] / diffs[1:])
 print("successive differences:", ", ".join(f"{d:.2e}" for d in diffs))
 print("observed orders:", ", ".join(f"{p:.2f}" for p in radau_orders), "(theory 2s - 1 = 5)")

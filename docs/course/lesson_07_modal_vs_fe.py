@@ -34,7 +34,11 @@ def x_tip(disc: object) -> float:
 
 
 results = {}
-for degree, counts in {1: [2, 4, 8, 16, 32, 64, 128], 2: [1, 2, 4, 8, 16, 32], 3: [1, 2, 4, 8]}.items():
+for degree, counts in {
+    1: [2, 4, 8, 16, 32, 64, 128],
+    2: [1, 2, 4, 8, 16, 32],
+    3: [1, 2, 4, 8],
+}.items():
     discs = [fempipe.FiniteElement(n, degree) for n in counts]
     results[f"P{degree}"] = (
         np.array([d.n for d in discs]),
@@ -54,8 +58,10 @@ for label, (d, e) in results.items():
     hand_orders[label] = p
     print(f"  {label:28s} p = {p:.2f}")
 n3, n4 = results["sine modes N (the paper's)"][1][2:4]
-print(f"  errors of the paper's N = 3 and N = 4: {n3:.1e}, {n4:.1e} "
-      f"(= {n3 * pipe.L * 1e3:.2f} mm, {n4 * pipe.L * 1e3:.3f} mm)")
+print(
+    f"  errors of the paper's N = 3 and N = 4: {n3:.1e}, {n4:.1e} "
+    f"(= {n3 * pipe.L * 1e3:.2f} mm, {n4 * pipe.L * 1e3:.3f} mm)"
+)
 
 fig, ax = plt.subplots(figsize=(5.5, 4.2), layout="constrained")
 for (label, (d, e)), style in zip(results.items(), ["o-", "s-", "^-", "d--"], strict=True):
