@@ -29,7 +29,8 @@ from fempipe.cli import main as fempipe_cli
 workdir = Path(tempfile.mkdtemp(prefix="fempipe-compare-"))
 csv_file = workdir / "mine.csv"
 csv_file.write_text(
-    "# my code: N = 3 sine modes, as in validation/compare_paper_N3.csv (beta = 0.142, mu = 5e-3 are fempipe's defaults)\n"
+    "# my code: N = 3 sine modes, as in validation/compare_paper_N3.csv\n"
+    "# (beta = 0.142 and mu = 5e-3 are fempipe's defaults)\n"
     "label,alpha_deg,gamma,v,X_tip [L],theta_tip [rad],v_cr [1]\n"
     "hanging,0,18.9,,,,6.3749331\n"
     "tilted,60,18.9,4,0.86054498,-0.74357232,\n"
@@ -37,7 +38,7 @@ csv_file.write_text(
 
 # %%
 # ``fempipe compare`` in this process
-# ----------------------------------
+# ------------------------------------
 # ``--fe P2:8`` keeps it quick (the default is P3:16); ``--json`` prints the contract's keys.
 buffer = io.StringIO()
 with contextlib.redirect_stdout(buffer):

@@ -4,7 +4,7 @@ Error estimates on a result
 
 Every command takes ``--error-estimate``: fempipe recomputes the result on a refined
 discretization (elements halved, or twice the modes) and reports beside each number Q an
-estimate of its discretization error, max(3 |Q - Q_refined| 2^p / (2^p - 1), floor) with the
+estimate of its discretization error, ``max(3 |Q - Q_refined| 2^p / (2^p - 1), floor)`` with the
 theoretical order p (2k for P_k; Roache's Grid Convergence Index).  In the library:
 :func:`fempipe.refined_static_states` and :func:`fempipe.with_static_estimates` (and their
 ``stability`` and ``attractor`` siblings).  Here the static tip positions of a coarse P2:2

@@ -40,8 +40,13 @@ crit = fempipe.critical_velocity(damped, v_max=8.0)
 print(f"flutter at v_cr = {crit.v_cr:.5f}, frequency {crit.critical.frequency:.4f}")
 
 fig, ax = plt.subplots(figsize=(5, 3.6), layout="constrained")
-for k in range(locus.lam.shape[1]):
-    ax.plot(locus.lam[:, k].real, locus.lam[:, k].imag, ".-", ms=3, label=f"mode {locus.modes[k]}")
+seen = set()
+for k, mode in enumerate(locus.modes):  # a conjugate pair: two columns of one mode
+    label = None if mode in seen else f"mode {mode}"
+    seen.add(mode)
+    ax.plot(
+        locus.lam[:, k].real, locus.lam[:, k].imag, ".-", ms=3, color=f"C{mode - 1}", label=label
+    )
 ax.axvline(0.0, color="k", lw=0.6)
 ax.set_xlabel("Re lambda")
 ax.set_ylabel("Im lambda")

@@ -77,10 +77,11 @@ for name, pts in [
 # %%
 # 3. The mass matrix is a Gram matrix
 # -----------------------------------
-# The centerline's velocity is r_t = C(theta_t n), the kinetic energy (1/2) int |r_t|^2; with
-# theta_t = sum_j phi_j qdot_j it is (1/2) qdot^T M qdot with M = B^T W B, B = C(Phi n):
-# symmetric, and positive definite because C is injective.  It equals the paper's double
-# integral, after one integration by parts
+# The centerline's velocity is r_t = C(theta_t n), the kinetic energy
+# :math:`\frac12 \int |\dot r|^2`; with theta_t = sum_j phi_j qdot_j it is
+# (1/2) qdot^T M qdot with M = B^T W B, B = C(Phi n): symmetric, and positive definite
+# because C is injective.  It equals the paper's double integral, after one integration
+# by parts
 # M_ij = int int phi_i(xi) phi_j(s) cos(theta(xi) - theta(s)) (1 - max(xi, s)) ds dxi,
 # dense in (i, j), yet M qdd costs O(n): two integrations.
 params = fempipe.Params(alpha=np.pi / 2)

@@ -27,9 +27,8 @@ q = np.zeros(model.disc.n)
 errors = []
 for k in range(8):
     errors.append(np.max(np.abs(q - exact)))
-    print(
-        f"step {k}: |q - q*| = {errors[-1]:.2e}, |R| = {np.linalg.norm(model.static_residual(q)):.2e}"
-    )
+    residual = np.linalg.norm(model.static_residual(q))
+    print(f"step {k}: |q - q*| = {errors[-1]:.2e}, |R| = {residual:.2e}")
     if errors[-1] < 1e-13:
         break
     q = q + np.linalg.solve(model.static_jacobian(q, dense=True), -model.static_residual(q))
@@ -68,9 +67,7 @@ fold = next(s for s in arc.special if s.kind == "fold")
 J_fold = tilted.with_params(fempipe.Params(alpha=fold.value, gamma=12.0, v=0.0))
 sv = np.linalg.svd(J_fold.static_jacobian(fold.q, dense=True), compute_uv=False)
 fold_singularity = sv[-1] / sv[0]
-print(
-    f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq there: {fold_singularity:.1e}"
-)
+print(f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq: {fold_singularity:.1e}")
 natural_failed = False
 try:  # natural-parameter continuation: step alpha past the fold from the same branch
     q_prev = right.points[-1].q

@@ -84,18 +84,22 @@ v_bisect = brentq(growth, 4.0, 7.0, xtol=1e-10)
 v_fempipe = fempipe.critical_velocity(fempipe.PipeModel(disc, flowing), v_max=8.0).v_cr
 print(f"flutter: bisection v_cr = {v_bisect:.8f}, fempipe.critical_velocity {v_fempipe:.8f}")
 
+# The eigenvalues for v = 0 ... 7, as dots coloured by v (no tracking: sorting by
+# frequency would mix the modes where one becomes overdamped; fempipe's
+# :func:`fempipe.root_locus` tracks them by their eigenvectors).
 vs = np.linspace(0.0, 7.0, 36)
-locus = np.array(
-    [oscillating(eigenvalues(fempipe.PipeModel(disc, flowing.with_flow(v))))[:3] for v in vs]
-)
+pts = []
+for v in vs:
+    lam = eigenvalues(fempipe.PipeModel(disc, flowing.with_flow(v)))
+    lam = lam[(np.abs(lam) < 80) & (lam.imag >= 0)]
+    pts += [(v, z) for z in lam]
 fig, ax = plt.subplots(figsize=(5, 3.4), layout="constrained")
-for j in range(3):
-    ax.plot(locus[:, j].real, locus[:, j].imag, ".-", ms=3, label=f"pair {j + 1}")
+sc = ax.scatter([z.real for _, z in pts], [z.imag for _, z in pts], c=[v for v, _ in pts], s=6)
+fig.colorbar(sc, ax=ax, label="v")
 ax.axvline(0, color="k", lw=0.6)
 ax.set_xlabel("Re lambda")
 ax.set_ylabel("Im lambda")
 ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0..7, P3:8: v_cr = {v_bisect:.4f}", fontsize=9)
-ax.legend(fontsize=8)
 
 # %%
 # Exercises

@@ -14,7 +14,8 @@ conservative motion (v = 0, mu = 0), which shrinks with the tolerance.
 # ------------
 # The eigenvalues of the linearized pipe (lesson 5) on finer meshes: the frequencies of the
 # highest modes grow like h^-2, and Kelvin-Voigt damping turns them into real rates
-# -mu omega^2, growing like h^-4.  An explicit method needs steps below 1/|lambda_max|.
+# -mu omega^2, growing like h^-4.  An explicit method needs steps below
+# :math:`1/|\lambda_{max}|`.
 import matplotlib.pyplot as plt
 import numpy as np
 import scipy.linalg as sla
