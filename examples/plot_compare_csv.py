@@ -18,6 +18,7 @@ Here the "user" is the paper's method, three sine modes (Eq. (22)).
 import contextlib
 import io
 import json
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -63,6 +64,7 @@ RESULT = next(r["fempipe"] for r in result["rows"] if r["quantity"] == "v_cr")
 quantity = fempipe.Quantity("v_cr", fempipe.Params(alpha=0.0), v_max=15.0)
 (cmp,) = fempipe.compare_values([(quantity, 6.3749331)], fempipe.FiniteElement(8, 2))
 print(f"compare_values: {cmp.to_dict()['fempipe']:.8f}, resolved: {cmp.to_dict()['resolved']}")
+shutil.rmtree(workdir)  # the temporary directory and what compare wrote into it
 
 fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")
 labels = [f"{r['label']}: {r['quantity']}" for r in result["rows"]]

@@ -15,6 +15,7 @@ a directory the workers can see.
 # %%
 # The cluster and the sweeps
 # --------------------------
+import shutil
 import tempfile
 
 import matplotlib.pyplot as plt
@@ -45,6 +46,7 @@ for p in diagram.points:
     print(
         f"{p['direction']:4s} v = {p['v']:.1f}: {p['attractor']:11s} amplitude eta(1) = {amp:.5f}"
     )
+shutil.rmtree(store)  # the point store (it lets an interrupted diagram resume)
 onset = min(p["v"] for p in diagram.points if p["attractor"] == "periodic")
 
 #: the smallest swept v with a periodic attractor (checked against the classical v_cr)
