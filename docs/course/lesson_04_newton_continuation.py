@@ -1,0 +1,99 @@
+"""
+Lesson 4: Newton's method and continuation
+==========================================
+
+What you should see: Newton's method on the discrete static problem R(q) = 0 doubling its
+correct digits at each step; natural-parameter continuation (the previous solution as the
+next guess) stopping at a fold, where the Jacobian is singular; pseudo-arclength continuation
+(Keller) turning round the fold and detecting the pitchfork of the standing pipe, which
+appears at Greenhill's heavy-column load.
+"""
+
+# %%
+# 1. Newton by hand
+# -----------------
+# R(q) is the weak form (W) of lesson 1 on a discretization; ``static_residual`` and
+# ``static_jacobian`` are its residual and analytic Jacobian.  Each step solves
+# J(q_k) dq = -R(q_k).  Near the solution the error squares at each step (quadratic
+# convergence): e_{k+1} / e_k^2 tends to a constant C.
+import matplotlib.pyplot as plt
+import numpy as np
+
+import fempipe
+
+model = fempipe.PipeModel(fempipe.FiniteElement(8, 3), fempipe.Params(alpha=np.pi / 2, v=3.0))
+exact = fempipe.solve_static(model, tol=1e-14).q
+q = np.zeros(model.disc.n)
+errors = []
+for k in range(8):
+    errors.append(np.max(np.abs(q - exact)))
+    residual = np.linalg.norm(model.static_residual(q))
+    print(f"step {k}: |q - q*| = {errors[-1]:.2e}, |R| = {residual:.2e}")
+    if errors[-1] < 1e-13:
+        break
+    q = q + np.linalg.solve(model.static_jacobian(q, dense=True), -model.static_residual(q))
+e = np.array(errors)
+ok = np.flatnonzero(e[1:] > 1e-12)  # steps not yet at round-off
+newton_constants = e[1:][ok] / e[:-1][ok] ** 2
+print("e_(k+1) / e_k^2:", ", ".join(f"{c:.3f}" for c in newton_constants))
+
+# %%
+# 2. The standing pipe: a pitchfork
+# ---------------------------------
+# Standing up (alpha = pi) and without flow, the straight pipe q = 0 solves R = 0 for every
+# gamma.  It buckles under its own weight at Greenhill's load, the first zero of
+# J_{-1/3}((2/3) sqrt(gamma)): gamma = 7.8373.  There the Jacobian is singular and two
+# mirror-image branches cross the straight one: a pitchfork.  Pseudo-arclength continuation
+# solves R(q, gamma) = 0 together with a step along the tangent, (q - q_0, gamma - gamma_0)
+# . t_0 = ds, whose Jacobian stays regular at folds; a change of sign of det J marks a
+# bifurcation, which :func:`fempipe.continuation` locates.
+disc = fempipe.FiniteElement(8, 3)
+standing = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0))
+straight = fempipe.continuation(standing, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
+pitchfork = straight.special[0]
+print(f"{pitchfork.kind} at gamma = {pitchfork.value:.8f}")
+right, _left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds=0.2)
+
+# %%
+# 3. A fold, and why natural continuation stops there
+# ---------------------------------------------------
+# Tilt the buckled pipe (gamma = 12) against its lean: continue in alpha.  The branch turns
+# back at a fold, where dR/dq is singular but the extended (arclength) system is not.
+tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=12.0, v=0.0))
+arc = fempipe.continuation(
+    tilted, "alpha", stop=np.pi + 0.8, q0=right.points[-1].q, ds=0.05, ds_max=0.1, direction=1
+)
+fold = next(s for s in arc.special if s.kind == "fold")
+J_fold = tilted.with_params(fempipe.Params(alpha=fold.value, gamma=12.0, v=0.0))
+sv = np.linalg.svd(J_fold.static_jacobian(fold.q, dense=True), compute_uv=False)
+fold_singularity = sv[-1] / sv[0]
+print(f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq: {fold_singularity:.1e}")
+natural_failed = False
+try:  # natural-parameter continuation: step alpha past the fold from the same branch
+    q_prev = right.points[-1].q
+    for a in np.linspace(np.pi, fold.value + 0.05, 25):
+        q_prev = fempipe.solve_static(
+            tilted.with_params(fempipe.Params(alpha=a, gamma=12.0, v=0.0)), q0=q_prev
+        ).q
+    jumped = fempipe.tip_values(disc, q_prev, a)["theta_tip"]
+    print(f"natural continuation past the fold landed on theta(1) = {jumped:.4f}: another branch")
+except fempipe.NewtonError as exc:
+    natural_failed = True
+    print(f"natural continuation failed past the fold: {exc}")
+
+fig, ax = plt.subplots(figsize=(5, 3.4), layout="constrained")
+th = [fempipe.tip_values(disc, p.q, p.value)["theta_tip"] for p in arc.points]
+ax.plot([p.value for p in arc.points], th, "-")
+ax.plot(fold.value, fempipe.tip_values(disc, fold.q, fold.value)["theta_tip"], "ko")
+ax.set_xlabel("alpha")
+ax.set_ylabel("theta(1)")
+ax.set_title(f"gamma = 12, v = 0, P3:8: fold at alpha = {fold.value:.4f}", fontsize=9)
+
+# %%
+# Exercises
+# ---------
+# 1. Freeze the Jacobian at q_0 (a chord method): what order do you observe?
+# 2. Continue the straight standing pipe in v at gamma = 5 (below Greenhill's load): is
+#    there a static bifurcation, or does it lose stability otherwise (lesson 5)?
+# 3. Why does a change of sign of det J detect a pitchfork but not a fold of the extended
+#    system?  (Hint: count the sign changes of the parameter's tangent component.)
