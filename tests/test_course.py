@@ -6,7 +6,7 @@ read from the lesson's globals, are checked against values from elsewhere: close
 (an exact solution, Greenhill's and the Euler-Bernoulli cantilever's characteristic
 equations, exact integrals of polynomials), the theoretical orders (k + 1, 2k, 5, N^-3),
 and independent solvers (scipy's ``solve_bvp``, the classical straight-pipe theory).  The
-lessons take about 10 CPU-s together, so their runs are marked slow.
+lessons take about 10 CPU-s together (in the default test run).
 """
 
 from __future__ import annotations
@@ -59,7 +59,6 @@ def test_the_lessons_are_lessons():
         assert sum(c.cell_type == "code" for c in nb.cells) >= 3, path.name
 
 
-@pytest.mark.slow
 def test_lesson_01_weak_form(tmp_path, monkeypatch):
     g = run_lesson("lesson_01", tmp_path, monkeypatch)
     # Eq. (19) by hand for the SI pipe
@@ -73,7 +72,6 @@ def test_lesson_01_weak_form(tmp_path, monkeypatch):
     assert abs(g["X_fe"] - g["X_bvp"]) < 1e-6
 
 
-@pytest.mark.slow
 def test_lesson_02_lagrange_elements(tmp_path, monkeypatch):
     g = run_lesson("lesson_02", tmp_path, monkeypatch)
     # against the exact solution sin(3 pi xi / 2): L2 orders k + 1, derivative k
@@ -86,7 +84,6 @@ def test_lesson_02_lagrange_elements(tmp_path, monkeypatch):
     assert g["slope_order"] == pytest.approx(2.0, abs=0.2)
 
 
-@pytest.mark.slow
 def test_lesson_03_nested_integrals(tmp_path, monkeypatch):
     g = run_lesson("lesson_03", tmp_path, monkeypatch)
     assert g["exact_deg2"] < 1e-14  # C x^2 = x^3/3 exactly with 3 Gauss points
@@ -99,7 +96,6 @@ def test_lesson_03_nested_integrals(tmp_path, monkeypatch):
     assert g["kernel_ratio"] == pytest.approx(4.0, abs=0.3)
 
 
-@pytest.mark.slow
 def test_lesson_04_newton_continuation(tmp_path, monkeypatch):
     g = run_lesson("lesson_04", tmp_path, monkeypatch)
     c = g["newton_constants"]
@@ -112,7 +108,6 @@ def test_lesson_04_newton_continuation(tmp_path, monkeypatch):
     assert g["natural_failed"] or abs(g["jumped"]) > 0.0
 
 
-@pytest.mark.slow
 def test_lesson_05_eigenproblems_flutter(tmp_path, monkeypatch):
     g = run_lesson("lesson_05", tmp_path, monkeypatch)
     x = brentq(lambda x: 1.0 + math.cos(x) * math.cosh(x), 1.0, 3.0, xtol=1e-15)
@@ -129,7 +124,6 @@ def test_lesson_05_eigenproblems_flutter(tmp_path, monkeypatch):
     assert g["v_bisect"] == pytest.approx(g["v_fempipe"], abs=1e-7)
 
 
-@pytest.mark.slow
 def test_lesson_06_time_integration(tmp_path, monkeypatch):
     g = run_lesson("lesson_06", tmp_path, monkeypatch)
     assert g["stiffness_growth"] == pytest.approx(4.0, abs=0.2)  # mu omega^2 ~ h^-4
@@ -139,7 +133,6 @@ def test_lesson_06_time_integration(tmp_path, monkeypatch):
     assert g["drifts"][1e-4] > 30 * g["drifts"][1e-6]
 
 
-@pytest.mark.slow
 def test_lesson_07_modal_vs_fe(tmp_path, monkeypatch):
     g = run_lesson("lesson_07", tmp_path, monkeypatch)
     hand = g["hand_orders"]

@@ -6,8 +6,7 @@ stay empty) and checks ``RESULT`` against a value computed here by other means: 
 form, an independent solver of :mod:`fempipe.validation` (scipy's ``solve_bvp`` on the
 strong form of Eq. (31a); Paidoussis' straight-pipe theory on Legendre spectral elements),
 a symmetry, or the theoretical order of a convergence study.  The tolerances say which
-discretization error they allow for.  The scripts take about 12 CPU-s together, so these
-runs are marked slow."""
+discretization error they allow for.  The scripts take about 12 CPU-s together (in the default test run)."""
 
 from __future__ import annotations
 
@@ -75,7 +74,6 @@ def test_there_are_enough_examples():
         assert "RESULT =" in path.read_text(), path.name
 
 
-@pytest.mark.slow
 def test_si_pipe_static(tmp_path, monkeypatch):
     g = run_example("plot_si_pipe_static", tmp_path, monkeypatch)
     p = g["pipe"].params(U=2.0)
@@ -83,7 +81,6 @@ def test_si_pipe_static(tmp_path, monkeypatch):
     assert g["RESULT"] == pytest.approx(bvp_x_tip(p.alpha, p.gamma, p.v), abs=1e-6)
 
 
-@pytest.mark.slow
 def test_convergence_study(tmp_path, monkeypatch):
     g = run_example("plot_convergence_study", tmp_path, monkeypatch)
     assert g["RESULT"] == pytest.approx(4.0, abs=0.3)  # P2 tip values: 2k = 4
@@ -92,21 +89,18 @@ def test_convergence_study(tmp_path, monkeypatch):
     assert g["study"].reference.value == pytest.approx(bvp, abs=1e-6)
 
 
-@pytest.mark.slow
 def test_fe_vs_paper_n3(tmp_path, monkeypatch):
     g = run_example("plot_fe_vs_paper_n3", tmp_path, monkeypatch)
     # P3:8 to 1e-6 (its error is about 1e-8); the N = 3 error there is 2.6e-3
     assert g["RESULT"] == pytest.approx(bvp_x_tip(np.pi / 3, 18.9, 4.0), abs=1e-6)
 
 
-@pytest.mark.slow
 def test_sine_vs_beam_modes(tmp_path, monkeypatch):
     g = run_example("plot_sine_vs_beam_modes", tmp_path, monkeypatch)
     assert g["RESULT"] == pytest.approx(3.0, abs=0.25)  # sine modes: N^-3 (README)
     assert g["orders"]["beam"] > g["RESULT"] + 0.7  # beam modes: one order more
 
 
-@pytest.mark.slow
 def test_spectrum_argand(tmp_path, monkeypatch):
     g = run_example("plot_spectrum_argand", tmp_path, monkeypatch)
     # Euler-Bernoulli cantilever: 1 + cos(x) cosh(x) = 0, x = beta_1 L = 1.8751...
@@ -121,14 +115,12 @@ def test_spectrum_argand(tmp_path, monkeypatch):
     assert g["crit"].v_cr == pytest.approx(ref, abs=1e-4)
 
 
-@pytest.mark.slow
 def test_vcr_vs_alpha(tmp_path, monkeypatch):
     g = run_example("plot_vcr_vs_alpha", tmp_path, monkeypatch)
     # P2:6 against the converged classical value: a discretization error of about 1e-3
     assert g["RESULT"] == pytest.approx(classical_v_cr(), abs=5e-3)
 
 
-@pytest.mark.slow
 def test_standing_pitchfork(tmp_path, monkeypatch):
     g = run_example("plot_standing_pitchfork", tmp_path, monkeypatch)
     # Greenhill's heavy column: J_{-1/3}((2/3) sqrt(gamma)) = 0, gamma = 7.8373...
@@ -140,7 +132,6 @@ def test_standing_pitchfork(tmp_path, monkeypatch):
     assert folds[0] + folds[1] == pytest.approx(2 * np.pi, abs=1e-6)
 
 
-@pytest.mark.slow
 def test_limit_cycle_floquet(tmp_path, monkeypatch):
     g = run_example("plot_limit_cycle_floquet", tmp_path, monkeypatch)
     # an autonomous system's periodic orbit has the multiplier 1; shooting tolerance 1e-5
@@ -149,14 +140,12 @@ def test_limit_cycle_floquet(tmp_path, monkeypatch):
     assert max(others) < 1.0  # and the cycle above a supercritical Hopf point is stable
 
 
-@pytest.mark.slow
 def test_bifurcation_continuation(tmp_path, monkeypatch):
     g = run_example("plot_bifurcation_continuation", tmp_path, monkeypatch)
     # P2:4 against the converged classical v_cr: a discretization error of about 6e-3
     assert g["RESULT"] == pytest.approx(classical_v_cr(), abs=1.5e-2)
 
 
-@pytest.mark.slow
 def test_compare_csv(tmp_path, monkeypatch):
     g = run_example("plot_compare_csv", tmp_path, monkeypatch)
     # P2:8 against the converged classical v_cr; fempipe's own estimate covers the difference
@@ -164,7 +153,6 @@ def test_compare_csv(tmp_path, monkeypatch):
     assert abs(g["RESULT"] - classical_v_cr()) < min(2e-3, row["error_estimate"])
 
 
-@pytest.mark.slow
 def test_variants(tmp_path, monkeypatch):
     g = run_example("plot_variants", tmp_path, monkeypatch)
 
@@ -180,7 +168,6 @@ def test_variants(tmp_path, monkeypatch):
     assert g["RESULT"] == pytest.approx(x**2, rel=1e-7)
 
 
-@pytest.mark.slow
 def test_error_estimates(tmp_path, monkeypatch):
     g = run_example("plot_error_estimates", tmp_path, monkeypatch)
     true = abs(g["points"][2]["X_tip"] - bvp_x_tip(np.pi / 2, 10.0, 2.0))
@@ -188,7 +175,6 @@ def test_error_estimates(tmp_path, monkeypatch):
     assert true <= g["RESULT"] <= 10 * true
 
 
-@pytest.mark.slow
 def test_dask_sweep(tmp_path, monkeypatch):
     pytest.importorskip("dask.distributed")
     g = run_example("plot_dask_sweep", tmp_path, monkeypatch)

@@ -195,7 +195,7 @@ def render_report(
         "```",
         "",
         "Reference numbers and their sources: `fempipe/validation/references/*.json`. "
-        "The literate tutorial deriving the finite-element formulation: `validation/tutorial.py`.",
+        "The course deriving the finite-element formulation, lesson by lesson: `docs/course/`.",
         "",
     ]
     return "\n".join(lines)
