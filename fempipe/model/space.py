@@ -95,23 +95,24 @@ def _dense(A) -> np.ndarray:
     return A.toarray() if hasattr(A, "toarray") else np.asarray(A, dtype=float)
 
 
+#: The pointwise quantities the local derivatives are taken with respect to, in
+#: order (3 components each): (field, basis, block of unknowns).
+_KINDS = (
+    ("u", "Phi", "q"),
+    ("u_prime", "dPhi", "q"),
+    ("u_dot", "Phi", "qdot"),
+    ("u_dot_prime", "dPhi", "qdot"),
+    ("u_ddot", "Phi", "qddot"),
+)
+
+
 class _Seeds:
-    """Phi, dPhi, tip of a discretization (dense) and the seeds of the Dual fields."""
+    """Phi, dPhi, tip of a discretization (dense), for the Dual fields."""
 
     def __init__(self, disc: Discretization) -> None:
         self.Phi = _dense(disc.Phi)
         self.dPhi = _dense(disc.dPhi)
         self.tip = np.asarray(disc.tip, dtype=float)
-        n_q, n = self.Phi.shape
-        N = 3 * n
-        # d u_c(x_q) / d U_(c', j) = delta_cc' Phi_qj, and the same for u'.
-        self.phi = np.zeros((n_q, 3, N))
-        self.dphi = np.zeros((n_q, 3, N))
-        self.tip_seed = np.zeros((1, 3, N))
-        for c in range(3):
-            self.phi[:, c, c * n : (c + 1) * n] = self.Phi
-            self.dphi[:, c, c * n : (c + 1) * n] = self.dPhi
-            self.tip_seed[0, c, c * n : (c + 1) * n] = self.tip
 
     @classmethod
     def of(cls, disc: Discretization) -> _Seeds:
@@ -119,6 +120,51 @@ class _Seeds:
         if s is None:
             s = _SEEDS[disc] = cls(disc)
         return s
+
+
+class _Blocks:
+    """The unknowns a Jacobian is taken with respect to, and the maps of the derivatives.
+
+    Pointwise quantities carry derivatives with respect to the 15 local values
+    (u, u', u_dot, u_dot', u_ddot at their own point, :data:`_KINDS`);
+    :meth:`expand` turns them into derivatives with respect to the unknowns
+    (``len(blocks) n`` directions) where an integral mixes the points, and
+    :meth:`assemble_local` tests them (the Jacobian of a local term is a sum of
+    ``Phi^T diag(d) Phi``-like products).
+    """
+
+    def __init__(self, seeds: _Seeds, blocks: tuple[str, ...]) -> None:
+        self.seeds = seeds
+        self.blocks = blocks
+        self.nt = seeds.Phi.shape[1]
+        self.N = 3 * self.nt
+        self.K = len(blocks) * self.N
+        self.kinds = [
+            (k, getattr(seeds, basis), blocks.index(block) * self.N)
+            for k, (_f, basis, block) in enumerate(_KINDS)
+            if block in blocks
+        ]
+
+    def expand(self, loc: np.ndarray) -> np.ndarray:
+        n_q = loc.shape[0]
+        L = loc.reshape(n_q, -1, len(_KINDS), 3)
+        out = np.zeros((n_q, L.shape[1], self.K))
+        for k, B, off in self.kinds:
+            part = L[:, :, k, :, None] * B[:, None, None, :]  # (n_q, r, 3, nt)
+            out[:, :, off : off + self.N] += part.reshape(n_q, L.shape[1], self.N)
+        return out.reshape(loc.shape[:-1] + (self.K,))
+
+    def assemble_local(self, loc: np.ndarray, test: np.ndarray, w: np.ndarray, J) -> None:
+        r"""Add ``\int test_i loc_(c, l) (local basis)_j`` to the Jacobian J (3 nt, K)."""
+        nt, n_q = self.nt, loc.shape[0]
+        L = loc.reshape(n_q, 3, len(_KINDS), 3) * w[:, None, None, None]
+        testT = np.ascontiguousarray(test.T)
+        for k, B, off in self.kinds:
+            Lk = L[:, :, k, :].reshape(n_q, 9)
+            # T[m, i, j] = sum_q test_qi L_qm B_qj, m = (c, c')
+            T = np.matmul(testT[None], Lk.T[:, :, None] * B[None])  # (9, nt, nt)
+            T = T.reshape(3, 3, nt, nt).transpose(0, 2, 1, 3).reshape(self.N, self.N)
+            J[:, off : off + self.N] += T
 
 
 def planar_state(q: np.ndarray) -> np.ndarray:
@@ -174,6 +220,12 @@ class SpaceModel:
         self.n_theta = disc.n
         self.n = 3 * disc.n
         self._seeds = _Seeds.of(disc)
+        self._maps: _Blocks | None = None
+        # Phi^T W and dPhi^T W: the test integrals of the two parts of the weak form.
+        self._tests = tuple(
+            np.ascontiguousarray((B * self.w[:, None]).T)
+            for B in (self._seeds.Phi, self._seeds.dPhi)
+        )
 
     def with_params(self, params: Params) -> SpaceModel:
         """The model on the same discretization with other parameters."""
@@ -189,51 +241,70 @@ class SpaceModel:
     def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> SpaceFields:
         """The kinematics at the quadrature points, with derivatives along ``blocks``.
 
-        ``blocks`` names the unknowns to differentiate with respect to, in
-        order, among ``"q"`` (U), ``"qdot"`` (U_dot) and ``"qddot"`` (U_ddot);
-        the derivatives of every field have ``len(blocks) * n`` directions.
+        U, Ud, Udd have shape (3 n,) or (S, 3 n) (S states at once); the
+        fields have a last axis of length S.  ``blocks`` names the unknowns to
+        differentiate with respect to (one state only), in order, among
+        ``"q"`` (U), ``"qdot"`` (U_dot) and ``"qddot"`` (U_ddot).
         """
         s = self._seeds
         nt = self.n_theta
-        zero = np.zeros(self.n)
-        U = np.asarray(U, dtype=float)
-        Ud = zero if Ud is None else np.asarray(Ud, dtype=float)
-        Udd = zero if Udd is None else np.asarray(Udd, dtype=float)
-        K = len(blocks) * self.n
-
-        def field(basis, seed, values, name):
-            val = basis @ values.reshape(3, nt).T
-            if name not in blocks:
-                return Dual(val)
-            der = np.zeros(val.shape + (K,))
-            k = blocks.index(name) * self.n
-            der[..., k : k + self.n] = seed
-            return Dual(val, der)
-
+        U = np.atleast_2d(np.asarray(U, dtype=float))
+        S = U.shape[0]
+        zero = np.zeros_like(U)
+        Ud = zero if Ud is None else np.atleast_2d(np.asarray(Ud, dtype=float))
+        Udd = zero if Udd is None else np.atleast_2d(np.asarray(Udd, dtype=float))
+        if blocks and S != 1:
+            raise ValueError("derivatives are taken for one state at a time")
+        maps = _Blocks(s, blocks) if blocks else None
+        values = {"u": U, "u_prime": U, "u_dot": Ud, "u_dot_prime": Ud, "u_ddot": Udd}
+        out = {}
+        for k, (name, basis, block) in enumerate(_KINDS):
+            val = np.einsum("qj,scj->qcs", getattr(s, basis), values[name].reshape(S, 3, nt))
+            loc = None
+            if maps is not None and block in blocks:
+                loc = np.zeros(val.shape + (3 * len(_KINDS),))
+                for c in range(3):
+                    loc[:, c, :, 3 * k + c] = 1.0
+            out[name] = Dual(val, None, loc)
+        tip_val = np.einsum("j,scj->cs", s.tip, U.reshape(S, 3, nt))[None]
+        tip_der = None
+        if maps is not None and "q" in blocks:
+            tip_der = np.zeros(tip_val.shape + (maps.K,))
+            off = blocks.index("q") * self.n
+            for c in range(3):
+                tip_der[0, c, 0, off + c * nt : off + (c + 1) * nt] = s.tip
+        self._maps = maps
         return space_fields(
-            field(s.Phi, s.phi, U, "q"),
-            field(s.Phi, s.phi, Ud, "qdot"),
-            field(s.Phi, s.phi, Udd, "qddot"),
-            field(s.dPhi, s.dphi, U, "q"),
-            field(s.dPhi, s.dphi, Ud, "qdot"),
-            field(s.tip[None, :], s.tip_seed, U, "q"),
+            out["u"],
+            out["u_dot"],
+            out["u_ddot"],
+            out["u_prime"],
+            out["u_dot_prime"],
+            Dual(tip_val, tip_der),
         )
+
+    def _integral(self, x: Dual, op) -> Dual:
+        """A linear map mixing the points (an integration operator) of x."""
+        maps = self._maps
+        return x.nonlocal_map(op, None if maps is None else maps.expand)
 
     # ------------------------------------------- the terms: force fields G --
     def inertia(self, fl: SpaceFields) -> Dual:
         """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
-        return fl.t_ddot.linear(self.quad.cumulative_cells).linear(self.quad.from_tip_cells)
+        return self._integral(
+            self._integral(fl.t_ddot, self.quad.cumulative_cells), self.quad.from_tip_cells
+        )
 
     def coriolis(self, fl: SpaceFields) -> Dual:
         """``2 v sqrt(beta) C^R t_dot``."""
         p = self.params
-        return (2.0 * p.v * np.sqrt(p.beta)) * fl.t_dot.linear(self.quad.from_tip_cells)
+        return (2.0 * p.v * np.sqrt(p.beta)) * self._integral(fl.t_dot, self.quad.from_tip_cells)
 
     def flow_acceleration(self, fl: SpaceFields, v_dot: float) -> Dual | None:
         """``v_dot sqrt(beta) C^R t`` (unsteady flow)."""
         if not v_dot:
             return None
-        return (v_dot * np.sqrt(self.params.beta)) * fl.t.linear(self.quad.from_tip_cells)
+        return (v_dot * np.sqrt(self.params.beta)) * self._integral(fl.t, self.quad.from_tip_cells)
 
     def follower(self, fl: SpaceFields) -> Dual:
         """``v^2 t(1)``: the jet's reaction and the fluid's centrifugal force, Eq. (14)."""
@@ -244,22 +315,23 @@ class SpaceModel:
         """``-gamma (1 - xi + Gamma) g``: the weight of the pipe and of the end mass beyond xi."""
         p = self.params
         lever = 1.0 - self.x + p.end_mass
-        return -p.gamma * lever[:, None] * self.gravity_direction[None, :]
+        return -p.gamma * lever[:, None, None] * self.gravity_direction[None, :, None]
 
     def end_mass_inertia(self, fl: SpaceFields) -> Dual | None:
         """``Gamma r_ddot(1)``: the end mass's inertia, felt by every section."""
         G = self.params.end_mass
         if not G:
             return None
-        acc = fl.t_ddot.linear(self.quad.integrate)  # (3,)
-        return G * acc[None, :]
+        acc = self._integral(fl.t_ddot, self.quad.integrate)  # (3, S)
+        return G * acc[None]
 
     def external_damping(self, fl: SpaceFields) -> Dual | None:
         """``sigma C^R C t_dot``: a viscous force -sigma r_dot along the pipe."""
         sigma = self.params.external_damping
         if not sigma:
             return None
-        return sigma * fl.t_dot.linear(self.quad.cumulative_cells).linear(self.quad.from_tip_cells)
+        rdot = self._integral(fl.t_dot, self.quad.cumulative_cells)
+        return sigma * self._integral(rdot, self.quad.from_tip_cells)
 
     def bending(self, fl: SpaceFields) -> tuple[Dual, Dual]:
         """(A, B): the variation of (1/2) \\int |t'|^2 is ``\\int A_c phi_i + B_c phi_i'``."""
@@ -270,7 +342,7 @@ class SpaceModel:
 
     def curvature_rate(self, fl: SpaceFields) -> Dual:
         """k = t x t_dot' + Omega t': the co-rotational rate of the curvature vector."""
-        Omega = dot(fl.t_prime, cross(fl.t, fl.t_dot)).linear(self.quad.cumulative_cells)
+        Omega = self._integral(dot(fl.t_prime, cross(fl.t, fl.t_dot)), self.quad.cumulative_cells)
         return cross(fl.t, fl.t_dot_prime) + fl.t_prime * Omega[:, None]
 
     def kelvin_voigt(self, fl: SpaceFields) -> tuple[Dual, Dual] | None:
@@ -280,7 +352,7 @@ class SpaceModel:
             return None
         k = self.curvature_rate(fl)
         kxt = cross(k, fl.t)
-        tail = dot(k, fl.t_prime).linear(self.quad.from_tip_cells)
+        tail = self._integral(dot(k, fl.t_prime), self.quad.from_tip_cells)
         tpxt = cross(fl.t_prime, fl.t) * tail[:, None]
         A = stack([dot(fl.dt_prime[c], kxt) + dot(fl.J[c], tpxt) for c in range(3)], axis=1)
         B = stack([dot(fl.J[c], kxt) for c in range(3)], axis=1)
@@ -320,25 +392,32 @@ class SpaceModel:
         if kv is not None:
             A, B = A + kv[0], B + kv[1]
         s = self._seeds
-        wA = A * self.w[:, None]
-        wB = B * self.w[:, None]
+        tests = self._tests
 
         def assemble(a, b):
-            # (n_q, 3, ...) -> (3, n, ...) -> (3 n, ...); None: no dependence
+            # (n_q, 3, S, ...) -> (3, n, S, ...) -> (3 n, S, ...); None: no dependence
             r = 0.0
-            if a is not None:
-                r = np.tensordot(s.Phi, a, axes=(0, 0))
-            if b is not None:
-                r = r + np.tensordot(s.dPhi, b, axes=(0, 0))
+            for x, T in ((a, tests[0]), (b, tests[1])):
+                if x is not None:
+                    r = r + (T @ x.reshape(x.shape[0], -1)).reshape((T.shape[0],) + x.shape[1:])
             r = np.moveaxis(r, 0, 1)
             return r.reshape((self.n,) + r.shape[2:])
 
-        der = None if wA.der is None and wB.der is None else assemble(wA.der, wB.der)
-        return Dual(assemble(wA.val, wB.val), der)
+        val = assemble(A.val, B.val).T  # (S, 3 n)
+        maps = self._maps
+        if maps is None:
+            return Dual(val)
+        der = assemble(A.der, B.der)
+        der = np.zeros((self.n, maps.K)) if np.isscalar(der) else der[:, 0]
+        for x, basis in ((A, s.Phi), (B, s.dPhi)):
+            if x.loc is not None:
+                maps.assemble_local(x.loc[:, :, 0], basis, self.w, der)
+        return Dual(val[0], der)
 
     def residual(self, U, Ud=None, Udd=None, v_dot: float = 0.0) -> np.ndarray:
-        """R(U, U', U''), shape (3 n,)."""
-        return self._weak_form(self.fields(U, Ud, Udd), v_dot).val
+        """R(U, U', U''), shape (3 n,); for S states (rows of (S, 3 n) arrays), (S, 3 n)."""
+        r = self._weak_form(self.fields(U, Ud, Udd), v_dot).val
+        return r if np.ndim(U) == 2 else r[0]
 
     def jacobians(self, U, Ud=None, Udd=None, v_dot: float = 0.0):
         """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized."""
@@ -361,12 +440,12 @@ class SpaceModel:
     # ------------------------------------------------------ geometry --
     def centerline_velocity(self, fl: SpaceFields) -> np.ndarray:
         """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
-        return self.quad.cumulative(fl.t_dot.val)
+        return self.quad.cumulative(fl.t_dot.val[:, :, 0])
 
     def tip_tangent(self, U) -> np.ndarray:
         """t(1), shape (3,)."""
         u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
-        return tangent(u1[None, :]).val[0]
+        return tangent(u1[None, :, None]).val[0, :, 0]
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:
@@ -376,7 +455,7 @@ class SpaceModel:
         T = 0.5 * float(self.w @ np.einsum("qc,qc->q", rd, rd))
         G = self.params.end_mass
         if G:
-            tip = self.quad.integrate(fl.t_dot.val)
+            tip = self.quad.integrate(fl.t_dot.val[:, :, 0])
             T += 0.5 * G * float(tip @ tip)
         return T
 
@@ -385,8 +464,8 @@ class SpaceModel:
         + gamma Gamma [cos(alpha) - \\int t . g]`` (zero for the straight pipe, as in the plane)."""
         fl = self.fields(U)
         p = self.params
-        tp = fl.t_prime.val
-        tg = fl.t.val @ self.gravity_direction
+        tp = fl.t_prime.val[:, :, 0]
+        tg = fl.t.val[:, :, 0] @ self.gravity_direction
         V = 0.5 * float(self.w @ np.einsum("qc,qc->q", tp, tp))
         grav = 0.5 * np.cos(p.alpha) - self.w @ ((1.0 - self.x) * tg)
         if p.end_mass:

@@ -55,8 +55,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..core.dual import Dual, stack
 
 __all__ = ["SpaceFields", "fiber_direction", "space_fields", "tangent"]
@@ -122,7 +120,7 @@ def _over(x: Dual, D: Dual) -> Dual:
 
 
 def tangent(u) -> Dual:
-    """t(u) for u of shape (m, 3) (rows (theta, a, b)): the chart."""
+    """t(u) for u of shape (m, 3, ...) (axis 1: theta, a, b): the chart."""
     P, D = _Point.of(u if isinstance(u, Dual) else Dual(u)).numerator()
     return _over(P, D)
 
@@ -200,17 +198,28 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     Pdp, Ddp = _grad(p, u_dot_prime)
     hPm, hDm = _hess(p, u_prime, u_dot)
     tdp = _over(Pdp + hPm - td * Dp[:, None] - tp * Dd[:, None] - t * (Ddp + hDm)[:, None], D)
-    # The columns of dt/du and dt'/du: the gradient and Hessian along e_c.
-    m = t.shape[0]
+    # The columns of dt/du and dt'/du: grad P [e_c], grad D [e_c] and
+    # hess P [e_c, u'], hess D [e_c, u'], written out (e_theta, e_a, e_b).
+    a, b, c, s = p.a, p.b, p.c, p.s
+    wt, wa, wb = u_prime[:, 0], u_prime[:, 1], u_prime[:, 2]
+    grads = (
+        (_vec(-p.st, p.ct, a * c + b * s), None),
+        (2.0 * _vec(a, b, s), 2.0 * a),
+        (2.0 * _vec(-b, a, -c), 2.0 * b),
+    )
+    hesses = (
+        (_vec(-p.ct * wt, -p.st * wt, c * wa + s * wb - 0.5 * (a * s - b * c) * wt), None),
+        (_vec(2.0 * wa, 2.0 * wb, c * wt), 2.0 * wa),
+        (_vec(-2.0 * wb, 2.0 * wa, s * wt), 2.0 * wb),
+    )
     J, dtp = [], []
-    for c in range(3):
-        e = np.zeros((m, 3))
-        e[:, c] = 1.0
-        e = Dual(e)
-        gP, gD = _grad(p, e)
-        Jc = _over(gP - t * gD[:, None], D)
-        hP, hD = _hess(p, e, u_prime)
-        dtp.append(_over(hP - Jc * Dp[:, None] - t * hD[:, None] - tp * gD[:, None], D))
+    for (gP, gD), (hP, hD) in zip(grads, hesses, strict=True):
+        num = gP if gD is None else gP - t * gD[:, None]
+        Jc = _over(num, D)
+        num = hP - Jc * Dp[:, None]
+        if hD is not None:
+            num = num - t * hD[:, None] - tp * gD[:, None]
+        dtp.append(_over(num, D))
         J.append(Jc)
     return SpaceFields(
         u=u,
