@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["Dual", "cross", "dot", "stack"]
+__all__ = ["Dual", "cos", "cross", "dot", "sin", "stack"]
 
 
 def _val(x):
@@ -159,12 +159,26 @@ class Dual:
         return Dual(op(self.val), None if der is None else op(der))
 
 
-def dot(x: Dual, y) -> Dual:
-    """The dot product over axis 1 of two vector fields of shape (m, 3, ...)."""
-    return (x * y).sum(axis=1) if isinstance(x, Dual) else (y * x).sum(axis=1)
+def sin(x):
+    """sin of a Dual or an array."""
+    return x.sin() if isinstance(x, Dual) else np.sin(x)
 
 
-def cross(x: Dual, y) -> Dual:
+def cos(x):
+    """cos of a Dual or an array."""
+    return x.cos() if isinstance(x, Dual) else np.cos(x)
+
+
+def dot(x, y):
+    """The dot product over axis 1 of two vector fields of shape (m, 3, ...) (Duals or arrays)."""
+    return (
+        (x * y).sum(axis=1)
+        if isinstance(x, Dual) or not isinstance(y, Dual)
+        else (y * x).sum(axis=1)
+    )
+
+
+def cross(x, y):
     """The cross product of two vector fields of shape (m, 3, ...) (over axis 1)."""
     x0, x1, x2 = x[:, 0], x[:, 1], x[:, 2]
     y0, y1, y2 = (y[:, 0], y[:, 1], y[:, 2])
@@ -173,6 +187,8 @@ def cross(x: Dual, y) -> Dual:
 
 def stack(items: Sequence, axis: int = 1) -> Dual:
     """Stack Duals (or arrays) of one shape along a leading ``axis`` of the value."""
+    if not any(isinstance(x, Dual) for x in items):
+        return np.stack(np.broadcast_arrays(*items), axis=axis)
     vals = [np.asarray(_val(x), dtype=float) for x in items]
     shape = np.broadcast_shapes(*(v.shape for v in vals))
     vals = [np.broadcast_to(v, shape) for v in vals]

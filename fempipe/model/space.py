@@ -265,7 +265,7 @@ class SpaceModel:
                 loc = np.zeros(val.shape + (3 * len(_KINDS),))
                 for c in range(3):
                     loc[:, c, :, 3 * k + c] = 1.0
-            out[name] = Dual(val, None, loc)
+            out[name] = val if maps is None else Dual(val, None, loc)
         tip_val = np.einsum("j,scj->cs", s.tip, U.reshape(S, 3, nt))[None]
         tip_der = None
         if maps is not None and "q" in blocks:
@@ -280,11 +280,13 @@ class SpaceModel:
             out["u_ddot"],
             out["u_prime"],
             out["u_dot_prime"],
-            Dual(tip_val, tip_der),
+            tip_val if maps is None else Dual(tip_val, tip_der),
         )
 
     def _integral(self, x: Dual, op) -> Dual:
         """A linear map mixing the points (an integration operator) of x."""
+        if not isinstance(x, Dual):
+            return op(x)
         maps = self._maps
         return x.nonlocal_map(op, None if maps is None else maps.expand)
 
@@ -403,10 +405,10 @@ class SpaceModel:
             r = np.moveaxis(r, 0, 1)
             return r.reshape((self.n,) + r.shape[2:])
 
-        val = assemble(A.val, B.val).T  # (S, 3 n)
         maps = self._maps
         if maps is None:
-            return Dual(val)
+            return Dual(assemble(A, B).T)  # (S, 3 n)
+        val = assemble(A.val, B.val).T
         der = assemble(A.der, B.der)
         der = np.zeros((self.n, maps.K)) if np.isscalar(der) else der[:, 0]
         for x, basis in ((A, s.Phi), (B, s.dPhi)):
@@ -440,12 +442,12 @@ class SpaceModel:
     # ------------------------------------------------------ geometry --
     def centerline_velocity(self, fl: SpaceFields) -> np.ndarray:
         """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
-        return self.quad.cumulative(fl.t_dot.val[:, :, 0])
+        return self.quad.cumulative(fl.t_dot[:, :, 0])
 
     def tip_tangent(self, U) -> np.ndarray:
         """t(1), shape (3,)."""
         u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
-        return tangent(u1[None, :, None]).val[0, :, 0]
+        return tangent(u1[None, :, None])[0, :, 0]
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:
@@ -455,7 +457,7 @@ class SpaceModel:
         T = 0.5 * float(self.w @ np.einsum("qc,qc->q", rd, rd))
         G = self.params.end_mass
         if G:
-            tip = self.quad.integrate(fl.t_dot.val[:, :, 0])
+            tip = self.quad.integrate(fl.t_dot[:, :, 0])
             T += 0.5 * G * float(tip @ tip)
         return T
 
@@ -464,8 +466,8 @@ class SpaceModel:
         + gamma Gamma [cos(alpha) - \\int t . g]`` (zero for the straight pipe, as in the plane)."""
         fl = self.fields(U)
         p = self.params
-        tp = fl.t_prime.val[:, :, 0]
-        tg = fl.t.val[:, :, 0] @ self.gravity_direction
+        tp = fl.t_prime[:, :, 0]
+        tg = fl.t[:, :, 0] @ self.gravity_direction
         V = 0.5 * float(self.w @ np.einsum("qc,qc->q", tp, tp))
         grav = 0.5 * np.cos(p.alpha) - self.w @ ((1.0 - self.x) * tg)
         if p.end_mass:

@@ -55,7 +55,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.dual import Dual, stack
+from ..core.dual import Dual, cos, sin, stack
 
 __all__ = ["SpaceFields", "fiber_direction", "space_fields", "tangent"]
 
@@ -80,7 +80,7 @@ class _Point:
     def of(cls, u: Dual) -> _Point:
         th, a, b = u[:, 0], u[:, 1], u[:, 2]
         half = th * 0.5
-        return cls(th, a, b, half.cos(), half.sin(), th.cos(), th.sin())
+        return cls(th, a, b, cos(half), sin(half), cos(th), sin(th))
 
     def numerator(self) -> tuple[Dual, Dual]:
         """(P, D): t = P / D."""
@@ -121,7 +121,7 @@ def _over(x: Dual, D: Dual) -> Dual:
 
 def tangent(u) -> Dual:
     """t(u) for u of shape (m, 3, ...) (axis 1: theta, a, b): the chart."""
-    P, D = _Point.of(u if isinstance(u, Dual) else Dual(u)).numerator()
+    P, D = _Point.of(u).numerator()
     return _over(P, D)
 
 

@@ -29,17 +29,13 @@ class _VelocityDerivative:
         self.zero = model.with_params(replace(model.params, v=0.0))
 
     def __call__(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
-        out = np.empty(Q.shape)
-        for i in range(Q.shape[0]):
-            r1 = self.unit.residual(Q[i], P[i], Acc[i])
-            r0 = self.zero.residual(Q[i], P[i], Acc[i])
-            # R(v) = R0 + v R_c + v^2 R_f: with R(1) - R(0) = R_c + R_f and
-            # R_c linear in the rates, dR/dv = R_c + 2 v R_f.
-            rf = self.unit.residual(Q[i], np.zeros_like(P[i]), np.zeros_like(Acc[i]))
-            rf = rf - self.zero.residual(Q[i], np.zeros_like(P[i]), np.zeros_like(Acc[i]))
-            rc = (r1 - r0) - rf
-            out[i] = rc + 2.0 * self.v * rf
-        return out
+        Q, P, Acc = np.atleast_2d(Q), np.atleast_2d(P), np.atleast_2d(Acc)
+        # R(v) = R0 + v R_c + v^2 R_f with R_c the Coriolis term (linear in the
+        # rates) and R_f the follower: R(1) - R(0) = R_c + R_f, and R_f is that
+        # difference at rest; dR/dv = R_c + 2 v R_f.
+        both = self.unit.residual(Q, P, Acc) - self.zero.residual(Q, P, Acc)
+        rf = self.unit.residual(Q) - self.zero.residual(Q)
+        return (both - rf) + 2.0 * self.v * rf
 
 
 class SpaceDynamics:
@@ -52,8 +48,6 @@ class SpaceDynamics:
         Unsteady flow (rule 9); default the steady ``model.params.v``.
     """
 
-    stage_residuals = None
-    stage_jacobians = None
     prefers_batched_stage_jacobians = False
 
     def __init__(
@@ -64,6 +58,17 @@ class SpaceDynamics:
         self.n = model.n
         self.autonomous = flow is None
         self.parameter_derivative = _VelocityDerivative(model) if flow is None else None
+        # The weak form takes S states at once (a last axis): the three stages
+        # of a Newton iteration are one evaluation (rule 6).
+        self.stage_residuals = self._stage_residuals if flow is None else None
+        self.stage_jacobians = self._stage_jacobians if flow is None else None
+
+    def _stage_residuals(self, Q, P, A) -> np.ndarray:
+        return self.model.residual(np.atleast_2d(Q), np.atleast_2d(P), np.atleast_2d(A))
+
+    def _stage_jacobians(self, Q, P, A):
+        out = [self.model.jacobians(q, p, a) for q, p, a in zip(Q, P, A, strict=True)]
+        return tuple(np.stack(m) for m in zip(*out, strict=True))
 
     def model_at(self, t: float) -> tuple[SpaceModel, float]:
         """The model with the flow velocity at tau = t, and v_dot there."""
