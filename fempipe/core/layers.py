@@ -22,7 +22,8 @@ The layers, in rank order (:data:`LAYERS`):
 ``analyses``
     What a user asks of the pipe, in their own order (a later one may use an
     earlier one): statics; linear stability; time integration; limit cycles;
-    bifurcation diagrams and branches of periodic orbits.  Each of these is
+    the motion in three dimensions (``analyses.space``); bifurcation
+    diagrams and branches of periodic orbits.  Each of these is
     a layer of its own below (``analyses.statics`` ... ``analyses.branches``);
     the package ``fempipe.analyses`` itself and an analysis not listed yet
     rank with the statics.
@@ -62,6 +63,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analyses.stability", ("fempipe.analyses.stability",)),
     ("analyses.dynamics", ("fempipe.analyses.dynamics",)),
     ("analyses.limit_cycle", ("fempipe.analyses.limit_cycle",)),
+    ("analyses.space", ("fempipe.analyses.space",)),
     ("analyses.branches", ("fempipe.analyses.bifurcation", "fempipe.analyses.periodic")),
     ("studies", ("fempipe.studies",)),
     ("io", ("fempipe.io",)),

@@ -1,0 +1,146 @@
+"""Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
+
+A planar limit cycle of the paper's model (:mod:`fempipe.analyses.limit_cycle`)
+is a periodic solution of the 3-D model too: its planar states are the 3-D
+model's states with a = b = 0 (:mod:`fempipe.model.space_chart`), and the
+mirror symmetry e_3 -> -e_3 keeps them there.  About such a solution the
+linearized 3-D equations split into the planar perturbations (theta) and the
+out-of-plane ones (a, b); the monodromy matrix of the 3-D model over one
+period, integrated by the same Radau integrator with its exact sensitivity,
+is block diagonal, and
+
+* its planar block is the planar model's monodromy (the same equations on the
+  same discretization: the multipliers agree to the integration tolerance);
+* its out-of-plane block (4 n multipliers for n unknowns per field) holds
+  the 2 n multipliers of out-of-plane perturbations and the 2 n of the
+  chart's gauge (:mod:`fempipe.model.space`).  The gauge relaxes at the rates
+  50 and 100 whatever the motion, so its multipliers are about e^(-50 T) and
+  smaller (measured: below 2e-6 for the hanging pipe's cycle at v = 10,
+  T = 0.27), far inside the physical ones that decide stability; the 2 n of
+  largest modulus are reported as the physics'.  (The gauge's multipliers are
+  all alike, one per point of the pipe, so their eigenvectors are not
+  resolved and cannot be told apart by their shape.)
+
+A planar cycle survives in 3-D when every out-of-plane multiplier is inside
+the unit circle.  At alpha = 0 and pi the pipe is axisymmetric: the cycle
+turned about the vertical is a cycle again, so one out-of-plane multiplier is
+exactly 1 in the continuum (its eigenvector is psi = sin theta, the rotated
+shape); it is the trivial one there, as the multiplier 1 of the planar phase.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...model.operators import PipeModel
+from ...model.space import SpaceModel, planar_state
+from ...solvers.radau import Radau
+from ..limit_cycle.results import LimitCycle
+
+__all__ = ["OutOfPlaneFloquet", "out_of_plane_floquet"]
+
+
+@dataclass(frozen=True)
+class OutOfPlaneFloquet:
+    """The out-of-plane Floquet multipliers of a planar cycle.
+
+    Attributes
+    ----------
+    multipliers : ndarray, complex
+        The out-of-plane multipliers, by decreasing modulus (the gauge's left out).
+    planar_multipliers : ndarray, complex
+        The planar block's, by decreasing modulus (the planar model's, recomputed).
+    axisymmetric : bool
+        sin(alpha) = 0: one multiplier is the neutral rotation about the vertical.
+    trivial : complex or None
+        At an axisymmetric alpha, the multiplier closest to 1 (that rotation).
+    max_nontrivial : float
+        The largest modulus of the others.
+    stable : bool
+        ``max_nontrivial < 1``: the cycle is stable against out-of-plane perturbations.
+    gauge_largest : float
+        The largest modulus among the 2 n multipliers left out as the gauge's.
+    steps : int
+        Integration steps over the period.
+    cpu_time : float
+        CPU seconds.
+    """
+
+    multipliers: np.ndarray
+    planar_multipliers: np.ndarray
+    axisymmetric: bool
+    trivial: complex | None
+    max_nontrivial: float
+    stable: bool
+    gauge_largest: float
+    steps: int
+    cpu_time: float
+
+    def to_dict(self, n_multipliers: int = 6) -> dict:
+        """JSON-able: the leading multipliers as [re, im] pairs, the verdict."""
+        return {
+            "out_of_plane_floquet_multipliers": [
+                [float(z.real), float(z.imag)] for z in self.multipliers[:n_multipliers]
+            ],
+            "max_nontrivial_out_of_plane_multiplier": self.max_nontrivial,
+            "stable_out_of_plane": self.stable,
+        }
+
+
+def out_of_plane_floquet(
+    model: PipeModel, cycle: LimitCycle, *, rtol: float = 1e-7
+) -> OutOfPlaneFloquet:
+    """The Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
+
+    Parameters
+    ----------
+    model : PipeModel
+        The planar model the cycle was computed on.
+    cycle : LimitCycle
+        The planar cycle (its state ``q0``, ``qdot0`` and ``period``).
+    rtol : float
+        Integration tolerance over the period.
+
+    Returns
+    -------
+    OutOfPlaneFloquet
+    """
+    start = time.process_time()
+    space = SpaceModel(model.disc, model.params)
+    nt = model.disc.n
+    stepper = Radau(
+        space, planar_state(cycle.q0), planar_state(cycle.qdot0), rtol=rtol, sensitivity=True
+    )
+    for _ in stepper.steps(cycle.period):
+        pass
+    S = stepper.sensitivity_matrix
+    N = 3 * nt
+    plane = np.r_[0:nt, N : N + nt]
+    out = np.r_[nt:N, N + nt : 2 * N]
+    planar = np.linalg.eigvals(S[np.ix_(plane, plane)])
+    values = np.linalg.eigvals(S[np.ix_(out, out)])
+    values = values[np.argsort(-np.abs(values), kind="stable")]
+    mu, gauge = values[: 2 * nt], values[2 * nt :]
+    axisymmetric = abs(math.sin(model.params.alpha)) < 1e-12
+    trivial = None
+    others = mu
+    if axisymmetric and mu.size:
+        k = int(np.argmin(np.abs(mu - 1.0)))
+        trivial = complex(mu[k])
+        others = np.delete(mu, k)
+    max_nontrivial = float(np.max(np.abs(others))) if others.size else 0.0
+    return OutOfPlaneFloquet(
+        multipliers=mu,
+        planar_multipliers=planar[np.argsort(-np.abs(planar), kind="stable")],
+        axisymmetric=axisymmetric,
+        trivial=trivial,
+        max_nontrivial=max_nontrivial,
+        stable=max_nontrivial < 1.0,
+        gauge_largest=float(np.abs(gauge[0])) if gauge.size else 0.0,
+        steps=stepper.stats.steps,
+        cpu_time=time.process_time() - start,
+    )
