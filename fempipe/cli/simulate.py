@@ -10,7 +10,14 @@ second half (``"attractor": "forced"``, no classification).
 
 ``--json`` prints ``{"attractor", "period", "tip": {"eta_tip": [min, max],
 "X_tip": [...], "Z_tip": [...]}, "floquet_multipliers", "steps",
-"rejected_steps", "wall_time", ...}``.  ``--out DIR`` writes simulate.json,
+"rejected_steps", "wall_time", ...}``.  Whether the planar attractor survives
+out of the plane (:func:`fempipe.analyses.space.three_dimensional_verdict`):
+``stable_3d`` (null for a motion that is not periodic) and for a cycle
+``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``; at
+alpha = 0 and pi the one closest to 1 is the neutral rotation about the
+vertical), ``max_nontrivial_out_of_plane_multiplier``,
+``stable_out_of_plane``, for an equilibrium ``stable_out_of_plane``;
+``--planar`` leaves them out.  ``--out DIR`` writes simulate.json,
 time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
 oscillating_shapes.png, pipe.gif, trajectory.pvd (+ the folder trajectory/
 of VTU frames, at most 400: the transient and three periods of the cycle) and
@@ -116,6 +123,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=num("--amplitude"),
         default="0.01",
         help="initial perturbation in rad (0.01)",
+    )
+    common.add_planar_argument(
+        g, "no out-of-plane Floquet multipliers and no stable_3d; about 5x faster for a cycle"
     )
     g.add_argument(
         "--no-shooting",
@@ -324,6 +334,10 @@ def run(args: argparse.Namespace) -> int:
             refined = _refined_attractor(model, att, q_s, flow, args, bar)
 
     result = _result(setup, traj, att, wall_time, args)
+    if att is not None and not args.planar:
+        from fempipe.analyses.space import three_dimensional_verdict
+
+        result.update(three_dimensional_verdict(model, att, rtol=shoot_rtol * 1e-2))
     if refined is not None:
         from fempipe.studies.estimates import with_attractor_estimates
 
@@ -513,6 +527,14 @@ def _print_summary(r: dict) -> None:
     if r.get("floquet_multipliers"):
         mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"])
         print(f"  |Floquet multipliers| {mus}")
+    if r.get("out_of_plane_floquet_multipliers"):
+        mus = ", ".join(
+            f"{abs(complex(a, b)):.4g}" for a, b in r["out_of_plane_floquet_multipliers"]
+        )
+        print(f"  |out-of-plane Floquet multipliers| {mus}")
+    if "stable_3d" in r:
+        verdict = {True: "stable", False: "unstable", None: "undecided"}[r["stable_3d"]]
+        print(f"  in three dimensions: {verdict}")
     print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")
     if with_errors:
         estimates.print_footer(

@@ -2,9 +2,11 @@
 
 :mod:`~fempipe.analyses.space.floquet` computes the Floquet multipliers of
 out-of-plane perturbations of a planar limit cycle on the 3-D model
-(:mod:`fempipe.model.space`).
+(:mod:`fempipe.model.space`); :func:`~fempipe.analyses.space.verdict.three_dimensional_verdict`
+says whether a planar attractor survives in three dimensions.
 """
 
 from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
+from .verdict import three_dimensional_verdict
 
-__all__ = ["OutOfPlaneFloquet", "out_of_plane_floquet"]
+__all__ = ["OutOfPlaneFloquet", "out_of_plane_floquet", "three_dimensional_verdict"]
