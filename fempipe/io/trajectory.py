@@ -146,8 +146,13 @@ def frame_data(
     numbers, computed without the per-state set-up).
     """
     if sampler is None:
-        sampler = CenterlineSampler(disc, alpha, points_per_cell)
-    s = sampler.shape(q, qdot)
+        from fempipe.model.kinematics import shape
+
+        s = shape(disc, q, alpha, points_per_cell=points_per_cell)
+        theta_dot = disc.evaluate(qdot, s.xi)
+    else:
+        s = sampler.shape(q, qdot)
+        theta_dot = sampler.evaluate(qdot)
     xi = s.xi
     # Centerline velocity r_dot(xi) = \int_0^xi theta_dot (-sin(theta+alpha), cos(theta+alpha))
     # in the global frame (X_g, Z_g): integrate at the quadrature points and
@@ -163,7 +168,7 @@ def frame_data(
 
     points = screen_points(s.X_g, s.Z_g)
     data = {f: np.asarray(getattr(s, f), dtype=float) for f in SHAPE_FIELDS}
-    data["theta_dot"] = sampler.evaluate(qdot)
+    data["theta_dot"] = theta_dot
     data["velocity"] = np.stack([vel_Z, -vel_X, np.zeros_like(xi)], axis=1)
     return points, data
 

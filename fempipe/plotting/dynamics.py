@@ -318,10 +318,11 @@ def animation_figure(
     """
     import matplotlib.pyplot as plt
 
-    from fempipe.model.kinematics import shape
+    from fempipe.io.trajectory import CenterlineSampler
 
     q = np.atleast_2d(q)
     t = np.asarray(t, dtype=float)
+    sampler = CenterlineSampler(disc, alpha, points_per_cell=2)
     period = None
     if _closed(q):
         period = float(t[-1] - t[0])
@@ -342,7 +343,7 @@ def animation_figure(
         ax.set_title(title, fontsize=9)
 
     def draw(k):
-        s = shape(disc, q[k], alpha, points_per_cell=2)
+        s = sampler.shape(q[k])
         line.set_data(s.Z_g, s.X_g)
         tip.set_data([s.Z_g[-1]], [s.X_g[-1]])
         if period is None:
@@ -375,9 +376,10 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
         artists (:func:`animation_figure`).
     n_frames : int
     full_redraw : bool
-        Draw the whole figure (layout included) for every frame, as
-        matplotlib's ``FuncAnimation(..., blit=False)`` does: the reference
-        the fast path is tested against.
+        Let matplotlib's ``FuncAnimation(..., blit=False)`` draw the whole
+        figure (layout included) for every frame and grab it as its
+        ``PillowWriter`` does (the frames ``animate`` wrote before): the
+        reference the fast path is tested against.
 
     Returns
     -------
@@ -386,28 +388,21 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
     """
     from PIL import Image
 
-    canvas = fig.canvas
     if full_redraw:
-        frames = []
-        for k in range(n_frames):
-            draw(k)
-            canvas.draw()
-            frames.append(
-                Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba()).copy()
-            )
-        return frames
+        return _redrawn_frames(fig, draw, n_frames)
+    canvas = fig.canvas
     artists = draw(0)
-    # Two full draws lay the figure out as a redraw of the running animation
-    # would (constrained layout starts from the previous positions); the
-    # layout is then fixed.
-    canvas.draw()
-    canvas.draw()
+    # The frames of a running animation are laid out from the previous
+    # frame's positions (constrained layout starts from them): lay the figure
+    # out once, then draw the background (everything but the moving artists)
+    # with the second layout, and fix that layout.
+    fig.draw_without_rendering()
+    for a in artists:
+        a.set_animated(True)
     engine = fig.get_layout_engine()
-    fig.set_layout_engine("none")
     try:
-        for a in artists:
-            a.set_animated(True)
-        canvas.draw()  # the background: everything but the moving artists
+        canvas.draw()
+        fig.set_layout_engine("none")
         background = canvas.copy_from_bbox(fig.bbox)
         size = canvas.get_width_height()
         frames = []
@@ -421,6 +416,35 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
             a.set_animated(False)
         fig.set_layout_engine(engine)
     return frames
+
+
+def _redrawn_frames(fig, draw, n_frames: int) -> list:
+    """The frames as ``FuncAnimation(fig, draw, blit=False).save(..., PillowWriter)``
+    grabs them (:func:`render_frames` with ``full_redraw``)."""
+    from io import BytesIO
+
+    from matplotlib.animation import AbstractMovieWriter, FuncAnimation
+    from PIL import Image
+
+    class Grab(AbstractMovieWriter):
+        def setup(self, fig, outfile, dpi=None):
+            super().setup(fig, outfile, dpi=dpi)
+            self.frames = []
+
+        def grab_frame(self, **savefig_kwargs):
+            buf = BytesIO()
+            self.fig.savefig(buf, **{**savefig_kwargs, "format": "rgba", "dpi": self.dpi})
+            self.frames.append(
+                Image.frombuffer("RGBA", self.frame_size, buf.getbuffer(), "raw", "RGBA", 0, 1)
+            )
+
+        def finish(self):
+            pass
+
+    writer = Grab(fps=20)
+    # Nothing is written to the file name: the writer keeps the frames.
+    FuncAnimation(fig, draw, frames=n_frames, blit=False).save("frames.gif", writer=writer)
+    return writer.frames
 
 
 def animate(
