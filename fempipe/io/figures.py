@@ -77,17 +77,18 @@ def quantize_frames(frames: Sequence) -> list:
     first = frames[0].convert("RGB").convert("P", palette=Image.Palette.ADAPTIVE)
     raw_palette = first.getpalette()
     palette = np.array(raw_palette, dtype=np.int64).reshape(-1, 3)
-    # Colors as 24-bit integers; the table maps a color to its palette index.
+    # A color as the 24-bit integer R + 256 G + 65536 B (the RGBA bytes read as
+    # one little-endian word, alpha masked); the table maps it to its palette index.
     table = np.zeros(1 << 24, dtype=np.uint8)
     known = np.zeros(1 << 24, dtype=bool)
     out = []
     for im in frames:
-        a = np.asarray(im)[..., :3].astype(np.int32)
-        color = (a[..., 0] << 16) | (a[..., 1] << 8) | a[..., 2]
+        rgba = np.ascontiguousarray(np.asarray(im.convert("RGBA"), dtype=np.uint8))
+        color = rgba.view("<u4")[..., 0] & 0xFFFFFF
         new = color[~known[color]]
         if new.size:
             new = np.unique(new)
-            rgb = np.stack([new >> 16, (new >> 8) & 255, new & 255], axis=1).astype(np.int64)
+            rgb = np.stack([new & 255, (new >> 8) & 255, new >> 16], axis=1).astype(np.int64)
             dist = ((rgb[:, None, :] - palette[None, :, :]) ** 2).sum(axis=2)
             table[new] = dist.argmin(axis=1)
             known[new] = True
