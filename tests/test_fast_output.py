@@ -217,3 +217,29 @@ def test_failed_trajectory_writes_no_index_and_no_half_frame(tmp_path, monkeypat
     assert files == [f"trajectory/frame_{k:05d}.vtu" for k in range(3)], files
     for k in range(3):
         assert read_field_data(tmp_path / files[k])["time"][0] == t[k]
+
+
+def test_bench_simulate_output_reports_the_ratio(monkeypatch):
+    """The benchmark alternates the two commands, gives --out a fresh directory that it
+    removes, and reports the median ratio (the CPU seconds faked here)."""
+    import fempipe.bench.output as bench_output
+    from fempipe.bench import available
+
+    assert available()["simulate_output"] is bench_output.bench_simulate_output
+    calls, dirs = [], []
+
+    def fake(argv, env=None):
+        assert argv[:3] == ["-m", "fempipe", "simulate"] and env == {"MPLBACKEND": "Agg"}
+        calls.append("--out" in argv)
+        if "--out" in argv:
+            dirs.append(argv[argv.index("--out") + 1])
+            assert os.path.isdir(dirs[-1])
+            return 3.5, ""
+        return 1.25, ""
+
+    monkeypatch.setattr(bench_output, "child_cpu_seconds", fake)
+    res = bench_output.bench_simulate_output(quick=True)
+    assert calls == [False, True, False, True]  # one untimed pair, then the timed pair
+    assert res["ratio"] == 2.8 and res["meets_target"] and res["files_seconds"] == 2.25
+    assert [r["cpu_seconds"] for r in res["table"]] == [1.25, 3.5]
+    assert not any(os.path.exists(d) for d in dirs)

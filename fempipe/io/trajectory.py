@@ -47,10 +47,12 @@ class CenterlineSampler:
     (``disc.evaluate`` locates every point in the mesh) and the Lagrange
     integrals of the interior points; that was 90 % of the cost of a frame.
     Here they are computed once and each state costs the products that
-    depend on it, the same operations in the same order as ``shape``, so the
-    numbers are the same bit for bit.  That is checked on the first state
-    (against ``shape`` and ``disc.evaluate``); on any difference the sampler
-    falls back to those functions for every state.
+    depend on it, the operations of ``shape`` in the same order, so the
+    numbers are the same bit for bit.  (theta at the points is
+    ``disc.basis_values(xi) @ q``: for finite elements the sum of
+    ``disc.evaluate`` without the clamped dof's term, which is 0.)  That is
+    checked on the first state (against ``shape`` and ``disc.evaluate``); on
+    any difference the sampler falls back to those functions for every state.
 
     Parameters
     ----------

@@ -365,8 +365,10 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
     :class:`matplotlib.animation.FuncAnimation`).  The moving artists are
     the last ones of their axes in drawing order (zorder 2-3, inside the axes,
     clear of the spines and titles), so a frame has the pixels of a full
-    redraw; a full redraw re-ran the constrained layout and every text of the
-    figure at each frame, which cost about 25 times the blitted frame.
+    redraw (all 47 frames of ``fempipe simulate --alpha 0 --v 10`` checked
+    equal).  A full redraw re-runs the constrained layout and every text of
+    the figure at each frame: for those 47 frames 8 CPU-s against 0.5 CPU-s
+    here (measured).
 
     Parameters
     ----------
@@ -460,8 +462,8 @@ def animate(
 
     The figure is :func:`animation_figure` (a closed orbit is drawn without
     its repeated last state), laid out once and its moving artists redrawn
-    for each frame (:func:`render_frames`); the GIF is encoded as
-    matplotlib's PillowWriter encodes it (:func:`fempipe.io.write_gif`).
+    for each frame (:func:`render_frames`); the frames share one palette
+    (:func:`fempipe.io.write_gif`).
     Written atomically to ``path``.  Returns the path.
     """
     import matplotlib.pyplot as plt
