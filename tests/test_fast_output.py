@@ -155,18 +155,23 @@ def test_vtu_frames_are_meshio_files_byte_for_byte(tmp_path):
         frames.append((pts, data, {"time": float(t[k]), "v": 10.0}))
     m = frames[0][0].shape[0]
     cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
-    fast = write_vtu_frames([tmp_path / f"fast_{k}.vtu" for k in range(t.size)], frames, cells)
+    names = [f"frame_{k}.vtu" for k in range(t.size)]
+    fast = write_vtu_frames(tmp_path / "fast", names, frames, cells)
+    assert fast == [tmp_path / "fast" / name for name in names]
     for k, (pts, data, field) in enumerate(frames):
         ref = write_vtu(tmp_path / f"ref_{k}.vtu", pts, cells, data, field)
         assert fast[k].read_bytes() == ref.read_bytes(), k
-    # A frame of another layout (one more array) is written by meshio, correctly.
+    # A frame of another layout (one more array) is written by meshio, correctly,
+    # into the existing directory, beside the files already there.
     pts, data, field = frames[0]
     odd = [(pts, {**data, "extra": data["xi"] * 2}, field)]
-    (path,) = write_vtu_frames([tmp_path / "odd.vtu"], odd, cells)
+    (path,) = write_vtu_frames(tmp_path / "fast", ["odd.vtu"], odd, cells)
     assert (
         path.read_bytes()
         == write_vtu(tmp_path / "odd_ref.vtu", pts, cells, *odd[0][1:]).read_bytes()
     )
+    assert len(list((tmp_path / "fast").iterdir())) == t.size + 1
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
 def _leftovers(directory) -> list[str]:
@@ -193,9 +198,10 @@ def test_failed_gif_writes_no_file(tmp_path, monkeypatch, frames):
     assert _leftovers(tmp_path) == []
 
 
-def test_failed_trajectory_writes_no_index_and_no_half_frame(tmp_path, monkeypatch):
-    """A trajectory that fails at a frame: the frames before it are whole files, the
-    failed one is absent (no temporary file either), and there is no .pvd index."""
+def test_failed_trajectory_writes_nothing(tmp_path, monkeypatch):
+    """A trajectory that fails at its fourth frame leaves no frame (the frames are
+    moved into place all at once), no temporary file or directory and no .pvd index;
+    a trajectory written over an older one replaces its frames."""
     import fempipe.io.trajectory as trajectory
     from fempipe.io import read_field_data
 
@@ -213,10 +219,13 @@ def test_failed_trajectory_writes_no_index_and_no_half_frame(tmp_path, monkeypat
     monkeypatch.setattr(trajectory, "frame_data", failing)
     with pytest.raises(RuntimeError, match="interrupted"):
         trajectory.write_trajectory(tmp_path / "trajectory.pvd", disc, t, q, qdot, alpha)
+    assert len(calls) == 4 and list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(trajectory, "frame_data", real)
+    trajectory.write_trajectory(tmp_path / "trajectory.pvd", disc, t, q, qdot, alpha)
+    trajectory.write_trajectory(tmp_path / "trajectory.pvd", disc, t + 1.0, q, qdot, alpha)
     files = _leftovers(tmp_path)
-    assert files == [f"trajectory/frame_{k:05d}.vtu" for k in range(3)], files
-    for k in range(3):
-        assert read_field_data(tmp_path / files[k])["time"][0] == t[k]
+    assert files == ["trajectory.pvd"] + [f"trajectory/frame_{k:05d}.vtu" for k in range(7)]
+    assert read_field_data(tmp_path / files[-1])["time"][0] == t[-1] + 1.0
 
 
 def test_bench_simulate_output_reports_the_ratio(monkeypatch):

@@ -7,10 +7,11 @@ Gravity along -y: a centerline point is ``(x, y, z) = (Z_g, -X_g, 0)``
 from __future__ import annotations
 
 import base64
+import contextlib
 import os
 import re
 import zlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -149,17 +150,22 @@ def _layout(points: np.ndarray, point_data: Mapping) -> tuple:
 
 
 def write_vtu_frames(
-    paths: Sequence[str | os.PathLike],
+    directory: str | os.PathLike,
+    names: Sequence[str],
     frames: Iterable[tuple[np.ndarray, Mapping, Mapping | None]],
     lines: np.ndarray,
 ) -> list[Path]:
-    """Write many VTU files of the same line cells, as :func:`write_vtu` writes each.
+    """Write many VTU files of the same line cells into ``directory``, as
+    :func:`write_vtu` writes each, all or none.
 
     Parameters
     ----------
-    paths : sequence of path-like
+    directory : path-like
+        Created if missing.
+    names : sequence of str
+        The file names, one per frame.
     frames : iterable of (points, point_data, field_data)
-        One per path, the arguments of :func:`write_vtu`.
+        One per name, the arguments of :func:`write_vtu`.
     lines : ndarray
         The line cells, shared by every frame.
 
@@ -172,25 +178,56 @@ def write_vtu_frames(
     The first frame is written by meshio; the others by filling its text with
     their arrays (:class:`_VTUTemplate`), byte for byte the file meshio would
     write (checked on the first frame: otherwise, or for a frame whose arrays
-    differ in name, shape or type, meshio writes it).  Each file is written
-    atomically.
+    differ in name, shape or type, meshio writes it).  The files are written
+    into a new hidden directory beside ``directory`` and moved into it once
+    all are written (:func:`_all_or_none`), so a failure leaves none of them;
+    a file per file atomic write (a temporary name, then a rename) cost twice
+    as much for the 400 small frames of a trajectory.
     """
-    from fempipe.core.files import write_text
-
     lines = np.asarray(lines)
-    template, out = None, []
-    for path, (points, point_data, field_data) in zip(paths, frames, strict=True):
-        points = np.asarray(points, dtype=float)
-        if template is not None and template.layout == _layout(points, point_data):
-            xml = template.fill(points, point_data)
-        else:
-            xml = _meshio_xml(points, lines, point_data)
-            if template is None:
-                template = _VTUTemplate(xml, points, point_data)
-                if not template.valid:
-                    template.layout = None  # never used: meshio writes every frame
-        out.append(write_text(path, _with_field_data(xml, field_data)))
-    return out
+    template = None
+    with _all_or_none(directory) as tmp:
+        for name, (points, point_data, field_data) in zip(names, frames, strict=True):
+            points = np.asarray(points, dtype=float)
+            if template is not None and template.layout == _layout(points, point_data):
+                xml = template.fill(points, point_data)
+            else:
+                xml = _meshio_xml(points, lines, point_data)
+                if template is None:
+                    template = _VTUTemplate(xml, points, point_data)
+                    if not template.valid:
+                        template.layout = None  # never used: meshio writes every frame
+            with open(tmp / name, "w", encoding="utf-8") as f:
+                f.write(_with_field_data(xml, field_data))
+    return [Path(directory) / name for name in names]
+
+
+@contextlib.contextmanager
+def _all_or_none(directory: str | os.PathLike) -> Iterator[Path]:
+    """Yield a new private directory beside ``directory``; on success move its files
+    into ``directory`` (the whole directory, if ``directory`` does not exist yet),
+    on an exception remove it.  The files of a failed write never appear."""
+    import shutil
+    import tempfile
+
+    directory = Path(directory)
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+    try:
+        yield tmp
+        # mkdtemp makes the directory private (0700): the usual permissions.
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o777 & ~mask)
+        if not directory.exists():
+            os.replace(tmp, directory)
+            return
+        for f in sorted(tmp.iterdir()):
+            os.replace(f, directory / f.name)
+        tmp.rmdir()
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 def read_field_data(path: str | os.PathLike) -> dict[str, np.ndarray]:

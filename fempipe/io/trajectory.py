@@ -20,9 +20,11 @@ not find it).  VTU
 stores line cells and point data and reads back with plain meshio; the PVD
 wrapper gives ParaView the time values.
 
-Every file is written to a temporary name and moved into place
-(:func:`fempipe.io.atomic_path`); the ``.pvd`` index is written last, so a
-reader never sees an index pointing at missing frames.
+The frames are written into a hidden directory and moved into ``NAME/``
+once all are written (:func:`fempipe.io.meshes.write_vtu_frames`: all or
+none), then the ``.pvd`` index, atomically (:func:`fempipe.io.atomic_path`),
+so a reader never sees an index pointing at missing frames, nor a half
+frame.
 """
 
 from __future__ import annotations
@@ -217,7 +219,6 @@ def write_trajectory(
     if params is not None:
         field = {k: float(getattr(params, k)) for k in ("v", "alpha", "beta", "gamma", "mu")}
     frames_dir = path.with_suffix("")
-    frames_dir.mkdir(parents=True, exist_ok=True)
     sampler = CenterlineSampler(disc, alpha, points_per_cell)
     m = sampler.xi.size
     cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
@@ -228,7 +229,7 @@ def write_trajectory(
             pts, data = frame_data(disc, q[k], qdot[k], alpha, points_per_cell, sampler)
             yield pts, data, {"time": float(t[k])} | field
 
-    write_vtu_frames([frames_dir / name for name in names], frames(), cells)
+    write_vtu_frames(frames_dir, names, frames(), cells)
     entries = [(float(tk), f"{frames_dir.name}/{name}") for tk, name in zip(t, names, strict=True)]
     lines = ['<?xml version="1.0"?>']
     lines.append('<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">')
