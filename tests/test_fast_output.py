@@ -183,6 +183,27 @@ def _leftovers(directory) -> list[str]:
     )
 
 
+def test_gif_of_transparent_frames_keeps_their_alpha(tmp_path):
+    """Frames with transparent pixels are not forced onto the opaque shared palette:
+    they are written as PillowWriter writes them (Pillow gives the GIF a
+    transparent color)."""
+    from fempipe.io import write_gif
+
+    frames = []
+    for k in range(3):
+        a = np.zeros((20, 30, 4), dtype=np.uint8)
+        a[..., 0] = 40 * k
+        a[5:15, 5 + 5 * k : 15 + 5 * k] = (0, 0, 255, 255)  # an opaque square moving right
+        frames.append(Image.fromarray(a, mode="RGBA"))  # the rest fully transparent
+    path = write_gif(tmp_path / "t.gif", frames, fps=10)
+    with Image.open(path) as gif:
+        assert gif.n_frames == 3 and "transparency" in gif.info
+        # The first frame: transparent exactly where it was (later frames are
+        # composed over the earlier ones, as GIF players show them).
+        alpha = np.asarray(gif.convert("RGBA"))[..., 3]
+        np.testing.assert_array_equal(alpha > 0, np.asarray(frames[0])[..., 3] > 0)
+
+
 def test_failed_gif_writes_no_file(tmp_path, monkeypatch, frames):
     """An encoder that fails half-way leaves neither pipe.gif nor its temporary file."""
     from fempipe.io import write_gif

@@ -134,6 +134,7 @@ class _VTUTemplate:
         )
 
     def fill(self, points: np.ndarray, point_data: Mapping) -> str:
+        """The file's text for these arrays (the cells' arrays kept from the template)."""
         arrays = {"Points": points, **point_data}
         out = [self.pieces[0]]
         for name, piece in zip(self.names, self.pieces[1:], strict=True):
