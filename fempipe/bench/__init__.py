@@ -21,8 +21,9 @@ imported by :func:`available`): :mod:`~fempipe.bench.static` (``static_path``,
 ``critical_3d``, ``stability_curve``), :mod:`~fempipe.bench.convergence`
 (``convergence_vcr``), :mod:`~fempipe.bench.startup` (``startup``),
 :mod:`~fempipe.bench.dynamics`, :mod:`~fempipe.bench.stability`
-(``critical_vs_classical``), :mod:`~fempipe.bench.bifurcation` and
-:mod:`~fempipe.bench.hopf`.  This module is the registry and the runner, with
+(``critical_vs_classical``), :mod:`~fempipe.bench.bifurcation`,
+:mod:`~fempipe.bench.hopf` and :mod:`~fempipe.bench.output`
+(``simulate_output``: the files of ``simulate --out`` against its computation).  This module is the registry and the runner, with
 the helpers the benchmarks share (:func:`best_time`,
 :func:`child_cpu_seconds`) and the cases they share (:data:`PAPER`,
 :data:`TEXIER_DORBOLO`).
@@ -69,6 +70,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench.stability",
     "fempipe.bench.bifurcation",
     "fempipe.bench.hopf",
+    "fempipe.bench.output",
 )
 
 #: The paper's reference case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2.

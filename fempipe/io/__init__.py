@@ -7,7 +7,7 @@ content or gets the complete new one.
 
 The writers live in :mod:`fempipe.core.files` (atomic files and strict
 JSON, used by the analyses' resumable stores too), :mod:`fempipe.io.tables`
-(CSV), :mod:`fempipe.io.meshes` (VTU shapes), :mod:`fempipe.io.figures` and
+(CSV), :mod:`fempipe.io.meshes` (VTU shapes), :mod:`fempipe.io.figures` (figures, animated GIFs) and
 :mod:`fempipe.io.trajectory` (ParaView time series); this package re-exports
 every public name, so ``fempipe.io.write_csv`` is the spelling to use.
 
@@ -64,7 +64,7 @@ file in one line: ``fempipe.io.read_csv("out/static.csv")["X_tip"]``.
 from __future__ import annotations
 
 from fempipe.core.files import atomic_path, json_dumps, to_jsonable, write_json, write_text
-from fempipe.io.figures import write_figure
+from fempipe.io.figures import write_figure, write_gif
 from fempipe.io.meshes import (
     SHAPE_FIELDS,
     read_field_data,
@@ -87,6 +87,7 @@ __all__ = [
     "ERROR_SUFFIX",
     "write_text",
     "write_figure",
+    "write_gif",
     "write_shapes",
     "write_vtu",
     "read_shapes",

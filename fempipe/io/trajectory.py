@@ -20,9 +20,11 @@ not find it).  VTU
 stores line cells and point data and reads back with plain meshio; the PVD
 wrapper gives ParaView the time values.
 
-Every file is written to a temporary name and moved into place
-(:func:`fempipe.io.atomic_path`); the ``.pvd`` index is written last, so a
-reader never sees an index pointing at missing frames.
+The frames are written into a hidden directory and moved into ``NAME/``
+once all are written (:func:`fempipe.io.meshes.write_vtu_frames`: all or
+none), then the ``.pvd`` index, atomically (:func:`fempipe.io.atomic_path`),
+so a reader never sees an index pointing at missing frames, nor a half
+frame.
 """
 
 from __future__ import annotations
@@ -36,16 +38,125 @@ import numpy as np
 
 from fempipe.model.discretization import Discretization
 
-__all__ = ["frame_data", "write_trajectory", "read_trajectory"]
+__all__ = ["CenterlineSampler", "frame_data", "write_trajectory", "read_trajectory"]
+
+
+class CenterlineSampler:
+    """The centerline of many states of one discretization, sampled at the same points.
+
+    :func:`fempipe.model.kinematics.shape` recomputes, for every state, what
+    depends on the sample points only: the basis at the points
+    (``disc.evaluate`` locates every point in the mesh) and the Lagrange
+    integrals of the interior points; that was 90 % of the cost of a frame.
+    Here they are computed once and each state costs the products that
+    depend on it, the operations of ``shape`` in the same order, so the
+    numbers are the same bit for bit.  (theta at the points is
+    ``disc.basis_values(xi) @ q``: for finite elements the sum of
+    ``disc.evaluate`` without the clamped dof's term, which is 0.)  That is
+    checked on the first state (against ``shape`` and ``disc.evaluate``); on
+    any difference the sampler falls back to those functions for every state.
+
+    Parameters
+    ----------
+    disc : Discretization
+    alpha : float
+    points_per_cell : int
+        As in :func:`~fempipe.model.kinematics.shape`.
+    """
+
+    def __init__(self, disc: Discretization, alpha: float, points_per_cell: int = 4) -> None:
+        from fempipe.model.kinematics import shape
+        from fempipe.model.quadrature import lagrange_integrals
+
+        self.disc, self.alpha, self.points_per_cell = disc, float(alpha), points_per_cell
+        quad = disc.quad
+        self.xi = shape(disc, np.zeros(disc.n), alpha, points_per_cell).xi
+        self._cells = np.clip(
+            np.searchsorted(quad.edges, self.xi, side="right") - 1, 0, quad.n_cells - 1
+        )
+        a, self._h = quad.edges[self._cells], quad.h[self._cells]
+        self._lag = lagrange_integrals(quad.ref_points, (self.xi - a) / self._h)
+        self._basis = disc.basis_values(self.xi)
+        self._checked = False
+
+    def _fast_shape(self, q: np.ndarray):
+        from fempipe.model.kinematics import Shape
+
+        disc, quad, alpha, xi = self.disc, self.disc.quad, self.alpha, self.xi
+        theta_q = disc.Phi @ q
+        f = np.stack(
+            [np.cos(theta_q), np.sin(theta_q), np.cos(theta_q + alpha), np.sin(theta_q + alpha)],
+            axis=1,
+        )
+        start = quad.at_edges(f)[self._cells]
+        fc = f.reshape(quad.n_cells, quad.n_gauss, 4)[self._cells]
+        integ = start + np.einsum("mk,mkc->mc", self._lag, fc) * self._h[:, None]
+        return Shape(
+            xi=xi,
+            theta=self._basis @ q,
+            varsigma=integ[:, 0] - xi,
+            eta=integ[:, 1],
+            X_g=integ[:, 2],
+            Z_g=integ[:, 3],
+        )
+
+    def _check(self, q: np.ndarray, qdot: np.ndarray | None) -> None:
+        """Compare the fast path with ``shape`` and ``disc.evaluate`` on one state, bitwise."""
+        from fempipe.model.kinematics import shape
+
+        self._checked = True
+        ref, fast = shape(self.disc, q, self.alpha, self.points_per_cell), self._fast_shape(q)
+        same = all(
+            np.array_equal(getattr(ref, f), getattr(fast, f)) for f in ("xi", *_SHAPE_ARRAYS)
+        )
+        if qdot is not None:
+            same = same and np.array_equal(self.disc.evaluate(qdot, self.xi), self._basis @ qdot)
+        if not same:
+            self._basis = None
+
+    def shape(self, q: np.ndarray, qdot: np.ndarray | None = None):
+        """:class:`~fempipe.model.kinematics.Shape` of the state q (as ``shape(disc, q, alpha)``)."""
+        q = np.asarray(q)
+        if not self._checked:
+            self._check(q, None if qdot is None else np.asarray(qdot))
+        if self._basis is None:
+            from fempipe.model.kinematics import shape
+
+            return shape(self.disc, q, self.alpha, self.points_per_cell)
+        return self._fast_shape(q)
+
+    def evaluate(self, q: np.ndarray) -> np.ndarray:
+        """theta(xi) (or theta_dot for a velocity) at the sample points, as ``disc.evaluate``."""
+        if self._basis is None:
+            return self.disc.evaluate(q, self.xi)
+        return self._basis @ np.asarray(q)
+
+
+_SHAPE_ARRAYS = ("theta", "varsigma", "eta", "X_g", "Z_g")
 
 
 def frame_data(
-    disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float, points_per_cell: int = 4
+    disc: Discretization,
+    q: np.ndarray,
+    qdot: np.ndarray,
+    alpha: float,
+    points_per_cell: int = 4,
+    sampler: CenterlineSampler | None = None,
 ):
-    """Points (m, 3) and point data of one frame (see module docstring)."""
-    from fempipe.model.kinematics import shape
+    """Points (m, 3) and point data of one frame (see module docstring).
 
-    s = shape(disc, q, alpha, points_per_cell=points_per_cell)
+    ``sampler``: a :class:`CenterlineSampler` of ``disc``, ``alpha`` and
+    ``points_per_cell``, reused over the frames of a trajectory (the same
+    numbers, computed without the per-state set-up).
+    """
+    if sampler is None:
+        from fempipe.model.kinematics import shape
+
+        s = shape(disc, q, alpha, points_per_cell=points_per_cell)
+        theta_dot = disc.evaluate(qdot, s.xi)
+    else:
+        s = sampler.shape(q, qdot)
+        theta_dot = sampler.evaluate(qdot)
     xi = s.xi
     # Centerline velocity r_dot(xi) = \int_0^xi theta_dot (-sin(theta+alpha), cos(theta+alpha))
     # in the global frame (X_g, Z_g): integrate at the quadrature points and
@@ -61,7 +172,7 @@ def frame_data(
 
     points = screen_points(s.X_g, s.Z_g)
     data = {f: np.asarray(getattr(s, f), dtype=float) for f in SHAPE_FIELDS}
-    data["theta_dot"] = disc.evaluate(qdot, xi)
+    data["theta_dot"] = theta_dot
     data["velocity"] = np.stack([vel_Z, -vel_X, np.zeros_like(xi)], axis=1)
     return points, data
 
@@ -94,7 +205,7 @@ def write_trajectory(
     Path of the .pvd file.
     """
     from fempipe.core.files import write_text
-    from fempipe.io.meshes import write_vtu
+    from fempipe.io.meshes import write_vtu_frames
 
     path = Path(path)
     if path.suffix != ".pvd":
@@ -108,15 +219,18 @@ def write_trajectory(
     if params is not None:
         field = {k: float(getattr(params, k)) for k in ("v", "alpha", "beta", "gamma", "mu")}
     frames_dir = path.with_suffix("")
-    frames_dir.mkdir(parents=True, exist_ok=True)
-    entries = []
-    for k in range(t.size):
-        pts, data = frame_data(disc, q[k], qdot[k], alpha, points_per_cell)
-        m = pts.shape[0]
-        cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
-        name = f"frame_{k:05d}.vtu"
-        write_vtu(frames_dir / name, pts, cells, data, {"time": float(t[k])} | field)
-        entries.append((float(t[k]), f"{frames_dir.name}/{name}"))
+    sampler = CenterlineSampler(disc, alpha, points_per_cell)
+    m = sampler.xi.size
+    cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
+    names = [f"frame_{k:05d}.vtu" for k in range(t.size)]
+
+    def frames():
+        for k in range(t.size):
+            pts, data = frame_data(disc, q[k], qdot[k], alpha, points_per_cell, sampler)
+            yield pts, data, {"time": float(t[k])} | field
+
+    write_vtu_frames(frames_dir, names, frames(), cells)
+    entries = [(float(tk), f"{frames_dir.name}/{name}") for tk, name in zip(t, names, strict=True)]
     lines = ['<?xml version="1.0"?>']
     lines.append('<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">')
     lines.append("  <Collection>")
