@@ -128,6 +128,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         g, "no out-of-plane Floquet multipliers and no stable_3d; about 5x faster for a cycle"
     )
     g.add_argument(
+        "--3d",
+        dest="three_d",
+        action="store_true",
+        help="integrate the 3-D model instead (fempipe.cli.simulate_space: motion, Y_tip, "
+        "whirl_rate)",
+    )
+    g.add_argument(
+        "--out-of-plane-amplitude",
+        metavar="A",
+        type=num("--out-of-plane-amplitude"),
+        default="0.01",
+        help="with --3d: initial out-of-plane rotation in rad, same sine mode (0.01)",
+    )
+    g.add_argument(
         "--no-shooting",
         action="store_true",
         help="accept a cycle when successive Poincare returns agree to 1e-6 (long integration)",
@@ -276,6 +290,10 @@ def run(args: argparse.Namespace) -> int:
     if len(setup.v) != 1:
         opt = "--U" if args.U is not None else "--v"
         raise CLIError(opt, f"simulate takes a single flow velocity, got {len(setup.v)}")
+    if args.three_d:
+        from fempipe.cli.simulate_space import run_3d
+
+        return run_3d(args, setup)
     args.shoot_rtol = shoot_rtol_of(args)
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
     amplitude, sigma, omega, mode = args.amplitude, args.sigma, args.omega, args.mode

@@ -188,7 +188,11 @@ def cross(x, y):
 def stack(items: Sequence, axis: int = 1) -> Dual:
     """Stack Duals (or arrays) of one shape along a leading ``axis`` of the value."""
     if not any(isinstance(x, Dual) for x in items):
-        return np.stack(np.broadcast_arrays(*items), axis=axis)
+        shape = np.broadcast_shapes(*(np.shape(x) for x in items))
+        out = np.empty(shape[:axis] + (len(items),) + shape[axis:])
+        for k, x in enumerate(items):
+            out[(slice(None),) * axis + (k,)] = x
+        return out
     vals = [np.asarray(_val(x), dtype=float) for x in items]
     shape = np.broadcast_shapes(*(v.shape for v in vals))
     vals = [np.broadcast_to(v, shape) for v in vals]

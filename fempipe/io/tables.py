@@ -36,6 +36,7 @@ CSV_UNITS: Mapping[str, str] = {
     "eta_tip": "L",
     "X_tip": "L",
     "Z_tip": "L",
+    "Y_tip": "L",
     "varsigma_tip": "L",
     "tip_drop": "L",
     "X_tip_m": "m",

@@ -451,6 +451,26 @@ class SpaceModel:
         u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
         return tangent(u1[None, :, None])[0, :, 0]
 
+    def centerline(self, U) -> np.ndarray:
+        """r(xi) = \\int_0^xi t at the cell edges, shape (n_cells + 1, 3), in the pipe's frame."""
+        return self.quad.at_edges(self.fields(U).t[:, :, 0])
+
+    def tip_coordinates(self, U) -> dict:
+        """The tip in the frames of the files: eta_tip (in the pipe's frame, e_2), X_tip (along
+        gravity), Z_tip (horizontal, in the plane of the static state) and Y_tip (out of it).
+
+        For a planar state they are those of :func:`fempipe.model.kinematics.tip_values`.
+        """
+        t = self.fields(U).t[:, :, 0]
+        r1 = self.w @ t  # (3,)
+        a = self.params.alpha
+        return {
+            "eta_tip": float(r1[1]),
+            "X_tip": float(np.cos(a) * r1[0] - np.sin(a) * r1[1]),
+            "Z_tip": float(np.sin(a) * r1[0] + np.cos(a) * r1[1]),
+            "Y_tip": float(r1[2]),
+        }
+
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:
         """T = (1/2) \\int |r_dot|^2 + (Gamma/2) |r_dot(1)|^2."""

@@ -7,6 +7,13 @@ says whether a planar attractor survives in three dimensions.
 """
 
 from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
+from .motion import SpaceMotion, simulate_space
 from .verdict import three_dimensional_verdict
 
-__all__ = ["OutOfPlaneFloquet", "out_of_plane_floquet", "three_dimensional_verdict"]
+__all__ = [
+    "OutOfPlaneFloquet",
+    "SpaceMotion",
+    "out_of_plane_floquet",
+    "simulate_space",
+    "three_dimensional_verdict",
+]

@@ -1,0 +1,279 @@
+"""The nonlinear motion of the pipe in three dimensions and its attractor.
+
+:func:`simulate_space` integrates the 3-D model (:mod:`fempipe.model.space`)
+from the planar static state, perturbed in the plane and out of it, with the
+Radau integrator, until the attractor is recognized on a Poincare section, and
+classifies it:
+
+* ``equilibrium``: the motion dies out;
+* ``periodic``: successive returns to the section agree; the motion is
+  ``planar`` when the tip stays in one vertical plane (for an inclined pipe,
+  the plane of its static state), ``nonplanar`` otherwise;
+* ``whirl``: a non-planar periodic motion of an axisymmetric pipe
+  (sin alpha = 0) whose tip turns about the vertical at a constant distance:
+  ``whirl_rate`` is its angular velocity (rad per unit tau, positive from
+  e_2 towards e_3, i.e. right-handed about the clamp's axis e_1);
+* ``non-periodic``: no recurrence before ``t_max`` (quasi-periodic or chaotic).
+
+The section is the tip's displacement eta_tip along e_2 crossing its static
+value upwards; a section state is located on the collocation polynomial of the
+step (the integrator's dense output) by the secant method.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...model.operators import PipeModel
+from ...model.space import SpaceModel, planar_state
+from ...solvers.radau import Radau
+from ..dynamics import initial_state
+from ..statics import solve_static
+
+__all__ = ["SpaceMotion", "out_of_plane_perturbation", "simulate_space"]
+
+TIP3_KEYS = ("eta_tip", "X_tip", "Z_tip", "Y_tip")
+
+
+@dataclass(frozen=True)
+class SpaceMotion:
+    """The attractor of a 3-D motion and the trajectory that reached it.
+
+    Attributes
+    ----------
+    kind : str
+        ``"equilibrium"``, ``"periodic"``, ``"whirl"`` or ``"non-periodic"``.
+    motion : str
+        ``"planar"`` or ``"nonplanar"`` (module docstring).
+    period : float or None
+    period_n : int or None
+        Section points per period.
+    whirl_rate : float or None
+        Angular velocity of a whirl about the vertical, rad per unit tau.
+    tip : dict
+        ``[min, max]`` of eta_tip, X_tip, Z_tip, Y_tip over the last period (or
+        the last tenth of the run).
+    planarity : float
+        How far the tip is from one vertical plane over that window: the ratio
+        of the smaller to the larger principal extent of its horizontal path
+        (axisymmetric pipe), or the out-of-plane extent over the in-plane one.
+    t, U, Udot : ndarray
+        The trajectory at every accepted step.
+    steps, rejected_steps : int
+    t_end : float
+    cpu_time : float
+    """
+
+    kind: str
+    motion: str
+    period: float | None
+    period_n: int | None
+    whirl_rate: float | None
+    tip: dict
+    planarity: float
+    t: np.ndarray = field(repr=False)
+    U: np.ndarray = field(repr=False)
+    Udot: np.ndarray = field(repr=False)
+    steps: int = 0
+    rejected_steps: int = 0
+    t_end: float = 0.0
+    cpu_time: float = 0.0
+
+    def to_dict(self) -> dict:
+        return {
+            "attractor": self.kind,
+            "motion": self.motion,
+            "period": self.period,
+            "period_n": self.period_n,
+            "whirl_rate": self.whirl_rate,
+            "tip": self.tip,
+            "planarity": self.planarity,
+            "steps": self.steps,
+            "rejected_steps": self.rejected_steps,
+            "t_end": self.t_end,
+            "cpu_time": self.cpu_time,
+        }
+
+
+def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int, amplitude: float):
+    """(a, b) of an out-of-plane rotation psi = amplitude sin((2 mode - 1) pi xi / 2) about the
+    planar state q_static: a = psi sin(theta/2) / 2, b = -psi cos(theta/2) / 2 (to first order
+    psi = 2 (a sin(theta/2) - b cos(theta/2)), the gauge g = 0), fitted in L2 at the quadrature
+    points."""
+    disc = model.disc
+    Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
+    x, w = disc.quad.x, disc.quad.w
+    theta = Phi @ q_static
+    psi = amplitude * np.sin((2 * mode - 1) * math.pi * x / 2)
+    G = Phi.T @ (w[:, None] * Phi)
+    fit = lambda f: np.linalg.solve(G, Phi.T @ (w * f))  # noqa: E731
+    return fit(0.5 * psi * np.sin(theta / 2)), fit(-0.5 * psi * np.cos(theta / 2))
+
+
+def _section_value(model: SpaceModel, U) -> float:
+    return model.tip_coordinates(U)["eta_tip"]
+
+
+def _locate(model, stepper, t0, t1, g0, g1, level):
+    """The section crossing in [t0, t1] on the step's dense output (secant, 30 iterations)."""
+    a, b, fa, fb = t0, t1, g0 - level, g1 - level
+    for _ in range(30):
+        t = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
+        t = min(max(t, a), b)
+        q, p = stepper.dense(t)
+        ft = _section_value(model, q) - level
+        if abs(ft) < 1e-13 or abs(b - a) < 1e-14:
+            return t, q, p
+        if (ft > 0) == (fb > 0):
+            b, fb = t, ft
+        else:
+            a, fa = t, ft
+    return t, q, p
+
+
+def _window_tips(model: SpaceModel, U: np.ndarray) -> dict:
+    tips = [model.tip_coordinates(u) for u in U]
+    return {k: [float(min(d[k] for d in tips)), float(max(d[k] for d in tips))] for k in TIP3_KEYS}
+
+
+def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
+    tips = np.array([[d["eta_tip"], d["Y_tip"]] for d in map(model.tip_coordinates, U)])
+    centred = tips - tips.mean(axis=0)
+    if axisymmetric:
+        sv = np.linalg.svd(centred, compute_uv=False)
+        return float(sv[1] / sv[0]) if sv[0] > 0 else 0.0
+    extent = np.ptp(tips, axis=0)
+    return float(extent[1] / extent[0]) if extent[0] > 0 else (0.0 if extent[1] == 0 else math.inf)
+
+
+def simulate_space(
+    model: PipeModel,
+    *,
+    mode: int = 1,
+    amplitude: float = 0.01,
+    out_of_plane_amplitude: float = 0.01,
+    t_max: float = 300.0,
+    rtol: float = 1e-6,
+    recurrence_tol: float = 1e-5,
+    planar_tol: float = 1e-3,
+    n_max: int = 8,
+    callback: Callable[[float], None] | None = None,
+) -> SpaceMotion:
+    """Integrate the 3-D model from the perturbed static state and classify its attractor.
+
+    Parameters
+    ----------
+    model : PipeModel
+        The planar model (its discretization and parameters); the static
+        state is its planar static state.
+    mode, amplitude : int, float
+        The in-plane perturbation (sine mode, rad), as the planar ``simulate``.
+    out_of_plane_amplitude : float
+        The out-of-plane rotation psi of the same sine mode, rad.
+    t_max : float
+        Longest integration.
+    rtol : float
+        Integration tolerance.
+    recurrence_tol : float
+        Successive section states agree to this (RMS of U, and of U_dot
+        scaled by the return time / 2 pi): periodic.
+    planar_tol : float
+        :attr:`SpaceMotion.planarity` below this: a planar motion.
+    n_max : int
+        Longest period-n looked for.
+    callback : callable, optional
+        Called with tau after every step (progress).
+    """
+    start = time.process_time()
+    space = SpaceModel(model.disc, model.params)
+    q_s = solve_static(model).q
+    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
+    a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
+    U0 = planar_state(q0)
+    nt = model.disc.n
+    U0[nt : 2 * nt], U0[2 * nt :] = a0, b0
+    level = _section_value(space, planar_state(q_s))
+    stepper = Radau(space, U0, planar_state(p0), rtol=rtol)
+    ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
+    g_old = _section_value(space, stepper.q)
+    sections: list[tuple[float, np.ndarray, np.ndarray]] = []
+    kind, period, period_n = "non-periodic", None, None
+    scale = max(1.0, float(np.sqrt(np.mean(U0**2))))
+    for t, q, p in stepper.steps(t_max):
+        ts.append(t)
+        Us.append(q)
+        Ps.append(p)
+        if callback is not None:
+            callback(t)
+        g = _section_value(space, q)
+        if g_old < level <= g:
+            sections.append(_locate(space, stepper, ts[-2], t, g_old, g, level))
+            found = _recurrence(sections, n_max, recurrence_tol, scale)
+            if found is not None:
+                period_n, period = found
+                kind = "periodic"
+                break
+        g_old = g
+        if t > 10.0 and np.sqrt(np.mean(p**2)) < 1e-8 and not sections[-2:]:
+            kind = "equilibrium"
+            break
+    t = np.array(ts)
+    U, P = np.array(Us), np.array(Ps)
+    window = t >= (t[-1] - period if period else 0.9 * t[-1])
+    axisymmetric = abs(math.sin(model.params.alpha)) < 1e-12
+    planarity = _planarity(space, U[window], axisymmetric) if kind != "equilibrium" else 0.0
+    motion = "planar" if planarity < planar_tol else "nonplanar"
+    whirl_rate = None
+    if kind == "periodic" and motion == "nonplanar" and axisymmetric:
+        whirl_rate = _whirl_rate(space, U[window], t[window], period)
+        if whirl_rate is not None:
+            kind = "whirl"
+    return SpaceMotion(
+        kind=kind,
+        motion=motion,
+        period=period,
+        period_n=period_n,
+        whirl_rate=whirl_rate,
+        tip=_window_tips(space, U[window]),
+        planarity=planarity,
+        t=t,
+        U=U,
+        Udot=P,
+        steps=stepper.stats.steps,
+        rejected_steps=stepper.stats.rejected_steps,
+        t_end=float(t[-1]),
+        cpu_time=time.process_time() - start,
+    )
+
+
+def _recurrence(sections, n_max: int, tol: float, scale: float):
+    """(n, period) when the last section state agrees with the one n returns before."""
+    if len(sections) < 3:
+        return None
+    t_last, q_last, p_last = sections[-1]
+    for n in range(1, min(n_max, len(sections) - 2) + 1):
+        t_prev, q_prev, p_prev = sections[-1 - n]
+        T = t_last - t_prev
+        dq = np.sqrt(np.mean((q_last - q_prev) ** 2))
+        dp = np.sqrt(np.mean((p_last - p_prev) ** 2)) * T / (2 * math.pi)
+        if max(dq, dp) < tol * scale:
+            return n, T
+    return None
+
+
+def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) -> float | None:
+    """The tip's angular velocity about the vertical if it turns at a constant distance, else None."""
+    tips = np.array([[d["eta_tip"], d["Y_tip"]] for d in map(model.tip_coordinates, U)])
+    radius = np.hypot(tips[:, 0], tips[:, 1])
+    if radius.min() < 0.95 * radius.max():
+        return None
+    angle = np.unwrap(np.arctan2(tips[:, 1], tips[:, 0]))
+    turn = angle[-1] - angle[0]
+    if abs(abs(turn) - 2 * math.pi) > 0.2:
+        return None
+    return float(turn / (t[-1] - t[0]))
