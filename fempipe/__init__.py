@@ -28,6 +28,9 @@ The public names, by what their users do (docs, "API reference"):
 * limit cycles and their continuation: :func:`shoot`, :func:`find_attractor`,
   :func:`tip_coordinates`, :func:`hopf_points`, :func:`continue_cycles`,
   :func:`cycle_diagram`, :func:`bifurcation_diagram`;
+* the pipe in three dimensions: :class:`SpaceModel`, :func:`simulate_space`,
+  :class:`SpaceMotion`, :func:`out_of_plane_floquet`,
+  :func:`three_dimensional_verdict`;
 * convergence studies: :func:`run_study`, :func:`observed_order`,
   :func:`richardson`; a user's values against fempipe: :func:`compare_values`;
 * error estimates: :func:`refined_static_states` / :func:`with_static_estimates`,
@@ -100,6 +103,12 @@ _LAZY: dict[str, str] = {
     "cycle_diagram": "analyses.periodic",
     "CycleDiagram": "analyses.periodic",
     "bifurcation_diagram": "analyses.bifurcation",
+    # The pipe in three dimensions
+    "SpaceModel": "model.space",
+    "simulate_space": "analyses.space",
+    "SpaceMotion": "analyses.space",
+    "out_of_plane_floquet": "analyses.space",
+    "three_dimensional_verdict": "analyses.space",
     # Studies: convergence, a user's values against fempipe, error estimates
     "run_study": "studies.convergence",
     "ConvergenceStudy": "studies.convergence",
@@ -181,6 +190,11 @@ __all__ = [
     "cycle_diagram",
     "CycleDiagram",
     "bifurcation_diagram",
+    "SpaceModel",
+    "simulate_space",
+    "SpaceMotion",
+    "out_of_plane_floquet",
+    "three_dimensional_verdict",
     "run_study",
     "ConvergenceStudy",
     "Quantity",

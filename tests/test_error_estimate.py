@@ -90,6 +90,9 @@ SIMULATE_KEYS = {
     "max_nontrivial_multiplier",
     "t_transient",
     "message",
+    # the planar equilibrium's verdict out of the plane (fempipe.analyses.space)
+    "stable_out_of_plane",
+    "stable_3d",
     "steps",
     "rejected_steps",
     "n_residual",

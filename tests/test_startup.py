@@ -119,6 +119,12 @@ from fempipe.analyses.periodic import (  # noqa: E402
     cycle_diagram,
     hopf_points,
 )
+from fempipe.analyses.space import (  # noqa: E402
+    SpaceMotion,
+    out_of_plane_floquet,
+    simulate_space,
+    three_dimensional_verdict,
+)
 from fempipe.analyses.stability import (  # noqa: E402
     SpatialStability,
     StabilityResult,
@@ -163,6 +169,7 @@ from fempipe.model.params import (  # noqa: E402
     Params,
     PipeSI,
 )
+from fempipe.model.space import SpaceModel  # noqa: E402
 from fempipe.studies.compare import (  # noqa: E402
     Comparison,
     compare_values,
@@ -233,6 +240,11 @@ PUBLIC = {
     "cycle_diagram": cycle_diagram,
     "CycleDiagram": CycleDiagram,
     "bifurcation_diagram": bifurcation_diagram,
+    "SpaceModel": SpaceModel,
+    "simulate_space": simulate_space,
+    "SpaceMotion": SpaceMotion,
+    "out_of_plane_floquet": out_of_plane_floquet,
+    "three_dimensional_verdict": three_dimensional_verdict,
     "run_study": run_study,
     "ConvergenceStudy": ConvergenceStudy,
     "Quantity": Quantity,

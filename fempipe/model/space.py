@@ -455,21 +455,31 @@ class SpaceModel:
         """r(xi) = \\int_0^xi t at the cell edges, shape (n_cells + 1, 3), in the pipe's frame."""
         return self.quad.at_edges(self.fields(U).t[:, :, 0])
 
+    def tip_position_gradient(self, U) -> np.ndarray:
+        """d r(1) / dU in the pipe's frame, shape (3, 3 n): r(1) = \\int_0^1 t."""
+        fl = self.fields(U, blocks=("q",))
+        der = self._maps.expand(fl.t.loc)[:, :, 0, :]  # (n_q, 3, 3 n)
+        return np.tensordot(self.w, der, axes=(0, 0))
+
     def tip_coordinates(self, U) -> dict:
         """The tip in the frames of the files: eta_tip (in the pipe's frame, e_2), X_tip (along
         gravity), Z_tip (horizontal, in the plane of the static state) and Y_tip (out of it).
 
-        For a planar state they are those of :func:`fempipe.model.kinematics.tip_values`.
+        Floats for one state U (3 n,), arrays (S,) for S states (S, 3 n).  For a planar
+        state they are those of :func:`fempipe.model.kinematics.tip_values`.
         """
-        t = self.fields(U).t[:, :, 0]
-        r1 = self.w @ t  # (3,)
+        t = self.fields(U).t  # (n_q, 3, S)
+        r1 = np.tensordot(self.w, t, axes=(0, 0))  # (3, S)
         a = self.params.alpha
-        return {
-            "eta_tip": float(r1[1]),
-            "X_tip": float(np.cos(a) * r1[0] - np.sin(a) * r1[1]),
-            "Z_tip": float(np.sin(a) * r1[0] + np.cos(a) * r1[1]),
-            "Y_tip": float(r1[2]),
+        out = {
+            "eta_tip": r1[1],
+            "X_tip": np.cos(a) * r1[0] - np.sin(a) * r1[1],
+            "Z_tip": np.sin(a) * r1[0] + np.cos(a) * r1[1],
+            "Y_tip": r1[2],
         }
+        if np.ndim(U) == 1:
+            return {k: float(v[0]) for k, v in out.items()}
+        return out
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:

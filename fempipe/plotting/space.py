@@ -2,8 +2,8 @@
 
 One frame for every figure and file (:mod:`fempipe.io.space_trajectory`):
 x = Z_g horizontal in the plane of the static state, y = -X_g up the screen
-(gravity down), z = Y_g out of that plane.  The window drawn is the last
-period of the attractor (or the last tenth of the run).
+(gravity down), z = Y_g out of that plane.  The window drawn is the shot
+periodic orbit, else the last period of the run (or its last tenth).
 """
 
 from __future__ import annotations
@@ -31,17 +31,19 @@ def _caption(model: SpaceModel, motion) -> str:
 
 
 def _window(motion) -> np.ndarray:
+    """The states drawn: the shot orbit if any, else the last period (or tenth) of the run."""
+    if motion.cycle is not None:
+        return motion.cycle.orbit_q
     t = motion.t
     span = motion.period if motion.period else 0.1 * (t[-1] - t[0])
-    return t >= t[-1] - span
+    return motion.U[t >= t[-1] - span]
 
 
 def plot_tip_orbit(model: SpaceModel, motion):
     """The tip's path over the window: from above (x, z) and from the side (x, y)."""
     import matplotlib.pyplot as plt
 
-    sel = _window(motion)
-    tips = np.array([space_frame_points(model, U)[0][-1] for U in motion.U[sel]])
+    tips = np.array([space_frame_points(model, U)[0][-1] for U in _window(motion)])
     fig, (top, side) = plt.subplots(1, 2, figsize=(9.0, 4.6), layout="constrained")
     top.plot(tips[:, 0], tips[:, 2], color="C0", lw=1.5)
     top.plot(0.0, 0.0, "k+", ms=10, label="clamp")
@@ -65,13 +67,13 @@ def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12):
     """The centerline at ``n_snapshots`` times of the window, in 3-D (the same frame)."""
     import matplotlib.pyplot as plt
 
-    sel = np.flatnonzero(_window(motion))
-    picks = sel[np.linspace(0, sel.size - 1, n_snapshots).round().astype(int)]
+    states = _window(motion)
+    picks = np.linspace(0, len(states) - 1, n_snapshots).round().astype(int)
     fig = plt.figure(figsize=(6.4, 6.0), layout="constrained")
     ax = fig.add_subplot(projection="3d")
     colors = plt.cm.viridis(np.linspace(0.0, 1.0, picks.size))
     for k, c in zip(picks, colors, strict=True):
-        pts, _ = space_frame_points(model, motion.U[k])
+        pts, _ = space_frame_points(model, states[k])
         # matplotlib's 3-D axes are z-up: draw (x, z, y) so that gravity points down
         ax.plot(pts[:, 0], pts[:, 2], pts[:, 1], color=c, lw=1.2)
     ax.set_xlabel("x = Z_g")

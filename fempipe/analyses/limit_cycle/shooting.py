@@ -162,7 +162,7 @@ class Shooter:
                 self.rejected += stepper.stats.rejected_steps
                 scale = T / (2 * math.pi)
                 res = state_distance(stepper.q - q, stepper.qdot - p, scale)
-                g = eta_tip(self.disc, q) - self.level
+                g = self.phase(q) - self.level
                 log.debug("shooting it %d: T=%.10g residual %.3e phase %.3e", it, T, res, g)
                 if need:
                     self.Phi = stepper.sensitivity_matrix
@@ -216,7 +216,7 @@ class Shooter:
         J = np.zeros((2 * n + 1, 2 * n + 1))
         J[: 2 * n, : 2 * n] = self.Phi - np.eye(2 * n)
         J[: 2 * n, -1] = np.concatenate([stepper.qdot, stepper.qddot])
-        J[-1, :n] = eta_tip_gradient(self.disc, q)
+        J[-1, :n] = self.phase_gradient(q)
         rhs = -np.concatenate([stepper.q - q, stepper.qdot - p, [g]])
         try:
             # Near an equilibrium (a decaying oscillation, the Hopf point) the
@@ -230,6 +230,14 @@ class Shooter:
         except (sla.LinAlgError, ValueError):
             return None
         return dx if np.all(np.isfinite(dx)) else None
+
+    def phase(self, q: np.ndarray) -> float:
+        """The section variable whose value ``level`` fixes the phase: eta_tip."""
+        return eta_tip(self.disc, q)
+
+    def phase_gradient(self, q: np.ndarray) -> np.ndarray:
+        """d(:meth:`phase`)/dq, shape (n,)."""
+        return eta_tip_gradient(self.disc, q)
 
     def tips(self, ends: list) -> dict:
         """Tip extrema of one period on the quintic interpolant of its step ends."""
@@ -293,7 +301,7 @@ class Shooter:
         self.total_steps += st2.stats.steps
         self.rejected += st2.stats.rejected_steps
         res2 = state_distance(st2.q - q2, st2.qdot - p2, T2 / (2 * math.pi))
-        g2 = eta_tip(self.disc, q2) - self.level
+        g2 = self.phase(q2) - self.level
         log.debug("shooting polish: T=%.10g residual %.3e", T2, res2)
         if res2 < res and abs(g2) < self.tol:
             return (it + 1, q2, p2, T2, res2, self.tips(ends2), st2, tt2, oq2, op2)

@@ -15,7 +15,8 @@ classifies it:
   e_2 towards e_3, i.e. right-handed about the clamp's axis e_1);
 * ``non-periodic``: no recurrence before ``t_max`` (quasi-periodic or chaotic).
 
-The section is the tip's displacement eta_tip along e_2 crossing its static
+The section is the tip's displacement along e_2 + e_3 (eta_tip + Y_tip,
+:func:`~fempipe.analyses.space.shooting.section_value`) crossing its static
 value upwards; a section state is located on the collocation polynomial of the
 step (the integrator's dense output) by the secant method.
 """
@@ -33,7 +34,9 @@ from ...model.operators import PipeModel
 from ...model.space import SpaceModel, planar_state
 from ...solvers.radau import Radau
 from ..dynamics import initial_state
+from ..limit_cycle.results import LimitCycle, ShootingError
 from ..statics import solve_static
+from .shooting import section_value, shoot_space
 
 __all__ = ["SpaceMotion", "out_of_plane_perturbation", "simulate_space"]
 
@@ -58,6 +61,9 @@ class SpaceMotion:
     tip : dict
         ``[min, max]`` of eta_tip, X_tip, Z_tip, Y_tip over the last period (or
         the last tenth of the run).
+    cycle : LimitCycle or None
+        The periodic orbit by shooting (:func:`~fempipe.analyses.space.shooting.shoot_space`):
+        period, tips and the 3-D Floquet multipliers come from it.
     planarity : float
         How far the tip is from one vertical plane over that window: the ratio
         of the smaller to the larger principal extent of its horizontal path
@@ -76,17 +82,23 @@ class SpaceMotion:
     whirl_rate: float | None
     tip: dict
     planarity: float
-    t: np.ndarray = field(repr=False)
-    U: np.ndarray = field(repr=False)
-    Udot: np.ndarray = field(repr=False)
+    cycle: LimitCycle | None = field(default=None, repr=False)
+    t: np.ndarray = field(default=None, repr=False)
+    U: np.ndarray = field(default=None, repr=False)
+    Udot: np.ndarray = field(default=None, repr=False)
     steps: int = 0
     rejected_steps: int = 0
     t_end: float = 0.0
     cpu_time: float = 0.0
 
     def to_dict(self) -> dict:
+        mu = None if self.cycle is None else self.cycle.floquet_multipliers[:6]
         return {
             "attractor": self.kind,
+            "floquet_multipliers": None
+            if mu is None
+            else [[float(z.real), float(z.imag)] for z in mu],
+            "stable": None if self.cycle is None else self.cycle.stable,
             "motion": self.motion,
             "period": self.period,
             "period_n": self.period_n,
@@ -116,7 +128,7 @@ def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int
 
 
 def _section_value(model: SpaceModel, U) -> float:
-    return model.tip_coordinates(U)["eta_tip"]
+    return section_value(model, U)
 
 
 def _locate(model, stepper, t0, t1, g0, g1, level):
@@ -137,12 +149,13 @@ def _locate(model, stepper, t0, t1, g0, g1, level):
 
 
 def _window_tips(model: SpaceModel, U: np.ndarray) -> dict:
-    tips = [model.tip_coordinates(u) for u in U]
-    return {k: [float(min(d[k] for d in tips)), float(max(d[k] for d in tips))] for k in TIP3_KEYS}
+    tips = model.tip_coordinates(np.atleast_2d(U))
+    return {k: [float(tips[k].min()), float(tips[k].max())] for k in TIP3_KEYS}
 
 
 def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
-    tips = np.array([[d["eta_tip"], d["Y_tip"]] for d in map(model.tip_coordinates, U)])
+    d = model.tip_coordinates(np.atleast_2d(U))
+    tips = np.column_stack([d["eta_tip"], d["Y_tip"]])
     centred = tips - tips.mean(axis=0)
     if axisymmetric:
         sv = np.linalg.svd(centred, compute_uv=False)
@@ -160,6 +173,10 @@ def simulate_space(
     t_max: float = 300.0,
     rtol: float = 1e-6,
     recurrence_tol: float = 1e-5,
+    start_tol: float = 1e-3,
+    shoot_rtol: float = 1e-7,
+    use_shooting: bool = True,
+    min_swing: float = 1e-2,
     planar_tol: float = 1e-3,
     n_max: int = 8,
     callback: Callable[[float], None] | None = None,
@@ -181,7 +198,15 @@ def simulate_space(
         Integration tolerance.
     recurrence_tol : float
         Successive section states agree to this (RMS of U, and of U_dot
-        scaled by the return time / 2 pi): periodic.
+        scaled by the return time / 2 pi): periodic without shooting.
+    start_tol : float
+        Successive section states agree to this: the orbit is shot from the last one
+        (:func:`~fempipe.analyses.space.shooting.shoot_space`, at ``shoot_rtol``); if the
+        shooting fails the integration goes on to ``recurrence_tol``.
+    use_shooting : bool
+        Shoot the orbit (default) or only integrate.
+    min_swing : float
+        Shoot only when the section variable swings by more than this between returns.
     planar_tol : float
         :attr:`SpaceMotion.planarity` below this: a planar motion.
     n_max : int
@@ -202,7 +227,9 @@ def simulate_space(
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     g_old = _section_value(space, stepper.q)
     sections: list[tuple[float, np.ndarray, np.ndarray]] = []
-    kind, period, period_n = "non-periodic", None, None
+    kind, period, period_n, cycle = "non-periodic", None, None, None
+    attempts = 0
+    swing = [math.inf, -math.inf]  # the section variable's range since the last return
     scale = max(1.0, float(np.sqrt(np.mean(U0**2))))
     for t, q, p in stepper.steps(t_max):
         ts.append(t)
@@ -211,8 +238,28 @@ def simulate_space(
         if callback is not None:
             callback(t)
         g = _section_value(space, q)
+        swing = [min(swing[0], g), max(swing[1], g)]
         if g_old < level <= g:
             sections.append(_locate(space, stepper, ts[-2], t, g_old, g, level))
+            # Shoot only an oscillation of some size (near the static state the returns
+            # of a slowly growing oscillation agree too, and Newton then finds the
+            # equilibrium), at most three times.
+            big = swing[1] - swing[0] > min_swing
+            swing = [g, g]
+            if use_shooting and attempts < 3 and big:
+                # a non-planar oscillation crosses the section twice a period (eta_tip
+                # swings at twice the frequency of Y_tip): look for period-n returns
+                first = _recurrence(sections, n_max, start_tol, scale)
+                if first is not None:
+                    attempts += 1
+                    t_k, q_k, p_k = sections[-1]
+                    try:
+                        cycle = shoot_space(space, q_k, p_k, first[1], level=level, rtol=shoot_rtol)
+                    except ShootingError:
+                        cycle = None
+                    if cycle is not None:
+                        kind, period_n, period = "periodic", first[0], cycle.period
+                        break
             found = _recurrence(sections, n_max, recurrence_tol, scale)
             if found is not None:
                 period_n, period = found
@@ -225,27 +272,33 @@ def simulate_space(
     t = np.array(ts)
     U, P = np.array(Us), np.array(Ps)
     window = t >= (t[-1] - period if period else 0.9 * t[-1])
+    wU, wt = U[window], t[window]
+    if cycle is not None:  # the attractor's own orbit
+        wU, wt = cycle.orbit_q, cycle.orbit_t
     axisymmetric = abs(math.sin(model.params.alpha)) < 1e-12
-    planarity = _planarity(space, U[window], axisymmetric) if kind != "equilibrium" else 0.0
+    planarity = _planarity(space, wU, axisymmetric) if kind != "equilibrium" else 0.0
     motion = "planar" if planarity < planar_tol else "nonplanar"
     whirl_rate = None
     if kind == "periodic" and motion == "nonplanar" and axisymmetric:
-        whirl_rate = _whirl_rate(space, U[window], t[window], period)
+        whirl_rate = _whirl_rate(space, wU, wt, period)
         if whirl_rate is not None:
             kind = "whirl"
+    tip = cycle.tip if cycle is not None else _window_tips(space, wU)
     return SpaceMotion(
         kind=kind,
         motion=motion,
         period=period,
         period_n=period_n,
         whirl_rate=whirl_rate,
-        tip=_window_tips(space, U[window]),
+        tip=tip,
         planarity=planarity,
+        cycle=cycle,
         t=t,
         U=U,
         Udot=P,
-        steps=stepper.stats.steps,
-        rejected_steps=stepper.stats.rejected_steps,
+        steps=stepper.stats.steps + (cycle.total_steps if cycle is not None else 0),
+        rejected_steps=stepper.stats.rejected_steps
+        + (cycle.rejected_steps if cycle is not None else 0),
         t_end=float(t[-1]),
         cpu_time=time.process_time() - start,
     )
@@ -268,7 +321,8 @@ def _recurrence(sections, n_max: int, tol: float, scale: float):
 
 def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) -> float | None:
     """The tip's angular velocity about the vertical if it turns at a constant distance, else None."""
-    tips = np.array([[d["eta_tip"], d["Y_tip"]] for d in map(model.tip_coordinates, U)])
+    d = model.tip_coordinates(np.atleast_2d(U))
+    tips = np.column_stack([d["eta_tip"], d["Y_tip"]])
     radius = np.hypot(tips[:, 0], tips[:, 1])
     if radius.min() < 0.95 * radius.max():
         return None
