@@ -257,3 +257,29 @@ def test_power_balance_with_flow_and_damping():
     )
     assert drift > 1e-3 * E0  # the flow and the damping do work
     assert balance < 1e-8 * E0, balance / E0
+
+
+def test_shooting_a_planar_cycle_in_3d_gives_the_planar_cycle():
+    """The planar shooting on the 3-D model, from a planar cycle: the same period and tips,
+    and the 3-D monodromy holds the planar multipliers."""
+    from fempipe.analyses.limit_cycle import find_attractor, shoot
+    from fempipe.analyses.space.shooting import shoot_space
+
+    disc = FiniteElement(3, 3)
+    planar = PipeModel(disc, Params(alpha=np.pi / 2, v=10.0))
+    att = find_attractor(planar)
+    cycle = shoot(planar, att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-8)
+    space = shoot_space(
+        SpaceModel(disc, planar.params),
+        planar_state(cycle.q0),
+        planar_state(cycle.qdot0),
+        cycle.period,
+        rtol=1e-8,
+    )
+    assert space.period == pytest.approx(cycle.period, rel=1e-9)
+    for key in ("eta_tip", "X_tip", "Z_tip"):
+        assert space.tip[key] == pytest.approx(cycle.tip[key], abs=1e-6)
+    assert space.tip["Y_tip"] == [0.0, 0.0]
+    mu3 = space.floquet_multipliers
+    for mu in cycle.floquet_multipliers[:3]:
+        assert np.min(np.abs(mu3 - mu)) < 1e-5 * max(1.0, abs(mu))

@@ -230,6 +230,7 @@ def simulate_space(
     kind, period, period_n, cycle = "non-periodic", None, None, None
     attempts = 0
     swing = [math.inf, -math.inf]  # the section variable's range since the last return
+    swings: list[float] = []
     scale = max(1.0, float(np.sqrt(np.mean(U0**2))))
     for t, q, p in stepper.steps(t_max):
         ts.append(t)
@@ -241,11 +242,16 @@ def simulate_space(
         swing = [min(swing[0], g), max(swing[1], g)]
         if g_old < level <= g:
             sections.append(_locate(space, stepper, ts[-2], t, g_old, g, level))
-            # Shoot only an oscillation of some size (near the static state the returns
-            # of a slowly growing oscillation agree too, and Newton then finds the
-            # equilibrium), at most three times.
-            big = swing[1] - swing[0] > min_swing
+            # Shoot only an oscillation of some size that has stopped growing (near the
+            # static state the returns of a slowly growing oscillation agree too, and
+            # Newton then finds the equilibrium), at most three times.
+            swings.append(swing[1] - swing[0])
             swing = [g, g]
+            big = (
+                len(swings) > 2
+                and swings[-1] > min_swing
+                and abs(swings[-1] - swings[-2]) < 1e-2 * swings[-1]
+            )
             if use_shooting and attempts < 3 and big:
                 # a non-planar oscillation crosses the section twice a period (eta_tip
                 # swings at twice the frequency of Y_tip): look for period-n returns
