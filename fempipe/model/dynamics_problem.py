@@ -21,7 +21,13 @@ import scipy.linalg as sla
 from .batched import StageKernels
 from .operators import PipeModel
 
-__all__ = ["BATCHED_STAGES_MAX", "PipeDynamics", "acceleration", "refuse_hysteretic"]
+__all__ = [
+    "BATCHED_STAGES_MAX",
+    "ModelDynamics",
+    "PipeDynamics",
+    "acceleration",
+    "refuse_hysteretic",
+]
 
 #: Up to this n_q * n the three stage Jacobians of the sensitivity are one
 #: batched evaluation (S = 3 in :meth:`StageKernels.jacobians`), beyond it three
@@ -99,7 +105,45 @@ class _PerStageVelocityDerivative:
         return out
 
 
-class PipeDynamics:
+class ModelDynamics:
+    """What the integrator's problem of a model with a steady or unsteady flow shares.
+
+    A subclass sets ``model`` and ``flow`` and says how to solve R = 0 for q''
+    (:meth:`solve_acceleration`); the model supplies ``residual(q, q', q'',
+    v_dot)``, ``jacobians(q, q', q'', v_dot)`` and ``with_params``.
+    """
+
+    model: PipeModel
+    flow: Callable[[float], tuple[float, float]] | None
+
+    def model_at(self, t: float):
+        """The model with the flow velocity at tau = t, and v_dot there."""
+        if self.flow is None:
+            return self.model, 0.0
+        v, v_dot = self.flow(t)
+        return self.model.with_params(self.model.params.with_flow(v)), float(v_dot)
+
+    def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
+        """R(t, q, q', q''), shape (n,) (rule 2)."""
+        m, vd = self.model_at(t)
+        return m.residual(q, qdot, qddot, vd)
+
+    def jacobians(self, t: float, q, qdot, qddot):
+        """(dR/dq, dR/dq', dR/dq''), dense (n, n) each (rule 3)."""
+        m, vd = self.model_at(t)
+        return m.jacobians(q, qdot, qddot, vd)
+
+    def acceleration(self, t: float, q, qdot) -> np.ndarray:
+        """q'' with R(t, q, q', q'') = 0 (rule 4)."""
+        m, vd = self.model_at(t)
+        return self.solve_acceleration(m, q, qdot, vd)
+
+    def solve_acceleration(self, model, q, qdot, v_dot: float) -> np.ndarray:
+        """q'' of ``model`` at (q, q') with the flow acceleration v_dot."""
+        raise NotImplementedError
+
+
+class PipeDynamics(ModelDynamics):
     """Eq. (20) of a pipe model as an implicit second-order problem (the integrator's contract).
 
     Parameters
@@ -153,27 +197,9 @@ class PipeDynamics:
                 else _PerStageVelocityDerivative(model)
             )
 
-    def model_at(self, t: float) -> tuple[PipeModel, float]:
-        """The model with the flow velocity at tau = t, and v_dot there."""
-        if self.flow is None:
-            return self.model, 0.0
-        v, v_dot = self.flow(t)
-        return self.model.with_params(self.model.params.with_flow(v)), float(v_dot)
-
-    def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
-        """R(t, q, q', q''), shape (n,) (rule 2)."""
-        m, vd = self.model_at(t)
-        return m.residual(q, qdot, qddot, vd)
-
-    def jacobians(self, t: float, q, qdot, qddot):
-        """(dR/dq, dR/dq', dR/dq''), dense (n, n) each (rule 3)."""
-        m, vd = self.model_at(t)
-        return m.jacobians(q, qdot, qddot, vd)
-
-    def acceleration(self, t: float, q, qdot) -> np.ndarray:
-        """q'' with R(t, q, q', q'') = 0 (rule 4; :func:`acceleration`)."""
-        m, vd = self.model_at(t)
-        return acceleration(m, q, qdot, vd)
+    def solve_acceleration(self, model, q, qdot, v_dot: float) -> np.ndarray:
+        """:func:`acceleration`."""
+        return acceleration(model, q, qdot, v_dot)
 
     def describe(self) -> str:
         """The parameter an error message names: the flow velocity v (rule 14)."""

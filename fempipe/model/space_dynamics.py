@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .dynamics_problem import ModelDynamics
 from .space import SpaceModel
 
 __all__ = ["SpaceDynamics"]
@@ -38,7 +39,7 @@ class _VelocityDerivative:
         return (both - rf) + 2.0 * self.v * rf
 
 
-class SpaceDynamics:
+class SpaceDynamics(ModelDynamics):
     """The 3-D weak form as an implicit second-order problem (the integrator's contract).
 
     Parameters
@@ -70,27 +71,9 @@ class SpaceDynamics:
         out = [self.model.jacobians(q, p, a) for q, p, a in zip(Q, P, A, strict=True)]
         return tuple(np.stack(m) for m in zip(*out, strict=True))
 
-    def model_at(self, t: float) -> tuple[SpaceModel, float]:
-        """The model with the flow velocity at tau = t, and v_dot there."""
-        if self.flow is None:
-            return self.model, 0.0
-        v, v_dot = self.flow(t)
-        return self.model.with_params(self.model.params.with_flow(v)), float(v_dot)
-
-    def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
-        """R(t, q, q', q''), shape (n,) (rule 2)."""
-        m, vd = self.model_at(t)
-        return m.residual(q, qdot, qddot, vd)
-
-    def jacobians(self, t: float, q, qdot, qddot):
-        """(dR/dq, dR/dq', dR/dq''), dense (n, n) each (rule 3)."""
-        m, vd = self.model_at(t)
-        return m.jacobians(q, qdot, qddot, vd)
-
-    def acceleration(self, t: float, q, qdot) -> np.ndarray:
-        """q'' with R = 0 (rule 4)."""
-        m, vd = self.model_at(t)
-        return m.acceleration(q, qdot, vd)
+    def solve_acceleration(self, model, q, qdot, v_dot: float) -> np.ndarray:
+        """:meth:`SpaceModel.acceleration`."""
+        return model.acceleration(q, qdot, v_dot)
 
     def describe(self) -> str:
         """The flow velocity, for error messages (rule 14)."""
