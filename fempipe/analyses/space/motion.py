@@ -263,6 +263,8 @@ def simulate_space(
                         cycle = shoot_space(space, q_k, p_k, first[1], level=level, rtol=shoot_rtol)
                     except ShootingError:
                         cycle = None
+                    if cycle is not None and not cycle.stable:
+                        cycle = None  # an orbit the motion is only passing: integrate on
                     if cycle is not None:
                         kind, period_n, period = "periodic", first[0], cycle.period
                         break
