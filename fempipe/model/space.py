@@ -338,7 +338,7 @@ class SpaceModel:
         return sigma * self._integral(rdot, self.quad.from_tip_cells)
 
     def bending(self, fl: SpaceFields) -> tuple[Dual, Dual]:
-        """(A, B): the variation of (1/2) \\int |t'|^2 is ``\\int A_c phi_i + B_c phi_i'``."""
+        """(A, B): the variation of ``(1/2) \\int |t'|^2`` is ``\\int A_c phi_i + B_c phi_i'``."""
         tp = fl.t_prime
         A = stack([dot(tp, fl.dt_prime[c]) for c in range(3)], axis=1)
         B = stack([dot(tp, fl.J[c]) for c in range(3)], axis=1)
@@ -483,7 +483,7 @@ class SpaceModel:
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:
-        """T = (1/2) \\int |r_dot|^2 + (Gamma/2) |r_dot(1)|^2."""
+        """``T = (1/2) \\int |r_dot|^2 + (Gamma/2) |r_dot(1)|^2``."""
         fl = self.fields(U, Ud)
         rd = self.centerline_velocity(fl)
         T = 0.5 * float(self.w @ np.einsum("qc,qc->q", rd, rd))
@@ -511,10 +511,10 @@ class SpaceModel:
 
         The virtual power of a term for the test U' (``U' . R_term``): for a
         force field G it is ``\int t_dot . G``.  Keys: ``coriolis``
-        (2 v sqrt(beta) \int t_dot . C^R t_dot = v sqrt(beta) |r_dot(1)|^2 >= 0,
-        the momentum the fluid carries out), ``follower`` (v^2 r_dot(1) . t(1)),
-        ``kelvin_voigt`` (mu \int |k|^2 >= 0), ``external_damping``
-        (sigma \int |r_dot|^2), ``flow_acceleration`` and ``gauge``: the work of
+        (``2 v sqrt(beta) \int t_dot . C^R t_dot = v sqrt(beta) |r_dot(1)|^2 >= 0``,
+        the momentum the fluid carries out), ``follower`` (``v^2 r_dot(1) . t(1)``),
+        ``kelvin_voigt`` (``mu \int |k|^2 >= 0``), ``external_damping``
+        (``sigma \int |r_dot|^2``), ``flow_acceleration`` and ``gauge``: the work of
         the gauge term, zero in the continuum and at planar states, a
         discretization error elsewhere (it falls as h^7 on P3 elements, measured).
         """
