@@ -283,3 +283,33 @@ def test_shooting_a_planar_cycle_in_3d_gives_the_planar_cycle():
     mu3 = space.floquet_multipliers
     for mu in cycle.floquet_multipliers[:3]:
         assert np.min(np.abs(mu3 - mu)) < 1e-5 * max(1.0, abs(mu))
+
+
+def _first_order_eigenvalues(K, C, M) -> np.ndarray:
+    n = K.shape[0]
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    return np.linalg.eigvals(A)
+
+
+def test_linearization_out_of_the_plane_is_the_out_of_plane_models():
+    """About a planar static state the out-of-plane block of the 3-D Jacobians has the
+    spectrum of the linear out-of-plane model (an independent derivation, checked against a
+    strong-form solver in the validation): stiffness, inertia, Coriolis and the objective
+    damping with its spin term, to the discretization error of each."""
+    from fempipe.analyses.statics import solve_static
+
+    errors = []
+    for n_el in (4, 8):
+        disc = FiniteElement(n_el, 3)
+        params = Params(alpha=1.2, v=4.0, mu=0.05)
+        planar = PipeModel(disc, params)
+        q = solve_static(planar).q
+        ref = _first_order_eigenvalues(*planar.with_plane("out").linearization(q))
+        ref = ref[np.argsort(np.abs(ref))][:6]
+        n = disc.n
+        out = np.r_[n : 3 * n]
+        blocks = [J[np.ix_(out, out)] for J in SpaceModel(disc, params).jacobians(planar_state(q))]
+        lam = _first_order_eigenvalues(*blocks)
+        lam = lam[np.abs(lam + 75.0) > 40.0]  # the gauge's roots, near -50 and -100
+        errors.append(max(np.min(np.abs(lam - r)) / abs(r) for r in ref))
+    assert errors[1] < 1e-6 and errors[1] < errors[0] / 16, errors
