@@ -36,7 +36,10 @@ RESULT = pitchfork.value
 # side opposite to the lean: the branch turns back at a fold.
 tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=15.0, v=0.0))
 folds = []
-for branch, direction in ((right, -1), (left, 1)):
+for branch in (right, left):
+    # which branch leans which way depends on the sign of a null vector (round-off): ask
+    lean = fempipe.tip_values(disc, branch.points[-1].q, np.pi)["theta_tip"]
+    direction = -1 if lean > 0 else 1
     arc = fempipe.continuation(
         tilted,
         "alpha",

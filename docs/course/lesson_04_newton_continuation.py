@@ -52,7 +52,7 @@ standing = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0)
 straight = fempipe.continuation(standing, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 pitchfork = straight.special[0]
 print(f"{pitchfork.kind} at gamma = {pitchfork.value:.8f}")
-right, _left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds=0.2)
+right, left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds=0.2)
 
 # %%
 # 3. A fold, and why natural continuation stops there
@@ -60,8 +60,12 @@ right, _left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds
 # Tilt the buckled pipe (gamma = 12) against its lean: continue in alpha.  The branch turns
 # back at a fold, where dR/dq is singular but the extended (arclength) system is not.
 tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=12.0, v=0.0))
+# Which of the two branches leans which way depends on the sign of a null vector (round-off
+# decides it): take the one leaning to negative theta(1), so that alpha grows against it.
+lean = fempipe.tip_values(disc, right.points[-1].q, np.pi)["theta_tip"]
+leaning = left if lean > 0 else right
 arc = fempipe.continuation(
-    tilted, "alpha", stop=np.pi + 0.8, q0=right.points[-1].q, ds=0.05, ds_max=0.1, direction=1
+    tilted, "alpha", stop=np.pi + 0.8, q0=leaning.points[-1].q, ds=0.05, ds_max=0.1, direction=1
 )
 fold = next(s for s in arc.special if s.kind == "fold")
 J_fold = tilted.with_params(fempipe.Params(alpha=fold.value, gamma=12.0, v=0.0))
@@ -70,7 +74,7 @@ fold_singularity = sv[-1] / sv[0]
 print(f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq: {fold_singularity:.1e}")
 natural_failed = False
 try:  # natural-parameter continuation: step alpha past the fold from the same branch
-    q_prev = right.points[-1].q
+    q_prev = leaning.points[-1].q
     for a in np.linspace(np.pi, fold.value + 0.05, 25):
         q_prev = fempipe.solve_static(
             tilted.with_params(fempipe.Params(alpha=a, gamma=12.0, v=0.0)), q0=q_prev
