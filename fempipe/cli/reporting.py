@@ -105,6 +105,20 @@ def progress(args: argparse.Namespace, total: int | None, desc: str):
     )
 
 
+def time_progress(bar, t_end: float):
+    """A library ``callback(t)`` that advances ``bar`` by 100 as the integration time runs
+    from 0 to ``t_end``; ``callback.done`` is the count advanced so far."""
+
+    def on_time(t: float) -> None:
+        k = min(100, int(100 * t / t_end))
+        if k > on_time.done:
+            bar.update(k - on_time.done)
+            on_time.done = k
+
+    on_time.done = 0
+    return on_time
+
+
 class _LogProgress:
     """tqdm's ``update`` / ``set_postfix_str`` as a line on stderr every ``interval`` s."""
 

@@ -316,16 +316,12 @@ def run(args: argparse.Namespace) -> int:
     work = 200 if args.error_estimate else 100
     refined = None
     with reporting.progress(args, work, f"simulate v={params.v:g}") as bar:
-        last = [0]
-
         cost = _cost_check(params.v, t_max, parsing.allow_large(args))
+        advance = reporting.time_progress(bar, t_max)
 
         def on_time(t):
             cost(t, time.process_time() - cpu_start)
-            k = min(100, int(100 * t / t_max))
-            if k > last[0]:
-                bar.update(k - last[0])
-                last[0] = k
+            advance(t)
 
         flow = None
         if sigma > 0:
@@ -346,8 +342,8 @@ def run(args: argparse.Namespace) -> int:
             )
             traj = att.trajectory
         wall_time = time.perf_counter() - t_start
-        if last[0] < 100:
-            bar.update(100 - last[0])
+        if advance.done < 100:
+            bar.update(100 - advance.done)
         if args.error_estimate:
             refined = _refined_attractor(model, att, q_s, flow, args, bar)
 
@@ -414,14 +410,7 @@ def _refined_attractor(model, att, q_static, flow, args, bar):
 
     fine = refine(model.disc)
     bar.set_postfix_str(f"refined {fine.name}")
-    done = [0]
-
-    def on_time(t: float) -> None:
-        k = min(100, int(100 * t / args.t_max))
-        if k > done[0]:
-            bar.update(k - done[0])
-            done[0] = k
-
+    on_time = reporting.time_progress(bar, args.t_max)
     refined = refined_attractor(
         model,
         att,
@@ -436,8 +425,8 @@ def _refined_attractor(model, att, q_static, flow, args, bar):
         fine=fine,
         callback=on_time,
     )
-    if done[0] < 100:
-        bar.update(100 - done[0])
+    if on_time.done < 100:
+        bar.update(100 - on_time.done)
     return refined
 
 

@@ -44,14 +44,7 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
     model = PipeModel(disc, params)
     start = time.perf_counter()
     with reporting.progress(args, 100, f"simulate --3d v={params.v:g}") as bar:
-        last = [0]
-
-        def on_time(t):
-            k = min(100, int(100 * t / args.t_max))
-            if k > last[0]:
-                bar.update(k - last[0])
-                last[0] = k
-
+        on_time = reporting.time_progress(bar, args.t_max)
         motion = simulate_space(
             model,
             mode=args.mode,

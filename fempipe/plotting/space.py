@@ -43,7 +43,8 @@ def plot_tip_orbit(model: SpaceModel, motion):
     """The tip's path over the window: from above (x, z) and from the side (x, y)."""
     import matplotlib.pyplot as plt
 
-    tips = np.array([space_frame_points(model, U)[0][-1] for U in _window(motion)])
+    tip = model.tip_coordinates(np.atleast_2d(_window(motion)))
+    tips = np.column_stack([tip["Z_tip"], -tip["X_tip"], tip["Y_tip"]])  # the files' frame
     fig, (top, side) = plt.subplots(1, 2, figsize=(9.0, 4.6), layout="constrained")
     top.plot(tips[:, 0], tips[:, 2], color="C0", lw=1.5)
     top.plot(0.0, 0.0, "k+", ms=10, label="clamp")
