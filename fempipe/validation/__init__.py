@@ -69,6 +69,7 @@ CASES: tuple[str, ...] = (
     # The pipe in three dimensions (fempipe.model.space): the non-planar oscillation's
     # onset against its Hopf normal form, and its mesh convergence.
     "space_onset",
+    "space_convergence",
 )
 
 

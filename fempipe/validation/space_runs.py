@@ -33,8 +33,8 @@ __all__ = [
     "space_cycles",
 ]
 
-#: Integration tolerance and Newton tolerance of every shot cycle here: the tip extrema
-#: and periods to ~1e-9, far below the differences the cases measure (>= 1e-8).
+#: Default integration and Newton tolerances of the shot cycles: the tip extrema and
+#: periods to ~1e-9, far below the differences the cases measure (>= 1e-8).
 RTOL, TOL = 1e-9, 1e-8
 
 
@@ -86,8 +86,11 @@ def _project3(src, U: np.ndarray, dst) -> np.ndarray:
     return project(src, U.reshape(3, src.n).T, dst).T.ravel()
 
 
-def space_cycles(elements: list[int], alpha: float, v: float) -> dict[int, LimitCycle]:
-    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine.
+def space_cycles(
+    elements: list[int], alpha: float, v: float, rtol: float = RTOL
+) -> dict[int, LimitCycle]:
+    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine (integration
+    tolerance ``rtol``, Newton's 10 ``rtol``).
 
     The first is shot from the normal form's prediction on its own mesh, each next
     from the previous one projected (a few Newton iterations).
@@ -106,13 +109,15 @@ def space_cycles(elements: list[int], alpha: float, v: float) -> dict[int, Limit
             Ud0 = _project3(src, c.qdot0, pm.disc)
             T = c.period
         model = SpaceModel(pm.disc, replace(pm.params, v=v))
-        cyc = shoot_space(model, U0, Ud0, T, rtol=RTOL, tol=TOL)
+        cyc = shoot_space(model, U0, Ud0, T, rtol=rtol, tol=10.0 * rtol)
         out[ne] = cyc
         prev = (pm.disc, cyc)
     return out
 
 
-def planar_cycles(elements: list[int], alpha: float, v: float) -> dict[int, LimitCycle]:
+def planar_cycles(
+    elements: list[int], alpha: float, v: float, rtol: float = RTOL
+) -> dict[int, LimitCycle]:
     """The planar cycle of Eq. (20) at (alpha, v) on each P3 mesh, as :func:`space_cycles`
     (the first from the transient, :func:`find_attractor`)."""
     out: dict[int, LimitCycle] = {}
@@ -128,7 +133,7 @@ def planar_cycles(elements: list[int], alpha: float, v: float) -> dict[int, Limi
         else:
             src, c = prev
             q0, p0, T = project(src, c.q0, m.disc), project(src, c.qdot0, m.disc), c.period
-        cyc = shoot(m, q0, p0, T, rtol=RTOL, tol=TOL)
+        cyc = shoot(m, q0, p0, T, rtol=rtol, tol=10.0 * rtol)
         out[ne] = cyc
         prev = (m.disc, cyc)
     return out
