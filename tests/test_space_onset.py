@@ -93,7 +93,7 @@ def test_amplitude_slope_at_onset_to_1e4():
     (P3:4: four cycles shot at delta = 1e-3 ... 1e-2, A^2 / delta = c^2 (1 + k delta +
     k2 delta^2) fitted; measured 2e-6)."""
     on = space_runs.onset(4, ALPHA)
-    c2 = on.normal_form.amplitude_coefficient ** 2
+    c2 = on.normal_form.amplitude_coefficient**2
     deltas = np.array([1e-3, 2e-3, 5e-3, 1e-2])
     ratios = np.array(
         [space_runs.amplitude(space_runs.space_cycle_near_onset(on, d)) ** 2 / d for d in deltas]
