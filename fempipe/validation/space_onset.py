@@ -40,7 +40,8 @@ CASE = Case(
         "cubic elements. (a) A² / (c² δ) against δ = v - v_cr, A = (max Y_tip - min Y_tip)/2 "
         "of the non-planar cycle shot on the 3-D model (markers, one color per mesh), c the "
         "amplitude coefficient of the Hopf normal form on the same mesh; lines: the fits "
-        "c² (1 + k δ + k₂ δ²), whose value at δ = 0 (open markers) must be 1. (b) A against δ "
+        "c² (1 + k δ + k₂ δ²), whose value at δ = 0 (filled markers; printed in the legend) "
+        "must be 1 to 1e-4. (b) A against δ "
         "(log-log): shot cycles (markers) and the normal form's c √δ (line). (c) Period "
         "against δ relative to the normal form's 2π/ω (star at δ = 0), with its fit."
     ),
@@ -216,21 +217,21 @@ def plot(result: CaseResult, fig=None):
     else:
         axes = list(fig.subplots(1, 3, squeeze=False).ravel())
     ax_r, ax_a, ax_t = axes
-    for color, m in zip(COLORS, result.data["meshes"], strict=False):
+    for color, mk, m in zip(COLORS, "osD^", result.data["meshes"], strict=False):
         d = np.array(m["deltas"])
         fine = np.linspace(0.0, d.max(), 100)
         coef = np.polyfit(d, m["ratios"], m["degree"])
         tag = m["tag"]
-        ax_r.plot(1e3 * d, m["ratios"], "o", color=color, label=f"{tag}: shot cycles")
+        ax_r.plot(1e3 * d, m["ratios"], mk, mfc="none", color=color, label=f"{tag}: shot cycles")
         ax_r.plot(1e3 * fine, np.polyval(coef, fine), "-", color=color, lw=1,
                   label=f"{tag}: fit; at δ = 0: 1 {m['r0'] - 1.0:+.1e}")  # fmt: skip
-        ax_r.plot([0.0], [m["r0"]], "o", mfc="none", color=color, ms=8)
-        ax_a.loglog(d, m["amplitudes"], "o", color=color, label=f"{tag}: shot cycles")
+        ax_r.plot([0.0], [m["r0"]], mk, color=color, ms=4)
+        ax_a.loglog(d, m["amplitudes"], mk, mfc="none", color=color, label=f"{tag}: shot cycles")
         ax_a.loglog(fine[1:], m["c"] * np.sqrt(fine[1:]), "-", color=color, lw=1,
                     label=f"{tag}: c √δ, c = {m['c']:.5f}")  # fmt: skip
         rel = (np.array(m["periods"]) - m["period_nf"]) / m["period_nf"]
         tc = np.polyfit(d, rel, m["degree"])
-        ax_t.plot(1e3 * d, 1e6 * rel, "o", color=color, label=f"{tag}: shot cycles")
+        ax_t.plot(1e3 * d, 1e6 * rel, mk, mfc="none", color=color, label=f"{tag}: shot cycles")
         ax_t.plot(1e3 * fine, 1e6 * np.polyval(tc, fine), "-", color=color, lw=1,
                   label=f"{tag}: fit")  # fmt: skip
     ax_t.plot([0.0], [0.0], "k*", ms=10, label="normal form: T = 2π/ω")
