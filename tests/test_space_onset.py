@@ -91,7 +91,7 @@ def test_shot_cycle_near_onset_is_the_normal_forms():
 def test_amplitude_slope_at_onset_to_1e4():
     """The slope of A^2 in v - v_cr at the onset equals c^2 of the normal form to 1e-4
     (P3:4: four cycles shot at delta = 1e-3 ... 1e-2, A^2 / delta = c^2 (1 + k delta +
-    k2 delta^2) fitted; measured 2e-6)."""
+    k2 delta^2) fitted; measured 1.1e-6)."""
     on = space_runs.onset(4, ALPHA)
     c2 = on.normal_form.amplitude_coefficient**2
     deltas = np.array([1e-3, 2e-3, 5e-3, 1e-2])
