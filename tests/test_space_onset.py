@@ -101,3 +101,18 @@ def test_amplitude_slope_at_onset_to_1e4():
     r0, k = space_runs.fit_slope(deltas, ratios / c2)
     assert abs(r0 - 1.0) < 1e-4
     assert k < 0  # the amplitude grows slower than sqrt(delta) (measured k = -0.37)
+
+
+def test_local_order_recovers_a_known_order():
+    """The local order of three non-uniform meshes recovers p of Q0 + C N^-p exactly, and a
+    sequence whose error changes sign is flagged (no order observed)."""
+    from fempipe.validation.space_convergence import local_order, orders
+
+    ns = [2, 3, 4, 6, 8]
+    for p in (2.0, 4.0, 6.0, 7.5):
+        vals = [1.0 + 0.3 * n**-p for n in ns]
+        assert local_order(ns[-3:], vals[-3:]) == pytest.approx(p, abs=1e-8)
+    table = {n: {"q": 1.0 + 0.3 * n**-6.0, "bent": 1.0 + n**-6.0 - 0.24 * n**-4.0} for n in ns}
+    out = orders(ns, table)
+    assert out["q"]["monotone"] and out["q"]["slope"] == pytest.approx(6.0, abs=0.1)
+    assert not out["bent"]["monotone"]
