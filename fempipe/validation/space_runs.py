@@ -8,7 +8,6 @@ cycles' mesh convergence).  Everything is on the paper's reference case
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -144,8 +143,3 @@ def fit_slope(deltas: np.ndarray, ratios: np.ndarray, degree: int = 2) -> tuple[
     coef = np.polyfit(np.asarray(deltas), np.asarray(ratios), degree)
     r0 = float(coef[-1])
     return r0, float(coef[-2] / r0)
-
-
-def pi_half() -> float:
-    """The horizontal pipe's inclination, alpha = pi/2."""
-    return math.pi / 2
