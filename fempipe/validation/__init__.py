@@ -66,6 +66,10 @@ CASES: tuple[str, ...] = (
     # The motion out of the plane (fempipe.model.out_of_plane) against an
     # independent strong form (fempipe.validation.lateral).
     "out_of_plane",
+    # The pipe in three dimensions (fempipe.model.space): the non-planar oscillation's
+    # onset against its Hopf normal form, and its mesh convergence.
+    "space_onset",
+    "space_convergence",
 )
 
 

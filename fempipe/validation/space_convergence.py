@@ -1,0 +1,263 @@
+"""Mesh convergence of the non-planar cycle of the horizontal pipe, against the planar cycle's.
+
+The non-planar limit cycle of the paper's pipe at alpha = pi/2, v = 6 (born at the
+out-of-plane v_cr 5.82, :mod:`fempipe.validation.space_onset`) is shot on the 3-D model
+(:func:`fempipe.analyses.space.shooting.shoot_space`) on P3 meshes of 2 to 8 elements, the
+first from the Hopf normal form's prediction, each next from the previous one projected.
+For its period and tip extrema (Y_tip out of the plane; X_tip along gravity, Z_tip
+horizontal in the plane) the case reports two observed orders in h ~ 1/N:
+
+* the **local order** of the three finest meshes N1 < N2 < N3, the p that solves
+  (Q1 - Q2) / (Q2 - Q3) = (N1^-p - N2^-p) / (N2^-p - N3^-p) (no reference value needed);
+* the **slope against the finest mesh**, the least-squares slope of log |Q_N - Q_finest|
+  against log N over the meshes N <= finest / 2 (where the finest mesh's own error
+  biases |Q_N - Q_finest| by at most 2^-6).
+
+The same two orders of the planar cycle of Eq. (20) at alpha = pi/2, v = 6.5 (above the
+in-plane v_cr 6.21, a similar distance past its Hopf point), on the same meshes, are the
+yardstick: global quantities of P3 converge as h^6 in the plane (the suite's convergence
+case), and the 3-D model, the same elements for each of its three fields, must do as well.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .case import Case
+from .checks import CaseResult, Table, below
+from .space_runs import planar_cycles, space_cycles
+
+CASE = Case(
+    name="space_convergence",
+    figure="Convergence out of the plane (3-D)",
+    title="Mesh convergence of the non-planar cycle (α = π/2) against the planar one",
+    caption=(
+        "The paper's pipe (β = 0.142, γ = 18.9, μ = 0.005) horizontal (α = π/2), cubic elements "
+        "(P3) with N elements. (a) Non-planar cycle of the 3-D model at v = 6: |Q_N - Q_finest| "
+        "against N (log-log) for the period and the tip extrema (Y_tip out of the plane, X_tip "
+        "along gravity, Z_tip horizontal in the plane); (b) the same for the planar cycle of "
+        "Eq. (20) at v = 6.5; thick grey lines: the points of the fitted slope, given in the "
+        "legend with the local order p of the three finest meshes. (c) The local orders of "
+        "the 3-D (filled; ×: a quantity whose values are not monotone in N, no order observed) "
+        "and planar (open) cycles; dotted: P3's order 6; dashed in (a), (b): N^-6."
+    ),
+    paper_shows=(
+        "Sec. 5 and Figs. 7-11: the limit cycles above v_cr, converged in the Galerkin "
+        "discretization; checked here for the non-planar cycle of the horizontal pipe, "
+        "against the planar cycle's convergence",
+    ),
+)
+
+
+def local_order(ns, values) -> float:
+    """p with (Q1 - Q2) / (Q2 - Q3) = (N1^-p - N2^-p) / (N2^-p - N3^-p) (nan if none in
+    (0.5, 30): the three values are not monotone or not asymptotic)."""
+    (n1, n2, n3), (a, b, c) = ns, values
+    if b == c or (a - b) / (b - c) <= 0:
+        return math.nan
+
+    def f(p: float) -> float:
+        return (n1**-p - n2**-p) / (n2**-p - n3**-p) - (a - b) / (b - c)
+
+    try:
+        return float(brentq(f, 0.5, 30.0))
+    except ValueError:
+        return math.nan
+
+
+def quantities(cycle, keys) -> dict:
+    """Period and tip extrema of a cycle."""
+    out = {"period": float(cycle.period)}
+    for k in keys:
+        lo, hi = cycle.tip[k]
+        out[f"min {k}"], out[f"max {k}"] = float(lo), float(hi)
+    return out
+
+
+def orders(ns: list[int], table: dict) -> dict:
+    """``{quantity: {"monotone", "values", "errors", "local", "slope", "fit"}}`` (module
+    docstring); ``monotone``: the values move one way from mesh to mesh."""
+    out = {}
+    finest = ns[-1]
+    fit = [i for i, n in enumerate(ns[:-1]) if n <= finest / 2]
+    for q in table[ns[0]]:
+        vals = np.array([table[n][q] for n in ns])
+        err = np.abs(vals - vals[-1])
+        loc = local_order(ns[-3:], vals[-3:])
+        slope = math.nan
+        if len(fit) >= 2 and np.all(err[fit] > 0):
+            slope = float(-np.polyfit(np.log([ns[i] for i in fit]), np.log(err[fit]), 1)[0])
+        steps = np.diff(vals)
+        out[q] = {
+            "monotone": bool(np.all(steps > 0) or np.all(steps < 0)),
+            "values": vals.tolist(),
+            "errors": err.tolist(),
+            "local": loc,
+            "slope": slope,
+            "fit": fit,
+        }
+    return out
+
+
+def run(quick: bool = False) -> CaseResult:
+    """The 3-D and planar cycles on every mesh, their observed orders."""
+    t0 = time.perf_counter()
+    ref = CASE.references
+    alpha = ref.value("alpha")
+    ns = ref.value("elements", quick)
+    rtol = ref.value("rtol", quick)
+    v3, v2 = ref.value("v_space"), ref.value("v_planar")
+    c3 = space_cycles(ns, alpha, v3, rtol=rtol)
+    c2 = planar_cycles(ns, alpha, v2, rtol=rtol)
+    q3 = orders(ns, {n: quantities(c3[n], ("Y_tip", "X_tip", "Z_tip")) for n in ns})
+    q2 = orders(ns, {n: quantities(c2[n], ("X_tip", "Z_tip")) for n in ns})
+    p_theory = ref.value("order")
+    tol = ref.value("order_tolerance", quick)
+    tol_2d = ref.value("order_vs_planar_tolerance", quick)
+    checks = []
+    # A quantity whose values do not move one way under refinement has an error constant
+    # that changes sign (nearly cancels) on these meshes: no order is observed for it.
+    checked = [q for q, s in q3.items() if s["monotone"]]
+    compared = [q for q in checked if q in q2 and q2[q]["monotone"]]
+    for q in checked:
+        s = q3[q]
+        tag = q.replace(" ", "_")
+        checks.append(
+            below(
+                f"order_{tag}",
+                f"3-D cycle, {q}: the local order of the three finest meshes is P3's h^6",
+                abs(s["local"] - p_theory) if math.isfinite(s["local"]) else math.inf,
+                tol,
+                why=ref.source("order_tolerance"),
+                source="local order of shoot_space cycles on P3 meshes; order: "
+                + ref.source("order"),
+            )
+        )
+    # The planar cycle's orders, measured the same way, for the quantities both have.
+    p2_local = float(np.median([s["local"] for s in q2.values()]))
+    for q in compared:
+        tag = q.replace(" ", "_")
+        checks.append(
+            below(
+                f"order_vs_planar_{tag}",
+                f"{q}: the 3-D cycle's local order equals the planar cycle's",
+                abs(q3[q]["local"] - q2[q]["local"])
+                if math.isfinite(q3[q]["local"] + q2[q]["local"])
+                else math.inf,
+                tol_2d,
+                why=ref.source("order_vs_planar_tolerance"),
+                source="the planar cycle (shoot) at v = 6.5 on the same meshes",
+            )
+        )
+    rows = []
+    for label, qs in ((f"3-D, v = {v3:g}", q3), (f"planar, v = {v2:g}", q2)):
+        for q, s in qs.items():
+            rows.append((label, q, *s["values"], s["local"], s["slope"], s["monotone"]))
+    table = Table(
+        "Period and tip extrema of the cycles on P3:N, and their observed orders in 1/N",
+        (
+            "cycle",
+            "quantity",
+            *[f"N = {n}" for n in ns],
+            "local order",
+            "slope vs finest",
+            "monotone",
+        ),
+        tuple(rows),
+        note=f"local order: from N = {', '.join(map(str, ns[-3:]))}; slope: of "
+        "log |Q_N - Q_finest| over N <= finest / 2. The planar cycles' median local order: "
+        f"{p2_local:.2f}.",
+    )
+    requires = [f"order_{q.replace(' ', '_')}" for q in checked] + [
+        f"order_vs_planar_{q.replace(' ', '_')}" for q in compared
+    ]
+    # The checks emitted depend on monotonicity; these must always be among them.
+    requires += ["order_period", "order_vs_planar_period", "order_max_Y_tip"]
+    skipped = [q for q in q3 if q not in checked]
+    findings = [
+        f"3-D cycle, {q}: not monotone under refinement (values "
+        + ", ".join(f"{x:.10f}" for x in q3[q]["values"])
+        + "): its error constant changes sign on these meshes, no order is observed"
+        for q in skipped
+    ]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=(table,),
+        findings=findings,
+        data={"elements": ns, "space": q3, "planar": q2, "v_space": v3, "v_planar": v2},
+        requires=requires,
+    )
+
+
+#: Color-blind-safe colors (Okabe & Ito) per quantity.
+COLORS = {
+    "period": "#000000",
+    "min Y_tip": "#0072B2",
+    "max Y_tip": "#56B4E9",
+    "min X_tip": "#D55E00",
+    "max X_tip": "#E69F00",
+    "min Z_tip": "#009E73",
+    "max Z_tip": "#CC79A7",
+}
+
+
+def _draw_errors(ax, ns, qs: dict, title: str) -> None:
+    ns = np.asarray(ns)
+    for q, s in qs.items():
+        err = np.asarray(s["errors"][:-1])
+        ok = err > 0
+        ax.loglog(ns[:-1][ok], err[ok], "o-", ms=4, color=COLORS.get(q),
+                  label=f"{q}: slope {s['slope']:.2f}, p {s['local']:.2f}")  # fmt: skip
+        if len(s["fit"]) >= 2:
+            ax.loglog(ns[s["fit"]], err[s["fit"]], "k-", lw=3, alpha=0.2)
+    # A line of slope -6 through the period's coarsest error: P3's order.
+    e0 = qs["period"]["errors"][0]
+    ax.loglog(ns[:-1], e0 * (ns[:-1] / ns[0]) ** -6.0, "--", color="0.5", lw=1, label="N^-6")
+    ax.set_xticks(ns[:-1], [str(n) for n in ns[:-1]])
+    ax.minorticks_off()
+    ax.set_xlabel("elements N")
+    ax.set_ylabel("|Q_N - Q_finest|")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) 3-D errors, (b) planar errors, (c) local orders of both."""
+    from .drawing import finish_figure, new_figure, paper_case_line
+
+    if fig is None:
+        fig, axes = new_figure(3, ncols=3, size=4.2)
+    else:
+        axes = list(fig.subplots(1, 3, squeeze=False).ravel())
+    d = result.data
+    ns = d["elements"]
+    _draw_errors(axes[0], ns, d["space"], f"non-planar cycle (3-D), v = {d['v_space']:g}")
+    _draw_errors(axes[1], ns, d["planar"], f"planar cycle (Eq. (20)), v = {d['v_planar']:g}")
+    ax = axes[2]
+    names = list(d["space"])
+    x = np.arange(len(names))
+    mono = [d["space"][q]["monotone"] for q in names]
+    ax.plot(x[mono], [d["space"][q]["local"] for q, m in zip(names, mono, strict=True) if m],
+            "o", color="#0072B2", label="3-D")  # fmt: skip
+    if not all(mono):
+        ax.plot(x[~np.array(mono)],
+                [d["space"][q]["local"] for q, m in zip(names, mono, strict=True) if not m],
+                "x", color="#0072B2", label="3-D, not monotone (not checked)")  # fmt: skip
+    ax.plot([i for i, q in enumerate(names) if q in d["planar"]],
+            [d["planar"][q]["local"] for q in names if q in d["planar"]],
+            "s", mfc="none", color="#D55E00", label="planar")  # fmt: skip
+    ax.axhline(6.0, color="0.5", ls=":", lw=1)
+    ax.set_xticks(x, names, rotation=45, ha="right", fontsize=8)
+    ax.set_ylabel(f"local order p (N = {', '.join(map(str, ns[-3:]))})")
+    ax.set_title("observed orders", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", f"{paper_case_line()}, α = π/2, P3")
+    return fig

@@ -1,0 +1,252 @@
+"""The onset of the non-planar oscillation of the horizontal pipe: normal form against shooting.
+
+At alpha = pi/2 the planar static state of the paper's pipe loses stability out of its
+plane (the out-of-plane v_cr, :mod:`fempipe.model.out_of_plane`, lies below the in-plane
+one of Fig. 6) and a non-planar limit cycle is born.  This case checks, on one P3 mesh at a
+time (both computations on the same mesh, so the comparison is free of discretization
+error):
+
+(a) **v_cr.**  The critical pair of the 3-D model's exact Jacobian
+    (:func:`fempipe.analyses.space.onset.space_hopf_normal_form`) crosses the imaginary
+    axis at the out-of-plane model's v_cr (two discretizations of one linear problem:
+    they agree to their discretization error);
+(b) **The amplitude.**  Cycles shot on the full 3-D model
+    (:func:`fempipe.analyses.space.shooting.shoot_space`) at v = v_cr + delta have
+    A^2 = ((max Y_tip - min Y_tip) / 2)^2 linear in delta with the slope c^2 of the normal
+    form (Kuznetsov's l1, the transversality, the critical mode): A^2 / delta fitted as
+    c^2 (1 + k delta + ...) must give 1 at delta -> 0 to 1e-4;
+(c) **The frequency.**  The period tends to 2 pi / omega;
+(d) **The symmetry.**  The critical mode is out of the plane (mirror-odd), Y_tip swings
+    symmetrically, and the cycles are stable (the Hopf point is supercritical, l1 < 0).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .case import Case
+from .checks import CaseResult, Table, below, holds
+from .space_runs import amplitude, fit_slope, onset, space_cycle_near_onset
+
+CASE = Case(
+    name="space_onset",
+    figure="Onset out of the plane (3-D)",
+    title="The non-planar oscillation of the horizontal pipe is born at the out-of-plane v_cr",
+    caption=(
+        "The paper's pipe (β = 0.142, γ = 18.9, μ = 0.005) horizontal (α = π/2), 3-D model on "
+        "cubic elements. (a) A² / (c² δ) against δ = v - v_cr, A = (max Y_tip - min Y_tip)/2 "
+        "of the non-planar cycle shot on the 3-D model (markers, one color per mesh), c the "
+        "amplitude coefficient of the Hopf normal form on the same mesh; lines: the fits "
+        "c² (1 + k δ + k₂ δ²), whose value at δ = 0 (filled markers; printed in the legend) "
+        "must be 1 to 1e-4. (b) A against δ "
+        "(log-log): shot cycles (markers) and the normal form's c √δ (line). (c) Period "
+        "against δ relative to the normal form's 2π/ω (star at δ = 0), with its fit."
+    ),
+    paper_shows=(
+        "Sec. 4 and Fig. 6: the pipe loses stability by flutter at the critical velocity of "
+        "the linear analysis, and Sec. 5: a limit cycle grows from it; checked here in three "
+        "dimensions, where the horizontal pipe's first flutter is out of its plane",
+    ),
+)
+
+
+def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) -> tuple:
+    """The checks and the table row of one mesh."""
+    nf = on.normal_form
+    c2 = nf.amplitude_coefficient**2
+    amps = np.array([amplitude(c) for c in cycles])
+    ratios = amps**2 / (c2 * np.asarray(deltas))
+    r0, k = fit_slope(deltas, ratios, degree)
+    periods = np.array([c.period for c in cycles])
+    T0 = float(np.polyval(np.polyfit(deltas, periods, degree), 0.0))
+    T_nf = 2.0 * math.pi / nf.omega
+    asym = max(abs(c.tip["Y_tip"][0] + c.tip["Y_tip"][1]) for c in cycles)
+    tol_v = ref.value("v_cr_tolerance")[tag.split(":")[1]]
+    checks = [
+        below(
+            f"v_cr_vs_out_of_plane_{tag}",
+            f"{tag}: the 3-D Jacobian's critical pair crosses at the out-of-plane model's v_cr",
+            abs(nf.v - nf.v_out_of_plane),
+            tol_v,
+            why=ref.source("v_cr_tolerance"),
+            source="fempipe.analyses.stability.spatial_critical_velocity (out-of-plane model) against the secant on the 3-D Jacobian",
+        ),
+        below(
+            f"amplitude_slope_{tag}",
+            f"{tag}: the slope of A² in v - v_cr at the onset is c² of the normal form",
+            abs(r0 - 1.0),
+            ref.value("slope_tolerance"),
+            why=ref.source("slope_tolerance"),
+            source="shoot_space cycles against space_hopf_normal_form on the same mesh",
+        ),
+        below(
+            f"l1_resolved_{tag}",
+            f"{tag}: l1 is resolved (its uncertainty relative to it)",
+            nf.uncertainty / abs(nf.l1),
+            ref.value("l1_tolerance"),
+            why=ref.source("l1_tolerance"),
+            source="the spread of l1 over the difference steps (lyapunov_coefficient)",
+        ),
+        below(
+            f"period_{tag}",
+            f"{tag}: the period tends to 2π/ω of the critical pair (relative difference)",
+            abs(T0 - T_nf) / T_nf,
+            ref.value("period_tolerance"),
+            why=ref.source("period_tolerance"),
+            source="shoot_space periods extrapolated to delta = 0 against Im lambda",
+        ),
+        below(
+            f"transversality_{tag}",
+            f"{tag}: Re λ'(v) by the adjoint equals the difference of Re λ on the branch",
+            abs(nf.transversality - nf.transversality_check) / abs(nf.transversality),
+            ref.value("transversality_tolerance"),
+            why=ref.source("transversality_tolerance"),
+            source="the adjoint formula p^H (dA/dv) q against the re-solved static branch",
+        ),
+        below(
+            f"mirror_{tag}",
+            f"{tag}: the critical mode is out of the plane and Y_tip swings symmetrically",
+            max(nf.in_plane_fraction, asym),
+            ref.value("symmetry_tolerance"),
+            why=ref.source("symmetry_tolerance"),
+            source="the mirror Y -> -Y of the 3-D model",
+        ),
+        holds(
+            f"supercritical_{tag}",
+            f"{tag}: l1 < 0 and the shot cycles are stable (a supercritical Hopf point)",
+            nf.criticality == "supercritical" and all(c.stable for c in cycles),
+            f"l1 = {nf.l1:.6g}, stable: {[bool(c.stable) for c in cycles]}",
+            why="the sign of l1 against the Floquet multipliers of the shot cycles",
+            source="Kuznetsov, Elements of Applied Bifurcation Theory, Thm. 3.3",
+            category="numerics",
+        ),
+    ]
+    row = (
+        tag,
+        nf.v,
+        nf.v_out_of_plane,
+        nf.l1,
+        nf.uncertainty,
+        nf.omega,
+        nf.transversality,
+        nf.amplitude_coefficient,
+        r0 - 1.0,
+        k,
+    )
+    data = {
+        "tag": tag,
+        "deltas": list(map(float, deltas)),
+        "amplitudes": amps.tolist(),
+        "ratios": ratios.tolist(),
+        "periods": periods.tolist(),
+        "r0": r0,
+        "k": k,
+        "degree": degree,
+        "c": nf.amplitude_coefficient,
+        "period_nf": T_nf,
+        "normal_form": nf.to_dict(),
+    }
+    return checks, row, data
+
+
+def run(quick: bool = False) -> CaseResult:
+    """Normal form and shot cycles on each mesh (P3:3 quick; P3:4 and P3:8 full)."""
+    t0 = time.perf_counter()
+    ref = CASE.references
+    alpha = ref.value("alpha")
+    meshes = ref.value("deltas", quick)
+    degree = ref.value("fit_degree", quick)
+    checks, rows, data = [], [], []
+    requires = []
+    for ne, deltas in meshes.items():
+        tag = f"P3:{ne}"
+        requires += [
+            f"{k}_{tag}"
+            for k in (
+                "v_cr_vs_out_of_plane",
+                "amplitude_slope",
+                "l1_resolved",
+                "period",
+                "transversality",
+                "mirror",
+                "supercritical",
+            )
+        ]
+        on = onset(int(ne), alpha)
+        cycles = [space_cycle_near_onset(on, d) for d in deltas]
+        ch, row, d = _mesh_checks(tag, on, cycles, np.array(deltas), degree, ref, quick)
+        checks += ch
+        rows.append(row)
+        data.append(d)
+    table = Table(
+        "The out-of-plane Hopf point (α = π/2) and the slope of A² at the onset",
+        (
+            "mesh",
+            "v_cr (3-D Jacobian)",
+            "v_cr (out-of-plane model)",
+            "l1",
+            "uncertainty of l1",
+            "ω",
+            "Re λ'(v)",
+            "c",
+            "A²/(c² δ) at δ → 0, minus 1",
+            "k",
+        ),
+        tuple(rows),
+        note="l1 with the critical mode of unit L2 norm over (θ, a, b); c of "
+        "(max Y_tip - min Y_tip)/2 ~ c √(v - v_cr); k of A²/δ = c² (1 + k δ + ...).",
+    )
+    return CASE.result(
+        checks, quick=quick, started=t0, tables=(table,), data={"meshes": data}, requires=requires
+    )
+
+
+#: Color-blind-safe colors (Okabe & Ito), one per mesh.
+COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7")
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) A²/(c² δ) and its fit, (b) A against δ with c √δ, (c) the period against δ."""
+    from .drawing import finish_figure, new_figure, paper_case_line
+
+    if fig is None:
+        fig, axes = new_figure(3, ncols=3, size=4.0)
+    else:
+        axes = list(fig.subplots(1, 3, squeeze=False).ravel())
+    ax_r, ax_a, ax_t = axes
+    for color, mk, m in zip(COLORS, "osD^", result.data["meshes"], strict=False):
+        d = np.array(m["deltas"])
+        fine = np.linspace(0.0, d.max(), 100)
+        coef = np.polyfit(d, m["ratios"], m["degree"])
+        tag = m["tag"]
+        ax_r.plot(1e3 * d, m["ratios"], mk, mfc="none", color=color, label=f"{tag}: shot cycles")
+        ax_r.plot(1e3 * fine, np.polyval(coef, fine), "-", color=color, lw=1,
+                  label=f"{tag}: fit; at δ = 0: 1 {m['r0'] - 1.0:+.1e}")  # fmt: skip
+        ax_r.plot([0.0], [m["r0"]], mk, color=color, ms=4)
+        ax_a.loglog(d, m["amplitudes"], mk, mfc="none", color=color, label=f"{tag}: shot cycles")
+        ax_a.loglog(fine[1:], m["c"] * np.sqrt(fine[1:]), "-", color=color, lw=1,
+                    label=f"{tag}: c √δ, c = {m['c']:.5f}")  # fmt: skip
+        rel = (np.array(m["periods"]) - m["period_nf"]) / m["period_nf"]
+        tc = np.polyfit(d, rel, m["degree"])
+        ax_t.plot(1e3 * d, 1e6 * rel, mk, mfc="none", color=color, label=f"{tag}: shot cycles")
+        ax_t.plot(1e3 * fine, 1e6 * np.polyval(tc, fine), "-", color=color, lw=1,
+                  label=f"{tag}: fit")  # fmt: skip
+    ax_t.plot([0.0], [0.0], "k*", ms=10, label="normal form: T = 2π/ω")
+    ax_r.axhline(1.0, color="0.5", lw=0.8, ls=":")
+    ax_r.set_xlabel("δ = v - v_cr (10⁻³)")
+    ax_r.set_ylabel("A² / (c² δ)")
+    ax_r.set_title("slope of A² against the normal form", fontsize=9)
+    ax_a.set_xlabel("δ = v - v_cr")
+    ax_a.set_ylabel("A = (max Y_tip - min Y_tip) / 2")
+    ax_a.set_title("out-of-plane swing of the tip", fontsize=9)
+    ax_t.set_xlabel("δ = v - v_cr (10⁻³)")
+    ax_t.set_ylabel("(T - 2π/ω) / (2π/ω)  (10⁻⁶)")
+    ax_t.set_title("period against the normal form's", fontsize=9)
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+    finish_figure(fig, f"{CASE.figure}: {CASE.title}", f"{paper_case_line()}, α = π/2, 3-D model")
+    return fig
