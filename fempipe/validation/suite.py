@@ -30,6 +30,8 @@ log = logging.getLogger(__name__)
 
 #: Rough relative cost of the full cases, to start the longest first.
 _COST = {
+    "space_convergence": 150,
+    "space_onset": 110,
     "fig08_10": 100,
     "convergence": 90,
     "fig07": 80,
