@@ -21,7 +21,7 @@ import numpy as np
 from .lapack import lu_factor, lu_solve
 from .tableau import A2, A, C
 
-__all__ = ["chain_step", "step_derivative"]
+__all__ = ["chain_step", "chain_step_blocks", "step_derivative"]
 
 
 def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np.ndarray:
@@ -84,3 +84,35 @@ def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None 
         new[:, -1] += D[:, -1]
         return new[:, :-1], new[:, -1]
     return new, None
+
+
+def chain_step_blocks(
+    h: float, Ks, Ds, Ms, dR_dp, S: np.ndarray, dy_dp: np.ndarray | None, blocks
+) -> np.ndarray | None:
+    """:func:`step_derivative` and :func:`chain_step` block by block, in place.
+
+    For Jacobians with no coupling between the groups of unknowns ``blocks``
+    (index arrays partitioning range(n)) and derivatives so far ``S`` with
+    none either (block diagonal in the (q, q') indices of each group), the
+    step's derivative is block diagonal too, and each group's is the whole
+    computation on that group alone: the same numbers (to round-off) for
+    sum_b n_b^3 instead of n^3 operations.  ``S`` (and ``dy_dp``) are updated
+    in place; the entries between groups stay exactly zero.
+
+    Returns
+    -------
+    ndarray or None
+        The new ``dy_dp``.
+    """
+    n = Ks.shape[1]
+    for idx in blocks:
+        ii = np.ix_(np.arange(3), idx, idx)
+        I = np.concatenate([idx, n + idx])
+        D = step_derivative(
+            h, Ks[ii], Ds[ii], Ms[ii], None if dR_dp is None else dR_dp[:, idx]
+        )
+        Sb, db = chain_step(D, h, S[np.ix_(I, I)], None if dy_dp is None else dy_dp[I])
+        S[np.ix_(I, I)] = Sb
+        if dy_dp is not None:
+            dy_dp[I] = db
+    return dy_dp
