@@ -57,9 +57,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
     guess = find_attractor(planar).cycle
     t_planar, cycle = _cpu(lambda: shoot(planar, guess.q0, guess.qdot0, guess.period), repeats)
     t_space, cycle3 = _cpu(
-        lambda: shoot_space(
-            space, planar_state(guess.q0), planar_state(guess.qdot0), guess.period
-        ),
+        lambda: shoot_space(space, planar_state(guess.q0), planar_state(guess.qdot0), guess.period),
         repeats,
     )
     t_oop, oop = _cpu(lambda: out_of_plane_floquet(planar, cycle), repeats)

@@ -298,9 +298,7 @@ class SpaceModel:
     # ------------------------------------------- the terms: force fields G --
     def inertia(self, fl: SpaceFields) -> Dual:
         """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
-        return self._integral(
-            self._integral(fl.t_ddot, "C"), "CR"
-        )
+        return self._integral(self._integral(fl.t_ddot, "C"), "CR")
 
     def coriolis(self, fl: SpaceFields) -> Dual:
         """``2 v sqrt(beta) C^R t_dot``."""
@@ -438,6 +436,21 @@ class SpaceModel:
         M = D[:, :, 2 * n :]
         out = D[:, :, :n], D[:, :, n : 2 * n], 0.5 * (M + M.transpose(0, 2, 1))
         return out if np.ndim(U) == 2 else tuple(x[0] for x in out)
+
+    def velocity_derivative(self, U, Ud) -> np.ndarray:
+        """dR/dv at fixed (U, U', U''), steady flow: the Coriolis and follower terms.
+
+        R depends on v through ``2 v sqrt(beta) C^R t_dot`` and ``v^2 t(1)`` only
+        (:meth:`coriolis`, :meth:`follower`), so dR/dv is the weak form of the force
+        field ``2 sqrt(beta) C^R t_dot + 2 v t(1)``: one evaluation of the fields.
+        Shape (3 n,), or (S, 3 n) for S states.
+        """
+        fl = self.fields(U, Ud)
+        p = self.params
+        G = 2.0 * np.sqrt(p.beta) * self._integral(fl.t_dot, "CR") + (2.0 * p.v) * fl.t_tip
+        A = stack([dot(fl.J[c], G) for c in range(3)], axis=1)
+        r = self._assemble(A, np.zeros_like(A))
+        return r if np.ndim(U) == 2 else r[0]
 
     def mass_matrix(self, U) -> np.ndarray:
         """dR/dU'' (R is affine in U''), symmetric positive definite, shape (3 n, 3 n)."""

@@ -11,7 +11,6 @@ unchanged.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 
@@ -22,21 +21,14 @@ __all__ = ["SpaceDynamics"]
 
 
 class _VelocityDerivative:
-    """dR/dv of the stages: R is quadratic in v, dR/dv = 2 v follower_1 + coriolis_1."""
+    """dR/dv of the stages (:meth:`SpaceModel.velocity_derivative`): one evaluation of the
+    fields for all stages (R is quadratic in v, dR/dv = 2 v follower_1 + coriolis_1)."""
 
     def __init__(self, model: SpaceModel) -> None:
-        self.v = model.params.v
-        self.unit = model.with_params(replace(model.params, v=1.0))
-        self.zero = model.with_params(replace(model.params, v=0.0))
+        self.model = model
 
     def __call__(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
-        Q, P, Acc = np.atleast_2d(Q), np.atleast_2d(P), np.atleast_2d(Acc)
-        # R(v) = R0 + v R_c + v^2 R_f with R_c the Coriolis term (linear in the
-        # rates) and R_f the follower: R(1) - R(0) = R_c + R_f, and R_f is that
-        # difference at rest; dR/dv = R_c + 2 v R_f.
-        both = self.unit.residual(Q, P, Acc) - self.zero.residual(Q, P, Acc)
-        rf = self.unit.residual(Q) - self.zero.residual(Q)
-        return (both - rf) + 2.0 * self.v * rf
+        return self.model.velocity_derivative(np.atleast_2d(Q), np.atleast_2d(P))
 
 
 class SpaceDynamics(ModelDynamics):

@@ -504,8 +504,14 @@ class Radau:
         self._stage3_jac = (Ks[2], Ds[2], Ms[2])
         if self._split_sensitivity and self._decoupled(Ks, Ds, Ms) is not None:
             dv = chain_step_blocks(
-                h, Ks, Ds, Ms, dR_dv, self.sensitivity_matrix,
-                self.velocity_sensitivity if with_v else None, self._blocks,
+                h,
+                Ks,
+                Ds,
+                Ms,
+                dR_dv,
+                self.sensitivity_matrix,
+                self.velocity_sensitivity if with_v else None,
+                self._blocks,
             )
         else:
             self._split_sensitivity = False

@@ -108,9 +108,7 @@ def chain_step_blocks(
     for idx in blocks:
         ii = np.ix_(np.arange(3), idx, idx)
         I = np.concatenate([idx, n + idx])
-        D = step_derivative(
-            h, Ks[ii], Ds[ii], Ms[ii], None if dR_dp is None else dR_dp[:, idx]
-        )
+        D = step_derivative(h, Ks[ii], Ds[ii], Ms[ii], None if dR_dp is None else dR_dp[:, idx])
         Sb, db = chain_step(D, h, S[np.ix_(I, I)], None if dy_dp is None else dy_dp[I])
         S[np.ix_(I, I)] = Sb
         if dy_dp is not None:
