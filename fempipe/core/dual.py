@@ -87,7 +87,7 @@ class Term:
     are older than the term (:func:`pullback` relies on it).
     """
 
-    __slots__ = ("adjoint", "gder", "loc", "m", "n", "nl", "order")
+    __slots__ = ("adjoint", "gder", "identity", "loc", "m", "n", "nl", "order")
 
     def __init__(self, n: int, m: int, adjoint=None, loc=None, nl=None, gder=None) -> None:
         self.n = n
@@ -97,13 +97,15 @@ class Term:
         self.nl = nl
         self.gder = gder
         self.order = next(_ORDER)
+        self.identity = None
 
-
-def _seed(val: np.ndarray, term: Term) -> np.ndarray:
-    """dY/dY: the identity on the components, broadcast over points and states."""
-    n, *comp, S = val.shape
-    eye = np.eye(term.m).reshape(tuple(comp) + (1, term.m))
-    return np.broadcast_to(eye[None], val.shape + (term.m,))
+    def identity_for(self, val: np.ndarray) -> np.ndarray:
+        """dY/dY for the value ``val`` of Y: the identity on the components, broadcast over
+        points and states (kept, so that a map of Y itself can be recognized)."""
+        n, *comp, S = val.shape
+        eye = np.eye(self.m).reshape(tuple(comp) + (1, self.m))
+        self.identity = np.broadcast_to(eye[None], val.shape + (self.m,))
+        return self.identity
 
 
 class Dual:
@@ -202,19 +204,30 @@ class Dual:
         """The sum over a leading axis (``axis`` >= 0, counted in the value)."""
         return Dual(self.val.sum(axis=axis), *self._map(lambda d: d.sum(axis=axis)))
 
-    def nonlocal_map(
-        self,
-        op: Callable[[np.ndarray], np.ndarray],
-        adjoint: Callable[[np.ndarray], np.ndarray],
-    ) -> Dual:
-        """``op`` (linear along axis 0, any trailing axes) of the value; its derivative is
-        carried as a new :class:`Term`, pulled back by ``adjoint`` (op^T along axis 0)."""
+    def nonlocal_map(self, op: Callable[[np.ndarray], np.ndarray], adjoint) -> Dual:
+        """``op`` (linear along axis 0, any trailing axes) of the value.
+
+        The derivative is carried as a new :class:`Term`, pulled back by
+        ``adjoint``: op^T along axis 0, a matrix (n_in, n_out) or a callable.
+        An integral of an integral (``self`` is the plain result of another
+        map) with matrices is one term, pulled back by the product of the two.
+        """
         val = op(self.val)
         if self.loc is None and self.nl is None:
             return Dual(val)
+        loc, nl = self.loc, self.nl
+        if loc is None and len(nl) == 1:
+            ((inner, coef),) = nl.items()
+            if (
+                coef is inner.identity
+                and isinstance(adjoint, np.ndarray)
+                and isinstance(inner.adjoint, np.ndarray)
+            ):
+                adjoint = inner.adjoint @ adjoint
+                loc, nl = inner.loc, inner.nl
         m = int(np.prod(self.val.shape[1:-1], dtype=int))
-        term = Term(val.shape[0], m, adjoint=adjoint, loc=self.loc, nl=self.nl)
-        return Dual(val, None, {term: _seed(val, term)})
+        term = Term(val.shape[0], m, adjoint=adjoint, loc=loc, nl=nl)
+        return Dual(val, None, {term: term.identity_for(val)})
 
 
 def linear_functional(val: np.ndarray, gder: np.ndarray) -> Dual:
@@ -222,7 +235,7 @@ def linear_functional(val: np.ndarray, gder: np.ndarray) -> Dual:
     the same for every state."""
     val = np.asarray(val, dtype=float)
     term = Term(val.shape[0], gder.shape[1], gder=gder)
-    return Dual(val, None, {term: _seed(val, term)})
+    return Dual(val, None, {term: term.identity_for(val)})
 
 
 def _flat(d: np.ndarray, n: int, S: int) -> np.ndarray:
@@ -283,7 +296,9 @@ def pullback(pairs: Sequence[tuple[Dual, np.ndarray]], L: int):
             g = np.einsum("sqmr,qmk->srk", seed, term.gder)
             G = g if G is None else G + g
             continue
-        inner = term.adjoint(seed.transpose(1, 0, 2, 3).reshape(n_out, -1))
+        flat = seed.transpose(1, 0, 2, 3).reshape(n_out, -1)
+        adj = term.adjoint
+        inner = adj @ flat if isinstance(adj, np.ndarray) else adj(flat)
         visit(term.loc, term.nl, inner.reshape(-1, S, m, R).transpose(1, 0, 2, 3))
     W = None
     if local:

@@ -123,17 +123,15 @@ class _Seeds:
         self.Phi = _dense(disc.Phi)
         self.dPhi = _dense(disc.dPhi)
         self.tip = np.asarray(disc.tip, dtype=float)
-        w = quad.w
-        # (op, op^T along axis 0); C^R = w 1^T - C elementwise in rows: C^R^T g = w sum(g) - C^T g
+        # (op, op^T as a matrix): the integrals and the matrices that pull derivatives back
+        eye = np.eye(quad.n_q)
         self.ops = {
-            "C": (quad.cumulative_cells, quad.cumulative_adjoint),
-            "CR": (
-                quad.from_tip_cells,
-                lambda g: w[:, None] * g.sum(axis=0) - quad.cumulative_adjoint(g),
-            ),
-            "int": (lambda f: quad.integrate(f)[None], lambda g: w[:, None] * g[0]),
+            "C": (quad.cumulative_cells, quad.cumulative_adjoint(eye)),
+            "CR": (quad.from_tip_cells, np.ascontiguousarray(quad.from_tip_cells(eye).T)),
+            "int": (lambda f: quad.integrate(f)[None], quad.w[:, None].copy()),
         }
         nt = self.Phi.shape[1]
+        self._tests_S: dict[int, tuple] = {}
         self.tests = []
         for B in (self.Phi, self.dPhi):
             seed = np.zeros((quad.n_q, 3, 3, nt))
@@ -144,6 +142,15 @@ class _Seeds:
         self.tip_der = np.zeros((1, 3, 9 * nt))
         for c in range(3):
             self.tip_der[0, c, c * nt : (c + 1) * nt] = self.tip
+
+    def tests_for(self, S: int) -> tuple:
+        """:attr:`tests` repeated for S states, contiguous (kept: made once per S)."""
+        t = self._tests_S.get(S)
+        if t is None:
+            t = self._tests_S[S] = tuple(
+                np.ascontiguousarray(np.repeat(x[None], S, 0)) for x in self.tests
+            )
+        return t
 
     @classmethod
     def of(cls, disc: Discretization) -> _Seeds:
@@ -410,10 +417,7 @@ class SpaceModel:
         """dR/d(blocks) of each state from the Duals A, B: shape (S, 3 n, len(blocks) 3 n)."""
         s = self._seeds
         S = A.shape[-1]
-        pairs = [
-            (x, np.broadcast_to(seed[None], (S,) + seed.shape))
-            for x, seed in zip((A, B), s.tests, strict=True)
-        ]
+        pairs = list(zip((A, B), s.tests_for(S), strict=True))
         W, G = pullback(pairs, 3 * len(_KINDS))
         return s.assemble(W, G, blocks)
 
