@@ -162,20 +162,25 @@ class Dual:
         return (-self) + other
 
     def __mul__(self, other) -> Dual:
-        ov = _val(other)
-        val = self.val * ov
-        ox = np.asarray(ov)[..., None]
+        # Every part has the shape of its value plus one axis, so the products below
+        # broadcast to the product's shape by themselves.
+        if not isinstance(other, Dual):
+            if isinstance(other, float | int):
+                return Dual(self.val * other, *self._map(lambda d: d * other))
+            ov = np.asarray(other)
+            ox = ov[..., None]
+            return Dual(self.val * ov, *self._map(lambda d: d * ox))
+        ov, sv = other.val, self.val
+        ox, sx = ov[..., None], sv[..., None]
         loc = None if self.loc is None else self.loc * ox
+        if other.loc is not None:
+            loc = other.loc * sx if loc is None else loc + other.loc * sx
         nl = None if self.nl is None else {t: c * ox for t, c in self.nl.items()}
-        if isinstance(other, Dual):
-            sx = self.val[..., None]
-            if other.loc is not None:
-                loc = _add(loc, other.loc * sx)
-            if other.nl is not None:
-                nl = {} if nl is None else nl
-                for t, c in other.nl.items():
-                    nl[t] = nl[t] + c * sx if t in nl else c * sx
-        return Dual(val, _bcast(loc, val.shape), _merge(nl, None, val.shape))
+        if other.nl is not None:
+            nl = {} if nl is None else nl
+            for t, c in other.nl.items():
+                nl[t] = nl[t] + c * sx if t in nl else c * sx
+        return Dual(sv * ov, loc, nl)
 
     __rmul__ = __mul__
 
