@@ -96,9 +96,9 @@ def test_pullback_through_an_integral_matches_the_closed_form():
     x = Dual(u[:, None], np.ones((n, 1, 1)))  # value (n, S = 1), d/du at the point
     integral = (x * x).nonlocal_map(lambda f: C @ f, lambda g: C.T @ g)
     y = x.sin() * integral
-    seed = np.eye(n)[None, :, None, :]  # (S, points, m = 1, R = n): the rows y_r
+    seed = np.eye(n)[:, None, None, :]  # (points, S, m = 1, R = n): the rows y_r
     W, G = pullback([(y, seed)], 1)
     assert G is None
-    jac = W[0, :, 0, :].T @ B  # sum over the points of d y_r / d u(q) B[q]
+    jac = W[:, 0, 0, :].T @ B  # sum over the points of d y_r / d u(q) B[q]
     expected = np.diag(np.cos(u) * (C @ u**2)) @ B + np.diag(np.sin(u)) @ C @ np.diag(2 * u) @ B
     assert np.allclose(jac, expected, rtol=1e-13, atol=1e-13)

@@ -244,9 +244,9 @@ def linear_functional(val: np.ndarray, gder: np.ndarray) -> Dual:
 
 
 def _flat(d: np.ndarray, n: int, S: int) -> np.ndarray:
-    """(n, *comp, S, k) -> (S, n, k, m) with m = prod(comp)."""
+    """(n, *comp, S, k) -> (n, S, k, m) with m = prod(comp)."""
     d = d.reshape(n, -1, S, d.shape[-1])
-    return d.transpose(2, 0, 3, 1)
+    return d.transpose(0, 2, 3, 1)
 
 
 def pullback(pairs: Sequence[tuple[Dual, np.ndarray]], L: int):
@@ -255,56 +255,61 @@ def pullback(pairs: Sequence[tuple[Dual, np.ndarray]], L: int):
     Parameters
     ----------
     pairs : sequence of (Dual, seed)
-        ``seed`` of shape (S, n_x, m_x, R) weighs the derivative of x's
+        ``seed`` of shape (n_x, S, m_x, R) weighs the derivative of x's
         component m at point q and state s in the R outputs (the rows of a
-        Jacobian): output r gets ``sum_(q, m) seed[s, q, m, r] dx[q, m, s]``.
+        Jacobian): output r gets ``sum_(q, m) seed[q, s, m, r] dx[q, m, s]``.
     L : int
         The number of local quantities (``loc``'s last axis).
 
     Returns
     -------
     (W, G)
-        W, shape (S, n_points, L, R): the outputs' derivatives with respect to
+        W, shape (n_points, S, L, R): the outputs' derivatives with respect to
         the local quantities at each point (to be multiplied by their bases);
         G, shape (S, R, K): the part through linear functionals
         (:func:`linear_functional`), None if none.
+
+    Notes
+    -----
+    The seeds keep the points first, so that the transposed integration
+    operators are plain matrix products on them (no copies); the products with
+    the pointwise coefficients are batched over (point, state).
     """
     G = None
     seeds: dict[Term, np.ndarray] = {}
     local: list[tuple[np.ndarray, np.ndarray]] = []  # (seed, loc) pairs, one product at the end
 
     def visit(loc, nl, seed):
-        S, n, m, R = seed.shape
-        seed = np.ascontiguousarray(seed)  # matmul is slow on broadcast (stride 0) operands
+        n, S, m, R = seed.shape
         if loc is not None:
             local.append((seed, _flat(loc, n, S)))
         if not nl:
             return
         # one batched product for all the terms (the products are small)
         coefs = np.concatenate([_flat(c, n, S) for c in nl.values()], axis=2)
-        both = np.matmul(coefs, seed)  # (S, n, sum of the terms' m, R)
+        both = np.matmul(coefs, seed)  # (n, S, sum of the terms' m, R)
         at = 0
         for term in nl:
             part = both[:, :, at : at + term.m]
             at += term.m
             if term.n != n:  # Y at its one point, broadcast to the n points of x
-                part = part.sum(axis=1, keepdims=True)
+                part = part.sum(axis=0, keepdims=True)
             seeds[term] = seeds[term] + part if term in seeds else part
 
     for x, seed in pairs:
-        visit(x.loc, x.nl, seed)
+        visit(x.loc, x.nl, np.ascontiguousarray(seed))
     while seeds:
         term = max(seeds, key=lambda t: t.order)
         seed = seeds.pop(term)
-        S, n_out, m, R = seed.shape
+        n_out, S, m, R = seed.shape
         if term.gder is not None:
-            g = np.einsum("sqmr,qmk->srk", seed, term.gder)
+            g = np.einsum("qsmr,qmk->srk", seed, term.gder)
             G = g if G is None else G + g
             continue
-        flat = seed.transpose(1, 0, 2, 3).reshape(n_out, -1)
+        flat = np.ascontiguousarray(seed).reshape(n_out, -1)
         adj = term.adjoint
         inner = adj @ flat if isinstance(adj, np.ndarray) else adj(flat)
-        visit(term.loc, term.nl, inner.reshape(-1, S, m, R).transpose(1, 0, 2, 3))
+        visit(term.loc, term.nl, inner.reshape(-1, S, m, R))
     W = None
     if local:
         W = np.matmul(

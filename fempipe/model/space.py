@@ -157,7 +157,7 @@ class _Seeds:
         t = self._tests_S.get(S)
         if t is None:
             t = self._tests_S[S] = tuple(
-                np.ascontiguousarray(np.repeat(x[None], S, 0)) for x in self.tests
+                np.ascontiguousarray(np.repeat(x[:, None], S, 1)) for x in self.tests
             )
         return t
 
@@ -171,18 +171,18 @@ class _Seeds:
     def assemble(self, W: np.ndarray, G: np.ndarray | None, blocks) -> np.ndarray:
         """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G).
 
-        W (S, n_q, 15, R): derivatives with respect to the local quantities of
+        W (n_q, S, 15, R): derivatives with respect to the local quantities of
         :data:`_KINDS`, multiplied here by their bases; G (S, R, 9 nt): those
         through the tip values, already by the unknowns.
         """
         nt = self.Phi.shape[1]
         N = 3 * nt
-        S, n_q, _, R = W.shape
+        n_q, S, _, R = W.shape
         out = np.zeros((S, len(blocks), N, R))
         for s in range(S):
             for k, (_f, basis, block) in enumerate(_KINDS):
                 if block in blocks:
-                    Wk = W[s, :, 3 * k : 3 * k + 3].reshape(n_q, 3 * R)
+                    Wk = W[:, s, 3 * k : 3 * k + 3].reshape(n_q, 3 * R)
                     part = getattr(self, basis).T @ Wk  # (nt, 3 R): (j, c, r)
                     out[s, blocks.index(block)] += (
                         part.reshape(nt, 3, R).transpose(1, 0, 2).reshape(N, R)
@@ -493,9 +493,9 @@ class SpaceModel:
     def tip_position_gradient(self, U) -> np.ndarray:
         """d r(1) / dU in the pipe's frame, shape (3, 3 n): r(1) = \\int_0^1 t."""
         fl = self.fields(U, blocks=("q",))
-        seed = np.zeros((1, self.w.size, 3, 3))
+        seed = np.zeros((self.w.size, 1, 3, 3))
         for c in range(3):
-            seed[0, :, c, c] = self.w  # (S, q, m, R)
+            seed[:, 0, c, c] = self.w  # (q, S, m, R)
         W, G = pullback([(fl.t, seed)], 3 * len(_KINDS))
         return self._seeds.assemble(W, G, ("q",))[0]
 
