@@ -102,3 +102,10 @@ def test_pullback_through_an_integral_matches_the_closed_form():
     jac = W[:, 0, 0, :].T @ B  # sum over the points of d y_r / d u(q) B[q]
     expected = np.diag(np.cos(u) * (C @ u**2)) @ B + np.diag(np.sin(u)) @ C @ np.diag(2 * u) @ B
     assert np.allclose(jac, expected, rtol=1e-13, atol=1e-13)
+
+
+def test_space_cycle_benchmark_is_registered():
+    from fempipe.bench import available
+    from fempipe.bench.space import bench_space_cycle
+
+    assert available()["space_cycle"] is bench_space_cycle
