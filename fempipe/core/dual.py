@@ -1,4 +1,4 @@
-"""Forward-mode derivatives of array expressions: exact Jacobians written once with the residual.
+"""Derivatives of array expressions: forward through pointwise arithmetic, reverse through integrals.
 
 A :class:`Dual` is an array value with its derivatives, carried along by the
 arithmetic.  A residual written with these operations gives its value (no
