@@ -503,7 +503,7 @@ class Radau:
         # those at the next step's start, where step() may want them.
         self._stage3_jac = (Ks[2], Ds[2], Ms[2])
         if self._split_sensitivity and self._decoupled(Ks, Ds, Ms) is not None:
-            dv = chain_step_blocks(
+            self.sensitivity_matrix, dv = chain_step_blocks(
                 h,
                 Ks,
                 Ds,

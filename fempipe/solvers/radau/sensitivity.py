@@ -86,25 +86,25 @@ def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None 
     return new, None
 
 
-def chain_step_blocks(
-    h: float, Ks, Ds, Ms, dR_dp, S: np.ndarray, dy_dp: np.ndarray | None, blocks
-) -> np.ndarray | None:
-    """:func:`step_derivative` and :func:`chain_step` block by block, in place.
+def chain_step_blocks(h: float, Ks, Ds, Ms, dR_dp, S: np.ndarray, dy_dp: np.ndarray | None, blocks):
+    """:func:`step_derivative` and :func:`chain_step` block by block.
 
     For Jacobians with no coupling between the groups of unknowns ``blocks``
     (index arrays partitioning range(n)) and derivatives so far ``S`` with
     none either (block diagonal in the (q, q') indices of each group), the
     step's derivative is block diagonal too, and each group's is the whole
     computation on that group alone: the same numbers (to round-off) for
-    sum_b n_b^3 instead of n^3 operations.  ``S`` (and ``dy_dp``) are updated
-    in place; the entries between groups stay exactly zero.
+    sum_b n_b^3 instead of n^3 operations.  The entries between groups stay
+    exactly zero.
 
     Returns
     -------
-    ndarray or None
-        The new ``dy_dp``.
+    (S1, dy_dp1)
+        As :func:`chain_step`: new arrays (the arguments are not modified).
     """
     n = Ks.shape[1]
+    S = S.copy()
+    dy_dp = None if dy_dp is None else dy_dp.copy()
     for idx in blocks:
         ii = np.ix_(np.arange(3), idx, idx)
         I = np.concatenate([idx, n + idx])
@@ -113,4 +113,4 @@ def chain_step_blocks(
         S[np.ix_(I, I)] = Sb
         if dy_dp is not None:
             dy_dp[I] = db
-    return dy_dp
+    return S, dy_dp
