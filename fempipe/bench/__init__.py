@@ -23,8 +23,9 @@ imported by :func:`available`): :mod:`~fempipe.bench.static` (``static_path``,
 :mod:`~fempipe.bench.dynamics`, :mod:`~fempipe.bench.stability`
 (``critical_vs_classical``), :mod:`~fempipe.bench.bifurcation`,
 :mod:`~fempipe.bench.hopf` and :mod:`~fempipe.bench.output`
-(``simulate_output``: the files of ``simulate --out`` against its computation).  This module is the registry and the runner, with
-the helpers the benchmarks share (:func:`best_time`,
+(``simulate_output``: the files of ``simulate --out`` against its computation),
+:mod:`~fempipe.bench.space` (``space_cycle``: a 3-D limit cycle against the planar
+one).  This module is the registry and the runner, with the helpers the benchmarks share (:func:`best_time`,
 :func:`child_cpu_seconds`) and the cases they share (:data:`PAPER`,
 :data:`TEXIER_DORBOLO`).
 """
@@ -71,6 +72,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench.bifurcation",
     "fempipe.bench.hopf",
     "fempipe.bench.output",
+    "fempipe.bench.space",
 )
 
 #: The paper's reference case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2.

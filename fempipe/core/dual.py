@@ -1,33 +1,59 @@
-"""Forward-mode derivatives of array expressions: exact Jacobians written once with the residual.
+"""Derivatives of array expressions: forward through pointwise arithmetic, reverse through integrals.
 
-A :class:`Dual` is an array value with the derivatives of every entry with
-respect to K independent directions (the unknowns of a residual), carried
-along by the arithmetic: ``x.der[..., k] = d x.val / d p_k``.  A residual
-written with these operations gives its value (``der`` None: no derivative is
-formed, no cost) and, from the same lines, its exact Jacobian (``der`` seeded
-with the derivatives of the unknown fields): the Jacobian cannot drift from the
-residual, and is exact to round-off (no finite differences).
+A :class:`Dual` is an array value with its derivatives, carried along by the
+arithmetic.  A residual written with these operations gives its value (no
+derivative: no cost) and, from the same lines, its exact Jacobian (the fields
+seeded with their derivatives): the Jacobian cannot drift from the residual,
+and is exact to round-off (no finite differences).
 
 Only what the weak forms need is here: the four operations, sine and cosine,
 indexing, sums and stacks along leading axes, vector dot and cross products
 over axis 1, and linear maps along axis 0 (the integration operators).
-Derivatives come in two parts (``der`` and ``loc``, :class:`Dual`): pointwise
-ones stay small until an integral mixes the points.  The
-derivative axis is always the last one, so every leading-axis index and
-linear map applies to the value and to the derivatives alike.
+
+How the derivatives are carried
+-------------------------------
+Axis 0 of every value runs over points (the quadrature points), the last axis
+over S states evaluated at once (each state's derivatives are its own).  A
+derivative has two kinds of parts, each stored as a small array of the value's
+shape with one more axis:
+
+* ``loc``: derivatives with respect to L quantities defined at the same point
+  (the fields and their rates there);
+* ``nl``: for each :class:`Term` Y (a quantity that mixes the points, an
+  integral ``Y = op X``, or a linear functional of the unknowns such as a tip
+  value), the derivative with respect to Y's m components at the point.
+
+Pointwise arithmetic (the chain rule) only scales these small arrays: the
+derivatives with respect to the unknowns are never formed at the points.
+:func:`pullback` contracts them at the end, in reverse: a weight on the
+residual's derivative (the test functions) is pushed through the terms
+(``op^T``, then the inner quantity's own ``loc`` and ``nl``), and what arrives
+at the local quantities is returned, to be multiplied by the bases.  The
+Jacobian of an integral term is so a product of (test x coefficients) x op^T
+x (coefficients x trial) matrices, of size (rows, points), instead of
+K = (number of unknowns) derivative columns at every point.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["Dual", "cos", "cross", "dot", "sin", "stack"]
+__all__ = ["Dual", "Term", "cos", "cross", "dot", "linear_functional", "pullback", "sin", "stack"]
+
+_ORDER = itertools.count()
 
 
 def _val(x):
     return x.val if isinstance(x, Dual) else x
+
+
+def _bcast(d, shape):
+    if d is not None and d.shape[:-1] != shape:
+        d = np.broadcast_to(d, shape + d.shape[-1:])
+    return d
 
 
 def _add(a, b):
@@ -38,49 +64,81 @@ def _add(a, b):
     return a + b
 
 
-def _parts(x) -> tuple:
-    return (x.der, x.loc) if isinstance(x, Dual) else (None, None)
+def _merge(a: dict | None, b: dict | None, shape) -> dict | None:
+    if not b:
+        return None if not a else {t: _bcast(c, shape) for t, c in a.items()}
+    if not a:
+        return {t: _bcast(c, shape) for t, c in b.items()}
+    out = dict(a)
+    for t, c in b.items():
+        out[t] = out[t] + c if t in out else c
+    return {t: _bcast(c, shape) for t, c in out.items()}
 
 
-def _bcast(d, shape):
-    if d is not None and d.shape[:-1] != shape:
-        d = np.broadcast_to(d, shape + d.shape[-1:])
-    return d
+class Term:
+    """A quantity Y that mixes the points: its value, and how its derivative is pulled back.
+
+    ``n`` is the number of points of Y (1: broadcast to all points where it is used).
+    Either ``Y = A X`` along axis 0 for a :class:`Dual` X (its ``loc`` and ``nl``; the
+    callable ``adjoint`` applies A^T along axis 0 of an array), or ``Y`` linear in the unknowns with the dense
+    derivative ``gder`` (shape (n_points, m, K)).  ``m`` is the number of
+    components of Y at a point and state (the value's shape between axis 0 and
+    the last axis).  Terms are ordered by creation: an inner quantity's terms
+    are older than the term (:func:`pullback` relies on it).
+    """
+
+    __slots__ = ("adjoint", "gder", "identity", "loc", "m", "n", "nl", "order")
+
+    def __init__(self, n: int, m: int, adjoint=None, loc=None, nl=None, gder=None) -> None:
+        self.n = n
+        self.m = m
+        self.adjoint = adjoint
+        self.loc = loc
+        self.nl = nl
+        self.gder = gder
+        self.order = next(_ORDER)
+        self.identity = None
+
+    def identity_for(self, val: np.ndarray) -> np.ndarray:
+        """dY/dY for the value ``val`` of Y: the identity on the components, broadcast over
+        points and states (kept, so that a map of Y itself can be recognized)."""
+        n, *comp, S = val.shape
+        eye = np.eye(self.m).reshape(tuple(comp) + (1, self.m))
+        self.identity = np.broadcast_to(eye[None], val.shape + (self.m,))
+        return self.identity
 
 
 class Dual:
-    """An array with its derivatives along K directions (module docstring).
+    """An array with its derivatives (module docstring).
 
     Parameters
     ----------
     val : array_like
-        The value.
-    der : ndarray or None
-        Shape ``val.shape + (K,)``: the derivatives with respect to the
-        unknowns; None for none.
+        The value; axis 0 the points, the last axis the states.
     loc : ndarray or None
         Shape ``val.shape + (L,)``: derivatives with respect to L quantities
-        defined pointwise along axis 0 (the fields and their rates at each
-        quadrature point), for values that do not yet depend on other points.
-        Every pointwise operation carries both parts alike; a linear map that
-        mixes points (:meth:`nonlocal_map`) first expands ``loc`` into
-        ``der``.  The two parts add: dx = der + (expansion of loc).
+        defined pointwise (each state's at its own point).
+    nl : dict or None
+        :class:`Term` -> ndarray of shape ``val.shape + (term.m,)``: derivatives
+        with respect to the components of each term at the same point and state.
     """
 
-    __slots__ = ("der", "loc", "val")
+    __slots__ = ("loc", "nl", "val")
     __array_ufunc__ = None  # ndarray (op) Dual defers to the reflected operators of Dual
 
-    def __init__(self, val, der: np.ndarray | None = None, loc: np.ndarray | None = None) -> None:
+    def __init__(self, val, loc: np.ndarray | None = None, nl: dict | None = None) -> None:
         self.val = np.asarray(val, dtype=float)
-        self.der = der
         self.loc = loc
+        self.nl = nl or None
 
     @property
     def shape(self) -> tuple[int, ...]:
         return self.val.shape
 
     def _map(self, f) -> tuple:
-        return tuple(None if d is None else f(d) for d in (self.der, self.loc))
+        loc = None if self.loc is None else f(self.loc)
+        nl = None if self.nl is None else {t: f(c) for t, c in self.nl.items()}
+        return loc, nl
 
     def __getitem__(self, idx) -> Dual:
         return Dual(self.val[idx], *self._map(lambda d: d[idx]))
@@ -90,10 +148,10 @@ class Dual:
 
     def __add__(self, other) -> Dual:
         val = self.val + _val(other)
-        od, ol = _parts(other)
-        der = _bcast(_add(self.der, od), val.shape)
-        loc = _bcast(_add(self.loc, ol), val.shape)
-        return Dual(val, der, loc)
+        if isinstance(other, Dual):
+            loc = _bcast(_add(self.loc, other.loc), val.shape)
+            return Dual(val, loc, _merge(self.nl, other.nl, val.shape))
+        return Dual(val, _bcast(self.loc, val.shape), _merge(self.nl, None, val.shape))
 
     __radd__ = __add__
 
@@ -104,15 +162,25 @@ class Dual:
         return (-self) + other
 
     def __mul__(self, other) -> Dual:
-        ov = np.asarray(_val(other))[..., None]
-        sv = self.val[..., None]
-        out = []
-        for mine, theirs in zip((self.der, self.loc), _parts(other), strict=True):
-            d = None if mine is None else mine * ov
-            if theirs is not None:
-                d = _add(d, sv * theirs)
-            out.append(d)
-        return Dual(self.val * _val(other), *out)
+        # Every part has the shape of its value plus one axis, so the products below
+        # broadcast to the product's shape by themselves.
+        if not isinstance(other, Dual):
+            if isinstance(other, float | int):
+                return Dual(self.val * other, *self._map(lambda d: d * other))
+            ov = np.asarray(other)
+            ox = ov[..., None]
+            return Dual(self.val * ov, *self._map(lambda d: d * ox))
+        ov, sv = other.val, self.val
+        ox, sx = ov[..., None], sv[..., None]
+        loc = None if self.loc is None else self.loc * ox
+        if other.loc is not None:
+            loc = other.loc * sx if loc is None else loc + other.loc * sx
+        nl = None if self.nl is None else {t: c * ox for t, c in self.nl.items()}
+        if other.nl is not None:
+            nl = {} if nl is None else nl
+            for t, c in other.nl.items():
+                nl[t] = nl[t] + c * sx if t in nl else c * sx
+        return Dual(sv * ov, loc, nl)
 
     __rmul__ = __mul__
 
@@ -141,22 +209,114 @@ class Dual:
         """The sum over a leading axis (``axis`` >= 0, counted in the value)."""
         return Dual(self.val.sum(axis=axis), *self._map(lambda d: d.sum(axis=axis)))
 
-    def nonlocal_map(
-        self,
-        op: Callable[[np.ndarray], np.ndarray],
-        expand: Callable[[np.ndarray], np.ndarray] | None = None,
-    ) -> Dual:
-        """``op`` (linear along axis 0, any trailing axes) of the value and derivatives.
+    def nonlocal_map(self, op: Callable[[np.ndarray], np.ndarray], adjoint) -> Dual:
+        """``op`` (linear along axis 0, any trailing axes) of the value.
 
-        ``expand`` turns ``loc`` into derivatives with respect to the unknowns
-        (``der``'s directions); it is needed when ``loc`` is present.
+        The derivative is carried as a new :class:`Term`, pulled back by
+        ``adjoint``: op^T along axis 0, a matrix (n_in, n_out) or a callable.
+        An integral of an integral (``self`` is the plain result of another
+        map) with matrices is one term, pulled back by the product of the two.
         """
-        der = self.der
-        if self.loc is not None:
-            if expand is None:
-                raise ValueError("a Dual with pointwise derivatives needs expand= to be mapped")
-            der = _add(der, expand(self.loc))
-        return Dual(op(self.val), None if der is None else op(der))
+        val = op(self.val)
+        if self.loc is None and self.nl is None:
+            return Dual(val)
+        loc, nl = self.loc, self.nl
+        if loc is None and len(nl) == 1:
+            ((inner, coef),) = nl.items()
+            if (
+                coef is inner.identity
+                and isinstance(adjoint, np.ndarray)
+                and isinstance(inner.adjoint, np.ndarray)
+            ):
+                adjoint = inner.adjoint @ adjoint
+                loc, nl = inner.loc, inner.nl
+        m = int(np.prod(self.val.shape[1:-1], dtype=int))
+        term = Term(val.shape[0], m, adjoint=adjoint, loc=loc, nl=nl)
+        return Dual(val, None, {term: term.identity_for(val)})
+
+
+def linear_functional(val: np.ndarray, gder: np.ndarray) -> Dual:
+    """A Dual Y linear in the unknowns: ``gder`` (shape (n_points, m, K)) is dY/d(unknowns),
+    the same for every state."""
+    val = np.asarray(val, dtype=float)
+    term = Term(val.shape[0], gder.shape[1], gder=gder)
+    return Dual(val, None, {term: term.identity_for(val)})
+
+
+def _flat(d: np.ndarray, n: int, S: int) -> np.ndarray:
+    """(n, *comp, S, k) -> (n, S, k, m) with m = prod(comp)."""
+    d = d.reshape(n, -1, S, d.shape[-1])
+    return d.transpose(0, 2, 3, 1)
+
+
+def pullback(pairs: Sequence[tuple[Dual, np.ndarray]], L: int):
+    """The derivatives of ``sum_x seed_x . dx`` (reverse accumulation through the terms).
+
+    Parameters
+    ----------
+    pairs : sequence of (Dual, seed)
+        ``seed`` of shape (n_x, S, m_x, R) weighs the derivative of x's
+        component m at point q and state s in the R outputs (the rows of a
+        Jacobian): output r gets ``sum_(q, m) seed[q, s, m, r] dx[q, m, s]``.
+    L : int
+        The number of local quantities (``loc``'s last axis).
+
+    Returns
+    -------
+    (W, G)
+        W, shape (n_points, S, L, R): the outputs' derivatives with respect to
+        the local quantities at each point (to be multiplied by their bases);
+        G, shape (S, R, K): the part through linear functionals
+        (:func:`linear_functional`), None if none.
+
+    Notes
+    -----
+    The seeds keep the points first, so that the transposed integration
+    operators are plain matrix products on them (no copies); the products with
+    the pointwise coefficients are batched over (point, state).
+    """
+    G = None
+    seeds: dict[Term, np.ndarray] = {}
+    local: list[tuple[np.ndarray, np.ndarray]] = []  # (seed, loc) pairs, one product at the end
+
+    def visit(loc, nl, seed):
+        n, S, m, R = seed.shape
+        if loc is not None:
+            local.append((seed, _flat(loc, n, S)))
+        if not nl:
+            return
+        # one batched product for all the terms (the products are small)
+        coefs = np.concatenate([_flat(c, n, S) for c in nl.values()], axis=2)
+        both = np.matmul(coefs, seed)  # (n, S, sum of the terms' m, R)
+        at = 0
+        for term in nl:
+            part = both[:, :, at : at + term.m]
+            at += term.m
+            if term.n != n:  # Y at its one point, broadcast to the n points of x
+                part = part.sum(axis=0, keepdims=True)
+            seeds[term] = seeds[term] + part if term in seeds else part
+
+    for x, seed in pairs:
+        visit(x.loc, x.nl, np.ascontiguousarray(seed))
+    while seeds:
+        term = max(seeds, key=lambda t: t.order)
+        seed = seeds.pop(term)
+        n_out, S, m, R = seed.shape
+        if term.gder is not None:
+            g = np.einsum("qsmr,qmk->srk", seed, term.gder)
+            G = g if G is None else G + g
+            continue
+        flat = np.ascontiguousarray(seed).reshape(n_out, -1)
+        adj = term.adjoint
+        inner = adj @ flat if isinstance(adj, np.ndarray) else adj(flat)
+        visit(term.loc, term.nl, inner.reshape(-1, S, m, R))
+    W = None
+    if local:
+        W = np.matmul(
+            np.concatenate([loc for _, loc in local], axis=3),
+            np.concatenate([seed for seed, _ in local], axis=2),
+        )
+    return W, G
 
 
 def sin(x):
@@ -195,21 +355,28 @@ def stack(items: Sequence, axis: int = 1) -> Dual:
         return out
     vals = [np.asarray(_val(x), dtype=float) for x in items]
     shape = np.broadcast_shapes(*(v.shape for v in vals))
-    vals = [np.broadcast_to(v, shape) for v in vals]
-    parts = []
-    for slot in range(2):
-        ds = [_parts(x)[slot] for x in items]
-        K = next((d.shape[-1] for d in ds if d is not None), None)
-        if K is None:
-            parts.append(None)
-            continue
-        parts.append(
-            np.stack(
-                [
-                    np.zeros(shape + (K,)) if d is None else np.broadcast_to(d, shape + (K,))
-                    for d in ds
-                ],
-                axis=axis,
-            )
-        )
-    return Dual(np.stack(vals, axis=axis), *parts)
+    val = np.empty(shape[:axis] + (len(items),) + shape[axis:])
+    at = (slice(None),) * axis
+    for k, v in enumerate(vals):
+        val[at + (k,)] = v
+
+    def stacked(parts: list, width: int) -> np.ndarray:
+        out = np.zeros(val.shape + (width,))
+        for k, d in enumerate(parts):
+            if d is not None:
+                out[at + (k,)] = d
+        return out
+
+    duals = [x for x in items if isinstance(x, Dual)]
+    locs = [x.loc if isinstance(x, Dual) else None for x in items]
+    L = next((d.shape[-1] for d in locs if d is not None), None)
+    loc = None if L is None else stacked(locs, L)
+    terms: dict[Term, None] = {}
+    for x in duals:
+        for t in x.nl or ():
+            terms[t] = None
+    nl = {
+        t: stacked([x.nl.get(t) if isinstance(x, Dual) and x.nl else None for x in items], t.m)
+        for t in terms
+    }
+    return Dual(val, loc, nl)

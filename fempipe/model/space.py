@@ -66,8 +66,17 @@ along f sees no physical force), it is zero at every planar state
 makes the mass matrix definite.
 
 The Jacobians of every term are exact: the weak form is evaluated on
-:class:`~fempipe.core.dual.Dual` fields seeded with the derivatives of u,
-u_dot and u_ddot with respect to U, U_dot and U_ddot.
+:class:`~fempipe.core.dual.Dual` fields that carry their derivatives with
+respect to u, u', u_dot, u_dot' and u_ddot at their own quadrature point, and
+with respect to each integral (C t_ddot, C^R t_dot, Omega, ...) at the point
+where it is used; :func:`~fempipe.core.dual.pullback` then pushes the test
+functions back through the transposed integration operators onto the local
+quantities, which are multiplied by the bases.  No derivative with respect to
+the 9 n unknowns is formed at the points: an integral term's Jacobian costs
+products of (3 n x n_q) matrices.  S states (the three Radau stages) are
+evaluated at once, each with its own Jacobians (measured at P3:16, one
+thread: 24 ms for one state before, 8-13 ms for three now, depending on the
+machine's load).
 """
 
 from __future__ import annotations
@@ -77,7 +86,7 @@ import weakref
 import numpy as np
 import scipy.linalg as sla
 
-from ..core.dual import Dual, cross, dot, stack
+from ..core.dual import Dual, cross, dot, linear_functional, pullback, stack
 from .discretization import Discretization
 from .params import Params
 from .space_chart import SpaceFields, space_fields, tangent
@@ -109,12 +118,48 @@ _KINDS = (
 
 
 class _Seeds:
-    """Phi, dPhi, tip of a discretization (dense), for the Dual fields."""
+    """What the Dual fields and the Jacobian assembly of a discretization need (dense).
+
+    Phi, dPhi, tip; the integration operators as matrices along the quadrature
+    points (C, C^R and the integral over the pipe, with their transposes, which pull
+    the derivatives back, :func:`fempipe.core.dual.pullback`); the top-level seeds
+    of the two parts of the weak form, ``seed[q, c', (c, i)] = test_i(q) w_q
+    delta_cc'`` (``\\int test_i A_c``).
+    """
 
     def __init__(self, disc: Discretization) -> None:
+        quad = disc.quad
         self.Phi = _dense(disc.Phi)
         self.dPhi = _dense(disc.dPhi)
         self.tip = np.asarray(disc.tip, dtype=float)
+        # (op, op^T as a matrix): the integrals and the matrices that pull derivatives back
+        eye = np.eye(quad.n_q)
+        self.ops = {
+            "C": (quad.cumulative_cells, quad.cumulative_adjoint(eye)),
+            "CR": (quad.from_tip_cells, np.ascontiguousarray(quad.from_tip_cells(eye).T)),
+            "int": (lambda f: quad.integrate(f)[None], quad.w[:, None].copy()),
+        }
+        nt = self.Phi.shape[1]
+        self._tests_S: dict[int, tuple] = {}
+        self.tests = []
+        for B in (self.Phi, self.dPhi):
+            seed = np.zeros((quad.n_q, 3, 3, nt))
+            for c in range(3):
+                seed[:, c, c, :] = B * quad.w[:, None]
+            self.tests.append(seed.reshape(quad.n_q, 3, 3 * nt))
+        # dU(1)/dU of the three fields, as columns of (U, U_dot, U_ddot)
+        self.tip_der = np.zeros((1, 3, 9 * nt))
+        for c in range(3):
+            self.tip_der[0, c, c * nt : (c + 1) * nt] = self.tip
+
+    def tests_for(self, S: int) -> tuple:
+        """:attr:`tests` repeated for S states, contiguous (kept: made once per S)."""
+        t = self._tests_S.get(S)
+        if t is None:
+            t = self._tests_S[S] = tuple(
+                np.ascontiguousarray(np.repeat(x[:, None], S, 1)) for x in self.tests
+            )
+        return t
 
     @classmethod
     def of(cls, disc: Discretization) -> _Seeds:
@@ -123,50 +168,30 @@ class _Seeds:
             s = _SEEDS[disc] = cls(disc)
         return s
 
+    def assemble(self, W: np.ndarray, G: np.ndarray | None, blocks) -> np.ndarray:
+        """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G).
 
-class _Blocks:
-    """The unknowns a Jacobian is taken with respect to, and the maps of the derivatives.
-
-    Pointwise quantities carry derivatives with respect to the 15 local values
-    (u, u', u_dot, u_dot', u_ddot at their own point, :data:`_KINDS`);
-    :meth:`expand` turns them into derivatives with respect to the unknowns
-    (``len(blocks) n`` directions) where an integral mixes the points, and
-    :meth:`assemble_local` tests them (the Jacobian of a local term is a sum of
-    ``Phi^T diag(d) Phi``-like products).
-    """
-
-    def __init__(self, seeds: _Seeds, blocks: tuple[str, ...]) -> None:
-        self.seeds = seeds
-        self.blocks = blocks
-        self.nt = seeds.Phi.shape[1]
-        self.N = 3 * self.nt
-        self.K = len(blocks) * self.N
-        self.kinds = [
-            (k, getattr(seeds, basis), blocks.index(block) * self.N)
-            for k, (_f, basis, block) in enumerate(_KINDS)
-            if block in blocks
-        ]
-
-    def expand(self, loc: np.ndarray) -> np.ndarray:
-        n_q = loc.shape[0]
-        L = loc.reshape(n_q, -1, len(_KINDS), 3)
-        out = np.zeros((n_q, L.shape[1], self.K))
-        for k, B, off in self.kinds:
-            part = L[:, :, k, :, None] * B[:, None, None, :]  # (n_q, r, 3, nt)
-            out[:, :, off : off + self.N] += part.reshape(n_q, L.shape[1], self.N)
-        return out.reshape(loc.shape[:-1] + (self.K,))
-
-    def assemble_local(self, loc: np.ndarray, test: np.ndarray, w: np.ndarray, J) -> None:
-        r"""Add ``\int test_i loc_(c, l) (local basis)_j`` to the Jacobian J (3 nt, K)."""
-        nt, n_q = self.nt, loc.shape[0]
-        L = loc.reshape(n_q, 3, len(_KINDS), 3) * w[:, None, None, None]
-        testT = np.ascontiguousarray(test.T)
-        for k, B, off in self.kinds:
-            Lk = L[:, :, k, :].reshape(n_q, 9)
-            # T[m, i, j] = sum_q test_qi L_qm B_qj, m = (c, c')
-            T = np.matmul(testT[None], Lk.T[:, :, None] * B[None])  # (9, nt, nt)
-            T = T.reshape(3, 3, nt, nt).transpose(0, 2, 1, 3).reshape(self.N, self.N)
-            J[:, off : off + self.N] += T
+        W (n_q, S, 15, R): derivatives with respect to the local quantities of
+        :data:`_KINDS`, multiplied here by their bases; G (S, R, 9 nt): those
+        through the tip values, already by the unknowns.
+        """
+        nt = self.Phi.shape[1]
+        N = 3 * nt
+        n_q, S, _, R = W.shape
+        out = np.zeros((S, len(blocks), N, R))
+        for s in range(S):
+            for k, (_f, basis, block) in enumerate(_KINDS):
+                if block in blocks:
+                    Wk = W[:, s, 3 * k : 3 * k + 3].reshape(n_q, 3 * R)
+                    part = getattr(self, basis).T @ Wk  # (nt, 3 R): (j, c, r)
+                    out[s, blocks.index(block)] += (
+                        part.reshape(nt, 3, R).transpose(1, 0, 2).reshape(N, R)
+                    )
+        out = out.reshape(S, len(blocks) * N, R).transpose(0, 2, 1)
+        if G is not None:
+            cols = [("q", "qdot", "qddot").index(b) for b in blocks]
+            out = out + np.concatenate([G[:, :, j * N : (j + 1) * N] for j in cols], axis=2)
+        return out
 
 
 def planar_state(q: np.ndarray) -> np.ndarray:
@@ -222,7 +247,6 @@ class SpaceModel:
         self.n_theta = disc.n
         self.n = 3 * disc.n
         self._seeds = _Seeds.of(disc)
-        self._maps: _Blocks | None = None
         # Phi^T W and dPhi^T W: the test integrals of the two parts of the weak form.
         self._tests = tuple(
             np.ascontiguousarray((B * self.w[:, None]).T)
@@ -241,12 +265,15 @@ class SpaceModel:
 
     # ------------------------------------------------------- fields --
     def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> SpaceFields:
-        """The kinematics at the quadrature points, with derivatives along ``blocks``.
+        """The kinematics at the quadrature points, with derivatives if ``blocks`` is not empty.
 
         U, Ud, Udd have shape (3 n,) or (S, 3 n) (S states at once); the
-        fields have a last axis of length S.  ``blocks`` names the unknowns to
-        differentiate with respect to (one state only), in order, among
-        ``"q"`` (U), ``"qdot"`` (U_dot) and ``"qddot"`` (U_ddot).
+        fields have a last axis of length S.  With ``blocks`` (any of ``"q"``,
+        ``"qdot"``, ``"qddot"``) the fields are :class:`~fempipe.core.dual.Dual`
+        and carry their derivatives with respect to all of U, U_dot, U_ddot,
+        each state's with respect to its own (:meth:`jacobians` picks the
+        blocks); the fields hold everything the weak form needs (no state is
+        kept in the model between calls).
         """
         s = self._seeds
         nt = self.n_theta
@@ -255,60 +282,50 @@ class SpaceModel:
         zero = np.zeros_like(U)
         Ud = zero if Ud is None else np.atleast_2d(np.asarray(Ud, dtype=float))
         Udd = zero if Udd is None else np.atleast_2d(np.asarray(Udd, dtype=float))
-        if blocks and S != 1:
-            raise ValueError("derivatives are taken for one state at a time")
-        maps = _Blocks(s, blocks) if blocks else None
         values = {"u": U, "u_prime": U, "u_dot": Ud, "u_dot_prime": Ud, "u_ddot": Udd}
         out = {}
-        for k, (name, basis, block) in enumerate(_KINDS):
-            val = np.einsum("qj,scj->qcs", getattr(s, basis), values[name].reshape(S, 3, nt))
-            loc = None
-            if maps is not None and block in blocks:
-                loc = np.zeros(val.shape + (3 * len(_KINDS),))
+        for k, (name, basis, _block) in enumerate(_KINDS):
+            val = getattr(s, basis) @ values[name].reshape(S * 3, nt).T  # (n_q, S 3)
+            val = np.ascontiguousarray(val.reshape(-1, S, 3).transpose(0, 2, 1))
+            if blocks:
+                loc = np.zeros((1, 3, 1, 3 * len(_KINDS)))
                 for c in range(3):
-                    loc[:, c, :, 3 * k + c] = 1.0
-            out[name] = val if maps is None else Dual(val, None, loc)
-        tip_val = np.einsum("j,scj->cs", s.tip, U.reshape(S, 3, nt))[None]
-        tip_der = None
-        if maps is not None and "q" in blocks:
-            tip_der = np.zeros(tip_val.shape + (maps.K,))
-            off = blocks.index("q") * self.n
-            for c in range(3):
-                tip_der[0, c, 0, off + c * nt : off + (c + 1) * nt] = s.tip
-        self._maps = maps
+                    loc[0, c, 0, 3 * k + c] = 1.0
+                val = Dual(val, np.broadcast_to(loc, val.shape + loc.shape[-1:]))
+            out[name] = val
+        tip_val = (U.reshape(S, 3, nt) @ s.tip).T[None]  # (1, 3, S)
         return space_fields(
             out["u"],
             out["u_dot"],
             out["u_ddot"],
             out["u_prime"],
             out["u_dot_prime"],
-            tip_val if maps is None else Dual(tip_val, tip_der),
+            linear_functional(tip_val, s.tip_der) if blocks else tip_val,
         )
 
-    def _integral(self, x: Dual, op) -> Dual:
-        """A linear map mixing the points (an integration operator) of x."""
+    def _integral(self, x, which: str):
+        """A linear map mixing the points (an integration operator: ``which`` is ``"C"``
+        (\\int_0^xi), ``"CR"`` (\\int_xi^1) or ``"int"`` (\\int_0^1, one point)) of x."""
+        op, adjoint = self._seeds.ops[which]
         if not isinstance(x, Dual):
             return op(x)
-        maps = self._maps
-        return x.nonlocal_map(op, None if maps is None else maps.expand)
+        return x.nonlocal_map(op, adjoint)
 
     # ------------------------------------------- the terms: force fields G --
     def inertia(self, fl: SpaceFields) -> Dual:
         """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
-        return self._integral(
-            self._integral(fl.t_ddot, self.quad.cumulative_cells), self.quad.from_tip_cells
-        )
+        return self._integral(self._integral(fl.t_ddot, "C"), "CR")
 
     def coriolis(self, fl: SpaceFields) -> Dual:
         """``2 v sqrt(beta) C^R t_dot``."""
         p = self.params
-        return (2.0 * p.v * np.sqrt(p.beta)) * self._integral(fl.t_dot, self.quad.from_tip_cells)
+        return (2.0 * p.v * np.sqrt(p.beta)) * self._integral(fl.t_dot, "CR")
 
     def flow_acceleration(self, fl: SpaceFields, v_dot: float) -> Dual | None:
         """``v_dot sqrt(beta) C^R t`` (unsteady flow)."""
         if not v_dot:
             return None
-        return (v_dot * np.sqrt(self.params.beta)) * self._integral(fl.t, self.quad.from_tip_cells)
+        return (v_dot * np.sqrt(self.params.beta)) * self._integral(fl.t, "CR")
 
     def follower(self, fl: SpaceFields) -> Dual:
         """``v^2 t(1)``: the jet's reaction and the fluid's centrifugal force, Eq. (14)."""
@@ -326,16 +343,15 @@ class SpaceModel:
         G = self.params.end_mass
         if not G:
             return None
-        acc = self._integral(fl.t_ddot, self.quad.integrate)  # (3, S)
-        return G * acc[None]
+        return G * self._integral(fl.t_ddot, "int")  # (1, 3, S)
 
     def external_damping(self, fl: SpaceFields) -> Dual | None:
         """``sigma C^R C t_dot``: a viscous force -sigma r_dot along the pipe."""
         sigma = self.params.external_damping
         if not sigma:
             return None
-        rdot = self._integral(fl.t_dot, self.quad.cumulative_cells)
-        return sigma * self._integral(rdot, self.quad.from_tip_cells)
+        rdot = self._integral(fl.t_dot, "C")
+        return sigma * self._integral(rdot, "CR")
 
     def bending(self, fl: SpaceFields) -> tuple[Dual, Dual]:
         """(A, B): the variation of ``(1/2) \\int |t'|^2`` is ``\\int A_c phi_i + B_c phi_i'``."""
@@ -346,7 +362,7 @@ class SpaceModel:
 
     def curvature_rate(self, fl: SpaceFields) -> Dual:
         """k = t x t_dot' + Omega t': the co-rotational rate of the curvature vector."""
-        Omega = self._integral(dot(fl.t_prime, cross(fl.t, fl.t_dot)), self.quad.cumulative_cells)
+        Omega = self._integral(dot(fl.t_prime, cross(fl.t, fl.t_dot)), "C")
         return cross(fl.t, fl.t_dot_prime) + fl.t_prime * Omega[:, None]
 
     def kelvin_voigt(self, fl: SpaceFields) -> tuple[Dual, Dual] | None:
@@ -356,7 +372,7 @@ class SpaceModel:
             return None
         k = self.curvature_rate(fl)
         kxt = cross(k, fl.t)
-        tail = self._integral(dot(k, fl.t_prime), self.quad.from_tip_cells)
+        tail = self._integral(dot(k, fl.t_prime), "CR")
         tpxt = cross(fl.t_prime, fl.t) * tail[:, None]
         A = stack([dot(fl.dt_prime[c], kxt) + dot(fl.J[c], tpxt) for c in range(3)], axis=1)
         B = stack([dot(fl.J[c], kxt) for c in range(3)], axis=1)
@@ -387,53 +403,72 @@ class SpaceModel:
                 G = G + extra
         return G
 
-    def _weak_form(self, fl: SpaceFields, v_dot: float) -> Dual:
-        """The residual (and its derivatives) as a Dual of shape (n,)."""
+    def _weak_form(self, fl: SpaceFields, v_dot: float) -> tuple:
+        """(A, B): the residual is ``\\int phi_i A_c + phi_i' B_c`` (Duals or arrays (n_q, 3, S))."""
         G = self.force_field(fl, v_dot)
         A, B = self.bending(fl)
         A = A + stack([dot(fl.J[c], G) for c in range(3)], axis=1) + self.gauge(fl)
         kv = self.kelvin_voigt(fl)
         if kv is not None:
             A, B = A + kv[0], B + kv[1]
+        return A, B
+
+    def _assemble(self, A, B) -> np.ndarray:
+        """The residuals (S, 3 n) of the values (n_q, 3, S) of A and B."""
+        r = 0.0
+        for x, T in zip((A, B), self._tests, strict=True):
+            x = np.asarray(x)
+            r = r + (T @ x.reshape(x.shape[0], -1)).reshape((T.shape[0],) + x.shape[1:])
+        # (nt, 3, S) -> (S, 3, nt)
+        return np.ascontiguousarray(np.transpose(r, (2, 1, 0))).reshape(r.shape[2], self.n)
+
+    def _derivatives(self, A: Dual, B: Dual, blocks: tuple[str, ...]) -> np.ndarray:
+        """dR/d(blocks) of each state from the Duals A, B: shape (S, 3 n, len(blocks) 3 n)."""
         s = self._seeds
-        tests = self._tests
-
-        def assemble(a, b):
-            # (n_q, 3, S, ...) -> (3, n, S, ...) -> (3 n, S, ...); None: no dependence
-            r = 0.0
-            for x, T in ((a, tests[0]), (b, tests[1])):
-                if x is not None:
-                    r = r + (T @ x.reshape(x.shape[0], -1)).reshape((T.shape[0],) + x.shape[1:])
-            r = np.moveaxis(r, 0, 1)
-            return r.reshape((self.n,) + r.shape[2:])
-
-        maps = self._maps
-        if maps is None:
-            return Dual(assemble(A, B).T)  # (S, 3 n)
-        val = assemble(A.val, B.val).T
-        der = assemble(A.der, B.der)
-        der = np.zeros((self.n, maps.K)) if np.isscalar(der) else der[:, 0]
-        for x, basis in ((A, s.Phi), (B, s.dPhi)):
-            if x.loc is not None:
-                maps.assemble_local(x.loc[:, :, 0], basis, self.w, der)
-        return Dual(val[0], der)
+        S = A.shape[-1]
+        pairs = list(zip((A, B), s.tests_for(S), strict=True))
+        W, G = pullback(pairs, 3 * len(_KINDS))
+        return s.assemble(W, G, blocks)
 
     def residual(self, U, Ud=None, Udd=None, v_dot: float = 0.0) -> np.ndarray:
         """R(U, U', U''), shape (3 n,); for S states (rows of (S, 3 n) arrays), (S, 3 n)."""
-        r = self._weak_form(self.fields(U, Ud, Udd), v_dot).val
+        r = self._assemble(*self._weak_form(self.fields(U, Ud, Udd), v_dot))
         return r if np.ndim(U) == 2 else r[0]
 
     def jacobians(self, U, Ud=None, Udd=None, v_dot: float = 0.0):
-        """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized."""
-        fl = self.fields(U, Ud, Udd, blocks=("q", "qdot", "qddot"))
-        D = self._weak_form(fl, v_dot).der
+        """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized.
+
+        For S states (rows of (S, 3 n) arrays) at once, arrays (S, 3 n, 3 n): each
+        state's Jacobians, equal to the one-by-one ones to round-off, in one
+        evaluation of the weak form.
+        """
+        blocks = ("q", "qdot", "qddot")
+        A, B = self._weak_form(self.fields(U, Ud, Udd, blocks=blocks), v_dot)
+        D = self._derivatives(A, B, blocks)
         n = self.n
-        M = D[:, 2 * n :]
-        return D[:, :n], D[:, n : 2 * n], 0.5 * (M + M.T)
+        M = D[:, :, 2 * n :]
+        out = D[:, :, :n], D[:, :, n : 2 * n], 0.5 * (M + M.transpose(0, 2, 1))
+        return out if np.ndim(U) == 2 else tuple(x[0] for x in out)
+
+    def velocity_derivative(self, U, Ud) -> np.ndarray:
+        """dR/dv at fixed (U, U', U''), steady flow: the Coriolis and follower terms.
+
+        R depends on v through ``2 v sqrt(beta) C^R t_dot`` and ``v^2 t(1)`` only
+        (:meth:`coriolis`, :meth:`follower`), so dR/dv is the weak form of the force
+        field ``2 sqrt(beta) C^R t_dot + 2 v t(1)``: one evaluation of the fields.
+        Shape (3 n,), or (S, 3 n) for S states.
+        """
+        fl = self.fields(U, Ud)
+        p = self.params
+        G = 2.0 * np.sqrt(p.beta) * self._integral(fl.t_dot, "CR") + (2.0 * p.v) * fl.t_tip
+        A = stack([dot(fl.J[c], G) for c in range(3)], axis=1)
+        r = self._assemble(A, np.zeros_like(A))
+        return r if np.ndim(U) == 2 else r[0]
 
     def mass_matrix(self, U) -> np.ndarray:
         """dR/dU'' (R is affine in U''), symmetric positive definite, shape (3 n, 3 n)."""
-        M = self._weak_form(self.fields(U, blocks=("qddot",)), 0.0).der
+        A, B = self._weak_form(self.fields(U, blocks=("qddot",)), 0.0)
+        M = self._derivatives(A, B, ("qddot",))[0]
         return 0.5 * (M + M.T)
 
     def acceleration(self, U, Ud, v_dot: float = 0.0) -> np.ndarray:
@@ -458,8 +493,11 @@ class SpaceModel:
     def tip_position_gradient(self, U) -> np.ndarray:
         """d r(1) / dU in the pipe's frame, shape (3, 3 n): r(1) = \\int_0^1 t."""
         fl = self.fields(U, blocks=("q",))
-        der = self._maps.expand(fl.t.loc)[:, :, 0, :]  # (n_q, 3, 3 n)
-        return np.tensordot(self.w, der, axes=(0, 0))
+        seed = np.zeros((self.w.size, 1, 3, 3))
+        for c in range(3):
+            seed[:, 0, c, c] = self.w  # (q, S, m, R)
+        W, G = pullback([(fl.t, seed)], 3 * len(_KINDS))
+        return self._seeds.assemble(W, G, ("q",))[0]
 
     def tip_coordinates(self, U) -> dict:
         """The tip in the frames of the files: eta_tip (in the pipe's frame, e_2), X_tip (along

@@ -40,7 +40,7 @@ Why this chart
 
 The time and space derivatives of t follow from the gradient and Hessian of
 the numerator P(u) and the denominator D(u) = 1 + a^2 + b^2 of t = P/D
-(:func:`_grad`, :func:`_hess`): with P = t D,
+(:func:`_gradient`, :func:`_hessian`): with P = t D,
 
     t_dot  = (P_dot - t D_dot) / D,
     t_ddot = (P_ddot - 2 t_dot D_dot - t D_ddot) / D,
@@ -87,32 +87,6 @@ class _Point:
         a, b = self.a, self.b
         P = _vec(self.ct + a * a - b * b, self.st + 2.0 * (a * b), 2.0 * (a * self.s - b * self.c))
         return P, 1.0 + a * a + b * b
-
-
-def _grad(p: _Point, v: Dual) -> tuple[Dual, Dual]:
-    """(grad P [v], grad D [v]) for a field v of shape (m, 3)."""
-    vt, va, vb = v[:, 0], v[:, 1], v[:, 2]
-    a, b = p.a, p.b
-    dP = _vec(
-        2.0 * (a * va - b * vb) - p.st * vt,
-        p.ct * vt + 2.0 * (b * va + a * vb),
-        (a * p.c + b * p.s) * vt + 2.0 * (p.s * va - p.c * vb),
-    )
-    return dP, 2.0 * (a * va + b * vb)
-
-
-def _hess(p: _Point, v: Dual, w: Dual) -> tuple[Dual, Dual]:
-    """(hess P [v, w], hess D [v, w])."""
-    vt, va, vb = v[:, 0], v[:, 1], v[:, 2]
-    wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
-    tt = vt * wt
-    Pz4 = 0.5 * (p.a * p.s - p.b * p.c)  # P_z / 4
-    hP = _vec(
-        2.0 * (va * wa - vb * wb) - p.ct * tt,
-        2.0 * (va * wb + vb * wa) - p.st * tt,
-        p.c * (vt * wa + va * wt) + p.s * (vt * wb + vb * wt) - Pz4 * tt,
-    )
-    return hP, 2.0 * (va * wa + vb * wb)
 
 
 def _over(x: Dual, D: Dual) -> Dual:
@@ -183,44 +157,80 @@ class SpaceFields:
     t_tip: Dual
 
 
+def _gradient(p: _Point) -> tuple:
+    """(G, g): ``G[:, i, c] = dP_i/du_c`` (n, 3, 3, ...) and ``g[:, c] = dD/du_c`` (n, 3, ...)."""
+    a, b, c, s = p.a, p.b, p.c, p.s
+    G = stack(
+        [_vec(-p.st, p.ct, a * c + b * s), 2.0 * _vec(a, b, s), 2.0 * _vec(-b, a, -c)], axis=2
+    )
+    return G, _vec(0.0 * a, 2.0 * a, 2.0 * b)
+
+
+def _hessian(p: _Point, w) -> tuple:
+    """(H, h) with ``H[:, :, c] = hess P [e_c, w]`` and ``h[:, c] = hess D [e_c, w]``:
+    hess P [v, w] = H v, hess D [v, w] = h . v."""
+    wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
+    c, s = p.c, p.s
+    Pz4 = 0.5 * (p.a * s - p.b * c)  # P_z / 4
+    H = stack(
+        [
+            _vec(-p.ct * wt, -p.st * wt, c * wa + s * wb - Pz4 * wt),
+            _vec(2.0 * wa, 2.0 * wb, c * wt),
+            _vec(-2.0 * wb, 2.0 * wa, s * wt),
+        ],
+        axis=2,
+    )
+    return H, _vec(0.0 * wa, 2.0 * wa, 2.0 * wb)
+
+
+def _apply(M, v):
+    """``M v`` at every point: (n, 3, 3, ...) by (n, 3, ...)."""
+    return (M * v[:, None]).sum(axis=2)
+
+
+def _dot(x, y):
+    return (x * y).sum(axis=1)
+
+
 def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
-    """The kinematics of :class:`SpaceFields` from the fields at the quadrature points."""
+    """The kinematics of :class:`SpaceFields` from the fields at the quadrature points.
+
+    The gradient G of P (and g of D) and the Hessians along u' and u_dot are
+    formed once as 3 x 3 matrices at each point; every derivative of t is a
+    product with them (module docstring), so that the chart costs few array
+    operations.
+    """
     p = _Point.of(u)
     P, D = p.numerator()
-    t = _over(P, D)
-    Pd, Dd = _grad(p, u_dot)
-    td = _over(Pd - t * Dd[:, None], D)
-    Pdd, Ddd = _grad(p, u_ddot)
-    hP, hD = _hess(p, u_dot, u_dot)
-    tdd = _over(Pdd + hP - 2.0 * (td * Dd[:, None]) - t * (Ddd + hD)[:, None], D)
-    Pp, Dp = _grad(p, u_prime)
-    tp = _over(Pp - t * Dp[:, None], D)
-    Pdp, Ddp = _grad(p, u_dot_prime)
-    hPm, hDm = _hess(p, u_prime, u_dot)
-    tdp = _over(Pdp + hPm - td * Dp[:, None] - tp * Dd[:, None] - t * (Ddp + hDm)[:, None], D)
-    # The columns of dt/du and dt'/du: grad P [e_c], grad D [e_c] and
-    # hess P [e_c, u'], hess D [e_c, u'], written out (e_theta, e_a, e_b).
-    a, b, c, s = p.a, p.b, p.c, p.s
-    wt, wa, wb = u_prime[:, 0], u_prime[:, 1], u_prime[:, 2]
-    grads = (
-        (_vec(-p.st, p.ct, a * c + b * s), None),
-        (2.0 * _vec(a, b, s), 2.0 * a),
-        (2.0 * _vec(-b, a, -c), 2.0 * b),
-    )
-    hesses = (
-        (_vec(-p.ct * wt, -p.st * wt, c * wa + s * wb - 0.5 * (a * s - b * c) * wt), None),
-        (_vec(2.0 * wa, 2.0 * wb, c * wt), 2.0 * wa),
-        (_vec(-2.0 * wb, 2.0 * wa, s * wt), 2.0 * wb),
-    )
-    J, dtp = [], []
-    for (gP, gD), (hP, hD) in zip(grads, hesses, strict=True):
-        num = gP if gD is None else gP - t * gD[:, None]
-        Jc = _over(num, D)
-        num = hP - Jc * Dp[:, None]
-        if hD is not None:
-            num = num - t * hD[:, None] - tp * gD[:, None]
-        dtp.append(_over(num, D))
-        J.append(Jc)
+    inv = 1.0 / D
+    t = P * inv[:, None]
+    G, g = _gradient(p)
+    Hp, hp = _hessian(p, u_prime)
+    Hd, hd = _hessian(p, u_dot)
+    Dd, Dp = _dot(g, u_dot), _dot(g, u_prime)
+    td = (_apply(G, u_dot) - t * Dd[:, None]) * inv[:, None]
+    tdd = (
+        _apply(G, u_ddot)
+        + _apply(Hd, u_dot)
+        - 2.0 * (td * Dd[:, None])
+        - t * (_dot(g, u_ddot) + _dot(hd, u_dot))[:, None]
+    ) * inv[:, None]
+    tp = (_apply(G, u_prime) - t * Dp[:, None]) * inv[:, None]
+    tdp = (
+        _apply(G, u_dot_prime)
+        + _apply(Hp, u_dot)
+        - td * Dp[:, None]
+        - tp * Dd[:, None]
+        - t * (_dot(g, u_dot_prime) + _dot(hp, u_dot))[:, None]
+    ) * inv[:, None]
+    # dt/du and dt'/du, column c: (grad P [e_c] - t grad D [e_c]) / D and
+    # (hess P [e_c, u'] - J_c D' - t hess D [e_c, u'] - t' grad D [e_c]) / D
+    Jm = (G - t[:, :, None] * g[:, None]) * inv[:, None, None]
+    dtm = (
+        Hp - Jm * Dp[:, None, None] - t[:, :, None] * hp[:, None] - tp[:, :, None] * g[:, None]
+    ) * inv[:, None, None]
+    J = [Jm[:, :, c] for c in range(3)]
+    dtp = [dtm[:, :, c] for c in range(3)]
     return SpaceFields(
         u=u,
         u_dot=u_dot,

@@ -21,6 +21,14 @@ is block diagonal, and
   all alike, one per point of the pipe, so their eigenvectors are not
   resolved and cannot be told apart by their shape.)
 
+The computation uses the block structure: along the planar cycle the 3-D
+Jacobians have exact zeros between theta and (a, b) (the mirror symmetry), so
+the integrator factors its Newton matrices and propagates the sensitivity
+block by block (``decoupled_blocks``, rule 7 of
+:mod:`fempipe.solvers.radau.contract`): the same matrix to round-off (measured:
+the multipliers agree to 1.3e-14 with the full computation at alpha = pi/2,
+v = 10, P3:16) for (n^3 + (2 n)^3) instead of (3 n)^3 operations.
+
 A planar cycle survives in 3-D when every out-of-plane multiplier is inside
 the unit circle.  At alpha = 0 and pi the pipe is axisymmetric: the cycle
 turned about the vertical is a cycle again, so one out-of-plane multiplier is

@@ -123,7 +123,10 @@ def shoot_space(
 
     As :func:`fempipe.analyses.limit_cycle.shoot`; ``tip`` has Y_tip too, and
     ``floquet_multipliers`` are the 3-D monodromy's (6 n of them: the planar
-    and out-of-plane perturbations' and the gauge's).
+    and out-of-plane perturbations' and the gauge's), all of them, from the
+    exact derivative of the discrete flow map.  Along a planar orbit the
+    integrator computes that matrix block by block (in-plane, out-of-plane:
+    the Jacobians decouple exactly there), elsewhere whole.
     """
     U0 = np.array(U0, dtype=float)
     level = section_value(model, U0) if level is None else float(level)

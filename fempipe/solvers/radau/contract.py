@@ -31,9 +31,16 @@ The problem
    present (every Newton iteration's three stage residuals, and every
    Jacobian, with S = 1 for one state): the choice, and so the floating-point
    result, is the problem's.
-7. **Batching size (optional).** ``problem.prefers_batched_stage_jacobians``
-   (bool) says whether the three stage Jacobians of the sensitivity are one
-   call of ``stage_jacobians`` with S = 3 (True) or three calls.
+7. **Batching size and structure (optional).**
+   ``problem.prefers_batched_stage_jacobians`` (bool) says whether the three
+   stage Jacobians of the sensitivity are one call of ``stage_jacobians`` with
+   S = 3 (True) or three calls.  ``problem.decoupled_blocks`` (absent or None,
+   or index arrays partitioning range(n)) names groups of unknowns that
+   decouple at some states (the 3-D pipe's in-plane and out-of-plane unknowns
+   at planar states): where the Jacobians have exactly zero entries between
+   the groups, the integrator factors the Newton matrices and propagates the
+   sensitivity group by group (the same result to round-off, for sum n_b^3
+   instead of n^3 operations).
 8. **Parameter derivative (optional).** ``problem.parameter_derivative(Q, P, A)
    -> (S, n)`` is dR/dp of the states for the problem's one continuation
    parameter p (the pipe: the flow velocity v), or None.  It is needed only
@@ -106,6 +113,8 @@ class ImplicitSecondOrderProblem(Protocol):
         Rule 7.
     parameter_derivative : callable or None
         ``(Q, P, A) -> dR/dp``, (S, n) (rule 8).
+    decoupled_blocks : sequence of index arrays or None, optional
+        Rule 7.
     """
 
     n: int

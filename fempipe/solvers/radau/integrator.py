@@ -20,8 +20,8 @@ from fempipe.core.parallel import single_blas_thread
 
 from .collocation import evaluate_increment, evaluate_lagrange
 from .contract import ImplicitSecondOrderProblem
-from .lapack import lu_factor, lu_solve
-from .sensitivity import chain_step, step_derivative
+from .lapack import lu_factor_blocks, lu_solve
+from .sensitivity import chain_step, chain_step_blocks, step_derivative
 from .tableau import (
     A2,
     EIGENVALUES,
@@ -232,6 +232,12 @@ class Radau:
         self._stages_batched = self._jacobians1 is not None and bool(
             problem.prefers_batched_stage_jacobians
         )
+        # Contract rule 7: groups of unknowns that decouple at some states; used only
+        # where the Jacobians' entries between them are exactly zero.
+        blocks = getattr(problem, "decoupled_blocks", None)
+        self._blocks = None if blocks is None else [np.asarray(b, dtype=np.intp) for b in blocks]
+        # the sensitivity stays block diagonal while every step's Jacobians decouple
+        self._split_sensitivity = self._blocks is not None
         self.sensitivity = bool(sensitivity)
         self.sensitivity_matrix = np.eye(2 * n) if sensitivity else None
         # d(q, q')/dv of the discrete flow map, steady flow only (a flow
@@ -255,11 +261,24 @@ class Radau:
             return Jq[0], Jqd[0], M[0]
         return self.problem.jacobians(t, q, p, a)
 
+    def _decoupled(self, *mats) -> list | None:
+        """The problem's ``decoupled_blocks`` if the matrices (the last two axes) have no
+        entry between them, else None."""
+        blocks = self._blocks
+        if blocks is None:
+            return None
+        for a in blocks:
+            for b in blocks:
+                if a is not b and any(np.any(m[..., a[:, None], b]) for m in mats):
+                    return None
+        return blocks
+
     def _factor(self, h: float):
         K, D, M = self._jac
         g0, g1 = EIGENVALUES[0].real, EIGENVALUES[1]
-        lu_r = lu_factor(M + h * g0 * D + (h * g0) ** 2 * K)
-        lu_c = lu_factor(M + h * g1 * D + (h * g1) ** 2 * K)
+        blocks = self._decoupled(K, D, M)
+        lu_r = lu_factor_blocks(M + h * g0 * D + (h * g0) ** 2 * K, blocks)
+        lu_c = lu_factor_blocks(M + h * g1 * D + (h * g1) ** 2 * K, blocks)
         self.stats.n_lu += 1
         self._lu = (h, lu_r, lu_c)
 
@@ -479,13 +498,27 @@ class Radau:
             jac = [self._jacobians(t + C[i] * h, Q[i], P[i], acc[i]) for i in range(3)]
             Ks, Ds, Ms = (np.array([j[k] for j in jac]) for k in range(3))  # (3, n, n) each
         with_v = self._stage_residuals_v is not None
-        D = step_derivative(h, Ks, Ds, Ms, self._stage_residuals_v(Q, P, acc) if with_v else None)
+        dR_dv = self._stage_residuals_v(Q, P, acc) if with_v else None
         # The last stage is the end of the step (c_3 = 1): its Jacobians are
         # those at the next step's start, where step() may want them.
         self._stage3_jac = (Ks[2], Ds[2], Ms[2])
-        self.sensitivity_matrix, dv = chain_step(
-            D, h, self.sensitivity_matrix, self.velocity_sensitivity if with_v else None
-        )
+        if self._split_sensitivity and self._decoupled(Ks, Ds, Ms) is not None:
+            self.sensitivity_matrix, dv = chain_step_blocks(
+                h,
+                Ks,
+                Ds,
+                Ms,
+                dR_dv,
+                self.sensitivity_matrix,
+                self.velocity_sensitivity if with_v else None,
+                self._blocks,
+            )
+        else:
+            self._split_sensitivity = False
+            D = step_derivative(h, Ks, Ds, Ms, dR_dv)
+            self.sensitivity_matrix, dv = chain_step(
+                D, h, self.sensitivity_matrix, self.velocity_sensitivity if with_v else None
+            )
         if with_v:
             self.velocity_sensitivity = dv
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-__all__ = ["lu_factor", "lu_solve"]
+__all__ = ["BlockFactors", "lu_factor", "lu_factor_blocks", "lu_solve"]
 
 
 def lu_factor(a: np.ndarray):
@@ -28,8 +28,34 @@ def lu_factor(a: np.ndarray):
     return lu, piv
 
 
+class BlockFactors:
+    """The LU factors of a block-diagonal matrix, one per diagonal block.
+
+    ``parts`` is a list of (index array, factors of that block).
+    """
+
+    __slots__ = ("parts",)
+
+    def __init__(self, parts: list) -> None:
+        self.parts = parts
+
+
+def lu_factor_blocks(a: np.ndarray, blocks):
+    """:func:`lu_factor` of ``a``, or, with ``blocks`` (index arrays partitioning its rows and
+    columns, between which ``a`` is zero), of each diagonal block (:class:`BlockFactors`)."""
+    if blocks is None:
+        return lu_factor(a)
+    return BlockFactors([(idx, lu_factor(a[np.ix_(idx, idx)])) for idx in blocks])
+
+
 def lu_solve(lu_piv, b: np.ndarray) -> np.ndarray:
-    """Solve with the factors of :func:`lu_factor` (LAPACK getrs)."""
+    """Solve with the factors of :func:`lu_factor` (LAPACK getrs) or :func:`lu_factor_blocks`."""
+    if isinstance(lu_piv, BlockFactors):
+        dtype = np.result_type(b, *(f[0] for _, f in lu_piv.parts))
+        x = np.empty(b.shape, dtype=dtype)
+        for idx, f in lu_piv.parts:
+            x[idx] = lu_solve(f, b[idx])
+        return x
     lu, piv = lu_piv
     getrs = sla.lapack.zgetrs if np.iscomplexobj(lu) else sla.lapack.dgetrs
     x, info = getrs(lu, piv, b)

@@ -1,0 +1,95 @@
+"""Benchmark of the 3-D model's limit cycles against the planar ones; not a timed test.
+
+Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``).
+
+* ``space_cycle``: the CPU seconds (``time.process_time``, median of 3) of Newton
+  shooting one limit cycle with its Floquet multipliers, planar
+  (:func:`fempipe.analyses.limit_cycle.shoot`) and in 3-D
+  (:func:`fempipe.analyses.space.shooting.shoot_space`), in the same run, from the
+  same initial guess (the attractor's cycle, lifted by
+  :func:`fempipe.model.space.planar_state`), with the same tolerances, at
+  alpha = pi/2, v = 10 on the default discretization P3:16; their ratio
+  (target: at most 5); the CPU of :func:`fempipe.analyses.space.floquet.out_of_plane_floquet`
+  of the planar cycle (run by every planar ``fempipe simulate``); and the CPU of
+  the 3-D Jacobians of the three stages of one step (one call, S = 3).  The
+  cycle is planar: its 3-D Jacobians decouple exactly into in-plane and
+  out-of-plane blocks, which the integrator uses (contract rule 7 of
+  :mod:`fempipe.solvers.radau.contract`); a non-planar cycle costs more.
+  The iterations and integration steps of both are reported: a polish (one
+  more period without the monodromy, :func:`~fempipe.analyses.limit_cycle.shoot`)
+  is taken only when the converged residual is above tol / 10, which the two
+  models' different step sequences decide differently (measured: the planar
+  shooting polishes, the 3-D one does not).  Measure with
+  ``OPENBLAS_NUM_THREADS=1``.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+
+import numpy as np
+
+from fempipe.bench import register
+
+
+def _cpu(fn, repeats: int):
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = fn()
+        times.append(time.process_time() - t0)
+    return statistics.median(times), out
+
+
+@register("space_cycle")
+def bench_space_cycle(quick: bool = False) -> dict:
+    """CPU-s of a 3-D limit cycle against the planar one (module docstring)."""
+    from fempipe.analyses.limit_cycle import find_attractor, shoot
+    from fempipe.analyses.space.floquet import out_of_plane_floquet
+    from fempipe.analyses.space.shooting import shoot_space
+    from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+    from fempipe.model.space import SpaceModel, planar_state
+
+    disc = FiniteElement(4, 3) if quick else discretization_from_name(DEFAULT_FE)
+    repeats = 1 if quick else 3
+    params = Params(alpha=math.pi / 2, v=10.0)
+    planar = PipeModel(disc, params)
+    space = SpaceModel(disc, params)
+    guess = find_attractor(planar).cycle
+    t_planar, cycle = _cpu(lambda: shoot(planar, guess.q0, guess.qdot0, guess.period), repeats)
+    t_space, cycle3 = _cpu(
+        lambda: shoot_space(space, planar_state(guess.q0), planar_state(guess.qdot0), guess.period),
+        repeats,
+    )
+    t_oop, oop = _cpu(lambda: out_of_plane_floquet(planar, cycle), repeats)
+    U, Ud = planar_state(cycle.q0), planar_state(cycle.qdot0)
+    Udd = space.acceleration(U, Ud)
+    stages = (np.tile(U, (3, 1)), np.tile(Ud, (3, 1)), np.tile(Udd, (3, 1)))
+    n_jac = 3 if quick else 20
+    t_jac, _ = _cpu(lambda: [space.jacobians(*stages) for _ in range(n_jac)], 1)
+    mu3 = np.abs(cycle3.floquet_multipliers)
+    return {
+        "discretization": disc.name,
+        "alpha": params.alpha,
+        "v": params.v,
+        "planar_cpu_s": t_planar,
+        "planar_iterations": cycle.iterations,
+        "planar_steps_total": cycle.total_steps,
+        "space_cpu_s": t_space,
+        "space_iterations": cycle3.iterations,
+        "space_steps_total": cycle3.total_steps,
+        "ratio_space_over_planar": t_space / t_planar if t_planar > 0 else math.nan,
+        "period_planar": cycle.period,
+        "period_space": cycle3.period,
+        "max_nontrivial_planar": cycle.max_nontrivial_multiplier,
+        "largest_space_multipliers": [float(x) for x in mu3[:4]],
+        "stable_planar": cycle.stable,
+        "stable_space": cycle3.stable,
+        "out_of_plane_floquet_cpu_s": t_oop,
+        "max_nontrivial_out_of_plane": oop.max_nontrivial,
+        "jacobians_3_stages_ms": 1e3 * t_jac / n_jac,
+    }
