@@ -6,7 +6,7 @@ stay empty) and checks ``RESULT`` against a value computed here by other means: 
 form, an independent solver of :mod:`fempipe.validation` (scipy's ``solve_bvp`` on the
 strong form of Eq. (31a); Paidoussis' straight-pipe theory on Legendre spectral elements),
 a symmetry, or the theoretical order of a convergence study.  The tolerances say which
-discretization error they allow for.  The scripts take about 12 CPU-s together (in the default test run)."""
+discretization error they allow for.  The scripts take about 19 CPU-s together (in the default test run)."""
 
 from __future__ import annotations
 
@@ -181,3 +181,15 @@ def test_dask_sweep(tmp_path, monkeypatch):
     # the onset is the first swept v above the classical v_cr (N = 3 is off by 0.04 only)
     assert g["RESULT"] == min(v for v in g["flows"] if v > classical_v_cr())
     assert all(p["attractor"] == "equilibrium" for p in g["diagram"].points if p["v"] < g["RESULT"])
+
+
+def test_3d_which_cycles_survive(tmp_path, monkeypatch):
+    g = run_example("plot_3d_which_cycles_survive", tmp_path, monkeypatch)
+    # the hanging pipe is axisymmetric: the rotated cycle is a cycle, its multiplier exactly 1
+    # in the continuum; P3:6 leaves a discretization error of about 1.5e-5
+    assert g["RESULT"] == pytest.approx(1.0, abs=1e-4)
+    hanging, standing = (oop for _cycle, oop in g["results"].values())
+    # every other out-of-plane multiplier of a stable cycle's neighbourhood lies inside the circle
+    assert hanging.stable and abs(hanging.trivial.imag) < 1e-12
+    # the standing pipe's planar cycle has one out-of-plane multiplier outside it
+    assert not standing.stable

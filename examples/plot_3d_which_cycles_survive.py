@@ -1,0 +1,77 @@
+"""
+Which planar cycles survive in three dimensions
+===============================================
+
+The paper's model is planar: its limit cycles are motions in the plane of gravity and the clamp.
+A round pipe may leave that plane.  A planar cycle is a solution of the 3-D model too
+(:class:`fempipe.SpaceModel`: its states with no out-of-plane part are the planar model's), and
+:func:`fempipe.out_of_plane_floquet` integrates the 3-D model's monodromy along it: its
+out-of-plane block holds the Floquet multipliers of perturbations out of the plane.  The cycle
+survives in 3-D when all of them lie inside the unit circle.
+
+The hanging (alpha = 0) and the standing (alpha = pi) pipe are axisymmetric: a planar cycle
+turned about the vertical is again a cycle, so one out-of-plane multiplier is exactly 1 in the
+continuum (on a mesh, up to the discretization error).  It is left out of the verdict, as the
+multiplier 1 of the phase is in the plane.
+"""
+
+# %%
+# The cycles at v = 10, hanging and standing
+# ------------------------------------------
+import matplotlib.pyplot as plt
+import numpy as np
+
+import fempipe
+
+disc = fempipe.FiniteElement(6, 3)  # P3:6; the default mesh is P3:16
+results = {}
+for alpha, name in ((0.0, "hanging, alpha = 0"), (np.pi, "standing, alpha = pi")):
+    model = fempipe.PipeModel(disc, fempipe.Params(alpha=alpha, v=10.0))
+    cycle = fempipe.find_attractor(model, t_max=150.0).cycle
+    oop = fempipe.out_of_plane_floquet(model, cycle)
+    results[name] = (cycle, oop)
+    verdict = "survives" if oop.stable else "does not survive"
+    print(
+        f"{name}: period {cycle.period:.5f}, largest non-trivial out-of-plane multiplier "
+        f"{oop.max_nontrivial:.4f} -> the planar cycle {verdict} in 3-D"
+    )
+
+hanging = results["hanging, alpha = 0"][1]
+print(f"the rotation about the vertical: multiplier {hanging.trivial.real:.7f}")
+
+#: the hanging pipe's neutral out-of-plane multiplier (1 by its axisymmetry), in tests/test_gallery.py
+RESULT = float(abs(hanging.trivial))
+
+# %%
+# The multipliers in the complex plane
+# ------------------------------------
+# In-plane multipliers (grey) and out-of-plane ones (colour); the neutral one of the
+# rotation about the vertical is circled.
+circle = np.exp(1j * np.linspace(0.0, 2.0 * np.pi, 300))
+fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.6), layout="constrained")
+for ax, (name, (_cycle, oop)) in zip(axes, results.items(), strict=True):
+    ax.plot(circle.real, circle.imag, "k-", lw=0.6)
+    mu_p, mu_o = oop.planar_multipliers, oop.multipliers
+    ax.plot(mu_p.real, mu_p.imag, "o", color="0.6", ms=4, label="in the plane")
+    ax.plot(mu_o.real, mu_o.imag, "x", color="C3", ms=6, label="out of the plane")
+    if oop.trivial is not None:
+        ax.plot(
+            oop.trivial.real,
+            oop.trivial.imag,
+            "o",
+            mfc="none",
+            mec="k",
+            ms=11,
+            label="rotation about the vertical",
+        )
+    ax.set_aspect("equal")
+    ax.set_xlim(-1.25, 1.25)
+    ax.set_ylim(-1.25, 1.25)
+    verdict = "stable" if oop.stable else "unstable"
+    ax.set_title(
+        f"{name}\nlargest out of plane {oop.max_nontrivial:.3f}: {verdict} in 3-D", fontsize=9
+    )
+    ax.set_xlabel("Re")
+axes[0].set_ylabel("Im")
+axes[1].legend(loc="lower left", fontsize=7)
+fig.suptitle("beta = 0.142, gamma = 18.9, mu = 5e-3, v = 10; P3:6", fontsize=9)
