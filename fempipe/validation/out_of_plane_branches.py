@@ -1,0 +1,398 @@
+"""Which planar orbits of Figs. 7-10 survive in three dimensions.
+
+The paper's post-flutter motions are planar limit cycles.  A round pipe may
+leave the plane, so each is checked on the 3-D model: its out-of-plane Floquet
+multipliers (:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`).  The
+FE diagram of a case is continued once, with the 3-D verdicts of a subset of
+each branch's orbits (:class:`~fempipe.analyses.periodic.out_of_plane.Spread`:
+about :data:`N_FULL` orbits spread along the branch, the last one and the
+orbit at v = 10; in the quick suite only v = 10), and where the largest
+non-trivial out-of-plane multiplier crosses 1 between two of them, the
+crossing is located by regula falsi on the multiplier
+(:func:`~fempipe.analyses.periodic.out_of_plane.locate_change`; full suite
+only, the quick suite gives the bracket).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fempipe.analyses.periodic import cycle_diagram
+from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
+from fempipe.analyses.periodic.results import CyclePoint
+
+from .dynamic_runs import FIRST_DS, ContinuedDiagram, _continued, _disc_from_spec, model_for
+
+__all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts", "caption_text"]
+
+#: Orbits per branch whose out-of-plane multipliers the full suite computes.
+N_FULL = 8
+#: The located crossing's v is known to this (the bracket's width).
+LOCATE_TOL = 2e-3
+
+
+@dataclass(frozen=True)
+class OutOfPlaneBranches:
+    """The 3-D verdicts along the cycle branches of one continued diagram.
+
+    Attributes
+    ----------
+    label : str
+    alpha : float
+    checked : list of dict
+        The orbits with a verdict: ``branch``, ``v``, ``stable`` (in the plane),
+        ``max_multiplier`` (in-plane), ``max_oop`` (the largest non-trivial
+        out-of-plane multiplier's modulus), ``stable_3d``, ``eta_tip``, ``X_tip``,
+        ``Z_tip``, ``planar_block`` (the 3-D monodromy's planar block's largest
+        non-trivial modulus), ``neutral`` (complex, at sin alpha = 0), ``multipliers``.
+    changes : list of dict
+        Where the out-of-plane verdict changes between two checked orbits of a
+        branch: ``branch``, ``bracket`` [v, v], ``direction`` ("loses" or
+        "regains" stability with increasing v), ``v`` (located, or None).
+    cpu_time : float
+        CPU seconds of the verdicts and the location.
+    """
+
+    label: str
+    alpha: float
+    checked: list
+    changes: list
+    cpu_time: float
+
+    def at(self, v: float) -> dict | None:
+        """The checked orbit at ``v`` that is stable in the plane (the paper's cycle)."""
+        pts = [p for p in self.checked if abs(p["v"] - v) < 1e-9 and p["stable"]]
+        return pts[0] if pts else None
+
+    def first_unstable_3d(self) -> float | None:
+        """The smallest v of a planar-stable checked orbit that is unstable out of plane."""
+        vs = [p["v"] for p in self.checked if p["stable"] and p["stable_3d"] is False]
+        return min(vs) if vs else None
+
+
+@dataclass(frozen=True)
+class AtVelocities:
+    """The branch points at the velocities ``v_keep`` (to 1e-9): the quick suite's selection."""
+
+    v_keep: tuple
+
+    def __call__(self, points) -> list[int]:
+        return [i for i, p in enumerate(points) if any(abs(p.v - w) < 1e-9 for w in self.v_keep)]
+
+
+def caption_text(quick: bool) -> str:
+    """The caption's sentence on the 3-D verdicts."""
+    which = (
+        "the orbit at v = 10"
+        if quick
+        else f"about {N_FULL} orbits spread along each branch, the last one and v = 10, "
+        "the crossing of |ρ| = 1 located by regula falsi between two of them"
+    )
+    return (
+        "Planar orbits unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the "
+        f"3-D model, FE) are marked with red triangles; checked: {which}."
+    )
+
+
+def continued_with_verdicts(
+    label: str, alpha: float, values, quick: bool
+) -> tuple[ContinuedDiagram, OutOfPlaneBranches]:
+    """The continued diagram of ``label`` at ``alpha`` (as
+    :func:`fempipe.validation.dynamic_runs.continued_diagram`) and the 3-D verdicts
+    of its orbits (cached per process)."""
+    return _cached(label, float(alpha), tuple(sorted(float(v) for v in values)), bool(quick))
+
+
+@functools.lru_cache(maxsize=8)
+def _cached(label: str, alpha: float, values: tuple, quick: bool):
+    t0 = time.process_time()
+    disc = _disc_from_spec(label)
+    select = AtVelocities((10.0,)) if quick else Spread(N_FULL, (10.0,))
+    model = model_for(disc, alpha, values[0])
+    with tempfile.TemporaryDirectory(prefix="fempipe-validate-3d-") as tmp:
+        dg = cycle_diagram(model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select)
+        diag = _continued(label, alpha, values, disc, dg, Path(tmp), t0)
+        t1 = time.process_time()
+        checked = [
+            _summary(d)
+            for d in dg.points
+            if d["attractor"] == "periodic"
+            and d.get("max_nontrivial_out_of_plane_multiplier") is not None
+        ]
+        changes = []
+        for name in sorted({p["branch"] for p in checked}):
+            path = Path(tmp) / f"a00-{name}.json"
+            states = [CyclePoint.from_dict(s) for s in json.loads(path.read_text())["points"]]
+            changes += _changes(
+                model, name, states, [p for p in checked if p["branch"] == name], locate=not quick
+            )
+    cpu = sum(p["cpu_time"] for p in checked) + (time.process_time() - t1)
+    return diag, OutOfPlaneBranches(label, alpha, checked, changes, cpu)
+
+
+def _summary(d: dict) -> dict:
+    neutral = d.get("neutral_out_of_plane_multiplier")
+    return {
+        "branch": d["branch"],
+        "index": d["index"],
+        "v": d["v"],
+        "stable": bool(d["stable"]),
+        "max_multiplier": d["max_multiplier"],
+        "max_oop": d["max_nontrivial_out_of_plane_multiplier"],
+        "stable_3d": d["stable_3d"],
+        "eta_tip": d["eta_tip"],
+        "X_tip": d["X_tip"],
+        "Z_tip": d["Z_tip"],
+        "planar_block": d["planar_block_max_multiplier"],
+        "neutral": None if neutral is None else complex(*neutral),
+        "multipliers": [complex(*z) for z in d["out_of_plane_floquet_multipliers"]],
+        "cpu_time": d["out_of_plane_cpu_time"],
+    }
+
+
+def _changes(model, name: str, states: list, checked: list, locate: bool) -> list[dict]:
+    """Brackets (and, with ``locate``, the located v) of the out-of-plane verdict's
+    changes between consecutive checked orbits of a branch."""
+    out = []
+    pts = sorted(checked, key=lambda p: p["index"])
+    for a, b in zip(pts, pts[1:], strict=False):
+        if (a["max_oop"] < 1.0) == (b["max_oop"] < 1.0):
+            continue
+        sa, sb = states[a["index"]], states[b["index"]]
+        if abs(sa.v - a["v"]) > 1e-12 or abs(sb.v - b["v"]) > 1e-12:
+            continue  # the store's layout differs from the diagram's: no location
+        lo_first = a["v"] < b["v"]
+        loses = (a["max_oop"] < 1.0) == lo_first
+        where = None
+        if locate:
+            found = locate_change(model, sa, sb, a["max_oop"], b["max_oop"], tol=LOCATE_TOL)
+            where = None if found is None else found["v"]
+        out.append(
+            {
+                "branch": name,
+                "bracket": sorted([a["v"], b["v"]]),
+                "direction": "loses" if loses else "regains",
+                "v": where,
+            }
+        )
+    return out
+
+
+def neutral_deviation(branches: OutOfPlaneBranches) -> float:
+    """max |ρ_neutral - 1| over the checked orbits (sin alpha = 0; nan elsewhere)."""
+    d = [abs(p["neutral"] - 1.0) for p in branches.checked if p["neutral"] is not None]
+    return float(max(d)) if d else float("nan")
+
+
+def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
+    """max | |ρ| of the 3-D monodromy's planar block - |ρ| of the planar orbit | (non-trivial
+    largest moduli) over the checked orbits."""
+    d = [
+        abs(p["planar_block"] - p["max_multiplier"])
+        for p in branches.checked
+        if p["planar_block"] is not None and p["max_multiplier"] is not None
+    ]
+    return float(max(d)) if d else float("nan")
+
+
+def survival_text(name: str, br: OutOfPlaneBranches) -> str:
+    """One sentence: which orbits of the diagram at alpha = ``name`` survive in 3-D."""
+    stable = [p for p in br.checked if p["stable"]]
+    if not stable:
+        return f"α = {name}: no stable planar orbit was checked"
+    v_lo, v_hi = min(p["v"] for p in stable), max(p["v"] for p in stable)
+    bad = [p for p in stable if p["stable_3d"] is False]
+    if not bad:
+        return (
+            f"α = {name}: every planar limit cycle checked on the stable branch (v = "
+            f"{v_lo:.4g} to {v_hi:.4g}) is stable in 3-D (largest out-of-plane |ρ| "
+            f"{max(p['max_oop'] for p in stable):.4f})"
+        )
+    first = min(p["v"] for p in bad)
+    loss = [c for c in br.changes if c["direction"] == "loses"]
+    where = ""
+    if loss:
+        c = min(loss, key=lambda c: c["bracket"][0])
+        where = (
+            f"; it leaves the plane from v = {c['v']:.4f} (located)"
+            if c["v"] is not None
+            else f"; the crossing lies between v = {c['bracket'][0]:.4g} and {c['bracket'][1]:.4g}"
+        )
+    worst = max(bad, key=lambda p: p["max_oop"])
+    return (
+        f"α = {name}: the planar limit cycles are unstable in 3-D from v = {first:.4g} on "
+        f"the checked orbits (largest out-of-plane |ρ| {worst['max_oop']:.4f} at v = "
+        f"{worst['v']:.4g}){where}"
+    )
+
+
+def marks(ax, br: OutOfPlaneBranches, key: str) -> bool:
+    """Red triangles at the extrema of ``key`` of the checked orbits that are stable in the
+    plane but unstable in 3-D; True if any were drawn."""
+    bad = [p for p in br.checked if p["stable"] and p["stable_3d"] is False]
+    if not bad:
+        return False
+    v = np.array([p["v"] for p in bad])
+    for side in (0, 1):
+        ax.plot(
+            v,
+            [p[key][side] for p in bad],
+            "v",
+            ms=6,
+            color="tab:red",
+            mfc="none",
+            mew=1.2,
+            zorder=5,
+        )
+    return True
+
+
+def add_legend_entry(ax) -> None:
+    """The legend of a panel with the entry of :func:`marks` added."""
+    from matplotlib.lines import Line2D
+
+    leg = ax.get_legend()
+    handles = list(leg.legend_handles) if leg is not None else []
+    handles.append(
+        Line2D(
+            [],
+            [],
+            ls="",
+            marker="v",
+            ms=6,
+            color="tab:red",
+            mfc="none",
+            mew=1.2,
+            label="unstable in 3-D",
+        )
+    )
+    ax.legend(handles=handles, fontsize=9)
+
+
+#: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
+#: orbit, so the multiplier is 1 exactly in the continuum; the FE chart and the
+#: integration (rtol 1e-7 over one period) leave a residue far below this.
+NEUTRAL_TOL = 1e-4
+#: The 3-D monodromy's planar block against the continuation's monodromy: the
+#: same equations, integrated at rtol 1e-7 and at the continuation's 1e-5.
+PLANAR_BLOCK_TOL = 1e-3
+
+_SOURCE = (
+    "fempipe.analyses.space.out_of_plane_floquet (3-D model, Radau with exact sensitivities) "
+    "on the continued orbits of fempipe.analyses.periodic"
+)
+
+
+def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches) -> list:
+    """``planar_block<suffix>`` and, at sin alpha = 0, ``neutral_oop<suffix>``: two
+    independent checks of the out-of-plane monodromy."""
+    from .checks import below
+
+    checks = [
+        below(
+            f"planar_block{suffix}",
+            f"α = {name}, {br.label}: the 3-D monodromy's planar block has the planar "
+            "orbit's largest non-trivial multiplier (checked orbits)",
+            planar_block_deviation(br),
+            PLANAR_BLOCK_TOL,
+            why="the same planar equations on the 3-D model, integrated at rtol 1e-7, against "
+            "the continuation's monodromy at rtol 1e-5",
+            source=_SOURCE,
+        )
+    ]
+    if any(p["neutral"] is not None for p in br.checked):
+        checks.append(
+            below(
+                f"neutral_oop{suffix}",
+                f"α = {name}, {br.label}: the out-of-plane multiplier of the rotation about "
+                "the vertical is 1 (axisymmetric pipe)",
+                neutral_deviation(br),
+                NEUTRAL_TOL,
+                why="symmetry: a planar orbit turned about the vertical is an orbit, so that "
+                "multiplier is exactly 1 in the continuum",
+                source=_SOURCE,
+            )
+        )
+    return checks
+
+
+def verdict_rows(name: str, br: OutOfPlaneBranches) -> list[tuple]:
+    """The checked orbits as rows of :func:`verdict_table`."""
+    rows = []
+    for p in sorted(br.checked, key=lambda p: (p["branch"], p["v"])):
+        lead = leading_text(p["multipliers"], p["neutral"])
+        rows.append(
+            (
+                name,
+                br.label,
+                p["branch"],
+                p["v"],
+                "yes" if p["stable"] else "no",
+                p["max_multiplier"],
+                p["max_oop"],
+                lead,
+                {True: "yes", False: "no", None: "-"}[p["stable_3d"]],
+            )
+        )
+    return rows
+
+
+def leading_text(multipliers, neutral) -> str:
+    """The out-of-plane multiplier of largest modulus but the neutral one, as ``a ± bi``."""
+    others = [complex(z) for z in multipliers if neutral is None or complex(z) != neutral]
+    if not others:
+        return "-"
+    z = others[0]
+    return f"{z.real:.4f} {'+' if z.imag >= 0 else '-'} {abs(z.imag):.4f}i"
+
+
+def verdict_table(rows: list[tuple], changes: list[str], quick: bool) -> object:
+    """The out-of-plane Floquet multipliers of the checked planar orbits."""
+    from .checks import Table
+
+    which = (
+        "the orbit at v = 10 (quick suite)"
+        if quick
+        else f"about {N_FULL} orbits spread along each branch, its last one and v = 10"
+    )
+    note = (
+        f"Checked orbits: {which}. |ρ| in the plane: the largest non-trivial Floquet multiplier "
+        "of the planar orbit; out of the plane: of the out-of-plane perturbations on the 3-D "
+        "model (at α = 0 and π the neutral rotation about the vertical is left out). Stable in "
+        "3-D: both below 1."
+    )
+    if changes:
+        note += " Changes of the out-of-plane verdict: " + "; ".join(changes) + "."
+    return Table(
+        "Do the planar limit cycles survive in 3-D? Out-of-plane Floquet multipliers",
+        (
+            "α",
+            "discretization",
+            "branch",
+            "v",
+            "stable in plane",
+            "max |ρ| in plane",
+            "max |ρ| out of plane",
+            "leading out-of-plane ρ",
+            "stable in 3-D",
+        ),
+        tuple(rows),
+        note=note,
+    )
+
+
+def change_texts(name: str, br: OutOfPlaneBranches) -> list[str]:
+    """The changes of the out-of-plane verdict, in words."""
+    out = []
+    for c in br.changes:
+        lo, hi = c["bracket"]
+        at = f"at v = {c['v']:.4f}" if c["v"] is not None else f"between v = {lo:.4g} and {hi:.4g}"
+        out.append(f"α = {name}, {c['branch']}: {c['direction']} out-of-plane stability {at}")
+    return out
