@@ -147,7 +147,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         checks += _shape_velocity_checks(inc, discs)
         checks += _attractor_checks(inc, next(iter(discs)))
         rows += _rows(inc, discs, onsets)
-        own = verdict_checks(f"_{inc.name}", inc.name, inc.oop)
+        own = verdict_checks(f"_{inc.name}", inc.name, inc.oop, quick)
         checks += own
         requires += [c.name for c in own]
         oop_rows += verdict_rows(inc.name, inc.oop)

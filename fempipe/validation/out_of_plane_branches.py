@@ -277,9 +277,11 @@ def add_legend_entry(ax) -> None:
 
 
 #: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
-#: orbit, so the multiplier is 1 exactly in the continuum; the FE chart and the
-#: integration (rtol 1e-7 over one period) leave a residue far below this.
-NEUTRAL_TOL = 1e-4
+#: orbit, so the multiplier is 1 exactly in the continuum; the mesh leaves a
+#: residue (v = 10, P3:8: 1.8e-5 at α = 0, 6.1e-4 at α = π; P3:16: 3.1e-7 at α = 0).
+#: Checked in the full suite only: on P3:4 at α = π it is not resolved (it pairs
+#: with the unstable multiplier into a complex pair, |ρ| = 1.045 both).
+NEUTRAL_TOL = 2e-3
 #: The 3-D monodromy's planar block against the continuation's monodromy: the
 #: same equations, integrated at rtol 1e-7 and at the continuation's 1e-5.
 PLANAR_BLOCK_TOL = 1e-3
@@ -290,9 +292,9 @@ _SOURCE = (
 )
 
 
-def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches) -> list:
-    """``planar_block<suffix>`` and, at sin alpha = 0, ``neutral_oop<suffix>``: two
-    independent checks of the out-of-plane monodromy."""
+def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) -> list:
+    """``planar_block<suffix>`` and, at sin alpha = 0 in the full suite,
+    ``neutral_oop<suffix>``: two independent checks of the out-of-plane monodromy."""
     from .checks import below
 
     checks = [
@@ -307,7 +309,7 @@ def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches) -> list:
             source=_SOURCE,
         )
     ]
-    if any(p["neutral"] is not None for p in br.checked):
+    if not quick and any(p["neutral"] is not None for p in br.checked):
         checks.append(
             below(
                 f"neutral_oop{suffix}",
