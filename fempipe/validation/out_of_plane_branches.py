@@ -208,11 +208,12 @@ def survival_text(name: str, br: OutOfPlaneBranches) -> str:
     if not stable:
         return f"α = {name}: no stable planar orbit was checked"
     v_lo, v_hi = min(p["v"] for p in stable), max(p["v"] for p in stable)
+    span = f"at v = {v_lo:.4g}" if v_lo == v_hi else f"v = {v_lo:.4g} to {v_hi:.4g}"
     bad = [p for p in stable if p["stable_3d"] is False]
     if not bad:
         return (
-            f"α = {name}: every planar limit cycle checked on the stable branch (v = "
-            f"{v_lo:.4g} to {v_hi:.4g}) is stable in 3-D (largest out-of-plane |ρ| "
+            f"α = {name}: every planar limit cycle checked on the stable branch ({span}) is "
+            "stable in 3-D (largest out-of-plane |ρ| "
             f"{max(p['max_oop'] for p in stable):.4f})"
         )
     first = min(p["v"] for p in bad)
