@@ -52,7 +52,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
-    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period. Red open triangles (none here if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE); checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?').",
+    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period. A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?').",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(
@@ -488,7 +488,9 @@ def plot(result: CaseResult, fig=None):
         strict=True,
     ):
         draw_continued(ax, d["diagrams"], key, lab)
-        if "out_of_plane" in d and marks(ax, d["out_of_plane"], key):
+        if "out_of_plane" in d and marks(
+            ax, d["out_of_plane"], d["diagrams"][d["out_of_plane"].label], key
+        ):
             add_legend_entry(ax)
         ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])

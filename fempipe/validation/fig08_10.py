@@ -45,7 +45,7 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
-    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). Red open triangles: planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE); checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?'). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?'). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -563,7 +563,9 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
         diag, insets = axes[:n], [None] * n
     for ax, inset, (name, pan) in zip(diag, insets, panels.items(), strict=True):
         draw_continued(ax, pan["diagrams"], key, lab, attractors=pan["sweeps"])
-        if "out_of_plane" in pan and marks(ax, pan["out_of_plane"], key):
+        if "out_of_plane" in pan and marks(
+            ax, pan["out_of_plane"], pan["diagrams"][pan["out_of_plane"].label], key
+        ):
             add_legend_entry(ax)
         ax.set_title(f"α = {name}: tip extrema", fontsize=10)
         if inset is not None:

@@ -22,8 +22,6 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from fempipe.analyses.periodic import cycle_diagram
 from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
 from fempipe.analyses.periodic.results import CyclePoint
@@ -96,8 +94,9 @@ def caption_text(quick: bool) -> str:
         "the crossing of |ρ| = 1 located by regula falsi between two of them"
     )
     return (
-        "Planar orbits unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the "
-        f"3-D model, FE) are marked with red triangles; checked: {which}."
+        "Planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet "
+        f"multiplier |ρ| > 1 on the 3-D model, FE) lie on a red band, the checked ones "
+        f"marked by red triangles; checked: {which}."
     )
 
 
@@ -234,25 +233,79 @@ def survival_text(name: str, br: OutOfPlaneBranches) -> str:
     )
 
 
-def marks(ax, br: OutOfPlaneBranches, key: str) -> bool:
-    """Red triangles at the extrema of ``key`` of the checked orbits that are stable in the
-    plane but unstable in 3-D; True if any were drawn."""
+def unstable_runs(br: OutOfPlaneBranches, diag: ContinuedDiagram) -> list[list]:
+    """Runs of consecutive orbits of ``diag``'s branches (stable in the plane) that are
+    unstable in 3-D: between the first and the last checked orbit of its branch, each
+    orbit takes the verdict of the nearer checked orbit, and between two checked orbits
+    of different verdicts the located crossing (or, not located, the bracket's
+    midpoint) decides."""
+    runs = []
+    for name, pts in diag.branches.items():
+        chk = sorted((p for p in br.checked if p["branch"] == name), key=lambda p: p["index"])
+        if not chk or chk[-1]["index"] >= len(pts):
+            continue
+        cross = {tuple(c["bracket"]): c["v"] for c in br.changes if c["branch"] == name}
+        bad = []
+        for i, pt in enumerate(pts):
+            if not chk[0]["index"] <= i <= chk[-1]["index"]:
+                bad.append(False)  # outside the checked orbits: no verdict
+                continue
+            after = next((c for c in chk if c["index"] >= i), chk[-1])
+            before = next((c for c in reversed(chk) if c["index"] <= i), chk[0])
+            if before["stable_3d"] == after["stable_3d"] or before is after:
+                verdict = (
+                    before if abs(i - before["index"]) <= abs(after["index"] - i) else after
+                )["max_oop"] >= 1.0
+            else:
+                lo, hi = sorted([before["v"], after["v"]])
+                v_c = cross.get((lo, hi)) or 0.5 * (lo + hi)
+                # on the side of the crossing where the nearer checked orbit lies
+                side = before if (pt.v - v_c) * (before["v"] - v_c) > 0 else after
+                verdict = side["max_oop"] >= 1.0
+            bad.append(bool(verdict and pt.stable))
+        run = []
+        for pt, b in zip(pts, bad, strict=True):
+            if b:
+                run.append(pt)
+            elif run:
+                runs.append(run)
+                run = []
+        if run:
+            runs.append(run)
+    return runs
+
+
+def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
+    """A thick translucent red band under the extrema of ``key`` where the planar orbits
+    are stable in the plane but unstable in 3-D (:func:`unstable_runs`), and red open
+    triangles at the checked ones; True if any were drawn."""
+    runs = unstable_runs(br, diag)
     bad = [p for p in br.checked if p["stable"] and p["stable_3d"] is False]
-    if not bad:
-        return False
-    v = np.array([p["v"] for p in bad])
     for side in (0, 1):
         ax.plot(
-            v,
+            [p["v"] for p in bad],
             [p[key][side] for p in bad],
             "v",
-            ms=6,
+            ms=7,
             color="tab:red",
             mfc="none",
             mew=1.2,
             zorder=5,
         )
-    return True
+    for run in runs:
+        v = [p.v for p in run]
+        for side in (0, 1):
+            ax.plot(
+                v,
+                [getattr(p, key)[side] for p in run],
+                "-",
+                lw=6,
+                color="tab:red",
+                alpha=0.3,
+                solid_capstyle="butt",
+                zorder=1,
+            )
+    return bool(runs or bad)
 
 
 def add_legend_entry(ax) -> None:
@@ -263,15 +316,7 @@ def add_legend_entry(ax) -> None:
     handles = list(leg.legend_handles) if leg is not None else []
     handles.append(
         Line2D(
-            [],
-            [],
-            ls="",
-            marker="v",
-            ms=6,
-            color="tab:red",
-            mfc="none",
-            mew=1.2,
-            label="unstable in 3-D",
+            [], [], lw=6, color="tab:red", alpha=0.3, label="stable planar orbit, unstable in 3-D"
         )
     )
     ax.legend(handles=handles, fontsize=9)
