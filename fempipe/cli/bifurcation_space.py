@@ -123,7 +123,7 @@ _LABELS = {"Y_tip": "Y(1) (out of plane)", "eta_tip": "η(1)", "X_tip": "X_g(1)"
 
 def diagram_figure(result: dict, key: str):
     """[min, max] of ``key`` against v: one mark each, the marker by attractor kind, the
-    color by sweep direction (down shifted by a hair to the right so that it does not
+    color by sweep direction (a colored line in the legend) (down shifted by a hair to the right so that it does not
     cover up), filled where the motion is non-planar; the run's parameters above."""
     import textwrap
 
@@ -142,7 +142,7 @@ def diagram_figure(result: dict, key: str):
         mk = _MARKS.get(p["attractor"], "x")
         ax.plot([x, x], [lo, hi], ls="", marker=mk, ms=5, color=c, mfc=face)
     handles = [
-        Line2D([], [], ls="", marker="o", color=c, mfc="none", label=f"sweep {d}")
+        Line2D([], [], ls="-", lw=3, color=c, label=f"sweep {d}")
         for d, c in _COLORS.items()
         if any(p["direction"] == d for p in pts)
     ]

@@ -360,12 +360,11 @@ def _oop_mesh_check(alpha: float, fe_label: str, oop) -> tuple[Check, tuple]:
     orbit's row of the verdict table."""
     from fempipe.analyses.periodic.out_of_plane import cycle_verdict
 
-    from .dynamic_runs import _disc_from_spec, model_for
+    from .dynamic_runs import model_for
+    from .out_of_plane_branches import fe_disc
 
     fine = attractor("FE P3:16", alpha, 10.0)
-    got = cycle_verdict(
-        model_for(_disc_from_spec("FE P3:16"), alpha, 10.0), fine.cycle, fine.cycle.stable
-    )
+    got = cycle_verdict(model_for(fe_disc("FE P3:16"), alpha, 10.0), fine.cycle, fine.cycle.stable)
     p10 = oop.at(10.0)
     mine = p10["max_oop"] if p10 else float("nan")
     d = abs(got["max_nontrivial_out_of_plane_multiplier"] - mine)

@@ -25,8 +25,9 @@ from pathlib import Path
 from fempipe.analyses.periodic import cycle_diagram
 from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
 from fempipe.analyses.periodic.results import CyclePoint
+from fempipe.model.discretization import parse_discretization
 
-from .dynamic_runs import FIRST_DS, ContinuedDiagram, _continued, _disc_from_spec, model_for
+from .dynamic_runs import FIRST_DS, ContinuedDiagram, continued_from, model_for
 
 __all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts", "caption_text"]
 
@@ -109,15 +110,22 @@ def continued_with_verdicts(
     return _cached(label, float(alpha), tuple(sorted(float(v) for v in values)), bool(quick))
 
 
+def fe_disc(label: str):
+    """The FE discretization of a label ``FE P3:8``."""
+    if not label.startswith("FE "):
+        raise ValueError(f"an FE label expected (FE Pk:n), got {label!r}")
+    return parse_discretization(fe=label[3:])
+
+
 @functools.lru_cache(maxsize=8)
 def _cached(label: str, alpha: float, values: tuple, quick: bool):
     t0 = time.process_time()
-    disc = _disc_from_spec(label)
+    disc = fe_disc(label)
     select = AtVelocities((10.0,)) if quick else Spread(N_FULL, (10.0,))
     model = model_for(disc, alpha, values[0])
     with tempfile.TemporaryDirectory(prefix="fempipe-validate-3d-") as tmp:
         dg = cycle_diagram(model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select)
-        diag = _continued(label, alpha, values, disc, dg, Path(tmp), t0)
+        diag = continued_from(label, alpha, values, disc, dg, Path(tmp), t0)
         t1 = time.process_time()
         checked = [
             _summary(d)

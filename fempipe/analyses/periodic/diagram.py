@@ -206,7 +206,8 @@ def _alpha_task(
 def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) -> None:
     """``stable_out_of_plane`` and ``stable_3d`` of the static points (in place; kept in
     the store beside the static branch)."""
-    from .hopf import _static_states
+    from fempipe.analyses.statics import solve_path
+
     from .out_of_plane import VerdictStore, equilibrium_verdict
 
     store = VerdictStore(directory / f"a{alpha_index:02d}-static-3d.json")
@@ -215,7 +216,10 @@ def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) 
         got = store.get(i, d["v"])
         if got is None:
             if states is None:
-                states = _static_states(model, values, v_start)
+                # The primary branch's states as static_points follows them: from v_start.
+                vals = sorted({float(v_start), *(float(v) for v in values)})
+                sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
+                states = {v: s.q for v, s in zip(vals, sols, strict=True)}
             m = model.with_params(replace(model.params, v=d["v"]))
             got = equilibrium_verdict(m, states[d["v"]], d["stable"])
             store.put(i, d["v"], got)
