@@ -235,7 +235,7 @@ def run(quick: bool = False) -> CaseResult:
                 verdict_rows("0", oop) + ([fine_oop] if fine_oop else []), changes, quick
             ),
         ),
-        findings=(survival_text("0", oop) + (f" ({'; '.join(changes)})" if changes else "") + ".",),
+        findings=(survival_text("0", oop) + ".",),
         data={
             "sweeps": sweeps,
             "diagrams": diags,

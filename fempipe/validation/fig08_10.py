@@ -153,9 +153,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         oop_rows += verdict_rows(inc.name, inc.oop)
         found = change_texts(inc.name, inc.oop)
         changes += found
-        findings.append(
-            survival_text(inc.name, inc.oop) + (f" ({'; '.join(found)})" if found else "") + "."
-        )
+        findings.append(survival_text(inc.name, inc.oop) + ".")
         panels[inc.name] = {
             "out_of_plane": inc.oop,
             "alpha": alpha,

@@ -193,9 +193,14 @@ def _changes(model, name: str, states: list, checked: list, locate: bool) -> lis
 
 
 def neutral_deviation(branches: OutOfPlaneBranches) -> float:
-    """max |ρ_neutral - 1| over the checked orbits (sin alpha = 0; nan elsewhere)."""
-    d = [abs(p["neutral"] - 1.0) for p in branches.checked if p["neutral"] is not None]
-    return float(max(d)) if d else float("nan")
+    """|ρ_neutral - 1| of the paper's cycle at v = 10 (sin alpha = 0; nan elsewhere).
+
+    At v = 10 the other multipliers are far from 1; near a crossing of |ρ| = 1 the
+    neutral one and the crossing one are nearly degenerate and the mesh error
+    of either is magnified (P3:8, α = π: 2.9e-3 along the branch, 6.1e-4 at v = 10).
+    """
+    p = branches.at(10.0)
+    return float("nan") if p is None or p["neutral"] is None else float(abs(p["neutral"] - 1.0))
 
 
 def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
@@ -209,36 +214,65 @@ def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
     return float(max(d)) if d else float("nan")
 
 
-def survival_text(name: str, br: OutOfPlaneBranches) -> str:
-    """One sentence: which orbits of the diagram at alpha = ``name`` survive in 3-D."""
-    stable = [p for p in br.checked if p["stable"]]
-    if not stable:
-        return f"α = {name}: no stable planar orbit was checked"
-    v_lo, v_hi = min(p["v"] for p in stable), max(p["v"] for p in stable)
-    span = f"at v = {v_lo:.4g}" if v_lo == v_hi else f"v = {v_lo:.4g} to {v_hi:.4g}"
-    bad = [p for p in stable if p["stable_3d"] is False]
-    if not bad:
-        return (
-            f"α = {name}: every planar limit cycle checked on the stable branch ({span}) is "
-            "stable in 3-D (largest out-of-plane |ρ| "
-            f"{max(p['max_oop'] for p in stable):.4f})"
-        )
-    first = min(p["v"] for p in bad)
-    loss = [c for c in br.changes if c["direction"] == "loses"]
-    where = ""
-    if loss:
-        c = min(loss, key=lambda c: c["bracket"][0])
-        where = (
-            f"; it leaves the plane from v = {c['v']:.4f} (located)"
-            if c["v"] is not None
-            else f"; the crossing lies between v = {c['bracket'][0]:.4g} and {c['bracket'][1]:.4g}"
-        )
-    worst = max(bad, key=lambda p: p["max_oop"])
-    return (
-        f"α = {name}: the planar limit cycles are unstable in 3-D from v = {first:.4g} on "
-        f"the checked orbits (largest out-of-plane |ρ| {worst['max_oop']:.4f} at v = "
-        f"{worst['v']:.4g}){where}"
+def stretches(br: OutOfPlaneBranches, branch: str) -> list[tuple[float, float, bool]]:
+    """The stretches of a branch's checked orbits (stable in the plane) with one 3-D
+    verdict, ``(v_from, v_to, stable_3d)`` in branch order; a boundary is the located
+    crossing, or ``nan`` when not located."""
+    pts = sorted(
+        (p for p in br.checked if p["branch"] == branch and p["stable"]), key=lambda p: p["index"]
     )
+    if not pts:
+        return []
+    cross = {tuple(c["bracket"]): c["v"] for c in br.changes if c["branch"] == branch}
+    out = []
+    start, ok = pts[0]["v"], pts[0]["max_oop"] < 1.0
+    for a, b in zip(pts, pts[1:], strict=False):
+        if (b["max_oop"] < 1.0) != ok:
+            v_c = cross.get(tuple(sorted([a["v"], b["v"]])))
+            v_c = float("nan") if v_c is None else v_c
+            out.append((start, v_c, ok))
+            start, ok = v_c, not ok
+    out.append((start, pts[-1]["v"], ok))
+    return out
+
+
+def survival_text(name: str, br: OutOfPlaneBranches) -> str:
+    """One sentence: which planar limit cycles of the diagram at alpha = ``name`` (stable in
+    the plane) survive in 3-D, by stretches of v, and the verdict at v = 10."""
+    parts = []
+    for branch in sorted({p["branch"] for p in br.checked}):
+        st = stretches(br, branch)
+        if not st:
+            continue
+        if len(st) == 1:
+            a, b, ok = st[0]
+            parts.append(
+                f"{branch}: all checked ({a:.4g} ≤ v ≤ {b:.4g}) are "
+                + ("stable in 3-D" if ok else "unstable in 3-D")
+            )
+            continue
+        words = [
+            f"{'stable' if ok else 'unstable'} for {_num(a)} ≤ v ≤ {_num(b)}" for a, b, ok in st
+        ]
+        parts.append(f"{branch}: " + ", ".join(words))
+    if not parts:
+        return f"α = {name}: no planar limit cycle stable in the plane was checked in 3-D"
+    text = f"α = {name}: the planar limit cycles in 3-D — " + "; ".join(parts)
+    p10 = br.at(10.0)
+    if p10 is not None:
+        text += (
+            f"; the paper's cycle at v = 10 is {'stable' if p10['stable_3d'] else 'UNSTABLE'} "
+            f"in 3-D (largest out-of-plane |ρ| {p10['max_oop']:.4f}, {br.label})"
+        )
+    if any(c["v"] is not None for c in br.changes):
+        text += " (the crossings located by regula falsi on the multiplier)"
+    elif br.changes:
+        text += " (the crossings, ?, not located: between the checked orbits)"
+    return text
+
+
+def _num(v: float) -> str:
+    return "?" if v != v else f"{v:.4g}"
 
 
 def unstable_runs(br: OutOfPlaneBranches, diag: ContinuedDiagram) -> list[list]:
@@ -317,17 +351,33 @@ def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
 
 
 def add_legend_entry(ax) -> None:
-    """The legend of a panel with the entry of :func:`marks` added."""
+    """The legend of a panel with the entries of :func:`marks` added, below the axes
+    (inside them it would cover the branches)."""
     from matplotlib.lines import Line2D
 
     leg = ax.get_legend()
     handles = list(leg.legend_handles) if leg is not None else []
-    handles.append(
-        Line2D(
-            [], [], lw=6, color="tab:red", alpha=0.3, label="stable planar orbit, unstable in 3-D"
-        )
+    band = Line2D(
+        [], [], lw=6, color="tab:red", alpha=0.3, label="stable in plane, unstable in 3-D"
     )
-    ax.legend(handles=handles, fontsize=9)
+    tri = Line2D(
+        [],
+        [],
+        ls="",
+        marker="v",
+        ms=7,
+        color="tab:red",
+        mfc="none",
+        label="checked: unstable in 3-D",
+    )
+    ax.legend(
+        handles=[*handles, band, tri],
+        fontsize=8,
+        ncol=3,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.16),
+        frameon=False,
+    )
 
 
 #: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
@@ -363,12 +413,13 @@ def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) 
             source=_SOURCE,
         )
     ]
-    if not quick and any(p["neutral"] is not None for p in br.checked):
+    p10 = br.at(10.0)
+    if not quick and p10 is not None and p10["neutral"] is not None:
         checks.append(
             below(
                 f"neutral_oop{suffix}",
                 f"α = {name}, {br.label}: the out-of-plane multiplier of the rotation about "
-                "the vertical is 1 (axisymmetric pipe)",
+                "the vertical is 1 (axisymmetric pipe; the cycle at v = 10)",
                 neutral_deviation(br),
                 NEUTRAL_TOL,
                 why="symmetry: a planar orbit turned about the vertical is an orbit, so that "
