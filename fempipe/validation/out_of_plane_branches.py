@@ -246,10 +246,12 @@ def survival_text(name: str, br: OutOfPlaneBranches) -> str:
             continue
         if len(st) == 1:
             a, b, ok = st[0]
-            parts.append(
-                f"{branch}: all checked ({a:.4g} ≤ v ≤ {b:.4g}) are "
-                + ("stable in 3-D" if ok else "unstable in 3-D")
+            which = (
+                f"the one checked (v = {a:.4g}) is"
+                if a == b
+                else (f"all checked ({a:.4g} ≤ v ≤ {b:.4g}) are")
             )
+            parts.append(f"{branch}: {which} " + ("stable in 3-D" if ok else "unstable in 3-D"))
             continue
         words = [
             f"{'stable' if ok else 'unstable'} for {_num(a)} ≤ v ≤ {_num(b)}" for a, b, ok in st
