@@ -52,3 +52,157 @@ def test_planar_simulate_says_whether_its_cycle_survives_in_3d(capsys):
     assert r["stable_3d"] == (r["max_nontrivial_out_of_plane_multiplier"] < 1 and in_plane)
     assert main(args + ["--planar"]) == 0
     assert "stable_3d" not in json.loads(capsys.readouterr().out)
+
+
+# --- bifurcation: which planar states survive in 3-D, and the 3-D sweep -------------
+
+PLANAR_CHEAP = ["--fe", "P2:2", "--quiet", "--json"]
+
+
+@pytest.fixture
+def fake_floquet(monkeypatch):
+    """The out-of-plane monodromy replaced by a stand-in (its multiplier v - 5.6, so that
+    it crosses 1 at v = 6.6), counting its calls: the plumbing without the ~2 s per orbit."""
+    import fempipe.analyses.periodic.out_of_plane as oop
+    from fempipe.analyses.space import OutOfPlaneFloquet
+
+    calls = []
+
+    def fake(model, cycle, rtol=1e-7):
+        calls.append(model.params.v)
+        rho = model.params.v - 5.6
+        mu = np.array([rho, 0.1], dtype=complex)
+        return OutOfPlaneFloquet(
+            multipliers=mu,
+            planar_multipliers=np.asarray(cycle.floquet_multipliers),
+            axisymmetric=False,
+            trivial=None,
+            max_nontrivial=abs(rho),
+            stable=abs(rho) < 1,
+            gauge_largest=0.0,
+            steps=0,
+            cpu_time=0.0,
+        )
+
+    monkeypatch.setattr(oop, "out_of_plane_floquet", fake)
+    return calls
+
+
+def test_bifurcation_keeps_the_3d_verdicts_with_its_points(tmp_path, capsys, fake_floquet):
+    """Continuation: every orbit gains its out-of-plane multipliers and stable_3d (stable
+    in the plane and out of it), every equilibrium its out-of-plane verdict; they are
+    kept in the point store (a rerun computes none) and --planar leaves them out."""
+    out = tmp_path / "bif"
+    argv = ["bifurcation", "--alpha", "0", "--v", "6,7", *PLANAR_CHEAP, "--out", str(out)]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    cycles = [p for p in d["points"] if p["attractor"] == "periodic"]
+    static = [p for p in d["points"] if p["attractor"] == "equilibrium"]
+    assert cycles and static
+    assert len(fake_floquet) == len(cycles)  # every orbit, stable or not
+    for p in cycles:
+        mu = p["max_nontrivial_out_of_plane_multiplier"]
+        assert mu == pytest.approx(abs(p["v"] - 5.6))
+        assert p["out_of_plane_floquet_multipliers"][0] == [pytest.approx(p["v"] - 5.6), 0.0]
+        assert p["stable_out_of_plane"] == (mu < 1)
+        assert p["stable_3d"] == (p["stable"] and mu < 1)
+    assert {p["stable_3d"] for p in cycles} == {True, False}
+    for p in static:
+        # alpha = 0: the pipe hangs straight, and a straight pipe has the same spectrum in
+        # every plane through its axis (symmetry): the out-of-plane verdict is the planar one.
+        assert p["stable_out_of_plane"] == p["stable"]
+        assert p["stable_3d"] == p["stable"]
+    stored = sorted((out / "points").glob("*-3d.json"))
+    assert len(stored) == 2  # the static branch's and the orbits'
+    mtimes = [f.stat().st_mtime_ns for f in stored]
+    assert main(argv) == 0  # resumes: every verdict from the store
+    again = json.loads(capsys.readouterr().out)
+    assert len(fake_floquet) == len(cycles)
+    assert [f.stat().st_mtime_ns for f in stored] == mtimes
+    assert [p["stable_3d"] for p in again["points"]] == [p["stable_3d"] for p in d["points"]]
+    assert main(["bifurcation", "--alpha", "0", "--v", "6,7", *PLANAR_CHEAP, "--planar"]) == 0
+    planar = json.loads(capsys.readouterr().out)
+    assert not any("stable_3d" in p for p in planar["points"])
+    from fempipe.cli.bifurcation import _print_table
+
+    _print_table(d)  # the plain table gains the column
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[-1] == "3d"
+    row = {True: "yes", False: "no"}
+    assert [ln.split()[-1] for ln in lines[1 : 1 + len(d["points"])]] == [
+        row[p["stable_3d"]] for p in d["points"]
+    ]
+
+
+def test_bifurcation_sweep_reports_stable_3d_of_its_attractors(tmp_path, capsys, fake_floquet):
+    """Sweep: the periodic attractor's verdict from its out-of-plane multipliers, the
+    equilibrium's from the out-of-plane spectrum; a planar run's store gains them on
+    a rerun without --planar."""
+    out = tmp_path / "sw"
+    argv = ["bifurcation", "--method", "sweep", "--alpha", "0", "--v", "5,7", "--directions"]
+    argv += ["up", *PLANAR_CHEAP, "--out", str(out)]
+    assert main([*argv, "--planar"]) == 0
+    assert "stable_3d" not in json.loads(capsys.readouterr().out)["points"][1]
+    assert main(argv) == 0
+    eq, cyc = json.loads(capsys.readouterr().out)["points"]
+    assert eq["attractor"] == "equilibrium" and cyc["attractor"] == "periodic"
+    assert eq["stable_3d"] is True  # the straight hanging pipe below flutter, in any plane
+    assert cyc["max_nontrivial_out_of_plane_multiplier"] == pytest.approx(7 - 5.6)
+    assert cyc["stable_3d"] is False
+    assert fake_floquet == [7.0]
+
+
+@pytest.mark.slow
+def test_bifurcation_3d_verdicts_agree_with_the_planar_monodromy(capsys):
+    """The real out-of-plane monodromy: its planar block is the planar orbit's monodromy
+    (the same equations integrated on the 3-D model), so the largest non-trivial
+    multipliers agree.  (The neutral multiplier of the rotation about the vertical is
+    not resolved on P2:2, 0.98 + 0.01i; the validation case fig07 checks it on P3:8.)"""
+    argv = ["bifurcation", "--alpha", "0", "--v", "6,7", *PLANAR_CHEAP]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    cycles = [p for p in d["points"] if p["attractor"] == "periodic"]
+    for p in cycles:
+        assert p["planar_block_max_multiplier"] == pytest.approx(p["max_multiplier"], abs=1e-3)
+        assert p["stable_3d"] == (p["stable"] and p["max_nontrivial_out_of_plane_multiplier"] < 1)
+
+
+def test_bifurcation_3d_writes_points_diagrams_and_resumes(tmp_path, capsys):
+    out = tmp_path / "b3"
+    argv = ["bifurcation", "--3d", "--method", "sweep", "--alpha", "1.2", "--v", "3,4"]
+    argv += ["--fe", "P3:3", "--t-max", "0.3", "--quiet", "--json", "--out", str(out)]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["model"] == "3d" and len(d["points"]) == 4  # up and down
+    for p in d["points"]:
+        assert p["direction"] in ("up", "down")
+        assert p["motion"] in ("planar", "nonplanar")
+        assert p["attractor"] in ("equilibrium", "periodic", "whirl", "non-periodic")
+        for k in ("eta_tip", "X_tip", "Z_tip", "Y_tip"):
+            assert len(p[k]) == 2 and p[k][0] <= p[k][1]
+        assert {"period", "whirl_rate", "started"} <= set(p)
+    assert [p["v"] for p in d["points"]] == [3.0, 4.0, 4.0, 3.0]
+    for name in ("Y_tip.png", "eta_tip.png", "X_tip.png", "Z_tip.png", "bifurcation.json"):
+        assert (out / name).stat().st_size > 0
+    stored = sorted((out / "points").glob("space-*.json"))
+    assert len(stored) == 4
+    mtimes = [f.stat().st_mtime_ns for f in stored]
+    assert main(argv) == 0  # resumes: nothing recomputed, the same points
+    again = json.loads(capsys.readouterr().out)
+    assert [f.stat().st_mtime_ns for f in stored] == mtimes
+    assert again["points"] == d["points"]
+
+
+@pytest.mark.parametrize(
+    "extra, option",
+    [
+        (["--method", "continuation"], "--method"),
+        (["--planar"], "--planar"),
+        (["--alphas", "0,1"], "--alphas"),
+        (["--workers", "2"], "--workers"),
+    ],
+)
+def test_bifurcation_3d_refuses_options_without_meaning_in_3d(capsys, extra, option):
+    code = main(["bifurcation", "--3d", "--fe", "P3:3", "--v", "3,4", *extra])
+    err = capsys.readouterr().err
+    assert code != 0 and option in err

@@ -339,7 +339,17 @@ def test_bifurcation_command_figures_have_one_legend_below_the_panels(method, ca
 
     from fempipe.cli.bifurcation import diagram_figure
 
-    argv = ["bifurcation", "--modal", "2", "--alphas", "0,pi/2", "--v", "6,7.5", "--json"]
+    argv = [
+        "bifurcation",
+        "--modal",
+        "2",
+        "--alphas",
+        "0,pi/2",
+        "--v",
+        "6,7.5",
+        "--json",
+        "--planar",
+    ]
     result = run_json(capsys, [*argv, "--method", method, "--quiet"])
     for key in ("eta_tip", "X_tip", "Z_tip"):
         fig = diagram_figure(result, key)

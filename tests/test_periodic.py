@@ -37,7 +37,7 @@ from fempipe.model.params import Params
 # P2:4 flutters at v_H = 6.3398 (alpha = 0); the requested values straddle it, and
 # 6.345 lies between v_H and the first orbit of the continuation (a step passes it).
 VALUES = "6.0,6.345,6.65,6.95"
-ARGV = ["bifurcation", "--fe", "P2:4", "--v", VALUES, "--json", "--quiet"]
+ARGV = ["bifurcation", "--fe", "P2:4", "--v", VALUES, "--json", "--quiet", "--planar"]
 
 
 @pytest.fixture(scope="module")
@@ -178,7 +178,18 @@ def test_hopf_points_carry_the_equilibrium_where_the_branch_starts(run, capsys):
     d, _ = run
     (h,) = d["hopf_points"]
     assert (h["eta_tip"], h["X_tip"], h["Z_tip"]) == ([0.0, 0.0], [1.0, 1.0], [0.0, 0.0])
-    argv = ["bifurcation", "--modal", "2", "--alphas", "pi/2", "--v", "6,7", "--json", "--quiet"]
+    argv = [
+        "bifurcation",
+        "--modal",
+        "2",
+        "--alphas",
+        "pi/2",
+        "--v",
+        "6,7",
+        "--json",
+        "--quiet",
+        "--planar",
+    ]
     (h,) = run_json(capsys, argv)["hopf_points"]
     assert 6.0 < h["v"] < 7.0
     disc = parse_discretization(modal=2)
@@ -292,7 +303,7 @@ def test_special_points_are_detected_and_located():
 def test_fig07_default_discretization_agrees_with_the_sweep(capsys):
     """P3:16, alpha = 0, v = 5:12:36: every stable orbit of the continuation
     agrees with the sweep up to 1e-6 in the period and the tip extrema."""
-    argv = ["bifurcation", "--v", "5:12:36", "--json", "--quiet"]
+    argv = ["bifurcation", "--v", "5:12:36", "--json", "--quiet", "--planar"]
     cont = run_json(capsys, argv)
     sweep = run_json(capsys, [*argv, "--method", "sweep", "--directions", "up"])
     cyc = {round(p["v"], 9): p for p in _cycles(cont) if p["stable"]}

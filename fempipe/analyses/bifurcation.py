@@ -84,6 +84,10 @@ class BifurcationPoint:
     wall_time : float
     q, qdot : ndarray
         The state the point ended on (start of the next point).
+    three_d : dict or None
+        The 3-D verdict (a sweep with ``out_of_plane``): ``stable_3d`` and the
+        out-of-plane evidence (:func:`_three_d_verdict`); its keys join the
+        point's in :meth:`to_dict`.
     """
 
     v: float
@@ -102,6 +106,7 @@ class BifurcationPoint:
     wall_time: float
     q: np.ndarray = field(repr=False)
     qdot: np.ndarray = field(repr=False)
+    three_d: dict | None = None
 
     def to_dict(self, state: bool = False) -> dict:
         """Plain-JSON form; with ``state`` also q and qdot (as the point store keeps them)."""
@@ -121,7 +126,10 @@ class BifurcationPoint:
             "rejected_steps": self.rejected_steps,
             "wall_time": self.wall_time,
         }
+        if self.three_d is not None:
+            d.update(self.three_d)
         if state:
+            d["three_d"] = self.three_d
             # repr-exact floats: a resumed sweep restarts from exactly this state.
             d["q"] = [float(x) for x in self.q]
             d["qdot"] = [float(x) for x in self.qdot]
@@ -130,8 +138,13 @@ class BifurcationPoint:
     @classmethod
     def from_dict(cls, d: dict) -> BifurcationPoint:
         """Inverse of ``to_dict(state=True)``."""
-        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot")}
-        return cls(**kw, q=np.asarray(d["q"], dtype=float), qdot=np.asarray(d["qdot"], dtype=float))
+        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot", "three_d")}
+        return cls(
+            **kw,
+            q=np.asarray(d["q"], dtype=float),
+            qdot=np.asarray(d["qdot"], dtype=float),
+            three_d=d.get("three_d"),
+        )
 
 
 class PointStore:
@@ -209,6 +222,7 @@ def sweep(
     alpha_index: int = 0,
     progress: Callable[[BifurcationPoint], None] | None = None,
     continue_cycles: bool = True,
+    out_of_plane: bool = False,
     **attractor_options,
 ) -> list[BifurcationPoint]:
     """Sweep the flow velocity, each point starting from the previous attractor.
@@ -237,6 +251,11 @@ def sweep(
         orbit, no transient); accepted only if Newton converges to a stable
         cycle of non-zero amplitude, else the point falls back to
         :func:`~fempipe.analyses.limit_cycle.find_attractor` from the same state.
+    out_of_plane : bool
+        Also decide whether each attractor survives in 3-D (:func:`_three_d_verdict`:
+        the out-of-plane Floquet multipliers of a cycle, the out-of-plane
+        spectrum of an equilibrium), stored with the point; a stored point
+        without it gains it on a rerun.
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor` (``t_max``,
         ``rtol``, ``shoot_rtol`` ...).
@@ -261,6 +280,9 @@ def sweep(
     for i, v in enumerate(vals):
         m = model.with_params(model.params.with_flow(v))
         old = None if store is None else _stored_point(store, alpha_index, direction, i, v)
+        if old is not None and out_of_plane and old.three_d is None:
+            old = replace(old, three_d=_three_d_verdict(m, old))
+            store.save(alpha_index, old)
         if old is not None:
             points.append(old)
             q, p = old.q, old.qdot
@@ -281,6 +303,8 @@ def sweep(
         if att is None:
             att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
         point = _new_point(att, m, direction, i, v, t0)
+        if out_of_plane:
+            point = replace(point, three_d=_three_d_verdict(m, point, att.cycle))
         if store is not None:
             store.save(alpha_index, point)
         points.append(point)
@@ -290,6 +314,47 @@ def sweep(
         if progress is not None:
             progress(point)
     return points
+
+
+def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
+    """``stable_3d`` of a sweep's attractor and its out-of-plane evidence.
+
+    A periodic attractor: its out-of-plane Floquet multipliers
+    (:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`; the orbit from
+    ``cycle``, or a stored point's state and period); an equilibrium: the
+    out-of-plane spectrum (an attractor is stable in the plane); a
+    non-periodic attractor: ``stable_3d`` None.
+    """
+    from fempipe.analyses.periodic.out_of_plane import cycle_verdict, equilibrium_verdict
+    from fempipe.core.errors import SolverError
+
+    from .limit_cycle import LimitCycle
+
+    if point.attractor == "equilibrium":
+        return equilibrium_verdict(m, point.q, True)
+    if point.attractor != "periodic" or point.period is None:
+        return {"stable_3d": None}
+    if cycle is None:
+        empty = np.zeros(0)
+        cycle = LimitCycle(
+            period=float(point.period),
+            q0=point.q,
+            qdot0=point.qdot,
+            level=math.nan,
+            tip={},
+            floquet_multipliers=np.zeros(0, complex),
+            stable=True,
+            iterations=0,
+            residual=0.0,
+            orbit_t=empty,
+            orbit_q=empty,
+            orbit_qdot=empty,
+        )
+    stable = point.max_multiplier is None or point.max_multiplier < 1.0
+    try:
+        return cycle_verdict(m, cycle, stable)
+    except SolverError as exc:
+        return {"stable_3d": None, "out_of_plane_error": str(exc)}
 
 
 def _start_state(m: PipeModel, q, p, previous_equilibrium: bool, perturbation: float):
@@ -403,6 +468,7 @@ def _sweep_task(
     manifest: dict,
     options: dict,
     on_point: Callable[[BifurcationPoint], None] | None = None,
+    out_of_plane: bool = False,
 ) -> list[dict]:
     """One independent sweep (in a worker, or in this process with ``on_point``).
 
@@ -411,7 +477,14 @@ def _sweep_task(
     """
     store = PointStore(store_dir, manifest)
     pts = sweep(
-        model, values, direction, store=store, alpha_index=alpha_index, progress=on_point, **options
+        model,
+        values,
+        direction,
+        store=store,
+        alpha_index=alpha_index,
+        progress=on_point,
+        out_of_plane=out_of_plane,
+        **options,
     )
     return [pt.to_dict(state=False) for pt in pts]
 
@@ -468,6 +541,7 @@ def bifurcation_diagram(
     executor: Executor | None = None,
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    out_of_plane: bool = False,
     **attractor_options,
 ) -> BifurcationDiagram:
     """Sweeps up and/or down (for one or several alpha), in parallel.
@@ -493,6 +567,9 @@ def bifurcation_diagram(
     progress : callable, optional
         Called as ``progress(done, total)`` when points finish (or are loaded
         from the store).
+    out_of_plane : bool
+        Each point's 3-D verdict (:func:`sweep`); not part of the store's
+        manifest, so that a planar run's store is resumed, adding it.
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
@@ -538,6 +615,7 @@ def bifurcation_diagram(
                 manifest,
                 dict(attractor_options),
                 counter.on_point if in_process else None,
+                out_of_plane,
             )
             for ia, a, d in sweeps
         ]

@@ -20,6 +20,18 @@ inclinations given with ``--alphas``) are independent and run in parallel on
 ``--workers N`` local processes or on a Dask cluster (``--dask tcp://host:port``,
 needs the optional extra ``fempipe[dask]``).
 
+Whether each planar state survives in three dimensions (as ``simulate``
+reports it; ``--planar`` leaves it out): every periodic point (the continued
+orbits, stable and unstable, and the sweep's periodic attractors) gains
+``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``, of the
+out-of-plane perturbations, :func:`fempipe.analyses.space.out_of_plane_floquet`),
+``max_nontrivial_out_of_plane_multiplier`` (at alpha = 0 and pi the neutral
+rotation about the vertical left out), ``stable_out_of_plane`` and
+``stable_3d`` (stable in the plane and out of it); an equilibrium
+``stable_out_of_plane`` and ``stable_3d`` from its out-of-plane spectrum.  The
+verdicts are kept in the point store with their points.  ``--3d`` sweeps the
+attractors of the 3-D model instead (:mod:`fempipe.cli.bifurcation_space`).
+
 ``--json`` prints ``{"points": [{"v", "direction", "attractor", "eta_tip":
 [min, max], "X_tip": [...], "Z_tip": [...], "period"}, ...]}``.  ``--out DIR``
 writes bifurcation.json, the diagrams eta_tip.png, X_tip.png and Z_tip.png
@@ -46,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--method",
         choices=("continuation", "sweep"),
-        default="continuation",
+        default=None,
         help="continuation of equilibria and periodic orbits (stable and unstable; default) "
         "or sweeps of attractors up and down (the independent check)",
     )
@@ -90,6 +102,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="run the sweeps on a Dask cluster, e.g. tcp://127.0.0.1:8786 (needs fempipe[dask]; "
         "the --out directory must be visible to the workers)",
     )
+    three = parser.add_argument_group("three dimensions")
+    common.add_planar_argument(
+        three,
+        "no out-of-plane Floquet multipliers and no stable_3d; a cycle point costs about 5x less",
+    )
+    three.add_argument(
+        "--3d",
+        dest="three_d",
+        action="store_true",
+        help="sweep the attractors of the 3-D model instead (fempipe.cli.bifurcation_space: "
+        "motion, Y_tip, whirl_rate against v)",
+    )
+    three.add_argument(
+        "--out-of-plane-amplitude",
+        metavar="A",
+        type=parsing.number_type("--out-of-plane-amplitude", 0.0, 1.0),
+        default="0.01",
+        help="with --3d: out-of-plane rotation in rad (first sine mode) added to the first "
+        "point's start and to every point that starts from an equilibrium (0.01)",
+    )
     common.add_output_arguments(parser)
 
 
@@ -124,6 +156,12 @@ def run(args: argparse.Namespace) -> int:
 
     common.refuse_hysteretic(args, "bifurcation")
     setup = common.setup_from_args(args)
+    if args.three_d:
+        from fempipe.cli.bifurcation_space import run_3d
+
+        return run_3d(args, setup)
+    if args.method is None:  # None: not given (--3d refuses an explicit continuation)
+        args.method = "continuation"
     directions, alphas, workers = _parse(args)
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
     large = parsing.allow_large(args)
@@ -176,6 +214,7 @@ def run(args: argparse.Namespace) -> int:
                     executor=executor,
                     workers=workers if executor is None else None,
                     progress=on_progress,
+                    out_of_plane=not args.planar,
                     t_max=t_max,
                     rtol=rtol,
                     shoot_rtol=shoot_rtol,
@@ -224,6 +263,7 @@ def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
                 store_dir=store_dir,
                 workers=workers,
                 progress=bar.update,
+                out_of_plane=not args.planar,
                 rtol=args.orbit_rtol,
             )
         except ValueError as exc:
@@ -348,15 +388,17 @@ def _print_table(result: dict) -> None:
     branch's name (``H1``, ...) or the sweep's direction; ``stable``: from the
     eigenvalues or Floquet multipliers (``-`` for a sweep's attractor, which is
     not analysed); ``point``: ``requested`` (a v of ``--v``) or ``step`` (the
-    continuation's own)."""
+    continuation's own); ``3d``: ``stable_3d`` (``-`` where undecided; the
+    column only when the verdicts were computed)."""
+    three = any("stable_3d" in pt for pt in result["points"])
     print(
         f"{'alpha':>8s} {'branch':>6s} {'v':>8s}  {'attractor':<12s} {'stable':<6s} "
         f"{'point':<9s} {'period':>10s} {'eta_min':>9s} {'eta_max':>9s} {'X_min':>9s} "
-        f"{'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}"
+        f"{'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}" + (f" {'3d':<4s}" if three else "")
     )
     for pt in result["points"]:
         per = f"{pt['period']:.6g}" if pt["period"] else "-"
-        stable = {True: "yes", False: "no"}.get(pt.get("stable"), "-")
+        stable = _yes_no(pt.get("stable"))
         point = "requested" if pt.get("requested", True) else "step"
         branch = {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
             pt["direction"], pt["direction"]
@@ -366,8 +408,13 @@ def _print_table(result: dict) -> None:
             f"{stable:<6s} {point:<9s} {per:>10s} {pt['eta_tip'][0]:9.5f} "
             f"{pt['eta_tip'][1]:9.5f} {pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} "
             f"{pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
+            + (f" {_yes_no(pt.get('stable_3d')):<4s}" if three else "")
         )
     for sp in result.get("special_points", []):
         print(
             f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} v = {sp['v']:.6g}"
         )
+
+
+def _yes_no(flag) -> str:
+    return {True: "yes", False: "no"}.get(flag, "-")

@@ -46,6 +46,7 @@ __all__ = [
     "ContinuedDiagram",
     "DiagramPoint",
     "continued_diagram",
+    "continued_from",
     "sweep_check",
     "checked_attractor",
     "Orbit",
@@ -389,6 +390,14 @@ def _continued_cached(label: str, alpha: float, values: tuple) -> ContinuedDiagr
             model_for(disc, alpha, values[0]), list(values), store_dir=tmp, ds=FIRST_DS
         )
         return _continued(label, alpha, values, disc, dg, Path(tmp), t0)
+
+
+def continued_from(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:
+    """The :class:`ContinuedDiagram` of a :func:`~fempipe.analyses.periodic.cycle_diagram`
+    result ``dg`` whose store ``store`` is still on disk (for a case that continues with
+    options of its own, e.g. the 3-D verdicts of the orbits); ``t0``: process time at
+    its start."""
+    return _continued(label, alpha, values, disc, dg, store, t0)
 
 
 def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:

@@ -36,11 +36,23 @@ from .dynamic_runs import (
     sweep_check,
 )
 from .onset import critical_velocity
+from .out_of_plane_branches import (
+    add_legend_entry,
+    caption_text,
+    change_texts,
+    continued_with_verdicts,
+    leading_text,
+    marks,
+    survival_text,
+    verdict_checks,
+    verdict_rows,
+    verdict_table,
+)
 from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
-    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period. A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?').",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(
@@ -191,26 +203,46 @@ def run(quick: bool = False) -> CaseResult:
     requires = [f"onset_{label_tag(lb)}" for lb in discs] + ["sweep_agreement"]
     requires += [] if quick else ["fe_mesh"]
     fe_label = next(iter(discs))
-    diags = {label: continued_diagram(label, alpha, values) for label in discs}
+    # The FE diagram with the 3-D verdicts of its orbits (out_of_plane_branches).
+    fe_diag, oop = continued_with_verdicts(fe_label, alpha, values, quick)
+    diags = {
+        label: fe_diag if label == fe_label else continued_diagram(label, alpha, values)
+        for label in discs
+    }
+    requires += ["planar_block"] + ([] if quick else ["neutral_oop"])
     # What a sweep up from the sagged state ends on at each v (the stable state).
     sweeps = {label: dg.attractors() for label, dg in diags.items()}
     shape_v = ref.value("shape_v")
     checked = [sweep_check(dg, shape_v) for dg in diags.values()]
     checks, onsets = _onsets(discs, alpha, diags)
     checks += _paper_checks(diags, sweeps, checked, onsets, shape_v, fe_label)
+    checks += verdict_checks("", "0", oop, quick)
+    fine_oop = None
     if not quick:  # mesh convergence of the FE amplitude (quick: see the convergence case)
         a10 = eta_amplitude({p.v: p for p in sweeps[fe_label] if p is not None}[10.0])
         checks.append(_mesh_check(alpha, fe_label, a10))
+        mesh_check, fine_oop = _oop_mesh_check(alpha, fe_label, oop)
+        checks.append(mesh_check)
+        requires.append("oop_mesh")
+    changes = change_texts("0", oop)
     return CASE.result(
         checks,
         quick=quick,
         started=t0,
-        tables=(_table(discs, onsets, sweeps),),
+        tables=(
+            _table(discs, onsets, sweeps),
+            verdict_table(
+                verdict_rows("0", oop) + ([fine_oop] if fine_oop else []), changes, quick
+            ),
+        ),
+        findings=(survival_text("0", oop) + ".",),
         data={
             "sweeps": sweeps,
             "diagrams": diags,
             "shapes": _shapes(discs, alpha, shape_v, checked),
             "alpha": alpha,
+            "out_of_plane": oop,
+            "out_of_plane_caption": caption_text(quick),
         },
         requires=requires,
     )
@@ -322,6 +354,47 @@ def _paper_checks(
     return checks
 
 
+def _oop_mesh_check(alpha: float, fe_label: str, oop) -> tuple[Check, tuple]:
+    """The largest out-of-plane multiplier of the FE cycle at v = 10 against that of the
+    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8); returns the check and the P3:16
+    orbit's row of the verdict table."""
+    from fempipe.analyses.periodic.out_of_plane import cycle_verdict
+
+    from .dynamic_runs import model_for
+    from .out_of_plane_branches import fe_disc
+
+    fine = attractor("FE P3:16", alpha, 10.0)
+    got = cycle_verdict(model_for(fe_disc("FE P3:16"), alpha, 10.0), fine.cycle, fine.cycle.stable)
+    p10 = oop.at(10.0)
+    mine = p10["max_oop"] if p10 else float("nan")
+    d = abs(got["max_nontrivial_out_of_plane_multiplier"] - mine)
+    check = below(
+        "oop_mesh",
+        f"{fe_label}: the largest out-of-plane multiplier of the cycle at v = 10 equals P3:16's",
+        d,
+        2e-3,
+        why="P3 meshes; both monodromies integrated at rtol 1e-7",
+        source="fempipe, refined mesh (P3:16)",
+    )
+    neutral = got.get("neutral_out_of_plane_multiplier")
+    lead = leading_text(
+        [complex(*z) for z in got["out_of_plane_floquet_multipliers"]],
+        None if neutral is None else complex(*neutral),
+    )
+    row = (
+        "0",
+        "FE P3:16",
+        "(shot)",
+        10.0,
+        "yes" if fine.cycle.stable else "no",
+        fine.cycle.max_nontrivial_multiplier,
+        got["max_nontrivial_out_of_plane_multiplier"],
+        lead,
+        "yes" if got["stable_3d"] else "no",
+    )
+    return check, row
+
+
 def _mesh_check(alpha: float, fe_label: str, a10: float) -> Check:
     """The FE limit-cycle amplitude ``a10`` at v = 10 against the P3:16 cycle."""
     fine = attractor("FE P3:16", alpha, 10.0)
@@ -414,6 +487,10 @@ def plot(result: CaseResult, fig=None):
         strict=True,
     ):
         draw_continued(ax, d["diagrams"], key, lab)
+        if "out_of_plane" in d and marks(
+            ax, d["out_of_plane"], d["diagrams"][d["out_of_plane"].label], key
+        ):
+            add_legend_entry(ax)
         ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])
     axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)

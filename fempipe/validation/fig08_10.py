@@ -30,11 +30,22 @@ from .checks import CaseResult, Check, Table, holds
 from .dynamic_runs import continued_diagram, dyn_discretizations, orbit, sweep_check, sweep_up
 from .fig07 import eta_amplitude, onset_bracket, onset_check, period_one, sweep_agreement
 from .onset import critical_velocity
+from .out_of_plane_branches import (
+    OutOfPlaneBranches,
+    add_legend_entry,
+    change_texts,
+    continued_with_verdicts,
+    marks,
+    survival_text,
+    verdict_checks,
+    verdict_rows,
+    verdict_table,
+)
 from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
-    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
+    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?'). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -88,6 +99,8 @@ class _Inclination:
         :func:`~fempipe.validation.dynamic_runs.sweep_check` of every diagram.
     fe_pts : dict
         The FE sweep's states by v.
+    oop : OutOfPlaneBranches
+        The 3-D verdicts of the FE diagram's orbits.
     """
 
     alpha: float
@@ -101,6 +114,7 @@ class _Inclination:
     check_v: list
     checked: list
     fe_pts: dict
+    oop: OutOfPlaneBranches
 
 
 def run(quick: bool = False, part: int | None = None) -> CaseResult:
@@ -115,6 +129,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         alphas = [alphas[part]]
     discs = dyn_discretizations(quick)
     checks, rows, panels, requires = [], [], {}, []
+    oop_rows, changes, findings = [], [], []
     for alpha in alphas:
         inc = _inclination(alpha, discs, quick)
         requires += _required(inc.name, inc.is_pi, discs) + [f"sweep_agreement_{inc.name}"]
@@ -132,7 +147,15 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         checks += _shape_velocity_checks(inc, discs)
         checks += _attractor_checks(inc, next(iter(discs)))
         rows += _rows(inc, discs, onsets)
+        own = verdict_checks(f"_{inc.name}", inc.name, inc.oop, quick)
+        checks += own
+        requires += [c.name for c in own]
+        oop_rows += verdict_rows(inc.name, inc.oop)
+        found = change_texts(inc.name, inc.oop)
+        changes += found
+        findings.append(survival_text(inc.name, inc.oop) + ".")
         panels[inc.name] = {
+            "out_of_plane": inc.oop,
             "alpha": alpha,
             "sweeps": inc.sweeps,
             "diagrams": inc.diags,
@@ -142,7 +165,8 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         checks,
         quick=quick,
         started=t0,
-        tables=(_table(rows),),
+        tables=(_table(rows), verdict_table(oop_rows, changes, quick)),
+        findings=tuple(findings),
         data={"panels": panels},
         requires=requires,
     )
@@ -161,8 +185,14 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
         if is_pi:
             values |= set(ref.value("v_fine_pi"))
         values = sorted(values)
-    # The static branch and the orbits born at its Hopf points, by continuation.
-    diags = {label: continued_diagram(label, alpha, values) for label in discs}
+    # The static branch and the orbits born at its Hopf points, by continuation
+    # (FE: with the 3-D verdicts of its orbits, out_of_plane_branches).
+    fe_label = next(iter(discs))
+    fe_diag, oop = continued_with_verdicts(fe_label, alpha, values, quick)
+    diags = {
+        label: fe_diag if label == fe_label else continued_diagram(label, alpha, values)
+        for label in discs
+    }
     hopf_v = {lb: dg.hopf[0]["v"] if dg.hopf else float("inf") for lb, dg in diags.items()}
     # What a sweep up from the sagged state ends on at each v.  At alpha = pi
     # the continued static branch is the straight pipe; below the flutter the
@@ -177,7 +207,6 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
             low = {p.v: p for p in sweep_up(d, alpha, pre)} if pre else {}
             att = [low.get(v, p) for v, p in zip(values, att, strict=True)]
         sweeps[label] = att
-    fe_label = next(iter(discs))
     # The independent check by integration at a few v of each diagram (at
     # alpha = pi above the flutter: below it the sweep is the check).
     check_v = list(shape_v)
@@ -196,6 +225,7 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
         check_v=check_v,
         checked=[sweep_check(dg, check_v) for dg in diags.values()],
         fe_pts={p.v: p for p in sweeps[fe_label] if p is not None},
+        oop=oop,
     )
 
 
@@ -531,6 +561,10 @@ def plot(result: CaseResult, fig=None, which: str = "fig09"):
         diag, insets = axes[:n], [None] * n
     for ax, inset, (name, pan) in zip(diag, insets, panels.items(), strict=True):
         draw_continued(ax, pan["diagrams"], key, lab, attractors=pan["sweeps"])
+        if "out_of_plane" in pan and marks(
+            ax, pan["out_of_plane"], pan["diagrams"][pan["out_of_plane"].label], key
+        ):
+            add_legend_entry(ax)
         ax.set_title(f"α = {name}: tip extrema", fontsize=10)
         if inset is not None:
             draw_orbit_shapes(inset, pan["shapes"])

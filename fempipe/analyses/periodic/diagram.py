@@ -102,8 +102,10 @@ def _alpha_task(
     manifest: dict,
     options: dict,
     on_point: Callable[[], None] | None = None,
+    out_of_plane=None,
 ) -> dict:
-    """Static branch, Hopf points and all branches of periodic orbits at one alpha."""
+    """Static branch, Hopf points and all branches of periodic orbits at one alpha
+    (with ``out_of_plane``: their 3-D verdicts, :func:`_add_verdicts`)."""
     from fempipe.analyses.bifurcation import PointStore
 
     store = PointStore(store_dir, manifest)
@@ -123,6 +125,9 @@ def _alpha_task(
             "points": eq_points,
         }
         write_text(static_path, json.dumps(saved))
+    if out_of_plane:
+        v_start = json.loads(static_path.read_text())["v_start"]
+        _static_verdicts(model, values, v_start, eq_points, store.directory, alpha_index)
     if on_point is not None:
         on_point()
     out = {
@@ -186,12 +191,51 @@ def _alpha_task(
             if ends:
                 near = min(ends, key=lambda x: abs(x - br.points[-1].v))
                 covered.append((near, near))
-        out["points"].extend(cycle_point_dict(p, name, i, alpha) for i, p in enumerate(br.points))
+        pts = [cycle_point_dict(p, name, i, alpha) for i, p in enumerate(br.points)]
+        if out_of_plane:
+            where = store.directory / f"a{alpha_index:02d}-{name}-3d.json"
+            _add_verdicts(model, br.points, pts, out_of_plane, where, on_point)
+        out["points"].extend(pts)
         out["branches"].append(dict(br.to_dict(), alpha=alpha))
         out["special_points"].extend(
             dict(s.to_dict(), alpha=alpha, branch=name) for s in br.special_points
         )
     return out
+
+
+def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) -> None:
+    """``stable_out_of_plane`` and ``stable_3d`` of the static points (in place; kept in
+    the store beside the static branch)."""
+    from fempipe.analyses.statics import solve_path
+
+    from .out_of_plane import VerdictStore, equilibrium_verdict
+
+    store = VerdictStore(directory / f"a{alpha_index:02d}-static-3d.json")
+    states = None
+    for i, d in enumerate(eq_points):
+        got = store.get(i, d["v"])
+        if got is None:
+            if states is None:
+                # The primary branch's states as static_points follows them: from v_start.
+                vals = sorted({float(v_start), *(float(v) for v in values)})
+                sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
+                states = {v: s.q for v, s in zip(vals, sols, strict=True)}
+            m = model.with_params(replace(model.params, v=d["v"]))
+            got = equilibrium_verdict(m, states[d["v"]], d["stable"])
+            store.put(i, d["v"], got)
+        d.update(got)
+
+
+def _add_verdicts(model, points, dicts, select, where, on_point) -> None:
+    """The 3-D verdicts of the selected orbits of a branch (``select`` True: all of
+    them, else a callable giving the indices), merged into their dicts; the
+    others get ``stable_3d`` None."""
+    from .out_of_plane import VerdictStore, branch_verdicts
+
+    indices = range(len(points)) if select is True else select(points)
+    verdicts = branch_verdicts(model, points, list(indices), VerdictStore(where), on_point)
+    for i, d in enumerate(dicts):
+        d.update(verdicts.get(i, {"stable_3d": None}))
 
 
 def _manifest(model: PipeModel, values, alphas, options) -> dict:
@@ -217,6 +261,7 @@ def cycle_diagram(
     executor: Executor | None = None,
     workers: int | None = None,
     progress: Callable[[], None] | None = None,
+    out_of_plane=None,
     **options,
 ) -> CycleDiagram:
     """Bifurcation diagram by continuation (Figs. 7-10): equilibria and periodic orbits.
@@ -243,6 +288,17 @@ def cycle_diagram(
         Run the alphas in parallel (as :func:`fempipe.analyses.bifurcation.bifurcation_diagram`).
     progress : callable, optional
         Called (in this process) whenever a point is finished.
+    out_of_plane : bool or callable, optional
+        Also decide which states survive in 3-D
+        (:mod:`fempipe.analyses.periodic.out_of_plane`): the static points gain
+        ``stable_out_of_plane`` and ``stable_3d``, the orbits (all with True, or
+        the indices a callable such as
+        :class:`~fempipe.analyses.periodic.out_of_plane.EveryKth` picks from a
+        branch's points) ``out_of_plane_floquet_multipliers``,
+        ``max_nontrivial_out_of_plane_multiplier``, ``stable_out_of_plane``,
+        ``stable_3d`` (None where not computed) and ``out_of_plane_cpu_time``.
+        The verdicts are kept in the store beside their branch (not part of
+        the run's manifest: a planar run's store is resumed, adding them).
     **options
         Passed to :func:`continue_cycles` (``rtol``, ``tol``, ``ds``, ``ds_max`` ...).
 
@@ -280,6 +336,7 @@ def cycle_diagram(
                 manifest,
                 dict(options),
                 progress if in_process else None,
+                out_of_plane,
             )
             for ia, a in enumerate(alphas)
         ]

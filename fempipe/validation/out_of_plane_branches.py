@@ -1,0 +1,507 @@
+"""Which planar orbits of Figs. 7-10 survive in three dimensions.
+
+The paper's post-flutter motions are planar limit cycles.  A round pipe may
+leave the plane, so each is checked on the 3-D model: its out-of-plane Floquet
+multipliers (:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`).  The
+FE diagram of a case is continued once, with the 3-D verdicts of a subset of
+each branch's orbits (:class:`~fempipe.analyses.periodic.out_of_plane.Spread`:
+about :data:`N_FULL` orbits spread along the branch, the last one and the
+orbit at v = 10; in the quick suite only v = 10), and where the largest
+non-trivial out-of-plane multiplier crosses 1 between two of them, the
+crossing is located by regula falsi on the multiplier
+(:func:`~fempipe.analyses.periodic.out_of_plane.locate_change`; full suite
+only, the quick suite gives the bracket).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from fempipe.analyses.periodic import cycle_diagram
+from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
+from fempipe.analyses.periodic.results import CyclePoint
+from fempipe.model.discretization import parse_discretization
+
+from .dynamic_runs import FIRST_DS, ContinuedDiagram, continued_from, model_for
+
+__all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts", "caption_text"]
+
+#: Orbits per branch whose out-of-plane multipliers the full suite computes.
+N_FULL = 8
+#: The located crossing's v is known to this (the bracket's width).
+LOCATE_TOL = 2e-3
+
+
+@dataclass(frozen=True)
+class OutOfPlaneBranches:
+    """The 3-D verdicts along the cycle branches of one continued diagram.
+
+    Attributes
+    ----------
+    label : str
+    alpha : float
+    checked : list of dict
+        The orbits with a verdict: ``branch``, ``v``, ``stable`` (in the plane),
+        ``max_multiplier`` (in-plane), ``max_oop`` (the largest non-trivial
+        out-of-plane multiplier's modulus), ``stable_3d``, ``eta_tip``, ``X_tip``,
+        ``Z_tip``, ``planar_block`` (the 3-D monodromy's planar block's largest
+        non-trivial modulus), ``neutral`` (complex, at sin alpha = 0), ``multipliers``.
+    changes : list of dict
+        Where the out-of-plane verdict changes between two checked orbits of a
+        branch: ``branch``, ``bracket`` [v, v], ``direction`` ("loses" or
+        "regains" stability with increasing v), ``v`` (located, or None).
+    cpu_time : float
+        CPU seconds of the verdicts and the location.
+    """
+
+    label: str
+    alpha: float
+    checked: list
+    changes: list
+    cpu_time: float
+
+    def at(self, v: float) -> dict | None:
+        """The checked orbit at ``v`` that is stable in the plane (the paper's cycle)."""
+        pts = [p for p in self.checked if abs(p["v"] - v) < 1e-9 and p["stable"]]
+        return pts[0] if pts else None
+
+    def first_unstable_3d(self) -> float | None:
+        """The smallest v of a planar-stable checked orbit that is unstable out of plane."""
+        vs = [p["v"] for p in self.checked if p["stable"] and p["stable_3d"] is False]
+        return min(vs) if vs else None
+
+
+@dataclass(frozen=True)
+class AtVelocities:
+    """The branch points at the velocities ``v_keep`` (to 1e-9): the quick suite's selection."""
+
+    v_keep: tuple
+
+    def __call__(self, points) -> list[int]:
+        return [i for i, p in enumerate(points) if any(abs(p.v - w) < 1e-9 for w in self.v_keep)]
+
+
+def caption_text(quick: bool) -> str:
+    """The caption's sentence on the 3-D verdicts."""
+    which = (
+        "the orbit at v = 10"
+        if quick
+        else f"about {N_FULL} orbits spread along each branch, the last one and v = 10, "
+        "the crossing of |ρ| = 1 located by regula falsi between two of them"
+    )
+    return (
+        "Planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet "
+        f"multiplier |ρ| > 1 on the 3-D model, FE) lie on a red band, the checked ones "
+        f"marked by red triangles; checked: {which}."
+    )
+
+
+def continued_with_verdicts(
+    label: str, alpha: float, values, quick: bool
+) -> tuple[ContinuedDiagram, OutOfPlaneBranches]:
+    """The continued diagram of ``label`` at ``alpha`` (as
+    :func:`fempipe.validation.dynamic_runs.continued_diagram`) and the 3-D verdicts
+    of its orbits (cached per process)."""
+    return _cached(label, float(alpha), tuple(sorted(float(v) for v in values)), bool(quick))
+
+
+def fe_disc(label: str):
+    """The FE discretization of a label ``FE P3:8``."""
+    if not label.startswith("FE "):
+        raise ValueError(f"an FE label expected (FE Pk:n), got {label!r}")
+    return parse_discretization(fe=label[3:])
+
+
+@functools.lru_cache(maxsize=8)
+def _cached(label: str, alpha: float, values: tuple, quick: bool):
+    t0 = time.process_time()
+    disc = fe_disc(label)
+    select = AtVelocities((10.0,)) if quick else Spread(N_FULL, (10.0,))
+    model = model_for(disc, alpha, values[0])
+    with tempfile.TemporaryDirectory(prefix="fempipe-validate-3d-") as tmp:
+        dg = cycle_diagram(model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select)
+        diag = continued_from(label, alpha, values, disc, dg, Path(tmp), t0)
+        t1 = time.process_time()
+        checked = [
+            _summary(d)
+            for d in dg.points
+            if d["attractor"] == "periodic"
+            and d.get("max_nontrivial_out_of_plane_multiplier") is not None
+        ]
+        changes = []
+        for name in sorted({p["branch"] for p in checked}):
+            path = Path(tmp) / f"a00-{name}.json"
+            states = [CyclePoint.from_dict(s) for s in json.loads(path.read_text())["points"]]
+            changes += _changes(
+                model, name, states, [p for p in checked if p["branch"] == name], locate=not quick
+            )
+    cpu = sum(p["cpu_time"] for p in checked) + (time.process_time() - t1)
+    return diag, OutOfPlaneBranches(label, alpha, checked, changes, cpu)
+
+
+def _summary(d: dict) -> dict:
+    neutral = d.get("neutral_out_of_plane_multiplier")
+    return {
+        "branch": d["branch"],
+        "index": d["index"],
+        "v": d["v"],
+        "stable": bool(d["stable"]),
+        "max_multiplier": d["max_multiplier"],
+        "max_oop": d["max_nontrivial_out_of_plane_multiplier"],
+        "stable_3d": d["stable_3d"],
+        "eta_tip": d["eta_tip"],
+        "X_tip": d["X_tip"],
+        "Z_tip": d["Z_tip"],
+        "planar_block": d["planar_block_max_multiplier"],
+        "neutral": None if neutral is None else complex(*neutral),
+        "multipliers": [complex(*z) for z in d["out_of_plane_floquet_multipliers"]],
+        "cpu_time": d["out_of_plane_cpu_time"],
+    }
+
+
+def _changes(model, name: str, states: list, checked: list, locate: bool) -> list[dict]:
+    """Brackets (and, with ``locate``, the located v) of the out-of-plane verdict's
+    changes between consecutive checked orbits of a branch."""
+    out = []
+    pts = sorted(checked, key=lambda p: p["index"])
+    for a, b in zip(pts, pts[1:], strict=False):
+        if (a["max_oop"] < 1.0) == (b["max_oop"] < 1.0):
+            continue
+        sa, sb = states[a["index"]], states[b["index"]]
+        if abs(sa.v - a["v"]) > 1e-12 or abs(sb.v - b["v"]) > 1e-12:
+            continue  # the store's layout differs from the diagram's: no location
+        lo_first = a["v"] < b["v"]
+        loses = (a["max_oop"] < 1.0) == lo_first
+        where = None
+        if locate:
+            found = locate_change(model, sa, sb, a["max_oop"], b["max_oop"], tol=LOCATE_TOL)
+            where = None if found is None else found["v"]
+        out.append(
+            {
+                "branch": name,
+                "bracket": sorted([a["v"], b["v"]]),
+                "direction": "loses" if loses else "regains",
+                "v": where,
+            }
+        )
+    return out
+
+
+def neutral_deviation(branches: OutOfPlaneBranches) -> float:
+    """|ρ_neutral - 1| of the paper's cycle at v = 10 (sin alpha = 0; nan elsewhere).
+
+    At v = 10 the other multipliers are far from 1; near a crossing of |ρ| = 1 the
+    neutral one and the crossing one are nearly degenerate and the mesh error
+    of either is magnified (P3:8, α = π: 2.9e-3 along the branch, 6.1e-4 at v = 10).
+    """
+    p = branches.at(10.0)
+    return float("nan") if p is None or p["neutral"] is None else float(abs(p["neutral"] - 1.0))
+
+
+def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
+    """max | |ρ| of the 3-D monodromy's planar block - |ρ| of the planar orbit | (non-trivial
+    largest moduli) over the checked orbits."""
+    d = [
+        abs(p["planar_block"] - p["max_multiplier"])
+        for p in branches.checked
+        if p["planar_block"] is not None and p["max_multiplier"] is not None
+    ]
+    return float(max(d)) if d else float("nan")
+
+
+def stretches(br: OutOfPlaneBranches, branch: str) -> list[tuple[float, float, bool]]:
+    """The stretches of a branch's checked orbits (stable in the plane) with one 3-D
+    verdict, ``(v_from, v_to, stable_3d)`` in branch order; a boundary is the located
+    crossing, or ``nan`` when not located."""
+    pts = sorted(
+        (p for p in br.checked if p["branch"] == branch and p["stable"]), key=lambda p: p["index"]
+    )
+    if not pts:
+        return []
+    cross = {tuple(c["bracket"]): c["v"] for c in br.changes if c["branch"] == branch}
+    out = []
+    start, ok = pts[0]["v"], pts[0]["max_oop"] < 1.0
+    for a, b in zip(pts, pts[1:], strict=False):
+        if (b["max_oop"] < 1.0) != ok:
+            v_c = cross.get(tuple(sorted([a["v"], b["v"]])))
+            v_c = float("nan") if v_c is None else v_c
+            out.append((start, v_c, ok))
+            start, ok = v_c, not ok
+    out.append((start, pts[-1]["v"], ok))
+    return out
+
+
+def survival_text(name: str, br: OutOfPlaneBranches) -> str:
+    """One sentence: which planar limit cycles of the diagram at alpha = ``name`` (stable in
+    the plane) survive in 3-D, by stretches of v, and the verdict at v = 10."""
+    parts = []
+    for branch in sorted({p["branch"] for p in br.checked}):
+        st = stretches(br, branch)
+        if not st:
+            continue
+        if len(st) == 1:
+            a, b, ok = st[0]
+            which = (
+                f"the one checked (v = {a:.4g}) is"
+                if a == b
+                else (f"all checked ({a:.4g} ≤ v ≤ {b:.4g}) are")
+            )
+            parts.append(f"{branch}: {which} " + ("stable in 3-D" if ok else "unstable in 3-D"))
+            continue
+        words = [
+            f"{'stable' if ok else 'unstable'} for {_num(a)} ≤ v ≤ {_num(b)}" for a, b, ok in st
+        ]
+        parts.append(f"{branch}: " + ", ".join(words))
+    if not parts:
+        return f"α = {name}: no planar limit cycle stable in the plane was checked in 3-D"
+    text = f"α = {name}: the planar limit cycles in 3-D — " + "; ".join(parts)
+    p10 = br.at(10.0)
+    if p10 is not None:
+        text += (
+            f"; the paper's cycle at v = 10 is {'stable' if p10['stable_3d'] else 'UNSTABLE'} "
+            f"in 3-D (largest out-of-plane |ρ| {p10['max_oop']:.4f}, {br.label})"
+        )
+    if any(c["v"] is not None for c in br.changes):
+        text += " (the crossings located by regula falsi on the multiplier)"
+    elif br.changes:
+        text += " (the crossings, ?, not located: between the checked orbits)"
+    return text
+
+
+def _num(v: float) -> str:
+    return "?" if v != v else f"{v:.4g}"
+
+
+def unstable_runs(br: OutOfPlaneBranches, diag: ContinuedDiagram) -> list[list]:
+    """Runs of consecutive orbits of ``diag``'s branches (stable in the plane) that are
+    unstable in 3-D: between the first and the last checked orbit of its branch, each
+    orbit takes the verdict of the nearer checked orbit, and between two checked orbits
+    of different verdicts the located crossing (or, not located, the bracket's
+    midpoint) decides."""
+    runs = []
+    for name, pts in diag.branches.items():
+        chk = sorted((p for p in br.checked if p["branch"] == name), key=lambda p: p["index"])
+        if not chk or chk[-1]["index"] >= len(pts):
+            continue
+        cross = {tuple(c["bracket"]): c["v"] for c in br.changes if c["branch"] == name}
+        bad = []
+        for i, pt in enumerate(pts):
+            if not chk[0]["index"] <= i <= chk[-1]["index"]:
+                bad.append(False)  # outside the checked orbits: no verdict
+                continue
+            after = next((c for c in chk if c["index"] >= i), chk[-1])
+            before = next((c for c in reversed(chk) if c["index"] <= i), chk[0])
+            if before["stable_3d"] == after["stable_3d"] or before is after:
+                verdict = (
+                    before if abs(i - before["index"]) <= abs(after["index"] - i) else after
+                )["max_oop"] >= 1.0
+            else:
+                lo, hi = sorted([before["v"], after["v"]])
+                v_c = cross.get((lo, hi)) or 0.5 * (lo + hi)
+                # on the side of the crossing where the nearer checked orbit lies
+                side = before if (pt.v - v_c) * (before["v"] - v_c) > 0 else after
+                verdict = side["max_oop"] >= 1.0
+            bad.append(bool(verdict and pt.stable))
+        run = []
+        for pt, b in zip(pts, bad, strict=True):
+            if b:
+                run.append(pt)
+            elif run:
+                runs.append(run)
+                run = []
+        if run:
+            runs.append(run)
+    return runs
+
+
+def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
+    """A thick translucent red band under the extrema of ``key`` where the planar orbits
+    are stable in the plane but unstable in 3-D (:func:`unstable_runs`), and red open
+    triangles at the checked ones; True if any were drawn."""
+    runs = unstable_runs(br, diag)
+    bad = [p for p in br.checked if p["stable"] and p["stable_3d"] is False]
+    for side in (0, 1):
+        ax.plot(
+            [p["v"] for p in bad],
+            [p[key][side] for p in bad],
+            "v",
+            ms=7,
+            color="tab:red",
+            mfc="none",
+            mew=1.2,
+            zorder=5,
+        )
+    for run in runs:
+        v = [p.v for p in run]
+        for side in (0, 1):
+            ax.plot(
+                v,
+                [getattr(p, key)[side] for p in run],
+                "-",
+                lw=6,
+                color="tab:red",
+                alpha=0.3,
+                solid_capstyle="butt",
+                zorder=1,
+            )
+    return bool(runs or bad)
+
+
+def add_legend_entry(ax) -> None:
+    """The legend of a panel with the entries of :func:`marks` added, below the axes
+    (inside them it would cover the branches)."""
+    from matplotlib.lines import Line2D
+
+    leg = ax.get_legend()
+    handles = list(leg.legend_handles) if leg is not None else []
+    band = Line2D(
+        [], [], lw=6, color="tab:red", alpha=0.3, label="stable in plane, unstable in 3-D"
+    )
+    tri = Line2D(
+        [],
+        [],
+        ls="",
+        marker="v",
+        ms=7,
+        color="tab:red",
+        mfc="none",
+        label="checked: unstable in 3-D",
+    )
+    ax.legend(
+        handles=[*handles, band, tri],
+        fontsize=8,
+        ncol=3,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.16),
+        frameon=False,
+    )
+
+
+#: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
+#: orbit, so the multiplier is 1 exactly in the continuum; the mesh leaves a
+#: residue (v = 10, P3:8: 1.8e-5 at α = 0, 6.1e-4 at α = π; P3:16: 3.1e-7 at α = 0).
+#: Checked in the full suite only: on P3:4 at α = π it is not resolved (it pairs
+#: with the unstable multiplier into a complex pair, |ρ| = 1.045 both).
+NEUTRAL_TOL = 2e-3
+#: The 3-D monodromy's planar block against the continuation's monodromy: the
+#: same equations, integrated at rtol 1e-7 and at the continuation's 1e-5.
+PLANAR_BLOCK_TOL = 1e-3
+
+_SOURCE = (
+    "fempipe.analyses.space.out_of_plane_floquet (3-D model, Radau with exact sensitivities) "
+    "on the continued orbits of fempipe.analyses.periodic"
+)
+
+
+def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) -> list:
+    """``planar_block<suffix>`` and, at sin alpha = 0 in the full suite,
+    ``neutral_oop<suffix>``: two independent checks of the out-of-plane monodromy."""
+    from .checks import below
+
+    checks = [
+        below(
+            f"planar_block{suffix}",
+            f"α = {name}, {br.label}: the 3-D monodromy's planar block has the planar "
+            "orbit's largest non-trivial multiplier (checked orbits)",
+            planar_block_deviation(br),
+            PLANAR_BLOCK_TOL,
+            why="the same planar equations on the 3-D model, integrated at rtol 1e-7, against "
+            "the continuation's monodromy at rtol 1e-5",
+            source=_SOURCE,
+        )
+    ]
+    p10 = br.at(10.0)
+    if not quick and p10 is not None and p10["neutral"] is not None:
+        checks.append(
+            below(
+                f"neutral_oop{suffix}",
+                f"α = {name}, {br.label}: the out-of-plane multiplier of the rotation about "
+                "the vertical is 1 (axisymmetric pipe; the cycle at v = 10)",
+                neutral_deviation(br),
+                NEUTRAL_TOL,
+                why="symmetry: a planar orbit turned about the vertical is an orbit, so that "
+                "multiplier is exactly 1 in the continuum",
+                source=_SOURCE,
+            )
+        )
+    return checks
+
+
+def verdict_rows(name: str, br: OutOfPlaneBranches) -> list[tuple]:
+    """The checked orbits as rows of :func:`verdict_table`."""
+    rows = []
+    for p in sorted(br.checked, key=lambda p: (p["branch"], p["v"])):
+        lead = leading_text(p["multipliers"], p["neutral"])
+        rows.append(
+            (
+                name,
+                br.label,
+                p["branch"],
+                p["v"],
+                "yes" if p["stable"] else "no",
+                p["max_multiplier"],
+                p["max_oop"],
+                lead,
+                {True: "yes", False: "no", None: "-"}[p["stable_3d"]],
+            )
+        )
+    return rows
+
+
+def leading_text(multipliers, neutral) -> str:
+    """The out-of-plane multiplier of largest modulus but the neutral one, as ``a ± bi``."""
+    others = [complex(z) for z in multipliers if neutral is None or complex(z) != neutral]
+    if not others:
+        return "-"
+    z = others[0]
+    return f"{z.real:.4f} {'+' if z.imag >= 0 else '-'} {abs(z.imag):.4f}i"
+
+
+def verdict_table(rows: list[tuple], changes: list[str], quick: bool) -> object:
+    """The out-of-plane Floquet multipliers of the checked planar orbits."""
+    from .checks import Table
+
+    which = (
+        "the orbit at v = 10 (quick suite)"
+        if quick
+        else f"about {N_FULL} orbits spread along each branch, its last one and v = 10"
+    )
+    note = (
+        f"Checked orbits: {which}. |ρ| in the plane: the largest non-trivial Floquet multiplier "
+        "of the planar orbit; out of the plane: of the out-of-plane perturbations on the 3-D "
+        "model (at α = 0 and π the neutral rotation about the vertical is left out). Stable in "
+        "3-D: both below 1."
+    )
+    if changes:
+        note += " Changes of the out-of-plane verdict: " + "; ".join(changes) + "."
+    return Table(
+        "Do the planar limit cycles survive in 3-D? Out-of-plane Floquet multipliers",
+        (
+            "α",
+            "discretization",
+            "branch",
+            "v",
+            "stable in plane",
+            "max |ρ| in plane",
+            "max |ρ| out of plane",
+            "leading out-of-plane ρ",
+            "stable in 3-D",
+        ),
+        tuple(rows),
+        note=note,
+    )
+
+
+def change_texts(name: str, br: OutOfPlaneBranches) -> list[str]:
+    """The changes of the out-of-plane verdict, in words."""
+    out = []
+    for c in br.changes:
+        lo, hi = c["bracket"]
+        at = f"at v = {c['v']:.4f}" if c["v"] is not None else f"between v = {lo:.4g} and {hi:.4g}"
+        out.append(f"α = {name}, {c['branch']}: {c['direction']} out-of-plane stability {at}")
+    return out
