@@ -180,6 +180,7 @@ def simulate_space(
     planar_tol: float = 1e-3,
     n_max: int = 8,
     callback: Callable[[float], None] | None = None,
+    initial: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> SpaceMotion:
     """Integrate the 3-D model from the perturbed static state and classify its attractor.
 
@@ -213,17 +214,24 @@ def simulate_space(
         Longest period-n looked for.
     callback : callable, optional
         Called with tau after every step (progress).
+    initial : (U0, Ud0), optional
+        A 3-D state (:class:`~fempipe.model.space.SpaceModel` unknowns and their rates) to
+        start from instead of the perturbed static state (``mode``, ``amplitude`` and
+        ``out_of_plane_amplitude`` are then not used), e.g. a planar cycle's state with an
+        out-of-plane perturbation.  The section level stays the static state's.
     """
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)
     q_s = solve_static(model).q
     q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
     a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
-    U0 = planar_state(q0)
+    U0, Ud0 = planar_state(q0), planar_state(p0)
     nt = model.disc.n
     U0[nt : 2 * nt], U0[2 * nt :] = a0, b0
+    if initial is not None:
+        U0, Ud0 = (np.array(x, dtype=float) for x in initial)
     level = _section_value(space, planar_state(q_s))
-    stepper = Radau(space, U0, planar_state(p0), rtol=rtol)
+    stepper = Radau(space, U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     g_old = _section_value(space, stepper.q)
     sections: list[tuple[float, np.ndarray, np.ndarray]] = []
@@ -274,7 +282,7 @@ def simulate_space(
                 kind = "periodic"
                 break
         g_old = g
-        if t > 10.0 and np.sqrt(np.mean(p**2)) < 1e-8 and not sections[-2:]:
+        if _settled(t, p, sections):
             kind = "equilibrium"
             break
     t = np.array(ts)
@@ -310,6 +318,22 @@ def simulate_space(
         t_end=float(t[-1]),
         cpu_time=time.process_time() - start,
     )
+
+
+#: An equilibrium: the section not crossed for this long (tau) and the rates below
+#: :data:`REST_RATE` (RMS of U_dot).
+REST_TIME = 10.0
+REST_RATE = 1e-8
+
+
+def _settled(t: float, p: np.ndarray, sections: list) -> bool:
+    """Whether the motion has come to rest: slow, and no section crossing for
+    :data:`REST_TIME` (since the start when there was none).  A motion that crossed the
+    section on its way to an equilibrium away from it (a buckled state, an offset
+    equilibrium) must count as at rest too, so the test is the time since the *last*
+    crossing, not whether there ever was one."""
+    last = sections[-1][0] if sections else 0.0
+    return t - last > REST_TIME and float(np.sqrt(np.mean(np.square(p)))) < REST_RATE
 
 
 def _recurrence(sections, n_max: int, tol: float, scale: float):
