@@ -66,6 +66,9 @@ CASES: tuple[str, ...] = (
     # The motion out of the plane (fempipe.model.out_of_plane) against an
     # independent strong form (fempipe.validation.lateral).
     "out_of_plane",
+    # The 3-D motion (fempipe.model.space): the whirl against a rotating-frame BVP
+    # (fempipe.validation.whirl_bvp).
+    "space_whirl",
 )
 
 
