@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from fempipe.analyses.space.motion import REST_TIME, _settled, simulate_space
+from fempipe.analyses.space.motion import REST_TIME, _settled, simulate_space, two_frequencies
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
@@ -44,3 +44,21 @@ def test_equilibrium_after_a_crossing():
     R = space.residual(r.U[-1])
     assert np.linalg.norm(R) < 1e-6 * np.linalg.norm(space.residual(0.5 * r.U[-1]))
     assert eta[-1] > 0.5
+
+
+def test_two_incommensurate_frequencies():
+    """A two-torus signal (frequencies 1 and sqrt 2, with a combination tone) is told from a
+    periodic one with harmonics and a subharmonic (1, 3, 1/2): the known frequencies come
+    back to the resolution of the record."""
+    t = np.sort(np.random.default_rng(1).uniform(0.0, 200.0, 20000))  # uneven steps
+    f2 = math.sqrt(2.0)
+    quasi = [
+        np.sin(2 * np.pi * t) + 0.3 * np.sin(2 * np.pi * f2 * t),
+        0.1 * np.cos(2 * np.pi * (f2 - 1.0) * t),
+    ]
+    pair = two_frequencies(t, quasi)
+    assert pair is not None and len(pair) == 2
+    assert abs(pair[0] - 1.0) < 2e-3 and abs(pair[1] - f2) < 2e-3
+    periodic = [np.sin(2 * np.pi * t) + 0.3 * np.sin(6 * np.pi * t) + 0.2 * np.sin(np.pi * t)]
+    single = two_frequencies(t, periodic)
+    assert single is not None and len(single) == 1 and abs(single[0] - 1.0) < 2e-3
