@@ -245,6 +245,8 @@ def _close(name, claim, measured, reference, atol, why):
 
 def plot(result: CaseResult, fig=None):
     """(a) The tip from above; (b) the differences against the BVP."""
+    from matplotlib.ticker import NullFormatter
+
     from .drawing import figure_panels, finish_figure
 
     d = result.data
@@ -259,10 +261,11 @@ def plot(result: CaseResult, fig=None):
         zp, yp = d["tip_planar"]
         ax.plot(zp, yp, "-", color="#D55E00", lw=2.0, label="planar cycle")
     ax.set_aspect("equal")
+    ax.set_ylim(-1.3 * R, 2.0 * R)  # room for the legend above the orbits
     ax.set_xlabel("Z_tip")
     ax.set_ylabel("Y_tip")
     ax.set_title(f"tip from above, v = {d['v']:g}", fontsize=10)
-    ax.legend(fontsize=8, loc="upper right")
+    ax.legend(fontsize=8, loc="upper center", ncols=2)
     ax.grid(alpha=0.3)
     ax = axes[1]
     ns = sorted(d["whirls"])
@@ -270,6 +273,8 @@ def plot(result: CaseResult, fig=None):
     rr = [abs(d["whirls"][n]["radius"] - d["bvp"]["radius"]) for n in ns]
     ax.loglog(ns, om, "-o", color="#0072B2", label="|Δω|")
     ax.loglog(ns, rr, "-s", color="#009E73", label="|Δ radius|")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(ns, [str(n) for n in ns])
     ax.set_xlabel("elements (cubic)")
     ax.set_ylabel("FE - BVP")
     ax.set_title("against the rotating-frame BVP", fontsize=10)
