@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...model.space import SpaceModel
+from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 from .shooting import shoot_space
 
@@ -51,7 +52,8 @@ class Whirl:
         e_3), as :attr:`fempipe.analyses.space.SpaceMotion.whirl_rate`.
     period : float
     radius : float
-        Mean distance of the tip from the vertical, sqrt(Z_tip^2 + Y_tip^2), over the orbit.
+        Mean distance of the tip from the vertical, sqrt(Z_tip^2 + Y_tip^2), over the orbit
+        (at the integrator's step ends over one period from the orbit's start).
     radius_variation : float
         (max - min) / mean of that distance over the orbit: zero for a rigid rotation.
     rotation_defect : float
@@ -178,12 +180,23 @@ def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.
     return U, Ud, T
 
 
-def _rotation_defect(model: SpaceModel, cycle: LimitCycle, omega: float) -> float:
-    r0 = model.centerline(cycle.orbit_q[0])
+def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
+    """tau and U at the accepted steps of one period from the cycle's start: the measures of
+    rigidity need states at the step ends (the integrator's accurate points; its dense
+    output between them is of lower order, measured 1e-3 off the radius on P3:4)."""
+    stepper = Radau(model, cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
+    ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
+    for t, q, _ in stepper.steps(cycle.period):
+        ts.append(t)
+        Us.append(q)
+    return np.array(ts), np.array(Us)
+
+
+def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: float) -> float:
+    r0 = model.centerline(Us[0])
     worst = 0.0
-    for tau, U in zip(cycle.orbit_t, cycle.orbit_q, strict=True):
-        ang = omega * (tau - cycle.orbit_t[0])
-        c, s = math.cos(ang), math.sin(ang)
+    for tau, U in zip(ts, Us, strict=True):
+        c, s = math.cos(omega * tau), math.sin(omega * tau)
         rot = np.column_stack([r0[:, 0], c * r0[:, 1] - s * r0[:, 2], s * r0[:, 1] + c * r0[:, 2]])
         worst = max(worst, float(np.max(np.linalg.norm(model.centerline(U) - rot, axis=1))))
     return worst
@@ -220,7 +233,8 @@ def find_whirl(
     if abs(math.sin(model.params.alpha)) > 1e-12:
         raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
     cycle = shoot_space(model, U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
-    tips = model.tip_coordinates(cycle.orbit_q)
+    ts, Us = _step_ends(model, cycle, rtol)
+    tips = model.tip_coordinates(Us)
     rad = np.hypot(tips["Z_tip"], tips["Y_tip"])
     ang = np.unwrap(np.arctan2(tips["Y_tip"], tips["Z_tip"]))
     turn = ang[-1] - ang[0]
@@ -239,7 +253,9 @@ def find_whirl(
         period=float(cycle.period),
         radius=mean,
         radius_variation=float((rad.max() - rad.min()) / mean),
-        rotation_defect=_rotation_defect(model, cycle, omega) if math.isfinite(omega) else math.nan,
+        rotation_defect=_rotation_defect(model, ts, Us, omega)
+        if math.isfinite(omega)
+        else math.nan,
         multipliers=mu[order[:8]],
         max_nontrivial=largest,
         stable=largest < 1.0,
