@@ -424,11 +424,15 @@ def tip_frequencies(t: np.ndarray, signals: list, n_peaks: int = 6) -> list[tupl
     return out
 
 
-def two_frequencies(t: np.ndarray, signals: list, floor: float = 0.05, q_max: int = 8):
+def two_frequencies(
+    t: np.ndarray, signals: list, floor: float = 0.05, q_max: int = 8, min_cycles: float = 20.0
+):
     """``(f1, f2)`` if the spectrum (:func:`tip_frequencies`) has a second strong peak
     (amplitude above ``floor`` of the strongest, f1) that is no harmonic or combination of
     f1: its ratio to f1 differs from every p/q with q <= ``q_max`` by more than twice the
-    frequency resolution (1 / duration) over f1.  Else ``(f1,)``, or None without a peak.
+    frequency resolution (1 / duration) over f1, and the record holds at least
+    ``min_cycles`` cycles of both (a short transient is not called quasi-periodic).  Else
+    ``(f1,)``, or None without a peak.
     """
     peaks = tip_frequencies(t, signals)
     if not peaks:
@@ -436,7 +440,7 @@ def two_frequencies(t: np.ndarray, signals: list, floor: float = 0.05, q_max: in
     f1 = peaks[0][0]
     res = 2.0 / (t[-1] - t[0]) / f1
     for f, amp in peaks[1:]:
-        if amp < floor or f <= 0:
+        if amp < floor or f <= 0 or min(f, f1) * (t[-1] - t[0]) < min_cycles:
             continue
         r = f / f1
         near = min(abs(r - round(r * q) / q) for q in range(1, q_max + 1))
