@@ -125,3 +125,33 @@ def test_whirl_by_shooting_matches_the_bvp(flutter):
     assert w.rotation_defect < 1e-2
     assert not w.stable and w.max_nontrivial > 1.2
     assert math.isclose(abs(w.omega) * w.period, 2 * math.pi)
+
+
+@pytest.mark.slow
+def test_guess_from_a_planar_cycle_turns():
+    """The standing wave plus i times its copy turned by 90 degrees a quarter period apart
+    (whirl_guess_from_cycle) is a rotating wave: along the planar cycle (v = 6.5, close to
+    onset, nearly harmonic) the guessed tip turns by pi/2 each quarter period, right-handed,
+    at a distance from the vertical constant to the cycle's anharmonicity (1 %)."""
+    from dataclasses import replace
+
+    from fempipe.analyses.limit_cycle.attractor import find_attractor
+    from fempipe.analyses.space.whirl import whirl_guess_from_cycle
+    from fempipe.model.space import planar_state
+
+    disc = FiniteElement(3, 3)
+    params = Params(alpha=0.0, v=6.5)
+    cycle = find_attractor(PipeModel(disc, params)).cycle
+    lift = np.vectorize(planar_state, signature="(n)->(m)")
+    cycle3 = replace(cycle, orbit_q=lift(cycle.orbit_q), orbit_qdot=lift(cycle.orbit_qdot))
+    space = SpaceModel(disc, params)
+    radius, angle = [], []
+    for tau in np.linspace(0.0, cycle.period, 5)[:4]:
+        U, _, T = whirl_guess_from_cycle(space, cycle3, tau)
+        d = space.tip_coordinates(U)
+        radius.append(math.hypot(d["Z_tip"], d["Y_tip"]))
+        angle.append(math.atan2(d["Y_tip"], d["Z_tip"]))
+    turns = np.diff(np.unwrap(angle))
+    assert np.allclose(turns, 0.5 * math.pi, atol=0.05)
+    assert np.ptp(radius) < 0.02 * np.mean(radius)
+    assert abs(max(radius) - cycle.tip["eta_tip"][1]) < 0.02 * max(radius)
