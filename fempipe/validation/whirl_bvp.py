@@ -36,9 +36,12 @@ The unknowns are y = (r, t, t', G, Q) (13 functions) and omega, with
 ``r(0) = 0``, ``t(0) = e_1``, ``t'(1) = 0`` (m(1) = 0), ``Q(1) = 0``, the
 condition on G(1), and the phase condition ``r_3(1) = 0`` (the tip in the
 (e_1, e_2) plane at the instant shown: it fixes the rotation).  The straight
-pipe solves the problem for every omega; a whirl of amplitude R is found with
-``r_2(1) = R`` fixed and v free, starting next to the Hopf point and
-continued in R, then v is fixed and R freed (:func:`solve_whirl_bvp`).  The
+pipe solves the problem for every omega, so v is left free and an amplitude
+fixed instead: first ``r_2(1) = 0.01`` next to the Hopf point, then the
+curvature energy ``Q(0) = \\int_0^1 |t'|^2``, continued until v passes the
+wanted value and then adjusted by the secant method until v is met
+(:func:`solve_whirl_bvp`; the tip radius itself saturates near 0.39 for the
+paper's pipe while v grows, a poor parameter).  The
 module shares no code with fempipe's discretizations, quadrature or
 residual: scipy's collocation solver ``solve_bvp`` (4th-order Lobatto IIIA,
 adaptive mesh) does the work.
@@ -72,10 +75,11 @@ class WhirlBVP:
     tip : ndarray, shape (3,)
         r(1) at the instant of the phase condition (r_3(1) = 0).
     dissipation, supply : float
-        Power balance per unit tau: Kelvin-Voigt ``mu omega^2 \\int |t'|^2`` and fluid
-        ``v sqrt(beta) |r_dot(1)|^2 + sigma \\int |r_dot|^2`` lost, ``v^2 r_dot(1) . t(1)``
-        supplied (zero for a whirl: r_dot(1) is normal to e_1 and t(1) ... in general not;
-        the balance ``supply = dissipation`` holds to the BVP's tolerance).
+        Power per unit tau: lost to the Kelvin-Voigt damping (``mu omega^2 \\int |t'|^2``),
+        to the fluid (``v sqrt(beta) |r_dot(1)|^2``) and to external damping
+        (``sigma \\int |r_dot|^2``); supplied by the follower force
+        (``-v^2 r_dot(1) . t(1)``).  In a whirl the energy is constant: they must agree
+        (to the BVP's tolerance).
     rms_residual : float
         Largest relative residual of the collocation (solve_bvp's ``rms_residuals``).
     n_nodes : int
