@@ -164,7 +164,7 @@ def run(quick: bool = False) -> CaseResult:
             w.omega,
             bvp.omega,
             ref.value("omega_tol", quick),
-            ref.source("omega_tol"),
+            ref.source("omega_tol_quick" if quick else "omega_tol"),
         ),
         _close(
             "radius_vs_bvp",
@@ -172,7 +172,7 @@ def run(quick: bool = False) -> CaseResult:
             w.radius,
             bvp.radius,
             ref.value("radius_tol", quick),
-            ref.source("radius_tol"),
+            ref.source("radius_tol_quick" if quick else "radius_tol"),
         ),
         ref.below(
             "radius_constant",
