@@ -101,7 +101,7 @@ PAPER_NOT_REPRODUCED_QUICK = {
 PAPER_NOT_REPRODUCED_FULL = {
     **{name: set() for name in ("fig02a", "fig02b", "fig12", "convergence", "end_mass")},
     **{name: set() for name in ("external_damping", "springs")},
-    **{name: set() for name in ("space_onset", "space_convergence")},
+    **{name: set() for name in ("space_onset", "space_convergence", "space_whirl")},
     "fig03": {"modal_3_shape", "modal_4_shape"},
     "fig04": {"modal_3_shape"},
     "fig05": {"pi_no_hysteresis"},

@@ -67,9 +67,11 @@ CASES: tuple[str, ...] = (
     # independent strong form (fempipe.validation.lateral).
     "out_of_plane",
     # The pipe in three dimensions (fempipe.model.space): the non-planar oscillation's
-    # onset against its Hopf normal form, and its mesh convergence.
+    # onset against its Hopf normal form, its mesh convergence, and the hanging pipe's
+    # whirl against a rotating-frame BVP (fempipe.validation.whirl_bvp).
     "space_onset",
     "space_convergence",
+    "space_whirl",
 )
 
 

@@ -13,7 +13,11 @@ classifies it:
   (sin alpha = 0) whose tip turns about the vertical at a constant distance:
   ``whirl_rate`` is its angular velocity (rad per unit tau, positive from
   e_2 towards e_3, i.e. right-handed about the clamp's axis e_1);
-* ``non-periodic``: no recurrence before ``t_max`` (quasi-periodic or chaotic).
+* ``quasi-periodic``: no recurrence before ``t_max``, and the tip's spectrum over the
+  second half of the run has two strong peaks at incommensurate frequencies
+  (:func:`tip_frequencies`, :func:`two_frequencies`): ``frequencies`` holds them;
+* ``non-periodic``: no recurrence before ``t_max``, and no such pair (chaotic, or a
+  transient too long for the run).
 
 The section is the tip's displacement along e_2 + e_3 (eta_tip + Y_tip,
 :func:`~fempipe.analyses.space.shooting.section_value`) crossing its static
@@ -38,7 +42,13 @@ from ..limit_cycle.results import LimitCycle, ShootingError
 from ..statics import solve_static
 from .shooting import section_value, shoot_space
 
-__all__ = ["SpaceMotion", "out_of_plane_perturbation", "simulate_space"]
+__all__ = [
+    "SpaceMotion",
+    "out_of_plane_perturbation",
+    "simulate_space",
+    "tip_frequencies",
+    "two_frequencies",
+]
 
 TIP3_KEYS = ("eta_tip", "X_tip", "Z_tip", "Y_tip")
 
@@ -50,7 +60,8 @@ class SpaceMotion:
     Attributes
     ----------
     kind : str
-        ``"equilibrium"``, ``"periodic"``, ``"whirl"`` or ``"non-periodic"``.
+        ``"equilibrium"``, ``"periodic"``, ``"whirl"``, ``"quasi-periodic"`` or
+        ``"non-periodic"``.
     motion : str
         ``"planar"`` or ``"nonplanar"`` (module docstring).
     period : float or None
@@ -61,6 +72,9 @@ class SpaceMotion:
     tip : dict
         ``[min, max]`` of eta_tip, X_tip, Z_tip, Y_tip over the last period (or
         the last tenth of the run).
+    frequencies : tuple of float or None
+        For a motion without recurrence: the two incommensurate frequencies (cycles per
+        unit tau) of a quasi-periodic motion, or the strongest one of a non-periodic one.
     cycle : LimitCycle or None
         The periodic orbit by shooting (:func:`~fempipe.analyses.space.shooting.shoot_space`):
         period, tips and the 3-D Floquet multipliers come from it.
@@ -82,6 +96,7 @@ class SpaceMotion:
     whirl_rate: float | None
     tip: dict
     planarity: float
+    frequencies: tuple[float, ...] | None = None
     cycle: LimitCycle | None = field(default=None, repr=False)
     t: np.ndarray = field(default=None, repr=False)
     U: np.ndarray = field(default=None, repr=False)
@@ -105,6 +120,7 @@ class SpaceMotion:
             "whirl_rate": self.whirl_rate,
             "tip": self.tip,
             "planarity": self.planarity,
+            "frequencies": None if self.frequencies is None else list(self.frequencies),
             "steps": self.steps,
             "rejected_steps": self.rejected_steps,
             "t_end": self.t_end,
@@ -180,6 +196,7 @@ def simulate_space(
     planar_tol: float = 1e-3,
     n_max: int = 8,
     callback: Callable[[float], None] | None = None,
+    initial: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> SpaceMotion:
     """Integrate the 3-D model from the perturbed static state and classify its attractor.
 
@@ -213,17 +230,24 @@ def simulate_space(
         Longest period-n looked for.
     callback : callable, optional
         Called with tau after every step (progress).
+    initial : (U0, Ud0), optional
+        A 3-D state (:class:`~fempipe.model.space.SpaceModel` unknowns and their rates) to
+        start from instead of the perturbed static state (``mode``, ``amplitude`` and
+        ``out_of_plane_amplitude`` are then not used), e.g. a planar cycle's state with an
+        out-of-plane perturbation.  The section level stays the static state's.
     """
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)
     q_s = solve_static(model).q
     q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
     a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
-    U0 = planar_state(q0)
+    U0, Ud0 = planar_state(q0), planar_state(p0)
     nt = model.disc.n
     U0[nt : 2 * nt], U0[2 * nt :] = a0, b0
+    if initial is not None:
+        U0, Ud0 = (np.array(x, dtype=float) for x in initial)
     level = _section_value(space, planar_state(q_s))
-    stepper = Radau(space, U0, planar_state(p0), rtol=rtol)
+    stepper = Radau(space, U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     g_old = _section_value(space, stepper.q)
     sections: list[tuple[float, np.ndarray, np.ndarray]] = []
@@ -274,7 +298,7 @@ def simulate_space(
                 kind = "periodic"
                 break
         g_old = g
-        if t > 10.0 and np.sqrt(np.mean(p**2)) < 1e-8 and not sections[-2:]:
+        if _settled(t, p, sections):
             kind = "equilibrium"
             break
     t = np.array(ts)
@@ -292,6 +316,14 @@ def simulate_space(
         if whirl_rate is not None:
             kind = "whirl"
     tip = cycle.tip if cycle is not None else _window_tips(space, wU)
+    frequencies = None
+    if kind == "non-periodic":
+        half = t >= 0.5 * t[-1]
+        d = space.tip_coordinates(U[half])
+        pair = two_frequencies(t[half], [d["eta_tip"], d["Y_tip"]])
+        if pair is not None and len(pair) == 2:
+            kind = "quasi-periodic"
+        frequencies = pair
     return SpaceMotion(
         kind=kind,
         motion=motion,
@@ -300,6 +332,7 @@ def simulate_space(
         whirl_rate=whirl_rate,
         tip=tip,
         planarity=planarity,
+        frequencies=frequencies,
         cycle=cycle,
         t=t,
         U=U,
@@ -310,6 +343,22 @@ def simulate_space(
         t_end=float(t[-1]),
         cpu_time=time.process_time() - start,
     )
+
+
+#: An equilibrium: the section not crossed for this long (tau) and the rates below
+#: :data:`REST_RATE` (RMS of U_dot).
+REST_TIME = 10.0
+REST_RATE = 1e-8
+
+
+def _settled(t: float, p: np.ndarray, sections: list) -> bool:
+    """Whether the motion has come to rest: slow, and no section crossing for
+    :data:`REST_TIME` (since the start when there was none).  A motion that crossed the
+    section on its way to an equilibrium away from it (a buckled state, an offset
+    equilibrium) must count as at rest too, so the test is the time since the *last*
+    crossing, not whether there ever was one."""
+    last = sections[-1][0] if sections else 0.0
+    return t - last > REST_TIME and float(np.sqrt(np.mean(np.square(p)))) < REST_RATE
 
 
 def _recurrence(sections, n_max: int, tol: float, scale: float):
@@ -339,3 +388,62 @@ def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) 
     if abs(abs(turn) - 2 * math.pi) > 0.2:
         return None
     return float(turn / (t[-1] - t[0]))
+
+
+def tip_frequencies(t: np.ndarray, signals: list, n_peaks: int = 6) -> list[tuple[float, float]]:
+    """The strongest peaks of the summed power spectrum of ``signals`` sampled at ``t``.
+
+    The signals are resampled uniformly (as many points as steps, linear
+    interpolation of the accepted steps), their mean removed, Hann-windowed; a
+    peak's frequency is refined by the parabola through the log power of its
+    three bins.  Returns ``(frequency, amplitude)`` pairs (cycles per unit tau;
+    amplitude the square root of the peak power relative to the strongest),
+    strongest first.
+    """
+    t = np.asarray(t, dtype=float)
+    m = max(256, t.size)
+    tu = np.linspace(t[0], t[-1], m)
+    dt = tu[1] - tu[0]
+    win = np.hanning(m)
+    power = 0.0
+    for y in signals:
+        yu = np.interp(tu, t, np.asarray(y, dtype=float))
+        power = power + np.abs(np.fft.rfft((yu - yu.mean()) * win)) ** 2
+    power = np.asarray(power)
+    f = np.fft.rfftfreq(m, dt)
+    inner = np.arange(2, power.size - 1)
+    peaks = inner[(power[inner] > power[inner - 1]) & (power[inner] >= power[inner + 1])]
+    peaks = peaks[np.argsort(-power[peaks])][:n_peaks]
+    out = []
+    top = power[peaks[0]] if peaks.size else 1.0
+    for k in peaks:
+        a, b, c = np.log(power[k - 1 : k + 2] + 1e-300)
+        den = a - 2 * b + c
+        shift = 0.5 * (a - c) / den if den != 0 else 0.0
+        out.append((float(f[k] + shift * (f[1] - f[0])), float(np.sqrt(power[k] / top))))
+    return out
+
+
+def two_frequencies(
+    t: np.ndarray, signals: list, floor: float = 0.05, q_max: int = 8, min_cycles: float = 20.0
+):
+    """``(f1, f2)`` if the spectrum (:func:`tip_frequencies`) has a second strong peak
+    (amplitude above ``floor`` of the strongest, f1) that is no harmonic or combination of
+    f1: its ratio to f1 differs from every p/q with q <= ``q_max`` by more than twice the
+    frequency resolution (1 / duration) over f1, and the record holds at least
+    ``min_cycles`` cycles of both (a short transient is not called quasi-periodic).  Else
+    ``(f1,)``, or None without a peak.
+    """
+    peaks = tip_frequencies(t, signals)
+    if not peaks:
+        return None
+    f1 = peaks[0][0]
+    res = 2.0 / (t[-1] - t[0]) / f1
+    for f, amp in peaks[1:]:
+        if amp < floor or f <= 0 or min(f, f1) * (t[-1] - t[0]) < min_cycles:
+            continue
+        r = f / f1
+        near = min(abs(r - round(r * q) / q) for q in range(1, q_max + 1))
+        if near > res:
+            return (f1, f)
+    return (f1,)

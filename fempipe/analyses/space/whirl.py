@@ -1,0 +1,263 @@
+"""Whirls of an axisymmetric pipe: periodic orbits that turn rigidly about the vertical.
+
+At sin(alpha) = 0 (hanging, alpha = 0, or standing, alpha = pi) gravity lies
+along the clamp's axis e_1 and a turn about e_1 maps motions to motions.  The
+flutter is then a Hopf bifurcation with O(2) symmetry, from which two kinds of
+cycles branch together: standing waves (the planar cycles, one for each
+vertical plane) and rotating waves, the *whirls*, in which the pipe's shape
+turns rigidly about e_1 at a rate omega, one for each sense of rotation.  In
+the continuum a whirl is a steady state in the frame turning at omega
+(:mod:`fempipe.validation.whirl_bvp` solves it as such); on a finite element
+mesh the turn is a symmetry only up to the discretization error (the chart of
+:mod:`fempipe.model.space_chart` is nonlinear in the angle of the turn), so
+the discrete whirl is a periodic orbit, found here by Newton shooting
+(:func:`~fempipe.analyses.space.shooting.shoot_space`, whose least-squares step
+handles the rotation's neutral direction).
+
+:func:`whirl_state` writes a tangent field t(xi) turning at omega as a state of
+:class:`~fempipe.model.space.SpaceModel` (in the chart's gauge); a start comes
+from any tangent field (e.g. the rotating-frame solution), or from a planar
+cycle (:func:`whirl_guess_from_cycle`: its state and the state a quarter
+period earlier turned by 90 degrees, the standing wave plus i times its
+rotated copy).  :func:`find_whirl` shoots and measures how rigid the
+discrete whirl's rotation is.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...model.space import SpaceModel
+from ...solvers.radau import Radau
+from ..limit_cycle.results import LimitCycle
+from .shooting import shoot_space
+
+__all__ = ["Whirl", "find_whirl", "tangent_state", "whirl_guess_from_cycle", "whirl_state"]
+
+
+@dataclass(frozen=True)
+class Whirl:
+    """A whirl of the 3-D model (a periodic orbit turning about e_1).
+
+    Attributes
+    ----------
+    v : float
+        Flow velocity.
+    omega : float
+        Rotation rate 2 pi / T, signed: positive right-handed about e_1 (from e_2 towards
+        e_3), as :attr:`fempipe.analyses.space.SpaceMotion.whirl_rate`.
+    period : float
+    radius : float
+        Mean distance of the tip from the vertical, sqrt(Z_tip^2 + Y_tip^2), over the orbit
+        (at the integrator's step ends over one period from the orbit's start).
+    radius_variation : float
+        (max - min) / mean of that distance over the orbit: zero for a rigid rotation.
+    rotation_defect : float
+        Largest distance, over the orbit and the cell edges, between the centerline and the
+        centerline at tau = 0 turned by omega tau about e_1: zero for a rigid rotation; on a
+        mesh a discretization error.
+    multipliers : ndarray of complex
+        The largest Floquet multipliers (by modulus, 8 of them).
+    max_nontrivial : float
+        The largest modulus leaving out the multiplier 1.  A whirl has one trivial
+        multiplier, not two: its shift in time *is* its turn about e_1 (the monodromy is
+        exp(T L) of the Jacobian L in the frame turning with it, whose symmetry eigenvalue
+        0 is that of the phase).
+    stable : bool
+        ``max_nontrivial < 1``.
+    cycle : LimitCycle
+        The shot orbit.
+    """
+
+    v: float
+    omega: float
+    period: float
+    radius: float
+    radius_variation: float
+    rotation_defect: float
+    multipliers: np.ndarray
+    max_nontrivial: float
+    stable: bool
+    cycle: LimitCycle = field(repr=False)
+
+    def to_dict(self) -> dict:
+        """The numbers, JSON-ready."""
+        return {
+            "v": self.v,
+            "omega": self.omega,
+            "period": self.period,
+            "radius": self.radius,
+            "radius_variation": self.radius_variation,
+            "rotation_defect": self.rotation_defect,
+            "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
+            "max_nontrivial": self.max_nontrivial,
+            "stable": self.stable,
+        }
+
+
+def _fit(model: SpaceModel, f: np.ndarray) -> np.ndarray:
+    """The finite element function nearest f at the quadrature points (L2)."""
+    disc = model.disc
+    Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
+    w = model.w
+    G = Phi.T @ (w[:, None] * Phi)
+    return np.linalg.solve(G, Phi.T @ (w[:, None] * f))
+
+
+def tangent_state(
+    model: SpaceModel, t: np.ndarray, t_dot: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(U, U_dot) of a tangent field and its rate given at the quadrature points.
+
+    The chart's gauge-free representative (least |(a, b)| on the fiber,
+    :mod:`fempipe.model.space_chart`) of t = (cos psi cos theta, cos psi sin theta, sin psi)
+    is ``a = rho sin(theta/2)``, ``b = -rho cos(theta/2)``, rho = tan(psi/2); its rates follow
+    from theta_dot and psi_dot.  Singular only where t = +-e_3.
+
+    Parameters
+    ----------
+    model : SpaceModel
+    t, t_dot : ndarray, shape (n_q, 3)
+    """
+    t = t / np.linalg.norm(t, axis=1, keepdims=True)
+    theta = np.arctan2(t[:, 1], t[:, 0])
+    psi = np.arcsin(np.clip(t[:, 2], -1.0, 1.0))
+    h = t[:, 0] ** 2 + t[:, 1] ** 2
+    th_dot = (t[:, 0] * t_dot[:, 1] - t[:, 1] * t_dot[:, 0]) / h
+    psi_dot = t_dot[:, 2] / np.sqrt(h)
+    rho = np.tan(0.5 * psi)
+    rho_dot = 0.5 * psi_dot / np.cos(0.5 * psi) ** 2
+    s, c = np.sin(0.5 * theta), np.cos(0.5 * theta)
+    u = np.column_stack([theta, rho * s, -rho * c])
+    ud = np.column_stack(
+        [th_dot, rho_dot * s + 0.5 * rho * c * th_dot, -rho_dot * c + 0.5 * rho * s * th_dot]
+    )
+    return _fit(model, u).T.ravel(), _fit(model, ud).T.ravel()
+
+
+def whirl_state(
+    model: SpaceModel, tangent: Callable[[np.ndarray], np.ndarray], omega: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(U, U_dot) of the shape ``tangent(xi)`` (shape (3, m) at m points) turning at omega
+    about e_1: t_dot = omega e_1 x t."""
+    t = np.asarray(tangent(model.x), dtype=float).T
+    t_dot = omega * np.cross([1.0, 0.0, 0.0], t)
+    return tangent_state(model, t, t_dot)
+
+
+def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.0):
+    """(U, U_dot, period) of a whirl guessed from a planar cycle (a standing wave).
+
+    In-plane angle theta(xi, tau) of the cycle and out-of-plane angle psi = theta(xi, tau -
+    T/4): to first order the standing wave plus i times its copy turned by 90 degrees a
+    quarter period apart, a rotating wave (right-handed about e_1).
+    """
+    T = cycle.period
+    n = model.n_theta
+    Phi = model.disc.Phi
+    pts = []
+    for s in (tau, tau - 0.25 * T):
+        k = float(np.mod(s, T))
+        i = int(np.clip(np.searchsorted(cycle.orbit_t, k), 1, len(cycle.orbit_t) - 1))
+        a = (k - cycle.orbit_t[i - 1]) / (cycle.orbit_t[i] - cycle.orbit_t[i - 1])
+        q = (1 - a) * cycle.orbit_q[i - 1] + a * cycle.orbit_q[i]
+        p = (1 - a) * cycle.orbit_qdot[i - 1] + a * cycle.orbit_qdot[i]
+        pts.append((Phi @ q[:n], Phi @ p[:n]))
+    (th, thd), (ps, psd) = pts
+    t = np.column_stack([np.cos(ps) * np.cos(th), np.cos(ps) * np.sin(th), np.sin(ps)])
+    t_dot = np.column_stack(
+        [
+            -np.sin(ps) * psd * np.cos(th) - np.cos(ps) * np.sin(th) * thd,
+            -np.sin(ps) * psd * np.sin(th) + np.cos(ps) * np.cos(th) * thd,
+            np.cos(ps) * psd,
+        ]
+    )
+    U, Ud = tangent_state(model, t, t_dot)
+    return U, Ud, T
+
+
+def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
+    """tau and U at the accepted steps of one period from the cycle's start: the measures of
+    rigidity need states at the step ends (the integrator's accurate points; its dense
+    output between them is of lower order, measured 1e-3 off the radius on P3:4)."""
+    stepper = Radau(model, cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
+    ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
+    for t, q, _ in stepper.steps(cycle.period):
+        ts.append(t)
+        Us.append(q)
+    return np.array(ts), np.array(Us)
+
+
+def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: float) -> float:
+    r0 = model.centerline(Us[0])
+    worst = 0.0
+    for tau, U in zip(ts, Us, strict=True):
+        c, s = math.cos(omega * tau), math.sin(omega * tau)
+        rot = np.column_stack([r0[:, 0], c * r0[:, 1] - s * r0[:, 2], s * r0[:, 1] + c * r0[:, 2]])
+        worst = max(worst, float(np.max(np.linalg.norm(model.centerline(U) - rot, axis=1))))
+    return worst
+
+
+def find_whirl(
+    model: SpaceModel,
+    U0: np.ndarray,
+    Ud0: np.ndarray,
+    period: float,
+    *,
+    rtol: float = 1e-8,
+    tol: float = 1e-7,
+    max_iter: int = 15,
+) -> Whirl:
+    """Shoot a whirl from a guess and measure it.
+
+    Parameters
+    ----------
+    model : SpaceModel
+        At an axisymmetric inclination (sin alpha = 0).
+    U0, Ud0, period : ndarray, ndarray, float
+        The guess (:func:`whirl_state`, :func:`whirl_guess_from_cycle`).
+    rtol, tol, max_iter
+        As :func:`~fempipe.analyses.space.shooting.shoot_space`.
+
+    Raises
+    ------
+    ValueError
+        If the pipe is not axisymmetric.
+    fempipe.analyses.limit_cycle.ShootingError
+        If Newton does not converge.
+    """
+    if abs(math.sin(model.params.alpha)) > 1e-12:
+        raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
+    cycle = shoot_space(model, U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
+    ts, Us = _step_ends(model, cycle, rtol)
+    tips = model.tip_coordinates(Us)
+    rad = np.hypot(tips["Z_tip"], tips["Y_tip"])
+    ang = np.unwrap(np.arctan2(tips["Y_tip"], tips["Z_tip"]))
+    turn = ang[-1] - ang[0]
+    omega = math.copysign(2.0 * math.pi / cycle.period, turn)
+    if abs(abs(turn) - 2.0 * math.pi) > 0.5:
+        omega = math.nan  # not one turn a period: no whirl
+    mu = np.asarray(cycle.floquet_multipliers)
+    order = np.argsort(-np.abs(mu))
+    trivial = np.argsort(np.abs(mu - 1.0))[:1]
+    others = np.delete(mu, trivial)
+    largest = float(np.max(np.abs(others))) if others.size else 0.0
+    mean = float(np.mean(rad))
+    return Whirl(
+        v=float(model.params.v),
+        omega=omega,
+        period=float(cycle.period),
+        radius=mean,
+        radius_variation=float((rad.max() - rad.min()) / mean),
+        rotation_defect=_rotation_defect(model, ts, Us, omega)
+        if math.isfinite(omega)
+        else math.nan,
+        multipliers=mu[order[:8]],
+        max_nontrivial=largest,
+        stable=largest < 1.0,
+        cycle=cycle,
+    )

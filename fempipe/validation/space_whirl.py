@@ -1,0 +1,347 @@
+"""The whirl of the hanging pipe, computed twice: a periodic orbit of the 3-D FE model and a
+steady state in the rotating frame.
+
+Hanging (alpha = 0) the pipe is axisymmetric about the vertical, and its flutter
+is a Hopf bifurcation with O(2) symmetry: standing waves (the planar cycles) and
+rotating waves (whirls, the shape turning rigidly about the vertical) are born
+together.  This case computes the whirl at v = 10 two ways and compares:
+
+(a) **The rotating-frame BVP** (:mod:`fempipe.validation.whirl_bvp`): the
+    continuum's strong form in the frame turning at omega, with the objective
+    Kelvin-Voigt damping (k = -omega t' in a whirl), solved by ``solve_bvp``,
+    continued from the Hopf point; its power balance (the fluid's supply against
+    the Kelvin-Voigt and Coriolis losses) is checked.
+(b) **The periodic orbit of the FE model** (:func:`fempipe.analyses.space.find_whirl`),
+    shot on cubic meshes from the BVP's shape: the rotation rate 2 pi / T and the
+    tip's distance from the vertical against the BVP's, the difference falling
+    with h; the tip's distance constant along the orbit and the centerline a
+    rigid rotation of itself, to the discretization error (the turn is a
+    symmetry of the continuum, of the mesh only as h -> 0).
+(b') **The BVP's whirl as a state of the FE model.**  Started from the BVP's shape
+    and rotation (fitted on the mesh), the FE motion over half a turn turns at
+    the BVP's rate and keeps the tip's distance from the vertical, up to errors
+    that fall at the FE order (P3:3, P3:6, P3:12: half a period each, cheap).
+(c) **The finding.**  The whirl's Floquet multipliers: it is unstable (a
+    complex pair outside the unit circle), while the planar cycle of the same
+    pipe is stable in 3-D: the standing wave is the attractor.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from fempipe.core.parallel import single_blas
+
+from .case import Case
+from .checks import CaseResult, Table, holds
+
+CASE = Case(
+    name="space_whirl",
+    figure="Whirl (3-D, α = 0)",
+    title="The whirl of the hanging pipe: periodic orbit and rotating-frame steady state",
+    caption=(
+        "The hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005) at v = 10. (a) The tip "
+        "seen from above (Z_tip horizontal in the plane of the planar cycle, Y_tip out of it): "
+        "the whirl of the 3-D FE model (cubic elements, solid), the whirl of the rotating-frame "
+        "BVP (dashed circle, black) and the planar cycle (the segment, vermilion). (b) The "
+        "difference of the FE whirl's rotation rate ω and tip radius from the BVP's against "
+        "the number of elements."
+    ),
+    paper_shows=(
+        "nothing: the paper's model is planar (Eq. (20)); the whirl is a 3-D motion of the "
+        "same pipe",
+    ),
+    requires=(
+        "bvp_power_balance",
+        "omega_vs_bvp",
+        "radius_vs_bvp",
+        "radius_constant",
+        "rigid_rotation",
+        "whirl_unstable",
+        "free_rate_order",
+        "free_rigidity_order",
+    ),
+    not_checked=("the paper shows no 3-D motion",),
+)
+
+
+def _flutter_slope(disc, v_guess: float, omega_guess: float):
+    """The planar flutter eigenmode's theta on 101 points: the BVP continuation's start."""
+    from fempipe.analyses.stability.eigensolvers import quadratic_eigen
+    from fempipe.analyses.stability.linear import linearized_matrices
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+
+    model = PipeModel(disc, Params(alpha=0.0, v=v_guess))
+    K, C, M = linearized_matrices(model, np.zeros(disc.n))
+    lam, X, _ = quadratic_eigen(K, C, M)
+    i = int(np.argmin(np.abs(lam - 1j * omega_guess)))
+    Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
+    th = Phi @ X[:, i]
+    x = np.r_[0.0, disc.quad.x]
+    xi = np.linspace(0.0, 1.0, 101)
+    return lam[i], np.interp(xi, x, np.r_[0, th.real]) + 1j * np.interp(xi, x, np.r_[0, th.imag])
+
+
+@single_blas
+def run(quick: bool = False) -> CaseResult:
+    """(a)-(c) of the module docstring."""
+    from fempipe.analyses.limit_cycle.attractor import find_attractor
+    from fempipe.analyses.space.whirl import find_whirl, whirl_state
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.model.operators import PipeModel
+    from fempipe.model.params import Params
+    from fempipe.model.space import SpaceModel, planar_state
+
+    from .whirl_bvp import solve_whirl_bvp
+
+    t0 = time.perf_counter()
+    ref = CASE.references
+    v = float(ref.value("v"))
+    meshes = ref.value("meshes", quick)
+    lam, slope = _flutter_slope(FiniteElement(4, 3), *ref.value("hopf_guess"))
+    bvp = solve_whirl_bvp(v, hopf=(ref.value("hopf_guess")[0], abs(lam.imag)), slope=slope)
+    checks = [
+        ref.below(
+            "bvp_power_balance",
+            "the BVP whirl's power balance: fluid supply = Kelvin-Voigt + Coriolis losses",
+            abs(bvp.supply - bvp.dissipation) / bvp.dissipation,
+            "power_tol",
+            source="the energy equation of the continuum (power_terms of the 3-D model)",
+        )
+    ]
+    free_meshes = ref.value("free_meshes", quick)
+    free = [_free_rotation(bvp, ne, v) for ne in free_meshes]
+    hs = [1.0 / ne for ne in free_meshes]
+    rate_order = _order(hs, [abs(r - bvp.omega) for r, _ in free])
+    rigid_order = _order(hs, [var for _, var in free])
+    checks += [
+        ref.below(
+            "free_rate_order",
+            "the FE motion from the BVP's whirl turns at the BVP's rate, to an error falling at "
+            "the FE order (observed order, negated)",
+            -rate_order,
+            "min_order_negated",
+            source="the convergence of cubic elements to the continuum (the BVP)",
+        ),
+        ref.below(
+            "free_rigidity_order",
+            "the tip's distance from the vertical in that motion varies by an error falling at "
+            "the FE order (observed order, negated)",
+            -rigid_order,
+            "min_order_negated",
+            source="the rotation symmetry of the continuum",
+        ),
+    ]
+    rows, whirls = [], []
+    for ne in meshes:
+        space = SpaceModel(FiniteElement(ne, 3), Params(alpha=0.0, v=v))
+        U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
+        w = find_whirl(space, U, Ud, bvp.period)
+        whirls.append((ne, w))
+        rows.append(
+            [
+                f"P3:{ne}",
+                w.omega,
+                w.period,
+                w.radius,
+                w.omega - bvp.omega,
+                w.radius - bvp.radius,
+                w.radius_variation,
+                w.rotation_defect,
+                w.max_nontrivial,
+            ]
+        )
+    ne, w = whirls[-1]
+    tag = f"P3:{ne}"
+    checks += [
+        _close(
+            "omega_vs_bvp",
+            f"ω on {tag} = the BVP's",
+            w.omega,
+            bvp.omega,
+            ref.value("omega_tol", quick),
+            ref.source("omega_tol_quick" if quick else "omega_tol"),
+        ),
+        _close(
+            "radius_vs_bvp",
+            f"tip radius on {tag} = the BVP's",
+            w.radius,
+            bvp.radius,
+            ref.value("radius_tol", quick),
+            ref.source("radius_tol_quick" if quick else "radius_tol"),
+        ),
+        ref.below(
+            "radius_constant",
+            f"the tip's distance from the vertical is constant along the whirl ({tag})",
+            w.radius_variation,
+            "rigidity_tol",
+            source="the rotation symmetry of the continuum",
+        ),
+        ref.below(
+            "rigid_rotation",
+            f"the centerline turns rigidly about the vertical ({tag})",
+            w.rotation_defect,
+            "rigidity_tol",
+            source="the rotation symmetry of the continuum",
+        ),
+        holds(
+            "whirl_unstable",
+            "the whirl is unstable (a Floquet multiplier outside the unit circle)",
+            w.max_nontrivial > 1.0,
+            w.max_nontrivial,
+            reference="> 1",
+            why="the O(2)-Hopf theory: of standing and rotating waves generically one is stable; "
+            "the planar cycle here is stable in 3-D",
+            source="the 3-D monodromy (fempipe.analyses.space.shooting)",
+            category="numerics",
+        ),
+    ]
+    if len(whirls) > 1:
+        errs = [abs(x.omega - bvp.omega) for _, x in whirls]
+        hs = [1.0 / n for n, _ in whirls]
+        order = math.log(errs[-2] / errs[-1]) / math.log(hs[-2] / hs[-1])
+        checks.append(
+            ref.below(
+                "omega_order",
+                "the ω difference falls at the FE order (observed order from the last two meshes)",
+                -order,
+                "min_order_negated",
+                source="the convergence of cubic elements",
+            )
+        )
+    space = SpaceModel(FiniteElement(meshes[-1], 3), Params(alpha=0.0, v=v))
+    planar = find_attractor(PipeModel(space.disc, space.params))
+    tips_planar = None
+    if planar.cycle is not None:
+        d = space.tip_coordinates(np.array([planar_state(q) for q in planar.cycle.orbit_q]))
+        tips_planar = (d["Z_tip"], d["Y_tip"])
+    d = space.tip_coordinates(w.cycle.orbit_q)
+    table = Table(
+        f"The whirl at v = {v:g}: FE against the rotating-frame BVP (ω = {bvp.omega:.8g}, "
+        f"radius {bvp.radius:.8g}, period {bvp.period:.8g})",
+        (
+            "mesh",
+            "ω",
+            "period",
+            "tip radius",
+            "Δω",
+            "Δradius",
+            "radius variation",
+            "rotation defect",
+            "largest |multiplier|",
+        ),
+        tuple(tuple(r) for r in rows),
+    )
+    free_table = Table(
+        "The FE motion from the BVP's whirl state, half a period",
+        ("mesh", "rate", "rate - ω_BVP", "radius variation"),
+        tuple(
+            (f"P3:{n}", r, r - bvp.omega, var)
+            for n, (r, var) in zip(free_meshes, free, strict=True)
+        ),
+    )
+    findings = [
+        f"The hanging pipe at v = {v:g} whirls at ω = {bvp.omega:.6g} (period "
+        f"{bvp.period:.6g}, tip radius {bvp.radius:.5g}) in the rotating frame; the FE whirl "
+        f"({tag}) has ω = {w.omega:.6g}, and Floquet multipliers of modulus up to "
+        f"{w.max_nontrivial:.4g}: unstable, the planar cycle is the attractor."
+    ]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=[table, free_table],
+        findings=findings,
+        data={
+            "v": v,
+            "bvp": {"omega": bvp.omega, "radius": bvp.radius, "period": bvp.period},
+            "whirls": {n: x.to_dict() for n, x in whirls},
+            "tip_whirl": (d["Z_tip"], d["Y_tip"]),
+            "tip_planar": tips_planar,
+            "free": {n: f for n, f in zip(free_meshes, free, strict=True)},
+        },
+    )
+
+
+def _free_rotation(bvp, n_elements: int, v: float) -> tuple[float, float]:
+    """(rate, radius variation) of the FE motion from the BVP's whirl over half a period."""
+    from fempipe.analyses.space.whirl import whirl_state
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.model.params import Params
+    from fempipe.model.space import SpaceModel
+    from fempipe.solvers.radau import Radau
+
+    space = SpaceModel(FiniteElement(n_elements, 3), Params(alpha=0.0, v=v))
+    U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
+    stepper = Radau(space, U, Ud, rtol=1e-9)
+    ts, Us = [0.0], [U]
+    for t, q, _ in stepper.steps(0.5 * bvp.period):
+        ts.append(t)
+        Us.append(q)
+    d = space.tip_coordinates(np.array(Us))
+    rad = np.hypot(d["Z_tip"], d["Y_tip"])
+    ang = np.unwrap(np.arctan2(d["Y_tip"], d["Z_tip"]))
+    return float((ang[-1] - ang[0]) / ts[-1]), float((rad.max() - rad.min()) / rad.mean())
+
+
+def _order(hs, errs) -> float:
+    return math.log(errs[-2] / errs[-1]) / math.log(hs[-2] / hs[-1])
+
+
+def _close(name, claim, measured, reference, atol, why):
+    from .checks import close
+
+    return close(
+        name,
+        claim,
+        measured,
+        reference,
+        atol=atol,
+        why=why,
+        source="the rotating-frame BVP (fempipe.validation.whirl_bvp)",
+    )
+
+
+def plot(result: CaseResult, fig=None):
+    """(a) The tip from above; (b) the differences against the BVP."""
+    from matplotlib.ticker import NullFormatter
+
+    from .drawing import figure_panels, finish_figure
+
+    d = result.data
+    fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
+    ax = axes[0]
+    z, y = d["tip_whirl"]
+    ax.plot(z, y, "-", color="#0072B2", lw=2.0, label="whirl, FE")
+    R = d["bvp"]["radius"]
+    a = np.linspace(0, 2 * np.pi, 361)
+    ax.plot(R * np.cos(a), R * np.sin(a), "--", color="k", lw=1.0, label="whirl, BVP")
+    if d["tip_planar"] is not None:
+        zp, yp = d["tip_planar"]
+        ax.plot(zp, yp, "-", color="#D55E00", lw=2.0, label="planar cycle")
+    ax.set_aspect("equal")
+    ax.set_ylim(-1.3 * R, 2.0 * R)  # room for the legend above the orbits
+    ax.set_xlabel("Z_tip")
+    ax.set_ylabel("Y_tip")
+    ax.set_title(f"tip from above, v = {d['v']:g}", fontsize=10)
+    ax.legend(fontsize=8, loc="upper center", ncols=2)
+    ax.grid(alpha=0.3)
+    ax = axes[1]
+    ns = sorted(d["whirls"])
+    om = [abs(d["whirls"][n]["omega"] - d["bvp"]["omega"]) for n in ns]
+    rr = [abs(d["whirls"][n]["radius"] - d["bvp"]["radius"]) for n in ns]
+    ax.loglog(ns, om, "-o", color="#0072B2", label="|Δω|")
+    ax.loglog(ns, rr, "-s", color="#009E73", label="|Δ radius|")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(ns, [str(n) for n in ns])
+    ax.set_xlabel("elements (cubic)")
+    ax.set_ylabel("FE - BVP")
+    ax.set_title("against the rotating-frame BVP", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    finish_figure(fig, CASE.title, parameters="α = 0, β = 0.142, γ = 18.9, μ = 0.005")
+    return fig

@@ -1,0 +1,284 @@
+"""The whirl of the hanging pipe as a steady state in a rotating frame: an independent BVP.
+
+At an axisymmetric inclination (sin alpha = 0: gravity along the clamp's axis
+e_1) a turn of the pipe about e_1 is a symmetry, and a *whirl* is a motion in
+which the shape turns rigidly about e_1 at a rate omega.  In the frame turning
+with it the shape is steady, and the motion of the continuum (the weak form of
+:mod:`fempipe.model.space`, written here in strong form) is a boundary-value
+problem in xi alone:
+
+* kinematics: ``r' = t``, ``t_dot = omega e_1 x t``, ``r_dot = omega e_1 x r``,
+  ``r_ddot = -omega^2 r_perp`` (r_perp = (0, r_2, r_3), the part normal to e_1);
+* the force field ``G(xi) = \\int_xi^1 (r_ddot + 2 v sqrt(beta) t_dot + sigma r_dot)
+  - gamma (1 - xi + Gamma) g + v^2 t(1) + Gamma r_ddot(1)``, g = (cos alpha, 0, 0),
+  i.e. ``G' = -(r_ddot + 2 v sqrt(beta) t_dot + sigma r_dot) + gamma g`` with
+  ``G(1) = -gamma Gamma g + v^2 t(1) + Gamma r_ddot(1)``;
+* the objective Kelvin-Voigt damping.  Its curvature rate is
+  ``k = t x t_dot' + Omega t'`` with ``Omega = \\int_0^xi t' . (t x t_dot)``
+  (the twist-free section frame, anchored at the clamp, which does not turn).
+  For ``t_dot = omega e_1 x t``: ``t x t_dot' = -omega t_1 t'`` and
+  ``Omega = omega (t_1 - 1)``, so ``k = -omega t'``: the sections do not turn
+  with the shape (the frame's angular velocity is omega (e_1 - t), not
+  omega e_1), each fibre is bent to and fro once a turn, and the damping
+  dissipates ``mu omega^2 \\int |t'|^2`` in a whirl;
+* the balance.  The virtual work
+  ``\\int delta t' . m + delta t . (G + mu K t' x t) = 0`` for every
+  ``delta t`` normal to t with ``delta t(0) = 0``, where
+  ``m = t' + mu k x t = t' + c t x t'`` (c = mu omega) and
+  ``K = \\int_xi^1 k . t' = -omega Q``, ``Q = \\int_xi^1 |t'|^2``, gives
+  ``m' = G + c Q t x t' + lambda t`` and ``m(1) = 0``, i.e.
+  ``t'' + c t x t'' = b + lambda t`` with ``b = G + c Q t x t'``; the
+  constraint |t| = 1 fixes lambda (``t . t'' = -|t'|^2``) and
+  ``t'' = -|t'|^2 t + (b_n - c t x b_n) / (1 + c^2)`` with b_n the part of b
+  normal to t.  For mu = 0 it is ``t'' = G - (t . G + |t'|^2) t``.
+
+The unknowns are y = (r, t, t', G, Q) (13 functions) and omega, with
+``r(0) = 0``, ``t(0) = e_1``, ``t'(1) = 0`` (m(1) = 0), ``Q(1) = 0``, the
+condition on G(1), and the phase condition ``r_3(1) = 0`` (the tip in the
+(e_1, e_2) plane at the instant shown: it fixes the rotation).  The straight
+pipe solves the problem for every omega, so v is left free and an amplitude
+fixed instead: first ``r_2(1) = 0.01`` next to the Hopf point, then the
+curvature energy ``Q(0) = \\int_0^1 |t'|^2``, continued until v passes the
+wanted value and then adjusted by the secant method until v is met
+(:func:`solve_whirl_bvp`; the tip radius itself saturates near 0.39 for the
+paper's pipe while v grows, a poor parameter).  The
+module shares no code with fempipe's discretizations, quadrature or
+residual: scipy's collocation solver ``solve_bvp`` (4th-order Lobatto IIIA,
+adaptive mesh) does the work.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_bvp
+
+__all__ = ["WhirlBVP", "solve_whirl_bvp", "whirl_rhs"]
+
+E1 = np.array([1.0, 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class WhirlBVP:
+    """A whirl of the continuum.
+
+    Attributes
+    ----------
+    v, omega : float
+        Flow velocity and rotation rate (rad per unit tau, right-handed about e_1).
+    period : float
+        2 pi / |omega|.
+    radius : float
+        The tip's distance from the vertical, sqrt(r_2(1)^2 + r_3(1)^2).
+    tip : ndarray, shape (3,)
+        r(1) at the instant of the phase condition (r_3(1) = 0).
+    dissipation, supply : float
+        Power per unit tau: lost to the Kelvin-Voigt damping (``mu omega^2 \\int |t'|^2``),
+        to the fluid (``v sqrt(beta) |r_dot(1)|^2``) and to external damping
+        (``sigma \\int |r_dot|^2``); supplied by the follower force
+        (``-v^2 r_dot(1) . t(1)``).  In a whirl the energy is constant: they must agree
+        (to the BVP's tolerance).
+    rms_residual : float
+        Largest relative residual of the collocation (solve_bvp's ``rms_residuals``).
+    n_nodes : int
+    sol : callable
+        ``sol(xi)`` -> y (13, len(xi)): r, t, t', G, Q.
+    """
+
+    v: float
+    omega: float
+    period: float
+    radius: float
+    tip: np.ndarray
+    dissipation: float
+    supply: float
+    rms_residual: float
+    n_nodes: int
+    sol: object
+
+
+def whirl_rhs(xi, y, omega, *, v, beta, gamma, mu, alpha=0.0, sigma=0.0):
+    """dy/dxi of y = (r, t, t', G, Q) (13, m) in the frame turning at omega (module docstring)."""
+    r, t, p, G, Q = y[0:3], y[3:6], y[6:9], y[9:12], y[12]
+    g = np.array([math.cos(alpha), 0.0, 0.0])[:, None]
+    e1 = E1[:, None]
+    r_perp = r * np.array([0.0, 1.0, 1.0])[:, None]
+    rdd = -(omega**2) * r_perp
+    td = omega * np.cross(e1, t, axis=0)
+    rd = omega * np.cross(e1, r, axis=0)
+    dG = -(rdd + 2.0 * v * math.sqrt(beta) * td + sigma * rd) + gamma * g
+    c = mu * omega
+    p2 = np.sum(p * p, axis=0)
+    tt = np.sum(t * t, axis=0)
+    b = G + c * Q * np.cross(t, p, axis=0)
+    bn = b - t * np.sum(t * b, axis=0) / tt
+    dp = -p2 * t + (bn - c * np.cross(t, bn, axis=0)) / (1.0 + c * c)
+    return np.vstack([t, p, dp, dG, -p2[None]])
+
+
+def _tip_force(yb, omega, v, gamma, end_mass, alpha):
+    g = np.array([math.cos(alpha), 0.0, 0.0])
+    rdd1 = -(omega**2) * yb[0:3] * np.array([0.0, 1.0, 1.0])
+    return -gamma * end_mass * g + v * v * yb[3:6] + end_mass * rdd1
+
+
+def _solve(xi, y, p, *, fixed_v, R, prm, tol, max_nodes, energy=None):
+    """One solve_bvp: p = (omega,) with v = fixed_v, or (omega, v) with r_2(1) = R or, if
+    ``energy`` is given, with Q(0) = \\int_0^1 |t'|^2 = energy."""
+    beta, gamma, mu, alpha, sigma, end_mass = (
+        prm[k] for k in ("beta", "gamma", "mu", "alpha", "sigma", "end_mass")
+    )
+
+    def split(pp):
+        return (pp[0], fixed_v) if fixed_v is not None else (pp[0], pp[1])
+
+    def fun(x, yy, pp):
+        om, v = split(pp)
+        return whirl_rhs(x, yy, om, v=v, beta=beta, gamma=gamma, mu=mu, alpha=alpha, sigma=sigma)
+
+    def bc(ya, yb, pp):
+        om, v = split(pp)
+        res = [ya[0:3], ya[3:6] - E1, yb[6:9], yb[12:13]]
+        res.append(yb[9:12] - _tip_force(yb, om, v, gamma, end_mass, alpha))
+        res.append(yb[2:3])  # phase: r_3(1) = 0
+        if fixed_v is None:
+            res.append(yb[1:2] - R if energy is None else ya[12:13] - energy)
+        return np.concatenate(res)
+
+    return solve_bvp(fun, bc, xi, y, p=p, tol=tol, max_nodes=max_nodes)
+
+
+def _initial_guess(xi, amplitude, v, gamma, end_mass, slope=None):
+    """A bent pipe under the axial force of the straight one, G = (v^2 - gamma (1 - xi +
+    Gamma)) e_1: with the complex lateral slope ``slope`` (t_2 + i t_3 at xi, e.g. a linear
+    whirl mode) scaled to the tip amplitude r_2(1) = amplitude, else theta = amplitude
+    sin(pi xi / 2) in the (e_1, e_2) plane."""
+    if slope is None:
+        slope = np.sin(0.5 * math.pi * xi) + 0j
+    w = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(xi))])
+    scale = amplitude / w[-1]  # complex: turns the tip onto e_2 (r_3(1) = 0)
+    s = slope * scale
+    t = np.vstack([np.sqrt(np.maximum(1.0 - np.abs(s) ** 2, 0.0)), s.real, s.imag])
+    t /= np.linalg.norm(t, axis=0)
+    p = np.gradient(t, xi, axis=1)
+    r = np.vstack(
+        [np.concatenate([[0.0], np.cumsum(0.5 * (c[1:] + c[:-1]) * np.diff(xi))]) for c in t]
+    )
+    y = np.zeros((13, xi.size))
+    y[0:3], y[3:6], y[6:9] = r, t, p
+    y[9] = v * v - gamma * (1.0 - xi + end_mass)
+    y[12] = np.sum(p * p, axis=0)[::-1].cumsum()[::-1] * (xi[1] - xi[0])
+    return y
+
+
+def _result(res, v, prm) -> WhirlBVP:
+    om = float(res.p[0])
+    xi = np.linspace(0.0, 1.0, 2001)
+    y = res.sol(xi)
+    r, t, p = y[0:3], y[3:6], y[6:9]
+    w = np.full(xi.size, xi[1] - xi[0])
+    w[[0, -1]] *= 0.5
+    rd = om * np.cross(E1[:, None], r, axis=0)
+    kv = prm["mu"] * om**2 * float(w @ np.sum(p * p, axis=0))
+    lost = v * math.sqrt(prm["beta"]) * float(rd[:, -1] @ rd[:, -1])
+    lost += prm["sigma"] * float(w @ np.sum(rd * rd, axis=0))
+    supply = -v * v * float(rd[:, -1] @ t[:, -1])
+    tip = r[:, -1].copy()
+    return WhirlBVP(
+        v=float(v),
+        omega=om,
+        period=2.0 * math.pi / abs(om),
+        radius=float(math.hypot(tip[1], tip[2])),
+        tip=tip,
+        dissipation=kv + lost,
+        supply=supply,
+        rms_residual=float(np.max(res.rms_residuals)),
+        n_nodes=int(res.x.size),
+        sol=res.sol,
+    )
+
+
+def solve_whirl_bvp(
+    v: float,
+    *,
+    beta: float = 0.142,
+    gamma: float = 18.9,
+    mu: float = 5e-3,
+    alpha: float = 0.0,
+    end_mass: float = 0.0,
+    sigma: float = 0.0,
+    hopf: tuple[float, float] = (6.33, 15.7),
+    slope: np.ndarray | None = None,
+    start_radius: float = 0.01,
+    max_step: float = 0.2,
+    tol: float = 1e-8,
+    max_nodes: int = 20000,
+) -> WhirlBVP:
+    """The whirl at flow velocity v, by continuation in amplitude from the Hopf point.
+
+    Parameters
+    ----------
+    v : float
+        Flow velocity of the whirl wanted (above the Hopf point).
+    beta, gamma, mu, alpha, end_mass, sigma : float
+        The pipe's parameters (:class:`fempipe.model.params.Params`; sin alpha must be 0).
+    hopf : (v, omega)
+        A guess of the Hopf point (flutter onset and frequency).
+    slope : ndarray of complex, optional
+        A guess of the critical mode's slope t_2 + i t_3 on ``np.linspace(0, 1, slope.size)``
+        (e.g. the flutter eigenmode's theta): the continuation starts from it at the tip
+        amplitude ``start_radius``.  The guesses only start the continuation; the whirl does
+        not depend on them (a planar guess may lead to another solution, e.g. a whirling
+        hanging chain at v ~ 0).
+    start_radius, max_step : float
+        The whirl of tip amplitude ``start_radius`` (v free) next to the Hopf point starts a
+        continuation in Q(0) = \\int |t'|^2, in steps of at most ``max_step`` (halved on
+        failure), until v passes the wanted one; then v is fixed and the amplitude freed.
+    tol : float
+        solve_bvp's tolerance of the final solve (the continuation uses 100 tol).
+    max_nodes : int
+    """
+    if abs(math.sin(alpha)) > 1e-12:
+        raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
+    prm = {"beta": beta, "gamma": gamma, "mu": mu, "alpha": alpha, "sigma": sigma}
+    prm["end_mass"] = end_mass
+    kw = {"prm": prm, "max_nodes": max_nodes}
+    xi = np.linspace(0.0, 1.0, 101 if slope is None else len(slope))
+    y = _initial_guess(xi, start_radius, hopf[0], gamma, end_mass, slope)
+    p = np.array([hopf[1], hopf[0]], dtype=float)
+    res = _solve(xi, y, p, fixed_v=None, R=start_radius, tol=100 * tol, **kw)
+    if not res.success:
+        raise RuntimeError(f"whirl BVP: no whirl of amplitude {start_radius} by the Hopf guess")
+    # Away from the Hopf point the tip amplitude saturates (near r_2(1) = 0.39 for the paper's
+    # pipe) while v grows fast: continue in the curvature energy Q(0) = \\int |t'|^2, which
+    # grows with v, in steps of at most max_step (halved on failure), until v passes the
+    # wanted one.
+    sol, A, step = res, float(res.y[12, 0]), max_step
+    lo = (A, float(sol.p[1]), sol)
+    while sol.p[1] < v:
+        trial = _solve(
+            sol.x, sol.y, sol.p, fixed_v=None, R=None, energy=A + step, tol=100 * tol, **kw
+        )
+        if trial.success and abs(trial.p[1] - sol.p[1]) < 1.0:
+            lo = (A, float(sol.p[1]), sol)
+            sol, A, step = trial, A + step, min(max_step, 1.5 * step)
+        else:
+            step *= 0.5
+            if step < 1e-4:
+                raise RuntimeError(f"whirl BVP: continuation stuck at v = {sol.p[1]}")
+    hi = (A, float(sol.p[1]), sol)
+    # v(Q(0)) = v by the secant method between the bracketing whirls (never the trivial
+    # solution, which the problem with v fixed also has)
+    for _ in range(30):
+        A = lo[0] + (v - lo[1]) * (hi[0] - lo[0]) / (hi[1] - lo[1])
+        near = hi if abs(hi[1] - v) < abs(lo[1] - v) else lo
+        res = _solve(near[2].x, near[2].y, near[2].p, fixed_v=None, R=None, energy=A, tol=tol, **kw)
+        if not res.success:
+            raise RuntimeError(f"whirl BVP at v = {v}: {res.message}")
+        lo, hi = hi, (A, float(res.p[1]), res)
+        if abs(res.p[1] - v) < 1e-11 * v:
+            break
+    v = float(res.p[1])
+    return _result(res, v, prm)
