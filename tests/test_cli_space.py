@@ -177,11 +177,21 @@ def test_bifurcation_3d_writes_points_diagrams_and_resumes(tmp_path, capsys):
     for p in d["points"]:
         assert p["direction"] in ("up", "down")
         assert p["motion"] in ("planar", "nonplanar")
-        assert p["attractor"] in ("equilibrium", "periodic", "whirl", "non-periodic")
+        assert p["attractor"] in (
+            "equilibrium",
+            "periodic",
+            "whirl",
+            "quasi-periodic",
+            "non-periodic",
+        )
         for k in ("eta_tip", "X_tip", "Z_tip", "Y_tip"):
             assert len(p[k]) == 2 and p[k][0] <= p[k][1]
         assert {"period", "whirl_rate", "started"} <= set(p)
     assert [p["v"] for p in d["points"]] == [3.0, 4.0, 4.0, 3.0]
+    # each sweep's second point goes on from the first one's state unless it came to rest
+    for first, second in (d["points"][:2], d["points"][2:]):
+        expect = "static state" if first["attractor"] == "equilibrium" else "previous attractor"
+        assert (first["started"], second["started"]) == ("static state", expect)
     for name in ("Y_tip.png", "eta_tip.png", "X_tip.png", "Z_tip.png", "bifurcation.json"):
         assert (out / name).stat().st_size > 0
     stored = sorted((out / "points").glob("space-*.json"))

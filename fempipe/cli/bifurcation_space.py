@@ -9,7 +9,7 @@ sine mode) and out of it (``--out-of-plane-amplitude``).  ``--directions``
 chooses the sweeps (up, down; a sweep down costs as much as one up).
 
 ``--json`` prints ``{"model": "3d", "points": [{"v", "direction", "attractor"
-("equilibrium", "periodic", "whirl", "non-periodic"), "motion" ("planar" or
+("equilibrium", "periodic", "whirl", "quasi-periodic", "non-periodic"), "motion" ("planar" or
 "nonplanar"), "eta_tip", "X_tip", "Z_tip", "Y_tip": [min, max], "period",
 "period_n", "whirl_rate", "planarity", "stable", "started", ...}, ...]}``.
 ``--out DIR`` writes bifurcation.json, the diagrams Y_tip.png, eta_tip.png,
@@ -116,7 +116,13 @@ def _write_outputs(output: reporting.Output, result: dict) -> None:
 
 
 #: Marker per attractor kind, color per direction; filled where the motion is non-planar.
-_MARKS = {"equilibrium": "s", "periodic": "o", "whirl": "D", "non-periodic": "x"}
+_MARKS = {
+    "equilibrium": "s",
+    "periodic": "o",
+    "whirl": "D",
+    "quasi-periodic": "^",
+    "non-periodic": "x",
+}
 _COLORS = {"up": "tab:blue", "down": "tab:red"}
 _LABELS = {"Y_tip": "Y(1) (out of plane)", "eta_tip": "η(1)", "X_tip": "X_g(1)", "Z_tip": "Z_g(1)"}
 

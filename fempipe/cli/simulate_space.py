@@ -7,9 +7,10 @@ mode), integrated until the attractor is recognized
 (:func:`fempipe.analyses.space.simulate_space`).
 
 ``--json`` prints ``{"model": "3d", "attractor" ("equilibrium", "periodic",
-"whirl", "non-periodic"), "motion" ("planar" or "nonplanar"), "period",
+"whirl", "quasi-periodic", "non-periodic"), "motion" ("planar" or "nonplanar"), "period",
 "period_n", "whirl_rate", "tip": {"eta_tip", "X_tip", "Z_tip", "Y_tip": [min,
-max]}, "planarity", "steps", "rejected_steps", "t_end", "cpu_time", ...}``;
+max]}, "planarity", "frequencies" (the tip's two leading frequencies of a
+quasi-periodic motion), "steps", "rejected_steps", "t_end", "cpu_time", ...}``;
 Y_tip is the tip's coordinate out of the plane of the static state.
 ``--out DIR`` writes simulate.json, tip.csv (tau, eta_tip, X_tip, Z_tip,
 Y_tip at every step), trajectory.pvd with its VTU frames (the last

@@ -2,13 +2,14 @@
 
 A sweep steps v up (or down); at each v the 3-D model is integrated until its
 attractor is recognized (:func:`~fempipe.analyses.space.motion.simulate_space`)
-and the point records its kind (equilibrium, periodic, whirl, non-periodic),
+and the point records its kind (equilibrium, periodic, whirl, quasi-periodic,
+non-periodic),
 whether the motion is planar, the tip's [min, max] in the plane (eta_tip,
 X_tip, Z_tip) and out of it (Y_tip), the period and the whirl rate.  Each
-point starts from the attractor of the previous one when
-:func:`simulate_space` accepts a start state (``U0``); otherwise, and after an
-equilibrium, from the static state of its own v perturbed in the plane and
-out of it (``started`` says which).  So the sweep follows the attractor it is
+point starts from the state the previous one ended on (its cycle's start, or
+the last state of its run); after an equilibrium, and at the first point,
+from the static state of its own v perturbed in the plane and out of it
+(``started`` says which).  So the sweep follows the attractor it is
 on, and sweeping up and down shows where two attractors coexist.
 
 Every finished point is written at once to a point store (one JSON file each,
@@ -18,7 +19,6 @@ missing points, from the same starting states.
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import os
@@ -146,17 +146,6 @@ class SpacePointStore:
         write_text(self.path(point.direction, point.index), json.dumps(point.to_dict(state=True)))
 
 
-def _start_keywords() -> tuple[str, str] | None:
-    """The names under which :func:`simulate_space` takes a start state, if it does."""
-    params = inspect.signature(simulate_space).parameters
-    if "U0" not in params:
-        return None
-    for name in ("Ud0", "Udot0", "U_dot0"):
-        if name in params:
-            return "U0", name
-    return None
-
-
 def _point(motion: SpaceMotion, m: PipeModel, direction, index, v, started) -> SpacePoint:
     if motion.cycle is not None:
         U, Ud = motion.cycle.q0, motion.cycle.qdot0
@@ -219,7 +208,6 @@ def space_sweep(
     vals = sorted(float(v) for v in values)
     if direction == "down":
         vals = vals[::-1]
-    keys = _start_keywords()
     prev: SpacePoint | None = None
     out = []
     for i, v in enumerate(vals):
@@ -228,8 +216,8 @@ def space_sweep(
         if old is None:
             options = dict(motion_options)
             started = "static state"
-            if keys is not None and prev is not None and prev.attractor != "equilibrium":
-                options[keys[0]], options[keys[1]] = prev.U, prev.Udot
+            if prev is not None and prev.attractor != "equilibrium":
+                options["initial"] = (prev.U, prev.Udot)
                 started = "previous attractor"
             motion = simulate_space(m, **options)
             old = _point(motion, m, direction, i, v, started)
