@@ -30,7 +30,8 @@ The public names, by what their users do (docs, "API reference"):
   :func:`cycle_diagram`, :func:`bifurcation_diagram`;
 * the pipe in three dimensions: :class:`SpaceModel`, :func:`simulate_space`,
   :class:`SpaceMotion`, :func:`out_of_plane_floquet`,
-  :func:`three_dimensional_verdict`;
+  :func:`three_dimensional_verdict`, :func:`space_diagram`,
+  :func:`space_hopf_normal_form`, :func:`find_whirl`;
 * convergence studies: :func:`run_study`, :func:`observed_order`,
   :func:`richardson`; a user's values against fempipe: :func:`compare_values`;
 * error estimates: :func:`refined_static_states` / :func:`with_static_estimates`,
@@ -109,6 +110,11 @@ _LAZY: dict[str, str] = {
     "SpaceMotion": "analyses.space",
     "out_of_plane_floquet": "analyses.space",
     "three_dimensional_verdict": "analyses.space",
+    "space_diagram": "analyses.space",
+    "space_hopf_normal_form": "analyses.space",
+    "SpaceHopfNormalForm": "analyses.space",
+    "find_whirl": "analyses.space",
+    "Whirl": "analyses.space",
     # Studies: convergence, a user's values against fempipe, error estimates
     "run_study": "studies.convergence",
     "ConvergenceStudy": "studies.convergence",
@@ -195,6 +201,11 @@ __all__ = [
     "SpaceMotion",
     "out_of_plane_floquet",
     "three_dimensional_verdict",
+    "space_diagram",
+    "space_hopf_normal_form",
+    "SpaceHopfNormalForm",
+    "find_whirl",
+    "Whirl",
     "run_study",
     "ConvergenceStudy",
     "Quantity",

@@ -120,9 +120,14 @@ from fempipe.analyses.periodic import (  # noqa: E402
     hopf_points,
 )
 from fempipe.analyses.space import (  # noqa: E402
+    SpaceHopfNormalForm,
     SpaceMotion,
+    Whirl,
+    find_whirl,
     out_of_plane_floquet,
     simulate_space,
+    space_diagram,
+    space_hopf_normal_form,
     three_dimensional_verdict,
 )
 from fempipe.analyses.stability import (  # noqa: E402
@@ -245,6 +250,11 @@ PUBLIC = {
     "SpaceMotion": SpaceMotion,
     "out_of_plane_floquet": out_of_plane_floquet,
     "three_dimensional_verdict": three_dimensional_verdict,
+    "space_diagram": space_diagram,
+    "space_hopf_normal_form": space_hopf_normal_form,
+    "SpaceHopfNormalForm": SpaceHopfNormalForm,
+    "find_whirl": find_whirl,
+    "Whirl": Whirl,
     "run_study": run_study,
     "ConvergenceStudy": ConvergenceStudy,
     "Quantity": Quantity,
