@@ -293,12 +293,14 @@ def simulate_space(
                         kind, period_n, period = "periodic", first[0], cycle.period
                         break
             found = _recurrence(sections, n_max, recurrence_tol, scale)
-            if found is not None:
+            # A decaying oscillation's returns agree too once it is small: periodic only
+            # when the swing has stopped shrinking.
+            if found is not None and _steady(swings):
                 period_n, period = found
                 kind = "periodic"
                 break
         g_old = g
-        if _settled(t, p, sections):
+        if _settled(t, p, sections, swings, scale):
             kind = "equilibrium"
             break
     t = np.array(ts)
@@ -349,16 +351,31 @@ def simulate_space(
 #: :data:`REST_RATE` (RMS of U_dot).
 REST_TIME = 10.0
 REST_RATE = 1e-8
+#: A swing of the section variable below this (times the state's scale) between returns:
+#: an oscillation that has died out.
+REST_SWING = 1e-9
+#: Successive swings of a periodic motion agree to this (relative); those of an
+#: oscillation decaying at the rate of the least damped mode do not (a factor e^(Re lambda T)
+#: a return).
+STEADY_SWING = 1e-3
 
 
-def _settled(t: float, p: np.ndarray, sections: list) -> bool:
-    """Whether the motion has come to rest: slow, and no section crossing for
-    :data:`REST_TIME` (since the start when there was none).  A motion that crossed the
-    section on its way to an equilibrium away from it (a buckled state, an offset
-    equilibrium) must count as at rest too, so the test is the time since the *last*
+def _settled(t: float, p: np.ndarray, sections: list, swings: list, scale: float) -> bool:
+    """Whether the motion has come to rest: slow, and either no section crossing for
+    :data:`REST_TIME` (since the start when there was none) or crossings of a swing below
+    :data:`REST_SWING` (an oscillation about the section level that has died out).  A motion
+    that crossed the section on its way to an equilibrium away from it (a buckled state, an
+    offset equilibrium) must count as at rest too, so the test is the time since the *last*
     crossing, not whether there ever was one."""
+    if float(np.sqrt(np.mean(np.square(p)))) >= REST_RATE:
+        return False
     last = sections[-1][0] if sections else 0.0
-    return t - last > REST_TIME and float(np.sqrt(np.mean(np.square(p)))) < REST_RATE
+    return t - last > REST_TIME or bool(swings and swings[-1] < REST_SWING * scale)
+
+
+def _steady(swings: list) -> bool:
+    """The section variable's last two swings agree to :data:`STEADY_SWING` (relative)."""
+    return len(swings) > 2 and abs(swings[-1] - swings[-2]) <= STEADY_SWING * swings[-1]
 
 
 def _recurrence(sections, n_max: int, tol: float, scale: float):
