@@ -90,7 +90,6 @@ def _flutter_slope(disc, v_guess: float, omega_guess: float):
 def run(quick: bool = False) -> CaseResult:
     """(a)-(c) of the module docstring."""
     from fempipe.analyses.limit_cycle.attractor import find_attractor
-    from fempipe.analyses.space.whirl import find_whirl, whirl_state
     from fempipe.model.discretization import FiniteElement
     from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
@@ -136,28 +135,47 @@ def run(quick: bool = False) -> CaseResult:
             source="the rotation symmetry of the continuum",
         ),
     ]
-    rows, whirls = [], []
-    for ne in meshes:
-        space = SpaceModel(FiniteElement(ne, 3), Params(alpha=0.0, v=v))
-        U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
-        w = find_whirl(space, U, Ud, bvp.period)
-        whirls.append((ne, w))
-        rows.append(
-            [
-                f"P3:{ne}",
-                w.omega,
-                w.period,
-                w.radius,
-                w.omega - bvp.omega,
-                w.radius - bvp.radius,
-                w.radius_variation,
-                w.rotation_defect,
-                w.max_nontrivial,
-            ]
-        )
+    rows, whirls = _shot_whirls(bvp, meshes, v)
     ne, w = whirls[-1]
     tag = f"P3:{ne}"
-    checks += [
+    checks += _whirl_checks(ref, bvp, whirls, quick)
+    space = SpaceModel(FiniteElement(meshes[-1], 3), Params(alpha=0.0, v=v))
+    planar = find_attractor(PipeModel(space.disc, space.params))
+    tips_planar = None
+    if planar.cycle is not None:
+        d = space.tip_coordinates(np.array([planar_state(q) for q in planar.cycle.orbit_q]))
+        tips_planar = (d["Z_tip"], d["Y_tip"])
+    d = space.tip_coordinates(w.cycle.orbit_q)
+    table, free_table = _tables(bvp, v, rows, free_meshes, free)
+    findings = [
+        f"The hanging pipe at v = {v:g} whirls at ω = {bvp.omega:.6g} (period "
+        f"{bvp.period:.6g}, tip radius {bvp.radius:.5g}) in the rotating frame; the FE whirl "
+        f"({tag}) has ω = {w.omega:.6g}, and Floquet multipliers of modulus up to "
+        f"{w.max_nontrivial:.4g}: unstable, the planar cycle is the attractor."
+    ]
+    return CASE.result(
+        checks,
+        quick=quick,
+        started=t0,
+        tables=[table, free_table],
+        findings=findings,
+        data={
+            "v": v,
+            "bvp": {"omega": bvp.omega, "radius": bvp.radius, "period": bvp.period},
+            "whirls": {n: x.to_dict() for n, x in whirls},
+            "tip_whirl": (d["Z_tip"], d["Y_tip"]),
+            "tip_planar": tips_planar,
+            "free": {n: f for n, f in zip(free_meshes, free, strict=True)},
+        },
+    )
+
+
+def _whirl_checks(ref, bvp, whirls, quick: bool) -> list:
+    """The finest shot whirl against the BVP, its rigidity and stability, and the order of
+    its omega error."""
+    ne, w = whirls[-1]
+    tag = f"P3:{ne}"
+    checks = [
         _close(
             "omega_vs_bvp",
             f"ω on {tag} = the BVP's",
@@ -213,13 +231,40 @@ def run(quick: bool = False) -> CaseResult:
                 source="the convergence of cubic elements",
             )
         )
-    space = SpaceModel(FiniteElement(meshes[-1], 3), Params(alpha=0.0, v=v))
-    planar = find_attractor(PipeModel(space.disc, space.params))
-    tips_planar = None
-    if planar.cycle is not None:
-        d = space.tip_coordinates(np.array([planar_state(q) for q in planar.cycle.orbit_q]))
-        tips_planar = (d["Z_tip"], d["Y_tip"])
-    d = space.tip_coordinates(w.cycle.orbit_q)
+    return checks
+
+
+def _shot_whirls(bvp, meshes, v: float) -> tuple[list, list]:
+    """The whirl shot on each mesh from the BVP's state: (table rows, [(mesh, Whirl)])."""
+    from fempipe.analyses.space.whirl import find_whirl, whirl_state
+    from fempipe.model.discretization import FiniteElement
+    from fempipe.model.params import Params
+    from fempipe.model.space import SpaceModel
+
+    rows, whirls = [], []
+    for ne in meshes:
+        space = SpaceModel(FiniteElement(ne, 3), Params(alpha=0.0, v=v))
+        U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
+        w = find_whirl(space, U, Ud, bvp.period)
+        whirls.append((ne, w))
+        rows.append(
+            [
+                f"P3:{ne}",
+                w.omega,
+                w.period,
+                w.radius,
+                w.omega - bvp.omega,
+                w.radius - bvp.radius,
+                w.radius_variation,
+                w.rotation_defect,
+                w.max_nontrivial,
+            ]
+        )
+    return rows, whirls
+
+
+def _tables(bvp, v: float, rows, free_meshes, free) -> tuple[Table, Table]:
+    """The shot whirls against the BVP, and the free motion from the BVP's state."""
     table = Table(
         f"The whirl at v = {v:g}: FE against the rotating-frame BVP (ω = {bvp.omega:.8g}, "
         f"radius {bvp.radius:.8g}, period {bvp.period:.8g})",
@@ -244,27 +289,7 @@ def run(quick: bool = False) -> CaseResult:
             for n, (r, var) in zip(free_meshes, free, strict=True)
         ),
     )
-    findings = [
-        f"The hanging pipe at v = {v:g} whirls at ω = {bvp.omega:.6g} (period "
-        f"{bvp.period:.6g}, tip radius {bvp.radius:.5g}) in the rotating frame; the FE whirl "
-        f"({tag}) has ω = {w.omega:.6g}, and Floquet multipliers of modulus up to "
-        f"{w.max_nontrivial:.4g}: unstable, the planar cycle is the attractor."
-    ]
-    return CASE.result(
-        checks,
-        quick=quick,
-        started=t0,
-        tables=[table, free_table],
-        findings=findings,
-        data={
-            "v": v,
-            "bvp": {"omega": bvp.omega, "radius": bvp.radius, "period": bvp.period},
-            "whirls": {n: x.to_dict() for n, x in whirls},
-            "tip_whirl": (d["Z_tip"], d["Y_tip"]),
-            "tip_planar": tips_planar,
-            "free": {n: f for n, f in zip(free_meshes, free, strict=True)},
-        },
-    )
+    return table, free_table
 
 
 def _free_rotation(bvp, n_elements: int, v: float) -> tuple[float, float]:

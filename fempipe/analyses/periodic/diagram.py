@@ -106,7 +106,7 @@ def _alpha_task(
 ) -> dict:
     """Static branch, Hopf points and all branches of periodic orbits at one alpha
     (with ``out_of_plane``: their 3-D verdicts, :func:`_add_verdicts`)."""
-    from fempipe.analyses.bifurcation import PointStore
+    from fempipe.analyses.periodic.points import PointStore
 
     store = PointStore(store_dir, manifest)
     alpha = float(model.params.alpha)
@@ -323,7 +323,7 @@ def cycle_diagram(
         tmp = tempfile.TemporaryDirectory(prefix="fempipe-cycles-")
         store_dir = tmp.name
     try:
-        from fempipe.analyses.bifurcation import PointStore
+        from fempipe.analyses.periodic.points import PointStore
 
         PointStore(store_dir, manifest)  # refuses a store of another run
         in_process = executor is None and (workers is None or int(workers) == 1 or len(alphas) == 1)

@@ -239,13 +239,12 @@ def simulate_space(
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)
     q_s = solve_static(model).q
-    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
-    a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
-    U0, Ud0 = planar_state(q0), planar_state(p0)
-    nt = model.disc.n
-    U0[nt : 2 * nt], U0[2 * nt :] = a0, b0
     if initial is not None:
         U0, Ud0 = (np.array(x, dtype=float) for x in initial)
+    else:
+        U0, Ud0 = _perturbed_static_state(
+            model, space, q_s, mode, amplitude, out_of_plane_amplitude
+        )
     level = _section_value(space, planar_state(q_s))
     stepper = Radau(space, U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
@@ -293,37 +292,21 @@ def simulate_space(
                         kind, period_n, period = "periodic", first[0], cycle.period
                         break
             found = _recurrence(sections, n_max, recurrence_tol, scale)
-            if found is not None:
+            # A decaying oscillation's returns agree too once it is small: periodic only
+            # when the swing has stopped shrinking.
+            if found is not None and _steady(swings):
                 period_n, period = found
                 kind = "periodic"
                 break
         g_old = g
-        if _settled(t, p, sections):
+        if _settled(t, p, sections, swings, scale):
             kind = "equilibrium"
             break
     t = np.array(ts)
     U, P = np.array(Us), np.array(Ps)
-    window = t >= (t[-1] - period if period else 0.9 * t[-1])
-    wU, wt = U[window], t[window]
-    if cycle is not None:  # the attractor's own orbit
-        wU, wt = cycle.orbit_q, cycle.orbit_t
-    axisymmetric = abs(math.sin(model.params.alpha)) < 1e-12
-    planarity = _planarity(space, wU, axisymmetric) if kind != "equilibrium" else 0.0
-    motion = "planar" if planarity < planar_tol else "nonplanar"
-    whirl_rate = None
-    if kind == "periodic" and motion == "nonplanar" and axisymmetric:
-        whirl_rate = _whirl_rate(space, wU, wt, period)
-        if whirl_rate is not None:
-            kind = "whirl"
-    tip = cycle.tip if cycle is not None else _window_tips(space, wU)
-    frequencies = None
-    if kind == "non-periodic":
-        half = t >= 0.5 * t[-1]
-        d = space.tip_coordinates(U[half])
-        pair = two_frequencies(t[half], [d["eta_tip"], d["Y_tip"]])
-        if pair is not None and len(pair) == 2:
-            kind = "quasi-periodic"
-        frequencies = pair
+    kind, motion, planarity, whirl_rate, tip, frequencies = _classify(
+        space, kind, period, cycle, t, U, planar_tol
+    )
     return SpaceMotion(
         kind=kind,
         motion=motion,
@@ -345,20 +328,75 @@ def simulate_space(
     )
 
 
+def _perturbed_static_state(model, space, q_s, mode, amplitude, out_of_plane_amplitude):
+    """(U0, Ud0): the static state perturbed in the plane (as the planar ``simulate``) and
+    out of it (:func:`out_of_plane_perturbation`)."""
+    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
+    a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
+    U0, Ud0 = planar_state(q0), planar_state(p0)
+    nt = model.disc.n
+    U0[nt : 2 * nt], U0[2 * nt :] = a0, b0
+    return U0, Ud0
+
+
+def _classify(space, kind, period, cycle, t, U, planar_tol):
+    """(kind, motion, planarity, whirl_rate, tip, frequencies) of a finished run: planar or
+    not over the attractor's window, a periodic non-planar motion of an axisymmetric pipe
+    that turns about the vertical is a whirl, a non-periodic one with two incommensurate
+    peaks in the tip's spectrum quasi-periodic."""
+    window = t >= (t[-1] - period if period else 0.9 * t[-1])
+    wU, wt = U[window], t[window]
+    if cycle is not None:  # the attractor's own orbit
+        wU, wt = cycle.orbit_q, cycle.orbit_t
+    axisymmetric = abs(math.sin(space.params.alpha)) < 1e-12
+    planarity = _planarity(space, wU, axisymmetric) if kind != "equilibrium" else 0.0
+    motion = "planar" if planarity < planar_tol else "nonplanar"
+    whirl_rate = None
+    if kind == "periodic" and motion == "nonplanar" and axisymmetric:
+        whirl_rate = _whirl_rate(space, wU, wt, period)
+        if whirl_rate is not None:
+            kind = "whirl"
+    tip = cycle.tip if cycle is not None else _window_tips(space, wU)
+    frequencies = None
+    if kind == "non-periodic":
+        half = t >= 0.5 * t[-1]
+        d = space.tip_coordinates(U[half])
+        pair = two_frequencies(t[half], [d["eta_tip"], d["Y_tip"]])
+        if pair is not None and len(pair) == 2:
+            kind = "quasi-periodic"
+        frequencies = pair
+    return kind, motion, planarity, whirl_rate, tip, frequencies
+
+
 #: An equilibrium: the section not crossed for this long (tau) and the rates below
 #: :data:`REST_RATE` (RMS of U_dot).
 REST_TIME = 10.0
 REST_RATE = 1e-8
+#: A swing of the section variable below this (times the state's scale) between returns:
+#: an oscillation that has died out.
+REST_SWING = 1e-9
+#: Successive swings of a periodic motion agree to this (relative); those of an
+#: oscillation decaying at the rate of the least damped mode do not (a factor e^(Re lambda T)
+#: a return).
+STEADY_SWING = 1e-3
 
 
-def _settled(t: float, p: np.ndarray, sections: list) -> bool:
-    """Whether the motion has come to rest: slow, and no section crossing for
-    :data:`REST_TIME` (since the start when there was none).  A motion that crossed the
-    section on its way to an equilibrium away from it (a buckled state, an offset
-    equilibrium) must count as at rest too, so the test is the time since the *last*
+def _settled(t: float, p: np.ndarray, sections: list, swings: list, scale: float) -> bool:
+    """Whether the motion has come to rest: slow, and either no section crossing for
+    :data:`REST_TIME` (since the start when there was none) or crossings of a swing below
+    :data:`REST_SWING` (an oscillation about the section level that has died out).  A motion
+    that crossed the section on its way to an equilibrium away from it (a buckled state, an
+    offset equilibrium) must count as at rest too, so the test is the time since the *last*
     crossing, not whether there ever was one."""
+    if float(np.sqrt(np.mean(np.square(p)))) >= REST_RATE:
+        return False
     last = sections[-1][0] if sections else 0.0
-    return t - last > REST_TIME and float(np.sqrt(np.mean(np.square(p)))) < REST_RATE
+    return t - last > REST_TIME or bool(swings and swings[-1] < REST_SWING * scale)
+
+
+def _steady(swings: list) -> bool:
+    """The section variable's last two swings agree to :data:`STEADY_SWING` (relative)."""
+    return len(swings) > 2 and abs(swings[-1] - swings[-2]) <= STEADY_SWING * swings[-1]
 
 
 def _recurrence(sections, n_max: int, tol: float, scale: float):
