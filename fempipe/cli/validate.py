@@ -2,7 +2,7 @@
 
 Examples
 --------
-fempipe validate --quick                  # about 20 s on 2 cores, into fempipe-out/validate
+fempipe validate --quick                  # about 2.5 min on 2 cores, into fempipe-out/validate
 fempipe validate --out validation/report --workers 2   # regenerate the committed report
 fempipe validate --case fig02b --case symmetry --json
 """
@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="the quick suite (coarser sweeps; about 20 s on 2 cores)",
+        help="the quick suite (coarser sweeps and meshes; about 2.5 min on 2 cores)",
     )
     common.add_workers_argument(
         parser, "worker processes (default: the number of CPUs, at most 4)", default=None
