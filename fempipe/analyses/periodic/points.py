@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fempipe.core.files import write_text
+from fempipe.core.files import claim_run_directory, write_text
 
 __all__ = ["BifurcationPoint", "PointStore"]
 
@@ -109,6 +109,13 @@ class BifurcationPoint:
         )
 
 
+def _sine_basis_default(old: dict) -> None:
+    """Stores written before Modal had a basis hold sine-mode runs."""
+    disc = old.get("discretization", {})
+    if disc.get("kind") == "modal":
+        disc.setdefault("basis", "sine")
+
+
 class PointStore:
     """A directory of finished points, one JSON file each, written atomically.
 
@@ -123,23 +130,8 @@ class PointStore:
     """
 
     def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
-        self.directory = Path(directory)
-        self.directory.mkdir(parents=True, exist_ok=True)
         self.manifest = json.loads(json.dumps(manifest))
-        path = self.directory / "run.json"
-        if path.exists():
-            old = json.loads(path.read_text())
-            disc = old.get("discretization", {})
-            if disc.get("kind") == "modal":
-                # Stores written before Modal had a basis hold sine-mode runs.
-                disc.setdefault("basis", "sine")
-            if old != self.manifest:
-                raise ValueError(
-                    f"point store {self.directory} holds a different run "
-                    f"(run.json differs); use another directory or delete it"
-                )
-        else:
-            write_text(path, json.dumps(self.manifest, indent=1))
+        self.directory = claim_run_directory(directory, self.manifest, _sine_basis_default)
 
     def path(self, alpha_index: int, direction: str, index: int) -> Path:
         """File of point ``index`` of the sweep ``direction`` at the ``alpha_index``-th alpha."""

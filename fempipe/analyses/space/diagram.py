@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.files import write_text
+from ...core.files import claim_run_directory, write_text
 from ...model.operators import PipeModel
 from .motion import TIP3_KEYS, SpaceMotion, simulate_space
 
@@ -116,18 +116,8 @@ class SpacePointStore:
     """
 
     def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
-        self.directory = Path(directory)
-        self.directory.mkdir(parents=True, exist_ok=True)
         self.manifest = json.loads(json.dumps(manifest))
-        path = self.directory / "run.json"
-        if path.exists():
-            if json.loads(path.read_text()) != self.manifest:
-                raise ValueError(
-                    f"point store {self.directory} holds a different run "
-                    "(run.json differs); use another directory or delete it"
-                )
-        else:
-            write_text(path, json.dumps(self.manifest, indent=1))
+        self.directory = claim_run_directory(directory, self.manifest)
 
     def path(self, direction: str, index: int) -> Path:
         return self.directory / f"space-{direction}-{index:03d}.json"
