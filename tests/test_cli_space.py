@@ -48,10 +48,39 @@ def test_planar_simulate_says_whether_its_cycle_survives_in_3d(capsys):
     # alpha = 0: the cycle turned about the vertical is a cycle, a multiplier 1 (to the
     # discretization error of P3:4, 2e-3)
     assert min(abs(m - 1) for m in mus) < 5e-3
+    # that multiplier is reported on its own, with its distance from 1 (no warning: FE keep
+    # the symmetry to better than 1e-2)
+    neutral = complex(*r["neutral_out_of_plane_multiplier"])
+    assert neutral == min(mus, key=lambda m: abs(m - 1))
+    assert r["out_of_plane_symmetry_defect"] == pytest.approx(abs(neutral - 1), rel=1e-12)
+    assert "stable_3d_note" not in r
     in_plane = r["max_nontrivial_multiplier"] < 1
     assert r["stable_3d"] == (r["max_nontrivial_out_of_plane_multiplier"] < 1 and in_plane)
     assert main(args + ["--planar"]) == 0
     assert "stable_3d" not in json.loads(capsys.readouterr().out)
+
+
+def test_planar_simulate_warns_that_few_sine_modes_give_rough_3d_verdicts(capsys):
+    """Three sine modes break the rotation symmetry of the hanging pipe: the neutral
+    multiplier (exactly 1 in the continuum, 1 - 2e-3 on P3:4 above) is more than 1e-2 from
+    1, and the JSON and the text say that the verdict is rough."""
+    args = ["simulate", "--alpha", "0", "--v", "10", "--modal", "3"]
+    assert main(args + ["--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["out_of_plane_symmetry_defect"] > 1e-2
+    assert "modal:3" in r["stable_3d_note"]
+    assert main(args) == 0
+    assert "note: the neutral multiplier" in capsys.readouterr().out
+
+
+def test_rough_verdict_note_names_the_discretization_and_the_defect():
+    from fempipe.analyses.space.verdict import ROUGH_DEFECT, rough_verdict_note
+
+    assert rough_verdict_note("P3:8", 1.5e-5) is None
+    assert rough_verdict_note("P3:8", None) is None
+    assert "P2:2" in rough_verdict_note("P2:2", 2 * ROUGH_DEFECT)
+    # a few modes are rough even where no symmetry measures it (alpha not 0 or pi)
+    assert "modal:4" in rough_verdict_note("modal:4", None)
 
 
 # --- bifurcation: which planar states survive in 3-D, and the 3-D sweep -------------

@@ -26,8 +26,11 @@ orbits, stable and unstable, and the sweep's periodic attractors) gains
 ``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``, of the
 out-of-plane perturbations, :func:`fempipe.analyses.space.out_of_plane_floquet`),
 ``max_nontrivial_out_of_plane_multiplier`` (at alpha = 0 and pi the neutral
-rotation about the vertical left out), ``stable_out_of_plane`` and
-``stable_3d`` (stable in the plane and out of it); an equilibrium
+rotation about the vertical left out, and reported as
+``neutral_out_of_plane_multiplier`` with its distance from 1,
+``out_of_plane_symmetry_defect``), ``stable_out_of_plane``, ``stable_3d``
+(stable in the plane and out of it) and, where that verdict is rough (a few
+modes, or a neutral multiplier more than 1e-2 from 1), ``stable_3d_note``; an equilibrium
 ``stable_out_of_plane`` and ``stable_3d`` from its out-of-plane spectrum.  The
 verdicts are kept in the point store with their points.  ``--3d`` sweeps the
 attractors of the 3-D model instead (:mod:`fempipe.cli.bifurcation_space`).

@@ -16,7 +16,11 @@ out of the plane (:func:`fempipe.analyses.space.three_dimensional_verdict`):
 ``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``; at
 alpha = 0 and pi the one closest to 1 is the neutral rotation about the
 vertical), ``max_nontrivial_out_of_plane_multiplier``,
-``stable_out_of_plane``, for an equilibrium ``stable_out_of_plane``;
+``stable_out_of_plane``, ``neutral_out_of_plane_multiplier`` and
+``out_of_plane_symmetry_defect`` (its distance from 1; null where alpha is
+not 0 or pi), ``stable_3d_note`` where the verdict is rough (a few modes, or
+a neutral multiplier more than 1e-2 from 1), for an equilibrium
+``stable_out_of_plane``;
 ``--planar`` leaves them out.  ``--out DIR`` writes simulate.json,
 time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
 oscillating_shapes.png, pipe.gif, trajectory.pvd (+ the folder trajectory/
@@ -542,6 +546,10 @@ def _print_summary(r: dict) -> None:
     if "stable_3d" in r:
         verdict = {True: "stable", False: "unstable", None: "undecided"}[r["stable_3d"]]
         print(f"  in three dimensions: {verdict}")
+        if r.get("out_of_plane_symmetry_defect") is not None:
+            print(f"  |neutral multiplier - 1| {r['out_of_plane_symmetry_defect']:.2g}")
+        if r.get("stable_3d_note"):
+            print(f"  note: {r['stable_3d_note']}")
     print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")
     if with_errors:
         estimates.print_footer(

@@ -27,6 +27,7 @@ import numpy as np
 
 from fempipe.analyses.limit_cycle import LimitCycle, ShootingError, shoot
 from fempipe.analyses.space import out_of_plane_floquet
+from fempipe.analyses.space.verdict import rough_verdict_note
 from fempipe.core.errors import SolverError
 from fempipe.core.files import write_text
 from fempipe.model.operators import PipeModel
@@ -84,9 +85,11 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
         ``stable_3d`` (stable in the plane and out of it),
         ``out_of_plane_cpu_time`` (CPU seconds), ``planar_block_max_multiplier``
         (the largest non-trivial modulus of the 3-D monodromy's planar block: the
-        planar multipliers again) and, at sin(alpha) = 0,
-        ``neutral_out_of_plane_multiplier`` (``[re, im]``, the rotation about the
-        vertical, left out of the verdict).
+        planar multipliers again), ``neutral_out_of_plane_multiplier`` (``[re, im]``,
+        the rotation about the vertical, left out of the verdict; None unless
+        sin(alpha) = 0) with ``out_of_plane_symmetry_defect`` (its distance from 1),
+        and ``stable_3d_note`` where the verdict is rough
+        (:func:`~fempipe.analyses.space.verdict.rough_verdict_note`).
     """
     from .results import nontrivial_multipliers
 
@@ -99,8 +102,9 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
     # the neutral multiplier of the rotation about the vertical (1 exactly).
     mu = nontrivial_multipliers(np.asarray(oop.planar_multipliers))
     out["planar_block_max_multiplier"] = float(np.max(np.abs(mu))) if mu.size else None
-    if oop.trivial is not None:
-        out["neutral_out_of_plane_multiplier"] = [oop.trivial.real, oop.trivial.imag]
+    note = rough_verdict_note(model.disc.name, oop.symmetry_defect)
+    if note:
+        out["stable_3d_note"] = note
     return out
 
 

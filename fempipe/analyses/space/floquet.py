@@ -88,14 +88,27 @@ class OutOfPlaneFloquet:
     steps: int
     cpu_time: float
 
+    @property
+    def symmetry_defect(self) -> float | None:
+        """|trivial - 1| at an axisymmetric alpha (else None): how far the discretization
+        is from the exact neutral rotation about the vertical, a measured lower bound
+        on the error of its out-of-plane multipliers."""
+        return None if self.trivial is None else float(abs(self.trivial - 1.0))
+
     def to_dict(self, n_multipliers: int = 6) -> dict:
-        """JSON-able: the leading multipliers as [re, im] pairs, the verdict."""
+        """JSON-able: the leading multipliers as [re, im] pairs, the verdict, and at an
+        axisymmetric alpha the neutral multiplier and its distance from 1."""
+        trivial = self.trivial
         return {
             "out_of_plane_floquet_multipliers": [
                 [float(z.real), float(z.imag)] for z in self.multipliers[:n_multipliers]
             ],
             "max_nontrivial_out_of_plane_multiplier": self.max_nontrivial,
             "stable_out_of_plane": self.stable,
+            "neutral_out_of_plane_multiplier": (
+                None if trivial is None else [float(trivial.real), float(trivial.imag)]
+            ),
+            "out_of_plane_symmetry_defect": self.symmetry_defect,
         }
 
 
