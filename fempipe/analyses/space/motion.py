@@ -248,58 +248,30 @@ def simulate_space(
     level = _section_value(space, planar_state(q_s))
     stepper = Radau(space, U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
-    g_old = _section_value(space, stepper.q)
-    sections: list[tuple[float, np.ndarray, np.ndarray]] = []
+    watch = _Returns(
+        space,
+        level,
+        _section_value(space, stepper.q),
+        scale=max(1.0, float(np.sqrt(np.mean(U0**2)))),
+        shoot=use_shooting,
+        shoot_rtol=shoot_rtol,
+        min_swing=min_swing,
+        start_tol=start_tol,
+        recurrence_tol=recurrence_tol,
+        n_max=n_max,
+    )
     kind, period, period_n, cycle = "non-periodic", None, None, None
-    attempts = 0
-    swing = [math.inf, -math.inf]  # the section variable's range since the last return
-    swings: list[float] = []
-    scale = max(1.0, float(np.sqrt(np.mean(U0**2))))
     for t, q, p in stepper.steps(t_max):
         ts.append(t)
         Us.append(q)
         Ps.append(p)
         if callback is not None:
             callback(t)
-        g = _section_value(space, q)
-        swing = [min(swing[0], g), max(swing[1], g)]
-        if g_old < level <= g:
-            sections.append(_locate(space, stepper, ts[-2], t, g_old, g, level))
-            # Shoot only an oscillation of some size that has stopped growing (near the
-            # static state the returns of a slowly growing oscillation agree too, and
-            # Newton then finds the equilibrium), at most three times.
-            swings.append(swing[1] - swing[0])
-            swing = [g, g]
-            big = (
-                len(swings) > 2
-                and swings[-1] > min_swing
-                and abs(swings[-1] - swings[-2]) < 1e-2 * swings[-1]
-            )
-            if use_shooting and attempts < 3 and big:
-                # a non-planar oscillation crosses the section twice a period (eta_tip
-                # swings at twice the frequency of Y_tip): look for period-n returns
-                first = _recurrence(sections, n_max, start_tol, scale)
-                if first is not None:
-                    attempts += 1
-                    t_k, q_k, p_k = sections[-1]
-                    try:
-                        cycle = shoot_space(space, q_k, p_k, first[1], level=level, rtol=shoot_rtol)
-                    except ShootingError:
-                        cycle = None
-                    if cycle is not None and not cycle.stable:
-                        cycle = None  # an orbit the motion is only passing: integrate on
-                    if cycle is not None:
-                        kind, period_n, period = "periodic", first[0], cycle.period
-                        break
-            found = _recurrence(sections, n_max, recurrence_tol, scale)
-            # A decaying oscillation's returns agree too once it is small: periodic only
-            # when the swing has stopped shrinking.
-            if found is not None and _steady(swings):
-                period_n, period = found
-                kind = "periodic"
-                break
-        g_old = g
-        if _settled(t, p, sections, swings, scale):
+        found = watch.step(stepper, ts[-2], t, q)
+        if found is not None:
+            kind, period_n, period, cycle = found
+            break
+        if _settled(t, p, watch.sections, watch.swings, watch.scale):
             kind = "equilibrium"
             break
     t = np.array(ts)
@@ -326,6 +298,89 @@ def simulate_space(
         t_end=float(t[-1]),
         cpu_time=time.process_time() - start,
     )
+
+
+class _Returns:
+    """The returns of the motion to the section (the static state's level of
+    :func:`_section_value`, upwards) and what they tell: a periodic orbit, by
+    shooting once the returns almost repeat or by recurrence alone.
+
+    :meth:`step` is called after every accepted step with the stepper; it returns
+    ``(kind, period_n, period, cycle)`` once the motion is periodic, else None.
+    ``sections`` (time, U, U_dot at each return) and ``swings`` (the section
+    variable's range between returns) are what :func:`_settled` reads.
+    """
+
+    def __init__(
+        self,
+        space,
+        level,
+        g0,
+        *,
+        scale,
+        shoot,
+        shoot_rtol,
+        min_swing,
+        start_tol,
+        recurrence_tol,
+        n_max,
+    ) -> None:
+        self.space, self.level, self.g_old, self.scale = space, level, g0, scale
+        self.shoot, self.shoot_rtol, self.min_swing = shoot, shoot_rtol, min_swing
+        self.start_tol, self.recurrence_tol, self.n_max = start_tol, recurrence_tol, n_max
+        self.sections: list[tuple[float, np.ndarray, np.ndarray]] = []
+        self.swings: list[float] = []
+        self.swing = [math.inf, -math.inf]  # the section variable's range since the last return
+        self.attempts = 0
+
+    def step(self, stepper, t_old: float, t: float, q: np.ndarray):
+        g = _section_value(self.space, q)
+        g_old, self.g_old = self.g_old, g
+        self.swing = [min(self.swing[0], g), max(self.swing[1], g)]
+        if not g_old < self.level <= g:
+            return None
+        self.sections.append(_locate(self.space, stepper, t_old, t, g_old, g, self.level))
+        self.swings.append(self.swing[1] - self.swing[0])
+        self.swing = [g, g]
+        shot = self._shoot()
+        if shot is not None:
+            return shot
+        found = _recurrence(self.sections, self.n_max, self.recurrence_tol, self.scale)
+        # A decaying oscillation's returns agree too once it is small: periodic only
+        # when the swing has stopped shrinking.
+        if found is not None and _steady(self.swings):
+            return "periodic", found[0], found[1], None
+        return None
+
+    def _shoot(self):
+        """Shoot the orbit from the last return if the returns almost repeat."""
+        # Shoot only an oscillation of some size that has stopped growing (near the
+        # static state the returns of a slowly growing oscillation agree too, and
+        # Newton then finds the equilibrium), at most three times.
+        swings = self.swings
+        big = (
+            len(swings) > 2
+            and swings[-1] > self.min_swing
+            and abs(swings[-1] - swings[-2]) < 1e-2 * swings[-1]
+        )
+        if not (self.shoot and self.attempts < 3 and big):
+            return None
+        # a non-planar oscillation crosses the section twice a period (eta_tip
+        # swings at twice the frequency of Y_tip): look for period-n returns
+        first = _recurrence(self.sections, self.n_max, self.start_tol, self.scale)
+        if first is None:
+            return None
+        self.attempts += 1
+        _t, q_k, p_k = self.sections[-1]
+        try:
+            cycle = shoot_space(
+                self.space, q_k, p_k, first[1], level=self.level, rtol=self.shoot_rtol
+            )
+        except ShootingError:
+            return None
+        if not cycle.stable:
+            return None  # an orbit the motion is only passing: integrate on
+        return "periodic", first[0], cycle.period, cycle
 
 
 def _perturbed_static_state(model, space, q_s, mode, amplitude, out_of_plane_amplitude):
