@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fempipe.core.dual import Dual, pullback
+from fempipe.core.dual import Dual, matvec, pullback
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.params import Params
 from fempipe.model.space import SpaceModel, planar_state
@@ -103,6 +103,31 @@ def test_pullback_through_an_integral_matches_the_closed_form():
     jac = W[:, 0, 0, :].T @ B  # sum over the points of d y_r / d u(q) B[q]
     expected = np.diag(np.cos(u) * (C @ u**2)) @ B + np.diag(np.sin(u)) @ C @ np.diag(2 * u) @ B
     assert np.allclose(jac, expected, rtol=1e-13, atol=1e-13)
+
+
+def test_matvec_carries_the_derivatives_of_the_broadcast_product():
+    # M v with M and v Duals carrying local derivatives and one integral term each (the
+    # term on both: its parts add), against the sum over the broadcast product.
+    rng = np.random.default_rng(5)
+    n, S, L = 4, 2, 3
+    base = Dual(rng.normal(size=(n, S)), rng.normal(size=(n, S, L)))
+    term = base.nonlocal_map(lambda f: np.cumsum(f, axis=0), np.triu(np.ones((n, n))))
+    ((t, identity),) = term.nl.items()
+
+    def field(shape):
+        x = Dual(rng.normal(size=shape), rng.normal(size=shape + (L,)))
+        return x + term[(slice(None),) + (None,) * (len(shape) - 2)] * rng.normal(size=shape)
+
+    M, v = field((n, 3, 3, S)), field((n, 3, S))
+    got, want = matvec(M, v), (M * v[:, None]).sum(axis=2)
+    assert np.allclose(got.val, want.val, rtol=1e-14, atol=1e-14)
+    assert np.allclose(got.loc, want.loc, rtol=1e-14, atol=1e-14)
+    assert set(got.nl) == set(want.nl) == {t}
+    assert np.allclose(got.nl[t], want.nl[t], rtol=1e-14, atol=1e-14)
+    # a plain matrix: the derivatives of v only
+    got, want = matvec(M.val, v), (v[:, None] * M.val).sum(axis=2)
+    assert np.allclose(got.loc, want.loc, rtol=1e-14, atol=1e-14)
+    assert np.allclose(got.nl[t], want.nl[t], rtol=1e-14, atol=1e-14)
 
 
 def test_space_cycle_benchmark_is_registered():

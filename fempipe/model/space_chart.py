@@ -55,7 +55,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.dual import Dual, cos, sin, stack
+from ..core.dual import Dual, cos, matvec, sin, stack
 
 __all__ = ["SpaceFields", "fiber_direction", "space_fields", "tangent"]
 
@@ -184,8 +184,8 @@ def _hessian(p: _Point, w) -> tuple:
 
 
 def _apply(M, v):
-    """``M v`` at every point: (n, 3, 3, ...) by (n, 3, ...)."""
-    return (M * v[:, None]).sum(axis=2)
+    """``M v`` at every point: (n, 3, 3, S) by (n, 3, S)."""
+    return matvec(M, v)
 
 
 def _dot(x, y):
