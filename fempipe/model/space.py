@@ -486,9 +486,17 @@ class SpaceModel:
         u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
         return tangent(u1[None, :, None])[0, :, 0]
 
+    def tangents(self, U) -> np.ndarray:
+        """t at the quadrature points, shape (n_q, 3, S) for U of shape (3 n,) (S = 1) or
+        (S, 3 n): the chart alone, without the rates and derivatives of :meth:`fields`."""
+        U = np.atleast_2d(np.asarray(U, dtype=float))
+        S = U.shape[0]
+        u = self._seeds.Phi @ U.reshape(S * 3, self.n_theta).T  # (n_q, S 3)
+        return tangent(np.ascontiguousarray(u.reshape(-1, S, 3).transpose(0, 2, 1)))
+
     def centerline(self, U) -> np.ndarray:
         """r(xi) = \\int_0^xi t at the cell edges, shape (n_cells + 1, 3), in the pipe's frame."""
-        return self.quad.at_edges(self.fields(U).t[:, :, 0])
+        return self.quad.at_edges(self.tangents(U)[:, :, 0])
 
     def tip_position_gradient(self, U) -> np.ndarray:
         """d r(1) / dU in the pipe's frame, shape (3, 3 n): r(1) = \\int_0^1 t."""
@@ -506,8 +514,7 @@ class SpaceModel:
         Floats for one state U (3 n,), arrays (S,) for S states (S, 3 n).  For a planar
         state they are those of :func:`fempipe.model.kinematics.tip_values`.
         """
-        t = self.fields(U).t  # (n_q, 3, S)
-        r1 = np.tensordot(self.w, t, axes=(0, 0))  # (3, S)
+        r1 = np.tensordot(self.w, self.tangents(U), axes=(0, 0))  # (3, S)
         a = self.params.alpha
         out = {
             "eta_tip": r1[1],
