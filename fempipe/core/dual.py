@@ -387,7 +387,12 @@ def cross(x, y):
 def stack(items: Sequence, axis: int = 1) -> Dual:
     """Stack Duals (or arrays) of one shape along a leading ``axis`` of the value."""
     if not any(isinstance(x, Dual) for x in items):
-        shape = np.broadcast_shapes(*(np.shape(x) for x in items))
+        shapes = [np.shape(x) for x in items]
+        # (the residual's path: items of one shape are the rule, and broadcast_shapes
+        # costs more than the copy)
+        shape = (
+            shapes[0] if shapes.count(shapes[0]) == len(shapes) else np.broadcast_shapes(*shapes)
+        )
         out = np.empty(shape[:axis] + (len(items),) + shape[axis:])
         for k, x in enumerate(items):
             out[(slice(None),) * axis + (k,)] = x
