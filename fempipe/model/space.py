@@ -85,6 +85,7 @@ import weakref
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..core.dual import Dual, cross, dot, linear_functional, pullback, stack
 from .discretization import Discretization
@@ -147,6 +148,11 @@ class _Seeds:
             for c in range(3):
                 seed[:, c, c, :] = B * quad.w[:, None]
             self.tests.append(seed.reshape(quad.n_q, 3, 3 * nt))
+        # Phi^T and dPhi^T, sparse when the discretization's are (elements), dense else
+        self.transposed = {
+            name: (sp.csr_matrix(B.T) if sp.issparse(getattr(disc, name)) else B.T.copy())
+            for name, B in (("Phi", self.Phi), ("dPhi", self.dPhi))
+        }
         # dU(1)/dU of the three fields, as columns of (U, U_dot, U_ddot)
         self.tip_der = np.zeros((1, 3, 9 * nt))
         for c in range(3):
@@ -172,25 +178,29 @@ class _Seeds:
         """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G).
 
         W (n_q, S, 15, R): derivatives with respect to the local quantities of
-        :data:`_KINDS`, multiplied here by their bases; G (S, R, 9 nt): those
+        :data:`_KINDS`, multiplied here by their bases (sparse for elements: a
+        point sees the p + 1 functions of its cell); G (S, R, 9 nt): those
         through the tip values, already by the unknowns.
         """
         nt = self.Phi.shape[1]
-        N = 3 * nt
         n_q, S, _, R = W.shape
-        out = np.zeros((S, len(blocks), N, R))
-        for s in range(S):
-            for k, (_f, basis, block) in enumerate(_KINDS):
-                if block in blocks:
-                    Wk = W[:, s, 3 * k : 3 * k + 3].reshape(n_q, 3 * R)
-                    part = getattr(self, basis).T @ Wk  # (nt, 3 R): (j, c, r)
-                    out[s, blocks.index(block)] += (
-                        part.reshape(nt, 3, R).transpose(1, 0, 2).reshape(N, R)
-                    )
-        out = out.reshape(S, len(blocks) * N, R).transpose(0, 2, 1)
+        W5 = W.reshape(n_q, S, len(_KINDS), 3, R)
+        # node first: out[j, s, block, c, r] = dR_r / d(the block's field c at node j)
+        out = np.zeros((nt, S, len(blocks), 3, R))
+        for basis in ("Phi", "dPhi"):
+            kinds = [k for k, (_f, b, blk) in enumerate(_KINDS) if b == basis and blk in blocks]
+            if not kinds:
+                continue
+            at = [blocks.index(_KINDS[k][2]) for k in kinds]
+            sel = W5[:, :, kinds] if len(kinds) > 1 else W5[:, :, kinds[0] : kinds[0] + 1]
+            part = self.transposed[basis] @ sel.reshape(n_q, -1)
+            out[:, :, at] += part.reshape((nt,) + sel.shape[1:])
+        # (j, s, block, c, r) -> (s, r, block, c, j): column block 3 nt + c nt + j
+        out = out.transpose(1, 4, 2, 3, 0).reshape(S, R, len(blocks) * 3 * nt)
         if G is not None:
+            N = 3 * nt
             cols = [("q", "qdot", "qddot").index(b) for b in blocks]
-            out = out + np.concatenate([G[:, :, j * N : (j + 1) * N] for j in cols], axis=2)
+            out += np.concatenate([G[:, :, j * N : (j + 1) * N] for j in cols], axis=2)
         return out
 
 
