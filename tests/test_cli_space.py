@@ -34,6 +34,30 @@ def test_simulate_3d_writes_its_files(tmp_path, capsys):
         assert (out / name).stat().st_size > 0
 
 
+def test_simulate_3d_text_names_the_cycle_multipliers_and_frequencies(capsys):
+    from fempipe.cli.simulate_space import _summary
+
+    r = {
+        "params": {"alpha": 1.57, "beta": 0.142, "gamma": 18.9, "mu": 0.005, "v": 6.5},
+        "attractor": "periodic",
+        "motion": "nonplanar",
+        "period": 0.42,
+        "tip": {"Y_tip": [-0.4, 0.4]},
+        "floquet_multipliers": [[1.0, 0.0], [0.0, 0.7554], [0.2, 0.0]],
+        "stable": True,
+        "planarity": 14.3,
+        "steps": 10,
+        "rejected_steps": 0,
+        "t_end": 3.9,
+        "cpu_time": 1.0,
+    }
+    _summary(r)
+    assert "|Floquet multipliers| 1, 0.7554, 0.2 (stable)" in capsys.readouterr().out
+    _summary(r | {"stable": False, "attractor": "quasi-periodic", "frequencies": [1.5, 2.25]})
+    text = capsys.readouterr().out
+    assert "(unstable)" in text and "frequencies 1.5, 2.25" in text
+
+
 def test_simulate_3d_refuses_a_pulsating_flow(capsys):
     code = main(["simulate", "--3d", "--sigma", "0.1", "--omega", "3", "--fe", "P2:2"])
     assert code != 0

@@ -109,6 +109,12 @@ def _summary(r: dict) -> None:
     print(line)
     for k, (lo, hi) in r["tip"].items():
         print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
+    if r.get("floquet_multipliers"):
+        mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"][:6])
+        verdict = "stable" if r.get("stable") else "unstable"
+        print(f"  |Floquet multipliers| {mus} ({verdict})")
+    if r.get("frequencies"):
+        print(f"  frequencies {', '.join(f'{f:.6g}' for f in r['frequencies'])}")
     print(
         f"  planarity {r['planarity']:.3g}, steps {r['steps']}, rejected {r['rejected_steps']}, "
         f"tau {r['t_end']:.4g}, CPU {r['cpu_time']:.1f} s"
