@@ -132,9 +132,10 @@ def test_matvec_carries_the_derivatives_of_the_broadcast_product():
 
 def test_space_cycle_benchmark_is_registered():
     from fempipe.bench import available
-    from fempipe.bench.space import bench_space_cycle
+    from fempipe.bench.space import bench_space_cycle, bench_space_nonplanar_cycle
 
     assert available()["space_cycle"] is bench_space_cycle
+    assert available()["space_nonplanar_cycle"] is bench_space_nonplanar_cycle
 
 
 def test_whirl_verdict_keeps_a_multiplier_near_but_not_at_one():

@@ -25,7 +25,7 @@ imported by :func:`available`): :mod:`~fempipe.bench.static` (``static_path``,
 :mod:`~fempipe.bench.hopf` and :mod:`~fempipe.bench.output`
 (``simulate_output``: the files of ``simulate --out`` against its computation),
 :mod:`~fempipe.bench.space` (``space_cycle``: a 3-D limit cycle against the planar
-one).  This module is the registry and the runner, with the helpers the benchmarks share (:func:`best_time`,
+one; ``space_nonplanar_cycle``: a cycle that leaves the plane).  This module is the registry and the runner, with the helpers the benchmarks share (:func:`best_time`,
 :func:`child_cpu_seconds`) and the cases they share (:data:`PAPER`,
 :data:`TEXIER_DORBOLO`).
 """

@@ -20,7 +20,16 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``).
   is taken only when the converged residual is above tol / 10, which the two
   models' different step sequences decide differently (measured: the planar
   shooting polishes, the 3-D one does not).  Measure with
-  ``OPENBLAS_NUM_THREADS=1``.
+  ``OPENBLAS_NUM_THREADS=1``.  Per period with the monodromy (one integration
+  with the sensitivity, no Newton step: like for like) the two models are
+  compared too (``*_period_cpu_s``).
+* ``space_nonplanar_cycle``: a genuinely non-planar cycle (alpha = pi/2, v = 6,
+  above the out-of-plane v_cr 5.821 and below the in-plane one 6.210, where no
+  planar cycle exists), found on P3:4 from the Hopf normal form and carried to
+  the default discretization (not timed), then shot again from its converged
+  state (timed: one period with the full monodromy, no block split) and one
+  period of it with the monodromy; the CPU per integration step against the
+  planar cycle's of ``space_cycle``.
 """
 
 from __future__ import annotations
@@ -72,6 +81,10 @@ def bench_space_cycle(quick: bool = False) -> dict:
     n_jac = 3 if quick else 20
     t_jac, _ = _cpu(lambda: [space.jacobians(*stages) for _ in range(n_jac)], 1)
     mu3 = np.abs(cycle3.floquet_multipliers)
+    t_pp, steps_p = _cpu(lambda: _period(planar, cycle.q0, cycle.qdot0, cycle.period), repeats)
+    t_ps, steps_s = _cpu(
+        lambda: _period(space, U, planar_state(cycle.qdot0), cycle.period), repeats
+    )
     return {
         "discretization": disc.name,
         "alpha": params.alpha,
@@ -92,4 +105,53 @@ def bench_space_cycle(quick: bool = False) -> dict:
         "out_of_plane_floquet_cpu_s": t_oop,
         "max_nontrivial_out_of_plane": oop.max_nontrivial,
         "jacobians_3_stages_ms": 1e3 * t_jac / n_jac,
+        "planar_period_cpu_s": t_pp,
+        "planar_period_steps": steps_p,
+        "space_period_cpu_s": t_ps,
+        "space_period_steps": steps_s,
+        "ratio_per_period": t_ps / t_pp if t_pp > 0 else math.nan,
+    }
+
+
+def _period(model, q0, qdot0, period: float, rtol: float = 1e-7) -> int:
+    """One period with the monodromy (the shooting's integration, no Newton step); its steps."""
+    from fempipe.solvers.radau import Radau
+
+    stepper = Radau(model, q0, qdot0, rtol=rtol, sensitivity=True)
+    for _ in stepper.steps(period):
+        pass
+    return stepper.stats.steps
+
+
+@register("space_nonplanar_cycle")
+def bench_space_nonplanar_cycle(quick: bool = False) -> dict:
+    """CPU-s of a non-planar 3-D limit cycle (module docstring)."""
+    from dataclasses import replace
+
+    from fempipe.analyses.space.shooting import shoot_space
+    from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
+    from fempipe.model.space import SpaceModel
+    from fempipe.validation.space_runs import planar_model, space_cycles
+
+    elements = 4 if quick else discretization_from_name(DEFAULT_FE).n_elements
+    alpha, v = math.pi / 2, 6.0
+    found = space_cycles(sorted({4, elements}), alpha, v)[elements]
+    pm = planar_model(elements, alpha)
+    space = SpaceModel(pm.disc, replace(pm.params, v=v))
+    repeats = 1 if quick else 2
+    t_shoot, cycle = _cpu(lambda: shoot_space(space, found.q0, found.qdot0, found.period), repeats)
+    t_period, steps = _cpu(lambda: _period(space, found.q0, found.qdot0, found.period), repeats)
+    return {
+        "discretization": pm.disc.name,
+        "alpha": alpha,
+        "v": v,
+        "period": cycle.period,
+        "Y_tip": cycle.tip["Y_tip"],
+        "stable": cycle.stable,
+        "shoot_cpu_s": t_shoot,
+        "shoot_iterations": cycle.iterations,
+        "shoot_steps_total": cycle.total_steps,
+        "period_cpu_s": t_period,
+        "period_steps": steps,
+        "ms_per_step_with_monodromy": 1e3 * t_period / steps,
     }
