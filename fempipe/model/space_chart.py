@@ -183,6 +183,20 @@ def _hessian(p: _Point, w) -> tuple:
     return H, _vec(0.0 * wa, 2.0 * wa, 2.0 * wb)
 
 
+def _hessian_quadratic(p: _Point, w) -> tuple:
+    """(hess P [w, w], hess D [w, w]): :func:`_hessian` applied to w itself, without the
+    matrix (the acceleration needs the quadratic form along u_dot only)."""
+    wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
+    Pz4 = 0.5 * (p.a * p.s - p.b * p.c)  # P_z / 4
+    wt2 = wt * wt
+    Hww = _vec(
+        2.0 * (wa * wa - wb * wb) - p.ct * wt2,
+        4.0 * (wa * wb) - p.st * wt2,
+        2.0 * ((p.c * wa + p.s * wb) * wt) - Pz4 * wt2,
+    )
+    return Hww, 2.0 * (wa * wa + wb * wb)
+
+
 def _apply(M, v):
     """``M v`` at every point: (n, 3, 3, S) by (n, 3, S)."""
     return matvec(M, v)
@@ -195,8 +209,8 @@ def _dot(x, y):
 def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     """The kinematics of :class:`SpaceFields` from the fields at the quadrature points.
 
-    The gradient G of P (and g of D) and the Hessians along u' and u_dot are
-    formed once as 3 x 3 matrices at each point; every derivative of t is a
+    The gradient G of P (and g of D) and the Hessian along u' are formed once as
+    3 x 3 matrices at each point (along u_dot only its quadratic form is needed); every derivative of t is a
     product with them (module docstring), so that the chart costs few array
     operations.
     """
@@ -206,14 +220,11 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     t = P * inv[:, None]
     G, g = _gradient(p)
     Hp, hp = _hessian(p, u_prime)
-    Hd, hd = _hessian(p, u_dot)
+    Hdd, hdd = _hessian_quadratic(p, u_dot)
     Dd, Dp = _dot(g, u_dot), _dot(g, u_prime)
     td = (_apply(G, u_dot) - t * Dd[:, None]) * inv[:, None]
     tdd = (
-        _apply(G, u_ddot)
-        + _apply(Hd, u_dot)
-        - 2.0 * (td * Dd[:, None])
-        - t * (_dot(g, u_ddot) + _dot(hd, u_dot))[:, None]
+        _apply(G, u_ddot) + Hdd - 2.0 * (td * Dd[:, None]) - t * (_dot(g, u_ddot) + hdd)[:, None]
     ) * inv[:, None]
     tp = (_apply(G, u_prime) - t * Dp[:, None]) * inv[:, None]
     tdp = (
