@@ -61,6 +61,7 @@ from fempipe.model.space import SpaceModel, planar_state
 from fempipe.solvers.newton import solve_static
 
 from ..stability.hopf.lyapunov import HopfCoefficient, lyapunov_coefficient
+from ..stability.hopf.normal_form import predicted_cycle_state
 from ..stability.hopf.pipe import dense
 
 __all__ = [
@@ -235,11 +236,9 @@ class SpaceHopfNormalForm:
         :func:`fempipe.analyses.space.shooting.section_value` crosses its static value there
         to leading order, eta_tip being even under the mirror).
         """
-        n = self.U_static.size
-        g = complex(self.y_gradient @ self.eigenvector[:n])
-        phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
-        x = 2.0 * self.rho(v) * np.real(self.eigenvector * np.exp(1j * phase))
-        return self.U_static + x[:n], x[n:], 2.0 * math.pi / self.omega
+        return predicted_cycle_state(
+            self.U_static, self.eigenvector, self.y_gradient, self.rho(v), self.omega
+        )
 
     def to_dict(self) -> dict:
         """Scalars for JSON."""

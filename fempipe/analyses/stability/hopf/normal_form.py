@@ -90,14 +90,9 @@ class HopfNormalForm:
         Poincare section of :mod:`fempipe.analyses.limit_cycle` (at another phase the
         section could be nearly tangent to the orbit).
         """
-        n = self.q_static.size
-        if phase is None:
-            # eta_tip - eta0 ~ 2 rho Re(g e^{i phase}), g = d eta_tip . q_theta: zero
-            # and rising where g e^{i phase} = -i |g|.
-            g = complex(self.eta_gradient @ self.eigenvector[:n])
-            phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
-        x = 2.0 * self.rho(v) * np.real(self.eigenvector * np.exp(1j * phase))
-        return self.q_static + x[:n], x[n:], 2.0 * math.pi / self.omega
+        return predicted_cycle_state(
+            self.q_static, self.eigenvector, self.eta_gradient, self.rho(v), self.omega, phase
+        )
 
     def to_dict(self) -> dict:
         return {
@@ -109,6 +104,30 @@ class HopfNormalForm:
             "theta_tip_amplitude_coefficient": self.amplitude_coefficients.get("theta_tip"),
             "eta_tip_amplitude_coefficient": self.amplitude_coefficients.get("eta_tip"),
         }
+
+
+def predicted_cycle_state(
+    x_static: np.ndarray,
+    eigenvector: np.ndarray,
+    section_gradient: np.ndarray,
+    rho: float,
+    omega: float,
+    phase: float | None = None,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """(q, q', T) = x_static + 2 rho Re(eigenvector e^{i phase}), 2 pi / omega: the normal
+    form's cycle, a starting guess for shooting.
+
+    ``eigenvector`` is the critical one of the first-order system (positions, then rates);
+    the default phase puts the section variable (gradient ``section_gradient`` with
+    respect to the positions) at its static value and rising.
+    """
+    n = x_static.size
+    if phase is None:
+        # s - s0 ~ 2 rho Re(g e^{i phase}), g = ds . q: zero and rising where g e^{i phase} = -i |g|
+        g = complex(section_gradient @ eigenvector[:n])
+        phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
+    x = 2.0 * rho * np.real(eigenvector * np.exp(1j * phase))
+    return x_static + x[:n], x[n:], 2.0 * math.pi / omega
 
 
 @single_blas
