@@ -52,10 +52,12 @@ class Whirl:
         e_3), as :attr:`fempipe.analyses.space.SpaceMotion.whirl_rate`.
     period : float
     radius : float
-        Mean distance of the tip from the vertical, sqrt(Z_tip^2 + Y_tip^2), over the orbit
-        (at the integrator's step ends over one period from the orbit's start).
+        Time average over one period of the tip's distance from the vertical,
+        sqrt(Z_tip^2 + Y_tip^2) (trapezoidal rule on the integrator's step ends: a plain mean
+        of the step ends weights the stretches where the steps are short, measured 1e-4 off
+        on P3:3).
     radius_variation : float
-        (max - min) / mean of that distance over the orbit: zero for a rigid rotation.
+        (max - min) / radius of that distance over the step ends: zero for a rigid rotation.
     rotation_defect : float
         Largest distance, over the orbit and the cell edges, between the centerline and the
         centerline at tau = 0 turned by omega tau about e_1: zero for a rigid rotation; on a
@@ -192,6 +194,13 @@ def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
     return np.array(ts), np.array(Us)
 
 
+def _radius_statistics(ts: np.ndarray, rad: np.ndarray) -> tuple[float, float]:
+    """(time average, (max - min) / time average) of the tip radius sampled at the times ts
+    (not equally spaced) over one period: the trapezoidal rule, exact to O(step^2)."""
+    mean = float(np.trapezoid(rad, ts) / (ts[-1] - ts[0]))
+    return mean, float((rad.max() - rad.min()) / mean)
+
+
 def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: float) -> float:
     r0 = model.centerline(Us[0])
     worst = 0.0
@@ -246,13 +255,13 @@ def find_whirl(
     trivial = np.argsort(np.abs(mu - 1.0))[:1]
     others = np.delete(mu, trivial)
     largest = float(np.max(np.abs(others))) if others.size else 0.0
-    mean = float(np.mean(rad))
+    mean, variation = _radius_statistics(ts, rad)
     return Whirl(
         v=float(model.params.v),
         omega=omega,
         period=float(cycle.period),
         radius=mean,
-        radius_variation=float((rad.max() - rad.min()) / mean),
+        radius_variation=variation,
         rotation_defect=_rotation_defect(model, ts, Us, omega)
         if math.isfinite(omega)
         else math.nan,
