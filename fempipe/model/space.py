@@ -58,8 +58,9 @@ tangent does not move (:mod:`fempipe.model.space_chart`).  The term
 
     r_g = d/dtau (f . u_dot) + c_g f . u_dot + k_g f . (0, a, b) = 0,
 
-tested with ``f . delta u``: a damped oscillator pulling the coordinates to
-the least |(a, b)| on each fiber.  It does not act on the physics in the
+tested with ``f . delta u``: a damped oscillator that, at rest, pulls the
+coordinates to the least |(a, b)| on each fiber (in motion it is forced: along
+a whirl the coordinates stay far from that representative, docs).  It does not act on the physics in the
 continuum (a test in the physical directions has f . delta u = 0, a test
 along f sees no physical force), it is zero at every planar state
 (so the planar equations are exactly those of the planar model), and it
