@@ -41,8 +41,10 @@ the out-of-plane model's 9.9e-6 | 1.0e-7 from it (two discretizations of one lin
 problem, the difference falling as h^6.6); l1 = -7.32031 +- 3e-5 | -7.31998 +- 2e-4
 (supercritical), omega = 14.2763 | 14.2752, Re lambda' = 3.63422 | 3.63389, c = 0.529221 |
 0.529240.  Cycles shot on the same mesh at v_cr + delta, delta = 1e-3 ... 1e-2, have
-A^2 / delta = c^2 (1 - 0.370 delta + ...) with the value at delta = 0 within 1.1e-6 |
-7.2e-6 of c^2, and periods tending to 2 pi / omega within 1e-9
+A^2 / delta = c^2 (1 - 0.370 delta + ...) with the value at delta = 0 within about
+1e-6 | a few 1e-6 of c^2 (the extrapolation moves at that level with round-off: 0.85e-6
+to 1.1e-6 on P3:4 and 1.5e-6 to 7.2e-6 on P3:8 over three runs), and periods tending to
+2 pi / omega within 1e-9
 (:mod:`fempipe.validation.space_onset`).
 """
 
