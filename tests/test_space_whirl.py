@@ -136,6 +136,26 @@ def test_radius_is_a_time_average_on_unequal_steps():
     assert abs(variation - 2 * eps) < 1e-6
 
 
+@pytest.mark.parametrize("alpha", [0.0, math.pi])
+def test_tip_turn_is_right_handed_about_e1_at_both_axisymmetric_inclinations(alpha):
+    """A bent shape turned by +phi about e_1 (from e_2 towards e_3) for phi from 0 to 2 pi:
+    the tip's angle grows by 2 pi at alpha = 0 and at alpha = pi (where the files' Z_tip is
+    -eta_tip, and the angle of (Z_tip, Y_tip) would fall by 2 pi), at a constant distance."""
+    from fempipe.analyses.space.whirl import tangent_state, tip_turn
+
+    sp = SpaceModel(FiniteElement(3, 3), Params(alpha=alpha, v=5.0))
+    th = 0.8 * np.sin(0.5 * np.pi * sp.x)
+    base = np.column_stack([np.cos(th), np.sin(th), np.zeros_like(th)])
+    states = []
+    for phi in np.linspace(0.0, 2 * np.pi, 25):
+        c, s_ = np.cos(phi), np.sin(phi)
+        turn = np.array([[1.0, 0.0, 0.0], [0.0, c, -s_], [0.0, s_, c]])
+        states.append(tangent_state(sp, base @ turn.T, np.zeros_like(base))[0])
+    radius, angle = tip_turn(sp.tip_coordinates(np.array(states)))
+    assert angle[-1] - angle[0] == pytest.approx(2 * np.pi, abs=1e-6)
+    assert np.ptp(radius) < 1e-6 * radius.mean()
+
+
 @pytest.mark.slow
 def test_whirl_by_shooting_matches_the_bvp(flutter):
     """The whirl of the 3-D model on P3:3 at v = 10 (shot from the BVP's shape) against the

@@ -41,6 +41,7 @@ from ..dynamics import initial_state
 from ..limit_cycle.results import LimitCycle, ShootingError
 from ..statics import solve_static
 from .shooting import section_value, shoot_space
+from .whirl import tip_turn
 
 __all__ = [
     "SpaceMotion",
@@ -471,12 +472,9 @@ def _recurrence(sections, n_max: int, tol: float, scale: float):
 
 def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) -> float | None:
     """The tip's angular velocity about the vertical if it turns at a constant distance, else None."""
-    d = model.tip_coordinates(np.atleast_2d(U))
-    tips = np.column_stack([d["eta_tip"], d["Y_tip"]])
-    radius = np.hypot(tips[:, 0], tips[:, 1])
+    radius, angle = tip_turn(model.tip_coordinates(np.atleast_2d(U)))
     if radius.min() < 0.95 * radius.max():
         return None
-    angle = np.unwrap(np.arctan2(tips[:, 1], tips[:, 0]))
     turn = angle[-1] - angle[0]
     if abs(abs(turn) - 2 * math.pi) > 0.2:
         return None

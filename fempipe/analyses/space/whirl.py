@@ -36,7 +36,14 @@ from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 from .shooting import shoot_space
 
-__all__ = ["Whirl", "find_whirl", "tangent_state", "whirl_guess_from_cycle", "whirl_state"]
+__all__ = [
+    "Whirl",
+    "find_whirl",
+    "tangent_state",
+    "tip_turn",
+    "whirl_guess_from_cycle",
+    "whirl_state",
+]
 
 
 @dataclass(frozen=True)
@@ -53,7 +60,7 @@ class Whirl:
     period : float
     radius : float
         Time average over one period of the tip's distance from the vertical,
-        sqrt(Z_tip^2 + Y_tip^2) (trapezoidal rule on the integrator's step ends: a plain mean
+        sqrt(eta_tip^2 + Y_tip^2) (trapezoidal rule on the integrator's step ends: a plain mean
         of the step ends weights the stretches where the steps are short, measured 1e-4 off
         on P3:3).
     radius_variation : float
@@ -211,6 +218,18 @@ def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: f
     return worst
 
 
+def tip_turn(tips: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(distance from the vertical, unwrapped angle) of the tip, from
+    :meth:`~fempipe.model.space.SpaceModel.tip_coordinates` of a sequence of states.
+
+    In the pipe's frame (eta_tip along e_2, Y_tip along e_3), so that the angle grows for a
+    turn right-handed about e_1 whatever the inclination: at alpha = pi the files' Z_tip is
+    -eta_tip, and the angle of (Z_tip, Y_tip) would turn the other way.
+    """
+    eta, y = np.asarray(tips["eta_tip"]), np.asarray(tips["Y_tip"])
+    return np.hypot(eta, y), np.unwrap(np.arctan2(y, eta))
+
+
 def find_whirl(
     model: SpaceModel,
     U0: np.ndarray,
@@ -243,9 +262,7 @@ def find_whirl(
         raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
     cycle = shoot_space(model, U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
     ts, Us = _step_ends(model, cycle, rtol)
-    tips = model.tip_coordinates(Us)
-    rad = np.hypot(tips["Z_tip"], tips["Y_tip"])
-    ang = np.unwrap(np.arctan2(tips["Y_tip"], tips["Z_tip"]))
+    rad, ang = tip_turn(model.tip_coordinates(Us))
     turn = ang[-1] - ang[0]
     omega = math.copysign(2.0 * math.pi / cycle.period, turn)
     if abs(abs(turn) - 2.0 * math.pi) > 0.5:
