@@ -354,8 +354,8 @@ def matvec(M, v):
     (Duals or arrays of exactly these shapes), contracted over M's axis 2 and v's axis 1.
 
     The same values and derivatives as ``(M * v[:, None]).sum(axis=2)``, without the
-    (m, 3, 3, S, L) product that sum reads: the chart's 3 x 3 gradients and Hessians
-    are applied six times per evaluation.
+    (m, 3, 3, S, L) product that sum reads: the chart applies its 3 x 3 gradient and
+    Hessian five times per evaluation.
     """
     if not isinstance(M, Dual) and not isinstance(v, Dual):
         return np.einsum("nijs,njs->nis", M, v)

@@ -197,11 +197,6 @@ def _hessian_quadratic(p: _Point, w) -> tuple:
     return Hww, 2.0 * (wa * wa + wb * wb)
 
 
-def _apply(M, v):
-    """``M v`` at every point: (n, 3, 3, S) by (n, 3, S)."""
-    return matvec(M, v)
-
-
 def _dot(x, y):
     return (x * y).sum(axis=1)
 
@@ -210,9 +205,9 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     """The kinematics of :class:`SpaceFields` from the fields at the quadrature points.
 
     The gradient G of P (and g of D) and the Hessian along u' are formed once as
-    3 x 3 matrices at each point (along u_dot only its quadratic form is needed); every derivative of t is a
-    product with them (module docstring), so that the chart costs few array
-    operations.
+    3 x 3 matrices at each point (along u_dot only its quadratic form is needed);
+    every derivative of t is a product with them (module docstring), so that the
+    chart costs few array operations.
     """
     p = _Point.of(u)
     P, D = p.numerator()
@@ -222,14 +217,14 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     Hp, hp = _hessian(p, u_prime)
     Hdd, hdd = _hessian_quadratic(p, u_dot)
     Dd, Dp = _dot(g, u_dot), _dot(g, u_prime)
-    td = (_apply(G, u_dot) - t * Dd[:, None]) * inv[:, None]
+    td = (matvec(G, u_dot) - t * Dd[:, None]) * inv[:, None]
     tdd = (
-        _apply(G, u_ddot) + Hdd - 2.0 * (td * Dd[:, None]) - t * (_dot(g, u_ddot) + hdd)[:, None]
+        matvec(G, u_ddot) + Hdd - 2.0 * (td * Dd[:, None]) - t * (_dot(g, u_ddot) + hdd)[:, None]
     ) * inv[:, None]
-    tp = (_apply(G, u_prime) - t * Dp[:, None]) * inv[:, None]
+    tp = (matvec(G, u_prime) - t * Dp[:, None]) * inv[:, None]
     tdp = (
-        _apply(G, u_dot_prime)
-        + _apply(Hp, u_dot)
+        matvec(G, u_dot_prime)
+        + matvec(Hp, u_dot)
         - td * Dp[:, None]
         - tp * Dd[:, None]
         - t * (_dot(g, u_dot_prime) + _dot(hp, u_dot))[:, None]

@@ -27,7 +27,7 @@ import numpy as np
 
 from fempipe.analyses.limit_cycle import LimitCycle, ShootingError, shoot
 from fempipe.analyses.space import out_of_plane_floquet
-from fempipe.analyses.space.verdict import rough_verdict_note
+from fempipe.analyses.space.verdict import cycle_entries, equilibrium_verdict
 from fempipe.core.errors import SolverError
 from fempipe.core.files import write_text
 from fempipe.model.operators import PipeModel
@@ -94,28 +94,13 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
     from .results import nontrivial_multipliers
 
     oop = out_of_plane_floquet(model, cycle)
-    out = oop.to_dict()
-    out["stable_3d"] = bool(stable_in_plane and oop.stable)
-    out["out_of_plane_cpu_time"] = oop.cpu_time
+    out = cycle_entries(model, oop, stable_in_plane)
     # Evidence to check the verdict by: the 3-D monodromy's planar block (the
     # planar model's multipliers, recomputed) and, at an axisymmetric alpha,
     # the neutral multiplier of the rotation about the vertical (1 exactly).
     mu = nontrivial_multipliers(np.asarray(oop.planar_multipliers))
     out["planar_block_max_multiplier"] = float(np.max(np.abs(mu))) if mu.size else None
-    note = rough_verdict_note(model.disc.name, oop.symmetry_defect)
-    if note:
-        out["stable_3d_note"] = note
     return out
-
-
-def equilibrium_verdict(model: PipeModel, q: np.ndarray, stable_in_plane: bool | None) -> dict:
-    """``stable_out_of_plane`` (the out-of-plane spectrum at ``q``) and ``stable_3d``
-    (None when the planar verdict is unknown)."""
-    from fempipe.analyses.stability import linearly_stable
-
-    out_stable = bool(linearly_stable(model.with_plane("out"), q))
-    both = None if stable_in_plane is None else bool(stable_in_plane and out_stable)
-    return {"stable_out_of_plane": out_stable, "stable_3d": both}
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,7 @@ class BifurcationPoint:
         The state the point ended on (start of the next point).
     three_d : dict or None
         The 3-D verdict (a sweep with ``out_of_plane``): ``stable_3d`` and the
-        out-of-plane evidence (:func:`_three_d_verdict`); its keys join the
+        out-of-plane evidence (:mod:`fempipe.analyses.bifurcation`); its keys join the
         point's in :meth:`to_dict`.
     """
 

@@ -9,12 +9,20 @@ A non-periodic planar motion gets no verdict.
 
 from __future__ import annotations
 
+import numpy as np
+
 from ...model.operators import PipeModel
 from ..limit_cycle.results import Attractor
 from ..stability import linearly_stable
-from .floquet import out_of_plane_floquet
+from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
 
-__all__ = ["ROUGH_DEFECT", "rough_verdict_note", "three_dimensional_verdict"]
+__all__ = [
+    "ROUGH_DEFECT",
+    "cycle_entries",
+    "equilibrium_verdict",
+    "rough_verdict_note",
+    "three_dimensional_verdict",
+]
 
 #: A neutral multiplier further than this from 1 marks a discretization whose out-of-plane
 #: multipliers are rough (finite elements: 1.8e-3 on P3:4, 1.5e-5 on P3:6 for the hanging
@@ -68,14 +76,29 @@ def three_dimensional_verdict(model: PipeModel, att: Attractor, *, rtol: float =
     """
     if att.kind == "periodic" and att.cycle is not None:
         oop = out_of_plane_floquet(model, att.cycle, rtol=rtol)
-        out = oop.to_dict()
-        out["stable_3d"] = bool(att.cycle.stable and oop.stable)
-        out["out_of_plane_cpu_time"] = oop.cpu_time
-        note = rough_verdict_note(model.disc.name, oop.symmetry_defect)
-        if note:
-            out["stable_3d_note"] = note
-        return out
+        return cycle_entries(model, oop, att.cycle.stable)
     if att.kind == "equilibrium":
-        stable = linearly_stable(model.with_plane("out"), att.q)
-        return {"stable_out_of_plane": stable, "stable_3d": stable}
+        return equilibrium_verdict(model, att.q, True)
     return {"stable_3d": None}
+
+
+def cycle_entries(model: PipeModel, oop: OutOfPlaneFloquet, stable_in_plane: bool) -> dict:
+    """The verdict of a planar cycle from its out-of-plane multipliers ``oop``: their
+    :meth:`~fempipe.analyses.space.floquet.OutOfPlaneFloquet.to_dict`, ``stable_3d``
+    (stable in the plane and out of it), ``out_of_plane_cpu_time`` and, where the
+    verdict is rough, ``stable_3d_note`` (:func:`rough_verdict_note`)."""
+    out = oop.to_dict()
+    out["stable_3d"] = bool(stable_in_plane and oop.stable)
+    out["out_of_plane_cpu_time"] = oop.cpu_time
+    note = rough_verdict_note(model.disc.name, oop.symmetry_defect)
+    if note:
+        out["stable_3d_note"] = note
+    return out
+
+
+def equilibrium_verdict(model: PipeModel, q: np.ndarray, stable_in_plane: bool | None) -> dict:
+    """``stable_out_of_plane`` (the out-of-plane spectrum at ``q``) and ``stable_3d``
+    (None when the planar verdict is unknown)."""
+    out_stable = bool(linearly_stable(model.with_plane("out"), q))
+    both = None if stable_in_plane is None else bool(stable_in_plane and out_stable)
+    return {"stable_out_of_plane": out_stable, "stable_3d": both}
