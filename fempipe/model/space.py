@@ -60,8 +60,8 @@ tangent does not move (:mod:`fempipe.model.space_chart`).  The term
 
 tested with ``f . delta u``: a damped oscillator that, at rest, pulls the
 coordinates to the least |(a, b)| on each fiber (in motion it is forced: along
-a whirl the coordinates stay far from that representative, docs).  It does not act on the physics in the
-continuum (a test in the physical directions has f . delta u = 0, a test
+a whirl the coordinates stay far from that representative, docs).  It does not
+act on the physics in the continuum (a test in the physical directions has f . delta u = 0, a test
 along f sees no physical force), it is zero at every planar state
 (so the planar equations are exactly those of the planar model), and it
 makes the mass matrix definite.
@@ -82,15 +82,13 @@ machine's load).
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 
 from ..core.dual import Dual, cross, dot, linear_functional, pullback, stack
 from .discretization import Discretization
 from .params import Params
+from .space_assembly import KINDS, Seeds
 from .space_chart import SpaceFields, space_fields, tangent
 
 __all__ = ["GAUGE_DAMPING", "GAUGE_STIFFNESS", "SpaceModel", "planar_state", "plane_of"]
@@ -100,109 +98,6 @@ __all__ = ["GAUGE_DAMPING", "GAUGE_STIFFNESS", "SpaceModel", "planar_state", "pl
 #: inside those of the physics (:mod:`fempipe.analyses.space.floquet`).
 GAUGE_DAMPING = 150.0
 GAUGE_STIFFNESS = 5000.0
-
-_SEEDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _dense(A) -> np.ndarray:
-    return A.toarray() if hasattr(A, "toarray") else np.asarray(A, dtype=float)
-
-
-#: The pointwise quantities the local derivatives are taken with respect to, in
-#: order (3 components each): (field, basis, block of unknowns).
-_KINDS = (
-    ("u", "Phi", "q"),
-    ("u_prime", "dPhi", "q"),
-    ("u_dot", "Phi", "qdot"),
-    ("u_dot_prime", "dPhi", "qdot"),
-    ("u_ddot", "Phi", "qddot"),
-)
-
-
-class _Seeds:
-    """What the Dual fields and the Jacobian assembly of a discretization need (dense).
-
-    Phi, dPhi, tip; the integration operators as matrices along the quadrature
-    points (C, C^R and the integral over the pipe, with their transposes, which pull
-    the derivatives back, :func:`fempipe.core.dual.pullback`); the top-level seeds
-    of the two parts of the weak form, ``seed[q, c', (c, i)] = test_i(q) w_q
-    delta_cc'`` (``\\int test_i A_c``).
-    """
-
-    def __init__(self, disc: Discretization) -> None:
-        quad = disc.quad
-        self.Phi = _dense(disc.Phi)
-        self.dPhi = _dense(disc.dPhi)
-        self.tip = np.asarray(disc.tip, dtype=float)
-        # (op, op^T as a matrix): the integrals and the matrices that pull derivatives back
-        eye = np.eye(quad.n_q)
-        self.ops = {
-            "C": (quad.cumulative_cells, quad.cumulative_adjoint(eye)),
-            "CR": (quad.from_tip_cells, np.ascontiguousarray(quad.from_tip_cells(eye).T)),
-            "int": (lambda f: quad.integrate(f)[None], quad.w[:, None].copy()),
-        }
-        nt = self.Phi.shape[1]
-        self._tests_S: dict[int, tuple] = {}
-        self.tests = []
-        for B in (self.Phi, self.dPhi):
-            seed = np.zeros((quad.n_q, 3, 3, nt))
-            for c in range(3):
-                seed[:, c, c, :] = B * quad.w[:, None]
-            self.tests.append(seed.reshape(quad.n_q, 3, 3 * nt))
-        # Phi^T and dPhi^T, sparse when the discretization's are (elements), dense else
-        self.transposed = {
-            name: (sp.csr_matrix(B.T) if sp.issparse(getattr(disc, name)) else B.T.copy())
-            for name, B in (("Phi", self.Phi), ("dPhi", self.dPhi))
-        }
-        # dU(1)/dU of the three fields, as columns of (U, U_dot, U_ddot)
-        self.tip_der = np.zeros((1, 3, 9 * nt))
-        for c in range(3):
-            self.tip_der[0, c, c * nt : (c + 1) * nt] = self.tip
-
-    def tests_for(self, S: int) -> tuple:
-        """:attr:`tests` repeated for S states, contiguous (kept: made once per S)."""
-        t = self._tests_S.get(S)
-        if t is None:
-            t = self._tests_S[S] = tuple(
-                np.ascontiguousarray(np.repeat(x[:, None], S, 1)) for x in self.tests
-            )
-        return t
-
-    @classmethod
-    def of(cls, disc: Discretization) -> _Seeds:
-        s = _SEEDS.get(disc)
-        if s is None:
-            s = _SEEDS[disc] = cls(disc)
-        return s
-
-    def assemble(self, W: np.ndarray, G: np.ndarray | None, blocks) -> np.ndarray:
-        """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G).
-
-        W (n_q, S, 15, R): derivatives with respect to the local quantities of
-        :data:`_KINDS`, multiplied here by their bases (sparse for elements: a
-        point sees the p + 1 functions of its cell); G (S, R, 9 nt): those
-        through the tip values, already by the unknowns.
-        """
-        nt = self.Phi.shape[1]
-        n_q, S, _, R = W.shape
-        W5 = W.reshape(n_q, S, len(_KINDS), 3, R)
-        # node first: out[j, s, block, c, r] = dR_r / d(the block's field c at node j)
-        out = np.zeros((nt, S, len(blocks), 3, R))
-        for basis in ("Phi", "dPhi"):
-            kinds = [k for k, (_f, b, blk) in enumerate(_KINDS) if b == basis and blk in blocks]
-            if not kinds:
-                continue
-            at = [blocks.index(_KINDS[k][2]) for k in kinds]
-            sel = W5[:, :, kinds] if len(kinds) > 1 else W5[:, :, kinds[0] : kinds[0] + 1]
-            part = self.transposed[basis] @ sel.reshape(n_q, -1)
-            out[:, :, at] += part.reshape((nt,) + sel.shape[1:])
-        # (j, s, block, c, r) -> (s, r, block, c, j): column block 3 nt + c nt + j
-        out = out.transpose(1, 4, 2, 3, 0).reshape(S, R, len(blocks) * 3 * nt)
-        if G is not None:
-            N = 3 * nt
-            cols = [("q", "qdot", "qddot").index(b) for b in blocks]
-            out += np.concatenate([G[:, :, j * N : (j + 1) * N] for j in cols], axis=2)
-        return out
 
 
 def planar_state(q: np.ndarray) -> np.ndarray:
@@ -257,7 +152,7 @@ class SpaceModel:
         self.w = disc.quad.w
         self.n_theta = disc.n
         self.n = 3 * disc.n
-        self._seeds = _Seeds.of(disc)
+        self._seeds = Seeds.of(disc)
         # Phi^T W and dPhi^T W: the test integrals of the two parts of the weak form.
         self._tests = tuple(
             np.ascontiguousarray((B * self.w[:, None]).T)
@@ -295,11 +190,11 @@ class SpaceModel:
         Udd = zero if Udd is None else np.atleast_2d(np.asarray(Udd, dtype=float))
         values = {"u": U, "u_prime": U, "u_dot": Ud, "u_dot_prime": Ud, "u_ddot": Udd}
         out = {}
-        for k, (name, basis, _block) in enumerate(_KINDS):
+        for k, (name, basis, _block) in enumerate(KINDS):
             val = getattr(s, basis) @ values[name].reshape(S * 3, nt).T  # (n_q, S 3)
             val = np.ascontiguousarray(val.reshape(-1, S, 3).transpose(0, 2, 1))
             if blocks:
-                loc = np.zeros((1, 3, 1, 3 * len(_KINDS)))
+                loc = np.zeros((1, 3, 1, 3 * len(KINDS)))
                 for c in range(3):
                     loc[0, c, 0, 3 * k + c] = 1.0
                 val = Dual(val, np.broadcast_to(loc, val.shape + loc.shape[-1:]))
@@ -438,7 +333,7 @@ class SpaceModel:
         s = self._seeds
         S = A.shape[-1]
         pairs = list(zip((A, B), s.tests_for(S), strict=True))
-        W, G = pullback(pairs, 3 * len(_KINDS))
+        W, G = pullback(pairs, 3 * len(KINDS))
         return s.assemble(W, G, blocks)
 
     def residual(self, U, Ud=None, Udd=None, v_dot: float = 0.0) -> np.ndarray:
@@ -515,7 +410,7 @@ class SpaceModel:
         seed = np.zeros((self.w.size, 1, 3, 3))
         for c in range(3):
             seed[:, 0, c, c] = self.w  # (q, S, m, R)
-        W, G = pullback([(fl.t, seed)], 3 * len(_KINDS))
+        W, G = pullback([(fl.t, seed)], 3 * len(KINDS))
         return self._seeds.assemble(W, G, ("q",))[0]
 
     def tip_coordinates(self, U) -> dict:
