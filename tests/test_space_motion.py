@@ -84,18 +84,14 @@ def test_a_growing_out_of_plane_oscillation_needs_no_step_halving():
     pipe above its out-of-plane v_cr, from the static state perturbed in and out of its plane.
     A heavy gauge (weight 1 instead of SpaceModel.gauge_weight, model docstring) failed 103
     times in the 168 steps of this run."""
-    from fempipe.analyses.dynamics import initial_state
-    from fempipe.analyses.space.motion import out_of_plane_perturbation
+    from fempipe.analyses.space.motion import _perturbed_static_state
     from fempipe.analyses.statics import solve_static
     from fempipe.solvers.radau import Radau
 
     model = PipeModel(FiniteElement(4, 3), Params(alpha=math.pi / 2, v=10.0))
     space = SpaceModel(model.disc, model.params)
-    q_s = solve_static(model).q
-    q0, p0 = initial_state(model, 1, 0.01, q_static=q_s)
-    U0, Ud0 = planar_state(q0), planar_state(p0)
+    U0, Ud0 = _perturbed_static_state(model, space, solve_static(model).q, 1, 0.01, 0.01)
     n = model.disc.n
-    U0[n : 2 * n], U0[2 * n :] = out_of_plane_perturbation(space, q_s, 1, 0.01)
     stepper = Radau(space, U0, Ud0, rtol=1e-6)
     for _ in stepper.steps(0.3):
         pass
