@@ -39,8 +39,8 @@ __all__ = [
 TIP3_KEYS = ("eta_tip", "X_tip", "Z_tip", "Y_tip")
 
 #: At an axisymmetric alpha a second multiplier this close to 1 is the rotation's (exactly 1
-#: in the continuum; measured 1.8e-3 off on P3:4 and 2.9e-3 at most along the standing
-#: pipe's branch on P3:8); a whirl has no second one.
+#: in the continuum; measured 1.0e-3 off on P3:4, and with the gauge's earlier weight 1,
+#: 2.9e-3 at most along the standing pipe's branch on P3:8); a whirl has no second one.
 NEUTRAL_TOLERANCE = 2e-2
 
 

@@ -25,8 +25,8 @@ __all__ = [
 ]
 
 #: A neutral multiplier further than this from 1 marks a discretization whose out-of-plane
-#: multipliers are rough (finite elements: 1.8e-3 on P3:4, 1.5e-5 on P3:6 for the hanging
-#: pipe's cycle at v = 10; three sine modes 3.8e-2).
+#: multipliers are rough (finite elements: 1.0e-3 on P3:4, 8.4e-6 on P3:6 for the hanging
+#: pipe's cycle at v = 10; three sine modes 0.23, four 0.09).
 ROUGH_DEFECT = 1e-2
 
 
@@ -36,8 +36,9 @@ def rough_verdict_note(disc_name: str, defect: float | None) -> str | None:
     The chart of the tangent is nonlinear, so the rotation about the vertical (a
     symmetry of the continuum at alpha = 0 and pi) is kept by a discretization only up to
     its error; a few sine modes keep it poorly, and their out-of-plane multipliers are
-    then off by far more than the neutral one (hanging pipe, v = 10: the largest 0.626 on
-    three sine modes against 0.796 converged, where the neutral one is 1.038).
+    then off by far more than the neutral one (hanging pipe, v = 10: on three sine modes
+    no multiplier is near 1, the nearest is 0.767 +- 0.032i, and the largest is 0.768
+    against 0.796 converged).
     """
     modal = disc_name.startswith("modal")
     if defect is not None and defect > ROUGH_DEFECT:
