@@ -341,10 +341,19 @@ def plot(result: CaseResult, fig=None):
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     ax = axes[0]
     z, y = d["tip_whirl"]
-    ax.plot(z, y, "-", color="#0072B2", lw=2.0, label="whirl, FE")
+    # the finest mesh's whirl (the one drawn): unstable orbits dashed, as in every figure
+    stable = d["whirls"][max(d["whirls"], key=int)]["stable"]
+    ax.plot(
+        z,
+        y,
+        "-" if stable else "--",
+        color="#0072B2",
+        lw=2.0,
+        label="whirl, FE" + ("" if stable else " (unstable)"),
+    )
     R = d["bvp"]["radius"]
     a = np.linspace(0, 2 * np.pi, 361)
-    ax.plot(R * np.cos(a), R * np.sin(a), "--", color="k", lw=1.0, label="whirl, BVP")
+    ax.plot(R * np.cos(a), R * np.sin(a), "-", color="k", lw=0.8, label="whirl, BVP")
     if d["tip_planar"] is not None:
         zp, yp = d["tip_planar"]
         ax.plot(zp, yp, "-", color="#D55E00", lw=2.0, label="planar cycle")
