@@ -22,7 +22,12 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``).
   shooting polishes, the 3-D one does not).  Measure with
   ``OPENBLAS_NUM_THREADS=1``.  Per period with the monodromy (one integration
   with the sensitivity, no Newton step: like for like) the two models are
-  compared too (``*_period_cpu_s``).
+  compared too (``*_period_cpu_s``), and where the 3-D period's CPU goes: one more
+  timed period on a model that accounts the CPU of its stage Jacobians and
+  residuals (``space_period_jacobians_cpu_s``, ``space_period_residuals_cpu_s``);
+  what is left (the integrator's linear algebra and the monodromy) against the
+  planar period is ``ratio_per_period_without_weak_form``: the ratio no faster
+  weak form could go below.
 * ``space_nonplanar_cycle``: a genuinely non-planar cycle (alpha = pi/2, v = 6,
   above the out-of-plane v_cr 5.821 and below the in-plane one 6.210, where no
   planar cycle exists), found on P3:4 from the Hopf normal form and carried to
@@ -85,6 +90,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
     t_ps, steps_s = _cpu(
         lambda: _period(space, U, planar_state(cycle.qdot0), cycle.period), repeats
     )
+    shares = _period_shares(disc, params, U, planar_state(cycle.qdot0), cycle.period)
     return {
         "discretization": disc.name,
         "alpha": params.alpha,
@@ -110,6 +116,45 @@ def bench_space_cycle(quick: bool = False) -> dict:
         "space_period_cpu_s": t_ps,
         "space_period_steps": steps_s,
         "ratio_per_period": t_ps / t_pp if t_pp > 0 else math.nan,
+        **shares,
+        "ratio_per_period_without_weak_form": (
+            (
+                shares["space_period_instrumented_cpu_s"]
+                - shares["space_period_jacobians_cpu_s"]
+                - shares["space_period_residuals_cpu_s"]
+            )
+            / t_pp
+            if t_pp > 0
+            else math.nan
+        ),
+    }
+
+
+def _period_shares(disc, params, U, Ud, period: float) -> dict:
+    """One 3-D period with the monodromy on a model that accounts its weak form's CPU."""
+    from fempipe.model.space import SpaceModel
+
+    class Accounted(SpaceModel):
+        jacobians_cpu = residuals_cpu = 0.0
+
+        def jacobians(self, *args, **kwargs):
+            t0 = time.process_time()
+            out = super().jacobians(*args, **kwargs)
+            Accounted.jacobians_cpu += time.process_time() - t0
+            return out
+
+        def residual(self, *args, **kwargs):
+            t0 = time.process_time()
+            out = super().residual(*args, **kwargs)
+            Accounted.residuals_cpu += time.process_time() - t0
+            return out
+
+    t0 = time.process_time()
+    _period(Accounted(disc, params), U, Ud, period)
+    return {
+        "space_period_instrumented_cpu_s": time.process_time() - t0,
+        "space_period_jacobians_cpu_s": Accounted.jacobians_cpu,
+        "space_period_residuals_cpu_s": Accounted.residuals_cpu,
     }
 
 
