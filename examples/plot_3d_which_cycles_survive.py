@@ -5,9 +5,12 @@ Which planar cycles survive in three dimensions
 The paper's model is planar: its limit cycles are motions in the plane of gravity and the clamp.
 A round pipe may leave that plane.  A planar cycle is a solution of the 3-D model too
 (:class:`fempipe.SpaceModel`: its states with no out-of-plane part are the planar model's), and
-:func:`fempipe.out_of_plane_floquet` integrates the 3-D model's monodromy along it: its
-out-of-plane block holds the Floquet multipliers of perturbations out of the plane.  The cycle
-survives in 3-D when all of them lie inside the unit circle.
+:func:`fempipe.out_of_plane_floquet` computes the Floquet multipliers of perturbations out of
+the plane in two independent ways: by default from the linear equation of out-of-plane
+perturbations about the moving planar state (one unknown, the out-of-plane rotation psi), and
+with ``method="3d"`` from the 3-D model's monodromy along the cycle (its out-of-plane block).
+The two are different discretizations of the same multipliers and agree to their
+discretization errors; the cycle survives in 3-D when all of them lie inside the unit circle.
 
 The hanging (alpha = 0) and the standing (alpha = pi) pipe are axisymmetric: a planar cycle
 turned about the vertical is again a cycle, so one out-of-plane multiplier is exactly 1 in the
@@ -28,32 +31,41 @@ results = {}
 for alpha, name in ((0.0, "hanging, alpha = 0"), (np.pi, "standing, alpha = pi")):
     model = fempipe.PipeModel(disc, fempipe.Params(alpha=alpha, v=10.0))
     cycle = fempipe.find_attractor(model, t_max=150.0).cycle
-    oop = fempipe.out_of_plane_floquet(model, cycle)
-    results[name] = (cycle, oop)
+    oop = fempipe.out_of_plane_floquet(model, cycle)  # the linear psi equation
+    oop3 = fempipe.out_of_plane_floquet(model, cycle, method="3d")  # the 3-D model
+    results[name] = (cycle, oop, oop3)
     verdict = "survives" if oop.stable else "does not survive"
     print(
         f"{name}: period {cycle.period:.5f}, largest non-trivial out-of-plane multiplier "
-        f"{oop.max_nontrivial:.4f} -> the planar cycle {verdict} in 3-D"
+        f"{oop.max_nontrivial:.5f} (3-D model: {oop3.max_nontrivial:.5f}) -> the planar cycle "
+        f"{verdict} in 3-D"
     )
 
-hanging = results["hanging, alpha = 0"][1]
-print(f"the rotation about the vertical: multiplier {hanging.trivial.real:.7f}")
+hanging, hanging3 = results["hanging, alpha = 0"][1:]
+print(
+    f"the rotation about the vertical: multiplier {hanging.trivial.real:.7f} "
+    f"(3-D model: {hanging3.trivial.real:.7f})"
+)
 
-#: the hanging pipe's neutral out-of-plane multiplier (1 by its axisymmetry), in tests/test_gallery.py
-RESULT = float(abs(hanging.trivial))
+#: the hanging pipe's neutral out-of-plane multipliers (1 by its axisymmetry), linear and
+#: 3-D, in tests/test_gallery.py
+RESULT = (float(abs(hanging.trivial)), float(abs(hanging3.trivial)))
 
 # %%
 # The multipliers in the complex plane
 # ------------------------------------
-# In-plane multipliers (grey) and out-of-plane ones (colour); the neutral one of the
-# rotation about the vertical is circled.
+# In-plane multipliers (grey) and out-of-plane ones (colour: crosses from the linear psi
+# equation, plus signs from the 3-D model); the neutral one of the rotation about the vertical
+# is circled.
 circle = np.exp(1j * np.linspace(0.0, 2.0 * np.pi, 300))
 fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.6), layout="constrained")
-for ax, (name, (_cycle, oop)) in zip(axes, results.items(), strict=True):
+for ax, (name, (_cycle, oop, oop3)) in zip(axes, results.items(), strict=True):
     ax.plot(circle.real, circle.imag, "k-", lw=0.6)
     mu_p, mu_o = oop.planar_multipliers, oop.multipliers
     ax.plot(mu_p.real, mu_p.imag, "o", color="0.6", ms=4, label="in the plane")
-    ax.plot(mu_o.real, mu_o.imag, "x", color="C3", ms=6, label="out of the plane")
+    ax.plot(mu_o.real, mu_o.imag, "x", color="C3", ms=6, label="out of the plane (psi)")
+    mu_3 = oop3.multipliers
+    ax.plot(mu_3.real, mu_3.imag, "+", color="C0", ms=8, label="out of the plane (3-D)")
     if oop.trivial is not None:
         ax.plot(
             oop.trivial.real,

@@ -186,9 +186,16 @@ def test_dask_sweep(tmp_path, monkeypatch):
 def test_3d_which_cycles_survive(tmp_path, monkeypatch):
     g = run_example("plot_3d_which_cycles_survive", tmp_path, monkeypatch)
     # the hanging pipe is axisymmetric: the rotated cycle is a cycle, its multiplier exactly 1
-    # in the continuum; P3:6 leaves a discretization error of about 8e-6
-    assert g["RESULT"] == pytest.approx(1.0, abs=1e-4)
-    hanging, standing = (oop for _cycle, oop in g["results"].values())
+    # in the continuum; P3:6 leaves a discretization error of about 8e-6 in the 3-D model,
+    # 1.5e-4 in the linear psi equation (measured; 4.2e-5 on P3:8: it converges)
+    linear, full = g["RESULT"]
+    assert full == pytest.approx(1.0, abs=1e-4)
+    assert linear == pytest.approx(1.0, abs=1e-3)
+    hanging, standing = (oop for _cycle, oop, _oop3 in g["results"].values())
+    for _cycle, oop, oop3 in g["results"].values():
+        # two discretizations of the same multipliers: one verdict, close values
+        assert oop.stable == oop3.stable
+        assert abs(oop.max_nontrivial - oop3.max_nontrivial) < 1e-3
     # every other out-of-plane multiplier of a stable cycle's neighbourhood lies inside the circle
     assert hanging.stable and abs(hanging.trivial.imag) < 1e-12
     # the standing pipe's planar cycle has one out-of-plane multiplier outside it

@@ -10,7 +10,8 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``).
   :func:`fempipe.model.space.planar_state`), with the same tolerances, at
   alpha = pi/2, v = 10 on the default discretization P3:16; their ratio
   (target: at most 5); the CPU of :func:`fempipe.analyses.space.floquet.out_of_plane_floquet`
-  of the planar cycle (run by every planar ``fempipe simulate``); and the CPU of
+  of the planar cycle (run by every planar ``fempipe simulate``), by its default
+  linear method and by the 3-D model (``*_3d``); and the CPU of
   the 3-D Jacobians of the three stages of one step (one call, S = 3).  The
   cycle is planar: its 3-D Jacobians decouple exactly into in-plane and
   out-of-plane blocks, which the integrator uses (contract rule 7 of
@@ -80,6 +81,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
         repeats,
     )
     t_oop, oop = _cpu(lambda: out_of_plane_floquet(planar, cycle), repeats)
+    t_oop3, oop3 = _cpu(lambda: out_of_plane_floquet(planar, cycle, method="3d"), repeats)
     U, Ud = planar_state(cycle.q0), planar_state(cycle.qdot0)
     Udd = space.acceleration(U, Ud)
     stages = (np.tile(U, (3, 1)), np.tile(Ud, (3, 1)), np.tile(Udd, (3, 1)))
@@ -110,6 +112,8 @@ def bench_space_cycle(quick: bool = False) -> dict:
         "stable_space": cycle3.stable,
         "out_of_plane_floquet_cpu_s": t_oop,
         "max_nontrivial_out_of_plane": oop.max_nontrivial,
+        "out_of_plane_floquet_3d_cpu_s": t_oop3,
+        "max_nontrivial_out_of_plane_3d": oop3.max_nontrivial,
         "jacobians_3_stages_ms": 1e3 * t_jac / n_jac,
         "planar_period_cpu_s": t_pp,
         "planar_period_steps": steps_p,

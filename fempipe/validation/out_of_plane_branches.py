@@ -384,7 +384,8 @@ def add_legend_entry(ax) -> None:
 
 #: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
 #: orbit, so the multiplier is 1 exactly in the continuum; the mesh leaves a
-#: residue (v = 10, P3:8: 1.8e-5 at α = 0, 6.1e-4 at α = π; P3:16: 3.1e-7 at α = 0).
+#: residue (the cycle at v = 10, linear method: P3:8 4.2e-5 at α = 0, 4.4e-4 at α = π;
+#: P3:16 8.5e-7 at α = 0; the 3-D model's: P3:8 1.0e-5 and 3.6e-4).
 #: Checked in the full suite only: on P3:4 at α = π it is not resolved (it pairs
 #: with the unstable multiplier into a complex pair, |ρ| = 1.045 both).
 NEUTRAL_TOL = 2e-3
@@ -393,8 +394,9 @@ NEUTRAL_TOL = 2e-3
 PLANAR_BLOCK_TOL = 1e-3
 
 _SOURCE = (
-    "fempipe.analyses.space.out_of_plane_floquet (3-D model, Radau with exact sensitivities) "
-    "on the continued orbits of fempipe.analyses.periodic"
+    "fempipe.analyses.space.out_of_plane_floquet (the linear out-of-plane equation about the "
+    "moving planar state, Radau with exact sensitivities) on the continued orbits of "
+    "fempipe.analyses.periodic"
 )
 
 

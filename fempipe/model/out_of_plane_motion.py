@@ -1,0 +1,296 @@
+"""Out-of-plane perturbations of a *moving* planar state: the linear problem, one operator per term.
+
+:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane about a
+planar static state.  Along a planar limit cycle the state moves, and the
+out-of-plane perturbations obey a linear equation with coefficients that
+follow the cycle,
+
+    M psi_ddot + C(tau) psi_dot + K(tau) psi = 0,
+
+whose monodromy over one period holds the cycle's out-of-plane Floquet
+multipliers.  It is the same pipe as the 3-D model (:mod:`fempipe.model.space`)
+in another parametrization: the tangent t = cos(psi) t_p + sin(psi) e_3 with
+t_p = (cos theta, sin theta, 0) the planar tangent, one unknown psi (zero at
+the clamp) on the discretization of theta, no gauge.  The two computations of
+the multipliers are independent (different fields, different derivations) and
+converge to each other (docs, "Three dimensions").
+
+The terms
+---------
+The virtual work of the 3-D weak form, tested with delta t = (e_3 - psi t_p)
+delta psi and linearized in psi about the planar motion theta(xi, tau)
+(n = (-sin theta, cos theta, 0), chi[psi] = psi' + theta' C(theta' psi) the
+material out-of-plane curvature of the static model, C = \\int_0^xi):
+
+=======================  ====================================================
+inertia, Coriolis,       as about a static state: the out-of-plane
+external damping,        acceleration is C psi_ddot, along the fixed e_3
+follower ``v^2 psi(1)``  (:class:`~fempipe.model.out_of_plane.OutOfPlaneOperators`)
+bending                  ``\\int psi' dpsi' - theta'^2 psi dpsi``
+axial force              ``-\\int (t_p . G_0) psi dpsi``: G_0 is the force field
+                         of the planar motion itself (:meth:`base_force`:
+                         inertia ``C^R C t_ddot``, Coriolis, the jet, gravity,
+                         end mass, external damping), t_p . G_0 its component
+                         along the tangent
+Kelvin-Voigt             ``mu \\int chi[psi_dot] chi[dpsi]`` (damping) and, from
+                         the planar bending rate theta_dot' of the cycle,
+                         ``mu \\int (theta_dot theta' psi - theta' C(theta_dot psi'))
+                         chi[dpsi] - theta_dot' theta' psi dpsi
+                         - theta_dot' psi' C(theta' dpsi)`` (stiffness)
+=======================  ====================================================
+
+The Kelvin-Voigt terms are the derivative with respect to psi_dot of the
+objective dissipation (mu/2) \\int |k|^2 of the 3-D model, k = t x t_dot' +
+Omega t', expanded to second order in psi: k = theta_dot' e_3 + k_1 + k_2 with
+``k_1 . n = -(chi[psi_dot] + theta_dot theta' psi - theta' C(theta_dot psi'))``
+and ``k_2 . e_3 = -psi^2 theta_dot' - psi (psi' theta_dot + psi_dot theta') +
+psi' C(theta_dot psi' - theta' psi_dot)``; the base rate theta_dot' e_3 meets
+k_2 (the second line of the table).  At rest (theta_dot = theta_ddot = 0) every
+term is the static model's: K and C equal
+:meth:`~fempipe.model.out_of_plane.OutOfPlaneOperators.matrices` to round-off
+(tested), without its neutral-mode correction.
+
+:class:`OutOfPlaneVariation` is the integrator's problem of the planar motion
+together with its out-of-plane variation (unknowns (theta, psi)): its
+sensitivity over a period is the planar monodromy and the out-of-plane one,
+block by block.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .dynamics_problem import PipeDynamics
+from .operators import PipeModel
+from .out_of_plane import OutOfPlaneOperators
+
+__all__ = ["OutOfPlaneMotion", "OutOfPlaneVariation"]
+
+
+@dataclass(frozen=True)
+class _Base:
+    """The planar motion at the quadrature points: theta, theta', their rates, theta(1)."""
+
+    theta: np.ndarray
+    dtheta: np.ndarray
+    rate: np.ndarray  # theta_dot
+    drate: np.ndarray  # theta_dot'
+    accel: np.ndarray  # theta_ddot
+    theta_tip: float
+
+
+class OutOfPlaneMotion:
+    """K(tau), C(tau), M of out-of-plane perturbations about a moving planar state.
+
+    Parameters
+    ----------
+    model : PipeModel
+        The planar pipe (discretization and parameters).  Springs are refused,
+        as by the 3-D model.
+    """
+
+    def __init__(self, model: PipeModel) -> None:
+        if model.params.springs:
+            raise ValueError(
+                "out-of-plane perturbations of a moving state: springs = () is required "
+                f"(got springs = {model.params.springs!r})"
+            )
+        self.static = OutOfPlaneOperators(model)
+        self.model = model
+        self.quad = model.disc.quad
+        self.w = self.quad.w
+        self.x = self.quad.x
+
+    @property
+    def params(self):
+        return self.model.params
+
+    def base(self, q, qdot, qddot) -> _Base:
+        """The planar motion (q, q', q'') at the quadrature points."""
+        f = self.static._fixed()
+        Phi, dPhi = f["Phi"], f["dPhi"]
+        return _Base(
+            theta=Phi @ q,
+            dtheta=dPhi @ q,
+            rate=Phi @ qdot,
+            drate=dPhi @ qdot,
+            accel=Phi @ qddot,
+            theta_tip=float(self.model.disc.tip @ q),
+        )
+
+    # ---------------------------------------------------- stiffness --
+    def base_force(self, b: _Base) -> np.ndarray:
+        """G_0: the force field of the planar motion, shape (n_q, 2) (in-plane components).
+
+        The 3-D model's terms at the planar state (:meth:`fempipe.model.space.SpaceModel.force_field`):
+        ``C^R C t_ddot + 2 v sqrt(beta) C^R t_dot + v^2 t(1) - gamma (1 - xi + Gamma) g
+        + Gamma \\int t_ddot + sigma C^R C t_dot`` with t_dot = theta_dot n and
+        t_ddot = theta_ddot n - theta_dot^2 t_p.
+        """
+        p, quad = self.params, self.quad
+        t = np.stack([np.cos(b.theta), np.sin(b.theta)], axis=1)
+        n = np.stack([-t[:, 1], t[:, 0]], axis=1)
+        t_dot = b.rate[:, None] * n
+        t_ddot = b.accel[:, None] * n - (b.rate**2)[:, None] * t
+        G = quad.from_tip(quad.cumulative(t_ddot))
+        G += 2.0 * p.v * math.sqrt(p.beta) * quad.from_tip(t_dot)
+        G += (p.v * p.v) * np.array([math.cos(b.theta_tip), math.sin(b.theta_tip)])
+        g = np.array([math.cos(p.alpha), -math.sin(p.alpha)])
+        G -= p.gamma * (1.0 - self.x + p.end_mass)[:, None] * g
+        if p.end_mass:
+            G += p.end_mass * quad.integrate(t_ddot)
+        if p.external_damping:
+            G += p.external_damping * quad.from_tip(quad.cumulative(t_dot))
+        return G
+
+    def axial_stiffness(self, b: _Base) -> np.ndarray:
+        """``-\\int (t_p . G_0) phi_i phi_j``: the planar motion's tangential force."""
+        G = self.base_force(b)
+        axial = np.cos(b.theta) * G[:, 0] + np.sin(b.theta) * G[:, 1]
+        return -self.static._weighted_gram(axial)
+
+    def bending(self, b: _Base) -> np.ndarray:
+        """``\\int phi_i' phi_j' - \\int theta'^2 phi_i phi_j`` (the static model's, at theta(tau))."""
+        return self.static._fixed()["K"] - self.static._weighted_gram(b.dtheta**2)
+
+    def jet(self) -> np.ndarray:
+        """``v^2 \\int phi_i phi_j(1)``: the jet turns with the tip out of the plane."""
+        f = self.static._fixed()
+        return (self.params.v**2) * np.outer(f["integral"], self.model.disc.tip)
+
+    # ------------------------------------------------ Kelvin-Voigt --
+    def curvature_rate(self, b: _Base) -> np.ndarray:
+        """chi[phi_j] at the quadrature points, shape (n_q, n) (the static model's B)."""
+        f = self.static._fixed()
+        d = b.dtheta[:, None]
+        return f["dPhi"] + d * self.quad.cumulative(d * f["Phi"])
+
+    def kelvin_voigt(self, b: _Base) -> tuple[np.ndarray, np.ndarray]:
+        """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state.
+
+        Damping ``mu \\int chi phi_i chi phi_j``; stiffness from the planar bending
+        rate (module docstring), zero at rest.
+        """
+        f = self.static._fixed()
+        Phi, dPhi, w, C = f["Phi"], f["dPhi"], self.w, self.quad.cumulative
+        d = b.dtheta[:, None]
+        B = self.curvature_rate(b)
+        WB = B * w[:, None]
+        damping = WB.T @ B
+        spin = (b.rate * b.dtheta)[:, None] * Phi - d * C(b.rate[:, None] * dPhi)
+        tilt = C(d * Phi) * w[:, None]  # C(theta' phi_i), weighted
+        stiffness = (
+            WB.T @ spin
+            - self.static._weighted_gram(b.drate * b.dtheta)
+            - tilt.T @ (b.drate[:, None] * dPhi)
+        )
+        mu = self.params.mu
+        return mu * damping, mu * stiffness
+
+    # -------------------------------------------------------- totals --
+    def matrices(self, q, qdot, qddot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, C, M) about the planar state (q, q', q'')."""
+        b = self.base(np.asarray(q, float), np.asarray(qdot, float), np.asarray(qddot, float))
+        s, p = self.static, self.params
+        K = self.bending(b) + self.axial_stiffness(b) + self.jet()
+        C = s.coriolis()
+        if p.external_damping:
+            C = C + s.external_damping()
+        if p.mu:
+            c_kv, k_kv = self.kelvin_voigt(b)
+            C, K = C + c_kv, K + k_kv
+        return K, C, s.inertia()
+
+
+class OutOfPlaneVariation:
+    """The planar motion and its out-of-plane variation as the integrator's problem.
+
+    Unknowns (q, psi), ``n = 2 model.n``: the planar equations (Eq. (20), the
+    planar model's residual and Jacobians, batched as in
+    :class:`~fempipe.model.dynamics_problem.PipeDynamics`) and
+    ``M psi_ddot + C(q, q') psi_dot + K(q, q', q'') psi = 0``.  Meant for psi = 0,
+    the variational equation along a planar orbit: there the psi rows' derivative
+    with respect to q (``(dK/dq) psi + (dC/dq) psi_dot``) vanishes and the
+    Jacobians below are exact; the sensitivity is then block diagonal
+    (``decoupled_blocks``, rule 7 of :mod:`fempipe.solvers.radau.contract`) and its
+    psi block is the out-of-plane monodromy.
+
+    Parameters
+    ----------
+    model : PipeModel
+        The planar pipe, steady flow.
+    """
+
+    def __init__(self, model: PipeModel) -> None:
+        self.planar = PipeDynamics(model)
+        self.motion = OutOfPlaneMotion(model)
+        self.model = model
+        self.m = model.n
+        self.n = 2 * model.n
+        self.autonomous = True
+        self.parameter_derivative = None
+        self.stage_residuals = self._stage_residuals if self.planar.stage_residuals else None
+        self.stage_jacobians = self._stage_jacobians if self.planar.stage_jacobians else None
+        self.prefers_batched_stage_jacobians = self.planar.prefers_batched_stage_jacobians
+        self.decoupled_blocks = (np.arange(self.m), np.arange(self.m, self.n))
+
+    def _psi_rows(self, q, qd, qdd, s, sd, sdd) -> np.ndarray:
+        if not (np.any(s) or np.any(sd) or np.any(sdd)):
+            return np.zeros(self.m)  # the linear equation at psi = 0: no matrices needed
+        K, C, M = self.motion.matrices(q, qd, qdd)
+        return K @ s + C @ sd + M @ sdd
+
+    def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
+        """R(q, psi), shape (n,) (rule 2)."""
+        m = self.m
+        return np.concatenate(
+            [
+                self.planar.residual(t, q[:m], qdot[:m], qddot[:m]),
+                self._psi_rows(q[:m], qdot[:m], qddot[:m], q[m:], qdot[m:], qddot[m:]),
+            ]
+        )
+
+    def _blocks(self, planar, psi) -> tuple[np.ndarray, ...]:
+        m, out = self.m, []
+        for P, X in zip(planar, psi, strict=True):
+            J = np.zeros((self.n, self.n))
+            J[:m, :m], J[m:, m:] = P, X
+            out.append(J)
+        return tuple(out)
+
+    def jacobians(self, t: float, q, qdot, qddot):
+        """Block-diagonal (dR/dq, dR/dq', dR/dq'') at psi = 0 (rule 3)."""
+        m = self.m
+        planar = self.planar.jacobians(t, q[:m], qdot[:m], qddot[:m])
+        return self._blocks(planar, self.motion.matrices(q[:m], qdot[:m], qddot[:m]))
+
+    def _stage_residuals(self, Q, P, A) -> np.ndarray:
+        m = self.m
+        R = np.empty(np.shape(Q))
+        R[:, :m] = self.planar.stage_residuals(Q[:, :m], P[:, :m], A[:, :m])
+        for i in range(R.shape[0]):
+            R[i, m:] = self._psi_rows(Q[i, :m], P[i, :m], A[i, :m], Q[i, m:], P[i, m:], A[i, m:])
+        return R
+
+    def _stage_jacobians(self, Q, P, A):
+        m = self.m
+        planar = self.planar.stage_jacobians(Q[:, :m], P[:, :m], A[:, :m])
+        per = [
+            self._blocks([J[i] for J in planar], self.motion.matrices(Q[i, :m], P[i, :m], A[i, :m]))
+            for i in range(np.shape(Q)[0])
+        ]
+        return tuple(np.stack([blocks[k] for blocks in per]) for k in range(3))
+
+    def acceleration(self, t: float, q, qdot) -> np.ndarray:
+        """(q'', psi'') (rule 4)."""
+        m = self.m
+        qdd = self.planar.acceleration(t, q[:m], qdot[:m])
+        K, C, M = self.motion.matrices(q[:m], qdot[:m], qdd)
+        return np.concatenate([qdd, -np.linalg.solve(M, K @ q[m:] + C @ qdot[m:])])
+
+    def describe(self) -> str:
+        """For error messages (rule 14)."""
+        return f"v = {self.model.params.v:.6g} (out-of-plane variation)"
