@@ -125,7 +125,8 @@ class OutOfPlaneMotion:
     def base_force(self, b: _Base) -> np.ndarray:
         """G_0: the force field of the planar motion, shape (n_q, 2) (in-plane components).
 
-        The 3-D model's terms at the planar state (:meth:`fempipe.model.space.SpaceModel.force_field`):
+        The 3-D model's terms at the planar state
+        (:meth:`fempipe.model.space.SpaceModel.force_field`):
         ``C^R C t_ddot + 2 v sqrt(beta) C^R t_dot + v^2 t(1) - gamma (1 - xi + Gamma) g
         + Gamma \\int t_ddot + sigma C^R C t_dot`` with t_dot = theta_dot n and
         t_ddot = theta_ddot n - theta_dot^2 t_p.
@@ -153,7 +154,7 @@ class OutOfPlaneMotion:
         return -self.static._weighted_gram(axial)
 
     def bending(self, b: _Base) -> np.ndarray:
-        """``\\int phi_i' phi_j' - \\int theta'^2 phi_i phi_j`` (the static model's, at theta(tau))."""
+        """``\\int phi_i' phi_j' - \\int theta'^2 phi_i phi_j`` (the static model's, at tau)."""
         return self.static._fixed()["K"] - self.static._weighted_gram(b.dtheta**2)
 
     def jet(self) -> np.ndarray:

@@ -49,7 +49,7 @@ class OutOfPlaneBranches:
         The orbits with a verdict: ``branch``, ``v``, ``stable`` (in the plane),
         ``max_multiplier`` (in-plane), ``max_oop`` (the largest non-trivial
         out-of-plane multiplier's modulus), ``stable_3d``, ``eta_tip``, ``X_tip``,
-        ``Z_tip``, ``planar_block`` (the 3-D monodromy's planar block's largest
+        ``Z_tip``, ``planar_block`` (the out-of-plane Floquet run's planar block's largest
         non-trivial modulus), ``neutral`` (complex, at sin alpha = 0), ``multipliers``.
     changes : list of dict
         Where the out-of-plane verdict changes between two checked orbits of a
@@ -204,8 +204,8 @@ def neutral_deviation(branches: OutOfPlaneBranches) -> float:
 
 
 def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
-    """max | |ρ| of the 3-D monodromy's planar block - |ρ| of the planar orbit | (non-trivial
-    largest moduli) over the checked orbits."""
+    """max | |ρ| of the out-of-plane Floquet run's planar block - |ρ| of the planar orbit |
+    (non-trivial largest moduli) over the checked orbits."""
     d = [
         abs(p["planar_block"] - p["max_multiplier"])
         for p in branches.checked
@@ -389,7 +389,7 @@ def add_legend_entry(ax) -> None:
 #: Checked in the full suite only: on P3:4 at α = π it is not resolved (it pairs
 #: with the unstable multiplier into a complex pair, |ρ| = 1.045 both).
 NEUTRAL_TOL = 2e-3
-#: The 3-D monodromy's planar block against the continuation's monodromy: the
+#: The out-of-plane Floquet run's planar block against the continuation's monodromy: the
 #: same equations, integrated at rtol 1e-7 and at the continuation's 1e-5.
 PLANAR_BLOCK_TOL = 1e-3
 
@@ -408,12 +408,12 @@ def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) 
     checks = [
         below(
             f"planar_block{suffix}",
-            f"α = {name}, {br.label}: the 3-D monodromy's planar block has the planar "
+            f"α = {name}, {br.label}: the out-of-plane Floquet run's planar block has the planar "
             "orbit's largest non-trivial multiplier (checked orbits)",
             planar_block_deviation(br),
             PLANAR_BLOCK_TOL,
-            why="the same planar equations on the 3-D model, integrated at rtol 1e-7, against "
-            "the continuation's monodromy at rtol 1e-5",
+            why="the same planar equations, integrated at rtol 1e-7 with the out-of-plane "
+            "ones, against the continuation's monodromy at rtol 1e-5",
             source=_SOURCE,
         )
     ]
