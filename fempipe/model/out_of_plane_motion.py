@@ -99,14 +99,8 @@ class OutOfPlaneMotion:
                 f"(got springs = {model.params.springs!r})"
             )
         self.static = OutOfPlaneOperators(model)
-        self.model = model
-        self.quad = model.disc.quad
-        self.w = self.quad.w
-        self.x = self.quad.x
-
-    @property
-    def params(self):
-        return self.model.params
+        self.model, self.params = model, model.params
+        self.quad, self.w, self.x = self.static.quad, self.static.w, self.static.x
 
     def base(self, q, qdot, qddot) -> _Base:
         """The planar motion (q, q', q'') at the quadrature points."""
