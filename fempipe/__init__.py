@@ -16,7 +16,7 @@ The public names, by what their users do (docs, "API reference"):
 
 * the model: :class:`Params`, :class:`PipeSI`, :class:`FiniteElement`,
   :class:`Modal`, :func:`parse_discretization`, :class:`PipeModel`,
-  :class:`OutOfPlaneModel`, :func:`shape`, :func:`tip_values`;
+  :class:`OutOfPlaneModel`, :class:`OutOfPlaneMotion`, :func:`shape`, :func:`tip_values`;
 * statics (Eq. (31a)): :func:`solve_static`, :func:`sagged_state`,
   :func:`solve_path`, :func:`continuation`, :func:`switch_branch`;
 * linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`root_locus`,
@@ -61,6 +61,7 @@ _LAZY: dict[str, str] = {
     "parse_discretization": "model.discretization",
     "PipeModel": "model.operators",
     "OutOfPlaneModel": "model.out_of_plane",
+    "OutOfPlaneMotion": "model.out_of_plane_motion",
     "shape": "model.kinematics",
     "tip_values": "model.kinematics",
     "ParamError": "core.errors",
@@ -157,6 +158,7 @@ __all__ = [
     "parse_discretization",
     "PipeModel",
     "OutOfPlaneModel",
+    "OutOfPlaneMotion",
     "shape",
     "tip_values",
     "ParamError",
@@ -273,6 +275,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from fempipe.model.kinematics import shape, tip_values
     from fempipe.model.operators import PipeModel
     from fempipe.model.out_of_plane import OutOfPlaneModel
+    from fempipe.model.out_of_plane_motion import OutOfPlaneMotion
     from fempipe.model.params import Params, PipeSI
     from fempipe.studies.compare import Comparison, compare_values
     from fempipe.studies.convergence import (

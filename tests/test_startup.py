@@ -170,6 +170,9 @@ from fempipe.model.operators import (  # noqa: E402
 from fempipe.model.out_of_plane import (  # noqa: E402
     OutOfPlaneModel,
 )
+from fempipe.model.out_of_plane_motion import (  # noqa: E402
+    OutOfPlaneMotion,
+)
 from fempipe.model.params import (  # noqa: E402
     Params,
     PipeSI,
@@ -206,6 +209,7 @@ PUBLIC = {
     "parse_discretization": parse_discretization,
     "PipeModel": PipeModel,
     "OutOfPlaneModel": OutOfPlaneModel,
+    "OutOfPlaneMotion": OutOfPlaneMotion,
     "shape": shape,
     "tip_values": tip_values,
     "ParamError": ParamError,
