@@ -172,15 +172,15 @@ class OutOfPlaneMotion:
         f = self.static._fixed()
         Phi, dPhi, w, C = f["Phi"], f["dPhi"], self.w, self.quad.cumulative
         d = b.dtheta[:, None]
-        B = self.curvature_rate(b)
+        tilt = C(d * Phi)  # C(theta' phi_j): in chi and in the last stiffness term
+        B = dPhi + d * tilt  # chi[phi_j], :meth:`curvature_rate`
         WB = B * w[:, None]
         damping = WB.T @ B
         spin = (b.rate * b.dtheta)[:, None] * Phi - d * C(b.rate[:, None] * dPhi)
-        tilt = C(d * Phi) * w[:, None]  # C(theta' phi_i), weighted
         stiffness = (
             WB.T @ spin
             - self.static._weighted_gram(b.drate * b.dtheta)
-            - tilt.T @ (b.drate[:, None] * dPhi)
+            - (tilt * w[:, None]).T @ (b.drate[:, None] * dPhi)
         )
         mu = self.params.mu
         return mu * damping, mu * stiffness
