@@ -38,7 +38,7 @@ Its monodromy has the planar block and an out-of-plane block of exactly the
 2 n physical multipliers.  The two computations differ by their
 discretization errors and converge to each other under refinement
 (measured at alpha = pi/2, v = 10, leading multiplier 0.8791856 on P3:16:
-|difference| 5e-4, 2e-5, 3e-7 on P3:4/8/16; at alpha = 0 the neutral
+differences of 5e-4, 2e-5, 3e-7 on P3:4/8/16; at alpha = 0 the neutral
 multiplier is 1 - 1.9e-3, 1 - 4.2e-5, 1 - 8.5e-7 on P3:4/8/16 against
 1 - 1.0e-3, 1 - 1.0e-5, 1 - 3.2e-7 in 3-D); the linear one costs 4-5 times
 less (P3:16: 1.4-2.2 s against 6.9-9.4 s in one run).
@@ -155,8 +155,8 @@ def out_of_plane_floquet(
         one unknown psi, no gauge); ``"3d"``: the 3-D model along the cycle (its
         out-of-plane block, gauge multipliers left out, module docstring).  The
         two are independent discretizations of the same multipliers and converge
-        to each other (measured at alpha = pi/2, v = 10: |difference| of the
-        leading multiplier 5e-4, 2e-5, 3e-7 on P3:4/8/16); "linear" costs 4-5
+        to each other (measured at alpha = pi/2, v = 10: the leading multipliers
+        differ by 5e-4, 2e-5, 3e-7 in modulus on P3:4/8/16); "linear" costs 4-6
         times less.
 
     Returns
