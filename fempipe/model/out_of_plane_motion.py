@@ -130,15 +130,14 @@ class OutOfPlaneMotion:
         n = np.stack([-t[:, 1], t[:, 0]], axis=1)
         t_dot = b.rate[:, None] * n
         t_ddot = b.accel[:, None] * n - (b.rate**2)[:, None] * t
-        G = quad.from_tip(quad.cumulative(t_ddot))
-        G += 2.0 * p.v * math.sqrt(p.beta) * quad.from_tip(t_dot)
+        # the integral terms share their operators: C^R (C (t_ddot + sigma t_dot) + c t_dot)
+        inner = t_ddot + p.external_damping * t_dot if p.external_damping else t_ddot
+        G = quad.from_tip(quad.cumulative(inner) + (2.0 * p.v * math.sqrt(p.beta)) * t_dot)
         G += (p.v * p.v) * np.array([math.cos(b.theta_tip), math.sin(b.theta_tip)])
         g = np.array([math.cos(p.alpha), -math.sin(p.alpha)])
         G -= p.gamma * (1.0 - self.x + p.end_mass)[:, None] * g
         if p.end_mass:
             G += p.end_mass * quad.integrate(t_ddot)
-        if p.external_damping:
-            G += p.external_damping * quad.from_tip(quad.cumulative(t_dot))
         return G
 
     def axial_stiffness(self, b: _Base) -> np.ndarray:
