@@ -159,7 +159,7 @@ class OutOfPlaneOperators:
         return self.model.params
 
     # -------------------------------------------------- fixed pieces --
-    def _fixed(self) -> dict:
+    def fixed(self) -> dict:
         """Phi, dPhi dense; the pipe's mass, the integrals C^R phi_j and \\int phi_i."""
         d = _FIXED.get(self.disc)
         if d is None:
@@ -185,7 +185,7 @@ class OutOfPlaneOperators:
 
     def state(self, q: np.ndarray) -> _State:
         """theta^s and theta^s' at the quadrature points."""
-        f = self._fixed()
+        f = self.fixed()
         q = np.asarray(q, dtype=float)
         return _State(
             theta=f["Phi"] @ q,
@@ -194,9 +194,9 @@ class OutOfPlaneOperators:
             q=q,
         )
 
-    def _weighted_gram(self, d: np.ndarray) -> np.ndarray:
+    def weighted_gram(self, d: np.ndarray) -> np.ndarray:
         """``\\int d phi_i phi_j`` for d at the quadrature points."""
-        Phi = self._fixed()["Phi"]
+        Phi = self.fixed()["Phi"]
         return (Phi * (self.w * d)[:, None]).T @ Phi
 
     # ---------------------------------------------------- stiffness --
@@ -206,7 +206,7 @@ class OutOfPlaneOperators:
         The second variation of (1/2) \\int |t'|^2 = (1/2) \\int psi'^2 + theta'^2 cos^2 psi:
         out of the plane the static curvature softens the pipe.
         """
-        return self._fixed()["K"] - self._weighted_gram(st.dtheta**2)
+        return self.fixed()["K"] - self.weighted_gram(st.dtheta**2)
 
     def axial_force(self, st: _State) -> np.ndarray:
         """N = n^s . t^s at the quadrature points (without the springs, :meth:`spring_axial`).
@@ -223,11 +223,11 @@ class OutOfPlaneOperators:
 
     def geometric_stiffness(self, st: _State) -> np.ndarray:
         """``\\int N phi_i phi_j`` (the springs' part in :meth:`spring`)."""
-        return self._weighted_gram(self.axial_force(st))
+        return self.weighted_gram(self.axial_force(st))
 
     def follower(self) -> np.ndarray:
         """``v^2 \\int phi_i (phi_j(1) - phi_j)``: the discharging jet turns with the tip."""
-        f = self._fixed()
+        f = self.fixed()
         v2 = self.params.v * self.params.v
         return v2 * (np.outer(f["integral"], self.disc.tip) - f["gram"])
 
@@ -254,7 +254,7 @@ class OutOfPlaneOperators:
     # ------------------------------------------------- rate matrices --
     def inertia(self) -> np.ndarray:
         """``\\int (C phi_i)(C phi_j) + Gamma (\\int phi_i)(\\int phi_j)``: the mass, SPD."""
-        f = self._fixed()
+        f = self.fixed()
         G = self.params.end_mass
         M = f["mass"]
         if G:
@@ -264,15 +264,15 @@ class OutOfPlaneOperators:
     def coriolis(self) -> np.ndarray:
         """``2 v sqrt(beta) \\int phi_i \\int_xi^1 phi_j``."""
         p = self.params
-        return 2.0 * p.v * math.sqrt(p.beta) * self._fixed()["coriolis"]
+        return 2.0 * p.v * math.sqrt(p.beta) * self.fixed()["coriolis"]
 
     def external_damping(self) -> np.ndarray:
         """``sigma \\int (C phi_i)(C phi_j)``: the force -sigma w_dot per unit length."""
-        return self.params.external_damping * self._fixed()["mass"]
+        return self.params.external_damping * self.fixed()["mass"]
 
     def curvature_rate(self, st: _State) -> np.ndarray:
         """B phi_j at the quadrature points, shape (n_q, n): chi = psi' + theta' C(theta' psi)."""
-        f = self._fixed()
+        f = self.fixed()
         d = st.dtheta[:, None]
         return f["dPhi"] + d * self.quad.cumulative(d * f["Phi"])
 
@@ -301,7 +301,7 @@ class OutOfPlaneOperators:
             C = C + self.external_damping()
         M = self.inertia()
         if material is None:
-            material = self._fixed()["K"]  # not used (no loss): the straight pipe's
+            material = self.fixed()["K"]  # not used (no loss): the straight pipe's
         neutral, resid = None, None
         if axisymmetric(p) and np.max(np.abs(st.theta)) > STRAIGHT_TOL:
             K, neutral, resid = self._with_neutral_mode(K, M, st)
@@ -310,14 +310,14 @@ class OutOfPlaneOperators:
     def neutral_mode(self, q: np.ndarray) -> np.ndarray:
         """The L2 projection of sin theta^s on the basis: the buckled shape turned out of the plane."""
         st = self.state(q)
-        f = self._fixed()
+        f = self.fixed()
         rhs = f["Phi"].T @ (self.w * np.sin(st.theta))
         return np.linalg.solve(f["gram"], rhs)
 
     def _with_neutral_mode(self, K, M, st: _State):
         x = self.neutral_mode(st.q)
         Kx = K @ x
-        scale = self._fixed()["K_norm"] * np.linalg.norm(x)
+        scale = self.fixed()["K_norm"] * np.linalg.norm(x)
         resid = float(np.linalg.norm(Kx) / scale) if scale > 0 else 0.0
         Mx = M @ x
         K = K - np.outer(Kx, Mx) / float(x @ Mx)

@@ -72,14 +72,13 @@ __all__ = ["OutOfPlaneMotion", "OutOfPlaneVariation"]
 
 @dataclass(frozen=True)
 class _Base:
-    """The planar motion at the quadrature points: theta, theta', their rates, theta(1)."""
+    """The planar motion at the quadrature points: the static model's state at tau
+    (theta, theta', theta(1): :meth:`OutOfPlaneOperators.state`) and the rates."""
 
-    theta: np.ndarray
-    dtheta: np.ndarray
+    state: object
     rate: np.ndarray  # theta_dot
     drate: np.ndarray  # theta_dot'
     accel: np.ndarray  # theta_ddot
-    theta_tip: float
 
 
 class OutOfPlaneMotion:
@@ -104,15 +103,12 @@ class OutOfPlaneMotion:
 
     def base(self, q, qdot, qddot) -> _Base:
         """The planar motion (q, q', q'') at the quadrature points."""
-        f = self.static._fixed()
-        Phi, dPhi = f["Phi"], f["dPhi"]
+        f = self.static.fixed()
         return _Base(
-            theta=Phi @ q,
-            dtheta=dPhi @ q,
-            rate=Phi @ qdot,
-            drate=dPhi @ qdot,
-            accel=Phi @ qddot,
-            theta_tip=float(self.model.disc.tip @ q),
+            state=self.static.state(q),
+            rate=f["Phi"] @ qdot,
+            drate=f["dPhi"] @ qdot,
+            accel=f["Phi"] @ qddot,
         )
 
     # ---------------------------------------------------- stiffness --
@@ -125,15 +121,15 @@ class OutOfPlaneMotion:
         + Gamma \\int t_ddot + sigma C^R C t_dot`` with t_dot = theta_dot n and
         t_ddot = theta_ddot n - theta_dot^2 t_p.
         """
-        p, quad = self.params, self.quad
-        t = np.stack([np.cos(b.theta), np.sin(b.theta)], axis=1)
+        p, quad, st = self.params, self.quad, b.state
+        t = np.stack([np.cos(st.theta), np.sin(st.theta)], axis=1)
         n = np.stack([-t[:, 1], t[:, 0]], axis=1)
         t_dot = b.rate[:, None] * n
         t_ddot = b.accel[:, None] * n - (b.rate**2)[:, None] * t
         # the integral terms share their operators: C^R (C (t_ddot + sigma t_dot) + c t_dot)
         inner = t_ddot + p.external_damping * t_dot if p.external_damping else t_ddot
         G = quad.from_tip(quad.cumulative(inner) + (2.0 * p.v * math.sqrt(p.beta)) * t_dot)
-        G += (p.v * p.v) * np.array([math.cos(b.theta_tip), math.sin(b.theta_tip)])
+        G += (p.v * p.v) * np.array([math.cos(st.theta_tip), math.sin(st.theta_tip)])
         g = np.array([math.cos(p.alpha), -math.sin(p.alpha)])
         G -= p.gamma * (1.0 - self.x + p.end_mass)[:, None] * g
         if p.end_mass:
@@ -143,43 +139,34 @@ class OutOfPlaneMotion:
     def axial_stiffness(self, b: _Base) -> np.ndarray:
         """``-\\int (t_p . G_0) phi_i phi_j``: the planar motion's tangential force."""
         G = self.base_force(b)
-        axial = np.cos(b.theta) * G[:, 0] + np.sin(b.theta) * G[:, 1]
-        return -self.static._weighted_gram(axial)
-
-    def bending(self, b: _Base) -> np.ndarray:
-        """``\\int phi_i' phi_j' - \\int theta'^2 phi_i phi_j`` (the static model's, at tau)."""
-        return self.static._fixed()["K"] - self.static._weighted_gram(b.dtheta**2)
+        theta = b.state.theta
+        return -self.static.weighted_gram(np.cos(theta) * G[:, 0] + np.sin(theta) * G[:, 1])
 
     def jet(self) -> np.ndarray:
         """``v^2 \\int phi_i phi_j(1)``: the jet turns with the tip out of the plane."""
-        f = self.static._fixed()
+        f = self.static.fixed()
         return (self.params.v**2) * np.outer(f["integral"], self.model.disc.tip)
 
     # ------------------------------------------------ Kelvin-Voigt --
-    def curvature_rate(self, b: _Base) -> np.ndarray:
-        """chi[phi_j] at the quadrature points, shape (n_q, n) (the static model's B)."""
-        f = self.static._fixed()
-        d = b.dtheta[:, None]
-        return f["dPhi"] + d * self.quad.cumulative(d * f["Phi"])
-
     def kelvin_voigt(self, b: _Base) -> tuple[np.ndarray, np.ndarray]:
         """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state.
 
         Damping ``mu \\int chi phi_i chi phi_j``; stiffness from the planar bending
         rate (module docstring), zero at rest.
         """
-        f = self.static._fixed()
+        f = self.static.fixed()
         Phi, dPhi, w, C = f["Phi"], f["dPhi"], self.w, self.quad.cumulative
-        d = b.dtheta[:, None]
-        tilt = C(d * Phi)  # C(theta' phi_j): in chi and in the last stiffness term
-        B = dPhi + d * tilt  # chi[phi_j], :meth:`curvature_rate`
+        dtheta = b.state.dtheta
+        d = dtheta[:, None]
+        B = self.static.curvature_rate(b.state)  # chi[phi_j] at theta(tau)
         WB = B * w[:, None]
         damping = WB.T @ B
-        spin = (b.rate * b.dtheta)[:, None] * Phi - d * C(b.rate[:, None] * dPhi)
+        spin = (b.rate * dtheta)[:, None] * Phi - d * C(b.rate[:, None] * dPhi)
+        tilt = C(d * Phi) * w[:, None]  # C(theta' phi_i), weighted
         stiffness = (
             WB.T @ spin
-            - self.static._weighted_gram(b.drate * b.dtheta)
-            - (tilt * w[:, None]).T @ (b.drate[:, None] * dPhi)
+            - self.static.weighted_gram(b.drate * dtheta)
+            - tilt.T @ (b.drate[:, None] * dPhi)
         )
         mu = self.params.mu
         return mu * damping, mu * stiffness
@@ -189,7 +176,7 @@ class OutOfPlaneMotion:
         """(K, C, M) about the planar state (q, q', q'')."""
         b = self.base(np.asarray(q, float), np.asarray(qdot, float), np.asarray(qddot, float))
         s, p = self.static, self.params
-        K = self.bending(b) + self.axial_stiffness(b) + self.jet()
+        K = s.bending(b.state) + self.axial_stiffness(b) + self.jet()
         C = s.coriolis()
         if p.external_damping:
             C = C + s.external_damping()
