@@ -221,8 +221,8 @@ def run(quick: bool = False) -> CaseResult:
     if not quick:  # mesh convergence of the FE amplitude (quick: see the convergence case)
         a10 = eta_amplitude({p.v: p for p in sweeps[fe_label] if p is not None}[10.0])
         checks.append(_mesh_check(alpha, fe_label, a10))
-        mesh_check, fine_oop = _oop_mesh_check(alpha, fe_label, oop)
-        checks += [mesh_check, _oop_methods_check(alpha)]
+        fine_checks, fine_oop = _oop_fine_checks(alpha, fe_label, oop)
+        checks += fine_checks
         requires.append("oop_mesh")
     changes = change_texts("0", oop)
     return CASE.result(
@@ -354,17 +354,19 @@ def _paper_checks(
     return checks
 
 
-def _oop_mesh_check(alpha: float, fe_label: str, oop) -> tuple[Check, tuple]:
+def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Check], tuple]:
     """The largest out-of-plane multiplier of the FE cycle at v = 10 against that of the
-    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8); returns the check and the P3:16
-    orbit's row of the verdict table."""
+    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8), and the P3:16 cycle's by the two
+    methods (:func:`_oop_methods_check`); returns the checks and the P3:16 orbit's row of
+    the verdict table."""
     from fempipe.analyses.periodic.out_of_plane import cycle_verdict
 
     from .dynamic_runs import model_for
     from .out_of_plane_branches import fe_disc
 
     fine = attractor("FE P3:16", alpha, 10.0)
-    got = cycle_verdict(model_for(fe_disc("FE P3:16"), alpha, 10.0), fine.cycle, fine.cycle.stable)
+    fine_model = model_for(fe_disc("FE P3:16"), alpha, 10.0)
+    got = cycle_verdict(fine_model, fine.cycle, fine.cycle.stable)
     p10 = oop.at(10.0)
     mine = p10["max_oop"] if p10 else float("nan")
     d = abs(got["max_nontrivial_out_of_plane_multiplier"] - mine)
@@ -392,7 +394,8 @@ def _oop_mesh_check(alpha: float, fe_label: str, oop) -> tuple[Check, tuple]:
         lead,
         "yes" if got["stable_3d"] else "no",
     )
-    return check, row
+    linear = got["max_nontrivial_out_of_plane_multiplier"]
+    return [check, _oop_methods_check(fine_model, fine.cycle, linear)], row
 
 
 #: |linear - 3-D| allowed for the largest out-of-plane multiplier of the P3:16 cycle: two
@@ -401,23 +404,18 @@ def _oop_mesh_check(alpha: float, fe_label: str, oop) -> tuple[Check, tuple]:
 OOP_METHODS_TOL = 1e-4
 
 
-def _oop_methods_check(alpha: float) -> Check:
-    """The P3:16 cycle's largest out-of-plane multiplier by the linear psi equation against
-    the 3-D model's (:func:`fempipe.analyses.space.out_of_plane_floquet`, both methods)."""
+def _oop_methods_check(model, cycle, linear: float) -> Check:
+    """``linear``, the cycle's largest out-of-plane multiplier by the linear psi equation
+    (the default of :func:`fempipe.analyses.space.out_of_plane_floquet`), against the 3-D
+    model's (``method="3d"``)."""
     from fempipe.analyses.space.floquet import out_of_plane_floquet
 
-    from .dynamic_runs import model_for
-    from .out_of_plane_branches import fe_disc
-
-    fine = attractor("FE P3:16", alpha, 10.0)
-    model = model_for(fe_disc("FE P3:16"), alpha, 10.0)
-    linear = out_of_plane_floquet(model, fine.cycle)
-    full = out_of_plane_floquet(model, fine.cycle, method="3d")
+    full = out_of_plane_floquet(model, cycle, method="3d")
     return below(
         "oop_methods",
         "FE P3:16: the largest out-of-plane multiplier of the cycle at v = 10 by the linear "
         "out-of-plane equation equals the 3-D model's",
-        abs(linear.max_nontrivial - full.max_nontrivial),
+        abs(linear - full.max_nontrivial),
         OOP_METHODS_TOL,
         why="two independent discretizations of the same multipliers (the psi equation about "
         "the moving cycle; the chart's (a, b) with its gauge), both at rtol 1e-7",

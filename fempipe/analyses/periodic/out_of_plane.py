@@ -84,7 +84,7 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
         ``max_nontrivial_out_of_plane_multiplier``, ``stable_out_of_plane``,
         ``stable_3d`` (stable in the plane and out of it),
         ``out_of_plane_cpu_time`` (CPU seconds), ``planar_block_max_multiplier``
-        (the largest non-trivial modulus of the 3-D monodromy's planar block: the
+        (the largest non-trivial modulus of the out-of-plane run's planar block: the
         planar multipliers again), ``neutral_out_of_plane_multiplier`` (``[re, im]``,
         the rotation about the vertical, left out of the verdict; None unless
         sin(alpha) = 0) with ``out_of_plane_symmetry_defect`` (its distance from 1),
@@ -95,7 +95,7 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
 
     oop = out_of_plane_floquet(model, cycle)
     out = cycle_entries(model, oop, stable_in_plane)
-    # Evidence to check the verdict by: the 3-D monodromy's planar block (the
+    # Evidence to check the verdict by: the out-of-plane run's planar block (the
     # planar model's multipliers, recomputed) and, at an axisymmetric alpha,
     # the neutral multiplier of the rotation about the vertical (1 exactly).
     mu = nontrivial_multipliers(np.asarray(oop.planar_multipliers))
