@@ -40,8 +40,8 @@ discretization errors and converge to each other under refinement
 (measured at alpha = pi/2, v = 10, leading multiplier 0.8791856 on P3:16:
 differences of 5e-4, 2e-5, 3e-7 on P3:4/8/16; at alpha = 0 the neutral
 multiplier is 1 - 1.9e-3, 1 - 4.2e-5, 1 - 8.5e-7 on P3:4/8/16 against
-1 - 1.0e-3, 1 - 1.0e-5, 1 - 3.2e-7 in 3-D); the linear one costs 4-5 times
-less (P3:16: 1.4-2.2 s against 6.9-9.4 s in one run).
+1 - 1.0e-3, 1 - 1.0e-5, 1 - 3.2e-7 in 3-D); the linear one costs 4-6 times
+less (P3:16, the cycles of Figs. 7-10 at v = 10: 1.3-2.3 s against 5.8-9.2 s CPU).
 
 A planar cycle survives in 3-D when every out-of-plane multiplier is inside
 the unit circle.  At alpha = 0 and pi the pipe is axisymmetric: the cycle
