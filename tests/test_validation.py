@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: Quick cases run by the default tests (about a minute together); the
 #: quick Figs. 7 and 8-10 (~15-20 CPU-s each) run only in ``fempipe validate --quick``
-#: and the slow full-suite test.
+#: (a stage of CI) and the slow full-suite test.
 CHEAP = [
     "fig02a",
     "fig02b",
@@ -49,6 +49,10 @@ CHEAP = [
     "out_of_plane",
 ]
 
+#: The quick 3-D cases (about 50 CPU-s together): their numerics run by default too, so
+#: that ``fempipe validate --quick`` cannot fail unnoticed.
+SPACE_QUICK = ["space_onset", "space_convergence", "space_whirl"]
+
 
 #: Citations a reader of the repository cannot resolve (written so that a
 #: search of the repository for them finds none).
@@ -61,7 +65,7 @@ def quick_result(name: str) -> CaseResult:
     return load_case(name).run(quick=True)
 
 
-@pytest.mark.parametrize("name", CHEAP)
+@pytest.mark.parametrize("name", CHEAP + SPACE_QUICK)
 def test_quick_case_numerics_pass(name):
     res = quick_result(name)
     assert isinstance(res, CaseResult)
