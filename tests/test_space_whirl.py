@@ -38,11 +38,15 @@ def flutter():
 
 def test_bvp_whirl_is_born_at_the_planar_flutter_onset(flutter):
     """A small whirl of the continuum (tip radius 0.01, v free) sits at the Hopf point: its
-    v and omega tend to the planar FE flutter onset v_cr = 6.33369, omega_cr = 15.7355
-    (P3:16, fempipe.analyses.stability.critical_velocity) as the radius^2 (the Hopf normal
-    form: v - v_cr ~ radius^2).  Two radii extrapolate to radius 0: measured 1e-6 and 2e-6
-    off."""
+    v and omega tend to the planar FE flutter onset (P3:16, computed here by
+    fempipe.analyses.stability.critical_velocity: v_cr = 6.33369, omega_cr = 15.7355, a
+    discretization error below 1e-7) as the radius^2 (the Hopf normal form: v - v_cr ~
+    radius^2).  Two radii extrapolate to radius 0: measured 1e-6 and 2e-6 off."""
+    from fempipe.analyses.stability import critical_velocity
     from fempipe.validation.whirl_bvp import _initial_guess, _result, _solve
+
+    onset = critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=0.0)), v_max=8.0)
+    v_cr, omega_cr = onset.v_cr, onset.events[0].frequency
 
     lam, slope = flutter
     prm = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3, "alpha": 0.0, "sigma": 0.0}
@@ -68,8 +72,8 @@ def test_bvp_whirl_is_born_at_the_planar_flutter_onset(flutter):
         assert abs(w.supply - w.dissipation) < 1e-5 * w.dissipation
     (om1, v1), (om2, v2) = out
     v0, om0 = (4 * v1 - v2) / 3, (4 * om1 - om2) / 3
-    assert abs(v0 - 6.333687) < 2e-5
-    assert abs(om0 - 15.735467) < 2e-5
+    assert abs(v0 - v_cr) < 2e-5
+    assert abs(om0 - omega_cr) < 2e-5
     assert v2 > v1  # supercritical in the amplitude: v grows along the branch
 
 
