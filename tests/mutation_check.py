@@ -467,9 +467,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.workers < 1:
         ap.error(f"--workers must be at least 1, got {args.workers}")
-    chosen = [
-        m for m in MUTATIONS if not args.only or args.only in m.model or args.only in m.term
-    ]
+    chosen = [m for m in MUTATIONS if not args.only or args.only in m.model or args.only in m.term]
     if args.list:
         for m in chosen:
             print(f"{m.model:13s} {m.term:45s} {m.change}")

@@ -169,8 +169,9 @@ def _powers(seed: int) -> dict:
     )
     # The end mass alone (gamma = 0: no weight): its inertia, Gamma r_ddot(1) . r_dot(1).
     out["end_mass_inertia"] = (
-        float(Ud @ (_residual(U, Ud, Udd, gamma=0.0, end_mass=G)
-                    - _residual(U, Ud, Udd, gamma=0.0))),  # fmt: skip
+        float(
+            Ud @ (_residual(U, Ud, Udd, gamma=0.0, end_mass=G) - _residual(U, Ud, Udd, gamma=0.0))
+        ),  # fmt: skip
         G * tip_dd @ tip_d,
     )
     # The pipe's inertia and bending: the whole residual at v = 0 without weight, damping
@@ -240,7 +241,7 @@ def test_gauge_term_is_its_equation():
         f = np.asarray(fiber_direction(_Point.of(u[:, :, None])))[:, :, 0]
         return f, np.einsum("qc,qc->q", f, at(Ud + s * Udd))
 
-    (fp, rp), (f0, r0), (fm, rm) = fiber_rate(EPS), fiber_rate(0.0), fiber_rate(-EPS)
+    (_, rp), (f0, r0), (_, rm) = fiber_rate(EPS), fiber_rate(0.0), fiber_rate(-EPS)
     u = at(U)
     r_g = ((rp - rm) / (2 * EPS) + model.gauge_damping * r0
            + model.gauge_stiffness * np.einsum("qc,qc->q", f0[:, 1:], u[:, 1:]))  # fmt: skip
