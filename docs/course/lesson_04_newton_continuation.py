@@ -72,18 +72,21 @@ J_fold = tilted.with_params(fempipe.Params(alpha=fold.value, gamma=12.0, v=0.0))
 sv = np.linalg.svd(J_fold.static_jacobian(fold.q, dense=True), compute_uv=False)
 fold_singularity = sv[-1] / sv[0]
 print(f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq: {fold_singularity:.1e}")
-natural_failed = False
+fold_tip = fempipe.tip_values(disc, fold.q, fold.value)["theta_tip"]
+print(f"theta(1) at the fold: {fold_tip:.4f}")
+natural_failed, reached = False, np.pi
 try:  # natural-parameter continuation: step alpha past the fold from the same branch
     q_prev = leaning.points[-1].q
     for a in np.linspace(np.pi, fold.value + 0.05, 25):
         q_prev = fempipe.solve_static(
             tilted.with_params(fempipe.Params(alpha=a, gamma=12.0, v=0.0)), q0=q_prev
         ).q
+        reached = a
     jumped = fempipe.tip_values(disc, q_prev, a)["theta_tip"]
     print(f"natural continuation past the fold landed on theta(1) = {jumped:.4f}: another branch")
 except fempipe.NewtonError as exc:
     natural_failed = True
-    print(f"natural continuation failed past the fold: {exc}")
+    print(f"natural continuation failed past the fold (last solved alpha = {reached:.5f}): {exc}")
 
 fig, ax = plt.subplots(figsize=(5, 3.4), layout="constrained")
 th = [fempipe.tip_values(disc, p.q, p.value)["theta_tip"] for p in arc.points]

@@ -374,7 +374,7 @@ def add_legend_entry(ax) -> None:
     )
     ax.legend(
         handles=[*handles, band, tri],
-        fontsize=8,
+        fontsize=9,
         ncol=3,
         loc="upper center",
         bbox_to_anchor=(0.5, -0.16),

@@ -242,8 +242,9 @@ def _draw_errors(ax, ns, qs: dict, title: str) -> None:
     for q, s in qs.items():
         err = np.asarray(s["errors"][:-1])
         ok = err > 0
+        slope = f", slope {s['slope']:.2f}" if math.isfinite(s["slope"]) else ""
         ax.loglog(ns[:-1][ok], err[ok], "o-", ms=4, color=COLORS.get(q),
-                  label=f"{q}: slope {s['slope']:.2f}, p {s['local']:.2f}")  # fmt: skip
+                  label=f"{q}: p {s['local']:.2f}{slope}")  # fmt: skip
         if len(s["fit"]) >= 2:
             ax.loglog(ns[s["fit"]], err[s["fit"]], "k-", lw=3, alpha=0.2)
     # A line of slope -6 through the period's coarsest error: P3's order.
@@ -255,15 +256,19 @@ def _draw_errors(ax, ns, qs: dict, title: str) -> None:
     ax.set_ylabel("|Q_N - Q_finest|")
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    # below the axes: inside, the legend would cover the coarse meshes' errors
+    ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncols=2, frameon=False)
 
 
 def plot(result: CaseResult, fig=None):
     """(a) 3-D errors, (b) planar errors, (c) local orders of both."""
-    from .drawing import finish_figure, new_figure, paper_case_line
+    from .drawing import finish_figure, paper_case_line
 
     if fig is None:
-        fig, axes = new_figure(3, ncols=3, size=4.2)
+        import matplotlib.pyplot as plt
+
+        # taller than wide panels: the legends of (a) and (b) sit under them
+        fig, axes = plt.subplots(1, 3, figsize=(14.0, 6.2), layout="constrained")
     else:
         axes = list(fig.subplots(1, 3, squeeze=False).ravel())
     d = result.data
@@ -284,10 +289,10 @@ def plot(result: CaseResult, fig=None):
             [d["planar"][q]["local"] for q in names if q in d["planar"]],
             "s", mfc="none", color="#D55E00", label="planar")  # fmt: skip
     ax.axhline(6.0, color="0.5", ls=":", lw=1)
-    ax.set_xticks(x, names, rotation=45, ha="right", fontsize=8)
+    ax.set_xticks(x, names, rotation=90, fontsize=9)
     ax.set_ylabel(f"local order p (N = {', '.join(map(str, ns[-3:]))})")
     ax.set_title("observed orders", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=9)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", f"{paper_case_line()}, α = π/2, P3")
     return fig

@@ -247,6 +247,6 @@ def plot(result: CaseResult, fig=None):
     ax_t.set_title("period against the normal form's", fontsize=9)
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=9)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", f"{paper_case_line()}, α = π/2, 3-D model")
     return fig
