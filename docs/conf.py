@@ -79,6 +79,9 @@ sphinx_gallery_conf = {
 gallery_indexes = [f"{out}/index" for _, out in _present]
 
 # -- HTML ---------------------------------------------------------------------
+# No typographic dashes: the CLI reference prints options (--alpha) that readers copy.
+smartquotes = False
+
 html_theme = "pydata_sphinx_theme"
 html_title = f"fempipe {version}"
 html_theme_options = {

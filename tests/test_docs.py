@@ -175,3 +175,8 @@ def test_docs_build(tmp_path):
     subprocess.run(cmd, cwd=ROOT, check=True)
     assert (tmp_path / "index.html").is_file()
     assert (tmp_path / "cli" / "reference.html").is_file()
+    # options printed as typed: "--alpha", never an en or em dash a shell rejects
+    for page in ("cli/reference.html", "cli/options.html", "getting_started.html"):
+        html = (tmp_path / page).read_text(encoding="utf-8")
+        assert "--alpha" in html, page
+        assert not re.search("[\u2013\u2014](alpha|U|basis|json|out|planar)\\b", html), page
