@@ -131,3 +131,25 @@ def test_bad_input_one_line_exit_2(capsys, argv, option):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert err[0].startswith(f"fempipe {argv[0]}: error: {option}")
+
+
+def test_critical_refuses_a_range_that_runs_downwards(capsys):
+    """``--v 5:3:4`` was swapped silently: now exit 2, naming the option and the order."""
+    assert main(["critical", "--alpha", "0", "--v", "5:3:4", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "--v" in err and "downwards" in err and "give 3 first" in err
+
+
+def test_critical_without_events_says_so(capsys):
+    """No event over the range: a sentence with the range, not an empty table header."""
+    assert main(["critical", "--alpha", "0", "--v", "0:3:2", "--quiet", "--fe", "P3:4"]) == 0
+    out = capsys.readouterr().out
+    assert "events: none (no eigenvalue crosses Re lambda = 0 for 0 <= v <= 3)" in out
+    assert "system below -> above" not in out
+
+
+def test_critical_defines_its_mode_numbers(capsys):
+    assert main(["critical", "--alpha", "pi/2", "--v", "0,8", "--quiet", "--fe", "P3:4"]) == 0
+    out = capsys.readouterr().out
+    assert "flutter in mode 2" in out
+    assert "mode k: the eigenvalue that is the k-th natural mode of the pipe without flow" in out

@@ -135,6 +135,12 @@ def run(args: argparse.Namespace) -> int:
     v_min, v_max = min(setup.v), max(setup.v)
     if v_max <= v_min:
         raise CLIError(flow_opt, f"needs a range with two different values, got {v_min:g} only")
+    if setup.v[0] > setup.v[-1]:
+        raise CLIError(
+            flow_opt,
+            f"the range runs downwards ({setup.v[0]:g} to {setup.v[-1]:g}); the branch is "
+            f"followed upwards in v: give {v_min:g} first",
+        )
     ds_max = args.ds_max
     model = PipeModel(setup.disc, setup.params)
     kwargs = {
@@ -273,6 +279,9 @@ def _print(result: dict, pipe) -> None:
         _print_planes(result, num)
     if result["v_flutter"] is not None and result["v_flutter"] != v_cr:
         print(f"first flutter of the primary branch: v = {num(result, 'v_flutter', '{:.10f}')}")
+    if not result["events"]:
+        print(f"events: none (no eigenvalue crosses Re lambda = 0 for {lo:g} <= v <= {hi:g})")
+        return
     w_v, w_f = (25, 21) if with_errors else (15, 11)
     print(
         f"{'branch':>8} {'plane':>5} {'type':>20} {'v':>{w_v}} {'mode':>5} {'Im lambda':>{w_f}}  "
@@ -291,6 +300,10 @@ def _print(result: dict, pipe) -> None:
             f"{num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
             f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
         )
+    print(
+        "mode k: the eigenvalue that is the k-th natural mode of the pipe without flow "
+        "(v = 0, same alpha, beta, gamma, mu), followed in v by continuity"
+    )
     if with_errors:
         estimates.print_footer(result["error_estimate"])
 
