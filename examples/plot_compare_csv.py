@@ -5,8 +5,9 @@ A user's CSV through ``compare``
 You have numbers from your own code (a modal code, another FE code, an experiment) and want
 to know whether they differ from fempipe by more than fempipe's own discretization error.
 ``fempipe compare FILE.csv`` reads one case per row, computes each quantity on a
-discretization and on its refinement, and calls a difference *resolved* when it exceeds the
-error estimate (a Grid Convergence Index).  The library form is :func:`fempipe.compare_values`.
+discretization and on its refinement, and says a value *differs* when the difference exceeds the
+error estimate (a Grid Convergence Index), *agrees* otherwise; the exit status is 0 only when
+every value agrees, as diff's.  The library form is :func:`fempipe.compare_values`.
 Here the "user" is the paper's method, three sine modes (Eq. (22)).
 """
 
@@ -52,7 +53,7 @@ for row in result["rows"]:
     print(
         f"{row['label']:8s} {row['quantity']:9s} user {row['user']:.8f} fempipe "
         f"{row['fempipe']:.8f} difference {row['difference']:+.2e} (estimate "
-        f"{row['error_estimate']:.1e}) {'resolved' if row['resolved'] else 'not resolved'}"
+        f"{row['error_estimate']:.1e}): {row['verdict']}"
     )
 
 #: fempipe's v_cr of the hanging pipe on P2:8 (checked against the classical straight-pipe v_cr)

@@ -62,7 +62,7 @@ Output
 ------
 ``--json`` prints ``{"file", "rows": [{"row", "quantity", "user",
 "fempipe", "difference", "relative_difference", "error_estimate",
-"resolved", "unit", "refined", "failure", "note", "alpha", "beta",
+"resolved", "verdict", "unit", "refined", "failure", "note", "alpha", "beta",
 "gamma", "mu", "v", "v_min", "v_max", "defaults", ...}], "discretization",
 "error_estimate": {"method", "discretization", "refined", "formula",
 "floor", "floors", "resolved", ...}, "summary", "cpu_time"}`` (with the SI
@@ -73,8 +73,10 @@ unit of the line's quantity, named in its column ``unit``, so their header
 says ``[-]``) and compare.png (user against fempipe per quantity, the line
 y = x, and the differences with fempipe's error estimate as error bars).
 
-Exit codes: 0 when every comparison was computed (resolved or not), 1 when
-some computation failed (Newton, no v_cr in the flow range, no limit cycle:
+Each row's ``verdict`` reads the criterion: ``"differs"`` (by more than
+fempipe's error estimate), ``"agrees"`` (within it), null without an estimate.
+Exit codes, as diff's: 0 when every value agrees, 1 when some value differs,
+has no estimate or failed (Newton, no v_cr in the flow range, no limit cycle:
 its row is in the table and the files with the failure's message and no
 fempipe value; the others are complete), 2 for bad input.
 """
@@ -158,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
             row["label"] = case.label
         row |= {k: d[k] for k in ("quantity", "user", "fempipe", "difference")}
         row |= {k: d[k] for k in ("relative_difference", "error_estimate", "resolved")}
+        row["verdict"] = VERDICTS[d["resolved"]]
         row |= {"unit": CSV_UNITS[name], "refined": d["refined"]}
         row |= {"failure": d["failure"], "note": d["note"]}
         row |= case.to_dict(name)
@@ -176,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
             "not_resolved": sum(r["resolved"] is False for r in rows),
             "no_estimate": sum(r["resolved"] is None and r["failure"] is None for r in rows),
             "failed": len(failed),
+            "agree": sum(r["verdict"] == "agrees" for r in rows),
+            "differ": sum(r["verdict"] == "differs" for r in rows),
         },
         "cpu_time": reporting.cpu_seconds(t0),
     }
@@ -189,8 +194,21 @@ def run(args: argparse.Namespace) -> int:
             " they are in the table with their message",
             file=sys.stderr,
         )
-        return 1
-    return 0
+    differ = [r for r in rows if r["verdict"] == "differs"]
+    if differ:
+        where = ", ".join(f"{r['row']} {r['quantity']}" for r in differ)
+        print(
+            f"fempipe compare: {len(differ)} of {len(rows)} values differ from fempipe's by more "
+            f"than its error estimate (row {where})",
+            file=sys.stderr,
+        )
+    # as diff: 0 when every value agrees within fempipe's error, 1 otherwise
+    return 0 if all(r["verdict"] == "agrees" for r in rows) else 1
+
+
+#: The verdict of a row from ``resolved``: a difference larger than fempipe's error
+#: estimate (resolved) is one fempipe's discretization cannot explain.
+VERDICTS = {True: "differs", False: "agrees", None: None}
 
 
 #: The columns of compare.csv, in order (those present).
@@ -205,6 +223,7 @@ CSV_COLUMNS = (
     "relative_difference",
     "error_estimate",
     "resolved",
+    "verdict",
     "refined",
     "alpha",
     "beta",
@@ -305,18 +324,18 @@ def _print(result: dict) -> None:
     wq = max([12] + [len(r["quantity"]) for r in rows])
     print(
         f"{'row':>4} {'quantity':<{wq}} {'user':>15} {'fempipe':>17} {'difference':>11} "
-        f"{'rel. diff.':>11} {'error est.':>10} {'resolved':>8}"
+        f"{'rel. diff.':>11} {'error est.':>10} {'verdict':>8}"
     )
     for r in rows:
         rel = (
             "-" if r["relative_difference"] is None else f"{100 * r['relative_difference']:+.3g} %"
         )
-        resolved = {True: "yes", False: "no", None: "-"}[r["resolved"]]
+        verdict = r["verdict"] or "-"
         print(
             f"{r['row']:>4} {r['quantity']:<{wq}} {_fmt(r['user']):>15} "
             f"{_fmt(r['fempipe']):>17} "
             f"{_fmt(r['difference'], '{:+.3e}'):>11} {rel:>11} "
-            f"{_fmt(r['error_estimate'], '{:.1e}'):>10} {resolved:>8}"
+            f"{_fmt(r['error_estimate'], '{:.1e}'):>10} {verdict:>8}"
         )
         if r["failure"] is not None:
             print(f"       failed: {r['failure']}")
@@ -339,6 +358,6 @@ def _print(result: dict) -> None:
         print(f"not given in row {_ranges(where)}: {k} = {val:.6g} ({why})")
     s = result["summary"]
     print(
-        f"{s['resolved']} resolved, {s['not_resolved']} not resolved (within fempipe's error "
-        f"estimate), {s['no_estimate']} without an estimate, {s['failed']} failed"
+        f"{s['agree']} agree within fempipe's error estimate, {s['differ']} differ by more than "
+        f"it, {s['no_estimate']} without an estimate, {s['failed']} failed"
     )

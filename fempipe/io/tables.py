@@ -126,6 +126,7 @@ CSV_UNITS: Mapping[str, str] = {
     "relative_difference": "1",
     "error_estimate": "-",
     "resolved": "-",
+    "verdict": "-",
     "refined": "-",
     "v_min": "1",
     "v_max": "1",

@@ -169,7 +169,7 @@ def _draw(top, bottom, name: str, rows: list[dict]) -> list:
                 ecolor=_COLOR,
                 capsize=3,
                 ls="none",
-                label="resolved" if what == "resolved" else "not resolved",
+                label="differs" if what == "resolved" else "agrees",
             )
     top.set_xlim(lo, hi)
     top.set_ylim(lo, hi)
