@@ -41,11 +41,14 @@ csv_file.write_text(
 # %%
 # ``fempipe compare`` in this process
 # ------------------------------------
-# ``--fe P2:8`` keeps it quick (the default is P3:16); ``--json`` prints the contract's keys.
+# ``--fe P2:8`` keeps it quick (the default is P3:16); ``--json`` prints the contract's keys;
+# ``--planar``: the user's code is planar, so its v_cr is compared with fempipe's in-plane one
+# (without it, v_cr is the first loss of stability in either plane, as ``fempipe critical``'s).
 buffer = io.StringIO()
 with contextlib.redirect_stdout(buffer):
     status = fempipe_cli(
-        ["compare", str(csv_file), "--fe", "P2:8", "--json", "--out", str(workdir / "out")]
+        ["compare", str(csv_file), "--fe", "P2:8", "--planar", "--json"]
+        + ["--out", str(workdir / "out")]
     )
 result = json.loads(buffer.getvalue())
 print(f"exit status {status}; files written: {sorted(p.name for p in (workdir / 'out').iterdir())}")

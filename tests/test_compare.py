@@ -414,7 +414,7 @@ def test_paper_n3_values_are_resolved(tmp_path, capsys):
     from pathlib import Path
 
     path = Path(__file__).resolve().parents[1] / "validation" / "compare_paper_N3.csv"
-    code, res, err = run_json(["compare", str(path), "--workers", "2"], capsys)
+    code, res, err = run_json(["compare", str(path), "--workers", "2", "--planar"], capsys)
     assert code == 1, err  # every N = 3 value differs from the converged one
     vcr = rows_of(res, "v_cr")
     assert [r["row"] for r in vcr] == list(range(1, 13))
@@ -427,3 +427,33 @@ def test_paper_n3_values_are_resolved(tmp_path, capsys):
     tips = [r for r in res["rows"] if r["row"] > 12]
     assert len(tips) == 12
     assert all(1e-3 < abs(r["difference"]) < 0.02 for r in tips), tips
+
+
+def test_v_cr_means_what_critical_means_and_planar_the_plane(tmp_path, capsys):
+    """An inclined pipe (alpha = 60 deg, beta = 0.3, gamma = 10) first loses stability out of
+    its plane: ``v_cr`` is that first loss, as ``fempipe critical``'s (one meaning in every
+    command); ``--planar`` compares the in-plane value, as ``critical --planar``.  Each row
+    names the fempipe quantity it used."""
+    from test_cli_stability import run_json as critical_json
+
+    args = ["--alpha", "60deg", "--beta", "0.3", "--gamma", "10", "--fe", "P3:4"]
+    crit = critical_json(capsys, ["critical", *args, "--v", "0,10", "--json", "--quiet"])
+    planar = critical_json(
+        capsys, ["critical", *args, "--v", "0,10", "--planar", "--json", "--quiet"]
+    )
+    assert crit["v_cr"] < planar["v_cr"]  # out of the plane first
+    path = write(tmp_path, "alpha_deg,beta,gamma,v_max,v_cr", "60,0.3,10,10,7.9")
+    _, res, _ = run_json(["compare", path, "--fe", "P3:4"], capsys)
+    (row,) = res["rows"]
+    assert row["fempipe_quantity"] == "v_cr" and res["planar"] is False
+    assert row["fempipe"] == pytest.approx(crit["v_cr"], abs=1e-9)
+    _, res, _ = run_json(["compare", path, "--fe", "P3:4", "--planar"], capsys)
+    (row,) = res["rows"]
+    assert row["fempipe_quantity"] == "v_cr_in_plane" and res["planar"] is True
+    assert row["fempipe"] == pytest.approx(planar["v_cr"], abs=1e-9)
+    assert main(["compare", path, "--fe", "P3:4", "--planar", "--quiet"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert (
+        "v_cr: compared with fempipe's v_cr_in_plane, the first loss of stability in the plane"
+        in out
+    )

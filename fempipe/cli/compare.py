@@ -26,15 +26,15 @@ Columns (:data:`COLUMNS`):
   critical event, per unit tau), ``theta_tip`` (rad), ``X_tip``, ``Z_tip``,
   ``eta_tip`` (static tip values, divided by L), ``lc_amplitude`` (of
   eta(1), L), ``lc_period`` (T); an empty cell: not given for that row.
-  ``v_cr`` and ``frequency`` are compared, as they always were, with the
-  critical velocity of the paper's planar model, the motion in the plane of
-  the static state (what a planar code computes; the same numbers as
-  ``v_cr_in_plane``, ``frequency_in_plane``); ``v_cr_out_of_plane`` and
-  ``frequency_out_of_plane`` are those of the motion out of that plane
-  (:mod:`fempipe.model.out_of_plane`): the round pipe first loses stability at the
-  smaller of ``v_cr_in_plane`` and ``v_cr_out_of_plane``, which is
-  ``fempipe critical``'s and ``fempipe convergence``'s ``v_cr`` (docs,
-  "Out of the plane");
+  ``v_cr`` and ``frequency`` mean what they mean in every command: the round
+  pipe's first loss of stability, at the smaller of ``v_cr_in_plane`` and
+  ``v_cr_out_of_plane`` (``fempipe critical``'s and ``fempipe convergence``'s
+  ``v_cr``; docs, "Out of the plane"); with ``--planar``, as in those commands,
+  the paper's planar model, the motion in the plane of the static state (what
+  a planar code computes: ``v_cr_in_plane``, ``frequency_in_plane``).
+  ``v_cr_out_of_plane`` and ``frequency_out_of_plane`` are those of the motion
+  out of that plane (:mod:`fempipe.model.out_of_plane`).  Each row names the
+  fempipe quantity it was compared with (``fempipe_quantity``);
 * the inclination ``alpha`` in rad (also ``pi/3``, ``60deg`` as for
   ``--alpha``) or ``alpha_deg`` in degrees, default 0;
 * dimensionless groups ``beta``, ``gamma``, ``mu`` (Eq. (19)) and the flow
@@ -98,7 +98,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "file",
         metavar="FILE.csv",
         help="the user's values: one case per row; columns: quantities (v_cr, frequency "
-        "(in the plane, the paper's planar model), theta_tip, X_tip, Z_tip, eta_tip, "
+        "(the first loss of stability, in either plane; with --planar the paper's planar "
+        "model's), theta_tip, X_tip, Z_tip, eta_tip, "
         "lc_amplitude, lc_period, v_cr_in_plane, v_cr_out_of_plane, frequency_in_plane, "
         "frequency_out_of_plane), parameters (alpha or "
         "alpha_deg, beta, gamma, mu, v; or length, EI, m, M, g, a, U in SI), the flow range "
@@ -119,6 +120,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         g, "integration tolerance of the limit cycle's shooting (lc_amplitude, lc_period)"
     )
     common.add_workers_argument(g, "processes computing the comparisons in parallel (default 1)")
+    common.add_planar_argument(g, "v_cr and frequency are the in-plane ones, v_cr_in_plane")
     common.add_output_arguments(parser)
 
 
@@ -146,7 +148,10 @@ def run(args: argparse.Namespace) -> int:
     parsing.check_count(
         args.file, len(items), parsing.MAX_VALUES, parsing.allow_large(args), "comparisons"
     )
-    pairs = [(case.quantity(name, args.shoot_rtol), case.values[name]) for case, name in items]
+    pairs = [
+        (case.quantity(name, args.shoot_rtol, args.planar), case.values[name])
+        for case, name in items
+    ]
     output = reporting.Output(args.out) if args.out is not None else None
     with reporting.progress(args, len(pairs), "compare") as bar:
         comparisons = compare_values(
@@ -159,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
         if case.label is not None:
             row["label"] = case.label
         row |= {k: d[k] for k in ("quantity", "user", "fempipe", "difference")}
+        row["fempipe_quantity"] = fempipe_quantity(name, args.planar)
         row |= {k: d[k] for k in ("relative_difference", "error_estimate", "resolved")}
         row["verdict"] = VERDICTS[d["resolved"]]
         row |= {"unit": CSV_UNITS[name], "refined": d["refined"]}
@@ -170,6 +176,7 @@ def run(args: argparse.Namespace) -> int:
     failed = [r for r in rows if r["failure"] is not None]
     result = {
         "file": str(args.file),
+        "planar": bool(args.planar),
         "rows": rows,
         "discretization": {"name": disc.name, **disc.to_dict()},
         "error_estimate": estimate_description(disc, quantities, args.shoot_rtol),
@@ -206,6 +213,13 @@ def run(args: argparse.Namespace) -> int:
     return 0 if all(r["verdict"] == "agrees" for r in rows) else 1
 
 
+def fempipe_quantity(name: str, planar: bool) -> str:
+    """The name of the quantity fempipe computed for the user's column ``name``: ``v_cr`` and
+    ``frequency`` are the first loss of stability in either plane, or with ``--planar`` the
+    in-plane ones (``v_cr_in_plane``)."""
+    return f"{name}_in_plane" if planar and name in ("v_cr", "frequency") else name
+
+
 #: The verdict of a row from ``resolved``: a difference larger than fempipe's error
 #: estimate (resolved) is one fempipe's discretization cannot explain.
 VERDICTS = {True: "differs", False: "agrees", None: None}
@@ -224,6 +238,7 @@ CSV_COLUMNS = (
     "error_estimate",
     "resolved",
     "verdict",
+    "fempipe_quantity",
     "refined",
     "alpha",
     "beta",
@@ -321,6 +336,11 @@ def _print(result: dict) -> None:
         f"fempipe compare {result['file']}: {n} comparison{'s' if n != 1 else ''} on "
         f"{est['discretization']}; error estimate {est['formula']} from {est['refined']}"
     )
+    used = sorted({(r["quantity"], r["fempipe_quantity"]) for r in rows})
+    for name, fq in used:
+        if name in ("v_cr", "frequency"):
+            what = "in the plane (--planar)" if fq != name else "in either plane (as critical's)"
+            print(f"{name}: compared with fempipe's {fq}, the first loss of stability {what}")
     wq = max([12] + [len(r["quantity"]) for r in rows])
     print(
         f"{'row':>4} {'quantity':<{wq}} {'user':>15} {'fempipe':>17} {'difference':>11} "

@@ -39,7 +39,7 @@ _QUANTITIES += (
 )
 _CRITICAL = ("v_cr", "frequency")
 _CRITICAL += ("v_cr_in_plane", "v_cr_out_of_plane", "frequency_in_plane", "frequency_out_of_plane")
-#: The user's v_cr and frequency are the planar model's (module docstring).
+#: With ``--planar`` the user's v_cr and frequency are the planar model's (module docstring).
 _PLANAR = ("v_cr", "frequency")
 _DIMLESS = ("beta", "gamma", "mu", "v", "v_min", "v_max")
 _SI = ("length", "EI", "m", "M", "g", "a", "U", "U_min", "U_max")
@@ -120,8 +120,10 @@ class Case:
     U_range: tuple[float, float] | None = None
     label: str | None = None
 
-    def quantity(self, name: str, shoot_rtol: float = 1e-9):
-        """The :class:`~fempipe.studies.convergence.Quantity` of column ``name`` for this row."""
+    def quantity(self, name: str, shoot_rtol: float = 1e-9, planar: bool = False):
+        """The :class:`~fempipe.studies.convergence.Quantity` of column ``name`` for this row:
+        ``v_cr`` and ``frequency`` those of the first loss of stability, in either plane, or
+        with ``planar`` of the paper's planar model (``v_cr_in_plane``)."""
         from dataclasses import replace
 
         from fempipe.studies.convergence import Quantity
@@ -133,7 +135,7 @@ class Case:
                 replace(self.params, v=lo),
                 v_max=hi,
                 shoot_rtol=shoot_rtol,
-                planar=name in _PLANAR,
+                planar=planar and name in _PLANAR,
             )
         return Quantity(name, self.params, shoot_rtol=shoot_rtol)
 

@@ -119,6 +119,7 @@ CSV_UNITS: Mapping[str, str] = {
     "row": "-",
     "label": "-",
     "quantity": "-",
+    "fempipe_quantity": "-",
     "unit": "-",
     "user": "-",
     "fempipe": "-",
