@@ -12,6 +12,7 @@ alpha = 0 the two planes are the same problem.
 
 from __future__ import annotations
 
+import json
 import math
 
 import matplotlib
@@ -22,6 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pytest  # noqa: E402
 from clirun import run_json  # noqa: E402
 
+from fempipe.cli import main  # noqa: E402
 from fempipe.io import read_csv  # noqa: E402
 
 #: The keys of ``fempipe spectrum --json`` before the out-of-plane analysis (and with --planar).
@@ -354,7 +356,8 @@ def test_critical_quantities_coincide_on_the_hanging_pipe():
 
 def test_compare_accepts_each_plane(capsys, tmp_path):
     """v_cr_in_plane, v_cr_out_of_plane, frequency_out_of_plane as columns; a user's v_cr is
-    the planar model's, as before (the same number as v_cr_in_plane)."""
+    the first loss of stability in either plane, as critical's (here out of the plane), or with
+    --planar the planar model's (the same number as v_cr_in_plane)."""
     from fempipe.model.discretization import Modal
     from fempipe.model.params import Params
     from fempipe.studies.convergence import Quantity
@@ -364,7 +367,13 @@ def test_compare_accepts_each_plane(capsys, tmp_path):
         "alpha_deg,v_cr,v_cr_in_plane,v_cr_out_of_plane [1],frequency_out_of_plane [1/T]\n"
         "90,6.24,6.24,5.85,14.4\n"
     )
-    d = run_json(capsys, ["compare", str(path), "--modal", "4", "--json", "--quiet"])
+    assert main(["compare", str(path), "--modal", "4", "--json", "--quiet"]) == 1
+    d = json.loads(capsys.readouterr().out)
+    rows = {r["quantity"]: r for r in d["rows"]}
+    # the two analyses locate one crossing, each to Brent's 1e-10
+    assert rows["v_cr"]["fempipe"] == pytest.approx(rows["v_cr_out_of_plane"]["fempipe"], abs=1e-9)
+    assert main(["compare", str(path), "--modal", "4", "--json", "--quiet", "--planar"]) == 1
+    d = json.loads(capsys.readouterr().out)
     rows = {r["quantity"]: r for r in d["rows"]}
     assert list(rows) == ["v_cr", "v_cr_in_plane", "v_cr_out_of_plane", "frequency_out_of_plane"]
     assert rows["v_cr"]["fempipe"] == rows["v_cr_in_plane"]["fempipe"]

@@ -117,3 +117,31 @@ def test_local_order_recovers_a_known_order():
     out = orders(ns, table)
     assert out["q"]["monotone"] and out["q"]["slope"] == pytest.approx(6.0, abs=0.1)
     assert not out["bent"]["monotone"]
+
+
+def test_critical_reports_the_out_of_plane_criticality_of_the_shot_cycles(capsys):
+    """``fempipe critical``'s flutter out of the plane carries the 3-D normal form: supercritical,
+    the cycles above v_cr, the tip's swing out of the plane c sqrt(v - v_cr), checked here
+    against the 3-D cycle shot at v_cr + 1e-3 on the same mesh (A^2 / (c^2 delta) within 2e-3 of
+    1, as the library's normal form)."""
+    import json
+
+    from fempipe.cli import main
+
+    assert (
+        main(["critical", "--alpha", "pi/2", "--v", "0,7", "--fe", "P3:3", "--json", "--quiet"])
+        == 0
+    )
+    res = json.loads(capsys.readouterr().out)
+    (ev,) = [e for e in res["events"] if e.get("plane") == "out" and e["type"] == "flutter"]
+    assert ev["criticality"] == "supercritical" and ev["cycle_side"] == "above"
+    assert ev["hopf_note"] is None and ev["first_lyapunov_coefficient"] < 0
+    c = ev["Y_tip_amplitude_coefficient"]
+    assert ev["theta_tip_amplitude_coefficient"] is None
+    (inp,) = [e for e in res["events"] if e.get("plane") == "in" and e["type"] == "flutter"]
+    assert inp["Y_tip_amplitude_coefficient"] is None and inp["criticality"] == "supercritical"
+    delta = 1e-3
+    cyc = near_onset_cycle(delta)
+    lo, hi = cyc.tip["Y_tip"]
+    assert abs((0.5 * (hi - lo)) ** 2 / (c * c * delta) - 1.0) < 2e-3
+    assert cyc.stable  # supercritical: the born cycle is stable

@@ -22,9 +22,9 @@ hanging or standing pipe does in every plane through its axis, "in"),
 ``critical_out_of_plane`` and ``branches_out_of_plane``; ``v_flutter`` is the
 first flutter in either plane, ``events`` lists both planes' events (each
 with ``plane``; a fold once, as an in-plane event), and with an SI pipe
-``U_cr_in_plane`` and ``U_cr_out_of_plane`` are added.  Out-of-plane flutter
-events have no Hopf normal form (it needs the three-dimensional nonlinear
-model): their ``hopf_note`` says so.
+``U_cr_in_plane`` and ``U_cr_out_of_plane`` are added.  An out-of-plane flutter
+of the primary branch carries the 3-D model's Hopf normal form, with
+``Y_tip_amplitude_coefficient`` (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).
 
 ``--json`` prints ``{"v_cr": float or null, "events": [{"v", "type", "branch",
 "frequency", "mode", "stable_before", "stable_after"}, ...], "critical",
@@ -169,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
     # Hopf criticality of the flutter events (fempipe.analyses.stability.hopf).
     from fempipe.analyses.stability.hopf import decorate_events
 
-    result = decorate_events(result, model, res if args.planar else res.in_plane)
+    out_of_plane = {} if args.planar else _out_of_plane_forms(result, model)
+    result = decorate_events(result, model, res if args.planar else res.in_plane, out_of_plane)
     result["params"] = head["params"]
     result["discretization"] = head["discretization"]
     if setup.pipe is not None:
@@ -252,6 +253,38 @@ def _write(output: reporting.Output, result: dict, res) -> None:
         output.figure("branches.png", ax.figure, dpi=150)
     finally:
         plt.close(ax.figure)
+
+
+def _out_of_plane_forms(result: dict, model) -> dict:
+    """``{(branch, v): keys}`` of the primary branch's flutters out of the plane: the 3-D
+    model's Hopf normal form (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`)."""
+    from dataclasses import replace
+
+    from fempipe.analyses.space.onset import out_of_plane_event_keys
+    from fempipe.analyses.stability.hopf import EVENT_KEYS
+    from fempipe.analyses.statics import sagged_state
+    from fempipe.model.out_of_plane import axisymmetric
+
+    out = {}
+    for ev in result.get("events", []):
+        if ev["type"] != "flutter" or ev.get("plane") != "out" or ev["branch"] != "primary":
+            continue
+        v = float(ev["v"])
+        if axisymmetric(model.params):
+            out[("primary", v)] = dict.fromkeys(EVENT_KEYS) | {
+                "hopf_note": "sin(alpha) = 0: every plane is alike, the pair is double (an "
+                "O(2) Hopf point: the in-plane normal form is the planar cycle's; the whirl is "
+                "fempipe simulate --3d's)"
+            }
+            continue
+        at = model.with_params(replace(model.params, v=v))
+        try:
+            q = sagged_state(at).q
+        except (RuntimeError, ValueError) as exc:
+            out[("primary", v)] = dict.fromkeys(EVENT_KEYS) | {"hopf_note": str(exc)}
+            continue
+        out[("primary", v)] = out_of_plane_event_keys(model, v, q)
+    return out
 
 
 def _print(result: dict, pipe) -> None:
@@ -342,4 +375,9 @@ def reporting_hopf(ev: dict) -> str:
     """``"  (supercritical, l1 = ...)"`` for a flutter event (or the reason there is none)."""
     if ev.get("criticality") is None:
         return f"  (no Hopf normal form: {ev.get('hopf_note')})" if ev.get("hopf_note") else ""
-    return f"  ({ev['criticality']}, l1 = {ev['first_lyapunov_coefficient']:.6g})"
+    text = f"  ({ev['criticality']}, l1 = {ev['first_lyapunov_coefficient']:.6g}"
+    c = ev.get("Y_tip_amplitude_coefficient")
+    if c is not None:
+        side = ev.get("cycle_side")
+        text += f"; Y_tip swing {c:.4g} sqrt(|v - v_cr|), {side} v_cr"
+    return text + ")"

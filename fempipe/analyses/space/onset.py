@@ -70,12 +70,16 @@ __all__ = [
     "SpaceHopfNormalForm",
     "critical_pair",
     "locate_hopf",
+    "out_of_plane_event_keys",
     "space_hopf_normal_form",
     "space_jacobian",
 ]
 
 #: |Re lambda| at which the secant of :func:`locate_hopf` stops (|lambda| ~ 14).
 HOPF_TOL = 1e-12
+#: The secant also stops when its step in v falls below this (relative): the accuracy to
+#: which the stability events locate v (Brent, 1e-10).
+HOPF_V_TOL = 1e-10
 
 
 def space_jacobian(model: SpaceModel, x: np.ndarray) -> np.ndarray:
@@ -136,7 +140,9 @@ def locate_hopf(
 
     Returns
     -------
-    (v, q, iterations) with \\|Re lambda(v)\\| <= :data:`HOPF_TOL` |lambda|.
+    (v, q, iterations) with \\|Re lambda(v)\\| <= :data:`HOPF_TOL` |lambda|, or where the
+    secant's step in v has fallen below :data:`HOPF_V_TOL` (on fine meshes the round-off of
+    the dense eigenvalues, about 1e-8 in Re lambda on P3:16, is above HOPF_TOL |lambda|).
     """
     space = SpaceModel(planar.disc, planar.params)
     v0, v1 = float(v_guess), float(v_guess) + dv
@@ -146,6 +152,8 @@ def locate_hopf(
         if abs(l1.real) <= HOPF_TOL * abs(l1):
             return v1, q, it
         v2 = v1 - l1.real * (v1 - v0) / (l1.real - l0.real)
+        if abs(v2 - v1) <= HOPF_V_TOL * max(1.0, abs(v1)):
+            return v1, q, it
         v0, l0 = v1, l1
         v1 = v2
         l1, q = _pair_at(space, planar, v1, q)
@@ -361,3 +369,39 @@ def space_hopf_normal_form(
         y_gradient=gY,
         coefficient=hc,
     )
+
+
+def out_of_plane_event_keys(planar: PipeModel, v: float, q_guess: np.ndarray) -> dict:
+    """The Hopf keys of ``fempipe critical``'s events for a flutter out of the plane.
+
+    The 3-D model's normal form at the event (:func:`space_hopf_normal_form`, from the
+    static state ``q_guess`` at ``v``): the keys of
+    :data:`fempipe.analyses.stability.hopf.EVENT_KEYS`, the tip's swing out of the plane
+    ``Y_tip_amplitude_coefficient`` (the in-plane ``theta_tip`` and ``eta_tip`` ones are
+    null: they do not swing at first order) and ``hopf_note`` null; where the normal form
+    cannot be computed, the keys null and the reason in ``hopf_note``.
+    """
+    keys = (
+        "first_lyapunov_coefficient", "first_lyapunov_uncertainty", "criticality",
+        "transversality", "cycle_side", "theta_tip_amplitude_coefficient",
+        "eta_tip_amplitude_coefficient", "Y_tip_amplitude_coefficient",
+    )  # fmt: skip
+    try:
+        nf = space_hopf_normal_form(planar, q_guess, v, v_out_of_plane=v)
+    except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
+        return dict.fromkeys(keys) | {"hopf_note": f"no 3-D normal form: {exc}"}
+    side = None
+    if nf.criticality != "degenerate" and math.isfinite(nf.rho2_slope):
+        side = "above" if nf.rho2_slope > 0 else "below"
+    coefficient = nf.amplitude_coefficient if math.isfinite(nf.amplitude_coefficient) else None
+    return {
+        "first_lyapunov_coefficient": nf.l1,
+        "first_lyapunov_uncertainty": nf.uncertainty,
+        "criticality": nf.criticality,
+        "transversality": nf.transversality,
+        "cycle_side": side,
+        "theta_tip_amplitude_coefficient": None,
+        "eta_tip_amplitude_coefficient": None,
+        "Y_tip_amplitude_coefficient": coefficient,
+        "hopf_note": None,
+    }

@@ -28,6 +28,7 @@ EVENT_KEYS = (
     "cycle_side",
     "theta_tip_amplitude_coefficient",
     "eta_tip_amplitude_coefficient",
+    "Y_tip_amplitude_coefficient",
     "hopf_note",
 )
 #: The eigenvalue at the reconstructed state must be within this (relative to
@@ -148,24 +149,33 @@ def _normal_form(model: PipeModel, result, key: tuple, q: np.ndarray) -> HopfNor
     )
 
 
-def decorate_events(result_dict: dict, model: PipeModel, result) -> dict:
+#: The keys of an out-of-plane flutter the 3-D normal form is not computed for.
+_NOT_PRIMARY = dict.fromkeys(EVENT_KEYS) | {
+    "hopf_note": "the 3-D normal form is computed for the primary branch's events"
+}
+
+
+def decorate_events(
+    result_dict: dict, model: PipeModel, result, out_of_plane: dict | None = None
+) -> dict:
     """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json``.
 
     In ``events``, ``critical`` (when a flutter) and ``branches[*].events``;
     ``hopf_note`` is null, or why the other keys are null (hysteretic
-    damping, a state not reconstructed).  ``result_dict`` is modified and returned.
+    damping, a state not reconstructed).  The flutters out of the plane take their keys
+    from ``out_of_plane``, ``{(branch, v): keys}`` (the 3-D model's normal form,
+    :func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).  ``result_dict`` is
+    modified and returned.
     """
     forms = normal_forms(model, result)
+    out_of_plane = out_of_plane or {}
 
     def decorate(d: dict | None) -> None:
         if d is None or d.get("type") != "flutter":
             return
         if d.get("plane", "in") != "in":
-            d.update(dict.fromkeys(EVENT_KEYS))
-            d["hopf_note"] = (
-                "a flutter out of the plane: its normal form needs the three-dimensional "
-                "nonlinear model"
-            )
+            # the 3-D model's normal form (fempipe.analyses.space.onset.out_of_plane_event_keys)
+            d.update(out_of_plane.get((d["branch"], float(d["v"])), _NOT_PRIMARY))
             return
         key = (d["branch"], d["type"], float(d["v"]), d["mode"])
         nf = forms.get(key, "no normal form computed for this event")
@@ -174,6 +184,7 @@ def decorate_events(result_dict: dict, model: PipeModel, result) -> dict:
             d["hopf_note"] = nf
         else:
             d.update(nf.to_dict())
+            d["Y_tip_amplitude_coefficient"] = None  # a planar cycle: Y_tip = 0
             d["hopf_note"] = None
 
     for d in result_dict.get("events", []):
