@@ -259,3 +259,22 @@ def test_cli_refuses_hysteretic_damping_for_a_limit_cycle():
         ["convergence", "--quantity", "lc_period", "--v", "10", "--hysteretic-damping", "0.01"]
     )
     assert code == 2 and "--hysteretic-damping" in err and "time-domain" in err
+
+
+@pytest.mark.parametrize(
+    "observed, expected, verdict",
+    [(5.95, 6.0, "asymptotic"), (5.28, 6.0, "pre-asymptotic"), (5.34, 4.0, "super-convergent"),
+     (3.0, None, None), (float("nan"), 6.0, None)],
+)  # fmt: skip
+def test_order_verdict_flags_orders_outside_the_theory_band(observed, expected, verdict):
+    """The observed orders the text once printed without a word (v_cr on P3: 5.28 against 6;
+    beam modes: 5.34 against 4) are flagged, with the band +-ORDER_BAND about the theory."""
+    import numpy as np
+
+    from fempipe.studies.convergence.study import ORDER_BAND, Series
+
+    assert ORDER_BAND == 0.5
+    s = Series("fe-P3", np.array([2, 4]), np.array([6, 12]), np.ones(2), np.ones(2),
+               observed, (0, 1), expected)  # fmt: skip
+    assert s.order_verdict == verdict
+    assert s.to_dict()["order_verdict"] == verdict

@@ -22,7 +22,7 @@ the plane (:class:`fempipe.studies.convergence.Quantity`).
 
 ``--json`` prints ``{"quantity", "reference": {"value", "error_estimate",
 "method", "family", "independent"}, "series": [{"family", "n", "dofs",
-"values", "errors", "observed_order", "expected_order", "fit_points",
+"values", "errors", "observed_order", "expected_order", "order_verdict", "fit_points",
 "local_orders", "failures", ...}], "params", "cpu_time", ...}`` with
 ``family`` one of ``fe-P1``, ``fe-P2``, ..., ``modal-sine``, ``modal-beam``;
 errors are absolute, the eigenvalue (complex) is ``[re, im]`` and its error
@@ -342,12 +342,19 @@ def _print(result: dict) -> None:
         for n, d, v, e in zip(s["n"], s["dofs"], s["values"], s["errors"], strict=True):
             err = "-" if e is None or (isinstance(e, float) and math.isnan(e)) else f"{e:.2e}"
             print(f"{s['family']:>11} {n:>5} {d:>5} {_fmt(v):>26} {err:>9}")
+    from fempipe.studies.convergence.study import ORDER_BAND
+
     for s in result["series"]:
         order = s["observed_order"]
         fit = ", ".join(str(n) for n in s["fit_points"]) or "none"
         exp = "unknown" if s["expected_order"] is None else f"{s['expected_order']:g}"
         got = "n/a" if order is None else f"{order:.3f}"
-        print(f"{s['family']}: observed order {got} in dofs (fit on n = {fit}); theory {exp}")
+        note = ""
+        if s["order_verdict"] in ("pre-asymptotic", "super-convergent"):
+            lo, hi = s["expected_order"] - ORDER_BAND, s["expected_order"] + ORDER_BAND
+            where = "below" if s["order_verdict"] == "pre-asymptotic" else "above"
+            note = f": {s['order_verdict']}, {where} the theory's band [{lo:g}, {hi:g}]"
+        print(f"{s['family']}: observed order {got} in dofs (fit on n = {fit}); theory {exp}{note}")
         for n, msg in s["failures"].items():
             print(f"  n = {n} failed: {msg}")
     print(f"CPU time {result['cpu_time']:.1f} s (this process and its workers)")

@@ -18,7 +18,12 @@ from fempipe.core.errors import SolverError
 from .orders import extrapolate, local_orders, observed_order
 from .quantities import Family, Quantity
 
-__all__ = ["Series", "Reference", "ConvergenceStudy", "run_study"]
+__all__ = ["ORDER_BAND", "Series", "Reference", "ConvergenceStudy", "run_study"]
+
+#: Half-width of the band about the theoretical order inside which an observed order counts as
+#: asymptotic (:attr:`Series.order_verdict`): the spread of P3's observed orders about 6 on
+#: the validation suite's meshes (its convergence cases' tolerance).
+ORDER_BAND = 0.5
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,19 @@ class Series:
     failures: dict = field(default_factory=dict)
     cpu_time: float = 0.0
 
+    @property
+    def order_verdict(self) -> str | None:
+        """Where the observed order lies against the theory's band, expected_order +-
+        :data:`ORDER_BAND`: ``"asymptotic"`` (inside), ``"pre-asymptotic"`` (below: the
+        meshes are too coarse, or a reference error), ``"super-convergent"`` (above); None
+        without a theory or an observed order."""
+        if self.expected_order is None or not np.isfinite(self.observed_order):
+            return None
+        gap = self.observed_order - self.expected_order
+        if abs(gap) <= ORDER_BAND:
+            return "asymptotic"
+        return "pre-asymptotic" if gap < 0 else "super-convergent"
+
     def to_dict(self) -> dict:
         return {
             "family": self.family,
@@ -72,6 +90,7 @@ class Series:
             "errors": [_number(x) for x in self.errors],
             "observed_order": _number(self.observed_order),
             "expected_order": self.expected_order,
+            "order_verdict": self.order_verdict,
             "fit_points": [int(self.n[i]) for i in self.fit],
             "local_orders": [_number(x) for x in local_orders(self.dofs, self.values)],
             "extrapolated": None if self.extrapolated is None else _number(self.extrapolated),
