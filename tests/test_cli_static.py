@@ -327,3 +327,17 @@ def test_points_report_linear_stability(capsys):
     assert d["points"][0]["stable"] is True
     d = run_json(["static", "--alpha", "pi/2", "--v", "0"], capsys)
     assert d["points"][0]["stable"] is True
+
+
+def test_si_run_without_a_says_its_damping_differs(capsys):
+    """The SI pipe's Kelvin-Voigt damping is zero unless --a is given, the dimensionless
+    runs' is the paper's 0.005: every SI run that takes the other default says so."""
+    from fempipe.cli import main
+
+    si = ["static", "--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058"]
+    si += ["--U", "1", "--fe", "P3:2"]
+    assert main(si) == 0
+    assert "no Kelvin-Voigt damping unless --a is given" in capsys.readouterr().err
+    for argv in (si + ["--a", "0.001"], si + ["--quiet"], ["static", "--v", "1", "--fe", "P3:2"]):
+        assert main(argv) == 0
+        assert "notice" not in capsys.readouterr().err, argv

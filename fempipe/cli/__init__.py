@@ -123,7 +123,11 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, "out", None) is not None:
             check_out_dir(args.out)
         with interruptible():
-            return int(args._run(args) or 0)
+            code = int(args._run(args) or 0)
+        if getattr(args, "progress", None) is not False:  # --quiet: progress False
+            for text in dict.fromkeys(getattr(args, "_notices", ())):
+                print(f"fempipe {args.command}: notice: {text}", file=sys.stderr)
+        return code
     except CLIError as exc:  # bad input: one line naming the option, exit 2
         print(f"{prefix} {exc}", file=sys.stderr)
         return 2

@@ -111,6 +111,14 @@ def setup_from_args(args: argparse.Namespace, need_flow: bool = True) -> Setup:
     v_list, U_list = _flow_from_args(args, pipe, large, need_flow)
     params = replace(base, v=v_list[0]) if v_list else base
     disc = _discretization_from_args(args, large)
+    if pipe is not None and _given(args, "a") is None:
+        # The two ways of giving the pipe differ in one default: every such run says so
+        # (fempipe.cli.main prints the notices when the command has run).
+        notices = args.__dict__.setdefault("_notices", [])
+        notices.append(
+            "the SI pipe has no Kelvin-Voigt damping unless --a is given "
+            f"(mu = 0 here; a dimensionless run takes the paper's mu = {DEFAULT_MU:g})"
+        )
     return Setup(params=params, pipe=pipe, v=v_list, disc=disc, U=U_list)
 
 
