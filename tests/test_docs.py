@@ -182,3 +182,20 @@ def test_docs_build(tmp_path):
         html = (tmp_path / page).read_text(encoding="utf-8")
         assert "--alpha" in html, page
         assert not re.search("[\u2013\u2014](alpha|U|basis|json|out|planar)\\b", html), page
+
+
+def test_api_summaries_are_whole_sentences():
+    """The API reference's summaries are the docstrings' first sentences as autosummary cuts
+    them: at the first period followed by white space.  "Solve Eq. (31a) ..." became "Solve
+    Eq."; no first sentence may end on an abbreviation."""
+    import inspect
+
+    import fempipe
+
+    cut = []
+    for name in sorted(fempipe._LAZY):
+        para = " ".join((inspect.getdoc(getattr(fempipe, name)) or "").split("\n\n")[0].split())
+        first = re.split(r"\.\s+", para)[0]
+        if re.search(r"\b(Eq|Eqs|Fig|Figs|Ref|Sec|cf|vs|al)$", first):
+            cut.append((name, first))
+    assert not cut, cut

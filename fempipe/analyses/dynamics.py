@@ -190,7 +190,9 @@ def integrate(
     t0: float = 0.0,
     **options,
 ) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
-    """Time stepping of Eq. (20) as a generator of (tau, q, q').
+    """Time stepping of the pipe's motion as a generator of (tau, q, q').
+
+    The motion of Eq. (20), integrated by :class:`Radau`.
 
     Yields the initial state first, then the state after every accepted step
     of :class:`Radau` (options are passed on: ``rtol``, ``atol``, ``max_step``,
@@ -285,7 +287,9 @@ def simulate(
     h_fixed: float | None = None,
     callback: Callable[[float], None] | None = None,
 ) -> Trajectory:
-    """Integrate Eq. (20) from tau = t0 to t_end.
+    """Integrate the pipe's motion from tau = t0 to t_end, with its record and diagnostics.
+
+    The motion of Eq. (20), by :class:`Radau`.
 
     Parameters
     ----------

@@ -30,7 +30,9 @@ __all__ = ["Fields", "PipeModel"]
 
 
 class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, SpringTerms):
-    """Residual of the weak form of Eq. (20) and its analytic Jacobians.
+    """The pipe's residual in weak form and its analytic Jacobians.
+
+    The weak form of Eq. (20) with the variants, one method per physical term.
 
     Parameters
     ----------

@@ -44,7 +44,10 @@ def _check_finite(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class Params:
-    """Dimensionless parameters of Eq. (20).
+    """Dimensionless parameters of the pipe and its variants, validated on construction.
+
+    The groups of Eq. (19) that Eq. (20) takes, and the variants' (end mass, damping,
+    springs), each checked against its allowed range.
 
     Parameters
     ----------

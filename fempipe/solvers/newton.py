@@ -161,7 +161,9 @@ def solve_static(
     tol: float = 1e-10,
     max_iter: int = 40,
 ) -> StaticSolution:
-    """Solve Eq. (31a) by Newton's method with the analytic Jacobian.
+    """Solve the static problem by Newton's method with the analytic Jacobian.
+
+    The static problem is Eq. (31a), in weak form.
 
     Parameters
     ----------

@@ -264,7 +264,9 @@ def cycle_diagram(
     out_of_plane=None,
     **options,
 ) -> CycleDiagram:
-    """Bifurcation diagram by continuation (Figs. 7-10): equilibria and periodic orbits.
+    """Bifurcation diagram by continuation: equilibria and periodic orbits against v.
+
+    The diagrams of the paper's Figs. 7-10.
 
     For each alpha: the stability events of the primary static branch
     (:func:`fempipe.analyses.stability.stability_analysis`), its equilibria at the

@@ -176,7 +176,9 @@ def stability_map(
     planar: bool = False,
     **options,
 ) -> StabilityMap:
-    """v_cr(alpha) for each (beta, gamma) in ``curves``, in parallel (Fig. 6).
+    """v_cr against alpha for each (beta, gamma) in ``curves``, computed in parallel.
+
+    The stability map of the paper's Fig. 6.
 
     Each point is an independent :func:`~fempipe.analyses.stability.spatial_critical_velocity`
     (gravity loading, continuation in v, the first loss of stability in the

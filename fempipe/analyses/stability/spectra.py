@@ -109,7 +109,9 @@ def spectrum(
     method: str = "auto",
     tolerance: float = RESOLUTION_TOL,
 ) -> Spectrum:
-    """Resolved eigenvalues of the linearized problem, Eq. (32), about a static state.
+    """Resolved eigenvalues of the linearized problem about a static state.
+
+    The quadratic eigenproblem of Eq. (32).
 
     Every resolved eigenvalue is listed.  At v != 0 the mode numbers cost a
     path: the branch through q is continued back to v = 0 and the

@@ -371,7 +371,9 @@ def root_locus(
     tolerance: float = RESOLUTION_TOL,
     callback: Callable[[int, float], None] | None = None,
 ) -> RootLocus:
-    """Spectra along the static branch at the flow velocities ``values`` (Fig. 5).
+    """Spectra along the static branch at the flow velocities ``values``: a root locus.
+
+    The root loci of the paper's Fig. 5.
 
     Parameters
     ----------
