@@ -18,8 +18,9 @@ __all__ = ["plot_space_snapshots", "plot_tip_orbit"]
 
 def _caption(model: SpaceModel, motion) -> str:
     p = model.params
+    # the angle in degrees, as in every other figure's caption
     head = (
-        f"alpha = {p.alpha:.4g}, beta = {p.beta:.4g}, gamma = {p.gamma:.4g}, mu = {p.mu:.4g}, "
+        f"α = {np.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, μ = {p.mu:.4g}, "
         f"v = {p.v:.4g} ({model.disc.name})"
     )
     kind = f"{motion.kind}, {motion.motion}"
@@ -87,6 +88,6 @@ def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12):
     ax.set_zlim(-lim, lim * 0.3)
     ax.set_title(
         _caption(model, motion) + f"\n{picks.size} snapshots over the window (dark: first)",
-        fontsize=8,
+        fontsize=9,
     )
     return fig
