@@ -447,3 +447,42 @@ def test_report_findings_first_and_truncations_in_one_table(tmp_path):
     assert rows[0] == "i" and len(rows) == 101
     # a source cited by three checks is defined once and cited by its label
     assert "- **S1**: s" in text and text.count("[S1](#sources)") == 3
+
+
+def test_a_case_section_stays_within_its_budget(tmp_path):
+    """A case with 25 short tables of 20 rows (each inline on its own) and 40 checks with long
+    reasons: its section takes at most CASE_BUDGET bytes; the largest tables, then the checks'
+    reasons and sources, go to linked CSV files that keep every row and every reason."""
+    import csv
+    import re
+
+    from fempipe.validation.report import CASE_BUDGET
+
+    why = "a reason of some length, " * 8
+    checks = tuple(
+        Check(f"c{k}", f"claim {k}", "numerics", True, 1e-9 * k, 1e-6, f"≤ 1e-06; {why}", f"s{k}")
+        for k in range(40)
+    )
+    tables = tuple(
+        Table(f"t{j}", ("a", "b"), tuple((i, 0.5 * i) for i in range(20))) for j in range(25)
+    )
+    res = CaseResult("big", "Fig. 9", "big case", ("it shows",), checks, tables=tables)
+    suite = SuiteResult(
+        (CaseOutcome("big", "ok", result=res),),
+        quick=True,
+        workers=1,
+        wall_time=1.0,
+        started="now",
+        environment={"workers": 1},
+    )
+    text = render_report(suite, tables_dir=tmp_path)
+    section = re.split(r"\n(?=## )", text)
+    (big,) = [s for s in section if s.startswith("## Fig. 9")]
+    assert len(big.encode()) <= CASE_BUDGET
+    assert "[big_checks.csv](big_checks.csv)" in big and "| ≤ 1e-06 |" in big
+    with open(tmp_path / "big_checks.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    assert len(rows) == 41 and all(why in r[6] for r in rows[1:])
+    linked = re.findall(r"\[(big_table\d+\.csv)\]", big)
+    assert linked and all(len((tmp_path / n).read_text().splitlines()) == 21 for n in linked)
+    assert len(linked) + big.count("| a | b |") == 25  # every table, inline or linked

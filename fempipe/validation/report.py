@@ -25,18 +25,18 @@ def _source_labels(suite: SuiteResult) -> dict[str, str]:
     return {src: f"S{k}" for k, src in enumerate(repeated, start=1)}
 
 
-def _check_row(c: Check, sources: dict[str, str] | None = None) -> str:
-    """One check as a table row; a repeated source is cited by its label."""
+def _check_row(c: Check, sources: dict[str, str] | None = None, short: bool = False) -> str:
+    """One check as a table row; a repeated source is cited by its label.  ``short``: the
+    tolerance without its reason, no source."""
     mark = "✅ pass" if c.passed else ("❌ FAIL" if c.category == "numerics" else "⚠️ differs")
-    cells = [
-        mark,
-        c.category,
-        c.claim,
-        format_cell(c.measured),
-        format_cell(c.reference),
-        c.tolerance,
-        f"[{sources[c.source]}](#sources)" if sources and c.source in sources else c.source,
-    ]
+    cells = [mark, c.category, c.claim, format_cell(c.measured), format_cell(c.reference)]
+    if short:
+        cells.append(c.tolerance.split(";")[0])
+    else:
+        cells += [
+            c.tolerance,
+            f"[{sources[c.source]}](#sources)" if sources and c.source in sources else c.source,
+        ]
     return "| " + " | ".join(format_cell(x) for x in cells) + " |"
 
 
@@ -130,11 +130,15 @@ def _findings(suite: SuiteResult) -> list[str]:
 
 #: Tables longer than this go to a CSV file beside the report, linked.
 MAX_INLINE_ROWS = 30
+#: The most bytes a case's section of REPORT.md may take: past it, its longest tables go to
+#: CSV files beside the report (linked), then its checks' reasons and sources (the checks
+#: stay inline with their verdicts and numbers; results.json holds everything).
+CASE_BUDGET = 8192
 
 
-def _table(t, case: str, k: int, tables_dir: Path | None) -> list[str]:
-    """A table in Markdown, or a link to its CSV file when it is long."""
-    if len(t.rows) <= MAX_INLINE_ROWS or tables_dir is None:
+def _table(t, case: str, k: int, tables_dir: Path | None, inline: bool = True) -> list[str]:
+    """A table in Markdown, or a link to its CSV file when it is long (or not ``inline``)."""
+    if tables_dir is None or (inline and len(t.rows) <= MAX_INLINE_ROWS):
         return ["", t.to_markdown()]
     name = f"{case}_table{k}.csv"
     _write_csv(tables_dir / name, t)
@@ -162,9 +166,9 @@ def render_report(
 ) -> str:
     """The report as Markdown text; figure links are relative to ``figures_dir``.
 
-    Tables longer than :data:`MAX_INLINE_ROWS` are written as CSV files into
-    ``tables_dir`` (the report's directory) and linked; without ``tables_dir``
-    they stay inline.
+    Tables longer than :data:`MAX_INLINE_ROWS`, and those that would take a case's section
+    past :data:`CASE_BUDGET`, are written as CSV files into ``tables_dir`` (the report's
+    directory) and linked; without ``tables_dir`` they stay inline.
     """
     tables_path = None if tables_dir is None else Path(tables_dir)
     cmd = "fempipe validate" + (" --quick" if suite.quick else "")
@@ -278,10 +282,57 @@ def _summary(suite: SuiteResult) -> list[str]:
     return lines
 
 
+def _size(lines: list[str]) -> int:
+    return len("\n".join(lines).encode())
+
+
 def _case_section(
     o: CaseOutcome, sources: dict[str, str], figures_dir: str, tables_path: Path | None
 ) -> list[str]:
-    """One case's section: what the paper shows, its figures, checks and tables."""
+    """One case's section, within :data:`CASE_BUDGET` where ``tables_path`` is given."""
+    r = o.result
+    if r is None or tables_path is None:
+        return _case_lines(o, sources, figures_dir, tables_path, set(), False)
+    outside: set[int] = set()
+    by_size = sorted(range(len(r.tables)), key=lambda k: -len(r.tables[k].to_markdown()))
+    lines = _case_lines(o, sources, figures_dir, tables_path, outside, False)
+    for k in by_size:
+        if _size(lines) <= CASE_BUDGET:
+            return lines
+        outside.add(k)
+        lines = _case_lines(o, sources, figures_dir, tables_path, outside, False)
+    if _size(lines) > CASE_BUDGET:
+        lines = _case_lines(o, sources, figures_dir, tables_path, outside, True)
+    return lines
+
+
+def _checks_csv(path: Path, checks) -> None:
+    import csv
+    import io
+
+    from ..io import write_text
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(("passed", "category", "name", "claim", "measured", "reference", "tolerance",
+                "source"))  # fmt: skip
+    for c in checks:
+        w.writerow((c.passed, c.category, c.name, c.claim, c.measured, c.reference,
+                    c.tolerance, c.source))  # fmt: skip
+    write_text(path, buf.getvalue())
+
+
+def _case_lines(
+    o: CaseOutcome,
+    sources: dict[str, str],
+    figures_dir: str,
+    tables_path: Path | None,
+    outside: set[int],
+    short_checks: bool,
+) -> list[str]:
+    """One case's section: what the paper shows, its figures, checks and tables; the tables
+    ``outside`` as linked CSV files, with ``short_checks`` the checks without their reasons
+    and sources (those in a linked CSV file)."""
     lines = ["", f'<a id="{o.name}"></a>', ""]
     r = o.result
     if r is None:
@@ -302,14 +353,26 @@ def _case_section(
         lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
     if r.caption and (o.figures or o.figure):
         lines += ["", f"*{r.figure}.* {r.caption}"]
-    lines += [
-        "",
-        "| result | category | check | measured | reference | tolerance (why) | source |",
-        "|---|---|---|---|---|---|---|",
-        *[_check_row(c, sources) for c in r.checks],
-    ]
+    if short_checks:
+        name = f"{o.name}_checks.csv"
+        _checks_csv(tables_path / name, r.checks)
+        lines += [
+            "",
+            f"Why each tolerance has its size, and each check's source: [{name}]({name}) (CSV).",
+            "",
+            "| result | category | check | measured | reference | tolerance |",
+            "|---|---|---|---|---|---|",
+            *[_check_row(c, short=True) for c in r.checks],
+        ]
+    else:
+        lines += [
+            "",
+            "| result | category | check | measured | reference | tolerance (why) | source |",
+            "|---|---|---|---|---|---|---|",
+            *[_check_row(c, sources) for c in r.checks],
+        ]
     for k, t in enumerate(r.tables, start=1):
-        lines += _table(t, o.name, k, tables_path)
+        lines += _table(t, o.name, k, tables_path, inline=k - 1 not in outside)
     return lines
 
 
