@@ -4,7 +4,9 @@ Build (warnings are errors)::
 
     python -m sphinx -W -b html docs docs/_build/html
 
-Generated at build time, ignored by git: the API stubs (``api/generated/``),
+Generated at build time, ignored by git: the main job's files (``_generated/``, the
+README's main command, whose figure the getting-started page shows), the API stubs
+(``api/generated/``),
 one page per validation case from the committed report (``report/``, by
 ``_ext/validation_report.py``), and the sphinx-gallery output of ``examples/``
 and ``course/`` (``gallery/``, ``lessons/``).
@@ -106,5 +108,22 @@ def _gallery_toctree(app, docname, source):
     source[0] = source[0].replace(".. GALLERY-TOCTREE\n", block)
 
 
+def _main_job_figure(app) -> None:
+    """Run the README's main command into ``_generated/main_job/``: the getting-started
+    page shows the figure it writes (``shapes.png``), made by the code being documented."""
+    import shlex
+
+    from fempipe.cli import main
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    line = text.split("<!-- main-command -->")[1].split("<!-- /main-command -->")[0]
+    command = line.strip().strip("`").strip().splitlines()[-1].split("&& fempipe ", 1)[1]
+    argv = shlex.split(command)
+    argv = argv[: argv.index("--out")] + ["--out", str(DOCS / "_generated" / "main_job")]
+    if main([*argv, "--quiet"]) != 0:
+        raise RuntimeError(f"the README's main command failed: fempipe {command}")
+
+
 def setup(app):
+    app.connect("builder-inited", _main_job_figure)
     app.connect("source-read", _gallery_toctree)

@@ -177,6 +177,10 @@ def test_docs_build(tmp_path):
     subprocess.run(cmd, cwd=ROOT, check=True)
     assert (tmp_path / "index.html").is_file()
     assert (tmp_path / "cli" / "reference.html").is_file()
+    # getting started shows the main job's figure, made by the README's main command
+    html = (tmp_path / "getting_started.html").read_text(encoding="utf-8")
+    assert re.search(r'<img [^>]*src="_images/shapes\.png"', html)
+    assert (tmp_path / "_images" / "shapes.png").stat().st_size > 10_000
     # options printed as typed: "--alpha", never an en or em dash a shell rejects
     for page in ("cli/reference.html", "cli/options.html", "getting_started.html"):
         html = (tmp_path / page).read_text(encoding="utf-8")
