@@ -292,17 +292,19 @@ def _case_section(
     """One case's section, within :data:`CASE_BUDGET` where ``tables_path`` is given."""
     r = o.result
     if r is None or tables_path is None:
-        return _case_lines(o, sources, figures_dir, tables_path, set(), False)
+        return _case_lines(o, sources, figures_dir, tables_path, set(), 0)
     outside: set[int] = set()
     by_size = sorted(range(len(r.tables)), key=lambda k: -len(r.tables[k].to_markdown()))
-    lines = _case_lines(o, sources, figures_dir, tables_path, outside, False)
+    lines = _case_lines(o, sources, figures_dir, tables_path, outside, 0)
     for k in by_size:
         if _size(lines) <= CASE_BUDGET:
             return lines
         outside.add(k)
-        lines = _case_lines(o, sources, figures_dir, tables_path, outside, False)
-    if _size(lines) > CASE_BUDGET:
-        lines = _case_lines(o, sources, figures_dir, tables_path, outside, True)
+        lines = _case_lines(o, sources, figures_dir, tables_path, outside, 0)
+    for level in (1, 2):
+        if _size(lines) <= CASE_BUDGET:
+            break
+        lines = _case_lines(o, sources, figures_dir, tables_path, outside, level)
     return lines
 
 
@@ -328,11 +330,12 @@ def _case_lines(
     figures_dir: str,
     tables_path: Path | None,
     outside: set[int],
-    short_checks: bool,
+    checks_level: int,
 ) -> list[str]:
     """One case's section: what the paper shows, its figures, checks and tables; the tables
-    ``outside`` as linked CSV files, with ``short_checks`` the checks without their reasons
-    and sources (those in a linked CSV file)."""
+    ``outside`` as linked CSV files.  ``checks_level`` 0: every check with its reason and
+    source; 1: without them; 2: only the checks that did not pass inline (1 and 2: every
+    check, with its reason and source, in a linked CSV file)."""
     lines = ["", f'<a id="{o.name}"></a>', ""]
     r = o.result
     if r is None:
@@ -353,17 +356,24 @@ def _case_lines(
         lines += ["", f"![{r.figure}]({Path(figures_dir, fig).as_posix()})"]
     if r.caption and (o.figures or o.figure):
         lines += ["", f"*{r.figure}.* {r.caption}"]
-    if short_checks:
+    if checks_level:
         name = f"{o.name}_checks.csv"
         _checks_csv(tables_path / name, r.checks)
+        shown = r.checks if checks_level == 1 else [c for c in r.checks if not c.passed]
+        n_pass = sum(c.passed for c in r.checks)
         lines += [
             "",
-            f"Why each tolerance has its size, and each check's source: [{name}]({name}) (CSV).",
-            "",
-            "| result | category | check | measured | reference | tolerance |",
-            "|---|---|---|---|---|---|",
-            *[_check_row(c, short=True) for c in r.checks],
+            f"{n_pass} of {len(r.checks)} checks pass; every check with the reason for its "
+            f"tolerance and its source: [{name}]({name}) (CSV)."
+            + ("" if checks_level == 1 else " Below: the checks that do not pass."),
         ]
+        if shown:
+            lines += [
+                "",
+                "| result | category | check | measured | reference | tolerance |",
+                "|---|---|---|---|---|---|",
+                *[_check_row(c, short=True) for c in shown],
+            ]
     else:
         lines += [
             "",
