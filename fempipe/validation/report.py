@@ -10,7 +10,7 @@ import os
 import re
 from pathlib import Path
 
-from .checks import Check, format_cell
+from .checks import Check, Table, format_cell
 from .suite import CaseOutcome, SuiteResult
 
 __all__ = ["render_report", "write_report"]
@@ -309,19 +309,11 @@ def _case_section(
 
 
 def _checks_csv(path: Path, checks) -> None:
-    import csv
-    import io
-
-    from ..io import write_text
-
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(("passed", "category", "name", "claim", "measured", "reference", "tolerance",
-                "source"))  # fmt: skip
-    for c in checks:
-        w.writerow((c.passed, c.category, c.name, c.claim, c.measured, c.reference,
-                    c.tolerance, c.source))  # fmt: skip
-    write_text(path, buf.getvalue())
+    """Every check of a case, with the reason for its tolerance and its source, as CSV."""
+    columns = ("passed", "category", "name", "claim", "measured", "reference", "tolerance",
+               "source")  # fmt: skip
+    rows = tuple(tuple(getattr(c, k) for k in columns) for c in checks)
+    _write_csv(path, Table("checks", columns, rows))
 
 
 def _case_lines(
