@@ -61,7 +61,9 @@ print(f"(beta_1 L)^2 = {beta1**2:.10f}; observed order of P2 {eigen_order:.2f} (
 # 2. Flow: non-symmetric stiffness, gyroscopic damping
 # ----------------------------------------------------
 # The follower force v^2 sin(theta(1) - theta) gives K a dense, non-symmetric tip column;
-# the Coriolis term gives C the skew part 2 v sqrt(beta) (...).  The eigenvalues are no
+# the Coriolis term gives C_ij = 2 v sqrt(beta) \int phi_i \int_xi^1 phi_j on the straight
+# pipe (Eq. (33b)): a skew (gyroscopic) part, and the symmetric part v sqrt(beta) b b^T,
+# b_i = \int phi_i, the momentum the fluid carries out at the tip.  The eigenvalues are no
 # longer on the imaginary axis; as v grows the second mode's pair crosses it: a Hopf
 # (flutter) instability.  We locate it by bisection on the largest real part, then compare
 # with :func:`fempipe.critical_velocity` (events tracked along the static branch).
