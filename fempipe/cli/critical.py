@@ -258,33 +258,13 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 def _out_of_plane_forms(result: dict, model) -> dict:
     """``{(branch, v): keys}`` of the primary branch's flutters out of the plane: the 3-D
     model's Hopf normal form (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`)."""
-    from dataclasses import replace
-
     from fempipe.analyses.space.onset import out_of_plane_event_keys
-    from fempipe.analyses.stability.hopf import EVENT_KEYS
-    from fempipe.analyses.statics import sagged_state
-    from fempipe.model.out_of_plane import axisymmetric
 
-    out = {}
-    for ev in result.get("events", []):
-        if ev["type"] != "flutter" or ev.get("plane") != "out" or ev["branch"] != "primary":
-            continue
-        v = float(ev["v"])
-        if axisymmetric(model.params):
-            out[("primary", v)] = dict.fromkeys(EVENT_KEYS) | {
-                "hopf_note": "sin(alpha) = 0: every plane is alike, the pair is double (an "
-                "O(2) Hopf point: the in-plane normal form is the planar cycle's; the whirl is "
-                "fempipe simulate --3d's)"
-            }
-            continue
-        at = model.with_params(replace(model.params, v=v))
-        try:
-            q = sagged_state(at).q
-        except (RuntimeError, ValueError) as exc:
-            out[("primary", v)] = dict.fromkeys(EVENT_KEYS) | {"hopf_note": str(exc)}
-            continue
-        out[("primary", v)] = out_of_plane_event_keys(model, v, q)
-    return out
+    return {
+        ("primary", float(ev["v"])): out_of_plane_event_keys(model, float(ev["v"]))
+        for ev in result.get("events", [])
+        if ev["type"] == "flutter" and ev.get("plane") == "out" and ev["branch"] == "primary"
+    }
 
 
 def _print(result: dict, pipe) -> None:

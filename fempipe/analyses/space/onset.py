@@ -59,12 +59,15 @@ import scipy.linalg as sla
 from fempipe.core.companion import first_order_matrix
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import axisymmetric
 from fempipe.model.space import SpaceModel, planar_state
 from fempipe.solvers.newton import solve_static
 
+from ..stability.hopf.flutter import EVENT_KEYS
 from ..stability.hopf.lyapunov import HopfCoefficient, lyapunov_coefficient
 from ..stability.hopf.normal_form import predicted_cycle_state
 from ..stability.hopf.pipe import dense
+from ..statics import sagged_state
 
 __all__ = [
     "SpaceHopfNormalForm",
@@ -371,37 +374,41 @@ def space_hopf_normal_form(
     )
 
 
-def out_of_plane_event_keys(planar: PipeModel, v: float, q_guess: np.ndarray) -> dict:
-    """The Hopf keys of ``fempipe critical``'s events for a flutter out of the plane.
+def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:
+    """The Hopf keys of ``fempipe critical``'s flutter out of the plane at ``v`` on the primary
+    (gravity-loaded) branch.
 
-    The 3-D model's normal form at the event (:func:`space_hopf_normal_form`, from the
-    static state ``q_guess`` at ``v``): the keys of
-    :data:`fempipe.analyses.stability.hopf.EVENT_KEYS`, the tip's swing out of the plane
-    ``Y_tip_amplitude_coefficient`` (the in-plane ``theta_tip`` and ``eta_tip`` ones are
-    null: they do not swing at first order) and ``hopf_note`` null; where the normal form
-    cannot be computed, the keys null and the reason in ``hopf_note``.
+    The 3-D model's normal form there (:func:`space_hopf_normal_form` from the sagged static
+    state at ``v``): the keys of :data:`fempipe.analyses.stability.hopf.EVENT_KEYS` with the
+    tip's swing out of the plane ``Y_tip_amplitude_coefficient`` (the in-plane ``theta_tip`` and
+    ``eta_tip`` ones null: they do not swing at first order) and ``hopf_note`` null.  Where
+    there is no normal form (sin alpha = 0, where the pair is double; a failed computation) the
+    keys are null and ``hopf_note`` says why.
     """
-    keys = (
-        "first_lyapunov_coefficient", "first_lyapunov_uncertainty", "criticality",
-        "transversality", "cycle_side", "theta_tip_amplitude_coefficient",
-        "eta_tip_amplitude_coefficient", "Y_tip_amplitude_coefficient",
-    )  # fmt: skip
+
+    def unavailable(reason: str) -> dict:
+        return dict.fromkeys(EVENT_KEYS) | {"hopf_note": reason}
+
+    if axisymmetric(planar.params):
+        return unavailable(
+            "sin(alpha) = 0: every plane is alike, the pair is double (an O(2) Hopf point: the "
+            "in-plane normal form is the planar cycle's; the whirl is fempipe simulate --3d's)"
+        )
     try:
-        nf = space_hopf_normal_form(planar, q_guess, v, v_out_of_plane=v)
+        q = sagged_state(planar.with_params(replace(planar.params, v=v))).q
+        nf = space_hopf_normal_form(planar, q, v, v_out_of_plane=v)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
-        return dict.fromkeys(keys) | {"hopf_note": f"no 3-D normal form: {exc}"}
+        return unavailable(f"no 3-D normal form: {exc}")
     side = None
     if nf.criticality != "degenerate" and math.isfinite(nf.rho2_slope):
         side = "above" if nf.rho2_slope > 0 else "below"
     coefficient = nf.amplitude_coefficient if math.isfinite(nf.amplitude_coefficient) else None
-    return {
+    return unavailable("") | {
         "first_lyapunov_coefficient": nf.l1,
         "first_lyapunov_uncertainty": nf.uncertainty,
         "criticality": nf.criticality,
         "transversality": nf.transversality,
         "cycle_side": side,
-        "theta_tip_amplitude_coefficient": None,
-        "eta_tip_amplitude_coefficient": None,
         "Y_tip_amplitude_coefficient": coefficient,
         "hopf_note": None,
     }
