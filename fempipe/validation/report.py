@@ -136,12 +136,17 @@ MAX_INLINE_ROWS = 30
 CASE_BUDGET = 8192
 
 
-def _table(t, case: str, k: int, tables_dir: Path | None, inline: bool = True) -> list[str]:
-    """A table in Markdown, or a link to its CSV file when it is long (or not ``inline``)."""
-    if tables_dir is None or (inline and len(t.rows) <= MAX_INLINE_ROWS):
+def _linked(t, tables_dir: Path | None, inline: bool) -> bool:
+    """Whether a table goes to a CSV file beside the report: when it is long, or not
+    ``inline``; never without ``tables_dir``."""
+    return tables_dir is not None and (not inline or len(t.rows) > MAX_INLINE_ROWS)
+
+
+def _table(t, case: str, k: int, linked: bool) -> list[str]:
+    """A table in Markdown, or a link to its CSV file ``<case>_table<k>.csv``."""
+    if not linked:
         return ["", t.to_markdown()]
     name = f"{case}_table{k}.csv"
-    _write_csv(tables_dir / name, t)
     out = ["", f"**{t.title}**: {len(t.rows)} rows in [{name}]({name}) (CSV)."]
     if t.note:
         out += ["", t.note]
@@ -289,22 +294,28 @@ def _size(lines: list[str]) -> int:
 def _case_section(
     o: CaseOutcome, sources: dict[str, str], figures_dir: str, tables_path: Path | None
 ) -> list[str]:
-    """One case's section, within :data:`CASE_BUDGET` where ``tables_path`` is given."""
+    """One case's section, within :data:`CASE_BUDGET` where ``tables_path`` is given; the
+    CSV files it links are written there once its form is chosen."""
     r = o.result
     if r is None or tables_path is None:
         return _case_lines(o, sources, figures_dir, tables_path, set(), 0)
     outside: set[int] = set()
     by_size = sorted(range(len(r.tables)), key=lambda k: -len(r.tables[k].to_markdown()))
-    lines = _case_lines(o, sources, figures_dir, tables_path, outside, 0)
+    level = 0
+    lines = _case_lines(o, sources, figures_dir, tables_path, outside, level)
     for k in by_size:
         if _size(lines) <= CASE_BUDGET:
-            return lines
-        outside.add(k)
-        lines = _case_lines(o, sources, figures_dir, tables_path, outside, 0)
-    for level in (1, 2):
-        if _size(lines) <= CASE_BUDGET:
             break
+        outside.add(k)
         lines = _case_lines(o, sources, figures_dir, tables_path, outside, level)
+    while _size(lines) > CASE_BUDGET and level < 2:
+        level += 1
+        lines = _case_lines(o, sources, figures_dir, tables_path, outside, level)
+    for k, t in enumerate(r.tables, start=1):
+        if _linked(t, tables_path, k - 1 not in outside):
+            _write_csv(tables_path / f"{o.name}_table{k}.csv", t)
+    if level:
+        _checks_csv(tables_path / f"{o.name}_checks.csv", r.checks)
     return lines
 
 
@@ -325,9 +336,9 @@ def _case_lines(
     checks_level: int,
 ) -> list[str]:
     """One case's section: what the paper shows, its figures, checks and tables; the tables
-    ``outside`` as linked CSV files.  ``checks_level`` 0: every check with its reason and
+    ``outside`` as links to CSV files.  ``checks_level`` 0: every check with its reason and
     source; 1: without them; 2: only the checks that did not pass inline (1 and 2: every
-    check, with its reason and source, in a linked CSV file)."""
+    check, with its reason and source, in a linked CSV file).  Writes nothing."""
     lines = ["", f'<a id="{o.name}"></a>', ""]
     r = o.result
     if r is None:
@@ -350,7 +361,6 @@ def _case_lines(
         lines += ["", f"*{r.figure}.* {r.caption}"]
     if checks_level:
         name = f"{o.name}_checks.csv"
-        _checks_csv(tables_path / name, r.checks)
         shown = r.checks if checks_level == 1 else [c for c in r.checks if not c.passed]
         n_pass = sum(c.passed for c in r.checks)
         lines += [
@@ -374,7 +384,7 @@ def _case_lines(
             *[_check_row(c, sources) for c in r.checks],
         ]
     for k, t in enumerate(r.tables, start=1):
-        lines += _table(t, o.name, k, tables_path, inline=k - 1 not in outside)
+        lines += _table(t, o.name, k, _linked(t, tables_path, k - 1 not in outside))
     return lines
 
 
