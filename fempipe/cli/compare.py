@@ -88,7 +88,7 @@ import math
 import sys
 
 from fempipe.cli import common, parsing, reporting
-from fempipe.cli.compare_cases import COLUMNS, DEFAULT_V_MAX, Case, read_cases
+from fempipe.cli.compare_cases import COLUMNS, DEFAULT_V_MAX, Case, fempipe_quantity, read_cases
 
 __all__ = ["COLUMNS", "CSV_COLUMNS", "DEFAULT_V_MAX", "Case", "add_arguments", "read_cases", "run"]
 
@@ -213,13 +213,6 @@ def run(args: argparse.Namespace) -> int:
     return 0 if all(r["verdict"] == "agrees" for r in rows) else 1
 
 
-def fempipe_quantity(name: str, planar: bool) -> str:
-    """The name of the quantity fempipe computed for the user's column ``name``: ``v_cr`` and
-    ``frequency`` are the first loss of stability in either plane, or with ``--planar`` the
-    in-plane ones (``v_cr_in_plane``)."""
-    return f"{name}_in_plane" if planar and name in ("v_cr", "frequency") else name
-
-
 #: The verdict of a row from ``resolved``: a difference larger than fempipe's error
 #: estimate (resolved) is one fempipe's discretization cannot explain.
 VERDICTS = {True: "differs", False: "agrees", None: None}
@@ -338,7 +331,7 @@ def _print(result: dict) -> None:
     )
     used = sorted({(r["quantity"], r["fempipe_quantity"]) for r in rows})
     for name, fq in used:
-        if name in ("v_cr", "frequency"):
+        if fempipe_quantity(name, True) != name:  # a quantity whose meaning --planar changes
             what = "in the plane (--planar)" if fq != name else "in either plane (as critical's)"
             print(f"{name}: compared with fempipe's {fq}, the first loss of stability {what}")
     wq = max([12] + [len(r["quantity"]) for r in rows])

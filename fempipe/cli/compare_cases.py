@@ -23,7 +23,7 @@ from fempipe.cli.parsing import CLIError
 from fempipe.core.errors import ParamError
 from fempipe.model.params import Params, PipeSI
 
-__all__ = ["COLUMNS", "DEFAULT_V_MAX", "Case", "read_cases"]
+__all__ = ["COLUMNS", "DEFAULT_V_MAX", "Case", "fempipe_quantity", "read_cases"]
 
 #: Default end of the flow range of v_cr and frequency (above every v_cr of
 #: the paper's Fig. 6, about 10 at beta = 0.5).
@@ -41,6 +41,15 @@ _CRITICAL = ("v_cr", "frequency")
 _CRITICAL += ("v_cr_in_plane", "v_cr_out_of_plane", "frequency_in_plane", "frequency_out_of_plane")
 #: With ``--planar`` the user's v_cr and frequency are the planar model's (module docstring).
 _PLANAR = ("v_cr", "frequency")
+
+
+def fempipe_quantity(name: str, planar: bool) -> str:
+    """The name of the quantity fempipe computes for the user's column ``name``: ``v_cr`` and
+    ``frequency`` are the first loss of stability in either plane, or with ``--planar`` the
+    in-plane ones (``v_cr_in_plane``), as :meth:`Case.quantity` computes them."""
+    return f"{name}_in_plane" if planar and name in _PLANAR else name
+
+
 _DIMLESS = ("beta", "gamma", "mu", "v", "v_min", "v_max")
 _SI = ("length", "EI", "m", "M", "g", "a", "U", "U_min", "U_max")
 _SI_REQUIRED = ("length", "EI", "m", "M")
