@@ -281,8 +281,13 @@ def _fake_suite(passed: bool) -> SuiteResult:
         (check, finding),
         tables=(Table("t", ("a", "b|c"), ((1.0, "x|y"),)),),
     )
+    return _one_case_suite("fake", res)
+
+
+def _one_case_suite(name: str, res: CaseResult) -> SuiteResult:
+    """A quick suite of the one case ``name`` that returned ``res``."""
     return SuiteResult(
-        (CaseOutcome("fake", "ok", result=res),),
+        (CaseOutcome(name, "ok", result=res),),
         quick=True,
         workers=1,
         wall_time=1.5,
@@ -467,15 +472,7 @@ def test_a_case_section_stays_within_its_budget(tmp_path):
         Table(f"t{j}", ("a", "b"), tuple((i, 0.5 * i) for i in range(20))) for j in range(25)
     )
     res = CaseResult("big", "Fig. 9", "big case", ("it shows",), checks, tables=tables)
-    suite = SuiteResult(
-        (CaseOutcome("big", "ok", result=res),),
-        quick=True,
-        workers=1,
-        wall_time=1.0,
-        started="now",
-        environment={"workers": 1},
-    )
-    text = render_report(suite, tables_dir=tmp_path)
+    text = render_report(_one_case_suite("big", res), tables_dir=tmp_path)
     section = re.split(r"\n(?=## )", text)
     (big,) = [s for s in section if s.startswith("## Fig. 9")]
     assert len(big.encode()) <= CASE_BUDGET
