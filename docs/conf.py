@@ -37,6 +37,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    # MathJax served from the built site (_static/mathjax), not from a CDN: the pages'
+    # equations render offline.
+    "sphinx-mathjax-offline",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
     "sphinxarg.ext",
@@ -46,7 +49,13 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "**/GALLERY_HEADER.rst", "**.ipynb_checkpoints"]
+exclude_patterns = [
+    "_build",
+    "**/GALLERY_HEADER.rst",
+    "**.ipynb_checkpoints",
+    "sg_execution_times.rst",
+    "**/sg_execution_times.rst",
+]
 templates_path = ["_templates"]
 
 # -- MyST: the pages moved from the README are Markdown ----------------------
@@ -76,6 +85,8 @@ sphinx_gallery_conf = {
     "within_subsection_order": "FileNameSortKey",
     "matplotlib_animations": False,
     "show_memory": False,
+    # its timing pages load jQuery and DataTables from CDNs; the site works offline
+    "write_computation_times": False,
 }
 #: gallery output folders that exist in this build, for the toctree of index.rst
 gallery_indexes = [f"{out}/index" for _, out in _present]
@@ -92,6 +103,9 @@ html_theme_options = {
     "secondary_sidebar_items": ["page-toc"],
 }
 html_static_path: list[str] = []
+# The theme's left sidebar lists the pages under the current top-level page; the top-level
+# pages without any would show an empty "Section Navigation" box.
+html_sidebars = {page: [] for page in ("index", "getting_started", "verification", "development")}
 html_show_sourcelink = False
 
 

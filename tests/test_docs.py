@@ -106,7 +106,7 @@ def test_docs_extra_has_what_conf_py_loads():
         for req in extra["project"]["optional-dependencies"]["docs"]
     }
     assert {"sphinx", "numpydoc", "sphinx-gallery", "sphinx-argparse"} <= names
-    assert {"pydata-sphinx-theme", "myst-parser"} <= names
+    assert {"pydata-sphinx-theme", "myst-parser", "sphinx-mathjax-offline"} <= names
 
 
 def test_every_public_name_is_in_the_api_reference():
@@ -186,6 +186,18 @@ def test_docs_build(tmp_path):
         html = (tmp_path / page).read_text(encoding="utf-8")
         assert "--alpha" in html, page
         assert not re.search("[\u2013\u2014](alpha|U|basis|json|out|planar)\\b", html), page
+    # equations render offline: MathJax from the site itself, no page loads a script or a
+    # style sheet from another host, and no page has an empty navigation box
+    assert (tmp_path / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    pages = sorted(tmp_path.rglob("*.html"))
+    assert len(pages) > 50
+    for path in pages:
+        html = path.read_text(encoding="utf-8")
+        page = path.relative_to(tmp_path)
+        assert not re.search(r'<(script|link)[^>]*(src|href)="(https?:)?//', html), page
+        assert '<div class="bd-toc-item navbar-nav"></div>' not in html, page
+    html = (tmp_path / "theory" / "model.html").read_text(encoding="utf-8")
+    assert re.search(r'<script[^>]*src="\.\./_static/mathjax/tex-chtml\.js"', html)
 
 
 def test_api_summaries_are_whole_sentences():
@@ -203,3 +215,25 @@ def test_api_summaries_are_whole_sentences():
         if re.search(r"\b(Eq|Eqs|Fig|Figs|Ref|Sec|cf|vs|al)$", first):
             cut.append((name, first))
     assert not cut, cut
+
+
+def _literal_blocks(text: str) -> list[str]:
+    """The literal blocks of a Markdown page: fenced ones and those indented by four spaces
+    after a blank line (outside lists)."""
+    blocks = re.findall(r"^```[^\n]*\n(.*?)^```", text, flags=re.S | re.M)
+    blocks += re.findall(r"(?:(?<=\n\n)|^)((?:    [^ \-*\d].*\n)+)", text)
+    return blocks
+
+
+def test_equations_are_typeset_not_literal_blocks():
+    """Display equations are LaTeX (``$$ ... $$``, rendered by the site's own MathJax), never
+    a code block of Unicode: one notation on every page."""
+    symbols = re.compile("[\u222b\u03b8\u03be\u03c6\u03c8\u03c7\u03a3\u221a\u2032\u2033]")
+    pages = sorted((ROOT / "docs").rglob("*.md"))
+    pages = [p for p in pages if "_build" not in p.parts and "_generated" not in p.parts]
+    assert len(pages) >= 10
+    for page in pages:
+        for block in _literal_blocks(page.read_text(encoding="utf-8")):
+            assert not symbols.search(block), f"{page.relative_to(ROOT)}: {block[:60]!r}"
+    model = (ROOT / "docs" / "theory" / "model.md").read_text(encoding="utf-8")
+    assert "$$\n-\\theta''" in model
