@@ -1,9 +1,10 @@
 """The first-order (companion) form of lambda^2 M + lambda C + K (fempipe.core.companion).
 
-Each builder must reproduce, bit for bit, the matrices its callers formed
-themselves before: the QZ pencil of the stability eigensolver, the Cholesky
-form of the Hopf normal form's Jacobian and the LU form of the periodic
-orbits' critical eigenvector.
+Checked against what the form must be, not against an earlier copy of its code: the pencil's
+eigenpairs solve the quadratic problem, the standard form's action on z = (x, y) is
+(y, -M^-1 (K x + C y)) by an independent solve, its eigenvalues are the pencil's (QZ, another
+algorithm), and the pipe's first-order Jacobian is the finite-difference derivative of the
+first-order vector field of Eq. (20).
 """
 
 from __future__ import annotations
@@ -49,31 +50,31 @@ def test_pencil_is_the_block_form(hysteretic):
         assert np.linalg.norm(r) <= 1e-10 * max(1.0, abs(lam[k]) ** 2) * np.linalg.norm(x)
 
 
-def test_cholesky_matrix_is_the_normal_forms_jacobian():
-    """factor='cholesky': one cho_factor, both blocks in one cho_solve, written into a
-    zero matrix (the former pipe_jacobian), with or without the caller's factor."""
-    K, C, M = _matrices()
-    n = K.shape[0]
-    cf = sla.cho_factor(M)
-    want = np.zeros((2 * n, 2 * n))
-    want[:n, n:] = np.eye(n)
-    want[n:] = -sla.cho_solve(cf, np.hstack([K, C]))
-    assert np.array_equal(first_order_matrix(K, C, M), want)
-    assert np.array_equal(first_order_matrix(K, C, M, mass_factor=cf), want)
-    # The standard form of the pencil: the same eigenvalues.
-    A, B = first_order_pencil(K, C, M)
-    lam, mu = sla.eigvals(A, B), np.linalg.eigvals(want)
-    assert lam.size == mu.size == 2 * n
-    assert np.abs(lam[:, None] - mu[None, :]).min(axis=1).max() <= 1e-10 * np.abs(lam).max()
-
-
-def test_lu_matrix_is_the_periodic_orbits_matrix():
-    """factor='lu': two LU solves and np.block, the expression of
-    fempipe.analyses.periodic's critical eigenvector, bit for bit."""
+@pytest.mark.parametrize("factor", ["cholesky", "lu"])
+def test_standard_form_acts_as_the_first_order_system(factor):
+    """A z = (y, -M^-1 (K x + C y)) for z = (x, y), M^-1 applied by an independent solver
+    (numpy's LU on M alone), with or without the caller's Cholesky factor; its eigenvalues
+    are those of the pencil (QZ)."""
     K, C, M = _matrices(9, seed=11)
     n = K.shape[0]
-    want = np.block([[np.zeros((n, n)), np.eye(n)], [-sla.solve(M, K), -sla.solve(M, C)]])
-    assert np.array_equal(first_order_matrix(K, C, M, factor="lu"), want)
+    rng = np.random.default_rng(2)
+    z = rng.standard_normal((2 * n, 3))
+    x, y = z[:n], z[n:]
+    want = np.vstack([y, -np.linalg.solve(M, K @ x + C @ y)])
+    variants = [first_order_matrix(K, C, M, factor=factor)]
+    if factor == "cholesky":
+        variants.append(first_order_matrix(K, C, M, mass_factor=sla.cho_factor(M)))
+    A, B = first_order_pencil(K, C, M)
+    lam = sla.eigvals(A, B)
+    for J in variants:
+        assert J.shape == (2 * n, 2 * n)
+        np.testing.assert_allclose(J @ z, want, rtol=0, atol=1e-12 * np.abs(want).max())
+        mu = np.linalg.eigvals(J)
+        assert np.abs(lam[:, None] - mu[None, :]).min(axis=1).max() <= 1e-10 * np.abs(lam).max()
+
+
+def test_first_order_matrix_refuses_what_it_cannot_do():
+    K, C, M = _matrices()
     with pytest.raises(ValueError, match="factor"):
         first_order_matrix(K, C, M, factor="qr")
     with pytest.raises(ValueError, match="mass_factor"):
@@ -106,20 +107,26 @@ def test_the_critical_eigenvector_of_periodic_solves_the_quadratic_problem():
     assert w == pytest.approx(mu[np.argmin(np.abs(mu - 1j * omega))].imag, rel=1e-10)
 
 
-def test_pipe_jacobian_keeps_its_operations():
-    """hopf.pipe_jacobian through first_order_matrix: the arrays of its former inline code."""
+@pytest.mark.parametrize("alpha", [0.3, np.pi])
+def test_pipe_jacobian_is_the_derivative_of_the_first_order_field(alpha):
+    """hopf.pipe_jacobian at a moving, deformed state against central differences of
+    F(q, q') = (q', -M(q)^-1 R(q, q', 0)), the first-order form of Eq. (20) (so the
+    derivative of the mass matrix times the acceleration is in it)."""
     from fempipe.analyses.stability.hopf import pipe_jacobian
 
-    model = PipeModel(FiniteElement(4, 3), Params(alpha=0.3, beta=0.142, gamma=18.9, v=6.0))
+    params = Params(alpha=alpha, beta=0.142, gamma=18.9, v=6.0, mu=0.005)
+    model = PipeModel(FiniteElement(4, 3), params)
     n = model.n
-    rng = np.random.default_rng(5)
-    x = 0.1 * rng.standard_normal(2 * n)
-    q, qd = x[:n], x[n:]
-    M = model.mass_matrix(q)
-    cf = sla.cho_factor(M)
-    a = -sla.cho_solve(cf, model.residual(q, qd, None))
-    Jq, Jqd, _ = model.jacobians(q, qd, a)
-    want = np.zeros((2 * n, 2 * n))
-    want[:n, n:] = np.eye(n)
-    want[n:] = -sla.cho_solve(cf, np.hstack([Jq, Jqd]))
-    assert np.array_equal(pipe_jacobian(model, x), want)
+    x = 0.3 * np.random.default_rng(5).standard_normal(2 * n)
+
+    def field(x):
+        q, qd = x[:n], x[n:]
+        return np.concatenate(
+            [qd, -np.linalg.solve(model.mass_matrix(q), model.residual(q, qd, None))]
+        )
+
+    h = 1e-6
+    fd = np.column_stack([(field(x + h * e) - field(x - h * e)) / (2 * h) for e in np.eye(2 * n)])
+    J = pipe_jacobian(model, x)
+    assert np.abs(J - fd).max() <= 1e-6 * np.abs(fd).max()
+    assert np.abs(J[n:, :n]).max() > 1.0  # the stiffness block is there, not two zeros

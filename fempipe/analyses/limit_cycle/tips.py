@@ -267,10 +267,14 @@ def _vertex(t: np.ndarray, y: np.ndarray, k: int) -> float:
     """The extreme value of the parabola through the samples k - 1, k, k + 1, or y[k]."""
     if 0 < k < y.size - 1 and t[k + 1] > t[k] > t[k - 1]:
         y0, y1, y2 = y[k - 1], y[k], y[k + 1]
-        den = y0 - 2 * y1 + y2
-        if den != 0:
-            s = 0.5 * (y0 - y2) / den
-            return float(y1 - 0.25 * (y0 - y2) * s)
+        h0, h1 = t[k] - t[k - 1], t[k + 1] - t[k]
+        # The samples of a trace are unequally spaced where one step ends and the next,
+        # of another length, begins: divided differences, not the equal-spacing formula.
+        d0, d1 = (y1 - y0) / h0, (y2 - y1) / h1
+        curvature = (d1 - d0) / (h0 + h1)
+        if curvature != 0:
+            slope = (d0 * h1 + d1 * h0) / (h0 + h1)  # p'(t[k])
+            return float(y1 - slope * slope / (4 * curvature))
     return float(y[k])
 
 
