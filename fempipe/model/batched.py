@@ -1,13 +1,12 @@
 """The pipe's residual, Jacobians and dR/dv at several states in one call (the Radau stages).
 
-:meth:`PipeModel.residual <fempipe.model.operators.PipeModel.residual>` costs
-about 0.25 ms on P3:16, almost all of it call overhead of some forty small
-array operations on n_q = 96 points; the three Radau stages evaluated together
-cost about one evaluation (the stage residuals are 3/4 of an integration
-step).  :class:`StageKernels` evaluates the same terms of Eq. (20) for S states
-stacked in the rows of (S, n) arrays, summed in another order, for the pipe
-without variants and steady flow (v_dot = 0).  The variants (end mass,
-external damping, springs) and any subclass of PipeModel have no kernels
+On the small meshes of the dynamics (n_q = 96 on P3:16) :meth:`PipeModel.residual
+<fempipe.model.operators.PipeModel.residual>` is mostly the call overhead of some forty
+small array operations, so the three Radau stages evaluated together cost about one
+evaluation (the stage residuals are most of an integration step).  :class:`StageKernels`
+evaluates the same terms of Eq. (20) for S states stacked in the rows of (S, n) arrays,
+summed in another order, for the pipe without variants and steady flow (v_dot = 0).  The
+variants (end mass, external damping, springs) and any subclass of PipeModel have no kernels
 (:meth:`StageKernels.for_model` returns None); their users evaluate
 :meth:`PipeModel.residual` and :meth:`PipeModel.jacobians` state by state
 (:class:`fempipe.model.dynamics_problem.PipeDynamics` chooses).
@@ -46,11 +45,9 @@ DENSE_OPERATORS_MAX = 32768
 
 #: Up to this many quadrature points the integration operators are applied as
 #: dense (n_q, n_q) matrices (one BLAS product; O(n_q^2) work, which beyond
-#: this is more than the O(n_q) of :meth:`LineQuadrature.cumulative_cells`).
-#: Measured, one Jacobian evaluation (best of 5x50, one BLAS thread), dense
-#: against cell-wise: P3:4 (n_q = 24) 0.15 against 0.22 ms, P3:16 (96) 1.11
-#: against 1.16 ms, the sine modes N = 3, 4 (256) 0.32-0.37 against 0.25-0.29
-#: ms, P3:64 (384) 33 against 27 ms.
+#: this is more than the O(n_q) of :meth:`LineQuadrature.cumulative_cells`): with one
+#: BLAS thread a Jacobian evaluation is cheaper dense up to P3:16 (n_q = 96) and cheaper
+#: cell by cell from the sine modes' 256 points on.
 DENSE_INTEGRALS_MAX = 128
 
 
@@ -223,8 +220,7 @@ class StageKernels:
         ``sum_q (a . U_i + b . V_i)_q phi_j(x_q)``, one (n_q, n) field per
         Jacobian times Phi.  Integrating the n test fields once, instead of the
         2 x 2 n trial fields of dF/dq and dF/dq' twice each, makes a Jacobian
-        cheaper: 0.11 -> 0.08 ms on P3:8, 0.37 -> 0.23 ms on P3:16, 2.5 -> 1.1 ms
-        on P3:32 (best of 7, one BLAS thread).
+        cheaper, the more so the finer the mesh.
         """
         Phi, K, tip, w = self._Phi, self._K, self._tip, self._w
         n_q, n = Phi.shape

@@ -1,41 +1,16 @@
-"""The two discretizations of theta(xi) behind one contract.
+"""The two discretizations of theta(xi) behind one contract, and their CLI spellings.
 
-A discretization represents theta = sum_j phi_j(xi) q_j with theta(0) = 0
-built in, and supplies everything the solvers use (:class:`Discretization`;
-nothing else is ever asked of it):
+A discretization represents theta = sum_j phi_j(xi) q_j with theta(0) = 0 built in and
+supplies everything the solvers use (:class:`Discretization`, whose members are the whole
+contract); solvers never ask which one they have.  :class:`FiniteElement` is the package's
+point: 1-D Lagrange elements of any degree on a scikit-fem ``MeshLine``.  :class:`Modal` is
+the paper's sine-mode Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2), or with
+``basis="beam"`` the same method on the slopes of the clamped-free beam modes (orders:
+:data:`EXPECTED_ORDER`; docs/theory/convergence.md).
 
-``n``          number of unknowns q_j;
-``quad``       :class:`~fempipe.model.quadrature.LineQuadrature` (points, weights,
-               integration operators);
-``Phi``        basis values at the quadrature points, shape (n_q, n);
-``tip``        phi_j(1), shape (n,);
-``dPhi``       basis derivatives phi_j' at the quadrature points, shape
-               (n_q, n) (the static curvature of the out-of-plane problem,
-               :mod:`fempipe.model.out_of_plane`);
-``K``          bending stiffness ``\\int phi_i' phi_j'``, shape (n, n);
-``gram``       L2 Gram matrix ``\\int phi_i phi_j``, shape (n, n): the metric
-               of theta (arclength of continuation, L2 projections);
-``sparse``     whether ``Phi``, ``K`` and ``gram`` are scipy sparse matrices;
-``name``       the CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``;
-               :func:`discretization_from_name` is the inverse);
-``evaluate``   theta at arbitrary points, for post-processing;
-``basis_values``
-               phi_j at arbitrary points, shape (m, n), sparse for finite
-               elements: the Gauss rule on [0, xi_s] of a spring inside a
-               cell (:meth:`~fempipe.model.operators.PipeModel.spring`);
-``to_dict``    a JSON-able description.
-
-:class:`FiniteElement` is the package's point: 1-D Lagrange elements of any
-degree on a scikit-fem ``MeshLine``.  :class:`Modal` is the paper's sine-mode
-Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2), or with
-``basis="beam"`` the same method on the slopes of the clamped-free beam modes
-(error N^-4 instead of N^-3, :data:`EXPECTED_ORDER`).  Solvers only use the
-contract and never ask which one they have.
-
-This module holds the contract (:class:`Discretization`) and the CLI
-spellings (:func:`parse_discretization`, :func:`discretization_from_name`);
-the two discretizations are in :mod:`fempipe.model.finite_element` and
-:mod:`fempipe.model.modal` (re-exported here).
+This module holds the contract and the CLI spellings (:func:`parse_discretization`,
+:func:`discretization_from_name`); the two discretizations are in
+:mod:`fempipe.model.finite_element` and :mod:`fempipe.model.modal` (re-exported here).
 """
 
 from __future__ import annotations
@@ -68,7 +43,43 @@ __all__ = [
 
 @runtime_checkable
 class Discretization(Protocol):
-    """What every solver of the package uses of a discretization (module docstring)."""
+    """What every solver of the package uses of a discretization; nothing else is asked of it.
+
+    Attributes
+    ----------
+    n : int
+        Number of unknowns q_j.
+    quad : LineQuadrature
+        Points, weights and integration operators (:mod:`fempipe.model.quadrature`).
+    Phi : ndarray or sparse matrix, shape (n_q, n)
+        Basis values at the quadrature points.
+    dPhi : ndarray or sparse matrix, shape (n_q, n)
+        Basis derivatives phi_j' at the quadrature points (the static curvature of the
+        out-of-plane problem, :mod:`fempipe.model.out_of_plane`).
+    tip : ndarray, shape (n,)
+        phi_j(1).
+    K : ndarray or sparse matrix, shape (n, n)
+        Bending stiffness ``\\int phi_i' phi_j'``.
+    gram : ndarray or sparse matrix, shape (n, n)
+        L2 Gram matrix ``\\int phi_i phi_j``: the metric of theta (arclength of
+        continuation, L2 projections).
+    sparse : bool
+        Whether ``Phi``, ``K`` and ``gram`` are scipy sparse matrices.
+    name : str
+        The CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``;
+        :func:`discretization_from_name` is the inverse).
+
+    Methods
+    -------
+    evaluate(q, xi)
+        theta at arbitrary points, for post-processing.
+    basis_values(xi)
+        phi_j at arbitrary points, shape (m, n), sparse for finite elements: the Gauss rule
+        on [0, xi_s] of a spring inside a cell
+        (:meth:`~fempipe.model.operators.PipeModel.spring`).
+    to_dict()
+        A JSON-able description.
+    """
 
     n: int
     quad: LineQuadrature

@@ -31,13 +31,9 @@ __all__ = [
 
 #: Up to this n_q * n the three stage Jacobians of the sensitivity are one
 #: batched evaluation (S = 3 in :meth:`StageKernels.jacobians`), beyond it three
-#: (its (n_q, 2, S, n) temporaries outgrow the call overhead saved).
-#: Measured (best of 7, one BLAS thread), three calls against one: P2:4 (128)
-#: 0.15 against 0.07 ms, P3:4 (288) 0.16 against 0.08, sine modes N = 3 on
-#: 96 points (288) 0.21 against 0.13, N = 4 on 128 (512) 0.25 against 0.18,
-#: P3:8 (1152) 0.23 against 0.15, P3:12 (2592) 0.34 against 0.30, P3:16
-#: (4608) 0.60 against 0.55-0.58; P3:20 (7200) 1.02 against 1.43, P3:24
-#: (10368) 1.67 against 2.22.
+#: (its (n_q, 2, S, n) temporaries outgrow the call overhead saved): with one BLAS
+#: thread one call is cheaper than three up to P3:16 (n_q n = 4608) and dearer from
+#: P3:20 (7200) on.
 BATCHED_STAGES_MAX = 4608
 
 

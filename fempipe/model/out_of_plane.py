@@ -1,71 +1,21 @@
 """The linearized motion out of the plane of a planar static state, one operator per term.
 
-A round pipe is free to leave the plane of its static deformation.  This
-module gives the linear problem of that motion about any planar static state
-theta^s of Eq. (31a), on the same discretizations as the planar model; the
-stability solvers run on it unchanged (:class:`OutOfPlaneModel`).  The
-derivation is in the docs ("Out of the plane"); in short:
+A round pipe is free to leave the plane of its static deformation.  This module gives the
+linear problem of that motion about any planar static state theta^s of Eq. (31a), in the
+rotation psi of the tangent out of the plane (psi(0) = 0 at the clamp, psi'(1) = 0), on the
+same discretizations as the planar model.  :class:`OutOfPlaneOperators` is its weak form, one
+method per term: bending with the static curvature, the static axial force N(xi), the
+follower force, inertia, Coriolis, external damping, the end mass, springs, and the
+objective Kelvin-Voigt damping on the material curvature chi = B psi.  Every term equals the
+planar one on the straight pipe.  :class:`OutOfPlaneModel` carries it as a pipe model, so
+the stability solvers run on it unchanged.
 
-* **The unknown.**  The tangent of the deformed pipe is
-  t = cos(psi) (cos theta, sin theta, 0) + sin(psi) e_3 in the pipe's frame
-  (e_1 along the clamp, e_2 the in-plane normal, e_3 out of the plane); psi is
-  the rotation of the tangent out of the plane, the out-of-plane analogue of
-  theta, with psi(0) = 0 (clamp) and psi'(1) = 0 (no moment at the free end).
-  The out-of-plane deflection is w = \\int_0^xi psi.  About a planar state the
-  in-plane and out-of-plane perturbations decouple (mirror symmetry
-  e_3 -> -e_3): this is the psi part.
-* **No twist.**  For an isotropic section the elastic bending moment
-  m = t x t' (EI = 1) is parallel to the curvature vector, so m . t' = 0;
-  the moment balance m' + t x n = 0 then gives (m . t)' = m . t' = 0: the
-  twisting moment is the same at every section, zero at the torque-free free
-  end, so the twist stays zero and GJ drops out.  The centerline alone is the
-  state.  (The damping moment below is not parallel to the curvature; the
-  twist it would cause is O(mu) and is taken as zero: the pipe is
-  torsionally stiff against it, and the reaction torque does no work.)
-* **Stiffness** (the second variation of the energy, and the follower
-  force from the moment balance): with |t'|^2 = psi'^2 + theta'^2 cos^2 psi
-  the bending energy gives ``\\int psi'^2 - theta'^2 psi^2``; the static
-  force n^s of the planar state (gravity, the jet's reaction, the end mass,
-  the springs) acts on the out-of-plane rotation through its axial component
-  N = n^s . t^s:
+On the buckled branches of the standing pipe the rotation of the buckled shape about the
+vertical, psi = sin(theta^s), is a neutral mode of the continuum;
+:meth:`OutOfPlaneOperators.matrices` makes it exact on the mesh by a rank-one correction of K
+(``neutral_residual`` reports ||K x|| before it).
 
-      N(xi) = gamma (1 - xi + Gamma) cos(theta^s + alpha)
-              + v^2 (1 - cos(theta^s(1) - theta^s))
-              + sum_s H(xi_s - xi) F_s . t^s,     F_s = -kappa (r^s(xi_s) - xi_s e_1),
-
-  and the follower force of the discharging fluid adds v^2 (psi(1) - psi).
-* **Inertia, Coriolis, external damping**: the out-of-plane acceleration
-  w_ddot = \\int_0^xi psi_ddot along the fixed direction e_3, so these are the
-  planar terms of the straight pipe (cos(theta^s(xi) - theta^s(r)) -> 1);
-  the end mass adds Gamma w_ddot(1), a spring kappa w(xi_s).
-* **Kelvin-Voigt damping, objective**: the damping moment acts on the
-  co-rotational rate of the curvature vector kappa = t x t', the rate seen in
-  the section's own (twist-free) frame.  Linearized it is chi_dot n^s with
-
-      chi = psi' + theta^s'(xi) \\int_0^xi theta^s' psi
-
-  (the second term: the frame's spin about the tangent, which a rigid
-  rotation of the curved pipe carries); the damping is the Rayleigh
-  dissipation (mu/2) \\int chi_dot^2, so C_KV = mu \\int B phi_i B phi_j with
-  B psi = chi: symmetric, semi-definite, mu K on a straight pipe (the
-  paper's mu theta_dot'').  The hysteretic loss acts on the same material
-  curvature: i mu_h sgn(omega) \\int B phi_i B phi_j.
-
-Every term equals the planar one on the straight pipe (theta^s = 0): there the
-out-of-plane spectrum is the in-plane spectrum (alpha = 0, and the straight
-branch at alpha = pi).  On the buckled branches of the standing pipe
-(sin alpha = 0, theta^s != 0) the rotation of the buckled shape about the
-vertical is a neutral mode: psi = sin(theta^s) (w = eta^s, the rotated
-static shape) solves K psi = 0 exactly in the continuum (docs).  A
-discretization does not contain sin(theta^s) exactly: for its L2 projection
-x, ||K x|| / (||K|| ||x||) is O(h^4) on P1 to P3 elements (measured: 3.4e-3,
-2.7e-4, 1.7e-5, 1.1e-6 on P3 with 4 to 32 elements), and the smallest
-eigenvalue of K is O(h^2k) instead of 0 (P3: 1.2e-2, 1.5e-4, 2.5e-6,
-4.0e-8).  :meth:`OutOfPlaneOperators.matrices` restores the symmetry with
-the rank-one correction K - (K x)(M x)^T / (x^T M x), which makes lambda = 0
-exact to round-off with eigenvector x (``neutral_residual`` reports ||K x||
-before it).  The other eigenvalues move by far less than ||K x|| (4e-10
-relative on P3:16, where ||K x|| is 1.7e-5) and still converge as h^2k.
+Derivation: docs/theory/out_of_plane.md.
 """
 
 from __future__ import annotations
@@ -132,7 +82,7 @@ _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class OutOfPlaneOperators:
-    """The weak form of the out-of-plane problem (module docstring), one method per term.
+    """The weak form of the out-of-plane problem (docs/theory/out_of_plane.md), one method per term.
 
     Parameters
     ----------
@@ -212,7 +162,7 @@ class OutOfPlaneOperators:
         """N = n^s . t^s at the quadrature points (without the springs, :meth:`spring_axial`).
 
         Gravity of the pipe beyond xi and of the end mass, and the jet's
-        reaction v^2 (t^s(1) - t^s) projected on the tangent (module docstring).
+        reaction v^2 (t^s(1) - t^s) projected on the tangent (docs/theory/out_of_plane.md).
         """
         p = self.params
         v2 = p.v * p.v
@@ -282,7 +232,7 @@ class OutOfPlaneOperators:
         return (B * self.w[:, None]).T @ B
 
     def kelvin_voigt(self, st: _State) -> np.ndarray:
-        """``mu \\int B phi_i B phi_j``: the objective Kelvin-Voigt damping (module docstring)."""
+        """``mu \\int B phi_i B phi_j``: the objective Kelvin-Voigt damping (docs/theory/out_of_plane.md)."""
         return self.params.mu * self.material_bending(st)
 
     # -------------------------------------------------------- totals --

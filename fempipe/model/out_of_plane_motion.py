@@ -1,59 +1,21 @@
 """Out-of-plane perturbations of a *moving* planar state: the linear problem, one operator per term.
 
-:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane about a
-planar static state.  Along a planar limit cycle the state moves, and the
-out-of-plane perturbations obey a linear equation with coefficients that
-follow the cycle,
+:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane about a planar
+static state.  Along a planar limit cycle the state moves, and the out-of-plane
+perturbations obey a linear equation whose coefficients follow the cycle,
 
     M psi_ddot + C(tau) psi_dot + K(tau) psi = 0,
 
-whose monodromy over one period holds the cycle's out-of-plane Floquet
-multipliers.  It is the same pipe as the 3-D model (:mod:`fempipe.model.space`)
-in another parametrization: the tangent t = cos(psi) t_p + sin(psi) e_3 with
-t_p = (cos theta, sin theta, 0) the planar tangent, one unknown psi (zero at
-the clamp) on the discretization of theta, no gauge.  The two computations of
-the multipliers are independent (different fields, different derivations) and
-converge to each other (docs, "Three dimensions").
+whose monodromy over one period holds the cycle's out-of-plane Floquet multipliers.  It is
+the 3-D model (:mod:`fempipe.model.space`) in another parametrization, one unknown psi on
+the discretization of theta and no gauge, so the two computations of the multipliers are
+independent.  :class:`OutOfPlaneMotion` holds the terms: those of the static problem, the
+axial force of the moving pipe and the Kelvin-Voigt stiffness of its bending rate; at rest
+they equal the static model's matrices.  :class:`OutOfPlaneVariation` is the integrator's
+problem of the planar motion together with its variation (unknowns (theta, psi)): its
+sensitivity over a period is the planar monodromy and the out-of-plane one, block by block.
 
-The terms
----------
-The virtual work of the 3-D weak form, tested with delta t = (e_3 - psi t_p)
-delta psi and linearized in psi about the planar motion theta(xi, tau)
-(n = (-sin theta, cos theta, 0), chi[psi] = psi' + theta' C(theta' psi) the
-material out-of-plane curvature of the static model, C = \\int_0^xi):
-
-=======================  ====================================================
-inertia, Coriolis,       as about a static state: the out-of-plane
-external damping,        acceleration is C psi_ddot, along the fixed e_3
-follower ``v^2 psi(1)``  (:class:`~fempipe.model.out_of_plane.OutOfPlaneOperators`)
-bending                  ``\\int psi' dpsi' - theta'^2 psi dpsi``
-axial force              ``-\\int (t_p . G_0) psi dpsi``: G_0 is the force field
-                         of the planar motion itself (:meth:`base_force`:
-                         inertia ``C^R C t_ddot``, Coriolis, the jet, gravity,
-                         end mass, external damping), t_p . G_0 its component
-                         along the tangent
-Kelvin-Voigt             ``mu \\int chi[psi_dot] chi[dpsi]`` (damping) and, from
-                         the planar bending rate theta_dot' of the cycle,
-                         ``mu \\int (theta_dot theta' psi - theta' C(theta_dot psi'))
-                         chi[dpsi] - theta_dot' theta' psi dpsi
-                         - theta_dot' psi' C(theta' dpsi)`` (stiffness)
-=======================  ====================================================
-
-The Kelvin-Voigt terms are the derivative with respect to psi_dot of the
-objective dissipation (mu/2) \\int |k|^2 of the 3-D model, k = t x t_dot' +
-Omega t', expanded to second order in psi: k = theta_dot' e_3 + k_1 + k_2 with
-``k_1 . n = -(chi[psi_dot] + theta_dot theta' psi - theta' C(theta_dot psi'))``
-and ``k_2 . e_3 = -psi^2 theta_dot' - psi (psi' theta_dot + psi_dot theta') +
-psi' C(theta_dot psi' - theta' psi_dot)``; the base rate theta_dot' e_3 meets
-k_2 (the second line of the table).  At rest (theta_dot = theta_ddot = 0) every
-term is the static model's: K and C equal
-:meth:`~fempipe.model.out_of_plane.OutOfPlaneOperators.matrices` to round-off
-(tested), without its neutral-mode correction.
-
-:class:`OutOfPlaneVariation` is the integrator's problem of the planar motion
-together with its out-of-plane variation (unknowns (theta, psi)): its
-sensitivity over a period is the planar monodromy and the out-of-plane one,
-block by block.
+Derivation: docs/theory/out_of_plane.md, "About a moving planar state".
 """
 
 from __future__ import annotations
@@ -152,7 +114,7 @@ class OutOfPlaneMotion:
         """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state.
 
         Damping ``mu \\int chi phi_i chi phi_j``; stiffness from the planar bending
-        rate (module docstring), zero at rest.
+        rate (docs/theory/out_of_plane.md), zero at rest.
         """
         f = self.static.fixed()
         Phi, dPhi, w, C = f["Phi"], f["dPhi"], self.w, self.quad.cumulative

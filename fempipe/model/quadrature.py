@@ -1,28 +1,13 @@
-"""Gauss quadrature on a partition of [0, 1] and the integration operators.
+"""Gauss quadrature on a partition of [0, 1] and the integration operators of Eq. (20).
 
-Eq. (20) is an integro-differential equation: besides the local terms it
-contains the single integral ``\\int_\\xi^1`` (Coriolis, flow acceleration)
-and the double integral ``\\int_\\xi^1 \\int_0^s`` (inertia, centripetal).
-Every field is represented by its values at the Gauss points of each cell,
-and the integrals become two operators on those values:
+Every field is represented by its values at the Gauss points of each cell, and the single
+and double integrals of Eq. (20) become two operators on those values, ``cumulative``
+(C f)_q = \\int_0^{x_q} f and ``from_tip`` (C^R f)_q = \\int_{x_q}^1 f: exact for
+polynomials of degree ``n_g - 1`` on each cell and O(n_q) to apply.  On Gauss points they
+are exact adjoints, ``W C^R = C^T W``, so the discrete mass matrix is exactly symmetric and
+the undamped discrete system without flow conserves its energy.
 
-``cumulative``  (C f)_q = \\int_0^{x_q} f  (lower triangular),
-``from_tip``    (C^R f)_q = \\int_{x_q}^1 f.
-
-Inside a cell, f is replaced by its interpolating polynomial through the cell's
-``n_g`` Gauss points and integrated exactly (the collocation matrix
-``a_pq = \\int_0^{c_p} l_q``, the Butcher matrix of the Gauss Runge--Kutta
-method), so both operators are exact for polynomials of degree ``n_g - 1`` on
-each cell; whole cells before (after) x_q contribute their Gauss sums.  Applying
-either costs O(n_q): a small dense product per cell plus a cumulative sum.
-
-Why Gauss points: the Gauss collocation matrix satisfies
-``b_p a_pq + b_q a_qp = b_p b_q`` (the symplecticity condition of the Gauss
-Runge--Kutta methods).  It makes the discrete operators adjoint,
-``W C^R = C^T W`` with W = diag(weights), exactly as ``\\int_0^1 g \\int_\\xi^1 f
-= \\int_0^1 f \\int_0^\\xi g`` in the continuum.  Consequently the discrete mass
-matrix ``\\Phi^T W n\\cdot C^R C (n \\Phi)`` is exactly symmetric, and for v = 0,
-mu = 0 the discrete system conserves the discrete energy identically.
+Derivation: docs/theory/weak_form.md, "The integration operators".
 """
 
 from __future__ import annotations

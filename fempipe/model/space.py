@@ -1,95 +1,22 @@
 """The pipe in three dimensions: the geometrically exact weak form, one method per term.
 
-The planar model (Eq. (20), :mod:`fempipe.model.weak_form`) holds for motion
-in the plane of the clamp and gravity.  A round pipe may leave that plane;
-this module is the same pipe in space, under the same assumptions
-(inextensible, isotropic section, no twist, the same fluid terms, gravity,
-Kelvin-Voigt damping made objective, the end mass and external damping), on
-the same discretizations.  The tangent t(xi, tau) is the unknown, through the
-singularity-free chart of :mod:`fempipe.model.space_chart` with three fields
-u = (theta, a, b), stacked as U = (theta_dofs, a_dofs, b_dofs).
+The planar model (Eq. (20), :mod:`fempipe.model.weak_form`) holds for motion in the plane of
+the clamp and gravity.  :class:`SpaceModel` is the same pipe in space, under the same
+assumptions (inextensible, isotropic section, no twist, the same fluid terms, gravity, the
+end mass and external damping, Kelvin-Voigt damping made objective), on the same
+discretizations.  The unknown is the tangent t(xi, tau), through the singularity-free chart
+of :mod:`fempipe.model.space_chart` with three fields u = (theta, a, b), stacked as
+U = (theta_dofs, a_dofs, b_dofs).  Each force field G is tested as ``\\int phi_i J_c . G``
+(J = dt/du); bending and the objective Kelvin-Voigt damping act on the curvature; the
+``gauge`` term gives the chart's free direction (the fiber) a damped equation of its own,
+which does not act on the physics in the continuum and is zero at planar states
+(:func:`planar_state` lifts a planar state exactly).
 
-The weak form
--------------
-The virtual work of Eq. (20) written with vectors: for a variation delta u
-(the test functions phi_i on each field) the tangent varies by
-delta t = J delta u (J = dt/du) and the centerline by
-delta r = \\int_0^xi delta t.  Every force per unit length f(xi) then does the
-work ``\\int delta r . f = \\int delta t . C^R f`` (C^R the integral to the
-free end, :mod:`fempipe.model.quadrature`), so each term is a vector field G
-tested as ``\\int phi_i J_c . G``:
+The Jacobians are exact: the weak form is evaluated on :class:`~fempipe.core.dual.Dual`
+fields and pulled back through the transposed integration operators; the S stages of a
+Radau step are one evaluation.
 
-=====================  ===================================================
-inertia                ``C^R C t_ddot`` (with its centripetal part)
-coriolis               ``2 v sqrt(beta) C^R t_dot``
-flow_acceleration      ``v_dot sqrt(beta) C^R t``
-follower               ``v^2 t(1)``
-gravity                ``-gamma (1 - xi + Gamma) g``, g = (cos alpha, -sin alpha, 0)
-end_mass_inertia       ``Gamma r_ddot(1)``, r_ddot(1) = \\int_0^1 t_ddot
-external_damping       ``sigma C^R C t_dot``
-=====================  ===================================================
-
-In the plane J_theta = n, t_ddot = theta_ddot n - theta_dot^2 t, and each row is
-the planar term of the same name (n . g = -sin(theta + alpha),
-n . t(1) = sin(theta(1) - theta)).  Two terms act on the curvature:
-
-* **bending**: the energy (1/2) \\int |t'|^2 (EI = 1), whose variation is
-  ``\\int t' . (dt'/du_c phi_i + J_c phi_i')`` (= \\int theta' phi_i' in the
-  plane);
-* **kelvin_voigt**, objective: the dissipation (mu/2) \\int |k|^2 of the
-  co-rotational rate of the curvature vector t x t', which for a section
-  frame without twist is k = omega', the xi-derivative of the frame's
-  angular velocity omega = t x t_dot + Omega t.  The compatibility of the
-  frame (d_xi of its angular velocity minus d_tau of its curvature equals
-  their cross product) and zero twist give
-  ``k = t x t_dot' + Omega t'``, ``Omega = \\int_0^xi t' . (t x t_dot)``
-  (the spin about the tangent that the frame acquires when a curved pipe
-  moves out of its plane).  Its variation with respect to u_dot is
-  ``mu \\int [delta t_dot' . (k x t) + delta t_dot . (t' x t) C^R(k . t')]``.
-  In the plane k = theta_dot' e_3: the planar mu K q'.  Linearized about a
-  planar state it is the out-of-plane model's damping
-  (:mod:`fempipe.model.out_of_plane`).
-
-The gauge
----------
-Three fields describe two degrees of freedom: along the fiber f(u) the
-tangent does not move (:mod:`fempipe.model.space_chart`).  The term
-``gauge`` gives that direction an equation of its own,
-
-    r_g = d/dtau (f . u_dot) + c_g f . u_dot + k_g f . (0, a, b) = 0,
-
-tested with ``w_g f . delta u``: a damped oscillator that, at rest, pulls the
-coordinates to the least |(a, b)| on each fiber (in motion it is forced: along
-a whirl the coordinates stay far from that representative, docs).  Its weight
-w_g (:data:`GAUGE_WEIGHT`) does not change its rates; it sets how heavy the
-gauge is beside the pipe's own inertia in the mass matrix.  The fiber turns
-with theta (by theta/2 at a planar state), so the mass matrix frozen at a
-step's start carries the gauge's mass, turned, into the physical directions;
-where their own mass is small (the rotation of the last elements, whose
-inertia falls as the cube of their length) a heavy gauge spoils the simplified
-Newton iteration of the integrator.  Measured on a growing out-of-plane
-oscillation (alpha = pi/2, v = 10, tau in [0, 5]): on P3:4, 4583 steps with
-3907 Newton failures at w_g = 1, 2740 steps and none at w_g = 0.03; on P3:16
-over tau in [0, 0.5], 451 steps and 527 failures at w_g = 1, 224 and 3 at
-0.03; much lighter gauges fail again (P3:16: 903 steps and 1533 failures at
-3e-4), as the physics then leaks into the gauge.  It does not
-act on the physics in the continuum (a test in the physical directions has f . delta u = 0, a test
-along f sees no physical force), it is zero at every planar state
-(so the planar equations are exactly those of the planar model), and it
-makes the mass matrix definite.
-
-The Jacobians of every term are exact: the weak form is evaluated on
-:class:`~fempipe.core.dual.Dual` fields that carry their derivatives with
-respect to u, u', u_dot, u_dot' and u_ddot at their own quadrature point, and
-with respect to each integral (C t_ddot, C^R t_dot, Omega, ...) at the point
-where it is used; :func:`~fempipe.core.dual.pullback` then pushes the test
-functions back through the transposed integration operators onto the local
-quantities, which are multiplied by the bases.  No derivative with respect to
-the 9 n unknowns is formed at the points: an integral term's Jacobian costs
-products of (3 n x n_q) matrices.  S states (the three Radau stages) are
-evaluated at once, each with its own Jacobians (measured at P3:16, one
-thread: 24 ms for one state before, 8-13 ms for three now, depending on the
-machine's load).
+Derivation, the table of terms and the gauge: docs/theory/space.md, "The weak form".
 """
 
 from __future__ import annotations
@@ -117,7 +44,7 @@ __all__ = [
 #: inside those of the physics (:mod:`fempipe.analyses.space.floquet`).
 GAUGE_DAMPING = 150.0
 GAUGE_STIFFNESS = 5000.0
-#: w_g: the weight of the gauge equation in the weak form (module docstring: a heavier
+#: w_g: the weight of the gauge equation in the weak form (docs/theory/space.md: a heavier
 #: gauge makes the integrator's frozen mass matrix a poor one as the fiber turns).
 GAUGE_WEIGHT = 0.03
 
@@ -135,7 +62,7 @@ def plane_of(U: np.ndarray) -> np.ndarray:
 
 
 class SpaceModel:
-    """The residual of the 3-D weak form and its exact Jacobians (module docstring).
+    """The residual of the 3-D weak form and its exact Jacobians (docs/theory/space.md).
 
     Parameters
     ----------
@@ -295,7 +222,7 @@ class SpaceModel:
         return cross(fl.t, fl.t_dot_prime) + fl.t_prime * Omega[:, None]
 
     def kelvin_voigt(self, fl: SpaceFields) -> tuple[Dual, Dual] | None:
-        """(A, B) of the objective Kelvin-Voigt damping (module docstring)."""
+        """(A, B) of the objective Kelvin-Voigt damping (docs/theory/space.md)."""
         mu = self.params.mu
         if not mu:
             return None
@@ -308,7 +235,7 @@ class SpaceModel:
         return mu * A, mu * B
 
     def gauge(self, fl: SpaceFields) -> Dual:
-        """A of the gauge term: ``w_g r_g f_c`` (module docstring)."""
+        """A of the gauge term: ``w_g r_g f_c`` (docs/theory/space.md)."""
         f, u = fl.fiber, fl.u
         rate = dot(f, fl.u_dot)
         r = (

@@ -1,54 +1,21 @@
 """The tangent of the pipe in space from three fields, free of coordinate singularities.
 
-The 3-D model (:mod:`fempipe.model.space`) describes the centerline by its
-unit tangent t(xi, tau), as the planar model does by theta.  Its unknowns are
-three fields u = (theta, a, b), each discretized exactly like theta (the same
-:class:`~fempipe.model.discretization.Discretization`, u(0) = 0 at the clamp),
-and the tangent is the image of e_1 under the rotation of the unnormalized
-quaternion q(u) = (cos(theta/2), a, b, sin(theta/2)):
+The 3-D model (:mod:`fempipe.model.space`) describes the centerline by its unit tangent
+t(xi, tau).  Its unknowns are three fields u = (theta, a, b), each discretized exactly like
+theta (u(0) = 0 at the clamp), and the tangent is the image of e_1 under the rotation of the
+unnormalized quaternion q(u) = (cos(theta/2), a, b, sin(theta/2)):
 
-    t = q e_1 q* / |q|^2
-      = (cos theta + a^2 - b^2,  sin theta + 2 a b,  2 (a s - b c)) / (1 + a^2 + b^2),
+    t = (cos theta + a^2 - b^2,  sin theta + 2 a b,  2 (a s - b c)) / (1 + a^2 + b^2),
 
-with c = cos(theta/2), s = sin(theta/2), in the pipe's frame (e_1 along the
-clamp, e_2 the in-plane normal, e_3 out of the plane).
+c = cos(theta/2), s = sin(theta/2), in the pipe's frame (e_1 along the clamp, e_2 the
+in-plane normal, e_3 out of the plane).  For a = b = 0 it is the planar tangent with the same
+theta; the map u -> t has rank 2 everywhere, and along one direction of u, the fiber
+(:func:`fiber_direction`), t does not change.  :func:`space_fields` gives t and its time and
+space derivatives, from the gradient and Hessian of t = P/D, as
+:class:`~fempipe.core.dual.Dual` values: the same lines give the weak form's exact
+derivatives.
 
-Why this chart
---------------
-* **Exact planar reduction.**  For a = b = 0 it is t = (cos theta, sin
-  theta, 0) with the same theta field: the planar states of the 3-D model are
-  the planar model's states, on the same discretization, and by the mirror
-  symmetry e_3 -> -e_3 (which maps (theta, a, b) to (theta, -a, -b)) a planar
-  state stays planar.
-* **No singular configuration.**  The map u -> t has rank 2 at every u: its
-  derivative through q has columns (1/2)(-s, 0, 0, c), e_x, e_y, which with
-  q itself (whose (w, z) part (c, s) is orthogonal to (-s, c)) span R^4, and
-  the only directions the map q -> q e_1 q* / |q|^2 ignores are q and q i
-  (scaling and twist about e_1).  Every direction t is reached (the twist of
-  a quaternion can always be chosen so that its (w, z) part is not zero), and
-  |q|^2 = 1 + a^2 + b^2 >= 1 never vanishes.  Two angles (theta and an
-  out-of-plane angle psi) would be singular where the tangent points along
-  e_3, a rotation vector normal to e_1 where it points back along -e_1; a
-  unit director needs a constraint per point.  Here three unknowns describe two
-  degrees of freedom with one free direction per point, the fiber.
-* **The fiber.**  Along f(u) = (a s - b c, c/2 + a g/2, s/2 + b g/2),
-  g = a c + b s (the twist q -> q (1 + i phi/2) brought back to the chart),
-  t does not change.  :mod:`fempipe.model.space` gives that direction an
-  equation of its own (the gauge), which leaves the physics untouched.  At a
-  planar state f = (0, c, s)/2 and the out-of-plane rotation is
-  psi = 2 (s a - c b) to first order.
-
-The time and space derivatives of t follow from the gradient and Hessian of
-the numerator P(u) and the denominator D(u) = 1 + a^2 + b^2 of t = P/D
-(:func:`_gradient`, :func:`_hessian`): with P = t D,
-
-    t_dot  = (P_dot - t D_dot) / D,
-    t_ddot = (P_ddot - 2 t_dot D_dot - t D_ddot) / D,
-    t_dot' = (P_dot' - t_dot D' - t' D_dot - t D_dot') / D,
-
-where P_dot = grad P [u_dot], P_ddot = grad P [u_ddot] + hess P [u_dot, u_dot]
-and so on.  Every quantity is a :class:`~fempipe.core.dual.Dual`: the same
-lines give the exact derivatives of the weak form.
+Derivation: docs/theory/space.md, "The unknown".
 """
 
 from __future__ import annotations
@@ -100,7 +67,7 @@ def tangent(u) -> Dual:
 
 
 def fiber_direction(p: _Point) -> Dual:
-    """f(u): the direction of u along which t does not change (module docstring)."""
+    """f(u): the direction of u along which t does not change (docs/theory/space.md)."""
     g = p.a * p.c + p.b * p.s
     return _vec(p.a * p.s - p.b * p.c, 0.5 * (p.c + p.a * g), 0.5 * (p.s + p.b * g))
 
@@ -206,7 +173,7 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
 
     The gradient G of P (and g of D) and the Hessian along u' are formed once as
     3 x 3 matrices at each point (along u_dot only its quadratic form is needed);
-    every derivative of t is a product with them (module docstring), so that the
+    every derivative of t is a product with them (docs/theory/space.md), so that the
     chart costs few array operations.
     """
     p = _Point.of(u)

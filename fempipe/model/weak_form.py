@@ -1,68 +1,21 @@
 """The weak form of Eq. (20), one operator per physical term: the shared part.
 
-Multiplying Eq. (20) by a test function phi_i (phi_i(0) = 0) and integrating
-over [0, 1] gives the discrete residual
+The discrete residual R(q, q', q'') is a sum of one term per physical effect: bending,
+Kelvin-Voigt, gravity, the follower force, inertia, centripetal, Coriolis, flow acceleration,
+and the variants of the pipe (end mass, external damping, springs; zero by default).  Each
+term supplies its analytic derivatives with respect to q, q' and q'', which Newton's method,
+the stability matrices (Eqs. (31b)-(33)) and the time integrators all use.
 
-    R(q, q', q'') = bending + kelvin_voigt + gravity + follower
-                    + inertia + centripetal + coriolis + flow_acceleration
-                    + end_mass_gravity + end_mass_inertia + external_damping
-                    + spring = 0,
+The terms are grouped by kind, one method per term, named after it:
+:class:`~fempipe.model.local_terms.LocalTerms` (bending, Kelvin-Voigt, gravity, follower),
+:class:`~fempipe.model.nonlocal_terms.NonlocalTerms` (inertia, centripetal, Coriolis, flow
+acceleration), :mod:`~fempipe.model.variants` (end mass, external damping) and
+:class:`~fempipe.model.springs.SpringTerms`.  This module holds what they share
+(:class:`Fields`, the test integral and the projection n . C^R);
+:class:`~fempipe.model.operators.PipeModel` sums them (residual, Jacobians, mass matrix).
 
-with (theta = Phi q at the quadrature points, t = (cos theta, sin theta) the
-tangent and n = (-sin theta, cos theta) the normal):
-
-=====================  ===================================================
-bending                ``\\int phi_i' theta'``  (= K q; -theta'' by parts)
-kelvin_voigt           ``mu \\int phi_i' theta_dot'``  (= mu K q')
-gravity                ``gamma \\int phi_i (1 - xi) sin(theta + alpha)``
-follower               ``v^2 \\int phi_i sin(theta(1) - theta)``
-inertia                ``\\int phi_i n . C^R C(theta_ddot n)``   (= M(q) q'')
-centripetal            ``-\\int phi_i n . C^R C(theta_dot^2 t)``
-coriolis               ``2 v sqrt(beta) \\int phi_i n . C^R (theta_dot n)``
-flow_acceleration      ``sqrt(beta) v_dot \\int phi_i n . C^R t``
-end_mass_gravity       ``gamma Gamma \\int phi_i sin(theta + alpha)``
-end_mass_inertia       ``Gamma (\\int phi_i n) . r_ddot(1)``  (M += Gamma b b^T)
-external_damping       ``sigma \\int phi_i n . C^R C(theta_dot n)``  (= sigma M_pipe q')
-spring                 ``kappa \\int_0^xi_s phi_i n . (r(xi_s) - (xi_s, 0))``
-=====================  ===================================================
-
-Here C and C^R are the integration operators from 0 and to 1
-(:mod:`fempipe.model.quadrature`).  Written with n and t the nested brackets of
-Eq. (20) read ``n(xi) . \\int_xi^1 r_ddot`` with
-``r_ddot = \\int_0^s (theta_ddot n - theta_dot^2 t)`` the acceleration of the
-centerline: the generalised inertia force.  The mass matrix is therefore
-``M_ij = \\int_0^1 (C phi_i n) . (C phi_j n)``, symmetric positive definite.
-
-The last four rows are the variants of the pipe (:class:`~fempipe.model.params.Params`,
-scaled as Eq. (19); docs, "Variants of the pipe"), each zero by default:
-
-* an end mass Gamma = M_e/((m+M) L) at xi = 1 (a point mass without fluid):
-  its weight adds gamma Gamma sin(theta + alpha) to the gravity lever
-  gamma (1 - xi) sin(theta + alpha), and its inertia Gamma r_ddot(1) to the
-  inertia force field ``\\int_xi^1 r_ddot`` of every section, with
-  ``b_i = \\int_0^1 phi_i n = (C phi_i n)(1)`` and
-  ``r_ddot(1) = \\int_0^1 (theta_ddot n - theta_dot^2 t)``;
-* external viscous damping sigma = c L^2/sqrt(EI (m+M)), a force -sigma r_dot
-  per unit length along the whole velocity r_dot = C(theta_dot n): its
-  virtual work is the inertia projection with r_ddot replaced by r_dot;
-* linear springs kappa = k L^3/EI tying r(xi_s) = \\int_0^xi_s t to its
-  undeformed position (xi_s, 0): the gradient of the potential
-  (kappa/2) |r(xi_s) - (xi_s, 0)|^2, integrated over [0, xi_s] with a
-  Gauss rule of its own (:meth:`PipeModel.spring`).
-
-Each term also supplies its derivatives with respect to q, q' and q'' so that
-Newton's method, the linearized stability matrices (Eqs. (31b)-(33)) and the
-implicit time integrators all use the same analytic Jacobians.
-
-The terms are grouped by kind, one method per physical term, named after it:
-:class:`~fempipe.model.local_terms.LocalTerms` (bending, Kelvin-Voigt,
-gravity, follower), :class:`~fempipe.model.nonlocal_terms.NonlocalTerms`
-(inertia, centripetal, Coriolis, flow acceleration),
-:mod:`~fempipe.model.variants` (end mass, external damping) and
-:class:`~fempipe.model.springs.SpringTerms`; this module holds what they
-share (:class:`Fields`, the test integral and the projection n . C^R), and
-:class:`~fempipe.model.operators.PipeModel` sums them (residual, Jacobians,
-mass matrix, energy).
+Derivation and the table of terms: docs/theory/weak_form.md; the variants:
+docs/theory/variants.md.
 """
 
 from __future__ import annotations
