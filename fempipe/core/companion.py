@@ -1,23 +1,18 @@
 """The first-order (companion) form of a quadratic eigenproblem.
 
-With z = (x, lambda x) the quadratic eigenproblem
-
-    (lambda^2 M + lambda C + K) x = 0
-
-is the generalised one A z = lambda B z of the pencil
+With z = (x, lambda x) the quadratic eigenproblem (lambda^2 M + lambda C + K) x = 0 is the
+generalised one A z = lambda B z of the pencil
 
     A = [[0, I], [-K, -C]],   B = [[I, 0], [0, M]],
 
 and, for an invertible M, the standard one of the matrix
+B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]].
 
-    B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]].
-
-Linear algebra only: these builders know nothing of the pipe.  Each keeps
-the exact floating-point operations of the code it was taken from, so that
-results are reproduced to the bit: :func:`first_order_pencil` does no
-arithmetic at all (the generalised eigensolvers factor B themselves);
-:func:`first_order_matrix` solves with M by one Cholesky factorisation or
-by LU per block.
+Linear algebra only: these builders know nothing of the pipe.  The stability analysis and
+the Hopf normal forms share them, so their matrices are formed by the same floating-point
+operations: :func:`first_order_pencil` does no arithmetic at all (the generalised
+eigensolvers factor B themselves); :func:`first_order_matrix` solves with M by one Cholesky
+factorisation or by LU per block.
 """
 
 from __future__ import annotations

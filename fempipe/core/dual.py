@@ -1,37 +1,18 @@
 """Derivatives of array expressions: forward through pointwise arithmetic, reverse through integrals.
 
-A :class:`Dual` is an array value with its derivatives, carried along by the
-arithmetic.  A residual written with these operations gives its value (no
-derivative: no cost) and, from the same lines, its exact Jacobian (the fields
-seeded with their derivatives): the Jacobian cannot drift from the residual,
-and is exact to round-off (no finite differences).
+A :class:`Dual` is an array value with its derivatives, carried along by the arithmetic.  A
+residual written with these operations gives its value (no derivative: no cost) and, from
+the same lines, its exact Jacobian (the fields seeded with their derivatives): the Jacobian
+cannot drift from the residual, and is exact to round-off (no finite differences).  The
+derivatives are kept with respect to quantities at the same point and to the
+:class:`Term` objects that mix the points (integrals, tip values); :func:`pullback` contracts them
+at the end, in reverse, so that no derivative with respect to all the unknowns is ever
+formed at the points (the class docstring of :class:`Dual` says how).
 
-Only what the weak forms need is here: the four operations, sine and cosine,
-indexing, sums and stacks along leading axes, vector dot and cross products
-over axis 1, and linear maps along axis 0 (the integration operators).
-
-How the derivatives are carried
--------------------------------
-Axis 0 of every value runs over points (the quadrature points), the last axis
-over S states evaluated at once (each state's derivatives are its own).  A
-derivative has two kinds of parts, each stored as a small array of the value's
-shape with one more axis:
-
-* ``loc``: derivatives with respect to L quantities defined at the same point
-  (the fields and their rates there);
-* ``nl``: for each :class:`Term` Y (a quantity that mixes the points, an
-  integral ``Y = op X``, or a linear functional of the unknowns such as a tip
-  value), the derivative with respect to Y's m components at the point.
-
-Pointwise arithmetic (the chain rule) only scales these small arrays: the
-derivatives with respect to the unknowns are never formed at the points.
-:func:`pullback` contracts them at the end, in reverse: a weight on the
-residual's derivative (the test functions) is pushed through the terms
-(``op^T``, then the inner quantity's own ``loc`` and ``nl``), and what arrives
-at the local quantities is returned, to be multiplied by the bases.  The
-Jacobian of an integral term is so a product of (test x coefficients) x op^T
-x (coefficients x trial) matrices, of size (rows, points), instead of
-K = (number of unknowns) derivative columns at every point.
+Only what the weak forms need is here: the four operations, sine and cosine, indexing, sums
+and stacks along leading axes, vector dot and cross products over axis 1, and linear maps
+along axis 0 (the integration operators).  The 3-D model (:mod:`fempipe.model.space`) is
+written on it; docs/theory/space.md, "The weak form".
 """
 
 from __future__ import annotations
@@ -120,7 +101,7 @@ class Term:
 
 
 class Dual:
-    """An array with its derivatives (module docstring).
+    """An array with its derivatives.
 
     Parameters
     ----------
@@ -132,6 +113,25 @@ class Dual:
     nl : dict or None
         :class:`Term` -> ndarray of shape ``val.shape + (term.m,)``: derivatives
         with respect to the components of each term at the same point and state.
+
+    Notes
+    -----
+    Axis 0 of every value runs over points (the quadrature points), the last axis over S
+    states evaluated at once (each state's derivatives are its own).  A derivative has two
+    kinds of parts, each a small array of the value's shape with one more axis: ``loc``,
+    the derivatives with respect to L quantities defined at the same point (the fields and
+    their rates there), and ``nl``, for each :class:`Term` Y (a quantity that mixes the
+    points, an integral ``Y = op X``, or a linear functional of the unknowns such as a tip
+    value), the derivative with respect to Y's m components at the point.
+
+    Pointwise arithmetic (the chain rule) only scales these small arrays: the derivatives
+    with respect to the unknowns are never formed at the points.  :func:`pullback`
+    contracts them at the end, in reverse: a weight on the residual's derivative (the test
+    functions) is pushed through the terms (``op^T``, then the inner quantity's own ``loc``
+    and ``nl``), and what arrives at the local quantities is returned, to be multiplied by
+    the bases.  The Jacobian of an integral term is so a product of (test x coefficients) x
+    op^T x (coefficients x trial) matrices, of size (rows, points), not K = (number of
+    unknowns) derivative columns at every point.
     """
 
     __slots__ = ("loc", "nl", "val")

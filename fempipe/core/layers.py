@@ -1,51 +1,18 @@
 """The layers of the package, lowest first: a module imports from its own layer or lower ones.
 
-This module is data (and one lookup function): ``tests/test_layering.py``
-reads it without importing fempipe, parses every module of the package and
-fails on an import of a higher layer, on a private name (``_x``) imported
-from another module, and on a cycle of module-level imports.
+This module is data (and one lookup function): ``tests/test_layering.py`` reads it without
+importing fempipe, parses every module of the package and fails on an import of a higher
+layer, on a private name (``_x``) imported from another module, and on a cycle of
+module-level imports.
 
-The layers, in rank order (:data:`LAYERS`):
+The layers, in rank order (:data:`LAYERS`): ``core`` < ``model`` < ``solvers`` <
+``analyses`` (statics < stability < dynamics < limit_cycle < space < branches: bifurcation
+diagrams and periodic orbits) < ``studies`` < ``io`` < ``plotting`` < ``validation`` <
+``bench`` < ``cli`` < ``facade`` (``fempipe`` itself and ``python -m fempipe``; nothing in
+the package imports it).  The package ``fempipe.analyses`` itself, and an analysis not
+listed yet, rank with the statics.
 
-``core``
-    No physics, nothing of the pipe: errors, worker processes and BLAS
-    limits, Brent's root finder, the optimal assignment of eigenvalues,
-    atomic files and strict JSON, the version, this list.
-``model``
-    The pipe: parameters, quadrature, the discretizations (finite elements,
-    modal bases), the operators of Eq. (20) (residual, Jacobian, mass,
-    damping), the motion out of the plane, kinematics (Eq. (28)), the
-    projection between discretizations.
-``solvers``
-    Problem-agnostic numerics on a model: Newton, pseudo-arclength
-    continuation, the Radau IIA integrator.
-``analyses``
-    What a user asks of the pipe, in their own order (a later one may use an
-    earlier one): statics; linear stability; time integration; limit cycles;
-    the motion in three dimensions (``analyses.space``); bifurcation
-    diagrams and branches of periodic orbits.  Each of these is
-    a layer of its own below (``analyses.statics`` ... ``analyses.branches``);
-    the package ``fempipe.analyses`` itself and an analysis not listed yet
-    rank with the statics.
-``studies``
-    Studies over many analyses: convergence, the comparison with a user's
-    results, the error estimate.
-``io``
-    Files: CSV tables, VTU shapes and trajectories, figures (the atomic
-    writers themselves are in the core).
-``plotting``
-    matplotlib figures of the results.
-``validation``
-    The validation suite (``fempipe validate``): one case per figure of the
-    paper, with its checks and references, and the independent classical
-    and strong-form solvers it compares with.
-``bench``
-    Performance benchmarks (``fempipe bench``).
-``cli``
-    The command line, one module per subcommand.
-``facade``
-    ``fempipe`` itself (the public names, loaded on first use) and
-    ``python -m fempipe``.  Nothing in the package imports it.
+What each layer holds: docs/api/usage.md, "The package, layer by layer".
 """
 
 from __future__ import annotations

@@ -1,42 +1,16 @@
 """Independent tasks in worker processes: one runner, one BLAS limiter, clean exits.
 
-Every parallel sweep of the package (stability maps and root loci, the
-bifurcation sweeps, the validation cases) runs through :func:`run_tasks`, so
-they share one error policy and one worker lifecycle:
+Every parallel sweep of the package (stability maps and root loci, the bifurcation sweeps,
+the validation cases) runs through :func:`run_tasks`, on worker processes started here
+(:func:`process_pool`) or on any :class:`concurrent.futures.Executor` (e.g. Dask's
+``Client.get_executor()``), so they share one policy: results in task order and failures per
+task (a task's exception in its slot); interrupts stop everything (:func:`interruptible`,
+:class:`Interrupted`); no orphaned workers, even after the parent is killed; and one BLAS
+thread per process (:func:`single_blas_thread`, :func:`single_blas`,
+:func:`one_blas_thread`), since the model's dense matrices are small and the parallelism
+comes from independent tasks.
 
-* **Results in task order, failures per task.**  A task that raises an
-  :class:`Exception` does not stop the others; its slot in the returned list
-  holds the exception instead of a value.  ``traceback.format_exception(exc)``
-  shows where it failed (for a process pool the worker's traceback is chained
-  as ``__cause__``).  A worker process that dies (``BrokenProcessPool``) is
-  such a failure for every task it takes down.  The caller decides what a
-  failure means (record it, or raise it once all tasks are done).
-* **Interrupts stop everything.**  ``KeyboardInterrupt`` (and so
-  :class:`Interrupted`) or ``SystemExit`` in the parent while tasks run, or an
-  exception raised by a callback, cancels what has not started yet,
-  terminates the workers of a pool that :func:`run_tasks` started, and
-  propagates.  :func:`interruptible` turns SIGINT and SIGTERM into
-  :class:`Interrupted` so that a command-line run stops its workers and exits
-  with 128 + the signal number (130, 143).
-* **No orphans.**  Workers started here (:func:`process_pool`) ignore SIGINT
-  (the parent decides), die on SIGTERM, and exit within about a second when
-  their parent is gone, even if the parent was killed with SIGKILL and could
-  not clean up: on Linux the kernel sends them SIGKILL when the parent dies
-  (``prctl(PR_SET_PDEATHSIG)``), and on every platform a watchdog thread
-  exits the worker when it is re-parented or the pool's creator is gone (the
-  only way with the "forkserver" start method, where the parent is the fork
-  server and outlives the creator while workers run).
-* **One BLAS thread per process** (:func:`single_blas_thread`, :func:`single_blas`): the dense
-  matrices of the model are small (2n = 96 for P3:16), where a multi-threaded
-  BLAS spends more time synchronising than computing (measured: 32 ms per
-  spectrum with two OpenBLAS threads, 7 ms with one), and LAPACK's
-  nonsymmetric QR iterations parallelise poorly even at n = 768 (5 s with one
-  thread, 18 s with two on a busy 2-core machine).  Parallelism comes from
-  independent tasks instead.
-
-Any :class:`concurrent.futures.Executor` can run them instead of a local
-pool (e.g. Dask's ``Client.get_executor()``); it is not shut down, and its
-workers' lifecycle is its owner's business.
+The policy in full: docs/development.md, "Worker processes".
 """
 
 from __future__ import annotations
@@ -155,8 +129,8 @@ def single_blas_thread() -> contextlib.AbstractContextManager:
     """Context manager: one BLAS thread in this process while it is active.
 
     For the small dense solves and eigenproblems of the model, where thread
-    start-up and synchronisation cost more than the arithmetic (see the module
-    docstring for measurements).  The previous limits are restored on exit.
+    start-up and synchronisation cost more than the arithmetic (docs/development.md,
+    "Worker processes").  The previous limits are restored on exit.
 
     Examples
     --------
@@ -171,7 +145,7 @@ def single_blas(fn: Callable) -> Callable:
 
     For functions whose work is small dense linear algebra, such as the
     eigenproblems of the stability analysis (2n = 96 for P3:16), where one
-    BLAS thread is fastest (measurements in the module docstring).
+    BLAS thread is fastest (docs/development.md, "Worker processes").
 
     Examples
     --------
@@ -192,8 +166,8 @@ def single_blas(fn: Callable) -> Callable:
 
 #: threadpoolctl's controllers by which of numpy and scipy.linalg (each with
 #: its own OpenBLAS) are loaded: a controller scans the process's shared
-#: libraries once, where ``threadpool_limits`` rescans them on every call
-#: (about 1 ms each, many calls per limit cycle).
+#: libraries once, where ``threadpool_limits`` rescans them on every call (and a limit
+#: cycle makes many calls).
 _CONTROLLERS: dict = {}
 
 
@@ -455,17 +429,16 @@ def one_blas_thread() -> tuple[str, ...]:
     """One BLAS thread for this process and its workers, unless the user chose otherwise.
 
     fempipe's dense matrices are small and its parallelism is by processes
-    (module docstring, "One BLAS thread per process"); it limits the BLAS to
+    (docs/development.md, "Worker processes"); it limits the BLAS to
     one thread around its computations already (:func:`single_blas_thread`).
     Setting the variables of :data:`BLAS_THREAD_VARIABLES` to 1 before numpy
     is loaded also spares the start-up of the thread pools: each OpenBLAS
     (numpy and scipy load one each) starts its threads when it is loaded,
-    and they spin for a while before they sleep, about 0.1 CPU-s per
-    library, measured (``python -c "import scipy.linalg"``: 0.55 CPU-s, 0.36
-    with ``OPENBLAS_NUM_THREADS=1``).  A variable the user set is left as it
-    is, and nothing is set once numpy is loaded (the command line's ``main``
-    called from a Python session): there the variables would no longer act
-    on this process.  This module imports only the standard library, so the
+    and they spin for a while before they sleep, a visible share of a short
+    command's start-up (``fempipe bench --only startup``; docs/cli/commands.md,
+    "One BLAS thread").  A variable the user set is left as it is, and nothing is
+    set once numpy is loaded (the command line's ``main`` called from a Python
+    session): OpenBLAS has read the variables by then.  This module imports only the standard library, so the
     command line calls it before anything loads numpy.
 
     Returns
