@@ -96,9 +96,8 @@ class StaticSolution:
 
 
 #: Largest number of unknowns for which Newton's method and the continuation
-#: use the dense static Jacobian: below it scipy.sparse's constructors cost
-#: more than a dense LU (measured 5 ms per sparse Jacobian at n = 48, P3:16,
-#: against 0.2 ms for the dense one and its LU).
+#: use the dense static Jacobian: below it scipy.sparse's constructors alone cost
+#: more than the dense Jacobian and its LU (at P3:16, n = 48, many times more).
 DENSE_MAX_N = 400
 
 

@@ -1,26 +1,17 @@
 """Keller's pseudo-arclength method with the exact tangent, for any problem.
 
-The building blocks, each on a
-:class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`:
+The building blocks, each on a :class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`:
+:func:`tangent` (the unit tangent from the bordered system, oriented along the previous one,
+with the sign and log|det| of the bordered matrix), :func:`correct` (Newton's method on
+``[F(y); <t, y - y_pred>] = 0``, a fresh Jacobian at every iteration, no damping) and
+:func:`locate` (bisection in arclength for the zero of a test function between two points of
+the branch).  :class:`KellerPolicy` is the policy of the engine
+(:func:`~fempipe.solvers.continuation.continue_curve`) built from them: the predictor
+``y + h t`` on the exact tangent, refusal of steps that turn by more than acos 0.8, step
+halving on failure and growth by 1.5 after an easy correction, folds and branch points
+located by bisection.  The static branches of the pipe use it (:mod:`fempipe.analyses.statics`).
 
-* :func:`tangent` -- the unit tangent t at y, the solution of the bordered
-  system ``[[F_x, F_lambda], [<t_prev, .>]] t = e_(m+1)`` normalized in the
-  inner product and oriented along ``t_prev``, with the sign and log|det| of
-  the bordered matrix;
-* :func:`correct` -- Newton's method on ``[F(y); <t, y - y_pred>] = 0`` (a
-  fresh Jacobian at every iteration, no damping);
-* :func:`locate` -- bisection in arclength for the zero of a test function
-  between two points of the branch, with the corrector at every midpoint.
-
-and :class:`KellerPolicy`, the policy of the engine
-(:func:`~fempipe.solvers.continuation.continue_curve`) built from them: the
-predictor ``y + h t`` on the exact tangent, refusal of steps that turn by
-more than acos 0.8, step halving on failure and growth by 1.5 after an easy
-correction, folds (sign changes of the tangent's parameter component) and
-branch points (sign changes of the bordered determinant, which keeps its sign
-at folds) located by bisection.  The static branches of the pipe use it
-(:mod:`fempipe.analyses.statics`); any other problem may, e.g. the circle
-x^2 + lambda^2 = 1 of the tests.
+Derivation: docs/theory/numerics.md, "Pseudo-arclength continuation".
 """
 
 from __future__ import annotations

@@ -1,29 +1,19 @@
 """What the pseudo-arclength engine asks of a problem and of its policies.
 
-A one-parameter problem is a curve of zeros of F: R^(m+1) -> R^m in
-y = (x, lambda), the state x and the parameter lambda.  The engine
-(:func:`fempipe.solvers.continuation.continue_curve`) walks along it; all it
-needs of the problem is written down here as two protocols:
+A one-parameter problem is a curve of zeros of F: R^(m+1) -> R^m in y = (x, lambda), the
+state x and the parameter lambda.  The engine (:func:`fempipe.solvers.continuation.continue_curve`)
+walks along it; all it needs of the problem is written down here as two protocols:
 
-* :class:`ContinuationProblem` -- the mathematics of the curve: F, its
-  derivatives in x and lambda, the bordered (extended) linear solve of
-  Keller's method and the inner product in which arclength is measured;
-* :class:`ContinuationPolicy` -- the algorithmic choices of one kind of
-  branch: how to predict, correct, accept and land a step, how to change the
-  step size, which special points to look for, when to stop.  They differ
-  legitimately between problems (the exact tangent of a cheap static problem,
-  the secant of an expensive shooting problem), so each problem brings its
-  own; :class:`fempipe.solvers.continuation.KellerPolicy` is the textbook one.
+* :class:`ContinuationProblem` -- the mathematics of the curve: F, its derivatives in x and
+  lambda, the bordered linear solve of Keller's method (its last row the linear form
+  :meth:`ContinuationProblem.dual` of the tangent) and the inner product in which arclength
+  is measured;
+* :class:`ContinuationPolicy` -- the algorithmic choices of one kind of branch (predictor,
+  corrector, acceptance, landing, step size, special points, when to stop), which each
+  problem brings; :class:`fempipe.solvers.continuation.KellerPolicy` is the textbook one.
 
-The bordered system of pseudo-arclength continuation (Keller 1977;
-Kuznetsov, *Elements of Applied Bifurcation Theory*, Sec. 10.2) is
-
-    [ F_x    F_lambda ] [dx      ]   [ -F             ]
-    [ <t, .>          ] [dlambda ] = [ -<t, y - y_pred> ]
-
-with t the unit tangent; its last row is the linear form ``<t, .>`` of the
-problem's inner product, a row vector the problem builds with
-:meth:`ContinuationProblem.dual`.
+The bordered system: docs/theory/numerics.md; the protocol: docs/development.md, "The
+continuation engine's protocol".
 """
 
 from __future__ import annotations

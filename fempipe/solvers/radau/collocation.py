@@ -1,26 +1,18 @@
 """The collocation polynomial of one Radau IIA step: the integrator's one dense output.
 
-Inside an accepted step from t_old of size h, with s = (t - t_old)/h, the
-Radau IIA solution is the cubic y(s) through the four nodes
-(0, y_old), (c_1, Y_1), (c_2, Y_2), (c_3 = 1, Y_3) (:data:`NODES`): the
-positions, velocities or accelerations of the step's stages.  This module
-owns that polynomial.  It is evaluated in three floating-point forms, equal
-to round-off (``tests/test_collocation.py``: to 1e-15) and each kept because
-its users' results depend on its last bit:
+Inside an accepted step from t_old of size h, with s = (t - t_old)/h, the Radau IIA solution
+is the cubic y(s) through the four nodes (0, y_old), (c_1, Y_1), (c_2, Y_2), (c_3 = 1, Y_3)
+(:data:`NODES`): the positions, velocities or accelerations of the step's stages.  It is
+evaluated in three floating-point forms, equal to round-off (``tests/test_collocation.py``)
+and each kept because its users' results depend on its last bit:
 
-* **increment form** (:func:`increment_weights`, :func:`evaluate_increment`):
-  ``y_old + sum_i w_i(s) (Y_i - y_old)`` with the coefficients of the cubic
-  through (0, 0) and (c_i, Z_i) (:data:`INCREMENT_MATRIX`);
-  :meth:`Radau.dense <fempipe.solvers.radau.Radau.dense>`;
-* **barycentric Lagrange form** (:func:`lagrange_weights`,
-  :func:`evaluate_lagrange`): the products of the differences s - x_m times
-  the precomputed ``1 / prod(x_j - x_m)`` (:data:`LAGRANGE_WEIGHTS`); the
-  integrator's extrapolation of the stage accelerations into the next step
-  (Newton's starting guess);
-* **plain Lagrange product** (:func:`product_weights`,
-  :func:`evaluate_product`): ``prod_m (s - x_m)/(x_j - x_m)`` in a double loop,
-  the form of the tip extrema over a period of
-  :mod:`fempipe.analyses.periodic`.
+* the increment form (:func:`increment_weights`, :func:`evaluate_increment`,
+  :data:`INCREMENT_MATRIX`) of :meth:`Radau.dense <fempipe.solvers.radau.Radau.dense>`;
+* the barycentric Lagrange form (:func:`lagrange_weights`, :func:`evaluate_lagrange`,
+  :data:`LAGRANGE_WEIGHTS`) of the integrator's extrapolation of the stage accelerations
+  into the next step (Newton's starting guess);
+* the plain Lagrange product (:func:`product_weights`, :func:`evaluate_product`) of the tip
+  extrema over a period of :mod:`fempipe.analyses.periodic`.
 """
 
 from __future__ import annotations
