@@ -1,26 +1,16 @@
-"""Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10).
+"""Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10) by sweeps.
 
-A sweep steps v up (or down) through a list of values; each point starts
-from the attractor of the previous one (plus a small perturbation when that
-attractor is an equilibrium, since an equilibrium of one v is not one of the
-next only approximately, and not at all at alpha = 0 where theta = 0 is static
-for every v) and records, with :func:`fempipe.analyses.limit_cycle.find_attractor`, the
-kind of attractor, its period and the extrema of eta(1), X_g(1), Z_g(1).
-Sweeping up and down shows hysteresis where a stable equilibrium and a stable
-cycle coexist (subcritical Hopf).  When the previous attractor is a stable
-cycle, the next point first shoots directly from it (natural-parameter
-continuation of the periodic orbit, chord-Newton); only if that fails, or
-gives an unstable or degenerate cycle, does it integrate past a transient.
+:func:`sweep` steps v up (or down) through a list of values; each point starts from the
+attractor of the previous one and records, with
+:func:`fempipe.analyses.limit_cycle.find_attractor`, the kind of attractor, its period and the
+extrema of eta(1), X_g(1), Z_g(1); a stable cycle is first continued by shooting directly
+from the previous one.  Sweeping up and down shows hysteresis where a stable equilibrium and
+a stable cycle coexist (subcritical Hopf).  :func:`bifurcation_diagram` runs independent
+sweeps (up and down, several alpha) in parallel through
+:func:`fempipe.core.parallel.run_tasks`, writing every finished point at once to a point
+store, from which a rerun resumes with the same results as an uninterrupted run.
 
-Independent sweeps (up and down, several alpha) run in parallel through
-:func:`fempipe.core.parallel.run_tasks`: local worker processes, or any
-:class:`concurrent.futures.Executor` (e.g. a Dask ``Client.get_executor()``).
-Every finished point is written at once as its own JSON file (atomically,
-:func:`fempipe.io.atomic_path`) in a point store; a rerun on the same store
-loads the finished points, including the state each one ended on, and
-computes only the rest, so the chain of starting states and hence the
-results are the same as in an uninterrupted run, however the first run ended
-(killed, interrupted, or a sweep that failed while the others went on).
+How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
 
 The time integration itself is :class:`fempipe.solvers.radau.Radau`, an L-stable
-Radau IIA method written on the second-order residual form of Eq. (20) (its
-module docstring says why), which takes the pipe as the problem
+Radau IIA method written on the second-order residual form of Eq. (20)
+(docs/theory/numerics.md says why), which takes the pipe as the problem
 :class:`fempipe.model.dynamics_problem.PipeDynamics` (model and flow) by the
 contract of :mod:`fempipe.solvers.radau.contract`; this module drives it: :func:`simulate` records a
 :class:`Trajectory`, :func:`integrate` yields the states step by step,

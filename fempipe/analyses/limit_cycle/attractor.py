@@ -83,9 +83,9 @@ def find_attractor(
     shoot_rtol, shoot_tol : float
         Integration tolerance and Newton tolerance of the shooting.  The
         default 1e-5 gives the period to 5e-8 and the tip extrema to 5e-7
-        (relative, measured at four flutter cycles; module docstring); it was
-        1e-7, three times the steps per period for 100x more accuracy than
-        the 1e-6 asked of the cycle.
+        (relative, measured at four flutter cycles; docs/theory/numerics.md);
+        1e-7 would take three times the steps per period for 100x more accuracy
+        than the 1e-6 asked of the cycle.
     use_shooting : bool
         If False, a periodic orbit is accepted when successive section returns
         agree to ``converged_tol`` (plain long integration).

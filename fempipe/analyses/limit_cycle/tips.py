@@ -1,24 +1,17 @@
 """Tip coordinates on attractors and their extrema over one period.
 
-The [min, max] of the tip coordinates (:data:`TIP_KEYS`) over a computed
-period is taken by one routine, :func:`tip_extrema`, on samples of the orbit
-from one of three sources (the :class:`OrbitSamples` protocol):
-
-* :class:`QuinticOrbit`: the quintic Hermite interpolant through
-  (q, q', q'') at the step ends, as accurate as the steps themselves
-  (the cycles of :func:`~fempipe.analyses.limit_cycle.shoot`);
-* :class:`CollocationOrbit`: the integrator's collocation polynomials of
-  the steps (the branches of periodic orbits);
-* :class:`TipTrace`: tip coordinates recorded on the collocation
-  polynomial of every step while integrating (the transient of
-  :func:`~fempipe.analyses.limit_cycle.find_attractor`), which cannot be
-  evaluated between its samples.
-
-Each extremum of the samples is then refined, by a parabola through three
-samples (``refine="parabola"``: on ``fine + 1`` new samples between the
-neighbours of the extremum, or on the samples themselves if ``fine = 0``),
-or by a bounded scalar minimization on the interpolant between the
-neighbours (``refine="bounded"``).
+The [min, max] of the tip coordinates (:data:`TIP_KEYS`) over a computed period is taken by
+one routine, :func:`tip_extrema`, on samples of the orbit from one of three sources (the
+:class:`OrbitSamples` protocol): :class:`QuinticOrbit`, the quintic Hermite interpolant
+through (q, q', q'') at the step ends (the cycles of
+:func:`~fempipe.analyses.limit_cycle.shoot`); :class:`CollocationOrbit`, the integrator's
+collocation polynomials of the steps (the branches of periodic orbits); :class:`TipTrace`,
+tip coordinates recorded on the collocation polynomial of every step while integrating (the
+transient of :func:`~fempipe.analyses.limit_cycle.find_attractor`), which cannot be
+evaluated between its samples.  Each extremum of the samples is then refined, by a parabola
+through three samples (``refine="parabola"``: on ``fine + 1`` new samples between the
+neighbours of the extremum, or on the samples themselves if ``fine = 0``), or by a bounded
+scalar minimization on the interpolant between the neighbours (``refine="bounded"``).
 """
 
 from __future__ import annotations

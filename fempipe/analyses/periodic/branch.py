@@ -2,7 +2,7 @@
 
 The branch is walked by the engine of :mod:`fempipe.solvers.continuation`
 with :class:`CycleBranchPolicy`, the choices of the periodic-orbit problem
-(module docstring of :mod:`fempipe.analyses.periodic`): the first step along
+(docs/theory/numerics.md, "Branches of periodic orbits"): the first step along
 the Hopf eigenvector, later ones along the secant of the last two points
 with a polynomial predictor (:func:`predict`), the chord-Newton corrector of
 :class:`~fempipe.analyses.periodic.problem.CycleCorrector` at fixed v where a
@@ -442,7 +442,7 @@ def continue_cycles(
         the residual alone underestimates by 1 / (1 - mu) where a multiplier
         mu is near 1 (near the Hopf point, near folds).
     ds, ds_min, ds_max : float
-        First, smallest and largest arclength step (metric of the module docstring).
+        First, smallest and largest arclength step (metric of docs/theory/numerics.md).
     max_steps : int
         Steps before the branch ends.
     max_iter : int

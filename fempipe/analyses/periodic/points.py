@@ -110,7 +110,7 @@ class BifurcationPoint:
 
 
 def _sine_basis_default(old: dict) -> None:
-    """Stores written before Modal had a basis hold sine-mode runs."""
+    """A store whose modal discretization names no basis holds sine-mode runs."""
     disc = old.get("discretization", {})
     if disc.get("kind") == "modal":
         disc.setdefault("basis", "sine")

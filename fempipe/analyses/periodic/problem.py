@@ -166,7 +166,7 @@ class OrbitProblem:
         return BorderedSolution(z)
 
     def inner(self, a: np.ndarray, b: np.ndarray) -> float:
-        """(S a) . (S b), the metric of the module docstring."""
+        """(S a) . (S b), the metric of docs/theory/numerics.md, "Branches of periodic orbits"."""
         return float((self.S * a) @ (self.S * b))
 
     def dual(self, t: np.ndarray) -> np.ndarray:
@@ -201,7 +201,7 @@ class CycleCorrector:
         self.T_H = 2 * math.pi / hopf.omega
         n = self.n
         s = self.T_H / (2 * math.pi)
-        # u -> z = S u: the metric of the arclength (module docstring).
+        # u -> z = S u: the metric of the arclength (docs/theory/numerics.md).
         self.S = np.r_[
             np.full(n, 1 / math.sqrt(n)), np.full(n, s / math.sqrt(n)), 1 / self.T_H, 1.0
         ]

@@ -1,53 +1,21 @@
 """Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
 
-A planar limit cycle of the paper's model (:mod:`fempipe.analyses.limit_cycle`)
-is a periodic solution of the 3-D model too: its planar states are the 3-D
-model's states with a = b = 0 (:mod:`fempipe.model.space_chart`), and the
-mirror symmetry e_3 -> -e_3 keeps them there.  About such a solution the
-linearized 3-D equations split into the planar perturbations (theta) and the
-out-of-plane ones (a, b); the monodromy matrix of the 3-D model over one
-period, integrated by the same Radau integrator with its exact sensitivity,
-is block diagonal, and
+A planar limit cycle of the paper's model (:mod:`fempipe.analyses.limit_cycle`) is a periodic
+solution of the 3-D model too, and by the mirror symmetry e_3 -> -e_3 the linearized motion
+about it splits into planar perturbations (theta) and out-of-plane ones.
+:func:`out_of_plane_floquet` computes the out-of-plane multipliers two independent ways:
+by default (``method="linear"``) from the linear equation of out-of-plane perturbations about
+the moving planar state (:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`:
+one unknown psi, no gauge), or (``method="3d"``) from the out-of-plane block of the 3-D
+model's monodromy (:mod:`fempipe.model.space`), integrated block by block
+(``decoupled_blocks``, rule 7 of :mod:`fempipe.solvers.radau.contract`), whose gauge
+multipliers (about e^(-50 T) and smaller) are left out.  The two differ by their
+discretization errors and converge to each other.  A planar cycle survives in 3-D when every
+out-of-plane multiplier is inside the unit circle; at alpha = 0 and pi one of them, the
+cycle turned about the vertical, is exactly 1 in the continuum (the trivial one there).
 
-* its planar block is the planar model's monodromy (the same equations on the
-  same discretization: the multipliers agree to the integration tolerance);
-* its out-of-plane block (4 n multipliers for n unknowns per field) holds
-  the 2 n multipliers of out-of-plane perturbations and the 2 n of the
-  chart's gauge (:mod:`fempipe.model.space`).  The gauge relaxes at the rates
-  50 and 100 whatever the motion, so its multipliers are about e^(-50 T) and
-  smaller (measured: below 2e-6 for the hanging pipe's cycle at v = 10,
-  T = 0.27), far inside the physical ones that decide stability; the 2 n of
-  largest modulus are reported as the physics'.  (The gauge's multipliers are
-  all alike, one per point of the pipe, so their eigenvectors are not
-  resolved and cannot be told apart by their shape.)
-
-The computation uses the block structure: along the planar cycle the 3-D
-Jacobians have exact zeros between theta and (a, b) (the mirror symmetry), so
-the integrator factors its Newton matrices and propagates the sensitivity
-block by block (``decoupled_blocks``, rule 7 of
-:mod:`fempipe.solvers.radau.contract`): the same matrix to round-off (measured:
-the multipliers agree to 1.3e-14 with the full computation at alpha = pi/2,
-v = 10, P3:16) for (n^3 + (2 n)^3) instead of (3 n)^3 operations.
-
-The same multipliers have a second, independent computation, the default
-(``method="linear"``): the linear equation of out-of-plane perturbations
-about the moving planar state (:mod:`fempipe.model.out_of_plane_motion`), one
-unknown psi on the discretization of theta and no gauge, integrated together
-with the planar motion (:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`).
-Its monodromy has the planar block and an out-of-plane block of exactly the
-2 n physical multipliers.  The two computations differ by their
-discretization errors and converge to each other under refinement
-(measured at alpha = pi/2, v = 10, leading multiplier 0.8791856 on P3:16:
-differences of 5e-4, 2e-5, 3e-7 on P3:4/8/16; at alpha = 0 the neutral
-multiplier is 1 - 1.9e-3, 1 - 4.2e-5, 1 - 8.5e-7 on P3:4/8/16 against
-1 - 1.0e-3, 1 - 1.0e-5, 1 - 3.2e-7 in 3-D); the linear one costs 4-6 times
-less (P3:16, the cycles of Figs. 7-10 at v = 10: 1.3-2.3 s against 5.8-9.2 s CPU).
-
-A planar cycle survives in 3-D when every out-of-plane multiplier is inside
-the unit circle.  At alpha = 0 and pi the pipe is axisymmetric: the cycle
-turned about the vertical is a cycle again, so one out-of-plane multiplier is
-exactly 1 in the continuum (its eigenvector is psi = sin theta, the rotated
-shape); it is the trivial one there, as the multiplier 1 of the planar phase.
+Derivation and measurements: docs/theory/out_of_plane.md, "About a moving planar state", and
+docs/theory/space.md, "What it answers".
 """
 
 from __future__ import annotations
@@ -153,11 +121,10 @@ def out_of_plane_floquet(
         ``"linear"``: the linear out-of-plane equation about the moving planar
         state (:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`,
         one unknown psi, no gauge); ``"3d"``: the 3-D model along the cycle (its
-        out-of-plane block, gauge multipliers left out, module docstring).  The
-        two are independent discretizations of the same multipliers and converge
-        to each other (measured at alpha = pi/2, v = 10: the leading multipliers
-        differ by 5e-4, 2e-5, 3e-7 in modulus on P3:4/8/16); "linear" costs 4-6
-        times less.
+        out-of-plane block, gauge multipliers left out).  The two are independent
+        discretizations of the same multipliers and converge to each other (at
+        alpha = pi/2, v = 10 the leading multipliers differ by 5e-4, 2e-5, 3e-7 in
+        modulus on P3:4/8/16; docs/theory/out_of_plane.md); "linear" is the cheaper.
 
     Returns
     -------

@@ -1,28 +1,20 @@
 """The nonlinear motion of the pipe in three dimensions and its attractor.
 
-:func:`simulate_space` integrates the 3-D model (:mod:`fempipe.model.space`)
-from the planar static state, perturbed in the plane and out of it, with the
-Radau integrator, until the attractor is recognized on a Poincare section, and
-classifies it:
-
-* ``equilibrium``: the motion dies out;
-* ``periodic``: successive returns to the section agree; the motion is
-  ``planar`` when the tip stays in one vertical plane (for an inclined pipe,
-  the plane of its static state), ``nonplanar`` otherwise;
-* ``whirl``: a non-planar periodic motion of an axisymmetric pipe
-  (sin alpha = 0) whose tip turns about the vertical at a constant distance:
-  ``whirl_rate`` is its angular velocity (rad per unit tau, positive from
-  e_2 towards e_3, i.e. right-handed about the clamp's axis e_1);
-* ``quasi-periodic``: no recurrence before ``t_max``, and the tip's spectrum over the
-  second half of the run has two strong peaks at incommensurate frequencies
-  (:func:`tip_frequencies`, :func:`two_frequencies`): ``frequencies`` holds them;
-* ``non-periodic``: no recurrence before ``t_max``, and no such pair (chaotic, or a
-  transient too long for the run).
+:func:`simulate_space` integrates the 3-D model (:mod:`fempipe.model.space`) from the planar
+static state, perturbed in the plane and out of it, with the Radau integrator, until the
+attractor is recognized on a Poincare section, and classifies it: ``equilibrium`` (the
+motion dies out); ``periodic`` (successive returns agree), ``planar`` when the tip stays in
+one vertical plane (for an inclined pipe, the plane of its static state), ``nonplanar``
+otherwise; ``whirl``, a non-planar periodic motion of an axisymmetric pipe (sin alpha = 0)
+whose tip turns about the vertical at a constant distance (``whirl_rate``: rad per unit tau,
+positive from e_2 towards e_3, right-handed about the clamp's axis e_1); ``quasi-periodic``,
+no recurrence before ``t_max`` and two strong peaks at incommensurate frequencies in the
+tip's spectrum over the second half of the run (:func:`tip_frequencies`,
+:func:`two_frequencies`); ``non-periodic``, no recurrence and no such pair.
 
 The section is the tip's displacement along e_2 + e_3 (eta_tip + Y_tip,
-:func:`~fempipe.analyses.space.shooting.section_value`) crossing its static
-value upwards; a section state is located on the collocation polynomial of the
-step (the integrator's dense output) by the secant method.
+:func:`~fempipe.analyses.space.shooting.section_value`) crossing its static value upwards; a
+section state is located on the integrator's collocation polynomial by the secant method.
 """
 
 from __future__ import annotations
@@ -64,7 +56,7 @@ class SpaceMotion:
         ``"equilibrium"``, ``"periodic"``, ``"whirl"``, ``"quasi-periodic"`` or
         ``"non-periodic"``.
     motion : str
-        ``"planar"`` or ``"nonplanar"`` (module docstring).
+        ``"planar"`` or ``"nonplanar"`` (the module docstring says which).
     period : float or None
     period_n : int or None
         Section points per period.

@@ -1,51 +1,20 @@
 """The onset of the non-planar oscillation: the Hopf normal form of the 3-D model.
 
 Where the linear out-of-plane analysis (:mod:`fempipe.model.out_of_plane`,
-:func:`fempipe.analyses.stability.spatial_critical_velocity`) finds that a
-planar static state loses stability out of its plane before it does in it
-(the horizontal pipe, alpha = pi/2: the out-of-plane v_cr lies below the
-in-plane one), a non-planar periodic orbit is born at that v_cr.  This module
-computes its Hopf normal form on the full 3-D model (:mod:`fempipe.model.space`)
-as the planar one does on Eq. (20) (the package docstring of
-:mod:`fempipe.analyses.stability.hopf`):
+:func:`fempipe.analyses.stability.spatial_critical_velocity`) finds that a planar static state
+loses stability out of its plane before it does in it (the horizontal pipe, alpha = pi/2), a
+non-planar periodic orbit is born at that v_cr.  :func:`space_hopf_normal_form` computes its
+Hopf normal form on the full 3-D model (:mod:`fempipe.model.space`) as the planar one does on
+Eq. (20): the first-order system and its exact Jacobian (:func:`space_jacobian`), the planar
+static state lifted exactly to 3-D at the v where the critical pair crosses the imaginary
+axis (:func:`locate_hopf`), the first Lyapunov coefficient l1 of the generic
+:func:`~fempipe.analyses.stability.hopf.lyapunov_coefficient`, the transversality, and the
+amplitude of the tip's swing out of the plane, ``(max Y_tip - min Y_tip) / 2 ~ c
+sqrt(v - v_cr)``.  The critical mode is odd under the mirror through the plane of the static
+state, so Y_tip swings symmetrically; the gauge's real eigenvalues are never critical.
 
-* the first-order system x = (U, U'), F(x) = (U', a(U, U')) with
-  a = -M(U)^{-1} R(U, U', 0) and its exact Jacobian
-  ``[[0, I], [-M^{-1} R_U, -M^{-1} R_U']]`` (:meth:`SpaceModel.jacobians` at
-  the acceleration, :func:`space_jacobian`);
-* the planar static state (Eq. (31a), :func:`fempipe.solvers.newton.solve_static`
-  on the planar model, lifted by :func:`fempipe.model.space.planar_state`: the
-  planar reduction is exact) at the v where the critical pair of that Jacobian
-  crosses the imaginary axis (a secant on its real part, :func:`locate_hopf`);
-* the first Lyapunov coefficient l1 of the generic
-  :func:`~fempipe.analyses.stability.hopf.lyapunov_coefficient` (differences of
-  the analytic Jacobian on a ladder of steps), q normalized in L2 over the
-  three fields (theta, a, b) of U;
-* the transversality Re lambda'(v) = Re p^H (dA/dv) q along the static branch;
-* the amplitude of the tip's swing out of the plane,
-  ``(max Y_tip - min Y_tip) / 2 ~ c sqrt(v - v_cr)``,
-  c = 2 |dY_tip . q_U| sqrt(rho^2 / (v - v_cr)).
-
-Symmetry: the mirror through the plane of the static state (Y -> -Y) maps
-the 3-D model onto itself and fixes the planar state.  The critical
-eigenvector is odd under it (its theta part vanishes, reported as
-``in_plane_fraction``), so Y_tip is odd along the born orbit and its
-extrema are symmetric, max Y_tip = -min Y_tip; the quadratic terms
-B(q, q), B(q, qbar) of the normal form are even (in-plane), and the
-second harmonic they excite does not shift Y_tip.  The gauge's eigenvalues
-(real, about -50 and -100, :mod:`fempipe.model.space`) are not critical: the
-critical pair is the complex one nearest the imaginary axis.
-
-Measured (the paper's case, alpha = pi/2, P3:4 | P3:8): v_cr = 5.8210193 | 5.8208965,
-the out-of-plane model's 9.9e-6 | 1.0e-7 from it (two discretizations of one linear
-problem, the difference falling as h^6.6); l1 = -7.32031 +- 3e-5 | -7.31998 +- 2e-4
-(supercritical), omega = 14.2763 | 14.2752, Re lambda' = 3.63422 | 3.63389, c = 0.529221 |
-0.529240.  Cycles shot on the same mesh at v_cr + delta, delta = 1e-3 ... 1e-2, have
-A^2 / delta = c^2 (1 - 0.370 delta + ...) with the value at delta = 0 within about
-1e-6 | a few 1e-6 of c^2 (the extrapolation moves at that level with round-off: 0.85e-6
-to 1.1e-6 on P3:4 and 1.5e-6 to 7.2e-6 on P3:8 over three runs), and periods tending to
-2 pi / omega within 1e-9
-(:mod:`fempipe.validation.space_onset`).
+Derivation, symmetry and measurements: docs/theory/space.md, "The onset of the non-planar
+oscillation"; checked against shot cycles by :mod:`fempipe.validation.space_onset`.
 """
 
 from __future__ import annotations
@@ -86,7 +55,7 @@ HOPF_V_TOL = 1e-10
 
 
 def space_jacobian(model: SpaceModel, x: np.ndarray) -> np.ndarray:
-    """D_x F of the 3-D first-order system at x = (U, U'), shape (2 n, 2 n) (module docstring).
+    """D_x F of the 3-D first-order system at x = (U, U'), shape (2 n, 2 n).
 
     ``[[0, I], [-M^{-1} R_U, -M^{-1} R_U']]`` with the exact Jacobians of
     :meth:`SpaceModel.jacobians` at the acceleration a(U, U') (off the
@@ -104,7 +73,7 @@ def space_jacobian(model: SpaceModel, x: np.ndarray) -> np.ndarray:
 def critical_pair(A: np.ndarray) -> complex:
     """The eigenvalue of A with Im > 0 nearest the imaginary axis (relative to its size).
 
-    The gauge's eigenvalues are real (module docstring) and never chosen.
+    The gauge's eigenvalues are real (docs/theory/space.md) and never chosen.
     """
     lam = np.linalg.eigvals(A)
     upper = lam[lam.imag > 0]
@@ -290,7 +259,7 @@ def space_hopf_normal_form(
     step: float | None = None,
 ) -> SpaceHopfNormalForm:
     """The Hopf normal form of the 3-D model where the planar static state loses stability
-    out of its plane (module docstring).
+    out of its plane (docs/theory/space.md, "The onset of the non-planar oscillation").
 
     Parameters
     ----------

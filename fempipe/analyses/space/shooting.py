@@ -39,8 +39,7 @@ __all__ = [
 TIP3_KEYS = ("eta_tip", "X_tip", "Z_tip", "Y_tip")
 
 #: At an axisymmetric alpha a second multiplier this close to 1 is the rotation's (exactly 1
-#: in the continuum; measured 1.0e-3 off on P3:4, and with the gauge's earlier weight 1,
-#: 2.9e-3 at most along the standing pipe's branch on P3:8); a whirl has no second one.
+#: in the continuum; measured 1.0e-3 off on P3:4); a whirl has no second one.
 NEUTRAL_TOLERANCE = 2e-2
 
 
@@ -82,7 +81,7 @@ def space_tip_extrema(model: SpaceModel, orbit: QuinticOrbit, per_step: int = 16
 
 
 class SpaceShooter(Shooter):
-    """The planar :class:`Shooter` on a :class:`SpaceModel` (module docstring)."""
+    """The planar :class:`Shooter` on a :class:`SpaceModel`."""
 
     def __init__(self, model: SpaceModel, level: float, **options) -> None:
         super().__init__(model, level, **options)

@@ -1,26 +1,20 @@
 """Whirls of an axisymmetric pipe: periodic orbits that turn rigidly about the vertical.
 
-At sin(alpha) = 0 (hanging, alpha = 0, or standing, alpha = pi) gravity lies
-along the clamp's axis e_1 and a turn about e_1 maps motions to motions.  The
-flutter is then a Hopf bifurcation with O(2) symmetry, from which two kinds of
-cycles branch together: standing waves (the planar cycles, one for each
-vertical plane) and rotating waves, the *whirls*, in which the pipe's shape
-turns rigidly about e_1 at a rate omega, one for each sense of rotation.  In
-the continuum a whirl is a steady state in the frame turning at omega
-(:mod:`fempipe.validation.whirl_bvp` solves it as such); on a finite element
-mesh the turn is a symmetry only up to the discretization error (the chart of
-:mod:`fempipe.model.space_chart` is nonlinear in the angle of the turn), so
-the discrete whirl is a periodic orbit, found here by Newton shooting
-(:func:`~fempipe.analyses.space.shooting.shoot_space`, whose least-squares step
-handles the rotation's neutral direction).
+At sin(alpha) = 0 (hanging or standing) a turn about the clamp's axis e_1 maps motions to
+motions, and the flutter is a Hopf bifurcation with O(2) symmetry: standing waves (the
+planar cycles) and rotating waves, the *whirls*, in which the pipe's shape turns rigidly
+about e_1 at a rate omega, branch together.  In the continuum a whirl is a steady state in
+the turning frame (:mod:`fempipe.validation.whirl_bvp` solves it as such); on a mesh the
+turn is a symmetry only up to the discretization error (the chart of
+:mod:`fempipe.model.space_chart` is nonlinear in the angle of the turn), so the discrete
+whirl is a periodic orbit, found here by Newton shooting
+(:func:`~fempipe.analyses.space.shooting.shoot_space`).
 
-:func:`whirl_state` writes a tangent field t(xi) turning at omega as a state of
-:class:`~fempipe.model.space.SpaceModel` (in the chart's gauge); a start comes
-from any tangent field (e.g. the rotating-frame solution), or from a planar
-cycle (:func:`whirl_guess_from_cycle`: its state and the state a quarter
-period earlier turned by 90 degrees, the standing wave plus i times its
-rotated copy).  :func:`find_whirl` shoots and measures how rigid the
-discrete whirl's rotation is.
+:func:`whirl_state` writes a tangent field turning at omega as a state of
+:class:`~fempipe.model.space.SpaceModel`; :func:`whirl_guess_from_cycle` starts from a planar
+cycle (its state plus i times its state a quarter period before, turned by 90 degrees);
+:func:`find_whirl` shoots and measures how rigid the discrete whirl's rotation is.
+Measurements: docs/theory/space.md, "The whirl of the hanging pipe".
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 :class:`BranchAnalysis` samples the spectra along a continuation branch,
 carries the mode numbers, checks extrema of Re lambda between samples and
-locates every crossing of Re lambda = 0 (package docstring, "Stability
+locates every crossing of Re lambda = 0 (docs/theory/stability.md, "Stability
 events"); its results are :class:`~fempipe.analyses.stability.events.BranchStability`.
 """
 
@@ -172,7 +172,7 @@ class BranchAnalysis:
         return bool(self.stop_at_first and _unstable_count(e) > 0)
 
     def _number(self, first: ClassifiedSpectrum) -> None:
-        """Mode numbers at the branch's first state (the package docstring, "Mode numbers").
+        """Mode numbers at the branch's first state (docs/theory/stability.md, "Mode numbers").
 
         Carried from v = 0 along the branch (:func:`reference_tracker`); on a
         branch born at a branch point, from the parent branch's sample nearest

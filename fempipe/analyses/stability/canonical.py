@@ -4,7 +4,7 @@ The canonical modes are those of the straight, unloaded pipe, the
 clamped-free Euler-Bernoulli beam, whose exact frequencies are known: a
 discretization resolves the leading ones it reproduces within
 :data:`RESOLUTION_TOL`, and an eigenvalue is resolved when its eigenvector
-lies mostly on those (package docstring, "Resolved modes").
+lies mostly on those (docs/theory/stability.md, "Resolved modes").
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ def cantilever_frequencies(n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Resolution:
-    """Which modes a discretization resolves (the package docstring, "Resolved modes").
+    """Which modes a discretization resolves (docs/theory/stability.md, "Resolved modes").
 
     Attributes
     ----------

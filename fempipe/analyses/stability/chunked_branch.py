@@ -131,16 +131,13 @@ class ChunkedBranch:
 
 
 #: Step in v between the spectra of a straight branch, in units of ds_max
-#: (Notes of :func:`stability_analysis`).  Measured at alpha = 0 (and pi
-#: below buckling), P3:16, v in [0, 16] on 55 cases (beta 0.1-0.9, gamma
-#: 0-40, mu 0-0.05, end mass, springs, external and hysteretic damping): the
-#: events of factors 3, 4 and 5 (steps growing from 0.05) are those of
-#: factor 1 to 2.5e-11, with 54 %, 50 % and 44 % of its spectra.  Beyond, the
-#: tracker's halving can insert more spectra than the larger step saves (the
-#: hanging pipe, beta = 0.2, gamma = 10: 42, 35, 31 spectra for 3, 4, 5 and 94
-#: for 6); 4 keeps a margin.  Taking this step from v_min on, instead of
-#: growing to it from 0.05, leaves the events of the 55 cases and of the
-#: hanging pipe as they were (2.4e-11) with 7 % fewer spectra.
+#: (Notes of :func:`stability_analysis`).  On 55 straight cases (alpha = 0, and pi
+#: below buckling; P3:16, v in [0, 16]; beta 0.1-0.9, gamma 0-40, mu 0-0.05 and every
+#: variant) the factors 3, 4 and 5 give the events of factor 1 to 2.5e-11 with about half
+#: its spectra.  Beyond, the tracker's halving can insert more spectra than the larger
+#: step saves (the hanging pipe, beta = 0.2, gamma = 10: 35 spectra for 4, 94 for 6), so
+#: 4 keeps a margin.  The step is taken from v_min on, not grown to from 0.05: the same
+#: events (to 2.4e-11) with fewer spectra.
 STRAIGHT_STEP = 4.0
 
 

@@ -1,7 +1,7 @@
 """Spectra classified by the canonical modes: resolved eigenvalues and mode numbers.
 
 A :class:`ClassifiedSpectrum` holds every eigenvalue of one state with the
-share of its eigenvector on resolved canonical modes (package docstring,
+share of its eigenvector on resolved canonical modes (docs/theory/stability.md,
 "Resolved modes"); :func:`canonical_labels` numbers eigenvalues by the
 canonical mode they are made of ("Mode numbers").
 """

@@ -1,6 +1,6 @@
 """The stability criterion of a static state: :func:`linearly_stable`, :func:`growth_rate`.
 
-One criterion (package docstring, "Linear stability"), evaluated densely on
+One criterion (docs/theory/stability.md, "Linear stability"), evaluated densely on
 every resolved eigenvalue for small problems and, for large meshes, on the
 lowest modes by sparse shift-invert Arnoldi in O(n) per state.
 """
@@ -48,7 +48,7 @@ def linearly_stable(
     """Whether the static state q is linearly stable: the criterion of :func:`spectrum`.
 
     Stable when no resolved eigenvalue of Eq. (32) has
-    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (package docstring,
+    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (docs/theory/stability.md,
     "Linear stability"); the same decision as ``spectrum(model, q).stable``,
     :func:`critical_velocity` and :func:`stability_analysis`.
 

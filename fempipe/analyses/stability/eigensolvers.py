@@ -72,8 +72,7 @@ def quadratic_eigen(
     (backward stable; used up to n = 200).  ``shift-invert``: the standard
     eigenproblem of (A - sigma B)^{-1} B with a real shift, for larger n: the
     low modes, the ones that matter, are its largest eigenvalues and come out
-    with full relative accuracy, and it is 5-20 times faster than QZ at
-    n = 768.  Both keep exact conjugate pairs (real arithmetic).  With
+    with full relative accuracy, and it is much faster than QZ at such n.  Both keep exact conjugate pairs (real arithmetic).  With
     ``vectors=False`` only the eigenvalues are computed (X is None): 40 % less
     work for the dense eigensolver.
 

@@ -4,7 +4,7 @@
 branch), :class:`BranchStability` (one branch and its stability along it)
 and :class:`StabilityResult` (every branch of one parameter point);
 :class:`~fempipe.analyses.stability.branch_analysis.BranchAnalysis` computes
-them (package docstring, "Stability events").
+them (docs/theory/stability.md, "Stability events").
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The roots of Eq. (32) with hysteretic damping, continued in the loss factor.
 
 The structural loss factor mu_h multiplies the bending stiffness by
-1 + i mu_h sgn(omega) (package docstring, "Hysteretic damping");
+1 + i mu_h sgn(omega) (docs/theory/conventions.md, "Hysteretic damping");
 :func:`hysteretic_roots` continues the roots of the real problem in mu_h.
 :class:`ConjugateHalves`, :func:`relevant_roots` and :func:`match_roots`
 are its steps, shared with the sparse criterion

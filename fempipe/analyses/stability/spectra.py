@@ -115,7 +115,7 @@ def spectrum(
 
     Every resolved eigenvalue is listed.  At v != 0 the mode numbers cost a
     path: the branch through q is continued back to v = 0 and the
-    eigenvalues tracked along it (package docstring, "Mode numbers"); for
+    eigenvalues tracked along it (docs/theory/stability.md, "Mode numbers"); for
     the stability decision alone use :func:`linearly_stable`.
 
     Parameters

@@ -1,6 +1,6 @@
 """Mode numbers by continuity along a path of static states, and root loci (Fig. 5).
 
-The numbering rule is the package docstring's ("Mode numbers").
+The numbering rule: docs/theory/stability.md, "Mode numbers".
 """
 
 from __future__ import annotations

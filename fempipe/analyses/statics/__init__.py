@@ -1,26 +1,21 @@
 """Static large deformation (Eq. (31a)): the gravity-loaded state and paths in a parameter.
 
-    -theta'' + gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta) = 0,
-    theta(0) = 0, theta'(1) = 0.
-
 Three layers, each usable on its own:
 
 * :mod:`fempipe.solvers.newton` -- one equilibrium by Newton's method
   (:func:`solve_static`, :class:`NewtonError`, :class:`StaticSolution`);
-* :mod:`~fempipe.analyses.statics.branches` -- pseudo-arclength continuation
-  with fold and bifurcation detection and branch switching
-  (:func:`continuation`, :func:`switch_branch`, :class:`Branch`), on the
-  problem :class:`~fempipe.analyses.statics.family.StaticFamily` (the pipe
-  models along v, gamma or alpha) and the engine of
+* :mod:`~fempipe.analyses.statics.branches` -- pseudo-arclength continuation with fold and
+  bifurcation detection and branch switching (:func:`continuation`, :func:`switch_branch`,
+  :class:`Branch`), on the problem :class:`~fempipe.analyses.statics.family.StaticFamily`
+  (the pipe models along v, gamma or alpha) and the engine of
   :mod:`fempipe.solvers.continuation`;
-* :mod:`~fempipe.analyses.statics.loading` -- the state a pipe reaches when
-  gravity is switched on (:func:`sagged_state`) and the states along a list
-  of parameter values (:func:`solve_path`), what ``fempipe static`` computes.
+* :mod:`~fempipe.analyses.statics.loading` -- the state a pipe reaches when gravity is
+  switched on (:func:`sagged_state`) and the states along a list of parameter values
+  (:func:`solve_path`), what ``fempipe static`` computes.
 
-Every solver only uses the model's ``static_residual``, ``static_jacobian``,
-``static_parameter_derivative``, ``static_terms`` and ``gravity_load`` and the
-discretization's Gram matrix; it runs unchanged on finite elements and on
-sine modes.  The names of the first two layers are importable from here too.
+Every solver uses only the model's static residual, Jacobian, parameter derivative, terms and
+gravity load and the discretization's Gram matrix, so it runs unchanged on finite elements
+and on sine modes.  The names of the first two layers are importable from here too.
 """
 
 from fempipe.solvers.newton import NewtonError, StaticSolution, solve_static

@@ -1,7 +1,7 @@
 """The Radau IIA integrator: :class:`Radau`, its step record and its error.
 
-The method and why it is used are in the package docstring
-(:mod:`fempipe.solvers.radau`); what it asks of the problem and what it
+The method and why it is used are in docs/theory/numerics.md, "Time
+integration"; what it asks of the problem and what it
 guarantees in :mod:`fempipe.solvers.radau.contract`.
 """
 

@@ -1,9 +1,8 @@
 """The first Lyapunov coefficient of a generic x' = F(x) at a Hopf point.
 
 Kuznetsov's formula with the multilinear forms B and C taken as differences
-of the analytic Jacobian, on a ladder of steps (the package docstring of
-:mod:`fempipe.analyses.stability.hopf`, "Kuznetsov's formula" and
-"Derivatives").  Nothing here knows the pipe.
+of the analytic Jacobian, on a ladder of steps (docs/theory/stability.md, "Kuznetsov's
+formula" and "Derivatives").  Nothing here knows the pipe.
 """
 
 from __future__ import annotations
@@ -17,7 +16,7 @@ import scipy.linalg as sla
 
 #: |l1| <= DEGENERATE_FACTOR * uncertainty: "degenerate", no criticality claimed.
 DEGENERATE_FACTOR = 10.0
-#: Difference steps tried for B and C (q of unit size; package docstring).
+#: Difference steps tried for B and C (q of unit size; docs/theory/stability.md, "Derivatives").
 STEP_LADDER = (1e-5, 4e-5, 1.6e-4, 6.4e-4, 2.56e-3)
 #: The ends of the ladder are added only when the middle three steps spread by
 #: more than this fraction of l1 (measured flat to ~2e-6 from P3:4 to P3:32).
@@ -35,7 +34,7 @@ class HopfCoefficient:
     l1 : float
         First Lyapunov coefficient Re(c1) / omega.
     uncertainty : float
-        Spread of l1 over the steps used, plus the rounding level (package docstring).
+        Spread of l1 over the steps used, plus the rounding level (docs/theory/stability.md).
     c1 : complex
         Cubic coefficient of z' = lambda z + c1 |z|^2 z.
     eigenvalue : complex
@@ -120,7 +119,7 @@ def lyapunov_coefficient(
     ----------
     jacobian : callable
         ``jacobian(x) -> ndarray (N, N)``, the analytic D_x F at any x (the
-        multilinear forms B, C are its differences, package docstring).
+        multilinear forms B, C are its differences, docs/theory/stability.md).
     x0 : ndarray, shape (N,)
         The equilibrium, F(x0) = 0, where A = jacobian(x0) has a pair +- i omega.
     omega : float, optional
@@ -131,7 +130,7 @@ def lyapunov_coefficient(
         of q (and so of l1); default the identity.
     step : float, optional
         A fixed difference step h for q of that unit size, > 0; default the
-        ladder :data:`STEP_LADDER` (package docstring).
+        ladder :data:`STEP_LADDER` (docs/theory/stability.md).
     derivatives : callable, optional
         ``(u, h) -> (DJ[u], D2J[u, u])`` for real u; default
         :func:`jacobian_differences`.  A problem-specific form can avoid the
@@ -206,7 +205,7 @@ def lyapunov_coefficient(
 
 
 def _c1(derivatives, A, q, p, w, h) -> tuple[complex, tuple]:
-    """c1 of the package docstring with difference step h."""
+    """c1 of Kuznetsov's formula (docs/theory/stability.md) with difference step h."""
     DJr, D2r = derivatives(q.real, h)
     DJi, D2i = derivatives(q.imag, h)
     D2 = D2r + D2i  # D2J[q, qbar]

@@ -3,8 +3,8 @@
 :func:`first_lyapunov_coefficient` applies the generic
 :func:`~fempipe.analyses.stability.hopf.lyapunov.lyapunov_coefficient` to
 Eq. (20) in first-order form, with the transversality lambda'(v) along the
-static branch and the predicted cycle amplitudes (the package docstring of
-:mod:`fempipe.analyses.stability.hopf`).
+static branch and the predicted cycle amplitudes (docs/theory/stability.md,
+"Hopf criticality of the flutter events").
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from .pipe import dense, pipe_derivatives, pipe_jacobian
 
 @dataclass(frozen=True)
 class HopfNormalForm:
-    """The Hopf normal form of the pipe at a flutter point (package docstring).
+    """The Hopf normal form of the pipe at a flutter point (docs/theory/stability.md).
 
     Attributes
     ----------
@@ -32,7 +32,7 @@ class HopfNormalForm:
     l1 : float
         First Lyapunov coefficient, q_theta of unit L2 norm.
     uncertainty : float
-        Numerical uncertainty of l1 (package docstring).
+        Numerical uncertainty of l1 (docs/theory/stability.md, "Derivatives").
     criticality : {'supercritical', 'subcritical', 'degenerate'}
     omega : float
         Im lambda at v.
@@ -44,7 +44,7 @@ class HopfNormalForm:
         Re lambda'(v).
     rho2_slope : float
         rho^2 / (v - v_cr) = -Re(lambda') / (omega l1): positive where the
-        cycles exist above v_cr (package docstring).
+        cycles exist above v_cr (docs/theory/stability.md, "Kuznetsov's formula").
     side : {'above', 'below'} or None
         Side of v_cr where the cycles exist (None if degenerate or not transversal).
     amplitude_coefficients : dict
@@ -150,7 +150,7 @@ def first_lyapunov_coefficient(
         Frequency of the crossing pair (the event's ``frequency``); default
         the pair nearest the imaginary axis.
     step : float, optional
-        A fixed difference step h, > 0; default the ladder (package docstring).
+        A fixed difference step h, > 0; default the ladder (docs/theory/stability.md, "Derivatives").
 
     Returns
     -------

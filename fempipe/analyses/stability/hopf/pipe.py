@@ -1,9 +1,8 @@
 """The pipe's first-order Jacobian and its derivatives for the normal form.
 
-D_x F of the first-order form of Eq. (20) (:func:`pipe_jacobian`, the
-package docstring of :mod:`fempipe.analyses.stability.hopf`, "First-order
-form") and its first and second directional derivatives without
-differencing the bending matrix (:func:`pipe_derivatives`, "Derivatives").
+D_x F of the first-order form of Eq. (20) (:func:`pipe_jacobian`; docs/theory/stability.md,
+"First-order form") and its first and second directional derivatives without differencing
+the bending matrix (:func:`pipe_derivatives`; "Derivatives").
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ def pipe_jacobian(model: PipeModel, x: np.ndarray) -> np.ndarray:
 
     ``[[0, I], [-M^{-1} R_q, -M^{-1} R_q']]`` with the analytic Jacobians of
     :meth:`PipeModel.jacobians` at (q, q', a), a = -M^{-1} R(q, q', 0) the
-    acceleration (the package docstring, "First-order form"): the companion
+    acceleration (docs/theory/stability.md, "First-order form"): the companion
     matrix of :func:`fempipe.core.companion.first_order_matrix`, M factorised
     once by Cholesky for both the acceleration and the blocks.
     """
