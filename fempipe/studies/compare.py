@@ -1,26 +1,17 @@
 """A user's numbers against fempipe: each value beside fempipe's and fempipe's error estimate.
 
-A user's result for one case -- a static tip value, the critical flow
-velocity or its frequency, a limit cycle's amplitude or period -- is set
-beside fempipe's value of the same :class:`~fempipe.studies.convergence.Quantity` on
-one discretization (the reported value, computed exactly as ``fempipe
-convergence`` computes it), and the error of fempipe's value is estimated
-from one refinement (:mod:`fempipe.studies.error_estimate`: the value is computed
-again on ``refine(disc)`` and the Grid Convergence Index
-``max(3 |Q - Q_refined| r^p / (r^p - 1), floor)`` of the coarse value is
-its estimate, with the floor the quantity's solver tolerance
-``Quantity.tolerance * max(1, |Q|)``).
-
-The difference user - fempipe is **resolved** when it exceeds fempipe's
-error estimate: then fempipe's discretization error cannot explain it, and
-the difference is the user's (their truncation, their model, their
-measurement).  An unresolved difference is within what fempipe's own
-discretization could be off by; only a finer ``disc`` can tell.
+A user's result for one case -- a static tip value, the critical flow velocity or its
+frequency, a limit cycle's amplitude or period -- is set beside fempipe's value of the same
+:class:`~fempipe.studies.convergence.Quantity` on one discretization (computed exactly as
+``fempipe convergence`` computes it), with fempipe's error estimated from one refinement
+(:mod:`fempipe.studies.error_estimate`).  The difference user - fempipe is **resolved** when it
+exceeds that estimate: fempipe's discretization error cannot explain it, so the difference is
+the user's (truncation, model, measurement); otherwise only a finer ``disc`` can tell.
 
 :func:`compare_values` runs the comparisons (in worker processes if asked,
-:func:`fempipe.core.parallel.run_tasks`); a comparison whose computation fails
-(Newton, no v_cr in the flow range, no limit cycle) is kept, with the
-failure's message and no fempipe value, and does not stop the others.
+:func:`fempipe.core.parallel.run_tasks`); a comparison whose computation fails (Newton, no
+v_cr in the flow range, no limit cycle) is kept with the failure's message and no fempipe
+value, and does not stop the others.  docs/cli/commands.md, "fempipe compare".
 """
 
 from __future__ import annotations

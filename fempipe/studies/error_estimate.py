@@ -1,56 +1,20 @@
 """Error estimates of reported numbers from one refinement (the Grid Convergence Index).
 
-A number Q computed on a discretization (the *coarse*, reported value Q_h) is
-computed again on a refined one (Q_{h/r}, :func:`refine`), and the error of
-Q_h is estimated by Roache's Grid Convergence Index for a two-grid study,
-stated for the coarse grid:
+A number Q_h computed on a discretization (the coarse, reported value) is computed again on a
+refined one (:func:`refine`: finite elements h-refined, the modal method with twice the modes,
+plus one for an odd N), and its error is estimated by Roache's Grid Convergence Index for a
+two-grid study, stated for the coarse grid (:func:`estimate`):
 
-    err(Q_h) = Fs |Q_h - Q_{h/r}| r^p / (r^p - 1),     Fs = 3,
+    err(Q_h) = max(Fs |Q_h - Q_{h/r}| r^p / (r^p - 1), floor),     Fs = 3,
 
-with the refinement ratio r (:func:`refinement_ratio`: 2, or (2N + 1)/N for
-an odd number of modes) and the theoretical order p of the error in the
-refinement (:func:`expected_order`).  If the error of Q_h is C h^p and
-that of Q_{h/r} is C (h/r)^p, then Q_h - Q_{h/r} = C h^p (1 - r^-p), so
-|Q_h - Q_{h/r}| r^p / (r^p - 1) is the error of Q_h itself once the sequence
-is in its asymptotic range; the safety factor Fs = 3 is Roache's for studies
-with two grids, where the observed order cannot be checked (P. J. Roache,
-*Perspective: a method for uniform reporting of grid refinement studies*,
-J. Fluids Eng. 116(3) 405-413, 1994; *Verification and Validation in
-Computational Science and Engineering*, Hermosa, 1998).  When the order is
-unknown the bracket is dropped (factor 1): Fs |Q_h - Q_{h/r}|.
+with the refinement ratio r (:func:`refinement_ratio`), the theoretical order p of the error
+(:func:`expected_order`; without one the bracket is 1) and the floor the solver's tolerance
+on the value, below which a difference says nothing about the discretization.
+:class:`ErrorEstimate` describes how an estimate was formed, for the JSON of the commands;
+:mod:`fempipe.studies.estimates` attaches estimates to whole results, as ``fempipe static``,
+``critical`` and ``simulate`` report them with ``--error-estimate``.
 
-A difference below the solver's own tolerance says nothing about the
-discretization, so the estimate is never below ``floor``, which the caller
-sets from the tolerance of the computation (Newton's 1e-10 of the static
-states, the 1e-10 in v of the located stability events, the shooting
-tolerance of a limit cycle).
-
-Refinement (:func:`refine`): finite elements are h-refined (every element
-halved, the same degree); the modal Galerkin method doubles its number of
-modes, plus one for an odd N (the sine modes' tip error alternates with the
-parity of N, so an odd N is compared with an odd refinement), with the same
-basis.  Orders (:func:`expected_order`, docs,
-"Conventions and derivations"): Lagrange P_k elements converge as h^(2k) in
-the static tip values (nodal superconvergence in 1-D), the eigenvalues and
-v_cr; the sine modes as N^-3; another modal basis as its class states
-(``expected_order``), else unknown.
-
-:class:`ErrorEstimate` describes how an estimate was formed, for the JSON
-of the commands (``"error_estimate": {...}``).  :mod:`fempipe.studies.estimates`
-uses this module to attach estimates to whole results (static states, stability
-events, attractors), as ``fempipe static``, ``critical`` and ``simulate`` report
-them with ``--error-estimate``.
-
-Examples
---------
->>> from fempipe.model.discretization import FiniteElement
->>> disc = FiniteElement(16, 3)
->>> refine(disc).name, expected_order(disc)
-('P3:32', 6.0)
->>> estimate(1.0, 1.5, 2.0)  # 3 * 0.5 * 4 / 3
-2.0
->>> estimate(1.0, 1.0, 2.0, floor=1e-10)  # below the solver's tolerance
-1e-10
+Derivation, references and the measured reliability: docs/cli/options.md, "Error estimates".
 """
 
 from __future__ import annotations
@@ -73,7 +37,7 @@ __all__ = [
     "refinement_ratio",
 ]
 
-#: Roache's safety factor for a study with two grids (module docstring).
+#: Roache's safety factor for a study with two grids (docs/cli/options.md, "Error estimates").
 SAFETY_FACTOR = 3.0
 #: The refinement ratio of :func:`refine`: elements halved, modes doubled.
 RATIO = 2.0
@@ -115,6 +79,13 @@ def refine(disc):
     ------
     TypeError
         For another kind of discretization.
+
+    Examples
+    --------
+    >>> from fempipe.model.discretization import FiniteElement
+    >>> disc = FiniteElement(16, 3)
+    >>> refine(disc).name, expected_order(disc)
+    ('P3:32', 6.0)
     """
     if isinstance(disc, FiniteElement):
         return disc.refined(int(RATIO))
@@ -193,8 +164,10 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
     """Grid Convergence Index of the coarse value: its error estimated from one refinement.
 
     ``max(Fs |coarse - fine| r^p / (r^p - 1), floor)`` with Fs =
-    :data:`SAFETY_FACTOR` (module docstring); without an order (None) the
-    factor r^p / (r^p - 1) is 1.
+    :data:`SAFETY_FACTOR`; without an order (None) the factor r^p / (r^p - 1) is 1.
+    If the error of the coarse value is C h^p, |coarse - fine| r^p / (r^p - 1) is that
+    error itself once the sequence is asymptotic; Fs = 3 is Roache's factor for two grids,
+    where the observed order cannot be checked (docs/cli/options.md, "Error estimates").
 
     Parameters
     ----------
@@ -217,6 +190,13 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
     ------
     ValueError
         If ``ratio <= 1`` or ``order <= 0``.
+
+    Examples
+    --------
+    >>> estimate(1.0, 1.5, 2.0)  # 3 * 0.5 * 4 / 3
+    2.0
+    >>> estimate(1.0, 1.0, 2.0, floor=1e-10)  # below the solver's tolerance
+    1e-10
     """
     if not ratio > 1.0:
         raise ValueError(f"the refinement ratio must be > 1, got {ratio}")

@@ -1,35 +1,18 @@
 """Convergence studies of one quantity of the user's case: error against degrees of freedom.
 
-A study computes one scalar :class:`Quantity` (a static tip value, the
-critical flow velocity or its frequency, an eigenvalue, a limit cycle's
-amplitude or period) on a sequence of discretizations of each
-:class:`Family` -- Lagrange elements P_k on meshes of doubling element
-counts, sine or beam modes of doubling N -- and reports for each family the
-values, the errors against a reference and the observed order.
+A study computes one scalar :class:`Quantity` (a static tip value, the critical flow velocity
+or its frequency, an eigenvalue, a limit cycle's amplitude or period) on a sequence of
+discretizations of each :class:`Family` -- Lagrange elements P_k on meshes of doubling
+element counts, sine or beam modes of doubling N -- and reports for each family the values,
+the errors against a reference and the observed order (:func:`run_study`,
+:class:`ConvergenceStudy`).  The reference is the Richardson extrapolation of the best
+family's two finest values (:func:`richardson`), with the other families' extrapolations (and
+for static tip values the collocation solution of the strong form) as independent values;
+``Reference.method`` records how it was formed.  The observed order (:func:`observed_order`)
+is fitted over the asymptotic range only.
 
-How the reference is formed (:func:`run_study`, recorded in
-``Reference.method`` so a reader can judge it):
-
-* for every family with at least two usable members, the Richardson
-  extrapolation of its two finest values,
-  ``Q* = Q_f + (Q_f - Q_c) / (r^p - 1)`` (r the ratio of the sizes, p the
-  family's theoretical order in that ratio, or the observed local order of
-  its last three members where no theory is known), with error estimate the
-  size of the correction (at least the solver's tolerance, below which
-  differences mean nothing);
-* the reference is the extrapolation of the *best* family, the one with the
-  smallest error estimate;
-* the other families' extrapolations, and for static tip values the
-  collocation solution of the strong form (scipy ``solve_bvp``, Eq. (31a)),
-  are listed as independent values with their distance to the reference.
-
-The observed order is the least-squares slope of log(error) against
-log(dofs) over the asymptotic range: the finest (at most three) consecutive
-members whose error is above ten times the reference's error estimate and
-the solver tolerance (so that the reference's own error does not bend the
-fit).  Theory (docs, "Conventions and derivations"): P_k converges as
-h^(2k) in tip values, v_cr and eigenvalues (nodal superconvergence), the sine
-modes as N^-3, the beam modes as given by ``Modal.expected_order``.
+How the reference and the fit are formed: docs/cli/commands.md, "fempipe convergence"; the
+theoretical orders: docs/theory/conventions.md and docs/theory/convergence.md.
 """
 
 from .orders import extrapolate, local_orders, observed_order, richardson

@@ -1,7 +1,8 @@
 """The convergence study: every member of every family, the reference, the fitted orders.
 
 :func:`run_study` and its result :class:`ConvergenceStudy` (the JSON of
-``fempipe convergence``); the package docstring says how the reference is formed.
+``fempipe convergence``); how the reference is formed: docs/cli/commands.md, "fempipe
+convergence".
 """
 
 from __future__ import annotations

@@ -131,6 +131,16 @@ def with_static_estimates(result: dict, solutions: Sequence, refined: RefinedSta
     dict
         ``result`` (updated in place) with the new points and the top-level
         ``"error_estimate"`` (:func:`header`).
+
+    Examples
+    --------
+    ``fempipe static --error-estimate`` does, for the states ``sols`` of
+    :func:`fempipe.analyses.statics.solve_path` on ``model`` and their JSON-ready
+    ``result = {"points": [...]}``::
+
+        refined = refined_static_states(model, sols)
+        result = with_static_estimates(result, sols, refined)
+        result["points"][0]["theta_tip_error"], result["error_estimate"]["notes"]
     """
     from fempipe.model.kinematics import tip_values
 
