@@ -26,8 +26,8 @@ def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Pat
     matplotlib's ``PillowWriter`` writes it.  The colors: a GIF frame has a
     palette of at most 256 colors, and an antialiased figure has about 500.
     ``PillowWriter`` lets Pillow build an adaptive palette (median cut) for
-    every frame, which was 80 % of the cost of writing the GIF of ``fempipe
-    simulate``.  Here the frames share one palette, Pillow's adaptive palette
+    every frame, most of the cost of writing the GIF of ``fempipe simulate``.
+    Here the frames share one palette, Pillow's adaptive palette
     of the first frame, and each pixel takes the palette color nearest to it
     (:func:`quantize_frames`); the frames of an animation differ in a few
     moving artists, whose colors the first frame holds too.  Measured on the
@@ -36,9 +36,8 @@ def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Pat
     the mean error is 0.008 (per-frame palettes 0.007) of 255, the largest
     58 (per-frame palettes 81).  The shared palette is written as it is
     (``optimize=False``: Pillow's reduction of each frame's palette to its
-    used colors took 0.09 of the 0.11 CPU-s of encoding and made the file 38 %
-    smaller, 106 against 171 kB; without it the file has the size of
-    ``PillowWriter``'s, 169 kB).  Frames with transparency are encoded as
+    used colors would be most of the encoding's cost, for a file about a third
+    smaller; without it the file has about the size of ``PillowWriter``'s).  Frames with transparency are encoded as
     ``PillowWriter`` encodes them.
 
     Raises

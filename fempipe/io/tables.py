@@ -22,7 +22,7 @@ from fempipe.core.files import write_text
 __all__ = ["CSV_UNITS", "ERROR_SUFFIX", "csv_header", "write_csv", "read_csv"]
 
 
-#: The unit of every CSV column (module docstring, "CSV headers and units").
+#: The unit of every CSV column (the package docstring of :mod:`fempipe.io`; docs/cli/options.md).
 CSV_UNITS: Mapping[str, str] = {
     # flow, parameters and continuation values
     "v": "1",
@@ -205,8 +205,8 @@ def write_csv(
 def read_csv(path: str | os.PathLike) -> dict[str, np.ndarray]:
     """The columns of a CSV file written by :func:`write_csv`, by bare name.
 
-    Each header cell must be ``name [unit]`` (module docstring); the unit is
-    dropped, so ``read_csv(path)["X_tip"]`` is the column ``X_tip [L]``.  A
+    Each header cell must be ``name [unit]`` (:mod:`fempipe.io`); the unit is dropped, so
+    ``read_csv(path)["X_tip"]`` is the column ``X_tip [L]``.  A
     column of ``True``/``False`` becomes a bool array, one of integers an int
     array, one of numbers a float array (an empty cell is NaN) and any other
     a str array.

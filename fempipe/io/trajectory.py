@@ -1,30 +1,17 @@
 """The moving pipe as a time series of meshio files that ParaView opens.
 
-Format: a ParaView collection ``NAME.pvd`` (a small XML list of
-``(timestep, file)``) plus one VTU file per output time in ``NAME/``, written
-by meshio.  Each VTU holds the centerline in the package's one VTK frame
-(:mod:`fempipe.io`: x = Z_g horizontal, y = -X_g so that gravity points
-down the screen, z = 0) as ``line`` cells, as point data ``xi``, ``theta``
-(rad), ``varsigma``, ``eta``, ``X_g``, ``Z_g`` (the arrays of
-``shapes.vtu``), ``theta_dot`` (rad per unit tau) and ``velocity`` (the
-centerline velocity r_dot in the same frame, 3 components), and as field
-data ``time`` (tau), ``v`` and the parameters.
+Format: a ParaView collection ``NAME.pvd`` (a small XML list of ``(timestep, file)``) plus
+one VTU file per output time in ``NAME/``, written by meshio.  Each VTU holds the centerline
+in the package's one VTK frame (:mod:`fempipe.io`: x = Z_g horizontal, y = -X_g, z = 0) as
+``line`` cells, as point data ``xi``, ``theta`` (rad), ``varsigma``, ``eta``, ``X_g``,
+``Z_g`` (the arrays of ``shapes.vtu``), ``theta_dot`` (rad per unit tau) and ``velocity``
+(the centerline velocity r_dot in the same frame, 3 components), and as field data ``time``
+(tau), ``v`` and the parameters.  VTU rather than XDMF: docs/cli/options.md, "VTK files".
 
-Why not XDMF: tried and measured with meshio 5.3.5.  ``meshio.xdmf.TimeSeriesWriter``
-needs h5py (not a dependency of fempipe), writes line cells as a ``Polyline``
-topology without ``NodesPerElement`` (which ParaView's XDMF reader needs to
-split a polyline into segments), and in our test the written series did not
-read back (the writer put the HDF5 heavy data in the current working
-directory, not beside the .xdmf file that refers to it, so the reader could
-not find it).  VTU
-stores line cells and point data and reads back with plain meshio; the PVD
-wrapper gives ParaView the time values.
-
-The frames are written into a hidden directory and moved into ``NAME/``
-once all are written (:func:`fempipe.io.meshes.write_vtu_frames`: all or
-none), then the ``.pvd`` index, atomically (:func:`fempipe.io.atomic_path`),
-so a reader never sees an index pointing at missing frames, nor a half
-frame.
+The frames are written into a hidden directory and moved into ``NAME/`` once all are
+written (:func:`fempipe.io.meshes.write_vtu_frames`: all or none), then the ``.pvd`` index,
+atomically (:func:`fempipe.io.atomic_path`), so a reader never sees an index pointing at
+missing frames, nor a half frame.
 """
 
 from __future__ import annotations
@@ -47,8 +34,8 @@ class CenterlineSampler:
     :func:`fempipe.model.kinematics.shape` recomputes, for every state, what
     depends on the sample points only: the basis at the points
     (``disc.evaluate`` locates every point in the mesh) and the Lagrange
-    integrals of the interior points; that was 90 % of the cost of a frame.
-    Here they are computed once and each state costs the products that
+    integrals of the interior points, most of the cost of a frame.  Here they
+    are computed once and each state costs the products that
     depend on it, the operations of ``shape`` in the same order, so the
     numbers are the same bit for bit.  (theta at the points is
     ``disc.basis_values(xi) @ q``: for finite elements the sum of
