@@ -1,33 +1,19 @@
 """Performance benchmarks (timings, never unit tests).
 
-A benchmark is a function ``fn(quick: bool = False) -> dict`` registered
-under a name in :data:`BENCHMARKS`; ``fempipe bench`` runs them all or
-``--only NAME``.  To add one from another module::
-
-    from fempipe.bench import register
-
-    @register("my_solver")
-    def bench_my_solver(quick: bool = False) -> dict:
-        ...
-        return {"seconds": t, ...}
-
-and list that module in :data:`BENCHMARK_MODULES` so the CLI imports it.
-A result dict may carry a ``"table"`` (list of flat dicts), which the CLI
+A benchmark is a function ``fn(quick: bool = False) -> dict`` registered under a name in
+:data:`BENCHMARKS` with :func:`register` (``@register("my_solver")``), in a module listed in
+:data:`BENCHMARK_MODULES` so that :func:`available` imports it; ``fempipe bench`` runs them all
+or ``--only NAME``.  A result dict may carry a ``"table"`` (list of flat dicts), which the CLI
 prints as a table; everything else is printed as ``key: value``.
 
-The benchmarks, one module per subject (listed in :data:`BENCHMARK_MODULES`,
-imported by :func:`available`): :mod:`~fempipe.bench.static` (``static_path``,
-``static_scaling``), :mod:`~fempipe.bench.critical` (``stability_vcr``,
-``critical_3d``, ``stability_curve``), :mod:`~fempipe.bench.convergence`
-(``convergence_vcr``), :mod:`~fempipe.bench.startup` (``startup``),
-:mod:`~fempipe.bench.dynamics`, :mod:`~fempipe.bench.stability`
-(``critical_vs_classical``), :mod:`~fempipe.bench.bifurcation`,
-:mod:`~fempipe.bench.hopf` and :mod:`~fempipe.bench.output`
-(``simulate_output``: the files of ``simulate --out`` against its computation),
-:mod:`~fempipe.bench.space` (``space_cycle``: a 3-D limit cycle against the planar
-one; ``space_nonplanar_cycle``: a cycle that leaves the plane).  This module is the registry and the runner, with the helpers the benchmarks share (:func:`best_time`,
-:func:`child_cpu_seconds`) and the cases they share (:data:`PAPER`,
-:data:`TEXIER_DORBOLO`).
+The benchmarks, one module per subject: :mod:`~fempipe.bench.static`,
+:mod:`~fempipe.bench.critical`, :mod:`~fempipe.bench.convergence`,
+:mod:`~fempipe.bench.startup`, :mod:`~fempipe.bench.dynamics`,
+:mod:`~fempipe.bench.stability`, :mod:`~fempipe.bench.bifurcation`,
+:mod:`~fempipe.bench.hopf`, :mod:`~fempipe.bench.output` and :mod:`~fempipe.bench.space`.
+This module is the registry and the runner, with the helpers the benchmarks share
+(:func:`best_time`, :func:`child_cpu_seconds`) and the cases they share (:data:`PAPER`,
+:data:`TEXIER_DORBOLO`).  What each measures: docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations

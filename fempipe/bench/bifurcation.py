@@ -2,16 +2,14 @@
 
 Registered with :mod:`fempipe.bench` (``fempipe bench --only fig07_continuation``).
 
-* ``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7:
-  alpha = 0, the paper's beta, gamma, mu, the default discretization P3:16,
-  ``--method continuation``, the default) as a fresh process: CPU seconds
-  (user + sys of the finished child, ``resource.getrusage``), start-up
-  included.  Target: < 20 CPU-s.  Not in quick mode: the same diagram by
-  ``--method sweep`` (up and down, one process), its CPU seconds and the ratio,
-  and the largest differences of the period and tip extrema of the stable
-  orbits where both give one.
-* ``fig08_10_continuation``: ``--alphas pi/4,pi/2,3pi/4,pi`` (Figs. 8-10), the
-  same way, without the sweep.  Target: < 120 CPU-s for the four together.
+* ``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7: alpha = 0, the
+  paper's beta, gamma, mu, the default discretization, ``--method continuation``) as a fresh
+  process: CPU seconds (user + sys of the finished child, ``resource.getrusage``), start-up
+  included; target :data:`FIG07_TARGET_S`.  Not in quick mode: the same diagram by
+  ``--method sweep`` (up and down, one process), its CPU seconds and the ratio, and the
+  largest differences of the period and tip extrema of the stable orbits where both give one.
+* ``fig08_10_continuation``: ``--alphas pi/4,pi/2,3pi/4,pi`` (Figs. 8-10), the same way,
+  without the sweep; target :data:`FIG08_10_TARGET_S` for the four together.
 """
 
 from __future__ import annotations

@@ -1,24 +1,17 @@
 """The benchmark ``simulate_output`` (registered with :mod:`fempipe.bench`): what writing the
 files of ``fempipe simulate`` costs beside its computation.
 
-``fempipe simulate --alpha 0 --v 10 --planar`` (the paper's case, P3:16) finds the limit
-cycle and prints its JSON (``--planar``: without the out-of-plane Floquet
-multipliers, whose 3-D monodromy costs about 12 CPU-s more and would make the
-files look cheaper than they are); with ``--out DIR`` it also writes three figures, the
-animation pipe.gif (47 frames), trajectory.pvd with 400 VTU frames, tip.csv and
-simulate.json.  The benchmark runs both commands as the user does, each in a
-fresh ``python -m fempipe`` process, and reports their CPU seconds and the
-ratio; the target is that the files cost at most twice the computation (the
-ratio at most 3).
-
-Measured on two shared cores: 1.1 CPU-s without and 3.1-3.5 CPU-s with
-``--out``, ratio 2.8-3.1 depending on the load of the other core (with a full
-redraw of the GIF's figure for each frame and one meshio call per VTU frame
-it was 12.7 CPU-s, ratio 10.5-11.4).  What remains is mostly matplotlib's:
-importing it (0.33 CPU-s), the three PNG figures (0.5, half of it their
-constrained layout), the GIF (0.5, half of it the time label's mathtext,
-parsed anew for every frame), and the 400 VTU frames (0.3: zlib and
-creating the files).
+``fempipe simulate --alpha 0 --v 10 --planar`` (the paper's case, P3:16) finds the limit cycle
+and prints its JSON (``--planar``: without the out-of-plane Floquet multipliers, whose 3-D
+monodromy would make the files look cheaper than they are); with ``--out DIR`` it also writes
+three figures, the animation pipe.gif, trajectory.pvd with its VTU frames, tip.csv and
+simulate.json.  The benchmark runs both commands as the user does, each in a fresh
+``python -m fempipe`` process, and reports their CPU seconds and the ratio; the target is
+that the files cost at most twice the computation (the ratio at most
+:data:`OUTPUT_RATIO_TARGET`).  Most of
+what the files cost is matplotlib's: importing it, the PNG figures (half of it their
+constrained layout), the GIF (half of it the time label's mathtext, parsed anew for every
+frame); the VTU frames are a small part.
 """
 
 from __future__ import annotations

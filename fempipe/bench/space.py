@@ -1,41 +1,22 @@
 """Benchmark of the 3-D model's limit cycles against the planar ones; not a timed test.
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``).
+Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``); measure with
+``OPENBLAS_NUM_THREADS=1``.
 
-* ``space_cycle``: the CPU seconds (``time.process_time``, median of 3) of Newton
-  shooting one limit cycle with its Floquet multipliers, planar
-  (:func:`fempipe.analyses.limit_cycle.shoot`) and in 3-D
-  (:func:`fempipe.analyses.space.shooting.shoot_space`), in the same run, from the
-  same initial guess (the attractor's cycle, lifted by
-  :func:`fempipe.model.space.planar_state`), with the same tolerances, at
-  alpha = pi/2, v = 10 on the default discretization P3:16; their ratio
-  (target: at most 5); the CPU of :func:`fempipe.analyses.space.floquet.out_of_plane_floquet`
-  of the planar cycle (run by every planar ``fempipe simulate``), by its default
-  linear method and by the 3-D model (``*_3d``); and the CPU of
-  the 3-D Jacobians of the three stages of one step (one call, S = 3).  The
-  cycle is planar: its 3-D Jacobians decouple exactly into in-plane and
-  out-of-plane blocks, which the integrator uses (contract rule 7 of
-  :mod:`fempipe.solvers.radau.contract`); a non-planar cycle costs more.
-  The iterations and integration steps of both are reported: a polish (one
-  more period without the monodromy, :func:`~fempipe.analyses.limit_cycle.shoot`)
-  is taken only when the converged residual is above tol / 10, which the two
-  models' different step sequences decide differently (measured: the planar
-  shooting polishes, the 3-D one does not).  Measure with
-  ``OPENBLAS_NUM_THREADS=1``.  Per period with the monodromy (one integration
-  with the sensitivity, no Newton step: like for like) the two models are
-  compared too (``*_period_cpu_s``), and where the 3-D period's CPU goes: one more
-  timed period on a model that accounts the CPU of its stage Jacobians and
-  residuals (``space_period_jacobians_cpu_s``, ``space_period_residuals_cpu_s``);
-  what is left (the integrator's linear algebra and the monodromy) against the
-  planar period is ``ratio_per_period_without_weak_form``: the ratio no faster
-  weak form could go below.
-* ``space_nonplanar_cycle``: a genuinely non-planar cycle (alpha = pi/2, v = 6,
-  above the out-of-plane v_cr 5.821 and below the in-plane one 6.210, where no
-  planar cycle exists), found on P3:4 from the Hopf normal form and carried to
-  the default discretization (not timed), then shot again from its converged
-  state (timed: one period with the full monodromy, no block split) and one
-  period of it with the monodromy; the CPU per integration step against the
-  planar cycle's of ``space_cycle``.
+* ``space_cycle``: the CPU seconds (``time.process_time``, median of 3) of Newton shooting
+  one limit cycle with its Floquet multipliers, planar and in 3-D, from the same guess with
+  the same tolerances (alpha = pi/2, v = 10, the default discretization), and their ratio
+  (target 5); the out-of-plane Floquet multipliers of the planar cycle by both methods; the
+  3-D stage Jacobians of one step; one period with the monodromy of each model (like for
+  like), and where the 3-D period's CPU goes (stage Jacobians, residuals, the rest:
+  ``ratio_per_period_without_weak_form``, the ratio no faster weak form could go below).
+  The cycle is planar, so its 3-D Jacobians decouple into in-plane and out-of-plane blocks
+  (rule 7 of :mod:`fempipe.solvers.radau.contract`); a non-planar cycle costs more.
+* ``space_nonplanar_cycle``: a non-planar cycle (alpha = pi/2, v = 6, between the
+  out-of-plane and the in-plane v_cr), found on P3:4 from the Hopf normal form and carried to
+  the default discretization, then shot again from its converged state and integrated over
+  one period with the full monodromy (timed): the CPU per step against the planar cycle's.
+  docs/cli/commands.md, "fempipe bench", and docs/theory/space.md, "The weak form".
 """
 
 from __future__ import annotations

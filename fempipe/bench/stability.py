@@ -1,47 +1,20 @@
 """Benchmark of ``fempipe critical`` against a classical beam-mode Galerkin (timings, not tests).
 
 Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classical``).
+``critical_vs_classical`` measures the CPU seconds (user + system of fresh processes, median
+of 7 runs; quick: 1) of ``fempipe critical`` on the hanging pipe (:data:`REFERENCE_ARGS`) and
+of the classical linear Galerkin of the straight pipe as a user would write it
+(:data:`BASELINE`, numpy and scipy only) with 40 and 20 modes, each with its v_cr error
+against the classical theory on Legendre spectral elements
+(:mod:`fempipe.validation.classical`).  ``ratio`` is fempipe's CPU seconds over the 40-mode
+baseline's, whose error is the accuracy fempipe's default must match or beat (target
+:data:`TARGET_RATIO`); the commands run in turns so that the machine's drift hits all alike
+(``ratio_by_round``).  The baseline runs as written and once more with one BLAS thread
+(``ratio_one_thread``), which ``fempipe`` sets for itself.  A second case, the paper's pipe
+at alpha = pi/2 (:data:`CURVED_ARGS`, a curved static state, no classical theory), gives
+fempipe's CPU seconds and v_cr error against a finer mesh.
 
-``critical_vs_classical``
-    CPU seconds (user + system of a fresh process, the change of
-    ``getrusage(RUSAGE_CHILDREN)``, median of 7 runs; quick: 1) of
-
-    * ``fempipe critical --alpha 0 --beta 0.2 --gamma 10 --mu 0 --v 0,10 --json``
-      (the hanging pipe: default discretization P3:16, branches followed,
-      every event to v = 10), and
-    * the classical linear Galerkin of the straight pipe as a user would
-      write it, ``python fempipe/validation/classical_baseline.py`` (numpy and
-      scipy only: clamped-free beam modes, Paidoussis' closed-form b_sr, c_sr,
-      d_sr, eigenvalues of the 2N first-order system on a scan of v with step
-      0.1, then Brent on the largest real part) with N = 40 and N = 20 modes,
-
-    each with its v_cr error against a converged reference computed here
-    (the children load cached bytecode, :func:`fempipe.bench.child_cpu_seconds`, after
-    one untimed run of each command):
-    the classical theory on Legendre spectral elements of degree 24
-    (:mod:`fempipe.validation.classical`; degrees 12 to 40 agree to ~1e-12).
-    ``ratio`` is fempipe's CPU seconds over the 40-mode baseline's, whose
-    error (~3e-7 relative) is the accuracy fempipe's default must match or
-    beat; the target is ratio <= 1.  The commands run in turns (each round
-    runs each once) so that the machine's drift in speed hits all alike;
-    ``ratio_by_round`` is the ratio within each round.
-
-    BLAS threads.  ``fempipe`` sets one BLAS thread for its process
-    (:func:`fempipe.core.parallel.one_blas_thread`), which spares it the start-up of
-    the OpenBLAS thread pools (about 0.1 CPU-s for each of numpy's and
-    scipy's).  The baseline runs as written, with the default thread count
-    (the variables fempipe set in this process are removed from its
-    environment, those the user set are kept), and once more with
-    ``OPENBLAS_NUM_THREADS=1`` (and MKL's, BLIS's) in its environment: the
-    same saving, the baseline's best.  ``ratio_one_thread`` is fempipe's CPU
-    seconds over that run's, ``ratio_by_round_one_thread`` by round; its
-    row is the last of the table.
-
-    Second case, the paper's pipe at alpha = pi/2 (a curved static state, no
-    classical theory): ``fempipe critical --alpha pi/2 --v 0,10 --json``, its
-    CPU seconds and its v_cr error against P3:64 (quick: P3:32), computed
-    here by :func:`fempipe.analyses.stability.spatial_critical_velocity`, the
-    command's analysis (both planes: out of the plane first at this alpha).
+The benchmark in full: docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations
