@@ -1,27 +1,20 @@
 """The validation suite: the paper's figures by FE and modal Galerkin, side by side.
 
-One importable case per figure of Chen, Hu, Dai & Wang (2020).  Each case
-module declares ``CASE``, a :class:`~fempipe.validation.case.Case` (name,
-figure, title, what the paper shows, the checks it must emit), and defines
-``run(quick=False) -> CaseResult`` (the data and the checks) and
-``plot(result, fig=None) -> Figure`` (the figure drawn as the paper does,
-with the mesh-converged FE result and modal N = 3 and N = 4 overlaid).
-Reference numbers sit beside the cases in ``references/<case>.json``, each
-with its source.
+One importable case per figure of Chen, Hu, Dai & Wang (2020).  Each case module declares
+``CASE``, a :class:`~fempipe.validation.case.Case` (name, figure, title, what the paper shows,
+the checks it must emit), and defines ``run(quick=False) -> CaseResult`` (the data and the
+checks) and ``plot(result, fig=None) -> Figure`` (the figure drawn as the paper does, with the
+mesh-converged FE result and modal N = 3 and N = 4 overlaid).  Reference numbers sit beside
+the cases in ``references/<case>.json``, each with its source.
 
 >>> from fempipe.validation import load_case
 >>> res = load_case("fig02b").run(quick=True)      # doctest: +SKIP
 >>> [c.name for c in res.checks if not c.passed]   # doctest: +SKIP
 
-:func:`fempipe.validation.suite.run_suite` runs them all (in parallel) and
-writes the Markdown report; ``fempipe validate`` is its command line.  Every
-case needs every part of fempipe: a module that fails to import fails the
-case loudly.
-
-This package is the suite.  The folder ``validation/`` at the top of the
-repository (not installed) holds what is made from it and around it: the
-committed report (``fempipe validate --out validation/report``), standalone
-scripts and the figure review.
+:func:`fempipe.validation.suite.run_suite` runs them all (in parallel) and writes the Markdown
+report; ``fempipe validate`` is its command line.  Every case needs every part of fempipe: a
+module that fails to import fails the case loudly.  The folder ``validation/`` at the top of
+the repository (not installed) holds what is made from the suite: docs/verification.md.
 """
 
 from __future__ import annotations

@@ -1,27 +1,17 @@
 """An independent solver of the static problem, for checking the weak form.
 
-Eq. (31a) in strong form, with the variants of the pipe (an end mass Gamma at
-xi = 1 and linear springs (kappa_j, xi_j); docs, "Variants of the pipe"), is
-the boundary-value problem
+Eq. (31a) in strong form, with the variants of the pipe (an end mass Gamma at xi = 1 and
+linear springs (kappa_j, xi_j), each a point force at which theta'' jumps), is a
+boundary-value problem with theta(1) and the spring points r(xi_j) as unknown parameters.
+:func:`solve_static_bvp` integrates it with scipy's collocation solver ``solve_bvp``
+(4th-order Lobatto IIIA, adaptive mesh), carrying the global coordinates X_g, Z_g as two more
+states so that the tip position is part of the solution; with springs the interval is cut at
+their positions and the pieces are solved as one system joined by continuity, so that the
+collocation never straddles a jump.  It shares no code with fempipe's discretizations,
+quadrature or residual: agreement to the BVP tolerance checks the weak form, the integration
+operators and Newton at once.
 
-    theta'' = gamma (1 - xi + Gamma) sin(theta + alpha) + v^2 sin(theta(1) - theta)
-              + sum_j kappa_j H(xi_j - xi) n(theta) . (r(xi_j) - (xi_j, 0)),
-    theta(0) = 0,  theta'(1) = 0,
-
-with n = (-sin theta, cos theta), r = \\int_0^xi (cos theta, sin theta) the
-centerline in the pipe's frame and H the unit step: each spring is a point
-force at xi_j, where theta'' jumps by kappa_j n . (r(xi_j) - (xi_j, 0)) and
-theta, theta' are continuous.  theta(1) and the spring points r(xi_j) are
-unknown parameters p with the extra conditions theta(1) = p_0, r(xi_j) = p_j.
-:func:`solve_static_bvp` integrates it with scipy's collocation solver
-``solve_bvp`` (4th-order Lobatto IIIA, adaptive mesh), carrying the global
-coordinates X_g' = cos(theta + alpha), Z_g' = sin(theta + alpha) as two more
-states so that the tip position is part of the solution.  With springs the
-interval is cut at their positions and the pieces, each mapped onto [0, 1],
-are solved as one system joined by continuity of (theta, theta', X_g, Z_g):
-the collocation never straddles the jump of theta''.  It shares no code with
-fempipe's discretizations, quadrature or residual: agreement to the BVP
-tolerance checks the weak form, the integration operators and Newton at once.
+Derivation: docs/theory/independent.md, "The static problem in strong form".
 """
 
 from __future__ import annotations

@@ -1,117 +1,22 @@
 """The classical linear theory of the straight pipe: an independent check of fempipe.
 
-This module solves the textbook equation of small lateral motions eta(xi, tau)
-of a cantilevered pipe conveying fluid (Paidoussis, *Fluid-Structure
-Interactions: Slender Structures and Axial Flow*, vol. 1, Academic Press
-1998, Sec. 3.3.5, Eqs. (3.70)-(3.71); Gregory & Paidoussis 1966; Paidoussis
-1970), written here from that equation and nothing else of fempipe: it knows
-neither the rotation angle theta nor the geometrically exact weak form of
+This module solves the textbook equation of small lateral motions eta(xi, tau) of a
+cantilevered pipe conveying fluid (Paidoussis, *Fluid-Structure Interactions*, vol. 1, 1998,
+Sec. 3.3.5, Eqs. (3.70)-(3.71)), with the variants of the pipe (end mass, external damping,
+hysteretic loss factor, springs), written from that equation alone: it knows neither the
+rotation angle theta nor the geometrically exact weak form of
 :mod:`fempipe.model.operators`.  It is valid for the straight pipe only: hanging
 (alpha = 0), standing (alpha = pi) or without gravity (gamma = 0).
 
-The equation
-------------
-With fempipe's (and Paidoussis') scaling -- xi = x/L, tau = t (EI/(m+M))^(1/2)
-/ L^2, v = (M/EI)^(1/2) U L, beta = M/(m+M), gamma = (m+M) g L^3/EI -- and the
-variant parameters of :class:`fempipe.model.params.Params` (end mass Gamma =
-M_e/((m+M) L), external damping sigma = c L^2/(EI (m+M))^(1/2), hysteretic
-loss factor mu_h, springs kappa_s = k_s L^3/EI at xi_s), the hanging pipe
-obeys
-
-    E eta'''' + v^2 eta'' - (T eta')' + 2 sqrt(beta) v eta_dot' + sigma eta_dot
-        + eta_ddot + sum_s kappa_s eta delta(xi - xi_s) = 0,
-
-    T(xi) = s_g gamma (1 - xi + Gamma),
-
-where E = 1 + mu d/dtau + i mu_h sgn(omega) is the bending operator
-(Kelvin-Voigt mu and the hysteretic loss factor, the latter for harmonic
-motion of frequency omega only), and s_g = +1 hanging, -1 standing.  T is the
-tension of the pipe wall: the weight of the pipe below xi plus that of the end
-mass (Paidoussis Eq. (3.69): (T - pA) = (m + M) g (L - x) for the hanging
-pipe discharging to atmosphere; the end mass adds M_e g).  Since T' = -s_g
-gamma, -(T eta')' = -s_g gamma (1 - xi + Gamma) eta'' + s_g gamma eta', the
-form of Eq. (3.70).
-
-The boundary conditions are eta = eta' = 0 at the clamp, and at the free end
-the bending moment vanishes, E eta''(1) = 0, while the transverse force of the
-pipe on the end mass accelerates it (Newton's second law for the point mass,
-which carries neither fluid nor external damping):
-
-    Gamma eta_ddot(1) = E eta'''(1) - T(1) eta'(1) - kappa_1 eta(1),
-
-with kappa_1 a spring at xi_s = 1 (Paidoussis Eq. (3.118) for Gamma = 0, no
-gravity: EI w''' - K w = 0).  The follower force of the discharging jet needs
-no boundary term: with the pressure zero at the exit it is the v^2 eta'' of
-the field equation.  An interior spring makes eta''' jump:
-E [eta''']_{xi_s^-}^{xi_s^+} = -kappa_s eta(xi_s).
-
-Two discretizations
--------------------
-:class:`BeamGalerkin`
-    Paidoussis' classical method: eta = sum_r q_r phi_r(xi) with the
-    clamped-free beam eigenfunctions phi_r (cos lambda cosh lambda = -1,
-    int phi_r^2 = 1).  Multiplying by phi_s and integrating by parts twice
-    (the natural boundary conditions then carry the end mass, the tip tension
-    and the tip spring) gives M q'' + C q' + K q = 0 with
-
-    M = I + Gamma phi(1) phi(1)^T,
-    C = mu diag(lambda^4) + 2 sqrt(beta) v b + sigma I,
-    K = (1 + i mu_h) diag(lambda^4) + s_g gamma e + v^2 c + sum_s kappa_s phi(xi_s) phi(xi_s)^T,
-
-    b_sr = int phi_s phi_r', c_sr = int phi_s phi_r'' (Paidoussis' b_sr, c_sr)
-    and e_sr = int (1 - xi + Gamma) phi_s' phi_r' (by parts, Paidoussis'
-    b_sr - c_sr + d_sr plus the end mass's Gamma (phi_s(1) phi_r'(1) - c_sr)).  The integrals
-    are Gauss-Legendre sums on 4N cells of 8 points, with the modes evaluated
-    in a form whose exponentials never exceed 1.  Every basis function has
-    eta'''(1) = 0, which the solution does not when Gamma, kappa_1 or gravity
-    with an end mass act there, nor at an interior spring.  Measured errors of
-    v_cr for N = 10, 20, 40: plain pipe (gamma = 18.9) 2.1e-4, 1.3e-5,
-    7.5e-7 (N^-4); an end mass (Gamma = 0.3) 9.1e-3, 2.5e-3, 6.6e-4 and a tip
-    spring (kappa = 100) 2.0e-3, 7.2e-4, 2.1e-4 (N^-2); a spring at xi_s = 0.5
-    1.0e-3, 1.1e-4, 1.5e-5 (N^-3).  Frequencies at v = 0 with an end mass
-    converge as N^-3.
-:class:`LegendreGalerkin`
-    The same weak form on spectral elements: one element per segment between
-    springs, C^1 (eta and eta' continuous at the nodes, where the springs
-    sit), each with the Hermite cubics and bubbles whose second derivatives
-    are the Legendre polynomials P_2 ... P_p; exact Gauss integration.  The
-    solution is analytic on each element, so the error falls faster than any
-    power of p whatever the variant: p = 12 ... 40 agree to about 1e-12 in
-    v_cr.  The reference of the validation cases.
-
-Both are in :mod:`fempipe.validation.classical_galerkin`; the closed forms
-the solvers are checked against (Greenhill's column, the tip-mass
-frequencies, the tip-spring divergence, the limit of large external damping)
-are in :mod:`fempipe.validation.classical_limits`.  This module re-exports
-them: ``fempipe.validation.classical`` is the one name to use.
-
-Both give a quadratic eigenproblem (K + lambda C + lambda^2 M) x = 0 for
-eta ~ exp(lambda tau) (Re lambda > 0 unstable; Paidoussis' omega = -i
-lambda, so his Re omega is Im lambda, the frequency), solved in first-order
-(companion) form for nu = 1/(lambda + 1), which keeps the round-off at the
-scale of the low modes (:func:`~fempipe.validation.classical_galerkin.quadratic_eigenvalues`).
-
-Hysteretic damping
-------------------
-E = 1 + i mu_h sgn(omega) is not analytic in lambda.  An eigenvalue with
-Im lambda > 0 is an eigenvalue of the problem with 1 + i mu_h, one with
-Im lambda < 0 its complex conjugate (the problem with 1 - i mu_h is the
-conjugate problem), and a real eigenvalue (omega = 0) one of the problem
-without mu_h.  :func:`eigenvalues` returns exactly these; the eigenvalues of
-the 1 + i mu_h problem in the lower half plane solve no consistent problem
-and are dropped.
-
-Stability
----------
-An eigenvalue counts as unstable when Re lambda > ``tol`` max(1, |lambda|)
-(round-off of an undamped problem is below it); only eigenvalues with
-|lambda| < ``lam_max`` (the lowest eight or so modes, well resolved by every
-discretization used) decide.  :func:`critical_velocity` scans v on a grid
-with that margin, then locates the first crossing with Brent's method: on the
-largest Re lambda itself when it is negative below the crossing (a damped
-system: the exact zero), otherwise on the margin (an undamped system, whose
-real parts are zero to round-off below a coalescence; the margin then
-crosses (tol |lambda| / c)^2 above it, Re lambda ~ c (v - v_cr)^(1/2)).
+:class:`StraightPipe` is the problem; :func:`eigenvalues` its spectrum (eta ~ exp(lambda
+tau), Re lambda > 0 unstable; with hysteretic damping the roots consistent with
+1 + i mu_h sgn(omega)); :func:`spectral_abscissa` and :func:`critical_velocity` (a scan of v,
+then Brent's method) its stability.  The two discretizations, Paidoussis' beam-mode Galerkin
+method (:class:`BeamGalerkin`) and Legendre spectral elements (:class:`LegendreGalerkin`, the
+reference of the validation cases), are in :mod:`fempipe.validation.classical_galerkin`, the
+closed forms in :mod:`fempipe.validation.classical_limits`; this module re-exports them, so
+``fempipe.validation.classical`` is the one name to use.  Derivation and measured errors:
+docs/theory/independent.md, "The classical linear theory of the straight pipe".
 """
 
 from __future__ import annotations
@@ -322,7 +227,7 @@ def spectral_abscissa(
         The discretization (:func:`discretization`).
     lam_max, tol : float
         Only |lambda| < ``lam_max`` count; an unstable real part exceeds
-        ``tol`` max(1, |lambda|) (module docstring).
+        ``tol`` max(1, |lambda|) (docs/theory/independent.md).
 
     Returns
     -------

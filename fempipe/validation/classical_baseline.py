@@ -1,23 +1,20 @@
 """A classical beam-mode Galerkin critical velocity, as a user would write it (numpy, scipy only).
 
-The timing baseline of ``fempipe bench critical_vs_classical``: the straight
-hanging (or standing) cantilevered pipe conveying fluid, Paidoussis (1970),
-Gregory & Paidoussis (1966); Paidoussis, *Fluid-Structure Interactions* vol. 1
-(1998), Eq. (3.70) and Appendix D:
+The timing baseline of ``fempipe bench critical_vs_classical``: the straight hanging (or
+standing) cantilevered pipe conveying fluid of Paidoussis (1970) and Gregory & Paidoussis
+(1966); Paidoussis, *Fluid-Structure Interactions* vol. 1 (1998), Eq. (3.70) and Appendix D,
 
     eta'''' + mu eta_dot'''' + [v^2 - s gamma (1 - xi)] eta'' + 2 sqrt(beta) v eta_dot'
         + s gamma eta' + eta_ddot = 0     (s = +1 hanging, -1 standing),
 
-on N clamped-free beam modes (cos l cosh l = -1, int phi^2 = 1) with the
-closed-form coefficients b_sr = int phi_s phi_r', c_sr = int phi_s phi_r'',
-d_sr = int xi phi_s phi_r''.  It is run as a script by its path and imports
-nothing of fempipe:
+on N clamped-free beam modes with the closed-form coefficients b_sr, c_sr, d_sr.  It is run as
+a script by its path and imports nothing of fempipe:
 
     python classical_baseline.py --beta 0.2 --gamma 10 --n 40 [--eigenvalues-at 3]
 
-prints JSON: v_cr (scan of v with ``--step``, then Brent on the largest real
-part of the 2N eigenvalues of the first-order system), the frequency there,
-and optionally the eigenvalues at one v sorted by |lambda|.
+prints JSON: v_cr (a scan of v with ``--step``, then Brent on the largest real part of the 2N
+eigenvalues of the first-order system), the frequency there, and optionally the eigenvalues
+at one v sorted by |lambda|.  docs/theory/independent.md, "The classical linear theory".
 """
 
 import argparse

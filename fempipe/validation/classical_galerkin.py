@@ -4,8 +4,8 @@
 functions, and :class:`LegendreGalerkin`, C^1 Legendre spectral elements cut
 at the springs; both give the pencil of the quadratic eigenproblem
 (K + lambda C + lambda^2 M) x = 0, solved by :func:`quadratic_eigenvalues`.
-The weak form and the measured errors are in the docstring of
-:mod:`fempipe.validation.classical`.
+The weak form and the measured errors: docs/theory/independent.md, "The classical
+linear theory of the straight pipe".
 """
 
 from __future__ import annotations
@@ -147,7 +147,7 @@ def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.nda
 
 
 class BeamGalerkin:
-    """Paidoussis' Galerkin method on ``n`` clamped-free beam modes (module docstring).
+    """Paidoussis' Galerkin method on ``n`` clamped-free beam modes (docs/theory/independent.md).
 
     Parameters
     ----------
@@ -225,7 +225,7 @@ def legendre_local_basis(p: int):
 
 
 class LegendreGalerkin:
-    """A spectral-element Galerkin method on the weak form (module docstring).
+    """A spectral-element Galerkin method on the weak form (docs/theory/independent.md).
 
     One element per segment between the springs (a spring sits on a node),
     each carrying polynomials of degree p + 2: the Hermite cubics (eta and

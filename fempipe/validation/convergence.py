@@ -1,27 +1,20 @@
 """The convergence study: error against degrees of freedom, FE P1/P2/P3 and modal N.
 
-For each quantity Q (a static tip value; v_cr for each alpha of Fig. 6; a
-limit-cycle amplitude) the study computes Q on a sequence of meshes for each
-element degree and for increasing numbers of sine modes, then
+For each quantity Q (a static tip value; v_cr for each alpha of Fig. 6; a limit-cycle
+amplitude) the study computes Q on a sequence of meshes for each element degree and for
+increasing numbers of sine modes, then
 
-* takes as reference the Richardson extrapolation of the two finest P3
-  values, ``Q_ref = Q_h + (Q_h - Q_2h) / (2^p - 1)`` with the theoretical
-  order p, and as its error estimate ``|Q_h - Q_2h| / (2^p - 1)`` (the
-  correction itself, an upper bound once the sequence is asymptotic);
-* fits the observed order as the least-squares slope of log(error) against
-  log(dofs) over the last three points whose error is well above the
-  reference's own uncertainty and round-off;
+* takes as reference the Richardson extrapolation of the two finest P3 values,
+  ``Q_ref = Q_h + (Q_h - Q_2h) / (2^p - 1)`` with the theoretical order p, and as its error
+  estimate the correction itself (an upper bound once the sequence is asymptotic);
+* fits the observed order as the least-squares slope of log(error) against log(dofs) over the
+  last three points whose error is well above the reference's own uncertainty and round-off;
 * tabulates the error of the paper's N = 3 and N = 4 against the reference.
 
-FE tip values of P_k converge as h^(2k) (nodal superconvergence; kept by the
-Gauss integration operators, see :mod:`fempipe.model.quadrature`).  The sine modes
-sin(k_r xi), k_r = (2r - 1) pi / 2, converge only algebraically: each has
-phi''(0) = 0, whereas Eq. (31a) at xi = 0 gives
-theta''(0) = gamma sin(alpha) + v^2 sin(theta(1)) != 0.  Integrating the sine
-coefficient c_r = 2 int theta sin(k_r xi) by parts three times leaves
-c_r = -2 theta''(0) / k_r^3 + O(k_r^-4), so the truncation error in the
-energy norm is O(N^(-3/2)) and functionals and eigenvalues (the square of it)
-converge as N^-3 (docs, "Conventions and derivations").
+FE tip values of P_k converge as h^(2k) (nodal superconvergence, kept by the Gauss
+integration operators of :mod:`fempipe.model.quadrature`); the sine modes only as N^-3,
+because each has phi''(0) = 0 where Eq. (31a) gives theta''(0) != 0 (the derivation:
+docs/theory/conventions.md, "Why the sine modes converge only algebraically").
 """
 
 from __future__ import annotations

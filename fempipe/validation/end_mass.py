@@ -1,24 +1,21 @@
 """End mass: closed forms, the classical theory and Hill & Swanson's statement.
 
-A point mass Gamma = M_e/((m+M) L) at the free end (fempipe's ``end_mass``)
-adds its inertia at the tip and, under gravity, its weight: a tension
-gamma Gamma along the hanging pipe (a compression along the standing one).
-No printed critical flow velocity was found for this variant (Hill &
-Swanson's results are curves; see ``references/end_mass.json``), so this case
+A point mass Gamma = M_e/((m+M) L) at the free end (fempipe's ``end_mass``) adds its inertia at
+the tip and, under gravity, its weight: a tension gamma Gamma along the hanging pipe (a
+compression along the standing one).  No printed critical flow velocity was found for this
+variant (Hill & Swanson's results are curves; see ``references/end_mass.json``), so this case
 checks fempipe (FE P3:16) against
 
-* Blevins's frequency equation of the cantilever with a tip mass (v = gamma
-  = 0: the inertia term alone);
-* the Bessel-function solution of the standing column (alpha = pi, v = 0)
-  buckling under its own weight and the end mass's
-  (:func:`fempipe.validation.classical.heavy_column_buckling`: the weight
+* Blevins's frequency equation of the cantilever with a tip mass (v = gamma = 0: the inertia
   term alone);
-* the classical linear theory's v_cr(Gamma) for the paper's hanging pipe and
-  for the horizontal pipe of Gregory & Paidoussis (both terms with the flow),
-  to 1e-6;
+* the Bessel-function solution of the standing column (alpha = pi, v = 0) buckling under its
+  own weight and the end mass's (:func:`fempipe.validation.classical.heavy_column_buckling`:
+  the weight term alone);
+* the classical linear theory's v_cr(Gamma) for the paper's hanging pipe and for the
+  horizontal pipe of Gregory & Paidoussis (both terms with the flow), to 1e-6;
 
-and Hill & Swanson's statement that an end mass destabilizes the horizontal
-undamped pipe, more for Gamma = 0.3 than 0.2 (a ``paper`` check).
+and Hill & Swanson's statement that an end mass destabilizes the horizontal undamped pipe,
+more for Gamma = 0.3 than 0.2 (a ``paper`` check).
 """
 
 from __future__ import annotations

@@ -1,24 +1,20 @@
 """External viscous damping: Beck's column (Plaut & Infante 1970) and the hanging pipe.
 
-A force -c r_dot per unit length (fempipe's ``external_damping`` sigma) on
-Beck's column (beta = gamma = mu = 0: the follower force v^2 = P L^2/EI
-alone) raises the flutter load from 20.05 at zero damping to 37.7 for large
-damping (Plaut & Infante 1970).  This case computes v_cr^2(sigma) with
-fempipe (FE P3:16, :func:`fempipe.analyses.stability.critical_velocity`) and with the
-classical theory of :mod:`fempipe.validation.classical`, checks that the two
+A force -c r_dot per unit length (fempipe's ``external_damping`` sigma) on Beck's column
+(beta = gamma = mu = 0: the follower force v^2 = P L^2/EI alone) raises the flutter load from
+20.05 at zero damping to 37.7 for large damping (Plaut & Infante 1970).  This case computes
+v_cr^2(sigma) with fempipe (FE P3:16, :func:`fempipe.analyses.stability.critical_velocity`)
+and with the classical theory of :mod:`fempipe.validation.classical`, checks that the two
 agree to 1e-6 and compares them with the printed numbers.
 
-The large-damping limit is computed without damping at all: with damping
-sigma M and no Coriolis term, each root nu = a + ib of K x = nu M x gives
-lambda^2 + sigma lambda + nu = 0, stable iff a > 0 and b^2 < sigma^2 a; as
-sigma -> infinity only a > 0 is left, so the limit is the v at which the
-complex pair of Beck's column reaches Re nu = 0
-(:func:`fempipe.validation.classical.large_damping_limit`).  The classical
-v_cr at sigma = 3000 must approach it from below.
-
-The hanging pipe of the paper (beta = 0.142, gamma = 18.9, mu = 0.005)
-exercises the damping together with the Coriolis, gravity and Kelvin-Voigt
-terms: fempipe against the classical theory again.
+The large-damping limit is computed without damping at all: with damping sigma M and no
+Coriolis term, each root nu = a + ib of K x = nu M x gives lambda^2 + sigma lambda + nu = 0,
+stable iff a > 0 and b^2 < sigma^2 a; as sigma -> infinity only a > 0 is left, so the limit is
+the v at which the complex pair of Beck's column reaches Re nu = 0
+(:func:`fempipe.validation.classical.large_damping_limit`).  The classical v_cr at
+sigma = 3000 must approach it from below.  The hanging pipe of the paper (beta = 0.142,
+gamma = 18.9, mu = 0.005) exercises the damping together with the Coriolis, gravity and
+Kelvin-Voigt terms: fempipe against the classical theory again.
 """
 
 from __future__ import annotations

@@ -1,22 +1,19 @@
 """Fig. 7: bifurcation diagram of the hanging pipe (alpha = 0), N = 3 against N = 4.
 
-The paper sweeps v for alpha = 0 with N = 3 and N = 4 modes and concludes
-from their agreement that N = 3 is acceptable.  This case follows the static
-branch and the periodic orbits over the same range by continuation, with the
-converged FE mesh as well, and checks
+The paper sweeps v for alpha = 0 with N = 3 and N = 4 modes and concludes from their agreement
+that N = 3 is acceptable.  This case follows the static branch and the periodic orbits over
+the same range by continuation, with the converged FE mesh as well, and checks
 
-* the onset of the limit cycle against the linear critical velocity of each
-  discretization (an independent bisection on the spectrum): the branch of
-  periodic orbits is continued from the Hopf point of the static branch
-  (:func:`fempipe.analyses.periodic.cycle_diagram`), so the onset is v_H itself, no
-  longer a bracket of sweep velocities;
-* the continuation against brute force: at v = 6.3, 6.5, 10 the attractor
-  reached by integration from the sagged state must be a stable continued
-  state (cycles to 1e-6 in period and tip extrema); one that is not is
-  flagged in the check;
-* the paper's statements: equilibrium below v_cr, period-1 limit cycle above,
-  N = 3 and N = 4 agreeing, large amplitudes, and the bracket 6.3 < v_cr < 6.5
-  implied by the shapes of Fig. 7(c);
+* the onset of the limit cycle against the linear critical velocity of each discretization
+  (an independent bisection on the spectrum): the branch of periodic orbits is continued from
+  the Hopf point of the static branch (:func:`fempipe.analyses.periodic.cycle_diagram`), so
+  the onset is v_H itself, not a bracket of sweep velocities;
+* the continuation against brute force: at v = 6.3, 6.5, 10 the attractor reached by
+  integration from the sagged state must be a stable continued state (cycles to 1e-6 in
+  period and tip extrema); one that is not is flagged in the check;
+* the paper's statements: equilibrium below v_cr, period-1 limit cycle above, N = 3 and N = 4
+  agreeing, large amplitudes, and the bracket 6.3 < v_cr < 6.5 implied by the shapes of
+  Fig. 7(c);
 * how far N = 3 and N = 4 are from the converged answer.
 """
 

@@ -1,100 +1,19 @@
 """The motion out of the plane in strong form: an independent check of fempipe.model.out_of_plane.
 
-This module solves the classical fourth-order equation of the out-of-plane
-deflection w(xi, tau) of the pipe about a planar static state theta^s(xi)
-(Chen et al. 2020, Eq. (31a)), written from that equation alone: it knows
-neither the out-of-plane rotation psi = w' of :mod:`fempipe.model.out_of_plane` nor
-fempipe's discretizations, quadrature or operators.  The static state comes
-from :func:`fempipe.validation.bvp.solve_static_bvp` (scipy's ``solve_bvp``
-on the strong form of Eq. (31a)), which is independent of fempipe too.
+This module solves the classical fourth-order equation of the out-of-plane deflection
+w(xi, tau) of the pipe about a planar static state theta^s(xi) (Chen et al. 2020,
+Eq. (31a)), written from that equation alone: it knows neither the out-of-plane rotation
+psi = w' of :mod:`fempipe.model.out_of_plane` nor fempipe's discretizations, quadrature or
+operators.  The static state comes from :func:`fempipe.validation.bvp.solve_static_bvp`
+(scipy's ``solve_bvp`` on the strong form of Eq. (31a)), independent of fempipe too
+(:func:`static_state`, :func:`loaded_state`).  The equation (with the static axial force N,
+the curvature's softening theta'^2, the jet, the variants and the objective Kelvin-Voigt
+damping) is discretized in its weak form by C^1 spectral elements (:class:`HermiteSpectral`:
+Hermite cubics and Legendre bubbles, a node at every spring); :class:`LateralProblem` gives
+its spectrum and :func:`critical_velocity` the first crossing along the static branch.
 
-The equation
-------------
-Dimensionless (dot = d/dtau, prime = d/dxi), 0 < xi < 1:
-
-    w_ddot + sigma w_dot + 2 sqrt(beta) v w_dot' + v^2 w'' + w''''
-        + ((theta'^2 - N) w')' + mu KV[w_dot] + sum_s kappa_s w delta(xi - xi_s) = 0,
-
-    N(xi) = gamma (1 - xi + Gamma) cos(theta + alpha) + v^2 (1 - cos(theta(1) - theta))
-            + sum_s H(xi_s - xi) F_s . t,   F_s = -kappa_s (r(xi_s) - (xi_s, 0)),
-
-with theta = theta^s, t = (cos theta, sin theta), r = \\int_0^xi t (the
-pipe's frame): N is the axial force of the planar state (gravity beyond xi
-and of the end mass Gamma, the jet's reaction, the springs' static forces)
-and theta'^2 the softening of the curved pipe out of its plane.  The
-Kelvin-Voigt term acts on the co-rotational curvature rate: with psi = w',
-
-    chi = psi' + theta'(xi) \\int_0^xi theta' psi,
-    KV[w] = chi'' - (theta' \\int_xi^1 theta' chi)'      (w'''' on a straight pipe).
-
-Boundary conditions: w(0) = w'(0) = 0; the moment w''(1) + mu chi_dot(1) = 0
-(theta'(1) = 0, so chi(1) = w''(1)); the shear force
-
-    -(w''' + mu chi_dot')(1) + N(1) w'(1) + Gamma w_ddot(1) = 0,
-
-Newton's law of the end mass (the Kelvin-Voigt shear mu chi_dot'(1) is the
-classical E w'''(1), E = 1 + mu d/dtau, of the straight pipe; without damping
-it is the condition -w'''(1) + N(1) w'(1) + Gamma w_ddot(1) = 0).  A spring
-makes w''' jump by kappa_s w(xi_s).  Hysteretic damping is not modelled.
-
-The weak form (derived here)
-----------------------------
-Multiply by a test function u with u(0) = u'(0) = 0 and integrate over
-[0, 1].  By parts,
-
-* ``\\int u w'''' = u(1) w'''(1) - u'(1) w''(1) + \\int u'' w''``;
-* ``\\int u ((theta'^2 - N) w')' = -u(1) N(1) w'(1) - \\int u' (theta'^2 - N) w'``
-  (theta'(1) = 0);
-* ``\\int u v^2 w'' = v^2 u(1) w'(1) - v^2 \\int u' w'``: the follower force of
-  the jet keeps a boundary term (no condition carries it);
-* ``\\int u KV[w] = u(1) chi'(1) - u'(1) chi(1) + \\int u'' chi
-  + \\int u' theta' \\int_xi^1 theta' chi``, and exchanging the order of the
-  double integral, ``\\int u' theta' \\int_xi^1 theta' chi = \\int chi theta'
-  \\int_0^xi theta' u'``: the volume terms are ``\\int B u B w`` with
-  B w = chi, symmetric.
-
-The boundary terms at xi = 1 are u(1) [w''' + mu chi_dot' - N w'](1) -
-u'(1) [w'' + mu chi_dot](1) = u(1) Gamma w_ddot(1) by the natural conditions,
-so that for w = W(xi) e^{lambda tau}, (K + lambda C + lambda^2 M) a = 0 with
-
-    M = \\int u w + Gamma u(1) w(1),
-    C = sigma \\int u w + 2 sqrt(beta) v \\int u w' + mu \\int B u B w,
-    K = \\int u'' w'' + \\int (N - theta'^2) u' w' + v^2 (u(1) w'(1) - \\int u' w')
-        + sum_s kappa_s u(xi_s) w(xi_s).
-
-Only second derivatives appear: C^1 elements are conforming.
-
-Discretization
---------------
-:class:`HermiteSpectral`: spectral elements in w, C^1 (w and w' continuous
-at the nodes), each element carrying the Hermite cubics and the bubbles
-whose second derivatives are the Legendre polynomials P_2 ... P_p (the
-basis of :class:`fempipe.validation.classical.LegendreGalerkin`); a node at
-every spring (w''' jumps there, theta^s'' too).  Integrals by Gauss-Legendre
-on each element with p + 40 points (theta^s enters through cos and squares:
-the integrands are not polynomials); the inner integral of B by spectral
-integration on the same points (the Legendre series of the integrand,
-integrated exactly).  theta^s and theta^s' are the ``solve_bvp`` solution
-(a C^1 cubic on its adaptive mesh, tolerance 1e-10; its tip equals
-fempipe's P3:64 to 3e-13 at alpha = pi/2, v = 5.65).  The eigenvalues are
-those of the quadratic pencil in first-order form, in the M-orthonormal
-modes of the bending stiffness and with the shift of
-:func:`fempipe.validation.classical_galerkin.quadratic_eigenvalues`.
-
-Stability
----------
-:func:`critical_velocity` follows the static branch from v_min (the loaded
-state, gravity switched on in steps, :func:`loaded_state`) in steps of v,
-each static state started from the previous one, and locates the first v
-where an eigenvalue with |lambda| < ``lam_max`` crosses into Re lambda > 0 by
-Brent's method (as :func:`fempipe.validation.classical.critical_velocity`).
-
-Sanity checks (tests/test_out_of_plane_strong.py): alpha = 0 (theta^s = 0)
-is the classical hanging pipe of :mod:`fempipe.validation.classical`; at
-alpha = pi on a buckled state the rotated static shape W = eta^s =
-\\int_0^xi sin theta^s is a null vector: with w' = sin theta, the field
-operator is d/dxi [cos theta theta'' - (N - v^2) sin theta], and Eq. (31a)
-makes the bracket the constant v^2 sin theta(1); the conditions hold too.
+Derivation, weak form and checks: docs/theory/independent.md, "The motion out of the plane
+in strong form".
 """
 
 from __future__ import annotations
@@ -172,7 +91,7 @@ class StaticState:
         return np.asarray(self.bvp.sol(np.asarray(xi, dtype=float))[1])
 
     def axial_force(self, xi) -> np.ndarray:
-        """N(xi) (module docstring); ``xi`` must not be a spring's position."""
+        """N(xi) (docs/theory/independent.md); ``xi`` must not be a spring's position."""
         p = self.params
         xi = np.asarray(xi, dtype=float)
         th = self.theta(xi)
@@ -264,7 +183,7 @@ def _reference(p: int, nq: int):
 
 
 class HermiteSpectral:
-    """C^1 spectral elements for the weak form of the module docstring.
+    """C^1 spectral elements for the weak form of docs/theory/independent.md.
 
     Parameters
     ----------
@@ -352,7 +271,7 @@ class HermiteSpectral:
         return out
 
     def matrices(self, state: StaticState):
-        """K, C, M (module docstring) about ``state`` at its v, and the tip and spring rows.
+        """K, C, M (docs/theory/independent.md) about ``state`` at its v, and the tip and spring rows.
 
         Returns
         -------

@@ -1,33 +1,22 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
-:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane of a planar
-static state (docs, "Out of the plane").  This case checks it four ways and
-reports what it finds:
+:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane of a planar static
+state (docs/theory/out_of_plane.md).  This case checks it four ways and reports what it finds:
 
-(a) **The straight pipe.**  Hanging (alpha = 0), and standing below buckling
-    (alpha = pi), a round straight pipe has no preferred plane: the
-    out-of-plane K, C, M (and the hysteretic stiffness) equal the in-plane
-    ones to round-off, and so do the spectra, on P3, sine and beam modes,
-    with every variant switched on.
-(b) **The buckled standing pipe** (alpha = pi, gamma above Greenhill's 7.837):
-    turning the buckled shape about the vertical costs nothing, so
-    lambda = 0 with the rotated static shape as eigenvector (w = eta^s,
-    psi = sin theta^s).  fempipe restores this null vector exactly (rank-one
-    correction); the residual ||K x|| of the uncorrected operator is its
-    discretization error and must fall under refinement; the other
-    eigenvalues are stable, and equal the strong form's.
-(c) **An independent strong form.**  :mod:`fempipe.validation.lateral` solves
-    the fourth-order equation of the out-of-plane deflection w on C^1
-    spectral elements about the static state of ``solve_bvp``: the critical
-    velocities and flutter frequencies must agree to 1e-8 (absolute) at
-    alpha = pi/4, pi/2, 3pi/4 for the paper's case (mu = 0, 0.005) and for
-    Texier & Dorbolo's pipe, and the spectra of an inclined pipe with every
-    variant (springs' static forces in the axial force included) must agree.
-(d) **Convergence.**  The observed orders of the out-of-plane v_cr: h^2k for
-    P_k, N^-3 for the sine modes, N^-4 for the beam modes (those of the
-    planar problem).
-(e) **The finding.**  The out-of-plane v_cr against the in-plane one (the
-    paper's, Fig. 6) over alpha in [0, pi].
+(a) **The straight pipe.**  Hanging, and standing below buckling, a round straight pipe has no
+    preferred plane: the out-of-plane K, C, M (and the hysteretic stiffness) equal the in-plane
+    ones to round-off, and so do the spectra, on P3, sine and beam modes, every variant on.
+(b) **The buckled standing pipe** (alpha = pi, gamma above Greenhill's 7.837): turning the
+    buckled shape about the vertical costs nothing (lambda = 0, psi = sin theta^s).  fempipe
+    restores this null vector exactly; the residual ||K x|| of the uncorrected operator must
+    fall under refinement, and the other eigenvalues are stable and equal the strong form's.
+(c) **An independent strong form** (:mod:`fempipe.validation.lateral`): the critical
+    velocities and flutter frequencies agree to 1e-8 at alpha = pi/4, pi/2, 3pi/4 for the
+    paper's case (mu = 0, 0.005) and Texier & Dorbolo's pipe, and the spectra of an inclined
+    pipe with every variant agree.
+(d) **Convergence.**  The observed orders of the out-of-plane v_cr: h^2k for P_k, N^-3 for
+    the sine modes, N^-4 for the beam modes (those of the planar problem).
+(e) **The finding.**  The out-of-plane v_cr against the in-plane one (Fig. 6), alpha in [0, pi].
 """
 
 from __future__ import annotations

@@ -1,20 +1,17 @@
 """The onset of the non-planar oscillation of the horizontal pipe: normal form against shooting.
 
-At alpha = pi/2 the planar static state of the paper's pipe loses stability out of its
-plane (the out-of-plane v_cr, :mod:`fempipe.model.out_of_plane`, lies below the in-plane
-one of Fig. 6) and a non-planar limit cycle is born.  This case checks, on one P3 mesh at a
-time (both computations on the same mesh, so the comparison is free of discretization
-error):
+At alpha = pi/2 the planar static state of the paper's pipe loses stability out of its plane
+(the out-of-plane v_cr, :mod:`fempipe.model.out_of_plane`, lies below the in-plane one of
+Fig. 6) and a non-planar limit cycle is born.  This case checks, on one P3 mesh at a time (both
+computations on the same mesh, so the comparison is free of discretization error):
 
 (a) **v_cr.**  The critical pair of the 3-D model's exact Jacobian
-    (:func:`fempipe.analyses.space.onset.space_hopf_normal_form`) crosses the imaginary
-    axis at the out-of-plane model's v_cr (two discretizations of one linear problem:
-    they agree to their discretization error);
+    (:func:`fempipe.analyses.space.onset.space_hopf_normal_form`) crosses the imaginary axis
+    at the out-of-plane model's v_cr (two discretizations of one linear problem);
 (b) **The amplitude.**  Cycles shot on the full 3-D model
     (:func:`fempipe.analyses.space.shooting.shoot_space`) at v = v_cr + delta have
     A^2 = ((max Y_tip - min Y_tip) / 2)^2 linear in delta with the slope c^2 of the normal
-    form (Kuznetsov's l1, the transversality, the critical mode): A^2 / delta fitted as
-    c^2 (1 + k delta + ...) must give 1 at delta -> 0 to 1e-4;
+    form: A^2 / delta fitted as c^2 (1 + k delta + ...) must give 1 at delta -> 0 to 1e-4;
 (c) **The frequency.**  The period tends to 2 pi / omega;
 (d) **The symmetry.**  The critical mode is out of the plane (mirror-odd), Y_tip swings
     symmetrically, and the cycles are stable (the Hopf point is supercritical, l1 < 0).

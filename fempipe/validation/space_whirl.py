@@ -1,29 +1,21 @@
 """The whirl of the hanging pipe, computed twice: a periodic orbit of the 3-D FE model and a
 steady state in the rotating frame.
 
-Hanging (alpha = 0) the pipe is axisymmetric about the vertical, and its flutter
-is a Hopf bifurcation with O(2) symmetry: standing waves (the planar cycles) and
-rotating waves (whirls, the shape turning rigidly about the vertical) are born
-together.  This case computes the whirl at v = 10 two ways and compares:
+Hanging (alpha = 0) the pipe is axisymmetric, and its flutter is a Hopf bifurcation with O(2)
+symmetry: standing waves (the planar cycles) and rotating waves (whirls) are born together.
+This case computes the whirl at v = 10 two ways and compares (docs/theory/space.md, "The
+whirl of the hanging pipe"):
 
-(a) **The rotating-frame BVP** (:mod:`fempipe.validation.whirl_bvp`): the
-    continuum's strong form in the frame turning at omega, with the objective
-    Kelvin-Voigt damping (k = -omega t' in a whirl), solved by ``solve_bvp``,
-    continued from the Hopf point; its power balance (the fluid's supply against
-    the Kelvin-Voigt and Coriolis losses) is checked.
-(b) **The periodic orbit of the FE model** (:func:`fempipe.analyses.space.find_whirl`),
-    shot on cubic meshes from the BVP's shape: the rotation rate 2 pi / T and the
-    tip's distance from the vertical against the BVP's, the difference falling
-    with h; the tip's distance constant along the orbit and the centerline a
-    rigid rotation of itself, to the discretization error (the turn is a
-    symmetry of the continuum, of the mesh only as h -> 0).
-(b') **The BVP's whirl as a state of the FE model.**  Started from the BVP's shape
-    and rotation (fitted on the mesh), the FE motion over half a turn turns at
-    the BVP's rate and keeps the tip's distance from the vertical, up to errors
-    that fall at the FE order (P3:3, P3:6, P3:12: half a period each, cheap).
-(c) **The finding.**  The whirl's Floquet multipliers: it is unstable (a
-    complex pair outside the unit circle), while the planar cycle of the same
-    pipe is stable in 3-D: the standing wave is the attractor.
+(a) **The rotating-frame BVP** (:mod:`fempipe.validation.whirl_bvp`), continued from the Hopf
+    point; its power balance (the fluid's supply against the losses) is checked.
+(b) **The periodic orbit of the FE model** (:func:`fempipe.analyses.space.find_whirl`), shot on
+    cubic meshes from the BVP's shape: the rotation rate and the tip's distance from the
+    vertical against the BVP's, the difference falling with h; the tip's distance constant
+    and the centerline a rigid rotation of itself, to the discretization error.
+(b') **The BVP's whirl as a state of the FE model**: over half a turn the FE motion turns at
+    the BVP's rate and keeps the tip's distance, up to errors that fall at the FE order.
+(c) **The finding.**  The whirl is unstable (a complex pair of Floquet multipliers outside the
+    unit circle), while the planar cycle is stable in 3-D: the standing wave is the attractor.
 """
 
 from __future__ import annotations

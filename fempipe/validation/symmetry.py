@@ -1,25 +1,21 @@
 """Sec. 5, closing remark: the symmetries of Eq. (20).
 
-The paper ends Sec. 5 with "the solution for a given value of alpha is
-antisymmetric with the solution for alpha - pi, since sin(theta + alpha) =
--sin(theta + alpha - pi)".  That identity only says that alpha -> alpha - pi
-flips the sign of the gravity term (gamma -> -gamma): it turns gravity
-upside down, so a pipe clamped at 3 pi / 4 (pointing obliquely up) is not the
-mirror image of one clamped at -pi / 4 (pointing obliquely down).  The
-symmetry Eq. (20) does have is (theta, alpha) -> (-theta, -alpha) (every term
-is odd under it), so the solution for -alpha is minus the solution for
-alpha, and at alpha = 0 and alpha = pi the problem is symmetric under theta
--> -theta (mirror buckled branches).
-
-This case measures both on static states (converged FE):
+The paper ends Sec. 5 with "the solution for a given value of alpha is antisymmetric with the
+solution for alpha - pi, since sin(theta + alpha) = -sin(theta + alpha - pi)".  That identity
+only says that alpha -> alpha - pi flips the sign of the gravity term (gamma -> -gamma): it
+turns gravity upside down, so a pipe clamped at 3 pi / 4 (pointing obliquely up) is not the
+mirror image of one clamped at -pi / 4 (pointing obliquely down).  The symmetry Eq. (20) does
+have is (theta, alpha) -> (-theta, -alpha) (every term is odd under it), so the solution for
+-alpha is minus the solution for alpha, and at alpha = 0 and pi the problem is symmetric under
+theta -> -theta (mirror buckled branches).  This case measures both on static states
+(converged FE):
 
 * ``||theta_alpha + theta_{-alpha}||``: zero to round-off (the true symmetry);
 * ``||theta_alpha + theta_{alpha - pi}||``: O(1) (the paper's claim fails);
-* at alpha = pi above the Greenhill load, the two buckled states are mirror
-  images.
+* at alpha = pi above the Greenhill load, the two buckled states are mirror images.
 
-The paper's conclusion that 0 <= alpha <= pi suffices is still right, by the
-true symmetry alpha -> -alpha and 2 pi periodicity, not by the one it gives.
+The paper's conclusion that 0 <= alpha <= pi suffices is still right, by the true symmetry
+alpha -> -alpha and 2 pi periodicity, not by the one it gives.
 """
 
 from __future__ import annotations

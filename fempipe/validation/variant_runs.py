@@ -1,23 +1,21 @@
 """What the four variant cases share: fempipe's v_cr, the classical one, their agreement.
 
-The cases ``end_mass``, ``external_damping``, ``hysteretic`` and ``springs``
-each compare fempipe's critical flow velocity of a straight pipe (hanging,
-standing or gravity-free: the static state is the undeformed pipe) with the
-classical linear theory of :mod:`fempipe.validation.classical`, which solves
-another equation (the lateral displacement eta, not the rotation theta) by
-another method (spectral elements in eta).  Both are converged far below the
-agreement asked for:
+The cases ``end_mass``, ``external_damping``, ``hysteretic`` and ``springs`` each compare
+fempipe's critical flow velocity of a straight pipe (hanging, standing or gravity-free: the
+static state is the undeformed pipe) with the classical linear theory of
+:mod:`fempipe.validation.classical`, which solves another equation (the lateral displacement
+eta, not the rotation theta) by another method (spectral elements in eta).  Both are
+converged far below the agreement asked for:
 
-* fempipe's FE P3:16 (the suite's converged mesh): its v_cr of the paper's
-  hanging pipe equals P3:64 to 3e-10 (docs), the variant terms converge at
-  the element order (end mass, damping, a spring on a node; a spring inside
+* fempipe's FE P3:16 (the suite's converged mesh): its v_cr of the paper's hanging pipe
+  equals P3:64 to 3e-10, and the variant terms converge at the element order (a spring inside
   an element lowers the order to 3, so the cases put springs on nodes);
-* the classical solver on Legendre elements of degree p + 2 = 18: p = 16 and
-  p = 32 agree to 1e-9 (checked in each case).
+* the classical solver on Legendre elements of degree p + 2 = 18: p = 16 and p = 32 agree to
+  1e-9 (checked in each case).
 
-Their difference must be below ``AGREEMENT`` = 1e-6, which leaves two orders
-for the v_cr tolerances of the two critical-velocity searches (fempipe's
-crossing to about 1e-8, the classical Brent to 1e-12).
+Their difference must be below ``AGREEMENT`` = 1e-6, which leaves two orders for the v_cr
+tolerances of the two critical-velocity searches (fempipe's crossing to about 1e-8, the
+classical Brent to 1e-12).
 """
 
 from __future__ import annotations

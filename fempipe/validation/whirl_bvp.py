@@ -1,50 +1,18 @@
 """The whirl of the hanging pipe as a steady state in a rotating frame: an independent BVP.
 
-At an axisymmetric inclination (sin alpha = 0: gravity along the clamp's axis
-e_1) a turn of the pipe about e_1 is a symmetry, and a *whirl* is a motion in
-which the shape turns rigidly about e_1 at a rate omega.  In the frame turning
-with it the shape is steady, and the motion of the continuum (the weak form of
-:mod:`fempipe.model.space`, written here in strong form) is a boundary-value
-problem in xi alone:
+At an axisymmetric inclination (sin alpha = 0) a *whirl* is a motion in which the pipe's
+shape turns rigidly about the clamp's axis e_1 at a rate omega.  In the frame turning with it
+the shape is steady, and the motion of the continuum (the weak form of
+:mod:`fempipe.model.space`, written here in strong form, with the objective Kelvin-Voigt
+damping, whose curvature rate in a whirl is k = -omega t') is a boundary-value problem in xi
+alone: 13 functions y = (r, t, t', G, Q) (:func:`whirl_rhs`) and omega, with a phase
+condition that fixes the rotation.  The straight pipe solves it for every omega, so v is left
+free and an amplitude is fixed instead: the tip's deflection next to the Hopf point, then the
+curvature energy, continued and adjusted until v is met (:func:`solve_whirl_bvp`,
+:class:`WhirlBVP`).  The module shares no code with fempipe's discretizations, quadrature or
+residual: scipy's collocation solver ``solve_bvp`` does the work.
 
-* kinematics: ``r' = t``, ``t_dot = omega e_1 x t``, ``r_dot = omega e_1 x r``,
-  ``r_ddot = -omega^2 r_perp`` (r_perp = (0, r_2, r_3), the part normal to e_1);
-* the force field ``G(xi) = \\int_xi^1 (r_ddot + 2 v sqrt(beta) t_dot + sigma r_dot)
-  - gamma (1 - xi + Gamma) g + v^2 t(1) + Gamma r_ddot(1)``, g = (cos alpha, 0, 0),
-  i.e. ``G' = -(r_ddot + 2 v sqrt(beta) t_dot + sigma r_dot) + gamma g`` with
-  ``G(1) = -gamma Gamma g + v^2 t(1) + Gamma r_ddot(1)``;
-* the objective Kelvin-Voigt damping.  Its curvature rate is
-  ``k = t x t_dot' + Omega t'`` with ``Omega = \\int_0^xi t' . (t x t_dot)``
-  (the twist-free section frame, anchored at the clamp, which does not turn).
-  For ``t_dot = omega e_1 x t``: ``t x t_dot' = -omega t_1 t'`` and
-  ``Omega = omega (t_1 - 1)``, so ``k = -omega t'``: the sections do not turn
-  with the shape (the frame's angular velocity is omega (e_1 - t), not
-  omega e_1), each fibre is bent to and fro once a turn, and the damping
-  dissipates ``mu omega^2 \\int |t'|^2`` in a whirl;
-* the balance.  The virtual work
-  ``\\int delta t' . m + delta t . (G + mu K t' x t) = 0`` for every
-  ``delta t`` normal to t with ``delta t(0) = 0``, where
-  ``m = t' + mu k x t = t' + c t x t'`` (c = mu omega) and
-  ``K = \\int_xi^1 k . t' = -omega Q``, ``Q = \\int_xi^1 |t'|^2``, gives
-  ``m' = G + c Q t x t' + lambda t`` and ``m(1) = 0``, i.e.
-  ``t'' + c t x t'' = b + lambda t`` with ``b = G + c Q t x t'``; the
-  constraint |t| = 1 fixes lambda (``t . t'' = -|t'|^2``) and
-  ``t'' = -|t'|^2 t + (b_n - c t x b_n) / (1 + c^2)`` with b_n the part of b
-  normal to t.  For mu = 0 it is ``t'' = G - (t . G + |t'|^2) t``.
-
-The unknowns are y = (r, t, t', G, Q) (13 functions) and omega, with
-``r(0) = 0``, ``t(0) = e_1``, ``t'(1) = 0`` (m(1) = 0), ``Q(1) = 0``, the
-condition on G(1), and the phase condition ``r_3(1) = 0`` (the tip in the
-(e_1, e_2) plane at the instant shown: it fixes the rotation).  The straight
-pipe solves the problem for every omega, so v is left free and an amplitude
-fixed instead: first ``r_2(1) = 0.01`` next to the Hopf point, then the
-curvature energy ``Q(0) = \\int_0^1 |t'|^2``, continued until v passes the
-wanted value and then adjusted by the secant method until v is met
-(:func:`solve_whirl_bvp`; the tip radius itself saturates near 0.39 for the
-paper's pipe while v grows, a poor parameter).  The
-module shares no code with fempipe's discretizations, quadrature or
-residual: scipy's collocation solver ``solve_bvp`` (4th-order Lobatto IIIA,
-adaptive mesh) does the work.
+Derivation: docs/theory/independent.md, "The whirl of the hanging pipe in a rotating frame".
 """
 
 from __future__ import annotations
@@ -100,7 +68,7 @@ class WhirlBVP:
 
 
 def whirl_rhs(xi, y, omega, *, v, beta, gamma, mu, alpha=0.0, sigma=0.0):
-    """dy/dxi of y = (r, t, t', G, Q) (13, m) in the frame turning at omega (module docstring)."""
+    """dy/dxi of y = (r, t, t', G, Q) (13, m) in the frame turning at omega (docs/theory/independent.md)."""
     r, t, p, G, Q = y[0:3], y[3:6], y[6:9], y[9:12], y[12]
     g = np.array([math.cos(alpha), 0.0, 0.0])[:, None]
     e1 = E1[:, None]
