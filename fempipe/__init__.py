@@ -1,47 +1,22 @@
 """fempipe: finite elements and modal Galerkin for the soft pipe conveying fluid.
 
-The geometrically exact model of Chen, Hu, Dai & Wang (Appl. Math. Mech.
-41(9) 1381-1400, 2020), Eq. (20), discretized by 1-D Lagrange finite
-elements on a scikit-fem MeshLine or by the paper's sine modes.
+The geometrically exact model of Chen, Hu, Dai & Wang (Appl. Math. Mech. 41(9) 1381-1400,
+2020), Eq. (20), discretized by 1-D Lagrange finite elements on a scikit-fem MeshLine or by
+the paper's sine modes, and the pipe in three dimensions.  The public names, by what their
+users do (the API reference groups them alike):
 
-The package is layered, lowest first: ``core`` < ``model`` < ``solvers`` <
-``analyses`` (statics < stability < dynamics < limit_cycle < bifurcation,
-periodic) < ``studies`` < ``io`` < ``plotting`` < ``validation`` < ``bench`` <
-``cli`` < this facade.  A module imports from its own layer or lower ones,
-never higher, and no private name of another module.  The layers are written
-down once, with what each holds, in :mod:`fempipe.core.layers`
-(``tests/test_layering.py`` keeps them).
+* the model: :class:`Params`, :class:`PipeSI`, :func:`parse_discretization`,
+  :class:`PipeModel`, :func:`shape`, :func:`tip_values`;
+* statics (Eq. (31a)): :func:`solve_static`, :func:`solve_path`, :func:`continuation`;
+* linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`critical_velocity`,
+  :func:`stability_map`, :func:`spatial_critical_velocity`;
+* dynamics: :func:`simulate`, :func:`find_attractor`, :func:`shoot`, :func:`continue_cycles`,
+  :func:`bifurcation_diagram`; in three dimensions :class:`SpaceModel`,
+  :func:`simulate_space`, :func:`out_of_plane_floquet`, :func:`find_whirl`;
+* studies: :func:`run_study`, :func:`compare_values` and the error estimates.
 
-The public names, by what their users do (docs, "API reference"):
-
-* the model: :class:`Params`, :class:`PipeSI`, :class:`FiniteElement`,
-  :class:`Modal`, :func:`parse_discretization`, :class:`PipeModel`,
-  :class:`OutOfPlaneModel`, :class:`OutOfPlaneMotion`, :func:`shape`, :func:`tip_values`;
-* statics (Eq. (31a)): :func:`solve_static`, :func:`sagged_state`,
-  :func:`solve_path`, :func:`continuation`, :func:`switch_branch`;
-* linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`root_locus`,
-  :func:`stability_analysis`, :func:`critical_velocity`, :func:`stability_map`,
-  in three dimensions :func:`spatial_stability_analysis`,
-  :func:`spatial_critical_velocity`;
-* time integration: :func:`simulate`, :func:`integrate`, :func:`initial_state`,
-  :class:`PulsatingFlow`;
-* limit cycles and their continuation: :func:`shoot`, :func:`find_attractor`,
-  :func:`tip_coordinates`, :func:`hopf_points`, :func:`continue_cycles`,
-  :func:`cycle_diagram`, :func:`bifurcation_diagram`;
-* the pipe in three dimensions: :class:`SpaceModel`, :func:`simulate_space`,
-  :class:`SpaceMotion`, :func:`out_of_plane_floquet`,
-  :func:`three_dimensional_verdict`, :func:`space_diagram`,
-  :func:`space_hopf_normal_form`, :func:`find_whirl`;
-* convergence studies: :func:`run_study`, :func:`observed_order`,
-  :func:`richardson`; a user's values against fempipe: :func:`compare_values`;
-* error estimates: :func:`refined_static_states` / :func:`with_static_estimates`,
-  :func:`refined_stability` / :func:`with_stability_estimates`,
-  :func:`refined_attractor` / :func:`with_attractor_estimates`;
-
-with their result and error classes.  They are loaded on first use (PEP 562 module ``__getattr__``), so
-``import fempipe`` and the start of the ``fempipe`` command do not pay for
-numpy, scipy, scikit-fem and the solvers (0.6 CPU-s on a 2-core x86_64
-machine; ``fempipe bench --only startup``) until a computation needs them.
+They are loaded on first use (PEP 562), so ``import fempipe`` and the start of the ``fempipe``
+command do not pay for numpy, scipy and scikit-fem until a computation needs them.
 """
 
 from __future__ import annotations
@@ -297,7 +272,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
 
 
 def __getattr__(name: str) -> object:
-    """Load a public name (or an eagerly-loaded-before submodule) on first access."""
+    """Load a public name (or a layer subpackage, :data:`_SUBMODULES`) on first access."""
     module = _LAZY.get(name)
     if module is not None:
         value = getattr(importlib.import_module(f"{__name__}.{module}"), name)

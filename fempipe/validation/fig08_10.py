@@ -197,7 +197,7 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
     # What a sweep up from the sagged state ends on at each v.  At alpha = pi
     # the continued static branch is the straight pipe; below the flutter the
     # pipe rests on the left buckled branch (not continued), so that part is a
-    # sweep, as before (equilibria only), checked against the continuation
+    # sweep (equilibria only), checked against the continuation
     # where the straight pipe is stable.
     sweeps = {}
     for label, d in discs.items():
