@@ -87,6 +87,10 @@ sphinx_gallery_conf = {
     "show_memory": False,
     # its timing pages load jQuery and DataTables from CDNs; the site works offline
     "write_computation_times": False,
+    # The notebooks offered for download: pandoc (pypandoc-binary, in the docs extra)
+    # converts the RST text to Markdown, maths and collapsed solutions included; the
+    # filter turns Sphinx roles (:class:, :func:, :doc:) into code and plain text.
+    "pypandoc": {"filters": [str(DOCS / "_ext" / "notebook_markdown.lua")]},
 }
 #: gallery output folders that exist in this build, for the toctree of index.rst
 gallery_indexes = [f"{out}/index" for _, out in _present]

@@ -25,6 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 disc = fempipe.FiniteElement(6, 3)  # P3:6; the default mesh is P3:16
 results = {}
@@ -87,3 +88,4 @@ for ax, (name, (_cycle, oop, oop3)) in zip(axes, results.items(), strict=True):
 axes[0].set_ylabel("Im")
 axes[1].legend(loc="lower left", fontsize=7)
 fig.suptitle("beta = 0.142, gamma = 18.9, mu = 5e-3, v = 10; P3:6", fontsize=9)
+show_or_save()  # run as a script: a window, or PNG files without a display

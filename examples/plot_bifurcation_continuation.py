@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 params = fempipe.Params(alpha=0.0)  # beta = 0.142, gamma = 18.9, mu = 5e-3
 model = fempipe.PipeModel(fempipe.FiniteElement(4, 2), params)
@@ -53,3 +54,4 @@ ax.set_xlabel("v")
 ax.set_ylabel("amplitude of eta(1)")
 ax.set_title(f"alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3; P2:4; v_H = {h.v:.4f}", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt
 
 import fempipe
 from fempipe.cli import main as fempipe_cli
+from fempipe.plotting.scripts import show_or_save
 
 workdir = Path(tempfile.mkdtemp(prefix="fempipe-compare-"))
 csv_file = workdir / "mine.csv"
@@ -79,3 +80,4 @@ ax.bar(labels, est, color="C0", width=0.4, label="fempipe's error estimate")
 ax.set_yscale("log")
 ax.set_title("N = 3 sine modes against P2:8 (beta = 0.142, gamma = 18.9)", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 from fempipe.studies.convergence import Family
 
 params = fempipe.Params(alpha=np.pi / 3, v=4.0)
@@ -53,3 +54,4 @@ ax.set_ylabel("|X_tip - reference|")
 ax.set_title("beta = 0.142, gamma = 18.9, alpha = pi/3, v = 4", fontsize=9)
 ax.grid(alpha=0.3, which="both")
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

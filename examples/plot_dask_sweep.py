@@ -23,6 +23,7 @@ import numpy as np
 from dask.distributed import Client, LocalCluster
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 model = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0))  # the paper's pipe
 flows = [6.0, 6.8]
@@ -67,3 +68,4 @@ ax.set_ylabel("amplitude of eta(1)")
 ax.set_title("alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3; N = 3 sine modes", fontsize=9)
 ax.legend(fontsize=8)
 np.testing.assert_equal(len(diagram.points), 2 * len(flows))
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 alpha = np.pi / 2
 disc = fempipe.FiniteElement(2, 2)
@@ -58,3 +59,4 @@ ax.set_xlabel("v")
 ax.set_ylabel("error of X_tip")
 ax.set_title("alpha = pi/2, gamma = 10; P2:2", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

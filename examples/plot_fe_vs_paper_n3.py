@@ -15,6 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 alpha = np.pi / 3
 flows = [0.0, 2.0, 4.0, 6.0]
@@ -49,3 +50,4 @@ ax.set_xlabel("Z_g / L")
 ax.set_ylabel("-X_g / L")
 ax.set_title("gamma = 18.9, alpha = pi/3: P3:8 (solid), N = 3 sine modes (dashed)", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 params = fempipe.Params(alpha=0.0, v=7.0)  # beta = 0.142, gamma = 18.9, mu = 5e-3
 model = fempipe.PipeModel(fempipe.Modal(3), params)
@@ -51,3 +52,4 @@ ax2.set_title("Floquet multipliers", fontsize=9)
 fig.suptitle(
     "alpha = 0, beta = 0.142, gamma = 18.9, mu = 5e-3, v = 7; N = 3 sine modes", fontsize=9
 )
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 pipe = fempipe.PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=np.pi / 2)
 params = pipe.params(U=0.0)
@@ -56,3 +57,4 @@ ax.set_xlabel("horizontal (mm)")
 ax.set_ylabel("height (mm)")
 ax.set_title(f"L = 94 mm, gamma = {params.gamma:.2f}, beta = {params.beta:.3f}; P3:8", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -11,12 +11,13 @@ one order: N^-4.  The reference is P3 on 32 elements (error below 1e-11).
 """
 
 # %%
-# The tip rotation for N = 4 ... 32 modes of each basis
+# The tip rotation for N = 4 to 32 modes of each basis
 # -----------------------------------------------------
 import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 params = fempipe.Params(alpha=np.pi / 2, gamma=10.0, v=2.0)
 
@@ -57,3 +58,4 @@ ax.set_ylabel("|theta(1) - P3:32|")
 ax.set_title("alpha = pi/2, gamma = 10, v = 2: static tip rotation", fontsize=9)
 ax.grid(alpha=0.3, which="both")
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 params = fempipe.Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, v=0.0)
 model = fempipe.PipeModel(fempipe.FiniteElement(8, 3), params)
@@ -25,7 +26,7 @@ up = spec.lam[spec.lam.imag > 0]
 lam = up[np.argsort(up.imag)][:3]
 print("first three eigenvalues at v = 0:", ", ".join(f"{z:.6f}" for z in lam))
 
-#: the first frequency Im(lambda_1) at v = 0 (checked against (1.8751...)^2)
+#: the first frequency Im(lambda_1) at v = 0 (checked against (beta_1 L)^2 = 1.87510407^2)
 RESULT = float(lam[0].imag)
 
 # %%
@@ -50,5 +51,6 @@ for k, mode in enumerate(locus.modes):  # a conjugate pair: two columns of one m
 ax.axvline(0.0, color="k", lw=0.6)
 ax.set_xlabel("Re lambda")
 ax.set_ylabel("Im lambda")
-ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0..8: v_cr = {crit.v_cr:.3f}", fontsize=9)
+ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0 to 8: v_cr = {crit.v_cr:.3f}", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display

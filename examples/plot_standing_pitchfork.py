@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 disc = fempipe.FiniteElement(6, 2)
 model = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0))
@@ -67,3 +68,4 @@ ax.axvline(pitchfork.value, color="0.6", ls=":")
 ax.set_xlabel("gamma")
 ax.set_ylabel("theta(1)")
 ax.set_title(f"alpha = pi, v = 0, P2:6: pitchfork at gamma = {pitchfork.value:.4f}", fontsize=9)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -2,8 +2,8 @@
 The variants: an end mass and springs
 =====================================
 
-Paidoussis' classical variants are terms of the same weak form (README, "Variants of the
-pipe"): a point mass Gamma = M_e / ((m + M) L) at the free end, springs (kappa, xi_s) tying
+Paidoussis' classical variants are terms of the same weak form (:doc:`Variants of the
+pipe </theory/variants>`): a point mass Gamma = M_e / ((m + M) L) at the free end, springs (kappa, xi_s) tying
 the centerline to its undeformed position, external viscous damping sigma.  They are fields
 of :class:`fempipe.Params`, zero by default, and every analysis uses them.  Here the
 frequencies of the gravity-free pipe without flow and the critical velocity of the hanging
@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 disc = fempipe.FiniteElement(8, 3)
 base = dict(alpha=0.0, beta=0.142, gamma=0.0, mu=0.0, v=0.0)
@@ -56,3 +57,4 @@ ax.set_yscale("log")
 ax.set_xticks(x, ["omega_1", "omega_2", "omega_3"])
 ax.set_title("beta = 0.142, no gravity, v = 0; P3:8 (v_cr: gamma = 18.9, P2:6)", fontsize=9)
 ax.legend(fontsize=7)
+show_or_save()  # run as a script: a window, or PNG files without a display

@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.plotting.scripts import show_or_save
 
 disc = fempipe.FiniteElement(6, 2)
 alphas_deg = np.arange(0, 181, 30)
@@ -45,3 +46,4 @@ for a, v, k in zip(alphas_deg, v_cr, kinds, strict=True):
 ax.set_xlabel("alpha (deg)")
 ax.set_ylabel("v_cr")
 ax.set_title("beta = 0.142, gamma = 18.9, mu = 5e-3; P2:6", fontsize=9)
+show_or_save()  # run as a script: a window, or PNG files without a display

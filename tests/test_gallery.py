@@ -1,8 +1,8 @@
 """The examples gallery: every ``examples/plot_*.py`` runs and one number of each is right.
 
 Each script sets a module-level ``RESULT``; the test runs the script as sphinx-gallery does
-(``runpy``, ``__main__``, the Agg backend, an empty temporary working directory that must
-stay empty) and checks ``RESULT`` against a value computed here by other means: a closed
+(a fresh ``__main__`` without ``__file__``, the Agg backend, an empty temporary working
+directory that must stay empty) and checks ``RESULT`` against a value computed here by other means: a closed
 form, an independent solver of :mod:`fempipe.validation` (scipy's ``solve_bvp`` on the
 strong form of Eq. (31a); Paidoussis' straight-pipe theory on Legendre spectral elements),
 a symmetry, or the theoretical order of a convergence study.  The tolerances say which
@@ -13,11 +13,11 @@ from __future__ import annotations
 import functools
 import math
 import os
-import runpy
 from pathlib import Path
 
 import numpy as np
 import pytest
+from gallery_exec import run_like_sphinx_gallery
 from scipy.optimize import brentq
 from scipy.special import jv
 
@@ -26,7 +26,9 @@ EXAMPLES = sorted((ROOT / "examples").glob("plot_*.py"))
 
 
 def run_example(name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict:
-    """Run ``examples/<name>.py`` in an empty cwd; its globals (the cwd must stay empty)."""
+    """Run ``examples/<name>.py`` as sphinx-gallery does (no ``__file__``: its final
+    ``show_or_save()`` leaves the figures to the gallery) in an empty cwd; its globals (the
+    cwd must stay empty)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -36,7 +38,7 @@ def run_example(name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> d
     monkeypatch.chdir(tmp_path)
     plt.close("all")
     try:
-        g = runpy.run_path(str(ROOT / "examples" / f"{name}.py"), run_name="__main__")
+        g = run_like_sphinx_gallery(ROOT / "examples" / f"{name}.py")
         n_figures = len(plt.get_fignums())
     finally:
         plt.close("all")

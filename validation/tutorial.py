@@ -17,7 +17,6 @@ This script runs lesson 7 and writes its convergence plot, as the tutorial did:
 from __future__ import annotations
 
 import argparse
-import runpy
 from pathlib import Path
 
 LESSON = Path(__file__).resolve().parents[1] / "docs" / "course" / "lesson_07_modal_vs_fe.py"
@@ -31,7 +30,10 @@ def main() -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    lesson = runpy.run_path(str(LESSON), run_name="__main__")
+    # as sphinx-gallery runs it, without __file__: the lesson's show_or_save() then leaves
+    # the figure to this script instead of writing it into the working directory
+    lesson = {"__name__": "__main__"}
+    exec(compile(LESSON.read_text(encoding="utf-8"), str(LESSON), "exec"), lesson)
     out = Path(args.out) / "tutorial_convergence.png"
     out.parent.mkdir(parents=True, exist_ok=True)
     lesson["fig"].savefig(out, dpi=120)

@@ -27,9 +27,12 @@ reproduces a closed form, and fempipe agrees with an independent ODE solver.
 # Bending, the moment of the weight of the pipe beyond xi, and the follower force of the jet
 # leaving the free end (Eq. (14)).  The centerline follows by integration (Eq. (28)):
 # X_g = int_0^xi cos(theta + alpha) (down), Z_g = int_0^xi sin(theta + alpha).
+import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
 from fempipe.validation.bvp import solve_static_bvp  # section 5
 
 # Texier & Dorbolo's horizontal silicone pipe (the paper's Sec. 3.1), in SI units
@@ -108,15 +111,107 @@ print(f"observed order in N: {galerkin_order:.2f}")
 # and modes.  scipy's collocation solver on the *strong* form (with theta(1) as an unknown
 # parameter) shares no code with it.
 model = fempipe.PipeModel(fempipe.FiniteElement(16, 2), params)
-X_fe = fempipe.tip_values(model.disc, fempipe.solve_static(model).q, params.alpha)["X_tip"]
+q = fempipe.solve_static(model).q
+X_fe = fempipe.tip_values(model.disc, q, params.alpha)["X_tip"]
 X_bvp = solve_static_bvp(params.alpha, params.gamma, params.v, tol=1e-11).X_tip
 print(f"X_g(1): fempipe P2:16 {X_fe:.10f}, solve_bvp {X_bvp:.10f}, difference {X_fe - X_bvp:.1e}")
+
+fig, ax = plt.subplots(figsize=(5, 3.2), layout="constrained")
+ax.semilogy(modes, tip_errors, "o-", ms=4, label=f"sine modes: slope {-galerkin_order:.2f} in N")
+ax.axhline(abs(X_fe - X_bvp), color="k", ls="--", lw=0.8, label="fempipe P2:16 - solve_bvp, X_g(1)")
+ax.set_xscale("log", base=2)
+ax.set_xlabel("N (modes)")
+ax.set_ylabel("|theta_N(1) + gamma/6|")
+ax.set_title("Galerkin by hand against the closed form -gamma/6", fontsize=9)
+ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Derive the weak form with a test function that does *not* vanish at xi = 0.  Which
-#    boundary term appears, and what is its physical meaning (the clamp's moment)?
-# 2. Replace the sine modes in ``galerkin_tip`` by polynomials xi, xi^2, xi^3 (they satisfy
-#    only the essential condition).  Show that three of them give theta(1) = -gamma/6 exactly.
-# 3. Add the end mass Gamma of the README's "Variants": how does the lever (1 - xi) change?
+# ``check("1.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, exact fractions, scipy's ``solve_bvp``).  Each solution runs in this lesson.
+#
+# 1. Derive the weak form with a test function that does *not* vanish at xi = 0: the
+#    boundary term -theta'(0) phi(0) appears, the moment of the clamp (in units EI / L).
+#    With phi = 1, compute theta'(0) of section 5's pipe from the P2:16 solution ``q``, and
+#    compare it with the derivative of theta_h at 0.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Integrating by parts, int theta' phi' = -int theta'' phi - theta'(0) phi(0), so
+#    (W) = -theta'(0) phi(0); with phi = 1 the clamp carries the moment of the weight and
+#    of the follower force.  Expected: ``answer`` = -1.88628 (solve_bvp: -1.8862804) and
+#    ``slope`` = -1.88784: the weak form's value (a reaction, computed from the equation)
+#    is over a thousand times closer than the derivative of theta_h.
+#
+#    .. code-block:: python
+#
+#       disc = model.disc
+#       theta = disc.basis_values(disc.quad.x) @ q  # at the Gauss points of the mesh
+#       theta_1 = (disc.basis_values(np.array([1.0])) @ q)[0]
+#       g, v, a = params.gamma, params.v, params.alpha
+#       load = g * (1 - disc.quad.x) * np.sin(theta + a) + v**2 * np.sin(theta_1 - theta)
+#       answer = -disc.quad.w @ load
+#       slope = (disc.basis_values(np.array([1e-7])) @ q)[0] / 1e-7  # theta_h'(0)
+#       print(f"theta'(0): from (W) {answer:.7f}, differentiated {slope:.7f}")
+#       check("1.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Replace the sine modes by the polynomials xi, xi^2 to xi^n (they satisfy only the
+#    essential condition).  Compute theta_n(1) for n = 1, 2 and theta_2(1/4), gamma = 1.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Stiffness int (xi^i)' (xi^j)' = ij / (i + j - 1), load -int (1 - xi) xi^i =
+#    -1 / ((i + 1)(i + 2)).  Expected: ``tip_1`` = -0.166667 and ``tip_2`` = -0.166667,
+#    already exact: the tip value's Green's function (the solution for a unit moment at the
+#    tip) is xi, which both spaces contain; ``answer`` = -0.0885417, against the exact
+#    -37/384 = -0.0963542 (three polynomials contain the cubic solution: exact everywhere).
+#
+#    .. code-block:: python
+#
+#       def polynomial_galerkin(n):
+#           i = np.arange(1, n + 1)
+#           A = np.outer(i, i) / (i[:, None] + i[None, :] - 1)
+#           return np.linalg.solve(A, -1.0 / ((i + 1) * (i + 2)))
+#
+#       tip_1, tip_2 = (polynomial_galerkin(n).sum() for n in (1, 2))
+#       answer = polynomial_galerkin(2) @ [0.25, 0.25**2]
+#       print(f"theta_1(1) = {tip_1:.6f}, theta_2(1) = {tip_2:.6f}, theta_2(1/4) = {answer:.7f}")
+#       check("1.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. Add an end mass Gamma (:doc:`Variants of the pipe </theory/variants>`): its weight acts
+#    beyond every section, so the lever (1 - xi) becomes (1 - xi + Gamma).  Compute the
+#    sine-mode tip theta_32(1) of the linear problem for gamma = 1, Gamma = 0.5.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    int_0^1 sin(k xi) = 1/k (cos k = 0), so the load gains -gamma Gamma / k.  The closed
+#    form is theta(1) = -gamma (1/6 + Gamma/2).  Expected: ``answer`` = -0.416665
+#    (closed form -5/12 = -0.4166667).
+#
+#    .. code-block:: python
+#
+#       k = (2 * np.arange(1, 33) - 1) * np.pi / 2
+#       load = -gamma * (1 / k - np.sin(k) / k**2 + 0.5 / k)
+#       answer = float((load / (k**2 / 2)) @ np.sin(k))
+#       print(f"theta_32(1) with Gamma = 0.5: {answer:.7f}")
+#       check("1.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>

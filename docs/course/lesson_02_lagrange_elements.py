@@ -3,7 +3,7 @@ Lesson 2: Lagrange elements on a MeshLine, assembled in scikit-fem
 ==================================================================
 
 What you should see: scikit-fem's four pieces (mesh, element, basis, forms), the orders of
-P1 ... P3 on a linear model problem with a known solution (error k + 1 in L2, k in the
+P1 to P3 on a linear model problem with a known solution (error k + 1 in L2, k in the
 derivative), and a Newton solver of the pipe's weak form (W) of lesson 1 in forty lines
 that agrees with fempipe to round-off and with an independent ODE solver to its
 discretization error.
@@ -40,6 +40,9 @@ from skfem import (
 from skfem.helpers import dot, grad
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
+from fempipe.validation.bvp import solve_static_bvp  # the independent solver of section 3
 
 K3 = 3 * np.pi / 2
 
@@ -104,11 +107,15 @@ ax.legend(fontsize=8)
 #    + v^2 \int \cos(\theta(1)-\theta) (\phi_j(1) - \phi_j) \phi_i .
 #
 # The last term couples every equation to theta(1): a local mass-like matrix plus one
-# dense column (rank one), so J stays sparse.
+# dense column (rank one), so J stays sparse.  The result is checked twice: against
+# fempipe (another implementation of the same discrete problem: equal to round-off) and
+# against scipy's ``solve_bvp`` on the strong form, Eq. (31a) with theta(1) an unknown
+# parameter, which shares no code with either (equal to P2:16's discretization error).
 
 
-def static_fe(n: int, k: int, alpha: float, gamma: float, v: float):
-    """Solve (W) with P_k on n elements; (basis, dofs, Newton steps)."""
+def static_fe(n: int, k: int, alpha: float, gamma: float, v: float, guess=None):
+    """Solve (W) with P_k on n elements, Newton from theta = 0 or from ``guess(xi)``;
+    (basis, dofs, Newton steps)."""
     basis = Basis(MeshLine(np.linspace(0.0, 1.0, n + 1)), element(k), intorder=4 * k - 1)
     tip = basis.probes(np.array([[1.0]])).tocsr()  # theta(1) = tip @ u
     clamped = basis.get_dofs(lambda x: np.isclose(x[0], 0.0)).all()
@@ -128,7 +135,8 @@ def static_fe(n: int, k: int, alpha: float, gamma: float, v: float):
         return v**2 * np.cos(w["tip"] - w["theta"]) * phi
 
     K = laplace.assemble(basis)
-    u = np.zeros(basis.N)
+    # Lagrange dofs are values at the dof locations: the guess's interpolant, clamped
+    u = np.zeros(basis.N) if guess is None else guess(basis.doflocs[0]) * (basis.doflocs[0] > 0)
     for it in range(1, 30):
         fields = {"theta": basis.interpolate(u), "tip": float((tip @ u)[0])}
         r = K @ u + loads.assemble(basis, **fields)
@@ -151,7 +159,9 @@ basis, u, its = static_fe(16, 2, params.alpha, params.gamma, params.v)
 ours = x_g.assemble(basis, theta=basis.interpolate(u), alpha=params.alpha)
 model = fempipe.PipeModel(fempipe.FiniteElement(16, 2), params)
 theirs = fempipe.tip_values(model.disc, fempipe.solve_static(model).q, params.alpha)["X_tip"]
+X_bvp = solve_static_bvp(params.alpha, params.gamma, params.v, tol=1e-11).X_tip
 print(f"X_g(1): this lesson's P2:16 {ours:.12f} after {its} Newton steps, fempipe {theirs:.12f}")
+print(f"        scipy's solve_bvp on the strong form {X_bvp:.12f}: difference {ours - X_bvp:.1e}")
 
 # %%
 # The natural condition theta'(1) = 0 is satisfied only in the limit: the computed slope at
@@ -166,10 +176,93 @@ for n in (4, 8, 16, 32):
     print(f"P2:{n:2d}: |theta_h'(1)| = {tip_slopes[-1]:.2e}")
 slope_order = np.log2(tip_slopes[-2] / tip_slopes[-1])
 print(f"order of theta_h'(1) -> 0: {slope_order:.2f}")
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Assemble the model problem with ``intorder=1``: which order survives, and why?
-# 2. Put a node at xi = 0.3 and a load jump there; what happens to the orders?
-# 3. Replace the dense tip column by a sparse outer product and time both for n = 1000.
+# ``check("2.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, scipy's ``solve_bvp``).  Each solution runs in this lesson.
+#
+# 1. A load with a jump: f = 1 on [0, 0.3), 0 beyond.  The Green's function of u(1) is xi,
+#    so u(1) = int_0^0.3 xi = 0.045, and in 1-D the nodal values of P_k are exact when the
+#    load's integrals are.  Compute u_h(1) with P2 on 8 cells (0.3 inside a cell) and on
+#    10 cells (0.3 a node).
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    A Gauss rule integrates the jump inside a cell as if it were smooth: the load vector,
+#    and with it every nodal value, is off.  Put the node where the data jumps.  Expected:
+#    ``off_node`` = 0.048745 and ``answer`` = 0.045000 (exact to round-off).
+#
+#    .. code-block:: python
+#
+#       @LinearForm
+#       def jump_load(phi, w):
+#           return (w.x[0] < 0.3) * phi
+#
+#       def jump_tip(n):
+#           basis = Basis(MeshLine(np.linspace(0, 1, n + 1)), element(2), intorder=6)
+#           clamped = basis.get_dofs(lambda x: np.isclose(x[0], 0.0)).all()
+#           u = solve(*condense(laplace.assemble(basis), jump_load.assemble(basis), D=clamped))
+#           return (basis.probes(np.array([[1.0]])) @ u)[0]
+#
+#       off_node, answer = jump_tip(8), jump_tip(10)
+#       print(f"u_h(1): 8 cells {off_node:.7f}, 10 cells {answer:.12f}")
+#       check("2.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Stand the pipe up (alpha = pi, v = 0) above Greenhill's load (lesson 4), gamma = 10.
+#    ``static_fe`` from theta = 0 stays on the straight solution (R(0) = 0 there).  Start
+#    Newton from the guess theta = sin(pi xi / 2) and report theta_h(1) on P2:16.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Newton converges to the solution whose basin holds the guess: here the buckled one
+#    (its mirror image, from -sin, has theta(1) of the other sign).
+#    Expected: ``answer`` = 1.42139 (solve_bvp: 1.4213962).
+#
+#    .. code-block:: python
+#
+#       b, u_b, its_b = static_fe(16, 2, np.pi, 10.0, 0.0, guess=lambda xi: np.sin(np.pi * xi / 2))
+#       answer = (b.probes(np.array([[1.0]])) @ u_b)[0]
+#       print(f"buckled standing pipe, gamma = 10: theta_h(1) = {answer:.7f} ({its_b} steps)")
+#       check("2.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. How many nonzero entries has the Jacobian J of ``static_fe`` on P2:1000, against
+#    (2n + 1)^2 for a dense matrix?  Predict it, then count it.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    The bending and the local term couple the 3 dofs of each cell: 9 entries per cell,
+#    the n - 1 shared vertices counted twice, 8n + 1.  The rank-one term fills the tip
+#    dof's column, which had 3 entries: 2n - 2 more, 10n - 1 in all.
+#    Expected: ``answer`` = 9999, a fraction ``fraction`` = 0.0025 of the dense 4 004 001.
+#
+#    .. code-block:: python
+#
+#       b = Basis(MeshLine(np.linspace(0.0, 1.0, 1001)), element(2), intorder=7)
+#       column = sp.csr_matrix(np.ones((b.N, 1)))  # v^2 int cos(theta(1) - theta) phi_i != 0
+#       # the local term has the pattern of the bending term: both couple one cell's dofs
+#       J = laplace.assemble(b) + column @ b.probes(np.array([[1.0]]))
+#       answer = J.count_nonzero()
+#       fraction = answer / b.N**2
+#       print(f"P2:1000: {answer} nonzeros of {b.N**2} ({fraction:.2%})")
+#       check("2.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>

@@ -22,7 +22,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
 from fempipe.model.quadrature import lagrange_integrals
+from fempipe.plotting.scripts import show_or_save
 
 
 def cumulative_matrix(edges: np.ndarray, points: np.ndarray):
@@ -116,12 +118,84 @@ kernel_ratio = d1 / d2
 print(
     f"kernel form - Gram form: {d1:.1e} (200 cells), {d2:.1e} (400 cells), ratio {kernel_ratio:.2f}"
 )
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Show that C is exact for degree n_g - 1 but not n_g (try x^3 above).  What degree is
-#    the Gauss *sum* exact for, and why does that not help C?
-# 2. Prove b_p a_pq + b_q a_qp = b_p b_q for Gauss points from the exactness of the rule.
-# 3. Compute M qdd with two applications of C and C^R and compare the cost with M @ qdd for
-#    n = 10 000 unknowns.
+# ``check("3.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, exact fractions).  Each solution runs in this lesson.
+#
+# 1. C is exact for degree n_g - 1, not n_g: compute max |C x^3 - x^4/4| with 3 Gauss
+#    points on 4 cells.  The Gauss *sum* is exact up to degree 5: why does that not help C?
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Whole earlier cells contribute their Gauss sums, exact for x^3; the error is that of
+#    the partial cell, whose integral runs over [x_c, x_p] only: h^3 times the node
+#    polynomial (t - c_1)(t - c_2)(t - c_3) of the Gauss points integrated from 0 to c_p, a
+#    part of the cell on which no quadrature rule is exact.
+#    Expected: ``answer`` = 1.2207e-05 (= h^4 / 320 = 1/81920).
+#
+#    .. code-block:: python
+#
+#       answer = np.max(np.abs(C @ x**3 - x**4 / 4))
+#       print(f"max |C x^3 - x^4/4| = {answer:.6e}")
+#       check("3.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Prove b_p a_pq + b_q a_qp = b_p b_q for Gauss points, and compute the largest defect
+#    |b_p a_pq + b_q a_qp - b_p b_q| for the Gauss-Lobatto points (0, 1/2, 1).
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    With L_q(x) = int_0^x l_q, the product rule gives int_0^1 (l_p L_q + l_q L_p) =
+#    L_p(1) L_q(1) = b_p b_q.  l_p L_q has degree 2s - 1, which s Gauss points integrate
+#    exactly: int_0^1 l_p L_q = sum_r b_r l_p(c_r) L_q(c_r) = b_p a_pq.  Three Lobatto
+#    points are exact to degree 3 only.  Expected: ``answer`` = 0.027778 (= 1/36; times
+#    h^2 = 1/16 on section 2's cells: the 1.7e-3 printed there).
+#
+#    .. code-block:: python
+#
+#       lobatto = np.array([0.0, 0.5, 1.0])
+#       a_l = lagrange_integrals(lobatto, lobatto)
+#       b_l = lagrange_integrals(lobatto, np.array([1.0]))[0]
+#       ba = b_l[:, None] * a_l
+#       answer = np.max(np.abs(ba + ba.T - np.outer(b_l, b_l)))
+#       print(f"Lobatto: max defect {answer:.6f}")
+#       check("3.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. Without forming M: the bent pipe theta = xi moves with theta_t = xi.  Compute
+#    2T = int_0^1 |r_t|^2 with r_t = C(theta_t n), two integrations on the Gauss points of
+#    8 cells (what fempipe does in O(n) for M qdd).
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    In complex notation r_t(xi) = int_0^xi s e^(is) ds = e^(i xi)(1 - i xi) - 1, so
+#    2T = 7/3 - 4 sin 1 + 2 cos 1.  Expected: ``answer`` = 0.0480540 (closed form
+#    0.04805401; three Gauss points per cell leave 4e-10).
+#
+#    .. code-block:: python
+#
+#       C8, x8, w8 = cumulative_matrix(np.linspace(0.0, 1.0, 9), gauss)
+#       rt_x, rt_y = C8 @ (x8 * -np.sin(x8)), C8 @ (x8 * np.cos(x8))  # n = (-sin, cos)
+#       answer = w8 @ (rt_x**2 + rt_y**2)
+#       print(f"2T = {answer:.10f}")
+#       check("3.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>

@@ -18,8 +18,12 @@ appears at Greenhill's heavy-column load.
 # convergence): e_{k+1} / e_k^2 tends to a constant C.
 import matplotlib.pyplot as plt
 import numpy as np
+from scipy.optimize import brentq
+from scipy.special import jv
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
 
 model = fempipe.PipeModel(fempipe.FiniteElement(8, 3), fempipe.Params(alpha=np.pi / 2, v=3.0))
 exact = fempipe.solve_static(model, tol=1e-14).q
@@ -51,7 +55,10 @@ disc = fempipe.FiniteElement(8, 3)
 standing = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0))
 straight = fempipe.continuation(standing, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 pitchfork = straight.special[0]
-print(f"{pitchfork.kind} at gamma = {pitchfork.value:.8f}")
+# the independent reference: Greenhill's closed form, the first zero of J_(-1/3)
+greenhill = brentq(lambda s: jv(-1.0 / 3.0, 2.0 / 3.0 * np.sqrt(s)), 5.0, 10.0, xtol=1e-14)
+print(f"{pitchfork.kind} at gamma = {pitchfork.value:.8f}; Greenhill {greenhill:.8f}")
+print(f"P3:8 against the closed form: {pitchfork.value - greenhill:.1e}")
 right, left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds=0.2)
 
 # %%
@@ -95,12 +102,85 @@ ax.plot(fold.value, fempipe.tip_values(disc, fold.q, fold.value)["theta_tip"], "
 ax.set_xlabel("alpha")
 ax.set_ylabel("theta(1)")
 ax.set_title(f"gamma = 12, v = 0, P3:8: fold at alpha = {fold.value:.4f}", fontsize=9)
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Freeze the Jacobian at q_0 (a chord method): what order do you observe?
-# 2. Continue the straight standing pipe in v at gamma = 5 (below Greenhill's load): is
-#    there a static bifurcation, or does it lose stability otherwise (lesson 5)?
-# 3. Why does a change of sign of det J detect a pitchfork but not a fold of the extended
-#    system?  (Hint: count the sign changes of the parameter's tangent component.)
+# ``check("4.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, scipy's ``solve_bvp``, linear algebra).  Each solution runs in this lesson.
+#
+# 1. Freeze the Jacobian at q_0 = 0 (the chord method) for alpha = pi/2, gamma = 5, v = 2
+#    on P3:8.  What order do you observe, and what ratio e_(k+1) / e_k?
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    The error of the chord step is e_(k+1) = (I - J_0^-1 J(q*)) e_k + O(e_k^2): linear
+#    convergence (order 1), the ratio tending to the spectral radius of I - J_0^-1 J(q*).
+#    Expected: ``answer`` = 0.2045 (the spectral radius: 0.20445), reaching 1e-12 in
+#    ``steps`` = 17 steps.
+#
+#    .. code-block:: python
+#
+#       chord = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi / 2, gamma=5.0, v=2.0))
+#       q_star = fempipe.solve_static(chord, tol=1e-14).q
+#       J_0 = chord.static_jacobian(np.zeros(disc.n), dense=True)
+#       q_c, e_c = np.zeros(disc.n), [np.max(np.abs(q_star))]
+#       while e_c[-1] > 1e-12:
+#           q_c = q_c - np.linalg.solve(J_0, chord.static_residual(q_c))
+#           e_c.append(np.max(np.abs(q_c - q_star)))
+#       steps, answer = len(e_c) - 1, (e_c[-1] / e_c[-6]) ** (1 / 5)
+#       print(f"chord method: {steps} steps, e_(k+1) / e_k -> {answer:.4f}")
+#       check("4.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Continue the straight standing pipe of section 2 to gamma = 60: where does it buckle
+#    a second time?
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    At the second zero of J_(-1/3)((2/3) sqrt(gamma)), 55.97703: a second pitchfork, whose
+#    mode (one more inflexion) P3:8 resolves less well than the first.
+#    Expected: ``answer`` = 55.9772.
+#
+#    .. code-block:: python
+#
+#       tall = fempipe.continuation(standing, "gamma", stop=60.0, ds=1.0, ds_max=2.0)
+#       answer = tall.special[1].value
+#       print(f"bifurcations at gamma = {[round(s.value, 5) for s in tall.special]}")
+#       check("4.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. Tilt the standing pipe by 0.05 rad (alpha = pi + 0.05) and continue in gamma from 0 to
+#    12.  Does the pitchfork survive?  Report theta(1) at gamma = 12.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    No: the imperfection unfolds it; the pipe leans from the start and the branch has no
+#    singular point.  Expected: ``answer`` = 1.84559 (solve_bvp: 1.845593) with
+#    ``n_special`` = 0 special points.
+#
+#    .. code-block:: python
+#
+#       imperfect = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi + 0.05, gamma=0.0, v=0.0))
+#       path = fempipe.continuation(imperfect, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
+#       n_special = len(path.special)
+#       answer = fempipe.tip_values(disc, path.points[-1].q, np.pi + 0.05)["theta_tip"]
+#       print(f"gamma = {path.points[-1].value}: theta(1) = {answer:.6f}, {n_special} special points")
+#       check("4.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>

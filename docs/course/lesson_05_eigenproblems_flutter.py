@@ -28,6 +28,10 @@ import scipy.linalg as sla
 from scipy.optimize import brentq
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
+from fempipe.validation.classical import StraightPipe
+from fempipe.validation.classical import critical_velocity as classical_critical_velocity
 
 
 def eigenvalues(model: fempipe.PipeModel, q: np.ndarray | None = None) -> np.ndarray:
@@ -66,7 +70,11 @@ print(f"(beta_1 L)^2 = {beta1**2:.10f}; observed order of P2 {eigen_order:.2f} (
 # b_i = \int phi_i, the momentum the fluid carries out at the tip.  The eigenvalues are no
 # longer on the imaginary axis; as v grows the second mode's pair crosses it: a Hopf
 # (flutter) instability.  We locate it by bisection on the largest real part, then compare
-# with :func:`fempipe.critical_velocity` (events tracked along the static branch).
+# with :func:`fempipe.critical_velocity` (events tracked along the static branch: the same
+# discretization, another algorithm) and with the classical linear theory of the straight
+# pipe (Paidoussis' equation for the lateral displacement, solved on Legendre spectral
+# elements in ``fempipe.validation.classical``): an independent reference that shares no
+# code with the finite elements.
 flowing = fempipe.Params(alpha=0.0, beta=0.2, gamma=0.0, mu=1e-3)
 disc = fempipe.FiniteElement(8, 3)
 
@@ -84,9 +92,14 @@ print(
 )
 v_bisect = brentq(growth, 4.0, 7.0, xtol=1e-10)
 v_fempipe = fempipe.critical_velocity(fempipe.PipeModel(disc, flowing), v_max=8.0).v_cr
+classical = classical_critical_velocity(
+    StraightPipe(beta=0.2, gamma=0.0, mu=1e-3), v_max=8.0, method="legendre"
+)
+v_classical = classical.v_cr
 print(f"flutter: bisection v_cr = {v_bisect:.8f}, fempipe.critical_velocity {v_fempipe:.8f}")
+print(f"         classical theory {v_classical:.8f}: P3:8 differs by {v_bisect - v_classical:.1e}")
 
-# The eigenvalues for v = 0 ... 7, as dots coloured by v (no tracking: sorting by
+# The eigenvalues for v = 0 to 7, as dots coloured by v (no tracking: sorting by
 # frequency would mix the modes where one becomes overdamped; fempipe's
 # :func:`fempipe.root_locus` tracks them by their eigenvectors).
 vs = np.linspace(0.0, 7.0, 36)
@@ -101,13 +114,84 @@ fig.colorbar(sc, ax=ax, label="v")
 ax.axvline(0, color="k", lw=0.6)
 ax.set_xlabel("Re lambda")
 ax.set_ylabel("Im lambda")
-ax.set_title(f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0..7, P3:8: v_cr = {v_bisect:.4f}", fontsize=9)
+ax.set_title(
+    f"beta = 0.2, gamma = 0, mu = 1e-3, v = 0 to 7, P3:8: v_cr = {v_bisect:.4f}", fontsize=9
+)
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Show that with v = 0 and mu = 0 the pencil's eigenvalues are purely imaginary (K and M
-#    symmetric, K positive definite).  Which term breaks this for v > 0?
-# 2. Hang the pipe (gamma = 18.9, alpha = 0): how does gravity change omega_1 and v_cr?
-# 3. Replace the bisection by a secant method on the real part of the tracked eigenvalue.
-#    Why is tracking by eigenvectors safer than sorting by frequency?
+# ``check("5.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, the classical straight-pipe theory).  Each solution runs in this lesson.
+#
+# 1. With v = 0 and mu = 0 the eigenvalues are purely imaginary (K, M symmetric, K
+#    positive definite).  Kelvin-Voigt damping (mu = 1e-3, gamma = 0, v = 0) makes C = mu K:
+#    show that lambda = -mu omega^2 / 2 +- i omega (1 - mu^2 omega^2 / 4)^(1/2) and compute
+#    Re lambda_1 on P3:8.  Which terms break the symmetry for v > 0?
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    On an eigenvector of K x = omega^2 M x the equation becomes
+#    lambda^2 + mu omega^2 lambda + omega^2 = 0.  For v > 0 the follower force makes K
+#    non-symmetric and the Coriolis term adds C.  Expected: ``answer`` = -0.0061812
+#    (-mu (beta_1 L)^4 / 2 = -0.00618118).
+#
+#    .. code-block:: python
+#
+#       damped = fempipe.Params(alpha=0.0, beta=0.2, gamma=0.0, mu=1e-3, v=0.0)
+#       answer = oscillating(eigenvalues(fempipe.PipeModel(disc, damped)))[0].real
+#       print(f"Re lambda_1 = {answer:.9f}")
+#       check("5.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Hang the pipe (gamma = 18.9, alpha = 0; beta = 0.2, mu = 1e-3): find v_cr by
+#    bisection as in section 2.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Gravity puts the hanging pipe in tension, which stiffens it: v_cr rises from 5.64 to
+#    7.11.  Expected: ``answer`` = 7.10614 (classical theory: 7.106154).
+#
+#    .. code-block:: python
+#
+#       hanging = fempipe.Params(alpha=0.0, beta=0.2, gamma=18.9, mu=1e-3)
+#
+#       def growth_hanging(v):
+#           return np.max(eigenvalues(fempipe.PipeModel(disc, hanging.with_flow(v))).real)
+#
+#       answer = brentq(growth_hanging, 6.0, 8.0, xtol=1e-10)
+#       print(f"hanging pipe: v_cr = {answer:.6f}")
+#       check("5.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. At what frequency does the pipe of section 2 flutter?  Compare with the cantilever's
+#    first two frequencies.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    The crossing pair's Im lambda at v_cr.  Expected: ``answer`` = 13.6002, between
+#    omega_1 = 3.52 and omega_2 = 22.03 of the cantilever: the flow has coupled the modes.
+#
+#    .. code-block:: python
+#
+#       lam_cr = eigenvalues(fempipe.PipeModel(disc, flowing.with_flow(v_bisect)))
+#       answer = abs(lam_cr[np.argmax(lam_cr.real)].imag)
+#       print(f"flutter frequency {answer:.5f}")
+#       check("5.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>

@@ -21,6 +21,8 @@ import numpy as np
 import scipy.linalg as sla
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
 
 hanging = fempipe.Params(alpha=0.0)  # beta = 0.142, gamma = 18.9, mu = 5e-3
 fastest = []
@@ -41,7 +43,7 @@ print(f"growth per halving of h: 2^{stiffness_growth:.2f} (Kelvin-Voigt: h^-4)")
 # The 3-stage Radau IIA collocation method is implicit, of order 5 and L-stable: its
 # stability function R(z) tends to 0 as z -> -infinity, so the stiff components are damped
 # in one step instead of resolved.  fempipe writes its stage equations directly on the
-# second-order system M(q) q'' + ... = 0 (``fempipe.solvers.radau``) and controls the error
+# second-order system M(q) q'' = f(q, q') (``fempipe.solvers.radau``) and controls the error
 # as Hairer and Wanner's RADAU5.  The steps needed for the same physical motion barely
 # change with the mesh:
 for n in (4, 8, 16):
@@ -55,8 +57,8 @@ for n in (4, 8, 16):
 # 3. The order, with fixed steps
 # ------------------------------
 # A large swing (0.5 rad in the first mode) of the hanging pipe without flow or damping, on
-# three sine modes, integrated to tau = 1 with fixed steps h, h/2, ...: the differences of
-# successive end states fall as h^5.
+# three sine modes, integrated to tau = 1 with fixed steps h, h/2, h/4, h/8: the
+# differences of successive end states fall as h^5, the order the theory gives (2s - 1).
 conservative = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0, mu=0.0, v=0.0))
 q0, qd0 = fempipe.initial_state(conservative, mode=1, amplitude=0.5)
 steps = (0.02, 0.01, 0.005, 0.0025)
@@ -69,9 +71,10 @@ print("observed orders:", ", ".join(f"{p:.2f}" for p in radau_orders), "(theory 
 # %%
 # 4. Energy
 # ---------
-# For v = 0, mu = 0 the energy E = T + V is conserved (README, "Variants of the pipe").
-# Radau IIA is not symplectic: it does not conserve E exactly, but its error follows the
-# tolerance.
+# For v = 0, mu = 0 the energy E = T + V is conserved (the energy paragraph of
+# :doc:`Variants of the pipe </theory/variants>`): the exact conservation law is the
+# independent reference here.  Radau IIA is not symplectic: it does not conserve E
+# exactly, but its error follows the tolerance.
 drifts = {}
 fig, ax = plt.subplots(figsize=(5, 3.2), layout="constrained")
 for rtol in (1e-4, 1e-6):
@@ -84,13 +87,73 @@ ax.set_xlabel("tau")
 ax.set_ylabel("|E - E(0)| / E(0)")
 ax.set_title("alpha = 0, gamma = 18.9, v = 0, mu = 0; 3 sine modes, 0.5 rad swing", fontsize=9)
 ax.legend(fontsize=8)
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # Exercises
 # ---------
-# 1. Integrate the conservative swing with the trapezoidal rule (A-stable, not L-stable) on
-#    P2:16 with mu = 5e-3.  What happens to the highest modes?
-# 2. Why is the order of the stage values (3) lower than that of the step (5), and when does
-#    it matter (hint: dense output, events)?
-# 3. Add flow (v = 3): the energy now changes by the work of the jet; check the power
-#    balance with :func:`fempipe.analyses.dynamics.power_terms`.
+# ``check("6.k", answer)`` compares an answer with a reference computed independently (a
+# closed form, the other side of a balance).  Each solution runs in this lesson.
+#
+# 1. Add flow (v = 3, mu = 5e-3; the hanging pipe on three sine modes, 0.3 rad in the first
+#    mode): the energy now changes by the work of the jet, the Coriolis force and the
+#    damping.  Integrate dE/dtau of :func:`fempipe.analyses.dynamics.power_terms` over
+#    tau in [0, 1].
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    The power balance dE/dtau = -(sum of the non-conservative powers) holds along the
+#    exact motion; Simpson's rule on 401 dense outputs integrates it.
+#    Expected: ``answer`` = -0.179902 (E(1) - E(0) = -0.1799016).
+#
+#    .. code-block:: python
+#
+#       from scipy.integrate import simpson
+#
+#       from fempipe.analyses.dynamics import power_terms
+#
+#       with_flow = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0, v=3.0))
+#       q0_f, qd0_f = fempipe.initial_state(with_flow, mode=1, amplitude=0.3)
+#       run = fempipe.simulate(with_flow, q0_f, qd0_f, 1.0, rtol=1e-9, n_out=401)
+#       power = [power_terms(with_flow, q, qd)["dE_dtau"] for q, qd in zip(run.q, run.qdot)]
+#       answer = simpson(power, x=run.t)
+#       print(f"int_0^1 dE/dtau = {answer:.7f}")
+#       check("6.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Radau IIA is the collocation method on the Radau points c = ((4 - sqrt 6)/10,
+#    (4 + sqrt 6)/10, 1): its tableau is lesson 3's a_pq and b_q on them.  Compute the
+#    stability function R(z) = 1 + z b^T (I - z A)^-1 (1, 1, 1) at z = -1 and z = -1e6.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    R is the (2, 3) Pade approximant of e^z, (1 + 2z/5 + z^2/20) / (1 - 3z/5 + 3z^2/20 -
+#    z^3/60): close to e^z for small z (order 5: the local error is O(z^6)), and R(z) -> 0
+#    as z -> -infinity (L-stability).  Expected: ``answer`` = 0.3679245 (e^-1 = 0.3678794)
+#    and ``stiff`` = 3.0e-06 (about -3/z).
+#
+#    .. code-block:: python
+#
+#       from fempipe.model.quadrature import lagrange_integrals
+#
+#       radau = np.array([(4 - np.sqrt(6)) / 10, (4 + np.sqrt(6)) / 10, 1.0])
+#       A_r = lagrange_integrals(radau, radau)
+#       b_r = lagrange_integrals(radau, np.array([1.0]))[0]
+#
+#       def R(z):
+#           return 1 + z * b_r @ np.linalg.solve(np.eye(3) - z * A_r, np.ones(3))
+#
+#       answer, stiff = R(-1.0), R(-1e6)
+#       print(f"R(-1) = {answer:.8f}, R(-1e6) = {stiff:.2e}")
+#       check("6.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>

@@ -18,6 +18,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
+from fempipe.course import check  # noqa: F401 (the exercises' solutions use it)
+from fempipe.plotting.scripts import show_or_save
 from fempipe.studies.convergence import Family
 from fempipe.validation.bvp import solve_static_bvp
 
@@ -71,6 +73,7 @@ ax.set_ylabel(r"|error of tip drop $X_g(1)$| (units of $L$)")
 ax.set_title("Texier-Dorbolo pipe, U = 2 m/s: convergence", fontsize=10)
 ax.grid(alpha=0.3, which="both")
 ax.legend(fontsize=9)
+show_or_save()  # run as a script: a window, or PNG files without a display
 
 # %%
 # 2. Why the orders come out as they do
@@ -123,9 +126,100 @@ for s in study.series:
 # %%
 # Exercises
 # ---------
-# 1. Repeat the study for the critical velocity (``Quantity("v_cr", ...)``): do the orders
-#    of eigenvalues match those of the tip values?
-# 2. Put an end mass (README, "Variants of the pipe") on the pipe: which basis loses an order,
+# ``check("7.k", answer)`` compares an answer with a reference computed independently
+# (scipy's ``solve_bvp``, the theoretical order).  Each solution runs in this lesson.
+#
+# 1. Repeat the study by hand for the critical velocity of the hanging pipe
+#    (``fempipe.Params(alpha=0.0)``) with P2 on 4, 8, 16 cells, against the classical
+#    straight-pipe theory (``fempipe.validation.classical``).  What order do the eigenvalues
+#    converge with?
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Like the tip values, 2k: an eigenvalue's error is, as a functional's, the product of
+#    the errors of the eigenvector and of its adjoint.  Expected: ``answer`` = 3.97 (from
+#    8 to 16 cells; theory 4).
+#
+#    .. code-block:: python
+#
+#       from fempipe.validation.classical import StraightPipe, critical_velocity
+#
+#       straight = StraightPipe(beta=0.142, gamma=18.9, mu=5e-3)
+#       v_ref = critical_velocity(straight, v_max=15.0, method="legendre").v_cr
+#       hang = fempipe.Params(alpha=0.0)
+#       v_n = [
+#           fempipe.critical_velocity(fempipe.PipeModel(fempipe.FiniteElement(n, 2), hang), 15.0).v_cr
+#           for n in (4, 8, 16)
+#       ]
+#       err = np.abs(np.array(v_n) - v_ref)
+#       answer = np.log2(err[-2] / err[-1])
+#       print(f"v_cr errors {err}, order {answer:.2f}")
+#       check("7.1", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 2. Put an end mass Gamma = 0.5 (:doc:`Variants of the pipe </theory/variants>`) on the
+#    pipe of section 1.  Compute X_g(1) on P3:8, and the orders of 16 to 32 sine and beam
+#    modes against ``solve_static_bvp`` with ``end_mass=0.5``.  Which basis loses accuracy,
 #    and why (hint: theta''(1))?
-# 3. Use ``fempipe.richardson`` on the P2 family by hand and compare with the study's
-#    reference.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    The strong form at xi = 1 now gives theta''(1) = gamma Gamma sin(theta(1) + alpha),
+#    no longer 0.  Every beam mode has psi_r''(1) = 0 (the beam's free end carries no
+#    shear force) and cannot follow it: the beam modes drop from N^-4 to N^-2 (measured).
+#    The sine modes constrain nothing at the tip beyond theta'(1) = 0 and keep N^-3.
+#    Expected: ``answer`` = 0.704968 (solve_bvp: 0.7049678), ``sine_order`` = 2.99 and
+#    ``beam_order`` = 2.00.
+#
+#    .. code-block:: python
+#
+#       import dataclasses
+#
+#       heavy = dataclasses.replace(params, end_mass=0.5)
+#       ref_heavy = solve_static_bvp(alpha, heavy.gamma, heavy.v, tol=1e-10, end_mass=0.5).X_tip
+#
+#       def x_heavy(disc):
+#           q_heavy = fempipe.solve_static(fempipe.PipeModel(disc, heavy)).q
+#           return fempipe.tip_values(disc, q_heavy, alpha)["X_tip"]
+#
+#       e_sine, e_beam = (
+#           [abs(x_heavy(fempipe.Modal(n, basis=b)) - ref_heavy) for n in (16, 32)]
+#           for b in ("sine", "beam")
+#       )
+#       sine_order, beam_order = np.log2(e_sine[0] / e_sine[1]), np.log2(e_beam[0] / e_beam[1])
+#       answer = x_heavy(fempipe.FiniteElement(8, 3))
+#       print(f"X_g(1) = {answer:.8f}; orders: sine {sine_order:.2f}, beam {beam_order:.2f}")
+#       check("7.2", answer)
+#
+#    .. raw:: html
+#
+#       </details>
+#
+# 3. Extrapolate by hand (``fempipe.richardson``) from P2:8 and P2:16 with the order 4 and
+#    compare with the reference of section 1.
+#
+#    .. raw:: html
+#
+#       <details><summary>Solution</summary>
+#
+#    Q* = Q_16 + (Q_16 - Q_8) / (2^4 - 1) removes the leading error term: P2:16 alone is
+#    off by 3.6e-7, the extrapolation by 3.4e-9.  Expected: ``answer`` = 0.527282495
+#    (solve_bvp: 0.5272824985).
+#
+#    .. code-block:: python
+#
+#       x_8, x_16 = (x_tip(fempipe.FiniteElement(n, 2)) for n in (8, 16))
+#       answer = float(np.real(fempipe.richardson(x_8, x_16, 4.0)[0]))
+#       print(f"Richardson: {answer:.10f}, off by {answer - reference:.1e}")
+#       check("7.3", answer)
+#
+#    .. raw:: html
+#
+#       </details>
