@@ -14,9 +14,10 @@ def bench_convergence_vcr(quick: bool = False) -> dict:
     ``fempipe convergence --quantity v_cr_in_plane --alpha pi/2 --v 0,10 --fe
     P1,P2,P3 --modal 2:32 --basis sine,beam`` (quick: 2:8 elements, 2:8
     modes): the paper's planar v_cr (``--quantity v_cr`` is the first loss in
-    three dimensions, out of the plane at this alpha), in this process: CPU seconds of the whole study and of each family, and the
-    observed orders (theory 2, 4, 6 in dofs for P1, P2, P3; 3 for the sine
-    modes, 4 for the beam modes).
+    three dimensions, out of the plane at this alpha), in this process: CPU
+    seconds of the whole study and of each family, and the observed orders
+    (theory 2, 4, 6 in dofs for P1, P2, P3; 3 for the sine modes, 4 for the
+    beam modes).
     """
     from dataclasses import replace
 

@@ -32,7 +32,9 @@ SIMULATE = ("simulate", "--alpha", "0", "--v", "10", "--planar", "--json")
 
 @register("simulate_output")
 def bench_simulate_output(quick: bool = False) -> dict:
-    """CPU seconds of ``fempipe simulate --alpha 0 --v 10`` with and without --out; target ratio 3.
+    """CPU seconds of ``fempipe simulate --alpha 0 --v 10`` with and without --out.
+
+    Target: the ratio at most :data:`OUTPUT_RATIO_TARGET`.
 
     Each run is a new ``python -m fempipe`` process (``sys.executable``,
     ``MPLBACKEND=Agg``); its CPU time is user + system of the finished

@@ -24,7 +24,9 @@ _STARTUP_COMMANDS: tuple[tuple[str, list[str], bool], ...] = (
 
 @register("startup")
 def bench_startup(quick: bool = False) -> dict:
-    """CPU seconds of ``import fempipe`` and ``fempipe --help`` in a fresh python; target 0.4.
+    """CPU seconds of ``import fempipe`` and ``fempipe --help`` in a fresh python.
+
+    Target: :data:`STARTUP_TARGET`.
 
     Each command runs as a new ``python`` process (``sys.executable``); its
     user + system CPU time is the change of ``getrusage(RUSAGE_CHILDREN)``,

@@ -39,8 +39,8 @@ __all__ = [
 
 #: Up to this many entries (n_q n) Phi, K and Phi^T W are applied as dense
 #: arrays in the batched stage functions: for the small systems of limit
-#: cycles and continuation (P3:16: 96 x 48) a dense product costs a few
-#: microseconds where scipy.sparse's dispatch alone costs about ten.
+#: cycles and continuation (P3:16: 96 x 48) a dense product costs less than
+#: scipy.sparse's dispatch alone.
 DENSE_OPERATORS_MAX = 32768
 
 #: Up to this many quadrature points the integration operators are applied as

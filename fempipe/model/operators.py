@@ -209,7 +209,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         The dense form is one product ``Phi^T diag(d) Phi`` (gravity and the
         local follower part) plus the follower's tip column and the springs:
         for the small systems of the continuation (n of a few hundred) it is
-        ~10 times cheaper than building the sparse matrix from its parts.
+        much cheaper than building the sparse matrix from its parts.
         """
         if dense:
             fl = self.fields(q)
