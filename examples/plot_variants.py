@@ -3,11 +3,11 @@ The variants: an end mass and springs
 =====================================
 
 Paidoussis' classical variants are terms of the same weak form (:doc:`Variants of the
-pipe </theory/variants>`): a point mass Gamma = M_e / ((m + M) L) at the free end, springs (kappa, xi_s) tying
-the centerline to its undeformed position, external viscous damping sigma.  They are fields
-of :class:`fempipe.Params`, zero by default, and every analysis uses them.  Here the
-frequencies of the gravity-free pipe without flow and the critical velocity of the hanging
-pipe, with and without them.
+pipe </theory/variants>`): a point mass Gamma = M_e / ((m + M) L) at the free end, springs
+(kappa, xi_s) tying the centerline to its undeformed position, external viscous damping
+sigma.  They are fields of :class:`fempipe.Params`, zero by default, and every analysis uses
+them.  Here the frequencies of the gravity-free pipe without flow and the critical velocity
+of the hanging pipe, with and without them.
 """
 
 # %%

@@ -126,7 +126,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 # ``check("3.k", answer)`` compares an answer with a reference computed independently (a
 # closed form, exact fractions).  Each solution runs in this lesson.
 #
-# 1. C is exact for degree n_g - 1, not n_g: compute max |C x^3 - x^4/4| with 3 Gauss
+# 1. C is exact for degree n_g - 1, not n_g: compute :math:`\max |C x^3 - x^4/4|` with 3 Gauss
 #    points on 4 cells.  The Gauss *sum* is exact up to degree 5: why does that not help C?
 #
 #    .. raw:: html
@@ -150,7 +150,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #       </details>
 #
 # 2. Prove b_p a_pq + b_q a_qp = b_p b_q for Gauss points, and compute the largest defect
-#    |b_p a_pq + b_q a_qp - b_p b_q| for the Gauss-Lobatto points (0, 1/2, 1).
+#    :math:`|b_p a_{pq} + b_q a_{qp} - b_p b_q|` for the Gauss-Lobatto points (0, 1/2, 1).
 #
 #    .. raw:: html
 #
@@ -177,8 +177,8 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #       </details>
 #
 # 3. Without forming M: the bent pipe theta = xi moves with theta_t = xi.  Compute
-#    2T = int_0^1 |r_t|^2 with r_t = C(theta_t n), two integrations on the Gauss points of
-#    8 cells (what fempipe does in O(n) for M qdd).
+#    :math:`2T = \int_0^1 |\dot r|^2` with r_t = C(theta_t n), two integrations on the
+#    Gauss points of 8 cells (what fempipe does in O(n) for M qdd).
 #
 #    .. raw:: html
 #

@@ -15,7 +15,7 @@ appears at Greenhill's heavy-column load.
 # R(q) is the weak form (W) of lesson 1 on a discretization; ``static_residual`` and
 # ``static_jacobian`` are its residual and analytic Jacobian.  Each step solves
 # J(q_k) dq = -R(q_k).  Near the solution the error squares at each step (quadratic
-# convergence): e_{k+1} / e_k^2 tends to a constant C.
+# convergence): :math:`e_{k+1} / e_k^2` tends to a constant C.
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy.optimize import brentq
@@ -46,7 +46,7 @@ print("e_(k+1) / e_k^2:", ", ".join(f"{c:.3f}" for c in newton_constants))
 # ---------------------------------
 # Standing up (alpha = pi) and without flow, the straight pipe q = 0 solves R = 0 for every
 # gamma.  It buckles under its own weight at Greenhill's load, the first zero of
-# J_{-1/3}((2/3) sqrt(gamma)): gamma = 7.8373.  There the Jacobian is singular and two
+# :math:`J_{-1/3}(\tfrac23 \sqrt\gamma)`: gamma = 7.8373.  There the Jacobian is singular and two
 # mirror-image branches cross the straight one: a pitchfork.  Pseudo-arclength continuation
 # solves R(q, gamma) = 0 together with a step along the tangent, (q - q_0, gamma - gamma_0)
 # . t_0 = ds, whose Jacobian stays regular at folds; a change of sign of det J marks a
@@ -111,14 +111,15 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 # closed form, scipy's ``solve_bvp``, linear algebra).  Each solution runs in this lesson.
 #
 # 1. Freeze the Jacobian at q_0 = 0 (the chord method) for alpha = pi/2, gamma = 5, v = 2
-#    on P3:8.  What order do you observe, and what ratio e_(k+1) / e_k?
+#    on P3:8.  What order do you observe, and what ratio :math:`e_{k+1} / e_k`?
 #
 #    .. raw:: html
 #
 #       <details><summary>Solution</summary>
 #
-#    The error of the chord step is e_(k+1) = (I - J_0^-1 J(q*)) e_k + O(e_k^2): linear
-#    convergence (order 1), the ratio tending to the spectral radius of I - J_0^-1 J(q*).
+#    The error of the chord step is :math:`e_{k+1} = (I - J_0^{-1} J(q^*)) e_k + O(e_k^2)`:
+#    linear convergence (order 1), the ratio tending to the spectral radius of
+#    :math:`I - J_0^{-1} J(q^*)`.
 #    Expected: ``answer`` = 0.2045 (the spectral radius: 0.20445), reaching 1e-12 in
 #    ``steps`` = 17 steps.
 #
@@ -146,8 +147,8 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #
 #       <details><summary>Solution</summary>
 #
-#    At the second zero of J_(-1/3)((2/3) sqrt(gamma)), 55.97703: a second pitchfork, whose
-#    mode (one more inflexion) P3:8 resolves less well than the first.
+#    At the second zero of :math:`J_{-1/3}(\tfrac23 \sqrt\gamma)`, 55.97703: a second
+#    pitchfork, whose mode (one more inflexion) P3:8 resolves less well than the first.
 #    Expected: ``answer`` = 55.9772.
 #
 #    .. code-block:: python
@@ -178,7 +179,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #       path = fempipe.continuation(imperfect, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 #       n_special = len(path.special)
 #       answer = fempipe.tip_values(disc, path.points[-1].q, np.pi + 0.05)["theta_tip"]
-#       print(f"gamma = {path.points[-1].value}: theta(1) = {answer:.6f}, {n_special} special points")
+#       print(f"gamma = 12: theta(1) = {answer:.6f}, {n_special} special points")
 #       check("4.3", answer)
 #
 #    .. raw:: html
