@@ -25,6 +25,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.text import Annotation, Text  # noqa: E402
+from mpl_toolkits.mplot3d.axis3d import Axis as Axis3D  # noqa: E402
 
 from fempipe.model.discretization import Modal  # noqa: E402
 from fempipe.model.operators import PipeModel  # noqa: E402
@@ -36,8 +37,12 @@ _MIN_OVERLAP_PX2 = 2.0
 
 def _axis_texts(axis) -> list[Text]:
     # Only the tick labels matplotlib draws (ticks inside the view); the
-    # others keep stale positions.
-    ticks = axis._update_ticks()
+    # others keep stale positions.  A 3-D axis places its ticks as it draws.
+    if isinstance(axis, Axis3D):
+        lo, hi = sorted(axis.get_view_interval())
+        ticks = [t for t in axis.get_major_ticks() if lo <= t.get_loc() <= hi]
+    else:
+        ticks = axis._update_ticks()
     out = []
     for t in ticks:
         out += [lab for lab in (t.label1, t.label2) if lab.get_visible()]
@@ -61,6 +66,8 @@ def drawn_texts(fig) -> list[Text]:
             continue
         texts += [ax.title, ax._left_title, ax._right_title, *ax.texts]
         texts += _axis_texts(ax.xaxis) + _axis_texts(ax.yaxis)
+        if hasattr(ax, "zaxis"):
+            texts += _axis_texts(ax.zaxis)
         leg = ax.get_legend()
         if leg is not None and leg.get_visible():
             texts += [*leg.get_texts(), leg.get_title()]

@@ -250,7 +250,7 @@ def _write(output: reporting.Output, result: dict, res) -> None:
     try:
         output.json("critical.json", result)
         output.csv("events.csv", rows, estimates.error_columns(rows))
-        output.figure("branches.png", ax.figure, dpi=150)
+        output.figure("branches.png", ax.figure, dpi=150, bbox_inches="tight")
     finally:
         plt.close(ax.figure)
 

@@ -14,8 +14,10 @@ quasi-periodic motion), "steps", "rejected_steps", "t_end", "cpu_time", ...}``;
 Y_tip is the tip's coordinate out of the plane of the static state.
 ``--out DIR`` writes simulate.json, tip.csv (tau, eta_tip, X_tip, Z_tip,
 Y_tip at every step), trajectory.pvd with its VTU frames (the last
-``--frames`` steps' worth of the run, at most 400), tip_orbit.png (from above
-and from the side) and snapshots_3d.png.
+``--frames`` steps' worth of the run, at most 400), tip_orbit.png (the tip's
+path from above, from the side and from the front, each view framed on the
+motion) and snapshots_3d.png (the pipe over one oscillation, colored by tau);
+both mark the static state the motion left.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
     space = SpaceModel(disc, params)
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
-        _write(output, result, space, motion)
+        _write(output, result, space, motion, _static_state(model))
     if args.json:
         print(json_dumps(result))
     else:
@@ -77,7 +79,26 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
     return 0
 
 
-def _write(output: reporting.Output, result: dict, space, motion) -> None:
+def _static_state(model) -> tuple:
+    """``(U, stable)``: the static state the motion starts from, as 3-D unknowns, and
+    whether it is linearly stable in three dimensions (None where undecided), for the
+    figures."""
+    from fempipe.analyses.space.verdict import equilibrium_verdict
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_static
+    from fempipe.model.space import planar_state
+
+    q = solve_static(model).q
+    verdict = equilibrium_verdict(model, q, linearly_stable(model, q))
+    return planar_state(q), verdict["stable_3d"]
+
+
+def _write(output: reporting.Output, result: dict, space, motion, static) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     from fempipe.io.space_trajectory import write_space_trajectory
     from fempipe.plotting.space import plot_space_snapshots, plot_tip_orbit
 
@@ -91,8 +112,13 @@ def _write(output: reporting.Output, result: dict, space, motion) -> None:
         write_space_trajectory(output.path("trajectory.pvd"), space, motion.t[keep], motion.U[keep])
     )
     output.record(output.path("trajectory"))
-    output.figure("tip_orbit.png", plot_tip_orbit(space, motion), dpi=130)
-    output.figure("snapshots_3d.png", plot_space_snapshots(space, motion), dpi=130)
+    for name, fig in (
+        ("tip_orbit.png", plot_tip_orbit(space, motion, static=static)),
+        ("snapshots_3d.png", plot_space_snapshots(space, motion, static=static)),
+    ):
+        # tight: a 3-D axes' labels reach beyond the box the layout gives it
+        output.figure(name, fig, dpi=130, bbox_inches="tight")
+        plt.close(fig)
 
 
 def _summary(r: dict) -> None:

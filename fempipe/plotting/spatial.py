@@ -4,104 +4,270 @@ from __future__ import annotations
 
 import numpy as np
 
-from .style import EVENT_MARKERS, mask_edges, new_axes
+from .stability import mark_v_cr
+from .static import OUT_OF_PLANE_STYLE
+from .style import EVENT_MARKERS, new_axes, parameter_text, place_legend
 
 
-def _out_unstable_at(branch_in, branch_out) -> np.ndarray:
-    """Per in-plane sample: unstable out of the plane.
-
-    The out-of-plane analysis samples the same branch (every third point and
-    its own insertions).  Where the branch is monotone in v, the verdict at
-    an in-plane sample is that after the last out-of-plane event below its v
-    (events are located to 1e-10); elsewhere (a branch through a fold) it is
-    that of the out-of-plane sample nearest in (v, theta(1)).
-    """
-    if branch_out is None or branch_out.v.size == 0:
-        return np.zeros(branch_in.v.size, bool)
-    v = branch_in.v
+def _monotone(v: np.ndarray) -> bool:
     dv = np.diff(v)
-    events = [e for e in branch_out.events if e.type != "fold" and not e.at_start]
-    if np.all(dv >= 0) or np.all(dv <= 0):
-        rising = v[-1] >= v[0]
-        order = sorted(events, key=lambda e: e.v, reverse=not rising)
-        start = branch_out.n_unstable[np.argmin(np.abs(branch_out.v - v[0]))] > 0
-        out = np.full(v.size, start)
-        for e in order:
-            past = v >= e.v if rising else v <= e.v
-            out[past] = not e.stable_after
+    return bool(np.all(dv >= 0) or np.all(dv <= 0))
+
+
+def _unstable_at(v: np.ndarray, theta: np.ndarray, branch, monotone: bool) -> np.ndarray:
+    """Whether ``branch`` (one plane's analysis of a static branch) is unstable at the
+    points (v, theta(1)) of that branch.
+
+    Where the branch is monotone in v, the verdict at a point is that of the
+    branch's lowest sample changed by each event of the plane below the
+    point's v (events are located to 1e-10, ``stable_after`` is the verdict
+    above them in v; the two planes' analyses sample the branch at different
+    points); elsewhere (a branch through a fold) it is that of the plane's
+    sample nearest in (v, theta(1)).
+    """
+    if branch is None or branch.v.size == 0:
+        return np.zeros(v.size, bool)
+    if monotone:
+        out = np.full(v.size, branch.n_unstable[np.argmin(branch.v)] > 0)
+        events = [e for e in branch.events if e.type != "fold" and not e.at_start]
+        for e in sorted(events, key=lambda e: e.v):
+            out[v >= e.v] = not e.stable_after
         return out
-    d = np.hypot(
-        v[:, None] - branch_out.v[None, :],
-        branch_in.theta_tip[:, None] - branch_out.theta_tip[None, :],
+    d = np.hypot(v[:, None] - branch.v[None, :], theta[:, None] - branch.theta_tip[None, :])
+    return branch.n_unstable[np.argmin(d, axis=1)] > 0
+
+
+def _theta_at(b, v: float) -> float:
+    """theta(1) of branch ``b`` at ``v``: interpolated between the samples around the
+    sample nearest in v (on a branch through a fold v alone does not say where)."""
+    j = int(np.argmin(np.abs(b.v - v)))
+    for k in (j - 1, j):
+        if 0 <= k < b.v.size - 1 and (b.v[k] - v) * (b.v[k + 1] - v) <= 0 and b.v[k] != b.v[k + 1]:
+            w = (v - b.v[k]) / (b.v[k + 1] - b.v[k])
+            return float(b.theta_tip[k] + w * (b.theta_tip[k + 1] - b.theta_tip[k]))
+    return float(b.theta_tip[j])
+
+
+def branch_pieces(b, bo) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(v, theta, kind)``: the branch's samples with the events of both planes inserted,
+    and per segment 0 (stable in 3-D), 1 (unstable in the plane) or 2 (unstable out of
+    the plane only), so that the styles change at the events themselves.
+
+    Parameters
+    ----------
+    b, bo : BranchStability
+        The in-plane and the out-of-plane analysis of one static branch (``bo`` None:
+        the in-plane verdict alone).
+    """
+    v, theta = b.v, b.theta_tip
+    monotone = _monotone(v)
+    if monotone and v.size > 1:
+        events = [e.v for br in (b, bo) if br is not None for e in br.events]
+        inside = [x for x in events if min(v[0], v[-1]) < x < max(v[0], v[-1])]
+        order = 1 if v[-1] >= v[0] else -1
+        v = np.unique(np.concatenate([v, inside]))[::order]
+        theta = np.interp(v, b.v[::order], b.theta_tip[::order])
+    if v.size < 2:
+        return v, theta, np.zeros(0, int)
+    mid_v, mid_theta = (v[1:] + v[:-1]) / 2, (theta[1:] + theta[:-1]) / 2
+    unstable_in = _unstable_at(mid_v, mid_theta, b, monotone)
+    unstable_out = _unstable_at(mid_v, mid_theta, bo, monotone)
+    kind = np.where(unstable_in, 1, np.where(unstable_out, 2, 0))
+    return v, theta, kind
+
+
+def _runs(kind: np.ndarray):
+    """``(kind, first segment, last segment)`` of each run of equal kinds."""
+    start = 0
+    for k in range(1, kind.size + 1):
+        if k == kind.size or kind[k] != kind[start]:
+            yield int(kind[start]), start, k - 1
+            start = k
+
+
+#: The marks of the events: in the plane open (a white face hides the curve) and large,
+#: out of it filled, small and white-edged, drawn over them, so that events at the same
+#: v show both (the straight pipe loses stability in every plane at once).
+_EVENT_STYLE = {
+    "in": {"ms": 13.0, "mew": 1.8, "mfc": "white", "zorder": 4},
+    "out": {"ms": 6.0, "mew": 0.7, "mec": "white", "zorder": 5},
+}
+#: The pieces of a branch: stable in 3-D, unstable in the plane, out of it only (the
+#: dash-dot of the static shapes' figure, :data:`fempipe.plotting.static.OUT_OF_PLANE_STYLE`).
+_PIECES = (("-", 1.8), ("--", 1.4), (OUT_OF_PLANE_STYLE, 2.2))
+#: First losses of the two planes closer than this share of the v-range get a zoomed inset.
+ZOOM_BELOW = 0.05
+
+
+def _draw_branches(ax, result, colors) -> list:
+    """The branches' pieces and the events of both planes; returns the event marks."""
+    outs = {b.name: b for b in result.out_of_plane.branches}
+    marks = []
+    for i, b in enumerate(result.in_plane.branches):
+        c = colors[i % len(colors)]
+        bo = outs.get(b.name)
+        v, theta, kind = branch_pieces(b, bo)
+        for k, first, last in _runs(kind):
+            ls, lw = _PIECES[k]
+            ax.plot(v[first : last + 2], theta[first : last + 2], ls=ls, color=c, lw=lw)
+        for branch, plane in ((b, "in"), (bo, "out")):
+            if branch is None:
+                continue
+            for ev in branch.events:
+                if ev.type == "fold" and plane == "out":  # the static branch's: drawn once
+                    continue
+                (mark,) = ax.plot(
+                    ev.v,
+                    _theta_at(b, ev.v),
+                    ls="",
+                    marker=EVENT_MARKERS.get(ev.type, "x"),
+                    color=c,
+                    **({"mfc": c} if plane == "out" else {}),
+                    gid=f"event {plane} {ev.type} {b.name}",
+                    **_EVENT_STYLE[plane],
+                )
+                marks.append(mark)
+    return marks
+
+
+def _key(result, colors, v_cr_line) -> list:
+    """Legend handles: the branches, the styles, the event kinds present, the planes, v_cr."""
+    from matplotlib.lines import Line2D
+
+    grey = "0.3"
+    key = [
+        Line2D([], [], color=colors[i % len(colors)], lw=2.0, label=f"branch {b.name}")
+        for i, b in enumerate(result.in_plane.branches)
+    ]
+    key += [
+        Line2D([], [], color=grey, ls=ls, lw=lw, label=label)
+        for (ls, lw), label in zip(
+            _PIECES, ("stable (3-D)", "unstable in the plane", "unstable out of the plane only"),
+            strict=True,
+        )
+    ]  # fmt: skip
+    kinds = dict.fromkeys(e.type for e in result.events)
+    key += [
+        Line2D([], [], color=grey, ls="", marker=EVENT_MARKERS.get(k, "x"), mfc="none", label=k)
+        for k in kinds
+    ]
+    for plane, label in (("in", "event in the plane"), ("out", "event out of the plane")):
+        style = {"mfc": grey} | {k: x for k, x in _EVENT_STYLE[plane].items() if k != "zorder"}
+        key.append(Line2D([], [], color=grey, ls="", marker="o", label=label, **style))
+    if v_cr_line is not None:
+        key.append(v_cr_line)
+    return key
+
+
+def _plane_words(result) -> str | None:
+    """The words " in both planes" where the two planes lose stability at the same v (the
+    straight pipe), else None (the critical event's plane names itself)."""
+    vi, vo = result.in_plane.v_cr, result.out_of_plane.v_cr
+    return " in both planes" if vi is not None and vi == vo else None
+
+
+def _zoom_window(result) -> tuple[float, float] | None:
+    """The v-interval around the two planes' first losses when they are too close to tell
+    apart at the scale of the whole range (None otherwise)."""
+    vi, vo = result.in_plane.v_cr, result.out_of_plane.v_cr
+    lo, hi = result.in_plane.v_range
+    if vi is None or vo is None or vi == vo or abs(vi - vo) >= ZOOM_BELOW * (hi - lo):
+        return None
+    pad = 1.5 * abs(vi - vo)
+    return max(lo, min(vi, vo) - pad), min(hi, max(vi, vo) + pad)
+
+
+def _emptiest_corner(ax, size: float) -> list[float]:
+    """Bounds (axes fraction) of the corner box of ``size`` that covers the fewest data points."""
+    pts = [
+        ax.transAxes.inverted().transform(ax.transData.transform(line.get_xydata()))
+        for line in ax.get_lines()
+    ]
+    pts = np.vstack([p[np.isfinite(p).all(axis=1)] for p in pts])
+    best, corner = None, None
+    # Room for the inset's own tick labels (left of it and under it) and title (above).
+    for x0 in (0.97 - size, 0.15):  # right first, then left
+        for y0 in (0.12, 0.9 - size):
+            box = (pts[:, 0] > x0 - 0.05) & (pts[:, 0] < x0 + size + 0.03)
+            box &= (pts[:, 1] > y0 - 0.06) & (pts[:, 1] < y0 + size + 0.08)
+            if best is None or box.sum() < best:
+                best, corner = int(box.sum()), [x0, y0, size, size]
+    return corner
+
+
+def _zoom(ax, result, colors, window) -> None:
+    """An inset of the branches over ``window`` in v, in the emptiest corner of ``ax``."""
+    from matplotlib.ticker import MaxNLocator
+
+    lo, hi = window
+    outs = {b.name: b for b in result.out_of_plane.branches}
+    ys = []
+    for b in result.in_plane.branches:
+        v, theta, _ = branch_pieces(b, outs.get(b.name))
+        near = (v >= lo) & (v <= hi)
+        ys.extend(theta[near])
+        if _monotone(b.v):
+            ys.extend(_theta_at(b, x) for x in (lo, hi) if min(b.v) <= x <= max(b.v))
+    if not ys:
+        return
+    y0, y1 = min(ys), max(ys)
+    pad = 0.2 * max(y1 - y0, 1e-9)
+    ax.set_xlim(ax.get_xlim())  # the corner is chosen on the final limits
+    ax.set_ylim(ax.get_ylim())
+    inset = ax.inset_axes(_emptiest_corner(ax, 0.4))
+    _draw_branches(inset, result, colors)
+    mark_v_cr(inset, result.critical, _plane_words(result))
+    inset.set_xlim(lo, hi)
+    inset.set_ylim(y0 - pad, y1 + pad)
+    inset.tick_params(labelsize=9)
+    # On white: the zoom's connectors run behind it.
+    inset.set_title(
+        f"zoom: {lo:.4g} ≤ v ≤ {hi:.4g}", fontsize=9, bbox={"fc": "white", "ec": "none", "pad": 1}
     )
-    return branch_out.n_unstable[np.argmin(d, axis=1)] > 0
+    inset.xaxis.set_major_locator(MaxNLocator(3))
+    inset.yaxis.set_major_locator(MaxNLocator(3))
+    ax.indicate_inset_zoom(inset, edgecolor="0.4")
 
 
 def plot_spatial_branches(result, ax=None, title=None):
     """theta(1) of the static branches against v, stable in 3-D or not, and both planes' events.
 
-    Solid: stable in three dimensions; dashed: unstable in the plane; dotted:
-    stable in the plane, unstable out of it.  Events: open markers in the
-    plane, filled out of it (○ flutter, □ divergence, △ restabilization,
-    ◇ fold).
+    Solid: stable in three dimensions; dashed: unstable in the plane;
+    dash-dot: stable in the plane, unstable out of it; the styles change at
+    the events.  Events: large open markers in the plane, small filled ones
+    out of it drawn over them (○ flutter, □ divergence, △ restabilization,
+    ◇ fold), so that events of the two planes at the same v both show.  The
+    vertical line is v_cr, the first loss of stability in three dimensions;
+    where the two planes' first losses are closer than :data:`ZOOM_BELOW` of
+    the range, an inset shows them.
 
     Parameters
     ----------
     result : SpatialStability
     ax : Axes, optional
+    title : str, optional
 
     Returns
     -------
     Axes
     """
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
 
-    ax = new_axes(ax, size=(6.4, 5.0))
+    ax = new_axes(ax, size=(7.6, 6.6))
     colors = plt.cm.tab10(np.arange(10))
-    outs = {b.name: b for b in result.out_of_plane.branches}
-    for i, b in enumerate(result.in_plane.branches):
-        c = colors[i % 10]
-        bo = outs.get(b.name)
-        unstable_in = b.n_unstable > 0
-        unstable_out = _out_unstable_at(b, bo) & ~unstable_in
-        stable = ~unstable_in & ~unstable_out
-        # Each piece joined to its neighbours, so that the styles meet.
-        for mask, ls, lw, label in (
-            (stable, "-", 1.3, b.name),
-            (unstable_in, "--", 1.3, None),
-            (unstable_out, ":", 1.8, None),
-        ):
-            y = np.where(mask | mask_edges(mask), b.theta_tip, np.nan)
-            ax.plot(b.v, y, ls, color=c, lw=lw, label=label)
-        for branch, out in ((b, False), (bo, True)):
-            if branch is None:
-                continue
-            fill = c if out else "none"
-            for ev in branch.events:
-                if ev.type == "fold" and out:  # the static branch's: drawn once
-                    continue
-                j = int(np.argmin(np.abs(b.v - ev.v)))
-                ax.plot(
-                    ev.v, b.theta_tip[j], EVENT_MARKERS.get(ev.type, "x"), color=c, mfc=fill, ms=7
-                )
-    key = [
-        Line2D([], [], color="0.3", ls="-", label="stable (3-D)"),
-        Line2D([], [], color="0.3", ls="--", label="unstable in the plane"),
-        Line2D([], [], color="0.3", ls=":", lw=1.8, label="unstable out of the plane only"),
-        Line2D([], [], color="0.3", ls="", marker="o", mfc="none", label="event in the plane"),
-        Line2D([], [], color="0.3", ls="", marker="o", label="event out of the plane"),
-    ]
-    handles, _ = ax.get_legend_handles_labels()
-    ax.legend(handles=handles + key, fontsize=9, loc="best")
-    ax.set_xlabel("v")
-    ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
+    _draw_branches(ax, result, colors)
+    v_cr_line = mark_v_cr(ax, result.critical, _plane_words(result))
+    ax.set_xlabel("v (flow velocity)", fontsize=11)
+    ax.set_ylabel(r"$\theta(1)$ of the static state (rad)", fontsize=11)
+    ax.tick_params(labelsize=10)
     p = result.in_plane.params
     ax.set_title(
-        title
-        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
-        rf"$\mu$ = {p.mu:g}: stability in three dimensions",
-        fontsize=10,
+        title or f"{parameter_text(p, v=False)}: stability of the static branches in 3-D",
+        fontsize=11,
     )
     ax.grid(alpha=0.3)
+    window = _zoom_window(result)
+    if window is not None:
+        _zoom(ax, result, colors, window)
+    place_legend(ax, _key(result, colors, v_cr_line), ncols=3)
     return ax

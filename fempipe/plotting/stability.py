@@ -18,10 +18,15 @@ from __future__ import annotations
 import numpy as np
 
 from .layout import declutter
-from .style import EVENT_MARKERS, mask_edges, new_axes
+from .style import EVENT_MARKERS, mask_edges, new_axes, parameter_text
+
+#: The color of the v_cr line (:func:`mark_v_cr`): no branch is drawn in it.
+V_CR_COLOR = "#B2182B"
 
 __all__ = [
     "MODE_COLORS",
+    "V_CR_COLOR",
+    "mark_v_cr",
     "mode_color",
     "plot_argand",
     "plot_stability_map",
@@ -86,10 +91,7 @@ def plot_argand(
     ax.set_xlabel(r"Re $\Omega$ = Im $\lambda$")
     ax.set_ylabel(r"Im $\Omega$ = $-$Re $\lambda$   (< 0 unstable)")
     p = locus.params
-    head = (
-        rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}, "
-        rf"$\mu$ = {p.mu:g}"
-    )
+    head = parameter_text(p, v=False)
     if same:
         head += ": out of the plane the same loci"
     ax.set_title(
@@ -370,18 +372,36 @@ def _plot_spatial_map(smap, ax, title):
     return ax
 
 
+def mark_v_cr(ax, event, plane: str | None = None):
+    """A vertical line at v_cr, the first loss of stability (``event``, a StabilityEvent);
+    its value, kind and plane (``plane``, else the event's) in its legend label.  Returns
+    the line (None without one)."""
+    if event is None:
+        return None
+    plane = plane or {"in": " in the plane", "out": " out of the plane"}.get(event.plane, "")
+    return ax.axvline(
+        event.v,
+        color=V_CR_COLOR,
+        lw=1.1,
+        zorder=1,
+        label=rf"$v_{{cr}}$ = {event.v:.5g} ({event.type}{plane})",
+    )
+
+
 def plot_branches(result, ax=None, title=None):
     """Static branches of a :class:`~fempipe.analyses.stability.StabilityResult`: theta_tip against v.
 
     Solid where stable, dashed where some resolved eigenvalue has
     Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilization,
-    ◇ fold).
+    ◇ fold, keyed in the legend); the vertical line at v_cr, its value in the
+    legend.
 
     Returns
     -------
     Axes
     """
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     ax = new_axes(ax)
     colors = plt.cm.tab10(np.arange(10))
@@ -397,17 +417,20 @@ def plot_branches(result, ax=None, title=None):
             ax.plot(
                 ev.v, b.theta_tip[j], EVENT_MARKERS.get(ev.type, "x"), color=c, mfc="none", ms=6
             )
+    mark_v_cr(ax, result.critical)
+    handles, _ = ax.get_legend_handles_labels()
+    handles += [
+        Line2D([], [], color="0.3", ls="", marker=EVENT_MARKERS.get(k, "x"), mfc="none", label=k)
+        for k in dict.fromkeys(e.type for e in result.events)
+    ]
     ax.set_xlabel("v")
     ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
-    p = result.params
     ax.set_title(
-        title
-        or rf"$\alpha$ = {np.degrees(p.alpha):.4g}°, $\beta$ = {p.beta:g}, $\gamma$ = {p.gamma:g}: "
-        "solid stable, dashed unstable",
+        title or f"{parameter_text(result.params, v=False)}: solid stable, dashed unstable",
         fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
+    ax.legend(handles=handles, fontsize=9)
     return ax
 
 

@@ -1,4 +1,6 @@
-"""What the figures of the package share: new axes, the markers of the events, joined pieces.
+"""What the figures of the package share: new axes, the markers of the events, joined pieces,
+the line of parameters of a title or caption (the angle in degrees, ``α = 60°``), a legend
+under the axes.
 
 matplotlib is imported only when a new figure is made.
 """
@@ -7,7 +9,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["EVENT_MARKERS", "new_axes", "mask_edges"]
+__all__ = [
+    "EVENT_MARKERS",
+    "angle_text",
+    "mask_edges",
+    "new_axes",
+    "parameter_text",
+    "place_legend",
+]
 
 #: The marker of each stability event (:class:`fempipe.analyses.stability.StabilityEvent`
 #: ``type``) on the branch figures; another type is drawn as ``"x"``.
@@ -32,3 +41,60 @@ def mask_edges(mask: np.ndarray) -> np.ndarray:
     out[1:] |= mask[:-1]
     out[:-1] |= mask[1:]
     return out
+
+
+def place_legend(ax, handles: list, ncols: int = 2, fontsize: float = 10):
+    """The legend of ``handles`` under the axes (constrained layout), else inside them.
+
+    Under the axes it covers no curve, however the branches fill the frame;
+    it takes fewer columns than ``ncols`` where those would be wider than
+    the figure.
+    """
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    fig = ax.figure
+    if not isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine):
+        return ax.legend(handles=handles, fontsize=fontsize, loc="best")
+    renderer = fig.canvas.get_renderer()
+    for n in range(min(ncols, len(handles)), 0, -1):
+        legend = fig.legend(
+            handles=handles, loc="outside lower center", ncols=n, fontsize=fontsize, frameon=False
+        )
+        if n == 1 or legend.get_window_extent(renderer).width <= 0.98 * fig.bbox.width:
+            return legend
+        legend.remove()
+    return legend
+
+
+def angle_text(alpha: float) -> str:
+    """``α = 60°``: the inclination as every figure's title and caption writes it."""
+    return f"α = {np.degrees(alpha):.4g}°"
+
+
+def parameter_text(params, v: bool = True) -> str:
+    """``α = 60°, β = 0.3, γ = 10, μ = 0.005, v = 8.2``: a figure's line of parameters.
+
+    Parameters
+    ----------
+    params : Params
+    v : bool
+        Include the flow velocity (False where v is the figure's abscissa).
+    """
+    parts = [
+        angle_text(params.alpha),
+        f"β = {params.beta:.4g}",
+        f"γ = {params.gamma:.4g}",
+        f"μ = {params.mu:.4g}",
+    ]
+    if v:
+        parts.append(f"v = {params.v:.4g}")
+    # The variants of the pipe, named only where present.
+    for key, name in (
+        ("end_mass", "end mass"),
+        ("external_damping", "σ"),
+        ("hysteretic_damping", "μ_h"),
+    ):
+        if getattr(params, key, 0.0):
+            parts.append(f"{name} = {getattr(params, key):.4g}")
+    parts += [f"spring κ = {k:.4g} at ξ = {x:.4g}" for k, x in getattr(params, "springs", ())]
+    return ", ".join(parts)
