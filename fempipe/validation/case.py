@@ -1,32 +1,29 @@
 """A validation case, declared once: what it reproduces, its references, its result.
 
-Every case module of :mod:`fempipe.validation` declares one :class:`Case`:
-its name, the paper's figure, a title, what the paper shows there (each
-statement is checked) and the names of the checks every run must emit.  The
-case reads its reference numbers through :attr:`Case.references`
-(``references/<name>.json``, each entry a value with its source), builds
-checks against them with :meth:`References.close` and
-:meth:`References.below` (value and source taken from the file, never
-restated), and returns :meth:`Case.result`.
+Every case module of :mod:`fempipe.validation` declares one :class:`Case`: its name, the
+paper's figure, a title and what the paper shows there.  Its reference file
+``references/<name>.json`` (:func:`load_references`) holds the reference numbers, each a
+value with its source, the figure's caption (a template of the reference values) and the
+specs of the case's checks (:mod:`fempipe.validation.evaluate`).  A run measures and returns
+:meth:`Case.result`, which judges every measurement by its spec.
 
-A declared check that a run did not emit is a failed numerics check in that
-result: a code path that silently skipped a comparison fails the case
-instead of shrinking the report.
+A check of the file without placeholders must be measured by every run (``"required":
+"full"``: by every full run; ``false``: when it applies); a run adds the members of a family
+of checks it must measure.  A required check that a run did not measure is a failed numerics
+check in that result: a code path that silently skipped a comparison fails the case instead
+of shrinking the report.
 """
 
 from __future__ import annotations
 
 import json
-import time
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
-from fractions import Fraction
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from .checks import CaseResult, Check, Table, below, close
+from .checks import CaseResult, Check, Table
+from .evaluate import KINDS, SPEC_KEYS, Measured, alpha_name, evaluate, fill
 
 __all__ = ["Case", "References", "alpha_name", "label_tag", "load_references"]
 
@@ -35,15 +32,18 @@ _REFERENCE_DIR = Path(__file__).with_name("references")
 
 @dataclass(frozen=True)
 class References:
-    """The reference numbers of one case, from ``references/<case>.json``.
+    """The reference file of one case, ``references/<case>.json``.
 
-    Each entry is ``{"value": ..., "source": "..."}``; ``about`` is the file's
-    ``"_about"`` text (where the numbers come from as a whole).
+    ``entries`` are the reference numbers, each ``{"value": ..., "source": "..."}``;
+    ``about`` the file's ``"_about"`` text (where the numbers come from as a whole);
+    ``caption`` the figure's caption template; ``checks`` the check specs by name.
     """
 
     case: str
     about: str
     entries: Mapping[str, Mapping[str, Any]]
+    caption: str = ""
+    checks: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def value(self, key: str, quick: bool = False) -> Any:
         """The value of ``key``; with ``quick``, that of ``key + "_quick"`` (which must exist)."""
@@ -54,18 +54,10 @@ class References:
         return self.entries[key]["source"]
 
     def close(
-        self,
-        name: str,
-        claim: str,
-        measured: float,
-        *,
-        key: str | None = None,
-        atol: float = 0.0,
-        rtol: float = 0.0,
-        why: str,
-        category: str = "numerics",
-    ) -> Check:
-        """``measured`` against the file's value of ``key`` (default ``name``), citing its source."""
+        self, name, claim, measured, *, key=None, atol=0.0, rtol=0.0, why, category="numerics"
+    ):  # TRANSITION
+        from .checks import close
+
         key = key or name
         return close(
             name,
@@ -79,17 +71,9 @@ class References:
             category=category,
         )
 
-    def below(
-        self,
-        name: str,
-        claim: str,
-        measured: float,
-        key: str,
-        *,
-        source: str,
-        category: str = "numerics",
-    ) -> Check:
-        """``measured <= `` the file's tolerance ``key``; the file's source says why it has that size."""
+    def below(self, name, claim, measured, key, *, source, category="numerics"):  # TRANSITION
+        from .checks import below
+
         return below(
             name,
             claim,
@@ -100,31 +84,59 @@ class References:
             category=category,
         )
 
+    def names(self, quick: bool) -> dict:
+        """The values the templates name: every entry (in the quick suite its ``_quick``
+        variant, where there is one) and ``"sources"``, their sources."""
+        key = {
+            k: f"{k}_quick" if quick and f"{k}_quick" in self.entries else k for k in self.entries
+        }
+        out = {k: self.entries[q]["value"] for k, q in key.items()}
+        out["sources"] = {k: self.entries[q]["source"] for k, q in key.items()}
+        return out
+
+
+def _check_spec(path: Path, name: str, spec: Any) -> None:
+    """Raise ValueError unless ``spec`` is a valid check spec (evaluate's module docstring)."""
+    if not isinstance(spec, dict) or spec.get("kind") not in KINDS:
+        raise ValueError(f"{path}: check {name!r} needs a kind, one of {', '.join(KINDS)}")
+    missing = {"claim", "source"} | ({"why"} if spec["kind"] != "holds" else set())
+    unknown = set(spec) - SPEC_KEYS - set(KINDS[spec["kind"]])
+    if missing - set(spec) or unknown:
+        raise ValueError(
+            f"{path}: check {name!r}: missing {missing - set(spec)}, unknown {unknown}"
+        )
+
 
 def load_references(case: str) -> References:
-    """The reference numbers of ``case`` from ``references/<case>.json``.
+    """The reference file of ``case``, ``references/<case>.json``.
 
     Raises
     ------
     ValueError
-        If the file has no ``"_about"`` or an entry lacks ``value`` or ``source``.
+        If the file has no ``"_about"``, an entry lacks ``value`` or ``source``, or a check
+        spec is not valid.
     """
     path = _REFERENCE_DIR / f"{case}.json"
     with path.open(encoding="utf-8") as fh:
         data = json.load(fh)
     if not isinstance(data.get("_about"), str):
         raise ValueError(f"{path}: needs an '_about' text")
-    for key, entry in data.items():
-        if key.startswith("_"):
-            continue
+    checks = data.get("checks", {})
+    for name, spec in checks.items():
+        _check_spec(path, name, spec)
+    entries = {k: v for k, v in data.items() if not k.startswith("_") and k not in _META}
+    for key, entry in entries.items():
         if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
             raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
-    entries = {k: v for k, v in data.items() if not k.startswith("_")}
-    return References(case, data["_about"], entries)
+    return References(case, data["_about"], entries, data.get("caption", ""), checks)
+
+
+#: The keys of a reference file that are not reference numbers.
+_META = ("caption", "checks")
 
 
 def not_emitted(name: str, case: str) -> Check:
-    """The failed numerics check standing for a declared check that a run did not emit."""
+    """The failed numerics check standing for a required check that a run did not measure."""
     return Check(
         name,
         f"the declared check {name!r} is computed",
@@ -135,6 +147,12 @@ def not_emitted(name: str, case: str) -> Check:
         "every check a case declares must be emitted by each run",
         f"the declaration of fempipe.validation.{case}",
     )
+
+
+def required(checks: Mapping[str, Mapping], quick: bool) -> list[str]:
+    """The checks of a spec section that every run (``quick`` or full) must measure."""
+    want = (True, "quick") if quick else (True, "full")
+    return [n for n, s in checks.items() if "{" not in n and s.get("required", True) in want]
 
 
 @dataclass(frozen=True)
@@ -150,68 +168,74 @@ class Case:
     title : str
     paper_shows : tuple of str
         What the paper shows there, in words; each is checked.
-    requires : tuple of str
-        Names of checks every run must emit; checks that depend on the run
-        (one per inclination, the full suite only) are passed to
-        :meth:`result` by the run that knows them.
     not_checked : tuple of str
         Statements of the paper this case cannot check (said so in the
         report, never counted as reproduced).
-    caption : str
-        The figure's caption in the report: parameters, flow velocities,
-        discretizations in words, the key of colors, line styles and
-        markers, which shapes are static and which oscillate.
     """
 
     name: str
     figure: str
     title: str
     paper_shows: tuple[str, ...]
-    requires: tuple[str, ...] = ()
-    caption: str = ""
+    requires: tuple[str, ...] = ()  # TRANSITION
+    caption: str = ""  # TRANSITION
     not_checked: tuple[str, ...] = ()
 
     @property
     def references(self) -> References:
-        """The case's reference numbers (``references/<name>.json``)."""
+        """The case's reference file (``references/<name>.json``)."""
         return load_references(self.name)
+
+    def filled_caption(self) -> str:
+        """The figure's caption in the report, filled from the (full suite's) reference values:
+        parameters, discretizations in words, the key of colors, line styles and markers."""
+        refs = self.references
+        return self.caption or fill(refs.caption, refs.names(quick=False))
+
+    def check(self, m: Measured, quick: bool) -> Check:
+        """The check of one measurement (a case that needs a verdict to write a finding)."""
+        refs = self.references
+        return evaluate(_spec(refs, m.spec), m, refs.names(quick))
 
     def result(
         self,
-        checks: Iterable[Check],
+        measured: Iterable[Measured],
         *,
         quick: bool,
-        started: float,
         tables: Iterable[Table] = (),
         findings: Iterable[str] = (),
         data: dict | None = None,
         explained: Iterable[str] = (),
         requires: Iterable[str] = (),
+        started=None,  # TRANSITION
     ) -> CaseResult:
-        """The case's result; every declared check that is missing is added as failed.
+        """The case's result: every measurement judged by its spec, every required check
+        that is missing added as failed.
 
         Parameters
         ----------
-        checks : iterable of Check
+        measured : iterable of Measured
         quick : bool
             Whether the quick version ran.
-        started : float
-            ``time.perf_counter()`` when the run started (the runtime is measured from it).
         tables, findings, data, explained
             As :class:`~fempipe.validation.checks.CaseResult`.
         requires : iterable of str
-            Check names this run must emit besides :attr:`requires`.
+            Names of checks this run must measure besides the file's required ones.
         """
-        checks = tuple(checks)
+        refs = self.references
+        names = refs.names(quick)
+        checks = tuple(
+            m if isinstance(m, Check) else evaluate(_spec(refs, m.spec), m, names) for m in measured
+        )  # TRANSITION
         emitted = {c.name for c in checks}
-        declared = dict.fromkeys((*self.requires, *requires))
+        declared = dict.fromkeys((*self.requires, *required(refs.checks, quick), *requires))
         missing = tuple(not_emitted(n, self.name) for n in declared if n not in emitted)
         return CaseResult(
             case=self.name,
             figure=self.figure,
             title=self.title,
             paper_shows=self.paper_shows,
-            caption=self.caption,
+            caption=self.filled_caption(),
             not_checked=self.not_checked,
             checks=checks + missing,
             tables=tuple(tables),
@@ -219,23 +243,14 @@ class Case:
             data={} if data is None else data,
             explained=tuple(explained),
             quick=quick,
-            runtime=time.perf_counter() - started,
         )
 
 
-def alpha_name(alpha: float) -> str:
-    """The inclination as a multiple of pi (``π/4``, ``3π/4``, ``-2π/3``, ``0``) when it is one.
-
-    Denominators up to 12; any other angle is printed with 4 decimals.
-    """
-    k = Fraction(alpha / np.pi).limit_denominator(12)
-    if abs(float(k) * np.pi - alpha) > 1e-12:
-        return f"{alpha:.4f}"
-    if k == 0:
-        return "0"
-    sign = "-" if k < 0 else ""
-    num, den = abs(k.numerator), k.denominator
-    return f"{sign}{'' if num == 1 else num}π{'' if den == 1 else f'/{den}'}"
+def _spec(refs: References, key: str) -> Mapping:
+    try:
+        return refs.checks[key]
+    except KeyError:
+        raise KeyError(f"{refs.case}: no check {key!r} in references/{refs.case}.json") from None
 
 
 def label_tag(label: str) -> str:

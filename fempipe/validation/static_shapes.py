@@ -21,11 +21,11 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .bvp import solve_static_bvp
-from .checks import Check, Table, below
+from .checks import Table
+from .evaluate import Measured, measure
 
 __all__ = [
     "CONVERGED_FE",
-    "PANEL_CHECKS",
     "PAPER_MODES",
     "Panel",
     "StaticShapes",
@@ -43,8 +43,6 @@ __all__ = [
 CONVERGED_FE = "P3:16"
 #: The paper's truncations.
 PAPER_MODES = (3, 4)
-#: The checks :func:`panel_checks` emits.
-PANEL_CHECKS = ("fe_mesh_converged", "fe_vs_bvp", *(f"modal_{n}_shape" for n in PAPER_MODES))
 
 
 def discretizations(extra_modes: Sequence[int] = ()) -> dict[str, object]:
@@ -260,45 +258,19 @@ def _stability(disc, fam: StaticShapes) -> tuple[bool, ...]:
     )
 
 
-def panel_checks(panels: Sequence[Panel], modal_tol: float = 0.01) -> list[Check]:
-    """The standard checks of a static figure (mesh, BVP, N = 3 and N = 4): :data:`PANEL_CHECKS`."""
+def panel_checks(panels: Sequence[Panel]) -> list[Measured]:
+    """The standard measurements of a static figure: ``fe_mesh_converged``, ``fe_vs_bvp``,
+    ``modal_3_shape`` and ``modal_4_shape`` (on the worst panel)."""
+    worst = {n: max(panels, key=lambda p, n=n: p.modal_error[f"N = {n}"]) for n in PAPER_MODES}
+    meshes = sorted({next(iter(p.fams))[3:] for p in panels})
     return [
-        below(
-            "fe_mesh_converged",
-            "converged FE tip positions equal the 2x refined mesh (all panels)",
-            max(p.mesh_error for p in panels),
-            1e-8,
-            why="P3 tip error is O(h^6); 1e-8 L is invisible in any figure",
-            source="fempipe, 2x refined mesh ("
-            + ", ".join(sorted({next(iter(p.fams))[3:] for p in panels}))
-            + " doubled)",
+        measure("fe_mesh_converged", max(p.mesh_error for p in panels), meshes=meshes),
+        measure("fe_vs_bvp", max(p.bvp_error for p in panels)),
+        *(
+            measure(f"modal_{n}_shape", w.modal_error[f"N = {n}"], worst=w.title)
+            for n, w in worst.items()
         ),
-        below(
-            "fe_vs_bvp",
-            "FE tip positions equal an independent strong-form solution (all panels)",
-            max(p.bvp_error for p in panels),
-            1e-8,
-            why="solve_bvp tolerance 1e-10; both discretization errors far below 1e-8",
-            source="scipy.integrate.solve_bvp on Eq. (31a) (fempipe.validation.bvp)",
-        ),
-        *(_modal_check(panels, n, modal_tol) for n in PAPER_MODES),
     ]
-
-
-def _modal_check(panels: Sequence[Panel], n: int, modal_tol: float) -> Check:
-    """N = n against the converged FE shapes, judged on the worst panel."""
-    label = f"N = {n}"
-    worst = max(panels, key=lambda p: p.modal_error[label])
-    return below(
-        f"modal_{n}_shape",
-        f"{label} (the paper's truncation) reproduces the converged shapes to the "
-        "resolution of the figures",
-        worst.modal_error[label],
-        modal_tol,
-        why=f"{modal_tol:g} L, about a line width on the paper's axes (worst panel: {worst.title})",
-        source="fempipe converged FE (this case)",
-        category="paper",
-    )
 
 
 def panel_table(panels: Sequence[Panel], title: str) -> Table:

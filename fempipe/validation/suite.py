@@ -210,6 +210,13 @@ def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcom
     )
 
 
+def _timed(run: Callable[..., CaseResult], quick: bool, **kwargs) -> CaseResult:
+    """``run(quick=quick, **kwargs)`` with its wall time as the result's ``runtime``."""
+    t0 = time.perf_counter()
+    result = run(quick=quick, **kwargs)
+    return replace(result, runtime=time.perf_counter() - t0)
+
+
 def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = None) -> CaseOutcome:
     """Run one case; draw its figure into ``out`` (if given) as ``<name>.png``.
 
@@ -218,7 +225,7 @@ def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = Non
     t0 = time.perf_counter()
     try:
         module = load_case(name)
-        result = module.run(quick=quick)
+        result = _timed(module.run, quick)
     except Exception:  # a failing case must not stop the suite
         log.exception("validation case %s failed", name)
         return CaseOutcome(
@@ -230,7 +237,7 @@ def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = Non
 def run_part(name: str, quick: bool, part) -> tuple[str, object]:
     """One part of a split case: ``("ok", CaseResult)`` or ``("error", traceback)``."""
     try:
-        return "ok", load_case(name).run(quick=quick, part=part)
+        return "ok", _timed(load_case(name).run, quick, part=part)
     except Exception:
         log.exception("validation case %s, part %s failed", name, part)
         return "error", traceback.format_exc()
