@@ -1,0 +1,196 @@
+"""Floquet multipliers of the straight pipe under a pulsating flow (the terms of Eq. (20) in v, v^2, dv/dtau).
+
+Where the straight state theta = 0 solves Eq. (20) at every flow (alpha = 0 or pi), a
+pulsating flow v(tau) = v0 (1 + sigma sin(omega tau)) leaves it in place and acts on small
+motions through time-periodic coefficients:
+
+    M q'' + (C0 + v C1) q' + (K0 + v^2 K2 + dv/dtau K3) q = 0,
+
+C1 the Coriolis term, K2 the follower force, K3 the flow acceleration.  The multipliers are the
+eigenvalues of the monodromy matrix over one period 2 pi / omega, computed on the lowest modes
+of the pipe (a Ritz projection that is the full problem when every mode is kept) with the
+L-stable Radau IIA method.  Derivation and the truncation's convergence:
+docs/theory/parametric.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.linalg as sla
+
+from fempipe.analyses.stability.linear import straight_is_static
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.radau import A as RADAU_A
+from fempipe.solvers.radau import C as RADAU_C
+
+__all__ = ["PulsationPencil", "ReducedPulsation", "floquet_multipliers"]
+
+
+def _dense(a) -> np.ndarray:
+    return np.asarray(a.toarray() if hasattr(a, "toarray") else a, dtype=float)
+
+
+@dataclass(frozen=True)
+class PulsationPencil:
+    """The straight pipe's linear matrices, split by their dependence on the flow.
+
+    Attributes
+    ----------
+    M, K0, K2, K3, C0, C1 : ndarray, shape (n, n)
+        K(tau) = K0 + v^2 K2 + (dv/dtau) K3 and C(tau) = C0 + v C1 at theta = 0.
+    """
+
+    M: np.ndarray
+    K0: np.ndarray
+    K2: np.ndarray
+    K3: np.ndarray
+    C0: np.ndarray
+    C1: np.ndarray
+
+    @classmethod
+    def of(cls, model: PipeModel) -> PulsationPencil:
+        """The matrices of ``model`` (its v is ignored) at the straight state.
+
+        Raises
+        ------
+        ValueError
+            If theta = 0 is not a static state (alpha is neither 0 nor pi).
+        """
+        if not straight_is_static(model.params):
+            raise ValueError(
+                f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
+                "alpha = 0 or pi; a bent pipe needs its forced periodic response"
+            )
+        n = model.n
+        zero = np.zeros(n)
+
+        def jacobians(v: float, v_dot: float):
+            m = model.with_params(replace(model.params, v=v))
+            Jq, Jqd, Jqdd = m.jacobians(zero, zero, zero, v_dot=v_dot)
+            return _dense(Jq), _dense(Jqd), _dense(Jqdd)
+
+        K0, C0, M = jacobians(0.0, 0.0)
+        K1, C1, _ = jacobians(1.0, 0.0)
+        Ka, _, _ = jacobians(0.0, 1.0)
+        return cls(M=M, K0=K0, K2=K1 - K0, K3=Ka - K0, C0=C0, C1=C1 - C0)
+
+
+class ReducedPulsation:
+    """The pulsating problem projected on the low modes of the mean flow, with their static
+    corrections.
+
+    The basis holds the real and imaginary parts of the ``pairs`` eigenvectors of lowest
+    |lambda| of the mean problem (v = v0, no pulsation), so that the multipliers at
+    sigma = 0 are exactly exp(lambda T), and the static responses K(v0)^-1 X of the
+    pulsating terms (X = K2 Phi, K3 Phi, C1 Phi): what the modes left out do, quasi-statically,
+    under the pulsation.  Orthonormalized in M, it carries the same equation with the projected
+    matrices (a Ritz projection; docs/theory/parametric.md measures how fast it converges).
+    Its first-order form is integrated over one period by the three-stage Radau IIA method
+    with fixed steps (L-stable: modes stiff with Kelvin-Voigt damping decay as they should).
+
+    Parameters
+    ----------
+    pencil : PulsationPencil
+    v0 : float
+        The mean flow velocity.
+    pairs : int
+        The eigenvectors kept (a complex pair counts once), at least 1.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray
+        The kept eigenvalues of the mean problem, Im >= 0, by increasing |lambda|.
+    """
+
+    def __init__(self, pencil: PulsationPencil, v0: float, pairs: int) -> None:
+        n = pencil.M.shape[0]
+        if pairs < 1:
+            raise ValueError(f"pairs must be >= 1, got {pairs}")
+        K = pencil.K0 + v0 * v0 * pencil.K2
+        C = pencil.C0 + v0 * pencil.C1
+        Minv = np.linalg.inv(pencil.M)
+        A0 = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
+        lam, X = sla.eig(A0)
+        upper = np.flatnonzero(lam.imag >= 0)
+        kept = upper[np.argsort(np.abs(lam[upper]))][:pairs]
+        self.eigenvalues = lam[kept]
+        modes = X[:n, kept]
+        parts = [modes.real, modes.imag[:, np.abs(modes.imag).max(axis=0) > 0]]
+        shapes = np.column_stack(parts)
+        loads = np.column_stack([pencil.K2 @ shapes, pencil.K3 @ shapes, pencil.C1 @ shapes])
+        basis = np.column_stack([shapes, np.linalg.solve(K, loads)])
+        U, S, _ = np.linalg.svd(basis / np.linalg.norm(basis, axis=0), full_matrices=False)
+        basis = U[:, S > 1e-10 * S[0]]
+        L = np.linalg.cholesky(basis.T @ pencil.M @ basis)
+        Q = np.linalg.solve(L, basis.T).T  # Q^T M Q = I
+        self.v0, self.Q = float(v0), Q
+
+        def proj(Y: np.ndarray) -> np.ndarray:
+            return Q.T @ Y @ Q
+
+        m = Q.shape[1]
+        Mr = proj(pencil.M)  # the identity up to round-off: solved with, not assumed
+
+        def first_order(K, C, identity: bool) -> np.ndarray:
+            F = np.zeros((2 * m, 2 * m))
+            if identity:
+                F[:m, m:] = np.eye(m)
+            if K is not None:
+                F[m:, :m] = -np.linalg.solve(Mr, proj(K))
+            if C is not None:
+                F[m:, m:] = -np.linalg.solve(Mr, proj(C))
+            return F
+
+        #: A(tau) = F[0] + v F[1] + v^2 F[2] + (dv/dtau) F[3]
+        self.F = np.stack(
+            [
+                first_order(pencil.K0, pencil.C0, True),
+                first_order(None, pencil.C1, False),
+                first_order(pencil.K2, None, False),
+                first_order(pencil.K3, None, False),
+            ]
+        )
+
+    @property
+    def size(self) -> int:
+        """The dimension of the first-order system."""
+        return self.F.shape[-1]
+
+    def monodromy(self, sigma: float, omega: float, steps: int = 128) -> np.ndarray:
+        """The state-transition matrix over one period 2 pi / omega (``steps`` Radau IIA steps).
+
+        The problem being linear, the stage equations of every step are solved at once,
+        independently of the state; the steps' propagators are then multiplied.
+        """
+        if omega <= 0:
+            raise ValueError(f"omega must be > 0, got {omega}")
+        if steps < 1:
+            raise ValueError(f"steps must be >= 1, got {steps}")
+        d = self.size
+        h = 2 * math.pi / omega / steps
+        tau = (np.arange(steps)[:, None] + RADAU_C[None, :]) * h  # (steps, 3)
+        v = self.v0 * (1.0 + sigma * np.sin(omega * tau))
+        v_dot = self.v0 * sigma * omega * np.cos(omega * tau)
+        coef = np.stack([np.ones_like(v), v, v * v, v_dot], axis=-1)  # (steps, 3, 4)
+        A = np.einsum("sjc,cab->sjab", coef, self.F)  # the stage matrices
+        # Y_j = A_j (X + h sum_l a_jl Y_l), all j: (I - h [a_jl A_j]) Y = [A_j] X
+        big = -h * RADAU_A[None, :, None, :, None] * A[:, :, :, None, :]
+        big = big.reshape(steps, 3 * d, 3 * d) + np.eye(3 * d)
+        S = np.linalg.solve(big, A.reshape(steps, 3 * d, d)).reshape(steps, 3, d, d)
+        # stiffly accurate: a step ends at its last stage
+        P = np.eye(d) + h * np.einsum("l,slab->sab", RADAU_A[2], S)
+        Phi = np.eye(d)
+        for k in range(steps):
+            Phi = P[k] @ Phi
+        return Phi
+
+
+def floquet_multipliers(
+    reduced: ReducedPulsation, sigma: float, omega: float, steps: int = 128
+) -> np.ndarray:
+    """The Floquet multipliers, largest modulus first."""
+    rho = np.linalg.eigvals(reduced.monodromy(sigma, omega, steps))
+    return rho[np.argsort(-np.abs(rho))]

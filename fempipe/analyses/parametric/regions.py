@@ -1,0 +1,178 @@
+"""The regions of the (omega, sigma) plane where a pulsating flow destabilizes the straight pipe.
+
+Each candidate resonance of the mean flow's frequencies omega_k (principal, omega near
+2 omega_k / n; combination, omega near (omega_j +- omega_k) / n) is searched near its
+nominal frequency: its threshold is the least sigma at which the largest Floquet multiplier
+reaches modulus 1 (a minimum over omega of the critical sigma, located by Brent's methods),
+and its boundary at each requested sigma is the pair of frequencies where the multiplier's
+modulus crosses 1 (bracketed outward from inside the region, then located to ``omega_tol``).
+Derivation: docs/theory/parametric.md.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from .floquet import ReducedPulsation, floquet_multipliers
+
+__all__ = ["Candidate", "ParametricRegion", "candidates", "locate_region"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A resonance that may open a region: its nominal frequency and what it involves.
+
+    ``kind`` is "principal" (omega = 2 omega_k / order), "sum" or "difference" (omega =
+    (omega_j +- omega_k) / order); ``mode`` the mode numbers (1 = the lowest frequency).
+    """
+
+    kind: str
+    order: int
+    mode: tuple[int, ...]
+    omega: float
+
+
+@dataclass(frozen=True)
+class ParametricRegion:
+    """One region of instability: its threshold and its boundary.
+
+    Attributes
+    ----------
+    candidate : Candidate
+    sigma_threshold, omega_threshold : float
+        The least sigma at which the region opens, and the omega there.
+    multiplier : complex
+        The critical Floquet multiplier at the threshold (modulus 1: real negative for an
+        odd-order principal region, real positive for an even one, complex for a
+        combination).
+    boundary : tuple of (sigma, omega_lo, omega_hi)
+        At each requested sigma at or above the threshold; ``nan`` where the region runs
+        into a neighbouring one before its edge.
+    evaluations : int
+        Monodromy matrices computed.
+    """
+
+    candidate: Candidate
+    sigma_threshold: float
+    omega_threshold: float
+    multiplier: complex
+    boundary: tuple[tuple[float, float, float], ...] = field(default=())
+    evaluations: int = 0
+
+
+def candidates(
+    frequencies: Sequence[float], band: tuple[float, float], max_order: int = 2
+) -> list[Candidate]:
+    """Every principal and combination resonance of ``frequencies`` whose nominal frequency
+    lies in ``band``, by increasing omega."""
+    lo, hi = band
+    out = []
+    for order in range(1, max_order + 1):
+        for k, w in enumerate(frequencies, start=1):
+            out.append(Candidate("principal", order, (k,), 2.0 * w / order))
+        for (j, wj), (k, wk) in itertools.combinations(enumerate(frequencies, start=1), 2):
+            out.append(Candidate("sum", order, (j, k), (wj + wk) / order))
+            out.append(Candidate("difference", order, (j, k), abs(wk - wj) / order))
+    return sorted((c for c in out if lo <= c.omega <= hi), key=lambda c: c.omega)
+
+
+class _Margin:
+    """log of the largest multiplier's modulus (> 0: unstable), counting evaluations."""
+
+    def __init__(self, reduced: ReducedPulsation, steps: int) -> None:
+        self.reduced, self.steps, self.count = reduced, steps, 0
+
+    def multipliers(self, sigma: float, omega: float) -> np.ndarray:
+        self.count += 1
+        return floquet_multipliers(self.reduced, sigma, omega, self.steps)
+
+    def __call__(self, sigma: float, omega: float) -> float:
+        return float(np.log(np.abs(self.multipliers(sigma, omega)[0])))
+
+
+def _edge(margin: Callable[[float], float], inside: float, limit: float, tol: float) -> float:
+    """The frequency between ``inside`` (unstable) and ``limit`` where the margin crosses 0,
+    bracketed by steps that double outward; nan if it stays unstable up to ``limit``."""
+    step = 1e-3 * abs(limit - inside)
+    a = inside
+    while True:
+        b = inside + math.copysign(min(step, abs(limit - inside)), limit - inside)
+        if margin(b) < 0:
+            break
+        if b == limit:
+            return math.nan
+        a, step = b, 2 * step
+    return brentq(margin, a, b, xtol=tol * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps)
+
+
+def locate_region(
+    reduced: ReducedPulsation,
+    candidate: Candidate,
+    window: tuple[float, float],
+    sigmas: Sequence[float],
+    *,
+    omega_tol: float = 1e-8,
+    sigma_tol: float = 1e-8,
+    steps: int = 128,
+) -> ParametricRegion | None:
+    """The region of ``candidate`` inside ``window``, or None if it stays closed up to
+    max(``sigmas``)."""
+    margin = _Margin(reduced, steps)
+    sigma_max = float(max(sigmas))
+    lo, hi = window
+    # where the region is widest open at the largest sigma: a grid, then Brent
+    grid = np.linspace(lo, hi, 25)
+    values = [margin(sigma_max, w) for w in grid]
+    k = int(np.argmax(values))
+    a, b = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+    best = minimize_scalar(lambda w: -margin(sigma_max, w), bounds=(a, b), method="bounded")
+    if -best.fun <= 0:
+        return None
+    peak = float(best.x)
+    # its edges at sigma_max bound the frequencies where it opens first
+    edge_lo = _edge(lambda w: margin(sigma_max, w), peak, lo, omega_tol)
+    edge_hi = _edge(lambda w: margin(sigma_max, w), peak, hi, omega_tol)
+    span = (lo if math.isnan(edge_lo) else edge_lo, hi if math.isnan(edge_hi) else edge_hi)
+
+    def critical_sigma(w: float) -> float:
+        if margin(sigma_max, w) <= 0:
+            return sigma_max
+        if margin(0.0, w) >= 0:
+            return 0.0
+        return brentq(lambda s: margin(s, w), 0.0, sigma_max, xtol=sigma_tol)
+
+    tip = minimize_scalar(
+        critical_sigma, bounds=span, method="bounded", options={"xatol": omega_tol * max(1.0, peak)}
+    )
+    sigma_th, omega_th = float(tip.fun), float(tip.x)
+    rho = margin.multipliers(sigma_th, omega_th)[0]
+    rows = []
+    for s in sorted(sigmas):
+        if s < sigma_th:
+            continue
+        inside = omega_th
+        if margin(s, inside) <= 0:  # a tilted region: its widest point at this sigma
+            inside = float(
+                minimize_scalar(lambda w, s=s: -margin(s, w), bounds=span, method="bounded").x
+            )
+        rows.append(
+            (
+                float(s),
+                _edge(lambda w, s=s: margin(s, w), inside, lo, omega_tol),
+                _edge(lambda w, s=s: margin(s, w), inside, hi, omega_tol),
+            )
+        )
+    return ParametricRegion(
+        candidate=candidate,
+        sigma_threshold=sigma_th,
+        omega_threshold=omega_th,
+        multiplier=complex(rho),
+        boundary=tuple(rows),
+        evaluations=margin.count,
+    )

@@ -1,0 +1,160 @@
+"""Parametric resonance under a pulsating flow (fempipe.analyses.parametric), checked against
+computations that share none of its code: the spectrum of the mean flow (no pulsation), the
+package's Radau integration of Eq. (20) itself with the pulsating flow (its variational
+equation along the straight state, and a small motion), and a Ritz basis of every mode."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fempipe import FiniteElement, Params, PipeModel, PulsatingFlow, spectrum
+from fempipe.analyses.parametric import PulsationPencil, ReducedPulsation, floquet_multipliers
+from fempipe.analyses.parametric.regions import Candidate, candidates, locate_region
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.solvers.radau import Radau
+
+HANGING = Params(alpha=0.0, beta=0.2, gamma=10.0, mu=0.005)  # Paidoussis & Issid's pipe
+DISC = FiniteElement(6, 3)
+
+
+def _model(v0: float) -> PipeModel:
+    return PipeModel(DISC, Params(**{**HANGING.__dict__, "v": v0}))
+
+
+@pytest.fixture(scope="module")
+def reduced6():
+    return ReducedPulsation(PulsationPencil.of(_model(6.0)), 6.0, 3)
+
+
+def _largest(rho: np.ndarray, k: int = 4) -> np.ndarray:
+    return rho[np.argsort(-np.abs(rho))][:k]
+
+
+def test_without_pulsation_the_multipliers_are_exp_lambda_t(reduced6):
+    """sigma = 0: the multipliers are exp(lambda T) of the mean flow's spectrum (Eq. (32),
+    computed by the stability analysis's own eigensolver)."""
+    omega = 20.0
+    lam = np.asarray(spectrum(_model(6.0), np.zeros(DISC.n)).lam)
+    lam = lam[lam.imag >= 0]
+    lam = lam[np.argsort(-lam.real)][:2]
+    expected = np.exp(lam * 2 * math.pi / omega)
+    rho = _largest(floquet_multipliers(reduced6, 0.0, omega))
+    for e in expected:
+        assert np.abs(rho - e).min() < 1e-9 * max(1.0, abs(e))
+
+
+@pytest.mark.parametrize(("sigma", "omega"), [(0.2, 29.5), (0.3, 21.0)])
+def test_monodromy_is_that_of_the_integrated_equation_of_motion(reduced6, sigma, omega):
+    """The monodromy of Eq. (20) linearized about the straight state, as the package's Radau
+    integrator propagates it (its sensitivity along q = 0, the residual's own Jacobians
+    with the pulsating flow): the same largest multipliers, inside a region (|rho| > 1) and
+    outside it."""
+    model = _model(6.0)
+    T = 2 * math.pi / omega
+    stepper = Radau(
+        PipeDynamics(model, PulsatingFlow(6.0, sigma, omega)),
+        np.zeros(model.n),
+        np.zeros(model.n),
+        0.0,
+        h_fixed=T / 400,
+        sensitivity=True,
+    )
+    for _ in stepper.steps(T):
+        pass
+    theirs = _largest(np.linalg.eigvals(stepper.sensitivity_matrix), 3)
+    ours = _largest(floquet_multipliers(reduced6, sigma, omega), 3)
+    np.testing.assert_allclose(ours, theirs, atol=1e-7)
+    assert (abs(ours[0]) > 1.0) == (sigma == 0.2)
+
+
+def test_the_ritz_basis_converges_to_the_full_problem():
+    """Three modes with their static corrections against a basis of every mode (the full
+    discretized problem written in another basis)."""
+    disc = FiniteElement(16, 3)
+    pencil = PulsationPencil.of(PipeModel(disc, Params(**{**HANGING.__dict__, "v": 6.0})))
+    few = ReducedPulsation(pencil, 6.0, 3)
+    every = ReducedPulsation(pencil, 6.0, disc.n)
+    assert every.size == 2 * disc.n and few.size < every.size
+    for sigma, omega in ((0.2, 29.5), (0.4, 12.0)):
+        np.testing.assert_allclose(
+            _largest(floquet_multipliers(few, sigma, omega)),
+            _largest(floquet_multipliers(every, sigma, omega)),
+            atol=1e-9,
+        )
+
+
+def test_a_small_motion_grows_like_the_largest_multiplier(reduced6):
+    """Eq. (20) integrated with the pulsating flow from a small perturbation: inside the
+    region the state grows, over the last of 12 periods by |rho_max|; outside it decays."""
+    model = _model(6.0)
+    q0 = 1e-7 * np.random.default_rng(4).standard_normal(model.n)
+    for sigma, omega in ((0.2, 29.5), (0.2, 24.0)):
+        T = 2 * math.pi / omega
+        stepper = Radau(
+            PipeDynamics(model, PulsatingFlow(6.0, sigma, omega)),
+            q0,
+            np.zeros(model.n),
+            0.0,
+            h_fixed=T / 200,
+        )
+        norms = []
+        for k in range(1, 13):
+            for _ in stepper.steps(k * T):
+                pass
+            norms.append(np.linalg.norm(np.r_[stepper.q, stepper.qdot / omega]))
+        rho = abs(floquet_multipliers(reduced6, sigma, omega)[0])
+        if rho > 1:
+            assert norms[-1] / norms[-2] == pytest.approx(rho, rel=1e-3)
+        else:  # the next multipliers are not far below: no clean ratio, only the decay
+            assert norms[-1] < 0.25 * norms[0] and rho < 0.9
+
+
+def test_a_region_is_located_where_a_multiplier_reaches_modulus_one(reduced6):
+    """The principal region of the second mode: at its threshold the critical multiplier is
+    -1 (period doubling); just below it no frequency of the window is unstable; at each
+    boundary frequency the largest modulus is 1, and larger between them."""
+    w2 = reduced6.eigenvalues.imag[1]
+    cand = Candidate("principal", 1, (2,), 2 * w2)
+    window = (0.8 * cand.omega, 1.2 * cand.omega)
+    region = locate_region(reduced6, cand, window, [0.1, 0.15])
+    assert region is not None
+    assert abs(region.multiplier + 1) < 1e-6
+    assert 0 < region.sigma_threshold < 0.1
+    assert abs(region.omega_threshold / cand.omega - 1) < 0.02
+
+    def largest(s, w):
+        return abs(floquet_multipliers(reduced6, s, w)[0])
+
+    below = region.sigma_threshold * (1 - 1e-3)
+    assert max(largest(below, w) for w in np.linspace(*window, 61)) < 1
+    for s, lo, hi in region.boundary:
+        assert lo < region.omega_threshold < hi
+        assert largest(s, lo) == pytest.approx(1, abs=1e-6)
+        assert largest(s, hi) == pytest.approx(1, abs=1e-6)
+        assert largest(s, 0.5 * (lo + hi)) > 1
+    assert [row[0] for row in region.boundary] == [0.1, 0.15]
+
+
+def test_candidates_name_the_resonances():
+    got = candidates([2.0, 5.0], (1.0, 11.0), max_order=2)
+    names = [(c.kind, c.order, c.mode, c.omega) for c in got]
+    assert ("principal", 1, (1,), 4.0) in names and ("principal", 1, (2,), 10.0) in names
+    assert ("sum", 1, (1, 2), 7.0) in names and ("difference", 1, (1, 2), 3.0) in names
+    assert ("principal", 2, (1,), 2.0) in names and ("sum", 2, (1, 2), 3.5) in names
+    assert [c.omega for c in got] == sorted(c.omega for c in got)
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="alpha"):
+        PulsationPencil.of(PipeModel(DISC, Params(alpha=1.0)))
+    pencil = PulsationPencil.of(_model(6.0))
+    with pytest.raises(ValueError, match="pairs"):
+        ReducedPulsation(pencil, 6.0, 0)
+    red = ReducedPulsation(pencil, 6.0, 2)
+    with pytest.raises(ValueError, match="omega"):
+        red.monodromy(0.1, 0.0)
+    with pytest.raises(ValueError, match="steps"):
+        red.monodromy(0.1, 1.0, steps=0)
