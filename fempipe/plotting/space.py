@@ -302,7 +302,8 @@ def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12, stati
         )
     tip_tau, tip_states = _window(motion)
     tips = model.tip_coordinates(tip_states)
-    ax.plot(tips["Z_tip"], tips["Y_tip"], tips["X_tip"], color="0.25", lw=0.6, label="tip path")
+    # Light: over a long window the path is a band of many loops, under the snapshots.
+    ax.plot(tips["Z_tip"], tips["Y_tip"], tips["X_tip"], color="0.6", lw=0.4, label="tip path")
     ax.plot([0.0], [0.0], [0.0], "ks", ms=7, label="clamp")
     _frame_3d(ax, np.vstack(drawn))
     for set_label, key in ((ax.set_xlabel, "Z"), (ax.set_ylabel, "Y"), (ax.set_zlabel, "X")):
