@@ -36,6 +36,7 @@ _LAZY: dict[str, str] = {
     "parse_discretization": "model.discretization",
     "PipeModel": "model.operators",
     "OutOfPlaneModel": "model.out_of_plane",
+    "out_of_plane_model": "model.out_of_plane",
     "OutOfPlaneMotion": "model.out_of_plane_motion",
     "shape": "model.kinematics",
     "tip_values": "model.kinematics",
@@ -133,6 +134,7 @@ __all__ = [
     "parse_discretization",
     "PipeModel",
     "OutOfPlaneModel",
+    "out_of_plane_model",
     "OutOfPlaneMotion",
     "shape",
     "tip_values",
@@ -249,7 +251,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from fempipe.model.discretization import FiniteElement, Modal, parse_discretization
     from fempipe.model.kinematics import shape, tip_values
     from fempipe.model.operators import PipeModel
-    from fempipe.model.out_of_plane import OutOfPlaneModel
+    from fempipe.model.out_of_plane import OutOfPlaneModel, out_of_plane_model
     from fempipe.model.out_of_plane_motion import OutOfPlaneMotion
     from fempipe.model.params import Params, PipeSI
     from fempipe.studies.compare import Comparison, compare_values

@@ -180,11 +180,12 @@ def test_arguments_are_checked():
 def test_collocation_orbit_is_the_integrator_s_cubic():
     """Inside a step the collocation orbit is the integrator's dense output (to round-off)."""
     from fempipe import Params, PipeModel
+    from fempipe.model.dynamics_problem import PipeDynamics
 
     model = PipeModel(DISC, Params(alpha=0.3))
     orbit = collocation(12)
     t_old, h, q_old, Q = orbit.record[5]
-    st = Radau(model, q_old, np.zeros(model.n), 0.0)
+    st = Radau(PipeDynamics(model), q_old, np.zeros(model.n), 0.0)
     st.last = StepRecord(t_old, h, q_old, np.zeros(model.n), Q, np.zeros_like(Q), None)
     for s in (0.1, 0.5, 0.9):
         np.testing.assert_allclose(orbit(t_old + s * h), st.dense(t_old + s * h)[0], atol=1e-14)

@@ -17,6 +17,7 @@ from fempipe.analyses.dynamics import (
     power_terms,
     simulate,
 )
+from fempipe.model.dynamics_problem import PipeDynamics
 
 GL_X, GL_W = np.polynomial.legendre.leggauss(4)
 
@@ -88,7 +89,7 @@ def test_energy_conserved_without_flow_and_damping():
 def _balance(flow, rtol, terms_dropped=()):
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.5, v=4.0, mu=0.02))
     q0, p0 = initial_state(m, 1, 0.3)
-    st = Radau(m, q0, p0, rtol=rtol, flow=flow)
+    st = Radau(PipeDynamics(m, flow), q0, p0, rtol=rtol)
     E0 = m.energy(q0, p0)
     work = work_abs = 0.0
     for _ in st.steps(0.6):
@@ -155,7 +156,7 @@ def test_time_convergence_order(disc):
     T = 0.3
 
     def final(N):
-        st = Radau(m, q0, p0, h_fixed=T / N, rtol=1e-10)
+        st = Radau(PipeDynamics(m), q0, p0, h_fixed=T / N, rtol=1e-10)
         for _ in st.steps(T):
             pass
         assert st.stats.steps == N
@@ -219,7 +220,7 @@ def test_simulate_uniform_output_and_stats():
 def test_bad_options(kwargs, word):
     m = PipeModel(Modal(2, n_cells=4), Params())
     with pytest.raises(ValueError, match=word):
-        Radau(m, np.zeros(2), **kwargs)
+        Radau(PipeDynamics(m), np.zeros(2), **kwargs)
 
 
 @pytest.mark.parametrize(
@@ -234,7 +235,7 @@ def test_bad_flow(kwargs, word):
 def test_fixed_step_failure_says_where():
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.4, v=5.0))
     q0, p0 = initial_state(m, 1, 1.5)
-    st = Radau(m, q0, p0, h_fixed=0.5)
+    st = Radau(PipeDynamics(m), q0, p0, h_fixed=0.5)
     with pytest.raises(IntegrationError, match="tau"):
         st.step()
 
@@ -262,11 +263,11 @@ def test_velocity_sensitivity_of_the_flow_map(disc):
     params = dict(alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3)
     m = PipeModel(disc, Params(v=7.0, **params))
     q0, p0 = initial_state(m, 1, 0.3)
-    st = Radau(m, q0, p0, rtol=1e-8, sensitivity=True, velocity_sensitivity=True)
+    st = Radau(PipeDynamics(m), q0, p0, rtol=1e-8, sensitivity=True, velocity_sensitivity=True)
     hs = [st.last[1] for _ in st.steps(0.3)]
 
     def flow(v):
-        s = Radau(m.with_params(Params(v=v, **params)), q0, p0, rtol=1e-8)
+        s = Radau(PipeDynamics(m.with_params(Params(v=v, **params))), q0, p0, rtol=1e-8)
         t = 0.0
         for h in hs:
             s.h, s._lu = h, None
@@ -277,7 +278,13 @@ def test_velocity_sensitivity_of_the_flow_map(disc):
     fd = (flow(7.0 + 1e-5) - flow(7.0 - 1e-5)) / 2e-5
     assert np.max(np.abs(st.velocity_sensitivity - fd)) < 1e-7 * np.max(np.abs(fd))
     with_flow = Radau(
-        m, q0, p0, sensitivity=True, velocity_sensitivity=True, flow=PulsatingFlow(7.0, 0.1, 2.0)
+        PipeDynamics(m, PulsatingFlow(7.0, 0.1, 2.0)),
+        q0,
+        p0,
+        sensitivity=True,
+        velocity_sensitivity=True,
     )
     assert with_flow.velocity_sensitivity is None  # no single v to differentiate by
-    assert Radau(m, q0, p0, sensitivity=True).velocity_sensitivity is None  # only when asked
+    assert (
+        Radau(PipeDynamics(m), q0, p0, sensitivity=True).velocity_sensitivity is None
+    )  # only when asked

@@ -414,14 +414,14 @@ def test_time_domain_refuses_hysteretic_damping():
     from fempipe.analyses.bifurcation import bifurcation_diagram, sweep
     from fempipe.analyses.dynamics import simulate
     from fempipe.analyses.limit_cycle import find_attractor, shoot
-    from fempipe.solvers.radau import Radau
+    from fempipe.model.dynamics_problem import PipeDynamics
 
     disc = Modal(4)
     model = PipeModel(disc, Params(v=8.0, hysteretic_damping=0.1))
     q = np.zeros(disc.n)
     calls = [
         lambda: simulate(model, q, None, 1.0),
-        lambda: Radau(model, q),
+        lambda: PipeDynamics(model),
         lambda: shoot(model, q, q, 1.0),
         lambda: find_attractor(model),
         lambda: sweep(model, [8.0]),

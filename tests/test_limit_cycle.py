@@ -138,9 +138,9 @@ def test_shooting_equals_long_integration():
     for k in ("eta_tip", "X_tip", "Z_tip"):
         np.testing.assert_allclose(a.tip[k], b.tip[k], atol=1e-6)
     # and the cycle is a cycle: integrate one period from its start
-    from fempipe.analyses.dynamics import Radau
+    from fempipe.analyses.dynamics import PipeDynamics, Radau
 
-    st = Radau(m, a.cycle.q0, a.cycle.qdot0, rtol=1e-9)
+    st = Radau(PipeDynamics(m), a.cycle.q0, a.cycle.qdot0, rtol=1e-9)
     for _ in st.steps(a.period):
         pass
     assert np.sqrt(np.mean((st.q - a.cycle.q0) ** 2)) < 1e-6
@@ -205,10 +205,10 @@ def _first_return(m, q0, p0, level: float, t_end: float):
     (16 samples per step on the integrator's dense output)."""
     from scipy.optimize import brentq
 
-    from fempipe.analyses.dynamics import Radau
+    from fempipe.analyses.dynamics import PipeDynamics, Radau
     from fempipe.analyses.limit_cycle.tips import TipTrace, eta_tip, tip_extrema
 
-    st = Radau(m, q0, p0, rtol=1e-9)
+    st = Radau(PipeDynamics(m), q0, p0, rtol=1e-9)
     trace = TipTrace(m.disc, m.params.alpha, per_step=16)
     s_old = eta_tip(m.disc, st.q) - level
     for t, q, _ in st.steps(t_end):

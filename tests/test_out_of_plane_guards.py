@@ -24,6 +24,7 @@ import pytest
 
 from fempipe.analyses.space.floquet import out_of_plane_floquet
 from fempipe.model.discretization import Modal
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
 from fempipe.model.out_of_plane_motion import OutOfPlaneMotion
 from fempipe.model.params import Params
@@ -37,7 +38,7 @@ def _damping_integral(model: PipeModel, q0, qdot0, T: float) -> float:
     """\\int_0^T tr(M^-1 C) along the planar motion from (q0, qdot0), by the Radau weights on
     every step's stages (order 5, like the integrator)."""
     motion = OutOfPlaneMotion(model)
-    stepper = Radau(model, q0, qdot0, rtol=RTOL)
+    stepper = Radau(PipeDynamics(model), q0, qdot0, rtol=RTOL)
     total = 0.0
     for _ in stepper.steps(T):
         rec = stepper.last

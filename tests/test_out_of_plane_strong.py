@@ -20,7 +20,7 @@ from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
 from fempipe.model.params import Params
 from fempipe.validation import classical, lateral
 
@@ -63,7 +63,7 @@ def test_strong_form_agrees_with_fe_at_one_inclination():
     p = Params(alpha=math.pi / 4, mu=0.005, **PAPER)
     lo, hi = 5.9, 6.5  # holds the onset (6.2126, found from v = 0 by the full validation case)
     s = lateral.critical_velocity(p, hi, v_min=lo)
-    r = stability.critical_velocity(PipeModel(FiniteElement(32, 3), p).with_plane("out"), hi, lo)
+    r = stability.critical_velocity(out_of_plane_model(PipeModel(FiniteElement(32, 3), p)), hi, lo)
     assert r.critical.type == s.kind == "flutter"
     assert abs(r.v_cr - s.v_cr) < 1e-8
     assert abs(r.critical.frequency - s.frequency) < 1e-8
@@ -90,7 +90,7 @@ def test_straight_pipe_out_of_plane_equals_in_plane(disc, alpha, gamma):
     """A straight round pipe has no preferred plane: same K, C, M and eigenvalues."""
     p = Params(alpha=alpha, beta=0.142, gamma=gamma, v=2.0, hysteretic_damping=0.01, **VARIANTS)
     m = PipeModel(disc, p)
-    mo = m.with_plane("out")
+    mo = out_of_plane_model(m)
     q = np.zeros(disc.n)
     for a, b in zip(mo.linearization(q), m.linearization(q), strict=True):
         b = b.toarray() if hasattr(b, "toarray") else np.asarray(b)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -60,10 +62,21 @@ def test_a_problem_of_the_contract_is_integrated():
     assert st.velocity_sensitivity is None
 
 
-def test_flow_belongs_to_a_model():
+def test_a_model_is_not_a_problem():
+    """Rule 10: the integrator takes a problem of the contract; a model (or anything
+    without the contract's members) is refused, naming what it lacks and how to build one."""
+    from fempipe import FiniteElement, Params, PipeModel
+
+    model = PipeModel(FiniteElement(2, 2), Params())
+    with pytest.raises(TypeError, match=r"dynamics problem.*PipeDynamics\(model\)") as err:
+        Radau(model, np.zeros(model.n))
+    assert "PipeModel has no autonomous" in str(err.value)
+
     prob = DampedOscillators([1.0], [0.0], [1.0])
-    with pytest.raises(TypeError, match="flow"):
-        Radau(prob, [1.0], flow=lambda t: (1.0, 0.0))
+    members = ("n", "autonomous", "stage_residuals", "stage_jacobians", "residual")
+    without = SimpleNamespace(**{m: getattr(prob, m) for m in members})
+    with pytest.raises(TypeError, match="SimpleNamespace has no prefers_batched_stage_jacobians, "):
+        Radau(without, [1.0])
 
 
 def test_failure_names_the_problem():

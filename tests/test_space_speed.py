@@ -18,6 +18,7 @@ from fempipe.core.dual import Dual, matvec, pullback
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.params import Params
 from fempipe.model.space import SpaceModel, planar_state
+from fempipe.model.space_dynamics import SpaceDynamics
 from fempipe.solvers.radau import Radau
 
 PARAMS = Params(alpha=0.7, v=3.0, mu=0.05, end_mass=0.3, external_damping=0.2)
@@ -42,12 +43,12 @@ def test_velocity_derivative_is_the_difference_quotient_in_v():
     down = model.with_params(replace(PARAMS, v=v - dv)).residual(Q, P, A)
     # R is quadratic in v: the central difference is exact up to round-off
     fd = (up - down) / (2 * dv)
-    exact = model.dynamics_problem().parameter_derivative(Q, P, A)
+    exact = SpaceDynamics(model).parameter_derivative(Q, P, A)
     assert np.abs(exact - fd).max() < 1e-12 * np.abs(up).max()
 
 
 def _sensitivity(model, U0, Ud0, split: bool):
-    problem = model.dynamics_problem()
+    problem = SpaceDynamics(model)
     if not split:
         problem.decoupled_blocks = None
     stepper = Radau(problem, U0, Ud0, h_fixed=2e-3, sensitivity=True, velocity_sensitivity=True)

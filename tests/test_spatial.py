@@ -15,7 +15,7 @@ from fempipe.analyses.statics import sagged_state, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.out_of_plane import OutOfPlaneOperators, in_plane_model, out_of_plane_model
 from fempipe.model.params import Params
 
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 0.005}
@@ -90,7 +90,8 @@ def test_straight_pipe_out_of_plane_equals_in_plane(disc):
     )
     model = PipeModel(disc, p)
     q = np.zeros(disc.n)
-    for a, b in zip(model.linearization(q), model.with_plane("out").linearization(q), strict=True):
+    out = out_of_plane_model(model)
+    for a, b in zip(model.linearization(q), out.linearization(q), strict=True):
         assert np.abs(a - b).max() <= 1e-13 * max(1.0, np.abs(a).max())
 
 
@@ -124,7 +125,7 @@ def test_neutral_rotation_mode_of_the_buckled_standing_pipe():
         mats = ops.matrices(q.q)
         resid.append(mats.neutral_residual)
         assert np.linalg.norm(mats.K @ mats.neutral) <= 1e-12 * np.linalg.norm(mats.K)
-        spec = spectrum(model.with_plane("out"), q.q)
+        spec = spectrum(out_of_plane_model(model), q.q)
         k = int(np.argmin(np.abs(spec.lam)))
         assert abs(spec.lam[k]) <= 1e-9
         x = np.real(spec.vectors[:, k] / spec.vectors[np.argmax(np.abs(mats.neutral)), k])
@@ -215,11 +216,13 @@ def test_critical_error_estimate_keys(capsys):
 
 
 def test_with_params_keeps_the_plane():
-    model = PipeModel(FiniteElement(4, 2), Params(alpha=1.0)).with_plane("out")
+    planar = PipeModel(FiniteElement(4, 2), Params(alpha=1.0))
+    model = out_of_plane_model(planar)
+    assert model.plane == "out" and out_of_plane_model(model) is model
     assert model.with_params(replace(model.params, v=2.0)).plane == "out"
-    assert model.with_plane("in").plane == "in"
-    with pytest.raises(ValueError, match="plane"):
-        model.with_plane("up")
+    back = in_plane_model(model)
+    assert type(back) is PipeModel and back.plane == "in" and in_plane_model(planar) is planar
+    assert back.disc is planar.disc and back.params == planar.params
 
 
 def test_readme_example_of_the_3d_stability_runs(capsys):

@@ -169,6 +169,7 @@ from fempipe.model.operators import (  # noqa: E402
 )
 from fempipe.model.out_of_plane import (  # noqa: E402
     OutOfPlaneModel,
+    out_of_plane_model,
 )
 from fempipe.model.out_of_plane_motion import (  # noqa: E402
     OutOfPlaneMotion,
@@ -209,6 +210,7 @@ PUBLIC = {
     "parse_discretization": parse_discretization,
     "PipeModel": PipeModel,
     "OutOfPlaneModel": OutOfPlaneModel,
+    "out_of_plane_model": out_of_plane_model,
     "OutOfPlaneMotion": OutOfPlaneMotion,
     "shape": shape,
     "tip_values": tip_values,

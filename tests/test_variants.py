@@ -23,8 +23,10 @@ from scipy.optimize import brentq
 from fempipe.analyses.dynamics import Radau, acceleration, initial_state, power_terms, simulate
 from fempipe.analyses.statics import sagged_state, solve_static
 from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import out_of_plane_model
 from fempipe.model.params import Params, PipeSI
 from fempipe.validation.bvp import solve_static_bvp
 
@@ -248,7 +250,7 @@ def test_power_balance_along_trajectory_with_external_damping():
     p = Params(alpha=0.5, v=4.0, mu=0.02, external_damping=0.8, **ENERGY_VARIANTS)
     m = PipeModel(FiniteElement(4, 2), p)
     q0, p0 = initial_state(m, 1, 0.3)
-    st = Radau(m, q0, p0, rtol=1e-7)
+    st = Radau(PipeDynamics(m), q0, p0, rtol=1e-7)
     E0 = m.energy(q0, p0)
     gx, gw = np.polynomial.legendre.leggauss(4)
     work = work_abs = damp = 0.0
@@ -569,7 +571,7 @@ def test_cli_critical_with_damping_and_spring(capsys):
     assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-10)
     assert abs(lib.v_cr - plain.v_cr) > 1e-2
     # v_cr is the 3-D one: the out-of-plane problem with the same variants
-    out = critical_velocity(PipeModel(FiniteElement(6, 2), p).with_plane("out"), 12.0)
+    out = critical_velocity(out_of_plane_model(PipeModel(FiniteElement(6, 2), p)), 12.0)
     assert d["v_cr"] == d["v_cr_out_of_plane"] == pytest.approx(out.v_cr, abs=1e-9)
 
 
@@ -641,7 +643,7 @@ def test_cli_stability_map_passes_the_variants(capsys):
     lib = critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2)
     assert d["points"][0]["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-8)
     # the map's v_cr is the first loss in 3-D: out of the plane, with the same variants
-    out = critical_velocity(PipeModel(Modal(3), p).with_plane("out"), 10.0, ds_max=0.2)
+    out = critical_velocity(out_of_plane_model(PipeModel(Modal(3), p)), 10.0, ds_max=0.2)
     assert d["points"][0]["v_cr"] == pytest.approx(out.v_cr, abs=1e-8)
 
 

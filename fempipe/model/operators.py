@@ -76,8 +76,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         self._part_rules: dict[float, PartRule] = {}
 
     #: The plane of the linear problem :meth:`linearization` gives: ``"in"``, the
-    #: plane of the static state (:class:`fempipe.model.out_of_plane.OutOfPlaneModel`
-    #: gives ``"out"``).
+    #: plane of the static state (the model of
+    #: :func:`fempipe.model.out_of_plane.out_of_plane_model` gives ``"out"``).
     plane = "in"
 
     def with_params(self, params: Params) -> PipeModel:
@@ -86,37 +86,6 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         new.__dict__.update(self.__dict__)
         new.params = params
         return new
-
-    def with_plane(self, plane: str) -> PipeModel:
-        """The model of the same pipe whose linearization is in (``"in"``) or out of
-        (``"out"``) the plane of its static states (:mod:`fempipe.model.out_of_plane`)."""
-        if plane == self.plane:
-            return self
-        if plane == "out":
-            # Imported here, not at the top: OutOfPlaneModel is a subclass of
-            # PipeModel (its module imports this one).
-            from .out_of_plane import OutOfPlaneModel
-
-            cls = OutOfPlaneModel
-        elif plane == "in":
-            cls = PipeModel
-        else:
-            raise ValueError(f"plane must be 'in' or 'out', got {plane!r}")
-        new = object.__new__(cls)
-        new.__dict__.update(self.__dict__)
-        return new
-
-    def dynamics_problem(self, flow=None):
-        """The equations of motion of this model as the integrator's problem.
-
-        Returns :class:`fempipe.model.dynamics_problem.PipeDynamics` ``(self, flow)``;
-        :class:`fempipe.solvers.radau.Radau` calls it when given a model instead
-        of a problem.  Imported here, not at the top: that module builds on this
-        one (its batched kernels know the plain PipeModel).
-        """
-        from .dynamics_problem import PipeDynamics
-
-        return PipeDynamics(self, flow)
 
     # ------------------------------------------------------- totals --
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:

@@ -8,7 +8,8 @@ method per term: bending with the static curvature, the static axial force N(xi)
 follower force, inertia, Coriolis, external damping, the end mass, springs, and the
 objective Kelvin-Voigt damping on the material curvature chi = B psi.  Every term equals the
 planar one on the straight pipe.  :class:`OutOfPlaneModel` carries it as a pipe model, so
-the stability solvers run on it unchanged.
+the stability solvers run on it unchanged: :func:`out_of_plane_model` builds it from a planar
+model, :func:`in_plane_model` the planar model back.
 
 On the buckled branches of the standing pipe the rotation of the buckled shape about the
 vertical, psi = sin(theta^s), is a neutral mode of the continuum;
@@ -29,7 +30,13 @@ import scipy.sparse as sp
 
 from .operators import PipeModel
 
-__all__ = ["OutOfPlaneMatrices", "OutOfPlaneModel", "OutOfPlaneOperators"]
+__all__ = [
+    "OutOfPlaneMatrices",
+    "OutOfPlaneModel",
+    "OutOfPlaneOperators",
+    "in_plane_model",
+    "out_of_plane_model",
+]
 
 
 def _dense(A) -> np.ndarray:
@@ -309,3 +316,21 @@ class OutOfPlaneModel(PipeModel):
     def rate_terms(self, q, qdot, qddot) -> np.ndarray:
         _, C, M = self.linearization(q)
         return C @ np.asarray(qdot) + M @ np.asarray(qddot)
+
+
+def out_of_plane_model(model: PipeModel) -> OutOfPlaneModel:
+    """The model of the pipe of ``model`` whose linearization is out of the plane of its static
+    states: an :class:`OutOfPlaneModel` on the same discretization with the same parameters
+    (``model`` itself if it is one)."""
+    if isinstance(model, OutOfPlaneModel):
+        return model
+    return OutOfPlaneModel(model.disc, model.params)
+
+
+def in_plane_model(model: PipeModel) -> PipeModel:
+    """The model of the pipe of ``model`` whose linearization is in the plane of its static
+    states: ``model`` itself unless it is an :class:`OutOfPlaneModel`, else a
+    :class:`~fempipe.model.operators.PipeModel` on the same discretization and parameters."""
+    if model.plane == "in":
+        return model
+    return PipeModel(model.disc, model.params)

@@ -452,9 +452,3 @@ class SpaceModel:
     def energy(self, U, Ud) -> float:
         """E = T + V: conserved for v = 0, mu = 0, sigma = 0 (up to the gauge's work)."""
         return self.kinetic_energy(U, Ud) + self.potential_energy(U)
-
-    def dynamics_problem(self, flow=None):
-        """The integrator's problem of this model (:class:`fempipe.model.space_dynamics.SpaceDynamics`)."""
-        from .space_dynamics import SpaceDynamics
-
-        return SpaceDynamics(self, flow)

@@ -13,9 +13,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from fempipe.analyses.statics import NewtonError, solve_static
 from fempipe.core.parallel import single_blas_thread
 from fempipe.core.rootfinding import brentq
-from fempipe.model.dynamics_problem import refuse_hysteretic
+from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
@@ -193,8 +194,6 @@ class _AttractorSearch:
     # -- the start ---------------------------------------------------------
     def _static_start(self, q0, qdot0, perturbation: float):
         """The static state (q_s, or None) and its stability; the initial state and level."""
-        from fempipe.analyses.statics import NewtonError, solve_static
-
         model = self.model
         guess = None if q0 is None else np.asarray(q0, dtype=float)
         try:
@@ -220,7 +219,7 @@ class _AttractorSearch:
         """Integrate until the attractor is recognized or t_max is reached."""
         q0, qdot0 = self._static_start(q0, qdot0, perturbation)
         disc, q_s = self.disc, self.q_s
-        self.stepper = stepper = Radau(self.model, q0, qdot0, 0.0, rtol=self.rtol)
+        self.stepper = stepper = Radau(PipeDynamics(self.model), q0, qdot0, 0.0, rtol=self.rtol)
         self.rec_t, self.rec_q, self.rec_p = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
         self.sec_t: list[float] = []
         self.sec_x: list[tuple[np.ndarray, np.ndarray]] = []
@@ -312,8 +311,6 @@ class _AttractorSearch:
         """The equilibrium if the state is close to a linearly stable static state and
         not moving away from it (checked every 0.5 tau, about two flutter periods, so
         that the exchange between q and q' averages out)."""
-        from fempipe.analyses.statics import NewtonError, solve_static
-
         stepper, model = self.stepper, self.model
         if stepper.t < self.next_eq_check:
             return None

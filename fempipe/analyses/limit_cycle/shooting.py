@@ -20,7 +20,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from fempipe.core.parallel import single_blas_thread
-from fempipe.model.dynamics_problem import refuse_hysteretic
+from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import Radau
 
@@ -148,6 +148,10 @@ class Shooter:
         self.total_steps = self.rejected = 0
         self.Phi = None
 
+    def problem(self) -> PipeDynamics:
+        """The integrator's problem of the model (one per integrated period)."""
+        return PipeDynamics(self.model)
+
     def run(self, q: np.ndarray, p: np.ndarray, T: float, max_iter: int) -> LimitCycle:
         """Newton iterations from (q, p, T) until converged; raise ShootingError if not."""
         n, tol = self.n, self.tol
@@ -194,7 +198,7 @@ class Shooter:
     def one_period(self, q: np.ndarray, p: np.ndarray, T: float, sensitivity: bool):
         """Integrate (q, p) over T; the stepper, the step ends and the orbit samples."""
         n_samples = self.n_samples
-        stepper = Radau(self.model, q, p, 0.0, rtol=self.rtol, sensitivity=sensitivity)
+        stepper = Radau(self.problem(), q, p, 0.0, rtol=self.rtol, sensitivity=sensitivity)
         tt = np.linspace(0.0, T, n_samples)
         orbit_q, orbit_p, k = [q.copy()], [p.copy()], 1
         ends = [(0.0, q.copy(), p.copy(), stepper.qddot.copy())]

@@ -27,7 +27,7 @@ import numpy as np
 
 from fempipe.analyses.limit_cycle import state_distance
 from fempipe.analyses.limit_cycle.tips import CollocationOrbit, tip_extrema
-from fempipe.model.dynamics_problem import acceleration
+from fempipe.model.dynamics_problem import PipeDynamics, acceleration
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, CorrectorError
 from fempipe.solvers.radau import IntegrationError, Radau
@@ -83,7 +83,13 @@ def period_flow(model: PipeModel, x: np.ndarray, T: float, rtol: float, sensitiv
     """phi_T(x) with the step data (for the tip extrema) and, if asked, the monodromy."""
     n = model.n
     st = Radau(
-        model, x[:n], x[n:], 0.0, rtol=rtol, sensitivity=sensitivity, velocity_sensitivity=True
+        PipeDynamics(model),
+        x[:n],
+        x[n:],
+        0.0,
+        rtol=rtol,
+        sensitivity=sensitivity,
+        velocity_sensitivity=True,
     )
     record = []
     for _ in st.steps(T):

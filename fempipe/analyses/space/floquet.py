@@ -29,6 +29,7 @@ import numpy as np
 from ...model.operators import PipeModel
 from ...model.out_of_plane_motion import OutOfPlaneVariation
 from ...model.space import SpaceModel, planar_state
+from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 
@@ -135,7 +136,7 @@ def out_of_plane_floquet(
     start = time.process_time()
     nt = model.disc.n
     if method == "3d":
-        problem = SpaceModel(model.disc, model.params)
+        problem = SpaceDynamics(SpaceModel(model.disc, model.params))
         q0, p0, n_fields = planar_state(cycle.q0), planar_state(cycle.qdot0), 3
     else:
         problem = OutOfPlaneVariation(model)

@@ -28,6 +28,7 @@ import numpy as np
 
 from ...model.operators import PipeModel
 from ...model.space import SpaceModel, planar_state
+from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
 from ..dynamics import initial_state
 from ..limit_cycle.results import LimitCycle, ShootingError
@@ -239,7 +240,7 @@ def simulate_space(
             model, space, q_s, mode, amplitude, out_of_plane_amplitude
         )
     level = _section_value(space, planar_state(q_s))
-    stepper = Radau(space, U0, Ud0, rtol=rtol)
+    stepper = Radau(SpaceDynamics(space), U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     watch = _Returns(
         space,

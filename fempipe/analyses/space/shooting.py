@@ -24,6 +24,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...model.space import SpaceModel
+from ...model.space_dynamics import SpaceDynamics
 from ..limit_cycle.results import LimitCycle
 from ..limit_cycle.shooting import Shooter
 from ..limit_cycle.tips import QuinticOrbit
@@ -86,6 +87,9 @@ class SpaceShooter(Shooter):
     def __init__(self, model: SpaceModel, level: float, **options) -> None:
         super().__init__(model, level, **options)
         self.axisymmetric = abs(math.sin(model.params.alpha)) < 1e-12
+
+    def problem(self) -> SpaceDynamics:
+        return SpaceDynamics(self.model)
 
     def phase(self, q: np.ndarray) -> float:
         return section_value(self.model, q)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...model.operators import PipeModel
+from ...model.out_of_plane import out_of_plane_model
 from ..limit_cycle.results import Attractor
 from ..stability import linearly_stable
 from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
@@ -101,6 +102,6 @@ def cycle_entries(model: PipeModel, oop: OutOfPlaneFloquet, stable_in_plane: boo
 def equilibrium_verdict(model: PipeModel, q: np.ndarray, stable_in_plane: bool | None) -> dict:
     """``stable_out_of_plane`` (the out-of-plane spectrum at ``q``) and ``stable_3d``
     (None when the planar verdict is unknown)."""
-    out_stable = bool(linearly_stable(model.with_plane("out"), q))
+    out_stable = bool(linearly_stable(out_of_plane_model(model), q))
     both = None if stable_in_plane is None else bool(stable_in_plane and out_stable)
     return {"stable_out_of_plane": out_stable, "stable_3d": both}

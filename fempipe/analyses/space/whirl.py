@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...model.space import SpaceModel
+from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 from .shooting import shoot_space
@@ -187,7 +188,7 @@ def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
     """tau and U at the accepted steps of one period from the cycle's start: the measures of
     rigidity need states at the step ends (the integrator's accurate points; its dense
     output between them is of lower order, measured 1e-3 off the radius on P3:4)."""
-    stepper = Radau(model, cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
+    stepper = Radau(SpaceDynamics(model), cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
     ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
     for t, q, _ in stepper.steps(cycle.period):
         ts.append(t)

@@ -18,6 +18,7 @@ import numpy as np
 
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
 
 from .analysis import analyse_planes
 from .canonical import RESOLUTION_TOL
@@ -145,9 +146,9 @@ def spatial_stability_analysis(
     the same branches).  The static branches are continued once; the
     out-of-plane analysis runs along the same points.
     """
-    planar = model.with_plane("in")
+    planar = in_plane_model(model)
     planes = analyse_planes(
-        [planar, planar.with_plane("out")],
+        [planar, out_of_plane_model(planar)],
         v_min=v_min,
         v_max=v_max,
         follow_bifurcations=follow_bifurcations,

@@ -21,6 +21,7 @@ from fempipe.analyses.statics import (
 from fempipe.core.matching import assignment
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
 from fempipe.model.params import Params
 
 from .canonical import RESOLUTION_TOL, Resolution, resolution
@@ -379,7 +380,7 @@ def root_locus(
     ----------
     model : PipeModel
         Parameters other than v are taken from ``model.params``; an
-        out-of-plane model (``model.with_plane("out")``) gives the loci of
+        out-of-plane model (:func:`~fempipe.model.out_of_plane.out_of_plane_model`) gives the loci of
         the motion out of the plane of the static states.
     values : sequence of float
         Flow velocities, in the order the branch is followed.
@@ -423,8 +424,8 @@ def spatial_root_locus(
     (RootLocus, RootLocus)
         The in-plane loci (plane ``"in"``) and the out-of-plane ones (``"out"``).
     """
-    planar = model.with_plane("in")
-    models = [planar, planar.with_plane("out")]
+    planar = in_plane_model(model)
+    models = [planar, out_of_plane_model(planar)]
     inp, out = _loci(models, values, q0, n_modes, method, tolerance, callback)
     return inp, out
 

@@ -13,7 +13,7 @@ the code and the tests cite them; in full in docs/development.md, "The integrato
 7. Batching and structure (optional): ``prefers_batched_stage_jacobians``, ``decoupled_blocks``.
 8. Parameter derivative (optional): ``parameter_derivative``, dR/dp of the stages.
 9. Time-dependent parameters: the problem evaluates its own at t.
-10. No other access: the integrator uses only these members and ``describe()``.
+10. No other access: the integrator uses only these members and ``describe()``; no model.
 11. Validation belongs to the problem: refusals happen when it is built.
 12. Error control: RADAU5's embedded estimate, Gustafsson's controller, halving on failure.
 13. Outputs: ``t, q, qdot, qddot``, ``last``, ``dense(t)``, the sensitivities, ``stats``.

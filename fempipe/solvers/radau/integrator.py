@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -88,14 +88,30 @@ def _rms(x: np.ndarray) -> float:
     return math.sqrt(float(x @ x) / x.size)
 
 
-def _as_problem(problem, flow) -> ImplicitSecondOrderProblem:
-    """The problem itself, or a model's ``dynamics_problem(flow)`` (duck-typed: the
-    integrator imports no model)."""
-    if hasattr(problem, "dynamics_problem"):
-        return problem.dynamics_problem(flow)
-    if flow is not None:
-        raise TypeError("flow= applies to a model; a problem carries its own time dependence")
-    return problem
+def _checked(problem) -> ImplicitSecondOrderProblem:
+    """``problem`` if it has every member of the contract, else a TypeError naming the missing
+    ones (a model, e.g. a PipeModel, is not a problem: rule 10)."""
+    if isinstance(problem, ImplicitSecondOrderProblem):
+        return problem
+    members = (
+        "n",
+        "autonomous",
+        "stage_residuals",
+        "stage_jacobians",
+        "prefers_batched_stage_jacobians",
+        "parameter_derivative",
+        "residual",
+        "jacobians",
+        "acceleration",
+        "describe",
+    )
+    missing = ", ".join(m for m in members if not hasattr(problem, m))
+    raise TypeError(
+        f"Radau integrates a dynamics problem (fempipe.solvers.radau.ImplicitSecondOrderProblem); "
+        f"a {type(problem).__name__} has no {missing}: build one with "
+        "fempipe.model.dynamics_problem.PipeDynamics(model) (a SpaceModel: "
+        "fempipe.model.space_dynamics.SpaceDynamics(model))"
+    )
 
 
 @dataclass
@@ -118,10 +134,10 @@ class Radau:
     ----------
     problem : ImplicitSecondOrderProblem
         The residual and its Jacobians, by the rules of
-        :mod:`fempipe.solvers.radau.contract`.  A model with a
-        ``dynamics_problem(flow)`` method (a
-        :class:`~fempipe.model.operators.PipeModel`) is accepted too and
-        replaced by ``model.dynamics_problem(flow)``.
+        :mod:`fempipe.solvers.radau.contract` (the pipe's:
+        :class:`fempipe.model.dynamics_problem.PipeDynamics`, with its flow; the
+        3-D pipe's: :class:`fempipe.model.space_dynamics.SpaceDynamics`).  A
+        model is not a problem: a TypeError names the members it lacks.
     q0, qdot0 : ndarray, shape (n,)
         Initial state (not modified).
     t0 : float
@@ -130,9 +146,6 @@ class Radau:
         Local error tolerances on (q, q'); the error of each component is
         measured against ``atol + rtol |y|``.  ``atol`` defaults to ``rtol``
         (theta is O(1) rad, so absolute and relative errors are comparable).
-    flow : PulsatingFlow or callable tau -> (v, v_dot), optional
-        Only with a model: its unsteady flow (default the steady
-        ``model.params.v``).  A problem carries its own time dependence.
     max_step : float
         Largest step.
     first_step : float, optional
@@ -167,14 +180,13 @@ class Radau:
         *,
         rtol: float = 1e-6,
         atol: float | None = None,
-        flow: Callable[[float], tuple[float, float]] | None = None,
         max_step: float = math.inf,
         first_step: float | None = None,
         h_fixed: float | None = None,
         sensitivity: bool = False,
         velocity_sensitivity: bool = False,
     ) -> None:
-        problem = _as_problem(problem, flow)
+        problem = _checked(problem)
         n = problem.n
         q0 = np.array(q0, dtype=float)
         qdot0 = np.zeros(n) if qdot0 is None else np.array(qdot0, dtype=float)

@@ -15,7 +15,11 @@ import numpy as np
 
 from fempipe.core.errors import SolverError
 from fempipe.model.discretization import FiniteElement, Modal
+from fempipe.model.kinematics import tip_values
 from fempipe.model.params import Params
+from fempipe.model.projection import project
+
+from ..error_estimate import expected_order
 
 __all__ = [
     "QUANTITIES",
@@ -136,8 +140,6 @@ class Family:
         """Theoretical order for the case ``params`` (variants can lower it, see
         :func:`fempipe.studies.error_estimate.expected_order`), judged on the coarser of the two
         finest members (a spring is a mesh node there or not)."""
-        from ..error_estimate import expected_order
-
         size = self.sizes[-2] if len(self.sizes) > 1 else self.sizes[-1]
         return expected_order(self.discretization(size), params)
 
@@ -182,7 +184,7 @@ class Quantity:
     ``*_in_plane`` those of the plane alone
     (:func:`fempipe.analyses.stability.critical_velocity`), ``*_out_of_plane`` those
     of the motion out of it (:func:`~fempipe.analyses.stability.critical_velocity` of
-    ``model.with_plane("out")``, the same static branch).
+    :func:`~fempipe.model.out_of_plane.out_of_plane_model`, the same static branch).
 
     Calling it on a discretization returns the value (complex for
     ``eigenvalue``), or raises :class:`fempipe.core.errors.SolverError`.
@@ -234,6 +236,7 @@ class Quantity:
         return f"{text} {where} [{unit}]"
 
     def __call__(self, disc) -> float | complex:
+        # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.model.operators import PipeModel
 
         model = PipeModel(disc, self.params)
@@ -251,7 +254,9 @@ class Quantity:
 
     def _critical(self, model) -> float:
         """v_cr or the frequency of the critical event, in 3-D or in one plane."""
+        # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.analyses.stability import critical_velocity, spatial_critical_velocity
+        from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
 
         name, plane = self.name, "3-D"
         for suffix, which in (("_in_plane", "in"), ("_out_of_plane", "out")):
@@ -263,7 +268,8 @@ class Quantity:
         if plane == "3-D":
             res = spatial_critical_velocity(model, **kw)
         else:
-            res = critical_velocity(model.with_plane(plane), **kw)
+            planed = out_of_plane_model(model) if plane == "out" else in_plane_model(model)
+            res = critical_velocity(planed, **kw)
         if res.v_cr is None:
             where = {"3-D": "", "in": " in its plane", "out": " out of its plane"}[plane]
             raise SolverError(
@@ -274,9 +280,9 @@ class Quantity:
 
     def cycle(self, disc):
         """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
+        # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
         from fempipe.model.operators import PipeModel
-        from fempipe.model.projection import project
 
         model = PipeModel(disc, self.params)
         if self.seed is not None:
@@ -337,6 +343,7 @@ def static_tip_state(disc, params: Params) -> np.ndarray:
         The state of :func:`fempipe.analyses.statics.solve_path` (tolerance
         :data:`STATIC_TOL`) at ``params.v``.
     """
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.statics import solve_path
     from fempipe.model.operators import PipeModel
 
@@ -349,13 +356,12 @@ def static_tip_state(disc, params: Params) -> np.ndarray:
 
 
 def _static_tip(model, key: str) -> float:
-    from fempipe.model.kinematics import tip_values
-
     q = static_tip_state(model.disc, model.params)
     return float(tip_values(model.disc, q, model.params.alpha)[key])
 
 
 def _eigenvalue(model, mode: int) -> complex:
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.stability import spectrum
 
     q = static_tip_state(model.disc, model.params)
