@@ -1,22 +1,17 @@
-"""One static equilibrium of Eq. (31a) by Newton's method, and what "converged" means.
+"""Newton's method with a backtracking line search, for any system R(x) = 0.
 
-The static residual is ``R(q, 0, 0; params)`` of :class:`~fempipe.model.operators.PipeModel`,
-the weak form of
-
-    -theta'' + gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta) = 0,
-    theta(0) = 0, theta'(1) = 0,
-
-the sum of three forces: bending, gravity and the follower force of the jet.
-:func:`solve_static` accepts a state only when the residual is small
-compared with each of them (:func:`force_balance`), and reports loads beyond
-floating-point range as a :class:`NewtonError`.  The branches and paths of
-:mod:`fempipe.analyses.statics` (continued by the engine of
-:mod:`fempipe.solvers.continuation`) are built on it.
+:func:`newton` knows the problem by two functions: ``balance(x) -> (R, ||R||, scale)``, the
+residual, its norm and the size of what R balances (converged: ``||R|| <= tol * scale``),
+and ``jacobian(x)``, dense or sparse (:func:`linear_solve`).  What R balances, and so what
+"converged" means, is the problem's: the pipe's forces are in
+:mod:`fempipe.analyses.statics.equilibrium`, which turns a :class:`NewtonConvergenceError` into its
+own error.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,81 +19,45 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from fempipe.core.errors import SolverError
-from fempipe.model.operators import PipeModel
-from fempipe.model.params import Params
 
-__all__ = [
-    "DENSE_MAX_N",
-    "NewtonError",
-    "StaticSolution",
-    "force_balance",
-    "linear_solve",
-    "solve_static",
-]
+__all__ = ["NewtonConvergenceError", "NewtonResult", "linear_solve", "newton"]
+
+#: ``balance(x) -> (R(x), ||R(x)||, scale)``: the residual, its norm and the size of the
+#: terms it balances.
+Balance = Callable[[np.ndarray], tuple[np.ndarray, float, float]]
 
 
-class NewtonError(SolverError):
-    """Newton's method did not converge, or met a non-finite residual.
+class NewtonConvergenceError(SolverError):
+    """Newton's method did not converge (``finite``), or met a non-finite residual or scale.
 
     Attributes
     ----------
-    params : Params
-        The parameter point.
     iterations : int
+        Iterations done.
     residual : float
-        Last residual norm (Euclidean norm of the weak-form residual).
+        Last residual norm (nan if not ``finite``).
+    finite : bool
+        False when the residual or its scale was not finite.
     """
 
-    def __init__(self, message: str, params: Params, iterations: int, residual: float) -> None:
+    def __init__(self, message: str, iterations: int, residual: float, finite: bool) -> None:
         super().__init__(message)
-        self.params = params
         self.iterations = iterations
         self.residual = residual
+        self.finite = finite
 
     def __reduce__(self):
-        # Rebuilt from all the constructor's arguments, so that the error of a
-        # worker process reaches its parent intact.
-        return type(self), (str(self), self.params, self.iterations, self.residual)
+        # Rebuilt from all the constructor's arguments (pickling across processes).
+        return type(self), (str(self), self.iterations, self.residual, self.finite)
 
 
 @dataclass(frozen=True)
-class StaticSolution:
-    """A converged static state.
+class NewtonResult:
+    """A converged iterate ``x`` after ``iterations`` steps, with ``||R(x)||``."""
 
-    Attributes
-    ----------
-    q : ndarray, shape (n,)
-    params : Params
-    iterations : int
-        Newton iterations used, all of them: for a state reached by gravity
-        loading (:func:`fempipe.analyses.statics.sagged_state`) those of the loading
-        included.
-    residual_norm : float
-        Euclidean norm of R(q, 0, 0) at return.
-    loading_iterations : int
-        The part of ``iterations`` spent on the gravity loading (the
-        continuation in gamma from 0); 0 for Newton from a neighbouring state.
-    """
-
-    q: np.ndarray
-    params: Params
+    x: np.ndarray
     iterations: int
     residual_norm: float
-    loading_iterations: int = 0
-
-    def to_dict(self) -> dict:
-        return {
-            "params": self.params.to_dict(),
-            "newton_iterations": self.iterations,
-            "gravity_loading_iterations": self.loading_iterations,
-            "residual_norm": self.residual_norm,
-        }
-
-
-#: Largest number of unknowns for which Newton's method and the continuation
-#: use the dense static Jacobian: below it scipy.sparse's constructors alone cost
-#: more than the dense Jacobian and its LU (at P3:16, n = 48, many times more).
-DENSE_MAX_N = 400
 
 
 def linear_solve(J, b: np.ndarray) -> np.ndarray:
@@ -109,118 +68,69 @@ def linear_solve(J, b: np.ndarray) -> np.ndarray:
     return np.linalg.solve(J, b)
 
 
-def force_balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """R(q, 0, 0), its norm, and the size of the forces it balances.
-
-    R = bending + gravity + follower + springs.  A state is an equilibrium
-    when R is small compared with each of these forces as they act at q:
-    ``||R|| <= tol (||bending|| + gravity load + ||follower|| + ||springs||)``.
-
-    * Bending, K q, the follower term, v^2 \\int phi_i sin(theta(1) - theta),
-      and the springs (:meth:`PipeModel.spring`) vanish with q, also in
-      floating point to round-off: they are measured as they are.
-    * Gravity, gamma \\int phi_i (1 - xi + Gamma) sin(theta + alpha) (the
-      pipe and its end mass), is measured by its load
-      ``gamma ||\\int phi_i (1 - xi + Gamma)||`` (:meth:`PipeModel.gravity_load`)
-      whatever the lever arm: sin(theta + alpha) carries an absolute
-      round-off error of ~1e-16 at every angle (sin(pi) = 1.2e-16), so the
-      straight column at alpha = pi is an equilibrium to that accuracy.
-
-    Scaling by the load coefficients (1 + gamma + v^2) instead would accept an
-    unbalanced load whenever another coefficient is huge: at v = 1e100 the
-    straight pipe, where the follower term vanishes, would "converge" with
-    the whole gravity load unbalanced.
-    """
-    with np.errstate(over="ignore", invalid="ignore"):  # reported as non-finite
-        b, g, f, k = model.static_terms(q)
-        r = b + g + f + k
-    size = (
-        float(np.linalg.norm(b))
-        + model.gravity_load()
-        + float(np.linalg.norm(f))
-        + float(np.linalg.norm(k))
-    )
-    return r, float(np.linalg.norm(r)), size
+def _not_finite(iterations: int) -> NewtonConvergenceError:
+    return NewtonConvergenceError("residual not finite", iterations, float("nan"), finite=False)
 
 
-def _not_finite(model: PipeModel, iterations: int) -> NewtonError:
-    p = model.params
-    return NewtonError(
-        f"static residual is not finite at alpha={p.alpha:.6g}, gamma={p.gamma:.6g}, "
-        f"v={p.v:.6g} (v^2 = {p.v * p.v:.3g}): the loads are outside floating-point range",
-        params=p,
-        iterations=iterations,
-        residual=float("nan"),
-    )
-
-
-def solve_static(
-    model: PipeModel,
-    q0: np.ndarray | None = None,
-    tol: float = 1e-10,
-    max_iter: int = 40,
-) -> StaticSolution:
-    """Solve the static problem by Newton's method with the analytic Jacobian.
-
-    The static problem is Eq. (31a), in weak form.
+def newton(
+    balance: Balance,
+    jacobian: Callable[[np.ndarray], object],
+    x0: np.ndarray,
+    tol: float,
+    max_iter: int,
+) -> NewtonResult:
+    """Solve R(x) = 0 by Newton's method from ``x0``, with a backtracking line search on ||R||.
 
     Parameters
     ----------
-    model : PipeModel
-    q0 : ndarray, shape (n,), optional
-        Initial guess (default: the straight pipe, theta = 0).
+    balance : callable
+        ``x -> (R, ||R||, scale)`` (:data:`Balance`).
+    jacobian : callable
+        ``x -> dR/dx``, a dense array or a sparse matrix.
+    x0 : ndarray
+        Initial iterate (not modified).
     tol : float
-        Convergence when ``||R|| <= tol (||bending|| + gravity load +
-        ||follower||)``, each term of R measured at the state (see
-        :func:`force_balance`), and the last Newton step is below
-        ``1e-9 (1 + ||q||)``.
+        Converged when ``||R|| <= tol * scale`` and the last step is below
+        ``1e-9 (1 + ||x||)``; ``x0`` itself when ``||R(x0)|| <= 1e-3 tol scale`` (a
+        point where the Jacobian may be singular, e.g. a located branch point).
     max_iter : int
 
     Returns
     -------
-    StaticSolution
+    NewtonResult
 
     Raises
     ------
-    NewtonError
-        Naming the parameter point, iterations and residual; also when the
-        residual is not finite (loads beyond floating-point range).
-
-    Notes
-    -----
-    A backtracking line search on ||R|| keeps the iteration from jumping
-    between the many equilibria of a large-deformation problem.
+    NewtonConvergenceError
+        After ``max_iter`` iterations or a non-finite step; at once when the residual or
+        its scale is not finite.
     """
-    q = np.zeros(model.n) if q0 is None else np.array(q0, dtype=float)
-    r, rn, scale = force_balance(model, q)
+    x = np.asarray(x0, dtype=float)
+    r, rn, scale = balance(x)
     if not (math.isfinite(rn) and math.isfinite(scale)):
-        raise _not_finite(model, 0)
+        raise _not_finite(0)
     if rn <= 1e-3 * tol * scale:
-        # Already a solution (e.g. a located branch point, where the Jacobian
-        # is singular and a Newton step would be meaningless).
-        return StaticSolution(q=q, params=model.params, iterations=0, residual_norm=rn)
+        return NewtonResult(x=x, iterations=0, residual_norm=rn)
     it = 0
     for it in range(1, max_iter + 1):
-        dq = linear_solve(model.static_jacobian(q, dense=model.n <= DENSE_MAX_N), -r)
-        if not np.all(np.isfinite(dq)):
+        dx = linear_solve(jacobian(x), -r)
+        if not np.all(np.isfinite(dx)):
             break
         lam = 1.0
         while True:
-            q_new = q + lam * dq
-            r_new, rn_new, scale_new = force_balance(model, q_new)
+            x_new = x + lam * dx
+            r_new, rn_new, scale_new = balance(x_new)
             if rn_new < (1.0 - 1e-4 * lam) * rn or lam < 1e-3 or rn < tol * scale:
                 break
             lam *= 0.5
-        q, r, rn, scale = q_new, r_new, rn_new, scale_new
+        x, r, rn, scale = x_new, r_new, rn_new, scale_new
         if not (math.isfinite(rn) and math.isfinite(scale)):
-            raise _not_finite(model, it)
-        if rn <= tol * scale and lam * np.linalg.norm(dq) <= 1e-9 * (1.0 + np.linalg.norm(q)):
-            return StaticSolution(q=q, params=model.params, iterations=it, residual_norm=rn)
-    p = model.params
-    raise NewtonError(
-        f"static Newton did not converge at alpha={p.alpha:.6g}, beta={p.beta:.6g}, "
-        f"gamma={p.gamma:.6g}, v={p.v:.6g}: residual {rn:.3e} after {it} iterations",
-        params=p,
-        iterations=it,
-        residual=rn,
+            raise _not_finite(it)
+        if rn <= tol * scale and lam * np.linalg.norm(dx) <= 1e-9 * (1.0 + np.linalg.norm(x)):
+            return NewtonResult(x=x, iterations=it, residual_norm=rn)
+    raise NewtonConvergenceError(
+        f"Newton did not converge: residual {rn:.3e} after {it} iterations",
+        it,
+        rn,
+        finite=True,
     )

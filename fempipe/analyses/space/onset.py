@@ -25,12 +25,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg as sla
 
+from fempipe.analyses.statics import solve_static
 from fempipe.core.companion import first_order_matrix
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 from fempipe.model.out_of_plane import axisymmetric
 from fempipe.model.space import SpaceModel, planar_state
-from fempipe.solvers.newton import solve_static
 
 from ..stability.hopf.flutter import EVENT_KEYS
 from ..stability.hopf.lyapunov import HopfCoefficient, lyapunov_coefficient

@@ -2,8 +2,9 @@
 
 Three layers, each usable on its own:
 
-* :mod:`fempipe.solvers.newton` -- one equilibrium by Newton's method
-  (:func:`solve_static`, :class:`NewtonError`, :class:`StaticSolution`);
+* :mod:`~fempipe.analyses.statics.equilibrium` -- one equilibrium by Newton's method
+  (:func:`solve_static`, :class:`NewtonError`, :class:`StaticSolution`; the iteration is
+  :func:`fempipe.solvers.newton.newton`);
 * :mod:`~fempipe.analyses.statics.branches` -- pseudo-arclength continuation with fold and
   bifurcation detection and branch switching (:func:`continuation`, :func:`switch_branch`,
   :class:`Branch`), on the problem :class:`~fempipe.analyses.statics.family.StaticFamily`
@@ -18,9 +19,8 @@ gravity load and the discretization's Gram matrix, so it runs unchanged on finit
 and on sine modes.  The names of the first two layers are importable from here too.
 """
 
-from fempipe.solvers.newton import NewtonError, StaticSolution, solve_static
-
 from .branches import Branch, BranchPoint, SpecialPoint, continuation, switch_branch
+from .equilibrium import NewtonError, StaticSolution, solve_static
 from .family import CONTINUATION_PARAMETERS, StaticFamily
 from .loading import sagged_state, solve_path
 

@@ -6,7 +6,7 @@ with Keller's policy (:class:`fempipe.solvers.continuation.KellerPolicy`: the
 exact tangent, a Newton corrector on the bordered system) on the problem
 :class:`~fempipe.analyses.statics.family.StaticFamily`.  What is the pipe's
 own is said here: a point converges when the forces balance
-(:func:`fempipe.solvers.newton.force_balance`), the branch lands exactly on
+(:func:`fempipe.analyses.statics.equilibrium.force_balance`), the branch lands exactly on
 the requested parameter value, or on v = 0 (gamma = 0) when it leaves the
 physical range, and a stalled branch is a :class:`NewtonError`.  Folds are
 sign changes of the parameter component of the tangent; bifurcation points
@@ -34,8 +34,8 @@ from fempipe.solvers.continuation import (
     normalize,
 )
 from fempipe.solvers.continuation import tangent as curve_tangent
-from fempipe.solvers.newton import NewtonError, solve_static
 
+from .equilibrium import NewtonError, solve_static
 from .family import StaticFamily
 
 __all__ = [

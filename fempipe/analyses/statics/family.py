@@ -19,7 +19,9 @@ import scipy.sparse as sp
 
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, solve_with_determinant
-from fempipe.solvers.newton import DENSE_MAX_N, force_balance, linear_solve
+from fempipe.solvers.newton import linear_solve
+
+from .equilibrium import DENSE_MAX_N, force_balance
 
 __all__ = ["CONTINUATION_PARAMETERS", "StaticFamily"]
 
@@ -54,7 +56,7 @@ class StaticFamily:
         self.parameter = parameter
         n = model.n
         metric = model.disc.gram
-        # Dense algebra up to DENSE_MAX_N unknowns (fempipe.solvers.newton).
+        # Dense algebra up to DENSE_MAX_N unknowns (fempipe.analyses.statics.equilibrium).
         self.sparse = sp.issparse(metric) and n > DENSE_MAX_N
         self.G = metric.toarray() if sp.issparse(metric) and not self.sparse else metric
         self.n = n
@@ -77,7 +79,7 @@ class StaticFamily:
 
     def balanced(self, y: np.ndarray, tol: float) -> float | None:
         """||R|| at y = (q, lambda) if the forces balance to ``tol``
-        (:func:`fempipe.solvers.newton.force_balance`), else None."""
+        (:func:`fempipe.analyses.statics.equilibrium.force_balance`), else None."""
         n = self.n
         _, rn, scale = force_balance(self.at(y[n]), y[:n])
         return rn if rn <= tol * scale else None

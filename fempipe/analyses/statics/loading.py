@@ -3,7 +3,7 @@
 :func:`sagged_state` follows the straight pipe at gamma = 0 to the actual
 gamma (the primary branch of every stability analysis); :func:`solve_path`
 gives the states along a list of parameter values, what ``fempipe static``
-computes, by Newton (:func:`fempipe.solvers.newton.solve_static`) bridged by
+computes, by Newton (:func:`fempipe.analyses.statics.equilibrium.solve_static`) bridged by
 continuation (:func:`~fempipe.analyses.statics.branches.continuation`) where
 Newton fails.
 """
@@ -19,9 +19,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from fempipe.model.operators import PipeModel
-from fempipe.solvers.newton import NewtonError, StaticSolution, solve_static
 
 from .branches import continuation
+from .equilibrium import NewtonError, StaticSolution, solve_static
 
 __all__ = ["sagged_state", "solve_path"]
 
