@@ -26,12 +26,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fempipe.analyses.periodic.out_of_plane import cycle_verdict, equilibrium_verdict
+from fempipe.core.errors import SolverError
 from fempipe.core.parallel import run_tasks
 from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
 
 from .dynamics import IntegrationError, initial_state
-from .limit_cycle import Attractor, ShootingError, find_attractor, shoot
+from .limit_cycle import Attractor, LimitCycle, ShootingError, find_attractor, shoot
 from .periodic.points import BifurcationPoint, PointStore
 
 __all__ = [
@@ -170,11 +172,6 @@ def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
     out-of-plane spectrum (an attractor is stable in the plane); a
     non-periodic attractor: ``stable_3d`` None.
     """
-    from fempipe.analyses.periodic.out_of_plane import cycle_verdict, equilibrium_verdict
-    from fempipe.core.errors import SolverError
-
-    from .limit_cycle import LimitCycle
-
     if point.attractor == "equilibrium":
         return equilibrium_verdict(m, point.q, True)
     if point.attractor != "periodic" or point.period is None:

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from fempipe.analyses.statics import solve_static
 from fempipe.model.dynamics_problem import PipeDynamics, acceleration
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
@@ -170,8 +171,6 @@ def initial_state(
     if not math.isfinite(amplitude):
         raise ValueError(f"amplitude must be finite, got {amplitude}")
     if q_static is None:
-        from fempipe.analyses.statics import solve_static
-
         q_static = solve_static(model).q
     disc = model.disc
     k = (2 * int(mode) - 1) * math.pi / 2.0

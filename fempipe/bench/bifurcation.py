@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 
-from fempipe.bench import child_cpu_seconds, register
+from fempipe.bench.harness import child_cpu_seconds, register
 
 #: Whole-process CPU target of Fig. 7 by continuation.
 FIG07_TARGET_S = 20.0

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
-from fempipe.bench import PAPER, register
+from fempipe.bench.harness import PAPER, register
+from fempipe.model.params import Params
+from fempipe.studies.convergence import Family, Quantity, doubling, run_study
 
 
 @register("convergence_vcr")
@@ -19,11 +22,6 @@ def bench_convergence_vcr(quick: bool = False) -> dict:
     (theory 2, 4, 6 in dofs for P1, P2, P3; 3 for the sine modes, 4 for the
     beam modes).
     """
-    from dataclasses import replace
-
-    from fempipe.model.params import Params
-    from fempipe.studies.convergence import Family, Quantity, doubling, run_study
-
     elements = doubling(2, 8 if quick else 64)
     modes = doubling(2, 8 if quick else 32)
     families = [Family("fe", tuple(elements), degree=k) for k in (1, 2, 3)] + [

@@ -17,7 +17,17 @@ import time
 
 import numpy as np
 
-from fempipe.bench import PAPER, best_time, register
+from fempipe.analyses.stability import (
+    critical_velocity,
+    resolution,
+    spatial_stability_analysis,
+    stability_analysis,
+    stability_map,
+)
+from fempipe.bench.harness import PAPER, best_time, register
+from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
 
 #: Seconds allowed for the v_cr of ``stability_vcr``.
 VCR_TARGET_S = 3.0
@@ -33,11 +43,6 @@ def bench_stability_vcr(quick: bool = False) -> dict:
 
     Target: :data:`VCR_TARGET_S`.  Accuracy: the relative difference to P3:32 (target 1e-6).
     """
-    from fempipe.analyses.stability import critical_velocity, resolution
-    from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import Params
-
     disc = parse_discretization(DEFAULT_FE)
     resolution(disc)  # canonical modes, cached per discretization
     model = PipeModel(disc, Params(**PAPER))
@@ -73,15 +78,6 @@ def bench_critical_3d(quick: bool = False) -> dict:
     minimum of its repeats.  Target: the ratio of the sums at most
     :data:`SPATIAL_TARGET_RATIO`.
     """
-    from fempipe.analyses.stability import (
-        resolution,
-        spatial_stability_analysis,
-        stability_analysis,
-    )
-    from fempipe.model.discretization import DEFAULT_FE, parse_discretization
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import Params
-
     disc = parse_discretization(DEFAULT_FE)
     resolution(disc)
     repeats = 1 if quick else 3
@@ -123,9 +119,6 @@ def bench_critical_3d(quick: bool = False) -> dict:
 @register("stability_curve")
 def bench_stability_curve(quick: bool = False) -> dict:
     """v_cr(alpha) at 37 inclinations 0..pi (Fig. 6) on 2 processes; target :data:`CURVE_TARGET_S`."""
-    from fempipe.analyses.stability import stability_map
-    from fempipe.model.discretization import DEFAULT_FE, parse_discretization
-
     n_alpha = 5 if quick else 37
     alphas = np.linspace(0.0, math.pi, n_alpha)
     disc = parse_discretization(DEFAULT_FE)

@@ -25,7 +25,9 @@ import time
 
 import numpy as np
 
-from fempipe.bench import child_cpu_seconds, register
+from fempipe.analyses.bifurcation import bifurcation_diagram
+from fempipe.analyses.limit_cycle import find_attractor
+from fempipe.bench.harness import child_cpu_seconds, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
@@ -38,8 +40,6 @@ def _disc(spec: str):
 
 def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
     """One converged limit cycle at alpha = 0, v = 10; returns timing and the cycle."""
-    from fempipe.analyses.limit_cycle import find_attractor
-
     model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0, **PAPER_CASE))
     t0 = time.perf_counter()
     att = find_attractor(model)
@@ -58,8 +58,6 @@ def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
 
 def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> dict:
     """The Fig. 7 sweep up and down in parallel; returns timing and a summary."""
-    from fempipe.analyses.bifurcation import bifurcation_diagram
-
     model = PipeModel(_disc(spec), Params(alpha=0.0, **PAPER_CASE))
     values = np.linspace(5.0, 12.0, n_values)
     t0 = time.perf_counter()

@@ -16,18 +16,17 @@ import math
 import statistics
 import time
 
-from fempipe.bench import register
+from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability.hopf import normal_forms
+from fempipe.bench.harness import register
+from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
 
 
 @register("hopf")
 def bench_hopf(quick: bool = False) -> dict:
     """CPU-s of the normal forms of every flutter event against the stability analysis."""
-    from fempipe.analyses.stability import stability_analysis
-    from fempipe.analyses.stability.hopf import normal_forms
-    from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import Params
-
     disc = discretization_from_name(DEFAULT_FE)
     alphas = (0.0,) if quick else (0.0, math.pi / 2, math.pi)
     repeats = 1 if quick else 3

@@ -20,7 +20,7 @@ import shutil
 import statistics
 import tempfile
 
-from fempipe.bench import child_cpu_seconds, register
+from fempipe.bench.harness import child_cpu_seconds, register
 
 #: Largest accepted ratio of the CPU seconds of ``simulate --out`` to those of
 #: the same run without ``--out``.

@@ -24,10 +24,22 @@ from __future__ import annotations
 import math
 import statistics
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from fempipe.bench import register
+from fempipe.analyses.limit_cycle import find_attractor, shoot
+from fempipe.analyses.space.floquet import out_of_plane_floquet
+from fempipe.analyses.space.shooting import shoot_space
+from fempipe.bench.harness import register
+from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+from fempipe.model.space import SpaceModel, planar_state
+from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.solvers.radau import Radau
+from fempipe.validation.space_runs import planar_model, space_cycles
 
 
 def _cpu(fn, repeats: int):
@@ -42,14 +54,6 @@ def _cpu(fn, repeats: int):
 @register("space_cycle")
 def bench_space_cycle(quick: bool = False) -> dict:
     """CPU-s of a 3-D limit cycle against the planar one (module docstring)."""
-    from fempipe.analyses.limit_cycle import find_attractor, shoot
-    from fempipe.analyses.space.floquet import out_of_plane_floquet
-    from fempipe.analyses.space.shooting import shoot_space
-    from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import Params
-    from fempipe.model.space import SpaceModel, planar_state
-
     disc = FiniteElement(4, 3) if quick else discretization_from_name(DEFAULT_FE)
     repeats = 1 if quick else 3
     params = Params(alpha=math.pi / 2, v=10.0)
@@ -69,9 +73,12 @@ def bench_space_cycle(quick: bool = False) -> dict:
     n_jac = 3 if quick else 20
     t_jac, _ = _cpu(lambda: [space.jacobians(*stages) for _ in range(n_jac)], 1)
     mu3 = np.abs(cycle3.floquet_multipliers)
-    t_pp, steps_p = _cpu(lambda: _period(planar, cycle.q0, cycle.qdot0, cycle.period), repeats)
+    t_pp, steps_p = _cpu(
+        lambda: _period(PipeDynamics(planar), cycle.q0, cycle.qdot0, cycle.period), repeats
+    )
     t_ps, steps_s = _cpu(
-        lambda: _period(space, U, planar_state(cycle.qdot0), cycle.period), repeats
+        lambda: _period(SpaceDynamics(space), U, planar_state(cycle.qdot0), cycle.period),
+        repeats,
     )
     shares = _period_shares(disc, params, U, planar_state(cycle.qdot0), cycle.period)
     return {
@@ -117,7 +124,6 @@ def bench_space_cycle(quick: bool = False) -> dict:
 
 def _period_shares(disc, params, U, Ud, period: float) -> dict:
     """One 3-D period with the monodromy on a model that accounts its weak form's CPU."""
-    from fempipe.model.space import SpaceModel
 
     class Accounted(SpaceModel):
         jacobians_cpu = residuals_cpu = 0.0
@@ -135,7 +141,7 @@ def _period_shares(disc, params, U, Ud, period: float) -> dict:
             return out
 
     t0 = time.process_time()
-    _period(Accounted(disc, params), U, Ud, period)
+    _period(SpaceDynamics(Accounted(disc, params)), U, Ud, period)
     return {
         "space_period_instrumented_cpu_s": time.process_time() - t0,
         "space_period_jacobians_cpu_s": Accounted.jacobians_cpu,
@@ -143,11 +149,9 @@ def _period_shares(disc, params, U, Ud, period: float) -> dict:
     }
 
 
-def _period(model, q0, qdot0, period: float, rtol: float = 1e-7) -> int:
+def _period(problem, q0, qdot0, period: float, rtol: float = 1e-7) -> int:
     """One period with the monodromy (the shooting's integration, no Newton step); its steps."""
-    from fempipe.solvers.radau import Radau
-
-    stepper = Radau(model, q0, qdot0, rtol=rtol, sensitivity=True)
+    stepper = Radau(problem, q0, qdot0, rtol=rtol, sensitivity=True)
     for _ in stepper.steps(period):
         pass
     return stepper.stats.steps
@@ -156,13 +160,6 @@ def _period(model, q0, qdot0, period: float, rtol: float = 1e-7) -> int:
 @register("space_nonplanar_cycle")
 def bench_space_nonplanar_cycle(quick: bool = False) -> dict:
     """CPU-s of a non-planar 3-D limit cycle (module docstring)."""
-    from dataclasses import replace
-
-    from fempipe.analyses.space.shooting import shoot_space
-    from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
-    from fempipe.model.space import SpaceModel
-    from fempipe.validation.space_runs import planar_model, space_cycles
-
     elements = 4 if quick else discretization_from_name(DEFAULT_FE).n_elements
     alpha, v = math.pi / 2, 6.0
     found = space_cycles(sorted({4, elements}), alpha, v)[elements]
@@ -170,7 +167,9 @@ def bench_space_nonplanar_cycle(quick: bool = False) -> dict:
     space = SpaceModel(pm.disc, replace(pm.params, v=v))
     repeats = 1 if quick else 2
     t_shoot, cycle = _cpu(lambda: shoot_space(space, found.q0, found.qdot0, found.period), repeats)
-    t_period, steps = _cpu(lambda: _period(space, found.q0, found.qdot0, found.period), repeats)
+    t_period, steps = _cpu(
+        lambda: _period(SpaceDynamics(space), found.q0, found.qdot0, found.period), repeats
+    )
     return {
         "discretization": pm.disc.name,
         "alpha": alpha,

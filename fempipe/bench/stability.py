@@ -20,11 +20,19 @@ The benchmark in full: docs/cli/commands.md, "fempipe bench".
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
 
-from fempipe.bench import child_cpu_seconds, register
+from fempipe.analyses.stability import spatial_critical_velocity
+from fempipe.bench.harness import child_cpu_seconds, register
+from fempipe.core import parallel
+from fempipe.model.discretization import discretization_from_name
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import PAPER_CASE, Params
+from fempipe.validation.classical import StraightPipe
+from fempipe.validation.classical import critical_velocity as classical_critical_velocity
 
 #: The reference case: the hanging pipe of the classical theory.
 REFERENCE_ARGS = ["--alpha", "0", "--beta", "0.2", "--gamma", "10", "--mu", "0", "--v", "0,10"]
@@ -45,8 +53,6 @@ def _child(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
 def _blas_env(one_thread: bool) -> dict:
     """The baseline's environment changes: one BLAS thread, or the defaults as written
     (only the variables fempipe's command line set in this process are removed)."""
-    from fempipe.core import parallel
-
     if one_thread:
         return dict.fromkeys(parallel.BLAS_THREAD_VARIABLES, "1")
     return dict.fromkeys(parallel.BLAS_SET_BY_FEMPIPE)
@@ -88,22 +94,13 @@ def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
 
 def _classical_reference() -> float:
     """v_cr of the hanging pipe (beta 0.2, gamma 10, mu 0): Legendre spectral elements, p = 24."""
-    from fempipe.validation.classical import StraightPipe, critical_velocity
-
     pipe = StraightPipe(beta=0.2, gamma=10.0)
-    return float(critical_velocity(pipe, v_max=10.0, method="legendre", n=24).v_cr)
+    return float(classical_critical_velocity(pipe, v_max=10.0, method="legendre", n=24).v_cr)
 
 
 def _curved_reference(spec: str) -> float:
     """v_cr in three dimensions of the paper's case at alpha = pi/2 on the finite elements
     ``spec`` (what ``fempipe critical`` computes without ``--planar``)."""
-    import math
-
-    from fempipe.analyses.stability import spatial_critical_velocity
-    from fempipe.model.discretization import discretization_from_name
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import PAPER_CASE, Params
-
     model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
     return float(spatial_critical_velocity(model, v_max=10.0).v_cr)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fempipe.bench import child_cpu_seconds, register
+from fempipe.bench.harness import child_cpu_seconds, register
 
 #: CPU seconds (user + sys) allowed for ``import fempipe`` and the start of the
 #: ``fempipe`` command (``--help``, and the imports before a computation).

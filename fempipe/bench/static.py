@@ -19,7 +19,12 @@ import math
 
 import numpy as np
 
-from fempipe.bench import PAPER, TEXIER_DORBOLO, best_time, register
+from fempipe.analyses.statics import continuation, solve_path
+from fempipe.bench.harness import PAPER, TEXIER_DORBOLO, best_time, register
+from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
+from fempipe.model.kinematics import tip_values
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params, PipeSI
 
 
 def _fit_exponent(n: np.ndarray, t: np.ndarray) -> float:
@@ -28,10 +33,6 @@ def _fit_exponent(n: np.ndarray, t: np.ndarray) -> float:
 
 
 def _path_case(name: str, params, disc, values: list[float], repeats: int) -> dict:
-    from fempipe.analyses.statics import continuation, solve_path
-    from fempipe.model.kinematics import tip_values
-    from fempipe.model.operators import PipeModel
-
     model = PipeModel(disc, params)
     t_path, sols = best_time(lambda: solve_path(model, values), repeats)
     t_arc, branch = best_time(lambda: continuation(model, "v", stop=values[-1]), repeats)
@@ -60,9 +61,6 @@ def _path_case(name: str, params, disc, values: list[float], repeats: int) -> di
 @register("static_path")
 def bench_static_path(quick: bool = False) -> dict:
     """61-point path in v = 0..10 at the default discretization, two cases."""
-    from fempipe.model.discretization import DEFAULT_FE, parse_discretization
-    from fempipe.model.params import Params, PipeSI
-
     n_points = 11 if quick else 61
     repeats = 1 if quick else 3
     values = list(np.linspace(0.0, 10.0, n_points))
@@ -78,11 +76,6 @@ def bench_static_path(quick: bool = False) -> dict:
 @register("static_scaling")
 def bench_static_scaling(quick: bool = False) -> dict:
     """Cost of the 61-point path as the P3 mesh doubles from 8 to 256 elements."""
-    from fempipe.analyses.statics import solve_path
-    from fempipe.model.discretization import FiniteElement
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.params import Params
-
     n_points = 11 if quick else 61
     repeats = 1 if quick else 3
     meshes = [8, 16, 32] if quick else [8, 16, 32, 64, 128, 256]

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fempipe.core.files import write_text
+
 __all__ = [
     "SHAPE_FIELDS",
     "screen_points",
@@ -51,8 +53,6 @@ def write_vtu(
     into a ``<FieldData>`` block of the grid, which VTK's XML readers (and
     ParaView) show as field data.  NaN values are written as ``nan``.
     """
-    from fempipe.core.files import write_text
-
     return write_text(path, _with_field_data(_meshio_xml(points, lines, point_data), field_data))
 
 

@@ -17,6 +17,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from fempipe.core.files import write_text
+from fempipe.io.meshes import write_vtu_frames
 from fempipe.model.space import SpaceModel
 from fempipe.model.space_chart import tangent
 
@@ -59,9 +61,6 @@ def write_space_trajectory(
     path: str | os.PathLike, model: SpaceModel, t: np.ndarray, U: np.ndarray
 ) -> Path:
     """Write ``path`` (.pvd) and one VTU per time in ``path``'s stem directory, all or none."""
-    from fempipe.core.files import write_text
-    from fempipe.io.meshes import write_vtu_frames
-
     path = Path(path)
     if path.suffix != ".pvd":
         raise ValueError(f"trajectory path must end in .pvd, got {path.name!r}")

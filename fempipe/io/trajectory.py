@@ -23,7 +23,12 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from fempipe.core.files import write_text
+from fempipe.io import SHAPE_FIELDS, screen_points
+from fempipe.io.meshes import write_vtu_frames
 from fempipe.model.discretization import Discretization
+from fempipe.model.kinematics import Shape, shape
+from fempipe.model.quadrature import lagrange_integrals
 
 __all__ = ["CenterlineSampler", "frame_data", "write_trajectory", "read_trajectory"]
 
@@ -52,9 +57,6 @@ class CenterlineSampler:
     """
 
     def __init__(self, disc: Discretization, alpha: float, points_per_cell: int = 4) -> None:
-        from fempipe.model.kinematics import shape
-        from fempipe.model.quadrature import lagrange_integrals
-
         self.disc, self.alpha, self.points_per_cell = disc, float(alpha), points_per_cell
         quad = disc.quad
         self.xi = shape(disc, np.zeros(disc.n), alpha, points_per_cell).xi
@@ -67,8 +69,6 @@ class CenterlineSampler:
         self._checked = False
 
     def _fast_shape(self, q: np.ndarray):
-        from fempipe.model.kinematics import Shape
-
         disc, quad, alpha, xi = self.disc, self.disc.quad, self.alpha, self.xi
         theta_q = disc.Phi @ q
         f = np.stack(
@@ -89,8 +89,6 @@ class CenterlineSampler:
 
     def _check(self, q: np.ndarray, qdot: np.ndarray | None) -> None:
         """Compare the fast path with ``shape`` and ``disc.evaluate`` on one state, bitwise."""
-        from fempipe.model.kinematics import shape
-
         self._checked = True
         ref, fast = shape(self.disc, q, self.alpha, self.points_per_cell), self._fast_shape(q)
         same = all(
@@ -107,8 +105,6 @@ class CenterlineSampler:
         if not self._checked:
             self._check(q, None if qdot is None else np.asarray(qdot))
         if self._basis is None:
-            from fempipe.model.kinematics import shape
-
             return shape(self.disc, q, self.alpha, self.points_per_cell)
         return self._fast_shape(q)
 
@@ -137,8 +133,6 @@ def frame_data(
     numbers, computed without the per-state set-up).
     """
     if sampler is None:
-        from fempipe.model.kinematics import shape
-
         s = shape(disc, q, alpha, points_per_cell=points_per_cell)
         theta_dot = disc.evaluate(qdot, s.xi)
     else:
@@ -155,7 +149,6 @@ def frame_data(
     edges = quad.at_edges(f)
     vel_X = np.interp(xi, quad.edges, edges[:, 0])
     vel_Z = np.interp(xi, quad.edges, edges[:, 1])
-    from fempipe.io import SHAPE_FIELDS, screen_points
 
     points = screen_points(s.X_g, s.Z_g)
     data = {f: np.asarray(getattr(s, f), dtype=float) for f in SHAPE_FIELDS}
@@ -191,9 +184,6 @@ def write_trajectory(
     -------
     Path of the .pvd file.
     """
-    from fempipe.core.files import write_text
-    from fempipe.io.meshes import write_vtu_frames
-
     path = Path(path)
     if path.suffix != ".pvd":
         raise ValueError(f"trajectory path must end in .pvd, got {path.name!r}")

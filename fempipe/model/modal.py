@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fempipe.core.rootfinding import brentq
+
 from .quadrature import LineQuadrature
 
 __all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
@@ -174,8 +176,6 @@ def beam_roots(n: int) -> np.ndarray:
     -------
     ndarray, shape (n,)
     """
-    from fempipe.core.rootfinding import brentq
-
     out = np.empty(int(n))
     for r in range(1, int(n) + 1):
         c = (2 * r - 1) * np.pi / 2.0

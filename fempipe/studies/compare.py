@@ -21,6 +21,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from fempipe.core.errors import SolverError
+from fempipe.core.parallel import run_tasks
+from fempipe.model.params import Params
 
 from .convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
 from .error_estimate import describe, estimate, expected_order, refine, refinement_ratio
@@ -223,8 +225,6 @@ def compare_values(
         One per pair, in order; a :class:`~fempipe.core.errors.SolverError` or
         ``ValueError`` of a computation is that comparison's ``failure``.
     """
-    from fempipe.core.parallel import run_tasks
-
     for q, _ in pairs:
         if q.name not in COMPARABLE:
             raise ValueError(f"{q.name} cannot be compared; the quantities are {COMPARABLE}")
@@ -254,8 +254,6 @@ def estimate_description(
     ``floors`` (quantity -> its relative solver tolerance,
     :attr:`Quantity.tolerance`) and ``resolved`` (the criterion) added.
     """
-    from fempipe.model.params import Params
-
     floors = {}
     for name in quantities:
         kw = {"v_max": 1.0} if name in CRITICAL_QUANTITIES else {}

@@ -11,6 +11,8 @@ from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
 from fempipe.analyses.limit_cycle import TIP_KEYS
+from fempipe.analyses.periodic.points import PointStore
+from fempipe.analyses.statics import solve_path
 from fempipe.core.files import write_text
 from fempipe.core.parallel import run_tasks
 from fempipe.model.dynamics_problem import refuse_hysteretic
@@ -18,6 +20,7 @@ from fempipe.model.operators import PipeModel
 
 from .branch import continue_cycles
 from .hopf import analyse_static, equilibrium_tip, point_dict, static_points
+from .out_of_plane import VerdictStore, branch_verdicts, equilibrium_verdict
 from .results import CycleContinuationError, CyclePoint, HopfPoint
 from .special import cycle_branch
 
@@ -106,8 +109,6 @@ def _alpha_task(
 ) -> dict:
     """Static branch, Hopf points and all branches of periodic orbits at one alpha
     (with ``out_of_plane``: their 3-D verdicts, :func:`_add_verdicts`)."""
-    from fempipe.analyses.periodic.points import PointStore
-
     store = PointStore(store_dir, manifest)
     alpha = float(model.params.alpha)
     v_lo, v_hi = min(values), max(values)
@@ -206,10 +207,6 @@ def _alpha_task(
 def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) -> None:
     """``stable_out_of_plane`` and ``stable_3d`` of the static points (in place; kept in
     the store beside the static branch)."""
-    from fempipe.analyses.statics import solve_path
-
-    from .out_of_plane import VerdictStore, equilibrium_verdict
-
     store = VerdictStore(directory / f"a{alpha_index:02d}-static-3d.json")
     states = None
     for i, d in enumerate(eq_points):
@@ -230,8 +227,6 @@ def _add_verdicts(model, points, dicts, select, where, on_point) -> None:
     """The 3-D verdicts of the selected orbits of a branch (``select`` True: all of
     them, else a callable giving the indices), merged into their dicts; the
     others get ``stable_3d`` None."""
-    from .out_of_plane import VerdictStore, branch_verdicts
-
     indices = range(len(points)) if select is True else select(points)
     verdicts = branch_verdicts(model, points, list(indices), VerdictStore(where), on_point)
     for i, d in enumerate(dicts):
@@ -325,8 +320,6 @@ def cycle_diagram(
         tmp = tempfile.TemporaryDirectory(prefix="fempipe-cycles-")
         store_dir = tmp.name
     try:
-        from fempipe.analyses.periodic.points import PointStore
-
         PointStore(store_dir, manifest)  # refuses a store of another run
         in_process = executor is None and (workers is None or int(workers) == 1 or len(alphas) == 1)
         tasks = [

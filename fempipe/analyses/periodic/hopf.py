@@ -14,6 +14,9 @@ from dataclasses import replace
 import numpy as np
 
 from fempipe.analyses.limit_cycle import TIP_KEYS, tip_coordinates
+from fempipe.analyses.stability import linearized_matrices, linearly_stable, stability_analysis
+from fempipe.analyses.statics import solve_path
+from fempipe.core.companion import first_order_matrix
 from fempipe.model.operators import PipeModel
 
 from .results import HopfPoint
@@ -30,8 +33,6 @@ __all__ = [
 def _static_states(model: PipeModel, values: Sequence[float], v_start: float) -> dict:
     """Static states of the primary branch (the gravity-loaded state continued in v,
     as the stability analysis follows it) at ``values``, keyed by v."""
-    from fempipe.analyses.statics import solve_path
-
     vals = sorted({float(v_start), *(float(v) for v in values)})
     sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
     return {v: s.q for v, s in zip(vals, sols, strict=True)}
@@ -39,9 +40,6 @@ def _static_states(model: PipeModel, values: Sequence[float], v_start: float) ->
 
 def critical_eigenvector(model: PipeModel, q: np.ndarray, omega: float) -> tuple[float, np.ndarray]:
     """(omega, z): the eigenpair of the first-order form nearest to i omega."""
-    from fempipe.analyses.stability import linearized_matrices
-    from fempipe.core.companion import first_order_matrix
-
     K, Cd, M = (
         np.asarray(a.toarray() if hasattr(a, "toarray") else a)
         for a in linearized_matrices(model, q)
@@ -80,8 +78,6 @@ def hopf_points(
 
 def analyse_static(model: PipeModel, v_min: float, v_max: float, ds_max: float = 0.1):
     """(Hopf points, start of the analysis, events of the primary branch)."""
-    from fempipe.analyses.stability import stability_analysis
-
     res = stability_analysis(model, v_max, v_min, follow_bifurcations=False, ds_max=ds_max)
     v_start = v_min
     if v_min > 0 and any(e.at_start for e in res.events):
@@ -126,8 +122,6 @@ def static_points(
     ``stable_after``) when given, else :func:`fempipe.analyses.stability.linearly_stable`
     at each state (the same criterion).
     """
-    from fempipe.analyses.stability import linearly_stable
-
     vals = sorted(float(v) for v in values)
     start = vals[0] if v_start is None else float(v_start)
     states = _static_states(model, vals, start)

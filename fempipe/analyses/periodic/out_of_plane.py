@@ -32,7 +32,7 @@ from fempipe.core.errors import SolverError
 from fempipe.core.files import write_text
 from fempipe.model.operators import PipeModel
 
-from .results import CyclePoint
+from .results import CyclePoint, nontrivial_multipliers
 
 __all__ = [
     "VerdictStore",
@@ -91,8 +91,6 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
         and ``stable_3d_note`` where the verdict is rough
         (:func:`~fempipe.analyses.space.verdict.rough_verdict_note`).
     """
-    from .results import nontrivial_multipliers
-
     oop = out_of_plane_floquet(model, cycle)
     out = cycle_entries(model, oop, stable_in_plane)
     # Evidence to check the verdict by: the out-of-plane run's planar block (the

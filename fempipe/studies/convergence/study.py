@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fempipe.core.errors import SolverError
+from fempipe.core.parallel import run_tasks, single_blas_thread
 
 from .orders import extrapolate, local_orders, observed_order
 from .quantities import Family, Quantity
@@ -172,8 +173,6 @@ def _number(x):
 
 def _member(quantity: Callable, family: Family, size: int) -> tuple[complex | float, float]:
     """Value of one member and its CPU seconds (a worker task)."""
-    from fempipe.core.parallel import single_blas_thread
-
     t0 = time.process_time()
     # The dense solves of a member are small: BLAS threads cost more than they
     # give (up to 50x on a loaded machine for N = 32 modes).
@@ -216,8 +215,6 @@ def run_study(
         Members whose solver failed have value NaN and their message in
         ``Series.failures``; they are left out of the reference and the fits.
     """
-    from fempipe.core.parallel import run_tasks
-
     t_start = time.process_time()
     families = list(families)
     if not families:

@@ -12,6 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fempipe.core.errors import SolverError
+from fempipe.model.kinematics import tip_values
+from fempipe.model.projection import project
 from fempipe.studies.error_estimate import describe, estimate, refine
 
 from .shape import ERROR, REFINED, Refined, beside, header
@@ -127,7 +130,7 @@ def refined_attractor(
         ``floor``: ``rtol`` for a pulsating flow, Newton's 1e-10 for an
         equilibrium, ``shoot_rtol`` for a cycle.
     """
-    from fempipe.core.errors import SolverError
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.model.operators import PipeModel
 
     att = attractor
@@ -185,11 +188,10 @@ def _refined_forced(
 ) -> AttractorSummary:
     """A pulsating flow integrated again from the refined static state: its tip extrema
     over the second half of the run."""
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.dynamics import initial_state, simulate
     from fempipe.analyses.limit_cycle import TIP_KEYS
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.kinematics import tip_values
-    from fempipe.model.projection import project
 
     disc, fine, params = model.disc, fine_model.disc, model.params
     q_s = solve_static(fine_model, project(disc, q_static, fine)).q
@@ -203,11 +205,10 @@ def _refined_forced(
 def _refined_equilibrium(model, fine_model, q_coarse) -> AttractorSummary:
     """The equilibrium solved by Newton on the refined discretization from the coarse
     one, with its tip values if it is linearly stable."""
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.limit_cycle import TIP_KEYS
     from fempipe.analyses.stability import linearly_stable
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.kinematics import tip_values
-    from fempipe.model.projection import project
 
     disc, fine, params = model.disc, fine_model.disc, model.params
     q = solve_static(fine_model, project(disc, q_coarse, fine)).q
@@ -246,8 +247,8 @@ def refined_cycle(
     notes : list of str
         A note if the shooting failed and the cycle was found by integration.
     """
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
-    from fempipe.model.projection import project
     from fempipe.solvers.radau import IntegrationError
 
     disc, att, summary = model.disc, attractor, AttractorSummary.of

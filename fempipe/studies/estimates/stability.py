@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fempipe.core.errors import SolverError
 from fempipe.studies.error_estimate import describe, match_events, refine
 
 from .shape import ERROR, REFINED, Refined, beside, header, with_estimate
@@ -62,8 +63,8 @@ def refined_stability(
         ``result`` None, with a note, if the refined run failed; a note if
         its primary branch ran out of continuation steps.
     """
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.stability import spatial_stability_analysis, stability_analysis
-    from fempipe.core.errors import SolverError
     from fempipe.model.operators import PipeModel
 
     analysis = stability_analysis if planar else spatial_stability_analysis

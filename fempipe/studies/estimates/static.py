@@ -12,6 +12,8 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from fempipe.model.kinematics import tip_values
+from fempipe.model.projection import project
 from fempipe.studies.error_estimate import describe, refine
 
 from .shape import ERROR, REFINED, Refined, beside, header, with_estimate
@@ -71,9 +73,9 @@ def refined_static_states(
     RefinedStatic
         With a note for each state Newton could not find (its errors null).
     """
+    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.statics import NewtonError, solve_static
     from fempipe.model.operators import PipeModel
-    from fempipe.model.projection import project
 
     disc = model.disc
     fine = refine(disc) if fine is None else fine
@@ -142,8 +144,6 @@ def with_static_estimates(result: dict, solutions: Sequence, refined: RefinedSta
         result = with_static_estimates(result, sols, refined)
         result["points"][0]["theta_tip_error"], result["error_estimate"]["notes"]
     """
-    from fempipe.model.kinematics import tip_values
-
     fine, info = refined.discretization, refined.info
     out = []
     for row, sol, fine_sol in zip(result["points"], solutions, refined.states, strict=True):

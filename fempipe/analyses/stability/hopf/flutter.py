@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from fempipe.analyses.statics import NewtonError, solve_path
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 
@@ -59,8 +60,6 @@ def event_states(model: PipeModel, result) -> dict:
     dict
         ``{(branch, type, v, mode): ndarray q or str reason}`` for the flutter events.
     """
-    from fempipe.analyses.statics import NewtonError, solve_path
-
     out: dict = {}
     flutter = [ev for ev in result.events if ev.type == "flutter"]
     primary = sorted(

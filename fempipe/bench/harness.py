@@ -1,0 +1,105 @@
+"""What the benchmarks share: their registration, two timers and two cases.
+
+A benchmark module registers its functions with :func:`register` (into :data:`BENCHMARKS`)
+and times them with :func:`best_time` (in this process) or :func:`child_cpu_seconds` (a
+fresh ``python``); :data:`PAPER` and :data:`TEXIER_DORBOLO` are the cases several of them
+run.  The registry of the modules and the runner are :mod:`fempipe.bench`.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+
+from fempipe.model.params import PAPER_CASE
+
+__all__ = [
+    "BENCHMARKS",
+    "PAPER",
+    "TEXIER_DORBOLO",
+    "best_time",
+    "child_cpu_seconds",
+    "register",
+]
+
+#: name -> benchmark function ``fn(quick=False) -> dict``.
+BENCHMARKS: dict[str, Callable[..., dict]] = {}
+
+#: The paper's reference case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2.
+PAPER = {"alpha": math.pi / 2, **PAPER_CASE}
+#: Texier & Dorbolo's pipe (paper Section 3.1, Fig. 2b): SI values.
+TEXIER_DORBOLO = {"L": 0.094, "EI": 1.8e-5, "m": 0.0159, "M": 0.0058, "g": 9.8}
+
+
+def register(name: str) -> Callable[[Callable[..., dict]], Callable[..., dict]]:
+    """Decorator: register ``fn(quick=False) -> dict`` as benchmark ``name``."""
+
+    def deco(fn: Callable[..., dict]) -> Callable[..., dict]:
+        if name in BENCHMARKS and BENCHMARKS[name] is not fn:
+            raise ValueError(f"benchmark {name!r} is already registered")
+        BENCHMARKS[name] = fn
+        return fn
+
+    return deco
+
+
+def best_time(fn: Callable[[], object], repeats: int) -> tuple[float, object]:
+    """Minimum wall time of ``repeats`` calls (the least disturbed run) and the last result."""
+    best, result = math.inf, None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, result
+
+
+_BYTECODE_CACHE: str | None = None
+
+
+def child_cpu_seconds(argv: list[str], env: dict | None = None) -> tuple[float, str]:
+    """User + system CPU seconds and stdout of one fresh ``python ARGV`` (``sys.executable``).
+
+    ``env`` changes the child's environment: ``{name: value}``, a value of
+    None removes the variable.
+
+    The CPU time is the change of ``getrusage(RUSAGE_CHILDREN)`` over the run.
+    All children of a benchmark run share one bytecode cache
+    (``PYTHONPYCACHEPREFIX``, a temporary directory removed at exit): an installed
+    package loads its modules from compiled bytecode, and with
+    PYTHONDONTWRITEBYTECODE set (as some harnesses do) fempipe's modules would
+    otherwise be compiled from source at every start while numpy's and scipy's
+    load their installed .pyc files.  The first run of a command fills the cache;
+    benchmarks make one untimed run first.
+
+    Raises
+    ------
+    RuntimeError
+        If the process fails, with the end of its stderr.
+    """
+    global _BYTECODE_CACHE
+    if _BYTECODE_CACHE is None:
+        _BYTECODE_CACHE = tempfile.mkdtemp(prefix="fempipe-bench-pycache-")
+        atexit.register(shutil.rmtree, _BYTECODE_CACHE, True)
+    child_env = dict(os.environ)
+    child_env.pop("PYTHONDONTWRITEBYTECODE", None)
+    child_env["PYTHONPYCACHEPREFIX"] = _BYTECODE_CACHE
+    for name, value in (env or {}).items():
+        if value is None:
+            child_env.pop(name, None)
+        else:
+            child_env[name] = value
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    res = subprocess.run([sys.executable, *argv], capture_output=True, text=True, env=child_env)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if res.returncode != 0:
+        raise RuntimeError(f"python {' '.join(argv)} failed: {res.stderr.strip()[-500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, res.stdout
