@@ -2,15 +2,15 @@
 
 This module is data (and one lookup function): ``tests/test_layering.py`` reads it without
 importing fempipe, parses every module of the package and fails on an import of a higher
-layer, on a private name (``_x``) imported from another module, and on a cycle of
-module-level imports.
+layer, on a private name (``_x``) imported from another module, and on a cycle of imports,
+even through imports inside functions.
 
 The layers, in rank order (:data:`LAYERS`): ``core`` < ``model`` < ``solvers`` <
 ``analyses`` (statics < stability < dynamics < limit_cycle < space < branches: bifurcation
 diagrams and periodic orbits) < ``studies`` < ``io`` < ``plotting`` < ``validation`` <
-``bench`` < ``cli`` < ``facade`` (``fempipe`` itself and ``python -m fempipe``; nothing in
-the package imports it).  The package ``fempipe.analyses`` itself, and an analysis not
-listed yet, rank with the statics.
+``bench`` < ``cli`` < ``facade`` (``fempipe`` itself, ``python -m fempipe`` and the course's
+answer checks ``fempipe.course``; nothing in the package imports it).  The package
+``fempipe.analyses`` itself, and an analysis not listed yet, rank with the statics.
 
 What each layer holds: docs/api/usage.md, "The package, layer by layer".
 """
@@ -42,7 +42,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 
 #: The modules of the facade, matched exactly (every module starts with ``fempipe``).
-FACADE: tuple[str, ...] = ("fempipe", "fempipe.__main__")
+FACADE: tuple[str, ...] = ("fempipe", "fempipe.__main__", "fempipe.course")
 
 
 def layer_of(module: str) -> tuple[int, str] | None:
