@@ -12,7 +12,7 @@ follows the static state in gravity or inclination at one flow velocity instead.
 pipe is round, and a state is stable when its motion in the plane of the
 static state (Eq. (32)) and out of it (:mod:`fempipe.model.out_of_plane`) are both
 stable (:func:`fempipe.analyses.stability.linearly_stable` of ``model`` and of
-``model.with_plane("out")``); ``stable_in_plane`` and
+``out_of_plane_model(model)``); ``stable_in_plane`` and
 ``stable_out_of_plane`` are each plane's verdict.  ``--planar`` decides in
 the plane alone, every output as before (``stable`` only).
 
@@ -205,10 +205,12 @@ def _stability(model, q, planar: bool = False) -> dict:
     Stable in three dimensions when stable in both planes; unstable when
     unstable in either; None when neither says unstable and one resolves nothing.
     """
+    from fempipe.model.out_of_plane import out_of_plane_model
+
     inp = _stable(model, q)
     if planar:
         return {"stable": inp}
-    out = _stable(model.with_plane("out"), q)
+    out = _stable(out_of_plane_model(model), q)
     if inp is False or out is False:
         both = False
     elif inp is None or out is None:
