@@ -292,11 +292,12 @@ def _free_rotation(bvp, n_elements: int, v: float) -> tuple[float, float]:
     from fempipe.model.discretization import FiniteElement
     from fempipe.model.params import Params
     from fempipe.model.space import SpaceModel
+    from fempipe.model.space_dynamics import SpaceDynamics
     from fempipe.solvers.radau import Radau
 
     space = SpaceModel(FiniteElement(n_elements, 3), Params(alpha=0.0, v=v))
     U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
-    stepper = Radau(space, U, Ud, rtol=1e-9)
+    stepper = Radau(SpaceDynamics(space), U, Ud, rtol=1e-9)
     ts, Us = [0.0], [U]
     for t, q, _ in stepper.steps(0.5 * bvp.period):
         ts.append(t)
