@@ -19,6 +19,7 @@ from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import out_of_plane_model
 from fempipe.model.params import Params
 
 from . import classical, lateral
@@ -46,7 +47,7 @@ __all__ = [
 
 def _pair(p: Params, fe: str, v_max: float, v_min: float = 0.0, p_spec: int = 24):
     """The out-of-plane onset by fempipe (FE) and by the strong form."""
-    m = PipeModel(discretization_from_name(fe), p).with_plane("out")
+    m = out_of_plane_model(PipeModel(discretization_from_name(fe), p))
     r = stability.critical_velocity(m, v_max=v_max, v_min=v_min)
     s = lateral.critical_velocity(p, v_max, v_min=v_min, disc=lateral.HermiteSpectral(p_spec))
     c = r.critical
@@ -174,7 +175,7 @@ def inclined_variants_check(ref):
     # gravity continuation does, at 1/40 of its cost with two springs); the tips are compared.
     q = solve_static(m).q
     tip_gap = abs(float(m.disc.tip @ q) - st.theta_tip)
-    lam_f = pencil_eigenvalues(*m.with_plane("out").linearization(q))
+    lam_f = pencil_eigenvalues(*out_of_plane_model(m).linearization(q))
     err = nearest_distance(lam_f, lam_s)
     return below(
         "inclined_variants_vs_strong",
@@ -205,7 +206,7 @@ def order_checks(ref, quick: bool, v_ref: float):
         errs, dofs = [], []
         for n in ns:
             d = FiniteElement(n, int(fam[1])) if fam.startswith("P") else Modal(n, basis=fam)
-            r = stability.critical_velocity(PipeModel(d, p).with_plane("out"), hi, lo)
+            r = stability.critical_velocity(out_of_plane_model(PipeModel(d, p)), hi, lo)
             errs.append(abs(float(r.v_cr) - v_ref))
             dofs.append(d.n)
         slopes = [refinement_slope(ns[k : k + 2], errs[k : k + 2]) for k in range(len(ns) - 1)]
@@ -254,7 +255,7 @@ def finding_checks(ref, quick: bool):
         for a in alphas:
             m = PipeModel(discretization_from_name(fe), Params(alpha=a, mu=mu, **base))
             ri = stability.critical_velocity(m, hi, lo)
-            ro = stability.critical_velocity(m.with_plane("out"), hi, lo)
+            ro = stability.critical_velocity(out_of_plane_model(m), hi, lo)
             ci, co = ri.critical, ro.critical
             vi, vo = float(ri.v_cr), float(ro.v_cr)
             curves.setdefault(mu, []).append((a, vi, vo))

@@ -23,7 +23,7 @@ from fempipe.analyses import stability
 from fempipe.analyses.statics import sagged_state, solve_static
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
 from fempipe.model.params import Params
 
 from . import lateral
@@ -126,7 +126,7 @@ def identity_checks(ref):
         worst_m, worst_l, worst_c = 0.0, 0.0, 0.0
         for name in ref.value("identity_discretizations"):
             m = PipeModel(_disc(name), p)
-            mo = m.with_plane("out")
+            mo = out_of_plane_model(m)
             q = sagged_state(m).q
             mats = [
                 _rel(a, b) for a, b in zip(mo.linearization(q), m.linearization(q), strict=True)
