@@ -9,11 +9,15 @@ a tolerance, the templates, the required checks, and that the files and the case
 
 from __future__ import annotations
 
+import functools
 import json
 import math
+import re
 
 import pytest
+from test_validation import CHEAP, ROOT, SPACE_QUICK, quick_result
 
+from fempipe.validation import CASES
 from fempipe.validation import case as case_module
 from fempipe.validation.case import Case, References, load_references
 from fempipe.validation.evaluate import Measured, evaluate, fill, measure
@@ -130,3 +134,38 @@ def test_invalid_specs_are_refused(tmp_path, monkeypatch):
     case = _write(tmp_path, monkeypatch, {})
     with pytest.raises(KeyError, match="no check 'x'"):
         case.result([measure("x", 1.0)], quick=True)
+
+
+def _pattern(key: str) -> re.Pattern:
+    """A spec's key as a pattern of check names: each ``{placeholder}`` stands for any text."""
+    return re.compile(".+".join(re.escape(p) for p in re.split(r"\{[^{}]*\}", key)))
+
+
+@functools.cache
+def _report_names() -> dict[str, set[str]]:
+    """The check names of every case in the committed report (a full run)."""
+    report = json.loads((ROOT / "validation" / "report" / "results.json").read_text("utf-8"))
+    return {
+        c["name"]: {k["name"] for k in (c["result"] or {}).get("checks", [])}
+        for c in report["cases"]
+    }
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_every_spec_is_used_and_every_check_has_one(name):
+    """No spec of ``references/<case>.json`` that no run measures (a full run: the committed
+    report; a quick run of the cheap cases), no check that has no spec, and every name a
+    family's ``"required"`` lists is one of its members."""
+    names = set(_report_names().get(name, ()))
+    if name in CHEAP + SPACE_QUICK:
+        names |= {c.name for c in quick_result(name).checks}
+    assert names, name
+    patterns = {key: _pattern(key) for key in load_references(name).checks}
+    unmatched = sorted(n for n in names if not any(p.fullmatch(n) for p in patterns.values()))
+    dead = sorted(k for k, p in patterns.items() if not any(p.fullmatch(n) for n in names))
+    assert not unmatched, f"checks without a spec: {unmatched}"
+    assert not dead, f"specs that no run measures: {dead}"
+    for key, spec in load_references(name).checks.items():
+        required = spec.get("required")
+        for member in required if isinstance(required, list) else []:
+            assert patterns[key].fullmatch(member), (key, member)

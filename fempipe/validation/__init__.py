@@ -1,11 +1,12 @@
 """The validation suite: the paper's figures by FE and modal Galerkin, side by side.
 
 One importable case per figure of Chen, Hu, Dai & Wang (2020).  Each case module declares
-``CASE``, a :class:`~fempipe.validation.case.Case` (name, figure, title, what the paper shows,
-the checks it must emit), and defines ``run(quick=False) -> CaseResult`` (the data and the
-checks) and ``plot(result, fig=None) -> Figure`` (the figure drawn as the paper does, with the
-mesh-converged FE result and modal N = 3 and N = 4 overlaid).  Reference numbers sit beside
-the cases in ``references/<case>.json``, each with its source.
+``CASE``, a :class:`~fempipe.validation.case.Case` (name, figure, title, what the paper shows),
+and defines ``run(quick=False) -> CaseResult`` (the data and the measurements, judged by
+:mod:`fempipe.validation.evaluate`) and ``plot(result, fig=None) -> Figure`` (the figure drawn
+as the paper does, with the mesh-converged FE result and modal N = 3 and N = 4 overlaid).
+``references/<case>.json`` holds a case's reference numbers with their sources, its caption
+and the specs of its checks (claim, limit or reference, tolerance, why, source).
 
 >>> from fempipe.validation import load_case
 >>> res = load_case("fig02b").run(quick=True)      # doctest: +SKIP

@@ -53,37 +53,6 @@ class References:
         """Where the value of ``key`` comes from (for a tolerance: why it has that size)."""
         return self.entries[key]["source"]
 
-    def close(
-        self, name, claim, measured, *, key=None, atol=0.0, rtol=0.0, why, category="numerics"
-    ):  # TRANSITION
-        from .checks import close
-
-        key = key or name
-        return close(
-            name,
-            claim,
-            measured,
-            self.value(key),
-            atol=atol,
-            rtol=rtol,
-            why=why,
-            source=self.source(key),
-            category=category,
-        )
-
-    def below(self, name, claim, measured, key, *, source, category="numerics"):  # TRANSITION
-        from .checks import below
-
-        return below(
-            name,
-            claim,
-            measured,
-            self.value(key),
-            why=self.source(key),
-            source=source,
-            category=category,
-        )
-
     def names(self, quick: bool) -> dict:
         """The values the templates name: every entry (in the quick suite its ``_quick``
         variant, where there is one) and ``"sources"``, their sources."""
@@ -101,6 +70,9 @@ def _check_spec(path: Path, name: str, spec: Any) -> None:
         raise ValueError(f"{path}: check {name!r} needs a kind, one of {', '.join(KINDS)}")
     missing = {"claim", "source"} | ({"why"} if spec["kind"] != "holds" else set())
     unknown = set(spec) - SPEC_KEYS - set(KINDS[spec["kind"]])
+    req = spec.get("required", True)
+    if not (isinstance(req, list) or req in (True, False, "full")):
+        unknown.add("required")
     if missing - set(spec) or unknown:
         raise ValueError(
             f"{path}: check {name!r}: missing {missing - set(spec)}, unknown {unknown}"
@@ -150,9 +122,17 @@ def not_emitted(name: str, case: str) -> Check:
 
 
 def required(checks: Mapping[str, Mapping], quick: bool) -> list[str]:
-    """The checks of a spec section that every run (``quick`` or full) must measure."""
-    want = (True, "quick") if quick else (True, "full")
-    return [n for n, s in checks.items() if "{" not in n and s.get("required", True) in want]
+    """The checks of a spec section that every run (``quick`` or full) must measure: each
+    check without placeholders (``"required": "full"``: in the full suite, ``false``:
+    none), and the members of a family that its ``"required"`` lists."""
+    names = []
+    for name, spec in checks.items():
+        want = spec.get("required", True)
+        if isinstance(want, list):
+            names += want
+        elif "{" not in name and (want is True or (want == "full" and not quick)):
+            names.append(name)
+    return names
 
 
 @dataclass(frozen=True)
@@ -177,8 +157,6 @@ class Case:
     figure: str
     title: str
     paper_shows: tuple[str, ...]
-    requires: tuple[str, ...] = ()  # TRANSITION
-    caption: str = ""  # TRANSITION
     not_checked: tuple[str, ...] = ()
 
     @property
@@ -186,11 +164,12 @@ class Case:
         """The case's reference file (``references/<name>.json``)."""
         return load_references(self.name)
 
-    def filled_caption(self) -> str:
+    @property
+    def caption(self) -> str:
         """The figure's caption in the report, filled from the (full suite's) reference values:
         parameters, discretizations in words, the key of colors, line styles and markers."""
         refs = self.references
-        return self.caption or fill(refs.caption, refs.names(quick=False))
+        return fill(refs.caption, refs.names(quick=False))
 
     def check(self, m: Measured, quick: bool) -> Check:
         """The check of one measurement (a case that needs a verdict to write a finding)."""
@@ -207,7 +186,6 @@ class Case:
         data: dict | None = None,
         explained: Iterable[str] = (),
         requires: Iterable[str] = (),
-        started=None,  # TRANSITION
     ) -> CaseResult:
         """The case's result: every measurement judged by its spec, every required check
         that is missing added as failed.
@@ -224,18 +202,16 @@ class Case:
         """
         refs = self.references
         names = refs.names(quick)
-        checks = tuple(
-            m if isinstance(m, Check) else evaluate(_spec(refs, m.spec), m, names) for m in measured
-        )  # TRANSITION
+        checks = tuple(evaluate(_spec(refs, m.spec), m, names) for m in measured)
         emitted = {c.name for c in checks}
-        declared = dict.fromkeys((*self.requires, *required(refs.checks, quick), *requires))
+        declared = dict.fromkeys((*required(refs.checks, quick), *requires))
         missing = tuple(not_emitted(n, self.name) for n in declared if n not in emitted)
         return CaseResult(
             case=self.name,
             figure=self.figure,
             title=self.title,
             paper_shows=self.paper_shows,
-            caption=self.filled_caption(),
+            caption=fill(refs.caption, refs.names(quick=False)),
             not_checked=self.not_checked,
             checks=checks + missing,
             tables=tuple(tables),

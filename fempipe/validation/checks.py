@@ -26,17 +26,7 @@ import numpy as np
 
 from ..io import to_jsonable
 
-__all__ = [
-    "CATEGORIES",
-    "CaseResult",
-    "Check",
-    "Table",
-    "below",
-    "close",
-    "format_cell",
-    "holds",
-    "merge_results",
-]
+__all__ = ["CATEGORIES", "CaseResult", "Check", "Table", "format_cell", "merge_results"]
 
 CATEGORIES = ("numerics", "paper")
 
@@ -92,77 +82,6 @@ def format_cell(x: Any) -> str:
     return str(x).replace("|", "\\|").replace("\n", " ")
 
 
-def close(
-    name: str,
-    claim: str,
-    measured: float,
-    reference: float,
-    *,
-    atol: float = 0.0,
-    rtol: float = 0.0,
-    why: str,
-    source: str,
-    category: str = "numerics",
-) -> Check:
-    """``|measured - reference| <= atol + rtol |reference|``.
-
-    ``why`` says why the tolerance has that size; it is stored with it.
-    """
-    measured, reference = float(measured), float(reference)
-    bound = atol + rtol * abs(reference)
-    err = abs(measured - reference)
-    parts = []
-    if atol:
-        parts.append(f"{atol:.3g}")
-    if rtol:
-        parts.append(f"{rtol:.3g}·|ref|")
-    tol = f"|Δ| ≤ {' + '.join(parts) or '0'} (|Δ| = {err:.3g}); {why}"
-    return Check(name, claim, category, bool(err <= bound), measured, reference, tol, source)
-
-
-def below(
-    name: str,
-    claim: str,
-    measured: float,
-    limit: float,
-    *,
-    why: str,
-    source: str,
-    category: str = "numerics",
-) -> Check:
-    """``measured <= limit`` (an error, a drift, a difference).
-
-    The reference is the limit itself, a number (the relation is in the
-    tolerance text), so that ``results.json`` carries it as a number.
-    """
-    measured = float(measured)
-    return Check(
-        name,
-        claim,
-        category,
-        bool(measured <= limit),
-        measured,
-        float(limit),
-        f"≤ {limit:.3g}; {why}",
-        source,
-    )
-
-
-def holds(
-    name: str,
-    claim: str,
-    ok: bool,
-    measured: Any,
-    *,
-    reference: Any = True,
-    why: str = "qualitative statement",
-    source: str,
-    category: str = "paper",
-) -> Check:
-    """A qualitative statement (monotonicity, a mode number, an attractor type)."""
-    return Check(name, claim, category, bool(ok), measured, reference, why, source)
-
-
 @dataclass(frozen=True)
 class Table:
     """A small table for the report: a title, column names and rows of cells."""
@@ -210,7 +129,7 @@ class CaseResult:
     quick : bool
         Whether the quick (coarser) version ran.
     runtime : float
-        Wall time of ``run``, s.
+        Wall time of ``run``, s (measured by :mod:`fempipe.validation.suite`).
     caption : str
         The figure's caption (see :class:`fempipe.validation.case.Case`).
     not_checked : tuple of str

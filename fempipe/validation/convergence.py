@@ -19,7 +19,6 @@ docs/theory/conventions.md, "Why the sine modes converge only algebraically").
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -31,15 +30,15 @@ from fempipe.studies.convergence import observed_order, richardson
 
 from .bvp import solve_static_bvp
 from .case import Case
-from .checks import CaseResult, Check, Table, close, holds
+from .checks import CaseResult, Table
 from .dynamic_runs import cycle_on
+from .evaluate import Measured, measure
 from .fig02b import pipe
 from .onset import critical_velocity
 from .static_shapes import static_shapes
 
 CASE = Case(
     name="convergence",
-    caption="Convergence of fempipe's discretizations: absolute error against the number of degrees of freedom (log-log) for the static tip position, v_cr at α = 0 and 90°, and the limit cycle, each against a finer reference. Markers: P1 (o), P2 (□), P3 (△) finite elements (linear, quadratic, cubic elements), modal sine bases (◇, dashed); thick grey lines: the points used for the fitted order p given in the legend; N = 3, N = 4: the paper's truncations; dotted line: the error estimate of the reference. Last panel: observed orders of v_cr against α (theory: 2, 4, 6 for P1, P2, P3).",
     figure="Convergence study",
     title="Error against degrees of freedom: FE P1, P2, P3 and modal N",
     paper_shows=(
@@ -47,7 +46,6 @@ CASE = Case(
         "the stability results are converged in the Galerkin discretization (Sec. 4)",
         "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
     ),
-    requires=("static_reference_vs_bvp",),
 )
 
 
@@ -130,38 +128,24 @@ def study_names(tag: str, degrees) -> list[str]:
     return [f"{tag}_order_P{int(k)}" for k in degrees] + [f"{tag}_modal_algebraic"]
 
 
-def study_checks(study: Study, tag: str, order_tol: float, source_order: str) -> list[Check]:
+def study_checks(study: Study, tag: str) -> list[Measured]:
     """Observed FE orders against theory, modal algebraic convergence: :func:`study_names`."""
-    checks = []
-    for label, s in study.series.items():
-        if s.expected is None:
-            continue
-        checks.append(
-            close(
-                f"{tag}_order_{label[-2:]}",
-                f"{study.quantity}: observed order of {label} in h equals 2k",
-                s.order,
-                s.expected,
-                atol=order_tol,
-                why="fit over the last 3 refinements above the reference's uncertainty",
-                source=source_order,
-            )
+    fields = {"tag": tag, "quantity": study.quantity}
+    checks = [
+        measure(
+            "{tag}_order_{degree}",
+            s.order,
+            degree=label[-2:],
+            label=label,
+            reference=s.expected,
+            **fields,
         )
+        for label, s in study.series.items()
+        if s.expected is not None
+    ]
     m = study.series["modal"]
-    checks.append(
-        holds(
-            f"{tag}_modal_algebraic",
-            f"{study.quantity}: the sine modes converge algebraically (order in N below 6)",
-            bool(np.isfinite(m.order) and 0.5 < m.order < 6.0),
-            f"observed order in N: {m.order:.2f}",
-            reference="0.5 < p < 6",
-            why="θ''(0) = 0 of every sine mode is violated by the solution: algebraic, "
-            "not spectral, convergence (order 3 in N)",
-            source="docs, Conventions and derivations: why the sine modes converge only algebraically; "
-            "measured here",
-            category="numerics",
-        )
-    )
+    ok = bool(np.isfinite(m.order) and 0.5 < m.order < 6.0)
+    checks.append(measure("{tag}_modal_algebraic", ok=ok, order=m.order, **fields))
     return checks
 
 
@@ -196,18 +180,9 @@ def static_study(quick: bool) -> tuple[Study, list]:
         st.paper_modes,
         ("solve_bvp", bvp.X_tip),
     )
-    checks = study_checks(st, "static", ref.value("order_tol"), ref.source("fe_order"))
-    checks.append(
-        close(
-            "static_reference_vs_bvp",
-            "the Richardson reference equals the independent collocation solution",
-            st.reference,
-            bvp.X_tip,
-            atol=max(1e-10, 10 * st.reference_error),
-            why="solve_bvp tolerance 1e-11; 10x the Richardson error estimate",
-            source="scipy.integrate.solve_bvp on Eq. (31a)",
-        )
-    )
+    checks = study_checks(st, "static")
+    atol = max(1e-10, 10 * st.reference_error)
+    checks.append(measure("static_reference_vs_bvp", st.reference, reference=bvp.X_tip, atol=atol))
     return st, checks
 
 
@@ -229,9 +204,7 @@ def vcr_studies(quick: bool) -> tuple[list, list]:
             roundoff=1e-11,
         )
         studies.append(st)
-        checks += study_checks(
-            st, f"vcr{np.degrees(a):.0f}", ref.value("order_tol"), ref.source("fe_order")
-        )
+        checks += study_checks(st, f"vcr{np.degrees(a):.0f}")
     return studies, checks
 
 
@@ -255,7 +228,7 @@ def lco_study() -> tuple[Study, list]:
         ref.value("fe_order"),
         roundoff=ref.value("lco_floor"),
     )
-    checks = study_checks(st, "lco", ref.value("order_tol"), ref.source("fe_order"))
+    checks = study_checks(st, "lco")
     return st, checks
 
 
@@ -333,7 +306,6 @@ def _reference_table(studies: Sequence[Study]) -> Table:
 
 def run(quick: bool = False) -> CaseResult:
     """The static and v_cr studies; the limit-cycle study in the full suite only."""
-    t0 = time.perf_counter()
     ref = CASE.references
     requires = study_names("static", ref.value("fe_elements", quick))
     for a in ref.value("vcr_alpha", quick):
@@ -359,7 +331,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         requires=requires,
         tables=(
             _paper_table(studies),

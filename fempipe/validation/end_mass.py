@@ -20,8 +20,6 @@ more for Gamma = 0.3 than 0.2 (a ``paper`` check).
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from scipy.optimize import brentq
 
@@ -32,34 +30,18 @@ from fempipe.model.params import Params
 
 from . import classical
 from .case import Case, References
-from .checks import CaseResult, Table, below, holds
-from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
+from .checks import CaseResult, Table
+from .evaluate import measure
+from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
 CASE = Case(
     name="end_mass",
     figure="Païdoussis (1998) Sec. 3.6.3",
     title="End mass: the tip-mass cantilever, the heavy column and v_cr against Γ",
-    caption=(
-        "Critical flow velocity v_cr against the end mass Γ = M_e/((m+M)L) of the straight pipe: "
-        "(a) the paper's hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005): inertia and "
-        "weight of the mass; (b) the horizontal undamped pipe of Gregory & Païdoussis "
-        "(γ = 0, β = 0.2), Hill & Swanson's system: inertia only. Lines: classical linear "
-        "theory (Legendre spectral elements in η); filled circles: fempipe, FE with cubic "
-        "elements; open diamonds in (b): Hill & Swanson's end masses 0.2 and 0.3."
-    ),
     paper_shows=(
         "an end mass destabilizes the horizontal undamped cantilevered pipe, and raising it from "
         "0.2 to 0.3 destabilizes it further (Hill & Swanson 1970, in Païdoussis 1998, "
         "pp. 165-166, Fig. 3.68)",
-    ),
-    requires=(
-        "blevins_frequencies_G0.2",
-        "blevins_frequencies_G1",
-        "heavy_column",
-        "classical_converged",
-        "fe_vs_classical_hanging_G0.3",
-        "fe_vs_classical_horizontal_G0.2",
-        "hill_swanson",
     ),
     not_checked=(
         "Hill & Swanson's curves of Fig. 3.68 and their experiments: no number is printed",
@@ -73,24 +55,19 @@ def _params(base: dict, end_mass: float, alpha: float = 0.0, **extra) -> Params:
 
 def run(quick: bool = False) -> CaseResult:
     """Closed forms, v_cr(Gamma) and Hill & Swanson; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     disc = parse_discretization(fe=FE)
     q0 = np.zeros(disc.n)
     checks = [*_blevins_checks(ref, disc, q0), _heavy_column_check(ref, disc, q0)]
+    requires = [f"blevins_frequencies_G{G:g}" for G in ref.value("blevins_end_mass")]
     families, fe = _families(ref, quick)
-    requires = []
     for fam, runs in fe.items():
         base = ref.value(fam)
         for G, f in runs.items():
-            name = f"fe_vs_classical_{fam}_G{G:g}"
-            requires.append(name)
-            what = f"{fam} pipe β = {base['beta']:g}, γ = {base['gamma']:g}, Γ = {G:g}"
-            checks.append(agreement_check(name, what, f, families[fam][G]))
-    hb = ref.value("hanging")
-    checks.append(
-        converged_check("classical_converged", "hanging pipe, Γ = 0.3", _params(hb, 0.3), 12.0)
-    )
+            requires.append(f"fe_vs_classical_{fam}_G{G:g}")
+            spec = "fe_vs_classical_{family}_G{G:g}"
+            checks.append(agreement(spec, f, families[fam][G], family=fam, base=base, G=G))
+    checks.append(converged(_params(ref.value("hanging"), 0.3), 12.0))
     hs_check, hs_table = _hill_swanson(ref)
     checks.append(hs_check)
     tables = []
@@ -116,7 +93,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=tuple(tables),
         data={
             "families": {
@@ -138,19 +114,8 @@ def _blevins_checks(ref: References, disc, q0: np.ndarray) -> list:
         p = Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, end_mass=G)
         lam = spectrum(PipeModel(disc, p), q0).lam
         got = np.sort(lam.imag[lam.imag > 0])[:3]
-        checks.append(
-            below(
-                f"blevins_frequencies_G{G:g}",
-                f"v = γ = 0, Γ = {G:g}: fempipe's first three frequencies "
-                f"({', '.join(f'{w:.6f}' for w in got)}) solve 1 + cos l cosh l + Γ l (cos l sinh l "
-                f"- sin l cosh l) = 0, ω = l² ({', '.join(f'{w:.6f}' for w in exact)})",
-                float(np.max(np.abs(got / exact - 1.0))),
-                ref.value("frequency_rtol"),
-                why=ref.source("frequency_rtol"),
-                source="Blevins, Formulas for Natural Frequency and Mode Shape (1979): cantilever "
-                "with a tip mass; roots by fempipe.validation.classical.tip_mass_frequencies",
-            )
-        )
+        err = float(np.max(np.abs(got / exact - 1.0)))
+        checks.append(measure("blevins_frequencies_G{G:g}", err, G=G, got=got, exact=exact))
     return checks
 
 
@@ -164,16 +129,7 @@ def _heavy_column_check(ref: References, disc, q0: np.ndarray):
         return spectrum(PipeModel(disc, p), q0).max_real
 
     g_fe = brentq(max_real, 0.8 * exact, 1.2 * exact, xtol=1e-12)
-    return below(
-        "heavy_column",
-        f"α = π, v = 0, Γ = {G:g}: fempipe's straight column loses stability (a real "
-        f"eigenvalue through zero) at γ = {g_fe:.9f}, the Bessel solution's {exact:.9f}",
-        abs(g_fe / exact - 1.0),
-        ref.value("buckling_rtol"),
-        why=ref.source("buckling_rtol"),
-        source="y'' + γ (1 + Γ - ξ) y = 0, y(0) = 0, y'(1) = 0, solved with J_(±1/3) "
-        "(fempipe.validation.classical.heavy_column_buckling; Γ = 0: Greenhill's 7.837)",
-    )
+    return measure("heavy_column", abs(g_fe / exact - 1.0), gamma_fe=g_fe, exact=exact)
 
 
 def _families(ref: References, quick: bool) -> tuple[dict, dict]:
@@ -201,17 +157,8 @@ def _hill_swanson(ref: References) -> tuple:
         v = [classical_onset(_params(base, G), 20.0).v_cr for G in (0.0, *masses)]
         ok &= bool(v[0] > v[1] > v[2])
         hs_rows.append((beta, *v))
-    check = holds(
-        "hill_swanson",
-        f"horizontal undamped pipe (γ = μ = 0): v_cr(Γ = 0) > v_cr(Γ = {masses[0]:g}) > "
-        f"v_cr(Γ = {masses[1]:g}) at β = "
-        + ", ".join(f"{b:g}" for b in ref.value("hill_swanson_betas")),
-        ok,
-        "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows),
-        why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
-        "(fe_vs_classical_horizontal_*)",
-        source=ref.source("hill_swanson_masses"),
-    )
+    measured = "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows)
+    check = measure("hill_swanson", measured, ok=ok)
     table = Table(
         "Hill & Swanson's statement: v_cr of the horizontal undamped pipe (classical theory)",
         ("β", "Γ = 0", f"Γ = {masses[0]:g}", f"Γ = {masses[1]:g}"),

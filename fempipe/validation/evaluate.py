@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .checks import Check, below, close, holds
+from .checks import Check
 
 __all__ = ["KINDS", "Measured", "alpha_name", "evaluate", "fill", "measure"]
 
@@ -110,31 +110,30 @@ def evaluate(spec: Mapping, m: Measured, names: Mapping[str, Any]) -> Check:
 
     ``names`` maps the references' names to their values and ``"sources"`` to their
     sources (:meth:`fempipe.validation.case.References.names`); the measurement's fields
-    and the check's numbers are added to it for the templates.
+    and the check's numbers are added to it for the templates.  ``below``: ``measured <=
+    limit``; ``close``: ``|measured - reference| <= atol + rtol |reference|``; ``holds``:
+    the case's verdict ``ok``.
     """
     kind = spec["kind"]
     names = {**names, **m.fields}
     nums = {k: _number(spec, k, d, m, names) for k, d in KINDS[kind].items()}
     names.update(nums)
     name, claim, source = (fill(t, names) for t in (m.spec, spec["claim"], spec["source"]))
-    why = fill(spec["why"], names) if "why" in spec else None
+    why = fill(spec.get("why", "qualitative statement"), names)
+    category = spec.get("category", "paper" if kind == "holds" else "numerics")
     if kind == "holds":
         reference = spec.get("reference", m.fields.get("reference", True))
         if isinstance(reference, str):
             reference = fill(reference, names)
         value = fill(spec["measured"], names) if "measured" in spec else m.value
-        return holds(
-            name,
-            claim,
-            bool(m.ok),
-            value,
-            reference=reference,
-            why=why if why is not None else "qualitative statement",
-            source=source,
-            category=spec.get("category", "paper"),
-        )
-    category = spec.get("category", "numerics")
+        return Check(name, claim, category, bool(m.ok), value, reference, why, source)
+    value = float(m.value)
     if kind == "below":
-        return below(name, claim, m.value, nums["limit"], why=why, source=source, category=category)
-    return close(name, claim, m.value, nums["reference"], atol=nums["atol"], rtol=nums["rtol"],
-                 why=why, source=source, category=category)  # fmt: skip
+        limit = nums["limit"]
+        tol = f"≤ {limit:.3g}; {why}"
+        return Check(name, claim, category, value <= limit, value, float(limit), tol, source)
+    ref, atol, rtol = float(nums["reference"]), nums["atol"], nums["rtol"]
+    err = abs(value - ref)
+    bound = " + ".join([f"{atol:.3g}"] * bool(atol) + [f"{rtol:.3g}·|ref|"] * bool(rtol))
+    tol = f"|Δ| ≤ {bound or '0'} (|Δ| = {err:.3g}); {why}"
+    return Check(name, claim, category, err <= atol + rtol * abs(ref), value, ref, tol, source)

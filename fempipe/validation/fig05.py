@@ -14,8 +14,6 @@ convergence of the event velocities.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from fempipe.analyses.stability import root_locus, stability_analysis
@@ -24,8 +22,9 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case, References, alpha_name, label_tag
-from .checks import CaseResult, Table, holds
+from .checks import CaseResult, Table
 from .dynamic_runs import dyn_discretizations
+from .evaluate import measure
 from .onset import critical_velocity as independent_vcr
 
 #: Resolution tolerance of the drawn-only modal loci: admits the N-th sine
@@ -34,7 +33,6 @@ TOP_MODE_TOL = 0.1
 
 CASE = Case(
     name="fig05",
-    caption="Eigenvalues Ω = −iλ of the linearized motion about the static state as v grows from 0 to 10 (β = 0.142, γ = 18.9, μ = 0.005); Im Ω < 0 is unstable. Colors: modes 1-4 (key below); solid: FE (P3:8 = cubic elements, 8 elements), dashed: N = 3 sine modes, dotted: N = 4 (the N-th mode of an N-mode model is drawn although it is 8-9 % off the beam's frequency); arrows: direction of increasing v; black dots: v = 0, 2, 4, …. The last panel gives the growth rate Re λ of modes 1 and 2 at α = π against v: the straight standing pipe buckles (mode 1, Re λ > 0 at v = 0), regains stability and flutters in mode 2.",
     figure="Fig. 5",
     title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilization, "
     "flutter",
@@ -63,7 +61,6 @@ def _first_flutter(res) -> float:
 
 def run(quick: bool = False) -> CaseResult:
     """Loci, events and checks; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     alphas = ref.value("alpha", quick)
     v_max = ref.value("v_max")
@@ -86,10 +83,10 @@ def run(quick: bool = False) -> CaseResult:
         rows += rows_a
         fe = results[fe_label]
         if not is_pi:
-            checks += _flutter_checks(ref, a, results, fe_label, discs[fe_label])
+            checks += _flutter_checks(a, results, fe_label, discs[fe_label])
         else:
             checks += _pi_checks(ref, fe)
-        checks.append(_mesh_check(ref, a, fe_label, fe, v_max))
+        checks.append(_mesh_check(a, fe_label, fe, v_max))
     table = Table(
         "Stability events on the static branches (v ≤ 10)",
         ("α", "discretization", "branch", "event", "v", "mode", "frequency Im λ"),
@@ -100,7 +97,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=(table,),
         data={"loci": loci, "top_modes": top},
         requires=requires,
@@ -131,34 +127,25 @@ def _alpha_runs(ref: References, discs: dict, a: float, values, v_max: float, is
     return loci, top, results, rows
 
 
-def _flutter_checks(ref: References, a: float, results: dict, fe_label: str, fe_disc) -> list:
+def _flutter_checks(a: float, results: dict, fe_label: str, fe_disc) -> list:
     """alpha < pi: flutter in mode 2 on every discretization, v_cr equal to the onset's."""
     name = alpha_name(a)
     checks = []
     for label, res in results.items():
         c = res.critical
-        ok = c is not None and c.type == "flutter" and c.mode == 2
         checks.append(
-            holds(
-                f"second_mode_{name}_{label_tag(label)}",
-                f"α = {name}, {label}: the first instability is flutter in mode 2",
-                ok,
+            measure(
+                "second_mode_{alpha}_{tag}",
                 "none" if c is None else f"{c.type} in mode {c.mode} at v = {c.v:.6f}",
-                reference="flutter, mode 2",
-                source="paper Sec. 4, Figs. 5(a)-(c)",
-                category="paper",
+                ok=c is not None and c.type == "flutter" and c.mode == 2,
+                alpha=name,
+                tag=label_tag(label),
+                label=label,
             )
         )
-    fe = results[fe_label]
     ind = independent_vcr(fe_disc, a, **PAPER_CASE)
     checks.append(
-        ref.below(
-            f"vcr_two_ways_{name}",
-            f"α = {name}: v_cr of fempipe.analyses.stability equals the independent onset",
-            abs(fe.v_cr - ind.v_cr),
-            "onset_tol",
-            source="fempipe.validation.onset (Brent on the spectral abscissa)",
-        )
+        measure("vcr_two_ways_{alpha}", abs(results[fe_label].v_cr - ind.v_cr), alpha=name)
     )
     return checks
 
@@ -168,50 +155,26 @@ def _pi_checks(ref: References, fe) -> list:
     prim = next(b for b in fe.branches if b.name == "primary")
     seq = [(e.type, e.mode) for e in prim.events if _changes_stability(e)]
     want = [("divergence", 1), ("restabilization", 1), ("flutter", 2)]
-    checks = [
-        holds(
-            "pi_sequence",
-            "α = π, straight pipe: divergence in mode 1, restabilization, flutter in mode 2",
-            seq[:3] == want,
-            "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events),
-            reference="divergence(1), restabilization(1), flutter(2)",
-            source="paper Sec. 4, Fig. 5(d)",
-        )
-    ]
+    events = "; ".join(f"{e.type} (mode {e.mode}) at v = {e.v:.6f}" for e in prim.events)
     # Fig. 5(d) reads the pitchfork as the pipe regaining stability.  Where
     # the buckled branches fold only beyond it (a subcritical pitchfork),
     # a buckled pipe stays buckled up to the fold: hysteresis.
     restab = next((e.v for e in prim.events if e.type == "restabilization"), float("nan"))
     folds = [e.v for b in fe.branches if b.name != "primary" for e in b.events if e.type == "fold"]
-    v_fold = max(folds) if folds else float("nan")
-    checks.append(
-        holds(
-            "pi_no_hysteresis",
-            "α = π: the buckled pipe straightens where the straight pipe regains "
-            "stability (a supercritical pitchfork, no hysteresis)",
-            bool(folds) and v_fold <= restab + ref.value("mesh_tol"),
-            f"the straight pipe regains stability at v = {restab:.6f} (pitchfork); "
-            f"the buckled branches stay stable up to their fold at v = {v_fold:.6f}: "
-            f"both states are stable on a window of {v_fold - restab:.4f} "
-            "(subcritical pitchfork, hysteresis)",
-            reference="stability regained at the pitchfork, nothing else shown",
-            source="paper Sec. 4, Fig. 5(d)",
-        )
-    )
-    return checks
+    fold = max(folds) if folds else float("nan")
+    ok = bool(folds) and fold <= restab + ref.value("mesh_tol")
+    return [
+        measure("pi_sequence", events, ok=seq[:3] == want),
+        measure("pi_no_hysteresis", ok=ok, restab=restab, fold=fold, window=fold - restab),
+    ]
 
 
-def _mesh_check(ref: References, a: float, fe_label: str, fe, v_max: float):
+def _mesh_check(a: float, fe_label: str, fe, v_max: float):
     """Mesh convergence of the first flutter on the primary branch."""
     fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PAPER_CASE))
     rf = stability_analysis(fine, v_max=v_max, follow_bifurcations=False)
-    return ref.below(
-        f"fe_mesh_{alpha_name(a)}",
-        f"α = {alpha_name(a)}: flutter velocity of {fe_label[3:]} equals P3:16",
-        abs(_first_flutter(fe) - _first_flutter(rf)),
-        "mesh_tol",
-        source="fempipe, refined mesh (P3:16)",
-    )
+    diff = abs(_first_flutter(fe) - _first_flutter(rf))
+    return measure("fe_mesh_{alpha}", diff, alpha=alpha_name(a), mesh=fe_label[3:])
 
 
 def plot(result: CaseResult, fig=None):

@@ -20,7 +20,6 @@ inclined alpha of the grid (checked), equal to the in-plane one at alpha = 0.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,12 +30,12 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case
-from .checks import CaseResult, Check, Table, below, holds
+from .checks import CaseResult, Table
+from .evaluate import Measured, measure
 from .onset import Onset, critical_velocity
 
 CASE = Case(
     name="fig06",
-    caption="Critical flow velocity v_cr of the gravity-sagged static state against the inclination α (μ = 0.005), converged FE (cubic elements). (a) γ = 18.9, several β; (b) β = 0.142, several γ. The reference case β = 0.142, γ = 18.9 is black in both panels; grey dashed and dotted: N = 3 and N = 4 sine modes for the reference case. Filled circles joined by solid lines: flutter in the plane of the static state (the paper's v_cr; a complex pair crossing); open diamond: the first loss of stability in the plane is a fold of the static branch (a real eigenvalue through zero), not flutter, and is not joined to the flutter curve. Open triangles on thin dash-dotted lines, same colors: the flutter of the round pipe out of that plane, which comes first at every inclined α where the pipe flutters before its static branch folds (equal at α = 0).",
     figure="Fig. 6",
     title="Critical flow velocity v_cr against α for several β and γ",
     paper_shows=(
@@ -44,16 +43,6 @@ CASE = Case(
         "the stability is weakened as α increases: v_cr falls with α (Sec. 4)",
         "the stability is enhanced as β increases: v_cr rises with β (Sec. 4)",
         "γ raises v_cr for small α and may lower it for large α (Sec. 4)",
-    ),
-    requires=(
-        "fe_mesh",
-        "flutter",
-        "rises_with_beta",
-        "gamma_sign_change",
-        "vs_stability_module",
-        "out_of_plane_first",
-        "out_of_plane_at_alpha_0",
-        "out_of_plane_vs_stability_module",
     ),
 )
 FE = "P3:8"
@@ -92,7 +81,6 @@ class _Curves:
 
 def run(quick: bool = False) -> CaseResult:
     """v_cr curves and checks; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     alphas = np.array(ref.value("alpha", quick))
     betas, gammas = ref.value("beta", quick), ref.value("gamma", quick)
@@ -108,7 +96,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=_tables(alphas, betas, gammas, cv),
         data={
             "alphas": alphas,
@@ -149,7 +136,7 @@ def _curves(fe, alphas: np.ndarray, betas, gammas) -> _Curves:
     return _Curves(by_beta, by_gamma, out_beta, out_gamma, modal)
 
 
-def _mesh_check(alphas: np.ndarray, base: list[Onset]) -> Check:
+def _mesh_check(alphas: np.ndarray, base: list[Onset]) -> Measured:
     """Mesh convergence of the reference curve: P3:8 against P3:16 at three α."""
     fine = parse_discretization(fe="P3:16")
     idx = [0, len(alphas) // 2, len(alphas) - 1]
@@ -160,16 +147,10 @@ def _mesh_check(alphas: np.ndarray, base: list[Onset]) -> Check:
         )
         for i in idx
     )
-    return CASE.references.below(
-        "fe_mesh",
-        f"{FE} v_cr equals P3:16 (α = {', '.join(_deg(alphas[i]) for i in idx)})",
-        dmesh,
-        "mesh_tol",
-        source="fempipe, refined mesh (P3:16)",
-    )
+    return measure("fe_mesh", dmesh, fe=FE, degrees=[_deg(alphas[i]) for i in idx])
 
 
-def _flutter_check(alphas: np.ndarray, cv: _Curves) -> Check:
+def _flutter_check(alphas: np.ndarray, cv: _Curves) -> Measured:
     """Every first instability in the plane (every β and γ) is flutter."""
     labelled = [(f"β = {b:g}, γ = {BASE_GAMMA:g}", c) for b, c in cv.by_beta.items()] + [
         (f"β = {BASE_BETA:g}, γ = {g:g}", c) for g, c in cv.by_gamma.items() if g != BASE_GAMMA
@@ -180,84 +161,63 @@ def _flutter_check(alphas: np.ndarray, cv: _Curves) -> Check:
         for i, o in enumerate(c)
         if o.kind != "flutter"
     ]
-    return holds(
-        "flutter",
-        "every first instability for α < π is flutter (a complex pair crossing)",
-        not other,
-        "all flutter" if not other else "; ".join(other),
-        why="a fold of the static branch (saddle-node: a real eigenvalue through zero) "
-        "is a static instability, not flutter",
-        source="paper Sec. 4; abstract; conclusion (iii)",
-    )
+    return measure("flutter", "all flutter" if not other else "; ".join(other), ok=not other)
 
 
-def _falls_with_alpha(alphas: np.ndarray, name: str, label: str, v, source: str) -> Check:
+def _falls_with_alpha(alphas: np.ndarray, spec: str, v, **fields) -> Measured:
     """v_cr falls with alpha: ``v`` decreases at every step of the α grid."""
     rises = [
         (_deg(alphas[i]), _deg(alphas[i + 1]), v[i + 1] - v[i])
         for i in range(len(v) - 1)
         if v[i + 1] > v[i]
     ]
-    return holds(
-        name,
-        label,
-        not rises,
-        "monotone decreasing"
-        if not rises
-        else "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises),
-        source=source,
-    )
+    text = "rises on " + "; ".join(f"{a0}→{a1} by {d:.4f}" for a0, a1, d in rises)
+    return measure(spec, text if rises else "monotone decreasing", ok=not rises, **fields)
 
 
-def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Check]:
+def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Measured]:
     """The paper's trends of Sec. 4: v_cr falls with α, rises with β, and the effect of γ
     changes sign with α."""
     checks = [
         _falls_with_alpha(
-            alphas,
-            f"falls_with_alpha_b{b:g}",
-            f"β = {b:g}, γ = {BASE_GAMMA:g}: v_cr falls as α grows (every step of the α grid)",
-            _v_cr(cv.by_beta[b]),
-            "paper Sec. 4, Fig. 6; conclusion (iii)",
+            alphas, "falls_with_alpha_b{beta:g}", _v_cr(cv.by_beta[b]), beta=b, gamma0=BASE_GAMMA
         )
         for b in betas
     ]
     checks += [
         _falls_with_alpha(
-            alphas,
-            f"falls_with_alpha_g{g:g}",
-            f"γ = {g:g}, β = {BASE_BETA:g}: v_cr falls as α grows",
-            _v_cr(cv.by_gamma[g]),
-            "paper Sec. 4, Fig. 6",
+            alphas, "falls_with_alpha_g{gamma:g}", _v_cr(cv.by_gamma[g]), gamma=g, beta0=BASE_BETA
         )
         for g in gammas
         if g != BASE_GAMMA
     ]
     # v_cr rises with beta at every alpha.
-    V = np.array([_v_cr(cv.by_beta[b]) for b in sorted(betas)])
-    ok = bool(np.all(np.diff(V, axis=0) > 0))
-    worst = np.unravel_index(np.argmin(np.diff(V, axis=0)), (len(betas) - 1, len(alphas)))
+    b = sorted(betas)
+    rise = np.diff([_v_cr(cv.by_beta[x]) for x in b], axis=0)
+    worst = np.unravel_index(np.argmin(rise), rise.shape)
     checks.append(
-        holds(
+        measure(
             "rises_with_beta",
-            "v_cr rises with β at every α",
-            ok,
-            f"smallest increase {np.min(np.diff(V, axis=0)):.4f} "
-            f"(β {sorted(betas)[worst[0]]:g}→{sorted(betas)[worst[0] + 1]:g} at α = {_deg(alphas[worst[1]])})",
-            source="paper Sec. 4, Fig. 6(a); conclusion (iii)",
+            ok=bool(np.all(rise > 0)),
+            increase=np.min(rise),
+            b0=b[worst[0]],
+            b1=b[worst[0] + 1],
+            at=_deg(alphas[worst[1]]),
         )
     )
     # gamma effect changes sign with alpha.
     G = np.array([_v_cr(cv.by_gamma[g]) for g in sorted(gammas)])
     d_small, d_large = G[-1, 0] - G[0, 0], G[-1, -1] - G[0, -1]
     checks.append(
-        holds(
+        measure(
             "gamma_sign_change",
-            f"raising γ ({min(gammas):g}→{max(gammas):g}) raises v_cr at α = {_deg(alphas[0])} "
-            f"and lowers it at α = {_deg(alphas[-1])}",
-            d_small > 0 and d_large < 0,
-            f"Δv_cr = {d_small:+.4f} at α = {_deg(alphas[0])}, {d_large:+.4f} at α = {_deg(alphas[-1])}",
-            source="paper Sec. 4, Fig. 6(b)",
+            ok=d_small > 0 and d_large < 0,
+            small=d_small,
+            large=d_large,
+            gamma_min=min(gammas),
+            gamma_max=max(gammas),
+            a0=_deg(alphas[0]),
+            a1=_deg(alphas[-1]),
         )
     )
     return checks
@@ -346,7 +306,7 @@ def _headline(alphas, by_beta, by_gamma, out_beta, out_gamma) -> str:
     )
 
 
-def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> list[Check]:
+def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> list[Measured]:
     """The out-of-plane curves: first at every inclined α, equal at α = 0, and the
     independent onset against fempipe.analyses.stability's analysis of both planes."""
     curves = [(f"β = {b:g}", by_beta[b], out_beta[b]) for b in by_beta] + [
@@ -373,30 +333,9 @@ def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> 
         if not late
         else "; ".join(late)
     )
-    checks = [
-        holds(
-            "out_of_plane_first",
-            "the paper's v_cr, the flutter in the plane of the static state, is the pipe's "
-            "first loss of stability",
-            bool(late),
-            first,
-            why="a round pipe is free to leave the plane of its static deformation; the "
-            "out-of-plane v_cr by the same independent onset solver (Brent to 1e-10)",
-            source="paper Sec. 4 (planar model); fempipe's out-of-plane linear problem",
-        )
-    ]
+    checks = [measure("out_of_plane_first", first, ok=bool(late))]
     if same:
-        checks.append(
-            below(
-                "out_of_plane_at_alpha_0",
-                "at α = 0 (straight hanging pipe) the out-of-plane v_cr equals the in-plane one",
-                max(same),
-                1e-8,
-                why="on the straight pipe the two linear problems are the same matrices; both "
-                "onsets are located to 1e-10",
-                source="symmetry (every plane through the axis is alike)",
-            )
-        )
+        checks.append(measure("out_of_plane_at_alpha_0", max(same)))
     from fempipe.analyses.stability import spatial_critical_velocity
 
     diffs = []
@@ -404,33 +343,17 @@ def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> 
         model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
         r = spatial_critical_velocity(model, v_max=10.0)
         diffs.append(abs(r.out_of_plane.v_cr - out_beta[BASE_BETA][i].v_cr))
-    checks.append(
-        below(
-            "out_of_plane_vs_stability_module",
-            "out-of-plane v_cr equals fempipe.analyses.stability's (two implementations)",
-            max(diffs),
-            1e-6,
-            why="both locate the crossing to ≤ 1e-8",
-            source="fempipe.analyses.stability.spatial_critical_velocity",
-        )
-    )
+    checks.append(measure("out_of_plane_vs_stability_module", max(diffs)))
     return checks
 
 
-def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Check:
+def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Measured:
     """v_cr of :func:`fempipe.analyses.stability.critical_velocity` against the independent onset."""
     diffs = []
     for i in (0, len(alphas) // 2):
         model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
         diffs.append(abs(stability.critical_velocity(model).v_cr - base[i].v_cr))
-    return below(
-        "vs_stability_module",
-        "v_cr equals fempipe.analyses.stability's (two implementations)",
-        max(diffs),
-        1e-6,
-        why="both locate the crossing to ≤ 1e-8",
-        source="fempipe.analyses.stability.critical_velocity",
-    )
+    return measure("vs_stability_module", max(diffs))
 
 
 #: Color-blind-safe colors (Okabe & Ito) of the non-reference curves; the

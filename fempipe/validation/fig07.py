@@ -19,12 +19,10 @@ the same range by continuation, with the converged FE mesh as well, and checks
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from .case import Case, label_tag
-from .checks import CaseResult, Check, Table, below, holds
+from .checks import CaseResult, Table
 from .dynamic_runs import (
     attractor,
     continued_diagram,
@@ -32,6 +30,7 @@ from .dynamic_runs import (
     orbit,
     sweep_check,
 )
+from .evaluate import Measured, measure
 from .onset import critical_velocity
 from .out_of_plane_branches import (
     add_legend_entry,
@@ -49,7 +48,6 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig07",
-    caption="Bifurcation diagram for α = 0 (β = 0.142, γ = 18.9, μ = 0.005) by continuation: extrema of (a) η(1), (b) X_g(1), (c) Z_g(1) against v on the static branch and on the branch of periodic orbits born at its Hopf point (pseudo-arclength continuation, fempipe.analyses.periodic), solid where stable, dashed where unstable; the Hopf point a filled dot. Marks: the stable state at each requested v (what a sweep up reaches) — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At v = 6.3, 6.5, 10 the attractor is also found by integration (the independent check, sweep_agreement). (d) shapes (FE) at v = 6.3, 6.5, 10: a static state is one thick line, an oscillation a bundle of thin lines at 12 phases of one period. A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?').",
     figure="Fig. 7",
     title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
     paper_shows=(
@@ -57,13 +55,6 @@ CASE = Case(
         "the onset agrees with the linear stability analysis (Sec. 5)",
         "N = 3 and N = 4 agree well, so N = 3 is acceptable (Sec. 5)",
         "the oscillation amplitudes are large",
-    ),
-    requires=(
-        "period_one",
-        "paper_bracket",
-        "n3_vs_n4",
-        *(f"n{n}_vs_fe" for n in PAPER_MODES),
-        "large_amplitude",
     ),
 )
 
@@ -86,49 +77,26 @@ def onset_bracket(points) -> tuple[float, float]:
     return lo, hi
 
 
-#: Largest |v_H - v_cr| between the Hopf point of the continuation (located by
-#: fempipe.analyses.stability on the static branch) and the linear v_cr of
-#: fempipe.validation.onset (Brent's method to 1e-10 on the spectral abscissa):
-#: two locations of the same root, each far more accurate than this.
-ONSET_TOL = 1e-6
-#: Largest difference in period and tip extrema between the attractor found by
-#: integration and the stable continued orbit at the same v.
-SWEEP_TOL = 1e-6
-
-
-def onset_check(name: str, claim: str, diag, v_lin: float, source: str) -> tuple:
+def onset_check(spec: str, diag, v_lin: float, tol: float, **fields) -> tuple:
     """The onset of a continued diagram against a linear critical velocity.
 
-    Passes when the first Hopf point of the static branch is ``v_lin`` to
-    :data:`ONSET_TOL`, the equilibria at the requested v below it are stable
-    and the orbits born there are stable at the requested v above it (the
-    flutter is supercritical: the cycle appears where the equilibrium loses
-    stability).  Returns (check, v_H, last stable equilibrium v, first v
-    with a stable orbit).
+    Passes when the first Hopf point of the static branch is ``v_lin`` to ``tol``, the
+    equilibria at the requested v below it are stable and the orbits born there are
+    stable at the requested v above it (the flutter is supercritical: the cycle appears
+    where the equilibrium loses stability).  Returns (measurement, v_H, last stable
+    equilibrium v, first v with a stable orbit).
     """
     v_h = diag.hopf[0]["v"] if diag.hopf else float("nan")
-    att = diag.attractors()
-    lo, hi = onset_bracket(att)
+    lo, hi = onset_bracket(diag.attractors())
     below_ok = all(diag.equilibrium_at(v).stable for v in diag.values if v < v_h)
     above_ok = all(diag.cycles_at(v) for v in diag.values if v > v_h)
     diff = abs(v_h - v_lin)
-    check = holds(
-        name,
-        claim,
-        bool(np.isfinite(diff) and diff <= ONSET_TOL and below_ok and above_ok),
-        f"Hopf point v_H = {v_h:.6f}, linear v_cr = {v_lin:.6f} (|difference| {diff:.1e}); "
-        f"stable equilibrium up to v = {lo:g}, stable limit cycle from v = {hi:g}",
-        reference=f"|v_H - v_cr| ≤ {ONSET_TOL:g}, equilibria stable below, cycles stable above",
-        why="the continuation starts the cycle branch at the Hopf point itself (no sweep "
-        "spacing any more); both are locations of the same root of Re λ(v), far more accurate "
-        "than the tolerance",
-        source=source,
-        category="numerics",
-    )
-    return check, v_h, lo, hi
+    ok = bool(np.isfinite(diff) and diff <= tol and below_ok and above_ok)
+    m = measure(spec, ok=ok, v_h=v_h, v_lin=v_lin, diff=diff, lo=lo, hi=hi, **fields)
+    return m, v_h, lo, hi
 
 
-def sweep_agreement(name: str, claim: str, results: list) -> Check:
+def sweep_agreement(spec: str, results: list, tol: float, **fields) -> Measured:
     """The brute-force check: the attractors found by integration at a few v lie on
     the stable continued states (:func:`~fempipe.validation.dynamic_runs.sweep_check`
     results of several diagrams)."""
@@ -138,27 +106,16 @@ def sweep_agreement(name: str, claim: str, results: list) -> Check:
     flagged = [f for r in results for f in r["flagged"]]
     unsettled = [f for r in results for f in r.get("unsettled", [])]
     n = sum(len(r["attractors"]) for r in results)
-    return holds(
-        name,
-        claim,
-        not flagged and dT <= SWEEP_TOL and dtip <= SWEEP_TOL,
+    text = (
         f"{n} attractors by integration: max |ΔT| {dT:.1e}, max |Δ tip extremum| {dtip:.1e} "
         f"on cycles, {deq:.1e} on equilibria; not on a stable continued state: "
         + ("; ".join(flagged) if flagged else "none")
-        + ("; inconclusive (integration unsettled): " + "; ".join(unsettled) if unsettled else ""),
-        reference=f"cycles ≤ {SWEEP_TOL:g} in period and tip extrema; every attractor on a "
-        "stable continued state",
-        why="the integration (find_attractor, shooting at rtol 1e-7) and the continuation "
-        "(rtol 1e-5 scaled near multipliers 1, measured within 4.1e-7 of shooting at rtol 1e-10) are "
-        "independent computations of the same orbits; equilibria reached by integration stop "
-        "at the classification's radius, so only their identity is checked (1e-3); an "
-        "integration that finds no attractor by its t_max next to v_H is listed as inconclusive",
-        source="fempipe.analyses.limit_cycle.find_attractor against fempipe.analyses.periodic.cycle_diagram",
-        category="numerics",
+        + ("; inconclusive (integration unsettled): " + "; ".join(unsettled) if unsettled else "")
     )
+    return measure(spec, text, ok=not flagged and dT <= tol and dtip <= tol, **fields)
 
 
-def period_one(name: str, claim: str, diags: dict, checked: list, source: str) -> Check:
+def period_one(spec: str, diags: dict, checked: list, **fields) -> Measured:
     """The post-flutter attractors are period-1: the stable continued cycles at the
     requested v have every non-trivial multiplier inside the unit circle, their branches
     no period doubling or Neimark-Sacker point, and every cycle found by integration
@@ -172,33 +129,31 @@ def period_one(name: str, claim: str, diags: dict, checked: list, source: str) -
     ]
     bif = [sp for dg in diags.values() for sp in dg.special if sp["type"] != "fold"]
     integ = [a for r in checked for a in r["attractors"].values() if a.kind == "periodic"]
-    return holds(
-        name,
-        claim,
+    ok = (
         bool(stable_cyc)
         and not bif
         and all(p.max_multiplier < 1 for p in stable_cyc)
-        and all(a.period_n == 1 for a in integ),
-        f"{len(stable_cyc)} stable continued cycles at the requested v, {len(bif)} "
-        f"period-doubling or Neimark-Sacker points on the branches; "
-        f"{sum(a.period_n == 1 for a in integ)} of {len(integ)} cycles found by "
-        "integration are period-1",
-        why="a stable period-1 orbit whose branch has no period doubling or torus "
-        "bifurcation stays the attractor; integration checks a few v",
-        source=source,
+        and all(a.period_n == 1 for a in integ)
+    )
+    return measure(
+        spec,
+        ok=ok,
+        stable=len(stable_cyc),
+        bifurcations=len(bif),
+        period_1=sum(a.period_n == 1 for a in integ),
+        integrated=len(integ),
+        **fields,
     )
 
 
 def run(quick: bool = False) -> CaseResult:
     """Diagrams by continuation, the brute-force check, onsets and checks; see the module
     docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     alpha = ref.value("alpha")
     values = ref.value("v", quick)
     discs = dyn_discretizations(quick)
-    requires = [f"onset_{label_tag(lb)}" for lb in discs] + ["sweep_agreement"]
-    requires += [] if quick else ["fe_mesh"]
+    requires = [f"onset_{label_tag(lb)}" for lb in discs]
     fe_label = next(iter(discs))
     # The FE diagram with the 3-D verdicts of its orbits (out_of_plane_branches).
     fe_diag, oop = continued_with_verdicts(fe_label, alpha, values, quick)
@@ -206,26 +161,25 @@ def run(quick: bool = False) -> CaseResult:
         label: fe_diag if label == fe_label else continued_diagram(label, alpha, values)
         for label in discs
     }
-    requires += ["planar_block"] + ([] if quick else ["neutral_oop"])
     # What a sweep up from the sagged state ends on at each v (the stable state).
     sweeps = {label: dg.attractors() for label, dg in diags.items()}
     shape_v = ref.value("shape_v")
     checked = [sweep_check(dg, shape_v) for dg in diags.values()]
-    checks, onsets = _onsets(discs, alpha, diags)
-    checks += _paper_checks(diags, sweeps, checked, onsets, shape_v, fe_label)
+    checks, onsets = _onsets(ref, discs, alpha, diags)
+    checks += _paper_checks(ref, diags, sweeps, checked, onsets, fe_label)
     checks += verdict_checks("", "0", oop, quick)
     fine_oop = None
     if not quick:  # mesh convergence of the FE amplitude (quick: see the convergence case)
         a10 = eta_amplitude({p.v: p for p in sweeps[fe_label] if p is not None}[10.0])
-        checks.append(_mesh_check(alpha, fe_label, a10))
+        fine = attractor("FE P3:16", alpha, 10.0)
+        dmesh = abs(0.5 * (fine.tip["eta_tip"][1] - fine.tip["eta_tip"][0]) - a10)
+        checks.append(measure("fe_mesh", dmesh, fe=fe_label))
         fine_checks, fine_oop = _oop_fine_checks(alpha, fe_label, oop)
         checks += fine_checks
-        requires.append("oop_mesh")
     changes = change_texts("0", oop)
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=(
             _table(discs, onsets, sweeps),
             verdict_table(
@@ -245,12 +199,12 @@ def run(quick: bool = False) -> CaseResult:
     )
 
 
-def _onsets(discs: dict, alpha: float, diags: dict) -> tuple[list[Check], dict]:
+def _onsets(ref, discs: dict, alpha: float, diags: dict) -> tuple[list[Measured], dict]:
     """The linear v_cr of every discretization and the onset check of its diagram.
 
     Returns
     -------
-    checks : list of Check
+    checks : list of Measured
         ``onset_<tag>`` of every discretization (:func:`onset_check`).
     onsets : dict
         ``(last equilibrium v, first periodic v, linear v_cr, Hopf point v_H)`` by label.
@@ -258,105 +212,54 @@ def _onsets(discs: dict, alpha: float, diags: dict) -> tuple[list[Check], dict]:
     checks, onsets = [], {}
     for label, d in discs.items():
         v_lin = critical_velocity(d, alpha).v_cr
-        chk, v_h, lo, hi = onset_check(
-            f"onset_{label_tag(label)}",
-            f"{label}: the limit cycle appears where the linear analysis loses stability",
-            diags[label],
-            v_lin,
-            "fempipe.validation.onset: Brent's method on the spectral abscissa of Eqs. "
-            "(31b)-(33), against the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
+        tol = ref.value("onset_tol")
+        m, v_h, lo, hi = onset_check(
+            "onset_{tag}", diags[label], v_lin, tol, tag=label_tag(label), label=label
         )
-        checks.append(chk)
+        checks.append(m)
         onsets[label] = (lo, hi, v_lin, v_h)
     return checks, onsets
 
 
 def _paper_checks(
-    diags: dict, sweeps: dict, checked: list, onsets: dict, shape_v, fe_label: str
-) -> list[Check]:
+    ref, diags: dict, sweeps: dict, checked: list, onsets: dict, fe_label: str
+) -> list[Measured]:
     """The brute-force check and the paper's statements: period-1 cycles, the bracket
     6.3 < v_cr < 6.5, N = 3 against N = 4 and against FE, the large amplitude."""
-    ref = CASE.references
     checks = [
-        sweep_agreement(
-            "sweep_agreement",
-            f"the attractors found by integration at v = {', '.join(f'{v:g}' for v in shape_v)} "
-            "lie on the stable continued branches (every discretization)",
-            checked,
-        ),
-        period_one(
-            "period_one",
-            "every post-flutter attractor is a period-1 limit cycle (Sec. 5)",
-            diags,
-            checked,
-            source="paper Sec. 5: 'all these nonlinear oscillations after flutter instability are period-1'",
-        ),
+        sweep_agreement("sweep_agreement", checked, ref.value("sweep_tol")),
+        period_one("period_one", diags, checked),
     ]
     fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
     fe_diag = diags[fe_label]
     a63, a65 = fe_pts.get(6.3), fe_pts.get(6.5)
     kind = {6.3: a63.attractor if a63 else "none", 6.5: a65.attractor if a65 else "none"}
+    ok = (
+        kind[6.3] == "equilibrium"
+        and kind[6.5] == "periodic"
+        and not fe_diag.cycles_at(6.3)
+        and not fe_diag.equilibrium_at(6.5).stable
+    )
     checks.append(
-        holds(
-            "paper_bracket",
-            "equilibrium at v = 6.3 and limit cycle at v = 6.5 (converged FE)",
-            kind[6.3] == "equilibrium"
-            and kind[6.5] == "periodic"
-            and not fe_diag.cycles_at(6.3)
-            and not fe_diag.equilibrium_at(6.5).stable,
-            f"v = 6.3: {kind[6.3]}, v = 6.5: {kind[6.5]} (stable states of the continuation; "
-            f"Hopf point v_H = {onsets[fe_label][3]:.4f})",
-            reference="6.3 < v_cr < 6.5",
-            why="inferred: the shapes of Fig. 7(c) at v = 6.3, 6.5 straddle v_cr",
-            source="paper Fig. 7 caption (shapes at v = 6.3, 6.5, 10)",
-        )
+        measure("paper_bracket", ok=ok, at_63=kind[6.3], at_65=kind[6.5], v_h=onsets[fe_label][3])
     )
     amps = {lb: np.array([eta_amplitude(p) for p in pts]) for lb, pts in sweeps.items()}
-    d34 = float(np.max(np.abs(amps["N = 3"] - amps["N = 4"])))
-    checks.append(
-        ref.below(
-            "n3_vs_n4",
-            "N = 3 and N = 4 agree (largest difference of the η(1) amplitude)",
-            d34,
-            "amplitude_tol",
-            source="paper Sec. 5, Fig. 7",
-            category="paper",
-        )
-    )
+    checks.append(measure("n3_vs_n4", float(np.max(np.abs(amps["N = 3"] - amps["N = 4"])))))
     for n in PAPER_MODES:
         dn = float(np.max(np.abs(amps[f"N = {n}"] - amps[fe_label])))
-        checks.append(
-            ref.below(
-                f"n{n}_vs_fe",
-                f"N = {n} reproduces the converged η(1) amplitude",
-                dn,
-                "amplitude_tol",
-                source=f"fempipe converged FE ({fe_label})",
-                category="paper",
-            )
-        )
-    a10 = eta_amplitude(fe_pts[10.0])
-    checks.append(
-        holds(
-            "large_amplitude",
-            "large-amplitude oscillation at v = 10: η(1) amplitude > 0.4 L",
-            a10 > 0.4,
-            f"η(1) amplitude {a10:.4f} L, Z_g(1) range "
-            f"{fe_pts[10.0].Z_tip[1] - fe_pts[10.0].Z_tip[0]:.4f} L",
-            reference="> 0.4",
-            why="'relatively large' read as almost half the pipe length",
-            source="paper Sec. 5, Fig. 7",
-        )
-    )
+        checks.append(measure(f"n{n}_vs_fe", dn, fe=fe_label))
+    a10, z10 = eta_amplitude(fe_pts[10.0]), fe_pts[10.0].Z_tip
+    checks.append(measure("large_amplitude", ok=a10 > 0.4, amplitude=a10, z_range=z10[1] - z10[0]))
     return checks
 
 
-def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Check], tuple]:
+def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], tuple]:
     """The largest out-of-plane multiplier of the FE cycle at v = 10 against that of the
-    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8), and the P3:16 cycle's by the two
-    methods (:func:`_oop_methods_check`); returns the checks and the P3:16 orbit's row of
-    the verdict table."""
+    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8), and the P3:16 cycle's by the
+    linear out-of-plane equation against the 3-D model's; returns the measurements and the
+    P3:16 orbit's row of the verdict table."""
     from fempipe.analyses.periodic.out_of_plane import cycle_verdict
+    from fempipe.analyses.space.floquet import out_of_plane_floquet
 
     from .dynamic_runs import model_for
     from .out_of_plane_branches import fe_disc
@@ -366,15 +269,8 @@ def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Check], tup
     got = cycle_verdict(fine_model, fine.cycle, fine.cycle.stable)
     p10 = oop.at(10.0)
     mine = p10["max_oop"] if p10 else float("nan")
-    d = abs(got["max_nontrivial_out_of_plane_multiplier"] - mine)
-    check = below(
-        "oop_mesh",
-        f"{fe_label}: the largest out-of-plane multiplier of the cycle at v = 10 equals P3:16's",
-        d,
-        2e-3,
-        why="P3 meshes; both monodromies integrated at rtol 1e-7",
-        source="fempipe, refined mesh (P3:16)",
-    )
+    linear = got["max_nontrivial_out_of_plane_multiplier"]
+    full = out_of_plane_floquet(fine_model, fine.cycle, method="3d")
     neutral = got.get("neutral_out_of_plane_multiplier")
     lead = leading_text(
         [complex(*z) for z in got["out_of_plane_floquet_multipliers"]],
@@ -387,51 +283,15 @@ def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Check], tup
         10.0,
         "yes" if fine.cycle.stable else "no",
         fine.cycle.max_nontrivial_multiplier,
-        got["max_nontrivial_out_of_plane_multiplier"],
+        linear,
         lead,
         "yes" if got["stable_3d"] else "no",
     )
-    linear = got["max_nontrivial_out_of_plane_multiplier"]
-    return [check, _oop_methods_check(fine_model, fine.cycle, linear)], row
-
-
-#: |linear - 3-D| allowed for the largest out-of-plane multiplier of the P3:16 cycle: two
-#: discretizations of the same multipliers (measured 5e-7 at v = 10; the P3:8 -> P3:16
-#: change of the linear one is 5e-5).
-OOP_METHODS_TOL = 1e-4
-
-
-def _oop_methods_check(model, cycle, linear: float) -> Check:
-    """``linear``, the cycle's largest out-of-plane multiplier by the linear psi equation
-    (the default of :func:`fempipe.analyses.space.out_of_plane_floquet`), against the 3-D
-    model's (``method="3d"``)."""
-    from fempipe.analyses.space.floquet import out_of_plane_floquet
-
-    full = out_of_plane_floquet(model, cycle, method="3d")
-    return below(
-        "oop_methods",
-        "FE P3:16: the largest out-of-plane multiplier of the cycle at v = 10 by the linear "
-        "out-of-plane equation equals the 3-D model's",
-        abs(linear - full.max_nontrivial),
-        OOP_METHODS_TOL,
-        why="two independent discretizations of the same multipliers (the psi equation about "
-        "the moving cycle; the chart's (a, b) with its gauge), both at rtol 1e-7",
-        source="fempipe.analyses.space.out_of_plane_floquet, method='linear' and method='3d'",
-    )
-
-
-def _mesh_check(alpha: float, fe_label: str, a10: float) -> Check:
-    """The FE limit-cycle amplitude ``a10`` at v = 10 against the P3:16 cycle."""
-    fine = attractor("FE P3:16", alpha, 10.0)
-    dmesh = abs(0.5 * (fine.tip["eta_tip"][1] - fine.tip["eta_tip"][0]) - a10)
-    return below(
-        "fe_mesh",
-        f"{fe_label} limit-cycle amplitude at v = 10 equals P3:16",
-        dmesh,
-        1e-4,
-        why="P3 meshes; the limit cycle is computed by shooting to rtol 1e-8",
-        source="fempipe, refined mesh (P3:16)",
-    )
+    checks = [
+        measure("oop_mesh", abs(linear - mine), fe=fe_label),
+        measure("oop_methods", abs(linear - full.max_nontrivial)),
+    ]
+    return checks, row
 
 
 def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:

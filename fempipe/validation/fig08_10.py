@@ -16,7 +16,6 @@ shape velocities the paper chose for Fig. 9.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,8 +25,9 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case, alpha_name, label_tag
-from .checks import CaseResult, Check, Table, holds
+from .checks import CaseResult, Table
 from .dynamic_runs import continued_diagram, dyn_discretizations, orbit, sweep_check, sweep_up
+from .evaluate import Measured, measure
 from .fig07 import eta_amplitude, onset_bracket, onset_check, period_one, sweep_agreement
 from .onset import critical_velocity
 from .out_of_plane_branches import (
@@ -45,7 +45,6 @@ from .static_shapes import PAPER_MODES
 
 CASE = Case(
     name="fig08_10",
-    caption="Figs. 8, 9 and 10: extrema of η(1), X_g(1) and Z_g(1) against v for α = π/4, π/2, 3π/4, π (β = 0.142, γ = 18.9, μ = 0.005) by continuation: lines are the static branch and the branch of periodic orbits born at its Hopf point (fempipe.analyses.periodic), solid where stable, dashed where unstable, the Hopf point a filled dot. Marks: the stable state at each requested v — open circles: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); +: N = 3 sine modes; x: N = 4. One mark per v: a static state; two: the minimum and maximum of a limit cycle. At α = π the continued static branch is the straight pipe; the buckled equilibria below the flutter are marks from a sweep up. At the paper's shape velocities the attractor is also found by integration (sweep_agreement). A translucent red band under a branch (none if all survive): planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet multiplier |ρ| > 1 on the 3-D model, FE), red open triangles at the checked ones; checked: about 8 orbits spread along each branch, its last one and v = 10 (quick suite: v = 10 only), each orbit between two checked ones taking the verdict of the nearer, a crossing of |ρ| = 1 located by regula falsi (table 'Do the planar limit cycles survive in 3-D?'). Fig. 9 shows beside each panel the FE shapes at the paper's three velocities (e.g. v = 6.4, 6.5, 10 for α = π/4): a static state is one thick line drawn above the others, an oscillation a bundle of thin lines at 12 phases of one period.",
     figure="Figs. 8-10",
     title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
     paper_shows=(
@@ -123,8 +122,8 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     ``part`` (an index of :func:`parts`) restricts the run to one alpha; the
     suite merges the parts with :func:`fempipe.validation.checks.merge_results`.
     """
-    t0 = time.perf_counter()
-    alphas = CASE.references.value("alpha", quick)
+    ref = CASE.references
+    alphas = ref.value("alpha", quick)
     if part is not None:
         alphas = [alphas[part]]
     discs = dyn_discretizations(quick)
@@ -135,11 +134,11 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         requires += _required(inc.name, inc.is_pi, discs) + [f"sweep_agreement_{inc.name}"]
         checks.append(
             sweep_agreement(
-                f"sweep_agreement_{inc.name}",
-                f"α = {inc.name}: the attractors found by integration at v = "
-                f"{', '.join(f'{v:g}' for v in inc.check_v)} lie on the stable continued branches "
-                "(every discretization)",
+                "sweep_agreement_{alpha}",
                 inc.checked,
+                ref.value("sweep_tol"),
+                alpha=inc.name,
+                check_v=inc.check_v,
             )
         )
         onset_checks, onsets = _onsets(inc, discs)
@@ -147,9 +146,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
         checks += _shape_velocity_checks(inc, discs)
         checks += _attractor_checks(inc, next(iter(discs)))
         rows += _rows(inc, discs, onsets)
-        own = verdict_checks(f"_{inc.name}", inc.name, inc.oop, quick)
-        checks += own
-        requires += [c.name for c in own]
+        checks += verdict_checks("_{alpha}", inc.name, inc.oop, quick)
         oop_rows += verdict_rows(inc.name, inc.oop)
         found = change_texts(inc.name, inc.oop)
         changes += found
@@ -164,7 +161,6 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=(_table(rows), verdict_table(oop_rows, changes, quick)),
         findings=tuple(findings),
         data={"panels": panels},
@@ -229,17 +225,18 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
     )
 
 
-def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
+def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Measured], dict]:
     """The linear onset of every discretization and (α ≠ π) its check against the diagram.
 
     Returns
     -------
-    checks : list of Check
+    checks : list of Measured
         ``onset_<name>_<tag>`` of every discretization (none at α = π).
     onsets : dict
         ``(linear v_cr, last equilibrium v, first periodic v, Hopf point v_H)`` by label.
     """
     checks, onsets = [], {}
+    tol = CASE.references.value("onset_tol")
     for label, d in discs.items():
         dg = inc.diags[label]
         if inc.is_pi:
@@ -250,21 +247,14 @@ def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Check], dict]:
             v_h = inc.hopf_v[label]
         else:
             v_lin = critical_velocity(d, inc.alpha).v_cr
-            chk, v_h, lo, hi = onset_check(
-                f"onset_{inc.name}_{label_tag(label)}",
-                f"α = {inc.name}, {label}: the limit cycle appears where the linear "
-                "analysis loses stability",
-                dg,
-                v_lin,
-                "fempipe.validation.onset: Brent's method on the spectral abscissa, against "
-                "the Hopf point of fempipe.analyses.periodic (fempipe.analyses.stability)",
-            )
-            checks.append(chk)
+            fields = {"alpha": inc.name, "tag": label_tag(label), "label": label}
+            m, v_h, lo, hi = onset_check("onset_{alpha}_{tag}", dg, v_lin, tol, **fields)
+            checks.append(m)
         onsets[label] = (v_lin, lo, hi, v_h)
     return checks, onsets
 
 
-def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Check]:
+def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Measured]:
     """The states at the paper's shape velocities (FE): the onset bracket they imply
     (α ≠ π), or the buckling / restabilization / flutter sequence and its jumps against
     the stability analysis (α = π)."""
@@ -273,19 +263,10 @@ def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Check]:
     v1, v2, _ = inc.shape_v
     a1, a2 = fe_pts[v1].attractor, fe_pts[v2].attractor
     if not inc.is_pi:
-        return [
-            holds(
-                f"paper_bracket_{inc.name}",
-                f"α = {inc.name}: equilibrium at v = {v1:g}, limit cycle at v = {v2:g} (FE)",
-                a1 == "equilibrium" and a2 == "periodic",
-                f"v = {v1:g}: {a1}; v = {v2:g}: {a2} (Hopf point v_H = {inc.hopf_v[fe_label]:.4f})",
-                reference=f"{v1:g} < v_cr < {v2:g}",
-                why="inferred: the text lists the shapes of Fig. 9 at these v; as for α = 0 "
-                "(6.3 static, 6.5 oscillating) we read the first as static, the second as "
-                "oscillating",
-                source="paper Sec. 5, the v of the shapes added to Fig. 9",
-            )
-        ]
+        ok = a1 == "equilibrium" and a2 == "periodic"
+        v_h = inc.hopf_v[fe_label]
+        fields = {"alpha": inc.name, "v1": v1, "v2": v2, "a1": a1, "a2": a2, "v_h": v_h}
+        return [measure("paper_bracket_{alpha}", ok=ok, **fields)]
     pts = [p for p in inc.sweeps[fe_label] if p is not None]
     fe_diag = inc.diags[fe_label]
     buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
@@ -304,62 +285,36 @@ def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Check]:
         and max(buckled) < min(straight)
         and max(straight) < min(flutter)
     )
-    checks = [
-        holds(
-            "pi_sequence",
-            "α = π: buckled equilibrium, then the straight pipe regains stability, "
-            "then flutter (FE: sweep below the flutter, continuation above)",
-            seq_ok,
-            f"buckled at v = {buckled}; straight stable at v = {straight}; "
-            f"periodic from v = {min(flutter) if flutter else None}; straight pipe "
-            f"{'stable' if consistent else 'NOT stable'} on the continued static branch "
-            "exactly where the sweep rests on it",
-            source="paper Sec. 4-5, Figs. 5(d), 8(d)-10(d)",
-        )
-    ]
-    checks += _pi_cross_checks(discs[fe_label], pts, fe_diag)
-    checks.append(
-        holds(
-            "pi_shape_velocities",
-            f"α = π: buckled at v = {v1:g}, and at v = {v2:g} (the paper's second shape)",
-            a1 == "equilibrium" and abs(fe_pts[v1].Z_tip[0]) > 0.1,
-            f"v = {v1:g}: {a1} (Z_g(1) = {fe_pts[v1].Z_tip[0]:.3f}); v = {v2:g}: {a2} "
-            f"(Z_g(1) range [{fe_pts[v2].Z_tip[0]:.2e}, {fe_pts[v2].Z_tip[1]:.2e}])",
-            source="paper Sec. 5: shapes of Fig. 9(d) at v = 2.0, 4.1, 10",
-        )
+    sequence = measure(
+        "pi_sequence",
+        ok=seq_ok,
+        buckled=buckled,
+        straight=straight,
+        periodic_from=min(flutter) if flutter else None,
+        consistent="stable" if consistent else "NOT stable",
     )
-    return checks
+    shapes = measure(
+        "pi_shape_velocities",
+        ok=a1 == "equilibrium" and abs(fe_pts[v1].Z_tip[0]) > 0.1,
+        v1=v1,
+        v2=v2,
+        a1=a1,
+        a2=a2,
+        z1=fe_pts[v1].Z_tip[0],
+        z2=fe_pts[v2].Z_tip,
+    )
+    return [sequence, *_pi_cross_checks(discs[fe_label], pts, fe_diag), shapes]
 
 
-def _attractor_checks(inc: _Inclination, fe_label: str) -> list[Check]:
+def _attractor_checks(inc: _Inclination, fe_label: str) -> list[Measured]:
     """Period-1 attractors, the tip excursion at v = 10, and N = 3 / N = 4 against FE
     at every v of the diagram."""
-    ref = CASE.references
     name = inc.name
-    checks = [
-        period_one(
-            f"period_one_{name}",
-            f"α = {name}: every post-flutter attractor is period-1",
-            inc.diags,
-            inc.checked,
-            source="paper Sec. 5",
-        )
-    ]
+    checks = [period_one("period_one_{alpha}", inc.diags, inc.checked, alpha=name)]
     p10 = inc.fe_pts[10.0]
-    excursion = max(p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0])
-    large = ref.value("large")
-    checks.append(
-        holds(
-            f"large_{name}",
-            f"α = {name}: tip excursion at v = 10 close to L (≥ {large:g} L)",
-            excursion >= large,
-            f"X_g(1) range {p10.X_tip[1] - p10.X_tip[0]:.3f}, Z_g(1) range "
-            f"{p10.Z_tip[1] - p10.Z_tip[0]:.3f}",
-            reference=f"≥ {large:g}",
-            why=ref.source("large"),
-            source="paper Sec. 5, Fig. 9",
-        )
-    )
+    x_range, z_range = p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0]
+    ok = max(x_range, z_range) >= CASE.references.value("large")
+    checks.append(measure("large_{alpha}", ok=ok, alpha=name, x_range=x_range, z_range=z_range))
     for n in PAPER_MODES:
         other = {p.v: p for p in inc.sweeps[f"N = {n}"] if p is not None}
         diffs = []
@@ -372,16 +327,7 @@ def _attractor_checks(inc: _Inclination, fe_label: str) -> list[Check]:
                 a, b = getattr(p, key), getattr(q, key)
                 diffs.append(max(abs(a[0] - b[0]), abs(a[1] - b[1])))
         worst = float(np.nanmax(diffs))
-        checks.append(
-            ref.below(
-                f"n{n}_vs_fe_{name}",
-                f"α = {name}: N = {n} reproduces the converged tip extrema X_g(1), Z_g(1)",
-                worst,
-                "amplitude_tol",
-                source=f"fempipe converged FE ({fe_label})",
-                category="paper",
-            )
-        )
+        checks.append(measure(f"n{n}_vs_fe_{{alpha}}", worst, alpha=name, fe=fe_label))
     return checks
 
 
@@ -460,7 +406,7 @@ def _straight_flutter(disc) -> float:
     return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
 
 
-def _pi_cross_checks(disc, pts, diag) -> list[Check]:
+def _pi_cross_checks(disc, pts, diag) -> list[Measured]:
     """alpha = pi: the sweep's jumps against the events of :func:`fempipe.analyses.stability.stability_analysis`.
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
@@ -485,19 +431,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
     out = []
     if buckled and straight and max(straight) > max(buckled):
         lo, hi = max(buckled), min(v for v in straight if v > max(buckled))
-        out.append(
-            holds(
-                "pi_fold_vs_sweep",
-                "α = π: the sweep leaves the buckled state where the buckled branch folds",
-                lo <= fold <= hi,
-                f"buckled at v = {lo:g}, straight at v = {hi:g}; fold of the buckled branch at "
-                f"v = {fold:.6f}",
-                reference="lo ≤ v_fold ≤ hi",
-                why="the sweep resolves the jump only to its spacing",
-                source="fempipe.analyses.stability.stability_analysis (branch switching, folds)",
-                category="numerics",
-            )
-        )
+        out.append(measure("pi_fold_vs_sweep", ok=lo <= fold <= hi, lo=lo, hi=hi, fold=fold))
     if straight and periodic and min(straight) < min(periodic):
         lo = max(v for v in straight if v < min(periodic))
         hi = min(periodic)
@@ -505,20 +439,8 @@ def _pi_cross_checks(disc, pts, diag) -> list[Check]:
         # The orbits born at the Hopf point are the ones the integration reaches:
         # stable at the first requested v above it.
         born_stable = bool(diag.cycles_at(hi)) and not diag.equilibrium_at(hi).stable
-        out.append(
-            holds(
-                "pi_flutter_vs_sweep",
-                "α = π: the limit cycle appears at the flutter of the straight pipe",
-                lo <= flutter <= hi and abs(v_h - flutter) <= 1e-6 and born_stable,
-                f"straight at v = {lo:g} (sweep), stable cycle at v = {hi:g} (continuation); "
-                f"flutter at v = {flutter:.6f}, cycle branch from the Hopf point v_H = {v_h:.6f}",
-                reference="lo ≤ v_flutter ≤ hi, |v_H - v_flutter| ≤ 1e-6, stable cycle at hi",
-                why="the continued cycle branch starts at the Hopf point itself; the "
-                "requested v bracket it to their spacing",
-                source="fempipe.analyses.stability.stability_analysis; fempipe.analyses.periodic",
-                category="numerics",
-            )
-        )
+        ok = lo <= flutter <= hi and abs(v_h - flutter) <= 1e-6 and born_stable
+        out.append(measure("pi_flutter_vs_sweep", ok=ok, lo=lo, hi=hi, flutter=flutter, v_h=v_h))
     return out
 
 

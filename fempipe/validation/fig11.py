@@ -10,19 +10,17 @@ converged period and tip ranges.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from fempipe.model.discretization import parse_discretization
 
 from .case import Case, alpha_name
-from .checks import CaseResult, Check, Table, below, holds
+from .checks import CaseResult, Table
 from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations
+from .evaluate import Measured, measure
 
 CASE = Case(
     name="fig11",
-    caption="Tip position X_g(1) (left) and Z_g(1) (right, units of L) against τ on the limit cycle at v = 10 (β = 0.142, γ = 18.9, μ = 0.005), one row per inclination α, over one common τ window starting at a Poincaré-section crossing. Black solid: the finite-element solution (FE; P3:8 = cubic elements, 8 elements, in the full suite; P3:4 in the quick suite); vermilion dashed: N = 3 sine modes; blue dotted: N = 4.",
     figure="Fig. 11",
     title="Time traces of X_g(1), Z_g(1) at v = 10",
     paper_shows=(
@@ -34,7 +32,6 @@ CASE = Case(
 
 def run(quick: bool = False) -> CaseResult:
     """Cycles, traces and checks; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     v = ref.value("v")
     alphas = tuple(ref.value("alpha", quick))
@@ -47,7 +44,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=(_cycle_table(alphas, discs, cycles, traces),),
         data={"traces": traces, "v": v},
         requires=requires,
@@ -124,48 +120,30 @@ def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple
         ]
         fe = cycles[(a, fe_label)]
         found = {lb: cycles[(a, lb)] is not None for lb in discs}
-        checks.append(
-            holds(
-                f"periodic_{name}",
-                f"α = {name}: the attractor at v = 10 is a stable limit cycle (all discretizations)",
-                all(found.values())
-                and all(cycles[(a, lb)].max_nontrivial_multiplier < 1 for lb in discs),
-                ", ".join(
-                    f"{lb}: "
-                    + (
-                        f"|ρ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
-                        if found[lb]
-                        else "not periodic"
-                    )
-                    for lb in discs
-                ),
-                reference="periodic, |ρ| < 1",
-                why="Floquet multipliers from the monodromy matrix of the shooting",
-                source="paper Sec. 5, Fig. 11",
+        multipliers = ", ".join(
+            f"{lb}: "
+            + (
+                f"|ρ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
+                if found[lb]
+                else "not periodic"
             )
+            for lb in discs
         )
+        ok = all(found.values()) and all(
+            cycles[(a, lb)].max_nontrivial_multiplier < 1 for lb in discs
+        )
+        checks.append(measure("periodic_{alpha}", multipliers, ok=ok, alpha=name))
         if fe is None:
             continue
         tr = traces[name]
         fx = tr[fe_label]
         xr, zr = np.ptp(fx["X_tip"]), np.ptp(fx["Z_tip"])
-        large = ref.value("large")
-        checks.append(
-            holds(
-                f"large_{name}",
-                f"α = {name}: tip excursion close to L (≥ {large:g} L)",
-                max(xr, zr) >= large,
-                f"X_g(1) range {xr:.3f} L, Z_g(1) range {zr:.3f} L",
-                reference=f"≥ {large:g}",
-                why=ref.source("large"),
-                source="paper Sec. 5, Fig. 11",
-            )
-        )
+        ok = max(xr, zr) >= ref.value("large")
+        checks.append(measure("large_{alpha}", ok=ok, alpha=name, x_range=xr, z_range=zr))
         for lb in discs:
             if found[lb] and lb != fe_label:
                 checks += _modal_checks(name, lb, cycles[(a, lb)], tr[lb], fe, fx, fe_label)
     if fine is not None:
-        requires.append("fe_mesh_π/2")
         checks.append(_mesh_check(cycles[(np.pi / 2, fe_label)], fine))
     return checks, requires
 
@@ -173,45 +151,24 @@ def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple
 def _modal_checks(name: str, lb: str, c, t_: dict, fe, fx: dict, fe_label: str) -> list:
     """Period and tip extrema of the modal cycle ``c`` (traces ``t_``) against the FE
     cycle ``fe`` (traces ``fx``) at the inclination ``name``."""
-    ref = CASE.references
     dev = max(
         max(abs(t_[k].min() - fx[k].min()), abs(t_[k].max() - fx[k].max()))
         for k in ("X_tip", "Z_tip")
     )
+    fields = {"alpha": name, "n": lb[-1], "label": lb, "fe": fe_label}
     return [
-        ref.below(
-            f"period_{name}_{lb[-1]}",
-            f"α = {name}: {lb} reproduces the converged period",
-            abs(c.period - fe.period) / fe.period,
-            "period_tol",
-            source=f"fempipe converged FE ({fe_label})",
-            category="paper",
-        ),
-        ref.below(
-            f"range_{name}_{lb[-1]}",
-            f"α = {name}: {lb} reproduces the converged tip extrema",
-            dev,
-            "amplitude_tol",
-            source=f"fempipe converged FE ({fe_label})",
-            category="paper",
-        ),
+        measure("period_{alpha}_{n}", abs(c.period - fe.period) / fe.period, **fields),
+        measure("range_{alpha}_{n}", dev, **fields),
     ]
 
 
-def _mesh_check(c8, c16) -> Check:
+def _mesh_check(c8, c16) -> Measured:
     """The P3:8 cycle at α = π/2 (period, tip extrema) against P3:16."""
     dev = max(
         abs(c16.period - c8.period) / c8.period,
         *(abs(c16.tip[k][j] - c8.tip[k][j]) for k in ("X_tip", "Z_tip") for j in (0, 1)),
     )
-    return below(
-        "fe_mesh_π/2",
-        "α = π/2: the P3:8 cycle (period, tip extrema) equals P3:16",
-        dev,
-        1e-4,
-        why="relative period and tip extrema (units of L); shooting to rtol 1e-8",
-        source="fempipe, refined mesh (P3:16)",
-    )
+    return measure("fe_mesh_π/2", dev)
 
 
 def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:

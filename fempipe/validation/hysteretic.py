@@ -18,8 +18,6 @@ the hysteretic roots, with its own Kelvin-Voigt term as the reference.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from fempipe.analyses.stability import spectrum
@@ -28,40 +26,19 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
 from .case import Case, References
-from .checks import CaseResult, Table, below, close
-from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
+from .checks import CaseResult, Table
+from .evaluate import Measured, measure
+from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
 CASE = Case(
     name="hysteretic",
     figure="Païdoussis (1998) Table 3.4",
     title="Hysteretic damping: hanging cantilevers conveying air, v_cr and ω_cf",
-    caption=(
-        "Critical flow velocity v_cr (a) and crossing frequency ω_cf = Im λ (b) of the straight "
-        "hanging pipe (α = 0, no Kelvin–Voigt damping) against the hysteretic loss factor μ_h, "
-        "for the two pipes of Païdoussis (1998) Table 3.4 (β = 0.23×10⁻³, γ = 61.1, blue; "
-        "β = 2.03×10⁻³, γ = 42.4, vermilion). Lines: classical linear theory (Legendre "
-        "spectral elements in η); filled circles: fempipe, FE with cubic elements; black "
-        "crosses with bars: the table's theory (μ = 0 and 0.02) with half a unit of its last "
-        "printed digit; open squares: the table's experiments, drawn at μ = 0.02."
-    ),
     paper_shows=(
         "Table 3.4, theory: u_cf = 6.15, 5.62 and ω_cf = 21.3, 19.5 without damping",
         "Table 3.4, theory: u_cf = 6.33, 5.79 and ω_cf = 19.7, 18.1 with hysteretic μ = 0.02",
         "p. 118 (Païdoussis & Issid 1974, Fig. 3.34(b)): β = 0.65, γ = 10, hysteretic μ = 0.1 "
         "flutters at u_cf ≃ 11 (12.88 undamped)",
-    ),
-    requires=(
-        "classical_converged",
-        "fe_vs_classical_b2.03_muh",
-        "kelvin_voigt_equivalence",
-        "u_cf_b0.23_mu0",
-        "u_cf_b2.03_mu0",
-        "u_cf_b0.23_muh",
-        "u_cf_b2.03_muh",
-        "omega_cf_b0.23_mu0",
-        "omega_cf_b2.03_mu0",
-        "omega_cf_b0.23_muh",
-        "omega_cf_b2.03_muh",
     ),
     not_checked=(
         "the experimental columns of Table 3.4 (u_cf = 6.33, 6.05; ω_cf = 18.0, 19.5): drawn, "
@@ -82,7 +59,6 @@ def _params(pipe: dict, mu_h: float) -> Params:
 
 def run(quick: bool = False) -> CaseResult:
     """Table 3.4 by fempipe and the classical theory; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     pipes, mu_h, v_max = ref.value("pipes"), ref.value("mu_h"), ref.value("v_max")
     dampings = {"mu0": 0.0, "muh": mu_h}
@@ -97,8 +73,7 @@ def run(quick: bool = False) -> CaseResult:
     if not quick:
         # Paidoussis & Issid's pipe: a second onset up to v = 16 (full suite only).
         checks += _issid_checks()
-        requires += ["fe_vs_classical_issid", "u_cf_issid"]
-    printed_checks, table, findings, explained = _table_3_4(ref, dampings, classical, fe)
+    printed_checks, table, findings, explained = _table_3_4(ref, dampings, classical, fe, quick)
     checks += printed_checks
     grid = np.array(ref.value("mu_h_curve", quick))
     curves = {}
@@ -108,7 +83,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=(table,),
         findings=findings,
         explained=explained,
@@ -133,32 +107,24 @@ def _agreement_checks(
 ) -> tuple[list, list]:
     """The classical theory converged, fempipe's FE against it, Kelvin-Voigt against mu_h.
 
-    Returns the checks and the names of the FE checks this run must emit.
+    Returns the measurements and the names of the FE checks this run must emit.
     """
     mu_h = dampings["muh"]
-    checks = [
-        converged_check(
-            "classical_converged",
-            f"β = {pipes[1]['beta']:g}, γ = {pipes[1]['gamma']:g}, μ_h = {mu_h:g}",
-            _params(pipes[1], mu_h),
-            v_max,
-            step=0.05,
-        )
-    ]
+    checks = [converged(_params(pipes[1], mu_h), v_max, step=0.05)]
     requires = []
     for (k, d), f in fe.items():
-        name = f"fe_vs_classical_{_tag(pipes[k])}_{d}"
-        requires.append(name)
-        what = f"β = {pipes[k]['beta']:g}, γ = {pipes[k]['gamma']:g}, μ_h = {dampings[d]:g}"
-        checks.append(agreement_check(name, what, f, classical[(k, d)]))
+        pipe = {"beta": pipes[k]["beta"], "gamma": pipes[k]["gamma"], "mu": dampings[d]}
+        requires.append(f"fe_vs_classical_{_tag(pipes[k])}_{d}")
+        spec = "fe_vs_classical_{tag}_{d}"
+        checks.append(agreement(spec, f, classical[(k, d)], tag=_tag(pipes[k]), d=d, **pipe))
     checks.append(_kelvin_voigt_check(pipes[1], mu_h, fe[(1, "muh")]))
     return checks, requires
 
 
-def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict):
+def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict, quick: bool):
     """The printed theory against the converged answer (FE where computed).
 
-    Returns the checks, the table, the findings on the printed numbers that are
+    Returns the measurements, the table, the findings on the printed numbers that are
     not reproduced and the names of the checks those findings explain.
     """
     pipes, v_max = ref.value("pipes"), ref.value("v_max")
@@ -169,27 +135,17 @@ def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict):
         u = f.v_cr if f is not None else cl.v_cr
         w = f.frequency if f is not None else cl.frequency
         by = f"FE {FE}" if f is not None else "classical theory"
-        tag = f"{_tag(pipes[k])}_{d}"
-        lab = (
-            f"β = {pipes[k]['beta'] * 1e3:.2f}×10⁻³, γ = {pipes[k]['gamma']:g}, μ = {dampings[d]:g}"
-        )
+        pipe = {"beta_e3": pipes[k]["beta"] * 1e3, "gamma": pipes[k]["gamma"], "mu": dampings[d]}
         printed_u = ref.value(f"u_cf_{d}")[k]
         printed_w = ref.value(f"omega_cf_{d}")[k]
         for q, val, printed, unit in (
             ("u_cf", u, printed_u, "u_half_unit"),
             ("omega_cf", w, printed_w, "omega_half_unit"),
         ):
-            chk = close(
-                f"{q}_{tag}",
-                f"Table 3.4, {lab}: {q} = {printed:g} ({by}: {val:.4f})",
-                val,
-                printed,
-                atol=ref.value(unit),
-                why=ref.source(unit),
-                source=ref.source(f"{q}_{d}"),
-                category="paper",
-            )
-            checks.append(chk)
+            fields = {"tag": _tag(pipes[k]), "reference": printed, "by": by, "val": val}
+            m = measure(f"{q}_{{tag}}_{d}", val, **fields, **pipe)
+            checks.append(m)
+            chk = CASE.check(m, quick)
             if not chk.passed:
                 failed.setdefault((k, d), []).append((chk, printed, val, ref.value(unit)))
         rows.append(
@@ -233,25 +189,13 @@ def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict):
 
 def _issid_checks() -> list:
     """Paidoussis & Issid (1974) as quoted on p. 118 of the book: u_cf ~ 11 with mu_h = 0.1."""
-    ref = CASE.references
-    c = ref.value("issid")
+    c = CASE.references.value("issid")
     p = Params(alpha=0.0, beta=c["beta"], gamma=c["gamma"], mu=0.0, hysteretic_damping=c["mu_h"])
     f = fe_onset(p, c["v_max"])
     cl = classical_onset(p, c["v_max"], step=0.05)
-    what = f"β = {c['beta']:g}, γ = {c['gamma']:g}, μ_h = {c['mu_h']:g}"
     return [
-        agreement_check("fe_vs_classical_issid", what, f, cl),
-        close(
-            "u_cf_issid",
-            f"Païdoussis & Issid (1974): {what} flutters at u_cf ≃ {c['u_cf']:g} "
-            f"(FE {FE}: {f.v_cr:.4f})",
-            f.v_cr,
-            c["u_cf"],
-            atol=c["half_unit"],
-            why="printed as ≃ 11: half a unit of the last digit",
-            source=ref.source("issid"),
-            category="paper",
-        ),
+        agreement("fe_vs_classical_issid", f, cl),
+        measure("u_cf_issid", f.v_cr, val=f.v_cr, mesh=FE),
     ]
 
 
@@ -286,23 +230,15 @@ def _finding(pipe: dict, mu_h: float, bad: list, cl, fe, v_max: float, exp: dict
     return f"{lab}: " + "; ".join(parts) + "."
 
 
-def _kelvin_voigt_check(pipe: dict, mu_h: float, onset) -> object:
+def _kelvin_voigt_check(pipe: dict, mu_h: float, onset) -> Measured:
     """fempipe's Kelvin-Voigt pipe with mu = mu_h/omega has the eigenvalue i omega at v_cr."""
     mu = mu_h / onset.frequency
     p = Params(alpha=0.0, beta=pipe["beta"], gamma=pipe["gamma"], mu=mu, v=onset.v_cr)
     disc = parse_discretization(fe=FE)
     lam = spectrum(PipeModel(disc, p), np.zeros(disc.n)).lam
     dist = float(np.min(np.abs(lam - 1j * onset.frequency)))
-    return below(
-        "kelvin_voigt_equivalence",
-        f"at fempipe's hysteretic onset (v = {onset.v_cr:.6f}, ω = {onset.frequency:.6f}), its "
-        f"Kelvin–Voigt pipe with μ = μ_h/ω = {mu:.3e} has the eigenvalue iω",
-        dist,
-        1e-6,
-        why="E(1 + iμ_h) = E(1 + μλ) at λ = iω; the onset is located to ~1e-8 in v and "
-        "|dλ/dv| < 20, so the eigenvalues differ by less than 1e-6",
-        source="identity of the two damping laws at a purely imaginary eigenvalue",
-    )
+    fields = {"v": onset.v_cr, "omega": onset.frequency, "mu": mu}
+    return measure("kelvin_voigt_equivalence", dist, **fields)
 
 
 def plot(result: CaseResult, fig=None):

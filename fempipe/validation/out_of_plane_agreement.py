@@ -24,7 +24,8 @@ from fempipe.model.params import Params
 
 from . import classical, lateral
 from .case import alpha_name
-from .checks import Table, below, holds
+from .checks import Table
+from .evaluate import measure
 from .out_of_plane_runs import (
     nearest_distance,
     outside_cluster,
@@ -56,13 +57,13 @@ def _pair(p: Params, fe: str, v_max: float, v_min: float = 0.0, p_spec: int = 24
 
 
 def agreement_checks(ref, quick: bool):
-    tol, v_max = ref.value("agreement"), ref.value("v_max")
+    v_max = ref.value("v_max")
     fe = ref.value("fe_agreement", quick)
     pp = ref.value("spectral_p")
     base = ref.value("paper_case")
     runs = []
     if quick:
-        aq = ref.value("agreement_quick")
+        aq = ref.value("quick_agreement")
         runs.append(
             (
                 Params(alpha=aq["alpha_over_pi"] * math.pi, mu=aq["mu"], **base),
@@ -81,26 +82,21 @@ def agreement_checks(ref, quick: bool):
         (v_fe, kind_fe, w_fe), s = _pair(p, fe, v_hi, v_lo, pp[0])
         tag = f"{who}_a{alpha_name(p.alpha)}_mu{p.mu:g}"
         strong[(who, round(p.alpha, 12), p.mu)] = s
-        what = (
-            f"{'Texier & Dorbolo' if who == 'texier' else 'paper'} β = {p.beta:g}, "
-            f"γ = {p.gamma:g}, μ = {p.mu:g}, α = {alpha_name(p.alpha)}"
-            + (f" (onset searched in [{v_lo:g}, {v_hi:g}])" if v_lo > 0 else "")
-        )
+        fields = {
+            "who": "Texier & Dorbolo" if who == "texier" else "paper",
+            "p": p,
+            "window": f" (onset searched in [{v_lo:g}, {v_hi:g}])" if v_lo > 0 else "",
+            "tag": tag,
+            "fe_kind": kind_fe,
+            "method": s.method,
+            "strong_kind": s.kind,
+        }
         same = kind_fe == s.kind
         for q, a, b in (("v_cr", v_fe, s.v_cr), ("frequency", w_fe, s.frequency)):
-            name = f"strong_vs_fe_{q}_{tag}"
-            requires.append(name)
+            requires.append(f"strong_vs_fe_{q}_{tag}")
+            diff = abs(a - b) if same else math.inf
             checks.append(
-                below(
-                    name,
-                    f"{what}: fempipe's out-of-plane {q} ({fe}: {a:.10f}, {kind_fe}) equals the "
-                    f"strong form's ({s.method}: {b:.10f}, {s.kind}); absolute",
-                    abs(a - b) if same else math.inf,
-                    tol,
-                    why=ref.source("agreement"),
-                    source="fempipe.validation.lateral: the out-of-plane deflection w in strong "
-                    "form on C1 spectral elements about the solve_bvp static state",
-                )
+                measure("strong_vs_fe_{quantity}_{tag}", diff, quantity=q, fe=a, strong=b, **fields)
             )
         rows.append(
             (
@@ -128,18 +124,7 @@ def agreement_checks(ref, quick: bool):
         lam = lateral.eigen(*lateral.HermiteSpectral(k).matrices(state)[:3])
         crossing.append(lam[np.argmin(np.abs(lam - s0.lam))])
     diff = abs(crossing[1] - crossing[0])
-    checks.append(
-        below(
-            "strong_converged",
-            f"strong form at its onset ({alpha_name(p0.alpha)}, μ = {p0.mu:g}, v = {s0.v_cr:.10f}): "
-            f"the crossing eigenvalue on p = {pp[0]} equals p = {pp[1]} (absolute)",
-            float(diff),
-            1e-10,
-            why="spectral elements: the error falls faster than any power of p; 1e-10 is a "
-            "hundred times below the agreement asked",
-            source="fempipe.validation.lateral (refinement)",
-        )
-    )
+    checks.append(measure("strong_converged", float(diff), p=p0, v=s0.v_cr))
     table = Table(
         "(c) Out-of-plane onset: strong form against fempipe " + fe,
         (
@@ -177,18 +162,15 @@ def inclined_variants_check(ref):
     tip_gap = abs(float(m.disc.tip @ q) - st.theta_tip)
     lam_f = pencil_eigenvalues(*out_of_plane_model(m).linearization(q))
     err = nearest_distance(lam_f, lam_s)
-    return below(
+    springs = ", ".join(f"κ = {k:g} at ξ_s = {x:g}" for k, x in p.springs)
+    return measure(
         "inclined_variants_vs_strong",
-        f"α = {alpha_name(p.alpha)}, v = {p.v:g}, μ = {p.mu:g}, Γ = {p.end_mass:g}, "
-        f"σ = {p.external_damping:g}, springs "
-        + ", ".join(f"κ = {k:g} at ξ_s = {x:g}" for k, x in p.springs)
-        + f": the out-of-plane eigenvalues with |λ| < 300 ({lam_s.size}, outside the "
-        f"Kelvin-Voigt cluster) of {m.disc.name} equal the strong form's (relative; the "
-        f"static tips differ by {tip_gap:.1e})",
         err if tip_gap < 1e-8 else math.inf,
-        1e-7,
-        why=ref.source("inclined_fe") + "; the springs' static forces enter N",
-        source="fempipe.validation.lateral about the solve_bvp static state (with springs)",
+        p=p,
+        springs=springs,
+        n=lam_s.size,
+        mesh=m.disc.name,
+        tip_gap=tip_gap,
     )
 
 
@@ -211,24 +193,12 @@ def order_checks(ref, quick: bool, v_ref: float):
             dofs.append(d.n)
         slopes = [refinement_slope(ns[k : k + 2], errs[k : k + 2]) for k in range(len(ns) - 1)]
         curves[fam] = (dofs, errs, slopes[-1])
-        name = f"order_{fam}"
-        requires.append(name)
+        requires.append(f"order_{fam}")
         e = expected[fam]
         unit = "elements" if fam.startswith("P") else "modes"
-        checks.append(
-            holds(
-                name,
-                f"out-of-plane v_cr (α = π/2, μ = 0) on {fam}, {unit} {', '.join(map(str, ns))}: "
-                f"observed order {slopes[-1]:.2f} (slopes {', '.join(f'{s:.2f}' for s in slopes)})",
-                abs(slopes[-1] - e) <= ref.value("order_tolerance"),
-                slopes[-1],
-                reference=e,
-                why=ref.source("order_tolerance"),
-                source=ref.source("expected_orders")
-                + "; errors against the strong form (fempipe.validation.lateral)",
-                category="numerics",
-            )
-        )
+        ok = abs(slopes[-1] - e) <= ref.value("order_tolerance")
+        fields = {"family": fam, "unit": unit, "ns": ns, "slopes": slopes, "reference": e}
+        checks.append(measure("order_{family}", slopes[-1], ok=ok, slope=slopes[-1], **fields))
         for n, dof, err in zip(ns, dofs, errs, strict=True):
             rows.append((fam, n, dof, err))
         rows.append((fam, "slopes", "", ", ".join(f"{s:.2f}" for s in slopes)))
@@ -301,21 +271,8 @@ def finding_checks(ref, quick: bool):
         d, a, mu, vi, vo = min(gap)
         ok = all(g[0] >= 0.0 for g in gap)
         lower = sum(g[0] < 0.0 for g in gap)
-        checks.append(
-            holds(
-                "planar_v_cr_is_first",
-                "the planar analysis gives the first instability of the (round) pipe: no "
-                "out-of-plane mode is unstable below the in-plane v_cr, for 0 < α < π",
-                ok,
-                f"out-of-plane v_cr lower at {lower} of {len(inside)} (α, μ); most at "
-                f"α = {alpha_name(a)}, μ = {mu:g}: {vo:.6f} against {vi:.6f} "
-                f"({d:+.4f}, {100 * d / vi:+.1f} %)",
-                reference="out-of-plane v_cr ≥ in-plane v_cr",
-                why="a statement of the paper's scope; the out-of-plane problem is validated "
-                "by (a)-(d)",
-                source="paper Sec. 4 and Fig. 6: v_cr of the planar problem",
-            )
-        )
+        fields = {"lower": lower, "n": len(inside), "alpha": a, "mu": mu, "vo": vo, "vi": vi}
+        checks.append(measure("planar_v_cr_is_first", ok=ok, d=d, percent=100 * d / vi, **fields))
         if not ok:
             explained.append("planar_v_cr_is_first")
             worst = {}
@@ -335,29 +292,9 @@ def finding_checks(ref, quick: bool):
                 "plane). Fig. 6's v_cr is therefore an upper bound for a pipe free to move "
                 "out of its plane."
             )
-    else:
-        checks.append(
-            holds(
-                "planar_v_cr_is_first",
-                "no inclination strictly between 0 and π computed",
-                False,
-                "none",
-                why="needs an inclination 0 < α < π",
-                source="paper Sec. 4 and Fig. 6",
-            )
-        )
     at0 = [r for r in rows if r[1] == "0"]
     if at0:
-        checks.append(
-            below(
-                "alpha0_in_equals_out",
-                "α = 0: the out-of-plane v_cr equals the in-plane v_cr (largest difference over μ)",
-                max(abs(r[8]) for r in at0),
-                1e-9,
-                why="identical spectra on the straight pipe (a); both located to 1e-10",
-                source="the in-plane analysis (fempipe.analyses.stability.critical_velocity)",
-            )
-        )
+        checks.append(measure("alpha0_in_equals_out", max(abs(r[8]) for r in at0)))
     return checks, [table], findings, explained, curves
 
 
@@ -375,16 +312,5 @@ def classical_check(ref):
         classical.StraightPipe.from_params(p), ref.value("v_max"), method="legendre", n=24
     )
     s = lateral.critical_velocity(p, ref.value("v_max"))
-    return below(
-        "strong_vs_classical",
-        f"the strong form at α = 0 with μ = {p.mu:g}, Γ = {p.end_mass:g}, "
-        f"σ = {p.external_damping:g}, spring κ = {p.springs[0][0]:g} at ξ_s = "
-        f"{p.springs[0][1]:g}: v_cr ({s.v_cr:.12f}) equals the classical theory's "
-        f"({cl.v_cr:.12f})",
-        abs(s.v_cr - cl.v_cr) if s.kind == cl.kind else math.inf,
-        1e-10,
-        why="the same straight-pipe equation on the same kind of elements, about different "
-        "static states (solve_bvp's theta = 0, the classical straight pipe): round-off and "
-        "the 1e-12 crossings",
-        source="fempipe.validation.classical (Paidoussis 1998, Eqs. (3.70)-(3.71))",
-    )
+    diff = abs(s.v_cr - cl.v_cr) if s.kind == cl.kind else math.inf
+    return measure("strong_vs_classical", diff, p=p, strong=s.v_cr, classical=cl.v_cr)

@@ -382,56 +382,19 @@ def add_legend_entry(ax) -> None:
     )
 
 
-#: |ρ_neutral - 1| allowed: the rotation about the vertical maps an orbit onto an
-#: orbit, so the multiplier is 1 exactly in the continuum; the mesh leaves a
-#: residue (the cycle at v = 10, linear method: P3:8 4.2e-5 at α = 0, 4.4e-4 at α = π;
-#: P3:16 8.5e-7 at α = 0; the 3-D model's: P3:8 1.0e-5 and 3.6e-4).
-#: Checked in the full suite only: on P3:4 at α = π it is not resolved (it pairs
-#: with the unstable multiplier into a complex pair, |ρ| = 1.045 both).
-NEUTRAL_TOL = 2e-3
-#: The out-of-plane Floquet run's planar block against the continuation's monodromy: the
-#: same equations, integrated at rtol 1e-7 and at the continuation's 1e-5.
-PLANAR_BLOCK_TOL = 1e-3
-
-_SOURCE = (
-    "fempipe.analyses.space.out_of_plane_floquet (the linear out-of-plane equation about the "
-    "moving planar state, Radau with exact sensitivities) on the continued orbits of "
-    "fempipe.analyses.periodic"
-)
-
-
 def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) -> list:
-    """``planar_block<suffix>`` and, at sin alpha = 0 in the full suite,
-    ``neutral_oop<suffix>``: two independent checks of the out-of-plane monodromy."""
-    from .checks import below
+    """Measurements ``planar_block<suffix>`` and, at sin alpha = 0 in the full suite (on P3:4
+    at alpha = pi the neutral multiplier is not resolved), ``neutral_oop<suffix>``: two
+    independent checks of the out-of-plane monodromy (``suffix``: ``""`` or ``"_{alpha}"``)."""
+    from .evaluate import measure
 
-    checks = [
-        below(
-            f"planar_block{suffix}",
-            f"α = {name}, {br.label}: the out-of-plane Floquet run's planar block has the planar "
-            "orbit's largest non-trivial multiplier (checked orbits)",
-            planar_block_deviation(br),
-            PLANAR_BLOCK_TOL,
-            why="the same planar equations, integrated at rtol 1e-7 with the out-of-plane "
-            "ones, against the continuation's monodromy at rtol 1e-5",
-            source=_SOURCE,
-        )
-    ]
+    out = [measure(f"planar_block{suffix}", planar_block_deviation(br), alpha=name, label=br.label)]
     p10 = br.at(10.0)
     if not quick and p10 is not None and p10["neutral"] is not None:
-        checks.append(
-            below(
-                f"neutral_oop{suffix}",
-                f"α = {name}, {br.label}: the out-of-plane multiplier of the rotation about "
-                "the vertical is 1 (axisymmetric pipe; the cycle at v = 10)",
-                neutral_deviation(br),
-                NEUTRAL_TOL,
-                why="symmetry: a planar orbit turned about the vertical is an orbit, so that "
-                "multiplier is exactly 1 in the continuum",
-                source=_SOURCE,
-            )
+        out.append(
+            measure(f"neutral_oop{suffix}", neutral_deviation(br), alpha=name, label=br.label)
         )
-    return checks
+    return out
 
 
 def verdict_rows(name: str, br: OutOfPlaneBranches) -> list[tuple]:

@@ -27,8 +27,8 @@ from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
 from fempipe.model.params import Params
 
 from . import lateral
-from .case import alpha_name
-from .checks import Table, below, holds
+from .checks import Table
+from .evaluate import measure
 
 __all__ = [
     "CLUSTER",
@@ -141,37 +141,9 @@ def identity_checks(ref):
             worst_m, worst_l = max(worst_m, max(mats)), max(worst_l, d_out)
             worst_c = max(worst_c, d_in)
             rows.append((where, name, float(np.abs(q).max()), *mats, si.lam.size, d_out, d_in))
-        what = (
-            f"{where} straight pipe (α = {alpha_name(p.alpha)}, γ = {p.gamma:g}, v = {p.v:g}, "
-            f"μ = {p.mu:g}, Γ = {p.end_mass:g}, σ = {p.external_damping:g}, "
-            f"μ_h = {p.hysteretic_damping:g}, spring κ = {p.springs[0][0]:g} at "
-            f"ξ_s = {p.springs[0][1]:g}), P3, sine and beam modes"
-        )
-        checks.append(
-            below(
-                f"identity_matrices_{where}",
-                f"{what}: out-of-plane K, C, M and hysteretic stiffness equal the in-plane ones",
-                worst_m,
-                1e-13,
-                why="every out-of-plane term reduces to the planar one for theta^s = 0 "
-                "(module docstring of fempipe.model.out_of_plane): equal up to round-off",
-                source="the in-plane linearization of the same model (Eqs. (31b)-(33))",
-            )
-        )
-        checks.append(
-            below(
-                f"identity_spectrum_{where}",
-                f"{what}: the resolved out-of-plane eigenvalues and mode numbers equal the "
-                f"in-plane ones (relative; outside the Kelvin-Voigt cluster at −1/μ, where they "
-                f"differ by up to {worst_c:.1e})",
-                worst_l,
-                1e-10,
-                why="the matrices agree to 1e-15; well-separated eigenvalues move by round-off "
-                "times their condition; the cluster of slow Kelvin-Voigt roots near -1/mu is "
-                "ill-conditioned (nearly coincident roots) and is reported, not checked",
-                source="fempipe.analyses.stability.spectrum of the in-plane model",
-            )
-        )
+        fields = {"where": where, "p": p}
+        checks.append(measure("identity_matrices_{where}", worst_m, **fields))
+        checks.append(measure("identity_spectrum_{where}", worst_l, cluster=worst_c, **fields))
     table = Table(
         "(a) The straight pipe: out of the plane against in the plane (relative differences)",
         (
@@ -249,53 +221,20 @@ def _neutral_checks(fe: _NeutralSpectrum, strong: _NeutralSpectrum) -> list:
     """The neutral mode of fempipe and of the strong form, and their other eigenvalues."""
     where = fe.where
     return [
-        below(
-            "neutral_eigenvalue",
-            f"{where}: the out-of-plane spectrum has λ = 0 (|λ| of the smallest)",
-            abs(fe.lam0),
-            1e-10,
-            why="the rank-one correction makes the projection of sin theta^s an exact null "
-            "vector of K: lambda = 0 up to the eigensolver's round-off",
-            source="the rotation symmetry of the standing pipe about the vertical",
-        ),
-        below(
-            "neutral_eigenvector",
-            f"{where}: its eigenvector is the L2 projection of sin θˢ (1 − |cos angle|)",
-            1.0 - fe.cos,
-            1e-10,
-            why="a simple eigenvalue: its eigenvector is the null vector up to round-off",
-            source="OutOfPlaneOperators.neutral_mode (psi = sin theta^s: w = eta^s turned "
-            "out of the plane)",
-        ),
-        below(
-            "buckled_rest_stable",
-            f"{where}: every other out-of-plane eigenvalue (|λ| < {LAM_MAX:g}) is stable "
-            "(largest Re λ)",
-            float(fe.others.real.max()),
-            0.0,
-            why="the buckled state is the stable equilibrium of the standing pipe at this "
-            "flow; out of the plane only the neutral rotation is not damped",
-            source="fempipe.model.out_of_plane on the buckled branch",
-        ),
-        below(
+        measure("neutral_eigenvalue", abs(fe.lam0), where=where),
+        measure("neutral_eigenvector", 1.0 - fe.cos, where=where),
+        measure("buckled_rest_stable", float(fe.others.real.max()), where=where, lam_max=LAM_MAX),
+        measure(
             "strong_neutral_mode",
-            f"strong form, same pipe ({strong.where}): "
-            f"the smallest |λ| ({abs(strong.lam0):.1e}) and 1 − |cos| of its eigenvector with "
-            "the projection of ηˢ = ∫ sin θˢ (largest of the two)",
             max(abs(strong.lam0), 1.0 - strong.cos),
-            1e-10,
-            why="W = eta^s solves the strong form with lambda = 0 exactly (lateral's module "
-            "docstring); the spectral elements resolve it to round-off",
-            source="fempipe.validation.lateral (independent of fempipe.model.out_of_plane)",
+            strong=strong.where,
+            lam0=abs(strong.lam0),
         ),
-        below(
+        measure(
             "buckled_vs_strong",
-            f"{where}: the other eigenvalues with |λ| < 100 equal the strong form's "
-            f"({strong.others.size} eigenvalues; relative)",
             nearest_distance(fe.others, strong.others),
-            1e-8,
-            why="P3:32 is within 3e-9 of the strong form here (measured; order 6)",
-            source="fempipe.validation.lateral about the solve_bvp state",
+            where=where,
+            n=strong.others.size,
         ),
     ]
 
@@ -321,21 +260,16 @@ def _residual_orders(ref, p: Params, tip: float, quick: bool) -> tuple[list, Tab
                 order,
             )
         )
+        ok = bool(np.all(np.diff(res) < 0) and abs(slopes[-1] - order) <= 0.3)
+        fields = {"p": p, "meshes": meshes, "last": meshes[-1], "slopes": slopes}
         checks.append(
-            holds(
-                f"neutral_residual_order_{deg}",
-                f"buckled standing pipe (α = π, γ = {p.gamma:g}, v = {p.v:g}): the residual "
-                f"‖K x‖/(‖K‖ ‖x‖) of the projection x of sin θˢ (OutOfPlaneMatrices."
-                f"neutral_residual) falls on {deg}:{meshes[0]}…{meshes[-1]} (slopes "
-                + ", ".join(f"{s:.2f}" for s in slopes)
-                + ")",
-                bool(np.all(np.diff(res) < 0) and abs(slopes[-1] - order) <= 0.3),
-                f"{res[-1]:.3g} on {deg}:{meshes[-1]}, last slope {slopes[-1]:.2f}",
-                reference=f"decreasing, last slope {order:g} ± 0.3",
-                why=ref.source("neutral_order") + "; the eigenvalues converge as h^2k all the "
-                "same (buckled_vs_strong)",
-                source="the rotation symmetry: K sin(theta^s) = 0 in the continuum",
-                category="numerics",
+            measure(
+                "neutral_residual_order_{degree}",
+                ok=ok,
+                degree=deg,
+                residual=res[-1],
+                slope=slopes[-1],
+                **fields,
             )
         )
     table = Table(

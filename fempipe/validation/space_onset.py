@@ -20,28 +20,18 @@ computations on the same mesh, so the comparison is free of discretization error
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
 from .case import Case
-from .checks import CaseResult, Table, below, holds
+from .checks import CaseResult, Table
+from .evaluate import measure
 from .space_runs import amplitude, fit_slope, onset, space_cycle_near_onset
 
 CASE = Case(
     name="space_onset",
     figure="Onset out of the plane (3-D)",
     title="The non-planar oscillation of the horizontal pipe is born at the out-of-plane v_cr",
-    caption=(
-        "The paper's pipe (β = 0.142, γ = 18.9, μ = 0.005) horizontal (α = π/2), 3-D model on "
-        "cubic elements. (a) A² / (c² δ) against δ = v - v_cr, A = (max Y_tip - min Y_tip)/2 "
-        "of the non-planar cycle shot on the 3-D model (markers, one color per mesh), c the "
-        "amplitude coefficient of the Hopf normal form on the same mesh; lines: the fits "
-        "c² (1 + k δ + k₂ δ²), whose value at δ = 0 (filled markers; printed in the legend) "
-        "must be 1 to 1e-4. (b) A against δ "
-        "(log-log): shot cycles (markers) and the normal form's c √δ (line). (c) Period "
-        "against δ relative to the normal form's 2π/ω (star at δ = 0), with its fit."
-    ),
     paper_shows=(
         "Sec. 4 and Fig. 6: the pipe loses stability by flutter at the critical velocity of "
         "the linear analysis, and Sec. 5: a limit cycle grows from it; checked here in three "
@@ -62,63 +52,24 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
     T_nf = 2.0 * math.pi / nf.omega
     asym = max(abs(c.tip["Y_tip"][0] + c.tip["Y_tip"][1]) for c in cycles)
     tol_v = ref.value("v_cr_tolerance")[tag.split(":")[1]]
+    stable = [bool(c.stable) for c in cycles]
     checks = [
-        below(
-            f"v_cr_vs_out_of_plane_{tag}",
-            f"{tag}: the 3-D Jacobian's critical pair crosses at the out-of-plane model's v_cr",
-            abs(nf.v - nf.v_out_of_plane),
-            tol_v,
-            why=ref.source("v_cr_tolerance"),
-            source="fempipe.analyses.stability.spatial_critical_velocity (out-of-plane model) against the secant on the 3-D Jacobian",
-        ),
-        below(
-            f"amplitude_slope_{tag}",
-            f"{tag}: the slope of A² in v - v_cr at the onset is c² of the normal form",
-            abs(r0 - 1.0),
-            ref.value("slope_tolerance"),
-            why=ref.source("slope_tolerance"),
-            source="shoot_space cycles against space_hopf_normal_form on the same mesh",
-        ),
-        below(
-            f"l1_resolved_{tag}",
-            f"{tag}: l1 is resolved (its uncertainty relative to it)",
-            nf.uncertainty / abs(nf.l1),
-            ref.value("l1_tolerance"),
-            why=ref.source("l1_tolerance"),
-            source="the spread of l1 over the difference steps (lyapunov_coefficient)",
-        ),
-        below(
-            f"period_{tag}",
-            f"{tag}: the period tends to 2π/ω of the critical pair (relative difference)",
-            abs(T0 - T_nf) / T_nf,
-            ref.value("period_tolerance"),
-            why=ref.source("period_tolerance"),
-            source="shoot_space periods extrapolated to delta = 0 against Im lambda",
-        ),
-        below(
-            f"transversality_{tag}",
-            f"{tag}: Re λ'(v) by the adjoint equals the difference of Re λ on the branch",
+        measure("v_cr_vs_out_of_plane_{tag}", abs(nf.v - nf.v_out_of_plane), limit=tol_v, tag=tag),
+        measure("amplitude_slope_{tag}", abs(r0 - 1.0), tag=tag),
+        measure("l1_resolved_{tag}", nf.uncertainty / abs(nf.l1), tag=tag),
+        measure("period_{tag}", abs(T0 - T_nf) / T_nf, tag=tag),
+        measure(
+            "transversality_{tag}",
             abs(nf.transversality - nf.transversality_check) / abs(nf.transversality),
-            ref.value("transversality_tolerance"),
-            why=ref.source("transversality_tolerance"),
-            source="the adjoint formula p^H (dA/dv) q against the re-solved static branch",
+            tag=tag,
         ),
-        below(
-            f"mirror_{tag}",
-            f"{tag}: the critical mode is out of the plane and Y_tip swings symmetrically",
-            max(nf.in_plane_fraction, asym),
-            ref.value("symmetry_tolerance"),
-            why=ref.source("symmetry_tolerance"),
-            source="the mirror Y -> -Y of the 3-D model",
-        ),
-        holds(
-            f"supercritical_{tag}",
-            f"{tag}: l1 < 0 and the shot cycles are stable (a supercritical Hopf point)",
-            nf.criticality == "supercritical" and all(c.stable for c in cycles),
-            f"l1 = {nf.l1:.6g}, stable: {[bool(c.stable) for c in cycles]}",
-            why="the sign of l1 against the Floquet multipliers of the shot cycles",
-            source="Kuznetsov, Elements of Applied Bifurcation Theory, Thm. 3.3",
-            category="numerics",
+        measure("mirror_{tag}", max(nf.in_plane_fraction, asym), tag=tag),
+        measure(
+            "supercritical_{tag}",
+            ok=nf.criticality == "supercritical" and all(stable),
+            tag=tag,
+            l1=nf.l1,
+            stable=stable,
         ),
     ]
     row = (
@@ -151,7 +102,6 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
 
 def run(quick: bool = False) -> CaseResult:
     """Normal form and shot cycles on each mesh (P3:3 quick; P3:4 and P3:8 full)."""
-    t0 = time.perf_counter()
     ref = CASE.references
     alpha = ref.value("alpha")
     meshes = ref.value("deltas", quick)
@@ -197,7 +147,7 @@ def run(quick: bool = False) -> CaseResult:
         "(max Y_tip - min Y_tip)/2 ~ c √(v - v_cr); k of A²/δ = c² (1 + k δ + ...).",
     )
     return CASE.result(
-        checks, quick=quick, started=t0, tables=(table,), data={"meshes": data}, requires=requires
+        checks, quick=quick, tables=(table,), data={"meshes": data}, requires=requires
     )
 
 

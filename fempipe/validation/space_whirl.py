@@ -21,40 +21,22 @@ whirl of the hanging pipe"):
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
 from fempipe.core.parallel import single_blas
 
 from .case import Case
-from .checks import CaseResult, Table, holds
+from .checks import CaseResult, Table
+from .evaluate import measure
 
 CASE = Case(
     name="space_whirl",
     figure="Whirl (3-D, α = 0)",
     title="The whirl of the hanging pipe: periodic orbit and rotating-frame steady state",
-    caption=(
-        "The hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005) at v = 10. (a) The tip "
-        "seen from above (Z_tip horizontal in the plane of the planar cycle, Y_tip out of it): "
-        "the whirl of the 3-D FE model (cubic elements, solid), the whirl of the rotating-frame "
-        "BVP (dashed circle, black) and the planar cycle (the segment, vermilion). (b) The "
-        "difference of the FE whirl's rotation rate ω and tip radius from the BVP's against "
-        "the number of elements."
-    ),
     paper_shows=(
         "nothing: the paper's model is planar (Eq. (20)); the whirl is a 3-D motion of the "
         "same pipe",
-    ),
-    requires=(
-        "bvp_power_balance",
-        "omega_vs_bvp",
-        "radius_vs_bvp",
-        "radius_constant",
-        "rigid_rotation",
-        "whirl_unstable",
-        "free_rate_order",
-        "free_rigidity_order",
     ),
     not_checked=("the paper shows no 3-D motion",),
 )
@@ -89,43 +71,19 @@ def run(quick: bool = False) -> CaseResult:
 
     from .whirl_bvp import solve_whirl_bvp
 
-    t0 = time.perf_counter()
     ref = CASE.references
     v = float(ref.value("v"))
     meshes = ref.value("meshes", quick)
     lam, slope = _flutter_slope(FiniteElement(4, 3), *ref.value("hopf_guess"))
     bvp = solve_whirl_bvp(v, hopf=(ref.value("hopf_guess")[0], abs(lam.imag)), slope=slope)
-    checks = [
-        ref.below(
-            "bvp_power_balance",
-            "the BVP whirl's power balance: fluid supply = Kelvin-Voigt + Coriolis losses",
-            abs(bvp.supply - bvp.dissipation) / bvp.dissipation,
-            "power_tol",
-            source="the energy equation of the continuum (power_terms of the 3-D model)",
-        )
-    ]
+    balance = abs(bvp.supply - bvp.dissipation) / bvp.dissipation
     free_meshes = ref.value("free_meshes", quick)
     free = [_free_rotation(bvp, ne, v) for ne in free_meshes]
     hs = [1.0 / ne for ne in free_meshes]
-    rate_order = _order(hs, [abs(r - bvp.omega) for r, _ in free])
-    rigid_order = _order(hs, [var for _, var in free])
-    checks += [
-        ref.below(
-            "free_rate_order",
-            "the FE motion from the BVP's whirl turns at the BVP's rate, to an error falling at "
-            "the FE order (observed order, negated)",
-            -rate_order,
-            "min_order_negated",
-            source="the convergence of cubic elements to the continuum (the BVP)",
-        ),
-        ref.below(
-            "free_rigidity_order",
-            "the tip's distance from the vertical in that motion varies by an error falling at "
-            "the FE order (observed order, negated)",
-            -rigid_order,
-            "min_order_negated",
-            source="the rotation symmetry of the continuum",
-        ),
+    checks = [
+        measure("bvp_power_balance", balance),
+        measure("free_rate_order", -_order(hs, [abs(r - bvp.omega) for r, _ in free])),
+        measure("free_rigidity_order", -_order(hs, [var for _, var in free])),
     ]
     rows, whirls = _shot_whirls(bvp, meshes, v)
     ne, w = whirls[-1]
@@ -148,7 +106,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=[table, free_table],
         findings=findings,
         data={
@@ -167,64 +124,26 @@ def _whirl_checks(ref, bvp, whirls, quick: bool) -> list:
     its omega error."""
     ne, w = whirls[-1]
     tag = f"P3:{ne}"
-    omega_tol = ref.value("omega_tol", quick)
-    why = ref.source("omega_tol_quick" if quick else "omega_tol")
+    omega_tol, estimate = ref.value("omega_tol", quick), ""
     if len(whirls) > 1:
         # the finest mesh's own error, estimated from the last two (Richardson, order p)
         (n_a, w_a), (n_b, w_b) = whirls[-2:]
         p = ref.value("omega_estimate_order")
-        estimate = abs(w_a.omega - w_b.omega) / ((n_b / n_a) ** p - 1.0)
-        omega_tol = omega_tol * estimate
-        why = f"{why}: {estimate:.3g} from P3:{n_a} and P3:{n_b}"
+        error = abs(w_a.omega - w_b.omega) / ((n_b / n_a) ** p - 1.0)
+        omega_tol, estimate = omega_tol * error, f": {error:.3g} from P3:{n_a} and P3:{n_b}"
+    omega = {"reference": bvp.omega, "atol": omega_tol, "estimate": estimate, "tag": tag}
     checks = [
-        _close("omega_vs_bvp", f"ω on {tag} = the BVP's", w.omega, bvp.omega, omega_tol, why),
-        _close(
-            "radius_vs_bvp",
-            f"tip radius on {tag} = the BVP's",
-            w.radius,
-            bvp.radius,
-            ref.value("radius_tol", quick),
-            ref.source("radius_tol_quick" if quick else "radius_tol"),
-        ),
-        ref.below(
-            "radius_constant",
-            f"the tip's distance from the vertical is constant along the whirl ({tag})",
-            w.radius_variation,
-            "rigidity_tol",
-            source="the rotation symmetry of the continuum",
-        ),
-        ref.below(
-            "rigid_rotation",
-            f"the centerline turns rigidly about the vertical ({tag})",
-            w.rotation_defect,
-            "rigidity_tol",
-            source="the rotation symmetry of the continuum",
-        ),
-        holds(
-            "whirl_unstable",
-            "the whirl is unstable (a Floquet multiplier outside the unit circle)",
-            w.max_nontrivial > 1.0,
-            w.max_nontrivial,
-            reference="> 1",
-            why="the O(2)-Hopf theory: of standing and rotating waves generically one is stable; "
-            "the planar cycle here is stable in 3-D",
-            source="the 3-D monodromy (fempipe.analyses.space.shooting)",
-            category="numerics",
-        ),
+        measure("omega_vs_bvp", w.omega, **omega),
+        measure("radius_vs_bvp", w.radius, reference=bvp.radius, tag=tag),
+        measure("radius_constant", w.radius_variation, tag=tag),
+        measure("rigid_rotation", w.rotation_defect, tag=tag),
+        measure("whirl_unstable", w.max_nontrivial, ok=w.max_nontrivial > 1.0),
     ]
     if len(whirls) > 1:
         errs = [abs(x.omega - bvp.omega) for _, x in whirls]
         hs = [1.0 / n for n, _ in whirls]
         order = math.log(errs[-2] / errs[-1]) / math.log(hs[-2] / hs[-1])
-        checks.append(
-            ref.below(
-                "omega_order",
-                "the ω difference falls at the FE order (observed order from the last two meshes)",
-                -order,
-                "min_order_negated",
-                source="the convergence of cubic elements",
-            )
-        )
+        checks.append(measure("omega_order", -order))
     return checks
 
 
@@ -310,20 +229,6 @@ def _free_rotation(bvp, n_elements: int, v: float) -> tuple[float, float]:
 
 def _order(hs, errs) -> float:
     return math.log(errs[-2] / errs[-1]) / math.log(hs[-2] / hs[-1])
-
-
-def _close(name, claim, measured, reference, atol, why):
-    from .checks import close
-
-    return close(
-        name,
-        claim,
-        measured,
-        reference,
-        atol=atol,
-        why=why,
-        source="the rotating-frame BVP (fempipe.validation.whirl_bvp)",
-    )
 
 
 def plot(result: CaseResult, fig=None):

@@ -20,7 +20,6 @@ there (as N^-3: the beam functions are smooth across the spring).
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,32 +28,17 @@ from fempipe.model.params import Params
 
 from . import classical
 from .case import Case, References
-from .checks import CaseResult, Table, below, holds
-from .variant_runs import FE, agreement_check, classical_onset, converged_check, fe_onset
+from .checks import CaseResult, Table
+from .evaluate import measure
+from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
 CASE = Case(
     name="springs",
     figure="Païdoussis (1998) Eq. (3.119), Fig. 3.62",
     title="Springs: the spring-supported cantilever (Chen) and a spring inside the hanging pipe",
-    caption=(
-        "(a) The gravity-free undamped pipe (β = 0.2) with a spring κ at its free end: v_cr "
-        "against κ (logarithmic). Line: classical linear theory (Legendre spectral elements in "
-        "η), circles where the first instability is flutter, squares where it is divergence; "
-        "dashed: the divergence condition u³ + κ(sin u − u cos u) = 0 (Païdoussis 1998, Eq. "
-        "(3.119)); filled black circles: fempipe, FE with cubic elements. (b) The paper's "
-        "hanging pipe (α = 0, β = 0.142, γ = 18.9, μ = 0.005) with a spring at ξ_s = 0.5 (blue) "
-        "or 0.75 (vermilion): classical lines with the same markers, fempipe's FE in black."
-    ),
     paper_shows=(
         "with a spring at the free end, flutter for small K and divergence for larger K "
         "(Païdoussis 1998, Fig. 3.62, Chen 1971a)",
-    ),
-    requires=(
-        "classical_converged",
-        "fe_vs_classical_tip_K100",
-        "divergence_eq_3_119_K100",
-        "fe_vs_classical_interior_K50_x0.5",
-        "flutter_then_divergence",
     ),
     not_checked=("Fig. 3.62's curves and Fig. 3.64's experiments: no number is printed",),
 )
@@ -91,7 +75,6 @@ class _InteriorRuns:
 
 def run(quick: bool = False) -> CaseResult:
     """v_cr(kappa) at the tip and inside; see the module docstring."""
-    t0 = time.perf_counter()
     ref = CASE.references
     tip = _tip_runs(ref, quick)
     inner = _interior_runs(ref, quick)
@@ -99,7 +82,6 @@ def run(quick: bool = False) -> CaseResult:
     return CASE.result(
         checks,
         quick=quick,
-        started=t0,
         tables=_tables(ref, tip, inner),
         data={
             "tip": {k: (o.v_cr, o.kind) for k, o in tip.classical.items()},
@@ -157,72 +139,36 @@ def _interior_runs(ref: References, quick: bool) -> _InteriorRuns:
 
 
 def _checks(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple[list, list]:
-    """The case's checks and the names this run must emit."""
-    base = ref.value("tip")
+    """The case's measurements and the names this run must emit."""
     checks, requires = [], []
     for k, f in tip.fe.items():
-        name = f"fe_vs_classical_tip_K{k:g}"
-        requires.append(name)
-        checks.append(
-            agreement_check(
-                name, f"tip spring κ = {k:g}, β = {base['beta']:g}", f, tip.classical[k]
-            )
-        )
+        requires.append(f"fe_vs_classical_tip_K{k:g}")
+        checks.append(agreement("fe_vs_classical_tip_K{kappa:g}", f, tip.classical[k], kappa=k))
         root = classical.tip_spring_divergence(k)
         if math.isfinite(root):
-            name = f"divergence_eq_3_119_K{k:g}"
-            requires.append(name)
-            checks.append(
-                below(
-                    name,
-                    f"κ = {k:g}: fempipe's pipe diverges ({f.kind} at v = {f.v_cr:.9f}) at the "
-                    f"root of u³ + κ(sin u − u cos u) = 0 ({root:.9f})",
-                    abs(f.v_cr - root) if f.kind == "divergence" else math.inf,
-                    1e-6,
-                    why="an exact condition of the linear theory; FE P3:16 and the root agree "
-                    "far below 1e-6 (the crossing located to ~1e-8)",
-                    source="Païdoussis (1998), p. 158, Eq. (3.119) (Chen 1971a)",
-                )
-            )
+            requires.append(f"divergence_eq_3_119_K{k:g}")
+            diff = abs(f.v_cr - root) if f.kind == "divergence" else math.inf
+            onset = {"fe_kind": f.kind, "fe_v": f.v_cr, "root": root}
+            checks.append(measure("divergence_eq_3_119_K{kappa:g}", diff, kappa=k, **onset))
     kappas, kinds = tip.kappas, tip.kinds
     ok = all(
         lo == "flutter" and hi == "divergence" and abs(v - r) < 1e-6
         for lo, hi, v, r in kinds.values()
     )
-    checks.append(
-        holds(
-            "flutter_then_divergence",
-            f"tip spring: flutter at κ = {kappas[0]:g}, divergence at κ = {kappas[-1]:g} (at the "
-            "root of Eq. (3.119)), for β = " + ", ".join(f"{b:g}" for b in kinds),
-            ok,
-            "; ".join(
-                f"β = {b:g}: {lo} / {hi} at {v:.6f} (Eq. (3.119): {r:.6f})"
-                for b, (lo, hi, v, r) in kinds.items()
-            ),
-            why="qualitative statement; classical theory, which fempipe matches to 1e-6 "
-            "(fe_vs_classical_tip_*)",
-            source="Païdoussis (1998), p. 158, Fig. 3.62: flutter boundaries, shaded zones of "
-            "divergence at larger K (Chen 1971a)",
-        )
+    text = "; ".join(
+        f"β = {b:g}: {lo} / {hi} at {v:.6f} (Eq. (3.119): {r:.6f})"
+        for b, (lo, hi, v, r) in kinds.items()
     )
+    bounds = {"k_lo": kappas[0], "k_hi": kappas[-1]}
+    checks.append(measure("flutter_then_divergence", text, ok=ok, **bounds))
     # Springs inside the hanging pipe.
-    hb = ref.value("interior")
     for (k, x), f in inner.fe.items():
-        name = f"fe_vs_classical_interior_K{k:g}_x{x:g}"
-        requires.append(name)
-        what = (
-            f"hanging pipe β = {hb['beta']:g}, γ = {hb['gamma']:g}, spring κ = {k:g} at ξ_s = {x:g}"
-        )
-        checks.append(agreement_check(name, what, f, inner.classical[x][k]))
+        requires.append(f"fe_vs_classical_interior_K{k:g}_x{x:g}")
+        spec = "fe_vs_classical_interior_K{kappa:g}_x{xi:g}"
+        checks.append(agreement(spec, f, inner.classical[x][k], kappa=k, xi=x))
     k_c, x_c = ref.value("interior_springs_fe")[-1]
-    checks.append(
-        converged_check(
-            "classical_converged",
-            f"hanging pipe, spring κ = {k_c:g} at ξ_s = {x_c:g}",
-            _interior(hb, k_c, x_c),
-            15.0,
-        )
-    )
+    hb = ref.value("interior")
+    checks.append(converged(_interior(hb, k_c, x_c), 15.0, kappa=k_c, xi=x_c))
     return checks, requires
 
 

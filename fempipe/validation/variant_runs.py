@@ -13,9 +13,9 @@ converged far below the agreement asked for:
 * the classical solver on Legendre elements of degree p + 2 = 18: p = 16 and p = 32 agree to
   1e-9 (checked in each case).
 
-Their difference must be below ``AGREEMENT`` = 1e-6, which leaves two orders for the v_cr
-tolerances of the two critical-velocity searches (fempipe's crossing to about 1e-8, the
-classical Brent to 1e-12).
+Their difference must be below the ``agreement`` of each case's reference file, 1e-6, which
+leaves two orders for the v_cr tolerances of the two critical-velocity searches (fempipe's
+crossing to about 1e-8, the classical Brent to 1e-12).
 """
 
 from __future__ import annotations
@@ -29,34 +29,15 @@ from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
 from . import classical
-from .checks import Check, below
+from .evaluate import Measured, measure
 from .static_shapes import CONVERGED_FE
 
-__all__ = [
-    "AGREEMENT",
-    "CLASSICAL_P",
-    "FE",
-    "FeOnset",
-    "agreement_check",
-    "classical_onset",
-    "converged_check",
-    "fe_onset",
-]
+__all__ = ["CLASSICAL_P", "FE", "FeOnset", "agreement", "classical_onset", "converged", "fe_onset"]
 
 #: fempipe's converged discretization for the variant cases.
 FE = CONVERGED_FE
 #: Legendre degree of the classical solver (its v_cr converged to 1e-9).
 CLASSICAL_P = 16
-#: |v_cr(FE) - v_cr(classical)| allowed: see the module docstring.
-AGREEMENT = 1e-6
-AGREEMENT_WHY = (
-    "two converged solutions of one linear problem (FE P3:16; classical Legendre p = 16, "
-    "converged to 1e-9); 1e-6 leaves two orders for the crossing tolerances"
-)
-CLASSICAL_SOURCE = (
-    "fempipe.validation.classical: the textbook equation of eta(xi, tau) (Paidoussis 1998, "
-    "Eqs. (3.70)-(3.71)) on Legendre spectral elements, independent of fempipe's weak form"
-)
 
 
 @dataclass(frozen=True)
@@ -87,31 +68,18 @@ def classical_onset(
     return classical.critical_velocity(pipe, v_max, method="legendre", n=p, **kwargs)
 
 
-def agreement_check(name: str, what: str, fe: FeOnset, cl: classical.Onset) -> Check:
-    """|v_cr(FE) - v_cr(classical)| <= AGREEMENT, and both see the same kind of instability."""
+def agreement(spec: str, fe: FeOnset, cl: classical.Onset, **fields) -> Measured:
+    """|v_cr(FE) - v_cr(classical)| (infinite unless both see the same kind of instability)."""
     diff = abs(fe.v_cr - cl.v_cr) if fe.kind == cl.kind else math.inf
-    return below(
-        name,
-        f"{what}: fempipe's v_cr ({FE}: {fe.v_cr:.9f}, {fe.kind}) equals the classical "
-        f"theory's ({cl.v_cr:.9f}, {cl.kind})",
-        diff,
-        AGREEMENT,
-        why=AGREEMENT_WHY,
-        source=CLASSICAL_SOURCE,
-    )
+    onsets = {"fe_v": fe.v_cr, "fe_kind": fe.kind, "cl_v": cl.v_cr, "cl_kind": cl.kind}
+    return measure(spec, diff, mesh=FE, **onsets, **fields)
 
 
-def converged_check(name: str, what: str, params: Params, v_max: float, **kwargs) -> Check:
-    """The classical v_cr on p = 16 equals p = 32 to 1e-9 (spectral convergence)."""
-    a = classical_onset(params, v_max, CLASSICAL_P, **kwargs).v_cr
-    b = classical_onset(params, v_max, 2 * CLASSICAL_P, **kwargs).v_cr
-    return below(
-        name,
-        f"{what}: the classical v_cr is converged (Legendre p = {CLASSICAL_P} against "
-        f"p = {2 * CLASSICAL_P})",
-        abs(a - b),
-        1e-9,
-        why="the error of spectral elements falls faster than any power of p; 1e-9 is "
-        "a thousand times below the agreement asked of fempipe",
-        source="fempipe.validation.classical (refinement)",
-    )
+def converged(params: Params, v_max: float, step: float | None = None, **fields) -> Measured:
+    """``classical_converged``: the classical v_cr on p = 16 against p = 32 (spectral
+    convergence); ``step`` that of the classical search (its default if None)."""
+    kw = {} if step is None else {"step": step}
+    a = classical_onset(params, v_max, CLASSICAL_P, **kw).v_cr
+    b = classical_onset(params, v_max, 2 * CLASSICAL_P, **kw).v_cr
+    diff = abs(a - b)
+    return measure("classical_converged", diff, p=CLASSICAL_P, p2=2 * CLASSICAL_P, **fields)
