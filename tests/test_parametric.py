@@ -119,8 +119,8 @@ def test_a_region_is_located_where_a_multiplier_reaches_modulus_one(reduced6):
     w2 = reduced6.eigenvalues.imag[1]
     cand = Candidate("principal", 1, (2,), 2 * w2)
     window = (0.8 * cand.omega, 1.2 * cand.omega)
-    region = locate_region(reduced6, cand, window, [0.1, 0.15])
-    assert region is not None
+    region, count = locate_region(reduced6, cand, window, [0.1, 0.15])
+    assert region is not None and count == region.evaluations > 10
     assert abs(region.multiplier + 1) < 1e-6
     assert 0 < region.sigma_threshold < 0.1
     assert abs(region.omega_threshold / cand.omega - 1) < 0.02
@@ -158,3 +158,39 @@ def test_bad_input_is_refused():
         red.monodromy(0.1, 0.0)
     with pytest.raises(ValueError, match="steps"):
         red.monodromy(0.1, 1.0, steps=0)
+
+
+def test_the_chart_of_the_hanging_pipe():
+    """v0 = 6, omega in 20..36: the principal region of mode 2 (the flutter mode, the least
+    damped) and nothing else opens for sigma <= 0.2; mode 1, damped above the ratio
+    1/sqrt(2) by the flow at this v0, is not a resonator; both planes carry the region."""
+    from fempipe.analyses.parametric import parametric_chart
+
+    chart = parametric_chart(_model(6.0), 6.0, (20.0, 36.0), [0.1, 0.2])
+    lam = dict(zip(chart.modes, chart.eigenvalues, strict=True))
+    assert 1 not in lam and lam[2].imag > -lam[2].real
+    (region,) = chart.regions
+    c = region.candidate
+    assert (c.kind, c.order, c.mode) == ("principal", 1, (2,))
+    assert c.omega == pytest.approx(2 * lam[2].imag, rel=1e-12)
+    assert abs(region.multiplier + 1) < 1e-6 and 0 < region.sigma_threshold < 0.1
+    assert [row[0] for row in region.boundary] == [0.1, 0.2]
+    d = chart.to_dict()
+    assert [r["plane"] for r in d["regions"]] == ["in", "out"]
+    assert d["regions"][0]["sigma_threshold"] == region.sigma_threshold
+    assert d["regions"][0]["mode"] == [2] and d["regions"][0]["kind"] == "principal"
+    assert len(d["closed"]) == len(chart.closed) >= 1
+    assert chart.evaluations > 0
+
+
+def test_the_chart_refuses_what_it_cannot_chart():
+    from fempipe.analyses.parametric import parametric_chart
+
+    with pytest.raises(ValueError, match="omega"):
+        parametric_chart(_model(6.0), 6.0, (30.0, 20.0), [0.1])
+    with pytest.raises(ValueError, match="sigma"):
+        parametric_chart(_model(6.0), 6.0, (20.0, 30.0), [1.5])
+    with pytest.raises(ValueError, match="unstable"):
+        parametric_chart(_model(6.0), 7.5, (20.0, 30.0), [0.1])
+    with pytest.raises(ValueError, match="alpha"):
+        parametric_chart(PipeModel(DISC, Params(alpha=0.5)), 5.0, (20.0, 30.0), [0.1])

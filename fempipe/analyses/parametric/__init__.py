@@ -6,6 +6,18 @@ derivation: docs/theory/parametric.md.
 
 from __future__ import annotations
 
+from .chart import ParametricChart, parametric_chart
 from .floquet import PulsationPencil, ReducedPulsation, floquet_multipliers
+from .regions import Candidate, ParametricRegion, candidates, locate_region
 
-__all__ = ["PulsationPencil", "ReducedPulsation", "floquet_multipliers"]
+__all__ = [
+    "Candidate",
+    "ParametricChart",
+    "ParametricRegion",
+    "PulsationPencil",
+    "ReducedPulsation",
+    "candidates",
+    "floquet_multipliers",
+    "locate_region",
+    "parametric_chart",
+]

@@ -16,6 +16,7 @@ docs/theory/parametric.md.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -96,18 +97,29 @@ class ReducedPulsation:
     pencil : PulsationPencil
     v0 : float
         The mean flow velocity.
-    pairs : int
-        The eigenvectors kept (a complex pair counts once), at least 1.
+    pairs : int, optional
+        Keep this many eigenvectors of lowest |lambda| (a complex pair counts once).
+    targets : sequence of complex, optional
+        Instead, keep the eigenvectors whose eigenvalues are nearest to these (the modes of
+        :func:`fempipe.analyses.stability.spectrum`).
 
     Attributes
     ----------
     eigenvalues : ndarray
-        The kept eigenvalues of the mean problem, Im >= 0, by increasing |lambda|.
+        The kept eigenvalues of the mean problem, Im >= 0.
     """
 
-    def __init__(self, pencil: PulsationPencil, v0: float, pairs: int) -> None:
+    def __init__(
+        self,
+        pencil: PulsationPencil,
+        v0: float,
+        pairs: int | None = None,
+        targets: Sequence[complex] | None = None,
+    ) -> None:
         n = pencil.M.shape[0]
-        if pairs < 1:
+        if (pairs is None) == (targets is None):
+            raise ValueError("give either pairs or targets")
+        if pairs is not None and pairs < 1:
             raise ValueError(f"pairs must be >= 1, got {pairs}")
         K = pencil.K0 + v0 * v0 * pencil.K2
         C = pencil.C0 + v0 * pencil.C1
@@ -115,7 +127,11 @@ class ReducedPulsation:
         A0 = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
         lam, X = sla.eig(A0)
         upper = np.flatnonzero(lam.imag >= 0)
-        kept = upper[np.argsort(np.abs(lam[upper]))][:pairs]
+        if targets is None:
+            kept = upper[np.argsort(np.abs(lam[upper]))][:pairs]
+        else:
+            picks = [upper[np.argmin(np.abs(lam[upper] - complex(t)))] for t in targets]
+            kept = np.array(sorted(set(picks), key=picks.index))
         self.eigenvalues = lam[kept]
         modes = X[:n, kept]
         parts = [modes.real, modes.imag[:, np.abs(modes.imag).max(axis=0) > 0]]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -53,7 +53,8 @@ class ParametricRegion:
         combination).
     boundary : tuple of (sigma, omega_lo, omega_hi)
         At each requested sigma at or above the threshold; ``nan`` where the region runs
-        into a neighbouring one before its edge.
+        into a neighbouring one before its edge (the edge of their union is beyond the limits
+        searched) or beyond the band.
     evaluations : int
         Monodromy matrices computed.
     """
@@ -67,16 +68,21 @@ class ParametricRegion:
 
 
 def candidates(
-    frequencies: Sequence[float], band: tuple[float, float], max_order: int = 2
+    frequencies: Mapping[int, float] | Sequence[float],
+    band: tuple[float, float],
+    max_order: int = 2,
 ) -> list[Candidate]:
-    """Every principal and combination resonance of ``frequencies`` whose nominal frequency
-    lies in ``band``, by increasing omega."""
+    """Every principal and combination resonance of ``frequencies`` (mode number ->
+    frequency, or a sequence numbered from 1) whose nominal frequency lies in ``band``, by
+    increasing omega."""
+    if not isinstance(frequencies, Mapping):
+        frequencies = dict(enumerate(frequencies, start=1))
     lo, hi = band
     out = []
     for order in range(1, max_order + 1):
-        for k, w in enumerate(frequencies, start=1):
+        for k, w in frequencies.items():
             out.append(Candidate("principal", order, (k,), 2.0 * w / order))
-        for (j, wj), (k, wk) in itertools.combinations(enumerate(frequencies, start=1), 2):
+        for (j, wj), (k, wk) in itertools.combinations(sorted(frequencies.items()), 2):
             out.append(Candidate("sum", order, (j, k), (wj + wk) / order))
             out.append(Candidate("difference", order, (j, k), abs(wk - wj) / order))
     return sorted((c for c in out if lo <= c.omega <= hi), key=lambda c: c.omega)
@@ -117,28 +123,39 @@ def locate_region(
     window: tuple[float, float],
     sigmas: Sequence[float],
     *,
+    limits: tuple[float, float] | None = None,
     omega_tol: float = 1e-8,
     sigma_tol: float = 1e-8,
     steps: int = 128,
-) -> ParametricRegion | None:
-    """The region of ``candidate`` inside ``window``, or None if it stays closed up to
-    max(``sigmas``)."""
+) -> tuple[ParametricRegion | None, int]:
+    """The region of ``candidate`` whose tip lies in ``window``, and the monodromy matrices
+    computed.
+
+    None if it stays closed up to max(``sigmas``), or if the instability in the window is
+    strongest at its edge (the tip of another candidate's region).  Edges are searched up
+    to ``limits`` (default the window).
+    """
     margin = _Margin(reduced, steps)
     sigma_max = float(max(sigmas))
     lo, hi = window
+    limit_lo, limit_hi = limits if limits is not None else window
     # where the region is widest open at the largest sigma: a grid, then Brent
-    grid = np.linspace(lo, hi, 25)
+    grid = np.linspace(lo, hi, 17)
     values = [margin(sigma_max, w) for w in grid]
     k = int(np.argmax(values))
-    a, b = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
-    best = minimize_scalar(lambda w: -margin(sigma_max, w), bounds=(a, b), method="bounded")
-    if -best.fun <= 0:
-        return None
+    if values[k] <= 0 or k in (0, grid.size - 1):
+        return None, margin.count
+    best = minimize_scalar(
+        lambda w: -margin(sigma_max, w), bounds=(grid[k - 1], grid[k + 1]), method="bounded"
+    )
     peak = float(best.x)
     # its edges at sigma_max bound the frequencies where it opens first
-    edge_lo = _edge(lambda w: margin(sigma_max, w), peak, lo, omega_tol)
-    edge_hi = _edge(lambda w: margin(sigma_max, w), peak, hi, omega_tol)
-    span = (lo if math.isnan(edge_lo) else edge_lo, hi if math.isnan(edge_hi) else edge_hi)
+    edge_lo = _edge(lambda w: margin(sigma_max, w), peak, limit_lo, omega_tol)
+    edge_hi = _edge(lambda w: margin(sigma_max, w), peak, limit_hi, omega_tol)
+    span = (
+        limit_lo if math.isnan(edge_lo) else edge_lo,
+        limit_hi if math.isnan(edge_hi) else edge_hi,
+    )
 
     def critical_sigma(w: float) -> float:
         if margin(sigma_max, w) <= 0:
@@ -147,8 +164,12 @@ def locate_region(
             return 0.0
         return brentq(lambda s: margin(s, w), 0.0, sigma_max, xtol=sigma_tol)
 
+    # sigma_c is flat at its minimum: an error d in omega costs O(d^2) in sigma
     tip = minimize_scalar(
-        critical_sigma, bounds=span, method="bounded", options={"xatol": omega_tol * max(1.0, peak)}
+        critical_sigma,
+        bounds=span,
+        method="bounded",
+        options={"xatol": math.sqrt(sigma_tol) * max(1.0, peak)},
     )
     sigma_th, omega_th = float(tip.fun), float(tip.x)
     rho = margin.multipliers(sigma_th, omega_th)[0]
@@ -164,11 +185,11 @@ def locate_region(
         rows.append(
             (
                 float(s),
-                _edge(lambda w, s=s: margin(s, w), inside, lo, omega_tol),
-                _edge(lambda w, s=s: margin(s, w), inside, hi, omega_tol),
+                _edge(lambda w, s=s: margin(s, w), inside, limit_lo, omega_tol),
+                _edge(lambda w, s=s: margin(s, w), inside, limit_hi, omega_tol),
             )
         )
-    return ParametricRegion(
+    region = ParametricRegion(
         candidate=candidate,
         sigma_threshold=sigma_th,
         omega_threshold=omega_th,
@@ -176,3 +197,4 @@ def locate_region(
         boundary=tuple(rows),
         evaluations=margin.count,
     )
+    return region, margin.count
