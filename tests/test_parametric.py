@@ -194,3 +194,41 @@ def test_the_chart_refuses_what_it_cannot_chart():
         parametric_chart(_model(6.0), 7.5, (20.0, 30.0), [0.1])
     with pytest.raises(ValueError, match="alpha"):
         parametric_chart(PipeModel(DISC, Params(alpha=0.5)), 5.0, (20.0, 30.0), [0.1])
+
+
+def test_the_command(tmp_path, capsys):
+    """``fempipe parametric`` in-process: its JSON contract, its files, its errors (exit 2)."""
+    import json
+
+    from fempipe.cli import main
+
+    argv = ["parametric", "--v", "6", "--beta", "0.2", "--gamma", "10", "--modal", "4",
+            "--omega", "24:36", "--sigma", "0.1,0.2", "--compare-modal", "3", "--quiet"]  # fmt: skip
+    assert main([*argv, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    (inp, out) = d["regions"]
+    assert (inp["plane"], out["plane"]) == ("in", "out") and inp["kind"] == "principal"
+    assert set(inp) >= {"mode", "kind", "plane", "sigma_threshold", "omega_threshold", "boundary"}
+    assert [row[0] for row in inp["boundary"]] == [0.1, 0.2]
+    assert list(d["compare"]) == ["modal:3"] and d["compare"]["modal:3"]["regions"]
+    assert d["discretization"]["name"] == "modal:4" and d["cpu_seconds"] > 0
+    assert main([*argv, "--out", str(tmp_path / "out")]) == 0
+    text = capsys.readouterr().out
+    assert "opens at sigma" in text and "modal:3" in text
+    for name in ("parametric.json", "parametric.csv", "chart.png"):
+        assert (tmp_path / "out" / name).stat().st_size > 200
+    header = (tmp_path / "out" / "parametric.csv").read_text().splitlines()[0]
+    assert header.startswith("discretization") and "sigma_threshold [1]" in header
+    for bad, option in (
+        (["--v", "5,6"], "--v"),
+        (["--v", "5", "--alpha", "1"], "--alpha"),
+        (["--v", "5", "--omega", "30:20"], "--omega"),
+        (["--v", "5", "--sigma", "0,0.2"], "--sigma"),
+        (["--v", "9"], "--v"),
+    ):
+        try:
+            code = main(["parametric", *bad, "--modal", "3", "--compare-modal", "none", "--quiet"])
+        except SystemExit as exc:  # argparse's own errors
+            code = exc.code
+        assert code == 2, bad
+        assert option in capsys.readouterr().err

@@ -33,6 +33,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
         "fempipe.cli.compare",
         "a user's results (CSV) against fempipe, with fempipe's error estimate",
     ),
+    "parametric": (
+        "fempipe.cli.parametric",
+        "regions where a pulsating flow destabilizes the straight pipe (parametric resonance)",
+    ),
     "validate": ("fempipe.cli.validate", "run the validation suite and write the report"),
     "bench": ("fempipe.cli.bench", "performance benchmarks"),
 }

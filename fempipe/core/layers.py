@@ -6,8 +6,8 @@ layer, on a private name (``_x``) imported from another module, and on a cycle o
 even through imports inside functions.
 
 The layers, in rank order (:data:`LAYERS`): ``core`` < ``model`` < ``solvers`` <
-``analyses`` (statics < stability < dynamics < limit_cycle < space < branches: bifurcation
-diagrams and periodic orbits) < ``studies`` < ``io`` < ``plotting`` < ``validation`` <
+``analyses`` (statics < stability < dynamics < limit_cycle < space < parametric < branches:
+bifurcation diagrams and periodic orbits) < ``studies`` < ``io`` < ``plotting`` < ``validation`` <
 ``bench`` < ``cli`` < ``facade`` (``fempipe`` itself, ``python -m fempipe`` and the course's
 answer checks ``fempipe.course``; nothing in the package imports it).  The package
 ``fempipe.analyses`` itself, and an analysis not listed yet, rank with the statics.
@@ -31,6 +31,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analyses.dynamics", ("fempipe.analyses.dynamics",)),
     ("analyses.limit_cycle", ("fempipe.analyses.limit_cycle",)),
     ("analyses.space", ("fempipe.analyses.space",)),
+    ("analyses.parametric", ("fempipe.analyses.parametric",)),
     ("analyses.branches", ("fempipe.analyses.bifurcation", "fempipe.analyses.periodic")),
     ("studies", ("fempipe.studies",)),
     ("io", ("fempipe.io",)),

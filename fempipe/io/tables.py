@@ -63,6 +63,15 @@ CSV_UNITS: Mapping[str, str] = {
     "eigenvalue_index": "-",
     "pair_member": "-",
     "system_stable": "-",
+    # parametric resonance (fempipe parametric): one row per chart, region, plane and sigma
+    "discretization": "-",
+    "kind": "-",
+    "order": "-",
+    "sigma_threshold": "1",
+    "omega_threshold": "1/T",
+    "sigma": "1",
+    "omega_lo": "1/T",
+    "omega_hi": "1/T",
     # stability events (fempipe critical) and the stability map
     "type": "-",
     "branch": "-",

@@ -238,7 +238,7 @@ def parametric_chart(
             callback(cand, region)
     return ParametricChart(
         params=model.params,
-        discretization=model.disc.to_dict(),
+        discretization={"name": model.disc.name, **model.disc.to_dict()},
         band=(lo, hi),
         sigmas=sigmas,
         eigenvalues=tuple(modes[k] for k in kept),

@@ -63,7 +63,7 @@ class PulsationPencil:
         if not straight_is_static(model.params):
             raise ValueError(
                 f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
-                "alpha = 0 or pi; a bent pipe needs its forced periodic response"
+                "alpha = 0 or pi (the forced periodic response of a bent pipe is not computed yet)"
             )
         n = model.n
         zero = np.zeros(n)
