@@ -1,10 +1,10 @@
 """Checks from data: what a case measured, judged by the check specs of its reference file.
 
-``references/<case>.json`` holds a ``"checks"`` section: per check its kind (``below``,
-``close``, ``holds``, the verdicts of :mod:`fempipe.validation.checks`), claim, limit or
-reference and tolerance, why and source.  A case only measures: it returns one
-:class:`Measured` per check (:func:`measure`), and :func:`evaluate` builds the
-:class:`~fempipe.validation.checks.Check` from the measurement and its spec.
+``references/<case>.json`` holds a ``"checks"`` section: per check its kind (``below``: the
+measured value at most a limit; ``close``: within a tolerance of a reference; ``holds``: a
+statement the case judges), claim, limit or reference and tolerance, why and source.  A case
+only measures: it returns one :class:`Measured` per check (:func:`measure`), and
+:func:`evaluate` builds the :class:`~fempipe.validation.checks.Check` from it and its spec.
 
 Texts are templates (:func:`fill`): ``{x}`` is the measurement's field ``x``, else the
 reference value ``x`` (in the quick suite ``x_quick`` where there is one); ``{sources[x]}``
