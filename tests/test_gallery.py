@@ -202,3 +202,16 @@ def test_3d_which_cycles_survive(tmp_path, monkeypatch):
     assert hanging.stable and abs(hanging.trivial.imag) < 1e-12
     # the standing pipe's planar cycle has one out-of-plane multiplier outside it
     assert not standing.stable
+
+
+def test_parametric_resonance(tmp_path, monkeypatch):
+    """The small motion integrated by Eq. (20) with the pulsating flow (Radau, fixed steps)
+    grows per period by the largest Floquet multiplier of the reduced monodromy."""
+    from fempipe.analyses.parametric import PulsationPencil, ReducedPulsation, floquet_multipliers
+
+    g = run_example("plot_parametric_resonance", tmp_path, monkeypatch)
+    model = g["model"]
+    reduced = ReducedPulsation(PulsationPencil.of(model), 6.0, 3)
+    rho = floquet_multipliers(reduced, 0.2, g["region"].omega_threshold)[0]
+    assert rho.real < -1 and abs(rho.imag) < 1e-9
+    assert g["RESULT"] == pytest.approx(abs(rho), rel=2e-3)
