@@ -232,3 +232,23 @@ def test_the_command(tmp_path, capsys):
             code = exc.code
         assert code == 2, bad
         assert option in capsys.readouterr().err
+
+
+def test_the_thresholds_are_quantities_of_a_convergence_study():
+    """``fempipe convergence --quantity sigma_threshold``: the threshold of the first region to
+    open in the band, the same as the chart's; refused without a band."""
+    from fempipe.studies.convergence import Quantity
+
+    q = Quantity("sigma_threshold", _model(6.0).params, omega_band=(24.0, 36.0), sigma_max=0.2)
+    w = Quantity("omega_threshold", _model(6.0).params, omega_band=(24.0, 36.0), sigma_max=0.2)
+    disc = FiniteElement(3, 3)
+    from fempipe.analyses.parametric import parametric_chart
+
+    (region,) = parametric_chart(
+        PipeModel(disc, _model(6.0).params), 6.0, (24.0, 36.0), [0.2]
+    ).regions
+    assert q(disc) == pytest.approx(region.sigma_threshold, abs=2e-8)  # the chart: 1e-8
+    assert w(disc) == pytest.approx(region.omega_threshold, rel=1e-4)
+    assert "24 <= omega <= 36" in q.describe()
+    with pytest.raises(ValueError, match="band"):
+        Quantity("sigma_threshold", _model(6.0).params)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from fempipe.cli import common, parsing, reporting
+from fempipe.cli import common, parametric, parsing, reporting
 from fempipe.cli.parsing import CLIError
 
 DEFAULT_DEGREES = "P1,P2,P3"
@@ -104,7 +104,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "frequency of the critical event over the --v range (in three dimensions; "
         "v_cr_in_plane, frequency_in_plane: in the plane of the static state, the paper's; "
         "v_cr_out_of_plane, frequency_out_of_plane: out of it); eigenvalue: the --mode-th "
-        "eigenvalue at one v; lc_amplitude, lc_period: the limit cycle at one v",
+        "eigenvalue at one v; lc_amplitude, lc_period: the limit cycle at one v; "
+        "sigma_threshold, omega_threshold: where the straight pipe first resonates under a "
+        "pulsating flow about the mean flow --v, in the --omega band",
     )
     g.add_argument(
         "--mode",
@@ -112,6 +114,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.option_type("--mode", parsing.positive_int),
         default="1",
         help="mode number of --quantity eigenvalue (1)",
+    )
+    g.add_argument(
+        "--omega",
+        metavar="A:B",
+        type=parsing.option_type("--omega", parametric.parse_band),
+        default=None,
+        help="the pulsation frequencies searched by --quantity sigma_threshold, omega_threshold "
+        "(the first region of parametric resonance of the straight pipe to open), e.g. 20:40",
+    )
+    g.add_argument(
+        "--sigma-max",
+        metavar="S",
+        type=parsing.number_type("--sigma-max", 0.0, 1.0, strict_low=True),
+        default=0.5,
+        help="the largest pulsation amplitude they search (0.5)",
     )
     g.add_argument(
         "--fe",
@@ -188,7 +205,12 @@ def _families(args: argparse.Namespace) -> list:
 def _quantity(args: argparse.Namespace, setup):
     from dataclasses import replace
 
-    from fempipe.studies.convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
+    from fempipe.studies.convergence import (
+        CRITICAL_QUANTITIES,
+        CYCLE_QUANTITIES,
+        PARAMETRIC_QUANTITIES,
+        Quantity,
+    )
 
     name = args.quantity
     flow_opt = "--U" if getattr(args, "U", None) is not None else "--v"
@@ -204,6 +226,13 @@ def _quantity(args: argparse.Namespace, setup):
         raise CLIError(
             flow_opt, f"--quantity {name} needs one flow velocity, e.g. --v 3; got {got}"
         )
+    if name in PARAMETRIC_QUANTITIES:
+        if args.omega is None:
+            raise CLIError("--omega", f"--quantity {name} needs the band searched, e.g. 20:40")
+        try:
+            return Quantity(name, setup.params, omega_band=args.omega, sigma_max=args.sigma_max)
+        except ValueError as exc:
+            raise CLIError("--quantity", str(exc)) from None
     return Quantity(name, setup.params, mode=args.mode, shoot_rtol=args.shoot_rtol)
 
 

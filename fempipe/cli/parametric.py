@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--omega",
         metavar="A:B",
-        type=parsing.option_type("--omega", _band),
+        type=parsing.option_type("--omega", parse_band),
         default=(2.0, 40.0),
         help="the band of pulsation frequencies searched, 0 < A < B (default 2:40)",
     )
@@ -72,7 +72,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_output_arguments(parser)
 
 
-def _band(text: str) -> tuple[float, float]:
+def parse_band(text: str) -> tuple[float, float]:
+    """``A:B``, a band of pulsation frequencies 0 < A < B (ValueError otherwise)."""
     parts = str(text).split(":")
     try:
         lo, hi = (float(x) for x in parts)

@@ -26,6 +26,7 @@ __all__ = [
     "STATIC_QUANTITIES",
     "CRITICAL_QUANTITIES",
     "CYCLE_QUANTITIES",
+    "PARAMETRIC_QUANTITIES",
     "STATIC_TOL",
     "EVENT_TOL",
     "Quantity",
@@ -63,6 +64,12 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "eigenvalue": ("k-th resolved eigenvalue lambda at one v (complex)", "1"),
     "lc_amplitude": ("limit-cycle amplitude (max - min) / 2 of eta(1)", "L"),
     "lc_period": ("limit-cycle period", "1"),
+    "sigma_threshold": (
+        "least pulsation amplitude at which the straight pipe resonates (the first region of "
+        "parametric resonance to open in the omega band)",
+        "1",
+    ),
+    "omega_threshold": ("pulsation frequency where that region opens", "1/T"),
 }
 
 STATIC_QUANTITIES = ("theta_tip", "X_tip", "Z_tip", "eta_tip")
@@ -75,6 +82,10 @@ CRITICAL_QUANTITIES = (
     "frequency_out_of_plane",
 )
 CYCLE_QUANTITIES = ("lc_amplitude", "lc_period")
+PARAMETRIC_QUANTITIES = ("sigma_threshold", "omega_threshold")
+#: The thresholds' tolerance in sigma (the frequency there is located to its square root,
+#: where sigma is flat: docs/theory/parametric.md).
+PARAMETRIC_TOL = 1e-11
 
 #: Tolerances the quantities are computed to, relative to max(1, |Q|): below
 #: them a difference between two discretizations is solver noise.  Newton
@@ -176,6 +187,11 @@ class Quantity:
         numbers as ``v_cr_in_plane`` and ``frequency_in_plane``) instead of
         those of three dimensions; ``fempipe compare`` sets it for a user's
         ``v_cr`` and ``frequency`` (its module docstring).
+    omega_band : (float, float), optional
+        The pulsation frequencies searched by ``sigma_threshold`` and ``omega_threshold``
+        (the straight pipe under the mean flow ``params.v``).
+    sigma_max : float
+        The largest pulsation amplitude searched by them.
 
     The critical quantities (:data:`CRITICAL_QUANTITIES`): ``v_cr`` and
     ``frequency`` are those of the first loss of stability in three
@@ -197,10 +213,18 @@ class Quantity:
     shoot_rtol: float = 1e-9
     seed: tuple | None = field(default=None, repr=False, compare=False)
     planar: bool = False
+    omega_band: tuple[float, float] | None = None
+    sigma_max: float = 0.5
 
     def __post_init__(self) -> None:
         if self.name not in QUANTITIES:
             raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)}, got {self.name!r}")
+        if self.name in PARAMETRIC_QUANTITIES:
+            band = self.omega_band
+            if band is None or not 0 < band[0] < band[1]:
+                raise ValueError(f"{self.name} needs a band 0 < omega_lo < omega_hi, got {band}")
+            if not 0 < self.sigma_max <= 1:
+                raise ValueError(f"sigma_max must satisfy 0 < sigma_max <= 1, got {self.sigma_max}")
         if self.name in CRITICAL_QUANTITIES:
             if self.v_max is None or not self.v_max > self.params.v:
                 raise ValueError(
@@ -219,6 +243,8 @@ class Quantity:
             return EVENT_TOL
         if self.name in CYCLE_QUANTITIES:
             return 10 * self.shoot_rtol
+        if self.name in PARAMETRIC_QUANTITIES:
+            return 100 * PARAMETRIC_TOL if self.name == "sigma_threshold" else 1e-5
         return 1e-11
 
     def describe(self) -> str:
@@ -231,6 +257,9 @@ class Quantity:
             where = f"over {p.v:g} <= v <= {self.v_max:g}"
         elif self.name == "eigenvalue":
             where = f"mode {self.mode} at v = {p.v:g}"
+        elif self.name in PARAMETRIC_QUANTITIES:
+            lo, hi = self.omega_band
+            where = f"at v0 = {p.v:g}, {lo:g} <= omega <= {hi:g}, sigma <= {self.sigma_max:g}"
         else:
             where = f"at v = {p.v:g}"
         return f"{text} {where} [{unit}]"
@@ -246,11 +275,29 @@ class Quantity:
             return self._critical(model)
         if self.name == "eigenvalue":
             return _eigenvalue(model, self.mode)
+        if self.name in PARAMETRIC_QUANTITIES:
+            return self._parametric(model)
         cycle = self.cycle(disc)
         if self.name == "lc_period":
             return float(cycle.period)
         lo, hi = cycle.tip["eta_tip"]
         return 0.5 * float(hi - lo)
+
+    def _parametric(self, model) -> float:
+        """The threshold of the first region of parametric resonance to open in the band."""
+        from fempipe.analyses.parametric import parametric_chart
+        from fempipe.core.errors import SolverError
+
+        chart = parametric_chart(
+            model, self.params.v, self.omega_band, [self.sigma_max], sigma_tol=PARAMETRIC_TOL
+        )
+        if not chart.regions:
+            raise SolverError(
+                f"no region of parametric resonance opens for sigma <= {self.sigma_max:g} in "
+                f"{self.omega_band[0]:g} <= omega <= {self.omega_band[1]:g} on {model.disc.name}"
+            )
+        first = min(chart.regions, key=lambda r: r.sigma_threshold)
+        return first.sigma_threshold if self.name == "sigma_threshold" else first.omega_threshold
 
     def _critical(self, model) -> float:
         """v_cr or the frequency of the critical event, in 3-D or in one plane."""
