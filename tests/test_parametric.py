@@ -252,3 +252,41 @@ def test_the_thresholds_are_quantities_of_a_convergence_study():
     assert "24 <= omega <= 36" in q.describe()
     with pytest.raises(ValueError, match="band"):
         Quantity("sigma_threshold", _model(6.0).params)
+
+
+def test_the_forced_response_of_a_bent_pipe():
+    """The periodic response to the pulsation, by Newton on the period map: on the straight
+    pipe (alpha = 0) it is the straight state, with the reduced problem's multipliers; on the
+    horizontal pipe (alpha = pi/2) it tends to the static state as sigma -> 0, with the
+    multipliers exp(lambda T) of the static state's spectrum (Eq. (32)); at sigma = 0.3 it
+    converges, moves the pipe, and its multipliers do not depend on the steps (rtol 1e-8 against 1e-10 and twice the steps)."""
+    from fempipe.analyses.parametric.forced import forced_response
+    from fempipe.analyses.statics import sagged_state
+
+    straight = forced_response(_model(6.0), 0.2, 29.5)
+    assert straight.iterations == 0 and straight.amplitude == 0.0
+    np.testing.assert_allclose(
+        _largest(straight.multipliers, 3),
+        _largest(
+            floquet_multipliers(
+                ReducedPulsation(PulsationPencil.of(_model(6.0)), 6.0, 3), 0.2, 29.5
+            ),
+            3,
+        ),
+        atol=1e-7,
+    )
+    bent = PipeModel(
+        FiniteElement(4, 3), Params(alpha=math.pi / 2, beta=0.142, gamma=18.9, mu=0.005, v=4.0)
+    )
+    omega = 20.0
+    small = forced_response(bent, 1e-7, omega)
+    assert np.linalg.norm(small.q0 - sagged_state(bent).q) < 1e-5
+    lam = spectrum(bent, sagged_state(bent).q).lam
+    for e in np.exp(lam * 2 * math.pi / omega)[:4]:
+        assert np.abs(small.multipliers - e).min() < 1e-7
+    moved = forced_response(bent, 0.3, omega)
+    assert moved.residual <= 1e-9 and 1 <= moved.iterations <= 6 and moved.amplitude > 0.05
+    finer = forced_response(bent, 0.3, omega, guess=(moved.q0, moved.qdot0), steps=256, rtol=1e-10)
+    np.testing.assert_allclose(_largest(finer.multipliers), _largest(moved.multipliers), atol=1e-7)
+    with pytest.raises(ValueError, match="omega"):
+        forced_response(bent, 0.3, 0.0)

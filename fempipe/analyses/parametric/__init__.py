@@ -1,23 +1,27 @@
 """Parametric resonance of the pipe under a pulsating flow v(tau) = v0 (1 + sigma sin(omega tau)).
 
-The Floquet multipliers of the motions about the straight state (:mod:`.floquet`); the
-derivation: docs/theory/parametric.md.
+The Floquet multipliers of the motions about the straight state (:mod:`.floquet`), the chart
+of its regions (:mod:`.chart`), and the periodic response of a bent pipe with its multipliers
+(:mod:`.forced`); the derivation: docs/theory/parametric.md.
 """
 
 from __future__ import annotations
 
 from .chart import ParametricChart, parametric_chart
 from .floquet import PulsationPencil, ReducedPulsation, floquet_multipliers
+from .forced import ForcedResponse, forced_response
 from .regions import Candidate, ParametricRegion, candidates, locate_region
 
 __all__ = [
     "Candidate",
+    "ForcedResponse",
     "ParametricChart",
     "ParametricRegion",
     "PulsationPencil",
     "ReducedPulsation",
     "candidates",
     "floquet_multipliers",
+    "forced_response",
     "locate_region",
     "parametric_chart",
 ]

@@ -1,0 +1,145 @@
+"""The periodic response of a bent pipe to a pulsating flow, and its Floquet multipliers.
+
+For 0 < alpha < pi the static shape depends on the flow, so a pulsating flow
+v0 (1 + sigma sin(omega tau)) moves the pipe: Eq. (20) has a periodic solution of the
+pulsation's period 2 pi / omega near the static state.  :func:`forced_response` finds it by
+Newton's method on the period map (the monodromy matrix from the integrator's sensitivity,
+the problem being non-autonomous: no phase condition) and returns its multipliers, those of
+the motion in the plane.  At sigma = 0 it is the static state, and its multipliers are
+exp(lambda T) of the static state's spectrum.  Derivation: docs/theory/parametric.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fempipe.analyses.dynamics import PulsatingFlow
+from fempipe.analyses.statics import sagged_state
+from fempipe.core.errors import SolverError
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.kinematics import tip_values
+from fempipe.model.operators import PipeModel
+from fempipe.solvers.radau import Radau
+
+__all__ = ["ForcedResponse", "forced_response"]
+
+
+@dataclass(frozen=True)
+class ForcedResponse:
+    """The periodic response to a pulsating flow.
+
+    Attributes
+    ----------
+    q0, qdot0 : ndarray, shape (n,)
+        The state at tau = 0 (a multiple of the period: the pulsation's phase 0).
+    period : float
+        2 pi / omega.
+    multipliers : ndarray of complex, shape (2n,)
+        The Floquet multipliers of the motion in the plane, largest modulus first.
+    iterations : int
+        Newton steps on the period map.
+    residual : float
+        |x(T) - x(0)| of the returned state, relative to max(1, |x(0)|).
+    amplitude : float
+        (max - min) / 2 of theta(1) over the period, sampled at the steps.
+    """
+
+    q0: np.ndarray
+    qdot0: np.ndarray
+    period: float
+    multipliers: np.ndarray
+    iterations: int
+    residual: float
+    amplitude: float
+
+
+def _period_map(
+    model: PipeModel, flow: PulsatingFlow, x: np.ndarray, T: float, steps: int, rtol: float
+):
+    n = model.n
+    # The error control sees the state, not the sensitivity (on the straight pipe the state is
+    # exactly zero): the steps are also bounded, T / steps at most.
+    stepper = Radau(
+        PipeDynamics(model, flow),
+        x[:n],
+        x[n:],
+        0.0,
+        rtol=rtol,
+        max_step=T / steps,
+        first_step=T / steps,
+        sensitivity=True,
+    )
+    alpha = model.params.alpha
+    tips = [tip_values(model.disc, x[:n], alpha)["theta_tip"]]
+    for _, q, _ in stepper.steps(T):
+        tips.append(tip_values(model.disc, q, alpha)["theta_tip"])
+    return np.r_[stepper.q, stepper.qdot], stepper.sensitivity_matrix, tips
+
+
+def forced_response(
+    model: PipeModel,
+    sigma: float,
+    omega: float,
+    *,
+    guess: tuple[np.ndarray, np.ndarray] | None = None,
+    steps: int = 128,
+    rtol: float = 1e-8,
+    tol: float = 1e-9,
+    max_iterations: int = 12,
+) -> ForcedResponse:
+    """The periodic response of ``model`` (mean flow ``model.params.v``) to the pulsation.
+
+    Parameters
+    ----------
+    model : PipeModel
+    sigma, omega : float
+        Amplitude (0 <= sigma <= 1) and frequency (> 0) of the pulsation.
+    guess : (q0, qdot0), optional
+        A starting state (default the static state at the mean flow).
+    steps : int
+        At least this many Radau IIA steps per period (more where the error control asks).
+    rtol : float
+        The integrator's relative tolerance.
+    tol : float
+        Newton stops when |x(T) - x(0)| <= tol max(1, |x(0)|).
+
+    Raises
+    ------
+    SolverError
+        If Newton's method does not converge (naming sigma, omega and the residual).
+    """
+    if omega <= 0:
+        raise ValueError(f"omega must be > 0, got {omega}")
+    flow = PulsatingFlow(model.params.v, sigma, omega)
+    n = model.n
+    if guess is None:
+        x = np.r_[sagged_state(model).q, np.zeros(n)]
+    else:
+        x = np.r_[guess[0], guess[1]]
+    T = 2 * math.pi / omega
+    for iteration in range(max_iterations + 1):
+        end, S, tips = _period_map(model, flow, x, T, steps, rtol)
+        r = end - x
+        residual = float(np.linalg.norm(r) / max(1.0, np.linalg.norm(x)))
+        if residual <= tol:
+            rho = np.linalg.eigvals(S)
+            return ForcedResponse(
+                q0=x[:n].copy(),
+                qdot0=x[n:].copy(),
+                period=T,
+                multipliers=rho[np.argsort(-np.abs(rho))],
+                iterations=iteration,
+                residual=residual,
+                amplitude=0.5 * (max(tips) - min(tips)),
+            )
+        if iteration == max_iterations:
+            break
+        x = x + np.linalg.solve(S - np.eye(2 * n), -r)
+    raise SolverError(
+        f"the periodic response at sigma = {sigma:g}, omega = {omega:g} did not converge in "
+        f"{max_iterations} Newton steps (residual {residual:.2e}; the period map is singular "
+        "where a multiplier is 1)"
+    )
