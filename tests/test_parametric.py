@@ -136,6 +136,9 @@ def test_a_region_is_located_where_a_multiplier_reaches_modulus_one(reduced6):
         assert largest(s, hi) == pytest.approx(1, abs=1e-6)
         assert largest(s, 0.5 * (lo + hi)) > 1
     assert [row[0] for row in region.boundary] == [0.1, 0.15]
+    # the same search on any callable (sigma, omega) -> multipliers
+    again, _ = locate_region(lambda s, w: floquet_multipliers(reduced6, s, w), cand, window, [0.1])
+    assert again.sigma_threshold == region.sigma_threshold
 
 
 def test_candidates_name_the_resonances():

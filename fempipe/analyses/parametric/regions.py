@@ -89,14 +89,23 @@ def candidates(
 
 
 class _Margin:
-    """log of the largest multiplier's modulus (> 0: unstable), counting evaluations."""
+    """log of the largest multiplier's modulus (> 0: unstable), counting evaluations.
 
-    def __init__(self, reduced: ReducedPulsation, steps: int) -> None:
-        self.reduced, self.steps, self.count = reduced, steps, 0
+    ``source`` is a :class:`ReducedPulsation` (the straight pipe) or any callable
+    ``(sigma, omega) -> multipliers`` (e.g. the forced response of a bent pipe).
+    """
+
+    def __init__(self, source, steps: int) -> None:
+        if isinstance(source, ReducedPulsation):
+            self.source = lambda s, w: floquet_multipliers(source, s, w, steps)
+        else:
+            self.source = source
+        self.count = 0
 
     def multipliers(self, sigma: float, omega: float) -> np.ndarray:
         self.count += 1
-        return floquet_multipliers(self.reduced, sigma, omega, self.steps)
+        rho = np.asarray(self.source(sigma, omega))
+        return rho[np.argsort(-np.abs(rho))]
 
     def __call__(self, sigma: float, omega: float) -> float:
         return float(np.log(np.abs(self.multipliers(sigma, omega)[0])))
@@ -118,7 +127,7 @@ def _edge(margin: Callable[[float], float], inside: float, limit: float, tol: fl
 
 
 def locate_region(
-    reduced: ReducedPulsation,
+    reduced: ReducedPulsation | Callable[[float, float], np.ndarray],
     candidate: Candidate,
     window: tuple[float, float],
     sigmas: Sequence[float],
@@ -129,7 +138,7 @@ def locate_region(
     steps: int = 128,
 ) -> tuple[ParametricRegion | None, int]:
     """The region of ``candidate`` whose tip lies in ``window``, and the monodromy matrices
-    computed.
+    computed, for the multipliers of ``reduced`` (or of a callable (sigma, omega) -> them).
 
     None if it stays closed up to max(``sigmas``), or if the instability in the window is
     strongest at its edge (the tip of another candidate's region).  Edges are searched up
