@@ -138,7 +138,7 @@ def test_a_region_is_located_where_a_multiplier_reaches_modulus_one(reduced6):
     assert [row[0] for row in region.boundary] == [0.1, 0.15]
     # the same search on any callable (sigma, omega) -> multipliers
     again, _ = locate_region(lambda s, w: floquet_multipliers(reduced6, s, w), cand, window, [0.1])
-    assert again.sigma_threshold == region.sigma_threshold
+    assert again.sigma_threshold == pytest.approx(region.sigma_threshold, abs=1e-8)
 
 
 def test_candidates_name_the_resonances():
