@@ -10,7 +10,8 @@ The benchmarks, one module per subject: :mod:`~fempipe.bench.static`,
 :mod:`~fempipe.bench.critical`, :mod:`~fempipe.bench.convergence`,
 :mod:`~fempipe.bench.startup`, :mod:`~fempipe.bench.dynamics`,
 :mod:`~fempipe.bench.stability`, :mod:`~fempipe.bench.bifurcation`,
-:mod:`~fempipe.bench.hopf`, :mod:`~fempipe.bench.output` and :mod:`~fempipe.bench.space`;
+:mod:`~fempipe.bench.hopf`, :mod:`~fempipe.bench.output`, :mod:`~fempipe.bench.space` and
+:mod:`~fempipe.bench.parametric`;
 what they share (the registration, the timers, the cases) is :mod:`~fempipe.bench.harness`.
 This module is the registry of the modules and the runner.  What each measures:
 docs/cli/commands.md, "fempipe bench".
@@ -45,6 +46,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench.hopf",
     "fempipe.bench.output",
     "fempipe.bench.space",
+    "fempipe.bench.parametric",
 )
 
 

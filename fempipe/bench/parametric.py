@@ -1,0 +1,55 @@
+"""Benchmark of the chart of parametric resonance (registered with :mod:`fempipe.bench`).
+
+``parametric_region``
+    One region of the hanging pipe's chart, its threshold and its boundary at 10 amplitudes,
+    on the default discretization, in CPU seconds and as a ratio to one static v_cr
+    (target :data:`REGION_TARGET_S`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from fempipe.analyses.parametric import parametric_chart
+from fempipe.analyses.stability import critical_velocity
+from fempipe.bench.harness import register
+from fempipe.model.discretization import DEFAULT_FE, parse_discretization
+from fempipe.model.operators import PipeModel
+from fempipe.model.params import Params
+
+#: CPU seconds allowed for one region (threshold and boundary at 10 amplitudes).
+REGION_TARGET_S = 30.0
+#: Paidoussis & Issid's hanging pipe at the mean flow of the benchmark.
+HANGING = {"alpha": 0.0, "beta": 0.2, "gamma": 10.0, "mu": 0.005, "v": 6.0}
+
+
+@register("parametric_region")
+def bench_parametric_region(quick: bool = False) -> dict:
+    """The principal region of the second mode at v0 = 6 (omega 24 to 36, the band holding
+    it alone), its boundary at sigma = 0.10, 0.11, ..., 0.19, against the critical velocity
+    of the same pipe on the same discretization (both in CPU seconds of this process)."""
+    disc = parse_discretization(DEFAULT_FE)
+    model = PipeModel(disc, Params(**HANGING))
+    sigmas = np.round(np.linspace(0.10, 0.19, 5 if quick else 10), 6).tolist()
+    t0 = time.process_time()
+    chart = parametric_chart(model, HANGING["v"], (24.0, 36.0), sigmas)
+    chart_cpu = time.process_time() - t0
+    t0 = time.process_time()
+    res = critical_velocity(model, 10.0)
+    vcr_cpu = time.process_time() - t0
+    (region,) = chart.regions
+    return {
+        "discretization": disc.name,
+        "sigma_threshold": region.sigma_threshold,
+        "omega_threshold": region.omega_threshold,
+        "boundary_rows": len(region.boundary),
+        "candidates_closed": len(chart.closed),
+        "monodromy_matrices": chart.evaluations,
+        "cpu_seconds": chart_cpu,
+        "v_cr": res.v_cr,
+        "v_cr_cpu_seconds": vcr_cpu,
+        "ratio_to_v_cr": chart_cpu / vcr_cpu,
+        "target_seconds": REGION_TARGET_S,
+    }
