@@ -150,6 +150,20 @@ def test_candidates_name_the_resonances():
     assert [c.omega for c in got] == sorted(c.omega for c in got)
 
 
+def test_a_pipe_without_flow_acceleration_terms():
+    """beta = 0: no Coriolis force and no flow acceleration (their matrices vanish); the
+    reduced problem still is the full one, and at sigma = 0 its multipliers are exp(lambda T)."""
+    model = PipeModel(DISC, Params(alpha=0.0, beta=0.0, gamma=10.0, mu=0.005, v=3.0))
+    pencil = PulsationPencil.of(model)
+    assert np.abs(pencil.C1).max() == 0 and np.abs(pencil.K3).max() == 0
+    reduced = ReducedPulsation(pencil, 3.0, 3)
+    lam = reduced.eigenvalues
+    # 512 steps: the time discretization's error (1e-8 at the default 128) below 1e-10
+    rho = floquet_multipliers(reduced, 0.0, 10.0, steps=512)
+    for e in np.exp(lam * 2 * math.pi / 10.0):
+        assert np.abs(rho - e).min() < 1e-10
+
+
 def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="alpha"):
         PulsationPencil.of(PipeModel(DISC, Params(alpha=1.0)))

@@ -138,7 +138,9 @@ class ReducedPulsation:
         shapes = np.column_stack(parts)
         loads = np.column_stack([pencil.K2 @ shapes, pencil.K3 @ shapes, pencil.C1 @ shapes])
         basis = np.column_stack([shapes, np.linalg.solve(K, loads)])
-        U, S, _ = np.linalg.svd(basis / np.linalg.norm(basis, axis=0), full_matrices=False)
+        norms = np.linalg.norm(basis, axis=0)
+        basis = basis[:, norms > 0]  # a term that vanishes (beta = 0: no Coriolis) adds nothing
+        U, S, _ = np.linalg.svd(basis / norms[norms > 0], full_matrices=False)
         basis = U[:, S > 1e-10 * S[0]]
         L = np.linalg.cholesky(basis.T @ pencil.M @ basis)
         Q = np.linalg.solve(L, basis.T).T  # Q^T M Q = I
