@@ -22,16 +22,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg as sla
 
-from fempipe.analyses.stability.linear import straight_is_static
+from fempipe.analyses.stability.hopf.pipe import dense
+from fempipe.analyses.stability.linear import straight_is_static, straight_pencil
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import A as RADAU_A
 from fempipe.solvers.radau import C as RADAU_C
 
 __all__ = ["PulsationPencil", "ReducedPulsation", "floquet_multipliers"]
-
-
-def _dense(a) -> np.ndarray:
-    return np.asarray(a.toarray() if hasattr(a, "toarray") else a, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -65,18 +62,21 @@ class PulsationPencil:
                 f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
                 "alpha = 0 or pi (the forced periodic response of a bent pipe is not computed yet)"
             )
-        n = model.n
-        zero = np.zeros(n)
-
-        def jacobians(v: float, v_dot: float):
-            m = model.with_params(replace(model.params, v=v))
-            Jq, Jqd, Jqdd = m.jacobians(zero, zero, zero, v_dot=v_dot)
-            return _dense(Jq), _dense(Jqd), _dense(Jqdd)
-
-        K0, C0, M = jacobians(0.0, 0.0)
-        K1, C1, _ = jacobians(1.0, 0.0)
-        Ka, _, _ = jacobians(0.0, 1.0)
-        return cls(M=M, K0=K0, K2=K1 - K0, K3=Ka - K0, C0=C0, C1=C1 - C0)
+        # The steady terms are the stability analysis's straight pencil; only the flow
+        # acceleration's stiffness is new: the Jacobian's change with dv/dtau at v = 0.
+        straight = straight_pencil(model)
+        zero = np.zeros(model.n)
+        still = model.with_params(replace(model.params, v=0.0))
+        Ka = dense(still.jacobians(zero, zero, zero, v_dot=1.0)[0])
+        K0 = dense(straight.K0)
+        return cls(
+            M=dense(straight.M),
+            K0=K0,
+            K2=dense(straight.K2),
+            K3=Ka - dense(still.jacobians(zero, zero, zero)[0]),
+            C0=dense(straight.C0),
+            C1=dense(straight.C1),
+        )
 
 
 class ReducedPulsation:
