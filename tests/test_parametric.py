@@ -158,10 +158,12 @@ def test_a_pipe_without_flow_acceleration_terms():
     assert np.abs(pencil.C1).max() == 0 and np.abs(pencil.K3).max() == 0
     reduced = ReducedPulsation(pencil, 3.0, 3)
     lam = reduced.eigenvalues
-    # 512 steps: the time discretization's error (1e-8 at the default 128) below 1e-10
+    # 512 steps: the time discretization's error (1e-8 at the default 128) falls to 1e-11;
+    # the eigenvalues' round-off moves with the BLAS kernel (2e-10 on Prescott), hence 1e-9,
+    # the bound of the sigma = 0 test with flow
     rho = floquet_multipliers(reduced, 0.0, 10.0, steps=512)
     for e in np.exp(lam * 2 * math.pi / 10.0):
-        assert np.abs(rho - e).min() < 1e-10
+        assert np.abs(rho - e).min() < 1e-9
 
 
 def test_bad_input_is_refused():
