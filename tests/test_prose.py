@@ -37,7 +37,6 @@ NOT_YET = frozenset(
         "fempipe/cli/stability_map.py",
         "fempipe/cli/static.py",
         "fempipe/cli/validate.py",
-        "fempipe/plotting/dynamics.py",
     }
 )
 

@@ -1,16 +1,12 @@
 """Independent tasks in worker processes: one runner, one BLAS limiter, clean exits.
 
-Every parallel sweep of the package (stability maps and root loci, the bifurcation sweeps,
-the validation cases) runs through :func:`run_tasks`, on worker processes started here
-(:func:`process_pool`) or on any :class:`concurrent.futures.Executor` (e.g. Dask's
-``Client.get_executor()``), so they share one policy: results in task order and failures per
-task (a task's exception in its slot); interrupts stop everything (:func:`interruptible`,
-:class:`Interrupted`); no orphaned workers, even after the parent is killed; and one BLAS
-thread per process (:func:`single_blas_thread`, :func:`single_blas`,
-:func:`one_blas_thread`), since the model's dense matrices are small and the parallelism
-comes from independent tasks.
+Every parallel sweep (stability maps, root loci, bifurcation sweeps, validation cases) runs
+through :func:`run_tasks`, on a :func:`process_pool` or any ``concurrent.futures.Executor``:
+results in task order, a failing task's exception in its slot, interrupts stop everything
+(:func:`interruptible`), no orphaned workers, and one BLAS thread per process
+(:func:`single_blas_thread`, :func:`single_blas`, :func:`one_blas_thread`).
 
-The policy in full: docs/development.md, "Worker processes".
+Policy: docs/development.md, "Worker processes".
 """
 
 from __future__ import annotations
@@ -57,16 +53,8 @@ _PR_SET_PDEATHSIG = 1
 class Interrupted(KeyboardInterrupt):
     """SIGINT or SIGTERM arrived (see :func:`interruptible`).
 
-    A ``KeyboardInterrupt`` so that code catching ``Exception`` (such as the
-    per-task error policy of :func:`run_tasks`) never swallows it.
-
-    Attributes
-    ----------
-    signum : int
-        The signal received.
-    exit_code : int
-        The shell's convention for a process ended by that signal,
-        128 + ``signum`` (130 for SIGINT, 143 for SIGTERM).
+    A ``KeyboardInterrupt``, so the per-task ``except Exception`` of :func:`run_tasks` never
+    swallows it.  ``signum`` is the signal; ``exit_code`` is 128 + ``signum``.
     """
 
     def __init__(self, signum: int) -> None:
@@ -82,22 +70,10 @@ class Interrupted(KeyboardInterrupt):
 def interruptible() -> Iterator[None]:
     """Raise :class:`Interrupted` in the main thread on SIGINT or SIGTERM.
 
-    Without it SIGTERM ends the process at once (its workers then exit by
-    themselves, see :func:`process_pool`, but nothing is cleaned up and no
-    message is printed).  Inside it the signal unwinds the stack like Ctrl-C:
-    :func:`run_tasks` terminates its workers on the way, ``finally`` blocks
-    and context managers run.  A second signal while the first one unwinds is
-    ignored.  A signal inherited as ignored (``SIG_IGN``: ``nohup``, a
-    background job of a script) stays ignored.  The previous handlers are
-    restored on exit.
-
-    Signal handlers can only be installed in the main thread; elsewhere this
-    context manager does nothing (signals are delivered to the main thread).
-
-    Examples
-    --------
-    >>> with interruptible():                      # doctest: +SKIP
-    ...     results = run_tasks(fn, tasks, workers=4)
+    Inside it SIGTERM unwinds the stack like Ctrl-C (workers terminated, ``finally`` blocks
+    run) instead of ending the process at once.  A second signal during the unwinding is
+    ignored, a signal inherited as ``SIG_IGN`` stays ignored, the handlers are restored on
+    exit.  Outside the main thread it does nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -128,33 +104,13 @@ def interruptible() -> Iterator[None]:
 def single_blas_thread() -> contextlib.AbstractContextManager:
     """Context manager: one BLAS thread in this process while it is active.
 
-    For the small dense solves and eigenproblems of the model, where thread
-    start-up and synchronisation cost more than the arithmetic (docs/development.md,
-    "Worker processes").  The previous limits are restored on exit.
-
-    Examples
-    --------
-    >>> with single_blas_thread():
-    ...     pass
+    For the model's small dense solves, where thread start-up costs more than the arithmetic.
     """
     return _blas_controller().limit(limits=1, user_api="blas")
 
 
 def single_blas(fn: Callable) -> Callable:
-    """Decorator: run ``fn`` under :func:`single_blas_thread`.
-
-    For functions whose work is small dense linear algebra, such as the
-    eigenproblems of the stability analysis (2n = 96 for P3:16), where one
-    BLAS thread is fastest (docs/development.md, "Worker processes").
-
-    Examples
-    --------
-    >>> @single_blas
-    ... def f():
-    ...     return 1
-    >>> f()
-    1
-    """
+    """Decorator: run ``fn`` under :func:`single_blas_thread`."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -164,10 +120,8 @@ def single_blas(fn: Callable) -> Callable:
     return wrapper
 
 
-#: threadpoolctl's controllers by which of numpy and scipy.linalg (each with
-#: its own OpenBLAS) are loaded: a controller scans the process's shared
-#: libraries once, where ``threadpool_limits`` rescans them on every call (and a limit
-#: cycle makes many calls).
+#: threadpoolctl controllers by which of numpy and scipy.linalg are loaded: a controller scans
+#: the shared libraries once, ``threadpool_limits`` on every call.
 _CONTROLLERS: dict = {}
 
 
@@ -207,13 +161,7 @@ def _watch_parent(parent: int, ppid: int) -> None:
 
 
 def _init_worker(parent: int) -> None:
-    """Initializer of the workers of :func:`process_pool` (runs in each worker).
-
-    Parameters
-    ----------
-    parent : int
-        Pid of the process that created the pool.
-    """
+    """Initializer of the workers of :func:`process_pool`; ``parent`` is the pool creator's pid."""
     # The parent handles Ctrl-C (the terminal sends SIGINT to the whole process
     # group) and stops the workers with SIGTERM; a forked worker would
     # otherwise inherit the parent's Python-level handlers.
@@ -246,24 +194,17 @@ def process_pool(
 ) -> ProcessPoolExecutor:
     """A ``ProcessPoolExecutor`` whose workers never outlive this process.
 
-    Each worker uses one BLAS thread, ignores SIGINT, dies on SIGTERM, and
-    exits within about :data:`PARENT_POLL` seconds of this process's death
-    (at once on Linux by a parent-death signal, with the "fork" and "spawn"
-    start methods).  :func:`run_tasks` starts
-    one of these when asked for ``workers > 1``; build one yourself to reuse
-    the workers for several calls (``executor=``).
-
-    Linux sends the parent-death signal when the *thread* that started a
-    worker exits: use the pool from the thread that created it (or one that
-    outlives it).
+    Each worker uses one BLAS thread, ignores SIGINT, dies on SIGTERM and exits within
+    :data:`PARENT_POLL` seconds of this process's death (at once on Linux, by a parent-death
+    signal, which Linux sends when the *thread* that started the worker exits: use the pool
+    from that thread).
 
     Parameters
     ----------
     workers : int
         Number of worker processes (>= 1).
     mp_context : multiprocessing context, optional
-        How workers are started (``multiprocessing.get_context("spawn")``
-        ...); default: the platform's default.
+        How workers are started; default: the platform's.
     """
     # concurrent.futures and multiprocessing are imported here: a serial run does
     # not pay for them at start-up.
@@ -315,45 +256,32 @@ def run_tasks(
 ) -> list:
     """Run ``fn(*task)`` for every task, in parallel if asked; results in task order.
 
-    Error policy (the same serially and in parallel): a task that raises an
-    ``Exception`` leaves that exception in its slot and the other tasks run
-    on; ``KeyboardInterrupt`` (:class:`Interrupted`), ``SystemExit`` or an
-    exception raised by a callback cancel what has not started, terminate
-    the workers of the pool started here, and propagate.
+    A task raising an ``Exception`` leaves it in its slot and the others run on; an interrupt,
+    ``SystemExit`` or a callback's exception cancels what has not started, terminates the
+    workers of a pool started here, and propagates.
 
     Parameters
     ----------
     fn : callable
-        A module-level function (it is pickled for process pools).
+        A module-level function (pickled for process pools).
     tasks : sequence of tuple
         Positional arguments of each call.
     workers : int, optional
-        Without ``executor``: > 1 starts a :func:`process_pool` with
-        ``min(workers, len(tasks))`` processes, shut down on return; None or
-        1 (or a single task) runs in this process.
+        Without ``executor``: > 1 starts a :func:`process_pool` of ``min(workers, len(tasks))``
+        processes; None or 1 runs here.
     executor : concurrent.futures.Executor, optional
-        Any executor (a :func:`process_pool`, Dask's
-        ``Client.get_executor()``); it is not shut down, and on an interrupt
-        only what has not started yet is cancelled.
+        Any executor; not shut down, only unstarted tasks are cancelled on an interrupt.
     callback : callable, optional
-        ``callback(done, total, result)`` as each task finishes (progress).
+        ``callback(done, total, result)`` as each task finishes.
     on_result : callable, optional
-        ``on_result(index, result)`` as each task finishes, with its
-        position in ``tasks`` (to act on results before all are done).
+        ``on_result(index, result)`` as each task finishes.
     heartbeat : callable, optional
-        Called without arguments every :data:`HEARTBEAT` seconds while
-        parallel tasks run (e.g. to report progress that they write
-        elsewhere, such as files).
+        Called every :data:`HEARTBEAT` seconds while parallel tasks run.
 
     Returns
     -------
     list
-        One entry per task: its return value, or the exception it raised.
-
-    Raises
-    ------
-    ValueError
-        ``workers`` < 1.
+        Per task its return value or the exception it raised.
     """
     tasks = [tuple(t) for t in tasks]
     total = len(tasks)
@@ -417,34 +345,17 @@ def run_tasks(
 #: The thread-count variables of the BLAS libraries numpy and scipy load
 #: (OpenBLAS in the PyPI wheels, MKL, BLIS).
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
-#: Those of them that :func:`one_blas_thread` set in this process (the user had
-#: left them unset); ``fempipe bench`` unsets them again for the classical
-#: baseline it runs "as written".  Read it here, as
-#: ``fempipe.core.parallel.BLAS_SET_BY_FEMPIPE``, after the call: the function
-#: rebinds it.
+#: Those of them :func:`one_blas_thread` set (the user had not); ``fempipe bench`` unsets them
+#: for its "as written" baseline.
 BLAS_SET_BY_FEMPIPE: tuple[str, ...] = ()
 
 
 def one_blas_thread() -> tuple[str, ...]:
-    """One BLAS thread for this process and its workers, unless the user chose otherwise.
+    """Set the BLAS thread variables to 1 before numpy loads, unless the user set them.
 
-    fempipe's dense matrices are small and its parallelism is by processes
-    (docs/development.md, "Worker processes"); it limits the BLAS to
-    one thread around its computations already (:func:`single_blas_thread`).
-    Setting the variables of :data:`BLAS_THREAD_VARIABLES` to 1 before numpy
-    is loaded also spares the start-up of the thread pools: each OpenBLAS
-    (numpy and scipy load one each) starts its threads when it is loaded,
-    and they spin for a while before they sleep, a visible share of a short
-    command's start-up (``fempipe bench --only startup``; docs/cli/commands.md,
-    "One BLAS thread").  A variable the user set is left as it is, and nothing is
-    set once numpy is loaded (the command line's ``main`` called from a Python
-    session): OpenBLAS has read the variables by then.  This module imports only the standard library, so the
-    command line calls it before anything loads numpy.
-
-    Returns
-    -------
-    tuple of str
-        The names set (also kept in :data:`BLAS_SET_BY_FEMPIPE`).
+    Spares the start-up of the thread pools (docs/cli/commands.md, "One BLAS thread").  Does
+    nothing once numpy is loaded.  Returns the names set, also kept in
+    :data:`BLAS_SET_BY_FEMPIPE` (read it as ``fempipe.core.parallel.BLAS_SET_BY_FEMPIPE``).
     """
     global BLAS_SET_BY_FEMPIPE
     if "numpy" in sys.modules:

@@ -1,17 +1,10 @@
 """Figures of the nonlinear oscillation (Section 5 of the paper).
 
-* :func:`plot_time_traces` - tip position X_g(1), Z_g(1) against tau (Fig. 11);
-* :func:`plot_phase_portrait` - Z_g(1) against its velocity (Fig. 12);
-* :func:`plot_oscillating_shapes` - overlaid centerlines over one period in the
-  global frame, gravity down the page, equal axes (the insets of Figs. 7, 9);
-* :func:`plot_bifurcation` - extrema of a tip coordinate against v, sweeps up
-  and down or continued branches of equilibria and periodic orbits, unstable
-  ones dashed (Figs. 7, 9, 10);
-* :func:`animate` - an animated GIF of the moving pipe (its frames by
-  :func:`render_frames`, blitted on a figure laid out once).
-
-matplotlib is imported inside each function; every function takes ``ax=None``
-and returns the Axes (``animate`` returns the path written).
+:func:`plot_time_traces` (tip position against tau, Fig. 11), :func:`plot_phase_portrait`
+(Fig. 12), :func:`plot_oscillating_shapes` (overlaid centerlines, insets of Figs. 7, 9),
+:func:`plot_bifurcation` (extrema of a tip coordinate against v, unstable parts dashed,
+Figs. 7, 9, 10) and :func:`animate` (a GIF of the moving pipe).  Every plot takes ``ax=None``
+and returns the Axes.
 """
 
 from __future__ import annotations
@@ -58,8 +51,7 @@ def plot_time_traces(disc: Discretization, t, q, alpha: float, ax=None, title: s
     t : ndarray, shape (m,)
     q : ndarray, shape (m, n)
     alpha : float
-        The inclination (a scalar; the arrays come first, as in
-        :func:`fempipe.model.kinematics.tip_values`).
+        The inclination.
     """
     ax = new_axes(ax, (7, 3.5))
     tip = _tip_series(disc, q, None, alpha)
@@ -106,10 +98,7 @@ def plot_oscillating_shapes(
 ):
     """Overlaid centerlines in the global frame: Z_g across, X_g (gravity) down the page.
 
-    Parameters
-    ----------
-    q : ndarray, shape (m, n)
-        States over (about) one period; ``n_shapes`` of them are drawn.
+    ``q`` (shape (m, n)) holds states over about one period; ``n_shapes`` of them are drawn.
     """
     import matplotlib.pyplot as plt
 
@@ -157,23 +146,17 @@ def plot_bifurcation(
     Parameters
     ----------
     points : sequence of dict
-        Sweep points ``{"v", "direction": "up"/"down", "attractor", key: [min, max]}``
-        (:func:`fempipe.analyses.bifurcation.bifurcation_diagram`), drawn as markers; and/or
-        continuation points (:func:`fempipe.analyses.periodic.cycle_diagram`): equilibria
-        (``direction="static"``) and periodic orbits (``direction="continuation"``,
-        by ``branch`` in arclength order), drawn as lines, solid where ``stable``
-        and dashed where not, with the requested v marked.
+        Sweep points (``direction`` "up"/"down", :func:`fempipe.analyses.bifurcation.bifurcation_diagram`),
+        drawn as markers, and/or continuation points (:func:`fempipe.analyses.periodic.cycle_diagram`:
+        "static" equilibria, "continuation" orbits by ``branch``), drawn as lines, dashed where unstable.
     key : {"eta_tip", "X_tip", "Z_tip"}
     special_points : sequence of dict
-        ``{"v", "type", "branch"}`` of the continuation (folds, period doublings,
-        Neimark-Sacker points): vertical marks at their v.
+        ``{"v", "type", "branch"}`` of cycle bifurcations: vertical marks.
     caption : str, optional
-        Parameters, written small in the axes' corner (or pass them to the
-        figure's ``suptitle`` instead).
+        Parameters, written small in the axes' corner.
     hopf_points : sequence of dict
-        ``{"v", "branch"}``, and the equilibrium's ``key`` (``[y, y]``) where
-        known: each branch of orbits is drawn from its Hopf point, which is
-        marked (without ``key``, on the line of equilibria, interpolated).
+        ``{"v", "branch"}`` (and the equilibrium's ``key`` where known): each branch of orbits
+        starts at its marked Hopf point.
     """
     if key not in _LABEL:
         raise ValueError(f"key must be one of {sorted(_LABEL)}, got {key!r}")
@@ -217,8 +200,7 @@ def plot_bifurcation(
 
 
 def _runs(flags: list) -> list[tuple[int, int]]:
-    """Index ranges [i, j] of equal consecutive flags, overlapping by one point
-    (so that a solid and a dashed piece meet)."""
+    """Index ranges [i, j] of equal consecutive flags, overlapping by one point so the pieces meet."""
     out, start = [], 0
     for k in range(1, len(flags) + 1):
         if k == len(flags) or flags[k] != flags[start]:
@@ -228,8 +210,7 @@ def _runs(flags: list) -> list[tuple[int, int]]:
 
 
 def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> None:
-    """Equilibria and branches of periodic orbits: solid stable, dashed unstable;
-    each branch starts at its Hopf point on the (interpolated) line of equilibria."""
+    """Equilibria and orbit branches, solid stable, dashed unstable, from their Hopf points."""
     static = sorted((p for p in points if p["direction"] == "static"), key=lambda p: p["v"])
     start = {}
     sv = np.array([p["v"] for p in static])
@@ -305,11 +286,8 @@ def animation_figure(
 ):
     """The figure of :func:`animate` and its frame function.
 
-    A closed orbit (the last state equal to the first, as a limit cycle is
-    stored) loses its last frame, so the looping GIF does not show the same
-    state twice; its frames are then labelled with the time since the start
-    of the shown period and the period T, so that the restart of the label is
-    the restart of the period.
+    A closed orbit (last state equal to the first) loses its last frame, so the looping GIF
+    shows no state twice, and its frames are labelled with the time within the period T.
 
     Returns
     -------
@@ -356,37 +334,22 @@ def animation_figure(
 
 
 def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
-    """The frames of an animation figure as RGBA images (PIL), one per frame.
+    """The frames of an animation figure as RGBA PIL images, one per frame.
 
-    The figure is laid out and drawn whole once; the artists that ``draw(k)``
-    returns (the moving pipe, its tip, the time label) are then made
-    animated, the rest of the canvas is kept as a background, and each frame
-    is that background with only those artists drawn over it (the blitting of
-    :class:`matplotlib.animation.FuncAnimation`).  The moving artists are
-    the last ones of their axes in drawing order (zorder 2-3, inside the axes,
-    clear of the spines and titles), so a frame has the pixels of a full
-    redraw (all 47 frames of ``fempipe simulate --alpha 0 --v 10`` checked
-    equal).  A full redraw re-runs the constrained layout and every text of
-    the figure at each frame: for those 47 frames 8 CPU-s against 0.5 CPU-s
-    here (measured).
+    The figure is laid out and drawn once; each frame is that background with only the
+    artists ``draw(k)`` returns drawn over it (blitting).  They are the last of their axes in
+    drawing order, so a frame has the pixels of a full redraw, which re-runs the layout and
+    every text at each frame.
 
     Parameters
     ----------
     fig : matplotlib Figure
     draw : callable
-        ``draw(k)`` updates the figure to frame k and returns the changed
-        artists (:func:`animation_figure`).
+        ``draw(k)`` updates the figure to frame k, returns the changed artists.
     n_frames : int
     full_redraw : bool
-        Let matplotlib's ``FuncAnimation(..., blit=False)`` draw the whole
-        figure (layout included) for every frame and grab it as its
-        ``PillowWriter`` does (the frames ``animate`` wrote before): the
-        reference the fast path is tested against.
-
-    Returns
-    -------
-    list of PIL.Image.Image
-        Mode RGBA, the figure's size in pixels at its dpi.
+        Draw every frame whole with ``FuncAnimation(..., blit=False)``: the reference the
+        blitted frames are tested against.
     """
     from PIL import Image
 
@@ -394,10 +357,8 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
         return _redrawn_frames(fig, draw, n_frames)
     canvas = fig.canvas
     artists = draw(0)
-    # The frames of a running animation are laid out from the previous
-    # frame's positions (constrained layout starts from them): lay the figure
-    # out once, then draw the background (everything but the moving artists)
-    # with the second layout, and fix that layout.
+    # Constrained layout starts from the previous layout: lay out once, draw the background
+    # with the second layout, and fix it.
     fig.draw_without_rendering()
     for a in artists:
         a.set_animated(True)
@@ -421,8 +382,7 @@ def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
 
 
 def _redrawn_frames(fig, draw, n_frames: int) -> list:
-    """The frames as ``FuncAnimation(fig, draw, blit=False).save(..., PillowWriter)``
-    grabs them (:func:`render_frames` with ``full_redraw``)."""
+    """The frames as ``FuncAnimation(..., blit=False)`` with a ``PillowWriter`` grabs them."""
     from io import BytesIO
 
     from matplotlib.animation import AbstractMovieWriter, FuncAnimation
@@ -458,13 +418,10 @@ def animate(
     fps: int = 20,
     title: str | None = None,
 ):
-    """Animated GIF of the moving pipe in the global frame.
+    """Write an animated GIF of the moving pipe in the global frame to ``path`` (atomically).
 
-    The figure is :func:`animation_figure` (a closed orbit is drawn without
-    its repeated last state), laid out once and its moving artists redrawn
-    for each frame (:func:`render_frames`); the frames share one palette
-    (:func:`fempipe.io.write_gif`).
-    Written atomically to ``path``.  Returns the path.
+    Frames by :func:`animation_figure` and :func:`render_frames`, one shared palette
+    (:func:`fempipe.io.write_gif`).  Returns the path.
     """
     import matplotlib.pyplot as plt
 
