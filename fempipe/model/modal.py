@@ -1,10 +1,10 @@
 """The modal Galerkin discretization (the paper's Eq. (22)): :class:`Modal` and the beam modes.
 
-One of the two discretizations behind the contract of
-:mod:`fempipe.model.discretization`: N global modes, the sine modes of the
-paper or the slopes of the clamped-free beam modes (:func:`beam_roots`,
-:func:`beam_mode_slopes`), with the orders of their errors
-(:data:`EXPECTED_ORDER`).
+The second implementation of :mod:`fempipe.model.discretization`'s contract: N global modes,
+the paper's sine modes or the slopes of the clamped-free beam modes (:func:`beam_roots`,
+:func:`beam_mode_slopes`), with their error orders (:data:`EXPECTED_ORDER`).
+
+Derivation: docs/theory/convergence.md.
 """
 
 from __future__ import annotations
@@ -19,54 +19,29 @@ __all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
 
 
 class Modal:
-    """Modal Galerkin discretization: N global modes of [0, 1].
+    """Modal Galerkin discretization: N global modes of [0, 1] (contract:
+    :class:`fempipe.model.discretization.Discretization`).
 
-    The contract it fulfils is :class:`fempipe.model.discretization.Discretization`.
-
-    Two bases, both with theta(0) = 0 and theta'(1) = 0 built in:
-
-    ``basis="sine"`` (default): the paper's modes, Eq. (22),
-        phi_r(xi) = sin(k_r xi), k_r = (2r - 1) pi / 2, r = 1..N: the
-        clamped-free string modes.  They also have theta''(0) = 0, which the
-        true solution does not, so the method converges as N^-3 (docs,
-        "Conventions and derivations").  K = diag(k_r^2 / 2).
-    ``basis="beam"``: the slopes of the clamped-free Euler-Bernoulli beam modes,
-        psi_r(xi) = phi_r'(xi) / lambda_r with
-        phi_r = cosh(lambda_r xi) - cos(lambda_r xi)
-        - s_r (sinh(lambda_r xi) - sin(lambda_r xi)),
-        s_r = (cosh lambda_r + cos lambda_r) / (sinh lambda_r + sin lambda_r)
-        and cos(lambda_r) cosh(lambda_r) = -1 (:func:`beam_roots`).  theta =
-        w' for the beam deflection w, so psi_r also has theta''(1) = 0 (no
-        shear force at the free end, which the true solution satisfies) and
-        theta'''(0) = 0 (from w(0) = 0 and w'''' = lambda^4 w) instead of
-        theta''(0) = 0.  The psi_r are the exact modes of the straight pipe
-        without flow and gravity, so the frequencies of the linear problem at
-        v = gamma = 0 are exact.  With ``\\int phi_r^2 = 1`` (the textbook
-        normalization of phi_r), integrating by parts twice with the beam's
-        boundary conditions gives ``\\int psi_i' psi_j' =
-        \\int phi_i'' phi_j'' / (lambda_i lambda_j) = lambda_i^2 delta_ij``:
-        K = diag(lambda_r^2).  The Gram matrix is not diagonal.  The modes
-        are evaluated in a form without overflow or cancellation
-        (:func:`beam_mode_slopes`).
+    Both bases have theta(0) = 0 and theta'(1) = 0 built in.  ``basis="sine"``: the paper's
+    phi_r = sin(k_r xi), k_r = (2r - 1) pi / 2 (Eq. (22)), K = diag(k_r^2 / 2), error ~ N^-3.
+    ``basis="beam"``: psi_r = phi_r' / lambda_r of the clamped-free beam modes, exact for the
+    straight pipe without flow and gravity, K = diag(lambda_r^2), a non-diagonal Gram matrix,
+    error ~ N^-4 (docs/theory/convergence.md).
 
     Parameters
     ----------
     n_modes : int
         N >= 1.
     n_cells, n_gauss : int, optional
-        The quadrature used for the nonlinear integrals.  The default
-        (max(32, 4N) cells of 8 Gauss points) integrates either basis and
-        the nonlinear terms to near round-off (for the beam modes also their
-        boundary layer e^{-lambda_r xi}: at N = 64, lambda_N h = 0.78), so
-        the error measured is the modal truncation alone.
+        Quadrature of the nonlinear integrals; the default, max(32, 4N) cells of 8 points,
+        integrates to near round-off, so the error is the modal truncation alone.
     basis : {"sine", "beam"}
         Keyword only.
 
     Attributes
     ----------
     k : ndarray, shape (N,)
-        Wavenumbers of the modes: k_r = (2r - 1) pi / 2 (sine) or
-        lambda_r (beam).
+        Wavenumbers: (2r - 1) pi / 2 (sine) or lambda_r (beam).
     """
 
     #: The accepted values of ``basis``.
@@ -102,7 +77,7 @@ class Modal:
             self.Phi = beam_mode_slopes(self.k, x)
             self.dPhi = beam_mode_slopes(self.k, x, derivative=1)
             self.tip = beam_mode_slopes(self.k, [1.0])[0]
-            # \int_0^1 psi_i' psi_j' = lambda_i^2 delta_ij (class docstring).
+            # \int_0^1 psi_i' psi_j' = lambda_i^2 delta_ij (docs/theory/convergence.md).
             self.K = np.diag(self.k**2)
         # \int_0^1 phi_i phi_j (delta_ij / 2 for the sines); summed by the
         # quadrature like every integral of the nonlinear terms.
@@ -115,11 +90,7 @@ class Modal:
 
     @property
     def expected_order(self) -> float:
-        """Order p of the error ~ N^-p in tip values, v_cr and eigenvalues.
-
-        :data:`EXPECTED_ORDER`: 3 for the sine modes, 4 for the beam modes
-        (docs, "Convergence of the two modal bases").
-        """
+        """Order p of the error ~ N^-p in tip values, v_cr and eigenvalues (:data:`EXPECTED_ORDER`)."""
         return EXPECTED_ORDER[self.basis]
 
     def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -160,12 +131,9 @@ EXPECTED_ORDER = {"sine": 3.0, "beam": 4.0}
 
 
 def beam_roots(n: int) -> np.ndarray:
-    """lambda_r, r = 1..n: the roots of cos(lambda) cosh(lambda) = -1.
+    """lambda_r, r = 1..n, the roots of cos(lambda) cosh(lambda) = -1, to machine precision.
 
-    Solved as cos(lambda) + 1 / cosh(lambda) = 0 (no overflow) by Brent's
-    method in [c - 0.4, c + 0.4], c = (2r - 1) pi / 2, to machine precision:
-    1.87510407, 4.69409113, 7.85475744, 10.99554073, ...  lambda_r - c is
-    about (-1)^(r+1) 2 e^{-c}, below the rounding of c from r = 13 on.
+    Brent's method on cos(lambda) + 1 / cosh(lambda) = 0 (docs/theory/convergence.md).
 
     Parameters
     ----------
@@ -186,24 +154,8 @@ def beam_roots(n: int) -> np.ndarray:
 def beam_mode_slopes(lam: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
     """psi_r(xi) = phi_r'(xi) / lambda_r or a derivative, shape (len(xi), len(lam)).
 
-    phi_r is the clamped-free beam mode of :class:`Modal` (``basis="beam"``).
-    With E = e^{-lambda xi}, E+ = e^{lambda (xi - 1)}, E- = e^{-lambda (xi + 1)},
-    c = sin(lambda) - cos(lambda) - e^{-lambda} and
-    D = 1 - e^{-2 lambda} + 2 e^{-lambda} sin(lambda), so that
-    sinh(lambda) + sin(lambda) = e^lambda D / 2 and 1 - s = 2 c e^{-lambda} / D,
-    the textbook form becomes, with C = cos(lambda xi), S = sin(lambda xi),
-
-    ====================  =================================================
-    psi                   (C - E) + S + (c/D) (E+ + E- - 2 e^{-lambda} C)
-    psi' / lambda         E + C - S + (c/D) (E+ - E- + 2 e^{-lambda} S)
-    psi'' / lambda^2      -E - S - C + (c/D) (E+ + E- + 2 e^{-lambda} C)
-    psi''' / lambda^3     E - C + S + (c/D) (E+ - E- - 2 e^{-lambda} S)
-    ====================  =================================================
-
-    Every exponential is at most 1 and D >= 1 - 3 e^{-lambda_1} > 0.5, so
-    the values are accurate to round-off for any lambda and |psi| < 4;
-    psi(0) is exactly 0.  (The textbook form loses log10(cosh lambda) digits,
-    all of them from lambda ~ 37, r = 12, on, and overflows from r = 226.)
+    Evaluated in a form without overflow or cancellation, accurate to round-off for any
+    lambda (docs/theory/convergence.md, "The form without overflow").
 
     Parameters
     ----------

@@ -1,16 +1,12 @@
 """The pipe model: the weak form of Eq. (20) summed, with its analytic Jacobians.
 
-:class:`PipeModel` sums the terms of the weak form, one method per physical
-term, named after it (the table and the derivations are in
-:mod:`fempipe.model.weak_form`; the terms in :mod:`~fempipe.model.local_terms`,
-:mod:`~fempipe.model.nonlocal_terms`, :mod:`~fempipe.model.variants` and
-:mod:`~fempipe.model.springs`): the residual R(q, q', q''), its Jacobians, the
-mass matrix, the static problem's residual and Jacobian, the linearization
-and the energy.
+:class:`PipeModel` sums the physical terms (:mod:`~fempipe.model.local_terms`,
+:mod:`~fempipe.model.nonlocal_terms`, :mod:`~fempipe.model.variants`,
+:mod:`~fempipe.model.springs`): the residual R(q, q', q''), its Jacobians (the same ones
+serve Newton's method, the stability matrices of Eqs. (31b)-(33) and the implicit
+integrators), the mass matrix, the static problem and the energy.
 
-Each term also supplies its derivatives with respect to q, q' and q'' so that
-Newton's method, the linearized stability matrices (Eqs. (31b)-(33)) and the
-implicit time integrators all use the same analytic Jacobians.
+Derivation: docs/theory/weak_form.md.
 """
 
 from __future__ import annotations
@@ -30,9 +26,7 @@ __all__ = ["Fields", "PipeModel"]
 
 
 class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, SpringTerms):
-    """The pipe's residual in weak form and its analytic Jacobians.
-
-    The weak form of Eq. (20) with the variants, one method per physical term.
+    r"""The pipe's residual in weak form and its analytic Jacobians.
 
     Parameters
     ----------
@@ -40,28 +34,20 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         :class:`~fempipe.model.discretization.FiniteElement` or
         :class:`~fempipe.model.discretization.Modal`.
     params : Params
-        Dimensionless parameters, with the variants of the pipe
-        (:mod:`fempipe.model.weak_form`).
+        Dimensionless parameters with the variants.
 
     Attributes
     ----------
     disc, params, quad, x, w
-        The discretization, the parameters, ``disc.quad`` and its points and
-        weights.
-    test_matrix : ndarray or scipy.sparse matrix, shape (n, n_q)
-        ``Phi^T W``: ``test_matrix @ f`` is ``\\int phi_i f``
-        (:class:`~fempipe.model.weak_form.WeakForm`).
+        The discretization, the parameters, ``disc.quad`` and its points and weights.
+    test_matrix : ndarray or sparse, shape (n, n_q)
+        ``Phi^T W``: ``test_matrix @ f`` is ``\int phi_i f``.
 
     Notes
     -----
-    ``residual`` costs O(n_q) (plus O(nnz) sparse products).  The Jacobians
-    with respect to q' and q'' are dense because the nonlocal terms couple
-    every dof with every other; they cost O(n_q n) to form.  A spring at
-    xi_s couples every dof of [0, xi_s] with every other (a rank-2 block of
-    the static Jacobian), so for finite elements that block is dense.
-    ``params.hysteretic_damping`` has no term here: it acts in the linear
-    stability problem only (:func:`fempipe.analyses.stability.hysteretic.hysteretic_roots`),
-    and the time-domain solvers refuse it (:func:`fempipe.model.dynamics_problem.refuse_hysteretic`).
+    The Jacobians in q' and q'' are dense (the nonlocal terms couple all dofs), and so is a
+    spring's block of the static Jacobian.  ``params.hysteretic_damping`` has no term here: it
+    acts in the linear stability problem only, and the time-domain solvers refuse it.
     """
 
     def __init__(self, disc: Discretization, params: Params) -> None:
@@ -75,9 +61,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         # models of with_params (same discretization).
         self._part_rules: dict[float, PartRule] = {}
 
-    #: The plane of the linear problem :meth:`linearization` gives: ``"in"``, the
-    #: plane of the static state (the model of
-    #: :func:`fempipe.model.out_of_plane.out_of_plane_model` gives ``"out"``).
+    #: The plane of the linear problem of :meth:`linearization` (``"out"`` for
+    #: :func:`fempipe.model.out_of_plane.out_of_plane_model`).
     plane = "in"
 
     def with_params(self, params: Params) -> PipeModel:
@@ -89,11 +74,9 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
 
     # ------------------------------------------------------- totals --
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """``M_ij = \\int_0^1 (C phi_i n).(C phi_j n) + Gamma b_i . b_j``, dense SPD, shape (n, n).
+        r"""``M_ij = \int_0^1 (C phi_i n).(C phi_j n) + Gamma b_i . b_j``, dense SPD, shape (n, n).
 
-        Identical (to round-off) to ``d (inertia + end_mass_inertia) / d q''``;
-        the Gram form makes the symmetry exact.  b_i = (C phi_i n)(1)
-        (:meth:`end_mass_inertia`).
+        ``d (inertia + end_mass_inertia) / d q''`` in Gram form, which makes the symmetry exact.
         """
         fl = self.fields(q)
         M = self._pipe_mass(fl)
@@ -126,12 +109,9 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return r
 
     def rate_terms(self, q, qdot, qddot) -> np.ndarray:
-        """``C^d q' + M^d q''`` at the static state q, in O(n_q) without forming them.
+        """``C^d q' + M^d q''`` at the static state q (Eqs. (33b), (33c)), without forming them.
 
-        The part of R linear in the rates at (q, 0, 0) (Eqs. (33b), (33c)):
-        Kelvin-Voigt, Coriolis, external damping, the pipe's and the end
-        mass's inertia (the centripetal terms are quadratic in q' and drop
-        out).  Equal to ``jacobians(q)[1] @ qdot + jacobians(q)[2] @ qddot``.
+        Equals ``jacobians(q)[1] @ qdot + jacobians(q)[2] @ qddot``.
         """
         fl = self.fields(q, qdot, qddot)
         r = self.kelvin_voigt(qdot) + self.coriolis(fl) + self.inertia(fl)
@@ -150,12 +130,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
     def static_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The forces of R(q, 0, 0): (bending, gravity, follower, springs).
 
-        ``gravity`` is the weight of the pipe and of the end mass
-        (:meth:`gravity` + :meth:`end_mass_gravity`), ``springs`` the sum of
-        :meth:`spring` (zero without springs).  Their sum, in this order, is
-        :meth:`static_residual` to the last bit; their sizes say how small the
-        residual must be to call q an equilibrium
-        (:func:`fempipe.analyses.statics.solve_static`).
+        Gravity includes the end mass's.  Their sum in this order is :meth:`static_residual` to
+        the last bit; their sizes set the residual that makes q an equilibrium.
         """
         fl = self.fields(q)
         p = self.params
@@ -166,30 +142,15 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return self.bending(q), g, self.follower(fl), s
 
     def gravity_load(self) -> float:
-        """``gamma ||\\int phi_i (1 - xi + Gamma)||``: the size of the gravity term (end
-        mass included) whatever its lever arm sin(theta + alpha) (a norm of the
-        weak-form vector, like R)."""
+        r"""``gamma ||\int phi_i (1 - xi + Gamma)||``: the size of the gravity term (a norm like R's)."""
         p = self.params
         return p.gamma * float(np.linalg.norm(self._test(1.0 - self.x + p.end_mass)))
 
     def static_jacobian(self, q: np.ndarray, dense: bool = False):
-        """dR(q, 0, 0)/dq: sparse for finite elements, dense for modes or if ``dense``.
-
-        The dense form is one product ``Phi^T diag(d) Phi`` (gravity and the
-        local follower part) plus the follower's tip column and the springs:
-        for the small systems of the continuation (n of a few hundred) it is
-        much cheaper than building the sparse matrix from its parts.
-        """
-        if dense:
-            fl = self.fields(q)
-            d_follower, tip_col = self._follower_weights(fl)
-            d = self._gravity_weight(fl) + d_follower
-            Phi = self._Phi_dense
-            J = self._K_dense + (Phi.T * d) @ Phi + np.outer(tip_col, self.disc.tip)
-            if self.params.springs:
-                J = J + self.spring_jacobian(q, dense=True)
-            return J
+        """dR(q, 0, 0)/dq: sparse for finite elements, dense for modes or if ``dense``."""
         fl = self.fields(q)
+        if dense:
+            return self._dense_static_jacobian(q, fl)
         J = self.disc.K + self.gravity_jacobian(fl) + self.follower_jacobian(fl)
         if self.params.springs:
             J = J + self.spring_jacobian(q)
@@ -211,8 +172,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
     def jacobians(self, q, qdot=None, qddot=None, v_dot: float = 0.0):
         """Analytic ``(dR/dq, dR/dq', dR/dq'')``, each dense, shape (n, n).
 
-        dR/dq'' is the mass matrix M(q).  At a static state (q' = q'' = 0)
-        these are the K^d, C^d, M^d of Eqs. (31b)-(33).
+        At a static state these are the K^d, C^d, M^d of Eqs. (31b)-(33).
         """
         n = self.n
         qdot = np.zeros(n) if qdot is None else np.asarray(qdot)
@@ -239,9 +199,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
             )
         )
         dF = dF + self._phi_field(-cv * th_d[:, None] * t + v_dot * np.sqrt(p.beta) * nrm)
-        # The gravity, follower (local part) and normal-derivative terms are all
-        # Phi^T diag(d) Phi: one dense product instead of three small sparse
-        # ones (scipy.sparse overhead dominated the time-integration cost).
+        # Gravity, local follower and normal-derivative terms are all Phi^T diag(d) Phi:
+        # one dense product avoids the overhead of three small sparse ones.
         d_follower, tip_col = self._follower_weights(fl)
         d = self._gravity_weight(fl) + d_follower + self._normal_weight(F, fl)
         Phi = self._Phi_dense
@@ -270,8 +229,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return Jq, Jqd, M
 
     def linearization(self, q: np.ndarray):
-        """K^d, C^d, M^d of the linear problem about the static state q, in the plane
-        (:meth:`static_jacobians`); the stability solvers call this."""
+        """K^d, C^d, M^d of the linear problem about the static state q, in the plane."""
         return self.static_jacobians(q)
 
     def hysteretic_stiffness(self, q: np.ndarray) -> np.ndarray:
@@ -279,21 +237,14 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return self._K_dense
 
     def static_jacobians(self, q):
-        """:meth:`jacobians` at the static state (q, 0, 0): K^d, C^d, M^d of Eqs. (31b)-(33).
+        """:meth:`jacobians` at (q, 0, 0): K^d, C^d, M^d of Eqs. (31b)-(33).
 
-        The same terms with theta_dot = theta_ddot = 0 dropped before they are
-        formed: the inner field F of the projection and its q-derivative
-        vanish, so the normal-derivative weight, the q-derivative through F and
-        the end mass's acceleration terms are zero, and the two cumulative
-        integrals of (n_q, 2, n) fields they need are not computed.  Equal to
-        ``jacobians(q)`` (only exact zeros are left out); about half its cost.
+        The terms that vanish with theta_dot = theta_ddot = 0 are left out before they are formed
+        (only exact zeros), which skips two cumulative integrals.
         """
         fl = self.fields(q)
         p = self.params
         cv = 2.0 * p.v * np.sqrt(p.beta)
-        d_follower, tip_col = self._follower_weights(fl)
-        d = self._gravity_weight(fl) + d_follower
-        Phi = self._Phi_dense
         Jqd = p.mu * self._K_dense + self._project_jac(self._phi_field(cv * fl.normal), fl)
         M_pipe = self._pipe_mass(fl)
         if p.external_damping:
@@ -302,10 +253,17 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         if p.end_mass:
             b = self._end_vector(fl)
             M = M + p.end_mass * (b @ b.T)
-        Jq = self._K_dense + (Phi.T * d) @ Phi + np.outer(tip_col, self.disc.tip)
-        if p.springs:
-            Jq = Jq + self.spring_jacobian(q, dense=True)
-        return Jq, Jqd, M
+        return self._dense_static_jacobian(q, fl), Jqd, M
+
+    def _dense_static_jacobian(self, q, fl) -> np.ndarray:
+        """dR(q, 0, 0)/dq as one product ``Phi^T diag(d) Phi`` plus the tip column and springs."""
+        d_follower, tip_col = self._follower_weights(fl)
+        d = self._gravity_weight(fl) + d_follower
+        Phi = self._Phi_dense
+        J = self._K_dense + (Phi.T * d) @ Phi + np.outer(tip_col, self.disc.tip)
+        if self.params.springs:
+            J = J + self.spring_jacobian(q, dense=True)
+        return J
 
     # ------------------------------------------------------- energy --
     def kinetic_energy(self, q, qdot) -> float:
@@ -320,13 +278,11 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return T
 
     def potential_energy(self, q) -> float:
-        """Bending, gravity and springs.
+        r"""Bending, gravity and springs.
 
-        ``(1/2) q^T K q + gamma [cos(alpha)/2 - \\int (1 - xi) cos(theta + alpha)]
-        + gamma Gamma [cos(alpha) - \\int cos(theta + alpha)]
-        + sum (kappa/2) |r(xi_s) - (xi_s, 0)|^2``.
-        The constants make the straight pipe's gravity energy zero; the end
-        mass's is gamma Gamma (cos alpha - X_g(1)).
+        ``(1/2) q^T K q + gamma [cos(alpha)/2 - \int (1 - xi) cos(theta + alpha)]
+        + gamma Gamma [cos(alpha) - \int cos(theta + alpha)] + sum (kappa/2) |r(xi_s) - (xi_s, 0)|^2``,
+        zero for the straight pipe.
         """
         q = np.asarray(q)
         p = self.params
@@ -341,8 +297,5 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return V
 
     def energy(self, q, qdot) -> float:
-        """Total mechanical energy E = T + V, conserved for v = 0, mu = 0 and sigma = 0.
-
-        See :func:`fempipe.analyses.dynamics.power_terms` for dE/dtau in general.
-        """
+        """Total mechanical energy E = T + V, conserved for v = mu = sigma = 0."""
         return self.kinetic_energy(q, qdot) + self.potential_energy(q)
