@@ -1,18 +1,13 @@
 """Derivatives of array expressions: forward through pointwise arithmetic, reverse through integrals.
 
-A :class:`Dual` is an array value with its derivatives, carried along by the arithmetic.  A
-residual written with these operations gives its value (no derivative: no cost) and, from
-the same lines, its exact Jacobian (the fields seeded with their derivatives): the Jacobian
-cannot drift from the residual, and is exact to round-off (no finite differences).  The
-derivatives are kept with respect to quantities at the same point and to the
-:class:`Term` objects that mix the points (integrals, tip values); :func:`pullback` contracts them
-at the end, in reverse, so that no derivative with respect to all the unknowns is ever
-formed at the points (the class docstring of :class:`Dual` says how).
+A :class:`Dual` is an array value with its derivatives, carried along by the arithmetic: a
+residual written with these operations gives its value and, from the same lines, its exact
+Jacobian.  Derivatives are kept with respect to quantities at the same point and to the
+:class:`Term` objects that mix the points; :func:`pullback` contracts them at the end, in
+reverse.  Only what the weak forms need is here (the four operations, sin, cos, indexing,
+sums and stacks, dot and cross over axis 1, linear maps along axis 0).
 
-Only what the weak forms need is here: the four operations, sine and cosine, indexing, sums
-and stacks along leading axes, vector dot and cross products over axis 1, and linear maps
-along axis 0 (the integration operators).  The 3-D model (:mod:`fempipe.model.space`) is
-written on it; docs/theory/space.md, "The weak form".
+Derivation: docs/theory/space.md, "The weak form" (the 3-D model is written on it).
 """
 
 from __future__ import annotations
@@ -70,13 +65,10 @@ def _merge(a: dict | None, b: dict | None, shape) -> dict | None:
 class Term:
     """A quantity Y that mixes the points: its value, and how its derivative is pulled back.
 
-    ``n`` is the number of points of Y (1: broadcast to all points where it is used).
-    Either ``Y = A X`` along axis 0 for a :class:`Dual` X (its ``loc`` and ``nl``; the
-    callable ``adjoint`` applies A^T along axis 0 of an array), or ``Y`` linear in the unknowns with the dense
-    derivative ``gder`` (shape (n_points, m, K)).  ``m`` is the number of
-    components of Y at a point and state (the value's shape between axis 0 and
-    the last axis).  Terms are ordered by creation: an inner quantity's terms
-    are older than the term (:func:`pullback` relies on it).
+    ``n`` points (1: broadcast), ``m`` components per point and state.  Either ``Y = A X``
+    along axis 0 for a :class:`Dual` X (``adjoint`` applies A^T along axis 0), or Y linear in
+    the unknowns with the dense derivative ``gder`` (shape (n_points, m, K)).  Terms are
+    ordered by creation, inner before outer (:func:`pullback` relies on it).
     """
 
     __slots__ = ("adjoint", "gder", "identity", "loc", "m", "n", "nl", "order")
@@ -101,37 +93,18 @@ class Term:
 
 
 class Dual:
-    """An array with its derivatives.
+    """An array with its derivatives (docs/theory/space.md, "The weak form").
 
     Parameters
     ----------
     val : array_like
-        The value; axis 0 the points, the last axis the states.
+        The value; axis 0 the points, the last axis the S states.
     loc : ndarray or None
-        Shape ``val.shape + (L,)``: derivatives with respect to L quantities
-        defined pointwise (each state's at its own point).
+        Shape ``val.shape + (L,)``: derivatives with respect to L quantities defined at each
+        point (each state's at its own).
     nl : dict or None
-        :class:`Term` -> ndarray of shape ``val.shape + (term.m,)``: derivatives
-        with respect to the components of each term at the same point and state.
-
-    Notes
-    -----
-    Axis 0 of every value runs over points (the quadrature points), the last axis over S
-    states evaluated at once (each state's derivatives are its own).  A derivative has two
-    kinds of parts, each a small array of the value's shape with one more axis: ``loc``,
-    the derivatives with respect to L quantities defined at the same point (the fields and
-    their rates there), and ``nl``, for each :class:`Term` Y (a quantity that mixes the
-    points, an integral ``Y = op X``, or a linear functional of the unknowns such as a tip
-    value), the derivative with respect to Y's m components at the point.
-
-    Pointwise arithmetic (the chain rule) only scales these small arrays: the derivatives
-    with respect to the unknowns are never formed at the points.  :func:`pullback`
-    contracts them at the end, in reverse: a weight on the residual's derivative (the test
-    functions) is pushed through the terms (``op^T``, then the inner quantity's own ``loc``
-    and ``nl``), and what arrives at the local quantities is returned, to be multiplied by
-    the bases.  The Jacobian of an integral term is so a product of (test x coefficients) x
-    op^T x (coefficients x trial) matrices, of size (rows, points), not K = (number of
-    unknowns) derivative columns at every point.
+        :class:`Term` -> ndarray of shape ``val.shape + (term.m,)``: derivatives with respect to
+        each term's components at the same point and state.
     """
 
     __slots__ = ("loc", "nl", "val")
@@ -221,12 +194,10 @@ class Dual:
         return Dual(self.val.sum(axis=axis), *self._map(lambda d: d.sum(axis=axis)))
 
     def nonlocal_map(self, op: Callable[[np.ndarray], np.ndarray], adjoint) -> Dual:
-        """``op`` (linear along axis 0, any trailing axes) of the value.
+        """``op`` (linear along axis 0) of the value, its derivative carried as a new :class:`Term`.
 
-        The derivative is carried as a new :class:`Term`, pulled back by
-        ``adjoint``: op^T along axis 0, a matrix (n_in, n_out) or a callable.
-        An integral of an integral (``self`` is the plain result of another
-        map) with matrices is one term, pulled back by the product of the two.
+        ``adjoint`` is op^T along axis 0, a matrix (n_in, n_out) or a callable; two nested maps by
+        matrices make one term.
         """
         val = op(self.val)
         if self.loc is None and self.nl is None:
@@ -261,30 +232,21 @@ def _flat(d: np.ndarray, n: int, S: int) -> np.ndarray:
 
 
 def pullback(pairs: Sequence[tuple[Dual, np.ndarray]], L: int):
-    """The derivatives of ``sum_x seed_x . dx`` (reverse accumulation through the terms).
+    """The derivatives of ``sum_x seed_x . dx`` by reverse accumulation through the terms.
 
     Parameters
     ----------
     pairs : sequence of (Dual, seed)
-        ``seed`` of shape (n_x, S, m_x, R) weighs the derivative of x's
-        component m at point q and state s in the R outputs (the rows of a
-        Jacobian): output r gets ``sum_(q, m) seed[q, s, m, r] dx[q, m, s]``.
+        ``seed`` of shape (n_x, S, m_x, R): output r gets ``sum_(q, m) seed[q, s, m, r] dx[q, m, s]``.
     L : int
         The number of local quantities (``loc``'s last axis).
 
     Returns
     -------
     (W, G)
-        W, shape (n_points, S, L, R): the outputs' derivatives with respect to
-        the local quantities at each point (to be multiplied by their bases);
-        G, shape (S, R, K): the part through linear functionals
-        (:func:`linear_functional`), None if none.
-
-    Notes
-    -----
-    The seeds keep the points first, so that the transposed integration
-    operators are plain matrix products on them (no copies); the products with
-    the pointwise coefficients are batched over (point, state).
+        W, shape (n_points, S, L, R): derivatives with respect to the local quantities (to be
+        multiplied by their bases); G, shape (S, R, K): the part through linear functionals,
+        or None.
     """
     G = None
     seeds: dict[Term, np.ndarray] = {}
@@ -350,12 +312,9 @@ def dot(x, y):
 
 
 def matvec(M, v):
-    """``M v`` at every point and state: M of shape (m, 3, 3, S), v of shape (m, 3, S)
-    (Duals or arrays of exactly these shapes), contracted over M's axis 2 and v's axis 1.
+    """``M v`` at every point and state, M (m, 3, 3, S), v (m, 3, S), contracted over M's axis 2.
 
-    The same values and derivatives as ``(M * v[:, None]).sum(axis=2)``, without the
-    (m, 3, 3, S, L) product that sum reads: the chart applies its 3 x 3 gradient and
-    Hessian five times per evaluation.
+    As ``(M * v[:, None]).sum(axis=2)`` without forming its (m, 3, 3, S, L) product.
     """
     if not isinstance(M, Dual) and not isinstance(v, Dual):
         return np.einsum("nijs,njs->nis", M, v)

@@ -1,20 +1,11 @@
 """The pipe in three dimensions: the geometrically exact weak form, one method per term.
 
-The planar model (Eq. (20), :mod:`fempipe.model.weak_form`) holds for motion in the plane of
-the clamp and gravity.  :class:`SpaceModel` is the same pipe in space, under the same
-assumptions (inextensible, isotropic section, no twist, the same fluid terms, gravity, the
-end mass and external damping, Kelvin-Voigt damping made objective), on the same
-discretizations.  The unknown is the tangent t(xi, tau), through the singularity-free chart
-of :mod:`fempipe.model.space_chart` with three fields u = (theta, a, b), stacked as
-U = (theta_dofs, a_dofs, b_dofs).  Each force field G is tested as ``\\int phi_i J_c . G``
-(J = dt/du); bending and the objective Kelvin-Voigt damping act on the curvature; the
-``gauge`` term gives the chart's free direction (the fiber) a damped equation of its own,
-which does not act on the physics in the continuum and is zero at planar states
-(:func:`planar_state` lifts a planar state exactly).
-
-The Jacobians are exact: the weak form is evaluated on :class:`~fempipe.core.dual.Dual`
-fields and pulled back through the transposed integration operators; the S stages of a
-Radau step are one evaluation.
+:class:`SpaceModel` is the planar model's pipe (Eq. (20)) in space, under the same
+assumptions, on the same discretizations.  The unknown is the tangent t through the chart of
+:mod:`fempipe.model.space_chart`, three fields U = (theta_dofs, a_dofs, b_dofs); the
+``gauge`` term gives the chart's free direction an equation of its own, zero at planar
+states (:func:`planar_state`).  Jacobians are exact, by :class:`~fempipe.core.dual.Dual`
+fields pulled back through the transposed integration operators.
 
 Derivation, the table of terms and the gauge: docs/theory/space.md, "The weak form".
 """
@@ -62,17 +53,15 @@ def plane_of(U: np.ndarray) -> np.ndarray:
 
 
 class SpaceModel:
-    """The residual of the 3-D weak form and its exact Jacobians (docs/theory/space.md).
+    """The residual of the 3-D weak form and its exact Jacobians.
 
     Parameters
     ----------
     disc : Discretization
-        The discretization of each of the three fields (as the planar model's
-        theta).
+        The discretization of each of the three fields.
     params : Params
-        Dimensionless parameters.  Springs and hysteretic damping are refused:
-        the springs have no 3-D term yet, hysteretic damping no time-domain
-        meaning.
+        Dimensionless parameters; springs (no 3-D term) and hysteretic damping (no time-domain
+        meaning) are refused.
 
     Attributes
     ----------
@@ -123,13 +112,9 @@ class SpaceModel:
     def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> SpaceFields:
         """The kinematics at the quadrature points, with derivatives if ``blocks`` is not empty.
 
-        U, Ud, Udd have shape (3 n,) or (S, 3 n) (S states at once); the
-        fields have a last axis of length S.  With ``blocks`` (any of ``"q"``,
-        ``"qdot"``, ``"qddot"``) the fields are :class:`~fempipe.core.dual.Dual`
-        and carry their derivatives with respect to all of U, U_dot, U_ddot,
-        each state's with respect to its own (:meth:`jacobians` picks the
-        blocks); the fields hold everything the weak form needs (no state is
-        kept in the model between calls).
+        U, Ud, Udd have shape (3 n,) or (S, 3 n); the fields have a last axis of length S.  With
+        ``blocks`` (of ``"q"``, ``"qdot"``, ``"qddot"``) they are :class:`~fempipe.core.dual.Dual`,
+        each state's derivatives with respect to its own U, U_dot, U_ddot.
         """
         s = self._seeds
         nt = self.n_theta
@@ -160,8 +145,7 @@ class SpaceModel:
         )
 
     def _integral(self, x, which: str):
-        """A linear map mixing the points (an integration operator: ``which`` is ``"C"``
-        (\\int_0^xi), ``"CR"`` (\\int_xi^1) or ``"int"`` (\\int_0^1, one point)) of x."""
+        """Integration operator ``which`` ("C", "CR" or "int") applied to x."""
         op, adjoint = self._seeds.ops[which]
         if not isinstance(x, Dual):
             return op(x)
@@ -294,9 +278,8 @@ class SpaceModel:
     def jacobians(self, U, Ud=None, Udd=None, v_dot: float = 0.0):
         """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized.
 
-        For S states (rows of (S, 3 n) arrays) at once, arrays (S, 3 n, 3 n): each
-        state's Jacobians, equal to the one-by-one ones to round-off, in one
-        evaluation of the weak form.
+        For S states (rows of (S, 3 n) arrays), arrays (S, 3 n, 3 n) from one evaluation of the
+        weak form.
         """
         blocks = ("q", "qdot", "qddot")
         A, B = self._weak_form(self.fields(U, Ud, Udd, blocks=blocks), v_dot)
@@ -307,11 +290,8 @@ class SpaceModel:
         return out if np.ndim(U) == 2 else tuple(x[0] for x in out)
 
     def velocity_derivative(self, U, Ud) -> np.ndarray:
-        """dR/dv at fixed (U, U', U''), steady flow: the Coriolis and follower terms.
+        """dR/dv at fixed (U, U', U''), steady flow: the weak form of ``2 sqrt(beta) C^R t_dot + 2 v t(1)``.
 
-        R depends on v through ``2 v sqrt(beta) C^R t_dot`` and ``v^2 t(1)`` only
-        (:meth:`coriolis`, :meth:`follower`), so dR/dv is the weak form of the force
-        field ``2 sqrt(beta) C^R t_dot + 2 v t(1)``: one evaluation of the fields.
         Shape (3 n,), or (S, 3 n) for S states.
         """
         fl = self.fields(U, Ud)
@@ -343,8 +323,7 @@ class SpaceModel:
         return tangent(u1[None, :, None])[0, :, 0]
 
     def tangents(self, U) -> np.ndarray:
-        """t at the quadrature points, shape (n_q, 3, S) for U of shape (3 n,) (S = 1) or
-        (S, 3 n): the chart alone, without the rates and derivatives of :meth:`fields`."""
+        """t at the quadrature points, shape (n_q, 3, S), from the chart alone."""
         U = np.atleast_2d(np.asarray(U, dtype=float))
         S = U.shape[0]
         u = self._seeds.Phi @ U.reshape(S * 3, self.n_theta).T  # (n_q, S 3)
@@ -364,11 +343,11 @@ class SpaceModel:
         return self._seeds.assemble(W, G, ("q",))[0]
 
     def tip_coordinates(self, U) -> dict:
-        """The tip in the frames of the files: eta_tip (in the pipe's frame, e_2), X_tip (along
-        gravity), Z_tip (horizontal, in the plane of the static state) and Y_tip (out of it).
+        """The tip: eta_tip (e_2 of the pipe's frame), X_tip (along gravity), Z_tip (horizontal, in
+        the plane of the static state), Y_tip (out of it).
 
-        Floats for one state U (3 n,), arrays (S,) for S states (S, 3 n).  For a planar
-        state they are those of :func:`fempipe.model.kinematics.tip_values`.
+        Floats for one state, arrays (S,) for S states; for a planar state those of
+        :func:`fempipe.model.kinematics.tip_values`.
         """
         r1 = np.tensordot(self.w, self.tangents(U), axes=(0, 0))  # (3, S)
         a = self.params.alpha
@@ -395,8 +374,9 @@ class SpaceModel:
         return T
 
     def potential_energy(self, U) -> float:
-        """Bending and gravity: ``(1/2) \\int |t'|^2 + gamma [cos(alpha)/2 - \\int (1 - xi) t . g]
-        + gamma Gamma [cos(alpha) - \\int t . g]`` (zero for the straight pipe, as in the plane)."""
+        r"""Bending and gravity: ``(1/2) \int |t'|^2 + gamma [cos(alpha)/2 - \int (1 - xi) t . g]
+        + gamma Gamma [cos(alpha) - \int t . g]``, zero for the straight pipe.
+        """
         fl = self.fields(U)
         p = self.params
         tp = fl.t_prime[:, :, 0]
@@ -408,16 +388,12 @@ class SpaceModel:
         return V + p.gamma * float(grav)
 
     def power_terms(self, U, Ud, Udd, v_dot: float = 0.0) -> dict:
-        r"""The power of each non-conservative term: dE/dtau = -sum of the values.
+        r"""The power ``U' . R_term`` of each non-conservative term: dE/dtau = -sum of the values.
 
-        The virtual power of a term for the test U' (``U' . R_term``): for a
-        force field G it is ``\int t_dot . G``.  Keys: ``coriolis``
-        (``2 v sqrt(beta) \int t_dot . C^R t_dot = v sqrt(beta) |r_dot(1)|^2 >= 0``,
-        the momentum the fluid carries out), ``follower`` (``v^2 r_dot(1) . t(1)``),
-        ``kelvin_voigt`` (``mu \int |k|^2 >= 0``), ``external_damping``
-        (``sigma \int |r_dot|^2``), ``flow_acceleration`` and ``gauge``: the work of
-        the gauge term, zero in the continuum and at planar states, a
-        discretization error elsewhere (it falls as h^7 on P3 elements, measured).
+        Keys: ``coriolis`` (``v sqrt(beta) |r_dot(1)|^2 >= 0``), ``follower``
+        (``v^2 r_dot(1) . t(1)``), ``kelvin_voigt`` (``mu \int |k|^2``), ``external_damping``
+        (``sigma \int |r_dot|^2``), ``flow_acceleration`` and ``gauge`` (zero in the continuum and
+        at planar states, a discretization error elsewhere).
         """
         fl = self.fields(U, Ud, Udd)
         w = self.w

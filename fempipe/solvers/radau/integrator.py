@@ -1,8 +1,7 @@
 """The Radau IIA integrator: :class:`Radau`, its step record and its error.
 
-The method and why it is used are in docs/theory/numerics.md, "Time
-integration"; what it asks of the problem and what it
-guarantees in :mod:`fempipe.solvers.radau.contract`.
+Method: docs/theory/numerics.md, "Time integration"; what it asks of the problem and what
+it guarantees: :mod:`fempipe.solvers.radau.contract`.
 """
 
 from __future__ import annotations
@@ -56,18 +55,10 @@ class IntegrationError(SolverError):
 
 
 class StepRecord(NamedTuple):
-    """One accepted step: its start, size, initial state and stages (contract rule 13).
+    """One accepted step (contract rule 13); unpacks as ``(t_old, h, q_old, p_old, Q, P, A)``.
 
-    Unpacks as the tuple ``(t_old, h, q_old, p_old, Q, P, A)``.
-
-    Attributes
-    ----------
-    t_old, h : float
-        Start and size of the step.
-    q_old, p_old : ndarray, shape (n,)
-        q and q' at t_old.
-    Q, P, A : ndarray, shape (3, n)
-        q, q' and q'' at the stages t_old + c_i h (the last is the step's end).
+    t_old and h are its start and size, q_old and p_old q and q' at t_old, Q, P, A (shape
+    (3, n)) q, q', q'' at the stages t_old + c_i h (the last is the step's end).
     """
 
     t_old: float
@@ -89,8 +80,7 @@ def _rms(x: np.ndarray) -> float:
 
 
 def _checked(problem) -> ImplicitSecondOrderProblem:
-    """``problem`` if it has every member of the contract, else a TypeError naming the missing
-    ones (a model, e.g. a PipeModel, is not a problem: rule 10)."""
+    """``problem`` if it has every member of the contract, else a TypeError naming the missing ones."""
     if isinstance(problem, ImplicitSecondOrderProblem):
         return problem
     members = (
@@ -133,42 +123,32 @@ class Radau:
     Parameters
     ----------
     problem : ImplicitSecondOrderProblem
-        The residual and its Jacobians, by the rules of
-        :mod:`fempipe.solvers.radau.contract` (the pipe's:
-        :class:`fempipe.model.dynamics_problem.PipeDynamics`, with its flow; the
-        3-D pipe's: :class:`fempipe.model.space_dynamics.SpaceDynamics`).  A
-        model is not a problem: a TypeError names the members it lacks.
+        The residual and its Jacobians by the rules of :mod:`fempipe.solvers.radau.contract`
+        (e.g. :class:`fempipe.model.dynamics_problem.PipeDynamics`); a model is not a problem.
     q0, qdot0 : ndarray, shape (n,)
         Initial state (not modified).
     t0 : float
         Initial time tau_0.
     rtol, atol : float
-        Local error tolerances on (q, q'); the error of each component is
-        measured against ``atol + rtol |y|``.  ``atol`` defaults to ``rtol``
-        (theta is O(1) rad, so absolute and relative errors are comparable).
+        Local error tolerances on (q, q'), against ``atol + rtol |y|``; ``atol`` defaults to
+        ``rtol`` (theta is O(1) rad).
     max_step : float
         Largest step.
     first_step : float, optional
         First step (default: from the size of q'' and the tolerance).
     h_fixed : float, optional
-        Fixed step size, no error control (for convergence-order studies).
+        Fixed step size, no error control (convergence-order studies).
     sensitivity : bool
-        Accumulate the derivative of the discrete flow map with respect to
-        the initial state (the monodromy matrix over a period; see
-        :attr:`sensitivity_matrix`).
+        Accumulate the derivative of the flow map with respect to the initial state
+        (:attr:`sensitivity_matrix`, the monodromy over a period).
     velocity_sensitivity : bool
-        With ``sensitivity`` and a problem with a ``parameter_derivative``
-        (the pipe with steady flow), also the derivative with respect to that
-        parameter (the flow velocity v) at fixed initial state
-        (:attr:`velocity_sensitivity`; the continuation of periodic orbits
-        needs it, shooting at fixed v does not).
+        With ``sensitivity`` and a ``parameter_derivative``, also the derivative with respect
+        to v at fixed initial state (:attr:`velocity_sensitivity`).
 
     Notes
     -----
-    Counters in :attr:`stats`: accepted ``steps``, ``rejected_steps`` (error
-    test failed), ``newton_failures`` (step halved because Newton did not
-    converge), ``n_residual``, ``n_jacobian`` (evaluations of the three
-    Jacobians), ``n_lu`` (factorisation pairs), ``wall_time``.
+    :attr:`stats` counts ``steps``, ``rejected_steps``, ``newton_failures``, ``n_residual``,
+    ``n_jacobian``, ``n_lu`` and ``wall_time``.
     """
 
     def __init__(
@@ -274,8 +254,7 @@ class Radau:
         return self.problem.jacobians(t, q, p, a)
 
     def _decoupled(self, *mats) -> list | None:
-        """The problem's ``decoupled_blocks`` if the matrices (the last two axes) have no
-        entry between them, else None."""
+        """The problem's ``decoupled_blocks`` if the matrices have no entry between them, else None."""
         blocks = self._blocks
         if blocks is None:
             return None
@@ -315,14 +294,7 @@ class Radau:
     def _newton(self, t: float, h: float, acc: np.ndarray, scale: np.ndarray, max_iter=None):
         """Solve the stage equations; return (converged, iterations, acc, rate).
 
-        The iterate is accepted once the predicted remaining error
-        ``faccon * dnorm`` (faccon = rate / (1 - rate), the contraction of the
-        simplified Newton iteration) is below ``newton_tol``.  As in RADAU5,
-        the first iteration uses the factor of the previous step, raised to
-        the power 0.8 (Hairer & Wanner, Sec. IV.8, and the FACCON of radau5.f),
-        so that a step whose extrapolated guess is already good costs one
-        iteration (3 residuals) instead of two; scipy's Radau always does two.
-        With ``h_fixed`` (convergence-order studies) a rate is always measured.
+        RADAU5's acceptance test with the previous step's contraction (docs/theory/numerics.md).
         """
         max_iter = NEWTON_MAXITER if max_iter is None else max_iter
         _, lu_r, lu_c = self._lu
@@ -369,14 +341,7 @@ class Radau:
         return False, max_iter, acc, rate
 
     def _error(self, t, h, Q, P, scale, refine: bool) -> float:
-        """RADAU5's embedded error estimate in second-order form.
-
-        RADAU5 computes err = (mu/h I - J)^-1 (f0 + sum_i e_i Z_i / h) with
-        J = [[0, I], [-M^-1 K, -M^-1 D]] and mu = MU_REAL.  Eliminating the
-        velocity part: e_q = (h g0)^2 (M + h g0 D + (h g0)^2 K)^-1
-        [M r_p + (mu/h M + D) r_q], e_p = mu/h e_q - r_q with g0 = 1/mu, so the
-        real Newton factorisation is reused.
-        """
+        """RADAU5's embedded error estimate in second-order form (docs/theory/numerics.md)."""
         K, D, M = self._jac
         _, lu_r, _ = self._lu
         Zq = Q - self.q[None, :]
@@ -401,13 +366,7 @@ class Radau:
 
     # ------------------------------------------------------------------
     def step(self, t_bound: float = math.inf) -> None:
-        """Advance by one accepted step, not beyond ``t_bound``.
-
-        Raises
-        ------
-        IntegrationError
-            If the step size falls below round-off level.
-        """
+        """Advance by one accepted step, not beyond ``t_bound``; IntegrationError if h reaches round-off."""
         t0_wall = time.perf_counter()
         t = self.t
         h = min(self.h, self.max_step)
@@ -500,9 +459,7 @@ class Radau:
         self.stats.wall_time += time.perf_counter() - t0_wall
 
     def _accumulate_sensitivity(self, t, h, Q, P, acc) -> None:
-        """Chain the exact derivative of the step map y0 -> y1 (stage Jacobians, no
-        freezing; :mod:`~fempipe.solvers.radau.sensitivity`) into
-        :attr:`sensitivity_matrix` and :attr:`velocity_sensitivity`."""
+        """Chain the exact derivative of the step map y0 -> y1 into the sensitivities."""
         if self._stages_batched:
             self.stats.n_jacobian += 3
             Ks, Ds, Ms = self._jacobians1(Q, P, acc)  # (3, n, n) each
@@ -536,8 +493,7 @@ class Radau:
 
     # ------------------------------------------------------------------
     def dense(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(q, q') at tau = t inside the last step: the collocation polynomial
-        (:mod:`~fempipe.solvers.radau.collocation`, increment form)."""
+        """(q, q') at tau = t inside the last step, from the collocation polynomial."""
         if self.last is None:
             return self.q.copy(), self.qdot.copy()
         return self.last.dense(t)
@@ -547,10 +503,7 @@ class Radau:
         return self.t if self.last is None else self.last.t_old
 
     def steps(self, t_end: float) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
-        """Generator of (tau, q, q') after every accepted step up to ``t_end``.
-
-        The initial state is not yielded.  Arrays are fresh copies.
-        """
+        """Generator of fresh (tau, q, q') after every accepted step up to ``t_end`` (not the initial state)."""
         with single_blas_thread():
             while self.t < t_end - 10 * abs(np.nextafter(t_end, math.inf) - t_end):
                 self.step(t_end)
