@@ -1,21 +1,12 @@
 """The pipe's residual, Jacobians and dR/dv at several states in one call (the Radau stages).
 
-On the small meshes of the dynamics (n_q = 96 on P3:16) :meth:`PipeModel.residual
-<fempipe.model.operators.PipeModel.residual>` is mostly the call overhead of some forty
-small array operations, so the three Radau stages evaluated together cost about one
-evaluation (the stage residuals are most of an integration step).  :class:`StageKernels`
-evaluates the same terms of Eq. (20) for S states stacked in the rows of (S, n) arrays,
-summed in another order, for the pipe without variants and steady flow (v_dot = 0).  The
-variants (end mass, external damping, springs) and any subclass of PipeModel have no kernels
-(:meth:`StageKernels.for_model` returns None); their users evaluate
-:meth:`PipeModel.residual` and :meth:`PipeModel.jacobians` state by state
-(:class:`fempipe.model.dynamics_problem.PipeDynamics` chooses).
-``tests/test_batched.py`` checks every kernel against the plain terms.
+On small meshes :meth:`PipeModel.residual <fempipe.model.operators.PipeModel.residual>` is
+mostly call overhead, so :class:`StageKernels` evaluates the terms of Eq. (20) for S states
+stacked in (S, n) arrays at once, for the pipe without variants and steady flow
+(:meth:`StageKernels.for_model` returns None otherwise).  The integration operators are
+dense matrices up to :data:`DENSE_INTEGRALS_MAX` points, cell by cell beyond.
 
-The integration operators C (``\\int_0^{x_q}``) and C^R (``\\int_{x_q}^1``)
-are applied as dense (n_q, n_q) matrices up to :data:`DENSE_INTEGRALS_MAX`
-points and cell by cell beyond (:func:`integral_operators`,
-:func:`projection_fields`).
+Derivation: docs/theory/weak_form.md, "Projections on the test side".
 """
 
 from __future__ import annotations
@@ -56,11 +47,7 @@ def _as_dense(a) -> np.ndarray:
 
 
 def stage_operators(model: PipeModel):
-    """(Phi, K, Phi^T W): dense for small discretizations, else as the model has them.
-
-    Phi^T W is :attr:`PipeModel.test_matrix` (``\\int phi_i f`` of f at the
-    quadrature points); dense up to :data:`DENSE_OPERATORS_MAX` entries n_q n.
-    """
+    """(Phi, K, Phi^T W): dense up to :data:`DENSE_OPERATORS_MAX` entries n_q n, else the model's."""
     Phi, K, PhiT_W = model.disc.Phi, model.disc.K, model.test_matrix
     if model.quad.n_q * model.n <= DENSE_OPERATORS_MAX:
         Phi, K, PhiT_W = (_as_dense(a) for a in (Phi, K, PhiT_W))
@@ -78,11 +65,7 @@ def frames(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def integral_operators(quad: LineQuadrature):
-    """(C, C^R): functions applying ``\\int_0^{x_q}`` and ``\\int_{x_q}^1`` along axis 0.
-
-    Dense matrices up to :data:`DENSE_INTEGRALS_MAX` points, else
-    :meth:`LineQuadrature.cumulative_cells` and :meth:`~LineQuadrature.from_tip_cells`.
-    """
+    r"""(C, C^R): functions applying ``\int_0^{x_q}`` and ``\int_{x_q}^1`` along axis 0."""
     n_q = quad.n_q
     if n_q > DENSE_INTEGRALS_MAX:
         return quad.cumulative_cells, quad.from_tip_cells
@@ -99,13 +82,8 @@ def integral_operators(quad: LineQuadrature):
 
 
 def projection_fields(quad: LineQuadrature):
-    """``g -> (V, U)`` with ``V = (C^R)^T (w g)`` and ``U = C^T V``, along axis 0.
-
-    For a field X, ``sum_q w_q g_q (C^R X)_q = sum_q V_q X_q`` and
-    ``sum_q w_q g_q (C^R C X)_q = sum_q U_q X_q``: the projections of
-    :meth:`StageKernels.jacobians` moved onto the test side.  Dense (one product
-    with the stacked operators) up to :data:`DENSE_INTEGRALS_MAX` points,
-    cell by cell beyond (``C^R = 1 w^T - C``, so ``(C^R)^T y = w (1^T y) - C^T y``).
+    """``g -> (V, U)`` with ``V = (C^R)^T (w g)`` and ``U = C^T V`` along axis 0: the projections
+    ``sum w g C^R X = sum V X`` and ``sum w g C^R C X = sum U X`` moved onto the test side.
     """
     n_q, w = quad.n_q, quad.w
     if n_q <= DENSE_INTEGRALS_MAX:
@@ -131,15 +109,8 @@ def projection_fields(quad: LineQuadrature):
 class StageKernels:
     """Residual, Jacobians and dR/dv of the pipe without variants at S stacked states.
 
-    Build it with :meth:`for_model`.  Each method takes the states as rows,
-    ``Q, P, A`` of shape (S, n) (q, q', q''), and equals the plain term of
-    :class:`~fempipe.model.operators.PipeModel` applied row by row, to round-off.
-
-    Parameters
-    ----------
-    model : PipeModel
-        A plain PipeModel (no subclass) without end mass, external damping or
-        springs; steady flow.
+    Build it with :meth:`for_model`.  Each method takes rows ``Q, P, A`` of shape (S, n) and
+    equals the :class:`~fempipe.model.operators.PipeModel` term row by row, to round-off.
     """
 
     def __init__(self, model: PipeModel) -> None:
@@ -176,14 +147,8 @@ class StageKernels:
         return cls(model) if cls.applies_to(model) else None
 
     def residual(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
-        """``R(Q_s, P_s, A_s)``, shape (S, n): :meth:`PipeModel.residual` row by row.
-
-        The terms of the pipe without variants (v_dot = 0), summed in another
-        order: bending and Kelvin-Voigt ``K (q + mu q')``; gravity and
-        follower, local; and the three projections ``n . C^R F`` (inertia,
-        centripetal, Coriolis) with the one field
-        F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
-        since the projection is linear in F.
+        """``R(Q_s, P_s, A_s)``, shape (S, n), with the inertia, centripetal and Coriolis terms as one
+        projection of F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n.
         """
         Phi, K, PhiT_W = self._res_ops
         # Stages in columns: theta etc. have shape (n_q, S), frames (n_q, 2, S).
@@ -201,27 +166,7 @@ class StageKernels:
         return (np.asarray(K @ (Q + self._mu * P).T) + np.asarray(PhiT_W @ local)).T
 
     def jacobians(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray):
-        """``(dR/dq, dR/dq', M)``, each (S, n, n): :meth:`PipeModel.jacobians` row by row.
-
-        Same terms as :meth:`PipeModel.jacobians`: with
-        F = C(theta_ddot n - theta_dot^2 t) + 2 v sqrt(beta) theta_dot n,
-
-        * dR/dq = K + Phi^T diag(d) Phi + (tip column) tip^T + the projection
-          \\int phi_i n . C^R X_j of X_j = dF/dq_j = C(a phi_j) + b phi_j,
-          a = -theta_ddot t - theta_dot^2 n, b = -2 v sqrt(beta) theta_dot t,
-          with d = gamma w (1 - xi) cos(theta + alpha) - v^2 w cos(theta(1) - theta)
-          - w t . C^R F;
-        * dR/dq' = mu K + the same projection with a = -2 theta_dot t,
-          b = 2 v sqrt(beta) n;
-        * M = \\int (C phi n) . (C phi n).
-
-        The projections are taken on the test side: with V = (C^R)^T (w n phi_i)
-        and U = C^T V (:func:`projection_fields`), the (i, j) entry is
-        ``sum_q (a . U_i + b . V_i)_q phi_j(x_q)``, one (n_q, n) field per
-        Jacobian times Phi.  Integrating the n test fields once, instead of the
-        2 x 2 n trial fields of dF/dq and dF/dq' twice each, makes a Jacobian
-        cheaper, the more so the finer the mesh.
-        """
+        """``(dR/dq, dR/dq', M)``, each (S, n, n), with the projections on the test side."""
         Phi, K, tip, w = self._Phi, self._K, self._tip, self._w
         n_q, n = Phi.shape
         cv, v2 = self._cv, self._v2
@@ -252,13 +197,7 @@ class StageKernels:
         return Jq, Jqd, M
 
     def velocity_derivative(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
-        """``dR/dv`` at the S states, shape (S, n), for steady flow.
-
-        Only two terms of Eq. (20) depend on v: the follower force, v^2 times
-        :meth:`~fempipe.model.operators.PipeModel.follower` at v = 1, and the
-        Coriolis force, v times :meth:`~fempipe.model.operators.PipeModel.coriolis`
-        at v = 1; so dR/dv = 2 v follower_1 + coriolis_1, exactly.
-        """
+        """``dR/dv`` = 2 v follower(v=1) + coriolis(v=1), shape (S, n), steady flow."""
         Phi, _, PhiT_W = self._res_ops
         th = np.asarray(Phi @ Q.T)
         th_d = np.asarray(Phi @ P.T)

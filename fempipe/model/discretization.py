@@ -1,16 +1,12 @@
 """The two discretizations of theta(xi) behind one contract, and their CLI spellings.
 
 A discretization represents theta = sum_j phi_j(xi) q_j with theta(0) = 0 built in and
-supplies everything the solvers use (:class:`Discretization`, whose members are the whole
-contract); solvers never ask which one they have.  :class:`FiniteElement` is the package's
-point: 1-D Lagrange elements of any degree on a scikit-fem ``MeshLine``.  :class:`Modal` is
-the paper's sine-mode Galerkin method (Eq. (22)), phi_r = sin((2r - 1) pi xi / 2), or with
-``basis="beam"`` the same method on the slopes of the clamped-free beam modes (orders:
-:data:`EXPECTED_ORDER`; docs/theory/convergence.md).
+supplies all the solvers use (:class:`Discretization`).  :class:`FiniteElement`: Lagrange
+elements of any degree (:mod:`fempipe.model.finite_element`); :class:`Modal`: the paper's
+Galerkin method, Eq. (22), on sine or beam modes (:mod:`fempipe.model.modal`); both
+re-exported here with :func:`parse_discretization` and :func:`discretization_from_name`.
 
-This module holds the contract and the CLI spellings (:func:`parse_discretization`,
-:func:`discretization_from_name`); the two discretizations are in
-:mod:`fempipe.model.finite_element` and :mod:`fempipe.model.modal` (re-exported here).
+Derivation: docs/theory/weak_form.md; orders: docs/theory/convergence.md.
 """
 
 from __future__ import annotations
@@ -43,40 +39,33 @@ __all__ = [
 
 @runtime_checkable
 class Discretization(Protocol):
-    """What every solver of the package uses of a discretization; nothing else is asked of it.
+    r"""What every solver of the package uses of a discretization; nothing else is asked of it.
 
     Attributes
     ----------
     n : int
         Number of unknowns q_j.
     quad : LineQuadrature
-        Points, weights and integration operators (:mod:`fempipe.model.quadrature`).
-    Phi : ndarray or sparse matrix, shape (n_q, n)
-        Basis values at the quadrature points.
-    dPhi : ndarray or sparse matrix, shape (n_q, n)
-        Basis derivatives phi_j' at the quadrature points (the static curvature of the
-        out-of-plane problem, :mod:`fempipe.model.out_of_plane`).
+        Points, weights and integration operators.
+    Phi, dPhi : ndarray or sparse matrix, shape (n_q, n)
+        phi_j and phi_j' at the quadrature points.
     tip : ndarray, shape (n,)
         phi_j(1).
     K : ndarray or sparse matrix, shape (n, n)
-        Bending stiffness ``\\int phi_i' phi_j'``.
+        Bending stiffness ``\int phi_i' phi_j'``.
     gram : ndarray or sparse matrix, shape (n, n)
-        L2 Gram matrix ``\\int phi_i phi_j``: the metric of theta (arclength of
-        continuation, L2 projections).
+        ``\int phi_i phi_j``, the metric of theta.
     sparse : bool
-        Whether ``Phi``, ``K`` and ``gram`` are scipy sparse matrices.
+        Whether ``Phi``, ``K`` and ``gram`` are sparse.
     name : str
-        The CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``;
-        :func:`discretization_from_name` is the inverse).
+        The CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``).
 
     Methods
     -------
     evaluate(q, xi)
-        theta at arbitrary points, for post-processing.
+        theta at arbitrary points.
     basis_values(xi)
-        phi_j at arbitrary points, shape (m, n), sparse for finite elements: the Gauss rule
-        on [0, xi_s] of a spring inside a cell
-        (:meth:`~fempipe.model.operators.PipeModel.spring`).
+        phi_j at arbitrary points, shape (m, n) (sparse for finite elements).
     to_dict()
         A JSON-able description.
     """
@@ -104,16 +93,7 @@ _FE_RE = re.compile(r"^[Pp](\d+)\s*:\s*(\d+)$")
 
 
 def parse_fe_spec(text: str) -> tuple[int, int]:
-    """``(degree, n_elements)`` of a finite-element spelling ``Pk:n`` (e.g. ``"P3:16"``).
-
-    Checked without building the mesh (the command line uses it to count the
-    unknowns k n before any work).
-
-    Raises
-    ------
-    ValueError
-        With a message naming ``--fe`` and the allowed form.
-    """
+    """``(degree, n_elements)`` of ``Pk:n`` without building the mesh; ValueError naming ``--fe``."""
     m = _FE_RE.match(str(text).strip())
     if not m:
         raise ValueError(
@@ -131,22 +111,21 @@ def parse_fe_spec(text: str) -> tuple[int, int]:
 def parse_discretization(
     fe: str | None = None, modal: int | str | None = None, basis: str = "sine"
 ) -> FiniteElement | Modal:
-    """Build a discretization from the CLI spellings ``--fe P2:16`` / ``--modal 4 [--basis beam]``.
+    """Build a discretization from ``--fe P2:16`` / ``--modal 4 [--basis beam]``.
 
     Parameters
     ----------
     fe : str, optional
-        ``Pk:n``; the default :data:`DEFAULT_FE` when neither is given.
+        ``Pk:n``; :data:`DEFAULT_FE` when neither is given.
     modal : int or str, optional
         Number of modes N >= 1.
     basis : {"sine", "beam"}
-        The modal basis (:class:`Modal`); only the default ``"sine"`` goes
-        without ``modal``.
+        The modal basis; only ``"sine"`` goes without ``modal``.
 
     Raises
     ------
     ValueError
-        With a message naming the option and the allowed forms.
+        Naming the option and the allowed forms.
     """
     if basis not in Modal.BASES:
         raise ValueError(f"--basis expects one of {', '.join(Modal.BASES)}, got {basis!r}")
@@ -173,13 +152,7 @@ _NAME_RE = re.compile(r"^modal(?:-(sine|beam))?\s*:\s*(\d+)$")
 
 
 def discretization_from_name(name: str) -> FiniteElement | Modal:
-    """The inverse of ``disc.name``: ``"P3:16"``, ``"modal:4"`` or ``"modal-beam:4"``.
-
-    Raises
-    ------
-    ValueError
-        For any other spelling.
-    """
+    """The inverse of ``disc.name`` (``"P3:16"``, ``"modal:4"``, ``"modal-beam:4"``); ValueError otherwise."""
     m = _NAME_RE.match(str(name).strip())
     if m:
         return Modal(int(m.group(2)), basis=m.group(1) or "sine")

@@ -1,13 +1,9 @@
 """The pipe's equations of motion as the integrator's problem: Eq. (20) in residual form.
 
-:class:`PipeDynamics` implements the contract
-:class:`fempipe.solvers.radau.contract.ImplicitSecondOrderProblem` (its
-docstring numbers the rules cited here) for a
-:class:`~fempipe.model.operators.PipeModel` with a steady or an unsteady
-flow: the residual and Jacobians of the model, the acceleration q'' of
-Eq. (20), and, for steady flow, the batched stage kernels of
-:mod:`fempipe.model.batched` and dR/dv.  :func:`refuse_hysteretic` is the
-refusal every time-domain entry point makes first.
+:class:`PipeDynamics` implements :class:`fempipe.solvers.radau.contract.ImplicitSecondOrderProblem`
+(whose docstring numbers the rules cited here) for a :class:`~fempipe.model.operators.PipeModel`
+with a steady or unsteady flow.  :func:`refuse_hysteretic` is the refusal every time-domain
+entry point makes first.  Method: docs/theory/numerics.md, "Time integration".
 """
 
 from __future__ import annotations
@@ -38,27 +34,10 @@ BATCHED_STAGES_MAX = 4608
 
 
 def refuse_hysteretic(params, where: str) -> None:
-    """Raise ValueError if ``params`` has hysteretic damping: it has no time-domain meaning.
+    """Raise ValueError if ``params`` has hysteretic damping, named after the refusing function ``where``.
 
-    The loss factor mu_h multiplies EI by 1 + i mu_h sgn(omega), which is
-    defined for harmonic motion only (the linear stability problem,
-    :func:`fempipe.analyses.stability.hysteretic.hysteretic_roots`); a time integration
-    would silently drop it.  Every time-domain entry point (:class:`PipeDynamics`
-    and so :class:`fempipe.solvers.radau.Radau` and
-    :func:`fempipe.analyses.dynamics.simulate`, the shooting and attractor
-    search of :mod:`fempipe.analyses.limit_cycle`, the sweeps of
-    :mod:`fempipe.analyses.bifurcation`) calls this first.
-
-    Parameters
-    ----------
-    params : Params
-    where : str
-        The refusing function, named in the message.
-
-    Raises
-    ------
-    ValueError
-        If ``params.hysteretic_damping > 0``.
+    The loss factor multiplies EI by 1 + i mu_h sgn(omega), defined for harmonic motion only;
+    a time integration would silently drop it.
     """
     mu_h = getattr(params, "hysteretic_damping", 0.0)
     if mu_h:
@@ -71,23 +50,14 @@ def refuse_hysteretic(params, where: str) -> None:
 
 
 def acceleration(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0):
-    """q'' from Eq. (20): solve ``M(q) q'' = -R(q, q', 0)`` (R is linear in q'').
-
-    Returns
-    -------
-    ndarray, shape (n,)
-    """
+    """q'' from Eq. (20): solve ``M(q) q'' = -R(q, q', 0)``; shape (n,)."""
     M = model.mass_matrix(q)
     r = model.residual(q, qdot, None, v_dot)
     return -sla.cho_solve(sla.cho_factor(M), r)
 
 
 class _PerStageVelocityDerivative:
-    """dR/dv of the stages one by one, for the models :class:`StageKernels` does not know.
-
-    dR/dv = 2 v follower_1 + coriolis_1 with the terms at v = 1 (exact: R is
-    quadratic in v).
-    """
+    """dR/dv = 2 v follower(v=1) + coriolis(v=1) of the stages one by one (no kernels)."""
 
     def __init__(self, model: PipeModel) -> None:
         self.v = model.params.v
@@ -104,9 +74,7 @@ class _PerStageVelocityDerivative:
 class ModelDynamics:
     """What the integrator's problem of a model with a steady or unsteady flow shares.
 
-    A subclass sets ``model`` and ``flow`` and says how to solve R = 0 for q''
-    (:meth:`solve_acceleration`); the model supplies ``residual(q, q', q'',
-    v_dot)``, ``jacobians(q, q', q'', v_dot)`` and ``with_params``.
+    A subclass sets ``model`` and ``flow`` and implements :meth:`solve_acceleration`.
     """
 
     model: PipeModel
@@ -140,35 +108,26 @@ class ModelDynamics:
 
 
 class PipeDynamics(ModelDynamics):
-    """Eq. (20) of a pipe model as an implicit second-order problem (the integrator's contract).
+    """Eq. (20) of a pipe model as an implicit second-order problem.
 
     Parameters
     ----------
     model : PipeModel
         Supplies ``residual``, ``jacobians`` and ``mass_matrix``.
     flow : PulsatingFlow or callable tau -> (v, v_dot), optional
-        Unsteady flow: ``model.params.v`` is replaced by ``flow(tau)`` and the
-        flow-acceleration term gets v_dot (rule 9).  Default: the steady
-        ``model.params.v`` (an autonomous problem, rule 5).
+        Unsteady flow (rule 9); default the steady ``model.params.v`` (autonomous, rule 5).
 
     Attributes
     ----------
     n : int
-        Number of degrees of freedom.
     autonomous : bool
         ``flow is None``.
     stage_residuals, stage_jacobians : callable or None
-        The batched kernels (:class:`~fempipe.model.batched.StageKernels`) of a
-        plain pipe with steady flow, else None (rule 6).
+        The batched :class:`~fempipe.model.batched.StageKernels`, steady plain pipe only (rule 6).
     prefers_batched_stage_jacobians : bool
         The kernels exist and n_q n <= :data:`BATCHED_STAGES_MAX` (rule 7).
     parameter_derivative : callable or None
         ``(Q, P, A) -> dR/dv`` of the stages, steady flow only (rule 8).
-
-    Raises
-    ------
-    ValueError
-        If the model has hysteretic damping (:func:`refuse_hysteretic`, rule 11).
     """
 
     def __init__(

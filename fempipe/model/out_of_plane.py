@@ -1,20 +1,11 @@
 """The linearized motion out of the plane of a planar static state, one operator per term.
 
-A round pipe is free to leave the plane of its static deformation.  This module gives the
-linear problem of that motion about any planar static state theta^s of Eq. (31a), in the
-rotation psi of the tangent out of the plane (psi(0) = 0 at the clamp, psi'(1) = 0), on the
-same discretizations as the planar model.  :class:`OutOfPlaneOperators` is its weak form, one
-method per term: bending with the static curvature, the static axial force N(xi), the
-follower force, inertia, Coriolis, external damping, the end mass, springs, and the
-objective Kelvin-Voigt damping on the material curvature chi = B psi.  Every term equals the
-planar one on the straight pipe.  :class:`OutOfPlaneModel` carries it as a pipe model, so
-the stability solvers run on it unchanged: :func:`out_of_plane_model` builds it from a planar
-model, :func:`in_plane_model` the planar model back.
-
-On the buckled branches of the standing pipe the rotation of the buckled shape about the
-vertical, psi = sin(theta^s), is a neutral mode of the continuum;
-:meth:`OutOfPlaneOperators.matrices` makes it exact on the mesh by a rank-one correction of K
-(``neutral_residual`` reports ||K x|| before it).
+The linear problem, in the rotation psi of the tangent out of the plane (psi(0) = 0,
+psi'(1) = 0), about any planar static state of Eq. (31a), on the planar model's
+discretizations.  :class:`OutOfPlaneOperators` is its weak form, one method per term;
+:class:`OutOfPlaneModel` carries it as a pipe model so the stability solvers run on it
+unchanged (:func:`out_of_plane_model`, :func:`in_plane_model`).  On the buckled branches of
+the standing pipe, the rotation about the vertical is made an exact neutral mode.
 
 Derivation: docs/theory/out_of_plane.md.
 """
@@ -55,22 +46,18 @@ class _State:
 
 @dataclass(frozen=True)
 class OutOfPlaneMatrices:
-    """K, C, M of the out-of-plane problem about one planar static state.
+    r"""K, C, M of the out-of-plane problem about one planar static state.
 
     Attributes
     ----------
     K, C, M : ndarray, shape (n, n)
-        Stiffness, damping and mass: M psi_ddot + C psi_dot + K psi = 0.
+        M psi_ddot + C psi_dot + K psi = 0.
     material : ndarray, shape (n, n)
-        ``\\int B phi_i B phi_j``, the material bending stiffness (the
-        hysteretic loss acts on it; C_KV = mu times it).
+        ``\int B phi_i B phi_j``, the material bending stiffness (C_KV = mu times it).
     neutral : ndarray or None, shape (n,)
-        On an axisymmetric buckled state, the rotation mode (L2 projection of
-        sin theta^s) made an exact null vector of K; None otherwise.
+        On an axisymmetric buckled state, the rotation mode made an exact null vector of K.
     neutral_residual : float or None
-        ||K x|| / (||K_b||_2 ||x||) before the correction (K_b the bending
-        matrix, the leading part of K): how far the
-        discretization is from the continuum's exact neutral mode.
+        ||K x|| / (||K_b||_2 ||x||) before that correction.
     """
 
     K: np.ndarray
@@ -89,19 +76,10 @@ _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class OutOfPlaneOperators:
-    """The weak form of the out-of-plane problem (docs/theory/out_of_plane.md), one method per term.
+    """The weak form of the out-of-plane problem, one method per term.
 
-    Parameters
-    ----------
-    model : PipeModel
-        The planar pipe: its discretization, parameters and static states.
-
-    Notes
-    -----
-    The state-independent matrices (inertia, Coriolis, the follower's, the
-    plain integrals) depend on the discretization only and are computed once
-    per discretization; a spectrum then costs one O(n_q n^2) product for the
-    curvature-dependent terms.
+    ``model`` is the planar :class:`~fempipe.model.operators.PipeModel`.  The state-independent
+    matrices are computed once per discretization.
     """
 
     def __init__(self, model: PipeModel) -> None:
@@ -158,19 +136,11 @@ class OutOfPlaneOperators:
 
     # ---------------------------------------------------- stiffness --
     def bending(self, st: _State) -> np.ndarray:
-        """``\\int phi_i' phi_j' - \\int theta^s'^2 phi_i phi_j``: bending of the curved pipe.
-
-        The second variation of (1/2) \\int |t'|^2 = (1/2) \\int psi'^2 + theta'^2 cos^2 psi:
-        out of the plane the static curvature softens the pipe.
-        """
+        r"""``\int phi_i' phi_j' - \int theta^s'^2 phi_i phi_j``: out of the plane the static curvature softens the pipe."""
         return self.fixed()["K"] - self.weighted_gram(st.dtheta**2)
 
     def axial_force(self, st: _State) -> np.ndarray:
-        """N = n^s . t^s at the quadrature points (without the springs, :meth:`spring_axial`).
-
-        Gravity of the pipe beyond xi and of the end mass, and the jet's
-        reaction v^2 (t^s(1) - t^s) projected on the tangent (docs/theory/out_of_plane.md).
-        """
+        """N = n^s . t^s at the quadrature points: gravity, end mass and the jet's reaction (springs apart)."""
         p = self.params
         v2 = p.v * p.v
         grav = p.gamma * (1.0 - self.x + p.end_mass) * np.cos(st.theta + p.alpha)
@@ -189,11 +159,8 @@ class OutOfPlaneOperators:
         return v2 * (np.outer(f["integral"], self.disc.tip) - f["gram"])
 
     def spring(self, st: _State) -> np.ndarray:
-        """Springs: ``kappa b_i b_j`` (w(xi_s) tied) plus their static force's axial part.
-
-        b_i = \\int_0^xi_s phi_i; the static spring force F_s acts on the
-        sections before xi_s: ``\\int_0^xi_s (F_s . t^s) phi_i phi_j``, on the Gauss
-        rule of [0, xi_s] (:meth:`~fempipe.model.operators.PipeModel.part_rule`).
+        r"""Springs: ``kappa b_i b_j`` (w(xi_s) tied), b_i = \int_0^xi_s phi_i, plus the axial part
+        ``\int_0^xi_s (F_s . t^s) phi_i phi_j`` of their static force.
         """
         n = self.disc.n
         S = np.zeros((n, n))
@@ -290,13 +257,9 @@ def axisymmetric(params) -> bool:
 class OutOfPlaneModel(PipeModel):
     """The planar pipe whose linearization is the out-of-plane problem.
 
-    Its static states, residual and static Jacobian are those of
-    :class:`~fempipe.model.operators.PipeModel` (the static state of a round pipe
-    under in-plane loads is planar); :meth:`linearization` and
-    :meth:`hysteretic_stiffness` are the out-of-plane ones
-    (:class:`OutOfPlaneOperators`), so every stability solver
-    (:func:`fempipe.analyses.stability.spectrum`, :func:`fempipe.analyses.stability.stability_analysis`)
-    analyses the motion out of the plane when given this model.
+    Static states, residual and static Jacobian are the :class:`~fempipe.model.operators.PipeModel`'s;
+    :meth:`linearization` and :meth:`hysteretic_stiffness` are out of the plane, so every
+    stability solver analyses the motion out of the plane when given this model.
     """
 
     plane = "out"
@@ -319,18 +282,14 @@ class OutOfPlaneModel(PipeModel):
 
 
 def out_of_plane_model(model: PipeModel) -> OutOfPlaneModel:
-    """The model of the pipe of ``model`` whose linearization is out of the plane of its static
-    states: an :class:`OutOfPlaneModel` on the same discretization with the same parameters
-    (``model`` itself if it is one)."""
+    """An :class:`OutOfPlaneModel` of ``model``'s pipe (``model`` itself if it is one)."""
     if isinstance(model, OutOfPlaneModel):
         return model
     return OutOfPlaneModel(model.disc, model.params)
 
 
 def in_plane_model(model: PipeModel) -> PipeModel:
-    """The model of the pipe of ``model`` whose linearization is in the plane of its static
-    states: ``model`` itself unless it is an :class:`OutOfPlaneModel`, else a
-    :class:`~fempipe.model.operators.PipeModel` on the same discretization and parameters."""
+    """``model``'s pipe with its linearization in the plane (a PipeModel unless it already is one)."""
     if model.plane == "in":
         return model
     return PipeModel(model.disc, model.params)

@@ -1,15 +1,10 @@
 """Keller's pseudo-arclength method with the exact tangent, for any problem.
 
-The building blocks, each on a :class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`:
-:func:`tangent` (the unit tangent from the bordered system, oriented along the previous one,
-with the sign and log|det| of the bordered matrix), :func:`correct` (Newton's method on
-``[F(y); <t, y - y_pred>] = 0``, a fresh Jacobian at every iteration, no damping) and
-:func:`locate` (bisection in arclength for the zero of a test function between two points of
-the branch).  :class:`KellerPolicy` is the policy of the engine
-(:func:`~fempipe.solvers.continuation.continue_curve`) built from them: the predictor
-``y + h t`` on the exact tangent, refusal of steps that turn by more than acos 0.8, step
-halving on failure and growth by 1.5 after an easy correction, folds and branch points
-located by bisection.  The static branches of the pipe use it (:mod:`fempipe.analyses.statics`).
+On a :class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`: :func:`tangent`
+(from the bordered system, with the sign and log|det| of the bordered matrix),
+:func:`correct` (Newton on ``[F(y); <t, y - y_pred>] = 0``) and :func:`locate` (bisection in
+arclength for a test function's zero).  :class:`KellerPolicy` is the engine's policy built
+from them, used by the static branches (:mod:`fempipe.analyses.statics`).
 
 Derivation: docs/theory/numerics.md, "Pseudo-arclength continuation".
 """
@@ -51,11 +46,7 @@ class CurvePoint:
 
 @dataclass(frozen=True)
 class CurveEvent:
-    """A fold or a branch point located on a branch.
-
-    ``kind`` is ``"fold"`` (the parameter turns back) or ``"bifurcation"``
-    (a branch crosses).
-    """
+    """A fold (``kind="fold"``) or a branch point (``"bifurcation"``) located on a branch."""
 
     kind: str
     value: float
@@ -101,12 +92,10 @@ def correct(
     converged: Callable[[np.ndarray], float | None],
     max_iter: int = 12,
 ) -> tuple[np.ndarray, int, float] | None:
-    """Newton on [F(y); <t, y - y_pred>] = 0 from ``y_pred``.
+    """Newton on [F(y); <t, y - y_pred>] = 0 from ``y_pred``, a fresh Jacobian each iteration.
 
-    Converged when the Newton step is below ``1e-10 (1 + ||y||)`` and
-    ``converged(y)`` accepts the point (returning its residual norm; None
-    refuses).  Returns (y, iterations, residual norm), or None when Newton
-    diverges or does not converge in ``max_iter`` iterations.
+    Converged when the step is below ``1e-10 (1 + ||y||)`` and ``converged(y)`` returns a
+    residual norm (None refuses).  Returns (y, iterations, residual norm), or None.
     """
     y = y_pred.copy()
     for it in range(1, max_iter + 1):
@@ -134,23 +123,11 @@ def locate(
     corrector: Callable[[np.ndarray, np.ndarray], tuple | None],
     locate_tol: float,
 ):
-    """Bisection in arclength along the secant from a, for a sign change of f.
+    """Bisection in arclength along the secant from a, for a sign change of f, to ``locate_tol``.
 
-    ``f(y, t, sign, logdet)`` is a test function continuous along the branch
-    (t the tangent at y, sign and logdet those of the bordered matrix with the
-    row of a's tangent); ``corrector(y_pred, t)`` is :func:`correct` with the
-    branch's convergence test.  The bracket is halved until it is below
-    ``locate_tol``.  Near a branch point the bordered matrix is singular and the
-    corrector stops converging before that (2.7e-8 from the pitchfork of
-    alpha = pi, gamma = 18.9 in v, bracket 3.8e-6): the point is then the zero of
-    the linear interpolant of f between the bracket's two corrected ends, the
-    state interpolated alike, an error O(w^2) for a bracket of width w (1e-12
-    there, instead of the 1.9e-6 of the last corrected point).
-
-    Returns
-    -------
-    (y, t) or None
-        The located point and its tangent.
+    ``f(y, t, sign, logdet)`` is continuous along the branch; ``corrector(y_pred, t)`` is
+    :func:`correct` with the branch's test.  Where the corrector fails near a branch point the
+    zero of f's linear interpolant is taken (docs/theory/numerics.md).  Returns (y, t) or None.
     """
     ya = np.append(a.q, a.value)
     yb = np.append(b.q, b.value)
@@ -197,12 +174,8 @@ def interpolate_zero(problem: ContinuationProblem, lo: tuple, hi: tuple):
 class KellerPolicy:
     """Pseudo-arclength continuation with the exact tangent (the static branches' policy).
 
-    The branch is ``points`` (the first one given), ``events`` (folds and
-    branch points), the counters ``steps`` and ``rejected_steps``; the
-    policy ends after ``max_steps`` attempted steps.  Subclasses choose the
-    types of points and events (:attr:`point_type`, :attr:`event_type`), the
-    convergence test (:meth:`converged`), the landing on requested values
-    (:meth:`land`) and the error of a stalled branch (:meth:`stalled`).
+    Keeps ``points``, ``events``, ``steps`` and ``rejected_steps``.  Subclasses choose
+    :attr:`point_type`, :attr:`event_type`, :meth:`converged`, :meth:`land` and :meth:`stalled`.
 
     Parameters
     ----------
@@ -212,9 +185,9 @@ class KellerPolicy:
     ds_min, ds_max : float
         Smallest and largest arclength step.
     max_steps : int
-        Attempted steps (accepted or not) before the branch ends.
+        Attempted steps before the branch ends.
     tol : float
-        Tolerance of :meth:`converged` (the Euclidean norm of F by default).
+        Tolerance of :meth:`converged` (norm of F by default).
     detect : bool
         Locate folds and branch points.
     locate_tol : float
