@@ -5,7 +5,7 @@ Parametric resonance under a pulsating flow
 A pump's flow pulsates, v(tau) = v0 (1 + sigma sin(omega tau)).  Well below its critical
 velocity (7.1 for this pipe) the hanging pipe of Paidoussis & Issid (beta = 0.2, gamma = 10,
 mu = 5e-3) is driven unstable when omega is near twice the frequency of its second mode:
-:func:`fempipe.analyses.parametric.parametric_chart` finds the region and where it opens,
+:func:`fempipe.analyses.parametric.compute_parametric_chart` finds the region and where it opens,
 on finite elements and on the paper's three and four sine modes.  Then Eq. (20) itself is
 integrated with a pulsating flow inside and outside the region.
 """
@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import fempipe
-from fempipe.analyses.parametric import parametric_chart
+from fempipe.analyses.parametric import compute_parametric_chart
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.plotting.parametric import plot_parametric_chart
 from fempipe.plotting.scripts import show_or_save
@@ -26,7 +26,9 @@ from fempipe.solvers.radau import Radau
 v0 = 6.0
 params = fempipe.Params(alpha=0.0, beta=0.2, gamma=10.0, mu=5e-3, v=v0)
 charts = {
-    disc.name: parametric_chart(fempipe.PipeModel(disc, params), v0, (22.0, 38.0), [0.1, 0.2])
+    disc.name: compute_parametric_chart(
+        fempipe.PipeModel(disc, params), v0, (22.0, 38.0), [0.1, 0.2]
+    )
     for disc in (fempipe.FiniteElement(6, 3), fempipe.Modal(3), fempipe.Modal(4))
 }
 for name, chart in charts.items():

@@ -36,7 +36,7 @@ errors = {
 }
 orders = {}
 for basis, err in errors.items():
-    orders[basis], _ = fempipe.observed_order(sizes, err, floor=1e-11)
+    orders[basis], _ = fempipe.estimate_order(sizes, err, floor=1e-11)
     print(f"{basis} modes: errors {', '.join(f'{e:.1e}' for e in err)}; order {orders[basis]:.2f}")
 
 #: the observed order of the sine modes (theory 3), checked in tests/test_gallery.py

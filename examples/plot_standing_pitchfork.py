@@ -4,7 +4,7 @@ The standing pipe: pitchfork and folds
 
 A pipe standing up (alpha = pi) stays straight under its own weight until gravity reaches
 Greenhill's heavy-column load; there the straight state loses stability in a pitchfork and
-two buckled branches, mirror images, grow out of it.  :func:`fempipe.continuation`
+two buckled branches, mirror images, grow out of it.  :func:`fempipe.continue_static`
 (pseudo-arclength, Keller) follows the straight branch in gamma and detects the bifurcation
 by the sign of the Jacobian's determinant; :func:`fempipe.switch_branch` starts the buckled
 branches.  Tilting a buckled pipe against its lean then ends the branch in a fold (a turning
@@ -22,7 +22,7 @@ from fempipe.plotting.scripts import show_or_save
 
 disc = fempipe.FiniteElement(6, 2)
 model = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0))
-straight = fempipe.continuation(model, "gamma", stop=15.0, ds=0.5, ds_max=1.0)
+straight = fempipe.continue_static(model, "gamma", stop=15.0, ds=0.5, ds_max=1.0)
 pitchfork = straight.special[0]
 print(f"{pitchfork.kind} at gamma = {pitchfork.value:.6f}")
 right, left = fempipe.switch_branch(model, pitchfork, "gamma", stop=15.0, ds=0.2)
@@ -41,7 +41,7 @@ for branch in (right, left):
     # which branch leans which way depends on the sign of a null vector (round-off): ask
     lean = fempipe.tip_values(disc, branch.points[-1].q, np.pi)["theta_tip"]
     direction = -1 if lean > 0 else 1
-    arc = fempipe.continuation(
+    arc = fempipe.continue_static(
         tilted,
         "alpha",
         stop=np.pi + 0.8 * direction,

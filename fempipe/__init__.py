@@ -7,7 +7,7 @@ users do (the API reference groups them alike):
 
 * the model: :class:`Params`, :class:`PipeSI`, :func:`parse_discretization`,
   :class:`PipeModel`, :func:`shape`, :func:`tip_values`;
-* statics (Eq. (31a)): :func:`solve_static`, :func:`solve_path`, :func:`continuation`;
+* statics (Eq. (31a)): :func:`solve_static`, :func:`solve_path`, :func:`continue_static`;
 * linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`critical_velocity`,
   :func:`stability_map`, :func:`spatial_critical_velocity`;
 * dynamics: :func:`simulate`, :func:`find_attractor`, :func:`shoot`, :func:`continue_cycles`,
@@ -46,9 +46,9 @@ _LAZY: dict[str, str] = {
     "solve_static": "analyses.statics",
     "StaticSolution": "analyses.statics",
     "NewtonError": "analyses.statics",
-    "sagged_state": "analyses.statics",
+    "solve_sagged": "analyses.statics",
     "solve_path": "analyses.statics",
-    "continuation": "analyses.statics",
+    "continue_static": "analyses.statics",
     "switch_branch": "analyses.statics",
     "Branch": "analyses.statics",
     # Linear stability (Eqs. (31b)-(33)), in the plane and out of it
@@ -63,8 +63,8 @@ _LAZY: dict[str, str] = {
     "SpatialStability": "analyses.stability",
     # Time integration (Eq. (20))
     "simulate": "analyses.dynamics",
-    "integrate": "analyses.dynamics",
-    "initial_state": "analyses.dynamics",
+    "simulate_steps": "analyses.dynamics",
+    "make_initial_state": "analyses.dynamics",
     "Trajectory": "analyses.dynamics",
     "PulsatingFlow": "analyses.dynamics",
     "IntegrationError": "analyses.dynamics",
@@ -96,8 +96,8 @@ _LAZY: dict[str, str] = {
     "run_study": "studies.convergence",
     "ConvergenceStudy": "studies.convergence",
     "Quantity": "studies.convergence",
-    "observed_order": "studies.convergence",
-    "richardson": "studies.convergence",
+    "estimate_order": "studies.convergence",
+    "extrapolate_richardson": "studies.convergence",
     "compare_values": "studies.compare",
     "Comparison": "studies.compare",
     "ErrorEstimate": "studies.error_estimate",
@@ -143,9 +143,9 @@ __all__ = [
     "solve_static",
     "StaticSolution",
     "NewtonError",
-    "sagged_state",
+    "solve_sagged",
     "solve_path",
-    "continuation",
+    "continue_static",
     "switch_branch",
     "Branch",
     "spectrum",
@@ -158,8 +158,8 @@ __all__ = [
     "spatial_critical_velocity",
     "SpatialStability",
     "simulate",
-    "integrate",
-    "initial_state",
+    "simulate_steps",
+    "make_initial_state",
     "Trajectory",
     "PulsatingFlow",
     "IntegrationError",
@@ -188,8 +188,8 @@ __all__ = [
     "run_study",
     "ConvergenceStudy",
     "Quantity",
-    "observed_order",
-    "richardson",
+    "estimate_order",
+    "extrapolate_richardson",
     "compare_values",
     "Comparison",
     "ErrorEstimate",
@@ -207,9 +207,9 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         IntegrationError,
         PulsatingFlow,
         Trajectory,
-        initial_state,
-        integrate,
+        make_initial_state,
         simulate,
+        simulate_steps,
     )
     from fempipe.analyses.limit_cycle import (
         Attractor,
@@ -241,9 +241,9 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         Branch,
         NewtonError,
         StaticSolution,
-        continuation,
-        sagged_state,
+        continue_static,
         solve_path,
+        solve_sagged,
         solve_static,
         switch_branch,
     )
@@ -258,8 +258,8 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
     from fempipe.studies.convergence import (
         ConvergenceStudy,
         Quantity,
-        observed_order,
-        richardson,
+        estimate_order,
+        extrapolate_richardson,
         run_study,
     )
     from fempipe.studies.error_estimate import ErrorEstimate

@@ -226,10 +226,10 @@ def _flutter_frequency() -> float:
 
 @_exercise("6.1", 1e-6, "E(1) - E(0), the energy's change along the same motion")
 def _energy_change() -> float:
-    from fempipe import Modal, Params, PipeModel, initial_state, simulate
+    from fempipe import Modal, Params, PipeModel, make_initial_state, simulate
 
     model = PipeModel(Modal(3), Params(alpha=0.0, v=3.0))
-    q0, qd0 = initial_state(model, mode=1, amplitude=0.3)
+    q0, qd0 = make_initial_state(model, mode=1, amplitude=0.3)
     traj = simulate(model, q0, qd0, 1.0, rtol=1e-9)
     return model.energy(traj.q[-1], traj.qdot[-1]) - model.energy(traj.q[0], traj.qdot[0])
 

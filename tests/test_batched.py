@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.analyses.dynamics import Radau, initial_state
+from fempipe.analyses.dynamics import Radau, make_initial_state
 from fempipe.model import batched, dynamics_problem
 from fempipe.model.batched import StageKernels, integral_operators, projection_fields
 from fempipe.model.dynamics_problem import PipeDynamics
@@ -77,7 +77,7 @@ def test_batched_and_per_stage_integrations_agree():
     """Radau with the batched stage residual follows the per-stage one (the same
     steps, states to round-off amplified by the Newton iterations)."""
     m = PipeModel(FiniteElement(4, 3), Params(alpha=0.0, v=10.0))
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
     runs = []
     for problem in (PipeDynamics(m), _PerStage(m)):
         st = Radau(problem, q0, p0, rtol=1e-6)
@@ -181,7 +181,7 @@ def test_batched_stage_jacobians_give_the_same_sensitivities(disc, monkeypatch):
     """The three stage Jacobians of the sensitivity in one batched call (small
     discretizations) or three: the same monodromy and d phi/dv to round-off."""
     m = PipeModel(disc, Params(v=7.0, alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3))
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
 
     def run():
         problem = PipeDynamics(m)

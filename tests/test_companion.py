@@ -88,10 +88,10 @@ def test_the_critical_eigenvector_of_periodic_solves_the_quadratic_problem():
     pencil (QZ, another algorithm) nearest to i omega."""
     from fempipe.analyses.periodic.hopf import critical_eigenvector
     from fempipe.analyses.stability import linearized_matrices
-    from fempipe.analyses.statics import sagged_state
+    from fempipe.analyses.statics import solve_sagged
 
     model = PipeModel(FiniteElement(4, 3), Params(alpha=0.0, beta=0.142, gamma=18.9, v=8.4))
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     omega = 10.0
     K, C, M = (np.asarray(a) for a in linearized_matrices(model, q))
     w, z = critical_eigenvector(model, q, omega)

@@ -17,9 +17,9 @@ from fempipe.studies.convergence import (
     Family,
     Quantity,
     doubling,
+    estimate_order,
+    extrapolate_richardson,
     local_orders,
-    observed_order,
-    richardson,
     run_study,
 )
 
@@ -58,14 +58,14 @@ def test_doubling():
 def test_richardson_and_orders_recover_a_power_law():
     n = np.array([4.0, 8.0, 16.0])
     q = 2.0 + 5.0 * n**-4
-    val, err = richardson(q[1], q[2], 4.0)
+    val, err = extrapolate_richardson(q[1], q[2], 4.0)
     assert val == pytest.approx(2.0, abs=1e-14)
     assert err == pytest.approx(5.0 * 16.0**-4, rel=1e-12)
     assert local_orders(n, q) == pytest.approx([4.0])
-    order, idx = observed_order(n, np.abs(q - 2.0), floor=0.0)
+    order, idx = estimate_order(n, np.abs(q - 2.0), floor=0.0)
     assert order == pytest.approx(4.0) and idx == (0, 1, 2)
     # Points at or below the floor are not fitted.
-    order, idx = observed_order(n, np.abs(q - 2.0), floor=1e-4)
+    order, idx = estimate_order(n, np.abs(q - 2.0), floor=1e-4)
     assert idx == (0, 1)
 
 

@@ -12,10 +12,10 @@ from fempipe.analyses.dynamics import (
     Radau,
     acceleration,
     energy_rate,
-    initial_state,
-    integrate,
+    make_initial_state,
     power_terms,
     simulate,
+    simulate_steps,
 )
 from fempipe.model.dynamics_problem import PipeDynamics
 
@@ -39,7 +39,7 @@ def test_energy_rate_identity_at_random_states(disc, v_dot):
     m = PipeModel(disc, Params(alpha=0.7, v=3.0, mu=0.02, beta=0.3, gamma=5.0))
     # Smooth random states (combinations of the first three sine modes): for
     # a random FE vector q'' ~ 1e6 and no difference quotient is accurate.
-    modes = np.array([initial_state(m, r, 1.0, q_static=np.zeros(m.n))[0] for r in (1, 2, 3)])
+    modes = np.array([make_initial_state(m, r, 1.0, q_static=np.zeros(m.n))[0] for r in (1, 2, 3)])
     for _ in range(3):
         q = 0.5 * rng.normal(size=3) @ modes
         qd = 2.0 * rng.normal(size=3) @ modes
@@ -65,8 +65,8 @@ def _energy_drift(rtol: float) -> float:
     # Modal: without Kelvin-Voigt damping the FE system keeps undamped
     # h^-2 modes that an error-controlled integrator must resolve.
     m = PipeModel(Modal(3, n_cells=8), Params(alpha=0.3, v=0.0, mu=0.0))
-    q0, p0 = initial_state(m, 1, 0.8)
-    q0 = q0 + initial_state(m, 2, 0.3, q_static=np.zeros(m.n))[0]
+    q0, p0 = make_initial_state(m, 1, 0.8)
+    q0 = q0 + make_initial_state(m, 2, 0.3, q_static=np.zeros(m.n))[0]
     E0 = m.energy(q0, p0)
     tr = simulate(m, q0, p0, 1.0, rtol=rtol)
     return max(abs(m.energy(a, b) - E0) for a, b in zip(tr.q, tr.qdot, strict=True)) / E0
@@ -88,7 +88,7 @@ def test_energy_conserved_without_flow_and_damping():
 # ----------------------------------------------------------- power balance --
 def _balance(flow, rtol, terms_dropped=()):
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.5, v=4.0, mu=0.02))
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
     st = Radau(PipeDynamics(m, flow), q0, p0, rtol=rtol)
     E0 = m.energy(q0, p0)
     work = work_abs = 0.0
@@ -130,7 +130,7 @@ def test_pulsating_flow_needs_flow_acceleration_power():
 
 def test_pulsating_flow_with_zero_amplitude_is_steady():
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.5, v=4.0))
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
     a = simulate(m, q0, p0, 0.3, rtol=1e-7)
     b = simulate(m, q0, p0, 0.3, rtol=1e-7, flow=PulsatingFlow(4.0, 0.0, 5.0))
     # Two adaptive runs agree to their global error, not to round-off: their step
@@ -152,7 +152,7 @@ def test_time_convergence_order(disc):
     or 6 method would fail.
     """
     m = PipeModel(disc, Params(alpha=0.4, v=5.0))
-    q0, p0 = initial_state(m, 1, 0.5)
+    q0, p0 = make_initial_state(m, 1, 0.5)
     T = 0.3
 
     def final(N):
@@ -179,7 +179,7 @@ def test_steps_do_not_grow_with_mesh_refinement():
     steps = []
     for ne in (4, 8, 16):
         m = PipeModel(FiniteElement(ne, 2), Params(alpha=0.0, v=8.0))
-        q0, p0 = initial_state(m, 2, 0.05)
+        q0, p0 = make_initial_state(m, 2, 0.05)
         tr = simulate(m, q0, p0, 0.5, rtol=1e-6)
         steps.append(tr.steps)
     assert max(steps) <= 1.2 * min(steps), steps
@@ -188,8 +188,8 @@ def test_steps_do_not_grow_with_mesh_refinement():
 # ---------------------------------------------------------------- API --
 def test_generator_yields_initial_state_then_steps():
     m = PipeModel(Modal(2, n_cells=4), Params(v=2.0))
-    q0, p0 = initial_state(m, 1, 0.1)
-    out = list(integrate(m, q0, p0, 0.1, rtol=1e-6))
+    q0, p0 = make_initial_state(m, 1, 0.1)
+    out = list(simulate_steps(m, q0, p0, 0.1, rtol=1e-6))
     assert out[0][0] == 0.0 and np.array_equal(out[0][1], q0)
     assert out[-1][0] == pytest.approx(0.1, abs=1e-14)
     assert all(t1 > t0 for (t0, _, _), (t1, _, _) in zip(out, out[1:], strict=False))
@@ -200,7 +200,7 @@ def test_generator_yields_initial_state_then_steps():
 
 def test_simulate_uniform_output_and_stats():
     m = PipeModel(Modal(2, n_cells=4), Params(v=2.0))
-    q0, p0 = initial_state(m, 1, 0.1)
+    q0, p0 = make_initial_state(m, 1, 0.1)
     tr = simulate(m, q0, p0, 0.2, n_out=11)
     np.testing.assert_allclose(tr.t, np.linspace(0, 0.2, 11))
     d = tr.to_dict()
@@ -234,7 +234,7 @@ def test_bad_flow(kwargs, word):
 
 def test_fixed_step_failure_says_where():
     m = PipeModel(FiniteElement(4, 2), Params(alpha=0.4, v=5.0))
-    q0, p0 = initial_state(m, 1, 1.5)
+    q0, p0 = make_initial_state(m, 1, 1.5)
     st = Radau(PipeDynamics(m), q0, p0, h_fixed=0.5)
     with pytest.raises(IntegrationError, match="tau"):
         st.step()
@@ -262,7 +262,7 @@ def test_velocity_sensitivity_of_the_flow_map(disc):
     difference of the flow map replayed on the same steps, at v = 7 +- 1e-5."""
     params = dict(alpha=0.3, beta=0.142, gamma=18.9, mu=5e-3)
     m = PipeModel(disc, Params(v=7.0, **params))
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
     st = Radau(PipeDynamics(m), q0, p0, rtol=1e-8, sensitivity=True, velocity_sensitivity=True)
     hs = [st.last[1] for _ in st.steps(0.3)]
 

@@ -193,11 +193,11 @@ def _branches_figure():
 
 @functools.cache
 def _trajectory():
-    from fempipe.analyses.dynamics import initial_state, simulate
-    from fempipe.analyses.statics import sagged_state
+    from fempipe.analyses.dynamics import make_initial_state, simulate
+    from fempipe.analyses.statics import solve_sagged
 
     model = _model(0.0, v=10.0)
-    q0, qd0 = initial_state(model, q_static=sagged_state(model).q)
+    q0, qd0 = make_initial_state(model, q_static=solve_sagged(model).q)
     traj = simulate(model, q0, qd0, 2.0, n_out=400)
     return model, traj
 

@@ -71,7 +71,7 @@ def _check_text(fig) -> None:
 def _motion():
     """A swing in and out of the plane about the (unstable) static state at v = 8.2, one
     period per unit tau, with the SpaceMotion fields the figures read."""
-    from fempipe.analyses.dynamics import initial_state
+    from fempipe.analyses.dynamics import make_initial_state
     from fempipe.analyses.space.motion import SpaceMotion, out_of_plane_perturbation
     from fempipe.analyses.statics import solve_static
     from fempipe.model.space import SpaceModel, planar_state
@@ -79,7 +79,7 @@ def _motion():
     model = PipeModel(discretization_from_name("P2:4"), Params(v=8.2, **CASE))
     space = SpaceModel(model.disc, model.params)
     q_s = solve_static(model).q
-    q1, _ = initial_state(model, 1, 0.08, q_static=q_s)
+    q1, _ = make_initial_state(model, 1, 0.08, q_static=q_s)
     a, b = out_of_plane_perturbation(space, q_s, 1, 0.12)
     n = model.disc.n
     t = np.linspace(0.0, 10.0, 1001)

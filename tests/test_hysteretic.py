@@ -28,7 +28,7 @@ from fempipe.analyses.stability import (
     spectrum,
     stability_analysis,
 )
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 from fempipe.cli import main
 
 P3_16 = FiniteElement(16, 3)
@@ -311,7 +311,7 @@ def test_every_positive_frequency_root_solves_its_problem():
     model = PipeModel(
         P3_16, Params(alpha=np.pi / 2, mu=5e-3, v=3.0, hysteretic_damping=mu_h, **PAPER)
     )
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     spec = spectrum(model, q)
     K, C, M = linearized_matrices(model, q)
     Kb = P3_16.K.toarray()
@@ -354,9 +354,9 @@ def test_events_divergence_and_folds_stay_flutter_moves():
         else:
             assert abs(ea.v - eb.v) < 1e-9
     model = PipeModel(P3_16, replace(hyst, v=flutter.v - 1e-6))
-    below = spectrum(model, sagged_state(model).q)
+    below = spectrum(model, solve_sagged(model).q)
     model = PipeModel(P3_16, replace(hyst, v=flutter.v + 1e-6))
-    above = spectrum(model, sagged_state(model).q)
+    above = spectrum(model, solve_sagged(model).q)
     assert below.stable and not above.stable
     assert above.mode[above.unstable].tolist() == [2, 2]
 
@@ -384,7 +384,7 @@ def test_sparse_criterion_decides_as_the_dense_one(params, mu_h, stable_without,
 
     disc = FiniteElement(80, 3)
     model = PipeModel(disc, params)
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     assert linearly_stable(model, q, sparse=False) is stable_without
     hyst = model.with_params(replace(params, hysteretic_damping=mu_h))
     dense = linearly_stable(hyst, q, sparse=False)
@@ -400,7 +400,7 @@ def test_linearly_stable_and_growth_rate_are_the_spectrum_criterion(disc):
     test, with mu_h: the decision and the growth rate of spectrum."""
     for v, stable in ((6.4, True), (7.0, False)):
         model = PipeModel(disc, Params(alpha=0.0, mu=5e-3, v=v, hysteretic_damping=0.05, **PAPER))
-        q = sagged_state(model).q
+        q = solve_sagged(model).q
         spec = spectrum(model, q)
         assert spec.stable is stable
         assert linearly_stable(model, q) is stable
@@ -456,7 +456,7 @@ def test_cli_spectrum(capsys):
     d = run_json(capsys, [*argv, "--hysteretic-damping", "0.05"])
     assert d["params"]["hysteretic_damping"] == 0.05
     model = PipeModel(FiniteElement(4, 2), Params(alpha=0.0, v=3.0, hysteretic_damping=0.05))
-    spec = spectrum(model, sagged_state(model).q)
+    spec = spectrum(model, solve_sagged(model).q)
     got = [complex(e["re"], e["im"]) for e in d["points"][1]["eigenvalues"]]
     ref = spec.lam[np.isin(spec.mode, d["modes"])]
     assert np.abs(np.sort_complex(np.array(got)) - np.sort_complex(ref)).max() < 1e-9

@@ -97,7 +97,7 @@ def test_small_cycle_multipliers_tend_to_the_strong_form_spectrum():
     from fempipe.analyses.limit_cycle import shoot
     from fempipe.analyses.stability import critical_velocity
     from fempipe.analyses.stability.hopf.normal_form import first_lyapunov_coefficient
-    from fempipe.analyses.statics import sagged_state
+    from fempipe.analyses.statics import solve_sagged
     from fempipe.model.discretization import FiniteElement
     from fempipe.validation import lateral
 
@@ -106,7 +106,7 @@ def test_small_cycle_multipliers_tend_to_the_strong_form_spectrum():
     onset = critical_velocity(planar, v_max=8.0)
     at_onset = planar.with_params(replace(base, v=onset.v_cr))
     nf = first_lyapunov_coefficient(
-        at_onset, sagged_state(at_onset).q, omega=onset.events[0].frequency
+        at_onset, solve_sagged(at_onset).q, omega=onset.events[0].frequency
     )
     assert nf.side == "above"
     strong = lateral.LateralProblem(base, lateral.HermiteSpectral(24))

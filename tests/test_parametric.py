@@ -183,9 +183,9 @@ def test_the_chart_of_the_hanging_pipe():
     """v0 = 6, omega in 20..36: the principal region of mode 2 (the flutter mode, the least
     damped) and nothing else opens for sigma <= 0.2; mode 1, damped above the ratio
     1/sqrt(2) by the flow at this v0, is not a resonator; both planes carry the region."""
-    from fempipe.analyses.parametric import parametric_chart
+    from fempipe.analyses.parametric import compute_parametric_chart
 
-    chart = parametric_chart(_model(6.0), 6.0, (20.0, 36.0), [0.1, 0.2])
+    chart = compute_parametric_chart(_model(6.0), 6.0, (20.0, 36.0), [0.1, 0.2])
     lam = dict(zip(chart.modes, chart.eigenvalues, strict=True))
     assert 1 not in lam and lam[2].imag > -lam[2].real
     (region,) = chart.regions
@@ -203,16 +203,16 @@ def test_the_chart_of_the_hanging_pipe():
 
 
 def test_the_chart_refuses_what_it_cannot_chart():
-    from fempipe.analyses.parametric import parametric_chart
+    from fempipe.analyses.parametric import compute_parametric_chart
 
     with pytest.raises(ValueError, match="omega"):
-        parametric_chart(_model(6.0), 6.0, (30.0, 20.0), [0.1])
+        compute_parametric_chart(_model(6.0), 6.0, (30.0, 20.0), [0.1])
     with pytest.raises(ValueError, match="sigma"):
-        parametric_chart(_model(6.0), 6.0, (20.0, 30.0), [1.5])
+        compute_parametric_chart(_model(6.0), 6.0, (20.0, 30.0), [1.5])
     with pytest.raises(ValueError, match="unstable"):
-        parametric_chart(_model(6.0), 7.5, (20.0, 30.0), [0.1])
+        compute_parametric_chart(_model(6.0), 7.5, (20.0, 30.0), [0.1])
     with pytest.raises(ValueError, match="alpha"):
-        parametric_chart(PipeModel(DISC, Params(alpha=0.5)), 5.0, (20.0, 30.0), [0.1])
+        compute_parametric_chart(PipeModel(DISC, Params(alpha=0.5)), 5.0, (20.0, 30.0), [0.1])
 
 
 def test_the_command(tmp_path, capsys):
@@ -261,9 +261,9 @@ def test_the_thresholds_are_quantities_of_a_convergence_study():
     q = Quantity("sigma_threshold", _model(6.0).params, omega_band=(24.0, 36.0), sigma_max=0.2)
     w = Quantity("omega_threshold", _model(6.0).params, omega_band=(24.0, 36.0), sigma_max=0.2)
     disc = FiniteElement(3, 3)
-    from fempipe.analyses.parametric import parametric_chart
+    from fempipe.analyses.parametric import compute_parametric_chart
 
-    (region,) = parametric_chart(
+    (region,) = compute_parametric_chart(
         PipeModel(disc, _model(6.0).params), 6.0, (24.0, 36.0), [0.2]
     ).regions
     assert q(disc) == pytest.approx(region.sigma_threshold, abs=2e-8)  # the chart: 1e-8
@@ -279,10 +279,10 @@ def test_the_forced_response_of_a_bent_pipe():
     horizontal pipe (alpha = pi/2) it tends to the static state as sigma -> 0, with the
     multipliers exp(lambda T) of the static state's spectrum (Eq. (32)); at sigma = 0.3 it
     converges, moves the pipe, and its multipliers do not depend on the steps (rtol 1e-8 against 1e-10 and twice the steps)."""
-    from fempipe.analyses.parametric.forced import forced_response
-    from fempipe.analyses.statics import sagged_state
+    from fempipe.analyses.parametric.forced import solve_forced_response
+    from fempipe.analyses.statics import solve_sagged
 
-    straight = forced_response(_model(6.0), 0.2, 29.5)
+    straight = solve_forced_response(_model(6.0), 0.2, 29.5)
     assert straight.iterations == 0 and straight.amplitude == 0.0
     np.testing.assert_allclose(
         _largest(straight.multipliers, 3),
@@ -298,14 +298,16 @@ def test_the_forced_response_of_a_bent_pipe():
         FiniteElement(4, 3), Params(alpha=math.pi / 2, beta=0.142, gamma=18.9, mu=0.005, v=4.0)
     )
     omega = 20.0
-    small = forced_response(bent, 1e-7, omega)
-    assert np.linalg.norm(small.q0 - sagged_state(bent).q) < 1e-5
-    lam = spectrum(bent, sagged_state(bent).q).lam
+    small = solve_forced_response(bent, 1e-7, omega)
+    assert np.linalg.norm(small.q0 - solve_sagged(bent).q) < 1e-5
+    lam = spectrum(bent, solve_sagged(bent).q).lam
     for e in np.exp(lam * 2 * math.pi / omega)[:4]:
         assert np.abs(small.multipliers - e).min() < 1e-7
-    moved = forced_response(bent, 0.3, omega)
+    moved = solve_forced_response(bent, 0.3, omega)
     assert moved.residual <= 1e-9 and 1 <= moved.iterations <= 6 and moved.amplitude > 0.05
-    finer = forced_response(bent, 0.3, omega, guess=(moved.q0, moved.qdot0), steps=256, rtol=1e-10)
+    finer = solve_forced_response(
+        bent, 0.3, omega, guess=(moved.q0, moved.qdot0), steps=256, rtol=1e-10
+    )
     np.testing.assert_allclose(_largest(finer.multipliers), _largest(moved.multipliers), atol=1e-7)
     with pytest.raises(ValueError, match="omega"):
-        forced_response(bent, 0.3, 0.0)
+        solve_forced_response(bent, 0.3, 0.0)

@@ -11,7 +11,7 @@ import pytest
 
 import fempipe.analyses.stability.analysis as analysis
 from fempipe.analyses.stability import spatial_critical_velocity, spatial_stability_analysis
-from fempipe.analyses.statics import sagged_state, solve_static
+from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.operators import PipeModel
@@ -64,7 +64,7 @@ def test_stiffness_is_the_second_variation_of_the_3d_energy(disc):
     """
     p = Params(alpha=2.0, v=0.0, end_mass=0.3, springs=((15.0, 0.45), (5.0, 1.0)), **PAPER)
     model = PipeModel(disc, p)
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     K = OutOfPlaneOperators(model).matrices(q).K
     rng = np.random.default_rng(3)
     x, y = rng.standard_normal(disc.n), rng.standard_normal(disc.n)

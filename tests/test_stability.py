@@ -28,7 +28,7 @@ from fempipe.analyses.stability import (
     stability_analysis,
     stability_map,
 )
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 from fempipe.model.kinematics import shape
 
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
@@ -52,7 +52,7 @@ def test_matrices_are_finite_differences_of_the_residual(disc):
     """
     p = Params(alpha=np.pi / 3, v=4.0, **PAPER)
     model = PipeModel(disc, p)
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     assert np.abs(q).max() > 0.5  # a large deformation, not the straight pipe
     K, C, M = linearized_matrices(model, q)
     n, h = disc.n, 1e-6
@@ -308,7 +308,7 @@ def test_fine_mesh_stable_below_unstable_above_vcr(params, v_cr):
     disc = FiniteElement(128, 3)
     for f, stable in ((0.95, True), (1.05, False)):
         p = params.with_flow(f * v_cr)
-        q16 = sagged_state(PipeModel(P3_16, p)).q
+        q16 = solve_sagged(PipeModel(P3_16, p)).q
         model = PipeModel(disc, p)
         q = solve_static(model, q0=project(P3_16, q16, disc), tol=1e-12).q
         assert linearly_stable(model, q, sparse=False) is stable, f
@@ -317,7 +317,7 @@ def test_fine_mesh_stable_below_unstable_above_vcr(params, v_cr):
 # ------------------------------------------------------- v_cr, events --
 def brute_force_vcr(model, v_max, dv=0.05):
     """Spectral abscissa on a grid, then bisection: a second, simple implementation."""
-    q = sagged_state(model.with_params(model.params.with_flow(0.0))).q
+    q = solve_sagged(model.with_params(model.params.with_flow(0.0))).q
 
     def state(v, q0):
         return solve_static(model.with_params(model.params.with_flow(v)), q0=q0).q
@@ -409,9 +409,9 @@ def test_alpha_pi_events_on_every_branch():
     assert kids[0].events[0].v == pytest.approx(kids[1].events[0].v, abs=1e-10)
     assert np.allclose(kids[0].theta_tip, -kids[1].theta_tip, atol=1e-8)
     # The fold, independently.
-    from fempipe.analyses.statics import continuation, switch_branch
+    from fempipe.analyses.statics import continue_static, switch_branch
 
-    br = continuation(model, "v", stop=6.0, ds_max=0.1)
+    br = continue_static(model, "v", stop=6.0, ds_max=0.1)
     b1, _ = switch_branch(
         model.with_params(model.params.with_flow(3.0)), br.bifurcations[0], "v", 6.0
     )

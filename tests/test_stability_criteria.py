@@ -14,7 +14,7 @@ import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, solve_static
 from fempipe.analyses.stability import STABILITY_TOL, root_locus, spectrum, stability_analysis
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 
 P3_16 = FiniteElement(16, 3)
 
@@ -145,7 +145,7 @@ def _states():
     out = []
     for v in (1.0, 6.0, 6.5):
         m = PipeModel(disc, Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, v=v))
-        out.append((m, sagged_state(m).q))
+        out.append((m, solve_sagged(m).q))
     for v in (12.0, 12.88):
         m = PipeModel(disc, Params(alpha=0.0, beta=0.65, gamma=10.0, mu=0.0, v=v))
         out.append((m, np.zeros(disc.n)))
@@ -153,7 +153,7 @@ def _states():
         m = PipeModel(disc, Params(alpha=np.pi, beta=0.2, gamma=40.0, mu=5e-3, v=v))
         out.append((m, np.zeros(disc.n)))  # the straight column
         # A buckled state: Newton from the state loaded slightly off the vertical.
-        lean = sagged_state(m.with_params(replace(m.params, alpha=np.pi - 0.05))).q
+        lean = solve_sagged(m.with_params(replace(m.params, alpha=np.pi - 0.05))).q
         out.append((m, solve_static(m, q0=lean).q))
     return out
 
@@ -176,7 +176,7 @@ def test_stable_flag_of_a_3000_dof_state_takes_seconds():
 
     disc = FiniteElement(1000, 3)
     model = PipeModel(disc, Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3, v=1.0))
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     linearly_stable(model, q)  # the canonical modes, once per discretization
     t = time.process_time()
     assert linearly_stable(model, q) is True
@@ -199,7 +199,7 @@ def test_linearly_stable_is_the_spectrum_criterion(params):
     from fempipe.analyses.stability import growth_rate, linearly_stable
 
     model = PipeModel(P3_16, params)
-    q = sagged_state(model).q
+    q = solve_sagged(model).q
     spec = spectrum(model, q)
     assert linearly_stable(model, q) is spec.stable
     assert growth_rate(model, q) == pytest.approx(spec.max_real, rel=1e-9, abs=1e-12)

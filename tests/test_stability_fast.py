@@ -35,7 +35,7 @@ from fempipe.analyses.stability import (
 )
 from fempipe.analyses.stability.branch_analysis import peak_candidates
 from fempipe.analyses.stability.linear import StraightPencil
-from fempipe.analyses.statics import continuation
+from fempipe.analyses.statics import continue_static
 from fempipe.validation import classical
 
 BASELINE = Path(classical.__file__).resolve().with_name("classical_baseline.py")
@@ -240,7 +240,7 @@ def test_straight_values_are_the_points_of_the_continuation():
     model = PipeModel(Modal(3), Params(alpha=0.0, beta=0.2, gamma=10.0, mu=0.0, v=0.0))
     for lo, hi, ds_max in ((0.0, 3.0, 0.1), (0.4, 2.0, 0.3)):
         m = model.with_params(replace(model.params, v=lo))
-        br = continuation(m, "v", stop=hi, ds=min(0.05, ds_max), ds_max=ds_max)
+        br = continue_static(m, "v", stop=hi, ds=min(0.05, ds_max), ds_max=ds_max)
         assert br.values.tolist() == chunked_branch._straight_values(
             lo, hi, min(0.05, ds_max), ds_max
         )

@@ -100,9 +100,9 @@ from fempipe.analyses.dynamics import (  # noqa: E402
     IntegrationError,
     PulsatingFlow,
     Trajectory,
-    initial_state,
-    integrate,
+    make_initial_state,
     simulate,
+    simulate_steps,
 )
 from fempipe.analyses.limit_cycle import (  # noqa: E402
     Attractor,
@@ -145,9 +145,9 @@ from fempipe.analyses.statics import (  # noqa: E402
     Branch,
     NewtonError,
     StaticSolution,
-    continuation,
-    sagged_state,
+    continue_static,
     solve_path,
+    solve_sagged,
     solve_static,
     switch_branch,
 )
@@ -186,8 +186,8 @@ from fempipe.studies.compare import (  # noqa: E402
 from fempipe.studies.convergence import (  # noqa: E402
     ConvergenceStudy,
     Quantity,
-    observed_order,
-    richardson,
+    estimate_order,
+    extrapolate_richardson,
     run_study,
 )
 from fempipe.studies.error_estimate import (  # noqa: E402
@@ -219,9 +219,9 @@ PUBLIC = {
     "solve_static": solve_static,
     "StaticSolution": StaticSolution,
     "NewtonError": NewtonError,
-    "sagged_state": sagged_state,
+    "solve_sagged": solve_sagged,
     "solve_path": solve_path,
-    "continuation": continuation,
+    "continue_static": continue_static,
     "switch_branch": switch_branch,
     "Branch": Branch,
     "spectrum": spectrum,
@@ -234,8 +234,8 @@ PUBLIC = {
     "spatial_critical_velocity": spatial_critical_velocity,
     "SpatialStability": SpatialStability,
     "simulate": simulate,
-    "integrate": integrate,
-    "initial_state": initial_state,
+    "simulate_steps": simulate_steps,
+    "make_initial_state": make_initial_state,
     "Trajectory": Trajectory,
     "PulsatingFlow": PulsatingFlow,
     "IntegrationError": IntegrationError,
@@ -264,8 +264,8 @@ PUBLIC = {
     "run_study": run_study,
     "ConvergenceStudy": ConvergenceStudy,
     "Quantity": Quantity,
-    "observed_order": observed_order,
-    "richardson": richardson,
+    "estimate_order": estimate_order,
+    "extrapolate_richardson": extrapolate_richardson,
     "compare_values": compare_values,
     "Comparison": Comparison,
     "ErrorEstimate": ErrorEstimate,
@@ -298,7 +298,7 @@ def test_an_unknown_name_is_an_attribute_error():
 
 
 def test_the_continuation_function_has_no_module_of_its_name():
-    """``fempipe.continuation`` is the function of :mod:`fempipe.analyses.statics`; the
+    """``fempipe.continue_static`` is the function of :mod:`fempipe.analyses.statics`; the
     engine lives in :mod:`fempipe.solvers.continuation`, so no submodule of the
     package is named like a public function (and none can shadow it)."""
     import importlib.util
@@ -307,10 +307,10 @@ def test_the_continuation_function_has_no_module_of_its_name():
         "import json, importlib.util\n"
         "import fempipe.solvers.continuation\n"
         "import fempipe\n"
-        "from fempipe import continuation\n"
-        "from fempipe.analyses.statics import continuation as fn\n"
-        "print(json.dumps([continuation is fn, fempipe.continuation is fn,"
-        " importlib.util.find_spec('fempipe.continuation') is None]))\n"
+        "from fempipe import continue_static\n"
+        "from fempipe.analyses.statics import continue_static as fn\n"
+        "print(json.dumps([continue_static is fn, fempipe.continue_static is fn,"
+        " importlib.util.find_spec('fempipe.continue_static') is None]))\n"
     )
     assert _fresh(code) == [True, True, True]
     names = set(fempipe.__all__)

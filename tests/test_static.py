@@ -6,9 +6,9 @@ import pytest
 from fempipe import FiniteElement, Modal, Params, PipeModel, PipeSI, tip_values
 from fempipe.analyses.statics import (
     NewtonError,
-    continuation,
-    sagged_state,
+    continue_static,
     solve_path,
+    solve_sagged,
     solve_static,
     switch_branch,
 )
@@ -21,7 +21,7 @@ TIP_KEYS = ("theta_tip", "eta_tip", "X_tip")
 
 def tips(disc, params, q0=None):
     model = PipeModel(disc, params)
-    sol = solve_static(model, q0=q0) if q0 is not None else sagged_state(model)
+    sol = solve_static(model, q0=q0) if q0 is not None else solve_sagged(model)
     return np.array([tip_values(disc, sol.q, params.alpha)[k] for k in TIP_KEYS])
 
 
@@ -143,7 +143,7 @@ def test_standing_column_buckles_at_greenhill_load():
     assert abs(gamma_cr - 7.8373) < 1e-4
     disc = FiniteElement(16, 3)
     model = PipeModel(disc, Params(alpha=np.pi, gamma=0.0, mu=0.0, v=0.0))
-    branch = continuation(model, "gamma", stop=12.0, ds=0.5)
+    branch = continue_static(model, "gamma", stop=12.0, ds=0.5)
     bif = branch.bifurcations
     assert len(bif) == 1 and not branch.folds
     assert abs(bif[0].value - gamma_cr) < 1e-6
@@ -174,7 +174,7 @@ def test_buckled_branches_fold_and_reconnect_in_v():
         s, logdet = np.linalg.slogdet(J)
         return s * np.exp(logdet / n)
 
-    straight = continuation(model, "v", stop=6.0, ds=0.2)
+    straight = continue_static(model, "v", stop=6.0, ds=0.2)
     assert [s.kind for s in straight.special] == ["bifurcation"]
     v_pitch = straight.special[0].value
     v_ref = brentq(det_sign_scaled, v_pitch - 0.05, v_pitch + 0.05, xtol=1e-13)
@@ -184,11 +184,11 @@ def test_buckled_branches_fold_and_reconnect_in_v():
     # locator stopped at the corrector's failure near the singular point).
     assert abs(v_pitch - v_ref) < 2e-10
 
-    column = continuation(model.with_params(Params(alpha=np.pi, gamma=0.0)), "gamma", stop=18.9)
+    column = continue_static(model.with_params(Params(alpha=np.pi, gamma=0.0)), "gamma", stop=18.9)
     up, _ = switch_branch(model, column.bifurcations[0], "gamma", stop=18.9)
     buckled = up.points[-1]
     assert abs(tip_values(disc, buckled.q, np.pi)["theta_tip"]) > 1.0
-    branch = continuation(model, "v", stop=6.0, q0=buckled.q, ds=0.2)
+    branch = continue_static(model, "v", stop=6.0, q0=buckled.q, ds=0.2)
     assert branch.end_reason == "returned to v = 0"
     assert np.allclose(branch.points[-1].q, -buckled.q, atol=1e-7)
     folds = [s for s in branch.folds if abs(s.value - v_ref) > 1e-4]
@@ -260,7 +260,7 @@ def test_sagged_state_is_the_energy_minimum_near_vertical():
     and is a minimum: lower energy and a positive definite Hessian."""
     disc = FiniteElement(16, 3)
     model = PipeModel(disc, Params(alpha=np.radians(160), gamma=18.9, v=0.0))
-    loaded = sagged_state(model)
+    loaded = solve_sagged(model)
     straightish = solve_static(model)
     assert loaded.q @ disc.tip < -2.0 and straightish.q @ disc.tip > 0.5
     assert model.potential_energy(loaded.q) < model.potential_energy(straightish.q) - 1.0
@@ -278,7 +278,7 @@ def test_gravity_loading_iterations_are_reported_apart():
     from it take a few.  Both counts must be visible separately.
     """
     model = PipeModel(FiniteElement(3, 8), Params(alpha=np.pi / 2, v=0.0))
-    loaded = sagged_state(model)
+    loaded = solve_sagged(model)
     assert loaded.loading_iterations > 5
     assert 0 <= loaded.iterations - loaded.loading_iterations <= 5
     d = loaded.to_dict()

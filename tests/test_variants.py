@@ -20,8 +20,8 @@ import scipy.linalg as sla
 from clirun import run_json
 from scipy.optimize import brentq
 
-from fempipe.analyses.dynamics import Radau, acceleration, initial_state, power_terms, simulate
-from fempipe.analyses.statics import sagged_state, solve_static
+from fempipe.analyses.dynamics import Radau, acceleration, make_initial_state, power_terms, simulate
+from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import tip_values
@@ -192,7 +192,7 @@ def test_power_balance_at_random_states(disc_name, sigma):
     p = Params(alpha=0.9, beta=0.3, gamma=12.0, mu=mu, v=v, external_damping=sigma)
     m = PipeModel(disc, replace(p, **ENERGY_VARIANTS))
     rng = np.random.default_rng(12)
-    modes = np.array([initial_state(m, r, 1.0, q_static=np.zeros(m.n))[0] for r in (1, 2, 3)])
+    modes = np.array([make_initial_state(m, r, 1.0, q_static=np.zeros(m.n))[0] for r in (1, 2, 3)])
     q, qd = 0.6 * rng.normal(size=3) @ modes, 2.0 * rng.normal(size=3) @ modes
     a = acceleration(m, q, qd)
 
@@ -223,8 +223,8 @@ def _energy_drift(rtol: float, energy_model=None) -> float:
     """Largest |E - E0| / E0 along 1 tau of large motion, v = mu = sigma = 0."""
     p = Params(alpha=0.3, v=0.0, mu=0.0, **ENERGY_VARIANTS)
     m = PipeModel(Modal(3, n_cells=8), p)
-    q0, p0 = initial_state(m, 1, 0.8)
-    q0 = q0 + initial_state(m, 2, 0.3, q_static=np.zeros(m.n))[0]
+    q0, p0 = make_initial_state(m, 1, 0.8)
+    q0 = q0 + make_initial_state(m, 2, 0.3, q_static=np.zeros(m.n))[0]
     em = energy_model or m
     E0 = em.energy(q0, p0)
     tr = simulate(m, q0, p0, 1.0, rtol=rtol)
@@ -249,7 +249,7 @@ def test_power_balance_along_trajectory_with_external_damping():
     power misses by far more."""
     p = Params(alpha=0.5, v=4.0, mu=0.02, external_damping=0.8, **ENERGY_VARIANTS)
     m = PipeModel(FiniteElement(4, 2), p)
-    q0, p0 = initial_state(m, 1, 0.3)
+    q0, p0 = make_initial_state(m, 1, 0.3)
     st = Radau(PipeDynamics(m), q0, p0, rtol=1e-7)
     E0 = m.energy(q0, p0)
     gx, gw = np.polynomial.legendre.leggauss(4)
@@ -297,7 +297,7 @@ def test_statics_against_strong_form_bvp(case):
     )
     disc = FiniteElement(32, 3)
     m = PipeModel(disc, Params(**c))
-    tip = tip_values(disc, sagged_state(m, tol=1e-12).q, c["alpha"])
+    tip = tip_values(disc, solve_sagged(m, tol=1e-12).q, c["alpha"])
     inside = any(x not in (0.5, 1.0) for _, x in c.get("springs", ()))
     tol = 1e-6 if inside else 1e-9
     assert abs(tip["theta_tip"] - ref.theta_tip) < tol
@@ -307,7 +307,7 @@ def test_statics_against_strong_form_bvp(case):
     assert abs(tip["varsigma_tip"] - ref.varsigma_tip) < tol
     # The variant matters: the paper's pipe is far from it.
     plain = Params(alpha=c["alpha"], gamma=c["gamma"], v=c["v"])
-    tip0 = tip_values(disc, sagged_state(PipeModel(disc, plain)).q, c["alpha"])
+    tip0 = tip_values(disc, solve_sagged(PipeModel(disc, plain)).q, c["alpha"])
     assert abs(tip0["theta_tip"] - ref.theta_tip) > 1e-2
 
 
@@ -343,7 +343,7 @@ def test_mirror_symmetry_with_every_variant(disc_name):
     q, qd, qdd = random_state(disc.n, seed=13)
     r1 = m1.residual(q, qd, qdd, v_dot=0.4)
     assert np.allclose(m2.residual(-q, -qd, -qdd, v_dot=0.4), -r1, atol=1e-12 * np.abs(r1).max())
-    s1, s2 = sagged_state(m1).q, sagged_state(m2).q
+    s1, s2 = solve_sagged(m1).q, solve_sagged(m2).q
     assert np.abs(s1).max() > 0.1
     assert np.allclose(s2, -s1, atol=1e-9)
     assert m2.energy(-q, -qd) == pytest.approx(m1.energy(q, qd), rel=1e-13)
@@ -418,7 +418,7 @@ def test_external_damping_shifts_every_eigenvalue_by_minus_sigma_half(disc_name,
     if curved:
         p = replace(p, alpha=math.pi / 2, gamma=10.0, springs=((20.0, 0.4),))
     m = PipeModel(disc, p)
-    q = sagged_state(m).q
+    q = solve_sagged(m).q
     assert (np.abs(q).max() > 0.5) == curved
     K, C, M = m.jacobians(q)
     n = m.n
@@ -439,7 +439,7 @@ def _slopes(errors, ns):
 
 def _static_tip(disc, c):
     m = PipeModel(disc, Params(**c))
-    q = solve_static(m, q0=sagged_state(m, tol=1e-10).q, tol=1e-12).q
+    q = solve_static(m, q0=solve_sagged(m, tol=1e-10).q, tol=1e-12).q
     return tip_values(disc, q, c["alpha"])["theta_tip"]
 
 

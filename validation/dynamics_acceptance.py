@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.analyses.dynamics import initial_state, simulate
+from fempipe.analyses.dynamics import make_initial_state, simulate
 from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.io import json_dumps, write_json
 
@@ -32,7 +32,7 @@ def steps(elements=(8, 16, 32, 64), t_end: float = 2.0) -> list[dict]:
     discs = [(f"P3:{ne}", FiniteElement(ne, 3)) for ne in elements] + [("modal:4", Modal(4))]
     for name, disc in discs:
         m = PipeModel(disc, Params(alpha=0.0, v=10.0))
-        q0, p0 = initial_state(m, 1, 0.01)
+        q0, p0 = make_initial_state(m, 1, 0.01)
         tr = simulate(m, q0, p0, t_end, rtol=1e-6)
         rows.append({"disc": name, "n": m.n, **tr.stats()})
         print(rows[-1], flush=True)

@@ -80,7 +80,7 @@ def galerkin_tip(n_modes: int) -> float:
 
 modes = np.array([1, 2, 4, 8, 16, 32])
 tip_errors = np.array([abs(galerkin_tip(n) + gamma / 6) for n in modes])
-galerkin_order, _ = fempipe.observed_order(modes, tip_errors, floor=1e-14)
+galerkin_order, _ = fempipe.estimate_order(modes, tip_errors, floor=1e-14)
 for n, e in zip(modes, tip_errors, strict=True):
     print(f"N = {n:2d} sine modes: |theta_N(1) + gamma/6| = {e:.2e}")
 print(f"observed order in N: {galerkin_order:.2f}")

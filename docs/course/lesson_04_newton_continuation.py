@@ -50,10 +50,10 @@ print("e_(k+1) / e_k^2:", ", ".join(f"{c:.3f}" for c in newton_constants))
 # mirror-image branches cross the straight one: a pitchfork.  Pseudo-arclength continuation
 # solves R(q, gamma) = 0 together with a step along the tangent, (q - q_0, gamma - gamma_0)
 # . t_0 = ds, whose Jacobian stays regular at folds; a change of sign of det J marks a
-# bifurcation, which :func:`fempipe.continuation` locates.
+# bifurcation, which :func:`fempipe.continue_static` locates.
 disc = fempipe.FiniteElement(8, 3)
 standing = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=0.0, v=0.0))
-straight = fempipe.continuation(standing, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
+straight = fempipe.continue_static(standing, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 pitchfork = straight.special[0]
 # the independent reference: Greenhill's closed form, the first zero of J_(-1/3)
 greenhill = brentq(lambda s: jv(-1.0 / 3.0, 2.0 / 3.0 * np.sqrt(s)), 5.0, 10.0, xtol=1e-14)
@@ -71,7 +71,7 @@ tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=12.0, v=0.0))
 # decides it): take the one leaning to negative theta(1), so that alpha grows against it.
 lean = fempipe.tip_values(disc, right.points[-1].q, np.pi)["theta_tip"]
 leaning = left if lean > 0 else right
-arc = fempipe.continuation(
+arc = fempipe.continue_static(
     tilted, "alpha", stop=np.pi + 0.8, q0=leaning.points[-1].q, ds=0.05, ds_max=0.1, direction=1
 )
 fold = next(s for s in arc.special if s.kind == "fold")
@@ -153,7 +153,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #
 #    .. code-block:: python
 #
-#       tall = fempipe.continuation(standing, "gamma", stop=60.0, ds=1.0, ds_max=2.0)
+#       tall = fempipe.continue_static(standing, "gamma", stop=60.0, ds=1.0, ds_max=2.0)
 #       answer = tall.special[1].value
 #       print(f"bifurcations at gamma = {[round(s.value, 5) for s in tall.special]}")
 #       check("4.2", answer)
@@ -176,7 +176,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #    .. code-block:: python
 #
 #       imperfect = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi + 0.05, gamma=0.0, v=0.0))
-#       path = fempipe.continuation(imperfect, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
+#       path = fempipe.continue_static(imperfect, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 #       n_special = len(path.special)
 #       answer = fempipe.tip_values(disc, path.points[-1].q, np.pi + 0.05)["theta_tip"]
 #       print(f"gamma = 12: theta(1) = {answer:.6f}, {n_special} special points")

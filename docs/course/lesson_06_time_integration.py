@@ -49,7 +49,7 @@ print(f"growth per halving of h: 2^{stiffness_growth:.2f} (Kelvin-Voigt: h^-4)")
 for n in (4, 8, 16):
     model = fempipe.PipeModel(fempipe.FiniteElement(n, 2), hanging.with_flow(10.0))
     q_s = fempipe.solve_static(model).q
-    q0, qd0 = fempipe.initial_state(model, mode=1, amplitude=0.01, q_static=q_s)
+    q0, qd0 = fempipe.make_initial_state(model, mode=1, amplitude=0.01, q_static=q_s)
     traj = fempipe.simulate(model, q0, qd0, 0.5, rtol=1e-6)
     print(f"P2:{n:2d}, v = 10, tau in [0, 0.5]: {traj.steps} steps")
 
@@ -60,7 +60,7 @@ for n in (4, 8, 16):
 # three sine modes, integrated to tau = 1 with fixed steps h, h/2, h/4, h/8: the
 # differences of successive end states fall as h^5, the order the theory gives (2s - 1).
 conservative = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0, mu=0.0, v=0.0))
-q0, qd0 = fempipe.initial_state(conservative, mode=1, amplitude=0.5)
+q0, qd0 = fempipe.make_initial_state(conservative, mode=1, amplitude=0.5)
 steps = (0.02, 0.01, 0.005, 0.0025)
 ends = [fempipe.simulate(conservative, q0, qd0, 1.0, h_fixed=h).q[-1] for h in steps]
 diffs = np.array([np.max(np.abs(a - b)) for a, b in zip(ends[:-1], ends[1:], strict=True)])
@@ -115,7 +115,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #       from fempipe.analyses.dynamics import power_terms
 #
 #       with_flow = fempipe.PipeModel(fempipe.Modal(3), fempipe.Params(alpha=0.0, v=3.0))
-#       q0_f, qd0_f = fempipe.initial_state(with_flow, mode=1, amplitude=0.3)
+#       q0_f, qd0_f = fempipe.make_initial_state(with_flow, mode=1, amplitude=0.3)
 #       run = fempipe.simulate(with_flow, q0_f, qd0_f, 1.0, rtol=1e-9, n_out=401)
 #       power = [power_terms(with_flow, q, qd)["dE_dtau"] for q, qd in zip(run.q, run.qdot)]
 #       answer = simpson(power, x=run.t)

@@ -200,7 +200,7 @@ for s in study.series:
 #
 #       </details>
 #
-# 3. Extrapolate by hand (``fempipe.richardson``) from P2:8 and P2:16 with the order 4 and
+# 3. Extrapolate by hand (``fempipe.extrapolate_richardson``) from P2:8 and P2:16 with the order 4 and
 #    compare with the reference of section 1.
 #
 #    .. raw:: html
@@ -214,7 +214,7 @@ for s in study.series:
 #    .. code-block:: python
 #
 #       x_8, x_16 = (x_tip(fempipe.FiniteElement(n, 2)) for n in (8, 16))
-#       answer = float(np.real(fempipe.richardson(x_8, x_16, 4.0)[0]))
+#       answer = float(np.real(fempipe.extrapolate_richardson(x_8, x_16, 4.0)[0]))
 #       print(f"Richardson: {answer:.10f}, off by {answer - reference:.1e}")
 #       check("7.3", answer)
 #

@@ -32,7 +32,7 @@ from fempipe.core.parallel import run_tasks
 from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
 
-from .dynamics import IntegrationError, initial_state
+from .dynamics import IntegrationError, make_initial_state
 from .limit_cycle import Attractor, LimitCycle, ShootingError, find_attractor, shoot
 from .periodic.points import BifurcationPoint, PointStore
 
@@ -205,9 +205,9 @@ def _start_state(m: PipeModel, q, p, previous_equilibrium: bool, perturbation: f
     With no previous state, the static state of ``m`` plus the perturbation.
     """
     if q is None:
-        q, p = initial_state(m, 1, perturbation)
+        q, p = make_initial_state(m, 1, perturbation)
     elif previous_equilibrium:
-        dq, _ = initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
+        dq, _ = make_initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
         q, p = np.asarray(q) + dq, np.zeros(m.n)
     return q, p
 

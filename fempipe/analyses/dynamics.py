@@ -5,8 +5,8 @@ Radau IIA method written on the second-order residual form of Eq. (20)
 (docs/theory/numerics.md says why), which takes the pipe as the problem
 :class:`fempipe.model.dynamics_problem.PipeDynamics` (model and flow) by the
 contract of :mod:`fempipe.solvers.radau.contract`; this module drives it: :func:`simulate` records a
-:class:`Trajectory`, :func:`integrate` yields the states step by step,
-:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`initial_state` a
+:class:`Trajectory`, :func:`simulate_steps` yields the states step by step,
+:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`make_initial_state` a
 perturbed static state.  ``Radau``, ``IntegrationError`` and ``acceleration``
 are importable from here too.
 
@@ -36,9 +36,9 @@ __all__ = [
     "Radau",
     "IntegrationError",
     "Trajectory",
-    "integrate",
+    "simulate_steps",
     "simulate",
-    "initial_state",
+    "make_initial_state",
     "acceleration",
     "energy_rate",
     "power_terms",
@@ -142,7 +142,7 @@ def energy_rate(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float 
     return power_terms(model, q, qdot, v_dot)["dE_dtau"]
 
 
-def initial_state(
+def make_initial_state(
     model: PipeModel,
     mode: int = 1,
     amplitude: float = 0.01,
@@ -180,7 +180,7 @@ def initial_state(
     return np.asarray(q_static, dtype=float) + amplitude * pert, np.zeros(model.n)
 
 
-def integrate(
+def simulate_steps(
     model: PipeModel,
     q0: np.ndarray,
     qdot0: np.ndarray | None,

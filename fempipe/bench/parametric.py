@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from fempipe.analyses.parametric import parametric_chart
+from fempipe.analyses.parametric import compute_parametric_chart
 from fempipe.analyses.stability import critical_velocity
 from fempipe.bench.harness import register
 from fempipe.model.discretization import DEFAULT_FE, parse_discretization
@@ -34,7 +34,7 @@ def bench_parametric_region(quick: bool = False) -> dict:
     model = PipeModel(disc, Params(**HANGING))
     sigmas = np.round(np.linspace(0.10, 0.19, 5 if quick else 10), 6).tolist()
     t0 = time.process_time()
-    chart = parametric_chart(model, HANGING["v"], (24.0, 36.0), sigmas)
+    chart = compute_parametric_chart(model, HANGING["v"], (24.0, 36.0), sigmas)
     chart_cpu = time.process_time() - t0
     t0 = time.process_time()
     res = critical_velocity(model, 10.0)

@@ -5,7 +5,7 @@
     case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2 and the
     Texier--Dorbolo pipe (the paper's Section 3.1, Fig. 2(b)) at alpha = pi/2, through
     :func:`fempipe.analyses.statics.solve_path` (what ``fempipe static`` does) and,
-    for comparison, the pseudo-arclength :func:`fempipe.analyses.statics.continuation`
+    for comparison, the pseudo-arclength :func:`fempipe.analyses.statics.continue_static`
     from v = 0 to 10.
 ``static_scaling``
     The same 61-point path (paper's case) on P3 meshes of 8, 16, ..., 256
@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from fempipe.analyses.statics import continuation, solve_path
+from fempipe.analyses.statics import continue_static, solve_path
 from fempipe.bench.harness import PAPER, TEXIER_DORBOLO, best_time, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
 from fempipe.model.kinematics import tip_values
@@ -35,7 +35,7 @@ def _fit_exponent(n: np.ndarray, t: np.ndarray) -> float:
 def _path_case(name: str, params, disc, values: list[float], repeats: int) -> dict:
     model = PipeModel(disc, params)
     t_path, sols = best_time(lambda: solve_path(model, values), repeats)
-    t_arc, branch = best_time(lambda: continuation(model, "v", stop=values[-1]), repeats)
+    t_arc, branch = best_time(lambda: continue_static(model, "v", stop=values[-1]), repeats)
     last = sols[-1]
     tip = tip_values(disc, last.q, params.alpha)
     tip_arc = tip_values(disc, branch.points[-1].q, params.alpha)

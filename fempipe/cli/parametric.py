@@ -1,7 +1,7 @@
 """``fempipe parametric``: where a pulsating flow v0 (1 + sigma sin(omega tau)) destabilizes the pipe.
 
 The regions of parametric resonance of the straight pipe (alpha = 0 or pi) in the
-(omega, sigma) plane (:func:`fempipe.analyses.parametric.parametric_chart`): each region's
+(omega, sigma) plane (:func:`fempipe.analyses.parametric.compute_parametric_chart`): each region's
 mode and kind (principal, omega near 2 omega_k / n; sum or difference combination), its
 threshold (the least sigma at which it opens, and the omega there) and its boundary
 omega_lo, omega_hi at each ``--sigma``; beside the chart of the discretization, the same
@@ -109,7 +109,7 @@ def _modal_list(text: str) -> tuple[int, ...]:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from fempipe.analyses.parametric import parametric_chart
+    from fempipe.analyses.parametric import compute_parametric_chart
     from fempipe.model.discretization import Modal
     from fempipe.model.operators import PipeModel
 
@@ -125,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         for disc in discs:
             try:
                 charts.append(
-                    parametric_chart(
+                    compute_parametric_chart(
                         model if disc is setup.disc else PipeModel(disc, model.params),
                         v0,
                         args.omega,

@@ -285,7 +285,7 @@ def _cost_check(v: float, t_max: float, allow: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.analyses.dynamics import PulsatingFlow, initial_state, simulate
+    from fempipe.analyses.dynamics import PulsatingFlow, make_initial_state, simulate
     from fempipe.analyses.limit_cycle import find_attractor
     from fempipe.analyses.statics import solve_static
     from fempipe.io import json_dumps
@@ -316,7 +316,7 @@ def run(args: argparse.Namespace) -> int:
     params, disc = setup.params, setup.disc
     model = PipeModel(disc, params)
     q_s = solve_static(model).q
-    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
+    q0, p0 = make_initial_state(model, mode, amplitude, q_static=q_s)
     t_start = time.perf_counter()
     cpu_start = time.process_time()
     work = 200 if args.error_estimate else 100

@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
 
     points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
     # solve_path reaches its first point by the gravity loading (gamma continued
-    # from 0, fempipe.analyses.statics.sagged_state), whose Newton iterations are in that
+    # from 0, fempipe.analyses.statics.solve_sagged), whose Newton iterations are in that
     # point's newton_iterations; the others are Newton from the previous point.
     for row, sol in zip(points, sols, strict=True):
         row["includes_gravity_loading"] = sol.loading_iterations > 0

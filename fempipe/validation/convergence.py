@@ -26,7 +26,7 @@ import numpy as np
 
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.params import PAPER_CASE
-from fempipe.studies.convergence import observed_order, richardson
+from fempipe.studies.convergence import estimate_order, extrapolate_richardson
 
 from .bvp import solve_static_bvp
 from .case import Case
@@ -113,12 +113,12 @@ def run_study(
     raw["modal"] = (np.array(sorted(mvals)), np.array([mvals[n] for n in sorted(mvals)]), None)
     top = max(int(d) for d in fe_elements)
     _, vtop, _ = raw[f"FE P{top}"]
-    ref, ref_err = richardson(vtop[-2], vtop[-1], float(fe_order[str(top)]))
+    ref, ref_err = extrapolate_richardson(vtop[-2], vtop[-1], float(fe_order[str(top)]))
     floor = max(10.0 * ref_err, roundoff * max(1.0, abs(ref)))
     series = {}
     for label, (dofs, vals, expected) in raw.items():
         err = np.abs(vals - ref)
-        order, idx = observed_order(dofs, err, floor)
+        order, idx = estimate_order(dofs, err, floor)
         series[label] = Series(label, dofs, vals, err, order, idx, expected)
     return Study(quantity, ref, ref_err, series, {n: mvals[n] for n in paper_modes})
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from fempipe.analyses.bifurcation import sweep
-from fempipe.analyses.dynamics import initial_state, simulate
+from fempipe.analyses.dynamics import make_initial_state, simulate
 from fempipe.analyses.limit_cycle import (
     TIP_KEYS,
     ShootingError,
@@ -118,7 +118,7 @@ def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
     m = model_for(disc, alpha, values[0])
     gamma, beta, mu = PAPER_CASE["gamma"], PAPER_CASE["beta"], PAPER_CASE["mu"]
     st = static_shapes(disc, alpha, gamma, [values[0]], beta=beta, mu=mu, n_points=3)
-    q0, qdot0 = initial_state(m, 1, perturbation, q_static=st.q[0])
+    q0, qdot0 = make_initial_state(m, 1, perturbation, q_static=st.q[0])
     return sweep(m, values, "up", q0=q0, qdot0=qdot0, perturbation=perturbation)
 
 

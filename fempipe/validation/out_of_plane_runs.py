@@ -20,7 +20,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from fempipe.analyses import stability
-from fempipe.analyses.statics import sagged_state, solve_static
+from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.operators import PipeModel
 from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
@@ -127,7 +127,7 @@ def identity_checks(ref):
         for name in ref.value("identity_discretizations"):
             m = PipeModel(_disc(name), p)
             mo = out_of_plane_model(m)
-            q = sagged_state(m).q
+            q = solve_sagged(m).q
             mats = [
                 _rel(a, b) for a, b in zip(mo.linearization(q), m.linearization(q), strict=True)
             ]

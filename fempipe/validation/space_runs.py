@@ -16,7 +16,7 @@ from fempipe.analyses.limit_cycle import LimitCycle, find_attractor, shoot
 from fempipe.analyses.space.onset import SpaceHopfNormalForm, space_hopf_normal_form
 from fempipe.analyses.space.shooting import shoot_space
 from fempipe.analyses.stability.spatial import spatial_critical_velocity
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
@@ -61,7 +61,7 @@ def onset(elements: int, alpha: float, v_max: float = 7.0) -> Onset:
     vo = spatial_critical_velocity(pm, v_max=v_max).out_of_plane.v_cr
     if vo is None:
         raise ValueError(f"no out-of-plane loss of stability below v = {v_max} at alpha = {alpha}")
-    q = sagged_state(pm.with_params(replace(pm.params, v=vo))).q
+    q = solve_sagged(pm.with_params(replace(pm.params, v=vo))).q
     return Onset(elements, pm, space_hopf_normal_form(pm, q, vo, v_out_of_plane=vo))
 
 

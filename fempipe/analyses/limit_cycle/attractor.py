@@ -20,7 +20,7 @@ from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
-from ..dynamics import Trajectory, initial_state
+from ..dynamics import Trajectory, make_initial_state
 from ..stability import linearly_stable
 from .results import Attractor, ShootingError, state_distance
 from .shooting import shoot
@@ -208,7 +208,7 @@ class _AttractorSearch:
         if q0 is None:
             if q_s is None:
                 raise ValueError("no initial state given and the static problem has no solution")
-            q0, qdot0 = initial_state(model, 1, perturbation, q_static=q_s)
+            q0, qdot0 = make_initial_state(model, 1, perturbation, q_static=q_s)
         qdot0 = np.zeros(self.n) if qdot0 is None else np.asarray(qdot0, dtype=float)
         self.level = (
             eta_tip(self.disc, q_s) if q_s is not None else eta_tip(self.disc, np.asarray(q0))

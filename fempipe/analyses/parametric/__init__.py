@@ -7,9 +7,9 @@ of its regions (:mod:`.chart`), and the periodic response of a bent pipe with it
 
 from __future__ import annotations
 
-from .chart import ParametricChart, parametric_chart
+from .chart import ParametricChart, compute_parametric_chart
 from .floquet import PulsationPencil, ReducedPulsation, floquet_multipliers
-from .forced import ForcedResponse, forced_response
+from .forced import ForcedResponse, solve_forced_response
 from .regions import Candidate, ParametricRegion, candidates, locate_region
 
 __all__ = [
@@ -21,7 +21,7 @@ __all__ = [
     "ReducedPulsation",
     "candidates",
     "floquet_multipliers",
-    "forced_response",
+    "solve_forced_response",
     "locate_region",
-    "parametric_chart",
+    "compute_parametric_chart",
 ]

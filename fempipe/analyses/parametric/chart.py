@@ -1,6 +1,6 @@
 """The chart of parametric resonance of the straight pipe: every region of (omega, sigma).
 
-:func:`parametric_chart` searches every principal and combination resonance of the mean
+:func:`compute_parametric_chart` searches every principal and combination resonance of the mean
 flow's frequencies whose nominal frequency lies in the band, keeps those that open for
 sigma up to the largest requested and whose critical multiplier has the character of their
 kind, and returns them with their thresholds and boundaries.  On the straight pipe the
@@ -24,7 +24,7 @@ from fempipe.model.params import Params
 from .floquet import PulsationPencil, ReducedPulsation
 from .regions import Candidate, ParametricRegion, candidates, locate_region
 
-__all__ = ["ParametricChart", "parametric_chart"]
+__all__ = ["ParametricChart", "compute_parametric_chart"]
 
 #: Half-width of the frequency window searched for a region's tip, relative to its nominal
 #: frequency (also bounded by the midpoints to the neighbouring candidates).
@@ -135,7 +135,7 @@ def _same_tip(a: ParametricRegion, b: ParametricRegion) -> bool:
 
 
 @single_blas
-def parametric_chart(
+def compute_parametric_chart(
     model: PipeModel,
     v0: float,
     band: tuple[float, float],

@@ -2,7 +2,7 @@
 
 For 0 < alpha < pi the static shape depends on the flow, so a pulsating flow
 v0 (1 + sigma sin(omega tau)) moves the pipe: Eq. (20) has a periodic solution of the
-pulsation's period 2 pi / omega near the static state.  :func:`forced_response` finds it by
+pulsation's period 2 pi / omega near the static state.  :func:`solve_forced_response` finds it by
 Newton's method on the period map (the monodromy matrix from the integrator's sensitivity,
 the problem being non-autonomous: no phase condition) and returns its multipliers, those of
 the motion in the plane.  At sigma = 0 it is the static state, and its multipliers are
@@ -17,14 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from fempipe.analyses.dynamics import PulsatingFlow
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 from fempipe.core.errors import SolverError
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import Radau
 
-__all__ = ["ForcedResponse", "forced_response"]
+__all__ = ["ForcedResponse", "solve_forced_response"]
 
 
 @dataclass(frozen=True)
@@ -79,7 +79,7 @@ def _period_map(
     return np.r_[stepper.q, stepper.qdot], stepper.sensitivity_matrix, tips
 
 
-def forced_response(
+def solve_forced_response(
     model: PipeModel,
     sigma: float,
     omega: float,
@@ -116,7 +116,7 @@ def forced_response(
     flow = PulsatingFlow(model.params.v, sigma, omega)
     n = model.n
     if guess is None:
-        x = np.r_[sagged_state(model).q, np.zeros(n)]
+        x = np.r_[solve_sagged(model).q, np.zeros(n)]
     else:
         x = np.r_[guess[0], guess[1]]
     T = 2 * math.pi / omega

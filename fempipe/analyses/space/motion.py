@@ -30,7 +30,7 @@ from ...model.operators import PipeModel
 from ...model.space import SpaceModel, planar_state
 from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
-from ..dynamics import initial_state
+from ..dynamics import make_initial_state
 from ..limit_cycle.results import LimitCycle, ShootingError
 from ..statics import solve_static
 from .shooting import section_value, shoot_space
@@ -380,7 +380,7 @@ class _Returns:
 def _perturbed_static_state(model, space, q_s, mode, amplitude, out_of_plane_amplitude):
     """(U0, Ud0): the static state perturbed in the plane (as the planar ``simulate``) and
     out of it (:func:`out_of_plane_perturbation`)."""
-    q0, p0 = initial_state(model, mode, amplitude, q_static=q_s)
+    q0, p0 = make_initial_state(model, mode, amplitude, q_static=q_s)
     a0, b0 = out_of_plane_perturbation(space, q_s, mode, out_of_plane_amplitude)
     U0, Ud0 = planar_state(q0), planar_state(p0)
     nt = model.disc.n

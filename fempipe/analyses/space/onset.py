@@ -36,7 +36,7 @@ from ..stability.hopf.flutter import EVENT_KEYS
 from ..stability.hopf.lyapunov import HopfCoefficient, lyapunov_coefficient
 from ..stability.hopf.normal_form import predicted_cycle_state
 from ..stability.hopf.pipe import dense
-from ..statics import sagged_state
+from ..statics import solve_sagged
 
 __all__ = [
     "SpaceHopfNormalForm",
@@ -364,7 +364,7 @@ def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:
             "in-plane normal form is the planar cycle's; the whirl is fempipe simulate --3d's)"
         )
     try:
-        q = sagged_state(planar.with_params(replace(planar.params, v=v))).q
+        q = solve_sagged(planar.with_params(replace(planar.params, v=v))).q
         nf = space_hopf_normal_form(planar, q, v, v_out_of_plane=v)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
         return unavailable(f"no 3-D normal form: {exc}")

@@ -1,7 +1,7 @@
 """A static branch continued in v piece by piece, and the straight branch without continuation.
 
 :class:`ChunkedBranch` is what the stability analysis walks along: the points
-of :func:`fempipe.analyses.statics.continuation`, produced as far as the
+of :func:`fempipe.analyses.statics.continue_static`, produced as far as the
 analysis asks, or, where the primary branch is the straight pipe with no
 branch point in the range (alpha = 0 or pi), the same points written down
 without a Newton iteration (the Notes of
@@ -17,8 +17,8 @@ import numpy as np
 from fempipe.analyses.statics import (
     Branch,
     BranchPoint,
-    continuation,
-    sagged_state,
+    continue_static,
+    solve_sagged,
     solve_static,
 )
 from fempipe.model.operators import PipeModel
@@ -69,13 +69,13 @@ class ChunkedBranch:
 
         else:
             m = model.with_params(replace(model.params, v=lo))
-            q = sagged_state(m).q if q0 is None else solve_static(m, q0=q0).q
+            q = solve_sagged(m).q if q0 is None else solve_static(m, q0=q0).q
 
             def advance(piece_start, tangent):
                 v_a, q_a = piece_start
                 stop = hi if chunk is None else min(hi, v_a + chunk)
                 ma = model.with_params(replace(model.params, v=v_a))
-                return continuation(ma, "v", stop=stop, q0=q_a, tangent=tangent, **kw)
+                return continue_static(ma, "v", stop=stop, q0=q_a, tangent=tangent, **kw)
 
         self._next = lambda: advance((lo, q), None)
         self._hi = hi
@@ -142,7 +142,7 @@ STRAIGHT_STEP = 4.0
 
 
 def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[float]:
-    """The v of the points :func:`fempipe.analyses.statics.continuation` visits on a straight branch.
+    """The v of the points :func:`fempipe.analyses.statics.continue_static` visits on a straight branch.
 
     There the tangent is (0, 1), the corrector converges in one iteration,
     and the step grows by 1.5 from ``ds`` up to ``ds_max``; the last point
@@ -191,7 +191,7 @@ def _straight_without_branch_points(model: PipeModel, lo: float, hi: float, kw: 
 def _straight_piece(
     model: PipeModel, v_a: float, stop: float, ds: float, ds_max: float, max_steps: int
 ) -> Branch:
-    """The straight branch from v_a to stop as :func:`fempipe.analyses.statics.continuation` returns it.
+    """The straight branch from v_a to stop as :func:`fempipe.analyses.statics.continue_static` returns it.
 
     Only called after :func:`_straight_without_branch_points`: the points
     are theta = 0 at the values of :func:`_straight_values`, no folds, no

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fempipe.analyses.statics import sagged_state
+from fempipe.analyses.statics import solve_sagged
 from fempipe.core.parallel import single_blas
 from fempipe.model.kinematics import shape
 from fempipe.model.operators import PipeModel
@@ -122,7 +122,7 @@ def spectrum(
     ----------
     model : PipeModel
     q : ndarray, shape (n,), optional
-        The static state; default :func:`fempipe.analyses.statics.sagged_state`.
+        The static state; default :func:`fempipe.analyses.statics.solve_sagged`.
     method : {'auto', 'qz', 'shift-invert'}
         Dense eigensolver (see :func:`quadratic_eigen`).
     tolerance : float
@@ -147,7 +147,7 @@ def spectrum(
             "of the clamped-free beam frequencies; refine it"
         )
     if q is None:
-        q = sagged_state(model).q
+        q = solve_sagged(model).q
     e = classify_spectrum(model, q, res, method)
     tracker, _ = reference_tracker(model, e, res, method)
     keep = e.resolved[tracker.first_idx]

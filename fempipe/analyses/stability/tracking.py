@@ -13,9 +13,9 @@ import numpy as np
 
 from fempipe.analyses.statics import (
     NewtonError,
-    continuation,
-    sagged_state,
+    continue_static,
     solve_path,
+    solve_sagged,
     solve_static,
 )
 from fempipe.core.matching import assignment
@@ -227,7 +227,7 @@ def reference_tracker(model: PipeModel, e: ClassifiedSpectrum, res: Resolution, 
     if e.v == 0.0:
         return ModeTracker.canonical(e), 0
     m = model.with_params(replace(model.params, v=e.v))
-    back = continuation(
+    back = continue_static(
         m, "v", stop=0.0, q0=e.q, ds=REFERENCE_STEP, ds_max=REFERENCE_STEP, detect=False
     )
     if back.end_reason != "stop":
@@ -385,7 +385,7 @@ def root_locus(
     values : sequence of float
         Flow velocities, in the order the branch is followed.
     q0 : ndarray, optional
-        Static state at ``values[0]`` (default: :func:`fempipe.analyses.statics.sagged_state`).
+        Static state at ``values[0]`` (default: :func:`fempipe.analyses.statics.solve_sagged`).
     n_modes : int or None
         Report modes 1..n_modes (None: every resolved mode); every mode that
         is unstable at some v is reported too, whatever its number.  Every
@@ -443,7 +443,7 @@ def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[Root
         raise ValueError(f"discretization {model.disc.name} resolves no mode; refine it")
     m0 = model.with_params(replace(model.params, v=values[0]))
     if q0 is None:
-        q0 = sagged_state(m0).q
+        q0 = solve_sagged(m0).q
     states = solve_path(m0, values, q0=q0)
     paths = [TrackedPath(m, res, method) for m in models]
     keep: list[list[int]] = [[] for _ in models]  # sample index of each requested value

@@ -43,7 +43,7 @@ __all__ = [
     "Branch",
     "SpecialPoint",
     "StaticBranchPolicy",
-    "continuation",
+    "continue_static",
     "switch_branch",
 ]
 
@@ -184,7 +184,7 @@ def interp_state(a: CurvePoint, b: CurvePoint, value: float) -> np.ndarray:
     return a.q + s * (b.q - a.q)
 
 
-def continuation(
+def continue_static(
     model: PipeModel,
     parameter: str = "v",
     stop: float = 10.0,
@@ -319,6 +319,8 @@ def switch_branch(
             )
         y = res[0]
         start = family.at(float(y[n]))
-        br = continuation(start, parameter, stop=stop, q0=y[:n], tangent=sgn * phi, ds=ds, **kwargs)
+        br = continue_static(
+            start, parameter, stop=stop, q0=y[:n], tangent=sgn * phi, ds=ds, **kwargs
+        )
         out.append(br)
     return out[0], out[1]

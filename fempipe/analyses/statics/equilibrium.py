@@ -68,7 +68,7 @@ class StaticSolution:
     params : Params
     iterations : int
         Newton iterations used, all of them: for a state reached by gravity
-        loading (:func:`fempipe.analyses.statics.sagged_state`) those of the loading
+        loading (:func:`fempipe.analyses.statics.solve_sagged`) those of the loading
         included.
     residual_norm : float
         Euclidean norm of R(q, 0, 0) at return.

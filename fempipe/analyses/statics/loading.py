@@ -1,10 +1,10 @@
 """The state a pipe reaches when gravity is switched on, and states along a path.
 
-:func:`sagged_state` follows the straight pipe at gamma = 0 to the actual
+:func:`solve_sagged` follows the straight pipe at gamma = 0 to the actual
 gamma (the primary branch of every stability analysis); :func:`solve_path`
 gives the states along a list of parameter values, what ``fempipe static``
 computes, by Newton (:func:`fempipe.analyses.statics.equilibrium.solve_static`) bridged by
-continuation (:func:`~fempipe.analyses.statics.branches.continuation`) where
+continuation (:func:`~fempipe.analyses.statics.branches.continue_static`) where
 Newton fails.
 """
 
@@ -20,15 +20,15 @@ import scipy.sparse as sp
 
 from fempipe.model.operators import PipeModel
 
-from .branches import continuation
+from .branches import continue_static
 from .equilibrium import NewtonError, StaticSolution, solve_static
 
-__all__ = ["sagged_state", "solve_path"]
+__all__ = ["solve_sagged", "solve_path"]
 
 log = logging.getLogger(__name__)
 
 
-def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
+def solve_sagged(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
     """The static state reached by switching gravity on slowly: continuation in gamma from 0.
 
     At gamma = 0 the straight pipe is the solution for every v and alpha;
@@ -55,7 +55,7 @@ def sagged_state(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
     start = model.with_params(replace(p, gamma=0.0))
     q = None
     for ds_max in (1.0, 0.5, 0.1, 0.02):
-        branch = continuation(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=ds_max)
+        branch = continue_static(start, "gamma", stop=p.gamma, tol=tol, detect=False, ds_max=ds_max)
         if branch.end_reason != "stop":
             raise NewtonError(
                 f"gravity loading did not reach gamma={p.gamma:.6g} at alpha={p.alpha:.6g}, "
@@ -100,7 +100,7 @@ def solve_path(
     """Static states at the given parameter values, following one branch.
 
     The first value is solved by Newton from ``q0`` (default: the
-    gravity-sagged state of :func:`sagged_state`); each
+    gravity-sagged state of :func:`solve_sagged`); each
     next one starts from a linear extrapolation of the previous two.  If Newton
     fails (a fast-changing or folded branch), the gap is bridged by
     pseudo-arclength continuation, which passes folds.
@@ -119,7 +119,7 @@ def solve_path(
     for i, value in enumerate(values):
         m = model.with_params(replace(model.params, **{parameter: value}))
         if not prev_q and q0 is None:
-            sol = sagged_state(m, tol=tol)
+            sol = solve_sagged(m, tol=tol)
             out.append(sol)
             prev_q.append(sol.q)
             prev_v.append(value)
@@ -137,7 +137,7 @@ def solve_path(
             if not prev_q:
                 raise
             start = model.with_params(replace(model.params, **{parameter: prev_v[-1]}))
-            br = continuation(start, parameter, stop=value, q0=prev_q[-1], tol=tol, detect=False)
+            br = continue_static(start, parameter, stop=value, q0=prev_q[-1], tol=tol, detect=False)
             if br.points[-1].value != value:
                 raise
             sol = solve_static(m, q0=br.points[-1].q, tol=tol)

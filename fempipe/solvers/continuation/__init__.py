@@ -13,7 +13,7 @@
   gives the sign of the determinant (the test function of branch points).
 
 The static branches of the pipe (in v, gamma, alpha) are
-:func:`fempipe.analyses.statics.continuation`; the branches of periodic orbits
+:func:`fempipe.analyses.statics.continue_static`; the branches of periodic orbits
 :func:`fempipe.analyses.periodic.continue_cycles`.
 """
 

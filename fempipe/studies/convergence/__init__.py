@@ -6,16 +6,16 @@ discretizations of each :class:`Family` -- Lagrange elements P_k on meshes of do
 element counts, sine or beam modes of doubling N -- and reports for each family the values,
 the errors against a reference and the observed order (:func:`run_study`,
 :class:`ConvergenceStudy`).  The reference is the Richardson extrapolation of the best
-family's two finest values (:func:`richardson`), with the other families' extrapolations (and
+family's two finest values (:func:`extrapolate_richardson`), with the other families' extrapolations (and
 for static tip values the collocation solution of the strong form) as independent values;
-``Reference.method`` records how it was formed.  The observed order (:func:`observed_order`)
+``Reference.method`` records how it was formed.  The observed order (:func:`estimate_order`)
 is fitted over the asymptotic range only.
 
 How the reference and the fit are formed: docs/cli/commands.md, "fempipe convergence"; the
 theoretical orders: docs/theory/conventions.md and docs/theory/convergence.md.
 """
 
-from .orders import extrapolate, local_orders, observed_order, richardson
+from .orders import estimate_order, extrapolate, extrapolate_richardson, local_orders
 from .quantities import (
     CRITICAL_QUANTITIES,
     CYCLE_QUANTITIES,
@@ -45,8 +45,8 @@ __all__ = [
     "Reference",
     "ConvergenceStudy",
     "run_study",
-    "observed_order",
-    "richardson",
+    "estimate_order",
+    "extrapolate_richardson",
     "local_orders",
     "extrapolate",
     "doubling",

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-__all__ = ["observed_order", "richardson", "local_orders", "extrapolate"]
+__all__ = ["estimate_order", "extrapolate_richardson", "local_orders", "extrapolate"]
 
 
-def observed_order(
+def estimate_order(
     dofs: np.ndarray, errors: np.ndarray, floor: float, n_points: int = 3
 ) -> tuple[float, tuple[int, ...]]:
     """Slope of log(err) against log(dofs) over the finest ``n_points`` points with err > floor.
@@ -28,7 +28,7 @@ def observed_order(
     return float(-slope), idx
 
 
-def richardson(
+def extrapolate_richardson(
     coarse: complex, fine: complex, order: float, ratio: float = 2.0
 ) -> tuple[complex, float]:
     """Richardson extrapolation and its error estimate (the size of the correction)."""
@@ -95,7 +95,7 @@ def extrapolate(f, values: np.ndarray, tol: float, p: float | None):
         source = f"observed local order {p:.2f}"
     else:
         source = f"theoretical order {p:g}"
-    val, corr = richardson(values[i], values[j], p, r)
+    val, corr = extrapolate_richardson(values[i], values[j], p, r)
     raw = corr
     err = max(corr, floor)
     how = (

@@ -285,10 +285,10 @@ class Quantity:
 
     def _parametric(self, model) -> float:
         """The threshold of the first region of parametric resonance to open in the band."""
-        from fempipe.analyses.parametric import parametric_chart
+        from fempipe.analyses.parametric import compute_parametric_chart
         from fempipe.core.errors import SolverError
 
-        chart = parametric_chart(
+        chart = compute_parametric_chart(
             model, self.params.v, self.omega_band, [self.sigma_max], sigma_tol=PARAMETRIC_TOL
         )
         if not chart.regions:

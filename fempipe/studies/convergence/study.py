@@ -17,7 +17,7 @@ import numpy as np
 from fempipe.core.errors import SolverError
 from fempipe.core.parallel import run_tasks, single_blas_thread
 
-from .orders import extrapolate, local_orders, observed_order
+from .orders import estimate_order, extrapolate, local_orders
 from .quantities import Family, Quantity
 
 __all__ = ["ORDER_BAND", "Series", "Reference", "ConvergenceStudy", "run_study"]
@@ -245,7 +245,7 @@ def run_study(
     for f, values, fails, cpu in raw:
         dofs = np.array([f.dofs(n) for n in f.sizes])
         errors = np.abs(values - reference.value).astype(float)
-        order, fit = observed_order(dofs, errors, floor)
+        order, fit = estimate_order(dofs, errors, floor)
         e = extrap[f.label]
         series.append(
             Series(

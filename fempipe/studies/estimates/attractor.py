@@ -116,7 +116,7 @@ def refined_attractor(
         As for :func:`~fempipe.analyses.limit_cycle.find_attractor`.
     mode, amplitude : int, float
         The initial perturbation of a pulsating flow's run
-        (:func:`fempipe.analyses.dynamics.initial_state`).
+        (:func:`fempipe.analyses.dynamics.make_initial_state`).
     flow : PulsatingFlow, optional
         The pulsating flow (with ``attractor`` None).
     fine : FiniteElement or Modal, optional
@@ -189,13 +189,13 @@ def _refined_forced(
     """A pulsating flow integrated again from the refined static state: its tip extrema
     over the second half of the run."""
     # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.analyses.dynamics import initial_state, simulate
+    from fempipe.analyses.dynamics import make_initial_state, simulate
     from fempipe.analyses.limit_cycle import TIP_KEYS
     from fempipe.analyses.statics import solve_static
 
     disc, fine, params = model.disc, fine_model.disc, model.params
     q_s = solve_static(fine_model, project(disc, q_static, fine)).q
-    q0, p0 = initial_state(fine_model, mode, amplitude, q_static=q_s)
+    q0, p0 = make_initial_state(fine_model, mode, amplitude, q_static=q_s)
     tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
     tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
     tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
