@@ -1,18 +1,9 @@
 """The first-order (companion) form of a quadratic eigenproblem.
 
-With z = (x, lambda x) the quadratic eigenproblem (lambda^2 M + lambda C + K) x = 0 is the
-generalised one A z = lambda B z of the pencil
-
-    A = [[0, I], [-K, -C]],   B = [[I, 0], [0, M]],
-
-and, for an invertible M, the standard one of the matrix
-B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]].
-
-Linear algebra only: these builders know nothing of the pipe.  The stability analysis and
-the Hopf normal forms share them, so their matrices are formed by the same floating-point
-operations: :func:`first_order_pencil` does no arithmetic at all (the generalised
-eigensolvers factor B themselves); :func:`first_order_matrix` solves with M by one Cholesky
-factorisation or by LU per block.
+With z = (x, lambda x), (lambda^2 M + lambda C + K) x = 0 is A z = lambda B z with
+A = [[0, I], [-K, -C]], B = [[I, 0], [0, M]], or the standard problem of B^{-1} A.  Linear
+algebra only, shared by the stability analysis and the Hopf normal forms so that their
+matrices come from the same floating-point operations.  Derivation: docs/theory/stability.md.
 """
 
 from __future__ import annotations
@@ -31,14 +22,12 @@ def first_order_pencil(K, C, M) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     K, C, M : ndarray, shape (n, n)
-        Dense stiffness, damping and mass matrices (real or complex).
+        Dense stiffness, damping and mass (real or complex).
 
     Returns
     -------
     A, B : ndarray, shape (2n, 2n)
-        ``A = [[0, I], [-K, -C]]`` and ``B = [[I, 0], [0, M]]``:
-        A z = lambda B z with z = (x, lambda x).  No arithmetic beyond the
-        negations, so any eigensolver of the pencil sees exactly K, C and M.
+        ``[[0, I], [-K, -C]]`` and ``[[I, 0], [0, M]]``, no arithmetic beyond negations.
 
     Examples
     --------
@@ -62,29 +51,17 @@ def first_order_matrix(
     factor: Literal["cholesky", "lu"] = "cholesky",
     mass_factor: tuple | None = None,
 ) -> np.ndarray:
-    """The matrix B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]] of the first-order form.
-
-    M^{-1} is never formed.
+    """B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]], without forming M^{-1}.
 
     Parameters
     ----------
     K, C, M : ndarray, shape (n, n)
-        Dense real stiffness, damping and mass matrices.
+        Dense real stiffness, damping and mass.
     factor : {'cholesky', 'lu'}
-        ``"cholesky"`` (M symmetric positive definite): one
-        :func:`scipy.linalg.cho_factor` of M and both blocks in one
-        :func:`scipy.linalg.cho_solve` of ``[K, C]``, written into a zero
-        matrix whose upper right block is set to I.  ``"lu"``: one
-        :func:`scipy.linalg.solve` per block (M factorised twice), the
-        matrix assembled by :func:`numpy.block`.  The two differ by
-        round-off.
+        One Cholesky of an SPD M for both blocks, or one LU solve per block (they differ by
+        round-off).
     mass_factor : tuple, optional
-        ``scipy.linalg.cho_factor(M)`` if the caller has it already
-        (``factor="cholesky"`` only); M is then not factorised again.
-
-    Returns
-    -------
-    ndarray, shape (2n, 2n)
+        ``scipy.linalg.cho_factor(M)`` if the caller has it (``"cholesky"`` only).
 
     Examples
     --------

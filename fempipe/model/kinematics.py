@@ -1,8 +1,7 @@
 """Centerline geometry from the rotation angle (Eqs. (5), (27), (28)).
 
-The displacements and global coordinates are integrals of theta, evaluated
-with the discretization's own integration operator so that they inherit its
-accuracy: exact integrals of the interpolant at cell edges.
+Displacements and global coordinates are integrals of theta by the discretization's own
+integration operator: exact integrals of the interpolant at cell edges.
 """
 
 from __future__ import annotations
@@ -19,18 +18,11 @@ __all__ = ["Shape", "shape", "tip_values", "tip_velocity"]
 
 @dataclass(frozen=True)
 class Shape:
-    """A deformed centerline, dimensionless (divide by nothing, multiply by L for m).
+    """A deformed centerline, dimensionless (multiply by L for m).
 
-    Attributes
-    ----------
-    xi : ndarray, shape (m,)
-        Material coordinate, from 0 (clamp) to 1 (free end).
-    theta : ndarray, shape (m,)
-        Rotation angle, rad.
-    varsigma, eta : ndarray, shape (m,)
-        Axial and lateral displacement in the local frame, Eq. (5).
-    X_g, Z_g : ndarray, shape (m,)
-        Global coordinates, X_g along gravity (down), Eq. (28).
+    Attributes ``xi`` (0 at the clamp), ``theta`` (rad), ``varsigma``, ``eta`` (axial and
+    lateral displacement, Eq. (5)), ``X_g``, ``Z_g`` (global coordinates, X_g along gravity,
+    Eq. (28)), each of shape (m,).
     """
 
     xi: np.ndarray
@@ -61,12 +53,7 @@ def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: in
     alpha : float
         Inclination, rad (Eq. (28)).
     points_per_cell : int
-        Samples per quadrature cell; the integrals are exact at cell edges and
-        at the sampled interior points they use the same Gauss interpolation.
-
-    Returns
-    -------
-    Shape
+        Samples per quadrature cell (exact at cell edges, Gauss interpolation inside).
     """
     xi = _edge_points(disc, points_per_cell)
     quad = disc.quad
@@ -95,25 +82,22 @@ def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: in
 
 
 def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
-    """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
+    """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip (Eqs. (5), (28)).
 
-    The displacements (Eq. (5)) and global coordinates (Eq. (28)) at xi = 1
-    are the integrals of cos theta, sin theta over [0, 1], summed exactly on
-    the interpolated integrands by the discretization's Gauss rule.  The one
-    place the package computes the tip's geometry.
+    The one place the package computes the tip's geometry: integrals of cos theta, sin theta
+    over [0, 1] by the discretization's Gauss rule.
 
     Parameters
     ----------
     disc : Discretization
     q : ndarray, shape (n,) or (m, n)
-        One state or m states.
     alpha : float
         Inclination, rad.
 
     Returns
     -------
     dict
-        Floats for one state, arrays of shape (m,) for m states.
+        Floats for one state, arrays (m,) for m states.
     """
     q = np.asarray(q)
     th = disc.Phi @ q.T  # (n_q,) or (n_q, m)
@@ -133,17 +117,7 @@ def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
 def tip_velocity(disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float) -> dict:
     """Tip velocities, d/dtau of varsigma_tip, eta_tip, X_tip, Z_tip (Eq. (27)).
 
-    Parameters
-    ----------
-    disc : Discretization
-    q, qdot : ndarray, shape (n,) or (m, n)
-        One state or m states.
-    alpha : float
-
-    Returns
-    -------
-    dict
-        Floats for one state, arrays of shape (m,) for m states.
+    Shapes as in :func:`tip_values`, with ``qdot`` shaped like ``q``.
     """
     q, qdot = np.asarray(q), np.asarray(qdot)
     th = disc.Phi @ q.T

@@ -1,19 +1,11 @@
 """Out-of-plane perturbations of a *moving* planar state: the linear problem, one operator per term.
 
-:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane about a planar
-static state.  Along a planar limit cycle the state moves, and the out-of-plane
-perturbations obey a linear equation whose coefficients follow the cycle,
-
-    M psi_ddot + C(tau) psi_dot + K(tau) psi = 0,
-
-whose monodromy over one period holds the cycle's out-of-plane Floquet multipliers.  It is
-the 3-D model (:mod:`fempipe.model.space`) in another parametrization, one unknown psi on
-the discretization of theta and no gauge, so the two computations of the multipliers are
-independent.  :class:`OutOfPlaneMotion` holds the terms: those of the static problem, the
-axial force of the moving pipe and the Kelvin-Voigt stiffness of its bending rate; at rest
-they equal the static model's matrices.  :class:`OutOfPlaneVariation` is the integrator's
-problem of the planar motion together with its variation (unknowns (theta, psi)): its
-sensitivity over a period is the planar monodromy and the out-of-plane one, block by block.
+Along a planar limit cycle the out-of-plane perturbations obey
+M psi_ddot + C(tau) psi_dot + K(tau) psi = 0, whose monodromy holds the cycle's out-of-plane
+Floquet multipliers: the 3-D model in another parametrization (one unknown psi, no gauge),
+so the two computations are independent.  :class:`OutOfPlaneMotion` holds the terms (at rest
+the static model's matrices); :class:`OutOfPlaneVariation` is the integrator's problem of the
+planar motion with its variation.
 
 Derivation: docs/theory/out_of_plane.md, "About a moving planar state".
 """
@@ -44,14 +36,7 @@ class _Base:
 
 
 class OutOfPlaneMotion:
-    """K(tau), C(tau), M of out-of-plane perturbations about a moving planar state.
-
-    Parameters
-    ----------
-    model : PipeModel
-        The planar pipe (discretization and parameters).  Springs are refused,
-        as by the 3-D model.
-    """
+    """K(tau), C(tau), M of out-of-plane perturbations about a moving planar state (no springs)."""
 
     def __init__(self, model: PipeModel) -> None:
         if model.params.springs:
@@ -75,13 +60,8 @@ class OutOfPlaneMotion:
 
     # ---------------------------------------------------- stiffness --
     def base_force(self, b: _Base) -> np.ndarray:
-        """G_0: the force field of the planar motion, shape (n_q, 2) (in-plane components).
-
-        The 3-D model's terms at the planar state
-        (:meth:`fempipe.model.space.SpaceModel.force_field`):
-        ``C^R C t_ddot + 2 v sqrt(beta) C^R t_dot + v^2 t(1) - gamma (1 - xi + Gamma) g
-        + Gamma \\int t_ddot + sigma C^R C t_dot`` with t_dot = theta_dot n and
-        t_ddot = theta_ddot n - theta_dot^2 t_p.
+        """G_0, the force field of the planar motion, shape (n_q, 2): the 3-D model's
+        :meth:`~fempipe.model.space.SpaceModel.force_field` at the planar state.
         """
         p, quad, st = self.params, self.quad, b.state
         t = np.stack([np.cos(st.theta), np.sin(st.theta)], axis=1)
@@ -111,11 +91,7 @@ class OutOfPlaneMotion:
 
     # ------------------------------------------------ Kelvin-Voigt --
     def kelvin_voigt(self, b: _Base) -> tuple[np.ndarray, np.ndarray]:
-        """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state.
-
-        Damping ``mu \\int chi phi_i chi phi_j``; stiffness from the planar bending
-        rate (docs/theory/out_of_plane.md), zero at rest.
-        """
+        """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state; stiffness zero at rest."""
         f = self.static.fixed()
         Phi, dPhi, w, C = f["Phi"], f["dPhi"], self.w, self.quad.cumulative
         dtheta = b.state.dtheta
@@ -151,20 +127,10 @@ class OutOfPlaneMotion:
 class OutOfPlaneVariation:
     """The planar motion and its out-of-plane variation as the integrator's problem.
 
-    Unknowns (q, psi), ``n = 2 model.n``: the planar equations (Eq. (20), the
-    planar model's residual and Jacobians, batched as in
-    :class:`~fempipe.model.dynamics_problem.PipeDynamics`) and
-    ``M psi_ddot + C(q, q') psi_dot + K(q, q', q'') psi = 0``.  Meant for psi = 0,
-    the variational equation along a planar orbit: there the psi rows' derivative
-    with respect to q (``(dK/dq) psi + (dC/dq) psi_dot``) vanishes and the
-    Jacobians below are exact; the sensitivity is then block diagonal
-    (``decoupled_blocks``, rule 7 of :mod:`fempipe.solvers.radau.contract`) and its
-    psi block is the out-of-plane monodromy.
-
-    Parameters
-    ----------
-    model : PipeModel
-        The planar pipe, steady flow.
+    Unknowns (q, psi), ``n = 2 model.n``: Eq. (20) and ``M psi_ddot + C psi_dot + K psi = 0``.
+    Meant for psi = 0, where the psi rows' derivative in q vanishes, the Jacobians are exact and
+    the sensitivity is block diagonal (rule 7 of :mod:`fempipe.solvers.radau.contract`), its psi
+    block the out-of-plane monodromy.  ``model`` is the planar pipe, steady flow.
     """
 
     def __init__(self, model: PipeModel) -> None:

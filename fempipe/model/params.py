@@ -1,15 +1,9 @@
 """Physical parameters of the soft pipe conveying fluid.
 
-The model has five dimensionless groups (Eq. (19) of Chen, Hu, Dai & Wang
-2020): the inclination ``alpha``, the mass ratio ``beta``, the gravity
-parameter ``gamma``, the Kelvin--Voigt damping ``mu`` and the flow velocity
-``v``.  :class:`Params` holds them; :class:`PipeSI` holds a dimensional pipe
-(lengths in m, stiffness in N m^2, masses per length in kg/m, velocities in
-m/s) and converts both ways.
-
-Invalid values raise :class:`~fempipe.core.errors.ParamError` (a ``ValueError``)
-whose ``field`` names the offending field, so a caller can point at the input
-that set it.
+:class:`Params` holds the dimensionless groups of Eq. (19) (``alpha``, ``beta``, ``gamma``,
+``mu``, ``v``) and the variants'; :class:`PipeSI` a dimensional pipe, converted both ways.
+Invalid values raise :class:`~fempipe.core.errors.ParamError` naming the ``field``.
+Conventions: docs/theory/conventions.md; variants: docs/theory/variants.md.
 """
 
 from __future__ import annotations
@@ -46,34 +40,26 @@ def _check_finite(name: str, value: float) -> float:
 class Params:
     """Dimensionless parameters of the pipe and its variants, validated on construction.
 
-    The groups of Eq. (19) that Eq. (20) takes, and the variants' (end mass, damping,
-    springs), each checked against its allowed range.
-
     Parameters
     ----------
     alpha : float
-        Inclination of the undeformed pipe from the downward vertical, rad.
-        0 hangs down, pi/2 is horizontal, pi stands up.  Any finite value.
+        Inclination from the downward vertical, rad (0 hangs, pi stands).
     beta : float
-        Mass ratio M/(m+M), 0 <= beta <= 1.
+        Mass ratio M/(m+M), in [0, 1].
     gamma : float
         Gravity parameter (m+M) g L^3 / EI >= 0.
     mu : float
         Kelvin--Voigt damping sqrt(EI/(m+M)) a / L^2 >= 0.
     v : float
-        Flow velocity sqrt(M/EI) U L >= 0 (discharge at the free end).
+        Flow velocity sqrt(M/EI) U L >= 0.
     end_mass : float
-        Point mass at the free end, Gamma = M_e / ((m+M) L) >= 0 (no fluid in
-        it; the jet leaves as before).
+        Point mass at the free end, Gamma = M_e / ((m+M) L) >= 0 (no fluid in it).
     external_damping : float
-        Viscous damping by the surrounding fluid, a force -c r_dot per unit
-        length: sigma = c L^2 / sqrt(EI (m+M)) >= 0.
+        sigma = c L^2 / sqrt(EI (m+M)) >= 0 for a force -c r_dot per unit length.
     hysteretic_damping : float
-        Structural loss factor mu_h >= 0: EI -> EI (1 + i mu_h sgn(omega)) in
-        the linear stability problem only (no time-domain meaning).
+        Loss factor mu_h >= 0, EI -> EI (1 + i mu_h sgn(omega)); linear stability only.
     springs : tuple of (kappa, xi_s)
-        Isotropic linear springs tying the pipe point at xi_s (0 < xi_s <= 1)
-        to its undeformed position, kappa = k L^3 / EI >= 0.
+        Isotropic springs tying xi_s in (0, 1] to its undeformed position, kappa = k L^3 / EI.
     """
 
     alpha: float = 0.0
@@ -138,22 +124,18 @@ class Params:
 
 @dataclass(frozen=True)
 class PipeSI:
-    """A dimensional pipe, for users who think in SI units.
+    """A dimensional pipe, in SI units.
 
     Parameters
     ----------
-    L : float
-        Length, m (> 0).
-    EI : float
-        Bending stiffness, N m^2 (> 0).
-    m : float
-        Pipe mass per unit length, kg/m (>= 0).
-    M : float
-        Fluid mass per unit length, kg/m (>= 0; m + M > 0).
+    L, EI : float
+        Length (m) and bending stiffness (N m^2), > 0.
+    m, M : float
+        Pipe and fluid mass per unit length (kg/m), >= 0, m + M > 0.
     g : float
-        Gravitational acceleration, m/s^2 (>= 0).
+        Gravitational acceleration (m/s^2), >= 0.
     a : float
-        Kelvin--Voigt retardation time, s (>= 0), Eq. (18).
+        Kelvin--Voigt retardation time (s), >= 0, Eq. (18).
     alpha : float
         Inclination from the downward vertical, rad.
     """

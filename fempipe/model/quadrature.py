@@ -1,11 +1,8 @@
-"""Gauss quadrature on a partition of [0, 1] and the integration operators of Eq. (20).
+r"""Gauss quadrature on a partition of [0, 1] and the integration operators of Eq. (20).
 
-Every field is represented by its values at the Gauss points of each cell, and the single
-and double integrals of Eq. (20) become two operators on those values, ``cumulative``
-(C f)_q = \\int_0^{x_q} f and ``from_tip`` (C^R f)_q = \\int_{x_q}^1 f: exact for
-polynomials of degree ``n_g - 1`` on each cell and O(n_q) to apply.  On Gauss points they
-are exact adjoints, ``W C^R = C^T W``, so the discrete mass matrix is exactly symmetric and
-the undamped discrete system without flow conserves its energy.
+Fields are values at the Gauss points of each cell; the integrals of Eq. (20) become
+``cumulative`` (C f)_q = \int_0^{x_q} f and ``from_tip`` (C^R f)_q = \int_{x_q}^1 f, exact
+for polynomials of degree ``n_g - 1`` per cell, O(n_q), and exact adjoints ``W C^R = C^T W``.
 
 Derivation: docs/theory/weak_form.md, "The integration operators".
 """
@@ -19,18 +16,8 @@ __all__ = ["LineQuadrature", "gauss_collocation_matrix", "lagrange_integrals"]
 
 
 def lagrange_integrals(points: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Return ``P[m, q] = \\int_0^{s_m} l_q(x) dx`` for the Lagrange basis on ``points``.
-
-    Parameters
-    ----------
-    points : ndarray, shape (k,)
-        Distinct interpolation points in [0, 1] (the reference cell).
-    s : ndarray, shape (m,)
-        Upper limits in [0, 1].
-
-    Returns
-    -------
-    ndarray, shape (m, k)
+    r"""``P[m, q] = \int_0^{s_m} l_q(x) dx`` for the Lagrange basis on ``points`` (shape (k,), in
+    [0, 1]) and upper limits ``s`` (shape (m,)); shape (m, k).
     """
     c = np.asarray(points, dtype=float)
     s = np.asarray(s, dtype=float)
@@ -52,7 +39,7 @@ def gauss_collocation_matrix(points: np.ndarray) -> np.ndarray:
 
 
 class LineQuadrature:
-    """Gauss--Legendre quadrature on cells of [0, 1] with integration operators.
+    r"""Gauss--Legendre quadrature on cells of [0, 1] with integration operators.
 
     Parameters
     ----------
@@ -63,13 +50,10 @@ class LineQuadrature:
 
     Attributes
     ----------
-    x : ndarray, shape (n_q,)
-        Quadrature points, cell by cell, left to right.
-    w : ndarray, shape (n_q,)
-        Weights; ``w @ f`` integrates f over [0, 1].
+    x, w : ndarray, shape (n_q,)
+        Points (cell by cell) and weights; ``w @ f`` integrates f over [0, 1].
     collocation : ndarray, shape (n_gauss, n_gauss)
-        ``a[p, q] = \\int_0^{c_p} l_q`` on the reference cell
-        (:func:`gauss_collocation_matrix`): the in-cell part of :meth:`cumulative`.
+        ``a[p, q] = \int_0^{c_p} l_q`` on the reference cell: the in-cell part of :meth:`cumulative`.
     """
 
     def __init__(self, edges: np.ndarray, n_gauss: int) -> None:
@@ -118,10 +102,7 @@ class LineQuadrature:
         return out
 
     def cumulative(self, f: np.ndarray) -> np.ndarray:
-        """``(C f)_q = \\int_0^{x_q} f``; quadrature index on axis 0 of f.
-
-        Exact for piecewise polynomials of degree ``n_gauss - 1``; O(n_q).
-        """
+        r"""``(C f)_q = \int_0^{x_q} f``, quadrature index on axis 0; exact per cell, O(n_q)."""
         f = np.asarray(f)
         fc = self._cells(f)
         hs = self.h.reshape((-1,) + (1,) * (fc.ndim - 1))
@@ -142,10 +123,8 @@ class LineQuadrature:
     def cumulative_cells(self, f: np.ndarray) -> np.ndarray:
         """:meth:`cumulative` with the trailing axes flattened into one matrix product.
 
-        The same integral (quadrature index on axis 0 of f), summed in another
-        order: the einsum over ``...`` of :meth:`cumulative` slows down 13x from
-        (96, 2, 3, 48) to (96, 2, 9, 48) values, a ``matmul`` does not.  The
-        batched stage kernels (:mod:`fempipe.model.batched`) use it.
+        Summed in another order: a ``matmul`` keeps its speed for many trailing axes, where the
+        einsum does not (the batched stage kernels use it).
         """
         nc, ng = self.n_cells, self.n_gauss
         fc = f.reshape(nc, ng, -1)
@@ -160,13 +139,7 @@ class LineQuadrature:
         return (self.w @ fc - self.cumulative_cells(fc)).reshape(f.shape)
 
     def cumulative_adjoint(self, g: np.ndarray) -> np.ndarray:
-        """``C^T g`` for the cumulative integral C of :meth:`cumulative_cells`, O(n_q) per column.
-
-        Quadrature index on axis 0 of g, trailing axes flattened.  In cell k at
-        local point a, ``(C f)_{k,a} = h_k sum_b a_ab f_{k,b} + sum_{k' < k} h_k'
-        sum_b w_b f_{k',b}`` (w_b the reference weights), so
-        ``(C^T g)_{k,b} = h_k (sum_a a_ab g_{k,a} + w_b sum_{k' > k} sum_a g_{k',a})``.
-        """
+        """``C^T g`` of :meth:`cumulative_cells`, O(n_q) per column (docs/theory/weak_form.md)."""
         nc, ng = self.n_cells, self.n_gauss
         gc = g.reshape(nc, ng, -1)
         out = np.matmul(self.collocation.T, gc)

@@ -1,21 +1,12 @@
 """The weak form of Eq. (20), one operator per physical term: the shared part.
 
-The discrete residual R(q, q', q'') is a sum of one term per physical effect: bending,
-Kelvin-Voigt, gravity, the follower force, inertia, centripetal, Coriolis, flow acceleration,
-and the variants of the pipe (end mass, external damping, springs; zero by default).  Each
-term supplies its analytic derivatives with respect to q, q' and q'', which Newton's method,
-the stability matrices (Eqs. (31b)-(33)) and the time integrators all use.
+The residual R(q, q', q'') is a sum of terms with analytic derivatives, grouped by kind:
+:class:`~fempipe.model.local_terms.LocalTerms`, :class:`~fempipe.model.nonlocal_terms.NonlocalTerms`,
+:mod:`~fempipe.model.variants` and :class:`~fempipe.model.springs.SpringTerms`, summed by
+:class:`~fempipe.model.operators.PipeModel`.  This module holds what they share:
+:class:`Fields`, the test integral and the projection n . C^R.
 
-The terms are grouped by kind, one method per term, named after it:
-:class:`~fempipe.model.local_terms.LocalTerms` (bending, Kelvin-Voigt, gravity, follower),
-:class:`~fempipe.model.nonlocal_terms.NonlocalTerms` (inertia, centripetal, Coriolis, flow
-acceleration), :mod:`~fempipe.model.variants` (end mass, external damping) and
-:class:`~fempipe.model.springs.SpringTerms`.  This module holds what they share
-(:class:`Fields`, the test integral and the projection n . C^R);
-:class:`~fempipe.model.operators.PipeModel` sums them (residual, Jacobians, mass matrix).
-
-Derivation and the table of terms: docs/theory/weak_form.md; the variants:
-docs/theory/variants.md.
+Derivation and the table of terms: docs/theory/weak_form.md; variants: docs/theory/variants.md.
 """
 
 from __future__ import annotations
@@ -35,17 +26,8 @@ __all__ = ["Fields", "WeakForm", "as_dense", "scale_rows"]
 
 @dataclass(frozen=True)
 class Fields:
-    """theta, its time derivatives and the local frame at the quadrature points.
-
-    Attributes
-    ----------
-    theta, theta_dot, theta_ddot : ndarray, shape (n_q,)
-    theta_tip : float
-        theta(1).
-    tangent : ndarray, shape (n_q, 2)
-        t = (cos theta, sin theta).
-    normal : ndarray, shape (n_q, 2)
-        n = (-sin theta, cos theta).
+    """theta, theta_dot, theta_ddot (shape (n_q,)), ``theta_tip`` = theta(1), ``tangent``
+    t = (cos theta, sin theta) and ``normal`` n = (-sin theta, cos theta) (shape (n_q, 2)).
     """
 
     theta: np.ndarray
@@ -80,24 +62,11 @@ def _dense_forms(disc: Discretization) -> tuple[np.ndarray, np.ndarray]:
 
 
 class WeakForm:
-    """What the terms of the weak form share: the fields, the test integral, the projection.
+    r"""What the terms share: the fields, the test integral, the projection.
 
-    The base of the term classes (:mod:`fempipe.model.local_terms`,
-    :mod:`~fempipe.model.nonlocal_terms`, :mod:`~fempipe.model.variants`,
-    :mod:`~fempipe.model.springs`) and so of
-    :class:`~fempipe.model.operators.PipeModel`, which sets the attributes.
-
-    Attributes
-    ----------
-    disc : Discretization
-    params : Params
-    quad : LineQuadrature
-        ``disc.quad``.
-    x, w : ndarray, shape (n_q,)
-        Quadrature points and weights.
-    test_matrix : ndarray or scipy.sparse matrix, shape (n, n_q)
-        ``Phi^T W`` (W = diag(w)): ``test_matrix @ f`` is ``\\int phi_i f`` for f
-        at the quadrature points, the test integral of every term.
+    The base of the term classes and so of :class:`~fempipe.model.operators.PipeModel`, which
+    sets ``disc``, ``params``, ``quad``, ``x``, ``w`` and ``test_matrix`` (``Phi^T W``:
+    ``test_matrix @ f`` is ``\int phi_i f``).
     """
 
     disc: Discretization

@@ -1,16 +1,10 @@
 """What the pseudo-arclength engine asks of a problem and of its policies.
 
-A one-parameter problem is a curve of zeros of F: R^(m+1) -> R^m in y = (x, lambda), the
-state x and the parameter lambda.  The engine (:func:`fempipe.solvers.continuation.continue_curve`)
-walks along it; all it needs of the problem is written down here as two protocols:
-
-* :class:`ContinuationProblem` -- the mathematics of the curve: F, its derivatives in x and
-  lambda, the bordered linear solve of Keller's method (its last row the linear form
-  :meth:`ContinuationProblem.dual` of the tangent) and the inner product in which arclength
-  is measured;
-* :class:`ContinuationPolicy` -- the algorithmic choices of one kind of branch (predictor,
-  corrector, acceptance, landing, step size, special points, when to stop), which each
-  problem brings; :class:`fempipe.solvers.continuation.KellerPolicy` is the textbook one.
+A one-parameter problem is a curve of zeros of F: R^(m+1) -> R^m in y = (x, lambda).  The
+engine (:func:`fempipe.solvers.continuation.continue_curve`) needs two protocols:
+:class:`ContinuationProblem` (F, its derivatives, the bordered solve of Keller's method, the
+inner product of arclength) and :class:`ContinuationPolicy` (the algorithmic choices of one
+kind of branch; :class:`fempipe.solvers.continuation.KellerPolicy` is the textbook one).
 
 The bordered system: docs/theory/numerics.md; the protocol: docs/development.md, "The
 continuation engine's protocol".
@@ -36,9 +30,7 @@ __all__ = [
 
 
 class CorrectorError(Exception):
-    """A step failed: the corrector did not converge (or the integration inside
-    the residual failed).  The engine refuses the step and asks the policy for
-    a shorter one (:meth:`ContinuationPolicy.reject`)."""
+    """A step failed (no convergence, or a failed integration); the engine asks for a shorter one."""
 
 
 class SharpTurnError(CorrectorError):
@@ -52,16 +44,8 @@ class ContinuationError(SolverError):
 
 @dataclass(frozen=True)
 class BorderedSolution:
-    """The solution z of a bordered system and, if asked, its determinant.
-
-    Attributes
-    ----------
-    z : ndarray, shape (m + 1,)
-    det_sign : int or None
-        sign(det) of the bordered matrix (it flips at a simple branch point,
-        not at a fold).
-    log_abs_det : float or None
-        log|det| of the bordered matrix.
+    """The solution z (shape (m + 1,)) of a bordered system and, if asked, ``det_sign`` (flips at
+    a simple branch point, not at a fold) and ``log_abs_det`` of the bordered matrix.
     """
 
     z: np.ndarray
@@ -71,10 +55,7 @@ class BorderedSolution:
 
 @runtime_checkable
 class ContinuationProblem(Protocol):
-    """A curve F(y) = 0 in R^(m+1), y = (x, lambda), as the engine sees it.
-
-    The parameter lambda is the last component of y.
-    """
+    """A curve F(y) = 0 in R^(m+1), y = (x, lambda), lambda last, as the engine sees it."""
 
     def residual(self, y: np.ndarray) -> np.ndarray:
         """F(y), shape (m,)."""
@@ -86,9 +67,8 @@ class ContinuationProblem(Protocol):
     def solve_bordered(
         self, lin: Any, row: np.ndarray | None, rhs: np.ndarray, *, determinant: bool = False
     ) -> BorderedSolution:
-        """Solve ``[[F_x, F_lambda], [row]] z = rhs`` with the derivatives ``lin``.
+        """Solve ``[[F_x, F_lambda], [row]] z = rhs`` (``row`` None: ``F_x z = rhs`` at fixed lambda).
 
-        ``row`` None solves ``F_x z = rhs`` at fixed lambda (z of shape (m,)).
         With ``determinant``, also sign and log|det| of the bordered matrix.
         """
 
@@ -102,10 +82,8 @@ class ContinuationProblem(Protocol):
 class ContinuationPolicy(Protocol):
     """The algorithmic choices of one kind of branch, called by the engine.
 
-    The engine passes back to the policy what the policy returned: a *step*
-    (whatever :meth:`predict` returns: the predicted point, its tangent, the
-    step length) and a *point* (whatever :meth:`correct` and :meth:`land`
-    return).  The policy keeps the branch (its points, counters, events).
+    The engine hands back what the policy returned: a *step* (from :meth:`predict`) and a
+    *point* (from :meth:`correct`, :meth:`land`); the policy keeps the branch.
     """
 
     def stop_before(self) -> str | None:
