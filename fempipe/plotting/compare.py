@@ -38,11 +38,7 @@ def _log_scale(values: np.ndarray) -> bool:
 
 
 def _limits(values: np.ndarray, log: bool) -> tuple[float, float]:
-    """Axis limits holding every value (and error bar end) with a margin.
-
-    A range narrower than 2 % of the values' size is widened to that (so a
-    single point or equal values give a readable axis, not one of 1e-9).
-    """
+    """Axis limits holding every value and error bar with a margin, at least 2 % of the values' size wide."""
     v = values[np.isfinite(values)]
     if log:
         v = v[v > 0]
@@ -61,27 +57,19 @@ def _limits(values: np.ndarray, log: bool) -> tuple[float, float]:
 def plot_comparison(rows: Sequence[dict], caption: str = "", title: str | None = None):
     """Two panels per quantity: user against fempipe with y = x, and the differences.
 
-    Top panel: the user's value against fempipe's (log-log when every value
-    is positive and they span more than a decade, linear otherwise), the
-    line y = x, horizontal error bars of fempipe's error estimate, each
-    point labelled with its row.  Bottom panel: the difference user - fempipe
-    against fempipe's value, with fempipe's error estimate as error bars
-    about the difference; filled markers are resolved (|difference| >
-    estimate: the bar does not reach 0), open ones are not.  Rows without a
-    fempipe value (failed) are not drawn; the caption should say so.
+    Top: user's value against fempipe's (log-log over more than a decade of positive values),
+    fempipe's error estimate as error bars, each point labelled with its row.  Bottom: the
+    difference against fempipe's value; filled markers are resolved (the bar does not reach 0).
+    Failed rows are not drawn.
 
     Parameters
     ----------
     rows : sequence of dict
         The ``rows`` of ``fempipe compare --json``.
     caption : str
-        Text below the panels (parameters, method), wrapped.
+        Text below the panels, wrapped.
     title : str, optional
         Default: "user values against fempipe".
-
-    Returns
-    -------
-    matplotlib Figure
     """
     import matplotlib.pyplot as plt
 

@@ -20,12 +20,9 @@ FAMILY_STYLE = {
 
 
 def reference_member(study, series) -> int | None:
-    """Index of the member of ``series`` that defines the study's reference, or None.
-
-    The reference is the Richardson extrapolation of the two finest usable
-    members of its family; the finest one's distance to it is the
-    extrapolation's correction, the reference's own error estimate, not a
-    measured error.
+    """Index of the member of ``series`` that defines the reference (the finest of the two
+    Richardson-extrapolated ones), or None: its distance to the reference is an estimate, not
+    a measured error.
     """
     if series.family != study.reference.family:
         return None
@@ -34,25 +31,11 @@ def reference_member(study, series) -> int | None:
 
 
 def plot_convergence(study, ax=None, title: str | None = None):
-    """Error against degrees of freedom, log-log, one line per family.
+    """Error against degrees of freedom, log-log, one line per family; returns the Axes.
 
-    The legend gives each family's fitted order and the theoretical one; the
-    points the fit used are overdrawn by a thick grey line; the dotted line is
-    the reference's error estimate (below it, errors are not resolved).  The
-    member that defines the reference (:func:`reference_member`) has no
-    measured error: it is drawn apart from its family's line, as a large open
-    marker at the reference's error estimate.
-
-    Parameters
-    ----------
-    study : ConvergenceStudy
-    ax : matplotlib Axes, optional
-    title : str, optional
-        Default: the quantity and the parameters.
-
-    Returns
-    -------
-    matplotlib Axes
+    The legend gives fitted and theoretical orders; the fitted points are overdrawn grey; the
+    dotted line is the reference's error estimate; the reference member (:func:`reference_member`)
+    is a large open marker at that estimate.  ``title`` defaults to the quantity and parameters.
     """
     import matplotlib.pyplot as plt
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter

@@ -1,10 +1,7 @@
 """Text placement shared by the figures: labels that would collide are dropped.
 
-Marks along a curve (the flow velocity along a root locus, for instance) are
-labelled densely where the curve is long and pile up where it is short or
-where two curves run on top of each other (a divergence pair on the imaginary
-axis).  :func:`declutter` keeps a label only when its box, measured by the
-renderer, is clear of every label already kept and of the axes' edge.
+:func:`declutter` keeps a label only when its box, measured by the renderer, is clear of
+every label already kept and of the axes' edge; :func:`shared_legend` gives panels one legend.
 """
 
 from __future__ import annotations
@@ -17,26 +14,20 @@ __all__ = ["declutter", "shared_legend"]
 def declutter(
     ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = (), draw: bool = True
 ) -> list:
-    """Hide every text of ``texts`` that overlaps an earlier visible one.
+    """Hide every text of ``texts`` that overlaps an earlier visible one; return the kept texts.
 
     Parameters
     ----------
     ax : matplotlib Axes
         The texts' axes; a label reaching outside it is hidden too.
     texts : sequence of matplotlib Text
-        In order of priority (earlier ones are kept first).
+        In order of priority.
     pad : float
         Clearance between labels, pixels.
     keep_clear : sequence of Artist
-        Artists (a legend) that no kept label may overlap.
+        Artists (a legend) no kept label may overlap.
     draw : bool
-        Draw the figure first, to place every text (False: the caller has
-        just drawn it, e.g. once for the labels of several axes).
-
-    Returns
-    -------
-    list of Text
-        The texts kept visible.
+        Draw the figure first (False: the caller just drew it).
     """
     fig = ax.figure
     if draw:
@@ -57,17 +48,9 @@ def declutter(
 
 
 def shared_legend(fig, axes: Sequence, fontsize: float = 9, max_columns: int = 4):
-    """One legend for panels that share their entries, below them.
+    """One legend below panels that share their entries (constrained layout); None if nothing is labelled.
 
-    The panels' own legends are removed (inside the axes they cover curves
-    wherever a diagram fills its frame); each label is listed once, with the
-    first handle drawn under it.  Needs a constrained layout (the legend is
-    placed ``outside lower center``).
-
-    Returns
-    -------
-    matplotlib Legend or None
-        None when no panel has a labelled artist.
+    The panels' own legends are removed; each label is listed once, with its first handle.
     """
     handles: dict = {}
     for ax in axes:

@@ -1,12 +1,8 @@
 """The figures of a gallery example or a course lesson run as a script.
 
-Every ``examples/plot_*.py`` and ``docs/course/lesson_*.py`` ends with
-:func:`show_or_save`: run from a terminal (``python docs/course/lesson_02_...py``) the
-script opens its figures in a window, or, without a display (the Agg backend), writes them
-as PNG files and says where.  Under sphinx-gallery, which captures the figures itself, and
-in a notebook, which shows them inline, it does nothing: neither defines ``__file__``
-(sphinx-gallery runs the code in a module of its own without it), and a script run by
-``python`` always does.
+Every ``examples/plot_*.py`` and ``docs/course/lesson_*.py`` ends with :func:`show_or_save`:
+from a terminal it shows the figures, without a display it writes PNG files, and under
+sphinx-gallery or in a notebook (no ``__file__``) it does nothing.
 """
 
 from __future__ import annotations
@@ -27,18 +23,14 @@ def show_or_save(script: str | os.PathLike | None = None, *, dpi: int = 100) -> 
     Parameters
     ----------
     script : str or path-like, optional
-        The running script; by default the caller's ``__file__``.  Without one (under
-        sphinx-gallery, in a notebook) nothing happens.
+        The running script; by default the caller's ``__file__`` (none: nothing happens).
     dpi : int
         Resolution of the saved files.
 
     Notes
     -----
-    The k-th open figure is written as ``<stem>-figures/<stem>_<k>.png`` in the working
-    directory (``<stem>`` the script's name without ``.py``), or into the directory named by
-    the environment variable ``FEMPIPE_FIGURES`` if it is set, and the files are printed.
-    Nothing is returned: the call ends the scripts, where sphinx-gallery and Jupyter would
-    display a returned value.
+    Figure k is written as ``<stem>-figures/<stem>_<k>.png`` (or into ``$FEMPIPE_FIGURES``)
+    and the files are printed.  Nothing is returned, which Jupyter would display.
     """
     if script is None:
         script = sys._getframe(1).f_globals.get("__file__")

@@ -1,12 +1,9 @@
 """Figures of the 3-D motion: the tip's path in three views, 3-D snapshots of the pipe.
 
-Coordinates are the package's global frame (docs, "Conventions and
-derivations"): X_g along gravity, drawn down the page; Z_g horizontal in the
-plane of the static state; Y_g horizontal, out of that plane; the clamp at
-the origin; lengths in units of L.  Every view is framed on the motion (its
-limits from the data with a margin, equal scales), not on the whole pipe's
-reach, so that a swing of a tenth of L fills the panel.  The window drawn is
-the shot periodic orbit, else the last period of the run (or its last tenth).
+Global frame (docs/theory/conventions.md): X_g along gravity, down the page; Z_g horizontal
+in the plane of the static state; Y_g out of it; lengths in units of L.  Views are framed on
+the motion, not the pipe's reach.  The window drawn is the shot periodic orbit, else the
+last period of the run (or its last tenth).
 """
 
 from __future__ import annotations
@@ -94,12 +91,7 @@ def _sense_arrow(ax, x: np.ndarray, y: np.ndarray, color) -> None:
 
 
 def _view_limits(x: np.ndarray, y: np.ndarray) -> tuple[tuple, tuple]:
-    """``(xlim, ylim)`` of a view with equal scales: the data plus :data:`MARGIN`.
-
-    The shorter extent is widened until the height over the width lies
-    within :data:`_RATIO`, so that the data span at least that share of
-    both axes.
-    """
+    """``(xlim, ylim)`` with equal scales: the data plus :data:`MARGIN`, aspect within :data:`_RATIO`."""
     cx, cy = (np.min(x) + np.max(x)) / 2, (np.min(y) + np.max(y)) / 2
     hx, hy = np.ptp(x) / 2, np.ptp(y) / 2
     # A point (an equilibrium) gets a frame of 1e-3; a swing however small fills its own.
@@ -112,11 +104,7 @@ def _view_limits(x: np.ndarray, y: np.ndarray) -> tuple[tuple, tuple]:
 
 
 def _static_tip(model: SpaceModel, static, tips: dict) -> dict | None:
-    """The static state's tip and its verdict, if it lies near the motion (else None).
-
-    Near: within the tip's extent of the window beyond it, in every
-    coordinate, so that the tip's path still spans half of each view.
-    """
+    """The static state's tip and verdict if within the tip path's extent of the window, else None."""
     if static is None:
         return None
     U, stable = static
@@ -137,20 +125,10 @@ def _static_label(stable) -> str:
 
 
 def plot_tip_orbit(model: SpaceModel, motion, static=None):
-    """The tip's path over the window: from above, from the side and from the front.
+    """The tip's path over the window from above, the side and the front; returns the Figure.
 
-    Parameters
-    ----------
-    model : SpaceModel
-    motion : SpaceMotion
-    static : (ndarray, bool or None), optional
-        The static state the motion started from (3-D unknowns) and whether
-        it is linearly stable in three dimensions: its tip is marked, filled
-        if stable, open and grey if not, when it lies near the motion.
-
-    Returns
-    -------
-    matplotlib Figure
+    ``static`` = (3-D state, stable in 3-D or None): its tip is marked when near the motion,
+    filled if stable, open and grey if not.
     """
     import matplotlib.pyplot as plt
 
@@ -257,14 +235,8 @@ def _frame_3d(ax, pts: np.ndarray) -> None:
 
 
 def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12, static=None):
-    """The centerline at ``n_snapshots`` times over one oscillation, in 3-D, colored by τ.
-
-    Drawn with the tip's path over the window and, if given, the static
-    state (``static`` as in :func:`plot_tip_orbit`: grey dashed if unstable).
-
-    Returns
-    -------
-    matplotlib Figure
+    """The centerline at ``n_snapshots`` times over one oscillation in 3-D, colored by τ, with the
+    tip's path and ``static`` as in :func:`plot_tip_orbit`; returns the Figure.
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import Normalize

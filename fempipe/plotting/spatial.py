@@ -15,15 +15,8 @@ def _monotone(v: np.ndarray) -> bool:
 
 
 def _unstable_at(v: np.ndarray, theta: np.ndarray, branch, monotone: bool) -> np.ndarray:
-    """Whether ``branch`` (one plane's analysis of a static branch) is unstable at the
-    points (v, theta(1)) of that branch.
-
-    Where the branch is monotone in v, the verdict at a point is that of the
-    branch's lowest sample changed by each event of the plane below the
-    point's v (events are located to 1e-10, ``stable_after`` is the verdict
-    above them in v; the two planes' analyses sample the branch at different
-    points); elsewhere (a branch through a fold) it is that of the plane's
-    sample nearest in (v, theta(1)).
+    """Whether ``branch`` (one plane's analysis) is unstable at the points (v, theta(1)): from its
+    events below each v where the branch is monotone in v, else its nearest sample.
     """
     if branch is None or branch.v.size == 0:
         return np.zeros(v.size, bool)
@@ -49,15 +42,10 @@ def _theta_at(b, v: float) -> float:
 
 
 def branch_pieces(b, bo) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(v, theta, kind)``: the branch's samples with the events of both planes inserted,
-    and per segment 0 (stable in 3-D), 1 (unstable in the plane) or 2 (unstable out of
-    the plane only), so that the styles change at the events themselves.
+    """``(v, theta, kind)``: the branch's samples with both planes' events inserted, kind per
+    segment 0 (stable in 3-D), 1 (unstable in the plane) or 2 (unstable out of it only).
 
-    Parameters
-    ----------
-    b, bo : BranchStability
-        The in-plane and the out-of-plane analysis of one static branch (``bo`` None:
-        the in-plane verdict alone).
+    ``b``, ``bo``: the in-plane and out-of-plane analyses of one branch (``bo`` None: in-plane alone).
     """
     v, theta = b.v, b.theta_tip
     monotone = _monotone(v)
@@ -230,26 +218,12 @@ def _zoom(ax, result, colors, window) -> None:
 
 
 def plot_spatial_branches(result, ax=None, title=None):
-    """theta(1) of the static branches against v, stable in 3-D or not, and both planes' events.
+    """theta(1) of the static branches against v, stable in 3-D or not, with both planes' events.
 
-    Solid: stable in three dimensions; dashed: unstable in the plane;
-    dash-dot: stable in the plane, unstable out of it; the styles change at
-    the events.  Events: large open markers in the plane, small filled ones
-    out of it drawn over them (○ flutter, □ divergence, △ restabilization,
-    ◇ fold), so that events of the two planes at the same v both show.  The
-    vertical line is v_cr, the first loss of stability in three dimensions;
-    where the two planes' first losses are closer than :data:`ZOOM_BELOW` of
-    the range, an inset shows them.
-
-    Parameters
-    ----------
-    result : SpatialStability
-    ax : Axes, optional
-    title : str, optional
-
-    Returns
-    -------
-    Axes
+    Solid stable in 3-D, dashed unstable in the plane, dash-dot unstable out of it only.  Events:
+    large open markers in the plane, small filled ones out of it.  The vertical line is the 3-D
+    v_cr; an inset shows the two planes' first losses when closer than :data:`ZOOM_BELOW` of the
+    range.  ``result`` is a SpatialStability; returns the Axes.
     """
     import matplotlib.pyplot as plt
 

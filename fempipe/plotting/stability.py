@@ -1,16 +1,9 @@
 """Figures of the linear stability analysis (Figs. 5 and 6 of the paper).
 
-* :func:`plot_argand` -- root loci in the plane of the paper's Omega = -i lambda
-  (Re Omega the frequency, Im Omega < 0 unstable), one curve per mode, with
-  the flow velocity marked along the loci (Fig. 5).
-* :func:`plot_stability_map` -- v_cr against alpha, one curve per (beta, gamma)
-  (Fig. 6).
-* :func:`plot_branches` -- the static branches (theta_tip against v), solid
-  where stable, dashed where unstable, with the events marked.
-* :func:`plot_mode_shape` -- a mode about its static state in the global frame.
-
-matplotlib is imported inside the functions; each takes ``ax=None`` and
-returns the Axes.
+:func:`plot_argand` (root loci in the plane of Omega = -i lambda, Fig. 5),
+:func:`plot_stability_map` (v_cr against alpha, Fig. 6), :func:`plot_branches` (static
+branches, dashed where unstable, events marked) and :func:`plot_mode_shape` (a mode about
+its static state).  Each takes ``ax=None`` and returns the Axes.
 """
 
 from __future__ import annotations
@@ -48,26 +41,16 @@ def plot_argand(
     Parameters
     ----------
     locus : RootLocus
-        The loci in the plane of the static states (Eq. (32)): solid lines,
-        dots every ``mark_every``.
+        The loci in the plane (Eq. (32)), solid, dots every ``mark_every``.
     ax : Axes, optional
     mark_every : float, optional
-        Mark the loci at multiples of this v (default: about six marks over
-        the range); the marks are labelled with v on the lowest mode.
+        Mark the loci at multiples of this v (default: about six marks).
     label_marks : bool
-        Write the v values next to the marks of each mode's locus.
+        Write the v values next to the marks.
     title : str, optional
     out_of_plane : RootLocus, optional
-        The loci of the motion out of the plane about the same static states
-        (:func:`~fempipe.analyses.stability.spatial_root_locus`): drawn dashed in the
-        color of their mode, marked with open triangles, and named in the
-        legend ("out of the plane").  Where they are the in-plane loci (the
-        straight pipe: alpha = 0, or alpha = pi before buckling) they are not
-        drawn again and the title says so.
-
-    Returns
-    -------
-    Axes
+        The loci out of the plane about the same static states, dashed with open triangles;
+        not drawn again where they equal the in-plane loci (the title says so).
     """
     ax = new_axes(ax)
     v = np.asarray(locus.v)
@@ -110,11 +93,7 @@ def plot_argand(
 
 
 def _draw_loci(ax, loc, v, marks, style, label_marks: bool, seen: set, labels: list) -> None:
-    """Draw one root locus's modes: line, direction arrow, marks and their v labels.
-
-    ``style`` is ``(line style, marker, marker face color, zorder)``; the
-    modes drawn are added to ``seen`` and the mark labels to ``labels``.
-    """
+    """Draw one locus's modes with ``style`` (line style, marker, face color, zorder); record ``seen``, ``labels``."""
     ls, marker, mfc, z_order = style
     Om = np.where(loc.resolved, loc.Omega, np.nan)
     for j, mode in enumerate(loc.modes):
@@ -176,11 +155,7 @@ def _argand_handles(seen: set, both_planes: bool) -> list:
 
 
 def same_loci(a, b, rtol: float = 1e-8) -> bool:
-    """Whether two root loci have the same eigenvalues, mode by mode (to ``rtol`` of |lambda|).
-
-    The members of a mode (a conjugate pair, two real roots) are compared as a
-    set: at each v, in the order that matches them best.
-    """
+    """Whether two root loci have the same eigenvalues mode by mode (to ``rtol`` of |lambda|, members as a set)."""
     from itertools import permutations
 
     if not np.array_equal(a.modes, b.modes) or not np.array_equal(a.resolved, b.resolved):
@@ -235,22 +210,12 @@ def _nice_step(x: float) -> float:
 
 
 def plot_stability_map(smap, ax=None, title=None):
-    """Flutter velocity against alpha for each (beta, gamma) of a :class:`~fempipe.analyses.stability.StabilityMap`.
+    """Flutter velocity against alpha per (beta, gamma) of a :class:`~fempipe.analyses.stability.StabilityMap`.
 
-    The lines are the first flutter velocity of the primary branch (what the
-    paper's Fig. 6 plots); where the branch loses stability earlier by
-    divergence or at a fold (at and near alpha = pi), v_cr is drawn as an open
-    square.  A map in three dimensions (``smap.planar`` False) draws, in each
-    curve's color, the plane of the static state so (solid, ○ and □) and
-    the motion out of it dashed with open triangles (△ flutter, ◇ an earlier
-    loss of stability out of the plane), and under them a wide pale band along
-    v_cr in three dimensions, the first of the two: where the band follows
-    the dashed curve the pipe first leaves its plane.  The key is in the
-    legend below the axes.
-
-    Returns
-    -------
-    Axes
+    Lines: the first flutter velocity of the primary branch (Fig. 6); an earlier loss of
+    stability (divergence, fold) is an open square.  In three dimensions (``smap.planar``
+    False) the motion out of the plane is dashed with open triangles, under a pale band along
+    the 3-D v_cr.  The key is below the axes.
     """
     if not getattr(smap, "planar", True):
         return _plot_spatial_map(smap, ax, title)
@@ -373,9 +338,7 @@ def _plot_spatial_map(smap, ax, title):
 
 
 def mark_v_cr(ax, event, plane: str | None = None):
-    """A vertical line at v_cr, the first loss of stability (``event``, a StabilityEvent);
-    its value, kind and plane (``plane``, else the event's) in its legend label.  Returns
-    the line (None without one)."""
+    """A vertical line at the ``event``'s v_cr, its value, kind and plane in the label; None without one."""
     if event is None:
         return None
     plane = plane or {"in": " in the plane", "out": " out of the plane"}.get(event.plane, "")
@@ -389,16 +352,10 @@ def mark_v_cr(ax, event, plane: str | None = None):
 
 
 def plot_branches(result, ax=None, title=None):
-    """Static branches of a :class:`~fempipe.analyses.stability.StabilityResult`: theta_tip against v.
+    """theta_tip against v of a :class:`~fempipe.analyses.stability.StabilityResult`'s branches.
 
-    Solid where stable, dashed where some resolved eigenvalue has
-    Re lambda > 0; events marked (○ flutter, □ divergence, △ restabilization,
-    ◇ fold, keyed in the legend); the vertical line at v_cr, its value in the
-    legend.
-
-    Returns
-    -------
-    Axes
+    Solid where stable, dashed where not; events marked (○ flutter, □ divergence,
+    △ restabilization, ◇ fold); a vertical line at v_cr.
     """
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
@@ -435,15 +392,7 @@ def plot_branches(result, ax=None, title=None):
 
 
 def plot_mode_shape(shape, ax=None, amplitude: float = 0.15, phases: int = 8, title=None):
-    """A mode about its static state in the global frame (gravity down the page).
-
-    Draws the static centerline and ``X + amplitude Re(dX e^{i phi})`` for
-    ``phases`` phases over a period.
-
-    Returns
-    -------
-    Axes
-    """
+    """A mode about its static state in the global frame: ``X + amplitude Re(dX e^{i phi})`` over ``phases``."""
     ax = new_axes(ax, size=(4.5, 5.0))
     ax.plot(shape.Z_static, shape.X_static, "k-", lw=2.0, label="static")
     for k, phi in enumerate(np.linspace(0.0, 2 * np.pi, phases, endpoint=False)):

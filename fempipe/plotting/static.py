@@ -1,15 +1,8 @@
 """Figures of static deformation: deformed centerlines in the global frame.
 
-Drawn the way the paper's Figs. 2-4 show them: gravity points down the page
-(X_g, the coordinate along gravity in Eq. (28), increases downward), Z_g is
-horizontal, both axes have the same scale so shapes are not distorted, one
-curve per flow velocity, the clamp at the origin.  A static state that is
-linearly unstable (some resolved eigenvalue of Eq. (32) with Re lambda > 0) is
-not what the pipe shows: it is drawn grey and dashed and said so in the
-legend, so that it cannot be read as an equilibrium one would observe.  In
-three dimensions (``stable_in_plane`` given) a state that is stable in its
-plane but unstable out of it (:mod:`fempipe.model.out_of_plane`) is drawn grey and
-dash-dotted instead (dotted is the undeformed pipe), with its own legend key.
+As in the paper's Figs. 2-4: gravity down the page (X_g of Eq. (28)), Z_g horizontal,
+equal scales, the clamp at the origin.  A linearly unstable state is drawn grey and dashed,
+one unstable only out of the plane grey and dash-dotted, each with its legend key.
 """
 
 from __future__ import annotations
@@ -56,35 +49,22 @@ def plot_shapes(
     Parameters
     ----------
     shapes : sequence of Shape
-        :class:`fempipe.model.kinematics.Shape`, dimensionless (Eq. (28)).
+        Dimensionless (Eq. (28)).
     labels : sequence of str, optional
-        One legend entry per shape (e.g. ``"v = 2"``, ``"v = 1.69 (U = 1 m/s)"``).
+        One legend entry per shape.
     ax : matplotlib Axes, optional
-        Drawn into; a new figure is made if None.
     si_length : float, optional
-        Pipe length L in m: coordinates are then shown in mm.
+        Pipe length L in m: coordinates in mm.
     alpha : float or sequence of float, optional
-        Inclination(s), rad, for the dotted undeformed pipe and the clamp;
-        inferred from the first segment of each shape if None.
+        Inclination(s) for the undeformed pipe; inferred from each shape if None.
     max_labels : int
-        At most this many legend entries (every k-th curve is labelled).
+        At most this many legend entries.
     title : str, optional
     stable : sequence of bool or None, optional
-        Linear stability of each state (e.g. the ``stable`` flags of
-        ``fempipe static``, :func:`fempipe.analyses.stability.linearly_stable`).  States
-        flagged False are drawn grey and dashed, with "(unstable)" in their
-        legend entry and a legend key; None (the default, or an entry None)
-        draws the state as stable ones are drawn.
+        Linear stability per state; False is drawn grey and dashed, "(unstable)".
     stable_in_plane : sequence of bool or None, optional
-        With ``stable`` the verdict in three dimensions (``fempipe static``'s
-        ``stable`` and ``stable_in_plane``): a state unstable but stable in its
-        plane is unstable out of the plane only, drawn grey and dash-dotted with
-        "(unstable out of the plane)" in its legend entry; the others unstable
-        dashed with "(unstable in the plane)"; each kind with a legend key.
-
-    Returns
-    -------
-    matplotlib.axes.Axes
+        With ``stable``, the in-plane verdict: unstable but stable in the plane is drawn
+        dash-dotted, "(unstable out of the plane)".
     """
     import matplotlib.pyplot as plt
 
@@ -124,11 +104,7 @@ def plot_shapes(
 
 
 def _instability_kinds(n: int, stable, stable_in_plane) -> tuple[list, list, bool]:
-    """Which states are unstable, which of them out of the plane only, and whether 3-D.
-
-    Returns ``(unstable, out_only, spatial)``: one flag per state each, and
-    whether in-plane verdicts were given (the three-dimensional legend).
-    """
+    """``(unstable, out_only, spatial)``: flags per state, and whether in-plane verdicts were given."""
     if stable is None:
         stable = [None] * n
     elif len(stable) != n:

@@ -1,8 +1,5 @@
-"""What the figures of the package share: new axes, the markers of the events, joined pieces,
-the line of parameters of a title or caption (the angle in degrees, ``α = 60°``), a legend
-under the axes.
-
-matplotlib is imported only when a new figure is made.
+"""What the figures share: new axes, event markers, joined pieces, the line of parameters
+(``α = 60°``), a legend under the axes.  matplotlib is imported only for a new figure.
 """
 
 from __future__ import annotations
@@ -24,10 +21,7 @@ EVENT_MARKERS = {"flutter": "o", "divergence": "s", "restabilization": "^", "fol
 
 
 def new_axes(ax=None, size=(6.0, 4.5)):
-    """``ax``, or the Axes of a new figure of ``size`` inches with constrained layout.
-
-    Constrained layout keeps every label on the canvas.
-    """
+    """``ax``, or the Axes of a new figure of ``size`` inches with constrained layout."""
     if ax is None:
         import matplotlib.pyplot as plt
 
@@ -44,12 +38,7 @@ def mask_edges(mask: np.ndarray) -> np.ndarray:
 
 
 def place_legend(ax, handles: list, ncols: int = 2, fontsize: float = 10):
-    """The legend of ``handles`` under the axes (constrained layout), else inside them.
-
-    Under the axes it covers no curve, however the branches fill the frame;
-    it takes fewer columns than ``ncols`` where those would be wider than
-    the figure.
-    """
+    """The legend of ``handles`` under the axes (constrained layout), else inside, in at most ``ncols`` columns that fit."""
     from matplotlib.layout_engine import ConstrainedLayoutEngine
 
     fig = ax.figure
@@ -72,14 +61,7 @@ def angle_text(alpha: float) -> str:
 
 
 def parameter_text(params, v: bool = True) -> str:
-    """``α = 60°, β = 0.3, γ = 10, μ = 0.005, v = 8.2``: a figure's line of parameters.
-
-    Parameters
-    ----------
-    params : Params
-    v : bool
-        Include the flow velocity (False where v is the figure's abscissa).
-    """
+    """``α = 60°, β = 0.3, γ = 10, μ = 0.005, v = 8.2``: a figure's line of parameters (``v`` False leaves v out)."""
     parts = [
         angle_text(params.alpha),
         f"β = {params.beta:.4g}",
