@@ -1,11 +1,8 @@
 """Newton's method with a backtracking line search, for any system R(x) = 0.
 
-:func:`newton` knows the problem by two functions: ``balance(x) -> (R, ||R||, scale)``, the
-residual, its norm and the size of what R balances (converged: ``||R|| <= tol * scale``),
-and ``jacobian(x)``, dense or sparse (:func:`linear_solve`).  What R balances, and so what
-"converged" means, is the problem's: the pipe's forces are in
-:mod:`fempipe.analyses.statics.equilibrium`, which turns a :class:`NewtonConvergenceError` into its
-own error.
+:func:`newton` knows the problem by ``balance(x) -> (R, ||R||, scale)`` (converged:
+``||R|| <= tol * scale``) and ``jacobian(x)``, dense or sparse.  What R balances is the
+problem's: the pipe's forces are in :mod:`fempipe.analyses.statics.equilibrium`.
 """
 
 from __future__ import annotations
@@ -28,16 +25,9 @@ Balance = Callable[[np.ndarray], tuple[np.ndarray, float, float]]
 
 
 class NewtonConvergenceError(SolverError):
-    """Newton's method did not converge (``finite``), or met a non-finite residual or scale.
+    """Newton's method did not converge, or met a non-finite residual or scale (``finite`` False).
 
-    Attributes
-    ----------
-    iterations : int
-        Iterations done.
-    residual : float
-        Last residual norm (nan if not ``finite``).
-    finite : bool
-        False when the residual or its scale was not finite.
+    ``iterations`` done and the last ``residual`` norm (nan if not finite).
     """
 
     def __init__(self, message: str, iterations: int, residual: float, finite: bool) -> None:
@@ -86,24 +76,18 @@ def newton(
     balance : callable
         ``x -> (R, ||R||, scale)`` (:data:`Balance`).
     jacobian : callable
-        ``x -> dR/dx``, a dense array or a sparse matrix.
+        ``x -> dR/dx``, dense or sparse.
     x0 : ndarray
         Initial iterate (not modified).
     tol : float
-        Converged when ``||R|| <= tol * scale`` and the last step is below
-        ``1e-9 (1 + ||x||)``; ``x0`` itself when ``||R(x0)|| <= 1e-3 tol scale`` (a
-        point where the Jacobian may be singular, e.g. a located branch point).
+        Converged when ``||R|| <= tol * scale`` and the step is below ``1e-9 (1 + ||x||)``;
+        ``x0`` itself when ``||R(x0)|| <= 1e-3 tol scale`` (the Jacobian may be singular there).
     max_iter : int
-
-    Returns
-    -------
-    NewtonResult
 
     Raises
     ------
     NewtonConvergenceError
-        After ``max_iter`` iterations or a non-finite step; at once when the residual or
-        its scale is not finite.
+        After ``max_iter`` iterations, a non-finite step, or a non-finite residual or scale.
     """
     x = np.asarray(x0, dtype=float)
     r, rn, scale = balance(x)

@@ -1,11 +1,8 @@
-"""The pseudo-arclength continuation loop.
+"""The pseudo-arclength continuation loop, one for every branch of the package.
 
-One loop for every branch of the package -- static equilibria in v, gamma or
-alpha and periodic orbits in v -- written as the algorithm reads in a
-textbook (Allgower & Georg, *Introduction to Numerical Continuation Methods*,
-Ch. 2; Kuznetsov, Sec. 10.2).  What differs between problems is asked of the
-problem (:class:`~fempipe.solvers.continuation.protocol.ContinuationProblem`)
-and of its policy (:class:`~fempipe.solvers.continuation.protocol.ContinuationPolicy`).
+Static equilibria in v, gamma or alpha and periodic orbits in v, written as in Allgower &
+Georg (Ch. 2) and Kuznetsov (Sec. 10.2); what differs is asked of the problem and of its
+policy (:mod:`~fempipe.solvers.continuation.protocol`).  Derivation: docs/theory/numerics.md.
 """
 
 from __future__ import annotations
@@ -20,24 +17,10 @@ __all__ = ["continue_curve"]
 def continue_curve(policy: ContinuationPolicy, h: float) -> Any:
     """Follow a curve F(y) = 0 from its last known point with first step ``h``.
 
-    Every step is
-
-    1. **predict** -- a point at arclength ``h`` ahead (on the tangent, on a
-       secant or on a polynomial through the last points);
-    2. **correct** -- Newton's method back onto the curve, with the
-       pseudo-arclength condition <t, y - y_pred> = 0 as the extra equation
-       (or a fixed parameter, where a requested value lies ahead);
-    3. **accept** -- the corrected point is refused when the curve turned too
-       sharply (a jump to another branch); a refused or failed step is
-       **rejected**: retried with a shorter step, down to a minimum;
-    4. **land** -- a requested parameter value passed by the step is landed on
-       exactly;
-    5. **detect** -- special points between the last two points are found by
-       the sign changes of test functions (the parameter component of the
-       tangent at folds, the determinant of the bordered matrix at branch
-       points) and located (bisection, or the secant of the test function);
-    6. **step control** -- the next step grows when the corrector converged
-       quickly and shrinks when it did not.
+    Each step: predict a point at arclength ``h``; correct onto the curve (pseudo-arclength
+    condition, or a fixed parameter where a requested value lies ahead); accept, or reject and
+    retry shorter after a sharp turn or a failure; land on requested values passed; detect and
+    locate special points by sign changes of test functions; adapt the step.
 
     Parameters
     ----------

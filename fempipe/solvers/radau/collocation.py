@@ -1,18 +1,12 @@
 """The collocation polynomial of one Radau IIA step: the integrator's one dense output.
 
-Inside an accepted step from t_old of size h, with s = (t - t_old)/h, the Radau IIA solution
-is the cubic y(s) through the four nodes (0, y_old), (c_1, Y_1), (c_2, Y_2), (c_3 = 1, Y_3)
-(:data:`NODES`): the positions, velocities or accelerations of the step's stages.  It is
-evaluated in three floating-point forms, equal to round-off (``tests/test_collocation.py``)
-and each kept because its users' results depend on its last bit:
+The cubic through (0, y_old) and the stages (:data:`NODES`), in three floating-point forms
+equal to round-off, each kept because its users depend on its last bit: the increment form
+(:meth:`Radau.dense <fempipe.solvers.radau.Radau.dense>`), the barycentric Lagrange form (the
+extrapolation of the stage accelerations) and the plain Lagrange product (the tip extrema of
+:mod:`fempipe.analyses.periodic`).
 
-* the increment form (:func:`increment_weights`, :func:`evaluate_increment`,
-  :data:`INCREMENT_MATRIX`) of :meth:`Radau.dense <fempipe.solvers.radau.Radau.dense>`;
-* the barycentric Lagrange form (:func:`lagrange_weights`, :func:`evaluate_lagrange`,
-  :data:`LAGRANGE_WEIGHTS`) of the integrator's extrapolation of the stage accelerations
-  into the next step (Newton's starting guess);
-* the plain Lagrange product (:func:`product_weights`, :func:`evaluate_product`) of the tip
-  extrema over a period of :mod:`fempipe.analyses.periodic`.
+Derivation: docs/theory/numerics.md, "The collocation polynomial".
 """
 
 from __future__ import annotations
@@ -70,12 +64,8 @@ def evaluate_lagrange(s: np.ndarray, y_old: np.ndarray, Y: np.ndarray) -> np.nda
 
 
 def product_weights(s: np.ndarray) -> np.ndarray:
-    """Weights of (y_old, Y_1, Y_2, Y_3) at the points s, shape (m, 4) (plain product form).
-
-    ``L[:, j] = prod_{m != j} (s - x_m)/(x_j - x_m)``, multiplied in the order
-    m = 0, 1, 2, 3: the form the tip extrema of the branches of periodic orbits
-    are evaluated with (:class:`fempipe.analyses.limit_cycle.tips.CollocationOrbit`;
-    equal to the dense output's increment form to round-off, not bit for bit).
+    """Weights of (y_old, Y_1, Y_2, Y_3) at the points s, shape (m, 4), in the plain product form
+    ``prod_{m != j} (s - x_m)/(x_j - x_m)`` multiplied in the order m = 0..3.
     """
     s = np.atleast_1d(s)[:, None]
     L = np.ones((s.shape[0], 4))

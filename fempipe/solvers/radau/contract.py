@@ -37,24 +37,9 @@ StageFunction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 class ImplicitSecondOrderProblem(Protocol):
     """R(t, q, q', q'') = 0: the problem :class:`~fempipe.solvers.radau.Radau` integrates.
 
-    The rules are numbered in the module docstring (in full: docs/development.md).
-
-    Attributes
-    ----------
-    n : int
-        Number of unknowns (rule 1).
-    autonomous : bool
-        R does not depend on t (rule 5).
-    stage_residuals : callable or None
-        ``(Q, P, A) -> (S, n)`` (rule 6).
-    stage_jacobians : callable or None
-        ``(Q, P, A) -> (dR/dq, dR/dq', dR/dq'')``, each (S, n, n) (rule 6).
-    prefers_batched_stage_jacobians : bool
-        Rule 7.
-    parameter_derivative : callable or None
-        ``(Q, P, A) -> dR/dp``, (S, n) (rule 8).
-    decoupled_blocks : sequence of index arrays or None, optional
-        Rule 7.
+    Members by the module's rules: ``n`` (1), ``autonomous`` (5), ``stage_residuals`` and
+    ``stage_jacobians`` (6, ``(Q, P, A)`` of shape (S, n)), ``prefers_batched_stage_jacobians``
+    and ``decoupled_blocks`` (7), ``parameter_derivative`` (8).
     """
 
     n: int

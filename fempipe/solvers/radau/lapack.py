@@ -1,8 +1,7 @@
 """LU factors and solves through LAPACK getrf / getrs directly.
 
-``scipy.linalg.lu_factor`` / ``lu_solve`` do the same with argument checks
-that cost as much as the factorisation itself at n = 48 (they run twice per
-step and at every Newton iteration of the stage equations).
+``scipy.linalg.lu_factor`` / ``lu_solve`` add argument checks that cost as much as the
+factorisation of the integrator's small matrices.
 """
 
 from __future__ import annotations
@@ -14,13 +13,7 @@ __all__ = ["BlockFactors", "lu_factor", "lu_factor_blocks", "lu_solve"]
 
 
 def lu_factor(a: np.ndarray):
-    """LU factors of a real or complex square matrix (overwrites ``a``): LAPACK getrf.
-
-    Returns
-    -------
-    (lu, piv)
-        For :func:`lu_solve`.
-    """
+    """LU factors ``(lu, piv)`` of a real or complex square matrix (overwrites ``a``): LAPACK getrf."""
     getrf = sla.lapack.zgetrf if np.iscomplexobj(a) else sla.lapack.dgetrf
     lu, piv, info = getrf(a, overwrite_a=True)
     if info < 0:  # pragma: no cover - a wrong argument, not a singular matrix
@@ -29,10 +22,7 @@ def lu_factor(a: np.ndarray):
 
 
 class BlockFactors:
-    """The LU factors of a block-diagonal matrix, one per diagonal block.
-
-    ``parts`` is a list of (index array, factors of that block).
-    """
+    """The LU factors of a block-diagonal matrix: ``parts``, a list of (index array, factors)."""
 
     __slots__ = ("parts",)
 

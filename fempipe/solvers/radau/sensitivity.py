@@ -1,17 +1,9 @@
 """The derivative of one Radau IIA step with respect to its initial state and a parameter.
 
-Differentiating the stage equations R(Q_i, P_i, A_i) = 0, with Q, P the
-stage formulas, gives
+Exact (from the stage Jacobians, no freezing); :class:`~fempipe.solvers.radau.Radau` chains
+it into the monodromy matrix (``sensitivity=True``) and the derivative by v (contract rule 8).
 
-    [M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i] dA_j = -K_i dq0 - (c_i h K_i + D_i) dp0,
-
-and y1 = (Q_3, P_3) since c_3 = 1 (stiffly accurate): the exact derivative of
-the step map y0 -> y1 from the stage Jacobians (no freezing).  The same matrix
-with the right side -dR_i/dp gives the derivative by a parameter p at fixed
-y0 (contract rule 8), chained over the steps as
-dy_{k+1}/dp = S_k dy_k/dp + (dy_{k+1}/dp at fixed y_k).
-:class:`~fempipe.solvers.radau.Radau` accumulates these products into the
-monodromy matrix (``sensitivity=True``).
+Derivation: docs/theory/numerics.md, "The derivative of a step".
 """
 
 from __future__ import annotations
@@ -34,13 +26,12 @@ def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np
     Ks, Ds, Ms : ndarray, shape (3, n, n)
         dR/dq, dR/dq', dR/dq'' at the three stages.
     dR_dp : ndarray, shape (3, n), optional
-        dR/dp at the stages (the parameter column).
+        dR/dp at the stages.
 
     Returns
     -------
     ndarray, shape (2n, 2n) or (2n, 2n + 1)
-        (dq1, dp1) by (q0, p0[, p]); the whole derivative adds
-        ``[[I, h I], [0, I]]`` (the stage formulas at c_3 = 1, :func:`chain_step`).
+        (dq1, dp1) by (q0, p0[, p]), without the ``[[I, h I], [0, I]]`` of :func:`chain_step`.
     """
     n = Ks.shape[1]
     # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
@@ -64,15 +55,9 @@ def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np
 
 
 def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None = None):
-    """Chain one step's derivative D (:func:`step_derivative`) with the derivatives so far.
+    """Chain one step's derivative D with the derivatives so far: Y1 = [[I, h I], [0, I]] Y + D Y.
 
-    With Y = [d y/d y0, d y/dp]: Y1 = [[I, h I], [0, I]] Y + D[:, :2n] Y
-    (+ D[:, 2n] in the p column).
-
-    Returns
-    -------
-    (S1, dy_dp1)
-        d y1/d y0, shape (2n, 2n), and d y1/dp (None without ``dy_dp``).
+    Returns (d y1/d y0, d y1/dp), the latter None without ``dy_dp``.
     """
     n = S.shape[0] // 2
     with_p = dy_dp is not None
@@ -87,20 +72,9 @@ def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None 
 
 
 def chain_step_blocks(h: float, Ks, Ds, Ms, dR_dp, S: np.ndarray, dy_dp: np.ndarray | None, blocks):
-    """:func:`step_derivative` and :func:`chain_step` block by block.
-
-    For Jacobians with no coupling between the groups of unknowns ``blocks``
-    (index arrays partitioning range(n)) and derivatives so far ``S`` with
-    none either (block diagonal in the (q, q') indices of each group), the
-    step's derivative is block diagonal too, and each group's is the whole
-    computation on that group alone: the same numbers (to round-off) for
-    sum_b n_b^3 instead of n^3 operations.  The entries between groups stay
-    exactly zero.
-
-    Returns
-    -------
-    (S1, dy_dp1)
-        As :func:`chain_step`: new arrays (the arguments are not modified).
+    """:func:`step_derivative` and :func:`chain_step` block by block, for Jacobians and ``S`` with
+    no coupling between the groups ``blocks``: the same numbers to round-off, entries between
+    groups exactly zero.  Returns new arrays as :func:`chain_step`.
     """
     n = Ks.shape[1]
     S = S.copy()
