@@ -17,7 +17,8 @@ import pytest
 
 from fempipe.cli import build_parser, main
 from fempipe.cli.common import setup_from_args
-from fempipe.cli.parsing import GAMMA_MAX, MAX_DOFS, MAX_VALUES, MU_MAX, V_MAX
+from fempipe.cli.parsing import MAX_DOFS, MAX_VALUES
+from fempipe.io.ranges import GAMMA_MAX, MU_MAX, V_MAX
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]
 
@@ -59,11 +60,11 @@ def no_compute(monkeypatch):
     for module, name in (
         (fempipe.analyses.statics, "solve_path"),
         (fempipe.analyses.statics, "solve_static"),
-        (fempipe.analyses.stability, "root_locus"),
-        (fempipe.analyses.stability, "stability_analysis"),
-        (fempipe.analyses.stability, "stability_map"),
+        (fempipe.analyses.stability, "trace_root_locus"),
+        (fempipe.analyses.stability, "analyse_stability"),
+        (fempipe.analyses.stability, "map_stability"),
         (fempipe.analyses.limit_cycle, "find_attractor"),
-        (fempipe.analyses.bifurcation, "bifurcation_diagram"),
+        (fempipe.analyses.bifurcation, "compute_bifurcation_diagram"),
     ):
         monkeypatch.setattr(module, name, computed)
 

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from fempipe.cli import main
-from fempipe.cli.parsing import parse_alpha, parse_values
+from fempipe.cli.parsing import parse_values
 from fempipe.io import read_csv
+from fempipe.io.ranges import parse_alpha
 from fempipe.model.discretization import DEFAULT_FE
 
 TD_ARGS = ["--length", "0.094", "--EI", "1.8e-5", "--m", "0.0159", "--M", "0.0058", "--g", "9.8"]

@@ -1,23 +1,25 @@
-"""Command-line interface: ``fempipe <subcommand>``; one module per subcommand."""
+"""Command-line interface: ``fempipe <subcommand>``, one module per subcommand (:data:`SUBCOMMANDS`).
+
+Each module defines ``add_arguments(parser)``, ``run(args) -> int`` and ``EXAMPLES`` (the
+command lines of its help's epilogue), optionally ``solver_error_hint(args)``, a sentence added
+to the message of a solver failure.  Only the module of the command run is imported.  Errors
+and exit codes (:func:`main`): docs/cli/options.md.
+"""
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from collections.abc import Collection
 
-# The BLAS thread variables are set by main() before numpy loads;
-# fempipe.core.parallel imports only the standard library.  (Who set which
-# variable: fempipe.core.parallel.BLAS_SET_BY_FEMPIPE, rebound by the call.)
+# The BLAS thread variables are set by main() before numpy loads.
 from fempipe.core.parallel import BLAS_THREAD_VARIABLES, one_blas_thread
 
 __all__ = ["SUBCOMMANDS", "BLAS_THREAD_VARIABLES", "build_parser", "main", "one_blas_thread"]
 
-#: subcommand -> (module, one-line help).  Each module defines
-#: ``add_arguments(parser)`` and ``run(args) -> int``, and optionally
-#: ``solver_error_hint(args) -> str | None``, a sentence added to the message
-#: of a solver failure (e.g. where finished work was kept).
+#: subcommand -> (module, one-line help).
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "static": ("fempipe.cli.static", "static large deformation against flow velocity"),
     "spectrum": ("fempipe.cli.spectrum", "eigenvalues of the linearized problem against v"),
@@ -42,68 +44,73 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser:
-    """The ``fempipe`` parser with one subparser per entry of :data:`SUBCOMMANDS`.
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with one-line errors ``prog: error: --option: message`` (exit 2)."""
 
-    Parameters
-    ----------
-    only : collection of str, optional
-        Subcommands whose modules are imported and whose arguments are added;
-        the others get a bare subparser (named, with their one-line help, in
-        ``fempipe --help``).  None (the default): all of them.  :func:`main`
-        passes the subcommand it runs, so that starting the command imports
-        one subcommand module, not ten.
-    """
-    from fempipe.cli.common import ArgumentParser  # one-line errors, exit 2
+    def error(self, message: str):  # noqa: D102 - argparse API
+        message = re.sub(r"^argument (-[-\w]+)(?:/-[-\w]+)?: ", r"\1: ", " ".join(message.split()))
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+    def format_help(self) -> str:  # noqa: D102 - the epilogue's "::" is for the docs' RST
+        return super().format_help().replace("examples::", "examples:")
+
+
+def epilogue(name: str, examples: Collection[str]) -> str:
+    """The end of ``fempipe NAME --help``: the examples and where the command is explained."""
+    lines = "".join(f"  {e}\n" for e in examples)
+    return (
+        f"examples::\n\n{lines}\nwhat it computes, its --json keys and its files: "
+        f'docs/cli/commands.md, "fempipe {name}"'
+    )
+
+
+def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser:
+    """The ``fempipe`` parser; only the subcommands in ``only`` (default all) get their
+    arguments, the others a bare subparser named in ``fempipe --help``."""
+    from fempipe.core.version import __version__
 
     parser = ArgumentParser(
         prog="fempipe",
         description="Soft cantilevered pipe conveying fluid under gravity: "
         "finite elements and modal Galerkin (Chen et al. 2020, Eq. (20)).",
     )
-    from fempipe.core.version import __version__
-
     parser.add_argument("--version", action="version", version=f"fempipe {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in SUBCOMMANDS.items():
-        p = sub.add_parser(name, help=help_, description=help_)
+        p = sub.add_parser(
+            name,
+            help=help_,
+            description=help_,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
         if only is not None and name not in only:
             continue
         mod = importlib.import_module(module)
         mod.add_arguments(p)
+        p.epilog = epilogue(name, getattr(mod, "EXAMPLES", ()))
         p.set_defaults(_run=mod.run, _hint=getattr(mod, "solver_error_hint", None))
     return parser
-
-
-def _subcommand(argv: list[str]) -> str | None:
-    """The subcommand named in ``argv`` (the first known name), for error prefixes."""
-    return next((a for a in argv if a in SUBCOMMANDS), None)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code.
 
-    0 ok, 1 a solver failed (:class:`fempipe.core.errors.SolverError`), 2 bad input
-    (:class:`~fempipe.cli.parsing.CLIError` or argparse, also an unusable
-    ``--out``, checked before any computation), 130 / 143 interrupted by
-    SIGINT / SIGTERM (workers stopped, one line on stderr, no traceback).
-    Every error is one line ``fempipe COMMAND: error: --option: message``.
-    A command that fails or is interrupted leaves its ``--out`` directory as
-    it was (:class:`~fempipe.cli.reporting.Output`).
+    0 ok; 1 a solver failed (:class:`~fempipe.core.errors.SolverError`) or a disk error; 2 bad
+    input (argparse, :class:`~fempipe.cli.parsing.CLIError`, a point store of another run,
+    an unusable ``--out``), before any computation; 130 / 143 interrupted by SIGINT / SIGTERM.
+    Every error is one line ``fempipe COMMAND: error: --option: message``; a command that
+    fails leaves its ``--out`` directory as it was.
     """
     one_blas_thread()
     argv = list(sys.argv[1:] if argv is None else argv)
-    command = _subcommand(argv)
+    command = next((a for a in argv if a in SUBCOMMANDS), None)
     parser = build_parser(only=() if command is None else (command,))
     try:
         args, extra = parser.parse_known_args(argv)
-        if args.command not in (None, command):  # pragma: no cover - argparse chose another
+        if args.command not in (None, command):  # pragma: no cover - a value named a command
             parser = build_parser()
             args, extra = parser.parse_known_args(argv)
-        if extra:
-            # The top-level parser would say "fempipe: error: unrecognized
-            # arguments: ..."; name the subcommand and the option like every
-            # other message.
+        if extra:  # named like every other message, not "fempipe: error: unrecognized ..."
             sub = f"fempipe {command}" if command else "fempipe"
             print(f"{sub}: error: {extra[0]}: unrecognized argument", file=sys.stderr)
             return 2
@@ -114,15 +121,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     from fempipe.cli.parsing import CLIError
     from fempipe.cli.reporting import check_out_dir, discard_pending
-    from fempipe.core.errors import SolverError
+    from fempipe.core.errors import PointStoreMismatchError, SolverError
     from fempipe.core.parallel import Interrupted, interruptible
 
-    prefix = f"fempipe {args.command}: error:"
-
-    def hint() -> str:
-        text = args._hint(args) if args._hint is not None else None
-        return f"; {text}" if text else ""
-
+    prefix = f"fempipe {args.command}:"
+    hint = args._hint(args) if args._hint is not None else None
+    hint = f"; {hint}" if hint else ""
     try:
         if getattr(args, "out", None) is not None:
             check_out_dir(args.out)
@@ -130,20 +134,23 @@ def main(argv: list[str] | None = None) -> int:
             code = int(args._run(args) or 0)
         if getattr(args, "progress", None) is not False:  # --quiet: progress False
             for text in dict.fromkeys(getattr(args, "_notices", ())):
-                print(f"fempipe {args.command}: notice: {text}", file=sys.stderr)
+                print(f"{prefix} notice: {text}", file=sys.stderr)
         return code
-    except CLIError as exc:  # bad input: one line naming the option, exit 2
-        print(f"{prefix} {exc}", file=sys.stderr)
+    except PointStoreMismatchError as exc:  # --out holds another run's points
+        print(f"{prefix} error: {CLIError('--out', str(exc))}", file=sys.stderr)
         return 2
-    except SolverError as exc:  # a solver failed: say where, exit 1
-        print(f"{prefix} {' '.join(str(exc).split())}{hint()}", file=sys.stderr)
+    except CLIError as exc:
+        print(f"{prefix} error: {exc}", file=sys.stderr)
+        return 2
+    except SolverError as exc:
+        print(f"{prefix} error: {' '.join(str(exc).split())}{hint}", file=sys.stderr)
         return 1
     except Interrupted as exc:  # SIGINT or SIGTERM: workers are stopped by now
-        print(f"fempipe {args.command}: {exc}{hint()}", file=sys.stderr)
+        print(f"{prefix} {exc}{hint}", file=sys.stderr)
         return exc.exit_code
-    except OSError as exc:  # e.g. the disk filled up while writing: one line, no traceback
+    except OSError as exc:  # e.g. a full disk: one line, no traceback
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"{prefix} {where}{exc.strerror or exc}", file=sys.stderr)
+        print(f"{prefix} error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
     finally:
         discard_pending()

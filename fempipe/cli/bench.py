@@ -1,10 +1,5 @@
-"""``fempipe bench``: performance benchmarks (see :mod:`fempipe.bench`).
-
-``fempipe bench`` runs every registered benchmark; ``--only NAME`` (repeatable
-or comma-separated) selects some, ``--list`` names them, ``--quick`` runs
-small versions (a smoke test, not a measurement).  ``--json`` prints
-``{"environment", "quick", "benchmarks": {name: result}}``; ``--out DIR``
-writes the same to DIR/bench.json.
+"""``fempipe bench``: the performance benchmarks of :mod:`fempipe.bench` (``--only``, ``--list``,
+``--quick`` for a smoke run); ``--out DIR`` writes bench.json.
 """
 
 from __future__ import annotations
@@ -13,6 +8,8 @@ import argparse
 
 from fempipe.cli import common, reporting
 from fempipe.cli.parsing import CLIError
+
+EXAMPLES = ("fempipe bench --list", "fempipe bench --only startup,hopf --json")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,7 +29,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from fempipe import bench
-    from fempipe.io import json_dumps
 
     table = bench.available()
     if args.list:
@@ -51,15 +47,12 @@ def run(args: argparse.Namespace) -> int:
     n = len(names) if names else len(table)
     with reporting.progress(args, n, "bench") as bar:
         result = bench.run(names, quick=args.quick, callback=lambda name, res: bar.update())
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        output.json("bench.json", result)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        print_results(result)
-    if output is not None:
-        output.report(args)
+    reporting.deliver(
+        args,
+        result,
+        write=lambda out: out.json("bench.json", result),
+        text=lambda: print_results(result),
+    )
     return 0
 
 
@@ -82,8 +75,7 @@ def _print_value(key: str, value, indent: str) -> None:
 
 
 def print_results(result: dict) -> None:
-    """Print a ``fempipe bench`` result: the environment, then each benchmark's values
-    one per line and its table in aligned columns."""
+    """Print a ``fempipe bench`` result: the environment, each benchmark's values and table."""
     env = result["environment"]
     print("environment: " + ", ".join(f"{k} {v}" for k, v in env.items()))
     if result["quick"]:

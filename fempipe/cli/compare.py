@@ -1,84 +1,11 @@
-"""``fempipe compare FILE.csv``: a user's results checked against fempipe, with its error estimate.
+"""``fempipe compare FILE.csv``: a user's results against fempipe's, with fempipe's error estimate.
 
-The file holds the user's own numbers (from a modal code, another FE code, an
-experiment), one case per row; for each row and each quantity given, fempipe
-computes the same quantity (:class:`fempipe.studies.convergence.Quantity`, exactly
-as ``fempipe convergence`` does) on the chosen discretization (``--fe``,
-default P3:16, or ``--modal N``) and again on the refined one (elements
-halved, twice the modes plus one for an odd N), and reports the user's value, fempipe's, the
-difference user - fempipe, the relative difference (over |fempipe|),
-fempipe's error estimate (the Grid Convergence Index of one refinement,
-:mod:`fempipe.studies.error_estimate`) and whether the difference is *resolved*
-(|difference| > error estimate: fempipe's discretization error cannot explain
-it).  See :mod:`fempipe.studies.compare`.
-
-Input file
-----------
-CSV with a header line; lines starting with ``#`` and blank lines are
-skipped (comments: say where the numbers come from); ``row`` N in the output
-and in messages counts the data rows from 1.  A header cell is a column name,
-optionally with its unit in brackets as in fempipe's own CSV files
-(``v_cr [1]``, ``alpha [rad]``, ``X_tip [L]``); a unit that is not the
-column's is refused (``alpha [deg]``: name the column ``alpha_deg``).
-Columns (:data:`COLUMNS`):
-
-* the quantities, one or more: ``v_cr``, ``frequency`` (Im lambda of the
-  critical event, per unit tau), ``theta_tip`` (rad), ``X_tip``, ``Z_tip``,
-  ``eta_tip`` (static tip values, divided by L), ``lc_amplitude`` (of
-  eta(1), L), ``lc_period`` (T); an empty cell: not given for that row.
-  ``v_cr`` and ``frequency`` mean what they mean in every command: the round
-  pipe's first loss of stability, at the smaller of ``v_cr_in_plane`` and
-  ``v_cr_out_of_plane`` (``fempipe critical``'s and ``fempipe convergence``'s
-  ``v_cr``; docs, "Out of the plane"); with ``--planar``, as in those commands,
-  the paper's planar model, the motion in the plane of the static state (what
-  a planar code computes: ``v_cr_in_plane``, ``frequency_in_plane``).
-  ``v_cr_out_of_plane`` and ``frequency_out_of_plane`` are those of the motion
-  out of that plane (:mod:`fempipe.model.out_of_plane`).  Each row names the
-  fempipe quantity it was compared with (``fempipe_quantity``);
-* the inclination ``alpha`` in rad (also ``pi/3``, ``60deg`` as for
-  ``--alpha``) or ``alpha_deg`` in degrees, default 0;
-* dimensionless groups ``beta``, ``gamma``, ``mu`` (Eq. (19)) and the flow
-  ``v``; missing columns or empty cells of beta, gamma, mu take the paper's
-  case 0.142, 18.9, 5e-3 like the options of every other command, and the
-  output lists each value so taken (``defaults``);
-* or the SI pipe: ``length`` (m), ``EI`` (N m^2), ``m``, ``M`` (kg/m), ``g``
-  (m/s^2, default 9.81), ``a`` (s, default 0) and the flow ``U`` (m/s),
-  converted by :class:`fempipe.model.params.PipeSI` as the SI options are; a file
-  is either dimensionless or SI (``alpha``/``alpha_deg`` belong to both);
-* the flow range of the critical quantities (``v_cr``, ``frequency`` and
-  their ``_in_plane``, ``_out_of_plane`` forms): ``v_min`` (default 0),
-  ``v_max`` (default ``--v-max``, 15) or, SI, ``U_min``, ``U_max`` in m/s;
-  ``v``/``U`` is then not needed.  The static tip values and the limit
-  cycle are at the row's ``v`` (or ``U``), which they require;
-* ``label``: free text, carried into the output.
-
-Every value is checked before anything is computed, against the ranges of
-the command-line options (:mod:`fempipe.cli.parsing`); the first bad cell
-ends the command with one line ``fempipe compare: error: FILE: row N (line
-L), column C: message`` (``FILE: header, column C: ...`` for the header)
-and exit code 2, and no file is written.
-
-Output
-------
-``--json`` prints ``{"file", "rows": [{"row", "quantity", "user",
-"fempipe", "difference", "relative_difference", "error_estimate",
-"resolved", "verdict", "unit", "refined", "failure", "note", "alpha", "beta",
-"gamma", "mu", "v", "v_min", "v_max", "defaults", ...}], "discretization",
-"error_estimate": {"method", "discretization", "refined", "formula",
-"floor", "floors", "resolved", ...}, "summary", "cpu_time"}`` (with the SI
-pipe also ``U``, ``U_min``, ``U_max``, ``pipe_SI`` per row).  ``--out DIR``
-writes compare.json, compare.csv (one line per row and quantity; ``user``,
-``fempipe``, ``difference``, ``error_estimate`` and ``refined`` are in the
-unit of the line's quantity, named in its column ``unit``, so their header
-says ``[-]``) and compare.png (user against fempipe per quantity, the line
-y = x, and the differences with fempipe's error estimate as error bars).
-
-Each row's ``verdict`` reads the criterion: ``"differs"`` (by more than
-fempipe's error estimate), ``"agrees"`` (within it), null without an estimate.
-Exit codes, as diff's: 0 when every value agrees, 1 when some value differs,
-has no estimate or failed (Newton, no v_cr in the flow range, no limit cycle:
-its row is in the table and the files with the failure's message and no
-fempipe value; the others are complete), 2 for bad input.
+Each quantity of each row of the cases file (:func:`fempipe.io.cases.read_cases`) is computed
+on the discretization and on the refined one (:func:`fempipe.studies.compare.compare_values`);
+a difference larger than fempipe's error estimate is one its discretization cannot explain
+(verdict "differs").  Exit codes as diff's: 0 every value agrees, 1 some differs, has no
+estimate or failed, 2 bad input.  The file, keys and files: docs/cli/commands.md, "fempipe
+compare".
 """
 
 from __future__ import annotations
@@ -88,9 +15,17 @@ import math
 import sys
 
 from fempipe.cli import common, parsing, reporting
-from fempipe.cli.compare_cases import COLUMNS, DEFAULT_V_MAX, Case, fempipe_quantity, read_cases
+from fempipe.cli.parsing import CLIError
+from fempipe.core.errors import ParamError
+from fempipe.io import ranges
+from fempipe.io.cases import DEFAULT_V_MAX, fempipe_quantity, read_cases
 
-__all__ = ["COLUMNS", "CSV_COLUMNS", "DEFAULT_V_MAX", "Case", "add_arguments", "read_cases", "run"]
+__all__ = ["CSV_COLUMNS", "EXAMPLES", "add_arguments", "run"]
+
+EXAMPLES = (
+    "fempipe compare validation/compare_paper_N3.csv --planar --out out-cmp/   # the paper's N = 3",
+    "fempipe compare mine.csv --modal 8 --workers 2 --json",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -111,7 +46,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--v-max",
         metavar="V",
-        type=parsing.number_type("--v-max", 0.0, parsing.V_MAX, strict_low=True),
+        type=parsing.number_type("--v-max", 0.0, ranges.V_MAX, strict_low=True),
         default=str(DEFAULT_V_MAX),
         help=f"end of the flow range of v_cr and frequency where a row has no v_max (or U_max) "
         f"cell (default {DEFAULT_V_MAX:g}; dimensionless v, also for an SI file)",
@@ -124,16 +59,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_output_arguments(parser)
 
 
-# ---------------------------------------------------------------------------
-# Reading and checking the file
-# ---------------------------------------------------------------------------
-
-
-# ---------------------------------------------------------------------------
-# The command
-# ---------------------------------------------------------------------------
-
-
 def run(args: argparse.Namespace) -> int:
     import time
 
@@ -143,7 +68,10 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.process_time()
     setup = common.setup_from_args(args, need_flow=False)  # the discretization
     disc = setup.disc
-    cases = read_cases(args.file, v_max=args.v_max)
+    try:
+        cases = read_cases(args.file, v_max=args.v_max)
+    except ParamError as exc:
+        raise CLIError(args.file, str(exc)) from None
     items = [(case, name) for case in cases for name in case.values]
     parsing.check_count(
         args.file, len(items), parsing.MAX_VALUES, parsing.allow_large(args), "comparisons"
@@ -152,7 +80,6 @@ def run(args: argparse.Namespace) -> int:
         (case.quantity(name, args.shoot_rtol, args.planar), case.values[name])
         for case, name in items
     ]
-    output = reporting.Output(args.out) if args.out is not None else None
     with reporting.progress(args, len(pairs), "compare") as bar:
         comparisons = compare_values(
             pairs, disc, workers=args.workers, callback=lambda done, total: bar.update()
@@ -192,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         "cpu_time": reporting.cpu_seconds(t0),
     }
     reporting.deliver(
-        args, result, output, write=lambda out: _write(out, result), text=lambda: _print(result)
+        args, result, write=lambda out: _write(out, result), text=lambda: _print(result)
     )
     if failed:
         rows_failed = ", ".join(f"{r['row']} {r['quantity']}" for r in failed)
@@ -249,22 +176,14 @@ CSV_COLUMNS = (
 
 
 def _write(output: reporting.Output, result: dict) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.compare import plot_comparison
 
     present = {k for r in result["rows"] for k in r}
-    columns = [c for c in CSV_COLUMNS if c in present]
     fig = plot_comparison(result["rows"], caption=_caption(result))
-    try:
-        output.json("compare.json", result)
-        output.csv("compare.csv", result["rows"], columns)
-        output.figure("compare.png", fig, dpi=150)
-    finally:
-        plt.close(fig)
+    output.json("compare.json", result)
+    output.csv("compare.csv", result["rows"], [c for c in CSV_COLUMNS if c in present])
+    output.figure("compare.png", fig)
 
 
 def _ranges(numbers: list[int]) -> str:

@@ -1,34 +1,11 @@
 """``fempipe convergence``: a convergence study of one quantity of the user's case.
 
-Computes ``--quantity`` (a static tip value at one v; v_cr or the frequency
-of the critical event over the ``--v`` range, in three dimensions or in one
-plane; the ``--mode``-th eigenvalue
-at one v; the amplitude or period of the limit cycle at one v) on FE meshes
-of doubling element counts (``--fe P1,P2,P3 --elements 2:64``) and on
-doubling numbers of modes (``--modal 2:32 --basis sine,beam``), forms the
-reference by Richardson extrapolation and reports, per family, the values,
-the errors against the reference and the observed order with the points it
-used (:func:`fempipe.studies.convergence.run_study`, whose docstring says how the
-reference is formed).  For the static tip values the strong form is also
-solved by collocation (scipy ``solve_bvp``) as an independent check.
-
-The critical quantities: ``v_cr`` and ``frequency`` are those of the first
-loss of stability of the round pipe in three dimensions, the earlier of the
-motion in the plane of the static state and out of it
-(:func:`fempipe.analyses.stability.spatial_critical_velocity`); ``v_cr_in_plane``,
-``frequency_in_plane`` those of the plane alone (the paper's planar v_cr),
-``v_cr_out_of_plane``, ``frequency_out_of_plane`` those of the motion out of
-the plane (:class:`fempipe.studies.convergence.Quantity`).
-
-``--json`` prints ``{"quantity", "reference": {"value", "error_estimate",
-"method", "family", "independent"}, "series": [{"family", "n", "dofs",
-"values", "errors", "observed_order", "expected_order", "order_verdict", "fit_points",
-"local_orders", "failures", ...}], "params", "cpu_time", ...}`` with
-``family`` one of ``fe-P1``, ``fe-P2``, ..., ``modal-sine``, ``modal-beam``;
-errors are absolute, the eigenvalue (complex) is ``[re, im]`` and its error
-the modulus of the difference.  ``--out DIR`` writes convergence.json,
-convergence.csv and convergence.png (log-log error against dofs with the
-fitted and theoretical orders in the legend).
+``--quantity`` (a static tip value, v_cr or the critical frequency in three dimensions or one
+plane, an eigenvalue, the limit cycle's amplitude or period, a parametric threshold) on FE meshes
+of doubling element counts and on doubling numbers of modes, against the Richardson
+extrapolated reference, with each family's observed order
+(:func:`fempipe.studies.convergence.run_study`); static tip values also by collocation
+(scipy ``solve_bvp``).  Keys and files: docs/cli/commands.md, "fempipe convergence".
 """
 
 from __future__ import annotations
@@ -36,8 +13,15 @@ from __future__ import annotations
 import argparse
 import math
 
-from fempipe.cli import common, parametric, parsing, reporting
+from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+
+EXAMPLES = (
+    "fempipe convergence --quantity v_cr --alpha pi/2 --v 0,10 --fe P1,P2,P3 --modal 2:32 "
+    "--basis sine,beam --out out-conv/",
+    "fempipe convergence --quantity lc_amplitude --alpha 0 --v 10 --elements 2:32 --modal 2:16 "
+    "--workers 2",
+)
 
 DEFAULT_DEGREES = "P1,P2,P3"
 DEFAULT_ELEMENTS = "2:64"
@@ -45,6 +29,7 @@ DEFAULT_MODES = "2:32"
 
 
 def _degrees(text: str) -> list[int]:
+    """``--fe P1,P2,P3``: distinct element degrees."""
     out = []
     for item in str(text).split(","):
         item = item.strip()
@@ -83,6 +68,7 @@ def _sizes(text: str) -> list[int]:
 
 
 def _bases(text: str) -> list[str]:
+    """``--basis sine,beam``."""
     out = [b.strip() for b in str(text).split(",")]
     bad = [b for b in out if b not in ("sine", "beam")]
     if bad or len(set(out)) != len(out):
@@ -118,7 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--omega",
         metavar="A:B",
-        type=parsing.option_type("--omega", parametric.parse_band),
+        type=parsing.option_type("--omega", parsing.parse_band),
         default=None,
         help="the pulsation frequencies searched by --quantity sigma_threshold, omega_threshold "
         "(the first region of parametric resonance of the straight pipe to open), e.g. 20:40",
@@ -168,11 +154,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         g, "integration tolerance of the limit cycle's shooting (lc_* quantities)"
     )
     common.add_workers_argument(g, "processes computing members in parallel (1)")
-    g.add_argument(
-        "--allow-large",
-        action="store_true",
-        help=f"accept members with more than {parsing.MAX_DOFS} unknowns",
-    )
+    common.add_allow_large_argument(g, f"accept members with more than {parsing.MAX_DOFS} unknowns")
     common.add_output_arguments(parser)
 
 
@@ -213,7 +195,7 @@ def _quantity(args: argparse.Namespace, setup):
     )
 
     name = args.quantity
-    flow_opt = "--U" if getattr(args, "U", None) is not None else "--v"
+    flow_opt = common.flow_option(args)
     if name in CYCLE_QUANTITIES:
         common.refuse_hysteretic(args, f"--quantity {name} (a limit cycle)")
     if name in CRITICAL_QUANTITIES:
@@ -245,7 +227,6 @@ def run(args: argparse.Namespace) -> int:
     setup = common.setup_from_args(args, need_flow=False)
     quantity = _quantity(args, setup)
     families = _families(args)
-    output = reporting.Output(args.out) if args.out is not None else None
     t0 = time.process_time()
     independent = []
     total = sum(len(f.sizes) for f in families)
@@ -274,11 +255,7 @@ def run(args: argparse.Namespace) -> int:
     result["params"] = head["params"]
     result["cpu_time"] = reporting.cpu_seconds(t0)
     reporting.deliver(
-        args,
-        result,
-        output,
-        write=lambda out: _write(out, result, study),
-        text=lambda: _print(result),
+        args, result, write=lambda out: _write(out, result, study), text=lambda: _print(result)
     )
     return 0
 
@@ -316,11 +293,7 @@ def _bvp_value(quantity) -> tuple[str, float] | None:
 
 
 def _write(output: reporting.Output, result: dict, study) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.convergence import plot_convergence
 
     name = result["quantity"]
@@ -336,12 +309,9 @@ def _write(output: reporting.Output, result: dict, study) -> None:
             row[f"{name}_error"] = float(s.errors[i])
             rows.append(row)
     ax = plot_convergence(study)
-    try:
-        output.json("convergence.json", result)
-        output.csv("convergence.csv", rows)
-        output.figure("convergence.png", ax.figure, dpi=150)
-    finally:
-        plt.close(ax.figure)
+    output.json("convergence.json", result)
+    output.csv("convergence.csv", rows)
+    output.figure("convergence.png", ax.figure)
 
 
 def _fmt(x) -> str:

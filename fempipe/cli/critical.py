@@ -1,69 +1,12 @@
-"""``fempipe critical``: critical flow velocity and every stability event on the static branches.
+"""``fempipe critical``: the critical flow velocity and every stability event on the static branches.
 
-Follows the gravity-loaded static branch in v over the range of ``--v`` (or
-``--U``: their smallest and largest values), locates every change of stability
-and every fold to 1e-10 in v, follows the branches born at branch points
-(pitchforks at alpha = 0, pi; ``--no-branches`` to skip) and reports the first
-loss of stability of the primary branch as v_cr.  The pipe is round: its
-motion in the plane of the static state (Eq. (32)) and out of it
-(:mod:`fempipe.model.out_of_plane`) are both analysed along the same branches
-(:func:`fempipe.analyses.stability.spatial_stability_analysis`), and v_cr is the first
-loss of stability in three dimensions.  ``--planar`` analyses the paper's
-planar model alone (:func:`fempipe.analyses.stability.stability_analysis`), every
-output as before the out-of-plane analysis existed (events gain ``plane``).
-
-In three dimensions the JSON also carries ``v_cr_in_plane``,
-``frequency_in_plane``, ``v_cr_out_of_plane``, ``frequency_out_of_plane``
-(null where that plane stays stable), ``first_instability`` ({``v``,
-``plane`` ("in" or "out"), ``type``, ``frequency``}, null if stable; where
-both planes lose stability at the same v, within 1e-9, as the straight
-hanging or standing pipe does in every plane through its axis, "in"),
-``v_flutter_in_plane``, ``v_flutter_out_of_plane``, ``critical_in_plane``,
-``critical_out_of_plane`` and ``branches_out_of_plane``; ``v_flutter`` is the
-first flutter in either plane, ``events`` lists both planes' events (each
-with ``plane``; a fold once, as an in-plane event), and with an SI pipe
-``U_cr_in_plane`` and ``U_cr_out_of_plane`` are added.  An out-of-plane flutter
-of the primary branch carries the 3-D model's Hopf normal form, with
-``Y_tip_amplitude_coefficient`` (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).
-
-``--json`` prints ``{"v_cr": float or null, "events": [{"v", "type", "branch",
-"frequency", "mode", "stable_before", "stable_after"}, ...], "critical",
-"v_flutter", "v_range", "params", "discretization", "branches", ...}``.  The
-type is flutter, divergence (the system or a mode loses stability),
-restabilization (the system is stable above it), mode_restabilization (one
-mode gains stability while another stays unstable) or fold;
-``stable_before`` / ``stable_after`` say whether the whole system is stable
-just below and above the event; frequency = Im lambda = Re Omega at the
-crossing; mode numbers are those of ``fempipe spectrum`` (carried from
-v = 0).  An instability already present at the start of the range is listed
-at that v.  With an SI pipe, "U_cr" (m/s) is added.  ``--out DIR`` writes
-critical.json, events.csv and branches.png.
-
-``--error-estimate`` runs the whole analysis again on the refined
-discretization (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
-or twice the modes, plus one for an odd N), pairs the events of the two runs by branch, type and
-mode (:func:`fempipe.studies.error_estimate.match_events`, not by position) and adds
-beside ``v_cr``, ``v_flutter`` (and ``U_cr``), beside ``v`` and
-``frequency`` of every event and of ``critical``, the estimate ``Q_error`` =
-max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|)) (Roache's Grid
-Convergence Index, p = 2k for P_k, 3 for the sine modes; the floor is the
-1e-10 to which events are located) and ``Q_refined``.  Every event gets
-``error_note``: null, or why it has no estimate (no such event in the
-refined run); ``v_cr_error`` is null, with a note, when the refined run
-loses stability first by another event.  The top-level ``"error_estimate"``
-describes the method and lists the notes (also refined events the reported
-run lacks).  events.csv gains ``v_error`` and ``frequency_error`` after its
-columns; the text shows ``value ± error``.  It costs about one more run on
-the refined discretization; the ``branches`` entries are those of the
-reported run, without estimates.  The library does it
-(:func:`fempipe.studies.estimates.refined_stability`,
-:func:`~fempipe.studies.estimates.with_stability_estimates`); this module shows it.
-
-The continuation's step budget follows from the range (:func:`step_budget`).
-Should the primary branch still stop before the end of the range (its JSON
-``end_reason`` is ``"max_steps"``), the command says so on stderr, with the v
-reached, and exits 1 (the files and the output cover the part that was
-followed); ``--allow-partial`` makes that exit 0, with the warning.
+Follows the gravity-loaded branch over the range of ``--v``, locates every change of stability
+and fold to 1e-10 in v, follows the branches born at branch points and reports the first loss
+of stability as v_cr, in three dimensions (both planes,
+:func:`fempipe.analyses.stability.analyse_stability`) or with ``--planar`` in the plane; each
+flutter with its Hopf normal form; with ``--error-estimate`` the estimates from the refined
+discretization.  A primary branch cut short by the step budget (:func:`step_budget`) exits 1
+unless ``--allow-partial``.  Keys and files: docs/cli/commands.md, "fempipe critical".
 """
 
 from __future__ import annotations
@@ -72,8 +15,13 @@ import argparse
 import math
 import sys
 
-from fempipe.cli import common, estimates, parsing, reporting
+from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+
+EXAMPLES = (
+    "fempipe critical --alpha pi --v 0,6 --json                   # every event on every branch",
+    "fempipe critical --alpha pi/2 --v 0,8 --error-estimate",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -86,12 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="do not follow the branches born at branch points (faster; v_cr is unaffected)",
     )
-    g.add_argument(
-        "--planar",
-        action="store_true",
-        help="the paper's planar model only: no analysis of the motion out of the plane "
-        "(v_cr is then the in-plane critical velocity, every output as before)",
-    )
+    common.add_planar_argument(g, "v_cr is then the in-plane critical velocity")
     g.add_argument(
         "--ds-max",
         metavar="DS",
@@ -107,29 +50,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "of the range",
     )
     common.add_output_arguments(parser)
-    estimates.add_argument(parser, "v_cr, v_flutter and the v and frequency of every event")
+    common.add_error_estimate_argument(
+        parser, "v_cr, v_flutter and the v and frequency of every event"
+    )
 
 
 def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
-    """Continuation steps allowed for the range: 4 steps of ``ds_max`` per unit of v, >= 2000.
-
-    The arclength step measures the change of (theta, v) together, so one
-    step advances v by at most ``ds_max``; the factor 4 leaves room for
-    stretches where the shape changes faster than v and for steps shortened
-    near events and folds.  The library's default of 2000 steps is kept as
-    the floor (it cut ``--v 0,300`` at v = 200 before the budget followed the
-    range).
-    """
+    """Continuation steps allowed for the range: 4 steps of ``ds_max`` per unit of v (a step
+    advances v by at most ``ds_max``; room for shortened steps near events), at least 2000."""
     return max(2000, math.ceil(4.0 * (v_max - v_min) / ds_max))
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.analyses.stability import spatial_stability_analysis, stability_analysis
-    from fempipe.io import json_dumps
+    from fempipe.analyses.stability import PLANES, analyse_stability
+    from fempipe.analyses.stability.hopf import decorate_events
     from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
-    flow_opt = "--U" if args.U is not None else "--v"
+    flow_opt = common.flow_option(args)
     if not setup.v:
         raise CLIError(flow_opt, "give the flow range, e.g. --v 0,10")
     v_min, v_max = min(setup.v), max(setup.v)
@@ -150,7 +88,6 @@ def run(args: argparse.Namespace) -> int:
         "ds_max": ds_max,
         "max_steps": step_budget(v_min, v_max, ds_max),
     }
-    refined = None
     with reporting.progress(args, None, "critical") as bar:
 
         def on_sample(branch: str, v: float) -> None:
@@ -158,49 +95,36 @@ def run(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{branch} v={v:.4f}")
 
         try:
-            analysis = stability_analysis if args.planar else spatial_stability_analysis
-            res = analysis(model, callback=on_sample, **kwargs)
+            planes = ("in",) if args.planar else PLANES
+            res = analyse_stability(model, callback=on_sample, planes=planes, **kwargs)
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
+        result = res.to_dict()
+        out_of_plane = {} if args.planar else _out_of_plane_forms(result, model)
+        result = decorate_events(result, model, res if args.planar else res.in_plane, out_of_plane)
+        result |= setup.to_dict()
+        if setup.pipe is not None:
+            pipe = setup.pipe
+            result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
+            result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
+            for key in ("in_plane", "out_of_plane") if not args.planar else ():
+                v = result["v_cr_" + key]
+                result["U_cr_" + key] = None if v is None else pipe.U_of_v(v)
         if args.error_estimate:
-            refined = _refined_run(model, kwargs, bar, args.planar)
-    head = setup.to_dict()
-    result = res.to_dict()
-    # Hopf criticality of the flutter events (fempipe.analyses.stability.hopf).
-    from fempipe.analyses.stability.hopf import decorate_events
-
-    out_of_plane = {} if args.planar else _out_of_plane_forms(result, model)
-    result = decorate_events(result, model, res if args.planar else res.in_plane, out_of_plane)
-    result["params"] = head["params"]
-    result["discretization"] = head["discretization"]
-    if setup.pipe is not None:
-        pipe = setup.pipe
-        result["U_cr"] = None if res.v_cr is None else pipe.U_of_v(res.v_cr)
-        result["U_range"] = [pipe.U_of_v(v_min), pipe.U_of_v(v_max)]
-        for key in ("in_plane", "out_of_plane") if not args.planar else ():
-            v = result["v_cr_" + key]
-            result["U_cr_" + key] = None if v is None else pipe.U_of_v(v)
-    if refined is not None:
-        from fempipe.studies.estimates import with_stability_estimates
-
-        result = with_stability_estimates(result, res, refined, setup.pipe)
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write(output, result, res)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print(result, setup.pipe)
-    if output is not None:
-        output.report(args)
+            result = _with_estimates(result, model, res, kwargs, setup.pipe, bar)
+    reporting.deliver(
+        args,
+        result,
+        write=lambda output: _write(output, result, res),
+        text=lambda: _print(result, setup.pipe),
+    )
     return _check_coverage(args, result, v_max)
 
 
-def _refined_run(model, kwargs: dict, bar, planar: bool):
-    """:func:`fempipe.studies.estimates.refined_stability`, the progress bar counting its
-    samples too."""
+def _with_estimates(result: dict, model, res, kwargs: dict, pipe, bar) -> dict:
+    """:func:`fempipe.studies.estimates.estimate_errors`, counted by the progress bar."""
     from fempipe.studies.error_estimate import refine
-    from fempipe.studies.estimates import refined_stability
+    from fempipe.studies.estimates import estimate_errors
 
     fine = refine(model.disc)
 
@@ -208,11 +132,12 @@ def _refined_run(model, kwargs: dict, bar, planar: bool):
         bar.update()
         bar.set_postfix_str(f"refined {fine.name} {branch} v={v:.4f}")
 
-    return refined_stability(model, planar=planar, fine=fine, callback=on_sample, **kwargs)
+    return estimate_errors(result, model, res, pipe=pipe, fine=fine, callback=on_sample, **kwargs)
 
 
 def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int:
-    """Warn on stderr and return 1 if the primary branch ran out of steps (module docstring)."""
+    """Warn on stderr and return 1 (0 with ``--allow-partial``) if the primary branch ran out
+    of continuation steps."""
     primary = next((b for b in result.get("branches", []) if b["name"] == "primary"), None)
     if primary is None or primary["end_reason"] != "max_steps":
         return 0
@@ -226,17 +151,13 @@ def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int
 
 
 def _write(output: reporting.Output, result: dict, res) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.stability import plot_branches
 
     rows = []
     for ev, d in zip(res.events, result["events"], strict=True):
         row = ev.details()
-        row.update({k: x for k, x in d.items() if k.endswith(estimates.ERROR)})
+        row.update({k: x for k, x in d.items() if k.endswith(reporting.ERROR)})
         rows.append(row)
     rows.sort(key=lambda r: r["v"])
     for r in rows:
@@ -247,12 +168,9 @@ def _write(output: reporting.Output, result: dict, res) -> None:
         ax = plot_spatial_branches(res)
     else:
         ax = plot_branches(res)
-    try:
-        output.json("critical.json", result)
-        output.csv("events.csv", rows, estimates.error_columns(rows))
-        output.figure("branches.png", ax.figure, dpi=150, bbox_inches="tight")
-    finally:
-        plt.close(ax.figure)
+    output.json("critical.json", result)
+    output.csv("events.csv", rows, reporting.error_columns(rows))
+    output.figure("branches.png", ax.figure, bbox_inches="tight")
 
 
 def _out_of_plane_forms(result: dict, model) -> dict:
@@ -273,8 +191,8 @@ def _print(result: dict, pipe) -> None:
     with_errors = "error_estimate" in result
 
     def num(d: dict, key: str, spec: str) -> str:
-        if with_errors and key + estimates.ERROR in d:
-            return estimates.pm(d[key], d[key + estimates.ERROR], spec)
+        if with_errors and key + reporting.ERROR in d:
+            return reporting.pm(d[key], d[key + reporting.ERROR], spec)
         return spec.format(d[key])
 
     print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretization {disc}")
@@ -318,7 +236,7 @@ def _print(result: dict, pipe) -> None:
         "(v = 0, same alpha, beta, gamma, mu), followed in v by continuity"
     )
     if with_errors:
-        estimates.print_footer(result["error_estimate"])
+        reporting.print_footer(result["error_estimate"])
 
 
 def _print_planes(result: dict, num) -> None:

@@ -1,20 +1,10 @@
 """``fempipe parametric``: where a pulsating flow v0 (1 + sigma sin(omega tau)) destabilizes the pipe.
 
-The regions of parametric resonance of the straight pipe (alpha = 0 or pi) in the
-(omega, sigma) plane (:func:`fempipe.analyses.parametric.compute_parametric_chart`): each region's
-mode and kind (principal, omega near 2 omega_k / n; sum or difference combination), its
-threshold (the least sigma at which it opens, and the omega there) and its boundary
-omega_lo, omega_hi at each ``--sigma``; beside the chart of the discretization, the same
-chart on the paper's sine modes (``--compare-modal``, default 3 and 4).  Method:
-docs/theory/parametric.md.
-
-``--json`` prints the chart: ``regions[]`` with ``mode``, ``kind``, ``order``, ``plane``,
-``omega_nominal``, ``sigma_threshold``, ``omega_threshold``, ``multiplier`` ([re, im]) and
-``boundary`` (rows [sigma, omega_lo, omega_hi]; null where the region runs beyond the band or
-into another), ``modes``, ``frequencies``, ``eigenvalues``, ``closed``, ``params``,
-``discretization``, ``omega_band``, ``sigmas``, ``evaluations``, ``cpu_seconds``, and
-``compare`` (one such chart per modal discretization).  ``--out DIR`` writes
-parametric.json, parametric.csv (one row per chart, region, plane and sigma) and chart.png.
+The regions of parametric resonance of the straight pipe in the (omega, sigma) plane
+(:func:`fempipe.analyses.parametric.compute_parametric_chart`): each region's mode and kind, its
+threshold and its boundary at each ``--sigma``, beside the same chart on the paper's sine modes
+(``--compare-modal``).  Method: docs/theory/parametric.md; keys and files:
+docs/cli/commands.md, "fempipe parametric".
 """
 
 from __future__ import annotations
@@ -26,6 +16,12 @@ import time
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
 
+EXAMPLES = (
+    "fempipe parametric --v 6 --beta 0.2 --gamma 10 --omega 2:40 --sigma 0.1,0.2,0.3,0.4,0.5 "
+    "--out out-par/",
+    "fempipe parametric --v 5 --alpha pi --omega 5:60 --json",
+)
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_physical_arguments(parser)
@@ -35,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--omega",
         metavar="A:B",
-        type=parsing.option_type("--omega", parse_band),
+        type=parsing.option_type("--omega", parsing.parse_band),
         default=(2.0, 40.0),
         help="the band of pulsation frequencies searched, 0 < A < B (default 2:40)",
     )
@@ -72,19 +68,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     common.add_output_arguments(parser)
 
 
-def parse_band(text: str) -> tuple[float, float]:
-    """``A:B``, a band of pulsation frequencies 0 < A < B (ValueError otherwise)."""
-    parts = str(text).split(":")
-    try:
-        lo, hi = (float(x) for x in parts)
-    except ValueError:
-        raise ValueError(f"expects A:B with 0 < A < B, got {text!r}") from None
-    if not 0 < lo < hi < 1e4:
-        raise ValueError(f"expects A:B with 0 < A < B <= 1e4, got {text!r}")
-    return lo, hi
-
-
 def _sigmas(text: str) -> tuple[float, ...]:
+    """``--sigma``: distinct amplitudes 0 < sigma <= 1, sorted."""
     values = parsing.parse_values(text, "--sigma")
     bad = [s for s in values if not 0 < s <= 1]
     if bad:
@@ -93,6 +78,7 @@ def _sigmas(text: str) -> tuple[float, ...]:
 
 
 def _modal_list(text: str) -> tuple[int, ...]:
+    """``--compare-modal``: numbers of sine modes, or 'none'."""
     if str(text).strip().lower() == "none":
         return ()
     try:
@@ -144,11 +130,9 @@ def run(args: argparse.Namespace) -> int:
     result["compare"] = {c.discretization["name"]: c.to_dict() for c in charts[1:]}
     if setup.pipe is not None:
         result["U0"] = setup.pipe.U_of_v(v0)
-    output = reporting.Output(args.out) if args.out is not None else None
     reporting.deliver(
         args,
         result,
-        output,
         write=lambda out: _write(out, result, charts),
         text=lambda: _print(charts, cpu),
     )
@@ -178,20 +162,13 @@ def _rows(charts) -> list[dict]:
 
 
 def _write(output: reporting.Output, result: dict, charts) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.parametric import plot_parametric_chart
 
     ax = plot_parametric_chart(charts[0], charts[1:])
-    try:
-        output.json("parametric.json", result)
-        output.csv("parametric.csv", _rows(charts))
-        output.figure("chart.png", ax.figure, dpi=150)
-    finally:
-        plt.close(ax.figure)
+    output.json("parametric.json", result)
+    output.csv("parametric.csv", _rows(charts))
+    output.figure("chart.png", ax.figure)
 
 
 def _print(charts, cpu: float) -> None:

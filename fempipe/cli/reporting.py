@@ -1,21 +1,10 @@
-"""What a ``fempipe`` command shows and writes: progress, result files, headings.
+"""What a ``fempipe`` command shows and writes: progress, result files, tables, error estimates.
 
-Result files
-------------
-``--out DIR`` is checked before any computation (:func:`check_out_dir`): it
-must be a directory that exists or can be created, and writable; ``--out ''``
-is refused (it would scatter the files into the current directory).  The
-files of one run are written into a hidden staging directory inside DIR
-(:class:`Output`) and moved into place together at the end
-(:meth:`Output.commit`), so a run that fails or is interrupted part way
-leaves DIR as it was: every file of a run is written, or none.
-
-Progress
---------
-With ``--progress`` (or when stderr is a terminal) a tqdm bar; otherwise,
-unless ``--quiet``, a one-line progress message on stderr at most every
-:data:`LOG_INTERVAL` seconds, so that a batch job's log shows that a long
-run is alive and how far it is.
+``--out DIR`` is checked before any computation (:func:`check_out_dir`); the files of a run go
+into a hidden staging directory inside DIR and are moved in together at the end
+(:class:`Output`), so a run that fails leaves DIR as it was.  Progress is a tqdm bar, or a line
+on stderr every :data:`LOG_INTERVAL` s outside a terminal (:func:`progress`).  Conventions:
+docs/cli/options.md.
 """
 
 from __future__ import annotations
@@ -27,30 +16,37 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
+
+from fempipe.studies.error_estimate import ERROR, REFINED
 
 from .parsing import CLIError
 
-__all__ = ["LOG_INTERVAL", "Output", "check_out_dir", "describe", "discard_pending", "progress"]
+__all__ = [
+    "ERROR",
+    "LOG_INTERVAL",
+    "Output",
+    "agg",
+    "check_out_dir",
+    "cpu_seconds",
+    "deliver",
+    "describe",
+    "discard_pending",
+    "error_columns",
+    "pm",
+    "print_footer",
+    "progress",
+    "time_progress",
+]
 
 #: Seconds between two progress lines when stderr is not a terminal.
 LOG_INTERVAL = 20.0
 
 
 def check_out_dir(text: str, option: str = "--out") -> Path:
-    """Refuse an unusable output directory before any work is done.
-
-    ``text`` must be non-empty; the directory must exist or be creatable
-    (its nearest existing ancestor is a directory) and be writable, which is
-    tried by creating and removing a file in it.  Directories created for
-    the trial are removed again, so a refused or failed run leaves nothing.
-
-    Raises
-    ------
-    CLIError
-        Naming ``option``; the dispatcher prints it and exits 2.
-    """
+    """``text`` as a directory that exists or can be created, and is writable (tried, then
+    left as it was); CLIError naming ``option`` otherwise."""
     if not text or not text.strip():
         raise CLIError(option, "empty directory name; give a directory, e.g. --out results/")
     path = Path(text)
@@ -82,14 +78,9 @@ def check_out_dir(text: str, option: str = "--out") -> Path:
 
 
 def progress(args: argparse.Namespace, total: int | None, desc: str):
-    """Progress on stderr: a tqdm bar, or a line every :data:`LOG_INTERVAL` s.
-
-    A bar with ``--progress`` or when stderr is a terminal; nothing with
-    ``--quiet``; otherwise plain lines such as
-    ``fempipe: simulate: 12/40 (30 %), 61 s`` at a modest interval, for logs of
-    batch jobs.  Use as a context manager; call ``bar.update()`` (and
-    optionally ``bar.set_postfix_str``) from the library's progress callback.
-    """
+    """A context manager with tqdm's ``update`` and ``set_postfix_str``: a bar with
+    ``--progress`` or on a terminal, nothing with ``--quiet``, else a line such as
+    ``fempipe: simulate: 12/40 (30 %), 61 s`` every :data:`LOG_INTERVAL` s."""
     show = getattr(args, "progress", None)
     if show is None and not sys.stderr.isatty():
         return _LogProgress(total, desc, LOG_INTERVAL)
@@ -172,18 +163,9 @@ def discard_pending() -> None:
 class Output:
     """The result files of one command in ``--out DIR``, all or none.
 
-    Every file goes into a hidden staging directory inside DIR (through one
-    of the methods, which write atomically with :mod:`fempipe.io`, or by
-    another writer at :meth:`path`, followed by :meth:`record`);
-    :meth:`commit` moves them into DIR together.  If the command fails
-    first, :func:`discard_pending` removes the staging directory and DIR is
-    left as it was.  The "wrote ..." lines of :meth:`report` are exactly the
-    files moved into DIR.
-
-    Parameters
-    ----------
-    directory : path-like
-        The ``--out`` directory (checked by :func:`check_out_dir`).
+    Files go into a staging directory inside DIR (by the methods, or by another writer at
+    :meth:`path` followed by :meth:`record`); :meth:`commit` moves them into DIR together,
+    :func:`discard_pending` removes them if the command fails first.
     """
 
     def __init__(self, directory) -> None:
@@ -206,16 +188,11 @@ class Output:
         return self.stage / name
 
     def record(self, path) -> Path:
-        """Record a file (or directory) written at ``path`` (from :meth:`path`).
-
-        A path outside the staging directory is recorded as written in place.
-
-        Returns the final destination in DIR.
-        """
+        """Record a file or directory written at ``path`` (from :meth:`path`, or outside the
+        staging directory: written in place); returns its destination."""
         path = Path(path)
         if not path.is_relative_to(self.stage):
-            # Written in place on purpose (e.g. bifurcation's resumable point
-            # store, which keeps finished points when a run stops).
+            # in place on purpose: bifurcation's resumable point store
             self.written.append(path)
             return path
         name = path.relative_to(self.stage).parts[0]
@@ -266,15 +243,20 @@ class Output:
         return self.record(write_csv(self.path(name), rows, columns))
 
     def figure(self, name: str, fig, **savefig_kwargs) -> Path:
+        """Write ``fig`` (dpi 150 unless given) and close it."""
+        import matplotlib.pyplot as plt
+
         from fempipe.io import write_figure
 
-        return self.record(write_figure(self.path(name), fig, **savefig_kwargs))
+        try:
+            path = write_figure(self.path(name), fig, **({"dpi": 150} | savefig_kwargs))
+        finally:
+            plt.close(fig)
+        return self.record(path)
 
     def report(self, args: argparse.Namespace) -> None:
-        """:meth:`commit`, then ``wrote PATH`` on stderr for each file.
-
-        Nothing is printed with ``--json`` or ``--quiet``.
-        """
+        """:meth:`commit`, then ``wrote PATH`` on stderr for each file (not with ``--json``
+        or ``--quiet``)."""
         self.commit()
         if getattr(args, "json", False) or getattr(args, "progress", None) is False:
             return
@@ -283,10 +265,7 @@ class Output:
 
 
 def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu")) -> tuple:
-    """``(discretization label, "alpha = ..., beta = ...")`` for a table heading.
-
-    ``result`` is a subcommand's JSON dict with ``params`` and ``discretization``.
-    """
+    """``(discretization label, "alpha = ..., beta = ...")`` of a result's heading."""
     p, d = result["params"], result["discretization"]
     if d["kind"] == "fe":
         disc = f"P{d['degree']}:{d['n_elements']}"
@@ -307,14 +286,17 @@ def cpu_seconds(t0: float) -> float:
 def deliver(
     args: argparse.Namespace,
     result: dict,
-    output: Output | None,
+    output: Output | None = None,
     write: Callable[[Output], None] | None = None,
     text: Callable[[], None] | None = None,
 ) -> None:
-    """The end of a command: its files (``write(output)``), then JSON or text on stdout,
-    then the files moved into ``--out`` (:meth:`Output.report`)."""
+    """The end of a command: its files (``write(output)``, into ``output`` or a new
+    :class:`Output` of ``--out``), then JSON or ``text()`` on stdout, then the files moved
+    into ``--out`` (:meth:`Output.report`)."""
     from fempipe.io import json_dumps
 
+    if output is None and write is not None and getattr(args, "out", None) is not None:
+        output = Output(args.out)
     if output is not None and write is not None:
         write(output)
     if args.json:
@@ -323,3 +305,34 @@ def deliver(
         text()
     if output is not None:
         output.report(args)
+
+
+def agg() -> None:
+    """matplotlib without a display (before fempipe.plotting imports pyplot)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+def error_columns(rows: Iterable[Mapping]) -> list[str]:
+    """The CSV columns of ``rows`` with ``--error-estimate``: every key but ``*_refined`` and
+    ``error_note``, the ``*_error`` columns after the others."""
+    keys = list(dict.fromkeys(k for row in rows for k in row))
+    errors = [k for k in keys if k.endswith(ERROR)]
+    return [k for k in keys if not k.endswith((ERROR, REFINED)) and k != "error_note"] + errors
+
+
+def print_footer(est: Mapping, where: str = "") -> None:
+    """How the error estimates were formed (``where``: after the refined discretization),
+    then their notes."""
+    print(
+        f"± error estimate: {est['method']} to {est['refined']}{where}, {est['formula']} "
+        f"(floor: {est['floor']})"
+    )
+    for note in est["notes"]:
+        print(f"note: {note}")
+
+
+def pm(value, error, spec: str = "{:+.6f}") -> str:
+    """``"value ± error"`` (two digits; ``± ?`` without an error)."""
+    return f"{spec.format(value)} ± {'?' if error is None else f'{error:.1e}'}"

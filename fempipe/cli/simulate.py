@@ -1,67 +1,11 @@
 """``fempipe simulate``: nonlinear time integration of Eq. (20) and its attractor.
 
-Starts from the static state plus a small perturbation in a chosen sine mode,
-integrates past the transient, classifies the attractor (equilibrium,
-periodic with its period-n, non-periodic) and computes a limit cycle by
-shooting with the monodromy matrix (period, tip extrema, Floquet multipliers).
-With ``--sigma`` > 0 the flow pulsates, v(tau) = v (1 + sigma sin(omega tau)),
-and the command integrates to ``--t-max`` and reports the tip extrema over the
-second half (``"attractor": "forced"``, no classification).
-
-``--json`` prints ``{"attractor", "period", "tip": {"eta_tip": [min, max],
-"X_tip": [...], "Z_tip": [...]}, "floquet_multipliers", "steps",
-"rejected_steps", "wall_time", ...}``.  Whether the planar attractor survives
-out of the plane (:func:`fempipe.analyses.space.three_dimensional_verdict`):
-``stable_3d`` (null for a motion that is not periodic) and for a cycle
-``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``; at
-alpha = 0 and pi the one closest to 1 is the neutral rotation about the
-vertical), ``max_nontrivial_out_of_plane_multiplier``,
-``stable_out_of_plane``, ``neutral_out_of_plane_multiplier`` and
-``out_of_plane_symmetry_defect`` (its distance from 1; null where alpha is
-not 0 or pi), ``stable_3d_note`` where the verdict is rough (a few modes, or
-a neutral multiplier more than 1e-2 from 1), for an equilibrium
-``stable_out_of_plane``;
-``--planar`` leaves them out.  ``--out DIR`` writes simulate.json,
-time_traces.png (Fig. 11), phase_portrait.png (Fig. 12),
-oscillating_shapes.png, pipe.gif, trajectory.pvd (+ the folder trajectory/
-of VTU frames, at most 400: the transient and three periods of the cycle) and
-tip.csv, the tip's time series over the integration (:func:`tip_rows`: at
-every accepted step, or on a uniform grid with ``--output-dt``).
-
-What the files show is what was computed: the transient integrated at
-``--rtol`` from the perturbed static state until the Poincare returns of the
-tip agree to 1e-3 (or, where they approach each other slowly, near a
-bifurcation, to 2e-2), then the cycle itself, shot at ``--shoot-rtol``.
-tip.csv holds the transient only (every row a computed step; it stops
-where the shooting took over, the state then 1e-3 to 7e-3 rad (RMS) from the
-cycle, measured at alpha = 0 and pi/2, v = 10); the figures and
-trajectory.pvd add three periods of the converged cycle after it, from the
-cycle's point nearest the transient's end, and the phase portrait, shapes and
-animation are of the cycle.  The period, tip extrema and Floquet multipliers of the
-JSON are those of the cycle, never of the transient.
-
-``--error-estimate`` computes the attractor again on the refined
-discretization (:func:`fempipe.studies.error_estimate.refine`: P_k elements halved,
-or twice the modes, plus one for an odd N) without a new transient where it can: a limit cycle is
-shot from the coarse cycle transferred to the refined space (the L2
-projection :func:`fempipe.model.projection.project`), an equilibrium solved by
-Newton from the coarse one (and its linear stability checked); only if that
-shooting fails is the refined attractor found by integration from the
-transferred state, and a pulsating flow is integrated again from the refined
-static state.  Beside ``period`` and ``tip`` (and ``period_s``, ``tip_m``)
-it adds ``period_error``, ``period_refined``, ``tip_error`` and
-``tip_refined`` (``{"eta_tip": [error of min, error of max], ...}``, the
-shape of ``tip``) and ``attractor_refined``; the error of Q is
-max(3 |Q - Q_refined| 2^p / (2^p - 1), tol max(1, |Q|)) (Roache's Grid
-Convergence Index, p = 2k for P_k, 3 for the sine modes; tol is
-``--shoot-rtol`` for a cycle, ``--rtol`` for a pulsating flow, Newton's
-1e-10 for an equilibrium).  If the attractors differ in kind (periodic,
-period-n, equilibrium; a refined cycle that is unstable) there is no error
-number (null) and ``"error_estimate"["notes"]`` says so; a non-periodic
-attractor gets none either.  It costs about the refined shooting (a
-transient only where needed).  The library does it
-(:func:`fempipe.studies.estimates.refined_attractor`,
-:func:`~fempipe.studies.estimates.with_attractor_estimates`); this module shows it.
+From the static state plus a small perturbation in a sine mode, past the transient: the
+attractor classified (equilibrium, periodic, period-n, non-periodic), a limit cycle shot with
+its Floquet multipliers and, unless ``--planar``, whether it survives out of the plane; with
+``--sigma`` > 0 a pulsating flow, integrated to ``--t-max``; with ``--error-estimate`` the
+estimates from the refined discretization; ``--3d`` the 3-D model
+(:mod:`fempipe.cli.simulate_space`).  Keys and files: docs/cli/commands.md, "fempipe simulate".
 """
 
 from __future__ import annotations
@@ -72,22 +16,22 @@ import time
 
 import numpy as np
 
-from fempipe.cli import common, estimates, parsing, reporting
+from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
 
-#: Default --shoot-rtol.  The period and tip extrema are then within 5e-8 and
-#: 5e-7 (relative) of a cycle shot at 1e-10 (measured at alpha = 0, v = 7, 10,
-#: 12 and alpha = pi/2, v = 10 on P3:16).
+EXAMPLES = (
+    "fempipe simulate --v 10 --out out-sim/                     # flutter of the hanging pipe",
+    "fempipe simulate --v 6.4 --alpha pi/4 --output-dt 0.01 --out out-sim45/",
+)
+
+#: Default --shoot-rtol: the period and tip extrema within 5e-8 and 5e-7 (relative) of 1e-10.
 SHOOT_RTOL = 1e-5
-#: Default --shoot-rtol with --error-estimate: the estimates' floor is the
-#: shooting tolerance (docs, Error estimates), and the discretization error of
-#: a P3:16 cycle is about 1e-7, so 1e-5 would hide it under the floor.
+#: With --error-estimate, whose floor it is: below a P3:16 cycle's discretization error.
 ERROR_ESTIMATE_SHOOT_RTOL = 1e-7
 
 
 def shoot_rtol_of(args: argparse.Namespace) -> float:
-    """--shoot-rtol as given, else :data:`ERROR_ESTIMATE_SHOOT_RTOL` with
-    --error-estimate and :data:`SHOOT_RTOL` without."""
+    """--shoot-rtol as given, else the default with or without --error-estimate."""
     if args.shoot_rtol is not None:
         return float(args.shoot_rtol)
     return ERROR_ESTIMATE_SHOOT_RTOL if args.error_estimate else SHOOT_RTOL
@@ -174,97 +118,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="tip.csv on a uniform grid of step DT in tau (default: every accepted step)",
     )
-    estimates.add_argument(parser, "the period and each tip extremum")
+    common.add_error_estimate_argument(parser, "the period and each tip extremum")
 
 
-#: Columns of tip.csv; lengths are dimensionless (lengths / L), time tau = t / T
-#: with T = L^2 sqrt((m + M)/EI) (Eq. (19)), rates per unit tau.  The header
-#: cells carry these units (``tau [T]``, ``X_tip [L]``, ...: fempipe.io.CSV_UNITS).
-TIP_COLUMNS = (
-    "tau",
-    "theta_tip",
-    "eta_tip",
-    "X_tip",
-    "Z_tip",
-    "theta_tip_rate",
-    "eta_tip_rate",
-    "X_tip_rate",
-    "Z_tip_rate",
-)
-
-
-def tip_rows(disc, t, q, qdot, alpha: float, output_dt: float | None = None) -> list[dict]:
-    """The tip's time series: tau, theta(1), eta(1), X_g(1), Z_g(1) and their rates.
-
-    Parameters
-    ----------
-    disc : Discretization
-    t : ndarray, shape (m,)
-        Accepted step times of the integration.
-    q, qdot : ndarray, shape (m, n)
-    alpha : float
-    output_dt : float, optional
-        Uniform output step: the states between accepted steps are the cubic
-        Hermite interpolants through (q, qdot) at the steps (q exact to the
-        step's local error order 4, qdot its derivative).
-
-    Returns
-    -------
-    list of dict
-        Rows with the keys :data:`TIP_COLUMNS`, from
-        :func:`fempipe.model.kinematics.tip_values` and
-        :func:`~fempipe.model.kinematics.tip_velocity` (theta_tip_rate = theta_dot(1)).
-    """
-    from fempipe.model.kinematics import tip_values, tip_velocity
-
-    t, q, qdot = np.asarray(t, float), np.asarray(q, float), np.asarray(qdot, float)
-    if output_dt is not None:
-        from scipy.interpolate import CubicHermiteSpline
-
-        keep = np.concatenate([[True], np.diff(t) > 0])  # no zero-length steps
-        spline = CubicHermiteSpline(t[keep], q[keep], qdot[keep], axis=0)
-        n = int(math.floor((t[-1] - t[0]) / output_dt * (1 + 1e-12))) + 1
-        t = t[0] + output_dt * np.arange(n)
-        q, qdot = spline(t), spline.derivative()(t)
-    pos = tip_values(disc, q, alpha)
-    vel = tip_velocity(disc, q, qdot, alpha)
-    theta_rate = np.asarray(disc.tip @ qdot.T)
-    cols = {
-        "tau": t,
-        "theta_tip": pos["theta_tip"],
-        "eta_tip": pos["eta_tip"],
-        "X_tip": pos["X_tip"],
-        "Z_tip": pos["Z_tip"],
-        "theta_tip_rate": theta_rate,
-        "eta_tip_rate": vel["eta_tip"],
-        "X_tip_rate": vel["X_tip"],
-        "Z_tip_rate": vel["Z_tip"],
-    }
-    return [{k: float(cols[k][i]) for k in TIP_COLUMNS} for i in range(t.size)]
-
-
-#: The cost check of a long integration (see :func:`_cost_check`): after
-#: ``PROJECT_AFTER`` s of CPU time in the integration, the CPU time to reach
-#: ``--t-max`` is projected from the progress so far; above ``CPU_LIMIT`` s
-#: the run is refused (exit 2) unless ``--allow-large``.  CPU time, not wall
-#: time, so that a busy machine does not change the verdict.
+#: After PROJECT_AFTER CPU-seconds the cost to --t-max is projected; above CPU_LIMIT the run is
+#: refused unless --allow-large (CPU time: a busy machine does not change the verdict).
 PROJECT_AFTER = 10.0
 CPU_LIMIT = 900.0
 
 
 def _cost_check(v: float, t_max: float, allow: bool):
-    """A callback ``(tau, cpu_seconds)`` that refuses a run projected to take over ``CPU_LIMIT``.
-
-    Why: at high flow the motion is fast and of large amplitude, and the
-    error-controlled step follows it: at v = 20 (alpha = 0, paper's case,
-    P3:16) the integrator takes about 900 steps per unit tau (about 160 per
-    oscillation of period ~0.17, with a Jacobian at most steps and 5 % of the
-    steps halved after a Newton failure) for about 4 CPU-s per unit tau, so the
-    default ``--t-max 300`` means 20 CPU-minutes.  A coarser mesh does not
-    help (P3:8 needs the same steps: the step follows the motion, not the
-    mesh).  The check is made once, from a measurement, so that a run which
-    finds its attractor early is never refused.
-    """
+    """A callback ``(tau, cpu_seconds)`` refusing, once, a run projected past ``CPU_LIMIT``:
+    at high flow the error-controlled step follows the fast large-amplitude motion, whatever
+    the mesh; a run that finds its attractor early is never refused."""
     done = [False]
 
     def check(t: float, elapsed: float) -> None:
@@ -288,14 +154,14 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.dynamics import PulsatingFlow, make_initial_state, simulate
     from fempipe.analyses.limit_cycle import find_attractor
     from fempipe.analyses.statics import solve_static
-    from fempipe.io import json_dumps
     from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "simulate")
     setup = common.setup_from_args(args)
     if len(setup.v) != 1:
-        opt = "--U" if args.U is not None else "--v"
-        raise CLIError(opt, f"simulate takes a single flow velocity, got {len(setup.v)}")
+        raise CLIError(
+            common.flow_option(args), f"simulate takes a single flow velocity, got {len(setup.v)}"
+        )
     if args.three_d:
         from fempipe.cli.simulate_space import run_3d
 
@@ -320,7 +186,6 @@ def run(args: argparse.Namespace) -> int:
     t_start = time.perf_counter()
     cpu_start = time.process_time()
     work = 200 if args.error_estimate else 100
-    refined = None
     with reporting.progress(args, work, f"simulate v={params.v:g}") as bar:
         cost = _cost_check(params.v, t_max, parsing.allow_large(args))
         advance = reporting.time_progress(bar, t_max)
@@ -350,28 +215,22 @@ def run(args: argparse.Namespace) -> int:
         wall_time = time.perf_counter() - t_start
         if advance.done < 100:
             bar.update(100 - advance.done)
+        result = _result(setup, traj, att, wall_time, args)
+        if att is not None and not args.planar:
+            from fempipe.analyses.space import classify_3d
+
+            result.update(classify_3d(model, att, rtol=shoot_rtol * 1e-2))
         if args.error_estimate:
-            refined = _refined_attractor(model, att, q_s, flow, args, bar)
+            result = _with_estimates(
+                result, model, traj if att is None else att, q_s, setup.pipe, args, bar
+            )
 
-    result = _result(setup, traj, att, wall_time, args)
-    if att is not None and not args.planar:
-        from fempipe.analyses.space import three_dimensional_verdict
-
-        result.update(three_dimensional_verdict(model, att, rtol=shoot_rtol * 1e-2))
-    if refined is not None:
-        from fempipe.studies.estimates import with_attractor_estimates
-
-        result = with_attractor_estimates(result, refined, setup.pipe)
-
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write_outputs(output, result, model, traj, att, args.output_dt)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_summary(result)
-    if output is not None:
-        output.report(args)
+    reporting.deliver(
+        args,
+        result,
+        write=lambda output: _write_outputs(output, result, model, traj, att, args.output_dt),
+        text=lambda: _print_summary(result),
+    )
     return 0
 
 
@@ -408,43 +267,38 @@ def _result(setup: common.Setup, traj, att, wall_time: float, args: argparse.Nam
     return result
 
 
-def _refined_attractor(model, att, q_static, flow, args, bar):
-    """:func:`fempipe.studies.estimates.refined_attractor` (module docstring), the
-    progress bar running from 100 to 200 over this work."""
+def _with_estimates(result: dict, model, computed, q_static, pipe, args, bar) -> dict:
+    """:func:`fempipe.studies.estimates.estimate_errors`, the progress bar from 100 to 200."""
     from fempipe.studies.error_estimate import refine
-    from fempipe.studies.estimates import refined_attractor
+    from fempipe.studies.estimates import estimate_errors
 
     fine = refine(model.disc)
     bar.set_postfix_str(f"refined {fine.name}")
     on_time = reporting.time_progress(bar, args.t_max)
-    refined = refined_attractor(
+    result = estimate_errors(
+        result,
         model,
-        att,
-        q_static,
+        computed,
+        q_static=q_static,
+        pipe=pipe,
         t_max=args.t_max,
         rtol=args.rtol,
         shoot_rtol=args.shoot_rtol,
         use_shooting=not args.no_shooting,
         mode=args.mode,
         amplitude=args.amplitude,
-        flow=flow,
         fine=fine,
         callback=on_time,
     )
     if on_time.done < 100:
         bar.update(100 - on_time.done)
-    return refined
+    return result
 
 
 def _display_states(att, traj, n_periods: int = 3):
-    """(t, q, qdot) for the figures: the transient, then a few periods of the cycle.
-
-    The cycle continues from its sample nearest the transient's last state
-    (positions and velocities, velocities scaled by T / 2 pi): the shooting's
-    phase condition moves the orbit's first sample along the orbit (by 0.006
-    tau, 0.16 rad at the tip, at alpha = pi/2, v = 10), and appending the orbit
-    from that sample put a jump into the time traces and the animation.
-    """
+    """(t, q, qdot) for the figures: the transient, then a few periods of the cycle from its
+    sample nearest the transient's last state (the shooting's phase condition moves the orbit's
+    first sample along the orbit; appended from there the traces would jump)."""
     from fempipe.analyses.limit_cycle import state_distance
 
     t, q, p = traj.t, traj.q, traj.qdot
@@ -461,12 +315,8 @@ def _display_states(att, traj, n_periods: int = 3):
 
 
 def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt=None) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from fempipe.io.trajectory import write_trajectory
+    reporting.agg()
+    from fempipe.io.trajectory import TIP_COLUMNS, tip_rows, write_trajectory
     from fempipe.plotting.dynamics import (
         animate,
         plot_oscillating_shapes,
@@ -477,32 +327,25 @@ def _write_outputs(output: reporting.Output, result, model, traj, att, output_dt
     disc, p = model.disc, model.params
     title = f"α = {math.degrees(p.alpha):.4g}°, β = {p.beta:.4g}, γ = {p.gamma:.4g}, v = {p.v:.4g}"
     t, q, qd = _display_states(att, traj)
-    # Phase portrait, shapes and animation on the attractor: the cycle if any,
-    # else the second half of the computed motion.
+    # phase portrait, shapes and animation on the attractor: the cycle, else the second half
     if att is not None and att.cycle is not None:
         ct, cq = att.cycle.orbit_t, att.cycle.orbit_q
     else:
         half = t >= 0.5 * t[-1]
         ct, cq = t[half], q[half]
-    figs = []
-    try:
-        ax = plot_time_traces(disc, t, q, p.alpha, title=title)
-        figs.append(("time_traces.png", ax.figure))
-        ax = plot_phase_portrait(disc, q[t >= 0.5 * t[-1]], qd[t >= 0.5 * t[-1]], p.alpha)
-        ax.set_title(title, fontsize="small")
-        figs.append(("phase_portrait.png", ax.figure))
-        ax = plot_oscillating_shapes(disc, cq, p.alpha, title=title)
-        figs.append(("oscillating_shapes.png", ax.figure))
-        for name, fig in figs:
-            output.figure(name, fig, dpi=130)
-    finally:
-        for _, fig in figs:
-            plt.close(fig)
+    output.figure(
+        "time_traces.png", plot_time_traces(disc, t, q, p.alpha, title=title).figure, dpi=130
+    )
+    ax = plot_phase_portrait(disc, q[t >= 0.5 * t[-1]], qd[t >= 0.5 * t[-1]], p.alpha)
+    ax.set_title(title, fontsize="small")
+    output.figure("phase_portrait.png", ax.figure, dpi=130)
+    ax = plot_oscillating_shapes(disc, cq, p.alpha, title=title)
+    output.figure("oscillating_shapes.png", ax.figure, dpi=130)
     frames = np.linspace(0, len(ct) - 1, min(48, len(ct))).round().astype(int)
     gif = output.path("pipe.gif")
     animate(gif, disc, ct[frames], cq[frames], p.alpha, fps=16, title=title)
     output.record(gif)
-    # At most 400 frames (every step of a long run would be thousands of files).
+    # at most 400 frames, not one per step of a long run
     keep = np.unique(np.linspace(0, len(t) - 1, min(400, len(t))).round().astype(int))
     pvd = output.path("trajectory.pvd")
     write_trajectory(pvd, disc, t[keep], q[keep], qd[keep], p.alpha, params=p)
@@ -524,7 +367,7 @@ def _print_summary(r: dict) -> None:
     if r.get("period"):
         period = f"{r['period']:.8g}"
         if with_errors:
-            period = estimates.pm(r["period"], r["period_error"], "{:.8g}")
+            period = reporting.pm(r["period"], r["period_error"], "{:.8g}")
         line += f", period {period}"
         if r.get("period_n"):
             line += f" (period-{r['period_n']})"
@@ -533,7 +376,7 @@ def _print_summary(r: dict) -> None:
     for k, (lo, hi) in r["tip"].items():
         if with_errors:
             e_lo, e_hi = errors[k] if errors else (None, None)
-            lo_s, hi_s = estimates.pm(lo, e_lo, "{: .8f}"), estimates.pm(hi, e_hi, "{: .8f}")
+            lo_s, hi_s = reporting.pm(lo, e_lo, "{: .8f}"), reporting.pm(hi, e_hi, "{: .8f}")
             print(f"  {k:8s} min {lo_s}  max {hi_s}")
         else:
             print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
@@ -554,6 +397,6 @@ def _print_summary(r: dict) -> None:
             print(f"  note: {r['stable_3d_note']}")
     print(f"  steps {r['steps']}, rejected {r['rejected_steps']}, wall time {r['wall_time']:.2f} s")
     if with_errors:
-        estimates.print_footer(
+        reporting.print_footer(
             r["error_estimate"], where=f" (attractor there: {r['attractor_refined']})"
         )

@@ -1,44 +1,10 @@
-"""``fempipe spectrum``: eigenvalues of the linearized problem against the flow velocity.
+"""``fempipe spectrum``: eigenvalues of the linearized problem, Eq. (32), against the flow velocity.
 
-Follows the static branch (gravity loading, then the flow values of ``--v`` or
-``--U`` in order) and computes the resolved eigenvalues of Eq. (32) at every
-value (:func:`fempipe.analyses.stability.root_locus`).  Mode numbers are intrinsic:
-carried by continuity from the modes at v = 0, whatever the range start or
-the mesh; modes 1..``--modes`` are reported, and every mode that is unstable
-at some v whatever its number.  Both conventions are given: lambda
-(theta^d ∝ e^{lambda tau}, Re lambda > 0 unstable) and the paper's
-Omega = -i lambda (Im Omega < 0 unstable).
-
-The pipe is round: the motion out of the plane of the static state
-(:mod:`fempipe.model.out_of_plane`) is analysed too, about the same static states
-(:func:`fempipe.analyses.stability.spatial_root_locus`), and ``stable`` is the verdict
-in three dimensions: stable in the plane and out of it.  ``--planar`` gives
-the paper's planar model alone, every output as before the out-of-plane
-analysis existed.
-
-``--json`` prints ``{"points": [{"v", "stable", "max_real", "theta_tip",
-"eigenvalues": [{"mode", "re", "im", "Omega_re", "Omega_im", "plane"}, ...],
-"stable_in_plane", "stable_out_of_plane", "max_real_in_plane",
-"max_real_out_of_plane", "eigenvalues_out_of_plane": [...]}, ...], "modes",
-"modes_out_of_plane", "params", "discretization", "n_spectra",
-"n_spectra_in_plane", "n_spectra_out_of_plane"}``: ``eigenvalues`` are those
-of the motion in the plane (``plane`` "in"), ``eigenvalues_out_of_plane``
-those out of it (``plane`` "out", the same keys, their own mode numbers
-carried from v = 0), ``stable`` and ``max_real`` (the largest Re lambda)
-are those of both planes together.  On a buckled state of the standing pipe
-(alpha = pi) the out-of-plane spectrum has lambda = 0 exactly, the rotation
-of the buckled shape about the vertical: neutral, not unstable (docs, "Out
-of the plane").  With ``--planar`` the points are ``{"v", "stable",
-"max_real", "theta_tip", "eigenvalues": [{"mode", "re", "im", "Omega_re",
-"Omega_im"}, ...]}`` and the top level ``"modes", "params",
-"discretization", "n_spectra"``, as before.
-
-``--out DIR`` writes spectrum.json, spectrum.csv (one row per v and in-plane
-eigenvalue; its ``stable`` and ``system_stable`` columns are the verdict in
-three dimensions), spectrum_out_of_plane.csv (the same columns and
-``plane``, one row per v and out-of-plane eigenvalue; not with
-``--planar``) and argand.png (Re Omega against Im Omega with v marked along
-the loci, like Fig. 5; the out-of-plane loci dashed with open triangles).
+Follows the static branch over ``--v`` (:func:`fempipe.analyses.stability.trace_root_locus`),
+mode numbers carried by continuity from v = 0; lambda (Re lambda > 0 unstable) and the paper's
+Omega = -i lambda.  The motion out of the plane is analysed about the same states and
+``stable`` is the verdict in three dimensions; ``--planar``: the paper's planar model alone.
+Keys and files: docs/cli/commands.md, "fempipe spectrum".
 """
 
 from __future__ import annotations
@@ -48,6 +14,11 @@ import math
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+
+EXAMPLES = (
+    "fempipe spectrum --alpha pi --v 0:6:61 --out out-spectrum/   # Argand diagram like Fig. 5",
+    "fempipe spectrum --alpha pi/2 --modal 4 --v 6 --json",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -80,8 +51,7 @@ def _modes(text: str) -> int | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.analyses.stability import root_locus, spatial_root_locus
-    from fempipe.io import json_dumps
+    from fempipe.analyses.stability import PLANES, trace_root_locus
     from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
@@ -92,42 +62,33 @@ def run(args: argparse.Namespace) -> int:
     model = PipeModel(setup.disc, setup.params)
     with reporting.progress(args, len(values), "spectrum") as bar:
         try:
-            if args.planar:
-                locus = root_locus(
-                    model, values, n_modes=n_modes, callback=lambda i, v: bar.update()
-                )
-                out_locus = None
-            else:
-                locus, out_locus = spatial_root_locus(
-                    model, values, n_modes=n_modes, callback=lambda i, v: bar.update()
-                )
+            loci = trace_root_locus(
+                model,
+                values,
+                planes=("in",) if args.planar else PLANES,
+                n_modes=n_modes,
+                callback=lambda i, v: bar.update(),
+            )
+            locus, out_locus = (loci, None) if args.planar else loci
         except ValueError as exc:
             raise CLIError("--fe" if args.modal is None else "--modal", str(exc)) from None
-    head = setup.to_dict()
-    result = locus.to_dict()
-    result["params"] = head["params"]
-    result["discretization"] = head["discretization"]
-    result["n_spectra"] = locus.n_spectra
+    result = locus.to_dict() | setup.to_dict() | {"n_spectra": locus.n_spectra}
     if out_locus is not None:
         result = _with_out_of_plane(result, locus, out_locus)
     if setup.pipe is not None:
         for pt in result["points"]:
             pt["U"] = setup.pipe.U_of_v(pt["v"])
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write(output, result, locus, out_locus)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print_table(result, locus, out_locus)
-    if output is not None:
-        output.report(args)
+    reporting.deliver(
+        args,
+        result,
+        write=lambda output: _write(output, result, locus, out_locus),
+        text=lambda: _print_table(result, locus, out_locus),
+    )
     return 0
 
 
 def _with_out_of_plane(result: dict, locus, out_locus) -> dict:
-    """The planar result with the out-of-plane spectrum and the verdict in three dimensions
-    (the keys of the module docstring)."""
+    """The planar result with the out-of-plane spectrum and the verdict in three dimensions."""
     out_points = out_locus.to_dict()["points"]
     points = []
     for pt, po in zip(result["points"], out_points, strict=True):
@@ -182,22 +143,15 @@ def _rows(result: dict, key: str = "eigenvalues") -> list[dict]:
 
 
 def _write(output: reporting.Output, result: dict, locus, out_locus) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.stability import plot_argand
 
     ax = plot_argand(locus, out_of_plane=out_locus)
-    try:
-        output.json("spectrum.json", result)
-        output.csv("spectrum.csv", _rows(result))
-        if out_locus is not None:
-            output.csv("spectrum_out_of_plane.csv", _rows(result, "eigenvalues_out_of_plane"))
-        output.figure("argand.png", ax.figure, dpi=150)
-    finally:
-        plt.close(ax.figure)
+    output.json("spectrum.json", result)
+    output.csv("spectrum.csv", _rows(result))
+    if out_locus is not None:
+        output.csv("spectrum_out_of_plane.csv", _rows(result, "eigenvalues_out_of_plane"))
+    output.figure("argand.png", ax.figure)
 
 
 def _print_table(result: dict, locus, out_locus) -> None:

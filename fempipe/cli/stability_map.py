@@ -1,43 +1,10 @@
 """``fempipe stability-map``: the critical flow velocity against the inclination (Fig. 6).
 
-For every alpha of ``--alphas`` and every curve -- each beta of ``--betas`` at
-the gamma of ``--gamma``, and each gamma of ``--gammas`` at the beta of
-``--beta`` (Fig. 6(a) and 6(b)) -- computes v_cr, the first loss of
-stability of the gravity-loaded branch for v up to the largest ``--v``
-(:func:`fempipe.analyses.stability.stability_map`).  Points are independent and run
-on ``--workers N`` processes; a failed point is reported and does not stop
-the others.
-
-The variants of the pipe (``--end-mass``, ``--external-damping``,
-``--hysteretic-damping``, ``--spring``) apply to every point.
-
-The pipe is round: each point analyses the motion in the plane of the
-static state and out of it (:mod:`fempipe.model.out_of_plane`) along the same
-static branch (:func:`fempipe.analyses.stability.spatial_critical_velocity`), and
-v_cr is the first loss of stability in three dimensions, the first of the
-two planes' (at alpha = 0 they are the same: "in").  ``--planar`` maps the
-paper's planar model alone, every output as before.
-
-``--json`` prints ``{"alphas", "curves": [{"beta", "gamma"}], "mu",
-"end_mass", "external_damping", "hysteretic_damping", "springs", "v_max",
-"discretization", "points": [{"alpha", "beta", "gamma", "v_cr", "type",
-"frequency", "mode", "v_flutter", "error", "v_cr_in_plane",
-"frequency_in_plane", "type_in_plane", "mode_in_plane",
-"v_flutter_in_plane", "v_cr_out_of_plane", "frequency_out_of_plane",
-"type_out_of_plane", "mode_out_of_plane", "v_flutter_out_of_plane",
-"first_plane"}, ...]}``: v_cr, type, frequency and mode are those of the
-first loss of stability in three dimensions, v_flutter the first flutter
-in either plane, ``first_plane`` "in" or "out" (null if stable up to
-v_max); with the SI pipe also ``U_cr``, ``U_cr_in_plane``,
-``U_cr_out_of_plane``.  With ``--planar`` the points are ``{"alpha",
-"beta", "gamma", "v_cr", "type", "frequency", "mode", "v_flutter",
-"error"}`` (and ``U_cr``), as before.  ``--out DIR`` writes
-stability_map.json, stability_map.csv (one row per point, its keys) and
-stability_map.png (the flutter velocity against alpha: in the plane solid
-with open circles, out of it dashed with open triangles, an earlier loss of
-stability as open squares and diamonds, and a pale band along v_cr in three
-dimensions).  At alpha = pi the straight pipe can be unstable from v = 0
-(divergence, v_cr = 0); its first flutter velocity is in "v_flutter".
+v_cr at every alpha of ``--alphas`` for each curve (each beta of ``--betas`` at ``--gamma``, each
+gamma of ``--gammas`` at ``--beta``), in three dimensions or with ``--planar`` in the plane, the
+variants of the pipe applied to every point (:func:`fempipe.analyses.stability.map_stability`);
+points run on ``--workers`` processes, a failed one reported without stopping the others.  Keys
+and files: docs/cli/commands.md, "fempipe stability-map".
 """
 
 from __future__ import annotations
@@ -48,7 +15,14 @@ import sys
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+from fempipe.io import ranges
 from fempipe.model.params import VARIANT_FIELDS
+
+EXAMPLES = (
+    "fempipe stability-map --alphas 0:pi:37 --betas 0.1,0.3,0.5 --gammas 5,10,30 --workers 2 "
+    "--out out-map/",
+    "fempipe stability-map --alphas 0,pi/2,pi --planar --json",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -69,15 +43,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.option_type("--betas", lambda t: _list(t, "beta", 1.0)),
         default=None,
         help="mass ratios, one curve each at --gamma (Fig. 6(a)), e.g. "
-        f"0.1,{parsing.DEFAULT_BETA:g},0.3,0.5",
+        f"0.1,{ranges.DEFAULT_BETA:g},0.3,0.5",
     )
     g.add_argument(
         "--gammas",
         metavar="LIST",
-        type=parsing.option_type("--gammas", lambda t: _list(t, "gamma", parsing.GAMMA_MAX)),
+        type=parsing.option_type("--gammas", lambda t: _list(t, "gamma", ranges.GAMMA_MAX)),
         default=None,
         help="gravity parameters, one curve each at --beta (Fig. 6(b)), e.g. "
-        f"5,10,{parsing.DEFAULT_GAMMA:g},30",
+        f"5,10,{ranges.DEFAULT_GAMMA:g},30",
     )
     common.add_workers_argument(g, "local processes (default 1)")
     common.add_planar_argument(g, "v_cr is then the in-plane critical velocity")
@@ -95,6 +69,7 @@ def _list(text: str, field: str, high: float) -> parsing.ValueList:
 
 
 def _curves(args, setup) -> list[tuple[float, float]]:
+    """The (beta, gamma) of every curve, each once."""
     large = parsing.allow_large(args)
     betas = None if args.betas is None else args.betas.values(large)
     gammas = None if args.gammas is None else args.gammas.values(large)
@@ -102,29 +77,17 @@ def _curves(args, setup) -> list[tuple[float, float]]:
     if setup.pipe is not None and (betas or gammas):
         opt = "--betas" if betas else "--gammas"
         raise CLIError(opt, "cannot be combined with the SI pipe (beta, gamma follow from it)")
-    curves: list[tuple[float, float]] = []
-    for b in betas or []:
-        curves.append((b, p.gamma))
-    for g in gammas or []:
-        curves.append((p.beta, g))
-    if not curves:
-        curves = [(p.beta, p.gamma)]
-    seen, out = set(), []
-    for c in curves:
-        if c not in seen:
-            seen.add(c)
-            out.append(c)
-    return out
+    curves = [(b, p.gamma) for b in betas or []] + [(p.beta, g) for g in gammas or []]
+    return list(dict.fromkeys(curves or [(p.beta, p.gamma)]))
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.analyses.stability import stability_map
-    from fempipe.io import json_dumps
+    from fempipe.analyses.stability import map_stability
 
     if args.alpha is not None:
         raise CLIError("--alpha", "stability-map takes its inclinations from --alphas")
     setup = common.setup_from_args(args)
-    flow_opt = "--U" if args.U is not None else "--v"
+    flow_opt = common.flow_option(args)
     if not setup.v or max(setup.v) <= 0:
         raise CLIError(flow_opt, "give the flow range, e.g. --v 0,10")
     v_max = max(setup.v)
@@ -137,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     total = len(alphas) * len(curves)
     parsing.check_count("--alphas", total, parsing.MAX_VALUES, large, "points (alphas x curves)")
     with reporting.progress(args, total, "stability map") as bar:
-        smap = stability_map(
+        smap = map_stability(
             setup.disc,
             alphas,
             curves,
@@ -163,33 +126,20 @@ def run(args: argparse.Namespace) -> int:
             f"gamma={r['gamma']:g} failed: {r['error']}",
             file=sys.stderr,
         )
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
-        _write(output, result, smap)
-    if args.json:
-        print(json_dumps(result))
-    else:
-        _print(result)
-    if output is not None:
-        output.report(args)
+    reporting.deliver(
+        args, result, write=lambda output: _write(output, result, smap), text=lambda: _print(result)
+    )
     return 1 if failed and len(failed) == total else 0
 
 
 def _write(output: reporting.Output, result: dict, smap) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     from fempipe.plotting.stability import plot_stability_map
 
     ax = plot_stability_map(smap)
-    try:
-        output.json("stability_map.json", result)
-        output.csv("stability_map.csv", result["points"])
-        output.figure("stability_map.png", ax.figure, dpi=150)
-    finally:
-        plt.close(ax.figure)
+    output.json("stability_map.json", result)
+    output.csv("stability_map.csv", result["points"])
+    output.figure("stability_map.png", ax.figure)
 
 
 def _print(result: dict) -> None:

@@ -1,50 +1,29 @@
-"""``fempipe static``: large static deformation along a list of flow velocities.
+"""``fempipe static``: the large static deformation, Eq. (31a), along a list of flow velocities.
 
-Solves Eq. (31a) at each value of ``--v`` (or ``--U`` in m/s) by Newton and
-continuation from the gravity-sagged state (:func:`fempipe.analyses.statics.solve_path`),
-and reports the tip values (Eq. (28)) as a table, as JSON (``--json``) or as
-files (``--out DIR``: static.json, static.csv, shapes.png, shapes.vtu).
-
-``--continuation gamma`` or ``--continuation alpha`` with ``--values LIST``
-follows the static state in gravity or inclination at one flow velocity instead.
-
-``stable`` is the linear stability of each state in three dimensions: the
-pipe is round, and a state is stable when its motion in the plane of the
-static state (Eq. (32)) and out of it (:mod:`fempipe.model.out_of_plane`) are both
-stable (:func:`fempipe.analyses.stability.linearly_stable` of ``model`` and of
-``out_of_plane_model(model)``); ``stable_in_plane`` and
-``stable_out_of_plane`` are each plane's verdict.  ``--planar`` decides in
-the plane alone, every output as before (``stable`` only).
-
-``--error-estimate`` also solves every point on the refined discretization
-(:func:`fempipe.studies.error_estimate.refine`: P_k elements halved, or twice the
-modes), by Newton from the coarse state transferred to it (the L2
-projection, exact for these nested spaces, so the refined state is the same
-branch), and adds beside each tip value Q of a point (``theta_tip``,
-``eta_tip``, ``X_tip``, ``Z_tip``, ``varsigma_tip``, ``tip_drop`` and the SI
-values) ``Q_error`` = max(3 |Q - Q_refined| 2^p / (2^p - 1), 1e-10 max(1, |Q|))
-(Roache's Grid Convergence Index with p = 2k for P_k, 3 for the sine modes;
-the floor is Newton's tolerance) and ``Q_refined``, and the top-level
-``"error_estimate"`` (method, refined discretization, order, formula, notes).
-static.csv gains the ``Q_error`` columns after the others; the table shows
-``value ± error``.  The run costs about one more run on the refined
-discretization.  The library does it
-(:func:`fempipe.studies.estimates.refined_static_states`,
-:func:`~fempipe.studies.estimates.with_static_estimates`); this module shows it.
+Newton and continuation from the gravity-sagged state (:func:`fempipe.analyses.statics.solve_path`),
+in v or, with ``--continuation gamma|alpha``, in gravity or inclination at one flow; each state's
+linear stability in three dimensions (both planes) or, with ``--planar``, in its plane; with
+``--error-estimate`` each tip value's estimate from the refined discretization
+(:mod:`fempipe.studies.estimates`).  Keys and files: docs/cli/commands.md, "fempipe static".
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import sys
 from dataclasses import replace
 
-from fempipe.cli import common, estimates, parsing, reporting
+from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
-from fempipe.studies.estimates import STATIC_TIP_KEYS
+from fempipe.io import ranges
+from fempipe.studies.error_estimate import STATIC_TIP_KEYS
 
-__all__ = ["STATIC_TIP_KEYS", "add_arguments", "run"]
+__all__ = ["EXAMPLES", "add_arguments", "run"]
+
+EXAMPLES = (
+    "fempipe static --alpha pi/2 --v 0:10:11 --json",
+    "fempipe static --alpha 45deg --continuation gamma --values 0:100:6 --v 2 --out out-gamma/",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -69,11 +48,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("stability")
     common.add_planar_argument(g, "stable is then the verdict in the plane")
     common.add_output_arguments(parser)
-    estimates.add_argument(parser, "each tip value of a point")
+    common.add_error_estimate_argument(parser, "each tip value of a point")
 
 
 def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple[str, list]:
-    """The continued parameter and its values, validated (CLIError naming the option)."""
+    """The continued parameter and its values, validated."""
     parameter = args.continuation
     if parameter == "v":
         if args.values is not None:
@@ -88,24 +67,19 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
         )
     large = parsing.allow_large(args)
     if parameter == "alpha":
-        values = parsing.parse_alpha_list(args.values, "--values", large)
-    else:
-        try:
-            spec = parsing.value_list(args.values, "--values")
-        except ValueError as exc:
-            raise CLIError("--values", str(exc)) from None
+        return parameter, parsing.parse_alpha_list(args.values, "--values", large)
+    try:
+        spec = parsing.value_list(args.values, "--values")
         for x in (spec.low, spec.high):
-            try:
-                parsing.check_gamma(x, "--values")
-            except ValueError as exc:
-                raise CLIError("--values", str(exc)) from None
-        values = spec.values(large)
-    return parameter, values
+            ranges.check_param("gamma", x)
+    except ValueError as exc:
+        raise CLIError("--values", str(exc)) from None
+    return parameter, spec.values(large)
 
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.statics import NewtonError, solve_path
-    from fempipe.model.kinematics import shape, tip_values
+    from fempipe.model.kinematics import shape
     from fempipe.model.operators import PipeModel
 
     setup = common.setup_from_args(args)
@@ -115,8 +89,8 @@ def run(args: argparse.Namespace) -> int:
     if parameter != "v":
         flow_given = args.v is not None or args.U is not None
         if flow_given and len(setup.v) != 1:
-            opt = "--U" if args.U is not None else "--v"
-            raise CLIError(opt, f"--continuation {parameter} takes a single flow velocity")
+            option = common.flow_option(args)
+            raise CLIError(option, f"--continuation {parameter} takes a single flow velocity")
         base = replace(base, v=setup.v[0] if flow_given else 0.0)
     if not values:
         raise CLIError("--v", "no values to solve")
@@ -135,130 +109,85 @@ def run(args: argparse.Namespace) -> int:
         except NewtonError as exc:
             where = ""
             if pipe is not None and parameter == "v":
-                U = pipe.U_of_v(exc.params.v)
-                where = f" (U = {U:.6g} m/s)"
+                where = f" (U = {pipe.U_of_v(exc.params.v):.6g} m/s)"
             raise NewtonError(
                 f"{exc}{where}; {len(solved)} of {len(values)} points solved, nothing written",
                 params=exc.params,
                 iterations=exc.iterations,
                 residual=exc.residual,
             ) from exc
-        refined = _refined_states(model, sols, parameter, bar) if args.error_estimate else None
+        points = [_point(disc, sol, parameter, pipe) for sol in sols]
+        for row, sol in zip(points, sols, strict=True):
+            # the first point is reached by the gravity loading (gamma continued from 0)
+            row["includes_gravity_loading"] = sol.loading_iterations > 0
+            row.update(_stability(model.with_params(sol.params), sol.q, args.planar))
+        head = setup.to_dict()
+        head["params"].pop(parameter, None)
+        if parameter != "v":
+            head["params"]["v"] = base.v
+        result = {"points": points, **head}
+        if args.error_estimate:
+            result = _with_estimates(result, model, sols, parameter, pipe, bar)
 
-    points = [_point(disc, sol, parameter, pipe, tip_values) for sol in sols]
-    # solve_path reaches its first point by the gravity loading (gamma continued
-    # from 0, fempipe.analyses.statics.solve_sagged), whose Newton iterations are in that
-    # point's newton_iterations; the others are Newton from the previous point.
-    for row, sol in zip(points, sols, strict=True):
-        row["includes_gravity_loading"] = sol.loading_iterations > 0
-    for row, sol in zip(points, sols, strict=True):
-        row.update(_stability(model.with_params(sol.params), sol.q, args.planar))
-    result = setup.to_dict()
-    result["params"].pop(parameter, None)
-    if parameter != "v":
-        result["params"]["v"] = base.v
-    result = {
-        "points": points,
-        "params": result["params"],
-        "discretization": result["discretization"],
-    }
-    if refined is not None:
-        from fempipe.studies.estimates import with_static_estimates
-
-        result = with_static_estimates(result, sols, refined, pipe)
-        points = result["points"]
-
-    output = reporting.Output(args.out) if args.out is not None else None
-    if output is not None:
+    def write(output: reporting.Output) -> None:
         shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
-        _write_outputs(output, result, points, shapes, values, parameter, pipe)
+        _write(output, result, shapes, values, parameter, pipe)
 
-    if args.json:
-        from fempipe.io import json_dumps
-
-        print(json_dumps(result))
-    else:
-        _print_table(result, parameter, pipe)
-        sys.stdout.flush()
-    if output is not None:
-        output.report(args)
+    reporting.deliver(args, result, write=write, text=lambda: _print(result, parameter, pipe))
     return 0
 
 
-def _refined_states(model, sols, parameter: str, bar):
-    """:func:`fempipe.studies.estimates.refined_static_states`, the progress bar counting
-    the refined states."""
+def _with_estimates(result: dict, model, sols, parameter: str, pipe, bar) -> dict:
+    """:func:`fempipe.studies.estimates.estimate_errors`, counted by the progress bar."""
     from fempipe.studies.error_estimate import refine
-    from fempipe.studies.estimates import refined_static_states
+    from fempipe.studies.estimates import estimate_errors
 
     fine = refine(model.disc)
     bar.set_postfix_str(f"refined {fine.name}")
-    return refined_static_states(
-        model, sols, parameter, fine=fine, callback=lambda i, state: bar.update()
+    return estimate_errors(
+        result,
+        model,
+        sols,
+        parameter=parameter,
+        pipe=pipe,
+        fine=fine,
+        callback=lambda i, s: bar.update(),
     )
 
 
 def _stability(model, q, planar: bool = False) -> dict:
-    """``{"stable"}`` with ``planar``, else ``{"stable", "stable_in_plane",
-    "stable_out_of_plane"}``: the verdict in three dimensions and each plane's.
-
-    Stable in three dimensions when stable in both planes; unstable when
-    unstable in either; None when neither says unstable and one resolves nothing.
-    """
+    """``stable`` in three dimensions (stable in both planes; unstable if unstable in either;
+    else None) and each plane's verdict; with ``planar`` the in-plane ``stable`` alone."""
+    from fempipe.analyses.stability import linearly_stable
     from fempipe.model.out_of_plane import out_of_plane_model
 
-    inp = _stable(model, q)
+    inp = linearly_stable(model, q)
     if planar:
         return {"stable": inp}
-    out = _stable(out_of_plane_model(model), q)
-    if inp is False or out is False:
-        both = False
-    elif inp is None or out is None:
-        both = None
-    else:
-        both = True
+    out = linearly_stable(out_of_plane_model(model), q)
+    both = False if False in (inp, out) else None if None in (inp, out) else True
     return {"stable": both, "stable_in_plane": inp, "stable_out_of_plane": out}
 
 
-def _stable(model, q) -> bool | None:
-    """Linear stability of the static state in ``model``'s plane (Eq. (32) in it); None if
-    nothing is resolved.
+def _point(disc, sol, parameter: str, pipe) -> dict:
+    """One row of the results: tip values, Newton diagnostics, SI values with an SI pipe."""
+    from fempipe.model.kinematics import tip_values
 
-    :func:`fempipe.analyses.stability.linearly_stable`: the criterion of ``fempipe
-    spectrum`` and ``fempipe critical``, computed for large meshes from the few
-    lowest modes by sparse shift-invert (O(n) per point).
-
-    A static state can be an equilibrium nobody observes: at alpha = pi with
-    gamma > 7.837 the straight column is one.  ``fempipe critical`` follows
-    the other branches.
-    """
-    from fempipe.analyses.stability import linearly_stable
-
-    return linearly_stable(model, q)
-
-
-def _point(disc, sol, parameter: str, pipe, tip_values) -> dict:
-    """One row of the results: tip values, Newton diagnostics, SI values if SI."""
     p = sol.params
     tip = tip_values(disc, sol.q, p.alpha)
     row: dict = {"v": p.v}
     if parameter != "v":
         row[parameter] = getattr(p, parameter)
     row.update({k: tip[k] for k in STATIC_TIP_KEYS})
-    # Drop of the tip along gravity relative to the undeformed (straight) pipe,
-    # whose tip sits at X_g = cos(alpha): positive = the tip moved down.
-    row["tip_drop"] = tip["X_tip"] - math.cos(p.alpha)
+    row["tip_drop"] = tip["X_tip"] - math.cos(p.alpha)  # the straight pipe's tip is at cos(alpha)
     row["newton_iterations"] = sol.iterations
     row["gravity_loading_iterations"] = sol.loading_iterations
     row["residual_norm"] = sol.residual_norm
     if pipe is not None:
-        L = pipe.L
         row["U"] = pipe.U_of_v(p.v)
-        row["X_tip_m"] = tip["X_tip"] * L
-        row["Z_tip_m"] = tip["Z_tip"] * L
-        row["eta_tip_m"] = tip["eta_tip"] * L
-        row["varsigma_tip_m"] = tip["varsigma_tip"] * L
-        row["tip_drop_mm"] = row["tip_drop"] * L * 1e3
+        for k in ("X_tip", "Z_tip", "eta_tip", "varsigma_tip"):
+            row[f"{k}_m"] = tip[k] * pipe.L
+        row["tip_drop_mm"] = row["tip_drop"] * pipe.L * 1e3
     return row
 
 
@@ -272,17 +201,12 @@ def _labels(values, parameter: str, pipe) -> list[str]:
     return [f"v = {v:.4g}  (U = {pipe.U_of_v(v):.3g} m/s)" for v in values]
 
 
-def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> None:
-    """Make everything in memory first, then write each file atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def _write(output, result, shapes, values, parameter, pipe) -> None:
+    reporting.agg()
     from fempipe.io import write_shapes
     from fempipe.plotting.static import plot_shapes
 
-    p = result["params"]
+    p, points = result["params"], result["points"]
     if pipe is not None:
         title = (
             f"L = {pipe.L * 1e3:.4g} mm, EI = {pipe.EI:.3g} N m², α = {math.degrees(pipe.alpha):.4g}°"
@@ -299,72 +223,50 @@ def _write_outputs(output, result, points, shapes, values, parameter, pipe) -> N
         shapes,
         _labels(values, parameter, pipe),
         si_length=None if pipe is None else pipe.L,
-        alpha=_alphas(values, parameter, p),
+        alpha=list(values) if parameter == "alpha" else [p["alpha"]] * len(values),
         title=title,
         stable=[row["stable"] for row in points],
         stable_in_plane=(
             [row["stable_in_plane"] for row in points] if "stable_in_plane" in points[0] else None
         ),
     )
-    fig = ax.figure
-    try:
-        output.json("static.json", result)
-        output.csv("static.csv", points, estimates.error_columns(points))
-        output.figure("shapes.png", fig, dpi=150)
-        length = None if pipe is None else pipe.L
-        output.record(
-            write_shapes(
-                output.path("shapes.vtu"),
-                shapes,
-                values,
-                parameter=parameter,
-                length=length,
-                params={k: x for k, x in p.items() if isinstance(x, (int, float))},
-            )
-        )
-    finally:
-        plt.close(fig)
+    output.json("static.json", result)
+    output.csv("static.csv", points, reporting.error_columns(points))
+    output.figure("shapes.png", ax.figure)
+    numbers = {k: x for k, x in p.items() if isinstance(x, (int, float))}
+    length = None if pipe is None else pipe.L
+    path = output.path("shapes.vtu")
+    output.record(
+        write_shapes(path, shapes, values, parameter=parameter, length=length, params=numbers)
+    )
 
 
-def _alphas(values, parameter: str, p: dict) -> list[float]:
-    if parameter == "alpha":
-        return list(values)
-    return [p["alpha"]] * len(values)
-
-
-def _print_table(result: dict, parameter: str, pipe) -> None:
+def _print(result: dict, parameter: str, pipe) -> None:
     disc, head = reporting.describe(result, ("alpha", "beta", "gamma", "mu", "v"))
-    spatial = "stable_in_plane" in result["points"][0]
-    # stable: linear stability in three dimensions; in, out: each plane's.
-    planes = "; stable in 3-D (in: in the plane, out: out of it)" if spatial else ""
-    print(f"static deformation, {head}; discretization {disc}{planes}")
+    planes = "stable_in_plane" in result["points"][0]
+    note = "; stable in 3-D (in: in the plane, out: out of it)" if planes else ""
+    print(f"static deformation, {head}; discretization {disc}{note}")
     if pipe is not None:
         print(
             f"SI pipe: L = {pipe.L:g} m, EI = {pipe.EI:g} N m^2, m = {pipe.m:g} kg/m, "
             f"M = {pipe.M:g} kg/m, g = {pipe.g:g} m/s^2; v = {1 / pipe.velocity_scale:.6g} U"
         )
-    cols = [("v", "v", "{:8.4f}")]
-    if parameter != "v":
-        cols.insert(0, (parameter, parameter, "{:9.5f}"))
+    cols = [] if parameter == "v" else [(parameter, parameter, "{:9.5f}")]
+    cols.append(("v", "v", "{:8.4f}"))
     if pipe is not None:
         cols.append(("U", "U [m/s]", "{:8.4f}"))
-    cols += [
-        ("theta_tip", "theta_tip", "{:+10.6f}"),
-        ("X_tip", "X_tip", "{:+10.6f}"),
-        ("Z_tip", "Z_tip", "{:+10.6f}"),
-        ("eta_tip", "eta_tip", "{:+10.6f}"),
-    ]
+    cols += [(k, k, "{:+10.6f}") for k in ("theta_tip", "X_tip", "Z_tip", "eta_tip")]
     if pipe is not None:
         cols.append(("tip_drop_mm", "drop [mm]", "{:+10.4f}"))
     cols += [("newton_iterations", "Newton", "{:6d}"), ("residual_norm", "residual", "{:9.2e}")]
     cols.append(("stable", "stable", "{!s:>6}"))
-    if spatial:
+    if planes:
         cols += [("stable_in_plane", "in", "{!s:>5}"), ("stable_out_of_plane", "out", "{!s:>5}")]
     with_errors = "error_estimate" in result
 
     def cell(row, key, fmt):
-        if with_errors and key + estimates.ERROR in row:
-            return estimates.pm(row[key], row[key + estimates.ERROR], fmt)
+        if with_errors and key + reporting.ERROR in row:
+            return reporting.pm(row[key], row[key + reporting.ERROR], fmt)
         return fmt.format(row[key])
 
     sample = result["points"][0]
@@ -377,13 +279,14 @@ def _print_table(result: dict, parameter: str, pipe) -> None:
     ]
     print("  ".join(h.rjust(w) for (_, h, _), w in zip(cols, widths, strict=True)))
     for row in result["points"]:
-        cells = [cell(row, k, f).rjust(w) for (k, h, f), w in zip(cols, widths, strict=True)]
-        print("  ".join(cells))
+        print(
+            "  ".join(cell(row, k, f).rjust(w) for (k, _, f), w in zip(cols, widths, strict=True))
+        )
     if with_errors:
-        estimates.print_footer(result["error_estimate"])
+        reporting.print_footer(result["error_estimate"])
     if any(row["stable"] is False for row in result["points"]):
         print(
             "note: states marked stable=False are unstable equilibria (linearized, Eq. (32)"
-            + (" and out of the plane" if spatial else "")
+            + (" and out of the plane" if planes else "")
             + "); `fempipe critical` lists the stability events and follows the other branches"
         )

@@ -1,10 +1,6 @@
-"""``fempipe validate``: run the validation suite and write the report.
+"""``fempipe validate``: run the validation suite (:mod:`fempipe.validation`) and write the report.
 
-Examples
---------
-fempipe validate --quick                  # about 2.5 min on 2 cores, into fempipe-out/validate
-fempipe validate --out validation/report --workers 2   # regenerate the committed report
-fempipe validate --case fig02b --case symmetry --json
+The cases and what each checks: docs/verification.md.
 """
 
 from __future__ import annotations
@@ -16,9 +12,13 @@ import sys
 from fempipe.cli import common, reporting
 from fempipe.cli.parsing import CLIError
 
-#: Default ``--out``: a folder of the current directory that the repository's
-#: .gitignore ignores; the committed report (validation/report/) is only
-#: rewritten when asked for with ``--out validation/report``.
+EXAMPLES = (
+    "fempipe validate --quick                   # into fempipe-out/validate",
+    "fempipe validate --out validation/report --workers 2   # regenerate the committed report",
+    "fempipe validate --case fig02b --case symmetry --json",
+)
+
+#: Default ``--out``, ignored by git; the committed report is rewritten only when asked for.
 DEFAULT_OUT = os.path.join("fempipe-out", "validate")
 
 
@@ -47,7 +47,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.io import json_dumps
     from fempipe.validation import CASES
 
     if args.list:
@@ -64,9 +63,7 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or DEFAULT_OUT
     reporting.check_out_dir(out)
 
-    import matplotlib
-
-    matplotlib.use("Agg")
+    reporting.agg()
     from fempipe.validation.report import write_report
     from fempipe.validation.suite import run_suite
 
@@ -80,29 +77,21 @@ def run(args: argparse.Namespace) -> int:
         suite = run_suite(quick=args.quick, out=out, workers=workers, cases=cases, callback=done)
     path = write_report(suite, out)
     summary = suite.to_dict()
-    if args.json:
-        print(
-            json_dumps(
-                {k: v for k, v in summary.items() if k != "cases"}
-                | {
-                    "report": str(path),
-                    "cases": [
-                        {
-                            "name": o.name,
-                            "status": o.status,
-                            "numerics_passed": o.ok,
-                            "runtime": o.wall_time,
-                        }
-                        for o in suite.outcomes
-                    ],
-                }
+    cases = [
+        {"name": o.name, "status": o.status, "numerics_passed": o.ok, "runtime": o.wall_time}
+        for o in suite.outcomes
+    ]
+    result = {k: v for k, v in summary.items() if k != "cases"} | {"report": str(path)}
+
+    def say() -> None:
+        if args.progress is not False:
+            n, p = summary["numerics_checks"], summary["paper_checks"]
+            print(
+                f"fempipe validate: {'PASS' if suite.ok else 'FAIL'}: numerics "
+                f"{n['passed']}/{n['total']}, paper statements {p['passed']}/{p['total']}, "
+                f"{suite.wall_time:.1f} s; report {path}",
+                file=sys.stderr,
             )
-        )
-    elif args.progress is not False:
-        n, p = summary["numerics_checks"], summary["paper_checks"]
-        print(
-            f"fempipe validate: {'PASS' if suite.ok else 'FAIL'}: numerics {n['passed']}/{n['total']}, "
-            f"paper statements {p['passed']}/{p['total']}, {suite.wall_time:.1f} s; report {path}",
-            file=sys.stderr,
-        )
+
+    reporting.deliver(args, result | {"cases": cases}, text=say)
     return 0 if suite.ok else 1

@@ -27,10 +27,17 @@ from fempipe.core.files import write_text
 from fempipe.io import SHAPE_FIELDS, screen_points
 from fempipe.io.meshes import write_vtu_frames
 from fempipe.model.discretization import Discretization
-from fempipe.model.kinematics import Shape, shape
+from fempipe.model.kinematics import Shape, shape, tip_values, tip_velocity
 from fempipe.model.quadrature import lagrange_integrals
 
-__all__ = ["CenterlineSampler", "frame_data", "write_trajectory", "read_trajectory"]
+__all__ = [
+    "TIP_COLUMNS",
+    "CenterlineSampler",
+    "frame_data",
+    "read_trajectory",
+    "tip_rows",
+    "write_trajectory",
+]
 
 
 class CenterlineSampler:
@@ -232,3 +239,53 @@ def read_trajectory(path: str | os.PathLike) -> tuple[np.ndarray, list]:
         times.append(float(ds.get("timestep")))
         meshes.append(meshio.read(path.parent / ds.get("file")))
     return np.asarray(times), meshes
+
+
+#: Columns of tip.csv (units: :data:`fempipe.io.CSV_UNITS`; rates per unit tau).
+TIP_COLUMNS = (
+    "tau",
+    "theta_tip",
+    "eta_tip",
+    "X_tip",
+    "Z_tip",
+    "theta_tip_rate",
+    "eta_tip_rate",
+    "X_tip_rate",
+    "Z_tip_rate",
+)
+
+
+def tip_rows(disc, t, q, qdot, alpha: float, output_dt: float | None = None) -> list[dict]:
+    """The tip's time series: theta(1), eta(1), X_g(1), Z_g(1) and their rates, Eq. (28).
+
+    Parameters
+    ----------
+    disc : Discretization
+    t : ndarray, shape (m,)
+        Accepted step times.
+    q, qdot : ndarray, shape (m, n)
+    alpha : float
+    output_dt : float, optional
+        A uniform output step: the states in between are the cubic Hermite interpolants
+        through (q, qdot) at the steps.
+
+    Returns
+    -------
+    list of dict
+        Rows with the keys :data:`TIP_COLUMNS`.
+    """
+    t, q, qdot = np.asarray(t, float), np.asarray(q, float), np.asarray(qdot, float)
+    if output_dt is not None:
+        from scipy.interpolate import CubicHermiteSpline  # scipy: not for the CLI's start-up
+
+        keep = np.concatenate([[True], np.diff(t) > 0])  # no zero-length steps
+        spline = CubicHermiteSpline(t[keep], q[keep], qdot[keep], axis=0)
+        n = int(np.floor((t[-1] - t[0]) / output_dt * (1 + 1e-12))) + 1
+        t = t[0] + output_dt * np.arange(n)
+        q, qdot = spline(t), spline.derivative()(t)
+    pos = tip_values(disc, q, alpha)
+    vel = tip_velocity(disc, q, qdot, alpha)
+    cols = {"tau": t, **{k: pos[k] for k in TIP_COLUMNS[1:5]}}
+    cols["theta_tip_rate"] = np.asarray(disc.tip @ qdot.T)
+    cols |= {f"{k}_rate": vel[k] for k in ("eta_tip", "X_tip", "Z_tip")}
+    return [{k: float(cols[k][i]) for k in TIP_COLUMNS} for i in range(t.size)]
