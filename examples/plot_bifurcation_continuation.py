@@ -3,8 +3,8 @@ A bifurcation diagram by continuation of periodic orbits
 ========================================================
 
 Instead of integrating at each flow velocity until the motion settles (the sweeps of
-:func:`fempipe.bifurcation_diagram`), the branch of limit cycles can be followed from its
-Hopf point: :func:`fempipe.hopf_points` locates the flutter onsets on the static branch with
+:func:`fempipe.compute_bifurcation_diagram`), the branch of limit cycles can be followed from its
+Hopf point: :func:`fempipe.find_hopf_points` locates the flutter onsets on the static branch with
 their eigenvectors, and :func:`fempipe.continue_cycles` continues the periodic orbits in v by
 pseudo-arclength, on the same engine as the static branches, each orbit corrected by
 shooting with its Floquet multipliers (``fempipe bifurcation --method continuation``).
@@ -23,7 +23,7 @@ from fempipe.plotting.scripts import show_or_save
 
 params = fempipe.Params(alpha=0.0)  # beta = 0.142, gamma = 18.9, mu = 5e-3
 model = fempipe.PipeModel(fempipe.FiniteElement(4, 2), params)
-hopf, _ = fempipe.hopf_points(model, 5.0, 7.5)
+hopf, _ = fempipe.find_hopf_points(model, 5.0, 7.5)
 h = hopf[0]
 print(
     f"Hopf point: v_H = {h.v:.6f}, omega = {h.omega:.5f}, 2 pi / omega = {2 * np.pi / h.omega:.5f}"

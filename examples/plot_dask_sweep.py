@@ -2,7 +2,7 @@
 A sweep on a Dask cluster
 =========================
 
-A bifurcation diagram by sweeps (:func:`fempipe.bifurcation_diagram`) integrates at each flow
+A bifurcation diagram by sweeps (:func:`fempipe.compute_bifurcation_diagram`) integrates at each flow
 velocity until the motion settles, starting from the previous point's attractor; the sweeps
 up and down in v (and for several inclinations) are independent and run on any
 :class:`concurrent.futures.Executor`.  Dask's ``Client.get_executor()`` is one: on the
@@ -34,7 +34,7 @@ with (
     ) as cluster,
     Client(cluster) as client,
 ):
-    diagram = fempipe.bifurcation_diagram(
+    diagram = fempipe.compute_bifurcation_diagram(
         model,
         flows,
         ("up", "down"),

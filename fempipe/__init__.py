@@ -8,11 +8,11 @@ users do (the API reference groups them alike):
 * the model: :class:`Params`, :class:`PipeSI`, :func:`parse_discretization`,
   :class:`PipeModel`, :func:`shape`, :func:`tip_values`;
 * statics (Eq. (31a)): :func:`solve_static`, :func:`solve_path`, :func:`continue_static`;
-* linear stability (Eqs. (31b)-(33)): :func:`spectrum`, :func:`critical_velocity`,
-  :func:`stability_map`, :func:`spatial_critical_velocity`;
+* linear stability (Eqs. (31b)-(33)): :func:`compute_spectrum`, :func:`find_critical_velocity`
+  (in and out of the plane), :func:`map_stability`;
 * dynamics: :func:`simulate`, :func:`find_attractor`, :func:`shoot`, :func:`continue_cycles`,
-  :func:`bifurcation_diagram`; in three dimensions :class:`SpaceModel`,
-  :func:`simulate_space`, :func:`out_of_plane_floquet`, :func:`find_whirl`;
+  :func:`compute_bifurcation_diagram`; in three dimensions :class:`SpaceModel`,
+  :func:`simulate_3d`, :func:`compute_out_of_plane_floquet`, :func:`find_whirl`;
 * studies: :func:`run_study`, :func:`compare_values` and the error estimates.
 
 They are loaded on first use (PEP 562), so ``import fempipe`` and the start of the ``fempipe``
@@ -52,15 +52,13 @@ _LAZY: dict[str, str] = {
     "switch_branch": "analyses.statics",
     "Branch": "analyses.statics",
     # Linear stability (Eqs. (31b)-(33)), in the plane and out of it
-    "spectrum": "analyses.stability",
-    "root_locus": "analyses.stability",
-    "stability_analysis": "analyses.stability",
-    "critical_velocity": "analyses.stability",
+    "compute_spectrum": "analyses.stability",
+    "trace_root_locus": "analyses.stability",
+    "analyse_stability": "analyses.stability",
+    "find_critical_velocity": "analyses.stability",
     "StabilityResult": "analyses.stability",
-    "stability_map": "analyses.stability",
-    "spatial_stability_analysis": "analyses.stability",
-    "spatial_critical_velocity": "analyses.stability",
-    "SpatialStability": "analyses.stability",
+    "map_stability": "analyses.stability",
+    "StabilityInPlanes": "analyses.stability",
     # Time integration (Eq. (20))
     "simulate": "analyses.dynamics",
     "simulate_steps": "analyses.dynamics",
@@ -74,22 +72,21 @@ _LAZY: dict[str, str] = {
     "LimitCycle": "analyses.limit_cycle",
     "Attractor": "analyses.limit_cycle",
     "ShootingError": "analyses.limit_cycle",
-    "tip_coordinates": "analyses.limit_cycle",
-    "hopf_points": "analyses.periodic",
+    "find_hopf_points": "analyses.periodic",
     "continue_cycles": "analyses.periodic",
     "CycleBranch": "analyses.periodic",
-    "cycle_diagram": "analyses.periodic",
+    "compute_cycle_diagram": "analyses.periodic",
     "CycleDiagram": "analyses.periodic",
-    "bifurcation_diagram": "analyses.bifurcation",
+    "compute_bifurcation_diagram": "analyses.bifurcation",
     # The pipe in three dimensions
     "SpaceModel": "model.space",
-    "simulate_space": "analyses.space",
-    "SpaceMotion": "analyses.space",
-    "out_of_plane_floquet": "analyses.space",
-    "three_dimensional_verdict": "analyses.space",
-    "space_diagram": "analyses.space",
-    "space_hopf_normal_form": "analyses.space",
-    "SpaceHopfNormalForm": "analyses.space",
+    "simulate_3d": "analyses.space",
+    "Motion3D": "analyses.space",
+    "compute_out_of_plane_floquet": "analyses.space",
+    "classify_3d": "analyses.space",
+    "compute_diagram_3d": "analyses.space.diagram",
+    "hopf_normal_form_3d": "analyses.space",
+    "HopfNormalForm": "analyses.stability.hopf",
     "find_whirl": "analyses.space",
     "Whirl": "analyses.space",
     # Studies: convergence, a user's values against fempipe, error estimates
@@ -101,12 +98,7 @@ _LAZY: dict[str, str] = {
     "compare_values": "studies.compare",
     "Comparison": "studies.compare",
     "ErrorEstimate": "studies.error_estimate",
-    "refined_static_states": "studies.estimates",
-    "with_static_estimates": "studies.estimates",
-    "refined_stability": "studies.estimates",
-    "with_stability_estimates": "studies.estimates",
-    "refined_attractor": "studies.estimates",
-    "with_attractor_estimates": "studies.estimates",
+    "estimate_errors": "studies.estimates",
 }
 
 #: The layer subpackages, loaded on first attribute access
@@ -148,15 +140,13 @@ __all__ = [
     "continue_static",
     "switch_branch",
     "Branch",
-    "spectrum",
-    "root_locus",
-    "stability_analysis",
-    "critical_velocity",
+    "compute_spectrum",
+    "trace_root_locus",
+    "analyse_stability",
+    "find_critical_velocity",
     "StabilityResult",
-    "stability_map",
-    "spatial_stability_analysis",
-    "spatial_critical_velocity",
-    "SpatialStability",
+    "map_stability",
+    "StabilityInPlanes",
     "simulate",
     "simulate_steps",
     "make_initial_state",
@@ -168,21 +158,20 @@ __all__ = [
     "LimitCycle",
     "Attractor",
     "ShootingError",
-    "tip_coordinates",
-    "hopf_points",
+    "find_hopf_points",
     "continue_cycles",
     "CycleBranch",
-    "cycle_diagram",
+    "compute_cycle_diagram",
     "CycleDiagram",
-    "bifurcation_diagram",
+    "compute_bifurcation_diagram",
     "SpaceModel",
-    "simulate_space",
-    "SpaceMotion",
-    "out_of_plane_floquet",
-    "three_dimensional_verdict",
-    "space_diagram",
-    "space_hopf_normal_form",
-    "SpaceHopfNormalForm",
+    "simulate_3d",
+    "Motion3D",
+    "compute_out_of_plane_floquet",
+    "classify_3d",
+    "compute_diagram_3d",
+    "hopf_normal_form_3d",
+    "HopfNormalForm",
     "find_whirl",
     "Whirl",
     "run_study",
@@ -193,16 +182,11 @@ __all__ = [
     "compare_values",
     "Comparison",
     "ErrorEstimate",
-    "refined_static_states",
-    "with_static_estimates",
-    "refined_stability",
-    "with_stability_estimates",
-    "refined_attractor",
-    "with_attractor_estimates",
+    "estimate_errors",
 ]
 
 if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
-    from fempipe.analyses.bifurcation import bifurcation_diagram
+    from fempipe.analyses.bifurcation import compute_bifurcation_diagram
     from fempipe.analyses.dynamics import (
         IntegrationError,
         PulsatingFlow,
@@ -217,26 +201,34 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         ShootingError,
         find_attractor,
         shoot,
-        tip_coordinates,
     )
     from fempipe.analyses.periodic import (
         CycleBranch,
         CycleDiagram,
+        compute_cycle_diagram,
         continue_cycles,
-        cycle_diagram,
-        hopf_points,
+        find_hopf_points,
     )
+    from fempipe.analyses.space import (
+        Motion3D,
+        Whirl,
+        classify_3d,
+        compute_out_of_plane_floquet,
+        find_whirl,
+        hopf_normal_form_3d,
+        simulate_3d,
+    )
+    from fempipe.analyses.space.diagram import compute_diagram_3d
     from fempipe.analyses.stability import (
-        SpatialStability,
+        StabilityInPlanes,
         StabilityResult,
-        critical_velocity,
-        root_locus,
-        spatial_critical_velocity,
-        spatial_stability_analysis,
-        spectrum,
-        stability_analysis,
-        stability_map,
+        analyse_stability,
+        compute_spectrum,
+        find_critical_velocity,
+        map_stability,
+        trace_root_locus,
     )
+    from fempipe.analyses.stability.hopf import HopfNormalForm
     from fempipe.analyses.statics import (
         Branch,
         NewtonError,
@@ -263,14 +255,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         run_study,
     )
     from fempipe.studies.error_estimate import ErrorEstimate
-    from fempipe.studies.estimates import (
-        refined_attractor,
-        refined_stability,
-        refined_static_states,
-        with_attractor_estimates,
-        with_stability_estimates,
-        with_static_estimates,
-    )
+    from fempipe.studies.estimates import estimate_errors
 
 
 def __getattr__(name: str) -> object:

@@ -18,7 +18,8 @@ from processes import alive, children, needs_proc
 
 import fempipe.analyses.bifurcation as bif
 from fempipe import Modal, Params, PipeModel
-from fempipe.analyses.bifurcation import PointStore, bifurcation_diagram, sweep
+from fempipe.analyses.bifurcation import PointStore, compute_bifurcation_diagram, sweep
+from fempipe.core.errors import PointStoreMismatchError
 
 # Two sine modes on a coarse quadrature: the cheapest model that flutters
 # (v_cr ~ 6 at alpha = 0), so sweeps take seconds.
@@ -37,7 +38,7 @@ def _strip(points):
 @pytest.fixture(scope="module")
 def reference():
     """An uninterrupted serial run (up and down)."""
-    return bifurcation_diagram(_model(), VALUES, **OPTIONS)
+    return compute_bifurcation_diagram(_model(), VALUES, **OPTIONS)
 
 
 def test_sweep_orders_values_and_finds_flutter(reference):
@@ -74,12 +75,12 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
         f"""
         import sys
         from fempipe import Modal, Params, PipeModel
-        from fempipe.analyses.bifurcation import bifurcation_diagram
+        from fempipe.analyses.bifurcation import compute_bifurcation_diagram
         from fempipe.core.parallel import Interrupted, interruptible
         m = PipeModel(Modal(2, n_cells=8), Params(alpha=0.0))
         try:
             with interruptible():
-                bifurcation_diagram(
+                compute_bifurcation_diagram(
                     m,
                     {VALUES!r},
                     {directions!r},
@@ -126,9 +127,9 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
     saved, computed = [], []
     real_save, real_find, real_continue = PointStore.save, bif.find_attractor, bif._continue_cycle
 
-    def save(self, alpha_index, point):
-        saved.append(f"a{alpha_index:02d}-{point.direction}-{point.index:03d}.json")
-        real_save(self, alpha_index, point)
+    def save(self, sweep_name, point):
+        saved.append(f"{sweep_name}-{point.direction}-{point.index:03d}.json")
+        real_save(self, sweep_name, point)
 
     def find(model, *a, **k):
         computed.append(model.params.v)
@@ -141,7 +142,7 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
     monkeypatch.setattr(PointStore, "save", save)
     monkeypatch.setattr(bif, "find_attractor", find)
     monkeypatch.setattr(bif, "_continue_cycle", cont)
-    d = bifurcation_diagram(_model(), VALUES, directions, store_dir=store, **OPTIONS)
+    d = compute_bifurcation_diagram(_model(), VALUES, directions, store_dir=store, **OPTIONS)
     # only the missing points were computed and written, the others loaded
     assert sorted(saved) == sorted(set(saved)) and not set(saved) & set(done)
     assert len(saved) == total - len(done)
@@ -152,9 +153,12 @@ def test_resume_after_kill_gives_same_points_without_recomputation(
 
 
 def test_store_refuses_a_different_run(tmp_path):
-    bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, **OPTIONS)
-    with pytest.raises(ValueError, match="different run"):
-        bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, rtol=1e-4)
+    compute_bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, **OPTIONS)
+    with pytest.raises(PointStoreMismatchError, match="different run") as err:
+        compute_bifurcation_diagram(_model(), [5.0], ["up"], store_dir=tmp_path, rtol=1e-4)
+    assert isinstance(err.value, ValueError) and err.value.field == "store_dir"
+    assert err.value.differences == ["options.rtol", "options.shoot_rtol"]
+    assert "options.rtol, options.shoot_rtol" in str(err.value)
 
 
 def test_point_store_writes_atomically(tmp_path):
@@ -162,19 +166,19 @@ def test_point_store_writes_atomically(tmp_path):
     pts = sweep(_model(), [5.0], "up", store=store, **OPTIONS)
     files = sorted(os.listdir(tmp_path))
     assert files == ["a00-up-000.json", "run.json"]  # no temporary files left
-    back = store.load(0, "up", 0)
+    back = store.load("a00", "up", 0, 5.0)
     assert back.to_dict(state=True) == pts[0].to_dict(state=True)
 
 
 def test_process_pool_gives_the_serial_result(reference):
     with ProcessPoolExecutor(max_workers=2) as ex:
-        d = bifurcation_diagram(_model(), VALUES, executor=ex, **OPTIONS)
+        d = compute_bifurcation_diagram(_model(), VALUES, executor=ex, **OPTIONS)
     assert _strip(d.points) == _strip(reference.points)
 
 
 def test_progress_callback_counts_points():
     seen = []
-    bifurcation_diagram(
+    compute_bifurcation_diagram(
         _model(), [5.0, 5.5], ["up", "down"], progress=lambda d, t: seen.append((d, t)), **OPTIONS
     )
     assert seen[-1] == (4, 4)
@@ -182,7 +186,7 @@ def test_progress_callback_counts_points():
 
 
 def test_several_alphas_are_independent_sweeps():
-    d = bifurcation_diagram(_model(), [5.0], ["up"], alphas=[0.0, 0.5], **OPTIONS)
+    d = compute_bifurcation_diagram(_model(), [5.0], ["up"], alphas=[0.0, 0.5], **OPTIONS)
     assert [p["alpha"] for p in d.points] == [0.0, 0.5]
     # alpha = 0.5: the static tip leaves the vertical
     assert abs(d.points[1]["Z_tip"][0]) > 0.1 > abs(d.points[0]["Z_tip"][0])
@@ -199,7 +203,7 @@ def test_a_failed_sweep_does_not_stop_the_others(tmp_path, monkeypatch):
 
     monkeypatch.setattr(bif, "find_attractor", fails_at_half)
     with pytest.raises(RuntimeError, match="injected failure"):
-        bifurcation_diagram(
+        compute_bifurcation_diagram(
             _model(), [5.0], ["up"], alphas=[0.5, 0.0], store_dir=tmp_path, **OPTIONS
         )
     assert sorted(p.name for p in tmp_path.glob("a*.json")) == ["a01-up-000.json"]
@@ -211,7 +215,7 @@ def test_a_failed_sweep_does_not_stop_the_others(tmp_path, monkeypatch):
 )
 def test_bad_arguments(kwargs, word):
     with pytest.raises(ValueError, match=word):
-        bifurcation_diagram(_model(), [5.0], **kwargs)
+        compute_bifurcation_diagram(_model(), [5.0], **kwargs)
 
 
 def test_dask_local_cluster(reference):
@@ -224,7 +228,7 @@ def test_dask_local_cluster(reference):
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        d = bifurcation_diagram(_model(), VALUES, executor=client.get_executor(), **OPTIONS)
+        d = compute_bifurcation_diagram(_model(), VALUES, executor=client.get_executor(), **OPTIONS)
     assert _strip(d.points) == _strip(reference.points)
 
 

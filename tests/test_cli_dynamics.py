@@ -258,7 +258,7 @@ def test_bifurcation_solver_failure_says_the_points_are_kept(tmp_path, monkeypat
     def fail(*args, **kwargs):
         raise SolverError("integration failed at v = 9")
 
-    monkeypatch.setattr(fempipe.analyses.bifurcation, "bifurcation_diagram", fail)
+    monkeypatch.setattr(fempipe.analyses.bifurcation, "compute_bifurcation_diagram", fail)
     out = tmp_path / "run"
     code = main(
         [

@@ -20,13 +20,13 @@ from scipy.optimize import brentq
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.analyses.stability import (
+    analyse_stability,
     cantilever_frequencies,
-    critical_velocity,
+    compute_spectrum,
+    find_critical_velocity,
     growth_rate,
     linearly_stable,
     resolution,
-    spectrum,
-    stability_analysis,
 )
 from fempipe.analyses.statics import solve_sagged
 from fempipe.cli import main
@@ -152,7 +152,7 @@ def test_beam_mode_reference_is_the_classical_cantilever(galerkin):
 # ----------------------------------------------------------------------------
 def _at_rest(disc, mu_h, mu=0.0):
     model = PipeModel(disc, Params(alpha=0.0, beta=0.2, gamma=0.0, mu=mu, hysteretic_damping=mu_h))
-    return spectrum(model, np.zeros(disc.n))
+    return compute_spectrum(model, np.zeros(disc.n))
 
 
 @pytest.mark.parametrize(
@@ -245,7 +245,7 @@ def test_vcr_of_the_straight_pipe_against_the_beam_mode_galerkin(galerkin, beta,
     hanging v_cr by 1.3e-2; without mu_h it is 3e-2 lower."""
     mu_h = 0.01
     ref = galerkin.critical_velocity(beta, gamma, mu, mu_h)
-    res = critical_velocity(
+    res = find_critical_velocity(
         PipeModel(P3_16, Params(alpha=0.0, beta=beta, gamma=gamma, mu=mu, hysteretic_damping=mu_h)),
         10.0,
     )
@@ -270,7 +270,7 @@ def test_paidoussis_hanging_cantilevers_conveying_air(beta, gamma, mu_h, u_cf, o
     18.43 for mu = 0 and 0.02, against 6.15, 6.33, 21.3, 19.7 printed); the
     classical solver of fempipe.validation.classical finds the same."""
     p = Params(alpha=0.0, beta=beta, gamma=gamma, mu=0.0, hysteretic_damping=mu_h)
-    res = critical_velocity(PipeModel(P3_16, p), 10.0)
+    res = find_critical_velocity(PipeModel(P3_16, p), 10.0)
     assert res.critical.type == "flutter"
     assert abs(res.v_cr - u_cf) <= 0.005, res.v_cr
     assert abs(res.critical.frequency - omega_cf) <= 0.05, res.critical.frequency
@@ -284,8 +284,8 @@ def test_real_roots_and_mode_numbers_are_those_without_mu_h():
     real roots (sgn 0) are the same with mu_h; the complex pairs are damped and
     conjugate-symmetric; mode numbers (canonical at v = 0) are the same."""
     q = np.zeros(P3_16.n)
-    a = spectrum(PipeModel(P3_16, Params(alpha=np.pi, **PAPER)), q)
-    b = spectrum(PipeModel(P3_16, Params(alpha=np.pi, hysteretic_damping=0.05, **PAPER)), q)
+    a = compute_spectrum(PipeModel(P3_16, Params(alpha=np.pi, **PAPER)), q)
+    b = compute_spectrum(PipeModel(P3_16, Params(alpha=np.pi, hysteretic_damping=0.05, **PAPER)), q)
     assert np.array_equal(a.mode, b.mode)
     real = a.lam.imag == 0
     assert real.sum() >= 2 and a.max_real > 4
@@ -312,7 +312,7 @@ def test_every_positive_frequency_root_solves_its_problem():
         P3_16, Params(alpha=np.pi / 2, mu=5e-3, v=3.0, hysteretic_damping=mu_h, **PAPER)
     )
     q = solve_sagged(model).q
-    spec = spectrum(model, q)
+    spec = compute_spectrum(model, q)
     K, C, M = linearized_matrices(model, q)
     Kb = P3_16.K.toarray()
 
@@ -342,9 +342,9 @@ def test_events_divergence_and_folds_stay_flutter_moves():
     root through 0) and moves; just below and above it the spectrum says stable
     and unstable."""
     base = Params(alpha=np.pi, **PAPER)
-    a = stability_analysis(PipeModel(P3_16, base), 6.0)
+    a = analyse_stability(PipeModel(P3_16, base), 6.0)
     hyst = replace(base, hysteretic_damping=0.05)
-    b = stability_analysis(PipeModel(P3_16, hyst), 6.0)
+    b = analyse_stability(PipeModel(P3_16, hyst), 6.0)
     key = [(e.branch, e.type, e.mode) for e in a.events]
     assert key == [(e.branch, e.type, e.mode) for e in b.events]
     for ea, eb in zip(a.events, b.events, strict=True):
@@ -354,9 +354,9 @@ def test_events_divergence_and_folds_stay_flutter_moves():
         else:
             assert abs(ea.v - eb.v) < 1e-9
     model = PipeModel(P3_16, replace(hyst, v=flutter.v - 1e-6))
-    below = spectrum(model, solve_sagged(model).q)
+    below = compute_spectrum(model, solve_sagged(model).q)
     model = PipeModel(P3_16, replace(hyst, v=flutter.v + 1e-6))
-    above = spectrum(model, solve_sagged(model).q)
+    above = compute_spectrum(model, solve_sagged(model).q)
     assert below.stable and not above.stable
     assert above.mode[above.unstable].tolist() == [2, 2]
 
@@ -401,7 +401,7 @@ def test_linearly_stable_and_growth_rate_are_the_spectrum_criterion(disc):
     for v, stable in ((6.4, True), (7.0, False)):
         model = PipeModel(disc, Params(alpha=0.0, mu=5e-3, v=v, hysteretic_damping=0.05, **PAPER))
         q = solve_sagged(model).q
-        spec = spectrum(model, q)
+        spec = compute_spectrum(model, q)
         assert spec.stable is stable
         assert linearly_stable(model, q) is stable
         assert growth_rate(model, q) == pytest.approx(spec.max_real, rel=1e-9, abs=1e-12)
@@ -411,7 +411,7 @@ def test_linearly_stable_and_growth_rate_are_the_spectrum_criterion(disc):
 # Time domain: refused
 # ----------------------------------------------------------------------------
 def test_time_domain_refuses_hysteretic_damping():
-    from fempipe.analyses.bifurcation import bifurcation_diagram, sweep
+    from fempipe.analyses.bifurcation import compute_bifurcation_diagram, sweep
     from fempipe.analyses.dynamics import simulate
     from fempipe.analyses.limit_cycle import find_attractor, shoot
     from fempipe.model.dynamics_problem import PipeDynamics
@@ -422,10 +422,10 @@ def test_time_domain_refuses_hysteretic_damping():
     calls = [
         lambda: simulate(model, q, None, 1.0),
         lambda: PipeDynamics(model),
-        lambda: shoot(model, q, q, 1.0),
+        lambda: shoot(PipeDynamics(model), q, q, 1.0),
         lambda: find_attractor(model),
         lambda: sweep(model, [8.0]),
-        lambda: bifurcation_diagram(model, [8.0]),
+        lambda: compute_bifurcation_diagram(model, [8.0]),
     ]
     for call in calls:
         with pytest.raises(ValueError, match="hysteretic damping .* no time-domain meaning"):
@@ -442,7 +442,7 @@ def test_cli_critical(capsys):
     d = run_json(capsys, [*argv, "--hysteretic-damping", "0.01"])
     plain = run_json(capsys, argv)
     assert d["params"]["hysteretic_damping"] == 0.01
-    lib = critical_velocity(
+    lib = find_critical_velocity(
         PipeModel(Modal(4), Params(alpha=np.pi / 2, hysteretic_damping=0.01, **PAPER)), 9.0
     )
     assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-12)
@@ -456,7 +456,7 @@ def test_cli_spectrum(capsys):
     d = run_json(capsys, [*argv, "--hysteretic-damping", "0.05"])
     assert d["params"]["hysteretic_damping"] == 0.05
     model = PipeModel(FiniteElement(4, 2), Params(alpha=0.0, v=3.0, hysteretic_damping=0.05))
-    spec = spectrum(model, solve_sagged(model).q)
+    spec = compute_spectrum(model, solve_sagged(model).q)
     got = [complex(e["re"], e["im"]) for e in d["points"][1]["eigenvalues"]]
     ref = spec.lam[np.isin(spec.mode, d["modes"])]
     assert np.abs(np.sort_complex(np.array(got)) - np.sort_complex(ref)).max() < 1e-9
@@ -468,7 +468,7 @@ def test_cli_stability_map(capsys):
     argv = ["stability-map", "--alphas", "0,pi/2", "--v", "0,9", "--modal", "4", "--json"]
     d = run_json(capsys, [*argv, "--quiet", "--hysteretic-damping", "0.01"])
     assert d["hysteretic_damping"] == 0.01
-    lib = critical_velocity(
+    lib = find_critical_velocity(
         PipeModel(Modal(4), Params(alpha=0.0, hysteretic_damping=0.01, **PAPER)), 9.0, ds_max=0.2
     )
     assert d["points"][0]["v_cr"] == pytest.approx(lib.v_cr, abs=1e-9)

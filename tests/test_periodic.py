@@ -22,15 +22,16 @@ from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.analyses.periodic import (
     CycleContinuationError,
     CyclePoint,
+    compute_cycle_diagram,
     continue_cycles,
-    cycle_diagram,
-    hopf_points,
+    find_hopf_points,
     special_points,
 )
 from fempipe.analyses.stability import linearly_stable
 from fempipe.analyses.statics import solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import parse_discretization
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
@@ -109,7 +110,7 @@ def test_multipliers_at_the_requested_v_are_those_of_the_orbit(run):
             continue
         m = PipeModel(disc, Params(alpha=0.0, v=p["v"]))
         att = find_attractor(m, shoot_rtol=1e-6)
-        c = shoot(m, att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-10)
+        c = shoot(PipeDynamics(m), att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-10)
         ref = np.sort(np.abs(c.floquet_multipliers))[::-1][: len(p["floquet_multipliers"])]
         got = np.sort(np.abs([complex(*z) for z in p["floquet_multipliers"]]))[::-1]
         assert np.max(np.abs(got - ref)) < 1e-6, (p["v"], got[:3], ref[:3])
@@ -148,7 +149,7 @@ def test_corrector_takes_the_monodromy_at_the_orbit_when_asked():
 
 def _orbit_guess(m):
     att = find_attractor(m, shoot_rtol=1e-6)
-    return m, att.cycle.q0, att.cycle.qdot0, att.cycle.period
+    return PipeDynamics(m), att.cycle.q0, att.cycle.qdot0, att.cycle.period
 
 
 def test_branch_starts_at_the_hopf_point(run):
@@ -231,17 +232,17 @@ def test_interrupted_branch_resumes_to_the_same_points(run, tmp_path):
     class StopError(Exception):
         pass
 
-    def stop_after_three():
+    def stop_after_three(_done, _total):
         calls.append(1)
         if len(calls) == 4:  # the static part, then three orbits
             raise StopError
 
     values = [float(v) for v in VALUES.split(",")]
     with pytest.raises(StopError):
-        cycle_diagram(model, values, store_dir=tmp_path, progress=stop_after_three, rtol=1e-5)
+        compute_cycle_diagram(model, values, store_dir=tmp_path, progress=stop_after_three, rtol=1e-5)
     branch = json.loads((tmp_path / "a00-H1.json").read_text())
     assert 3 <= len(branch["points"]) < 8 and branch["end_reason"] is None
-    diag = cycle_diagram(model, values, store_dir=tmp_path, rtol=1e-5)
+    diag = compute_cycle_diagram(model, values, store_dir=tmp_path, rtol=1e-5)
     got = [(p["v"], p["period"], p["eta_tip"]) for p in _cycles(diag.to_dict(), False)]
     want = [(p["v"], p["period"], p["eta_tip"]) for p in _cycles(d, False)]
     assert got == want
@@ -252,7 +253,7 @@ def test_failure_names_v_and_step_and_keeps_the_points(monkeypatch):
     from fempipe.solvers.radau import IntegrationError
 
     model = PipeModel(parse_discretization("P2:4"), Params(alpha=0.0, v=6.0))
-    (hopf,), _ = hopf_points(model, 6.0, 7.0)
+    (hopf,), _ = find_hopf_points(model, 6.0, 7.0)
     real = per.period_flow
 
     def failing(m, x, T, rtol, sensitivity):
@@ -334,7 +335,7 @@ def test_subcritical_branch_folds_where_the_attractor_finder_loses_the_cycle():
     model = PipeModel(
         parse_discretization("P2:4"), Params(alpha=0.0, beta=0.15, end_mass=0.5, v=1.0)
     )
-    (hopf,), _ = hopf_points(model, 1.0, 8.0)
+    (hopf,), _ = find_hopf_points(model, 1.0, 8.0)
     br = continue_cycles(model, hopf, (hopf.v - 1.0, hopf.v + 0.5), [], ds_max=0.3)
     assert not br.points[0].stable and br.points[0].v < hopf.v
     assert br.points[-1].stable and br.points[-1].v > hopf.v

@@ -94,7 +94,7 @@ def test_critical_and_simulate_do_not_import_scipy_optimize():
 
 # The public names of the package, as the eager ``__init__`` imported them.
 from fempipe.analyses.bifurcation import (  # noqa: E402
-    bifurcation_diagram,
+    compute_bifurcation_diagram,
 )
 from fempipe.analyses.dynamics import (  # noqa: E402
     IntegrationError,
@@ -110,37 +110,34 @@ from fempipe.analyses.limit_cycle import (  # noqa: E402
     ShootingError,
     find_attractor,
     shoot,
-    tip_coordinates,
 )
 from fempipe.analyses.periodic import (  # noqa: E402
     CycleBranch,
     CycleDiagram,
+    compute_cycle_diagram,
     continue_cycles,
-    cycle_diagram,
-    hopf_points,
+    find_hopf_points,
 )
 from fempipe.analyses.space import (  # noqa: E402
-    SpaceHopfNormalForm,
-    SpaceMotion,
+    Motion3D,
     Whirl,
+    classify_3d,
+    compute_out_of_plane_floquet,
     find_whirl,
-    out_of_plane_floquet,
-    simulate_space,
-    space_diagram,
-    space_hopf_normal_form,
-    three_dimensional_verdict,
+    hopf_normal_form_3d,
+    simulate_3d,
 )
+from fempipe.analyses.space.diagram import compute_diagram_3d  # noqa: E402
 from fempipe.analyses.stability import (  # noqa: E402
-    SpatialStability,
+    StabilityInPlanes,
     StabilityResult,
-    critical_velocity,
-    root_locus,
-    spatial_critical_velocity,
-    spatial_stability_analysis,
-    spectrum,
-    stability_analysis,
-    stability_map,
+    analyse_stability,
+    compute_spectrum,
+    find_critical_velocity,
+    map_stability,
+    trace_root_locus,
 )
+from fempipe.analyses.stability.hopf import HopfNormalForm  # noqa: E402
 from fempipe.analyses.statics import (  # noqa: E402
     Branch,
     NewtonError,
@@ -193,14 +190,7 @@ from fempipe.studies.convergence import (  # noqa: E402
 from fempipe.studies.error_estimate import (  # noqa: E402
     ErrorEstimate,
 )
-from fempipe.studies.estimates import (  # noqa: E402
-    refined_attractor,
-    refined_stability,
-    refined_static_states,
-    with_attractor_estimates,
-    with_stability_estimates,
-    with_static_estimates,
-)
+from fempipe.studies.estimates import estimate_errors  # noqa: E402
 
 PUBLIC = {
     "Params": Params,
@@ -224,15 +214,13 @@ PUBLIC = {
     "continue_static": continue_static,
     "switch_branch": switch_branch,
     "Branch": Branch,
-    "spectrum": spectrum,
-    "root_locus": root_locus,
-    "stability_analysis": stability_analysis,
-    "critical_velocity": critical_velocity,
+    "compute_spectrum": compute_spectrum,
+    "trace_root_locus": trace_root_locus,
+    "analyse_stability": analyse_stability,
+    "find_critical_velocity": find_critical_velocity,
     "StabilityResult": StabilityResult,
-    "stability_map": stability_map,
-    "spatial_stability_analysis": spatial_stability_analysis,
-    "spatial_critical_velocity": spatial_critical_velocity,
-    "SpatialStability": SpatialStability,
+    "map_stability": map_stability,
+    "StabilityInPlanes": StabilityInPlanes,
     "simulate": simulate,
     "simulate_steps": simulate_steps,
     "make_initial_state": make_initial_state,
@@ -244,21 +232,20 @@ PUBLIC = {
     "LimitCycle": LimitCycle,
     "Attractor": Attractor,
     "ShootingError": ShootingError,
-    "tip_coordinates": tip_coordinates,
-    "hopf_points": hopf_points,
+    "find_hopf_points": find_hopf_points,
     "continue_cycles": continue_cycles,
     "CycleBranch": CycleBranch,
-    "cycle_diagram": cycle_diagram,
+    "compute_cycle_diagram": compute_cycle_diagram,
     "CycleDiagram": CycleDiagram,
-    "bifurcation_diagram": bifurcation_diagram,
+    "compute_bifurcation_diagram": compute_bifurcation_diagram,
     "SpaceModel": SpaceModel,
-    "simulate_space": simulate_space,
-    "SpaceMotion": SpaceMotion,
-    "out_of_plane_floquet": out_of_plane_floquet,
-    "three_dimensional_verdict": three_dimensional_verdict,
-    "space_diagram": space_diagram,
-    "space_hopf_normal_form": space_hopf_normal_form,
-    "SpaceHopfNormalForm": SpaceHopfNormalForm,
+    "simulate_3d": simulate_3d,
+    "Motion3D": Motion3D,
+    "compute_out_of_plane_floquet": compute_out_of_plane_floquet,
+    "classify_3d": classify_3d,
+    "compute_diagram_3d": compute_diagram_3d,
+    "hopf_normal_form_3d": hopf_normal_form_3d,
+    "HopfNormalForm": HopfNormalForm,
     "find_whirl": find_whirl,
     "Whirl": Whirl,
     "run_study": run_study,
@@ -269,12 +256,7 @@ PUBLIC = {
     "compare_values": compare_values,
     "Comparison": Comparison,
     "ErrorEstimate": ErrorEstimate,
-    "refined_static_states": refined_static_states,
-    "with_static_estimates": with_static_estimates,
-    "refined_stability": refined_stability,
-    "with_stability_estimates": with_stability_estimates,
-    "refined_attractor": refined_attractor,
-    "with_attractor_estimates": with_attractor_estimates,
+    "estimate_errors": estimate_errors,
 }
 
 

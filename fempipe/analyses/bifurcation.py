@@ -1,14 +1,12 @@
-"""Bifurcation diagrams of the tip response against the flow velocity (Figs. 7-10) by sweeps.
+"""Bifurcation diagrams of the tip response against the flow velocity by sweeps (Figs. 7-10).
 
-:func:`sweep` steps v up (or down) through a list of values; each point starts from the
-attractor of the previous one and records, with
+:func:`sweep` steps v up or down, each point starting from the attractor of the previous one
+(a stable cycle is first continued by shooting from the previous one) and recording, with
 :func:`fempipe.analyses.limit_cycle.find_attractor`, the kind of attractor, its period and the
-extrema of eta(1), X_g(1), Z_g(1); a stable cycle is first continued by shooting directly
-from the previous one.  Sweeping up and down shows hysteresis where a stable equilibrium and
-a stable cycle coexist (subcritical Hopf).  :func:`bifurcation_diagram` runs independent
-sweeps (up and down, several alpha) in parallel through
-:func:`fempipe.core.parallel.run_tasks`, writing every finished point at once to a point
-store, from which a rerun resumes with the same results as an uninterrupted run.
+extrema of eta(1), X_g(1), Z_g(1).  Up and down sweeps show hysteresis where a stable
+equilibrium and a stable cycle coexist.  :func:`compute_bifurcation_diagram` runs independent
+sweeps (up and down, several alpha) in parallel, resumable from a point store
+(:mod:`fempipe.analyses.periodic.points`).
 
 How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
 """
@@ -18,7 +16,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
@@ -28,33 +25,31 @@ import numpy as np
 
 from fempipe.analyses.periodic.out_of_plane import cycle_verdict, equilibrium_verdict
 from fempipe.core.errors import SolverError
-from fempipe.core.parallel import run_tasks
-from fempipe.model.dynamics_problem import refuse_hysteretic
+from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
 from fempipe.model.operators import PipeModel
 
 from .dynamics import IntegrationError, make_initial_state
 from .limit_cycle import Attractor, LimitCycle, ShootingError, find_attractor, shoot
-from .periodic.points import BifurcationPoint, PointStore
+from .periodic.points import (
+    DIRECTIONS,
+    BifurcationPoint,
+    PointStore,
+    diagram_manifest,
+    ordered,
+    run_diagram,
+    sweep_points,
+)
 
 __all__ = [
     "BifurcationPoint",
     "PointStore",
     "sweep",
-    "bifurcation_diagram",
+    "compute_bifurcation_diagram",
     "DIRECTIONS",
     "BifurcationDiagram",
 ]
 
 log = logging.getLogger(__name__)
-
-DIRECTIONS = ("up", "down")
-
-
-def _ordered(values: Sequence[float], direction: str) -> list[float]:
-    if direction not in DIRECTIONS:
-        raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
-    vals = sorted(float(v) for v in values)
-    return vals if direction == "up" else vals[::-1]
 
 
 def sweep(
@@ -79,33 +74,25 @@ def sweep(
     model : PipeModel
         Its ``params.v`` is replaced by each value.
     values : sequence of float
-        Flow velocities (sorted up or down according to ``direction``).
     direction : {"up", "down"}
     q0, qdot0 : ndarray, optional
         Start of the first point (default: static state + perturbation).
     perturbation : float
-        Amplitude (rad, first sine mode) added when the previous attractor is
-        an equilibrium.
+        Rotation (rad, first sine mode) added where the previous attractor is an equilibrium.
     store : PointStore, optional
         Finished points are read from and written to it (resume).
     alpha_index : int
-        Index of this sweep's alpha in the store's file names.
+        This sweep's alpha in the store's file names.
     progress : callable, optional
         Called with each finished (or loaded) point.
     continue_cycles : bool
-        When the previous attractor is a stable cycle, first shoot directly
-        from it with its period (natural-parameter continuation of the periodic
-        orbit, no transient); accepted only if Newton converges to a stable
-        cycle of non-zero amplitude, else the point falls back to
-        :func:`~fempipe.analyses.limit_cycle.find_attractor` from the same state.
+        After a stable cycle, first shoot from it with its period; accepted if Newton
+        converges to a stable cycle, else :func:`find_attractor` from the same state.
     out_of_plane : bool
-        Also decide whether each attractor survives in 3-D (:func:`_three_d_verdict`:
-        the out-of-plane Floquet multipliers of a cycle, the out-of-plane
-        spectrum of an equilibrium), stored with the point; a stored point
-        without it gains it on a rerun.
+        Also the 3-D verdict of each attractor (out-of-plane Floquet multipliers of a
+        cycle, out-of-plane spectrum of an equilibrium); a stored point gains it on a rerun.
     **attractor_options
-        Passed to :func:`fempipe.analyses.limit_cycle.find_attractor` (``t_max``,
-        ``rtol``, ``shoot_rtol`` ...).
+        Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
     Returns
     -------
@@ -117,60 +104,51 @@ def sweep(
         If the model has hysteretic damping (no time-domain meaning).
     """
     refuse_hysteretic(model.params, "sweep")
-    vals = _ordered(values, direction)
-    if not vals:
-        raise ValueError("values must not be empty")
-    q, p = q0, qdot0
-    previous_equilibrium = q0 is None
-    prev_cycle = None
-    points = []
-    for i, v in enumerate(vals):
-        m = model.with_params(model.params.with_flow(v))
-        old = None if store is None else _stored_point(store, alpha_index, direction, i, v)
-        if old is not None and out_of_plane and old.three_d is None:
-            old = replace(old, three_d=_three_d_verdict(m, old))
-            store.save(alpha_index, old)
-        if old is not None:
-            points.append(old)
-            q, p = old.q, old.qdot
-            previous_equilibrium = old.attractor == "equilibrium"
-            prev_cycle = (old.period, old.period_n) if old.attractor == "periodic" else None
-            if progress is not None:
-                progress(old)
-            continue
-        q, p = _start_state(m, q, p, previous_equilibrium, perturbation)
+
+    def at(v: float) -> PipeModel:
+        return model.with_params(model.params.with_flow(v))
+
+    def step(i: int, v: float, prev: BifurcationPoint | None) -> BifurcationPoint:
+        m = at(v)
+        if prev is None:
+            q, p, after_equilibrium, cycle = q0, qdot0, q0 is None, None
+        else:
+            q, p = prev.q, prev.qdot
+            after_equilibrium = prev.attractor == "equilibrium"
+            cycle = (prev.period, prev.period_n) if prev.attractor == "periodic" else None
+        q, p = _start_state(m, q, p, after_equilibrium, perturbation)
         t0 = time.perf_counter()
         att = None
-        if (
-            continue_cycles
-            and prev_cycle is not None
-            and attractor_options.get("use_shooting", True)
-        ):
-            att = _continue_cycle(m, q, p, prev_cycle, attractor_options)
+        if continue_cycles and cycle is not None and attractor_options.get("use_shooting", True):
+            att = _continue_cycle(m, q, p, cycle, attractor_options)
         if att is None:
             att = find_attractor(m, q, p, perturbation=perturbation, **attractor_options)
         point = _new_point(att, m, direction, i, v, t0)
         if out_of_plane:
             point = replace(point, three_d=_three_d_verdict(m, point, att.cycle))
-        if store is not None:
-            store.save(alpha_index, point)
-        points.append(point)
-        q, p = point.q, point.qdot
-        previous_equilibrium = att.kind == "equilibrium"
-        prev_cycle = (att.period, att.period_n) if att.cycle is not None else None
-        if progress is not None:
-            progress(point)
-    return points
+        return point
+
+    def amend(v: float, point: BifurcationPoint) -> BifurcationPoint:
+        if out_of_plane and point.three_d is None:
+            return replace(point, three_d=_three_d_verdict(at(v), point))
+        return point
+
+    return sweep_points(
+        values,
+        direction,
+        step,
+        store=store,
+        sweep=f"a{alpha_index:02d}",
+        progress=progress,
+        amend=amend,
+    )
 
 
 def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
     """``stable_3d`` of a sweep's attractor and its out-of-plane evidence.
 
-    A periodic attractor: its out-of-plane Floquet multipliers
-    (:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`; the orbit from
-    ``cycle``, or a stored point's state and period); an equilibrium: the
-    out-of-plane spectrum (an attractor is stable in the plane); a
-    non-periodic attractor: ``stable_3d`` None.
+    A cycle: its out-of-plane Floquet multipliers (the orbit ``cycle``, or the stored
+    point's state and period); an equilibrium: its out-of-plane spectrum; else None.
     """
     if point.attractor == "equilibrium":
         return equilibrium_verdict(m, point.q, True)
@@ -199,30 +177,14 @@ def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
         return {"stable_3d": None, "out_of_plane_error": str(exc)}
 
 
-def _start_state(m: PipeModel, q, p, previous_equilibrium: bool, perturbation: float):
-    """The state a point starts from: ``(q, p)``, perturbed after an equilibrium.
-
-    With no previous state, the static state of ``m`` plus the perturbation.
-    """
+def _start_state(m: PipeModel, q, p, after_equilibrium: bool, perturbation: float):
+    """``(q, p)``, perturbed after an equilibrium; none: the static state, perturbed."""
     if q is None:
         q, p = make_initial_state(m, 1, perturbation)
-    elif previous_equilibrium:
+    elif after_equilibrium:
         dq, _ = make_initial_state(m, 1, perturbation, q_static=np.zeros(m.n))
         q, p = np.asarray(q) + dq, np.zeros(m.n)
     return q, p
-
-
-def _stored_point(
-    store: PointStore, alpha_index: int, direction: str, index: int, v: float
-) -> BifurcationPoint | None:
-    """The point ``index`` of a sweep from the store, None if not there yet.
-
-    Raises ValueError if the stored point is of another flow velocity.
-    """
-    old = store.load(alpha_index, direction, index)
-    if old is not None and not math.isclose(old.v, v, rel_tol=0, abs_tol=1e-12):
-        raise ValueError(f"stored point {index} ({direction}) has v = {old.v}, expected {v}")
-    return old
 
 
 def _new_point(
@@ -263,11 +225,10 @@ def _continue_cycle(model, q, p, prev_cycle, options) -> Attractor | None:
     """Shoot from the previous point's cycle; None if that does not give a stable cycle."""
     period, period_n = prev_cycle
     try:
-        # A tenth of the shooting tolerance: the residual understates the error of
-        # the orbit by 1 / (1 - mu) for a multiplier mu near 1 (near the Hopf
-        # point: 2.2e-6 in eta_tip at v = 6.6, P3:16, with the residual below 1e-6).
+        # A tenth of the shooting tolerance: the residual understates the orbit's error
+        # by 1 / (1 - mu) for a multiplier mu near 1 (near the Hopf point).
         cyc = shoot(
-            model,
+            PipeDynamics(model),
             q,
             p,
             period,
@@ -306,18 +267,12 @@ def _sweep_task(
     values: list,
     direction: str,
     alpha_index: int,
-    store_dir: str,
-    manifest: dict,
     options: dict,
-    on_point: Callable[[BifurcationPoint], None] | None = None,
-    out_of_plane: bool = False,
+    out_of_plane: bool,
+    store: PointStore,
+    on_point: Callable[[BifurcationPoint], None] | None,
 ) -> list[dict]:
-    """One independent sweep (in a worker, or in this process with ``on_point``).
-
-    Opens the store itself (a worker cannot share the caller's object) and
-    returns the points as dicts without their states.
-    """
-    store = PointStore(store_dir, manifest)
+    """One sweep of :func:`compute_bifurcation_diagram`: its points without their states."""
     pts = sweep(
         model,
         values,
@@ -331,33 +286,18 @@ def _sweep_task(
     return [pt.to_dict(state=False) for pt in pts]
 
 
-def _manifest(model: PipeModel, values, directions, alphas, options) -> dict:
-    p = model.params.to_dict()
-    p.pop("v")
-    p.pop("alpha")
-    return {
-        "discretization": model.disc.to_dict(),
-        "params": p,
-        "alphas": [float(a) for a in alphas],
-        "values": sorted(float(v) for v in values),
-        "directions": list(directions),
-        "options": {k: options[k] for k in sorted(options)},
-    }
-
-
 @dataclass(frozen=True)
 class BifurcationDiagram:
-    """All points of a set of sweeps, with run diagnostics.
+    """All points of a set of sweeps.
 
     Attributes
     ----------
     points : list of dict
-        :meth:`BifurcationPoint.to_dict` of every point (without the states),
-        ordered by alpha, direction, then sweep order.
+        :meth:`BifurcationPoint.to_dict` of every point, by alpha, direction, sweep order.
     wall_time : float
         Seconds for the whole run (loading stored points included).
     manifest : dict
-        The run's description, as in the point store's ``run.json``.
+        The run's ``run.json``.
     """
 
     points: list
@@ -373,7 +313,7 @@ class BifurcationDiagram:
         }
 
 
-def bifurcation_diagram(
+def compute_bifurcation_diagram(
     model: PipeModel,
     values: Sequence[float],
     directions: Sequence[str] = DIRECTIONS,
@@ -386,7 +326,7 @@ def bifurcation_diagram(
     out_of_plane: bool = False,
     **attractor_options,
 ) -> BifurcationDiagram:
-    """Sweeps up and/or down (for one or several alpha), in parallel.
+    """Sweeps up and/or down (for one or several alpha), in parallel, resumable.
 
     Parameters
     ----------
@@ -396,128 +336,59 @@ def bifurcation_diagram(
     directions : sequence of {"up", "down"}
     alphas : sequence of float, optional
         Inclinations; default ``[model.params.alpha]``.
-    store_dir : path, optional
-        Point store (resume); a temporary directory if omitted.
-    executor : concurrent.futures.Executor, optional
-        Runs the independent sweeps (any Executor: process pool, Dask's
-        ``Client.get_executor()``).  With a remote executor the store directory
-        must be visible to the workers.
-    workers : int, optional
-        Without an executor: > 1 runs the sweeps in that many local worker
-        processes (:func:`fempipe.core.parallel.process_pool`: they exit with this
-        process, however it ends); 1 or None runs in this process.
+    store_dir, executor, workers
+        As :func:`fempipe.analyses.periodic.points.run_diagram`.
     progress : callable, optional
-        Called as ``progress(done, total)`` when points finish (or are loaded
-        from the store).
+        ``progress(done, total)`` as points finish (or load from the store).
     out_of_plane : bool
-        Each point's 3-D verdict (:func:`sweep`); not part of the store's
-        manifest, so that a planar run's store is resumed, adding it.
+        Each point's 3-D verdict (:func:`sweep`); not in the manifest, so that a planar
+        run's store is resumed, adding it.
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
     Returns
     -------
     BifurcationDiagram
-        Points ordered by alpha, direction, then sweep order.
 
     Raises
     ------
     ValueError
-        If the model has hysteretic damping (no time-domain meaning).
+        A hysteretic damping, no values, a bad direction or worker count.
+    PointStoreMismatchError
+        ``store_dir`` holds another run.
     Exception
-        The error of the first sweep (in that order) that failed, once all
-        sweeps have ended; the points finished before it are in the store.
-    KeyboardInterrupt
-        Including :class:`fempipe.core.parallel.Interrupted`: the workers are
-        stopped first; rerun on the same store to resume.
+        The first failed sweep's error, once all have ended (finished points are stored).
     """
-    refuse_hysteretic(model.params, "bifurcation_diagram")
+    refuse_hysteretic(model.params, "compute_bifurcation_diagram")
     t0 = time.perf_counter()
     directions = list(directions)
-    _check_diagram_args(values, directions, workers)
+    for d in directions:
+        ordered(values, d)
     alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
-    manifest = _manifest(model, values, directions, alphas, attractor_options)
-    tmp = None
-    if store_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="fempipe-sweep-")
-        store_dir = tmp.name
-    try:
-        store = PointStore(store_dir, manifest)
-        total = len(values) * len(directions) * len(alphas)
-        sweeps = [(ia, a, d) for ia, a in enumerate(alphas) for d in directions]
-        in_process = executor is None and (workers is None or int(workers) == 1 or len(sweeps) == 1)
-        counter = _ProgressCounter(store, total, progress)
-        args = [
-            (
-                model.with_params(replace(model.params, alpha=float(a))),
-                list(values),
-                d,
-                ia,
-                str(store_dir),
-                manifest,
-                dict(attractor_options),
-                counter.on_point if in_process else None,
-                out_of_plane,
-            )
-            for ia, a, d in sweeps
-        ]
-        results = run_tasks(
-            _sweep_task,
-            args,
-            workers=None if in_process else workers,
-            executor=executor,
-            heartbeat=None if in_process else counter.poll_store,
+    manifest = diagram_manifest(
+        model, values, attractor_options, alphas=alphas, directions=directions
+    )
+    tasks = [
+        (
+            model.with_params(replace(model.params, alpha=float(a))),
+            list(values),
+            d,
+            ia,
+            dict(attractor_options),
+            out_of_plane,
         )
-        if not in_process:
-            counter.poll_store()
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
-    for r in results:
-        if isinstance(r, BaseException):
-            # The other sweeps ran to their end and their points are stored.
-            raise r
+        for ia, a in enumerate(alphas)
+        for d in directions
+    ]
+    results = run_diagram(
+        _sweep_task,
+        tasks,
+        manifest,
+        store_dir=store_dir,
+        executor=executor,
+        workers=workers,
+        progress=progress,
+        total=len(values) * len(tasks),
+    )
     points = [pt for r in results for pt in r]
     return BifurcationDiagram(points=points, wall_time=time.perf_counter() - t0, manifest=manifest)
-
-
-def _check_diagram_args(values, directions: list, workers: int | None) -> None:
-    """ValueError for an unknown direction, no values, or fewer than one worker."""
-    for d in directions:
-        if d not in DIRECTIONS:
-            raise ValueError(f"direction must be 'up' or 'down', got {d!r}")
-    if not len(values):
-        raise ValueError("values must not be empty")
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
-
-
-class _ProgressCounter:
-    """Reports ``progress(done, total)`` of a bifurcation diagram's points.
-
-    In this process every finished point is counted (:meth:`on_point`); with
-    workers the files they have written to the store are (:meth:`poll_store`,
-    reported only when the count changed).
-    """
-
-    def __init__(
-        self, store: PointStore, total: int, progress: Callable[[int, int], None] | None
-    ) -> None:
-        self.store = store
-        self.total = total
-        self.progress = progress
-        self.done = 0
-        self.shown = -1
-
-    def on_point(self, _point: BifurcationPoint) -> None:
-        """Count a point finished (or loaded) in this process."""
-        self.done += 1
-        if self.progress is not None:
-            self.progress(self.done, self.total)
-
-    def poll_store(self) -> None:
-        """Count the points the workers have written to the store."""
-        n = self.store.count()
-        if self.progress is not None and n != self.shown:
-            self.progress(n, self.total)
-            self.shown = n

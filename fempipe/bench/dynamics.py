@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from fempipe.analyses.bifurcation import bifurcation_diagram
+from fempipe.analyses.bifurcation import compute_bifurcation_diagram
 from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.bench.harness import child_cpu_seconds, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
@@ -61,7 +61,7 @@ def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> 
     model = PipeModel(_disc(spec), Params(alpha=0.0, **PAPER_CASE))
     values = np.linspace(5.0, 12.0, n_values)
     t0 = time.perf_counter()
-    d = bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
+    d = compute_bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
     wall = time.perf_counter() - t0
     pts = d.points
     first_periodic = {

@@ -1,56 +1,37 @@
 """``fempipe bifurcation``: tip extrema against v, by continuation (default) or by sweeps.
 
-``--method continuation`` (the default) follows the equilibria of the primary
-static branch and the branch of periodic orbits born at every Hopf point
-(flutter event) by pseudo-arclength continuation
-(:func:`fempipe.analyses.periodic.cycle_diagram`): stable and unstable orbits, their
-Floquet multipliers, and the folds, period doublings and Neimark-Sacker points
-of the branches; every requested v is landed on exactly (``requested``: true,
-``source``: "grid"), the continuation's own points have ``requested``: false.
-Points gain ``stable``, ``branch`` and ``floquet_multipliers``; the result
-gains ``branches``, ``special_points``, ``hopf_points`` and ``errors``.  A
-branch that cannot be continued is reported (exit 1) after its finished
-points are written.  ``--directions`` has no meaning there; ``--orbit-rtol``
-is its integration tolerance (``--shoot-rtol``, ``--rtol`` and ``--t-max`` are
-the sweep's).
+``--method continuation`` follows the equilibria of the primary static branch and the branch
+of periodic orbits born at every Hopf point
+(:func:`fempipe.analyses.periodic.compute_cycle_diagram`); ``--method sweep`` steps through
+the attractors up and down, each point from the previous one
+(:func:`fempipe.analyses.bifurcation.compute_bifurcation_diagram`), in parallel on
+``--workers`` or a Dask cluster (``--dask``).  Both give each planar state its 3-D verdict
+(``--planar`` leaves it out).  ``--3d`` sweeps the attractors of the 3-D model instead
+(:func:`fempipe.analyses.space.diagram.compute_diagram_3d`).  ``--out DIR`` keeps the point
+store DIR/points/: rerunning the same command resumes.
 
-``--method sweep`` is the independent check.  Each point starts from the attractor of the previous one
-(:func:`fempipe.analyses.bifurcation.sweep`); up and down sweeps (and several
-inclinations given with ``--alphas``) are independent and run in parallel on
-``--workers N`` local processes or on a Dask cluster (``--dask tcp://host:port``,
-needs the optional extra ``fempipe[dask]``).
-
-Whether each planar state survives in three dimensions (as ``simulate``
-reports it; ``--planar`` leaves it out): every periodic point (the continued
-orbits, stable and unstable, and the sweep's periodic attractors) gains
-``out_of_plane_floquet_multipliers`` (the six largest, ``[re, im]``, of the
-out-of-plane perturbations, :func:`fempipe.analyses.space.out_of_plane_floquet`),
-``max_nontrivial_out_of_plane_multiplier`` (at alpha = 0 and pi the neutral
-rotation about the vertical left out, and reported as
-``neutral_out_of_plane_multiplier`` with its distance from 1,
-``out_of_plane_symmetry_defect``), ``stable_out_of_plane``, ``stable_3d``
-(stable in the plane and out of it) and, where that verdict is rough (a few
-modes, or a neutral multiplier more than 1e-2 from 1), ``stable_3d_note``; an equilibrium
-``stable_out_of_plane`` and ``stable_3d`` from its out-of-plane spectrum.  The
-verdicts are kept in the point store with their points.  ``--3d`` sweeps the
-attractors of the 3-D model instead (:mod:`fempipe.cli.bifurcation_space`).
-
-``--json`` prints ``{"points": [{"v", "direction", "attractor", "eta_tip":
-[min, max], "X_tip": [...], "Z_tip": [...], "period"}, ...]}``.  ``--out DIR``
-writes bifurcation.json, the diagrams eta_tip.png, X_tip.png and Z_tip.png
-(one panel per inclination; for the paper's case, each panel names the
-panel of the paper's Figs. 7-10 it redraws), and keeps the point store DIR/points/: every
-finished point is written at once, and rerunning the same command resumes,
-computing only the missing points.
+The options, the ``--json`` keys and the files: docs/cli/commands.md, "fempipe bifurcation".
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import textwrap
+from pathlib import Path
 
 from fempipe.cli import common, parsing, reporting
 from fempipe.cli.parsing import CLIError
+
+EXAMPLES = (
+    "fempipe bifurcation --alpha 0 --v 5:12:36 --out fig07",
+    "fempipe bifurcation --method sweep --alphas pi/4,pi/2 --v 5:12:15 --workers 2",
+    "fempipe bifurcation --3d --method sweep --alpha 1.2 --v 3:5:5 --out b3",
+)
+
+#: The diagrams of a planar run and of a 3-D run.
+KEYS = ("eta_tip", "X_tip", "Z_tip")
+KEYS_3D = ("Y_tip", "eta_tip", "X_tip", "Z_tip")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -115,8 +96,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--3d",
         dest="three_d",
         action="store_true",
-        help="sweep the attractors of the 3-D model instead (fempipe.cli.bifurcation_space: "
-        "motion, Y_tip, whirl_rate against v)",
+        help="sweep the attractors of the 3-D model instead (motion, Y_tip, whirl_rate against v)",
     )
     three.add_argument(
         "--out-of-plane-amplitude",
@@ -146,40 +126,43 @@ def _directions(text: str) -> list[str]:
     return directions
 
 
-def _parse(args):
-    directions = args.directions
-    alphas = None
-    if args.alphas is not None:
-        alphas = parsing.parse_alpha_list(args.alphas, "--alphas", parsing.allow_large(args))
-    return directions, alphas, args.workers
+def _on_progress(bar):
+    """A library ``progress(done, total)`` advancing ``bar`` to ``done``."""
+    seen = [0]
+
+    def on_progress(done, _total) -> None:
+        if done > seen[0]:
+            bar.update(done - seen[0])
+            seen[0] = done
+
+    return on_progress
 
 
 def run(args: argparse.Namespace) -> int:
-    from fempipe.analyses.bifurcation import bifurcation_diagram
+    from fempipe.analyses.bifurcation import compute_bifurcation_diagram
     from fempipe.model.operators import PipeModel
 
     common.refuse_hysteretic(args, "bifurcation")
     setup = common.setup_from_args(args)
     if args.three_d:
-        from fempipe.cli.bifurcation_space import run_3d
-
-        return run_3d(args, setup)
+        return _run_3d(args, setup)
     if args.method is None:  # None: not given (--3d refuses an explicit continuation)
         args.method = "continuation"
-    directions, alphas, workers = _parse(args)
-    t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
+    alphas = None
+    if args.alphas is not None:
+        alphas = parsing.parse_alpha_list(args.alphas, "--alphas", parsing.allow_large(args))
     large = parsing.allow_large(args)
-    parsing.check_count("--t-max", t_max, parsing.T_MAX, large, "time units")
+    parsing.check_count("--t-max", args.t_max, parsing.T_MAX, large, "time units")
     if not setup.v:
         raise CLIError("--v", "no flow velocities to sweep")
     n_alpha = 1 if alphas is None else len(alphas)
-    total = len(setup.v) * len(directions) * n_alpha
+    total = len(setup.v) * len(args.directions) * n_alpha
     flow_opt = "--U" if args.U is not None else "--v"
     parsing.check_count(
         flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions x alphas)"
     )
     if args.method == "continuation":
-        return _run_continuation(args, setup, alphas, workers)
+        return _run_continuation(args, setup, alphas)
     executor = client = None
     if args.dask is not None:
         try:
@@ -193,57 +176,48 @@ def run(args: argparse.Namespace) -> int:
         except (OSError, TimeoutError, ValueError) as exc:
             raise CLIError("--dask", f"cannot connect to {args.dask}: {exc}") from None
         executor = client.get_executor()
-    store_dir = None
-    if args.out is not None:
-        from pathlib import Path
-
-        store_dir = Path(args.out) / "points"
-    model = PipeModel(setup.disc, setup.params)
+    store_dir = _store_dir(args)
     try:
         with reporting.progress(args, total, "bifurcation") as bar:
-            seen = [0]
-
-            def on_progress(done, _total):
-                if done > seen[0]:
-                    bar.update(done - seen[0])
-                    seen[0] = done
-
-            try:
-                diagram = bifurcation_diagram(
-                    model,
-                    setup.v,
-                    directions,
-                    alphas=alphas,
-                    store_dir=store_dir,
-                    executor=executor,
-                    workers=workers if executor is None else None,
-                    progress=on_progress,
-                    out_of_plane=not args.planar,
-                    t_max=t_max,
-                    rtol=rtol,
-                    shoot_rtol=shoot_rtol,
-                )
-            except ValueError as exc:
-                if "point store" in str(exc):
-                    raise CLIError("--out", str(exc)) from None
-                raise
+            diagram = compute_bifurcation_diagram(
+                PipeModel(setup.disc, setup.params),
+                setup.v,
+                args.directions,
+                alphas=alphas,
+                store_dir=store_dir,
+                executor=executor,
+                workers=args.workers if executor is None else None,
+                progress=_on_progress(bar),
+                out_of_plane=not args.planar,
+                t_max=args.t_max,
+                rtol=args.rtol,
+                shoot_rtol=args.shoot_rtol,
+            )
     finally:
         if client is not None:
             client.close()
+    result = _result(setup, alphas)
+    result["points"] = diagram.points
+    result["wall_time"] = diagram.wall_time
+    _deliver(args, store_dir, result, KEYS)
+    return 0
 
+
+def _store_dir(args) -> Path | None:
+    return Path(args.out) / "points" if args.out is not None else None
+
+
+def _result(setup, alphas) -> dict:
     result = setup.to_dict()
     result["params"].pop("v", None)
     if alphas is not None:
         result["params"]["alphas"] = alphas
-    result["points"] = diagram.points
-    result["wall_time"] = diagram.wall_time
-    _deliver(args, store_dir, result)
-    return 0
+    return result
 
 
-def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
-    """``--method continuation``: :func:`fempipe.analyses.periodic.cycle_diagram`."""
-    from fempipe.analyses.periodic import cycle_diagram
+def _run_continuation(args: argparse.Namespace, setup, alphas) -> int:
+    """``--method continuation``."""
+    from fempipe.analyses.periodic import compute_cycle_diagram
     from fempipe.core.errors import SolverError
     from fempipe.model.operators import PipeModel
 
@@ -252,60 +226,107 @@ def _run_continuation(args: argparse.Namespace, setup, alphas, workers) -> int:
         raise CLIError(flow_opt, "continuation needs a range of v (at least two values)")
     if args.dask is not None:
         raise CLIError("--dask", "runs sweeps only; use --method sweep or --workers")
-    store_dir = None
-    if args.out is not None:
-        from pathlib import Path
-
-        store_dir = Path(args.out) / "points"
-    model = PipeModel(setup.disc, setup.params)
+    store_dir = _store_dir(args)
     with reporting.progress(args, None, "bifurcation") as bar:
-        try:
-            diagram = cycle_diagram(
-                model,
-                setup.v,
-                alphas=alphas,
-                store_dir=store_dir,
-                workers=workers,
-                progress=bar.update,
-                out_of_plane=not args.planar,
-                rtol=args.orbit_rtol,
-            )
-        except ValueError as exc:
-            if "point store" in str(exc):
-                raise CLIError("--out", str(exc)) from None
-            raise
-    result = setup.to_dict()
-    result["params"].pop("v", None)
-    if alphas is not None:
-        result["params"]["alphas"] = alphas
+        diagram = compute_cycle_diagram(
+            PipeModel(setup.disc, setup.params),
+            setup.v,
+            alphas=alphas,
+            store_dir=store_dir,
+            workers=args.workers,
+            progress=_on_progress(bar),
+            out_of_plane=not args.planar,
+            rtol=args.orbit_rtol,
+        )
+    result = _result(setup, alphas)
     result["method"] = "continuation"
     d = diagram.to_dict()
     for key in ("points", "branches", "special_points", "hopf_points", "errors", "wall_time"):
         result[key] = d[key]
-    _deliver(args, store_dir, result)
+    _deliver(args, store_dir, result, KEYS)
     if result["errors"]:
         raise SolverError("; ".join(result["errors"]))
     return 0
 
 
-def _deliver(args, store_dir, result: dict) -> None:
+def _refuse_3d(args: argparse.Namespace) -> None:
+    """CLIError for an option that has no meaning for the 3-D sweep."""
+    if args.method == "continuation":
+        raise CLIError(
+            "--method", "--3d sweeps the attractors (no continuation in 3-D): use --method sweep"
+        )
+    if args.planar:
+        raise CLIError("--planar", "contradicts --3d")
+    if args.alphas is not None:
+        raise CLIError("--alphas", "--3d sweeps one inclination; use --alpha")
+    if args.dask is not None:
+        raise CLIError("--dask", "--3d runs in this process")
+    if args.workers is not None and int(args.workers) > 1:
+        raise CLIError("--workers", "--3d runs in this process (use --workers 1)")
+    if getattr(args, "sigma", 0) > 0:
+        raise CLIError("--sigma", "a pulsating flow is not available with --3d (use sigma = 0)")
+
+
+def _run_3d(args: argparse.Namespace, setup) -> int:
+    """``--3d``: the attractors of the 3-D model swept against v."""
+    from fempipe.analyses.space.diagram import compute_diagram_3d
+    from fempipe.model.operators import PipeModel
+
+    _refuse_3d(args)
+    flow_opt = "--U" if args.U is not None else "--v"
+    if not setup.v:
+        raise CLIError(flow_opt, "no flow velocities to sweep")
+    large = parsing.allow_large(args)
+    parsing.check_count("--t-max", args.t_max, parsing.T_MAX, large, "time units")
+    total = len(setup.v) * len(args.directions)
+    parsing.check_count(flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions)")
+    store_dir = _store_dir(args)
+    with reporting.progress(args, total, "bifurcation --3d") as bar:
+        diagram = compute_diagram_3d(
+            PipeModel(setup.disc, setup.params),
+            setup.v,
+            args.directions,
+            store_dir=store_dir,
+            progress=_on_progress(bar),
+            out_of_plane_amplitude=args.out_of_plane_amplitude,
+            t_max=args.t_max,
+            rtol=args.rtol,
+            shoot_rtol=args.shoot_rtol,
+        )
+    result = _result(setup, None)
+    result["model"] = "3d"
+    result["method"] = "sweep"
+    result["points"] = diagram.points
+    result["wall_time"] = diagram.wall_time
+    result["cpu_time"] = diagram.cpu_time
+    _deliver(args, store_dir, result, KEYS_3D)
+    return 0
+
+
+def _deliver(args, store_dir, result: dict, keys) -> None:
     """The point store recorded in --out, then :func:`fempipe.cli.reporting.deliver`."""
     output = reporting.Output(args.out) if args.out is not None else None
     if output is not None:
         output.record(store_dir)
+    is_3d = result.get("model") == "3d"
     reporting.deliver(
-        args, result, output, lambda out: _write_outputs(out, result), lambda: _print_table(result)
+        args,
+        result,
+        output,
+        lambda out: _write_outputs(out, result, keys),
+        lambda: (_print_table_3d if is_3d else _print_table)(result),
     )
 
 
-def _write_outputs(output: reporting.Output, result) -> None:
+def _write_outputs(output: reporting.Output, result: dict, keys) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    for key in ("eta_tip", "X_tip", "Z_tip"):
-        fig = diagram_figure(result, key)
+    figure = diagram_figure_3d if result.get("model") == "3d" else diagram_figure
+    for key in keys:
+        fig = figure(result, key)
         try:
             output.figure(f"{key}.png", fig, dpi=130)
         finally:
@@ -316,8 +337,6 @@ def _write_outputs(output: reporting.Output, result) -> None:
 def diagram_figure(result: dict, key: str):
     """The figure of ``key`` (``eta_tip``, ``X_tip``, ``Z_tip``): one panel per
     inclination, the run's parameters above, one legend below the panels."""
-    import textwrap
-
     import matplotlib.pyplot as plt
 
     from fempipe.plotting.dynamics import plot_bifurcation
@@ -346,12 +365,10 @@ def diagram_figure(result: dict, key: str):
 
 
 def paper_panel(key: str, alpha: float, params: dict) -> str:
-    """`` (cf. Fig. 8(b))``: the panel of the paper's Figs. 7-10 that a diagram
-    redraws, or ``""`` where it redraws none (another case, another alpha).
+    """`` (cf. Fig. 8(b))``: the panel of the paper's Figs. 7-10 a diagram redraws, or ``""``.
 
-    Fig. 7 is alpha = 0 with (a) eta(1), (b) X_g(1), (c) Z_g(1); Figs. 8, 9 and
-    10 are eta(1), X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi,
-    all for the reference case beta = 0.142, gamma = 18.9, mu = 0.005.
+    Fig. 7 is alpha = 0 with (a) eta(1), (b) X_g(1), (c) Z_g(1); Figs. 8, 9 and 10 are eta(1),
+    X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi, all for the reference case.
     """
     from fempipe.model.params import PAPER_CASE, VARIANT_FIELDS
 
@@ -359,7 +376,7 @@ def paper_panel(key: str, alpha: float, params: dict) -> str:
         return ""
     if any(params.get(k) for k in VARIANT_FIELDS):
         return ""  # a variant of the pipe: the paper has no such figure
-    column = ("eta_tip", "X_tip", "Z_tip").index(key)
+    column = KEYS.index(key)
     if math.isclose(alpha, 0.0, abs_tol=1e-12):
         return f" (cf. Fig. 7({'abc'[column]}))"
     for k in range(1, 5):
@@ -368,14 +385,20 @@ def paper_panel(key: str, alpha: float, params: dict) -> str:
     return ""
 
 
+def _mesh(disc: dict) -> str:
+    """``P3:16``, or the modal kind."""
+    if disc.get("kind") == "fe":
+        return f"{disc.get('element')}:{disc.get('n_elements')}"
+    return str(disc.get("kind", ""))
+
+
 def _caption(result: dict) -> str:
     """The run's parameters, written under each diagram."""
     p = result["params"]
     disc = result.get("discretization", {})
-    if disc.get("kind") == "fe":
-        name = f"{disc.get('element')}:{disc.get('n_elements')}"
-    else:
-        name = f"{disc.get('kind', '')} {disc.get('n_modes', disc.get('n_dofs', ''))}"
+    name = _mesh(disc)
+    if disc.get("kind") != "fe":
+        name = f"{name} {disc.get('n_modes', disc.get('n_dofs', ''))}"
     text = f"μ = {p['mu']:.4g}, {name.strip()}; "
     if result.get("method") == "continuation":
         text += (
@@ -387,13 +410,66 @@ def _caption(result: dict) -> str:
     return text
 
 
+#: 3-D diagrams: marker per attractor kind, color per direction; filled where non-planar.
+_MARKS = {
+    "equilibrium": "s",
+    "periodic": "o",
+    "whirl": "D",
+    "quasi-periodic": "^",
+    "non-periodic": "x",
+}
+_COLORS = {"up": "tab:blue", "down": "tab:red"}
+_LABELS = {"Y_tip": "Y(1) (out of plane)", "eta_tip": "η(1)", "X_tip": "X_g(1)", "Z_tip": "Z_g(1)"}
+
+
+def diagram_figure_3d(result: dict, key: str):
+    """[min, max] of ``key`` against v of a 3-D run: the marker by attractor kind, the color
+    by sweep direction (down shifted a hair to the right), filled where the motion is
+    non-planar; the run's parameters above."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
+    pts = result["points"]
+    vs = [p["v"] for p in pts]
+    shift = 0.004 * (max(vs) - min(vs)) if len(set(vs)) > 1 else 0.0
+    for p in pts:
+        lo, hi = p[key]
+        x = p["v"] + (shift if p["direction"] == "down" else 0.0)
+        c = _COLORS[p["direction"]]
+        face = c if p["motion"] == "nonplanar" else "none"
+        mk = _MARKS.get(p["attractor"], "x")
+        ax.plot([x, x], [lo, hi], ls="", marker=mk, ms=5, color=c, mfc=face)
+    handles = [
+        Line2D([], [], ls="-", lw=3, color=c, label=f"sweep {d}")
+        for d, c in _COLORS.items()
+        if any(p["direction"] == d for p in pts)
+    ]
+    handles += [
+        Line2D([], [], ls="", marker=m, color="0.3", mfc="none", label=k)
+        for k, m in _MARKS.items()
+        if any(p["attractor"] == k for p in pts)
+    ]
+    handles.append(Line2D([], [], ls="", marker="o", color="0.3", mfc="0.3", label="non-planar"))
+    ax.legend(handles=handles, fontsize=8, loc="best")
+    ax.set_xlabel("v")
+    ax.set_ylabel(_LABELS[key] + " (/L), min and max")
+    ax.grid(alpha=0.3)
+    p = result["params"]
+    caption = (
+        f"3-D attractors, α = {math.degrees(p['alpha']):.4g}°, β = {p['beta']:.4g}, "
+        f"γ = {p['gamma']:.4g}, μ = {p['mu']:.4g}, {_mesh(result.get('discretization', {}))}; "
+        "open: planar motion, filled: non-planar"
+    )
+    ax.set_title(textwrap.fill(caption, 80), fontsize=9)
+    return fig
+
+
 def _print_table(result: dict) -> None:
-    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle
-    branch's name (``H1``, ...) or the sweep's direction; ``stable``: from the
-    eigenvalues or Floquet multipliers (``-`` for a sweep's attractor, which is
-    not analysed); ``point``: ``requested`` (a v of ``--v``) or ``step`` (the
-    continuation's own); ``3d``: ``stable_3d`` (``-`` where undecided; the
-    column only when the verdicts were computed)."""
+    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle branch
+    (``H1``, ...) or the sweep's direction; ``stable``: ``-`` for a sweep's attractor;
+    ``point``: ``requested`` (a v of ``--v``) or ``step`` (the continuation's own);
+    ``3d``: ``stable_3d``, where the verdicts were computed."""
     three = any("stable_3d" in pt for pt in result["points"])
     print(
         f"{'alpha':>8s} {'branch':>6s} {'v':>8s}  {'attractor':<12s} {'stable':<6s} "
@@ -417,6 +493,22 @@ def _print_table(result: dict) -> None:
     for sp in result.get("special_points", []):
         print(
             f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} v = {sp['v']:.6g}"
+        )
+
+
+def _print_table_3d(result: dict) -> None:
+    """One line per point of a 3-D run."""
+    print(
+        f"{'dir':>4s} {'v':>8s}  {'attractor':<12s} {'motion':<9s} {'period':>10s} "
+        f"{'whirl':>8s} {'Y_min':>9s} {'Y_max':>9s} {'eta_min':>9s} {'eta_max':>9s}"
+    )
+    for pt in result["points"]:
+        per = f"{pt['period']:.6g}" if pt["period"] else "-"
+        wr = f"{pt['whirl_rate']:.4g}" if pt["whirl_rate"] is not None else "-"
+        print(
+            f"{pt['direction']:>4s} {pt['v']:8.4g}  {pt['attractor']:<12s} {pt['motion']:<9s} "
+            f"{per:>10s} {wr:>8s} {pt['Y_tip'][0]:9.5f} {pt['Y_tip'][1]:9.5f} "
+            f"{pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f}"
         )
 
 

@@ -11,7 +11,7 @@ the parameter that is wrong.
 
 from __future__ import annotations
 
-__all__ = ["ParamError", "SolverError"]
+__all__ = ["ParamError", "PointStoreMismatchError", "SolverError"]
 
 
 class SolverError(RuntimeError):
@@ -37,3 +37,19 @@ class ParamError(ValueError):
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
         self.field = field
+
+
+class PointStoreMismatchError(ParamError):
+    """A point store (a resumable run's directory) that holds another run.
+
+    ``field`` is ``"store_dir"``; ``differences`` names what differs: keys of the
+    run's manifest (``run.json``), e.g. ``["options.rtol"]``, or a stored point.
+    """
+
+    def __init__(self, directory, differences: list[str]) -> None:
+        super().__init__(
+            "store_dir",
+            f"point store {directory} holds a different run (differs in: "
+            f"{', '.join(differences)}); use another directory or delete it",
+        )
+        self.differences = list(differences)

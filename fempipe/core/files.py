@@ -26,7 +26,6 @@ import numpy as np
 
 __all__ = [
     "atomic_path",
-    "claim_run_directory",
     "to_jsonable",
     "json_dumps",
     "write_text",
@@ -115,27 +114,3 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
 def write_json(path: str | os.PathLike, obj) -> Path:
     """Write ``obj`` as indented strict JSON, atomically."""
     return write_text(path, json_dumps(obj) + "\n")
-
-
-def claim_run_directory(directory: str | os.PathLike, manifest: dict, upgrade=None) -> Path:
-    """A directory of a resumable run: created with ``run.json`` holding ``manifest``, or
-    refused (ValueError) if its ``run.json`` describes another run, so that a resume never
-    mixes results.  ``upgrade(old)`` may bring an older manifest up to date in place before
-    the comparison."""
-    import json
-
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / "run.json"
-    if path.exists():
-        old = json.loads(path.read_text())
-        if upgrade is not None:
-            upgrade(old)
-        if old != manifest:
-            raise ValueError(
-                f"point store {directory} holds a different run "
-                "(run.json differs); use another directory or delete it"
-            )
-    else:
-        write_text(path, json.dumps(manifest, indent=1))
-    return directory

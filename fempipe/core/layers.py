@@ -32,7 +32,14 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analyses.limit_cycle", ("fempipe.analyses.limit_cycle",)),
     ("analyses.space", ("fempipe.analyses.space",)),
     ("analyses.parametric", ("fempipe.analyses.parametric",)),
-    ("analyses.branches", ("fempipe.analyses.bifurcation", "fempipe.analyses.periodic")),
+    (
+        "analyses.branches",
+        (
+            "fempipe.analyses.bifurcation",
+            "fempipe.analyses.periodic",
+            "fempipe.analyses.space.diagram",  # the 3-D diagram: a diagram over the 3-D motion
+        ),
+    ),
     ("studies", ("fempipe.studies",)),
     ("io", ("fempipe.io",)),
     ("plotting", ("fempipe.plotting",)),

@@ -146,8 +146,8 @@ def plot_bifurcation(
     Parameters
     ----------
     points : sequence of dict
-        Sweep points (``direction`` "up"/"down", :func:`fempipe.analyses.bifurcation.bifurcation_diagram`),
-        drawn as markers, and/or continuation points (:func:`fempipe.analyses.periodic.cycle_diagram`:
+        Sweep points (``direction`` "up"/"down", :func:`fempipe.analyses.bifurcation.compute_bifurcation_diagram`),
+        drawn as markers, and/or continuation points (:func:`fempipe.analyses.periodic.compute_cycle_diagram`:
         "static" equilibria, "continuation" orbits by ``branch``), drawn as lines, dashed where unstable.
     key : {"eta_tip", "X_tip", "Z_tip"}
     special_points : sequence of dict

@@ -24,16 +24,11 @@ import numpy as np
 
 from fempipe.analyses.bifurcation import sweep
 from fempipe.analyses.dynamics import make_initial_state, simulate
-from fempipe.analyses.limit_cycle import (
-    TIP_KEYS,
-    ShootingError,
-    find_attractor,
-    shoot,
-    tip_coordinates,
-)
-from fempipe.analyses.periodic import cycle_diagram
+from fempipe.analyses.limit_cycle import TIP_KEYS, ShootingError, find_attractor, shoot
+from fempipe.analyses.periodic import compute_cycle_diagram
 from fempipe.model.discretization import Modal, discretization_from_name, parse_discretization
-from fempipe.model.kinematics import shape, tip_velocity
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.kinematics import shape, tip_values, tip_velocity
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 from fempipe.model.projection import project
@@ -188,7 +183,8 @@ def orbit(
     m = model_for(disc, alpha, v)
     if period is None:  # an equilibrium: a single shape
         s = shape(disc, q, alpha)
-        tip = {k: np.array([val]) for k, val in tip_coordinates(disc, q, alpha).items()}
+        tv = tip_values(disc, q, alpha)
+        tip = {k: np.array([tv[k]]) for k in TIP_KEYS}
         return Orbit(
             label,
             alpha,
@@ -200,7 +196,8 @@ def orbit(
             [(s.Z_g, s.X_g)],
         )
     traj = simulate(m, q, qdot, periods * period, n_out=n_out, rtol=1e-8)
-    tip = tip_coordinates(disc, traj.q, alpha)
+    tv = tip_values(disc, traj.q, alpha)
+    tip = {k: tv[k] for k in TIP_KEYS}
     rates = [tip_velocity(disc, qq, pp, alpha) for qq, pp in zip(traj.q, traj.qdot, strict=True)]
     tip_rate = {k: np.array([r[k] for r in rates]) for k in ("eta_tip", "X_tip", "Z_tip")}
     idx = np.linspace(0, np.searchsorted(traj.t, traj.t[0] + period) - 1, n_shapes).astype(int)
@@ -224,7 +221,8 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
     if guess is not None:
         q0, p0, period = guess
         try:
-            return shoot(m, project(guess_disc, q0, disc), project(guess_disc, p0, disc), period)
+            q0, p0 = project(guess_disc, q0, disc), project(guess_disc, p0, disc)
+            return shoot(PipeDynamics(m), q0, p0, period)
         except ShootingError:
             pass
     att = find_attractor(m, shoot_rtol=CHECK_SHOOT_RTOL)
@@ -256,7 +254,8 @@ def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
 def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
     """Tip coordinates and their rates along ``periods`` periods of a cycle."""
     q, p = cycle.orbit_q[:-1], cycle.orbit_qdot[:-1]  # the last sample repeats the first
-    tip = tip_coordinates(disc, q, alpha)
+    tv = tip_values(disc, q, alpha)
+    tip = {k: tv[k] for k in TIP_KEYS}
     rates = [tip_velocity(disc, a, b, alpha) for a, b in zip(q, p, strict=True)]
     dt = cycle.orbit_t[1] - cycle.orbit_t[0]
     m = q.shape[0]
@@ -296,7 +295,7 @@ class DiagramPoint:
 @dataclass(frozen=True)
 class ContinuedDiagram:
     """The static branch and the cycle branches from each Hopf point of one
-    discretization at one alpha (:func:`fempipe.analyses.periodic.cycle_diagram`).
+    discretization at one alpha (:func:`fempipe.analyses.periodic.compute_cycle_diagram`).
 
     ``static`` the equilibria at the requested v; ``branches`` name -> points in
     arclength order; ``hopf`` the Hopf points (dicts with ``v``, ``omega``);
@@ -386,14 +385,14 @@ def _continued_cached(label: str, alpha: float, values: tuple) -> ContinuedDiagr
     t0 = time.process_time()
     disc = _disc_from_spec(label)
     with tempfile.TemporaryDirectory(prefix="fempipe-validate-") as tmp:
-        dg = cycle_diagram(
+        dg = compute_cycle_diagram(
             model_for(disc, alpha, values[0]), list(values), store_dir=tmp, ds=FIRST_DS
         )
         return _continued(label, alpha, values, disc, dg, Path(tmp), t0)
 
 
 def continued_from(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:
-    """The :class:`ContinuedDiagram` of a :func:`~fempipe.analyses.periodic.cycle_diagram`
+    """The :class:`ContinuedDiagram` of a :func:`~fempipe.analyses.periodic.compute_cycle_diagram`
     result ``dg`` whose store ``store`` is still on disk (for a case that continues with
     options of its own, e.g. the 3-D verdicts of the orbits); ``t0``: process time at
     its start."""
@@ -432,7 +431,7 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
                         for k in ("q0", "qdot0", "period")
                     )
                     try:
-                        c = shoot(model_for(disc, alpha, v), q, qd, float(T))
+                        c = shoot(PipeDynamics(model_for(disc, alpha, v)), q, qd, float(T))
                     except ShootingError:
                         break
                     filled.append(

@@ -6,7 +6,7 @@ the same range by continuation, with the converged FE mesh as well, and checks
 
 * the onset of the limit cycle against the linear critical velocity of each discretization
   (an independent bisection on the spectrum): the branch of periodic orbits is continued from
-  the Hopf point of the static branch (:func:`fempipe.analyses.periodic.cycle_diagram`), so
+  the Hopf point of the static branch (:func:`fempipe.analyses.periodic.compute_cycle_diagram`), so
   the onset is v_H itself, not a bracket of sweep velocities;
 * the continuation against brute force: at v = 6.3, 6.5, 10 the attractor reached by
   integration from the sagged state must be a stable continued state (cycles to 1e-6 in
@@ -259,7 +259,7 @@ def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], 
     linear out-of-plane equation against the 3-D model's; returns the measurements and the
     P3:16 orbit's row of the verdict table."""
     from fempipe.analyses.periodic.out_of_plane import cycle_verdict
-    from fempipe.analyses.space.floquet import out_of_plane_floquet
+    from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
 
     from .dynamic_runs import model_for
     from .out_of_plane_branches import fe_disc
@@ -270,7 +270,7 @@ def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], 
     p10 = oop.at(10.0)
     mine = p10["max_oop"] if p10 else float("nan")
     linear = got["max_nontrivial_out_of_plane_multiplier"]
-    full = out_of_plane_floquet(fine_model, fine.cycle, method="3d")
+    full = compute_out_of_plane_floquet(fine_model, fine.cycle, method="3d")
     neutral = got.get("neutral_out_of_plane_multiplier")
     lead = leading_text(
         [complex(*z) for z in got["out_of_plane_floquet_multipliers"]],

@@ -3,7 +3,7 @@
 The tip response eta(1) (Fig. 8) and its global coordinates X_g(1) (Fig. 9)
 and Z_g(1) (Fig. 10) against v, for the converged FE mesh and the paper's
 N = 3 and N = 4, by continuation of the static branch and of the periodic
-orbits born at its Hopf points (:func:`fempipe.analyses.periodic.cycle_diagram`; at
+orbits born at its Hopf points (:func:`fempipe.analyses.periodic.compute_cycle_diagram`; at
 alpha = pi the buckled equilibria below the flutter from a sweep up, which the
 continued straight branch does not contain).  The attractor found by
 integration at the shape velocities must be a stable continued state (to 1e-6
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability import analyse_stability
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
@@ -401,13 +401,13 @@ def _table(rows: list[tuple]) -> Table:
 def _straight_flutter(disc) -> float:
     """alpha = pi: v of the flutter that destabilizes the restabilized straight pipe."""
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
-    res = stability_analysis(m, v_max=6.0, follow_bifurcations=False)
+    res = analyse_stability(m, v_max=6.0, follow_bifurcations=False)
     prim = next(b for b in res.branches if b.name == "primary")
     return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
 
 
 def _pi_cross_checks(disc, pts, diag) -> list[Measured]:
-    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.analyses.stability.stability_analysis`.
+    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.analyses.stability.analyse_stability`.
 
     Up-sweep from the left buckled state: it stays buckled up to the fold of
     the buckled branch (a subcritical pitchfork makes the straight state
@@ -417,7 +417,7 @@ def _pi_cross_checks(disc, pts, diag) -> list[Measured]:
     that jump: the case's declaration then fails it as not computed.
     """
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
-    res = stability_analysis(m, v_max=6.0, follow_bifurcations=True)
+    res = analyse_stability(m, v_max=6.0, follow_bifurcations=True)
     prim = next(b for b in res.branches if b.name == "primary")
     # The flutter that destabilizes the restabilized straight pipe.
     flutter = next(

@@ -22,7 +22,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from fempipe.analyses.periodic import cycle_diagram
+from fempipe.analyses.periodic import compute_cycle_diagram
 from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
 from fempipe.analyses.periodic.results import CyclePoint
 from fempipe.model.discretization import parse_discretization
@@ -124,7 +124,9 @@ def _cached(label: str, alpha: float, values: tuple, quick: bool):
     select = AtVelocities((10.0,)) if quick else Spread(N_FULL, (10.0,))
     model = model_for(disc, alpha, values[0])
     with tempfile.TemporaryDirectory(prefix="fempipe-validate-3d-") as tmp:
-        dg = cycle_diagram(model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select)
+        dg = compute_cycle_diagram(
+            model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select
+        )
         diag = continued_from(label, alpha, values, disc, dg, Path(tmp), t0)
         t1 = time.process_time()
         checked = [

@@ -14,7 +14,7 @@ branch), :mod:`~fempipe.analyses.periodic.problem` (the shooting problem and its
 corrector), :mod:`~fempipe.analyses.periodic.branch` (the continuation of one branch,
 :func:`continue_cycles`, on the engine of :mod:`fempipe.solvers.continuation`),
 :mod:`~fempipe.analyses.periodic.special` (the special points) and
-:mod:`~fempipe.analyses.periodic.diagram` (the diagram over alpha, :func:`cycle_diagram`).
+:mod:`~fempipe.analyses.periodic.diagram` (the diagram over alpha, :func:`compute_cycle_diagram`).
 
 Derivation: docs/theory/numerics.md, "Branches of periodic orbits".
 """
@@ -27,8 +27,8 @@ from .branch import (
     CycleBranchPolicy,
     continue_cycles,
 )
-from .diagram import N_MULTIPLIERS, CycleDiagram, cycle_diagram, cycle_point_dict
-from .hopf import hopf_points, static_points
+from .diagram import N_MULTIPLIERS, CycleDiagram, compute_cycle_diagram, cycle_point_dict
+from .hopf import find_hopf_points, static_points
 from .problem import MONODROMY_AT_ORBIT, MONODROMY_NEAR, CycleCorrector, OrbitProblem
 from .results import (
     MIN_SWING,
@@ -46,10 +46,10 @@ __all__ = [
     "CycleSpecialPoint",
     "CycleBranch",
     "CycleContinuationError",
-    "hopf_points",
+    "find_hopf_points",
     "continue_cycles",
     "static_points",
-    "cycle_diagram",
+    "compute_cycle_diagram",
     "CycleDiagram",
     "cycle_point_dict",
     "special_points",

@@ -415,7 +415,7 @@ def continue_cycles(
     model : PipeModel
         alpha, beta, gamma, mu from ``model.params`` (its v is ignored).
     hopf : HopfPoint
-        Where the branch starts (:func:`hopf_points`).
+        Where the branch starts (:func:`find_hopf_points`).
     v_range : (float, float)
         The branch ends once it leaves this range of v.
     values : sequence of float

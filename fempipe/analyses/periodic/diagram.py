@@ -11,20 +11,18 @@ from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
 from fempipe.analyses.limit_cycle import TIP_KEYS
-from fempipe.analyses.periodic.points import PointStore
-from fempipe.analyses.statics import solve_path
 from fempipe.core.files import write_text
-from fempipe.core.parallel import run_tasks
 from fempipe.model.dynamics_problem import refuse_hysteretic
 from fempipe.model.operators import PipeModel
 
 from .branch import continue_cycles
-from .hopf import analyse_static, equilibrium_tip, point_dict, static_points
+from .hopf import analyse_static, equilibrium_tip, point_dict, primary_states, static_points
 from .out_of_plane import VerdictStore, branch_verdicts, equilibrium_verdict
+from .points import PointStore, diagram_manifest, run_diagram
 from .results import CycleContinuationError, CyclePoint, HopfPoint
 from .special import cycle_branch
 
-__all__ = ["N_MULTIPLIERS", "CycleDiagram", "cycle_diagram", "cycle_point_dict"]
+__all__ = ["N_MULTIPLIERS", "CycleDiagram", "compute_cycle_diagram", "cycle_point_dict"]
 
 #: Floquet multipliers listed per point in the JSON (largest moduli).
 N_MULTIPLIERS = 8
@@ -101,15 +99,13 @@ def _alpha_task(
     model: PipeModel,
     values: list,
     alpha_index: int,
-    store_dir: str,
-    manifest: dict,
     options: dict,
-    on_point: Callable[[], None] | None = None,
-    out_of_plane=None,
+    out_of_plane,
+    store: PointStore,
+    on_point: Callable[[], None] | None,
 ) -> dict:
     """Static branch, Hopf points and all branches of periodic orbits at one alpha
     (with ``out_of_plane``: their 3-D verdicts, :func:`_add_verdicts`)."""
-    store = PointStore(store_dir, manifest)
     alpha = float(model.params.alpha)
     v_lo, v_hi = min(values), max(values)
     static_path = store.directory / f"a{alpha_index:02d}-static.json"
@@ -205,7 +201,7 @@ def _alpha_task(
 
 
 def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) -> None:
-    """``stable_out_of_plane`` and ``stable_3d`` of the static points (in place; kept in
+    """``stable_out_of_plane`` and ``stable_3d`` of the static points, in place (kept in
     the store beside the static branch)."""
     store = VerdictStore(directory / f"a{alpha_index:02d}-static-3d.json")
     states = None
@@ -213,10 +209,7 @@ def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) 
         got = store.get(i, d["v"])
         if got is None:
             if states is None:
-                # The primary branch's states as static_points follows them: from v_start.
-                vals = sorted({float(v_start), *(float(v) for v in values)})
-                sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
-                states = {v: s.q for v, s in zip(vals, sols, strict=True)}
+                states = primary_states(model, values, v_start)
             m = model.with_params(replace(model.params, v=d["v"]))
             got = equilibrium_verdict(m, states[d["v"]], d["stable"])
             store.put(i, d["v"], got)
@@ -233,21 +226,7 @@ def _add_verdicts(model, points, dicts, select, where, on_point) -> None:
         d.update(verdicts.get(i, {"stable_3d": None}))
 
 
-def _manifest(model: PipeModel, values, alphas, options) -> dict:
-    p = model.params.to_dict()
-    p.pop("v")
-    p.pop("alpha")
-    return {
-        "method": "continuation",
-        "discretization": model.disc.to_dict(),
-        "params": p,
-        "alphas": [float(a) for a in alphas],
-        "values": sorted(float(v) for v in values),
-        "options": {k: options[k] for k in sorted(options)},
-    }
-
-
-def cycle_diagram(
+def compute_cycle_diagram(
     model: PipeModel,
     values: Sequence[float],
     *,
@@ -255,47 +234,34 @@ def cycle_diagram(
     store_dir: str | os.PathLike | None = None,
     executor: Executor | None = None,
     workers: int | None = None,
-    progress: Callable[[], None] | None = None,
+    progress: Callable[[int, None], None] | None = None,
     out_of_plane=None,
     **options,
 ) -> CycleDiagram:
-    """Bifurcation diagram by continuation: equilibria and periodic orbits against v.
+    """Bifurcation diagram by continuation: equilibria and periodic orbits against v (Figs. 7-10).
 
-    The diagrams of the paper's Figs. 7-10.
-
-    For each alpha: the stability events of the primary static branch
-    (:func:`fempipe.analyses.stability.stability_analysis`), its equilibria at the
-    requested v with their linear stability, and the branch of periodic
-    orbits of Eq. (20) born at every Hopf point, by :func:`continue_cycles`.
-    A branch that ends at another Hopf point (a family joining flutter and
-    restabilization) is not followed a second time from there.
+    For each alpha: the stability events of the primary static branch, its equilibria at the
+    requested v with their linear stability, and the branch of periodic orbits of Eq. (20)
+    born at every Hopf point (:func:`continue_cycles`).  A branch that ends at another Hopf
+    point is not followed a second time from there.
 
     Parameters
     ----------
     model : PipeModel
     values : sequence of float
-        Requested flow velocities (the diagram's range is their min to max).
+        Requested flow velocities (the range is their min to max).
     alphas : sequence of float, optional
         Inclinations; default ``[model.params.alpha]``.
-    store_dir : path, optional
-        Resumable store: ``run.json`` (the run's manifest; a store of another
-        run is refused with ValueError), the static part and every branch's
-        state after each accepted point.  A rerun resumes where it stopped.
-    executor, workers
-        Run the alphas in parallel (as :func:`fempipe.analyses.bifurcation.bifurcation_diagram`).
+    store_dir, executor, workers
+        As :func:`fempipe.analyses.periodic.points.run_diagram`: the store keeps the static
+        part and every branch's state after each accepted point; a rerun resumes.
     progress : callable, optional
-        Called (in this process) whenever a point is finished.
+        ``progress(done, None)`` (in this process) whenever a point is finished.
     out_of_plane : bool or callable, optional
-        Also decide which states survive in 3-D
-        (:mod:`fempipe.analyses.periodic.out_of_plane`): the static points gain
-        ``stable_out_of_plane`` and ``stable_3d``, the orbits (all with True, or
-        the indices a callable such as
-        :class:`~fempipe.analyses.periodic.out_of_plane.EveryKth` picks from a
-        branch's points) ``out_of_plane_floquet_multipliers``,
-        ``max_nontrivial_out_of_plane_multiplier``, ``stable_out_of_plane``,
-        ``stable_3d`` (None where not computed) and ``out_of_plane_cpu_time``.
-        The verdicts are kept in the store beside their branch (not part of
-        the run's manifest: a planar run's store is resumed, adding them).
+        Also the 3-D verdicts (:mod:`fempipe.analyses.periodic.out_of_plane`): of the static
+        points, and of the orbits (all with True, or the indices a callable such as
+        :class:`~fempipe.analyses.periodic.out_of_plane.EveryKth` picks); kept in the store,
+        not in the manifest (a planar run's store is resumed, adding them).
     **options
         Passed to :func:`continue_cycles` (``rtol``, ``tol``, ``ds``, ``ds_max`` ...).
 
@@ -304,46 +270,28 @@ def cycle_diagram(
     CycleDiagram
         Failed branches are listed in ``errors`` with their finished points kept.
     """
-    import tempfile
-
-    refuse_hysteretic(model.params, "cycle_diagram")
+    refuse_hysteretic(model.params, "compute_cycle_diagram")
     t0 = time.perf_counter()
     values = sorted(float(v) for v in values)
     if len(values) < 2 or values[0] == values[-1]:
         raise ValueError("values must span a range of v (at least two different values)")
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers must be >= 1, got {workers}")
     alphas = [model.params.alpha] if alphas is None else [float(a) for a in alphas]
-    manifest = _manifest(model, values, alphas, options)
-    tmp = None
-    if store_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="fempipe-cycles-")
-        store_dir = tmp.name
-    try:
-        PointStore(store_dir, manifest)  # refuses a store of another run
-        in_process = executor is None and (workers is None or int(workers) == 1 or len(alphas) == 1)
-        tasks = [
-            (
-                model.with_params(replace(model.params, alpha=a)),
-                values,
-                ia,
-                str(store_dir),
-                manifest,
-                dict(options),
-                progress if in_process else None,
-                out_of_plane,
-            )
-            for ia, a in enumerate(alphas)
-        ]
-        results = run_tasks(
-            _alpha_task, tasks, workers=None if in_process else workers, executor=executor
-        )
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
-    for r in results:
-        if isinstance(r, BaseException):
-            raise r
+    manifest = diagram_manifest(
+        model, values, options, head={"method": "continuation"}, alphas=alphas
+    )
+    tasks = [
+        (model.with_params(replace(model.params, alpha=a)), values, ia, dict(options), out_of_plane)
+        for ia, a in enumerate(alphas)
+    ]
+    results = run_diagram(
+        _alpha_task,
+        tasks,
+        manifest,
+        store_dir=store_dir,
+        executor=executor,
+        workers=workers,
+        progress=progress,
+    )
     return CycleDiagram(
         points=[p for r in results for p in r["points"]],
         branches=[b for r in results for b in r["branches"]],

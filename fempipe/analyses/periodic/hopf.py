@@ -13,10 +13,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from fempipe.analyses.limit_cycle import TIP_KEYS, tip_coordinates
-from fempipe.analyses.stability import linearized_matrices, linearly_stable, stability_analysis
+from fempipe.analyses.limit_cycle import TIP_KEYS
+from fempipe.analyses.stability import analyse_stability, linearized_matrices, linearly_stable
 from fempipe.analyses.statics import solve_path
 from fempipe.core.companion import first_order_matrix
+from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
 
 from .results import HopfPoint
@@ -24,13 +25,14 @@ from .results import HopfPoint
 __all__ = [
     "analyse_static",
     "equilibrium_tip",
-    "hopf_points",
+    "find_hopf_points",
     "point_dict",
+    "primary_states",
     "static_points",
 ]
 
 
-def _static_states(model: PipeModel, values: Sequence[float], v_start: float) -> dict:
+def primary_states(model: PipeModel, values: Sequence[float], v_start: float) -> dict:
     """Static states of the primary branch (the gravity-loaded state continued in v,
     as the stability analysis follows it) at ``values``, keyed by v."""
     vals = sorted({float(v_start), *(float(v) for v in values)})
@@ -54,12 +56,12 @@ def critical_eigenvector(model: PipeModel, q: np.ndarray, omega: float) -> tuple
     return float(lam[k].imag), z
 
 
-def hopf_points(
+def find_hopf_points(
     model: PipeModel, v_min: float, v_max: float, *, ds_max: float = 0.1
 ) -> tuple[list[HopfPoint], float]:
     """The Hopf points of the primary static branch in [0, v_max] that matter for [v_min, v_max].
 
-    The stability events of :func:`fempipe.analyses.stability.stability_analysis` of
+    The stability events of :func:`fempipe.analyses.stability.analyse_stability` of
     type flutter, restabilization or mode_restabilization with a non-zero
     frequency (a complex pair crossing Re lambda = 0) are Hopf points.  The
     analysis starts at ``v_min``; if the primary branch is already unstable
@@ -78,17 +80,17 @@ def hopf_points(
 
 def analyse_static(model: PipeModel, v_min: float, v_max: float, ds_max: float = 0.1):
     """(Hopf points, start of the analysis, events of the primary branch)."""
-    res = stability_analysis(model, v_max, v_min, follow_bifurcations=False, ds_max=ds_max)
+    res = analyse_stability(model, v_max, v_min, follow_bifurcations=False, ds_max=ds_max)
     v_start = v_min
     if v_min > 0 and any(e.at_start for e in res.events):
         v_start = 0.0
-        res = stability_analysis(model, v_max, 0.0, follow_bifurcations=False, ds_max=ds_max)
+        res = analyse_stability(model, v_max, 0.0, follow_bifurcations=False, ds_max=ds_max)
     events = [
         e
         for e in res.events
         if e.branch == "primary" and not e.at_start and e.frequency > 0 and e.type != "fold"
     ]
-    states = _static_states(model, [e.v for e in events], v_start) if events else {}
+    states = primary_states(model, [e.v for e in events], v_start) if events else {}
     out = []
     for e in events:
         m = model.with_params(replace(model.params, v=e.v))
@@ -118,13 +120,13 @@ def static_points(
     Each dict has the keys of a bifurcation point (``attractor`` =
     ``"equilibrium"``, ``direction`` = ``"static"``, tip [value, value], ...)
     and ``stable``: from the primary branch's stability ``events`` of
-    :func:`fempipe.analyses.stability.stability_analysis` (``stable_before`` /
+    :func:`fempipe.analyses.stability.analyse_stability` (``stable_before`` /
     ``stable_after``) when given, else :func:`fempipe.analyses.stability.linearly_stable`
     at each state (the same criterion).
     """
     vals = sorted(float(v) for v in values)
     start = vals[0] if v_start is None else float(v_start)
-    states = _static_states(model, vals, start)
+    states = primary_states(model, vals, start)
     out = []
     for i, v in enumerate(vals):
         t0 = time.perf_counter()
@@ -149,7 +151,7 @@ def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
     """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
     [min, max] form of the diagram's points: the static points, and the Hopf points
     where a branch of orbits starts."""
-    tip = tip_coordinates(model.disc, q, model.params.alpha)
+    tip = tip_values(model.disc, q, model.params.alpha)
     return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 

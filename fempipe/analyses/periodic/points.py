@@ -1,55 +1,122 @@
-"""The points of a bifurcation diagram and their store (:mod:`fempipe.analyses.bifurcation`).
+"""The points of a bifurcation diagram, their store and the resumable diagram driver.
 
-A :class:`BifurcationPoint` is one finished point of a sweep or a continued
-branch: the kind of attractor, its period, the tip's extrema, the state it
-ended on (so that a resumed run starts the next point from the same state) and
-its verdict in three dimensions.  A :class:`PointStore` keeps finished points
-as one JSON file each, written atomically, so that a rerun computes only the
-missing ones.
+A :class:`BifurcationPoint` is one finished point of a sweep, planar or of the 3-D model.
+A :class:`PointStore` keeps finished points as one JSON file each, written atomically, in a
+directory claimed by the run's manifest (``run.json``).  :func:`sweep_points` steps v through
+ordered values reusing the stored points, :func:`run_diagram` runs a diagram's independent
+tasks (sweeps, alphas) in this process or on workers.  Every diagram
+(:mod:`fempipe.analyses.bifurcation`, :mod:`fempipe.analyses.periodic.diagram`,
+:mod:`fempipe.analyses.space.diagram`) is a thin user of them.
+
+How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
 """
 
 from __future__ import annotations
 
 import json
 import os
+import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from fempipe.core.files import claim_run_directory, write_text
+from fempipe.core.errors import PointStoreMismatchError
+from fempipe.core.files import write_text
+from fempipe.core.parallel import run_tasks
 
-__all__ = ["BifurcationPoint", "PointStore"]
+__all__ = [
+    "DIRECTIONS",
+    "BifurcationPoint",
+    "PointStore",
+    "diagram_manifest",
+    "ordered",
+    "run_diagram",
+    "sweep_points",
+]
+
+DIRECTIONS = ("up", "down")
+
+# The JSON keys of a point, in order: planar sweep, 3-D sweep.
+_KEYS = (
+    "v",
+    "direction",
+    "index",
+    "alpha",
+    "attractor",
+    "eta_tip",
+    "X_tip",
+    "Z_tip",
+    "period",
+    "period_n",
+    "max_multiplier",
+    "steps",
+    "rejected_steps",
+    "wall_time",
+)
+_KEYS_3D = (
+    "v",
+    "direction",
+    "index",
+    "alpha",
+    "attractor",
+    "motion",
+    "eta_tip",
+    "X_tip",
+    "Z_tip",
+    "Y_tip",
+    "period",
+    "period_n",
+    "whirl_rate",
+    "planarity",
+    "stable",
+    "started",
+    "steps",
+    "rejected_steps",
+    "t_end",
+    "cpu_time",
+)
 
 
 @dataclass(frozen=True)
 class BifurcationPoint:
-    """One point of a sweep.
+    """One point of a sweep; the 3-D fields are set by a sweep of the 3-D model.
 
     Attributes
     ----------
-    v : float
-    direction : str
-        ``"up"`` or ``"down"``.
+    v, alpha : float
+    direction : {"up", "down"}
     index : int
         Position in the sweep.
-    alpha : float
     attractor : str
-        ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
+        ``"equilibrium"``, ``"periodic"``, ``"non-periodic"`` (3-D: also ``"whirl"``,
+        ``"quasi-periodic"``).
     eta_tip, X_tip, Z_tip : list of float
         [min, max] on the attractor.
     period : float or None
     period_n : int or None
-    max_multiplier : float or None
-        Largest non-trivial Floquet multiplier modulus of a periodic attractor.
     steps, rejected_steps : int
-    wall_time : float
     q, qdot : ndarray
-        The state the point ended on (start of the next point).
+        The state the point ended on, where the next point starts (3-D: ``U``, ``Udot``
+        in the JSON).
+    max_multiplier : float or None
+        Planar: largest non-trivial Floquet multiplier modulus of a periodic attractor.
+    wall_time : float or None
+        Planar.
     three_d : dict or None
-        The 3-D verdict (a sweep with ``out_of_plane``): ``stable_3d`` and the
-        out-of-plane evidence (:mod:`fempipe.analyses.bifurcation`); its keys join the
-        point's in :meth:`to_dict`.
+        Planar: the 3-D verdict (``stable_3d`` and the out-of-plane evidence); its keys
+        join the point's in :meth:`to_dict`.
+    motion : {"planar", "nonplanar"} or None
+        3-D; the point is of the 3-D model where this is set.
+    Y_tip : list of float or None
+        3-D: [min, max] out of the static plane.
+    whirl_rate, planarity : float or None
+    stable : bool or None
+        3-D: the shot orbit's Floquet verdict (None without a shot orbit).
+    started : str or None
+        3-D: ``"previous attractor"`` or ``"static state"`` (perturbed).
+    t_end, cpu_time : float or None
     """
 
     v: float
@@ -62,58 +129,62 @@ class BifurcationPoint:
     Z_tip: list
     period: float | None
     period_n: int | None
-    max_multiplier: float | None
     steps: int
     rejected_steps: int
-    wall_time: float
     q: np.ndarray = field(repr=False)
     qdot: np.ndarray = field(repr=False)
+    max_multiplier: float | None = None
+    wall_time: float | None = None
     three_d: dict | None = None
+    motion: str | None = None
+    Y_tip: list | None = None
+    whirl_rate: float | None = None
+    planarity: float | None = None
+    stable: bool | None = None
+    started: str | None = None
+    t_end: float | None = None
+    cpu_time: float | None = None
 
     def to_dict(self, state: bool = False) -> dict:
-        """Plain-JSON form; with ``state`` also q and qdot (as the point store keeps them)."""
-        d = {
-            "v": self.v,
-            "direction": self.direction,
-            "index": self.index,
-            "alpha": self.alpha,
-            "attractor": self.attractor,
-            "eta_tip": self.eta_tip,
-            "X_tip": self.X_tip,
-            "Z_tip": self.Z_tip,
-            "period": self.period,
-            "period_n": self.period_n,
-            "max_multiplier": self.max_multiplier,
-            "steps": self.steps,
-            "rejected_steps": self.rejected_steps,
-            "wall_time": self.wall_time,
-        }
+        """Plain JSON; with ``state`` also the state (as the point store keeps it)."""
+        is_3d = self.motion is not None
+        d = {k: getattr(self, k) for k in (_KEYS_3D if is_3d else _KEYS)}
         if self.three_d is not None:
             d.update(self.three_d)
         if state:
-            d["three_d"] = self.three_d
+            if not is_3d:
+                d["three_d"] = self.three_d
             # repr-exact floats: a resumed sweep restarts from exactly this state.
-            d["q"] = [float(x) for x in self.q]
-            d["qdot"] = [float(x) for x in self.qdot]
+            q, qdot = ("U", "Udot") if is_3d else ("q", "qdot")
+            d[q] = [float(x) for x in self.q]
+            d[qdot] = [float(x) for x in self.qdot]
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> BifurcationPoint:
         """Inverse of ``to_dict(state=True)``."""
-        kw = {k: d[k] for k in cls.__dataclass_fields__ if k not in ("q", "qdot", "three_d")}
+        is_3d = "U" in d
+        q, qdot = ("U", "Udot") if is_3d else ("q", "qdot")
         return cls(
-            **kw,
-            q=np.asarray(d["q"], dtype=float),
-            qdot=np.asarray(d["qdot"], dtype=float),
+            **{k: d[k] for k in (_KEYS_3D if is_3d else _KEYS)},
+            q=np.asarray(d[q], dtype=float),
+            qdot=np.asarray(d[qdot], dtype=float),
             three_d=d.get("three_d"),
         )
 
 
-def _sine_basis_default(old: dict) -> None:
-    """A store whose modal discretization names no basis holds sine-mode runs."""
-    disc = old.get("discretization", {})
-    if disc.get("kind") == "modal":
-        disc.setdefault("basis", "sine")
+def _differences(old, new, prefix: str = "") -> list[str]:
+    """The dotted keys where two manifests differ."""
+    if not (isinstance(old, dict) and isinstance(new, dict)):
+        return [] if old == new else [prefix or "run.json"]
+    out = []
+    for k in sorted(set(old) | set(new), key=str):
+        name = f"{prefix}.{k}" if prefix else str(k)
+        if k not in old or k not in new:
+            out.append(name)
+        else:
+            out += _differences(old[k], new[k], name)
+    return out
 
 
 class PointStore:
@@ -124,34 +195,230 @@ class PointStore:
     directory : path
         Created if missing.
     manifest : dict
-        Describes the run (discretization, parameters but v, values, options).
-        A store written by a different run is refused (ValueError), so that a
-        resume never mixes results.
+        The run (discretization, parameters but v, values, options), kept in ``run.json``.
+        A directory of another run raises :class:`~fempipe.core.errors.PointStoreMismatchError`
+        naming what differs, so that a resume never mixes results.
     """
 
     def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
         self.manifest = json.loads(json.dumps(manifest))
-        self.directory = claim_run_directory(directory, self.manifest, _sine_basis_default)
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        path = self.directory / "run.json"
+        if not path.exists():
+            write_text(path, json.dumps(self.manifest, indent=1))
+            return
+        old = json.loads(path.read_text())
+        disc = old.get("discretization", {})
+        if disc.get("kind") == "modal":
+            disc.setdefault("basis", "sine")  # a modal run that names no basis is of sine modes
+        if old != self.manifest:
+            raise PointStoreMismatchError(self.directory, _differences(old, self.manifest))
 
-    def path(self, alpha_index: int, direction: str, index: int) -> Path:
-        """File of point ``index`` of the sweep ``direction`` at the ``alpha_index``-th alpha."""
-        return self.directory / f"a{alpha_index:02d}-{direction}-{index:03d}.json"
+    def path(self, sweep: str, direction: str, index: int) -> Path:
+        """File of point ``index`` of the sweep ``direction`` of ``sweep`` (``a00``, ``space``)."""
+        return self.directory / f"{sweep}-{direction}-{index:03d}.json"
 
-    def load(self, alpha_index: int, direction: str, index: int) -> BifurcationPoint | None:
-        """The stored point, or None if it has not been finished."""
-        p = self.path(alpha_index, direction, index)
+    def load(self, sweep: str, direction: str, index: int, v: float) -> BifurcationPoint | None:
+        """The stored point, None if not finished; PointStoreMismatchError if it is of another v."""
+        p = self.path(sweep, direction, index)
         if not p.exists():
             return None
-        return BifurcationPoint.from_dict(json.loads(p.read_text()))
+        point = BifurcationPoint.from_dict(json.loads(p.read_text()))
+        if abs(point.v - v) > 1e-12:
+            raise PointStoreMismatchError(
+                self.directory, [f"v of point {index} ({direction}): {point.v}, expected {v}"]
+            )
+        return point
 
-    def save(self, alpha_index: int, point: BifurcationPoint) -> None:
+    def save(self, sweep: str, point: BifurcationPoint) -> None:
         """Write a finished point with its state (atomically: complete or absent)."""
         write_text(
-            self.path(alpha_index, point.direction, point.index),
-            json.dumps(point.to_dict(state=True)),
+            self.path(sweep, point.direction, point.index), json.dumps(point.to_dict(state=True))
         )
 
     def count(self) -> int:
-        """Number of finished points in the store (all sweeps)."""
-        # Temporary files of unfinished writes start with "." and do not match.
-        return sum(1 for _ in self.directory.glob("a*-*-*.json"))
+        """Number of finished points of the sweeps in the store."""
+        # Temporary files of unfinished writes start with "." and are not counted.
+        return sum(
+            1
+            for d in DIRECTIONS
+            for p in self.directory.glob(f"*-{d}-*.json")
+            if not p.name.startswith(".")
+        )
+
+
+def ordered(values: Sequence[float], direction: str) -> list[float]:
+    """``values`` sorted up or down; ValueError for another direction or no values."""
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
+    vals = sorted(float(v) for v in values)
+    if not vals:
+        raise ValueError("values must not be empty")
+    return vals if direction == "up" else vals[::-1]
+
+
+def sweep_points(
+    values: Sequence[float],
+    direction: str,
+    step: Callable[[int, float, BifurcationPoint | None], BifurcationPoint],
+    *,
+    store: PointStore | None = None,
+    sweep: str = "a00",
+    progress: Callable[[BifurcationPoint], None] | None = None,
+    amend: Callable[[float, BifurcationPoint], BifurcationPoint] | None = None,
+) -> list[BifurcationPoint]:
+    """Step v through ``values`` in ``direction``, each point after the previous one.
+
+    Parameters
+    ----------
+    values : sequence of float
+    direction : {"up", "down"}
+    step : callable
+        ``step(index, v, previous)`` computes a point (``previous`` None at the first).
+    store : PointStore, optional
+        Points are loaded from it where finished, and saved to it when computed.
+    sweep : str
+        The sweep's name in the store's file names.
+    progress : callable, optional
+        Called with each finished (or loaded) point.
+    amend : callable, optional
+        ``amend(v, point)`` completes a loaded point (saved again if it returns another).
+
+    Returns
+    -------
+    list of BifurcationPoint
+    """
+    points: list[BifurcationPoint] = []
+    for i, v in enumerate(ordered(values, direction)):
+        point = None if store is None else store.load(sweep, direction, i, v)
+        if point is not None and amend is not None:
+            amended = amend(v, point)
+            if amended is not point:
+                store.save(sweep, amended)
+            point = amended
+        if point is None:
+            point = step(i, v, points[-1] if points else None)
+            if store is not None:
+                store.save(sweep, point)
+        points.append(point)
+        if progress is not None:
+            progress(point)
+    return points
+
+
+def diagram_manifest(
+    model, values, options: dict, *, head=None, alphas=None, directions=None
+) -> dict:
+    """A diagram's ``run.json``: ``head``, the model but v (and alpha, given ``alphas``),
+    the values, ``directions`` and the options."""
+    p = model.params.to_dict()
+    p.pop("v")
+    if alphas is not None:
+        p.pop("alpha")
+    m = dict(head or {})
+    m.update(discretization=model.disc.to_dict(), params=p)
+    if alphas is not None:
+        m["alphas"] = [float(a) for a in alphas]
+    m["values"] = sorted(float(v) for v in values)
+    if directions is not None:
+        m["directions"] = list(directions)
+    m["options"] = {k: options[k] for k in sorted(options)}
+    return m
+
+
+class _Progress:
+    """``progress(done, total)``: points finished in this process (:meth:`tick`), or the
+    points the workers have written to the store (:meth:`poll`, told when it changed)."""
+
+    def __init__(self, store: PointStore, total, progress) -> None:
+        self.store, self.total, self.progress = store, total, progress
+        self.done = 0
+        self.shown = -1
+
+    def tick(self, *_point) -> None:
+        self.done += 1
+        if self.progress is not None:
+            self.progress(self.done, self.total)
+
+    def poll(self) -> None:
+        n = self.store.count()
+        if self.progress is not None and n != self.shown:
+            self.progress(n, self.total)
+            self.shown = n
+
+
+def run_diagram(
+    task: Callable,
+    tasks: Sequence[tuple],
+    manifest: dict,
+    *,
+    store_dir: str | os.PathLike | None = None,
+    executor=None,
+    workers: int | None = None,
+    progress: Callable[[int, int | None], None] | None = None,
+    total: int | None = None,
+) -> list:
+    """Run the independent tasks of a resumable diagram; their results in order.
+
+    Parameters
+    ----------
+    task : callable
+        ``task(*args, store, on_point)`` for each ``args`` of ``tasks``; ``on_point`` (None
+        in a worker) is called with each finished point.
+    tasks : sequence of tuple
+    manifest : dict
+        The run (:func:`diagram_manifest`); the store of another run is refused.
+    store_dir : path, optional
+        The point store; a temporary directory if omitted.
+    executor : concurrent.futures.Executor, optional
+        Runs the tasks (any Executor: process pool, Dask's ``Client.get_executor()``); the
+        store directory must be visible to its workers.
+    workers : int, optional
+        Without an executor: > 1 runs the tasks in that many local processes
+        (:func:`fempipe.core.parallel.run_tasks`); 1 or None in this process.
+    progress : callable, optional
+        ``progress(done, total)`` as points finish or load; with workers, from the store's
+        count of sweep points (``total`` given).
+    total : int, optional
+        The number of points, if known.
+
+    Returns
+    -------
+    list
+        The tasks' results.
+
+    Raises
+    ------
+    Exception
+        The error of the first task that failed, once all have ended.
+    """
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    tmp = None
+    if store_dir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="fempipe-diagram-")
+        store_dir = tmp.name
+    try:
+        store = PointStore(store_dir, manifest)
+        in_process = executor is None and (workers is None or int(workers) == 1 or len(tasks) == 1)
+        counter = _Progress(store, total, progress)
+        on_point = counter.tick if in_process else None
+        poll = None if in_process or total is None else counter.poll
+        results = run_tasks(
+            task,
+            [(*args, store, on_point) for args in tasks],
+            workers=None if in_process else workers,
+            executor=executor,
+            heartbeat=poll,
+        )
+        if poll is not None:
+            poll()
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    for r in results:
+        if isinstance(r, BaseException):
+            # The other tasks ran to their end and their points are stored.
+            raise r
+    return results

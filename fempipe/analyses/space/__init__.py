@@ -1,33 +1,30 @@
 """The pipe in three dimensions: which planar motions survive out of the plane, and the 3-D motion.
 
-:mod:`~fempipe.analyses.space.floquet` computes the Floquet multipliers of
-out-of-plane perturbations of a planar limit cycle on the 3-D model
-(:mod:`fempipe.model.space`); :func:`~fempipe.analyses.space.verdict.three_dimensional_verdict`
-says whether a planar attractor survives in three dimensions;
-:func:`~fempipe.analyses.space.whirl.find_whirl` shoots the whirl of an axisymmetric pipe
-(a periodic orbit turning rigidly about the vertical);
-:func:`~fempipe.analyses.space.onset.space_hopf_normal_form` is the Hopf normal form where
-the planar static state loses stability out of its plane; and
-:func:`~fempipe.analyses.space.diagram.space_diagram` sweeps the 3-D attractors against v.
+:func:`~fempipe.analyses.space.floquet.compute_out_of_plane_floquet` computes the Floquet
+multipliers of out-of-plane perturbations of a planar limit cycle;
+:func:`~fempipe.analyses.space.verdict.classify_3d` says whether a planar attractor survives
+in three dimensions; :func:`~fempipe.analyses.space.motion.simulate_3d` integrates the 3-D
+model to its attractor; :func:`~fempipe.analyses.space.whirl.find_whirl` shoots the whirl of
+an axisymmetric pipe; :mod:`~fempipe.analyses.space.onset` is the Hopf normal form out of
+the plane and :mod:`~fempipe.analyses.space.diagram` sweeps the 3-D attractors against v
+(a diagram: it ranks with the bifurcation diagrams, not imported here).
+Docs: docs/theory/space.md.
 """
 
-from .diagram import space_diagram
-from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
-from .motion import SpaceMotion, simulate_space
-from .onset import SpaceHopfNormalForm, space_hopf_normal_form
-from .verdict import three_dimensional_verdict
+from .floquet import OutOfPlaneFloquet, compute_out_of_plane_floquet
+from .motion import Motion3D, simulate_3d
+from .onset import hopf_normal_form_3d
+from .verdict import classify_3d
 from .whirl import Whirl, find_whirl, whirl_state
 
 __all__ = [
+    "Motion3D",
     "OutOfPlaneFloquet",
-    "SpaceHopfNormalForm",
-    "SpaceMotion",
     "Whirl",
+    "classify_3d",
+    "compute_out_of_plane_floquet",
     "find_whirl",
-    "out_of_plane_floquet",
-    "simulate_space",
-    "space_diagram",
-    "space_hopf_normal_form",
-    "three_dimensional_verdict",
+    "hopf_normal_form_3d",
+    "simulate_3d",
     "whirl_state",
 ]
