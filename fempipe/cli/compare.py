@@ -11,6 +11,7 @@ compare".
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import sys
 
@@ -121,21 +122,16 @@ def run(args: argparse.Namespace) -> int:
     reporting.deliver(
         args, result, write=lambda out: _write(out, result), text=lambda: _print(result)
     )
-    if failed:
-        rows_failed = ", ".join(f"{r['row']} {r['quantity']}" for r in failed)
-        print(
-            f"fempipe compare: {len(failed)} of {len(rows)} comparisons failed (row {rows_failed});"
-            " they are in the table with their message",
-            file=sys.stderr,
-        )
     differ = [r for r in rows if r["verdict"] == "differs"]
-    if differ:
-        where = ", ".join(f"{r['row']} {r['quantity']}" for r in differ)
-        print(
-            f"fempipe compare: {len(differ)} of {len(rows)} values differ from fempipe's by more "
-            f"than its error estimate (row {where})",
-            file=sys.stderr,
-        )
+    for some, what in (
+        (failed, "comparisons failed (row {}); they are in the table with their message"),
+        (differ, "values differ from fempipe's by more than its error estimate (row {})"),
+    ):
+        if some:
+            where = ", ".join(f"{r['row']} {r['quantity']}" for r in some)
+            print(
+                f"fempipe compare: {len(some)} of {len(rows)} {what.format(where)}", file=sys.stderr
+            )
     # as diff: 0 when every value agrees within fempipe's error, 1 otherwise
     return 0 if all(r["verdict"] == "agrees" for r in rows) else 1
 
@@ -146,32 +142,10 @@ VERDICTS = {True: "differs", False: "agrees", None: None}
 
 
 #: The columns of compare.csv, in order (those present).
-CSV_COLUMNS = (
-    "row",
-    "label",
-    "quantity",
-    "unit",
-    "user",
-    "fempipe",
-    "difference",
-    "relative_difference",
-    "error_estimate",
-    "resolved",
-    "verdict",
-    "fempipe_quantity",
-    "refined",
-    "alpha",
-    "beta",
-    "gamma",
-    "mu",
-    "v",
-    "v_min",
-    "v_max",
-    "U",
-    "U_min",
-    "U_max",
-    "failure",
-    "note",
+CSV_COLUMNS = tuple(
+    "row label quantity unit user fempipe difference relative_difference error_estimate resolved "
+    "verdict fempipe_quantity refined alpha beta gamma mu v v_min v_max U U_min U_max failure "
+    "note".split()
 )
 
 
@@ -188,18 +162,9 @@ def _write(output: reporting.Output, result: dict) -> None:
 
 def _ranges(numbers: list[int]) -> str:
     """``[1, 2, 3, 5]`` -> ``"1-3, 5"``."""
-    out, start, prev = [], None, None
-    for n in sorted(set(numbers)):
-        if start is None:
-            start = prev = n
-        elif n == prev + 1:
-            prev = n
-        else:
-            out.append(f"{start}" if start == prev else f"{start}-{prev}")
-            start = prev = n
-    if start is not None:
-        out.append(f"{start}" if start == prev else f"{start}-{prev}")
-    return ", ".join(out)
+    runs = itertools.groupby(enumerate(sorted(set(numbers))), lambda p: p[1] - p[0])
+    spans = [[n for _, n in run] for _, run in runs]
+    return ", ".join(f"{s[0]}" if len(s) == 1 else f"{s[0]}-{s[-1]}" for s in spans)
 
 
 def _common(rows: list[dict], key: str, fmt: str = "{:.6g}") -> str | None:
