@@ -1,8 +1,7 @@
 """Lagrange finite elements of any degree on a scikit-fem line mesh: :class:`FiniteElement`.
 
-One of the two discretizations behind the contract of
-:mod:`fempipe.model.discretization` (the package's point; the other is
-:class:`~fempipe.model.modal.Modal`).
+The package's discretization behind the contract of :mod:`fempipe.model.discretization`
+(the other is :class:`~fempipe.model.modal.Modal`).  Derivation: docs/theory/weak_form.md.
 """
 
 from __future__ import annotations
@@ -25,27 +24,20 @@ class FiniteElement:
     Parameters
     ----------
     n_elements : int, optional
-        Number of uniform elements (ignored if ``nodes`` is given).
+        Number of uniform elements (ignored with ``nodes``).
     degree : int
-        Polynomial degree (1 to 10).  P1, P2 use scikit-fem's ``ElementLineP1``,
-        ``ElementLineP2``; higher degrees ``ElementLinePp``.
+        Polynomial degree, 1 to 10.
     nodes : array_like, optional
-        Mesh nodes for graded meshes; must start at 0, end at 1, increase.
+        Mesh nodes of a graded mesh, increasing from 0 to 1.
     n_gauss : int, optional
-        Gauss points per element for all integrals.  The default ``2 * degree``
-        (at least 2) keeps the nodal superconvergence O(h^(2k)) of P_k in the
-        static tip values and eigenvalues: the integration operators interpolate
-        at the n_g Gauss points, so their local error is O(h^(n_g + 1)), and
-        the Gauss sums themselves are exact to degree 2 n_g - 1.
+        Gauss points per element; the default ``2 * degree`` (>= 2) keeps the nodal
+        superconvergence O(h^(2k)) of P_k in tip values and eigenvalues.
 
     Notes
     -----
-    scikit-fem assembles with the package's own Gauss rule (passed to
-    ``Basis`` as ``quadrature``), so its forms (``K``, ``gram``) and the
-    nonlinear terms integrated on :attr:`quad` use the same points and weights.
-    The Dirichlet condition theta(0) = 0 is imposed by removing the dofs of
-    the boundary named ``clamp`` (``basis.get_dofs``); theta'(1) = 0 is
-    natural in the weak form.
+    scikit-fem assembles ``K`` and ``gram`` on the package's own Gauss rule, so they and the
+    nonlinear terms share points and weights.  theta(0) = 0 removes the ``clamp`` dofs;
+    theta'(1) = 0 is natural.
     """
 
     def __init__(
@@ -157,11 +149,7 @@ class FiniteElement:
         return P @ self.full(q)
 
     def basis_values(self, xi: np.ndarray) -> sp.csr_matrix:
-        """phi_j(xi) of the free dofs at arbitrary points, sparse, shape (m, n).
-
-        ``basis.probes`` locates every point in every cell (O(m n_el)): meant
-        for a few points, built once (the Gauss rule of a part cell).
-        """
+        """phi_j(xi) of the free dofs at a few arbitrary points, sparse, shape (m, n)."""
         import scipy.sparse as sp
 
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
@@ -191,17 +179,12 @@ class FiniteElement:
 
 
 def _element_line_pp(degree: int):
-    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points.
+    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points' shape and values.
 
-    ``ElementLinePp`` caches its Legendre values and reuses them whenever the
-    next call has as many points along the second axis, whatever the points
-    and the array's shape: :meth:`FiniteElement.evaluate` at exactly as many
-    points as a cell has Gauss points (``basis.probes``, points shaped
-    (1, m, 1), after the assembly's (1, m)) then fails with a broadcasting
-    error (scikit-fem 12.0.2).  The subclass keys the cache by the shape and
-    the values of the points.  It is built on first use, so that importing
-    fempipe does not import scikit-fem, and found by name (module
-    ``__getattr__``) when a discretization is unpickled in a worker process.
+    The stock cache is keyed by the number of points only, which breaks
+    :meth:`FiniteElement.evaluate` at as many points as a cell has Gauss points (scikit-fem
+    12.0.2).  Built on first use (importing fempipe does not import scikit-fem) and found by
+    name when unpickled.
     """
     # Build the class once: a second class of the same qualified name would make
     # every element made from the first one unpicklable.

@@ -1,19 +1,11 @@
 """The tangent of the pipe in space from three fields, free of coordinate singularities.
 
-The 3-D model (:mod:`fempipe.model.space`) describes the centerline by its unit tangent
-t(xi, tau).  Its unknowns are three fields u = (theta, a, b), each discretized exactly like
-theta (u(0) = 0 at the clamp), and the tangent is the image of e_1 under the rotation of the
-unnormalized quaternion q(u) = (cos(theta/2), a, b, sin(theta/2)):
-
-    t = (cos theta + a^2 - b^2,  sin theta + 2 a b,  2 (a s - b c)) / (1 + a^2 + b^2),
-
-c = cos(theta/2), s = sin(theta/2), in the pipe's frame (e_1 along the clamp, e_2 the
-in-plane normal, e_3 out of the plane).  For a = b = 0 it is the planar tangent with the same
-theta; the map u -> t has rank 2 everywhere, and along one direction of u, the fiber
-(:func:`fiber_direction`), t does not change.  :func:`space_fields` gives t and its time and
-space derivatives, from the gradient and Hessian of t = P/D, as
-:class:`~fempipe.core.dual.Dual` values: the same lines give the weak form's exact
-derivatives.
+The unknowns u = (theta, a, b), each discretized like theta, give the tangent as the image
+of e_1 under the unnormalized quaternion (cos(theta/2), a, b, sin(theta/2)):
+t = (cos theta + a^2 - b^2, sin theta + 2 a b, 2 (a s - b c)) / (1 + a^2 + b^2), the planar
+tangent for a = b = 0.  The map has rank 2 everywhere; t does not change along the fiber
+(:func:`fiber_direction`).  :func:`space_fields` gives t and its derivatives as
+:class:`~fempipe.core.dual.Dual` values.
 
 Derivation: docs/theory/space.md, "The unknown".
 """
@@ -90,21 +82,9 @@ def _fiber_rate(p: _Point, ud: Dual) -> Dual:
 class SpaceFields:
     """The kinematics of a 3-D state at the quadrature points (all (n_q, 3) Duals).
 
-    Attributes
-    ----------
-    u, u_dot, u_ddot, u_prime, u_dot_prime
-        The fields (theta, a, b) and their derivatives.
-    t, t_dot, t_ddot, t_prime, t_dot_prime
-        The tangent and its derivatives in time and xi.
-    J : list of Dual
-        ``J[c] = dt/du_c``: the variation of t under a test function on u_c is
-        ``J[c] phi``.
-    dt_prime : list of Dual
-        ``dt'/du_c`` (the variation of t' is ``dt_prime[c] phi + J[c] phi'``).
-    fiber, fiber_dot
-        f(u) and its rate.
-    t_tip : Dual
-        t(1), shape (1, 3).
+    ``u, u_dot, u_ddot, u_prime, u_dot_prime`` the fields, ``t, t_dot, t_ddot, t_prime,
+    t_dot_prime`` the tangent and its derivatives, ``J[c] = dt/du_c``, ``dt_prime[c] = dt'/du_c``,
+    ``fiber`` and ``fiber_dot``, and ``t_tip`` = t(1) of shape (1, 3).
     """
 
     u: Dual
@@ -169,13 +149,7 @@ def _dot(x, y):
 
 
 def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
-    """The kinematics of :class:`SpaceFields` from the fields at the quadrature points.
-
-    The gradient G of P (and g of D) and the Hessian along u' are formed once as
-    3 x 3 matrices at each point (along u_dot only its quadratic form is needed);
-    every derivative of t is a product with them (docs/theory/space.md), so that the
-    chart costs few array operations.
-    """
+    """The kinematics of :class:`SpaceFields`, every derivative of t a product with the gradient and Hessian formed once."""
     p = _Point.of(u)
     P, D = p.numerator()
     inv = 1.0 / D

@@ -1,8 +1,7 @@
 """Linear springs tying centerline points to their undeformed positions.
 
-The spring term of Eq. (20)'s variants (:mod:`fempipe.model.weak_form`):
-each spring (kappa, xi_s) is integrated over [0, xi_s] with a Gauss rule of
-its own (:class:`PartRule`).
+A variant term of Eq. (20); each spring (kappa, xi_s) is integrated over [0, xi_s] by a Gauss
+rule of its own (:class:`PartRule`).  Derivation: docs/theory/variants.md.
 """
 
 from __future__ import annotations
@@ -19,17 +18,8 @@ __all__ = ["PartRule", "SpringTerms"]
 
 @dataclass(frozen=True)
 class PartRule:
-    """A Gauss rule on [0, xi_s] with the basis at its points (one per spring position).
-
-    Attributes
-    ----------
-    x, w : ndarray, shape (m,)
-        Points and weights; ``w @ f`` integrates f over [0, xi_s].
-    Phi : ndarray or scipy.sparse.csr_matrix, shape (m, n)
-        phi_j at the points.
-    at_node : bool
-        Whether xi_s is a cell edge of the model's quadrature (the rule is
-        then its restriction to the cells before xi_s).
+    """A Gauss rule on [0, xi_s] with the basis at its points: ``x``, ``w`` (shape (m,)), ``Phi``
+    (shape (m, n)) and ``at_node`` (xi_s is a cell edge of the model's quadrature).
     """
 
     x: np.ndarray
@@ -44,15 +34,7 @@ class SpringTerms(WeakForm):
     _part_rules: dict[float, PartRule]
 
     def _part_rule(self, xi_s: float) -> PartRule:
-        """The Gauss rule on [0, xi_s] (cached per position).
-
-        The cells of the model's quadrature before xi_s keep their points; if
-        xi_s lies inside a cell, the part [x_c, xi_s] of that cell gets a Gauss
-        rule of as many points, with the basis evaluated there
-        (``disc.basis_values``).  For finite elements every part is inside
-        one element, where theta is a polynomial: the rule is then as exact as
-        the model's own on whole cells, whatever xi_s.
-        """
+        """The Gauss rule on [0, xi_s], cached per position (exact for finite elements, docs/theory/variants.md)."""
         rule = self._part_rules.get(xi_s)
         if rule is not None:
             return rule
@@ -111,15 +93,8 @@ class SpringTerms(WeakForm):
         return out
 
     def spring(self, q: np.ndarray) -> np.ndarray:
-        """Springs: ``sum kappa \\int_0^xi_s phi_i n . (r(xi_s) - (xi_s, 0))``.
-
-        Each spring (kappa, xi_s) ties the centerline point r(xi_s) =
-        \\int_0^xi_s t (local frame of Eq. (5): r = (xi + varsigma, eta)) to its
-        undeformed position (xi_s, 0) with the isotropic potential
-        (kappa/2) |r(xi_s) - (xi_s, 0)|^2, kappa = k L^3/EI; this term is its
-        gradient.  In strong form it is a point force at xi_s: theta'' jumps
-        there by kappa n(xi_s) . (r(xi_s) - (xi_s, 0)) (a kink of theta').  The
-        integrals over [0, xi_s] use :meth:`_part_rule`.
+        r"""Springs: ``sum kappa \int_0^xi_s phi_i n . (r(xi_s) - (xi_s, 0))``, the gradient of
+        (kappa/2) |r(xi_s) - (xi_s, 0)|^2.
         """
         r = np.zeros(self.n)
         for kappa, _rule, _t, _n, b, d in self._spring_states(q):
@@ -127,10 +102,8 @@ class SpringTerms(WeakForm):
         return r
 
     def spring_jacobian(self, q: np.ndarray, dense: bool = False):
-        """d(spring)/dq, symmetric: ``kappa (b_s b_s^T - Phi_s^T diag(w_s t . d) Phi_s)``.
-
-        Sparse for finite elements unless ``dense``; b_s b_s^T is a dense
-        block on the dofs of [0, xi_s].
+        """d(spring)/dq, symmetric: ``kappa (b_s b_s^T - Phi_s^T diag(w_s t . d) Phi_s)``; sparse for
+        finite elements unless ``dense``.
         """
         n = self.n
         sparse = self.disc.sparse and not dense
