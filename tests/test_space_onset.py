@@ -21,8 +21,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fempipe.analyses.space.shooting import shoot_space
+from fempipe.analyses.limit_cycle import shoot
 from fempipe.model.space import SpaceModel
+from fempipe.model.space_dynamics import SpaceDynamics
 from fempipe.validation import space_runs
 
 ALPHA = math.pi / 2
@@ -41,7 +42,7 @@ def near_onset_cycle(delta: float):
     v = nf.v + delta
     model = SpaceModel(on.planar.disc, replace(on.planar.params, v=v))
     U0, Ud0, T = nf.initial_state(v)
-    return shoot_space(model, U0, Ud0, T, rtol=1e-6, tol=1e-5)
+    return shoot(SpaceDynamics(model), U0, Ud0, T, rtol=1e-6, tol=1e-5)
 
 
 def test_v_cr_of_the_3d_jacobian_is_the_out_of_plane_models():
@@ -49,8 +50,8 @@ def test_v_cr_of_the_3d_jacobian_is_the_out_of_plane_models():
     which falls fast under refinement (measured 3.4e-5 on P3:3, 1.1e-5 on P3:4, 8.5e-7 on
     P3:6, 1.5e-7 on P3:8: order ~6 from P3:4 on, as P3 eigenvalues; 5.3 from P3:3 to P3:6).
     Required: order above 4 between P3:3 and P3:6."""
-    d3 = abs(onset(3).normal_form.v - onset(3).normal_form.v_out_of_plane)
-    d6 = abs(onset(6).normal_form.v - onset(6).normal_form.v_out_of_plane)
+    d3 = abs(onset(3).normal_form.v - onset(3).normal_form.checks.v_out_of_plane)
+    d6 = abs(onset(6).normal_form.v - onset(6).normal_form.checks.v_out_of_plane)
     assert d3 < 2e-4
     assert d6 < d3 / 2**4
 
@@ -60,15 +61,15 @@ def test_normal_form_diagnostics():
     assert nf.criticality == "supercritical"
     assert abs(nf.eigenvalue.real) < 1e-9 * nf.omega
     # The critical mode is out of the plane (mirror-odd): no theta part.
-    assert nf.in_plane_fraction < 1e-9
+    assert nf.checks.in_plane_fraction < 1e-9
     # The gauge (about -50, -100) and the rest of the spectrum are far from critical.
-    assert nf.largest_real_eigenvalue < -40.0
-    assert nf.next_real_part < -0.5
+    assert nf.checks.largest_real_eigenvalue < -40.0
+    assert nf.checks.next_real_part < -0.5
     # l1 is flat on the ladder of steps.
     assert nf.uncertainty < 1e-5 * abs(nf.l1)
     # The adjoint formula for lambda'(v) against the eigenvalue re-solved at v +- 1e-4
     # (its rounding ~1e-9 / 1e-4).
-    assert nf.transversality == pytest.approx(nf.transversality_check, rel=1e-6)
+    assert nf.transversality == pytest.approx(nf.checks.transversality_check, rel=1e-6)
     assert nf.transversality > 0
 
 
@@ -81,7 +82,7 @@ def test_shot_cycle_near_onset_is_the_normal_forms():
     cyc = near_onset_cycle(delta)
     lo, hi = cyc.tip["Y_tip"]
     assert lo == pytest.approx(-hi, abs=1e-6)  # the mirror: Y_tip swings symmetrically
-    ratio = (0.5 * (hi - lo)) ** 2 / (nf.amplitude_coefficient**2 * delta)
+    ratio = (0.5 * (hi - lo)) ** 2 / (nf.amplitude_coefficients["Y_tip"] ** 2 * delta)
     assert abs(ratio - 1.0) < 2e-3
     # Period 2 pi / omega to O(delta); the born cycle is stable (supercritical).
     assert cyc.period == pytest.approx(2.0 * math.pi / nf.omega, rel=1e-3)
@@ -94,7 +95,7 @@ def test_amplitude_slope_at_onset_to_1e4():
     (P3:4: four cycles shot at delta = 1e-3 ... 1e-2, A^2 / delta = c^2 (1 + k delta +
     k2 delta^2) fitted; measured 1.1e-6)."""
     on = space_runs.onset(4, ALPHA)
-    c2 = on.normal_form.amplitude_coefficient**2
+    c2 = on.normal_form.amplitude_coefficients["Y_tip"] ** 2
     deltas = np.array([1e-3, 2e-3, 5e-3, 1e-2])
     ratios = np.array(
         [space_runs.amplitude(space_runs.space_cycle_near_onset(on, d)) ** 2 / d for d in deltas]

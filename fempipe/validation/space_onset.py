@@ -6,10 +6,10 @@ Fig. 6) and a non-planar limit cycle is born.  This case checks, on one P3 mesh 
 computations on the same mesh, so the comparison is free of discretization error):
 
 (a) **v_cr.**  The critical pair of the 3-D model's exact Jacobian
-    (:func:`fempipe.analyses.space.onset.space_hopf_normal_form`) crosses the imaginary axis
+    (:func:`fempipe.analyses.space.onset.hopf_normal_form_3d`) crosses the imaginary axis
     at the out-of-plane model's v_cr (two discretizations of one linear problem);
 (b) **The amplitude.**  Cycles shot on the full 3-D model
-    (:func:`fempipe.analyses.space.shooting.shoot_space`) at v = v_cr + delta have
+    (:func:`fempipe.analyses.limit_cycle.shoot`) at v = v_cr + delta have
     A^2 = ((max Y_tip - min Y_tip) / 2)^2 linear in delta with the slope c^2 of the normal
     form: A^2 / delta fitted as c^2 (1 + k delta + ...) must give 1 at delta -> 0 to 1e-4;
 (c) **The frequency.**  The period tends to 2 pi / omega;
@@ -43,7 +43,8 @@ CASE = Case(
 def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) -> tuple:
     """The checks and the table row of one mesh."""
     nf = on.normal_form
-    c2 = nf.amplitude_coefficient**2
+    c = nf.amplitude_coefficients.get("Y_tip", math.nan)
+    c2 = c**2
     amps = np.array([amplitude(c) for c in cycles])
     ratios = amps**2 / (c2 * np.asarray(deltas))
     r0, k = fit_slope(deltas, ratios, degree)
@@ -54,16 +55,18 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
     tol_v = ref.value("v_cr_tolerance")[tag.split(":")[1]]
     stable = [bool(c.stable) for c in cycles]
     checks = [
-        measure("v_cr_vs_out_of_plane_{tag}", abs(nf.v - nf.v_out_of_plane), limit=tol_v, tag=tag),
+        measure(
+            "v_cr_vs_out_of_plane_{tag}", abs(nf.v - nf.checks.v_out_of_plane), limit=tol_v, tag=tag
+        ),
         measure("amplitude_slope_{tag}", abs(r0 - 1.0), tag=tag),
         measure("l1_resolved_{tag}", nf.uncertainty / abs(nf.l1), tag=tag),
         measure("period_{tag}", abs(T0 - T_nf) / T_nf, tag=tag),
         measure(
             "transversality_{tag}",
-            abs(nf.transversality - nf.transversality_check) / abs(nf.transversality),
+            abs(nf.transversality - nf.checks.transversality_check) / abs(nf.transversality),
             tag=tag,
         ),
-        measure("mirror_{tag}", max(nf.in_plane_fraction, asym), tag=tag),
+        measure("mirror_{tag}", max(nf.checks.in_plane_fraction, asym), tag=tag),
         measure(
             "supercritical_{tag}",
             ok=nf.criticality == "supercritical" and all(stable),
@@ -75,12 +78,12 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
     row = (
         tag,
         nf.v,
-        nf.v_out_of_plane,
+        nf.checks.v_out_of_plane,
         nf.l1,
         nf.uncertainty,
         nf.omega,
         nf.transversality,
-        nf.amplitude_coefficient,
+        c,
         r0 - 1.0,
         k,
     )
@@ -93,7 +96,7 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
         "r0": r0,
         "k": k,
         "degree": degree,
-        "c": nf.amplitude_coefficient,
+        "c": c,
         "period_nf": T_nf,
         "normal_form": nf.to_dict(),
     }

@@ -1,50 +1,46 @@
 """The onset of the non-planar oscillation: the Hopf normal form of the 3-D model.
 
-Where the linear out-of-plane analysis (:mod:`fempipe.model.out_of_plane`,
-:func:`fempipe.analyses.stability.spatial_critical_velocity`) finds that a planar static state
-loses stability out of its plane before it does in it (the horizontal pipe, alpha = pi/2), a
-non-planar periodic orbit is born at that v_cr.  :func:`space_hopf_normal_form` computes its
-Hopf normal form on the full 3-D model (:mod:`fempipe.model.space`) as the planar one does on
-Eq. (20): the first-order system and its exact Jacobian (:func:`space_jacobian`), the planar
-static state lifted exactly to 3-D at the v where the critical pair crosses the imaginary
-axis (:func:`locate_hopf`), the first Lyapunov coefficient l1 of the generic
-:func:`~fempipe.analyses.stability.hopf.lyapunov_coefficient`, the transversality, and the
-amplitude of the tip's swing out of the plane, ``(max Y_tip - min Y_tip) / 2 ~ c
-sqrt(v - v_cr)``.  The critical mode is odd under the mirror through the plane of the static
-state, so Y_tip swings symmetrically; the gauge's real eigenvalues are never critical.
+Where the linear analysis out of the plane (:func:`fempipe.analyses.stability.find_critical_velocity`
+with ``planes=("in", "out")``) finds that a planar static state loses stability out of its plane
+first (the horizontal pipe, alpha = pi/2), a non-planar periodic orbit is born at that v_cr.
+:func:`hopf_normal_form_3d` computes its normal form on the 3-D model (:mod:`fempipe.model.space`)
+as the planar one does on Eq. (20): the exact Jacobian (the planar one's code), the planar static
+state lifted to 3-D where the critical pair crosses (:func:`locate_hopf`), l1, the transversality,
+and the tip's swing out of the plane, ``(max Y_tip - min Y_tip) / 2 ~ c sqrt(v - v_cr)``.
 
-Derivation, symmetry and measurements: docs/theory/space.md, "The onset of the non-planar
-oscillation"; checked against shot cycles by :mod:`fempipe.validation.space_onset`.
+Derivation and symmetry: docs/theory/space.md, "The onset of the non-planar oscillation";
+checked against shot cycles by :mod:`fempipe.validation.space_onset`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
-import scipy.linalg as sla
 
 from fempipe.analyses.statics import solve_static
-from fempipe.core.companion import first_order_matrix
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 from fempipe.model.out_of_plane import axisymmetric
 from fempipe.model.space import SpaceModel, planar_state
 
 from ..stability.hopf.flutter import EVENT_KEYS
-from ..stability.hopf.lyapunov import HopfCoefficient, lyapunov_coefficient
-from ..stability.hopf.normal_form import predicted_cycle_state
-from ..stability.hopf.pipe import dense
+from ..stability.hopf.lyapunov import lyapunov_coefficient
+from ..stability.hopf.normal_form import (
+    HopfChecks3D,
+    HopfNormalForm,
+    amplitude_coefficient,
+    cycle_side,
+)
+from ..stability.hopf.pipe import dense, pipe_jacobian
 from ..statics import solve_sagged
 
 __all__ = [
-    "SpaceHopfNormalForm",
     "critical_pair",
+    "hopf_normal_form_3d",
     "locate_hopf",
     "out_of_plane_event_keys",
-    "space_hopf_normal_form",
-    "space_jacobian",
 ]
 
 #: |Re lambda| at which the secant of :func:`locate_hopf` stops (|lambda| ~ 14).
@@ -52,22 +48,6 @@ HOPF_TOL = 1e-12
 #: The secant also stops when its step in v falls below this (relative): the accuracy to
 #: which the stability events locate v (Brent, 1e-10).
 HOPF_V_TOL = 1e-10
-
-
-def space_jacobian(model: SpaceModel, x: np.ndarray) -> np.ndarray:
-    """D_x F of the 3-D first-order system at x = (U, U'), shape (2 n, 2 n).
-
-    ``[[0, I], [-M^{-1} R_U, -M^{-1} R_U']]`` with the exact Jacobians of
-    :meth:`SpaceModel.jacobians` at the acceleration a(U, U') (off the
-    equilibrium the derivative of M(U) a matters).
-    """
-    n = model.n
-    U, Ud = x[:n], x[n:]
-    M = model.mass_matrix(U)
-    cf = sla.cho_factor(M)
-    a = -sla.cho_solve(cf, model.residual(U, Ud, None))
-    JU, JUd, _ = model.jacobians(U, Ud, a)
-    return first_order_matrix(JU, JUd, M, factor="cholesky", mass_factor=cf)
 
 
 def critical_pair(A: np.ndarray) -> complex:
@@ -86,11 +66,11 @@ def _static(planar: PipeModel, v: float, q0: np.ndarray) -> np.ndarray:
     return solve_static(planar.with_params(replace(planar.params, v=v)), q0, tol=1e-12).q
 
 
-def _pair_at(space: SpaceModel, planar: PipeModel, v: float, q0: np.ndarray):
+def _pair_at(model: SpaceModel, planar: PipeModel, v: float, q0: np.ndarray):
     q = _static(planar, v, q0)
-    m = space.with_params(replace(space.params, v=v))
-    x = np.concatenate([planar_state(q), np.zeros(space.n)])
-    return critical_pair(space_jacobian(m, x)), q
+    m = model.with_params(replace(model.params, v=v))
+    x = np.concatenate([planar_state(q), np.zeros(model.n)])
+    return critical_pair(pipe_jacobian(m, x)), q
 
 
 def locate_hopf(
@@ -116,10 +96,10 @@ def locate_hopf(
     secant's step in v has fallen below :data:`HOPF_V_TOL` (on fine meshes the round-off of
     the dense eigenvalues, about 1e-8 in Re lambda on P3:16, is above HOPF_TOL |lambda|).
     """
-    space = SpaceModel(planar.disc, planar.params)
+    model = SpaceModel(planar.disc, planar.params)
     v0, v1 = float(v_guess), float(v_guess) + dv
-    l0, q = _pair_at(space, planar, v0, q_guess)
-    l1, q = _pair_at(space, planar, v1, q)
+    l0, q = _pair_at(model, planar, v0, q_guess)
+    l1, q = _pair_at(model, planar, v1, q)
     for it in range(1, 40):
         if abs(l1.real) <= HOPF_TOL * abs(l1):
             return v1, q, it
@@ -128,118 +108,8 @@ def locate_hopf(
             return v1, q, it
         v0, l0 = v1, l1
         v1 = v2
-        l1, q = _pair_at(space, planar, v1, q)
+        l1, q = _pair_at(model, planar, v1, q)
     raise RuntimeError(f"the out-of-plane Hopf point was not located (Re lambda = {l1.real:.3e})")
-
-
-@dataclass(frozen=True)
-class SpaceHopfNormalForm:
-    """The Hopf normal form of the 3-D model at the onset of the non-planar oscillation.
-
-    Attributes
-    ----------
-    v : float
-        v_cr where the critical pair of the 3-D Jacobian crosses the imaginary axis.
-    v_out_of_plane : float or None
-        v_cr of the linear out-of-plane model (the start of the secant), if given.
-    l1 : float
-        First Lyapunov coefficient, q_U of unit L2 norm over (theta, a, b).
-    uncertainty : float
-        Its numerical uncertainty (spread over the difference steps, :func:`lyapunov_coefficient`).
-    criticality : {'supercritical', 'subcritical', 'degenerate'}
-    omega : float
-        Im lambda at v.
-    eigenvalue : complex
-        The critical eigenvalue at v (Re ~ 0).
-    eigenvalue_derivative : complex
-        lambda'(v) along the static branch.
-    transversality : float
-        Re lambda'(v).
-    transversality_check : float
-        Re lambda'(v) by the difference quotient of Re lambda at v +- 1e-4 on the branch
-        (independent of the adjoint formula).
-    rho2_slope : float
-        rho^2 / (v - v_cr) = -Re(lambda') / (omega l1).
-    amplitude_coefficient : float
-        c of ``(max Y_tip - min Y_tip) / 2 ~ c sqrt(v - v_cr)`` (nan unless the cycles
-        exist above v_cr and l1 is resolved).
-    in_plane_fraction : float
-        \\|q_theta\\| / \\|q_U\\|: 0 for the mirror-odd (out-of-plane) eigenvector.
-    largest_real_eigenvalue : float
-        The largest real eigenvalue of A at v (the gauge's relaxation, about -50: far from
-        critical).
-    next_real_part : float
-        The largest Re lambda of A at v besides the critical pair (the spectral gap).
-    secant_iterations : int
-    U_static : ndarray, shape (n,)
-        The planar static state at v, lifted to 3-D.
-    eigenvector : ndarray of complex, shape (2 n,)
-        q of the normal form (x - x0 ~ 2 rho Re(q e^{i omega tau})).
-    y_gradient : ndarray, shape (n,)
-        d Y_tip / dU at the static state.
-    coefficient : HopfCoefficient
-        The generic result (the ladder of steps).
-    """
-
-    v: float
-    v_out_of_plane: float | None
-    l1: float
-    uncertainty: float
-    criticality: str
-    omega: float
-    eigenvalue: complex
-    eigenvalue_derivative: complex
-    transversality: float
-    transversality_check: float
-    rho2_slope: float
-    amplitude_coefficient: float
-    in_plane_fraction: float
-    largest_real_eigenvalue: float
-    next_real_part: float
-    secant_iterations: int = 0
-    U_static: np.ndarray = field(repr=False, default=None)
-    eigenvector: np.ndarray = field(repr=False, default=None)
-    y_gradient: np.ndarray = field(repr=False, default=None)
-    coefficient: HopfCoefficient = field(repr=False, default=None)
-
-    def rho(self, v: float) -> float:
-        """Predicted normal-form amplitude rho at v (nan on the side without cycles)."""
-        r2 = self.rho2_slope * (v - self.v)
-        return math.sqrt(r2) if r2 >= 0 else math.nan
-
-    def amplitude(self, v: float) -> float:
-        """Predicted (max Y_tip - min Y_tip) / 2 at v, to leading order."""
-        return self.amplitude_coefficient * math.sqrt(max(v - self.v, 0.0))
-
-    def initial_state(self, v: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """(U, U', T) on the predicted cycle at v: x0 + 2 rho Re(q e^{i phase}), T = 2 pi / omega.
-
-        The phase puts Y_tip at zero and rising (the section eta_tip + Y_tip of
-        :func:`fempipe.analyses.space.shooting.section_value` crosses its static value there
-        to leading order, eta_tip being even under the mirror).
-        """
-        return predicted_cycle_state(
-            self.U_static, self.eigenvector, self.y_gradient, self.rho(v), self.omega
-        )
-
-    def to_dict(self) -> dict:
-        """Scalars for JSON."""
-        return {
-            "v_cr": self.v,
-            "v_cr_out_of_plane_model": self.v_out_of_plane,
-            "first_lyapunov_coefficient": self.l1,
-            "first_lyapunov_uncertainty": self.uncertainty,
-            "criticality": self.criticality,
-            "omega": self.omega,
-            "transversality": self.transversality,
-            "transversality_check": self.transversality_check,
-            "rho2_slope": self.rho2_slope,
-            "Y_tip_amplitude_coefficient": self.amplitude_coefficient,
-            "in_plane_fraction": self.in_plane_fraction,
-            "largest_real_eigenvalue": self.largest_real_eigenvalue,
-            "next_real_part": self.next_real_part,
-            "ladder": [[float(h), float(x)] for h, x in self.coefficient.ladder],
-        }
 
 
 def _next_real_part(lam: np.ndarray, critical: complex) -> float:
@@ -250,34 +120,35 @@ def _next_real_part(lam: np.ndarray, critical: complex) -> float:
 
 
 @single_blas
-def space_hopf_normal_form(
+def hopf_normal_form_3d(
     planar: PipeModel,
     q_guess: np.ndarray,
     v_guess: float,
     *,
     v_out_of_plane: float | None = None,
     step: float | None = None,
-) -> SpaceHopfNormalForm:
+) -> HopfNormalForm:
     """The Hopf normal form of the 3-D model where the planar static state loses stability
     out of its plane (docs/theory/space.md, "The onset of the non-planar oscillation").
 
     Parameters
     ----------
     planar : PipeModel
-        The planar pipe (its parameters but v; springs and hysteretic damping are refused by
-        :class:`SpaceModel`).
+        The planar pipe (springs and hysteretic damping are refused by :class:`SpaceModel`).
     q_guess : ndarray, shape (n,)
         A planar static state near the Hopf point (Newton's start).
     v_guess : float
-        A velocity near it, e.g. the out-of-plane model's v_cr.
+        A velocity near it, e.g. the out-of-plane v_cr.
     v_out_of_plane : float, optional
-        The out-of-plane model's v_cr, kept for comparison (``v_out_of_plane``).
+        The out-of-plane v_cr, kept for comparison (``checks.v_out_of_plane``).
     step : float, optional
         A fixed difference step of :func:`lyapunov_coefficient`; default its ladder.
 
     Returns
     -------
-    SpaceHopfNormalForm
+    HopfNormalForm
+        With ``amplitude_coefficients["Y_tip"]`` (where the cycles exist above v_cr) and
+        :class:`HopfChecks3D`.
     """
     v, q0, its = locate_hopf(planar, q_guess, v_guess)
     params = replace(planar.params, v=v)
@@ -289,7 +160,7 @@ def space_hopf_normal_form(
     gram = dense(planar.disc.gram)
     G = np.zeros((2 * n, 2 * n))
     G[:n, :n] = np.kron(np.eye(3), gram)
-    jac = lambda x: space_jacobian(model, x)  # noqa: E731
+    jac = lambda x: pipe_jacobian(model, x)  # noqa: E731
     hc = lyapunov_coefficient(jac, x0, norm=G, step=step)
     A = jac(x0)
     lam_all = np.linalg.eigvals(A)
@@ -303,25 +174,28 @@ def space_hopf_normal_form(
 
     def jac_at(s: float) -> np.ndarray:
         m = model.with_params(replace(params, v=v + s))
-        return space_jacobian(m, x0 + s * xv)
+        return pipe_jacobian(m, x0 + s * xv)
 
     dA = (jac_at(hv) - jac_at(-hv)) / (2.0 * hv)
     dlam = complex(np.conj(p) @ (dA @ q))
     # The same derivative from the eigenvalue itself on the re-solved branch.
-    space = SpaceModel(planar.disc, params)
-    lp = _pair_at(space, planar, v + hv, q0)[0]
-    lm = _pair_at(space, planar, v - hv, q0)[0]
+    lp = _pair_at(model, planar, v + hv, q0)[0]
+    lm = _pair_at(model, planar, v - hv, q0)[0]
     check = (lp.real - lm.real) / (2.0 * hv)
-    slope = -dlam.real / (w * hc.l1) if hc.l1 != 0.0 else math.inf
+    slope, side = cycle_side(hc, dlam)
     gY = model.tip_position_gradient(U0)[2]
-    c = math.nan
-    if hc.criticality != "degenerate" and math.isfinite(slope) and slope > 0:
-        c = float(2.0 * abs(gY @ q[:n]) * math.sqrt(slope))
+    coef = {"Y_tip": amplitude_coefficient(gY, q, slope)} if side == "above" else {}
     nt = planar.disc.n
-    frac = float(np.linalg.norm(q[:nt]) / np.linalg.norm(q[:n]))
-    return SpaceHopfNormalForm(
-        v=float(v),
+    checks = HopfChecks3D(
         v_out_of_plane=None if v_out_of_plane is None else float(v_out_of_plane),
+        transversality_check=float(check),
+        in_plane_fraction=float(np.linalg.norm(q[:nt]) / np.linalg.norm(q[:n])),
+        largest_real_eigenvalue=float(real.max()) if real.size else math.nan,
+        next_real_part=_next_real_part(lam_all, hc.eigenvalue),
+        secant_iterations=its,
+    )
+    return HopfNormalForm(
+        v=float(v),
         l1=hc.l1,
         uncertainty=hc.uncertainty,
         criticality=hc.criticality,
@@ -329,30 +203,25 @@ def space_hopf_normal_form(
         eigenvalue=hc.eigenvalue,
         eigenvalue_derivative=dlam,
         transversality=float(dlam.real),
-        transversality_check=float(check),
         rho2_slope=float(slope),
-        amplitude_coefficient=c,
-        in_plane_fraction=frac,
-        largest_real_eigenvalue=float(real.max()) if real.size else math.nan,
-        next_real_part=_next_real_part(lam_all, hc.eigenvalue),
-        secant_iterations=its,
-        U_static=U0,
+        side=side,
+        amplitude_coefficients=coef,
+        q_static=U0,
         eigenvector=q,
-        y_gradient=gY,
         coefficient=hc,
+        section_gradient=gY,
+        checks=checks,
     )
 
 
 def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:
-    """The Hopf keys of ``fempipe critical``'s flutter out of the plane at ``v`` on the primary
-    (gravity-loaded) branch.
+    """The Hopf keys (:data:`~fempipe.analyses.stability.hopf.EVENT_KEYS`) of ``fempipe
+    critical``'s flutter out of the plane at ``v`` on the primary branch.
 
-    The 3-D model's normal form there (:func:`space_hopf_normal_form` from the sagged static
-    state at ``v``): the keys of :data:`fempipe.analyses.stability.hopf.EVENT_KEYS` with the
-    tip's swing out of the plane ``Y_tip_amplitude_coefficient`` (the in-plane ``theta_tip`` and
-    ``eta_tip`` ones null: they do not swing at first order) and ``hopf_note`` null.  Where
-    there is no normal form (sin alpha = 0, where the pair is double; a failed computation) the
-    keys are null and ``hopf_note`` says why.
+    From the 3-D model's normal form at the sagged static state (the in-plane ``theta_tip``
+    and ``eta_tip`` coefficients null: they do not swing at first order).  Where there is
+    none (sin alpha = 0, where the pair is double; a failed computation) the keys are null
+    and ``hopf_note`` says why.
     """
 
     def unavailable(reason: str) -> dict:
@@ -365,19 +234,7 @@ def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:
         )
     try:
         q = solve_sagged(planar.with_params(replace(planar.params, v=v))).q
-        nf = space_hopf_normal_form(planar, q, v, v_out_of_plane=v)
+        nf = hopf_normal_form_3d(planar, q, v, v_out_of_plane=v)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
         return unavailable(f"no 3-D normal form: {exc}")
-    side = None
-    if nf.criticality != "degenerate" and math.isfinite(nf.rho2_slope):
-        side = "above" if nf.rho2_slope > 0 else "below"
-    coefficient = nf.amplitude_coefficient if math.isfinite(nf.amplitude_coefficient) else None
-    return unavailable("") | {
-        "first_lyapunov_coefficient": nf.l1,
-        "first_lyapunov_uncertainty": nf.uncertainty,
-        "criticality": nf.criticality,
-        "transversality": nf.transversality,
-        "cycle_side": side,
-        "Y_tip_amplitude_coefficient": coefficient,
-        "hopf_note": None,
-    }
+    return nf.event_keys()

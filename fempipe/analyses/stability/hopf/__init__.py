@@ -28,7 +28,7 @@ from .lyapunov import (
     jacobian_differences,
     lyapunov_coefficient,
 )
-from .normal_form import HopfNormalForm, first_lyapunov_coefficient
+from .normal_form import HopfChecks3D, HopfNormalForm, first_lyapunov_coefficient
 from .pipe import pipe_derivatives, pipe_jacobian
 
 __all__ = [
@@ -37,6 +37,7 @@ __all__ = [
     "FLAT_ENOUGH",
     "HopfCoefficient",
     "HopfNormalForm",
+    "HopfChecks3D",
     "lyapunov_coefficient",
     "pipe_jacobian",
     "pipe_derivatives",

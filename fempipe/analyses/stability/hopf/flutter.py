@@ -182,9 +182,7 @@ def decorate_events(
             d.update(dict.fromkeys(EVENT_KEYS))
             d["hopf_note"] = nf
         else:
-            d.update(nf.to_dict())
-            d["Y_tip_amplitude_coefficient"] = None  # a planar cycle: Y_tip = 0
-            d["hopf_note"] = None
+            d.update(nf.event_keys())  # a planar cycle: Y_tip_amplitude_coefficient null
 
     for d in result_dict.get("events", []):
         decorate(d)

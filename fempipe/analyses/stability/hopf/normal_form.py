@@ -1,10 +1,8 @@
-"""The Hopf normal form of the pipe at a flutter point.
+"""The Hopf normal form at a flutter point: the result of the planar pipe's and the 3-D model's.
 
-:func:`first_lyapunov_coefficient` applies the generic
-:func:`~fempipe.analyses.stability.hopf.lyapunov.lyapunov_coefficient` to
-Eq. (20) in first-order form, with the transversality lambda'(v) along the
-static branch and the predicted cycle amplitudes (docs/theory/stability.md,
-"Hopf criticality of the flutter events").
+:func:`first_lyapunov_coefficient` applies :func:`~.lyapunov.lyapunov_coefficient` to Eq. (20)
+in first-order form, with the transversality lambda'(v) along the static branch and the
+predicted cycle amplitudes (docs/theory/stability.md, "Hopf criticality of the flutter events").
 """
 
 from __future__ import annotations
@@ -22,40 +20,70 @@ from .pipe import dense, pipe_derivatives, pipe_jacobian
 
 
 @dataclass(frozen=True)
+class HopfChecks3D:
+    """Diagnostics of the 3-D model's normal form (:func:`~fempipe.analyses.space.onset.hopf_normal_form_3d`).
+
+    Attributes
+    ----------
+    v_out_of_plane : float or None
+        v_cr of the linear out-of-plane model (the secant's start), if given.
+    transversality_check : float
+        Re lambda'(v) by a central difference of Re lambda on the branch (independent check).
+    in_plane_fraction : float
+        \\|q_theta\\| / \\|q_U\\|: 0 for the mirror-odd (out-of-plane) eigenvector.
+    largest_real_eigenvalue : float
+        The largest real eigenvalue at v (the gauge's relaxation, far from critical).
+    next_real_part : float
+        The largest Re lambda besides the critical pair (the spectral gap).
+    secant_iterations : int
+    """
+
+    v_out_of_plane: float | None
+    transversality_check: float
+    in_plane_fraction: float
+    largest_real_eigenvalue: float
+    next_real_part: float
+    secant_iterations: int = 0
+
+
+@dataclass(frozen=True)
 class HopfNormalForm:
-    """The Hopf normal form of the pipe at a flutter point (docs/theory/stability.md).
+    """The Hopf normal form at a flutter point (docs/theory/stability.md).
 
     Attributes
     ----------
     v : float
         Flow velocity of the Hopf point.
     l1 : float
-        First Lyapunov coefficient, q_theta of unit L2 norm.
+        First Lyapunov coefficient (q's positions of unit L2 norm).
     uncertainty : float
         Numerical uncertainty of l1 (docs/theory/stability.md, "Derivatives").
     criticality : {'supercritical', 'subcritical', 'degenerate'}
     omega : float
         Im lambda at v.
     eigenvalue : complex
-        The critical eigenvalue at v (Re ~ 0 to the event's accuracy).
+        The critical eigenvalue at v (Re ~ 0).
     eigenvalue_derivative : complex
         lambda'(v) along the static branch.
     transversality : float
         Re lambda'(v).
     rho2_slope : float
-        rho^2 / (v - v_cr) = -Re(lambda') / (omega l1): positive where the
-        cycles exist above v_cr (docs/theory/stability.md, "Kuznetsov's formula").
+        rho^2 / (v - v_cr) = -Re(lambda') / (omega l1).
     side : {'above', 'below'} or None
         Side of v_cr where the cycles exist (None if degenerate or not transversal).
     amplitude_coefficients : dict
-        c of ``(max - min)/2 ~ c sqrt(|v - v_cr|)`` for theta_tip and eta_tip
-        (``{}`` when ``side`` is None).
+        c of ``(max - min)/2 ~ c sqrt(|v - v_cr|)`` per tip coordinate: ``theta_tip`` and
+        ``eta_tip`` (planar), ``Y_tip`` (3-D, where the cycles exist above v_cr).
     q_static : ndarray, shape (n,)
-        The equilibrium.
+        The equilibrium (planar q, or the 3-D U).
     eigenvector : ndarray of complex, shape (2n,)
         q of the normal form (x - x0 ~ 2 rho Re(q e^{i omega tau})).
     coefficient : HopfCoefficient
         The generic result (step diagnostics).
+    section_gradient : ndarray, shape (n,)
+        Gradient of the Poincare section variable (eta_tip; 3-D: Y_tip).
+    checks : HopfChecks3D or None
+        The 3-D model's diagnostics; None for the planar pipe.
     """
 
     v: float
@@ -72,7 +100,8 @@ class HopfNormalForm:
     q_static: np.ndarray = field(repr=False)
     eigenvector: np.ndarray = field(repr=False)
     coefficient: HopfCoefficient = field(repr=False)
-    eta_gradient: np.ndarray = field(repr=False, default=None)
+    section_gradient: np.ndarray = field(repr=False, default=None)
+    checks: HopfChecks3D | None = None
 
     def rho(self, v: float) -> float:
         """Predicted normal-form amplitude rho at v (nan on the side without cycles)."""
@@ -82,28 +111,66 @@ class HopfNormalForm:
     def initial_state(
         self, v: float, phase: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, float]:
-        """(q, q', T) on the predicted cycle at v: x0 + 2 rho Re(q e^{i phase}), T = 2 pi / omega.
+        """(q, q', T) on the predicted cycle at v, a starting guess for shooting.
 
-        A starting guess for shooting (:func:`fempipe.analyses.limit_cycle.shoot`),
-        also of unstable cycles a transient never reaches.  The default phase
-        puts the state where eta_tip crosses its static value upwards, the
-        Poincare section of :mod:`fempipe.analyses.limit_cycle` (at another phase the
-        section could be nearly tangent to the orbit).
+        The default phase puts the section variable at its static value and rising.
         """
         return predicted_cycle_state(
-            self.q_static, self.eigenvector, self.eta_gradient, self.rho(v), self.omega, phase
+            self.q_static, self.eigenvector, self.section_gradient, self.rho(v), self.omega, phase
         )
 
-    def to_dict(self) -> dict:
+    def event_keys(self) -> dict:
+        """The Hopf keys of a flutter event of ``fempipe critical --json`` (:data:`~.flutter.EVENT_KEYS`)."""
+        a = self.amplitude_coefficients
         return {
             "first_lyapunov_coefficient": self.l1,
             "first_lyapunov_uncertainty": self.uncertainty,
             "criticality": self.criticality,
             "transversality": self.transversality,
             "cycle_side": self.side,
-            "theta_tip_amplitude_coefficient": self.amplitude_coefficients.get("theta_tip"),
-            "eta_tip_amplitude_coefficient": self.amplitude_coefficients.get("eta_tip"),
+            "theta_tip_amplitude_coefficient": a.get("theta_tip"),
+            "eta_tip_amplitude_coefficient": a.get("eta_tip"),
+            "Y_tip_amplitude_coefficient": a.get("Y_tip"),
+            "hopf_note": None,
         }
+
+    def to_dict(self) -> dict:
+        """Scalars for JSON: the planar event keys, or the 3-D onset's (with :attr:`checks`)."""
+        c = self.checks
+        if c is None:
+            d = self.event_keys()
+            del d["Y_tip_amplitude_coefficient"], d["hopf_note"]
+            return d
+        return {
+            "v_cr": self.v,
+            "v_cr_out_of_plane_model": c.v_out_of_plane,
+            "first_lyapunov_coefficient": self.l1,
+            "first_lyapunov_uncertainty": self.uncertainty,
+            "criticality": self.criticality,
+            "omega": self.omega,
+            "transversality": self.transversality,
+            "transversality_check": c.transversality_check,
+            "rho2_slope": self.rho2_slope,
+            "Y_tip_amplitude_coefficient": self.amplitude_coefficients.get("Y_tip", math.nan),
+            "in_plane_fraction": c.in_plane_fraction,
+            "largest_real_eigenvalue": c.largest_real_eigenvalue,
+            "next_real_part": c.next_real_part,
+            "ladder": [[float(h), float(x)] for h, x in self.coefficient.ladder],
+        }
+
+
+def cycle_side(hc: HopfCoefficient, dlam: complex) -> tuple[float, str | None]:
+    """rho^2 / (v - v_cr) and the side of v_cr where the cycles exist (or None)."""
+    slope = -dlam.real / (hc.omega * hc.l1) if hc.l1 != 0.0 else math.inf
+    if hc.criticality == "degenerate" or dlam.real == 0.0 or not math.isfinite(slope):
+        return slope, None
+    return slope, "above" if slope > 0 else "below"
+
+
+def amplitude_coefficient(gradient: np.ndarray, eigenvector: np.ndarray, slope: float) -> float:
+    """c of ``(max - min)/2 ~ c sqrt(|v - v_cr|)`` of the coordinate of ``gradient``."""
+    n = gradient.size
+    return float(2.0 * abs(gradient @ eigenvector[:n]) * math.sqrt(abs(slope)))
 
 
 def predicted_cycle_state(
@@ -114,12 +181,10 @@ def predicted_cycle_state(
     omega: float,
     phase: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, float]:
-    """(q, q', T) = x_static + 2 rho Re(eigenvector e^{i phase}), 2 pi / omega: the normal
-    form's cycle, a starting guess for shooting.
+    """(q, q', T) = x_static + 2 rho Re(eigenvector e^{i phase}), 2 pi / omega.
 
-    ``eigenvector`` is the critical one of the first-order system (positions, then rates);
-    the default phase puts the section variable (gradient ``section_gradient`` with
-    respect to the positions) at its static value and rising.
+    The default phase puts the section variable (gradient ``section_gradient``) at its
+    static value and rising.
     """
     n = x_static.size
     if phase is None:
@@ -188,23 +253,18 @@ def first_lyapunov_coefficient(
     s = max(1.0, float(np.linalg.norm(xv)))  # a step of unit size in (x, v)
     dA = deriv(xv / s, hv, 1.0 / s)[0] * s
     dlam = complex(np.conj(p) @ (dA @ q))
-    crit = hc.criticality
-    slope = -dlam.real / (w * hc.l1) if hc.l1 != 0.0 else math.inf
-    side, coef = None, {}
+    slope, side = cycle_side(hc, dlam)
     # d(theta_tip)/dq and d(eta_tip)/dq = int phi_j cos theta.
     grads = {
         "theta_tip": np.asarray(disc.tip, dtype=float),
         "eta_tip": np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(disc.Phi @ q0))),
     }
-    if crit != "degenerate" and dlam.real != 0.0 and math.isfinite(slope):
-        side = "above" if slope > 0 else "below"
-        r = math.sqrt(abs(slope))
-        coef = {k: float(2.0 * abs(g @ q[:n]) * r) for k, g in grads.items()}
+    coef = {} if side is None else {k: amplitude_coefficient(g, q, slope) for k, g in grads.items()}
     return HopfNormalForm(
         v=float(v),
         l1=hc.l1,
         uncertainty=hc.uncertainty,
-        criticality=crit,
+        criticality=hc.criticality,
         omega=w,
         eigenvalue=hc.eigenvalue,
         eigenvalue_derivative=dlam,
@@ -215,5 +275,5 @@ def first_lyapunov_coefficient(
         q_static=q0,
         eigenvector=q,
         coefficient=hc,
-        eta_gradient=grads["eta_tip"],
+        section_gradient=grads["eta_tip"],
     )

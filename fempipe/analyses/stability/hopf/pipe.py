@@ -1,9 +1,5 @@
-"""The pipe's first-order Jacobian and its derivatives for the normal form.
-
-D_x F of the first-order form of Eq. (20) (:func:`pipe_jacobian`; docs/theory/stability.md,
-"First-order form") and its first and second directional derivatives without differencing
-the bending matrix (:func:`pipe_derivatives`; "Derivatives").
-"""
+"""The pipe's first-order Jacobian and its derivatives for the normal form
+(docs/theory/stability.md, "First-order form" and "Derivatives")."""
 
 from __future__ import annotations
 
@@ -21,14 +17,12 @@ from fempipe.model.operators import PipeModel
 from ..linear import straight_is_static
 
 
-def pipe_jacobian(model: PipeModel, x: np.ndarray) -> np.ndarray:
+def pipe_jacobian(model, x: np.ndarray) -> np.ndarray:
     """D_x F of the first-order form of Eq. (20) at x = (q, q'), shape (2n, 2n).
 
-    ``[[0, I], [-M^{-1} R_q, -M^{-1} R_q']]`` with the analytic Jacobians of
-    :meth:`PipeModel.jacobians` at (q, q', a), a = -M^{-1} R(q, q', 0) the
-    acceleration (docs/theory/stability.md, "First-order form"): the companion
-    matrix of :func:`fempipe.core.companion.first_order_matrix`, M factorised
-    once by Cholesky for both the acceleration and the blocks.
+    ``[[0, I], [-M^{-1} R_q, -M^{-1} R_q']]`` with the analytic Jacobians at the acceleration
+    a = -M^{-1} R(q, q', 0) (docs/theory/stability.md, "First-order form"); ``model`` is a
+    :class:`PipeModel` or the 3-D :class:`~fempipe.model.space.SpaceModel` (x = (U, U')).
     """
     n = model.n
     q, qd = x[:n], x[n:]
@@ -45,31 +39,19 @@ def dense(A) -> np.ndarray:
 
 
 def _without_bending(model: PipeModel) -> PipeModel:
-    """The model with the bending matrix K set to zero (a shallow copy).
-
-    Its residual is R - K q - mu K q' and its Jacobians lack the constant K
-    and mu K, the largest entries of the finite-element Jacobian (~h^-2):
-    differenced, they would only add their rounding.
-    """
+    """The model with the bending matrix K set to zero: its Jacobians lack the constant K and
+    mu K, which differenced would only add their rounding."""
     disc = copy.copy(model.disc)
     K = model.disc.K
     disc.K = sp.csr_matrix(K.shape) if sp.issparse(K) else np.zeros(K.shape)
-    # A new model, not with_params: that would share the caches of the model's
-    # matrices (a dense copy of K among them).
+    # A new model, not with_params: that would share the caches of the matrices (K among them).
     return PipeModel(disc, model.params)
 
 
 def _mirror_even(model: PipeModel, x0: np.ndarray) -> bool:
-    """Whether J is even about x0: the straight pipe x0 = 0 at alpha = 0 or pi.
-
-    The mirror symmetry (theta, alpha) -> (-theta, -alpha) of Eq. (20) maps
-    alpha = 0 and pi onto themselves, so there F is odd, F(-x) = -F(x) (every
-    term: gravity along the pipe, follower, Coriolis, inertia, the end mass,
-    external damping, springs tied to points of the axis), and its Jacobian
-    is even, J(-x) = J(x).  At alpha = pi the odd part of gravity is off by
-    sin(pi) ~ 1e-16.  A subclass of PipeModel may add terms that are not odd:
-    it takes the general path.
-    """
+    """Whether J is even about x0: the straight pipe x0 = 0 at alpha = 0 or pi, where the
+    mirror (theta, alpha) -> (-theta, -alpha) makes F odd (a PipeModel subclass may add
+    terms that are not: it takes the general path)."""
     return type(model) is PipeModel and straight_is_static(model.params) and not np.any(x0)
 
 
@@ -79,24 +61,11 @@ def pipe_derivatives(
     """``(u, h, dv=0) -> (DJ[u], D2J[u, u])`` of :func:`pipe_jacobian` about x0, without
     differencing the bending matrix.
 
-    The lower block of J is ``-N (Kc + X(x))`` with N = M(q)^{-1},
-    Kc = [K, mu K] constant and X(x) the rest of ``[R_q, R_q']`` (a model
-    without bending, :func:`_without_bending`, at the full model's
-    acceleration).  With Y = N0 (Kc + X(x0)) formed once and differences of
-    M and X only (the identities dN = -N dM N and
-    d^2N = 2 N dM N dM N - N d^2M N):
-
-        DJ = N0 (DM Y - DX),
-        D2J = N0 (D2M Y - D2X - 2 DM N0 (DM Y - DX)).
-
-    The rounding is then eps |M|, eps |X| over h^2 instead of eps |K| / h^2.
-    ``dv`` moves v by ``h dv`` along with x (the derivative along the
-    static branch, for lambda'(v)).
-
-    On the straight pipe at alpha = 0 or pi (``mirror``; default: detected,
-    :func:`_mirror_even`) J is even about x0 = 0, so J(x0 - h u) = J(x0 + h u):
-    DJ = 0 (B = 0) and D2J = 2 (J(x0 + h u) - J(x0)) / h^2 take one
-    evaluation instead of two (not for ``dv``, which moves v as well).
+    The lower block of J is ``-N (Kc + X(x))``, N = M(q)^{-1}, Kc = [K, mu K] constant; with
+    Y = N0 (Kc + X(x0)) and differences of M and X only, DJ = N0 (DM Y - DX) and
+    D2J = N0 (D2M Y - D2X - 2 DM N0 (DM Y - DX)): rounding eps |M|, eps |X| over h^2 instead
+    of eps |K| / h^2.  ``dv`` moves v by ``h dv`` along with x (lambda'(v)).  Where J is
+    even (``mirror``, default :func:`_mirror_even`) one evaluation replaces two.
     """
     n = model.n
     bare = _without_bending(model)
