@@ -29,7 +29,7 @@ cases = {
 }
 freqs = {}
 for name, p in cases.items():
-    lam = fempipe.spectrum(fempipe.PipeModel(disc, p), np.zeros(disc.n)).lam
+    lam = fempipe.compute_spectrum(fempipe.PipeModel(disc, p), np.zeros(disc.n)).lam
     freqs[name] = np.sort(lam.imag[lam.imag > 0])[:3]
     print(f"{name:16s}: omega_1..3 = " + ", ".join(f"{w:.6f}" for w in freqs[name]))
 
@@ -46,7 +46,7 @@ for name, extra in {
     "spring 50 at 0.5": {"springs": ((50.0, 0.5),)},
 }.items():
     model = fempipe.PipeModel(fempipe.FiniteElement(6, 2), fempipe.Params(alpha=0.0, **extra))
-    vcr[name] = fempipe.critical_velocity(model, v_max=15.0).v_cr
+    vcr[name] = fempipe.find_critical_velocity(model, v_max=15.0).v_cr
     print(f"{name:16s}: v_cr = {vcr[name]:.5f}")
 
 fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")

@@ -4,7 +4,7 @@ The critical flow velocity against the inclination
 
 The paper's Fig. 6: for each inclination alpha the static state is computed along v and the
 first v at which an eigenvalue crosses into the right half plane is located
-(:func:`fempipe.critical_velocity`; :func:`fempipe.stability_map` does the same over a grid
+(:func:`fempipe.find_critical_velocity`; :func:`fempipe.map_stability` does the same over a grid
 of alpha and parameter curves, in parallel).  beta = 0.142, gamma = 18.9, mu = 5e-3.
 At alpha = 0 the pipe hangs straight and the classical linear theory of the straight pipe
 applies; the paper's claim that v_cr falls monotonically with alpha is not borne out.
@@ -23,7 +23,9 @@ disc = fempipe.FiniteElement(6, 2)
 alphas_deg = np.arange(0, 181, 30)
 v_cr, kinds = [], []
 for a in alphas_deg:
-    res = fempipe.critical_velocity(fempipe.PipeModel(disc, fempipe.Params(alpha=np.radians(a))))
+    res = fempipe.find_critical_velocity(
+        fempipe.PipeModel(disc, fempipe.Params(alpha=np.radians(a)))
+    )
     v_cr.append(res.v_cr)
     kinds.append(res.critical.type)
     print(

@@ -20,7 +20,7 @@ from decimal import Decimal, localcontext
 import numpy as np
 import pytest
 
-from fempipe import FiniteElement, Modal, Params, PipeModel, critical_velocity, tip_values
+from fempipe import FiniteElement, Modal, Params, PipeModel, find_critical_velocity, tip_values
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import (
@@ -270,7 +270,7 @@ def test_point_store_of_an_older_sine_run_still_resumes(tmp_path):
 def test_linear_frequencies_at_rest_are_exact():
     """v = gamma = 0: the beam basis holds the exact modes, omega_r = lambda_r^2 for
     all N modes (the sine basis misses its N-th by 7-9 %)."""
-    from fempipe.analyses.stability import spectrum
+    from fempipe.analyses.stability import compute_spectrum
     from fempipe.analyses.stability.canonical import cantilever_frequencies, resolution
 
     for n in (3, 6, 12):
@@ -280,7 +280,7 @@ def test_linear_frequencies_at_rest_are_exact():
     sine = resolution(Modal(6))
     assert sine.n_resolved == 5 and 0.05 < sine.rel_error[-1] < 0.1  # 7.6 %
     rest = Params(alpha=0.0, beta=PAPER_CASE["beta"], gamma=0.0, mu=0.0, v=0.0)
-    s = spectrum(PipeModel(Modal(6, basis="beam"), rest), np.zeros(6))
+    s = compute_spectrum(PipeModel(Modal(6, basis="beam"), rest), np.zeros(6))
     up = np.sort(s.lam[s.lam.imag > 0].imag)
     np.testing.assert_allclose(up, cantilever_frequencies(6), rtol=1e-12)
     np.testing.assert_allclose(s.lam.real, 0.0, atol=1e-9)
@@ -351,7 +351,7 @@ def _converged_v_cr(alpha: float) -> float:
     P5:8, converged (P4:16 and P3:32 agree with it to 3e-12).  At alpha = 0 it is
     checked against the classical straight-pipe solver (below)."""
     p = Params(alpha=alpha, **PAPER_CASE)
-    return critical_velocity(PipeModel(FiniteElement(8, 5), p), v_max=7.0).critical.v
+    return find_critical_velocity(PipeModel(FiniteElement(8, 5), p), v_max=7.0).critical.v
 
 
 @pytest.mark.parametrize("alpha", [math.pi / 2, 0.0], ids=["pi/2", "0"])
@@ -370,16 +370,16 @@ def test_critical_velocity_converges_to_fe(alpha):
         pipe = StraightPipe(beta=p.beta, gamma=p.gamma, mu=p.mu)
         classical = classical_v_cr(pipe, 8.0, method="legendre", n=16)
         assert classical.kind == "flutter" and abs(classical.v_cr - ref) < 1e-9
-    fe = critical_velocity(PipeModel(FiniteElement(16, 3), p), v_max=7.0).critical
+    fe = find_critical_velocity(PipeModel(FiniteElement(16, 3), p), v_max=7.0).critical
     assert abs(fe.v - ref) < 1e-7  # P3:16's discretization error
     err = []
     for n in (8, 16):
-        c = critical_velocity(PipeModel(Modal(n, basis="beam"), p), v_max=7.0).critical
+        c = find_critical_velocity(PipeModel(Modal(n, basis="beam"), p), v_max=7.0).critical
         assert (c.type, c.mode) == ("flutter", 2)
         err.append(abs(c.v - ref))
     assert err[0] < 6e-4 and err[1] < 4e-5
     assert 10.0 < err[0] / err[1] < 30.0  # 2^4 = 16
-    sine = critical_velocity(PipeModel(Modal(8), p), v_max=7.0).critical
+    sine = find_critical_velocity(PipeModel(Modal(8), p), v_max=7.0).critical
     assert abs(sine.v - ref) > 5 * err[0]
 
 

@@ -116,14 +116,15 @@ def test_argand_marks_the_out_of_plane_loci():
     not drawn again where they are the in-plane loci (alpha = 0), which the title says."""
     from test_figures import text_faults
 
-    from fempipe.analyses.stability import spatial_root_locus
+    from fempipe.analyses.stability import trace_root_locus
     from fempipe.model.discretization import Modal
     from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
     from fempipe.plotting.stability import plot_argand
 
     values = [0.0, 2.0, 4.0, 6.0]
-    loci = spatial_root_locus(PipeModel(Modal(4), Params(alpha=math.pi / 2)), values, n_modes=3)
+    model = PipeModel(Modal(4), Params(alpha=math.pi / 2))
+    loci = trace_root_locus(model, values, n_modes=3, planes=("in", "out"))
     ax = plot_argand(loci[0], out_of_plane=loci[1])
     try:
         legend = _legend_texts(ax)
@@ -136,7 +137,8 @@ def test_argand_marks_the_out_of_plane_loci():
         assert not text_faults(ax.figure)
     finally:
         plt.close(ax.figure)
-    loci = spatial_root_locus(PipeModel(Modal(4), Params(alpha=0.0)), values, n_modes=3)
+    model = PipeModel(Modal(4), Params(alpha=0.0))
+    loci = trace_root_locus(model, values, n_modes=3, planes=("in", "out"))
     ax = plot_argand(loci[0], out_of_plane=loci[1])
     try:
         assert "out of the plane the same loci" in ax.get_title()
@@ -234,8 +236,8 @@ MAP_POINT_KEYS |= {"error"}
 
 def test_stability_map_in_three_dimensions(capsys, tmp_path):
     """Both planes' v_cr per alpha, v_cr the first of the two: the same at alpha = 0, out of
-    the plane first at pi/2 (the library's spatial_critical_velocity); --planar as before."""
-    from fempipe.analyses.stability import spatial_critical_velocity
+    the plane first at pi/2 (the library's find_critical_velocity); --planar as before."""
+    from fempipe.analyses.stability import find_critical_velocity
     from fempipe.model.discretization import Modal
     from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
@@ -254,8 +256,8 @@ def test_stability_map_in_three_dimensions(capsys, tmp_path):
     assert a0["frequency_in_plane"] == pytest.approx(a0["frequency_out_of_plane"], abs=1e-9)
     assert a90["first_plane"] == "out" and a90["type"] == "flutter"
     assert a90["v_cr_out_of_plane"] < a90["v_cr_in_plane"] - 0.3
-    lib = spatial_critical_velocity(
-        PipeModel(Modal(4), Params(alpha=math.pi / 2)), 10.0, ds_max=0.2
+    lib = find_critical_velocity(
+        PipeModel(Modal(4), Params(alpha=math.pi / 2)), 10.0, ds_max=0.2, planes=("in", "out")
     )
     assert a90["v_cr_in_plane"] == pytest.approx(lib.in_plane.v_cr, abs=1e-12)
     assert a90["v_cr_out_of_plane"] == pytest.approx(lib.out_of_plane.v_cr, abs=1e-12)
@@ -274,11 +276,11 @@ def test_stability_map_figure_shows_both_planes_and_the_first():
     (dashed, △) and the band along v_cr in 3-D; the key in a legend below the axes."""
     from test_figures import text_faults
 
-    from fempipe.analyses.stability import stability_map
+    from fempipe.analyses.stability import map_stability
     from fempipe.model.discretization import Modal
     from fempipe.plotting.stability import plot_stability_map
 
-    smap = stability_map(Modal(4), [0.0, math.pi / 2, math.pi], [(0.142, 18.9)], workers=1)
+    smap = map_stability(Modal(4), [0.0, math.pi / 2, math.pi], [(0.142, 18.9)], workers=1)
     ax = plot_stability_map(smap)
     try:
         (legend,) = ax.figure.legends

@@ -8,10 +8,9 @@ import pytest
 from clirun import run_json
 
 from fempipe import FiniteElement, Params, PipeModel
-from fempipe.analyses.stability import critical_velocity
+from fempipe.analyses.stability import find_critical_velocity
 from fempipe.analyses.stability.hopf import EVENT_KEYS as HOPF_KEYS
 from fempipe.cli import main
-from fempipe.model.out_of_plane import out_of_plane_model
 
 EVENT_KEYS = {
     "v",
@@ -43,8 +42,8 @@ def test_critical_json_contract(capsys):
     # v_cr is the first loss of stability in 3-D: out of the plane at alpha = pi/2
     # (docs, "Out of the plane"); the in-plane one is the planar library's.
     model = PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2))
-    lib = critical_velocity(model, 8.0)
-    out = critical_velocity(out_of_plane_model(model), 8.0)
+    lib = find_critical_velocity(model, 8.0)
+    out = find_critical_velocity(model, 8.0, planes=("out",))
     assert first["plane"] == "out" and d["first_instability"]["plane"] == "out"
     assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-12)
     assert d["v_cr"] == d["v_cr_out_of_plane"] == pytest.approx(out.v_cr, abs=1e-9)

@@ -229,11 +229,11 @@ def test_bench_convergence_vcr_quick_measures_the_orders():
     assert d["cpu_seconds"] > 0
     # v_cr of the paper's horizontal pipe: the Richardson reference of P3:4, P3:8
     # against P3:16 computed directly (1e-9 bounds P3:16's own error, 2.5e-10).
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
     from fempipe.model.discretization import FiniteElement
     from fempipe.model.operators import PipeModel
 
-    fine = critical_velocity(
+    fine = find_critical_velocity(
         PipeModel(FiniteElement(16, 3), Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3)),
         10.0,
     ).v_cr

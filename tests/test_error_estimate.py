@@ -300,11 +300,12 @@ def test_static_table_shows_plus_minus(capsys):
 # -------------------------------------------------------------- critical --
 @pytest.mark.parametrize("disc", [["--fe", "P2:4"], ["--modal", "3"]])
 def test_critical_v_cr_estimate_bounds_the_true_error(capsys, disc):
-    from fempipe.analyses.stability import spatial_critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
 
     argv = ["critical", *disc, "--alpha", "pi/2", "--v", "0,8", "--no-branches"]
     d = run_json(capsys, [*argv, "--error-estimate"])
-    ref = spatial_critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2)), 8.0)
+    model = PipeModel(FiniteElement(16, 3), Params(alpha=math.pi / 2))
+    ref = find_critical_velocity(model, 8.0, planes=("in", "out"))
     assert_bounds(d["v_cr_error"], d["v_cr"], ref.v_cr, "v_cr")
     for plane in ("in_plane", "out_of_plane"):
         key = "v_cr_" + plane
@@ -353,7 +354,7 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
 
     import fempipe.analyses.stability as stability
 
-    real = stability.stability_analysis
+    real = stability.analyse_stability
     calls = []
 
     def fake(model, **kw):
@@ -364,7 +365,7 @@ def test_critical_unmatched_event_gets_null_and_a_note(capsys, monkeypatch):
             res = dataclasses.replace(res, events=events, critical=events[0])
         return res
 
-    monkeypatch.setattr(stability, "stability_analysis", fake)
+    monkeypatch.setattr(stability, "analyse_stability", fake)
     # The planar analysis (the pairing of events is the same code in 3-D, by plane too).
     argv = ["critical", "--planar", "--modal", "3", "--alpha", "pi/2", "--v", "0,8"]
     argv += ["--no-branches"]
@@ -450,7 +451,7 @@ def test_simulate_attractors_of_different_kinds_give_no_number(capsys, monkeypat
     def fake(model, att, fine_model, **kwargs):
         return attractor_estimates.AttractorSummary.of("equilibrium", tip=att.tip), []
 
-    monkeypatch.setattr(attractor_estimates, "refined_cycle", fake)
+    monkeypatch.setattr(attractor_estimates, "refine_cycle", fake)
     d = run_json(capsys, ["simulate", "--modal", "2", "--v", "9", "--error-estimate"])
     assert d["attractor"] == "periodic" and d["attractor_refined"] == "equilibrium"
     assert d["period_error"] is None and d["tip_error"] is None
@@ -535,30 +536,25 @@ def test_static_estimate_bounds_the_error_with_a_spring_inside_an_element(capsys
 # -------------------------------------------------------------- library --
 def test_library_attaches_the_static_estimates_of_the_cli(capsys):
     """fempipe.studies.estimates gives a library user the numbers of --error-estimate."""
-    from fempipe.studies.estimates import (
-        ERROR,
-        REFINED,
-        STATIC_TIP_KEYS,
-        RefinedStatic,
-        refined_static_states,
-        with_static_estimates,
-    )
+    from fempipe.studies.error_estimate import ERROR, REFINED, STATIC_TIP_KEYS
+    from fempipe.studies.estimates import estimate_errors
 
     argv = ["static", "--modal", "3", "--alpha", "pi/2", "--v", "0,2", "--error-estimate"]
     d = run_json(capsys, argv)
     model = PipeModel(Modal(3), Params(alpha=math.pi / 2))
     sols = solve_path(model, [0.0, 2.0])
     seen = []
-    refined = refined_static_states(model, sols, callback=lambda i, s: seen.append(i))
-    assert isinstance(refined, RefinedStatic) and seen == [0, 1]
-    assert refined.discretization.name == "modal:7" and refined.notes == ()
     points = []
     for sol in sols:
         tip = tip_values(model.disc, sol.q, math.pi / 2)
         row = {k: tip[k] for k in STATIC_TIP_KEYS}
         row["tip_drop"] = tip["X_tip"] - math.cos(math.pi / 2)
         points.append(row)
-    result = with_static_estimates({"points": points}, sols, refined)
+    result = estimate_errors({"points": points}, model, sols, callback=lambda i, s: seen.append(i))
+    assert seen == [0, 1]
+    assert (
+        result["error_estimate"]["refined"] == "modal:7" and result["error_estimate"]["notes"] == []
+    )
     assert result["error_estimate"] == d["error_estimate"]
     for mine, cli in zip(result["points"], d["points"], strict=True):
         for k in (*STATIC_TIP_KEYS, "tip_drop"):

@@ -176,18 +176,18 @@ def _shapes_figure():
 
 
 def _argand_figure():
-    from fempipe.analyses.stability import root_locus
+    from fempipe.analyses.stability import trace_root_locus
     from fempipe.plotting.stability import plot_argand
 
-    locus = root_locus(_model(math.pi), np.linspace(0.0, 6.0, 31), n_modes=3)
+    locus = trace_root_locus(_model(math.pi), np.linspace(0.0, 6.0, 31), n_modes=3)
     return plot_argand(locus).figure
 
 
 def _branches_figure():
-    from fempipe.analyses.stability import stability_analysis
+    from fempipe.analyses.stability import analyse_stability
     from fempipe.plotting.stability import plot_branches
 
-    res = stability_analysis(_model(math.pi), v_max=6.0, ds_max=0.3, max_depth=1)
+    res = analyse_stability(_model(math.pi), v_max=6.0, ds_max=0.3, max_depth=1)
     return plot_branches(res).figure
 
 
@@ -252,10 +252,10 @@ def _bifurcation_figure():
 
 
 def _stability_map_figure():
-    from fempipe.analyses.stability.maps import stability_map
+    from fempipe.analyses.stability.maps import map_stability
     from fempipe.plotting.stability import plot_stability_map
 
-    smap = stability_map(Modal(2), np.linspace(0, np.pi, 5), [(0.142, 18.9)], workers=1)
+    smap = map_stability(Modal(2), np.linspace(0, np.pi, 5), [(0.142, 18.9)], workers=1)
     ax = plot_stability_map(smap)
     # The title's key: open circles for the flutter velocity, open squares for
     # an earlier loss of stability (here alpha = pi: the straight pipe buckles).

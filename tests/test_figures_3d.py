@@ -70,9 +70,9 @@ def _check_text(fig) -> None:
 @functools.cache
 def _motion():
     """A swing in and out of the plane about the (unstable) static state at v = 8.2, one
-    period per unit tau, with the SpaceMotion fields the figures read."""
+    period per unit tau, with the Motion3D fields the figures read."""
     from fempipe.analyses.dynamics import make_initial_state
-    from fempipe.analyses.space.motion import SpaceMotion, out_of_plane_perturbation
+    from fempipe.analyses.space.motion import Motion3D, out_of_plane_perturbation
     from fempipe.analyses.statics import solve_static
     from fempipe.model.space import SpaceModel, planar_state
 
@@ -87,7 +87,7 @@ def _motion():
     U[:, :n] += np.sin(2 * np.pi * t)[:, None] * (q1 - q_s)
     U[:, n : 2 * n] += np.cos(2 * np.pi * t)[:, None] * a
     U[:, 2 * n :] += np.cos(2 * np.pi * t)[:, None] * b
-    motion = SpaceMotion(
+    motion = Motion3D(
         kind="non-periodic", motion="nonplanar", period=None, period_n=None, whirl_rate=None,
         tip={}, planarity=1.0, frequencies=(1.0,), t=t, U=U,
     )  # fmt: skip
@@ -162,11 +162,12 @@ def test_snapshots_are_framed_on_the_pipe_with_a_tau_colorbar():
 
 @functools.cache
 def _spatial(alpha: float, **kw):
-    from fempipe.analyses.stability import spatial_stability_analysis
+    from fempipe.analyses.stability import analyse_stability
 
     params = Params(alpha=alpha, **kw)
     model = PipeModel(discretization_from_name("P3:4"), params)
-    return spatial_stability_analysis(model, v_max=6.0 if alpha > 3 else 10.0, ds_max=0.3)
+    v_max = 6.0 if alpha > 3 else 10.0
+    return analyse_stability(model, v_max=v_max, ds_max=0.3, planes=("in", "out"))
 
 
 def _event_marks(ax) -> list:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from clirun import run_json
 
-from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.eigensolvers import quadratic_eigen
 from fempipe.analyses.stability.hopf import (
     EVENT_KEYS,
@@ -30,7 +30,7 @@ from fempipe.analyses.stability.hopf import (
 from fempipe.analyses.stability.linear import linearized_matrices
 from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import discretization_from_name
-from fempipe.model.dynamics_problem import acceleration
+from fempipe.model.dynamics_problem import PipeDynamics, acceleration
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
@@ -94,7 +94,7 @@ def test_generic_degenerate_when_l1_vanishes():
 def _hopf_state(name: str, alpha: float, v_max: float = 9.0):
     """(model, q, event) at the first flutter of the primary branch."""
     model = PipeModel(discretization_from_name(name), Params(alpha=alpha))
-    res = stability_analysis(model, v_max=v_max, follow_bifurcations=False)
+    res = analyse_stability(model, v_max=v_max, follow_bifurcations=False)
     ev = next(e for e in res.events if e.type == "flutter")
     q = solve_path(model, np.linspace(0.0, ev.v, 12))[-1].q
     return model.with_params(replace(model.params, v=ev.v)), q, ev, res
@@ -227,7 +227,8 @@ def _onset_deviations(m, nf, eps_list, rtol: float, stable: bool | None = True) 
     for eps in eps_list:
         v = nf.v * (1 + sign * eps)
         q0, qd0, T = nf.initial_state(v)
-        cyc = shoot(m.with_params(replace(m.params, v=v)), q0, qd0, T, rtol=rtol, tol=10 * rtol)
+        problem = PipeDynamics(m.with_params(replace(m.params, v=v)))
+        cyc = shoot(problem, q0, qd0, T, rtol=rtol, tol=10 * rtol)
         lo, hi = cyc.tip["eta_tip"]
         pred = nf.amplitude_coefficients["eta_tip"] * math.sqrt(abs(v - nf.v))
         dev.append(0.5 * (hi - lo) / pred - 1.0)
@@ -296,7 +297,7 @@ def test_subcritical_onset_with_an_end_mass():
     normal form finds the unstable cycles below v_cr (a transient would not), their
     amplitude over the prediction tending to 1 linearly in v_cr - v."""
     model = PipeModel(discretization_from_name("P3:4"), Params(alpha=0.0, beta=0.15, end_mass=0.5))
-    res = stability_analysis(model, v_max=6.0, follow_bifurcations=False)
+    res = analyse_stability(model, v_max=6.0, follow_bifurcations=False)
     ev = next(e for e in res.events if e.type == "flutter")
     assert ev.stable_before
     q = solve_path(model, np.linspace(0.0, ev.v, 6))[-1].q

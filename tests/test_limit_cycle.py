@@ -8,15 +8,11 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
-from fempipe.analyses.limit_cycle import (
-    ShootingError,
-    find_attractor,
-    recurrence,
-    shoot,
-    tip_coordinates,
-)
-from fempipe.analyses.stability import growth_rate, linearly_stable, spectrum
+from fempipe.analyses.limit_cycle import ShootingError, find_attractor, recurrence, shoot
+from fempipe.analyses.stability import compute_spectrum, growth_rate, linearly_stable
 from fempipe.analyses.statics import solve_static
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.kinematics import tip_values
 
 # P3 on 4 elements: v_cr within 1e-4 of the converged value (the stability
 # tests) and cheap enough for the default run.
@@ -25,9 +21,9 @@ DISC = FiniteElement(4, 3)
 
 def _v_cr(alpha: float = 0.0) -> float:
     """Linear critical velocity from the quadratic eigenproblem (fempipe.analyses.stability)."""
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
 
-    return critical_velocity(PipeModel(DISC, Params(alpha=alpha)), v_max=8.0).v_cr
+    return find_critical_velocity(PipeModel(DISC, Params(alpha=alpha)), v_max=8.0).v_cr
 
 
 @pytest.fixture(scope="module")
@@ -81,17 +77,15 @@ def test_equilibrium_below_v_cr():
     att = find_attractor(m)
     assert att.kind == "equilibrium"
     q = solve_static(m).q
-    tip = tip_coordinates(DISC, q, 0.0)
+    tip = tip_values(DISC, q, 0.0)
     assert att.tip["X_tip"] == [pytest.approx(tip["X_tip"])] * 2
-    with pytest.raises(TypeError, match="alpha must be a scalar"):
-        tip_coordinates(DISC, 0.0, q)  # the old order (disc, alpha, q)
 
 
 def test_equilibrium_decision_is_the_stability_criterion():
     """v = mu = 0, alpha = 0: a conservative system whose hanging straight pipe is
     the minimum of the potential energy (positive definite static Jacobian,
     checked here), hence stable (Lagrange-Dirichlet), as the resolved-mode
-    criterion of stability.spectrum and critical says.  Round-off gives the
+    criterion of stability.compute_spectrum and critical says.  Round-off gives the
     unfiltered spectrum of M^-1 K Re lambda = +2e-15 (measured), which once
     made the attractor finder refuse the equilibrium, integrate to t_max and
     report "non-periodic".  It must decide as stability does."""
@@ -99,7 +93,7 @@ def test_equilibrium_decision_is_the_stability_criterion():
     q = solve_static(m).q
     K = np.asarray(m.static_jacobian(q))
     assert np.linalg.eigvalsh(0.5 * (K + K.T)).min() > 0
-    assert spectrum(m, q).stable and linearly_stable(m, q)
+    assert compute_spectrum(m, q).stable and linearly_stable(m, q)
     att = find_attractor(m, t_max=5.0)
     assert att.kind == "equilibrium"
 
@@ -152,7 +146,7 @@ def test_shoot_converges_quadratically_from_a_rough_guess():
     ref = find_attractor(m)
     c = ref.cycle
     guess_q = c.q0 * 1.02
-    cyc = shoot(m, guess_q, c.qdot0 * 0.98, c.period * 1.01, level=c.level)
+    cyc = shoot(PipeDynamics(m), guess_q, c.qdot0 * 0.98, c.period * 1.01, level=c.level)
     assert cyc.iterations <= 5
     assert cyc.period == pytest.approx(c.period, abs=1e-7)
     assert cyc.stable
@@ -209,7 +203,7 @@ def _first_return(m, q0, p0, level: float, t_end: float):
     from fempipe.analyses.limit_cycle.tips import TipTrace, eta_tip, tip_extrema
 
     st = Radau(PipeDynamics(m), q0, p0, rtol=1e-9)
-    trace = TipTrace(m.disc, m.params.alpha, per_step=16)
+    trace = TipTrace(m, per_step=16)
     s_old = eta_tip(m.disc, st.q) - level
     for t, q, _ in st.steps(t_end):
         trace.record(st)
@@ -223,7 +217,7 @@ def _first_return(m, q0, p0, level: float, t_end: float):
             return (
                 t_c,
                 st.dense(t_c),
-                tip_extrema(m.disc, trace, m.params.alpha, per_step=16, fine=0),
+                tip_extrema(m, trace, per_step=16, fine=0),
             )
         s_old = s_new
     return None, (None, None), None
@@ -291,7 +285,7 @@ def test_polish_lands_on_the_cycle():
     iterate's in both."""
     m = PipeModel(DISC, Params(alpha=0.0, v=10.0))
     c = find_attractor(m).cycle
-    args = (m, c.q0 * 1.01, c.qdot0 * 0.99, c.period * 1.002)
+    args = (PipeDynamics(m), c.q0 * 1.01, c.qdot0 * 0.99, c.period * 1.002)
     rough = shoot(*args, level=c.level, tol=2e-4, polish=False)
     fine = shoot(*args, level=c.level, tol=2e-4)
     assert rough.residual > 1e-5 and fine.residual < 1e-3 * rough.residual

@@ -7,7 +7,7 @@ form has the trace -tr(M^-1 C(tau)), so the monodromy over [0, T] has the determ
     prod rho_k = exp(-\\int_0^T tr(M^-1 C(tau)) dtau)      (Liouville).
 
 The left side comes from the integrator's sensitivity of the variational problem
-(:func:`fempipe.analyses.space.floquet.out_of_plane_floquet`); the right side is a
+(:func:`fempipe.analyses.space.floquet.compute_out_of_plane_floquet`); the right side is a
 quadrature of the damping matrices along the same planar motion, integrated again here.
 Liouville's identity holds for every motion, not only a cycle, so a short transient of
 large amplitude serves.  The sine modes keep every multiplier well above the round-off
@@ -22,7 +22,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from fempipe.analyses.space.floquet import out_of_plane_floquet
+from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
 from fempipe.model.discretization import Modal
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
@@ -70,7 +70,7 @@ def test_liouville_identity_of_the_out_of_plane_monodromy(disc, params):
     qdot0 = rng.normal(scale=1.0, size=model.n)
     T = 0.25
     motion = SimpleNamespace(q0=q0, qdot0=qdot0, period=T)
-    rho = out_of_plane_floquet(model, motion, rtol=RTOL).multipliers
+    rho = compute_out_of_plane_floquet(model, motion, rtol=RTOL).multipliers
     assert rho.size == 2 * model.n
     assert np.abs(rho).min() > 1e-8  # every multiplier resolved
     lhs = float(np.sum(np.log(np.abs(rho))))
@@ -95,7 +95,7 @@ def test_small_cycle_multipliers_tend_to_the_strong_form_spectrum():
     from dataclasses import replace
 
     from fempipe.analyses.limit_cycle import shoot
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
     from fempipe.analyses.stability.hopf.normal_form import first_lyapunov_coefficient
     from fempipe.analyses.statics import solve_sagged
     from fempipe.model.discretization import FiniteElement
@@ -103,7 +103,7 @@ def test_small_cycle_multipliers_tend_to_the_strong_form_spectrum():
 
     base = Params(alpha=math.pi / 2, beta=0.142, gamma=18.9, mu=0.005)
     planar = PipeModel(FiniteElement(6, 3), base)
-    onset = critical_velocity(planar, v_max=8.0)
+    onset = find_critical_velocity(planar, v_max=8.0)
     at_onset = planar.with_params(replace(base, v=onset.v_cr))
     nf = first_lyapunov_coefficient(
         at_onset, solve_sagged(at_onset).q, omega=onset.events[0].frequency
@@ -114,8 +114,8 @@ def test_small_cycle_multipliers_tend_to_the_strong_form_spectrum():
     for delta in (0.01, 0.005):
         v = onset.v_cr + delta
         model = planar.with_params(replace(base, v=v))
-        cycle = shoot(model, *nf.initial_state(v), rtol=1e-10, tol=1e-9)
-        rho = out_of_plane_floquet(model, cycle, rtol=1e-10).multipliers[:4]
+        cycle = shoot(PipeDynamics(model), *nf.initial_state(v), rtol=1e-10, tol=1e-9)
+        rho = compute_out_of_plane_floquet(model, cycle, rtol=1e-10).multipliers[:4]
         ref = np.exp(strong.eigenvalues(v) * cycle.period)
         dev[delta] = np.array([r - ref[np.argmin(np.abs(ref - r))] for r in rho])
     limit = 2.0 * dev[0.005] - dev[0.01]

@@ -63,7 +63,9 @@ def test_strong_form_agrees_with_fe_at_one_inclination():
     p = Params(alpha=math.pi / 4, mu=0.005, **PAPER)
     lo, hi = 5.9, 6.5  # holds the onset (6.2126, found from v = 0 by the full validation case)
     s = lateral.critical_velocity(p, hi, v_min=lo)
-    r = stability.critical_velocity(out_of_plane_model(PipeModel(FiniteElement(32, 3), p)), hi, lo)
+    r = stability.find_critical_velocity(
+        PipeModel(FiniteElement(32, 3), p), hi, lo, planes=("out",)
+    )
     assert r.critical.type == s.kind == "flutter"
     assert abs(r.v_cr - s.v_cr) < 1e-8
     assert abs(r.critical.frequency - s.frequency) < 1e-8

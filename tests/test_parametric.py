@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from fempipe import FiniteElement, Params, PipeModel, PulsatingFlow, spectrum
+from fempipe import FiniteElement, Params, PipeModel, PulsatingFlow, compute_spectrum
 from fempipe.analyses.parametric import PulsationPencil, ReducedPulsation, floquet_multipliers
 from fempipe.analyses.parametric.regions import Candidate, candidates, locate_region
 from fempipe.model.dynamics_problem import PipeDynamics
@@ -37,7 +37,7 @@ def test_without_pulsation_the_multipliers_are_exp_lambda_t(reduced6):
     """sigma = 0: the multipliers are exp(lambda T) of the mean flow's spectrum (Eq. (32),
     computed by the stability analysis's own eigensolver)."""
     omega = 20.0
-    lam = np.asarray(spectrum(_model(6.0), np.zeros(DISC.n)).lam)
+    lam = np.asarray(compute_spectrum(_model(6.0), np.zeros(DISC.n)).lam)
     lam = lam[lam.imag >= 0]
     lam = lam[np.argsort(-lam.real)][:2]
     expected = np.exp(lam * 2 * math.pi / omega)
@@ -300,7 +300,7 @@ def test_the_forced_response_of_a_bent_pipe():
     omega = 20.0
     small = solve_forced_response(bent, 1e-7, omega)
     assert np.linalg.norm(small.q0 - solve_sagged(bent).q) < 1e-5
-    lam = spectrum(bent, solve_sagged(bent).q).lam
+    lam = compute_spectrum(bent, solve_sagged(bent).q).lam
     for e in np.exp(lam * 2 * math.pi / omega)[:4]:
         assert np.abs(small.multipliers - e).min() < 1e-7
     moved = solve_forced_response(bent, 0.3, omega)

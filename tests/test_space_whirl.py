@@ -39,13 +39,13 @@ def flutter():
 def test_bvp_whirl_is_born_at_the_planar_flutter_onset(flutter):
     """A small whirl of the continuum (tip radius 0.01, v free) sits at the Hopf point: its
     v and omega tend to the planar FE flutter onset (P3:16, computed here by
-    fempipe.analyses.stability.critical_velocity: v_cr = 6.33369, omega_cr = 15.7355, a
+    fempipe.analyses.stability.find_critical_velocity: v_cr = 6.33369, omega_cr = 15.7355, a
     discretization error below 1e-7) as the radius^2 (the Hopf normal form: v - v_cr ~
     radius^2).  Two radii extrapolate to radius 0: measured 1e-6 and 2e-6 off."""
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
     from fempipe.validation.whirl_bvp import _initial_guess, _result, _solve
 
-    onset = critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=0.0)), v_max=8.0)
+    onset = find_critical_velocity(PipeModel(FiniteElement(16, 3), Params(alpha=0.0)), v_max=8.0)
     v_cr, omega_cr = onset.v_cr, onset.events[0].frequency
 
     lam, slope = flutter

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import fempipe.analyses.stability.analysis as analysis
-from fempipe.analyses.stability import spatial_critical_velocity, spatial_stability_analysis
+from fempipe.analyses.stability import PLANES as BOTH
+from fempipe.analyses.stability import analyse_stability, find_critical_velocity
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import FiniteElement, Modal
@@ -100,7 +101,7 @@ def test_mirror_symmetry_of_the_out_of_plane_critical_velocity():
     problem onto each other: the same v_cr, to the 1e-10 of the events."""
     disc = FiniteElement(8, 3)
     r = [
-        spatial_critical_velocity(PipeModel(disc, Params(alpha=a, **PAPER)), v_max=10)
+        find_critical_velocity(PipeModel(disc, Params(alpha=a, **PAPER)), v_max=10, planes=BOTH)
         for a in (1.1, -1.1)
     ]
     assert r[0].out_of_plane.v_cr == pytest.approx(r[1].out_of_plane.v_cr, abs=1e-9)
@@ -112,7 +113,7 @@ def test_mirror_symmetry_of_the_out_of_plane_critical_velocity():
 def test_neutral_rotation_mode_of_the_buckled_standing_pipe():
     """alpha = pi, buckled: lambda = 0 with the rotated static shape, the rest stable, and the
     uncorrected K x shrinking under refinement (the continuum's exact null vector)."""
-    from fempipe.analyses.stability import spectrum
+    from fempipe.analyses.stability import compute_spectrum
 
     resid = []
     for n_el in (4, 8, 16):
@@ -125,7 +126,7 @@ def test_neutral_rotation_mode_of_the_buckled_standing_pipe():
         mats = ops.matrices(q.q)
         resid.append(mats.neutral_residual)
         assert np.linalg.norm(mats.K @ mats.neutral) <= 1e-12 * np.linalg.norm(mats.K)
-        spec = spectrum(out_of_plane_model(model), q.q)
+        spec = compute_spectrum(out_of_plane_model(model), q.q)
         k = int(np.argmin(np.abs(spec.lam)))
         assert abs(spec.lam[k]) <= 1e-9
         x = np.real(spec.vectors[:, k] / spec.vectors[np.argmax(np.abs(mats.neutral)), k])
@@ -152,7 +153,7 @@ def test_sparser_out_of_plane_samples_give_the_same_events(params, monkeypatch):
     runs = {}
     for stride in (1, analysis.OUT_OF_PLANE_STRIDE):
         monkeypatch.setattr(analysis, "OUT_OF_PLANE_STRIDE", stride)
-        runs[stride] = spatial_stability_analysis(model, v_max=12).out_of_plane.events
+        runs[stride] = analyse_stability(model, v_max=12, planes=BOTH).out_of_plane.events
     a, b = runs.values()
     assert [(e.branch, e.type, e.mode) for e in a] == [(e.branch, e.type, e.mode) for e in b]
     assert max(abs(x.v - y.v) for x, y in zip(a, b, strict=True)) <= 1e-9
@@ -162,9 +163,9 @@ def test_inclined_pipe_flutters_out_of_the_plane_first():
     """Paper's case at alpha = pi/2: the first loss of stability is out of the plane; the FE
     value agrees with the beam modes (error ~N^-4) and with P3 on twice the elements."""
     p = Params(alpha=math.pi / 2, **PAPER)
-    r8 = spatial_critical_velocity(PipeModel(FiniteElement(8, 3), p), v_max=10)
-    r16 = spatial_critical_velocity(PipeModel(FiniteElement(16, 3), p), v_max=10)
-    beam = spatial_critical_velocity(PipeModel(Modal(12, basis="beam"), p), v_max=10)
+    r8 = find_critical_velocity(PipeModel(FiniteElement(8, 3), p), v_max=10, planes=BOTH)
+    r16 = find_critical_velocity(PipeModel(FiniteElement(16, 3), p), v_max=10, planes=BOTH)
+    beam = find_critical_velocity(PipeModel(Modal(12, basis="beam"), p), v_max=10, planes=BOTH)
     assert r16.critical.plane == "out" and r16.critical.type == "flutter"
     assert r16.out_of_plane.v_cr < 0.95 * r16.in_plane.v_cr
     assert r8.out_of_plane.v_cr == pytest.approx(r16.out_of_plane.v_cr, abs=1e-5)
@@ -174,7 +175,9 @@ def test_inclined_pipe_flutters_out_of_the_plane_first():
 
 
 def test_hanging_pipe_loses_stability_in_every_plane_at_once():
-    r = spatial_critical_velocity(PipeModel(FiniteElement(8, 3), Params(alpha=0.0, **PAPER)), 10)
+    r = find_critical_velocity(
+        PipeModel(FiniteElement(8, 3), Params(alpha=0.0, **PAPER)), 10, planes=BOTH
+    )
     assert r.out_of_plane.v_cr == r.in_plane.v_cr
     assert r.critical.plane == "in"
 
@@ -237,3 +240,25 @@ def test_readme_example_of_the_3d_stability_runs(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert "'plane': 'out'" in lines[0] and "5.82089" in lines[0]
     assert lines[1].startswith("6.21009") and "5.82089" in lines[1]
+
+
+def test_planes_is_validated_and_chooses_the_result():
+    """``planes`` names the linear problems: a bad value is a ParamError naming it; an
+    out-of-plane model needs "out"; one plane gives a StabilityResult of that plane."""
+    from fempipe.analyses.stability import StabilityResult, trace_root_locus
+    from fempipe.core.errors import ParamError
+
+    model = PipeModel(Modal(2), Params(alpha=1.0, **PAPER))
+    for planes in (("up",), (), ("in", "in"), "sideways"):
+        with pytest.raises(ParamError, match="planes") as err:
+            find_critical_velocity(model, 2.0, planes=planes)
+        assert err.value.field == "planes"
+    with pytest.raises(ParamError, match="planes"):
+        trace_root_locus(out_of_plane_model(model), [0.0, 1.0])
+    with pytest.raises(ParamError, match="'in', 'out'"):
+        analyse_stability(model, 2.0, planes=("in", "z"))
+    out = find_critical_velocity(out_of_plane_model(model), 10.0, planes=("out",))
+    same = find_critical_velocity(model, 10.0, planes=("out",))
+    assert isinstance(out, StabilityResult) and out.plane == "out"
+    assert out.v_cr == same.v_cr
+    assert find_critical_velocity(model, 10.0).plane == "in"

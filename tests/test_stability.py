@@ -17,16 +17,16 @@ from scipy.special import jv
 from fempipe import FiniteElement, Modal, Params, PipeModel, solve_static
 from fempipe.analyses.stability import (
     STABILITY_TOL,
+    analyse_stability,
     cantilever_frequencies,
-    critical_velocity,
+    compute_spectrum,
+    find_critical_velocity,
     linearized_matrices,
     linearly_stable,
+    map_stability,
     mode_shape,
     resolution,
-    root_locus,
-    spectrum,
-    stability_analysis,
-    stability_map,
+    trace_root_locus,
 )
 from fempipe.analyses.statics import solve_sagged
 from fempipe.model.kinematics import shape
@@ -154,7 +154,7 @@ def test_clamped_free_beam_frequencies():
     """v = gamma = mu = 0: the Euler-Bernoulli cantilever, Im lambda = beta_r^2 =
     3.5160, 22.034, 61.697, Re lambda = 0.  P3:16 errors measured 1e-11, 5e-9,
     9e-8 (order h^6); the bound 1e-6 is ten times the largest of them."""
-    spec = spectrum(PipeModel(P3_16, Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0)))
+    spec = compute_spectrum(PipeModel(P3_16, Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0)))
     got = np.array([upper(spec, r).imag for r in (1, 2, 3)])
     exact = np.array([1.87510407, 4.69409113, 7.85475744]) ** 2
     assert np.abs(got / exact - 1).max() < 1e-6
@@ -166,7 +166,9 @@ def test_beck_column_flutters_at_20_05():
     """beta = gamma = mu = 0 leaves the follower force v^2 alone: Beck's column
     (Beck 1952) flutters at v^2 = P L^2/EI = 20.05.  The literature gives four
     digits, so the bound is half a unit of the last one (2.5e-4 relative)."""
-    res = critical_velocity(PipeModel(P3_16, Params(alpha=0.0, beta=0.0, gamma=0.0, mu=0.0)), 6.0)
+    res = find_critical_velocity(
+        PipeModel(P3_16, Params(alpha=0.0, beta=0.0, gamma=0.0, mu=0.0)), 6.0
+    )
     assert res.critical.type == "flutter"
     assert abs(res.v_cr**2 / 20.05 - 1) < 2.5e-4
 
@@ -181,7 +183,7 @@ def test_standing_column_buckles_at_greenhill_load():
 
     def max_real(gamma):
         p = Params(alpha=np.pi, beta=0.142, gamma=gamma, mu=5e-3, v=0.0)
-        return spectrum(PipeModel(P3_16, p), q0).max_real
+        return compute_spectrum(PipeModel(P3_16, p), q0).max_real
 
     assert max_real(7.5) < 0 < max_real(8.2)
     gamma_cr = brentq(max_real, 7.5, 8.2, xtol=1e-12)
@@ -194,7 +196,9 @@ def test_gregory_paidoussis_cantilever():
     conveying fluid flutters in its second mode at v_cr ~ 5.6 (Gregory &
     Paidoussis 1966; Paidoussis, Fluid-Structure Interactions vol. 1, Fig. 3.10).
     The value is read off a figure: +-0.15 (about 3 %)."""
-    res = critical_velocity(PipeModel(P3_16, Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0)), 8.0)
+    res = find_critical_velocity(
+        PipeModel(P3_16, Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0)), 8.0
+    )
     assert res.critical.type == "flutter" and res.critical.mode == 2
     assert abs(res.v_cr - 5.6) < 0.15
 
@@ -206,7 +210,7 @@ LOADED = Params(alpha=np.pi / 2, v=3.0, **PAPER)
 @pytest.fixture(scope="module")
 def reference_mode2():
     """Mode 2 at a sagged state (alpha = pi/2, v = 3) on P3:64 (error ~1e-11)."""
-    return upper(spectrum(PipeModel(FiniteElement(64, 3), LOADED)), 2)
+    return upper(compute_spectrum(PipeModel(FiniteElement(64, 3), LOADED)), 2)
 
 
 MESHES = {1: [16, 32, 64, 128], 2: [4, 8, 16, 32], 3: [4, 8, 16, 32]}
@@ -218,7 +222,10 @@ def test_eigenvalue_convergence_order(degree, reference_mode2):
     h^(2k) for P_k.  Measured slopes 2.00, 3.97, 5.8 (P3 pre-asymptotic on the
     coarse meshes); bound +-0.35."""
     errs = [
-        abs(upper(spectrum(PipeModel(FiniteElement(n, degree), LOADED)), 2) - reference_mode2)
+        abs(
+            upper(compute_spectrum(PipeModel(FiniteElement(n, degree), LOADED)), 2)
+            - reference_mode2
+        )
         for n in MESHES[degree]
     ]
     slope = np.polyfit(np.log(1.0 / np.array(MESHES[degree])), np.log(errs), 1)[0]
@@ -230,7 +237,7 @@ def test_modal_converges_to_fe(reference_mode2):
     defect); Richardson extrapolation of N = 32, 64 with that order agrees with
     the FE reference to 2e-6 relative (N = 64 alone: 2.5e-6)."""
     Ns = np.array([16, 32, 64])
-    lams = np.array([upper(spectrum(PipeModel(Modal(N), LOADED)), 2) for N in Ns])
+    lams = np.array([upper(compute_spectrum(PipeModel(Modal(N), LOADED)), 2) for N in Ns])
     errs = np.abs(lams - reference_mode2)
     slope = np.polyfit(np.log(Ns), np.log(errs), 1)[0]
     assert -3.3 < slope < -2.7, (slope, errs)
@@ -242,8 +249,8 @@ def test_default_discretization_vcr_accuracy():
     """The default P3:16 gives v_cr within 1e-6 (relative) of P3:32; measured
     2.5e-9 (P3: 8, 16, 32, 64 differ by 1e-6, 1.6e-8, 2.5e-10: order 6)."""
     p = Params(alpha=np.pi / 2, **PAPER)
-    coarse = critical_velocity(PipeModel(P3_16, p), 10.0).v_cr
-    fine = critical_velocity(PipeModel(FiniteElement(32, 3), p), 10.0).v_cr
+    coarse = find_critical_velocity(PipeModel(P3_16, p), 10.0).v_cr
+    fine = find_critical_velocity(PipeModel(FiniteElement(32, 3), p), 10.0).v_cr
     assert abs(coarse / fine - 1) < 1e-6
 
 
@@ -252,8 +259,8 @@ def test_default_discretization_vcr_accuracy():
 def test_spectrum_symmetric_under_alpha_to_minus_alpha(disc):
     """(theta, alpha) -> (-theta, -alpha) maps states to states and leaves
     K, C, M unchanged (they depend on cos of the state): identical spectra."""
-    a = spectrum(PipeModel(disc, Params(alpha=1.0, v=4.0, **PAPER)))
-    b = spectrum(PipeModel(disc, Params(alpha=-1.0, v=4.0, **PAPER)))
+    a = compute_spectrum(PipeModel(disc, Params(alpha=1.0, v=4.0, **PAPER)))
+    b = compute_spectrum(PipeModel(disc, Params(alpha=-1.0, v=4.0, **PAPER)))
     assert np.allclose(a.q, -b.q, atol=1e-10)
     assert np.array_equal(a.mode, b.mode)
     assert np.abs(a.lam - b.lam).max() < 1e-9 * np.abs(a.lam).max()
@@ -281,7 +288,7 @@ def test_no_false_instability_fine_p3_at_rest(n_elements, n_resolved):
     |lambda| ~ 1e7) from round-off alone: that is what the resolution rule
     removes."""
     p = Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=0.0, v=0.0)
-    spec = spectrum(PipeModel(FiniteElement(n_elements, 3), p))
+    spec = compute_spectrum(PipeModel(FiniteElement(n_elements, 3), p))
     assert spec.method == "shift-invert"
     assert spec.stable and spec.max_real_unresolved > 0.0
     assert spec.n_resolved_modes > n_resolved
@@ -299,7 +306,7 @@ def test_fine_mesh_stable_below_unstable_above_vcr(params, v_cr):
     """128 P3 elements (n = 384) at 0.95 v_cr is stable and at 1.05 v_cr is not:
     the filter neither invents an instability nor hides the real one.  v_cr from
     P3:16 (test_default_discretization_vcr_accuracy, the G&P test).  The dense
-    criterion of spectrum() (linearly_stable(sparse=False), the same decision
+    criterion of compute_spectrum() (linearly_stable(sparse=False), the same decision
     without the mode numbers' path back to v = 0) about the static state of P3:16
     projected onto the fine mesh and corrected by Newton there (continuing the
     fine mesh from v = 0 took 11-14 s of the test's 28)."""
@@ -323,7 +330,7 @@ def brute_force_vcr(model, v_max, dv=0.05):
         return solve_static(model.with_params(model.params.with_flow(v)), q0=q0).q
 
     def unstable(v, q):
-        return spectrum(model.with_params(model.params.with_flow(v)), q).max_real > 0
+        return compute_spectrum(model.with_params(model.params.with_flow(v)), q).max_real > 0
 
     v = 0.0
     while v < v_max:
@@ -344,7 +351,7 @@ def test_vcr_equals_brute_force(alpha):
     """v_cr located by tracking + Brent equals bisection on the sign of the
     largest real part (independent of tracking) to 1e-8."""
     model = PipeModel(P3_16, Params(alpha=alpha, **PAPER))
-    res = critical_velocity(model, 10.0)
+    res = find_critical_velocity(model, 10.0)
     assert res.critical.type == "flutter" and res.critical.mode == 2
     assert abs(res.v_cr - brute_force_vcr(model, 10.0)) < 1e-8
 
@@ -382,7 +389,7 @@ def test_alpha_pi_events_on_every_branch():
     mirror images with a fold.  Independent checks: the pitchfork is where
     det K^d = 0 on the straight state (Brent on det K^d); the fold solves the Moore-Spence system."""
     model = PipeModel(P3_16, Params(alpha=np.pi, **PAPER))
-    res = stability_analysis(model, v_max=6.0)
+    res = analyse_stability(model, v_max=6.0)
     prim = next(b for b in res.branches if b.name == "primary")
     assert [(e.type, e.mode) for e in prim.events] == [
         ("divergence", 1),
@@ -427,7 +434,7 @@ def test_event_types_and_directions_along_a_folded_branch():
     before the near-straight part flutters; v_cr is the first fold, where the
     loaded state stops existing."""
     model = PipeModel(P3_16, Params(alpha=np.radians(179.0), **PAPER))
-    res = stability_analysis(model, v_max=6.0, follow_bifurcations=False)
+    res = analyse_stability(model, v_max=6.0, follow_bifurcations=False)
     types = [e.type for e in res.branches[0].events]
     assert types.count("fold") == 2 and "flutter" in types
     assert res.critical.type == "fold"
@@ -441,8 +448,8 @@ def test_root_locus_tracks_modes_by_continuity():
     points where needed) they agree with a fine grid, and the mode crossing the
     axis is mode 2 near v_cr = 6.3337 (alpha = 0)."""
     model = PipeModel(P3_16, Params(alpha=0.0, **PAPER))
-    coarse = root_locus(model, np.linspace(0, 8, 9), n_modes=4)
-    fine = root_locus(model, np.linspace(0, 8, 81), n_modes=4)
+    coarse = trace_root_locus(model, np.linspace(0, 8, 9), n_modes=4)
+    fine = trace_root_locus(model, np.linspace(0, 8, 81), n_modes=4)
     assert np.array_equal(coarse.modes, fine.modes)
     # Same eigenvalues under the same mode numbers (the two members of one
     # mode, a conjugate pair or two real roots, may come in either order).
@@ -466,7 +473,7 @@ def test_mode_shape_global_frame_is_the_derivative_of_the_centerline():
     """The global-frame mode shape equals a finite difference of
     kinematics.shape along the mode (step 1e-6: error ~1e-12 + 1e-10)."""
     model = PipeModel(P3_16, Params(alpha=np.pi / 4, v=3.0, **PAPER))
-    spec = spectrum(model)
+    spec = compute_spectrum(model)
     k = int(np.flatnonzero(spec.mode == 2)[0])
     ms = mode_shape(P3_16, spec, k)
     assert abs(np.abs(ms.theta).max() - 1) < 1e-12
@@ -489,11 +496,11 @@ def test_stability_map_serial_parallel_and_executor_agree():
     disc = Modal(4)
     kw = {"mu": 5e-3, "v_max": 10.0}
     alphas, curves = [0.0, np.pi / 2], [(0.142, 18.9), (0.3, 18.9)]
-    serial = stability_map(disc, alphas, curves, **kw)
-    par = stability_map(disc, alphas, curves, workers=2, **kw)
+    serial = map_stability(disc, alphas, curves, **kw)
+    par = map_stability(disc, alphas, curves, workers=2, **kw)
     seen = []
     with ThreadPoolExecutor(2) as ex:
-        thr = stability_map(
+        thr = map_stability(
             disc, alphas, curves, executor=ex, callback=lambda d, n, r: seen.append(d), **kw
         )
     assert sorted(seen) == [1, 2, 3, 4]
@@ -509,13 +516,13 @@ def test_stability_map_serial_parallel_and_executor_agree():
 def test_bad_input_names_the_parameter():
     model = PipeModel(P3_16, Params(**PAPER))
     with pytest.raises(ValueError, match="v_min"):
-        stability_analysis(model, v_max=1.0, v_min=2.0)
+        analyse_stability(model, v_max=1.0, v_min=2.0)
     with pytest.raises(ValueError, match="n_modes"):
-        root_locus(model, [0.0, 1.0], n_modes=0)
+        trace_root_locus(model, [0.0, 1.0], n_modes=0)
     with pytest.raises(ValueError, match="tolerance"):
         resolution(P3_16, tolerance=2.0)
     with pytest.raises(ValueError, match="resolves no mode"):
-        spectrum(PipeModel(FiniteElement(1, 1), Params(**PAPER)))
+        compute_spectrum(PipeModel(FiniteElement(1, 1), Params(**PAPER)))
     assert STABILITY_TOL < 1e-6
 
 
@@ -531,7 +538,7 @@ def test_alpha_a_hair_below_pi_gives_the_events_of_pi(caplog):
 
     def events(alpha):
         m = PipeModel(FiniteElement(8, 3), Params(alpha=alpha, **PAPER_CASE))
-        res = stability_analysis(m, 6.0, follow_bifurcations=False)
+        res = analyse_stability(m, 6.0, follow_bifurcations=False)
         return [(e.type, e.v) for e in res.events if e.branch == "primary"]
 
     exact = events(np.pi)

@@ -1,7 +1,7 @@
 """One stability criterion, intrinsic mode numbers, whole-system events, cheap stability flag.
 
 References come from outside the code under test where they can: the dense
-eigenvalue criterion of :func:`fempipe.analyses.stability.spectrum` checks the sparse
+eigenvalue criterion of :func:`fempipe.analyses.stability.compute_spectrum` checks the sparse
 one, a second mesh and the modal discretization check the mode numbers, a
 spectrum just below and above an event checks its stable_before/stable_after.
 """
@@ -13,7 +13,12 @@ import numpy as np
 import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel, solve_static
-from fempipe.analyses.stability import STABILITY_TOL, root_locus, spectrum, stability_analysis
+from fempipe.analyses.stability import (
+    STABILITY_TOL,
+    analyse_stability,
+    compute_spectrum,
+    trace_root_locus,
+)
 from fempipe.analyses.statics import solve_sagged
 
 P3_16 = FiniteElement(16, 3)
@@ -42,7 +47,7 @@ def test_single_v_spectrum_lists_the_unstable_eigenvalue():
     unstable must be listed (its real part is the reported max_real).
     """
     model = PipeModel(P3_16, Params(alpha=0.0, beta=0.65, gamma=10.0, mu=0.0, v=12.88))
-    locus = root_locus(model, [12.88], n_modes=4)
+    locus = trace_root_locus(model, [12.88], n_modes=4)
     assert not locus.stable[0] and locus.max_real[0] > 0
     listed = locus.lam[0][locus.resolved[0]]
     assert np.isclose(listed.real.max(), locus.max_real[0], rtol=1e-12, atol=0)
@@ -74,9 +79,9 @@ def test_mode_number_does_not_depend_on_range_start_or_mesh(beta, v):
     labels = []
     for disc in (P3_16, FiniteElement(40, 3), Modal(10)):
         model = PipeModel(disc, Params(alpha=0.0, beta=beta, gamma=10.0, mu=0.0, v=0.0))
-        path = root_locus(model, np.linspace(0.0, v, 5), n_modes=2)
-        alone = root_locus(model, [v], n_modes=2)
-        spec = spectrum(model.with_params(model.params.with_flow(v)))
+        path = trace_root_locus(model, np.linspace(0.0, v, 5), n_modes=2)
+        alone = trace_root_locus(model, [v], n_modes=2)
+        spec = compute_spectrum(model.with_params(model.params.with_flow(v)))
         got = [_unstable_modes(path, -1), _unstable_modes(alone, 0)]
         got.append(sorted({int(m) for m in spec.mode[spec.unstable]}))
         assert got[0] and got[0] == got[1] == got[2], (disc.name, got)
@@ -97,7 +102,7 @@ def test_events_from_v0_equal_events_from_vmin(params, v_min, v_max):
     model = PipeModel(P3_16, params)
 
     def events(lo):
-        res = stability_analysis(model, v_max, lo, follow_bifurcations=False)
+        res = analyse_stability(model, v_max, lo, follow_bifurcations=False)
         return [
             (e.type, e.mode, round(e.v, 8), e.stable_before, e.stable_after)
             for e in res.events
@@ -125,7 +130,7 @@ def test_events_state_whole_system_stability(mu, back):
     each event on the straight primary branch.
     """
     model = PipeModel(P3_16, Params(alpha=np.pi, beta=0.2, gamma=40.0, mu=mu))
-    res = stability_analysis(model, 4.0, 0.0, follow_bifurcations=False)
+    res = analyse_stability(model, 4.0, 0.0, follow_bifurcations=False)
     prim = [e for e in res.events if e.branch == "primary" and not e.at_start]
     assert [(e.type, e.mode) for e in prim if e.mode == 1] == [(back, 1)]
     q = np.zeros(P3_16.n)  # the straight column is the primary branch at alpha = pi
@@ -133,7 +138,7 @@ def test_events_state_whole_system_stability(mu, back):
         d = ev.to_dict()
         for dv, key in ((-1e-6, "stable_before"), (1e-6, "stable_after")):
             m = model.with_params(model.params.with_flow(ev.v + dv))
-            assert spectrum(m, q).stable is d[key], (ev, key)
+            assert compute_spectrum(m, q).stable is d[key], (ev, key)
     for ev in res.events:
         assert {"stable_before", "stable_after"} <= set(ev.to_dict())
 
@@ -200,6 +205,6 @@ def test_linearly_stable_is_the_spectrum_criterion(params):
 
     model = PipeModel(P3_16, params)
     q = solve_sagged(model).q
-    spec = spectrum(model, q)
+    spec = compute_spectrum(model, q)
     assert linearly_stable(model, q) is spec.stable
     assert growth_rate(model, q) == pytest.approx(spec.max_real, rel=1e-9, abs=1e-12)

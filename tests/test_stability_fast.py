@@ -29,9 +29,9 @@ import fempipe.analyses.stability.tracking as tracking
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.analyses.stability import (
     STABILITY_TOL,
+    analyse_stability,
+    compute_spectrum,
     linearized_matrices,
-    spectrum,
-    stability_analysis,
 )
 from fempipe.analyses.stability.branch_analysis import peak_candidates
 from fempipe.analyses.stability.linear import StraightPencil
@@ -65,7 +65,7 @@ def _assert_same_events(fast, general, **tol):
 
 
 def _analyse(model, forced_general: bool, monkeypatch, v_max: float):
-    """stability_analysis, with the straight fast path allowed or switched off (then also
+    """analyse_stability, with the straight fast path allowed or switched off (then also
     the StraightPencil: every spectrum from the assembled Jacobians); and whether the fast
     path built the primary branch."""
     taken = []
@@ -90,7 +90,7 @@ def _analyse(model, forced_general: bool, monkeypatch, v_max: float):
         if forced_general:
             mp.setattr(chunked_branch, "_straight_without_branch_points", lambda *a, **k: False)
             mp.setattr(tracking, "straight_pencil", Assembled)
-        res = stability_analysis(model, v_max, 0.0)
+        res = analyse_stability(model, v_max, 0.0)
     return res, bool(taken)
 
 
@@ -152,14 +152,14 @@ def test_inherited_classification_is_that_of_the_eigenvectors(disc, params, monk
     model = PipeModel(disc, params)
     with monkeypatch.context() as mp:
         mp.setattr(tracking, "classify_inherited", check)
-        fast = stability_analysis(model, 16.0, 0.0)
+        fast = analyse_stability(model, 16.0, 0.0)
     with monkeypatch.context() as mp:
         mp.setattr(
             tracking,
             "classify_inherited",
             lambda m, q, r, meth, mat, ref: classified.classify_spectrum(m, q, r, meth, mat),
         )
-        general = stability_analysis(model, 16.0, 0.0)
+        general = analyse_stability(model, 16.0, 0.0)
     assert len(inherited) >= 10
     assert all(all(x) for x in inherited)
     _assert_same_events(fast, general, rel=1e-10)
@@ -311,7 +311,7 @@ def test_baseline_eigenvalues_match_the_straight_pipe_spectrum():
     and of fempipe P3:16 agree to 1e-6 (both converged to ~1e-7 there)."""
     lam_b = _baseline().make_eigenvalues(40, 0.2, 10.0)(3.0)
     model = PipeModel(FiniteElement(16, 3), Params(alpha=0.0, beta=0.2, gamma=10.0, mu=0.0, v=3.0))
-    spec = spectrum(model, np.zeros(model.n))
+    spec = compute_spectrum(model, np.zeros(model.n))
     for mode in range(1, 5):
         k = np.flatnonzero((spec.mode == mode) & (spec.lam.imag > 0))
         assert k.size == 1

@@ -26,7 +26,6 @@ from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import out_of_plane_model
 from fempipe.model.params import Params, PipeSI
 from fempipe.validation.bvp import solve_static_bvp
 
@@ -563,15 +562,15 @@ def test_cli_critical_with_damping_and_spring(capsys):
     d = run_json(capsys, argv)
     assert d["params"]["external_damping"] == 0.1
     assert d["params"]["springs"] == [[50.0, 0.5]]
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
 
     p = Params(alpha=math.pi / 2, external_damping=0.1, springs=((50.0, 0.5),))
-    lib = critical_velocity(PipeModel(FiniteElement(6, 2), p), 12.0)
-    plain = critical_velocity(PipeModel(FiniteElement(6, 2), Params(alpha=math.pi / 2)), 12.0)
+    lib = find_critical_velocity(PipeModel(FiniteElement(6, 2), p), 12.0)
+    plain = find_critical_velocity(PipeModel(FiniteElement(6, 2), Params(alpha=math.pi / 2)), 12.0)
     assert d["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-10)
     assert abs(lib.v_cr - plain.v_cr) > 1e-2
     # v_cr is the 3-D one: the out-of-plane problem with the same variants
-    out = critical_velocity(out_of_plane_model(PipeModel(FiniteElement(6, 2), p)), 12.0)
+    out = find_critical_velocity(PipeModel(FiniteElement(6, 2), p), 12.0, planes=("out",))
     assert d["v_cr"] == d["v_cr_out_of_plane"] == pytest.approx(out.v_cr, abs=1e-9)
 
 
@@ -637,13 +636,13 @@ def test_cli_stability_map_passes_the_variants(capsys):
     d = run_json(capsys, argv)
     assert d["end_mass"] == 0.2 and d["external_damping"] == 0.5
     assert d["springs"] == [[20.0, 0.5]]
-    from fempipe.analyses.stability import critical_velocity
+    from fempipe.analyses.stability import find_critical_velocity
 
     p = Params(alpha=math.pi / 2, end_mass=0.2, external_damping=0.5, springs=((20.0, 0.5),))
-    lib = critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2)
+    lib = find_critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2)
     assert d["points"][0]["v_cr_in_plane"] == pytest.approx(lib.v_cr, abs=1e-8)
     # the map's v_cr is the first loss in 3-D: out of the plane, with the same variants
-    out = critical_velocity(out_of_plane_model(PipeModel(Modal(3), p)), 10.0, ds_max=0.2)
+    out = find_critical_velocity(PipeModel(Modal(3), p), 10.0, ds_max=0.2, planes=("out",))
     assert d["points"][0]["v_cr"] == pytest.approx(out.v_cr, abs=1e-8)
 
 
@@ -657,10 +656,10 @@ def test_basis_values_agree_with_evaluate(disc_name):
 
 
 def test_stability_map_refuses_unknown_variants():
-    from fempipe.analyses.stability import stability_map
+    from fempipe.analyses.stability import map_stability
 
     with pytest.raises(ValueError, match="variants are"):
-        stability_map(Modal(2), [0.0], [(0.142, 18.9)], variants={"tip_mass": 1.0})
+        map_stability(Modal(2), [0.0], [(0.142, 18.9)], variants={"tip_mass": 1.0})
 
 
 @pytest.mark.parametrize("variant", [{"external_damping": 0.5}, {"end_mass": 0.5}])

@@ -43,7 +43,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fempipe import FiniteElement, Params, PipeModel
-from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.statics import solve_path
 from fempipe.cli import main as cli_main
 from fempipe.model.kinematics import tip_values
@@ -193,7 +193,7 @@ def critical_reference(alpha: float, v_max: float, n_elements: int = 64) -> dict
     vals = []
     for n in (n_elements // 2, n_elements):
         model = PipeModel(FiniteElement(n, 3), Params(alpha=alpha, **CASE))
-        res = stability_analysis(model, v_max=v_max, follow_bifurcations=False)
+        res = analyse_stability(model, v_max=v_max, follow_bifurcations=False)
         vals.append(_critical_quantities(res.to_dict(), _standing(alpha)))
     return {k: (vals[1][k][0], abs(vals[1][k][0] - vals[0][k][0]) / 63.0 + 1e-15) for k in vals[1]}
 

@@ -29,9 +29,10 @@ from dataclasses import replace
 import numpy as np
 
 from fempipe.analyses.limit_cycle import shoot
-from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.hopf import normal_forms
 from fempipe.model.discretization import discretization_from_name
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
@@ -45,7 +46,7 @@ def onset_table(
     first_only: bool = False,
 ):
     """One row per (flutter event, eps): prediction, shot amplitude, ratio, period."""
-    res = stability_analysis(model, v_max=v_max, follow_bifurcations=False)
+    res = analyse_stability(model, v_max=v_max, follow_bifurcations=False)
     t0 = time.process_time()
     forms = normal_forms(model, res)
     cpu_l1 = time.process_time() - t0
@@ -72,7 +73,7 @@ def onset_table(
                 qd0 = scale * qd0
             t1 = time.process_time()
             try:
-                cyc = shoot(m, q0, qd0, T, rtol=rtol, tol=tol, max_iter=20)
+                cyc = shoot(PipeDynamics(m), q0, qd0, T, rtol=rtol, tol=tol, max_iter=20)
             except Exception as exc:  # noqa: BLE001 - reported in the table
                 rows.append({"event": list(key), "eps": eps, "note": f"shooting failed: {exc}"})
                 continue

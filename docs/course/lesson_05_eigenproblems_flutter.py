@@ -70,7 +70,7 @@ print(f"(beta_1 L)^2 = {beta1**2:.10f}; observed order of P2 {eigen_order:.2f} (
 # b_i = \int phi_i, the momentum the fluid carries out at the tip.  The eigenvalues are no
 # longer on the imaginary axis; as v grows the second mode's pair crosses it: a Hopf
 # (flutter) instability.  We locate it by bisection on the largest real part, then compare
-# with :func:`fempipe.critical_velocity` (events tracked along the static branch: the same
+# with :func:`fempipe.find_critical_velocity` (events tracked along the static branch: the same
 # discretization, another algorithm) and with the classical linear theory of the straight
 # pipe (Paidoussis' equation for the lateral displacement, solved on Legendre spectral
 # elements in ``fempipe.validation.classical``): an independent reference that shares no
@@ -91,17 +91,17 @@ print(
     f"{np.max(np.abs(C - C.T)):.2f}"
 )
 v_bisect = brentq(growth, 4.0, 7.0, xtol=1e-10)
-v_fempipe = fempipe.critical_velocity(fempipe.PipeModel(disc, flowing), v_max=8.0).v_cr
+v_fempipe = fempipe.find_critical_velocity(fempipe.PipeModel(disc, flowing), v_max=8.0).v_cr
 classical = classical_critical_velocity(
     StraightPipe(beta=0.2, gamma=0.0, mu=1e-3), v_max=8.0, method="legendre"
 )
 v_classical = classical.v_cr
-print(f"flutter: bisection v_cr = {v_bisect:.8f}, fempipe.critical_velocity {v_fempipe:.8f}")
+print(f"flutter: bisection v_cr = {v_bisect:.8f}, fempipe.find_critical_velocity {v_fempipe:.8f}")
 print(f"         classical theory {v_classical:.8f}: P3:8 differs by {v_bisect - v_classical:.1e}")
 
 # The eigenvalues for v = 0 to 7, as dots coloured by v (no tracking: sorting by
 # frequency would mix the modes where one becomes overdamped; fempipe's
-# :func:`fempipe.root_locus` tracks them by their eigenvectors).
+# :func:`fempipe.trace_root_locus` tracks them by their eigenvectors).
 vs = np.linspace(0.0, 7.0, 36)
 pts = []
 for v in vs:

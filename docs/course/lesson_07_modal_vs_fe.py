@@ -150,7 +150,7 @@ for s in study.series:
 #       v_ref = critical_velocity(straight, v_max=15.0, method="legendre").v_cr
 #       hang = fempipe.Params(alpha=0.0)
 #       models = [fempipe.PipeModel(fempipe.FiniteElement(n, 2), hang) for n in (4, 8, 16)]
-#       v_n = [fempipe.critical_velocity(m, v_max=15.0).v_cr for m in models]
+#       v_n = [fempipe.find_critical_velocity(m, v_max=15.0).v_cr for m in models]
 #       err = np.abs(np.array(v_n) - v_ref)
 #       answer = np.log2(err[-2] / err[-1])
 #       print(f"v_cr errors {err}, order {answer:.2f}")

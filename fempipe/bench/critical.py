@@ -1,13 +1,9 @@
-"""Benchmarks of the stability analysis in this process (registered with :mod:`fempipe.bench`).
+"""Benchmarks of the stability analysis in this process.
 
-``stability_vcr``
-    v_cr at alpha = pi/2 on the default discretization (target :data:`VCR_TARGET_S`).
-``critical_3d``
-    The analysis of both planes against the planar one (target :data:`SPATIAL_TARGET_RATIO`).
-``stability_curve``
-    v_cr(alpha) at 37 inclinations (Fig. 6) on 2 processes (target :data:`CURVE_TARGET_S`).
-
-The whole command against a classical Galerkin is :mod:`fempipe.bench.stability`.
+``stability_vcr`` (v_cr at alpha = pi/2, target :data:`VCR_TARGET_S`), ``critical_3d`` (both
+planes against the planar analysis, :data:`SPATIAL_TARGET_RATIO`) and ``stability_curve``
+(v_cr(alpha) at 37 inclinations on 2 processes, :data:`CURVE_TARGET_S`).  The whole command
+against a classical Galerkin is :mod:`fempipe.bench.stability`.
 """
 
 from __future__ import annotations
@@ -18,11 +14,11 @@ import time
 import numpy as np
 
 from fempipe.analyses.stability import (
-    critical_velocity,
+    PLANES,
+    analyse_stability,
+    find_critical_velocity,
+    map_stability,
     resolution,
-    spatial_stability_analysis,
-    stability_analysis,
-    stability_map,
 )
 from fempipe.bench.harness import PAPER, best_time, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
@@ -39,14 +35,11 @@ CURVE_TARGET_S = 60.0
 
 @register("stability_vcr")
 def bench_stability_vcr(quick: bool = False) -> dict:
-    """v_cr at alpha = pi/2 (paper's case) on the default discretization, events to 1e-10 in v.
-
-    Target: :data:`VCR_TARGET_S`.  Accuracy: the relative difference to P3:32 (target 1e-6).
-    """
+    """v_cr at alpha = pi/2 (paper's case), events to 1e-10 in v; accuracy against P3:32."""
     disc = parse_discretization(DEFAULT_FE)
     resolution(disc)  # canonical modes, cached per discretization
     model = PipeModel(disc, Params(**PAPER))
-    t, res = best_time(lambda: critical_velocity(model, 10.0), 1 if quick else 3)
+    t, res = best_time(lambda: find_critical_velocity(model, 10.0), 1 if quick else 3)
     out = {
         "discretization": disc.name,
         "alpha": PAPER["alpha"],
@@ -59,7 +52,7 @@ def bench_stability_vcr(quick: bool = False) -> dict:
         "target_seconds": VCR_TARGET_S,
     }
     if not quick:
-        fine = critical_velocity(PipeModel(FiniteElement(32, 3), Params(**PAPER)), 10.0)
+        fine = find_critical_velocity(PipeModel(FiniteElement(32, 3), Params(**PAPER)), 10.0)
         out["v_cr_P3_32"] = fine.v_cr
         out["rel_diff_vs_P3_32"] = abs(res.v_cr / fine.v_cr - 1.0)
     return out
@@ -67,16 +60,8 @@ def bench_stability_vcr(quick: bool = False) -> dict:
 
 @register("critical_3d")
 def bench_critical_3d(quick: bool = False) -> dict:
-    """The analysis of ``fempipe critical`` in three dimensions against the planar one.
-
-    At alpha = pi/4, pi/2, 3pi/4 and pi (paper's case, default discretization,
-    v in [0, 10], branches followed) the planar analysis
-    (:func:`~fempipe.analyses.stability.stability_analysis`, what ``--planar``
-    runs) and the analysis of
-    both planes (:func:`~fempipe.analyses.stability.spatial_stability_analysis`) are
-    timed in turn, in CPU seconds of this process (one BLAS thread), each the
-    minimum of its repeats.  Target: the ratio of the sums at most
-    :data:`SPATIAL_TARGET_RATIO`.
+    """CPU seconds of the analysis in both planes against the planar one, at four inclinations,
+    in turns, each the minimum of its repeats; target: the ratio of the sums.
     """
     disc = parse_discretization(DEFAULT_FE)
     resolution(disc)
@@ -87,10 +72,10 @@ def bench_critical_3d(quick: bool = False) -> dict:
         t_in, t_3d, res3 = math.inf, math.inf, None
         for _ in range(repeats):
             t0 = time.process_time()
-            planar = stability_analysis(model, 10.0)
+            planar = analyse_stability(model, 10.0)
             t_in = min(t_in, time.process_time() - t0)
             t0 = time.process_time()
-            res3 = spatial_stability_analysis(model, 10.0)
+            res3 = analyse_stability(model, 10.0, planes=PLANES)
             t_3d = min(t_3d, time.process_time() - t0)
         cases.append(
             {
@@ -123,7 +108,7 @@ def bench_stability_curve(quick: bool = False) -> dict:
     alphas = np.linspace(0.0, math.pi, n_alpha)
     disc = parse_discretization(DEFAULT_FE)
     t0 = time.perf_counter()
-    smap = stability_map(
+    smap = map_stability(
         disc, alphas, [(PAPER["beta"], PAPER["gamma"])], mu=PAPER["mu"], v_max=10.0, workers=2
     )
     t = time.perf_counter() - t0

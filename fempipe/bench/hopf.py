@@ -4,7 +4,7 @@ Registered with :mod:`fempipe.bench` (``fempipe bench --only hopf``).
 
 * ``hopf``: the CPU seconds (``time.process_time``, median of 3) that
   :func:`fempipe.analyses.stability.hopf.normal_forms` adds to the stability analysis
-  of ``fempipe critical --v 0,16`` (:func:`fempipe.analyses.stability.stability_analysis`)
+  of ``fempipe critical --v 0,16`` (:func:`fempipe.analyses.stability.analyse_stability`)
   for the paper's case on the default discretization, at alpha = 0, pi/2, pi;
   with l1 of the first flutter and its uncertainty.  Target: a small fraction
   of the analysis (the hook runs on every ``fempipe critical``).
@@ -16,7 +16,7 @@ import math
 import statistics
 import time
 
-from fempipe.analyses.stability import stability_analysis
+from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.hopf import normal_forms
 from fempipe.bench.harness import register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
@@ -36,7 +36,7 @@ def bench_hopf(quick: bool = False) -> dict:
         t_an, t_nf = [], []
         for _ in range(repeats):
             t0 = time.process_time()
-            res = stability_analysis(model, v_max=16.0)
+            res = analyse_stability(model, v_max=16.0)
             t1 = time.process_time()
             forms = normal_forms(model, res)
             t2 = time.process_time()

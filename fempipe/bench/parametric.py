@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from fempipe.analyses.parametric import compute_parametric_chart
-from fempipe.analyses.stability import critical_velocity
+from fempipe.analyses.stability import find_critical_velocity
 from fempipe.bench.harness import register
 from fempipe.model.discretization import DEFAULT_FE, parse_discretization
 from fempipe.model.operators import PipeModel
@@ -37,7 +37,7 @@ def bench_parametric_region(quick: bool = False) -> dict:
     chart = compute_parametric_chart(model, HANGING["v"], (24.0, 36.0), sigmas)
     chart_cpu = time.process_time() - t0
     t0 = time.process_time()
-    res = critical_velocity(model, 10.0)
+    res = find_critical_velocity(model, 10.0)
     vcr_cpu = time.process_time() - t0
     (region,) = chart.regions
     return {

@@ -1,18 +1,9 @@
-"""Benchmark of ``fempipe critical`` against a classical beam-mode Galerkin (timings, not tests).
+"""Benchmark ``critical_vs_classical``: ``fempipe critical`` against a classical beam-mode Galerkin.
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only critical_vs_classical``).
-``critical_vs_classical`` measures the CPU seconds (user + system of fresh processes, median
-of 7 runs; quick: 1) of ``fempipe critical`` on the hanging pipe (:data:`REFERENCE_ARGS`) and
-of the classical linear Galerkin of the straight pipe as a user would write it
-(:data:`BASELINE`, numpy and scipy only) with 40 and 20 modes, each with its v_cr error
-against the classical theory on Legendre spectral elements
-(:mod:`fempipe.validation.classical`).  ``ratio`` is fempipe's CPU seconds over the 40-mode
-baseline's, whose error is the accuracy fempipe's default must match or beat (target
-:data:`TARGET_RATIO`); the commands run in turns so that the machine's drift hits all alike
-(``ratio_by_round``).  The baseline runs as written and once more with one BLAS thread
-(``ratio_one_thread``), which ``fempipe`` sets for itself.  A second case, the paper's pipe
-at alpha = pi/2 (:data:`CURVED_ARGS`, a curved static state, no classical theory), gives
-fempipe's CPU seconds and v_cr error against a finer mesh.
+CPU seconds of fresh processes of ``fempipe critical`` on the hanging pipe and of the
+classical linear Galerkin of the straight pipe as a user would write it (:data:`BASELINE`,
+40 and 20 modes), with their v_cr errors; ``ratio`` against the 40-mode baseline (target
+:data:`TARGET_RATIO`).  A second case (:data:`CURVED_ARGS`) has a curved static state.
 
 The benchmark in full: docs/cli/commands.md, "fempipe bench".
 """
@@ -25,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fempipe.analyses.stability import spatial_critical_velocity
+from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.bench.harness import child_cpu_seconds, register
 from fempipe.core import parallel
 from fempipe.model.discretization import discretization_from_name
@@ -59,13 +50,9 @@ def _blas_env(one_thread: bool) -> dict:
 
 
 def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
-    """One row per (label, argv, reference, env): median CPU seconds of ``runs`` fresh processes
-    and the v_cr error of the last one; and the CPU seconds of every run, by round.
-
-    The commands run in turns (round k runs each once, in order), after one
-    untimed run each that fills the bytecode cache: this machine's speed
-    drifts by up to 2x over minutes, and turns put every command's runs in
-    the same minutes, so their ratios compare like with like.
+    """Per (label, argv, reference, env): median CPU seconds of ``runs`` fresh processes, the last
+    one's v_cr error, and every run's CPU seconds by round.  Commands run in turns after one
+    untimed run each, so drifts of the machine's speed hit all alike.
     """
     for _, argv, _, env in commands:
         _child(argv, env)
@@ -102,7 +89,7 @@ def _curved_reference(spec: str) -> float:
     """v_cr in three dimensions of the paper's case at alpha = pi/2 on the finite elements
     ``spec`` (what ``fempipe critical`` computes without ``--planar``)."""
     model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
-    return float(spatial_critical_velocity(model, v_max=10.0).v_cr)
+    return float(find_critical_velocity(model, v_max=10.0, planes=PLANES).v_cr)
 
 
 @register("critical_vs_classical")

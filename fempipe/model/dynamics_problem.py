@@ -44,7 +44,7 @@ def refuse_hysteretic(params, where: str) -> None:
         raise ValueError(
             f"{where}: hysteretic damping (mu_h = {mu_h:g}) has no time-domain meaning: "
             "EI (1 + i mu_h sgn(omega)) acts on harmonic motion only; use it in the linear "
-            "stability problem (spectrum, critical_velocity, stability_map) or set "
+            "stability problem (compute_spectrum, find_critical_velocity, map_stability) or set "
             "hysteretic_damping = 0"
         )
 

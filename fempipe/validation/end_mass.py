@@ -1,52 +1,28 @@
 """End mass: closed forms, the classical theory and Hill & Swanson's statement.
 
-A point mass Gamma = M_e/((m+M) L) at the free end (fempipe's ``end_mass``) adds its inertia at
-the tip and, under gravity, its weight: a tension gamma Gamma along the hanging pipe (a
-compression along the standing one).  No printed critical flow velocity was found for this
-variant (Hill & Swanson's results are curves; see ``references/end_mass.json``), so this case
-checks fempipe (FE P3:16) against
-
-* Blevins's frequency equation of the cantilever with a tip mass (v = gamma = 0: the inertia
-  term alone);
-* the Bessel-function solution of the standing column (alpha = pi, v = 0) buckling under its
-  own weight and the end mass's (:func:`fempipe.validation.classical.heavy_column_buckling`:
-  the weight term alone);
-* the classical linear theory's v_cr(Gamma) for the paper's hanging pipe and for the
-  horizontal pipe of Gregory & Paidoussis (both terms with the flow), to 1e-6;
-
-and Hill & Swanson's statement that an end mass destabilizes the horizontal undamped pipe,
-more for Gamma = 0.3 than 0.2 (a ``paper`` check).
+An end mass Gamma adds inertia and weight at the tip.  fempipe (FE P3:16) against Blevins's
+tip-mass frequencies (v = gamma = 0), the heavy column's Bessel solution (alpha = pi, v = 0)
+and the classical v_cr(Gamma) of the hanging and the horizontal pipe (to 1e-6); Hill &
+Swanson: an end mass destabilizes the horizontal undamped pipe (a ``paper`` check).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
-
-from fempipe.analyses.stability import spectrum
+from fempipe.analyses.stability import compute_spectrum
 from fempipe.model.discretization import parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from scipy.optimize import brentq
 
 from . import classical
 from .case import Case, References
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import measure
 from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
-CASE = Case(
-    name="end_mass",
-    figure="Païdoussis (1998) Sec. 3.6.3",
-    title="End mass: the tip-mass cantilever, the heavy column and v_cr against Γ",
-    paper_shows=(
-        "an end mass destabilizes the horizontal undamped cantilevered pipe, and raising it from "
-        "0.2 to 0.3 destabilizes it further (Hill & Swanson 1970, in Païdoussis 1998, "
-        "pp. 165-166, Fig. 3.68)",
-    ),
-    not_checked=(
-        "Hill & Swanson's curves of Fig. 3.68 and their experiments: no number is printed",
-    ),
-)
+CASE = Case.load("end_mass")
 
 
 def _params(base: dict, end_mass: float, alpha: float = 0.0, **extra) -> Params:
@@ -112,7 +88,7 @@ def _blevins_checks(ref: References, disc, q0: np.ndarray) -> list:
     for G in ref.value("blevins_end_mass"):
         exact = classical.tip_mass_frequencies(G, 3)
         p = Params(alpha=0.0, beta=0.2, gamma=0.0, mu=0.0, end_mass=G)
-        lam = spectrum(PipeModel(disc, p), q0).lam
+        lam = compute_spectrum(PipeModel(disc, p), q0).lam
         got = np.sort(lam.imag[lam.imag > 0])[:3]
         err = float(np.max(np.abs(got / exact - 1.0)))
         checks.append(measure("blevins_frequencies_G{G:g}", err, G=G, got=got, exact=exact))
@@ -126,7 +102,7 @@ def _heavy_column_check(ref: References, disc, q0: np.ndarray):
 
     def max_real(g):
         p = Params(alpha=np.pi, beta=0.142, gamma=g, mu=5e-3, end_mass=G)
-        return spectrum(PipeModel(disc, p), q0).max_real
+        return compute_spectrum(PipeModel(disc, p), q0).max_real
 
     g_fe = brentq(max_real, 0.8 * exact, 1.2 * exact, xtol=1e-12)
     return measure("heavy_column", abs(g_fe / exact - 1.0), gamma_fe=g_fe, exact=exact)
@@ -170,8 +146,6 @@ def _hill_swanson(ref: References) -> tuple:
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(Γ) hanging, (b) v_cr(Γ) horizontal: classical lines, FE dots."""
     from matplotlib.lines import Line2D
-
-    from .drawing import figure_panels, finish_figure
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)

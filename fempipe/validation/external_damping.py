@@ -1,44 +1,25 @@
 """External viscous damping: Beck's column (Plaut & Infante 1970) and the hanging pipe.
 
-A force -c r_dot per unit length (fempipe's ``external_damping`` sigma) on Beck's column
-(beta = gamma = mu = 0: the follower force v^2 = P L^2/EI alone) raises the flutter load from
-20.05 at zero damping to 37.7 for large damping (Plaut & Infante 1970).  This case computes
-v_cr^2(sigma) with fempipe (FE P3:16, :func:`fempipe.analyses.stability.critical_velocity`)
-and with the classical theory of :mod:`fempipe.validation.classical`, checks that the two
-agree to 1e-6 and compares them with the printed numbers.
-
-The large-damping limit is computed without damping at all: with damping sigma M and no
-Coriolis term, each root nu = a + ib of K x = nu M x gives lambda^2 + sigma lambda + nu = 0,
-stable iff a > 0 and b^2 < sigma^2 a; as sigma -> infinity only a > 0 is left, so the limit is
-the v at which the complex pair of Beck's column reaches Re nu = 0
-(:func:`fempipe.validation.classical.large_damping_limit`).  The classical v_cr at
-sigma = 3000 must approach it from below.  The hanging pipe of the paper (beta = 0.142,
-gamma = 18.9, mu = 0.005) exercises the damping together with the Coriolis, gravity and
-Kelvin-Voigt terms: fempipe against the classical theory again.
+Damping sigma raises Beck's flutter load from 20.05 to 37.7 for large damping.  v_cr^2(sigma)
+by fempipe (FE P3:16) and the classical theory (to 1e-6) against the printed numbers; the
+large-damping limit from the undamped roots nu of K x = nu M x
+(:func:`fempipe.validation.classical.large_damping_limit`); the paper's hanging pipe with
+damping against the classical theory.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
 from fempipe.model.params import Params
 
 from . import classical
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import measure
 from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
-CASE = Case(
-    name="external_damping",
-    figure="Plaut & Infante (1970)",
-    title="External damping: Beck's column from 20.05 to 37.7, and the hanging pipe",
-    paper_shows=(
-        "the critical load of Beck's column increases with external damping (Plaut & Infante "
-        "1970, abstract)",
-        "from 20.05 EI/L² at zero damping to the limiting value 37.7 EI/L² for large damping",
-    ),
-)
+CASE = Case.load("external_damping")
 
 BECK = {"beta": 0.0, "gamma": 0.0, "mu": 0.0}
 BECK_V_MAX = 7.0
@@ -86,10 +67,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _onsets(params, curve, fe_sigmas, v_max: float) -> tuple[dict, dict]:
-    """Classical onsets at ``curve`` and ``fe_sigmas``, and fempipe's FE onsets at ``fe_sigmas``.
-
-    ``params(sigma)`` is the pipe at the damping sigma; ``v_max`` bounds the classical search.
-    """
+    """Classical onsets at ``curve`` and ``fe_sigmas``, and FE onsets at ``fe_sigmas``."""
     onsets = {s: classical_onset(params(s), v_max) for s in curve}
     for s in fe_sigmas:
         onsets.setdefault(s, classical_onset(params(s), v_max))
@@ -165,8 +143,6 @@ def _tables(h: dict, beck, fe_beck, hanging, fe_hanging, v_inf: float) -> tuple[
 def plot(result: CaseResult, fig=None):
     """(a) v_cr²(σ) of Beck's column, (b) v_cr(σ) of the hanging pipe."""
     from matplotlib.lines import Line2D
-
-    from .drawing import figure_panels, finish_figure
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)

@@ -1,28 +1,23 @@
-"""Fig. 5: eigenvalues Omega against v (Argand diagrams) for several alpha.
+"""Fig. 5: eigenvalues Omega = -i lambda against v (Argand diagrams) for several alpha.
 
-Root loci of the four lowest modes about the gravity-sagged static state,
-with the mode numbers of :func:`fempipe.analyses.stability.root_locus`,
-for the converged FE mesh and the paper's N = 3 and N = 4; every stability
-event on the static branches (:func:`fempipe.analyses.stability.stability_analysis`).
-The paper plots Omega = -i lambda: Im Omega < 0 is unstable.
-
-Checks: flutter in the second mode for alpha != pi; for alpha = pi the
-sequence divergence (mode 1) -> restabilization -> flutter (mode 2); v_cr
-against the independent onset of :mod:`fempipe.validation.onset`; mesh
-convergence of the event velocities.
+Root loci of the four lowest modes about the sagged static state (FE, N = 3, N = 4) and every
+stability event on the static branches.  Checks: flutter in mode 2 for alpha != pi; at alpha
+= pi divergence (mode 1), restabilization, flutter (mode 2); v_cr against the independent
+onset (:mod:`fempipe.validation.onset`); mesh convergence of the events.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from fempipe.analyses.stability import root_locus, stability_analysis
+from fempipe.analyses.stability import analyse_stability, trace_root_locus
 from fempipe.model.discretization import Modal, parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
+from ..plotting.stability import direction_arrow, mode_color
 from .case import Case, References, alpha_name, label_tag
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure, legend_columns, paper_case_line, style_for
 from .dynamic_runs import dyn_discretizations
 from .evaluate import measure
 from .onset import critical_velocity as independent_vcr
@@ -31,29 +26,17 @@ from .onset import critical_velocity as independent_vcr
 #: mode (8-9 % off the clamped-free beam's frequency).
 TOP_MODE_TOL = 0.1
 
-CASE = Case(
-    name="fig05",
-    figure="Fig. 5",
-    title="Eigenvalues Ω against v: flutter in the second mode; α = π: buckling, restabilization, "
-    "flutter",
-    paper_shows=(
-        "for α ≠ π the pipe loses stability by flutter in the second mode (Figs. 5(a)-(c))",
-        "for α = π: buckling in the first mode, regained stability, flutter in the second mode "
-        "(Fig. 5(d))",
-    ),
-)
+CASE = Case.load("fig05")
 
 
 def _changes_stability(e) -> bool:
-    """The event changes whether the state is stable (or is an instability present at v = 0).
-
-    An eigenvalue of one mode crossing while another keeps the state unstable
-    does not: the sequence of Fig. 5(d) is about the state, not one mode.
+    """The event changes whether the state is stable (one mode crossing while another keeps the
+    state unstable does not).
     """
     return e.at_start or e.stable_before != e.stable_after
 
 
-def _first_flutter(res) -> float:
+def first_flutter(res) -> float:
     """v of the first flutter of a stable state on the primary branch (NaN if none)."""
     prim = next(b for b in res.branches if b.name == "primary")
     return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
@@ -104,23 +87,21 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _alpha_runs(ref: References, discs: dict, a: float, values, v_max: float, is_pi: bool):
-    """Root loci and stability analyses at one alpha, on every discretization.
-
-    Returns the loci by label, the figure's loci of all N modes by (alpha name,
-    label), the stability analyses by label and the event table's rows.
-    """
+    """Loci by label, the figure's loci of all N modes, the stability analyses and the table rows."""
     name = alpha_name(a)
     loci, top, results, rows = {}, {}, {}, []
     for label, d in discs.items():
         m = PipeModel(d, Params(alpha=a, **PAPER_CASE))
-        loci[label] = root_locus(m, values, n_modes=ref.value("n_modes"))
+        loci[label] = trace_root_locus(m, values, n_modes=ref.value("n_modes"))
         if isinstance(d, Modal):
             # For the figure only: the paper draws all N modes of its N-mode
             # model, including the N-th, which in the sine basis is ~9 % off
             # the beam's frequency and so outside the resolved set used by
             # the checks (in the beam basis every mode is resolved).
-            top[(name, label)] = root_locus(m, values, n_modes=d.n_modes, tolerance=TOP_MODE_TOL)
-        results[label] = stability_analysis(m, v_max=v_max, follow_bifurcations=is_pi)
+            top[(name, label)] = trace_root_locus(
+                m, values, n_modes=d.n_modes, tolerance=TOP_MODE_TOL
+            )
+        results[label] = analyse_stability(m, v_max=v_max, follow_bifurcations=is_pi)
         for br in results[label].branches:
             for ev in br.events:
                 rows.append((name, label, br.name, ev.type, ev.v, ev.mode, ev.frequency))
@@ -172,25 +153,16 @@ def _pi_checks(ref: References, fe) -> list:
 def _mesh_check(a: float, fe_label: str, fe, v_max: float):
     """Mesh convergence of the first flutter on the primary branch."""
     fine = PipeModel(parse_discretization(fe="P3:16"), Params(alpha=a, **PAPER_CASE))
-    rf = stability_analysis(fine, v_max=v_max, follow_bifurcations=False)
-    diff = abs(_first_flutter(fe) - _first_flutter(rf))
+    rf = analyse_stability(fine, v_max=v_max, follow_bifurcations=False)
+    diff = abs(first_flutter(fe) - first_flutter(rf))
     return measure("fe_mesh_{alpha}", diff, alpha=alpha_name(a), mesh=fe_label[3:])
 
 
 def plot(result: CaseResult, fig=None):
-    """Argand diagrams: Re Ω against Im Ω of modes 1-4, FE solid, N = 3 dashed, N = 4 dotted.
-
-    Colors are modes (as in every stability figure), line styles
-    discretizations, arrows the direction of increasing v, black dots
-    v = 0, 2, 4, ...  At α = π a last panel shows the growth rate Re λ of
-    modes 1 and 2 against v, where the buckling, restabilization and flutter
-    of the straight pipe, squeezed onto Re Ω = 0 in the Argand diagram, are
-    seen apart.
+    """Argand diagrams of modes 1-4 (colors: modes; FE solid, N = 3 dashed, N = 4 dotted); at
+    α = π a last panel of the growth rate Re λ of modes 1 and 2 against v.
     """
     from matplotlib.lines import Line2D
-
-    from ..plotting.stability import direction_arrow, mode_color
-    from .drawing import figure_panels, finish_figure, legend_columns, paper_case_line, style_for
 
     loci = result.data["loci"]
     top = result.data.get("top_modes", {})

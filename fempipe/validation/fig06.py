@@ -1,21 +1,10 @@
 """Fig. 6: the critical flow velocity against the inclination alpha.
 
-v_cr of the gravity-sagged static state for several mass ratios (Fig. 6(a),
-gamma = 18.9) and several gravity parameters (Fig. 6(b), beta = 0.142), by
-the converged FE mesh, with the paper's N = 3 and N = 4 overlaid for the
-reference case.  v_cr comes from :func:`fempipe.validation.onset.critical_velocity`
-(Brent's method on the spectral abscissa), independent of
-:mod:`fempipe.analyses.stability`; the two are compared.
-
-Checks the paper's statements of Sec. 4: flutter (a complex pair) for
-alpha != pi; v_cr falls as alpha grows; v_cr rises with beta; the effect of
-gamma on v_cr changes sign with alpha.  These are the paper's planar checks,
-on the in-plane v_cr.
-
-The figure also draws the critical velocity of the motion out of the plane
-(:mod:`fempipe.model.out_of_plane`), the same independent onset solver with
-``plane="out"``: for the round pipe it is the first instability at every
-inclined alpha of the grid (checked), equal to the in-plane one at alpha = 0.
+v_cr of the sagged state for several beta (gamma = 18.9) and gamma (beta = 0.142) by the
+converged FE mesh (N = 3, 4 for the reference case), from the independent
+:func:`fempipe.validation.onset.critical_velocity`, compared with
+:mod:`fempipe.analyses.stability`.  Checks the trends of Sec. 4 on the in-plane v_cr; the
+out-of-plane v_cr (``plane="out"``) comes first at every inclined alpha (checked).
 """
 
 from __future__ import annotations
@@ -23,28 +12,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from fempipe.analyses import stability
+from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.model.discretization import Modal, parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import Measured, measure
 from .onset import Onset, critical_velocity
 
-CASE = Case(
-    name="fig06",
-    figure="Fig. 6",
-    title="Critical flow velocity v_cr against α for several β and γ",
-    paper_shows=(
-        "flutter is the instability for α ≠ π (Sec. 4)",
-        "the stability is weakened as α increases: v_cr falls with α (Sec. 4)",
-        "the stability is enhanced as β increases: v_cr rises with β (Sec. 4)",
-        "γ raises v_cr for small α and may lower it for large α (Sec. 4)",
-    ),
-)
+CASE = Case.load("fig06")
 FE = "P3:8"
 BASE_BETA, BASE_GAMMA, MU = PAPER_CASE["beta"], PAPER_CASE["gamma"], PAPER_CASE["mu"]
 
@@ -60,16 +40,8 @@ def _v_cr(onsets) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Curves:
-    """The onsets of every curve of the figure, one :class:`Onset` per α of the grid.
-
-    Attributes
-    ----------
-    by_beta, by_gamma : dict
-        In the plane, FE, by β (γ = 18.9) and by γ (β = 0.142).
-    out_beta, out_gamma : dict
-        The same out of the plane.
-    modal : dict
-        In the plane, the reference case, by ``"N = 3"``, ``"N = 4"``.
+    """Onsets per α: ``by_beta``, ``by_gamma`` (in the plane, FE), ``out_beta``, ``out_gamma`` (out
+    of it), ``modal`` (the reference case by ``"N = 3"``, ``"N = 4"``).
     """
 
     by_beta: dict
@@ -115,8 +87,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _curves(fe, alphas: np.ndarray, betas, gammas) -> _Curves:
-    """The onsets of every curve: FE in and out of the plane for every β and γ, and the
-    paper's N = 3 and N = 4 for the reference case (the reference curve computed once)."""
+    """The onsets of every curve (the reference curve computed once)."""
 
     def curve(disc, beta, gamma, plane="in"):
         return [
@@ -176,8 +147,7 @@ def _falls_with_alpha(alphas: np.ndarray, spec: str, v, **fields) -> Measured:
 
 
 def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Measured]:
-    """The paper's trends of Sec. 4: v_cr falls with α, rises with β, and the effect of γ
-    changes sign with α."""
+    """v_cr falls with α, rises with β, and the effect of γ changes sign with α (Sec. 4)."""
     checks = [
         _falls_with_alpha(
             alphas, "falls_with_alpha_b{beta:g}", _v_cr(cv.by_beta[b]), beta=b, gamma0=BASE_GAMMA
@@ -224,8 +194,7 @@ def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Measur
 
 
 def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Table, Table]:
-    """The reference case against the paper's modes, in and out of the plane, and the
-    v_cr grid of every β and γ."""
+    """The reference case against the paper's modes, in and out of the plane, and the v_cr grid."""
     base, out = cv.by_beta[BASE_BETA], cv.out_beta[BASE_BETA]
     rows, out_rows = [], []
     for i, a in enumerate(alphas):
@@ -248,13 +217,8 @@ def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Tabl
     table = Table(
         f"v_cr for β = {BASE_BETA}, γ = {BASE_GAMMA}, μ = {MU} (converged FE and the paper's modes)",
         (
-            "α",
-            f"v_cr FE {FE}",
-            "crossing frequency Im λ",
-            "v_cr N = 3",
-            "error N = 3",
-            "v_cr N = 4",
-            "error N = 4",
+            f"α | v_cr FE {FE} | crossing frequency Im λ | v_cr N = 3 | error N = 3 | "
+            f"v_cr N = 4 | error N = 4"
         ),
         tuple(rows),
         note="Brent's method on the spectral abscissa to 1e-10 in v; FE P3:8 agrees with P3:16 "
@@ -274,14 +238,7 @@ def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Tabl
     )
     out_table = Table(
         f"v_cr in and out of the plane, β = {BASE_BETA}, γ = {BASE_GAMMA}, μ = {MU} (FE {FE})",
-        (
-            "α",
-            "v_cr in the plane",
-            "Im λ in",
-            "v_cr out of the plane",
-            "Im λ out",
-            "(out - in) / in",
-        ),
+        "α | v_cr in the plane | Im λ in | v_cr out of the plane | Im λ out | (out - in) / in",
         tuple(out_rows),
         note="The round pipe first loses stability out of the plane of its static state at "
         "every inclined α: the paper's v_cr (in the plane) is not the pipe's.",
@@ -307,8 +264,7 @@ def _headline(alphas, by_beta, by_gamma, out_beta, out_gamma) -> str:
 
 
 def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> list[Measured]:
-    """The out-of-plane curves: first at every inclined α, equal at α = 0, and the
-    independent onset against fempipe.analyses.stability's analysis of both planes."""
+    """Out of the plane first at every inclined α, equal at α = 0, and against the stability module."""
     curves = [(f"β = {b:g}", by_beta[b], out_beta[b]) for b in by_beta] + [
         (f"γ = {g:g}", by_gamma[g], out_gamma[g]) for g in by_gamma if g != BASE_GAMMA
     ]
@@ -336,23 +292,22 @@ def _out_of_plane_checks(fe, alphas, by_beta, by_gamma, out_beta, out_gamma) -> 
     checks = [measure("out_of_plane_first", first, ok=bool(late))]
     if same:
         checks.append(measure("out_of_plane_at_alpha_0", max(same)))
-    from fempipe.analyses.stability import spatial_critical_velocity
 
     diffs = []
     for i in (len(alphas) // 2, len(alphas) - 1):
         model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
-        r = spatial_critical_velocity(model, v_max=10.0)
+        r = find_critical_velocity(model, v_max=10.0, planes=PLANES)
         diffs.append(abs(r.out_of_plane.v_cr - out_beta[BASE_BETA][i].v_cr))
     checks.append(measure("out_of_plane_vs_stability_module", max(diffs)))
     return checks
 
 
 def _stability_cross_check(fe, alphas: np.ndarray, base: list[Onset]) -> Measured:
-    """v_cr of :func:`fempipe.analyses.stability.critical_velocity` against the independent onset."""
+    """v_cr of :func:`fempipe.analyses.stability.find_critical_velocity` against the independent onset."""
     diffs = []
     for i in (0, len(alphas) // 2):
         model = PipeModel(fe, Params(alpha=alphas[i], **PAPER_CASE))
-        diffs.append(abs(stability.critical_velocity(model).v_cr - base[i].v_cr))
+        diffs.append(abs(stability.find_critical_velocity(model).v_cr - base[i].v_cr))
     return measure("vs_stability_module", max(diffs))
 
 
@@ -363,7 +318,6 @@ CURVE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9"
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) for each β, (b) for each γ; N = 3 dashed and N = 4 dotted on the reference."""
-    from .drawing import figure_panels
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.5)
@@ -426,7 +380,6 @@ def plot(result: CaseResult, fig=None):
         ax.grid(alpha=0.3)
         # Below the panel: inside, the key would hide the beta = 0.5 and gamma = 5 curves.
         ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
-    from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -1,11 +1,5 @@
-"""Parts (c) to (e) of the out-of-plane validation case (fempipe.validation.out_of_plane).
-
-(c) :func:`agreement_checks`, :func:`inclined_variants_check` and
-:func:`classical_check`: the strong form of :mod:`fempipe.validation.lateral`
-against fempipe and the classical theory; (d) :func:`order_checks`, the
-observed orders of the out-of-plane v_cr; (e) :func:`finding_checks`, the
-out-of-plane v_cr against the in-plane one.  Parts (a) and (b), and the
-helpers for the spectra, are in :mod:`fempipe.validation.out_of_plane_runs`.
+"""Parts (c)-(e) of the case ``out_of_plane``: the strong form against fempipe and the
+classical theory, the observed orders, the out-of-plane v_cr against the in-plane one.
 """
 
 from __future__ import annotations
@@ -14,7 +8,6 @@ import math
 from dataclasses import replace
 
 import numpy as np
-
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
@@ -33,15 +26,6 @@ from .out_of_plane_runs import (
     refinement_slope,
 )
 
-__all__ = [
-    "agreement_checks",
-    "classical_check",
-    "finding_checks",
-    "inclined_variants_check",
-    "order_checks",
-]
-
-
 # ---------------------------------------------------------------------------
 # (c) the strong form against fempipe
 
@@ -49,7 +33,7 @@ __all__ = [
 def _pair(p: Params, fe: str, v_max: float, v_min: float = 0.0, p_spec: int = 24):
     """The out-of-plane onset by fempipe (FE) and by the strong form."""
     m = out_of_plane_model(PipeModel(discretization_from_name(fe), p))
-    r = stability.critical_velocity(m, v_max=v_max, v_min=v_min)
+    r = stability.find_critical_velocity(m, v_max=v_max, v_min=v_min, planes=("out",))
     s = lateral.critical_velocity(p, v_max, v_min=v_min, disc=lateral.HermiteSpectral(p_spec))
     c = r.critical
     fe_out = (float(r.v_cr), c.type, float(c.frequency)) if c else (math.nan, "stable", math.nan)
@@ -127,20 +111,7 @@ def agreement_checks(ref, quick: bool):
     checks.append(measure("strong_converged", float(diff), p=p0, v=s0.v_cr))
     table = Table(
         "(c) Out-of-plane onset: strong form against fempipe " + fe,
-        (
-            "pipe",
-            "α",
-            "β",
-            "γ",
-            "μ",
-            "v_cr strong",
-            f"v_cr {fe}",
-            "Δv",
-            "ω strong",
-            f"ω {fe}",
-            "Δω",
-            "kind",
-        ),
+        (f"pipe | α | β | γ | μ | v_cr strong | v_cr {fe} | Δv | ω strong | ω {fe} | Δω | kind"),
         tuple(rows),
     )
     return checks, [table], requires, strong
@@ -188,7 +159,7 @@ def order_checks(ref, quick: bool, v_ref: float):
         errs, dofs = [], []
         for n in ns:
             d = FiniteElement(n, int(fam[1])) if fam.startswith("P") else Modal(n, basis=fam)
-            r = stability.critical_velocity(out_of_plane_model(PipeModel(d, p)), hi, lo)
+            r = stability.find_critical_velocity(PipeModel(d, p), hi, lo, planes=("out",))
             errs.append(abs(float(r.v_cr) - v_ref))
             dofs.append(d.n)
         slopes = [refinement_slope(ns[k : k + 2], errs[k : k + 2]) for k in range(len(ns) - 1)]
@@ -224,8 +195,8 @@ def finding_checks(ref, quick: bool):
     for mu in ref.value("mu")[:1] if quick else ref.value("mu"):
         for a in alphas:
             m = PipeModel(discretization_from_name(fe), Params(alpha=a, mu=mu, **base))
-            ri = stability.critical_velocity(m, hi, lo)
-            ro = stability.critical_velocity(out_of_plane_model(m), hi, lo)
+            ri = stability.find_critical_velocity(m, hi, lo)
+            ro = stability.find_critical_velocity(m, hi, lo, planes=("out",))
             ci, co = ri.critical, ro.critical
             vi, vo = float(ri.v_cr), float(ro.v_cr)
             curves.setdefault(mu, []).append((a, vi, vo))
@@ -247,18 +218,7 @@ def finding_checks(ref, quick: bool):
     table = Table(
         f"(e) Critical flow velocity in and out of the plane (β = {base['beta']:g}, "
         f"γ = {base['gamma']:g}, FE {fe})",
-        (
-            "μ",
-            "α",
-            "v_cr in plane",
-            "kind",
-            "ω",
-            "v_cr out of plane",
-            "kind",
-            "ω",
-            "out − in",
-            "relative",
-        ),
+        "μ | α | v_cr in plane | kind | ω | v_cr out of plane | kind | ω | out − in | relative",
         tuple(rows),
         note="At α = π the primary branch is the straight standing pipe, buckled at v = 0 "
         "(γ > 7.837) in every plane alike; on its buckled branch the out-of-plane spectrum "

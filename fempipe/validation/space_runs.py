@@ -1,9 +1,5 @@
-"""Computations of the 3-D cases: the out-of-plane Hopf point and the cycles born there.
-
-Shared by :mod:`fempipe.validation.space_onset` (the normal form against shot
-cycles near the onset) and :mod:`fempipe.validation.space_convergence` (the
-cycles' mesh convergence).  Everything is on the paper's reference case
-(:data:`fempipe.model.params.PAPER_CASE`) at the inclination alpha.
+"""Computations of the 3-D cases on the paper's case: the out-of-plane Hopf point and the
+cycles born there (for ``space_onset`` and ``space_convergence``).
 """
 
 from __future__ import annotations
@@ -11,26 +7,18 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-
 from fempipe.analyses.limit_cycle import LimitCycle, find_attractor, shoot
-from fempipe.analyses.space.onset import SpaceHopfNormalForm, space_hopf_normal_form
-from fempipe.analyses.space.shooting import shoot_space
-from fempipe.analyses.stability.spatial import spatial_critical_velocity
+from fempipe.analyses.space.onset import hopf_normal_form_3d
+from fempipe.analyses.stability import PLANES, find_critical_velocity
+from fempipe.analyses.stability.hopf import HopfNormalForm
 from fempipe.analyses.statics import solve_sagged
 from fempipe.model.discretization import FiniteElement
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 from fempipe.model.projection import project
 from fempipe.model.space import SpaceModel
-
-__all__ = [
-    "Onset",
-    "amplitude",
-    "onset",
-    "planar_cycles",
-    "space_cycle_near_onset",
-    "space_cycles",
-]
+from fempipe.model.space_dynamics import SpaceDynamics
 
 #: Default integration and Newton tolerances of the shot cycles: the tip extrema and
 #: periods to ~1e-9, far below the differences the cases measure (>= 1e-8).
@@ -43,7 +31,7 @@ class Onset:
 
     elements: int
     planar: PipeModel
-    normal_form: SpaceHopfNormalForm
+    normal_form: HopfNormalForm
 
 
 def planar_model(elements: int, alpha: float, v: float = 0.0) -> PipeModel:
@@ -52,17 +40,15 @@ def planar_model(elements: int, alpha: float, v: float = 0.0) -> PipeModel:
 
 
 def onset(elements: int, alpha: float, v_max: float = 7.0) -> Onset:
-    """The normal form of the first out-of-plane Hopf point on P3:``elements``.
-
-    The out-of-plane model's v_cr (:func:`spatial_critical_velocity`) starts the secant on
-    the 3-D Jacobian; the sagged static state there starts Newton.
+    """The normal form of the first out-of-plane Hopf point on P3:``elements``, started from the
+    out-of-plane v_cr and the sagged state there.
     """
     pm = planar_model(elements, alpha)
-    vo = spatial_critical_velocity(pm, v_max=v_max).out_of_plane.v_cr
+    vo = find_critical_velocity(pm, v_max=v_max, planes=PLANES).out_of_plane.v_cr
     if vo is None:
         raise ValueError(f"no out-of-plane loss of stability below v = {v_max} at alpha = {alpha}")
     q = solve_sagged(pm.with_params(replace(pm.params, v=vo))).q
-    return Onset(elements, pm, space_hopf_normal_form(pm, q, vo, v_out_of_plane=vo))
+    return Onset(elements, pm, hopf_normal_form_3d(pm, q, vo, v_out_of_plane=vo))
 
 
 def amplitude(cycle: LimitCycle, key: str = "Y_tip") -> float:
@@ -77,7 +63,7 @@ def space_cycle_near_onset(on: Onset, delta: float) -> LimitCycle:
     v = nf.v + delta
     model = SpaceModel(on.planar.disc, replace(on.planar.params, v=v))
     U0, Ud0, T = nf.initial_state(v)
-    return shoot_space(model, U0, Ud0, T, rtol=RTOL, tol=TOL)
+    return shoot(SpaceDynamics(model), U0, Ud0, T, rtol=RTOL, tol=TOL)
 
 
 def _project3(src, U: np.ndarray, dst) -> np.ndarray:
@@ -88,11 +74,8 @@ def _project3(src, U: np.ndarray, dst) -> np.ndarray:
 def space_cycles(
     elements: list[int], alpha: float, v: float, rtol: float = RTOL
 ) -> dict[int, LimitCycle]:
-    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine (integration
-    tolerance ``rtol``, Newton's 10 ``rtol``).
-
-    The first is shot from the normal form's prediction on its own mesh, each next
-    from the previous one projected (a few Newton iterations).
+    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine: the first from the
+    normal form, each next from the previous one projected (Newton to 10 ``rtol``).
     """
     out: dict[int, LimitCycle] = {}
     prev = None
@@ -108,7 +91,7 @@ def space_cycles(
             Ud0 = _project3(src, c.qdot0, pm.disc)
             T = c.period
         model = SpaceModel(pm.disc, replace(pm.params, v=v))
-        cyc = shoot_space(model, U0, Ud0, T, rtol=rtol, tol=10.0 * rtol)
+        cyc = shoot(SpaceDynamics(model), U0, Ud0, T, rtol=rtol, tol=10.0 * rtol)
         out[ne] = cyc
         prev = (pm.disc, cyc)
     return out
@@ -117,8 +100,7 @@ def space_cycles(
 def planar_cycles(
     elements: list[int], alpha: float, v: float, rtol: float = RTOL
 ) -> dict[int, LimitCycle]:
-    """The planar cycle of Eq. (20) at (alpha, v) on each P3 mesh, as :func:`space_cycles`
-    (the first from the transient, :func:`find_attractor`)."""
+    """The planar cycle at (alpha, v) on each P3 mesh, as :func:`space_cycles` (first by integration)."""
     out: dict[int, LimitCycle] = {}
     prev = None
     for ne in elements:
@@ -132,7 +114,7 @@ def planar_cycles(
         else:
             src, c = prev
             q0, p0, T = project(src, c.q0, m.disc), project(src, c.qdot0, m.disc), c.period
-        cyc = shoot(m, q0, p0, T, rtol=rtol, tol=10.0 * rtol)
+        cyc = shoot(PipeDynamics(m), q0, p0, T, rtol=rtol, tol=10.0 * rtol)
         out[ne] = cyc
         prev = (m.disc, cyc)
     return out

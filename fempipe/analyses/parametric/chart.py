@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fempipe.analyses.stability import spectrum
+from fempipe.analyses.stability import compute_spectrum
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
@@ -49,7 +49,7 @@ class ParametricChart:
         (Im lambda > -Re lambda: damped below the ratio 1/sqrt(2)); their imaginary parts
         are the frequencies omega_k.
     modes : tuple of int
-        Their mode numbers (as :func:`fempipe.analyses.stability.spectrum` numbers them:
+        Their mode numbers (as :func:`fempipe.analyses.stability.compute_spectrum` numbers them:
         carried by continuity from v = 0).
     regions : tuple of ParametricRegion
         By increasing threshold frequency.
@@ -183,7 +183,7 @@ def compute_parametric_chart(
         raise ValueError(f"max_order must be >= 1, got {max_order}")
     model = model.with_params(replace(model.params, v=float(v0)))
     pencil = PulsationPencil.of(model)
-    mean = spectrum(model, np.zeros(model.n))
+    mean = compute_spectrum(model, np.zeros(model.n))
     if mean.max_real >= 0:
         raise ValueError(f"v0 = {v0:g}: the straight pipe is already unstable without pulsation")
     # one eigenvalue per oscillating mode: damped below the critical ratio 1/sqrt(2) (a mode

@@ -101,7 +101,7 @@ class ReducedPulsation:
         Keep this many eigenvectors of lowest |lambda| (a complex pair counts once).
     targets : sequence of complex, optional
         Instead, keep the eigenvectors whose eigenvalues are nearest to these (the modes of
-        :func:`fempipe.analyses.stability.spectrum`).
+        :func:`fempipe.analyses.stability.compute_spectrum`).
 
     Attributes
     ----------

@@ -1,8 +1,8 @@
-"""Hopf points of the static branch, where branches of periodic orbits start,
-and the equilibria of the primary branch with their linear stability.
+"""Hopf points of the static branch, where branches of periodic orbits start
+(:func:`find_hopf_points`), and the equilibria of the primary branch with their stability.
 
-The critical eigenvector (:func:`critical_eigenvector`) comes from the
-first-order (companion) form of the linearization, Eqs. (31b)-(33).
+The critical eigenvector is that of the first-order form of Eqs. (31b)-(33).
+Theory: docs/theory/numerics.md, "Branches of periodic orbits".
 """
 
 from __future__ import annotations
@@ -33,8 +33,7 @@ __all__ = [
 
 
 def primary_states(model: PipeModel, values: Sequence[float], v_start: float) -> dict:
-    """Static states of the primary branch (the gravity-loaded state continued in v,
-    as the stability analysis follows it) at ``values``, keyed by v."""
+    """Static states of the primary branch (continued in v from ``v_start``) at ``values``, by v."""
     vals = sorted({float(v_start), *(float(v) for v in values)})
     sols = solve_path(model.with_params(replace(model.params, v=vals[0])), vals, "v")
     return {v: s.q for v, s in zip(vals, sols, strict=True)}
@@ -59,14 +58,11 @@ def critical_eigenvector(model: PipeModel, q: np.ndarray, omega: float) -> tuple
 def find_hopf_points(
     model: PipeModel, v_min: float, v_max: float, *, ds_max: float = 0.1
 ) -> tuple[list[HopfPoint], float]:
-    """The Hopf points of the primary static branch in [0, v_max] that matter for [v_min, v_max].
+    """The Hopf points of the primary static branch that matter for [v_min, v_max].
 
-    The stability events of :func:`fempipe.analyses.stability.analyse_stability` of
-    type flutter, restabilization or mode_restabilization with a non-zero
-    frequency (a complex pair crossing Re lambda = 0) are Hopf points.  The
-    analysis starts at ``v_min``; if the primary branch is already unstable
-    there, it is repeated from v = 0 so that the Hopf points whose orbits
-    reach into the range are found too.
+    The stability events with a non-zero frequency (a complex pair crossing Re lambda = 0)
+    of :func:`fempipe.analyses.stability.analyse_stability` from ``v_min``, or from 0 if
+    the branch is unstable at ``v_min`` (the orbits of earlier Hopf points reach the range).
 
     Returns
     -------
@@ -117,12 +113,9 @@ def static_points(
 ) -> list[dict]:
     """Equilibria of the primary branch at ``values`` with their linear stability.
 
-    Each dict has the keys of a bifurcation point (``attractor`` =
-    ``"equilibrium"``, ``direction`` = ``"static"``, tip [value, value], ...)
-    and ``stable``: from the primary branch's stability ``events`` of
-    :func:`fempipe.analyses.stability.analyse_stability` (``stable_before`` /
-    ``stable_after``) when given, else :func:`fempipe.analyses.stability.linearly_stable`
-    at each state (the same criterion).
+    Dicts with the keys of a bifurcation point (``direction`` ``"static"``, tips [y, y])
+    and ``stable``: from the branch's stability ``events`` if given, else
+    :func:`fempipe.analyses.stability.linearly_stable` (the same criterion).
     """
     vals = sorted(float(v) for v in values)
     start = vals[0] if v_start is None else float(v_start)
@@ -148,14 +141,13 @@ def static_points(
 
 
 def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
-    """``{"eta_tip": [y, y], "X_tip": ..., "Z_tip": ...}`` of an equilibrium, in the
-    [min, max] form of the diagram's points: the static points, and the Hopf points
-    where a branch of orbits starts."""
+    """``{"eta_tip": [y, y], ...}``: an equilibrium's tip in the [min, max] form of the points."""
     tip = tip_values(model.disc, q, model.params.alpha)
     return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 
 def point_dict(v, direction, index, alpha, attractor) -> dict:
+    """The keys of a diagram's point, the tips and period empty."""
     return {
         "v": float(v),
         "direction": direction,

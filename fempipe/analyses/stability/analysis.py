@@ -1,4 +1,6 @@
-"""The analysis driver: every stability event of the static branches over a v-range."""
+"""The analysis driver: every stability event of the static branches over a v-range,
+in the plane of the static states, out of it, or both (docs/theory/stability.md,
+"Stability events" and "Both planes")."""
 
 from __future__ import annotations
 
@@ -16,25 +18,24 @@ from fempipe.model.operators import PipeModel
 from .branch_analysis import BranchAnalysis
 from .canonical import RESOLUTION_TOL, resolution
 from .chunked_branch import ChunkedBranch
-from .events import StabilityResult
+from .events import StabilityInPlanes, StabilityResult
+from .linear import plane_models
 
 log = logging.getLogger(__name__)
 
-#: Continuation points per out-of-plane sample when the in-plane analysis
-#: runs on the same branch (:func:`analyse_planes`).  The events are located by
-#: Brent's method between samples whatever their spacing, the tracker inserts
-#: states where the match is unsure and the peak check catches a real part
-#: that touches zero between samples; measured in tests/test_spatial.py:
-#: the out-of-plane events of stride 3 are those of stride 1 to 1e-10.
+#: Continuation points per out-of-plane sample when the in-plane analysis runs on the same
+#: branch: Brent's method locates the events between samples whatever their spacing
+#: (tests/test_spatial.py: the events of stride 3 are those of stride 1 to 1e-10).
 OUT_OF_PLANE_STRIDE = 3
 
 
 @single_blas
-def stability_analysis(
+def analyse_stability(
     model: PipeModel,
     v_max: float = 10.0,
     v_min: float = 0.0,
     *,
+    planes: tuple[str, ...] = ("in",),
     follow_bifurcations: bool = True,
     max_depth: int = 1,
     q0: np.ndarray | None = None,
@@ -44,7 +45,7 @@ def stability_analysis(
     tolerance: float = RESOLUTION_TOL,
     stop_at_first: bool = False,
     callback: Callable[[str, float], None] | None = None,
-) -> StabilityResult:
+) -> StabilityResult | StabilityInPlanes:
     """Every stability event and fold of the static branches for v_min <= v <= v_max.
 
     Parameters
@@ -53,102 +54,48 @@ def stability_analysis(
         alpha, beta, gamma, mu from ``model.params`` (its v is ignored).
     v_max, v_min : float
         The flow range, 0 <= v_min < v_max.
+    planes : tuple of {'in', 'out'}
+        The linear problems analysed along the same static branches: in the plane of
+        the static states (Eq. (32)) and/or out of it (:mod:`fempipe.model.out_of_plane`).
     follow_bifurcations : bool
-        Follow the branches born at branch points (pitchforks at alpha = 0, pi)
-        with :func:`fempipe.analyses.statics.switch_branch` and analyse them too.
+        Also analyse the branches born at branch points (pitchforks at alpha = 0, pi).
     max_depth : int
         Generations of branches to follow (1: those born on the primary branch).
     q0 : ndarray, optional
         Initial guess of the primary state at v_min (default: gravity loading).
     ds_max : float
-        Largest continuation step (arclength in (theta L2, v)); spectra are
-        computed at every point, so it bounds the sampling of the eigenvalue
-        paths; tracking inserts points where it is not clear and a peak check
-        catches a real part that touches zero between samples.
+        Largest continuation step (arclength in (theta L2, v)).
     method : {'auto', 'qz', 'shift-invert'}
-        Eigensolver of every spectrum.  ``auto`` is shift-invert here at
-        every n: the analysis only uses the resolved eigenvalues, which it
-        gives to ~1e-11 relative of QZ (measured on P3:16) at half the cost.
+        Eigensolver; ``auto`` is shift-invert (only resolved eigenvalues are used).
+    tolerance : float
+        :data:`RESOLUTION_TOL` of the resolved modes.
     stop_at_first : bool
-        Stop analysing the primary branch after the first loss of stability
-        (enough for v_cr; events beyond it are not listed).
+        Stop each plane's primary branch at its first loss of stability.
     callback : callable, optional
         ``callback(branch_name, v)`` after every sample (progress).
 
     Returns
     -------
     StabilityResult
-
-    Notes
-    -----
-    Where theta = 0 is the static state at every v (alpha = 0 or pi) and no
-    branch point lies on it in the range, the primary branch is not
-    continued: its points are the straight pipe, with steps in v of
-    ``STRAIGHT_STEP * ds_max``
-    (:data:`~fempipe.analyses.stability.chunked_branch.STRAIGHT_STEP`; the
-    tracker still halves a step wherever the match of the eigenvalues is
-    ambiguous, and the peak check and Brent's method run as on any branch),
-    and the spectra use K^d(v), C^d(v) formed from fixed matrices
-    (:class:`~fempipe.analyses.stability.linear.StraightPencil`): no Newton
-    iteration, no Jacobian assembly.  Most of these spectra are solved without
-    eigenvectors, their resolved classification taken from the nearest sample
-    where it is unambiguous
-    (:func:`~fempipe.analyses.stability.classified.classify_inherited`; a
-    spectrum with eigenvectors at least every 2.0 in v).  The events agree with those of the
-    general continuation to the 1e-10 to which both locate them
-    (tests/test_stability_fast.py).  A sign change of det K^d on the points
-    the continuation would visit (a branch point, where the general path
-    locates it and switches branches) sends the branch through the general
-    continuation, as does a step budget ``max_steps`` too small for the range.
+        For one plane; :class:`StabilityInPlanes` for ``("in", "out")``.
 
     Raises
     ------
+    ParamError
+        If ``planes`` is not a tuple of distinct "in", "out".
     NewtonError
-        If the static state cannot be followed (naming v and the residual).
+        If the static state cannot be followed.
+
+    Notes
+    -----
+    The branches are continued and switched once; each plane's analysis runs along the
+    same points (the out-of-plane one every :data:`OUT_OF_PLANE_STRIDE`-th point, or as
+    the in-plane one on a straight branch, where the two pencils are the same matrices).
+    Where theta = 0 is the static state (alpha = 0, pi) the straight branch is not
+    continued and its spectra use fixed matrices (docs/theory/stability.md, "The straight
+    branch"; tests/test_stability_fast.py).
     """
-    planes = analyse_planes(
-        [model],
-        v_min=v_min,
-        v_max=v_max,
-        follow_bifurcations=follow_bifurcations,
-        max_depth=max_depth,
-        q0=q0,
-        ds_max=ds_max,
-        max_steps=max_steps,
-        method=method,
-        tolerance=tolerance,
-        stop_at_first=stop_at_first,
-        callback=callback,
-    )
-    return planes[model.plane]
-
-
-def analyse_planes(
-    models: list[PipeModel],
-    *,
-    v_min: float,
-    v_max: float,
-    follow_bifurcations: bool,
-    max_depth: int,
-    q0: np.ndarray | None,
-    ds_max: float,
-    max_steps: int,
-    method: str,
-    tolerance: float,
-    stop_at_first: bool,
-    callback: Callable[[str, float], None] | None,
-) -> dict[str, StabilityResult]:
-    """:func:`stability_analysis` of one pipe in several planes, on shared static branches.
-
-    ``models`` are the same pipe (discretization and parameters) with the
-    linearizations of their planes (``model.plane``); the static branches
-    are continued and switched once, with the first model, and every plane's
-    analysis runs along the same points (each inserts its own where its
-    tracking asks).  Beside the in-plane analysis the out-of-plane one takes
-    every :data:`OUT_OF_PLANE_STRIDE`-th point, and on a straight branch
-    (theta = 0 at every point: alpha = 0, or pi below buckling) it takes the
-    in-plane analysis as it is, the two pencils being the same matrices there.
-    """
+    models = plane_models(model, planes)
     model = models[0]
     v_min, v_max = float(v_min), float(v_max)
     if not (math.isfinite(v_min) and math.isfinite(v_max)) or v_min < 0 or v_max <= v_min:
@@ -166,8 +113,7 @@ def analyse_planes(
 
     def analyse(m, branch, name, stop, parent, done):
         if m.plane != "in" and "in" in done and branch.is_straight():
-            # On the straight pipe the out-of-plane problem is the in-plane one,
-            # term by term (fempipe.model.out_of_plane): the same pencils, the same events.
+            # On the straight pipe the out-of-plane problem is the in-plane one, term by term.
             return done["in"].as_plane(m)
         stride = OUT_OF_PLANE_STRIDE if (m.plane != "in" and "in" in done) else 1
         ana = BranchAnalysis(
@@ -227,20 +173,19 @@ def analyse_planes(
             n_spectra=n_spectra[m.plane],
             plane=m.plane,
         )
-    return out
+    if len(out) == 2:
+        return StabilityInPlanes(in_plane=out["in"], out_of_plane=out["out"])
+    return out[models[0].plane]
 
 
-def critical_velocity(
-    model: PipeModel,
-    v_max: float = 10.0,
-    v_min: float = 0.0,
-    **kwargs,
-) -> StabilityResult:
-    """v_cr: the first loss of stability of the primary branch (no branch switching).
+def find_critical_velocity(
+    model: PipeModel, v_max: float = 10.0, v_min: float = 0.0, **kwargs
+) -> StabilityResult | StabilityInPlanes:
+    """v_cr: the first loss of stability of the primary branch, in each of ``planes``.
 
-    A shortcut for :func:`stability_analysis` with ``follow_bifurcations=False``
-    and ``stop_at_first=True``; its ``events`` stop at the critical one.
+    :func:`analyse_stability` (the same keywords) with ``follow_bifurcations=False`` and
+    ``stop_at_first=True``; its ``events`` stop at the critical one.
     """
     kwargs.setdefault("follow_bifurcations", False)
     kwargs.setdefault("stop_at_first", True)
-    return stability_analysis(model, v_max, v_min, **kwargs)
+    return analyse_stability(model, v_max, v_min, **kwargs)

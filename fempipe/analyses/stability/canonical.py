@@ -1,11 +1,5 @@
-"""The canonical modes of a discretization and the eigenvalues it resolves.
-
-The canonical modes are those of the straight, unloaded pipe, the
-clamped-free Euler-Bernoulli beam, whose exact frequencies are known: a
-discretization resolves the leading ones it reproduces within
-:data:`RESOLUTION_TOL`, and an eigenvalue is resolved when its eigenvector
-lies mostly on those (docs/theory/stability.md, "Resolved modes").
-"""
+"""The canonical modes of a discretization (the clamped-free beam's) and the eigenvalues it
+resolves (docs/theory/stability.md, "Resolved modes")."""
 
 from __future__ import annotations
 
@@ -20,25 +14,16 @@ from fempipe.core.rootfinding import brentq
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
-#: Relative error of the clamped-free beam frequency up to which a
-#: discretization is said to resolve a canonical mode.
+#: Relative frequency error up to which a discretization resolves a canonical mode.
 RESOLUTION_TOL = 0.05
-#: Share of an eigenvector's squared M(0)-norm that must lie on resolved
-#: canonical modes for its eigenvalue to be resolved.
+#: Share of an eigenvector's squared M(0)-norm on resolved modes for a resolved eigenvalue.
 RESOLVED_SHARE = 0.5
 
 
 def cantilever_frequencies(n: int) -> np.ndarray:
-    """Exact frequencies beta_r^2 of the clamped-free Euler-Bernoulli beam, r = 1..n.
+    """Exact frequencies beta_r^2 of the clamped-free beam, r = 1..n (time scale of Eq. (19)).
 
-    beta_r solves cos(beta) cosh(beta) = -1 (1.8751, 4.6941, 7.8548, ...);
-    written as cos(beta) + sech(beta) = 0 to avoid overflow.  For
-    beta > 40 the sech term is below 1e-17 and beta_r = (r - 1/2) pi.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        Dimensionless angular frequencies (time scale of Eq. (19)).
+    beta_r solves cos(beta) + sech(beta) = 0 (overflow-free); beta_r = (r - 1/2) pi above 40.
     """
     out = np.empty(int(n))
     for r in range(1, int(n) + 1):
@@ -53,13 +38,12 @@ def cantilever_frequencies(n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Resolution:
-    """Which modes a discretization resolves (docs/theory/stability.md, "Resolved modes").
+    """Which modes a discretization resolves.
 
     Attributes
     ----------
     n_resolved : int
-        Number of leading canonical modes within ``tolerance`` of the exact
-        clamped-free beam frequencies.
+        Leading canonical modes within ``tolerance`` of the exact frequencies.
     frequencies, exact, rel_error : ndarray, shape (n,)
         Discrete and exact canonical frequencies and |omega_h / omega - 1|.
     tolerance : float
@@ -90,14 +74,8 @@ _RESOLUTION_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def resolution(disc, tolerance: float = RESOLUTION_TOL) -> Resolution:
-    """The canonical modes of ``disc`` and how many it resolves (cached per discretization).
-
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-    tolerance : float
-        Relative frequency error allowed for a resolved canonical mode, in (0, 1).
-    """
+    """The canonical modes of ``disc`` and how many it resolves within ``tolerance`` in (0, 1)
+    (cached per discretization)."""
     if not 0.0 < tolerance < 1.0:
         raise ValueError(f"tolerance must be in (0, 1), got {tolerance}")
     per_disc = _RESOLUTION_CACHE.setdefault(disc, {})
@@ -118,17 +96,8 @@ def resolution(disc, tolerance: float = RESOLUTION_TOL) -> Resolution:
 
 
 def canonical_weights(res: Resolution, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Squared canonical coefficients of the columns of X and their share on resolved modes.
-
-    Returns
-    -------
-    W : ndarray, shape (n_canonical, m)
-        |c_rj|^2 of column j expanded in the M(0)-orthonormal canonical modes
-        (``res.basis``), normalized to sum 1 per column.
-    share : ndarray, shape (m,)
-        Sum of W over the resolved modes: an eigenvalue is resolved when its
-        share is at least :data:`RESOLVED_SHARE`.
-    """
+    """(W, share): |c_rj|^2 of the columns of X in the canonical modes, normalized per
+    column, shape (n_canonical, m), and their sum over the resolved modes."""
     c = res.basis.T @ (res.mass @ X)
     W = np.abs(c) ** 2
     W = W / W.sum(axis=0)

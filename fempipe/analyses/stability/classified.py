@@ -1,9 +1,6 @@
 """Spectra classified by the canonical modes: resolved eigenvalues and mode numbers.
 
-A :class:`ClassifiedSpectrum` holds every eigenvalue of one state with the
-share of its eigenvector on resolved canonical modes (docs/theory/stability.md,
-"Resolved modes"); :func:`canonical_labels` numbers eigenvalues by the
-canonical mode they are made of ("Mode numbers").
+Rules: docs/theory/stability.md, "Resolved modes" and "Mode numbers".
 """
 
 from __future__ import annotations
@@ -27,50 +24,25 @@ STABILITY_TOL = 1e-8
 
 @dataclass
 class ClassifiedSpectrum:
-    """All eigenvalues of one state with their resolved-share classification.
+    """Every eigenvalue of one state with the share of its eigenvector on resolved modes.
 
-    The working record of the analyses (:func:`classify_spectrum`,
-    :func:`classify_inherited`); the public results are built from it
-    (:class:`~fempipe.analyses.stability.Spectrum`, root loci, events).
-
-    Attributes
-    ----------
-    v : float
-        Flow velocity of the state.
-    q : ndarray, shape (n,)
-        The static state.
-    lam : ndarray of complex, shape (m,)
-        Every eigenvalue computed (m <= 2n).
-    X : ndarray of complex, shape (n, m), or None
-        Theta-parts of the eigenvectors (unit norm); None when the
-        classification is inherited.
-    share : ndarray, shape (m,)
-        Share of each eigenvector on resolved canonical modes.
-    weights : ndarray, shape (n_canonical, m)
-        Squared canonical coefficients, normalized per eigenvalue.
-    resolved : ndarray of bool, shape (m,)
-        share >= RESOLVED_SHARE.
-    method : str
-        The eigensolver used.
-    s : float
-        Position along a path (arclength proxy), set by the caller.
-    fold : bool
-        The state is a fold of its branch.
-    origin_v : float or None
-        v of the eigenvectors an inherited classification comes from.
+    The working record of the analyses.  ``X``: theta-parts of the eigenvectors (None when
+    the classification is inherited, from the eigenvectors at ``origin_v``); ``weights``:
+    squared canonical coefficients (n_canonical, m); ``resolved``: share >= RESOLVED_SHARE;
+    ``s``: position along a path (arclength proxy); ``fold``: a fold of its branch.
     """
 
     v: float
     q: np.ndarray
     lam: np.ndarray
-    X: np.ndarray | None  # None: classification inherited (:func:`classify_inherited`)
+    X: np.ndarray | None
     share: np.ndarray
-    weights: np.ndarray  # (n_canonical, m) squared canonical coefficients, normalized
+    weights: np.ndarray
     resolved: np.ndarray
     method: str
-    s: float = 0.0  # position along a path (arclength proxy)
+    s: float = 0.0
     fold: bool = False
-    origin_v: float | None = None  # v of the eigenvectors the classification comes from
+    origin_v: float | None = None
 
     @property
     def unstable(self) -> np.ndarray:
@@ -93,25 +65,8 @@ def classify_spectrum(
 ) -> ClassifiedSpectrum:
     """Every eigenvalue of Eq. (32) at the static state q, classified by the canonical modes.
 
-    Parameters
-    ----------
-    model : PipeModel
-        The pipe at the state's v (and plane).
-    q : ndarray, shape (n,)
-        The static state.
-    res : Resolution
-        The canonical modes of ``model.disc`` (:func:`~.canonical.resolution`).
-    method : {'auto', 'qz', 'shift-invert'}
-        Eigensolver (:func:`~.eigensolvers.quadratic_eigen`).
-    matrices : (K, C, M), optional
-        The linearized matrices if known (the straight pencil); default
-        :func:`~.linear.linearized_matrices` at q.
-
-    Returns
-    -------
-    ClassifiedSpectrum
-        With hysteretic damping, the roots continued in mu_h
-        (:func:`~.hysteretic.hysteretic_roots`) and classified by their eigenvectors.
+    ``matrices`` (K, C, M) if known (the straight pencil); with hysteretic damping the
+    roots are continued in mu_h (:func:`~.hysteretic.hysteretic_roots`).
     """
     K, C, M = linearized_matrices(model, q) if matrices is None else matrices
     lam, X, used = quadratic_eigen(K, C, M, method)
@@ -135,10 +90,8 @@ def classify_spectrum(
     )
 
 
-#: Classification inherited from a spectrum with eigenvectors only within
-#: this distance in v of it (:func:`classify_inherited`).  2.0 against 1.0 on
-#: 56 straight-branch cases (alpha 0 and pi, the variants): the same events
-#: (to 2.4e-11), 12 % fewer spectra with eigenvectors.
+#: Classification inherited from a spectrum with eigenvectors only within this distance
+#: in v of it (:func:`classify_inherited`).
 INHERIT_SPAN = 2.0
 #: ... only from eigenvalues whose share is this far from RESOLVED_SHARE ...
 INHERIT_MARGIN = 0.2
@@ -155,23 +108,13 @@ def classify_inherited(
     matrices: tuple[np.ndarray, np.ndarray, np.ndarray],
     ref: ClassifiedSpectrum,
 ) -> ClassifiedSpectrum:
-    """:func:`classify_spectrum` with eigenvalues only, the classification taken from a nearby spectrum.
+    """:func:`classify_spectrum` with eigenvalues only, the classification taken from ``ref``.
 
-    Each eigenvalue takes the share and canonical weights of the nearest
-    eigenvalue of ``ref`` (a spectrum of the same straight pencil at a v at
-    most :data:`INHERIT_SPAN` from the one whose eigenvectors ``ref``'s
-    classification came from).  That needs, for every eigenvalue, a nearest
-    old one whose share is at least :data:`INHERIT_MARGIN` from
-    :data:`RESOLVED_SHARE`, and no old eigenvalue of the other class within
-    1 / :data:`INHERIT_MATCH` times that distance -- except for heavily damped
-    roots (-Re lambda >= :data:`HYSTERETIC_HEAVY` |lambda|), which are never
-    unstable and must lie below the largest real part of the light resolved
-    roots, so that their class changes neither an event nor ``max_real``
-    (measured: in the clusters near -1/mu the eigenvectors, and so the
-    shares, of the full solve are arbitrary mixes); otherwise (and with
-    hysteretic damping, whose roots are continued along their eigenvectors)
-    the spectrum is solved with its eigenvectors as in :func:`classify_spectrum`.
-    The dense eigensolver then skips the eigenvectors (40 % of its work).
+    Each eigenvalue takes the share and weights of the nearest eigenvalue of ``ref`` (the
+    same straight pencil) when the match is sure (:data:`INHERIT_SPAN`,
+    :data:`INHERIT_MARGIN`, :data:`INHERIT_MATCH`; heavily damped roots below the light
+    resolved ones need not be); otherwise, and with hysteretic damping, the spectrum is
+    solved with its eigenvectors (docs/theory/stability.md, "Stability events").
     """
     origin = ref.v if ref.origin_v is None else ref.origin_v
     if model.params.hysteretic_damping > 0.0 or abs(model.params.v - origin) > INHERIT_SPAN:
@@ -186,10 +129,8 @@ def classify_inherited(
         cls = ref.resolved[j]
         other = np.where(ref.resolved[None, :] != cls[:, None], D, np.inf).min(axis=1)
         sure = np.abs(ref.share[j] - RESOLVED_SHARE) >= INHERIT_MARGIN
-        # Heavily damped roots (the crowded Kelvin-Voigt roots near -1/mu,
-        # whose eigenvectors are arbitrary mixes of a nearly degenerate
-        # cluster) need not be sure: they are never unstable, and they may not
-        # reach the largest real part of the light resolved roots (max_real).
+        # Heavily damped roots (the Kelvin-Voigt cluster near -1/mu, whose eigenvectors
+        # are arbitrary mixes) are never unstable: they need only stay below max_real.
         heavy = -lam.real >= HYSTERETIC_HEAVY * np.abs(lam)
         light_res = cls & ~heavy
         top = lam.real[light_res].max() if light_res.any() else -np.inf
@@ -210,11 +151,8 @@ def classify_inherited(
 
 
 def canonical_labels(e: ClassifiedSpectrum, idx: np.ndarray) -> np.ndarray:
-    """Mode numbers (1-based) of eigenvalues idx by optimal assignment to canonical modes.
-
-    Two slots per canonical mode (a conjugate pair, or two real roots of one
-    mode); the cost is minus the share of the eigenvector on that mode.
-    """
+    """Mode numbers (1-based) of eigenvalues idx by optimal assignment to canonical modes
+    (two slots per mode: a conjugate pair or two real roots)."""
     if idx.size == 0:
         return np.zeros(0, dtype=int)
     W = e.weights[:, idx].T  # (k, n_can)

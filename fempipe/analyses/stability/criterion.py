@@ -1,8 +1,7 @@
 """The stability criterion of a static state: :func:`linearly_stable`, :func:`growth_rate`.
 
-One criterion (docs/theory/stability.md, "Linear stability"), evaluated densely on
-every resolved eigenvalue for small problems and, for large meshes, on the
-lowest modes by sparse shift-invert Arnoldi in O(n) per state.
+Dense on every resolved eigenvalue, or for large meshes on the lowest modes by sparse
+shift-invert Arnoldi (docs/theory/stability.md, "Linear stability").
 """
 
 from __future__ import annotations
@@ -26,13 +25,10 @@ from .hysteretic import RELEVANT_SHARE, ConjugateHalves, match_roots, relevant_r
 
 @single_blas
 def growth_rate(model: PipeModel, q: np.ndarray, *, tolerance: float = RESOLUTION_TOL) -> float:
-    """Largest Re lambda of the resolved eigenvalues of Eq. (32) at the static state q.
+    """Largest Re lambda of the resolved eigenvalues of Eq. (32) at q (:attr:`Spectrum.max_real`).
 
-    The quantity :attr:`Spectrum.max_real` reports (-inf if no eigenvalue is
-    resolved).  Its sign alone is not the stability decision: an exactly
-    conservative problem (v = mu = 0) has Re lambda = 0 to round-off; use
-    :func:`linearly_stable`.  Every resolved eigenvalue is computed (dense,
-    O(n^3)).
+    Its sign is not the stability decision (round-off at v = mu = 0): use
+    :func:`linearly_stable`.
     """
     res = resolution(model.disc, tolerance)
     return classify_spectrum(model, np.asarray(q, dtype=float), res, "auto").max_real
@@ -45,26 +41,10 @@ def linearly_stable(
     tolerance: float = RESOLUTION_TOL,
     sparse: bool | None = None,
 ) -> bool | None:
-    """Whether the static state q is linearly stable: the criterion of :func:`spectrum`.
+    """Whether the static state q is linearly stable (docs/theory/stability.md, "Linear stability").
 
-    Stable when no resolved eigenvalue of Eq. (32) has
-    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (docs/theory/stability.md,
-    "Linear stability"); the same decision as ``spectrum(model, q).stable``,
-    :func:`critical_velocity` and :func:`stability_analysis`.
-
-    For finite elements with more than ``QZ_MAX_N`` unknowns only the
-    eigenvalues of the lowest ``SPARSE_MODES`` modes are computed, by
-    shift-invert Arnoldi at lambda = 0 on the first-order pencil: the inverse
-    needs one sparse LU of K^d (banded plus the rank-one tip coupling of the
-    follower force) and products with C^d and M^d, which are applied without
-    forming them in O(n) (:meth:`fempipe.model.operators.PipeModel.inertia`,
-    ``coriolis``, ``kelvin_voigt``).  Their resolution is tested on the lowest
-    canonical modes (:func:`_low_canonical_modes`).  The modes above are
-    bending-dominated and damped (Kelvin-Voigt Re lambda ~ -mu omega^2 / 2;
-    the Coriolis force at the free end) and never decide; the tests check the
-    decision against the dense criterion on stable, fluttering, diverging and
-    buckled states.  Where K^d is singular (a fold or a branch point itself)
-    the dense criterion is used.
+    No resolved eigenvalue of Eq. (32) with Re lambda > ``STABILITY_TOL`` max(1, |lambda|):
+    the decision of ``compute_spectrum(model, q).stable`` and of every analysis.
 
     Parameters
     ----------
@@ -74,13 +54,14 @@ def linearly_stable(
     tolerance : float
         :data:`RESOLUTION_TOL`.
     sparse : bool, optional
-        Force (True) or forbid (False) the sparse path; default: finite
-        elements with n > ``QZ_MAX_N``.
+        Only the lowest ``SPARSE_MODES`` modes, by shift-invert Arnoldi in O(n) (the modes
+        above are damped and never decide; the dense criterion where K^d is singular);
+        default: finite elements with n > ``QZ_MAX_N``.
 
     Returns
     -------
     bool or None
-        None when the discretization resolves no mode at all.
+        None when the discretization resolves no mode.
     """
     disc = model.disc
     if sparse is None:
@@ -117,12 +98,8 @@ def _mass_operator(model: PipeModel, q: np.ndarray) -> spla.LinearOperator:
 
 
 def _low_canonical_modes(disc, tolerance: float):
-    """The lowest canonical modes (K phi = omega^2 M(0) phi) by sparse shift-invert at 0.
-
-    Returns (basis (n, k) M(0)-orthonormal, number of leading modes within
-    ``tolerance`` of the exact cantilever frequencies).  O(n) per Lanczos step:
-    K is banded, M(0) is applied by :func:`_mass_operator`.
-    """
+    """(M(0)-orthonormal basis, number of resolved leading modes, model) of the lowest
+    canonical modes K phi = omega^2 M(0) phi, by sparse shift-invert at 0."""
     per_disc = _LOW_CANONICAL_CACHE.setdefault(disc, {})
     if tolerance in per_disc:
         return per_disc[tolerance]
@@ -156,9 +133,7 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
     mu = model.params.mu
 
     def op_parts(z):
-        # The right-hand side (M y + C x) of the operator below, for real z:
-        # every rate term of the model (Kelvin-Voigt, Coriolis, inertia, and
-        # the end mass's inertia and the external damping when present).
+        # M y + C x for real z: every rate term of the model.
         x, y = z[:n], z[n:]
         return model.rate_terms(q, x, y)
 
@@ -167,12 +142,9 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
         return np.concatenate([-lu.solve(op_parts(z)), z[:n]])
 
     T = spla.LinearOperator((2 * n, 2 * n), matvec=lambda z: op(np.ravel(z)), dtype=float)
-    # Kelvin-Voigt damping makes the modes with omega > 2 / mu overdamped, and
-    # their roots accumulate between -2 / mu and -1 / mu: asking Arnoldi for
-    # eigenvalues beyond |lambda| ~ 1 / mu would have it resolve that cluster
-    # (measured: 58000 iterations at P3:300, mu = 5e-3).  Only the modes with
-    # omega < 0.5 / mu are computed then; above, Re lambda < -mu omega^2 / 2
-    # < -1 / (8 mu).
+    # Kelvin-Voigt roots of the modes with omega > 2 / mu cluster between -2 / mu and
+    # -1 / mu, which Arnoldi would have to resolve: only omega < 0.5 / mu is computed
+    # (above, Re lambda < -mu omega^2 / 2 < -1 / (8 mu)).
     omega = cantilever_frequencies(SPARSE_MODES)
     limit = 0.5 / mu if mu > 0.0 else math.inf
     k = min(2 * max(2, int(np.count_nonzero(omega < limit))), 2 * n - 2)
@@ -202,16 +174,9 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
 
 
 def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
-    """The lowest roots with hysteretic damping, as :func:`~.hysteretic.hysteretic_roots` finds them.
-
-    Each root with Im lambda > 0 is matched (by eigenvalue and eigenvector)
-    to one of the k roots nearest 0 of the complex problem with stiffness
-    K^d + i mu_h K_bend, in one step of mu_h (one more shift-invert Arnoldi
-    solve); the roots with Im lambda < 0 are their conjugates; real roots,
-    and pairs whose match has Im lambda <= 0, are kept.  Where a relevant
-    match is not clearly better than the next candidate: :data:`_DENSE` (the
-    dense criterion continues in mu_h and decides).
-    """
+    """The lowest roots with hysteretic damping (one step of mu_h, matched by eigenvalue and
+    eigenvector as :func:`~.hysteretic.hysteretic_roots` does), or :data:`_DENSE` where a
+    relevant match is ambiguous."""
     n = model.n
     try:
         Kc = sp.csc_matrix(model.static_jacobian(q)) + 1j * mu_h * sp.csc_matrix(model.disc.K)

@@ -1,10 +1,7 @@
-"""The results of the stability analysis: events, branches, one parameter point.
+"""The results of the stability analysis: events, branches, one parameter point in one
+plane (:class:`StabilityResult`) or in both (:class:`StabilityInPlanes`).
 
-:class:`StabilityEvent` (a change of stability, or a fold, on a static
-branch), :class:`BranchStability` (one branch and its stability along it)
-and :class:`StabilityResult` (every branch of one parameter point);
-:class:`~fempipe.analyses.stability.branch_analysis.BranchAnalysis` computes
-them (docs/theory/stability.md, "Stability events").
+Definitions: docs/theory/stability.md, "Stability events".
 """
 
 from __future__ import annotations
@@ -15,10 +12,6 @@ import numpy as np
 
 from fempipe.model.params import Params
 
-# ---------------------------------------------------------------------------
-# Stability events along branches
-# ---------------------------------------------------------------------------
-
 
 @dataclass(frozen=True)
 class StabilityEvent:
@@ -27,34 +20,24 @@ class StabilityEvent:
     Attributes
     ----------
     v : float
-        Flow velocity, located to 1e-10 (Brent) for crossings; folds to the
-        continuation's 1e-10 in arclength.
+        Flow velocity, located to 1e-10.
     type : {'flutter', 'divergence', 'restabilization', 'mode_restabilization', 'fold'}
-        As v increases: a complex pair crosses to Re lambda > 0 (flutter), a
-        real root does (divergence), an eigenvalue crosses back and the
-        branch is stable above the event (restabilization), an eigenvalue
-        crosses back while another one stays unstable, so the branch is not
-        stable above the event (mode_restabilization: a per-mode event, the
-        system does not restabilize); or the branch turns back in v (fold).
-        ``stable_before`` and ``stable_after`` say what the whole system does.
+        As v increases (docs/theory/stability.md, "Stability events").
     branch : str
         Branch name (``"primary"``, ``"B1+"``, ...).
     frequency : float
         Im lambda = Re Omega at the crossing (0 for real roots and folds).
     mode : int or None
-        Number of the crossing mode (carried by continuity along the branch).
+        Number of the crossing mode.
     eigenvalue : complex
         lambda at the crossing.
     at_start : bool
-        The instability was already present at the start of the branch's
-        v-range (the event is listed at that v).
+        Unstable already at the start of the branch's v-range (listed at that v).
     stable_before, stable_after : bool
-        Stability of the branch just below / above the event in v (for a fold:
-        on the branch piece arriving at / leaving the fold, in branch order),
-        in the event's plane.
+        Stability of the whole branch just below / above the event (a fold: in branch
+        order), in the event's plane.
     plane : {'in', 'out'}
-        The motion that loses (or regains) stability: in the plane of the
-        static state (Eq. (32)) or out of it (:mod:`fempipe.model.out_of_plane`).
+        The motion that loses (or regains) stability.
     """
 
     v: float
@@ -69,9 +52,7 @@ class StabilityEvent:
     plane: str = "in"
 
     def to_dict(self) -> dict:
-        """The contract of ``fempipe critical --json``: v, type, branch, frequency, mode,
-        stable_before, stable_after (the whole system of the event's plane just below
-        and above the event), plane."""
+        """The contract of ``fempipe critical --json``."""
         return {
             "v": self.v,
             "type": self.type,
@@ -106,14 +87,14 @@ class BranchStability:
     born_at : float or None
         v of the branch point it starts from.
     v, theta_tip, max_real : ndarray, shape (m,)
-        At every sample (continuation points plus inserted ones).
+        At every sample.
     n_unstable : ndarray of int, shape (m,)
-        Resolved eigenvalues with Re lambda > 0 (a complex pair counts 2).
+        Unstable resolved eigenvalues (a complex pair counts 2).
     events : tuple of StabilityEvent
     folds, bifurcations : tuple of float
-        v of the folds and branch points located by the continuation.
+        v of the folds and branch points.
     end_reason : str
-        Why the continuation stopped (see :class:`fempipe.analyses.statics.Branch`).
+        Why the continuation stopped (:class:`fempipe.analyses.statics.Branch`).
     """
 
     name: str
@@ -161,20 +142,17 @@ class StabilityResult:
     discretization : dict
     v_range : (float, float)
     v_cr : float or None
-        First v at which the primary branch is not stable (the start of the
-        range if it is unstable there); None if stable throughout.
+        First v at which the primary branch is not stable; None if stable throughout.
     critical : StabilityEvent or None
         The event that defines v_cr.
     v_flutter : float or None
-        First flutter on the primary branch (Fig. 6 plots this; it equals v_cr
-        except where divergence or a fold comes first, e.g. alpha = pi).
+        First flutter on the primary branch (Fig. 6).
     events : tuple of StabilityEvent
         All branches, by branch then v.
     branches : tuple of BranchStability
     n_spectra : int
-        Eigenproblems solved (diagnostic).
+        Eigenproblems solved.
     plane : {'in', 'out'}
-        The motion analysed: in the plane of the static states or out of it.
     """
 
     params: Params
@@ -202,3 +180,88 @@ class StabilityResult:
             "branches": [b.to_dict(samples) for b in self.branches],
             "n_spectra": self.n_spectra,
         }
+
+
+#: Two critical velocities closer than this (relative to max(1, v)) are the same loss of
+#: stability: the events are located to 1e-10 in v.
+SAME_V = 1e-9
+
+
+def first_of(in_plane: StabilityEvent | None, out_of_plane: StabilityEvent | None):
+    """The earlier of two critical events; the in-plane one when they coincide (:data:`SAME_V`)."""
+    if out_of_plane is None:
+        return in_plane
+    if in_plane is None:
+        return out_of_plane
+    if out_of_plane.v < in_plane.v - SAME_V * max(1.0, abs(in_plane.v)):
+        return out_of_plane
+    return in_plane
+
+
+@dataclass(frozen=True)
+class StabilityInPlanes:
+    """The static branches' stability in and out of their plane (``planes=("in", "out")``).
+
+    Attributes
+    ----------
+    in_plane, out_of_plane : StabilityResult
+        The two analyses along the same branches.
+    """
+
+    in_plane: StabilityResult
+    out_of_plane: StabilityResult
+
+    @property
+    def critical(self) -> StabilityEvent | None:
+        """The first loss of stability of the primary branch in either plane."""
+        return first_of(self.in_plane.critical, self.out_of_plane.critical)
+
+    @property
+    def v_cr(self) -> float | None:
+        c = self.critical
+        return None if c is None else float(c.v)
+
+    @property
+    def v_flutter(self) -> float | None:
+        """The first flutter of the primary branch in either plane."""
+        vs = [v for v in (self.in_plane.v_flutter, self.out_of_plane.v_flutter) if v is not None]
+        return min(vs) if vs else None
+
+    @property
+    def events(self) -> tuple:
+        """Both planes' events by branch then v (the folds once, with the in-plane events)."""
+        order = {b.name: i for i, b in enumerate(self.in_plane.branches)}
+        evs = list(self.in_plane.events) + [e for e in self.out_of_plane.events if e.type != "fold"]
+        return tuple(sorted(evs, key=lambda e: (order.get(e.branch, len(order)), e.v)))
+
+    @property
+    def n_spectra(self) -> int:
+        return self.in_plane.n_spectra + self.out_of_plane.n_spectra
+
+    def first_instability(self) -> dict | None:
+        """``{"v", "plane", "type", "frequency"}`` of :attr:`critical`, or None."""
+        c = self.critical
+        if c is None:
+            return None
+        return {"v": c.v, "plane": c.plane, "type": c.type, "frequency": c.frequency}
+
+    def to_dict(self, samples: bool = False) -> dict:
+        """The contract of ``fempipe critical --json``."""
+        d = self.in_plane.to_dict(samples)
+        c = self.critical
+        d["v_cr"] = self.v_cr
+        d["critical"] = None if c is None else c.details()
+        d["v_flutter"] = self.v_flutter
+        d["events"] = [e.to_dict() for e in self.events]
+        d["n_spectra"] = self.n_spectra
+        d["first_instability"] = self.first_instability()
+        planes = {"in_plane": self.in_plane, "out_of_plane": self.out_of_plane}
+        for k, r in planes.items():
+            d[f"v_cr_{k}"] = r.v_cr
+            d[f"frequency_{k}"] = None if r.critical is None else r.critical.frequency
+        for k, r in planes.items():
+            d[f"v_flutter_{k}"] = r.v_flutter
+        for k, r in planes.items():
+            d[f"critical_{k}"] = None if r.critical is None else r.critical.details()
+        d["branches_out_of_plane"] = [b.to_dict(samples) for b in self.out_of_plane.branches]
+        return d

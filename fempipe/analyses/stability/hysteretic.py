@@ -1,11 +1,7 @@
-"""The roots of Eq. (32) with hysteretic damping, continued in the loss factor.
+"""The roots of Eq. (32) with hysteretic damping, continued in the loss factor mu_h.
 
-The structural loss factor mu_h multiplies the bending stiffness by
-1 + i mu_h sgn(omega) (docs/theory/conventions.md, "Hysteretic damping");
-:func:`hysteretic_roots` continues the roots of the real problem in mu_h.
-:class:`ConjugateHalves`, :func:`relevant_roots` and :func:`match_roots`
-are its steps, shared with the sparse criterion
-(:mod:`fempipe.analyses.stability.criterion`).
+Derivation: docs/theory/conventions.md, "Hysteretic damping".  The steps are shared with the
+sparse criterion (:mod:`fempipe.analyses.stability.criterion`).
 """
 
 from __future__ import annotations
@@ -25,9 +21,8 @@ HYSTERETIC_MATCH = 0.35
 #: solved per state; beyond, the nearest match is taken as it is.
 HYSTERETIC_MIN_STEP = 1.0 / 64.0
 HYSTERETIC_MAX_SOLVES = 16
-#: Share of an eigenvector on resolved canonical modes above which its match
-#: (if lightly damped) must be unambiguous (half of RESOLVED_SHARE: margin for the change of the
-#: eigenvector with mu_h).
+#: Share on resolved canonical modes above which a lightly damped root's match must be
+#: unambiguous (half of RESOLVED_SHARE: the eigenvector changes with mu_h).
 RELEVANT_SHARE = 0.25
 
 
@@ -35,12 +30,9 @@ RELEVANT_SHARE = 0.25
 class ConjugateHalves:
     """The roots of a real quadratic problem sorted by the sign of their frequency.
 
-    ``pos`` are the roots represented on the positive-frequency side: those
-    with Im lambda > 0, and those with Im lambda < 0 whose conjugate is
-    missing (``flip``; only a partial spectrum, such as Arnoldi's, can split
-    a pair).  ``paired`` are the other roots with Im lambda < 0, and
-    ``partner`` the position in ``pos`` of their conjugates.  Real roots are
-    in neither.
+    ``pos``: Im lambda > 0, and Im lambda < 0 without a conjugate (``flip``: a partial
+    spectrum can split a pair); ``paired``: the other Im lambda < 0, ``partner`` their
+    conjugates' positions in ``pos``.  Real roots are in neither.
     """
 
     pos: np.ndarray
@@ -88,9 +80,8 @@ class ConjugateHalves:
         return out, Xout
 
 
-#: Damping ratio -Re lambda / |lambda| above which a root's match need not be
-#: unambiguous: such roots are far from instability, and where many crowd
-#: (the Kelvin-Voigt roots near -1/mu) no continuation can tell them apart.
+#: Damping ratio -Re lambda / |lambda| above which a root's match need not be unambiguous
+#: (far from instability; the Kelvin-Voigt roots crowd near -1/mu).
 HYSTERETIC_HEAVY = 0.5
 
 
@@ -101,12 +92,10 @@ def relevant_roots(targets: np.ndarray, relevant: np.ndarray | None) -> np.ndarr
 
 
 def match_roots(pred: np.ndarray, Xpred: np.ndarray, lam: np.ndarray, X: np.ndarray, relevant):
-    """Indices in ``lam`` of the predicted roots, and which matches are ambiguous.
+    """Indices in ``lam`` of the predicted roots, and which relevant matches are ambiguous.
 
-    Optimal assignment on the cost ``min(1, |lambda - pred| / max(1, |pred|))
-    + 1 - |x_pred^H x|`` (unit vectors): the eigenvector tells apart roots
-    whose eigenvalues crowd.  A relevant root is ambiguous when its cost
-    exceeds ``HYSTERETIC_MATCH`` times that of the next candidate.
+    Optimal assignment on ``min(1, |lambda - pred| / max(1, |pred|)) + 1 - |x_pred^H x|``;
+    ambiguous: cost above ``HYSTERETIC_MATCH`` times the next candidate's.
     """
     dist = np.abs(pred[:, None] - lam[None, :]) / np.maximum(1.0, np.abs(pred))[:, None]
     Xu = X / np.linalg.norm(X, axis=0)
@@ -135,40 +124,10 @@ def hysteretic_roots(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The roots of Eq. (32) with the hysteretic bending stiffness Kb (1 + i mu_h sgn(omega)).
 
-    With theta^d ∝ e^{lambda tau} = e^{i Omega tau} the frequency is
-    omega = Re Omega = Im lambda, and the quadratic eigenproblem becomes
-
-        (lambda^2 M + lambda C + K + i mu_h sgn(Im lambda) Kb) x = 0,
-
-    with K = K^d (bending Kb, gravity and follower parts) and sgn(0) = 0.
-    The problem is not analytic in lambda; it is solved from the roots
-    ``lam0`` of the real problem (mu_h = 0) at the same state (package
-    docstring, "Hysteretic damping"):
-
-    * a root with Im lambda > 0 is continued in mu_h' from 0 to mu_h along
-      the roots of the complex quadratic problem with stiffness
-      K + i mu_h' Kb (each step: the optimal assignment to a linear
-      prediction by eigenvalue and eigenvector, the step halved while a
-      lightly damped root whose eigenvector lies on resolved modes is not
-      matched clearly better than by its next candidate);
-    * a root with Im lambda < 0 becomes the complex conjugate of its
-      partner's continuation (eigenvector conjugated too): the problem with
-      sgn = -1 is the conjugate of the one with sgn = +1;
-    * a real root (no oscillation, sgn 0: divergence, an overdamped mode) is
-      a root of the hysteretic problem as it is, and is kept; so is a pair
-      whose continuation reaches Im lambda <= 0, a root whose frequency is
-      smaller than the shift the loss would give it (in practice the nearly
-      real Kelvin-Voigt roots near -1/mu that the Coriolis force pairs up):
-      its frequency has no sign the loss could act on consistently, and it
-      is treated as not oscillating.
-
-    The result has as many roots as ``lam0`` and is conjugate-symmetric.  A
-    pair whose frequency goes to zero as v varies (a collision on the real
-    axis) jumps there from its continued roots to the real roots of the real
-    problem: the sgn(omega) law is discontinuous at omega = 0.  The complex
-    problem also has roots with Im lambda > 0 that continue real roots of the
-    real problem (a slow oscillation of a mode that does not oscillate); they
-    are not reported, since the real root itself stands for that mode.
+    (lambda^2 M + lambda C + K + i mu_h sgn(Im lambda) Kb) x = 0, solved from the roots
+    ``lam0`` of the real problem: each root with Im lambda > 0 continued in mu_h, its
+    conjugate mirrored, real roots (and pairs reaching Im lambda <= 0) kept
+    (docs/theory/conventions.md, "Hysteretic damping").
 
     Parameters
     ----------
@@ -178,21 +137,17 @@ def hysteretic_roots(
         The bending part of K^d (``disc.K``).
     mu_h : float
         Loss factor, > 0.
-    lam0 : ndarray, shape (m,)
-        Eigenvalues of the real problem (exact conjugate pairs, real roots
-        with Im = 0), as returned by :func:`quadratic_eigen`.
-    X0 : ndarray, shape (n, m)
-        Their theta-parts.
-    relevant : ndarray of bool, shape (m,), optional
+    lam0, X0 : ndarray
+        Eigenvalues of the real problem (exact conjugate pairs) and their theta-parts.
+    relevant : ndarray of bool, optional
         Roots whose match must be unambiguous if lightly damped (default: all).
     method : str
         Eigensolver of :func:`quadratic_eigen`.
 
     Returns
     -------
-    lam : ndarray of complex, shape (m,)
-    X : ndarray of complex, shape (n, m)
-        Unit-norm theta-parts, in the order of ``lam0``.
+    lam, X : ndarray of complex
+        As many roots as ``lam0``, conjugate-symmetric; unit-norm theta-parts.
     """
     lam0 = np.asarray(lam0)
     halves = ConjugateHalves.of(lam0)

@@ -12,8 +12,30 @@ from dataclasses import replace
 
 import numpy as np
 
+from fempipe.core.errors import ParamError
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
 from fempipe.model.params import Params
+
+#: The planes of the linear problems about a planar static state.
+PLANES = ("in", "out")
+
+
+def plane_models(model: PipeModel, planes) -> list[PipeModel]:
+    """The models of ``model``'s pipe linearized in each of ``planes``, in the order of PLANES.
+
+    An out-of-plane ``model`` is accepted only where ``"out"`` is among ``planes``.
+    """
+    planes = (planes,) if isinstance(planes, str) else tuple(planes)
+    if not planes or len(set(planes)) != len(planes) or not set(planes) <= set(PLANES):
+        raise ParamError("planes", f"planes must be distinct values of {PLANES}, got {planes!r}")
+    if model.plane == "out" and "out" not in planes:
+        raise ParamError(
+            "planes", f"model is linearized out of the plane; pass planes=('out',), got {planes!r}"
+        )
+    planar = in_plane_model(model)
+    build = {"in": lambda: planar, "out": lambda: out_of_plane_model(model)}
+    return [build[p]() for p in PLANES if p in planes]
 
 
 def linearized_matrices(model: PipeModel, q: np.ndarray):

@@ -12,67 +12,47 @@ from fempipe.core.parallel import run_tasks
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import VARIANT_FIELDS, Params
 
-from .analysis import critical_velocity, stability_analysis
-from .spatial import spatial_critical_velocity, spatial_stability_analysis
-from .tracking import RootLocus, root_locus
+from .analysis import analyse_stability, find_critical_velocity
+from .events import StabilityResult
+from .linear import PLANES
+from .tracking import RootLocus, trace_root_locus
 
-#: The keys of a point of a planar map (``planar=True``), and those a map in
-#: three dimensions adds: each plane's critical velocity, frequency, type,
-#: mode and first flutter, and the plane that loses stability first.
+#: The keys of a point of a planar map (``planar=True``), and those a map in both planes
+#: adds: each plane's v_cr, frequency, type, mode and first flutter, and the first plane.
 PLANAR_KEYS = ("v_cr", "type", "frequency", "mode", "v_flutter")
-PLANE_KEYS = tuple(
-    f"{k}_{plane}"
-    for plane in ("in_plane", "out_of_plane")
-    for k in ("v_cr", "frequency", "type", "mode", "v_flutter")
+PLANE_KEYS = (
+    *(
+        f"{k}_{plane}"
+        for plane in ("in_plane", "out_of_plane")
+        for k in ("v_cr", "frequency", "type", "mode", "v_flutter")
+    ),
+    "first_plane",
 )
-SPATIAL_KEYS = (*PLANE_KEYS, "first_plane")
+
+
+def _by_plane(res) -> dict[str, StabilityResult]:
+    if isinstance(res, StabilityResult):
+        return {"in_plane": res}
+    return {"in_plane": res.in_plane, "out_of_plane": res.out_of_plane}
 
 
 def _map_point(disc, params: Params, v_max: float, options: dict, planar: bool = False) -> dict:
-    if planar:
-        return _planar_point(disc, params, v_max, options)
-    return _spatial_point(disc, params, v_max, options)
-
-
-def _planar_point(disc, params: Params, v_max: float, options: dict) -> dict:
+    """One point: v_cr in the plane (``planar``) or in both planes, and the first flutter."""
     model = PipeModel(disc, params)
-    res = critical_velocity(model, v_max, **options)
-    c = res.critical
-    if c is not None and c.at_start:
-        # Unstable from the start (the straight column at alpha = pi): follow the
-        # branch to the end for its first flutter (what Fig. 6 shows there).
-        full = stability_analysis(
-            model, v_max, **{**options, "stop_at_first": False, "follow_bifurcations": False}
-        )
-        res = replace(res, v_flutter=full.v_flutter, n_spectra=res.n_spectra + full.n_spectra)
-    return {
-        "v_cr": res.v_cr,
-        "type": None if c is None else c.type,
-        "frequency": None if c is None else c.frequency,
-        "mode": None if c is None else c.mode,
-        "v_flutter": res.v_flutter,
-        "n_spectra": res.n_spectra,
-    }
-
-
-def _spatial_point(disc, params: Params, v_max: float, options: dict) -> dict:
-    """One point in three dimensions: :func:`spatial_critical_velocity` (one static branch,
-    both planes), each plane's first loss and the first of the two."""
-    model = PipeModel(disc, params)
-    res = spatial_critical_velocity(model, v_max, **options)
-    planes = {"in_plane": res.in_plane, "out_of_plane": res.out_of_plane}
-    flutter = {k: r.v_flutter for k, r in planes.items()}
+    planes = ("in",) if planar else PLANES
+    res = find_critical_velocity(model, v_max, planes=planes, **options)
+    per = _by_plane(res)
+    flutter = {k: r.v_flutter for k, r in per.items()}
     n_spectra = res.n_spectra
-    if any(r.critical is not None and r.critical.at_start for r in planes.values()):
-        # Unstable from the start in a plane: follow the branch to the end for
-        # that plane's first flutter (as the planar map does).
-        full = spatial_stability_analysis(
-            model, v_max, **{**options, "stop_at_first": False, "follow_bifurcations": False}
-        )
-        n_spectra += full.n_spectra
-        for k, r in planes.items():
+    if any(r.critical is not None and r.critical.at_start for r in per.values()):
+        # Unstable from the start (the straight column at alpha = pi): follow the branch
+        # to the end for that plane's first flutter (what Fig. 6 shows there).
+        opts = {**options, "stop_at_first": False, "follow_bifurcations": False}
+        full = _by_plane(analyse_stability(model, v_max, planes=planes, **opts))
+        n_spectra += sum(r.n_spectra for r in full.values())
+        for k, r in per.items():
             if r.critical is not None and r.critical.at_start:
-                flutter[k] = getattr(full, k).v_flutter
+                flutter[k] = full[k].v_flutter
     c = res.critical
     vf = [v for v in flutter.values() if v is not None]
     out = {
@@ -83,7 +63,9 @@ def _spatial_point(disc, params: Params, v_max: float, options: dict) -> dict:
         "v_flutter": min(vf) if vf else None,
         "n_spectra": n_spectra,
     }
-    for k, r in planes.items():
+    if planar:
+        return out
+    for k, r in per.items():
         ck = r.critical
         out[f"v_cr_{k}"] = r.v_cr
         out[f"frequency_{k}"] = None if ck is None else ck.frequency
@@ -103,17 +85,12 @@ class StabilityMap:
     alphas : ndarray, shape (n_alpha,)
     curves : tuple of (beta, gamma)
     base : Params
-        mu, the variants of the pipe (end mass, dampings, springs) and the
-        defaults.
+        mu, the variants of the pipe and the defaults.
     v_max : float
         Upper end of the searched range (v_cr is None if stable up to it).
     points : list of list of dict
-        ``points[c][a]``: v_cr, type, frequency, mode, v_flutter (or error);
-        in three dimensions v_cr, type, frequency, mode are those of the first
-        loss of stability of either plane, v_flutter the first flutter of
-        either, and each plane's values are added (:data:`SPATIAL_KEYS`:
-        ``v_cr_in_plane``, ``v_cr_out_of_plane``, ``frequency_in_plane``, ...,
-        ``first_plane``: "in", "out", or None if stable).
+        ``points[c][a]``: the keys of :data:`PLANAR_KEYS` (or ``error``); in both planes
+        those of the first loss of stability of either plane plus :data:`PLANE_KEYS`.
     planar : bool
         The paper's planar model alone (no out-of-plane analysis).
     """
@@ -145,7 +122,7 @@ class StabilityMap:
                 row.update({k: pt.get(k) for k in PLANAR_KEYS})
                 row["error"] = pt.get("error")
                 if not self.planar:
-                    row.update({k: pt.get(k) for k in SPATIAL_KEYS})
+                    row.update({k: pt.get(k) for k in PLANE_KEYS})
                 rows.append(row)
         return rows
 
@@ -162,7 +139,7 @@ class StabilityMap:
         }
 
 
-def stability_map(
+def map_stability(
     disc,
     alphas: Sequence[float],
     curves: Sequence[tuple[float, float]],
@@ -176,26 +153,16 @@ def stability_map(
     planar: bool = False,
     **options,
 ) -> StabilityMap:
-    """v_cr against alpha for each (beta, gamma) in ``curves``, computed in parallel.
+    """v_cr against alpha for each (beta, gamma) in ``curves``, in parallel (Fig. 6).
 
-    The stability map of the paper's Fig. 6.
-
-    Each point is an independent :func:`~fempipe.analyses.stability.spatial_critical_velocity`
-    (gravity loading, continuation in v, the first loss of stability in the
-    plane of the static state and out of it along the same branch; v_cr the
-    first of the two), or with ``planar`` the paper's planar
-    :func:`critical_velocity` alone; ``options`` are passed on
-    (``ds_max`` defaults to 0.2 here: Brent locates v_cr to 1e-10 whatever the
-    sampling, and the tracking and peak checks refine where needed).
-    A point that fails is recorded with its error and does not stop the others.
-    ``variants`` gives the variant fields of :class:`~fempipe.model.params.Params`
-    (``end_mass``, ``external_damping``, ``hysteretic_damping``, ``springs``)
-    of every point; default none (the paper's pipe).
+    Each point is an independent :func:`find_critical_velocity` in both planes (with
+    ``planar``, in the plane alone); ``options`` are passed on (``ds_max`` defaults to
+    0.2: Brent locates v_cr whatever the sampling).  A point that fails is recorded with
+    its error.  ``variants`` gives the variant fields of
+    :class:`~fempipe.model.params.Params` of every point (default: the paper's pipe).
     """
     alphas = np.asarray([float(a) for a in alphas])
     curves = tuple((float(b), float(g)) for b, g in curves)
-    # v_cr only: continuation steps of 0.2 (the 37-point curve of Fig. 6 is the
-    # same to 3e-11 as with 0.1, and cheaper).
     options.setdefault("ds_max", 0.2)
     if alphas.size == 0 or not curves:
         raise ValueError("need at least one alpha and one (beta, gamma) curve")
@@ -231,10 +198,10 @@ def stability_map(
 
 
 def _locus_task(disc, params: Params, values, options: dict) -> RootLocus:
-    return root_locus(PipeModel(disc, params), values, **options)
+    return trace_root_locus(PipeModel(disc, params), values, **options)
 
 
-def root_loci(
+def trace_root_loci(
     disc,
     params: Sequence[Params],
     values: Sequence[float],
@@ -244,7 +211,7 @@ def root_loci(
     callback: Callable[[int, int, object], None] | None = None,
     **options,
 ) -> list:
-    """:func:`root_locus` for several parameter points (e.g. the four alphas of Fig. 5), in parallel.
+    """:func:`trace_root_locus` of several parameter points (Fig. 5), in parallel.
 
     Returns a list of RootLocus (or the exception of a failed point).
     """

@@ -1,4 +1,5 @@
-"""The resolved spectrum of Eq. (32) about one static state, and its mode shapes."""
+"""The resolved spectrum of Eq. (32) about one static state, and its mode shapes
+(docs/theory/stability.md)."""
 
 from __future__ import annotations
 
@@ -17,10 +18,6 @@ from .canonical import RESOLUTION_TOL, resolution
 from .classified import STABILITY_TOL, classify_spectrum, eigenvalue_dict, mode_order
 from .tracking import reference_tracker
 
-# ---------------------------------------------------------------------------
-# One spectrum
-# ---------------------------------------------------------------------------
-
 
 @dataclass(frozen=True)
 class Spectrum:
@@ -32,23 +29,19 @@ class Spectrum:
     q : ndarray, shape (n,)
         The static state theta^s.
     lam : ndarray of complex, shape (m,)
-        Resolved eigenvalues lambda (theta^d ∝ e^{lambda tau}), sorted by mode
-        number, upper half-plane first.
+        Resolved eigenvalues (theta^d ∝ e^{lambda tau}) by mode number, upper half first.
     mode : ndarray of int, shape (m,)
-        Mode numbers (1-based), carried by continuity from v = 0 (package
-        docstring, "Mode numbers").
+        Mode numbers (1-based), carried by continuity from v = 0.
     vectors : ndarray of complex, shape (n, m)
-        theta-parts of the eigenvectors (unit Euclidean norm).
+        theta-parts of the eigenvectors (unit norm).
     share : ndarray, shape (m,)
         Share of each eigenvector on resolved canonical modes (>= 1/2).
-    n_computed : int
-        All eigenvalues computed (2 n).
-    n_resolved_modes : int
-        Canonical modes the discretization resolves.
+    n_computed, n_resolved_modes : int
+        Eigenvalues computed (2 n); canonical modes resolved.
     max_real_unresolved : float
         Largest Re lambda among the discarded eigenvalues (diagnostic).
     static_residual : float
-        Norm of the static residual at q (the linearization assumes a state).
+        Norm of the static residual at q.
     method : str
         ``"qz"`` or ``"shift-invert"``.
     """
@@ -102,21 +95,17 @@ class Spectrum:
 
 
 @single_blas
-def spectrum(
+def compute_spectrum(
     model: PipeModel,
     q: np.ndarray | None = None,
     *,
     method: str = "auto",
     tolerance: float = RESOLUTION_TOL,
 ) -> Spectrum:
-    """Resolved eigenvalues of the linearized problem about a static state.
+    """Every resolved eigenvalue of Eq. (32) about a static state, with its mode number.
 
-    The quadratic eigenproblem of Eq. (32).
-
-    Every resolved eigenvalue is listed.  At v != 0 the mode numbers cost a
-    path: the branch through q is continued back to v = 0 and the
-    eigenvalues tracked along it (docs/theory/stability.md, "Mode numbers"); for
-    the stability decision alone use :func:`linearly_stable`.
+    At v != 0 the mode numbers cost a path back to v = 0; for the decision alone use
+    :func:`linearly_stable`.
 
     Parameters
     ----------
@@ -124,9 +113,9 @@ def spectrum(
     q : ndarray, shape (n,), optional
         The static state; default :func:`fempipe.analyses.statics.solve_sagged`.
     method : {'auto', 'qz', 'shift-invert'}
-        Dense eigensolver (see :func:`quadratic_eigen`).
+        Dense eigensolver (:func:`quadratic_eigen`).
     tolerance : float
-        :data:`RESOLUTION_TOL`, the canonical-frequency error of a resolved mode.
+        :data:`RESOLUTION_TOL`.
 
     Returns
     -------
@@ -135,10 +124,9 @@ def spectrum(
     Raises
     ------
     ValueError
-        If the discretization resolves no mode at all.
+        If the discretization resolves no mode.
     NewtonError
-        If q is not a static state from which its branch can be continued
-        back towards v = 0 (the mode numbers).
+        If the branch through q cannot be continued back to v = 0.
     """
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
@@ -170,18 +158,10 @@ def spectrum(
     )
 
 
-# ---------------------------------------------------------------------------
-# Mode shapes
-# ---------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class ModeShape:
-    """A mode shape about a static state, in theta and in the global frame.
-
-    The perturbation is ``Re(a e^{lambda tau})`` times the complex fields
-    below, normalized so that max |theta^d| = 1 and theta^d is real and
-    positive where it is largest.
+    """A mode shape about a static state: ``Re(a e^{lambda tau})`` times the complex fields,
+    normalized to max |theta^d| = 1, real and positive where largest.
 
     Attributes
     ----------
@@ -189,9 +169,7 @@ class ModeShape:
     theta : ndarray of complex, shape (m,)
         theta^d(xi).
     X_g, Z_g : ndarray of complex, shape (m,)
-        Displacement of the centerline in the global frame (Eq. (28)
-        linearized): dX_g = -int sin(theta^s + alpha) theta^d,
-        dZ_g = int cos(theta^s + alpha) theta^d.
+        Displacement of the centerline (Eq. (28) linearized).
     X_static, Z_static : ndarray, shape (m,)
         The static centerline.
     lam : complex
@@ -222,13 +200,8 @@ class ModeShape:
 
 
 def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> ModeShape:
-    """Shape of the resolved eigenvalue ``spec.lam[index]`` in theta and in the global frame.
-
-    The global-frame displacement is the derivative of the centerline of
-    :func:`fempipe.model.kinematics.shape` in the direction of the mode, obtained by
-    complex-step differentiation of that same function (exact to round-off,
-    no second copy of Eq. (28)).
-    """
+    """Shape of the resolved eigenvalue ``spec.lam[index]`` in theta and in the global frame
+    (the complex-step derivative of :func:`fempipe.model.kinematics.shape` along the mode)."""
     if not -spec.lam.size <= index < spec.lam.size:
         raise ValueError(f"index must be in [0, {spec.lam.size}), got {index}")
     x = spec.vectors[:, index]

@@ -21,7 +21,6 @@ from fempipe.analyses.statics import (
 from fempipe.core.matching import assignment
 from fempipe.core.parallel import single_blas
 from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
 from fempipe.model.params import Params
 
 from .canonical import RESOLUTION_TOL, Resolution, resolution
@@ -34,7 +33,7 @@ from .classified import (
     eigenvalue_dict,
     mode_order,
 )
-from .linear import straight_pencil
+from .linear import plane_models, straight_pencil
 
 log = logging.getLogger(__name__)
 
@@ -42,17 +41,12 @@ log = logging.getLogger(__name__)
 #: modes, heavily damped for mu > 0, may swap without affecting any event).
 LABEL_MODES = 8
 
-# ---------------------------------------------------------------------------
-# Tracking eigenvalues along a path
-# ---------------------------------------------------------------------------
-
 
 class ModeTracker:
     """Carries mode numbers along a sequence of states by continuity.
 
-    Tracked eigenvalue j is, at every state, one index into that state's
-    :class:`ClassifiedSpectrum`; ``labels[j]`` is its mode number, given at the first state
-    (``first_idx``) and inherited by continuity afterwards.
+    ``labels[j]``: the mode number of tracked eigenvalue j, whose index into the first
+    state's spectrum is ``first_idx[j]``.
     """
 
     def __init__(self, labels: np.ndarray, first_idx: np.ndarray) -> None:
@@ -68,7 +62,7 @@ class ModeTracker:
         return cls(labels[o], idx[o])
 
     def match(self, new: ClassifiedSpectrum, pred: np.ndarray):
-        """Indices in ``new`` of the tracked eigenvalues, and an ambiguity flag per eigenvalue."""
+        """Indices in ``new`` of the tracked eigenvalues, and which matches are ambiguous."""
         D = np.abs(pred[:, None] - new.lam[None, :])
         rows, cols = assignment(D)
         idx = np.empty(pred.size, dtype=int)
@@ -100,21 +94,13 @@ def _predict(samples: list[tuple[ClassifiedSpectrum, np.ndarray]], s: float) -> 
 
 
 def state_l2(model: PipeModel, dq: np.ndarray) -> float:
-    """The L2 norm of the theta field of dq, (int_0^1 theta_dq^2 dxi)^(1/2).
-
-    With |dv| it measures the distance between states along a path (the
-    arclength proxy ``s`` of :class:`~.classified.ClassifiedSpectrum`).
-    """
+    """(int_0^1 theta_dq^2 dxi)^(1/2): with |dv|, the distance between states along a path."""
     th = model.disc.Phi @ dq
     return float(np.sqrt(model.w @ th**2))
 
 
 class TrackedPath:
-    """Spectra along a sequence of static states, with tracking and refinement.
-
-    ``static_between(a, b, v)`` returns the static state at v between samples
-    a and b (both on the same monotone piece in v), or None.
-    """
+    """Spectra along a sequence of static states, with tracking and refinement."""
 
     def __init__(
         self,
@@ -125,8 +111,7 @@ class TrackedPath:
         inherit: bool = False,
     ) -> None:
         self.model = model
-        # Straight states may take their classification from the nearest
-        # straight sample (classified.classify_inherited): eigenvalues only.
+        # Straight states may inherit their classification (classify_inherited).
         self.inherit = inherit
         self.res = res
         self.method = method
@@ -138,8 +123,7 @@ class TrackedPath:
     def analyse(self, q: np.ndarray, v: float) -> ClassifiedSpectrum:
         self.n_spectra += 1
         m = self.model.with_params(replace(self.model.params, v=v))
-        # At the straight state the matrices are known functions of v
-        # (StraightPencil): no Jacobian assembly.
+        # At the straight state the matrices are known functions of v (StraightPencil).
         if q.any():
             return classify_spectrum(m, q, self.res, self.method)
         matrices = straight_pencil(m).matrices(v)
@@ -154,14 +138,14 @@ class TrackedPath:
     def static_between(
         self, a: ClassifiedSpectrum, b: ClassifiedSpectrum, v: float
     ) -> np.ndarray | None:
+        """The static state at v between samples a and b (one monotone piece in v), or None."""
         if a.v == b.v:
             return None
         t = (v - a.v) / (b.v - a.v)
         m = self.model.with_params(replace(self.model.params, v=v))
         guess = a.q + t * (b.q - a.q)
-        # An exact guess (the straight pipe at alpha = 0, pi) is kept as it is:
-        # at a branch point the Jacobian is singular and a Newton step from an
-        # exact solution would fail.
+        # An exact guess (the straight pipe at alpha = 0, pi) is kept: at a branch point
+        # the Jacobian is singular and Newton would fail.
         p = m.params
         if np.linalg.norm(m.static_residual(guess)) <= 1e-13 * (1.0 + p.gamma + p.v**2):
             return guess
@@ -209,21 +193,13 @@ class TrackedPath:
         self.samples = [(e, tracker.first_idx)]
 
 
-#: Largest arclength step of the reference path from v = 0 (mode numbers);
-#: the tracker halves it wherever the match is ambiguous.
+#: Largest arclength step of the reference path from v = 0 (mode numbers).
 REFERENCE_STEP = 1.0
 
 
 def reference_tracker(model: PipeModel, e: ClassifiedSpectrum, res: Resolution, method: str):
-    """Mode numbers of the resolved eigenvalues of ``e``, carried by continuity from v = 0.
-
-    The static branch through e is followed back to v = 0 by pseudo-arclength
-    continuation (steps up to :data:`REFERENCE_STEP`, folds passed); the
-    eigenvalues resolved there are numbered by canonical assignment and
-    tracked forward to e.  A branch that does not reach v = 0 is numbered at
-    the end of the backward continuation instead.  Returns the tracker
-    (indices into e) and the number of spectra solved.
-    """
+    """(tracker, spectra solved): the mode numbers of ``e``'s resolved eigenvalues, carried
+    from v = 0 along its static branch (docs/theory/stability.md, "Mode numbers")."""
     if e.v == 0.0:
         return ModeTracker.canonical(e), 0
     m = model.with_params(replace(model.params, v=e.v))
@@ -238,9 +214,8 @@ def reference_tracker(model: PipeModel, e: ClassifiedSpectrum, res: Resolution, 
             back.points[-1].value,
             back.end_reason,
         )
-    # v = 0 first; the last point is e itself.  Coincident points (the
-    # continuation can end with two points at the stop value) are dropped: a
-    # step of 1e-33 followed by a finite one would wreck the linear prediction.
+    # v = 0 first, e itself last.  Coincident points are dropped: a step of 1e-33
+    # followed by a finite one would wreck the linear prediction.
     points = []
     for pt in back.points[::-1][:-1]:
         last = points[-1] if points else None
@@ -267,12 +242,8 @@ def reference_tracker(model: PipeModel, e: ClassifiedSpectrum, res: Resolution, 
 
 
 def complete_tracker(e: ClassifiedSpectrum, tracker: ModeTracker) -> ModeTracker:
-    """Add the resolved eigenvalues of e the tracker lacks, numbered on the free canonical slots.
-
-    An eigenvalue can be resolved at e and not where the numbering started;
-    it gets the canonical mode its eigenvector is made of among the slots (two
-    per mode) the tracked eigenvalues leave free.
-    """
+    """Add the resolved eigenvalues of e the tracker lacks, numbered on the free canonical
+    slots (two per mode) by their eigenvectors."""
     tracked = set(tracker.first_idx.tolist())
     extra = np.array([i for i in np.flatnonzero(e.resolved) if i not in tracked], dtype=int)
     if extra.size == 0:
@@ -290,18 +261,9 @@ def complete_tracker(e: ClassifiedSpectrum, tracker: ModeTracker) -> ModeTracker
     )
 
 
-# ---------------------------------------------------------------------------
-# Root loci (Fig. 5)
-# ---------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class RootLocus:
     """Eigenvalues against v with mode numbers carried by continuity (Fig. 5).
-
-    Modes 1..n_modes of :func:`root_locus`, and every mode that is unstable at
-    some v, whatever its number (so the eigenvalue behind ``stable = False``
-    is always listed).
 
     Attributes
     ----------
@@ -309,19 +271,17 @@ class RootLocus:
         The fixed parameters (v is the first value).
     v : ndarray, shape (m,)
     lam : ndarray of complex, shape (m, k)
-        Tracked eigenvalues; column j belongs to mode ``modes[j]``.
+        Column j belongs to mode ``modes[j]`` (modes 1..n_modes and every unstable one).
     modes : ndarray of int, shape (k,)
     resolved : ndarray of bool, shape (m, k)
     max_real : ndarray, shape (m,)
-        Largest Re lambda of all resolved eigenvalues at each v.
+        Largest Re lambda of all resolved eigenvalues.
     stable : ndarray of bool, shape (m,)
     theta_tip : ndarray, shape (m,)
         Static tip rotation (which branch).
     n_spectra : int
-        Spectra computed, including the points inserted for tracking.
+        Spectra computed, including those inserted for tracking.
     plane : {'in', 'out'}
-        The motion analysed: in the plane of the static states (Eq. (32)) or
-        out of it (:mod:`fempipe.model.out_of_plane`).
     """
 
     params: Params
@@ -362,72 +322,43 @@ class RootLocus:
 
 
 @single_blas
-def root_locus(
+def trace_root_locus(
     model: PipeModel,
     values: Sequence[float],
     *,
+    planes: tuple[str, ...] = ("in",),
     q0: np.ndarray | None = None,
     n_modes: int | None = 6,
     method: str = "auto",
     tolerance: float = RESOLUTION_TOL,
     callback: Callable[[int, float], None] | None = None,
-) -> RootLocus:
-    """Spectra along the static branch at the flow velocities ``values``: a root locus.
-
-    The root loci of the paper's Fig. 5.
+) -> RootLocus | tuple[RootLocus, RootLocus]:
+    """Spectra along the static branch at the flow velocities ``values``: a root locus (Fig. 5).
 
     Parameters
     ----------
     model : PipeModel
-        Parameters other than v are taken from ``model.params``; an
-        out-of-plane model (:func:`~fempipe.model.out_of_plane.out_of_plane_model`) gives the loci of
-        the motion out of the plane of the static states.
+        Parameters other than v are taken from ``model.params``.
     values : sequence of float
         Flow velocities, in the order the branch is followed.
+    planes : tuple of {'in', 'out'}
+        The motion in the plane of the static states (Eq. (32)) and/or out of it, about
+        the same static states, each plane's mode numbers carried from v = 0.
     q0 : ndarray, optional
-        Static state at ``values[0]`` (default: :func:`fempipe.analyses.statics.solve_sagged`).
+        Static state at ``values[0]`` (default: :func:`~fempipe.analyses.statics.solve_sagged`).
     n_modes : int or None
-        Report modes 1..n_modes (None: every resolved mode); every mode that
-        is unstable at some v is reported too, whatever its number.  Every
-        resolved eigenvalue is tracked.
+        Report modes 1..n_modes (None: every resolved mode) and every mode unstable at
+        some v.
     callback : callable, optional
-        ``callback(i, v)`` after each point (progress).
+        ``callback(i, v)`` after each value (all planes).
 
     Returns
     -------
     RootLocus
+        For one plane; ``(in_plane, out_of_plane)`` for ``("in", "out")``.
     """
-    return _loci([model], values, q0, n_modes, method, tolerance, callback)[0]
-
-
-@single_blas
-def spatial_root_locus(
-    model: PipeModel,
-    values: Sequence[float],
-    *,
-    q0: np.ndarray | None = None,
-    n_modes: int | None = 6,
-    method: str = "auto",
-    tolerance: float = RESOLUTION_TOL,
-    callback: Callable[[int, float], None] | None = None,
-) -> tuple[RootLocus, RootLocus]:
-    """:func:`root_locus` in and out of the plane, about the same static states.
-
-    The static branch is followed once; at every value the in-plane
-    spectrum (Eq. (32)) and the out-of-plane one (:mod:`fempipe.model.out_of_plane`)
-    are computed about the same state, each plane's mode numbers carried by
-    continuity from v = 0 along its own path.  ``callback(i, v)`` is called
-    once per value, after both planes.
-
-    Returns
-    -------
-    (RootLocus, RootLocus)
-        The in-plane loci (plane ``"in"``) and the out-of-plane ones (``"out"``).
-    """
-    planar = in_plane_model(model)
-    models = [planar, out_of_plane_model(planar)]
-    inp, out = _loci(models, values, q0, n_modes, method, tolerance, callback)
-    return inp, out
+    loci = _loci(plane_models(model, planes), values, q0, n_modes, method, tolerance, callback)
+    return loci[0] if len(loci) == 1 else tuple(loci)
 
 
 def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[RootLocus]:
@@ -474,8 +405,7 @@ def _locus_of(model, path, keep, params, values, tips, n_modes) -> RootLocus:
     lam = path.tracked()[keep]
     resolved = path.tracked_resolved()[keep]
     labels = path.labels
-    # Modes 1..n_modes, and every mode that is unstable at some point whatever
-    # its number (the eigenvalue that decides ``stable`` is always listed).
+    # Every mode unstable somewhere is listed: the eigenvalue that decides ``stable``.
     unstable = resolved & (lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(lam)))
     cols = np.ones(labels.size, dtype=bool) if n_modes is None else labels <= int(n_modes)
     cols = np.flatnonzero(cols | unstable.any(axis=0))

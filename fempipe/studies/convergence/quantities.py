@@ -196,11 +196,9 @@ class Quantity:
     The critical quantities (:data:`CRITICAL_QUANTITIES`): ``v_cr`` and
     ``frequency`` are those of the first loss of stability in three
     dimensions, the earlier of the motion in the plane of the static state
-    and out of it (:func:`fempipe.analyses.stability.spatial_critical_velocity`);
-    ``*_in_plane`` those of the plane alone
-    (:func:`fempipe.analyses.stability.critical_velocity`), ``*_out_of_plane`` those
-    of the motion out of it (:func:`~fempipe.analyses.stability.critical_velocity` of
-    :func:`~fempipe.model.out_of_plane.out_of_plane_model`, the same static branch).
+    and out of it (:func:`fempipe.analyses.stability.find_critical_velocity`);
+    ``*_in_plane`` those of the plane alone (``planes=("in",)``), ``*_out_of_plane`` those
+    of the motion out of it (``planes=("out",)``, the same static branch).
 
     Calling it on a discretization returns the value (complex for
     ``eigenvalue``), or raises :class:`fempipe.core.errors.SolverError`.
@@ -302,8 +300,7 @@ class Quantity:
     def _critical(self, model) -> float:
         """v_cr or the frequency of the critical event, in 3-D or in one plane."""
         # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-        from fempipe.analyses.stability import critical_velocity, spatial_critical_velocity
-        from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
+        from fempipe.analyses.stability import PLANES, find_critical_velocity
 
         name, plane = self.name, "3-D"
         for suffix, which in (("_in_plane", "in"), ("_out_of_plane", "out")):
@@ -312,11 +309,8 @@ class Quantity:
         if self.planar:
             plane = "in"
         kw = {"v_max": self.v_max, "v_min": self.params.v}
-        if plane == "3-D":
-            res = spatial_critical_velocity(model, **kw)
-        else:
-            planed = out_of_plane_model(model) if plane == "out" else in_plane_model(model)
-            res = critical_velocity(planed, **kw)
+        planes = PLANES if plane == "3-D" else (plane,)
+        res = find_critical_velocity(model, planes=planes, **kw)
         if res.v_cr is None:
             where = {"3-D": "", "in": " in its plane", "out": " out of its plane"}[plane]
             raise SolverError(
@@ -329,6 +323,7 @@ class Quantity:
         """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
         # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
+        from fempipe.model.dynamics_problem import PipeDynamics
         from fempipe.model.operators import PipeModel
 
         model = PipeModel(disc, self.params)
@@ -336,7 +331,7 @@ class Quantity:
             src, q0, p0, period = self.seed
             try:
                 return shoot(
-                    model,
+                    PipeDynamics(model),
                     project(src, q0, disc),
                     project(src, p0, disc),
                     period,
@@ -409,10 +404,10 @@ def _static_tip(model, key: str) -> float:
 
 def _eigenvalue(model, mode: int) -> complex:
     # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.analyses.stability import spectrum
+    from fempipe.analyses.stability import compute_spectrum
 
     q = static_tip_state(model.disc, model.params)
-    spec = spectrum(model, q)
+    spec = compute_spectrum(model, q)
     upper = [(m, lam) for m, lam in zip(spec.mode, spec.lam, strict=True) if lam.imag >= 0]
     for m, lam in upper:
         if int(m) == int(mode):
