@@ -72,13 +72,12 @@ def sweep(
     Parameters
     ----------
     model : PipeModel
-        Its ``params.v`` is replaced by each value.
     values : sequence of float
     direction : {"up", "down"}
     q0, qdot0 : ndarray, optional
         Start of the first point (default: static state + perturbation).
     perturbation : float
-        Rotation (rad, first sine mode) added where the previous attractor is an equilibrium.
+        Rotation (rad, first sine mode) added after an equilibrium.
     store : PointStore, optional
         Finished points are read from and written to it (resume).
     alpha_index : int
@@ -86,22 +85,15 @@ def sweep(
     progress : callable, optional
         Called with each finished (or loaded) point.
     continue_cycles : bool
-        After a stable cycle, first shoot from it with its period; accepted if Newton
-        converges to a stable cycle, else :func:`find_attractor` from the same state.
+        After a stable cycle, first shoot from it; else :func:`find_attractor`.
     out_of_plane : bool
-        Also the 3-D verdict of each attractor (out-of-plane Floquet multipliers of a
-        cycle, out-of-plane spectrum of an equilibrium); a stored point gains it on a rerun.
+        Also each attractor's 3-D verdict; a stored point gains it on a rerun.
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
     Returns
     -------
     list of BifurcationPoint
-
-    Raises
-    ------
-    ValueError
-        If the model has hysteretic damping (no time-domain meaning).
     """
     refuse_hysteretic(model.params, "sweep")
 
@@ -288,17 +280,8 @@ def _sweep_task(
 
 @dataclass(frozen=True)
 class BifurcationDiagram:
-    """All points of a set of sweeps.
-
-    Attributes
-    ----------
-    points : list of dict
-        :meth:`BifurcationPoint.to_dict` of every point, by alpha, direction, sweep order.
-    wall_time : float
-        Seconds for the whole run (loading stored points included).
-    manifest : dict
-        The run's ``run.json``.
-    """
+    """All points of a set of sweeps (dicts, by alpha, direction, sweep order), the run's
+    wall time and its manifest (``run.json``)."""
 
     points: list
     wall_time: float
@@ -332,17 +315,14 @@ def compute_bifurcation_diagram(
     ----------
     model : PipeModel
     values : sequence of float
-        Flow velocities.
     directions : sequence of {"up", "down"}
     alphas : sequence of float, optional
         Inclinations; default ``[model.params.alpha]``.
-    store_dir, executor, workers
+    store_dir, executor, workers, progress
         As :func:`fempipe.analyses.periodic.points.run_diagram`.
-    progress : callable, optional
-        ``progress(done, total)`` as points finish (or load from the store).
     out_of_plane : bool
-        Each point's 3-D verdict (:func:`sweep`); not in the manifest, so that a planar
-        run's store is resumed, adding it.
+        Each point's 3-D verdict (:func:`sweep`); not in the manifest (a planar run's
+        store is resumed, adding it).
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
@@ -353,11 +333,8 @@ def compute_bifurcation_diagram(
     Raises
     ------
     ValueError
-        A hysteretic damping, no values, a bad direction or worker count.
-    PointStoreMismatchError
-        ``store_dir`` holds another run.
-    Exception
-        The first failed sweep's error, once all have ended (finished points are stored).
+        Hysteretic damping, no values, a bad direction or worker count;
+        :class:`~fempipe.core.errors.PointStoreMismatchError` for a store of another run.
     """
     refuse_hysteretic(model.params, "compute_bifurcation_diagram")
     t0 = time.perf_counter()

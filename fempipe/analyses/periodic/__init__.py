@@ -1,20 +1,12 @@
 """Branches of periodic orbits of Eq. (20) by pseudo-arclength continuation in v.
 
-A flutter event of the static branch (:mod:`fempipe.analyses.stability`) is a Hopf point,
-where a family of periodic orbits is born.  This package follows that family in v, stable and
-unstable orbits alike, which a sweep of attractors (:mod:`fempipe.analyses.bifurcation`)
-cannot see: single shooting with a phase condition and Keller's pseudo-arclength condition in
-a weighted metric (or a fixed v, to land on every requested value), the exact monodromy and
-d phi_T/dv of the discrete Radau flow, and the Floquet multipliers, with folds of cycles,
-period doublings and Neimark-Sacker points located between points.
-
-Modules: :mod:`~fempipe.analyses.periodic.results` (Hopf points, orbits, branches),
-:mod:`~fempipe.analyses.periodic.hopf` (the Hopf points and the equilibria of the static
-branch), :mod:`~fempipe.analyses.periodic.problem` (the shooting problem and its
-corrector), :mod:`~fempipe.analyses.periodic.branch` (the continuation of one branch,
-:func:`continue_cycles`, on the engine of :mod:`fempipe.solvers.continuation`),
-:mod:`~fempipe.analyses.periodic.special` (the special points) and
-:mod:`~fempipe.analyses.periodic.diagram` (the diagram over alpha, :func:`compute_cycle_diagram`).
+A flutter event of the static branch is a Hopf point, where a family of periodic orbits is
+born; this package follows it in v, stable and unstable orbits alike, with their Floquet
+multipliers and special points.  Modules: ``results`` (Hopf points, orbits, branches),
+``hopf`` (:func:`find_hopf_points`, the static equilibria), ``problem`` (the shooting problem
+and its corrector), ``branch`` (:func:`continue_cycles`), ``special`` (folds, period doublings,
+Neimark-Sacker points), ``points`` (the points, store and driver of every diagram),
+``diagram`` (:func:`compute_cycle_diagram`), ``out_of_plane`` (the 3-D verdicts).
 
 Derivation: docs/theory/numerics.md, "Branches of periodic orbits".
 """

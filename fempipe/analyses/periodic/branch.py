@@ -1,13 +1,12 @@
 """A branch of periodic orbits from a Hopf point: :func:`continue_cycles`.
 
-The branch is walked by the engine of :mod:`fempipe.solvers.continuation`
-with :class:`CycleBranchPolicy`, the choices of the periodic-orbit problem
-(docs/theory/numerics.md, "Branches of periodic orbits"): the first step along
-the Hopf eigenvector, later ones along the secant of the last two points
-with a polynomial predictor (:func:`predict`), the chord-Newton corrector of
-:class:`~fempipe.analyses.periodic.problem.CycleCorrector` at fixed v where a
-requested v lies ahead, steps refused when the secant turns by more than
-:data:`MAX_ANGLE`, and the requested v passed by a step landed on afterwards.
+The engine of :mod:`fempipe.solvers.continuation` walks the branch with
+:class:`CycleBranchPolicy`: the first step along the Hopf eigenvector, later ones along the
+secant with a polynomial predictor (:func:`predict`), the chord-Newton corrector of
+:class:`~fempipe.analyses.periodic.problem.CycleCorrector` (at fixed v where a requested v lies
+ahead), steps refused when the secant turns by more than :data:`MAX_ANGLE`.
+
+Method: docs/theory/numerics.md, "Branches of periodic orbits".
 """
 
 from __future__ import annotations
@@ -48,26 +47,20 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Largest turn of the branch (rad) between two consecutive secants before
-#: the step is rejected and halved.
+#: Largest turn (rad) between two consecutive secants before the step is halved.
 MAX_ANGLE = 0.5
 #: The branch stops when the period exceeds this multiple of the Hopf period.
 MAX_PERIOD_RATIO = 20.0
 #: |dv/ds| below which v is not used as the local parameter (near folds).
 MIN_DV_DS = 0.2
-#: The orbits at the requested v are integrated this much more accurately
-#: than the continuation's own steps (whose orbits only trace the branch).
-#: Measured on Fig. 7 (P3:16, 36 v, against the sweep): stable cycles within
-#: 4.1e-7 of the attractors found by integration, against 1.4e-6 with 1.0
-#: (the chord matrix seeded from the previous point moves the last iterates,
-#: and with them the integration noise), at no measurable extra CPU.
+#: The orbits at the requested v are integrated this much more accurately than the
+#: continuation's own steps, which only trace the branch (docs/theory/numerics.md).
 GRID_RTOL_FACTOR = 0.5
 
 
 @dataclass(frozen=True)
 class CycleStep:
-    """A predicted step of ``h`` from ``u_k`` along ``secant`` (z-space): at the
-    fixed v of ``u_pred`` when ``tangent`` is None (``source="grid"``)."""
+    """A predicted step of ``h`` from ``u_k`` along ``secant``; fixed v if ``tangent`` is None."""
 
     h: float
     u_k: np.ndarray
@@ -81,8 +74,7 @@ class CycleStep:
 
 @dataclass(frozen=True)
 class CorrectedOrbit:
-    """The corrector's result (u, flow, monodromy, iterations, rejected steps)
-    and the integration tolerance it was asked for."""
+    """The corrector's result (u, flow, monodromy, iterations, rejected) and its rtol."""
 
     got: tuple
     rtol: float
@@ -107,11 +99,8 @@ def u_of(pt: CyclePoint) -> np.ndarray:
 
 
 class CycleBranchPolicy:
-    """The continuation policy of a branch of periodic orbits (see :func:`continue_cycles`).
-
-    Holds the branch (``points``, their ``us``, the counters) and implements
-    :class:`fempipe.solvers.continuation.ContinuationPolicy`.
-    """
+    """The :class:`~fempipe.solvers.continuation.ContinuationPolicy` of a branch of
+    periodic orbits; holds the branch (``points``, their ``us``, the counters)."""
 
     def __init__(
         self,
@@ -245,10 +234,8 @@ class CycleBranchPolicy:
                 self.seed if step.source == "grid" else None,
             )
         except CorrectorError as first:
-            # Newton can stall on the jumps of the adaptive step sequence
-            # (measured: a residual floor of 3e-6 at rtol = 1e-5, P3:16,
-            # alpha = pi/2, v = 9.2): the same step once more, ten times
-            # more accurately, before the step is halved.
+            # Newton can stall on the jumps of the adaptive step sequence: the same
+            # step once more, ten times more accurately, before the step is halved.
             log.info(
                 "%s: %s at v = %.6g; rtol %.1e", self.name, first, step.u_pred[-1], rtol_k / 10
             )
@@ -299,9 +286,8 @@ class CycleBranchPolicy:
         return AcceptedOrbit(pt, u, fl)
 
     def _land_passed(self, step: CycleStep, u: np.ndarray, rtol_k: float) -> None:
-        # Requested v passed by this step (near the Hopf point or a fold,
-        # where v is no local parameter): landed on at fixed v from the
-        # secant between the two orbits around them.
+        """Land at fixed v on the requested v this step passed (near the Hopf point or a
+        fold, where v is no local parameter), from the secant of the orbits around them."""
         us, u_k, n, cont, name = self.us, step.u_k, self.n, self.cont, self.name
         v_k = u_k[-1]
         lo_, hi_ = sorted((v_k, u[-1]))
@@ -403,12 +389,10 @@ def continue_cycles(
     resume: dict | None = None,
     on_point: Callable[[dict], None] | None = None,
 ) -> CycleBranch:
-    """Follow the periodic orbits born at a Hopf point by pseudo-arclength continuation.
+    """Follow the periodic orbits of Eq. (20) born at a Hopf point by pseudo-arclength continuation.
 
-    Solves the periodic-orbit problem of Eq. (20) in (x0, T, v) (module
-    docstring: single shooting with the exact monodromy of the discrete flow,
-    a Poincare phase condition, Keller's pseudo-arclength condition or a fixed
-    v on the requested values).
+    Single shooting in (x0, T, v) with the exact monodromy of the discrete flow, a Poincare
+    phase condition, and Keller's arclength condition or a fixed v on the requested values.
 
     Parameters
     ----------
@@ -419,41 +403,28 @@ def continue_cycles(
     v_range : (float, float)
         The branch ends once it leaves this range of v.
     values : sequence of float
-        Requested v: each is landed on exactly (fixed-v corrector) every time
-        the branch passes it (``source="grid"``).
+        Requested v, landed on exactly every time the branch passes them (``source="grid"``).
     name : str
         Branch name.
     rtol : float
-        Integration tolerance of :class:`fempipe.solvers.radau.Radau`, scaled down by
-        the distance of the nearest non-trivial Floquet multiplier from 1 (down
-        to rtol / 10; see :meth:`~fempipe.analyses.periodic.problem.CycleCorrector.rtol_after`); the orbits at the
-        requested v at :data:`GRID_RTOL_FACTOR` times that.  At the default
-        1e-5 the periods and tip extrema of P3:16 orbits at alpha = 0,
-        v = 6.4 ... 12 lie within 4.7e-8 and 4.1e-7 of orbits shot at
-        rtol = 1e-10 (measured at the 29 requested v of Fig. 7; the error is
-        that of the integrated flow and moves with the step sequences), with
-        55-60 % of the steps of rtol = 1e-6.
+        Integration tolerance, scaled down near a multiplier 1
+        (:meth:`~fempipe.analyses.periodic.problem.CycleCorrector.rtol_after`); at the
+        requested v times :data:`GRID_RTOL_FACTOR`.  Accuracy: docs/theory/numerics.md.
     tol : float
-        Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi),
-        on the phase and on the arclength conditions.
+        Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi), on the phase
+        and the arclength conditions.
     xtol : float
-        ... and on the Newton correction that residual asks for (the error of
-        the iterate: q in rad, q' scaled by T / 2 pi, T relative, v), which
-        the residual alone underestimates by 1 / (1 - mu) where a multiplier
-        mu is near 1 (near the Hopf point, near folds).
+        Newton tolerance on the correction (the residual understates the error by
+        1 / (1 - mu) for a multiplier mu near 1).
     ds, ds_min, ds_max : float
-        First, smallest and largest arclength step (metric of docs/theory/numerics.md).
+        First, smallest and largest arclength step.
     max_steps : int
-        Steps before the branch ends.
     max_iter : int
         Newton iterations per corrector.
     resume : dict, optional
-        The state written to ``on_point`` by an interrupted run with the same
-        arguments: the branch continues from there.
+        The state an interrupted run passed to ``on_point``: the branch continues from there.
     on_point : callable, optional
-        Called after every accepted point with a plain-JSON dict of the whole
-        branch state (points with their states, step size), which ``resume``
-        accepts.
+        Called after every accepted point with the branch's plain-JSON state.
 
     Returns
     -------
@@ -462,10 +433,9 @@ def continue_cycles(
     Raises
     ------
     CycleContinuationError
-        If the corrector fails at the smallest step; names v and the step, and
-        carries the finished part of the branch.
+        The corrector failed at the smallest step; names v and carries the finished branch.
     ValueError
-        For bad arguments or hysteretic damping (no time-domain meaning).
+        Bad arguments or hysteretic damping.
     """
     refuse_hysteretic(model.params, "continue_cycles")
     v_lo, v_hi = _checked_range(v_range, ds, ds_min, ds_max, tol, rtol)
@@ -505,10 +475,9 @@ def _checked_range(v_range, ds, ds_min, ds_max, tol, rtol) -> tuple[float, float
 
 
 def predict(S: np.ndarray, us: list, tangent: np.ndarray, h: float) -> np.ndarray:
-    """The point at arclength h ahead of the last one: on the polynomial through the
-    last four (or three) points, parametrized by chord length in the metric, when
-    they are about evenly spaced and h is not much longer than their spacing (as
-    on a run of requested v); else on the tangent."""
+    """The point at arclength h ahead: on the polynomial through the last four (or three)
+    points in chord length when they are about evenly spaced and h is not much longer than
+    their spacing, else on the tangent."""
     for m in (4, 3):
         if len(us) < m:
             continue

@@ -1,5 +1,8 @@
-"""Bifurcation diagrams by continuation: the static branch and every branch of
-periodic orbits, per alpha, resumable from a store."""
+"""Bifurcation diagrams by continuation (Figs. 7-10): the static branch and every branch of
+periodic orbits, per alpha, resumable (:func:`compute_cycle_diagram`).
+
+Method: docs/theory/numerics.md, "Branches of periodic orbits".
+"""
 
 from __future__ import annotations
 
@@ -29,8 +32,8 @@ N_MULTIPLIERS = 8
 
 
 def cycle_point_dict(pt: CyclePoint, branch: str, index: int, alpha: float) -> dict:
-    """A cycle as a point of ``fempipe bifurcation --json`` (the sweep's keys plus
-    ``stable``, ``branch``, ``requested``, ``source``, ``floquet_multipliers``)."""
+    """A cycle as a point of ``fempipe bifurcation --json``: the sweep's keys and ``stable``,
+    ``branch``, ``requested``, ``source``, ``floquet_multipliers``."""
     d = point_dict(pt.v, "continuation", index, alpha, "periodic")
     d.update({k: list(pt.tip[k]) for k in TIP_KEYS})
     d.update(
@@ -60,14 +63,10 @@ class CycleDiagram:
     Attributes
     ----------
     points : list of dict
-        Equilibria (``direction="static"``) at the requested v, then the points
-        of every branch of periodic orbits (``direction="continuation"``) in
-        arclength order; by alpha.
-    branches : list of dict
-        :meth:`CycleBranch.to_dict` of every branch, with ``alpha``.
-    special_points : list of dict
-        Folds, period doublings, Neimark-Sacker points with ``alpha`` and ``branch``.
-    hopf_points : list of dict
+        By alpha: the equilibria (``direction="static"``) at the requested v, then every
+        branch's orbits (``direction="continuation"``) in arclength order.
+    branches, special_points, hopf_points : list of dict
+        With ``alpha`` (special points also with ``branch``).
     errors : list of str
         Branches that could not be continued (their finished points are kept).
     wall_time : float
@@ -104,8 +103,7 @@ def _alpha_task(
     store: PointStore,
     on_point: Callable[[], None] | None,
 ) -> dict:
-    """Static branch, Hopf points and all branches of periodic orbits at one alpha
-    (with ``out_of_plane``: their 3-D verdicts, :func:`_add_verdicts`)."""
+    """The static branch, Hopf points and branches of orbits at one alpha (and their 3-D verdicts)."""
     alpha = float(model.params.alpha)
     v_lo, v_hi = min(values), max(values)
     static_path = store.directory / f"a{alpha_index:02d}-static.json"
@@ -201,8 +199,7 @@ def _alpha_task(
 
 
 def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) -> None:
-    """``stable_out_of_plane`` and ``stable_3d`` of the static points, in place (kept in
-    the store beside the static branch)."""
+    """The 3-D verdicts of the static points, in place (kept in the store)."""
     store = VerdictStore(directory / f"a{alpha_index:02d}-static-3d.json")
     states = None
     for i, d in enumerate(eq_points):
@@ -217,9 +214,7 @@ def _static_verdicts(model, values, v_start, eq_points, directory, alpha_index) 
 
 
 def _add_verdicts(model, points, dicts, select, where, on_point) -> None:
-    """The 3-D verdicts of the selected orbits of a branch (``select`` True: all of
-    them, else a callable giving the indices), merged into their dicts; the
-    others get ``stable_3d`` None."""
+    """The 3-D verdicts of the orbits ``select`` picks (True: all), merged into their dicts."""
     indices = range(len(points)) if select is True else select(points)
     verdicts = branch_verdicts(model, points, list(indices), VerdictStore(where), on_point)
     for i, d in enumerate(dicts):

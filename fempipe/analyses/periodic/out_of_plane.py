@@ -1,18 +1,13 @@
 """Do the planar orbits and equilibria of a bifurcation diagram survive in 3-D?
 
-The planar states are states of the 3-D model (:mod:`fempipe.model.space`)
-and stay planar by the mirror symmetry, so a planar periodic orbit of the
-paper's Eq. (20) is a periodic orbit in 3-D as well; it is observed in 3-D
-only when it is stable in the plane and against out-of-plane perturbations.
-For an orbit the out-of-plane Floquet multipliers decide
-(:func:`fempipe.analyses.space.out_of_plane_floquet`), for an equilibrium the
-out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`), as the planar
-``simulate`` reports them (:func:`fempipe.analyses.space.three_dimensional_verdict`).
+A planar orbit of Eq. (20) is an orbit of the 3-D model too (mirror symmetry), observed only
+when stable in the plane and out of it: for an orbit its out-of-plane Floquet multipliers
+decide (:func:`fempipe.analyses.space.compute_out_of_plane_floquet`), for an equilibrium its
+out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`).  :class:`VerdictStore` keeps a
+branch's verdicts in the diagram's point store; :func:`locate_change` finds the v between two
+orbits where the largest out-of-plane multiplier crosses the unit circle.
 
-:class:`VerdictStore` keeps the verdicts of a branch in the point store of a
-diagram, beside the branch, so that a rerun computes only the missing ones;
-:func:`locate_change` bisects between two orbits of a branch for the v where
-the largest out-of-plane multiplier crosses the unit circle.
+Theory: docs/theory/space.md.
 """
 
 from __future__ import annotations
@@ -26,10 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from fempipe.analyses.limit_cycle import LimitCycle, ShootingError, shoot
-from fempipe.analyses.space import out_of_plane_floquet
+from fempipe.analyses.space import compute_out_of_plane_floquet
 from fempipe.analyses.space.verdict import cycle_entries, equilibrium_verdict
 from fempipe.core.errors import SolverError
 from fempipe.core.files import write_text
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
 
 from .results import CyclePoint, nontrivial_multipliers
@@ -80,18 +76,11 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
     Returns
     -------
     dict
-        ``out_of_plane_floquet_multipliers`` (six largest, ``[re, im]``),
-        ``max_nontrivial_out_of_plane_multiplier``, ``stable_out_of_plane``,
-        ``stable_3d`` (stable in the plane and out of it),
-        ``out_of_plane_cpu_time`` (CPU seconds), ``planar_block_max_multiplier``
-        (the largest non-trivial modulus of the out-of-plane run's planar block: the
-        planar multipliers again), ``neutral_out_of_plane_multiplier`` (``[re, im]``,
-        the rotation about the vertical, left out of the verdict; None unless
-        sin(alpha) = 0) with ``out_of_plane_symmetry_defect`` (its distance from 1),
-        and ``stable_3d_note`` where the verdict is rough
-        (:func:`~fempipe.analyses.space.verdict.rough_verdict_note`).
+        The keys of :func:`fempipe.analyses.space.verdict.cycle_entries` and
+        ``planar_block_max_multiplier`` (the planar multipliers again, from the
+        out-of-plane run's planar block: evidence to check the verdict by).
     """
-    oop = out_of_plane_floquet(model, cycle)
+    oop = compute_out_of_plane_floquet(model, cycle)
     out = cycle_entries(model, oop, stable_in_plane)
     # Evidence to check the verdict by: the out-of-plane run's planar block (the
     # planar model's multipliers, recomputed) and, at an axisymmetric alpha,
@@ -103,9 +92,7 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
 
 @dataclass(frozen=True)
 class EveryKth:
-    """A selection of branch points for the verdict (picklable, for worker
-    processes): every ``k``-th one, the last one, and those at the velocities
-    ``v_keep`` (to 1e-9)."""
+    """Branch points for the verdict (picklable): every ``k``-th, the last, those at ``v_keep``."""
 
     k: int
     v_keep: tuple = ()
@@ -120,8 +107,7 @@ class EveryKth:
 
 @dataclass(frozen=True)
 class Spread:
-    """A selection of about ``n`` branch points spread evenly by index (picklable),
-    with the last one and those at the velocities ``v_keep`` (to 1e-9)."""
+    """About ``n`` branch points spread evenly (picklable), the last, those at ``v_keep``."""
 
     n: int
     v_keep: tuple = ()
@@ -132,12 +118,8 @@ class Spread:
 
 
 class VerdictStore:
-    """The 3-D verdicts of one branch's points, one JSON file in the point store.
-
-    ``{"points": {"<index>": {"v": ..., <verdict keys>}}}``, rewritten atomically
-    after every new verdict; a verdict whose v is not the point's is ignored
-    (recomputed).  Without a path the verdicts live in memory only.
-    """
+    """The 3-D verdicts of one branch's points: ``{"points": {"<index>": {"v", ...}}}``,
+    rewritten atomically after each; one of another v is recomputed; no path: in memory."""
 
     def __init__(self, path: str | Path | None) -> None:
         self.path = None if path is None else Path(path)
@@ -194,14 +176,9 @@ def locate_change(
     tol: float = 1e-3,
     max_iter: int = 6,
 ) -> dict | None:
-    """The v between two orbits of a branch where the largest non-trivial
-    out-of-plane multiplier crosses 1, by regula falsi (Illinois) on
-    ``mu - 1``.
-
-    The orbit at an intermediate v is shot (:func:`fempipe.analyses.limit_cycle.shoot`)
-    from the state interpolated linearly between the two orbits in v; the
-    interval shrinks until it is shorter than ``tol`` or ``max_iter``
-    orbits have been computed.
+    """The v between two orbits of a branch where the largest non-trivial out-of-plane
+    multiplier crosses 1, by regula falsi (Illinois) on ``mu - 1``, each orbit shot from the
+    state interpolated between the two; until the bracket is shorter than ``tol``.
 
     Returns
     -------
@@ -228,10 +205,10 @@ def locate_change(
         )
         m = model.with_params(replace(model.params, v=float(v)))
         try:
-            cyc = shoot(m, q, qd, float(T))
+            cyc = shoot(PipeDynamics(m), q, qd, float(T))
         except ShootingError:
             return None
-        f = out_of_plane_floquet(m, cyc).max_nontrivial - 1.0
+        f = compute_out_of_plane_floquet(m, cyc).max_nontrivial - 1.0
         if f * lo[1] > 0:
             lo = [float(v), f]
             if side == 1:

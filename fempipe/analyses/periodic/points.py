@@ -81,42 +81,16 @@ _KEYS_3D = (
 
 @dataclass(frozen=True)
 class BifurcationPoint:
-    """One point of a sweep; the 3-D fields are set by a sweep of the 3-D model.
+    """One point of a sweep, of the planar model or (``motion`` set) of the 3-D model.
 
-    Attributes
-    ----------
-    v, alpha : float
-    direction : {"up", "down"}
-    index : int
-        Position in the sweep.
-    attractor : str
-        ``"equilibrium"``, ``"periodic"``, ``"non-periodic"`` (3-D: also ``"whirl"``,
-        ``"quasi-periodic"``).
-    eta_tip, X_tip, Z_tip : list of float
-        [min, max] on the attractor.
-    period : float or None
-    period_n : int or None
-    steps, rejected_steps : int
-    q, qdot : ndarray
-        The state the point ended on, where the next point starts (3-D: ``U``, ``Udot``
-        in the JSON).
-    max_multiplier : float or None
-        Planar: largest non-trivial Floquet multiplier modulus of a periodic attractor.
-    wall_time : float or None
-        Planar.
-    three_d : dict or None
-        Planar: the 3-D verdict (``stable_3d`` and the out-of-plane evidence); its keys
-        join the point's in :meth:`to_dict`.
-    motion : {"planar", "nonplanar"} or None
-        3-D; the point is of the 3-D model where this is set.
-    Y_tip : list of float or None
-        3-D: [min, max] out of the static plane.
-    whirl_rate, planarity : float or None
-    stable : bool or None
-        3-D: the shot orbit's Floquet verdict (None without a shot orbit).
-    started : str or None
-        3-D: ``"previous attractor"`` or ``"static state"`` (perturbed).
-    t_end, cpu_time : float or None
+    The JSON keys are those of ``fempipe bifurcation --json`` (docs/cli/commands.md).
+    ``attractor``: equilibrium, periodic, non-periodic (3-D also whirl, quasi-periodic);
+    the tips [min, max] on it; ``q``, ``qdot``: the state it ended on, where the next point
+    starts (``U``, ``Udot`` in a 3-D point's JSON).  Planar only: ``max_multiplier`` (largest
+    non-trivial Floquet modulus), ``wall_time``, ``three_d`` (the 3-D verdict, whose keys join
+    the point's).  3-D only: ``motion`` (planar, nonplanar), ``Y_tip``, ``whirl_rate``,
+    ``planarity``, ``stable`` (the shot orbit's Floquet verdict), ``started`` (previous
+    attractor, static state), ``t_end``, ``cpu_time``.
     """
 
     v: float
@@ -188,17 +162,9 @@ def _differences(old, new, prefix: str = "") -> list[str]:
 
 
 class PointStore:
-    """A directory of finished points, one JSON file each, written atomically.
-
-    Parameters
-    ----------
-    directory : path
-        Created if missing.
-    manifest : dict
-        The run (discretization, parameters but v, values, options), kept in ``run.json``.
-        A directory of another run raises :class:`~fempipe.core.errors.PointStoreMismatchError`
-        naming what differs, so that a resume never mixes results.
-    """
+    """A directory (created if missing) of finished points, one JSON file each, written
+    atomically; ``run.json`` holds the run's ``manifest``, and a directory of another run
+    raises :class:`~fempipe.core.errors.PointStoreMismatchError` naming what differs."""
 
     def __init__(self, directory: str | os.PathLike, manifest: dict) -> None:
         self.manifest = json.loads(json.dumps(manifest))
@@ -268,27 +234,10 @@ def sweep_points(
     progress: Callable[[BifurcationPoint], None] | None = None,
     amend: Callable[[float, BifurcationPoint], BifurcationPoint] | None = None,
 ) -> list[BifurcationPoint]:
-    """Step v through ``values`` in ``direction``, each point after the previous one.
-
-    Parameters
-    ----------
-    values : sequence of float
-    direction : {"up", "down"}
-    step : callable
-        ``step(index, v, previous)`` computes a point (``previous`` None at the first).
-    store : PointStore, optional
-        Points are loaded from it where finished, and saved to it when computed.
-    sweep : str
-        The sweep's name in the store's file names.
-    progress : callable, optional
-        Called with each finished (or loaded) point.
-    amend : callable, optional
-        ``amend(v, point)`` completes a loaded point (saved again if it returns another).
-
-    Returns
-    -------
-    list of BifurcationPoint
-    """
+    """Step v through ``values`` in ``direction``: ``step(index, v, previous)`` computes a
+    point (``previous`` None at the first) unless ``store`` has it under the name ``sweep``;
+    ``amend(v, point)`` completes a loaded point (saved again if it returns another);
+    ``progress(point)`` follows every point."""
     points: list[BifurcationPoint] = []
     for i, v in enumerate(ordered(values, direction)):
         point = None if store is None else store.load(sweep, direction, i, v)
@@ -364,34 +313,25 @@ def run_diagram(
     Parameters
     ----------
     task : callable
-        ``task(*args, store, on_point)`` for each ``args`` of ``tasks``; ``on_point`` (None
-        in a worker) is called with each finished point.
+        ``task(*args, store, on_point)`` per ``args`` of ``tasks``; ``on_point`` (None in a
+        worker) is called with each finished point.
     tasks : sequence of tuple
     manifest : dict
-        The run (:func:`diagram_manifest`); the store of another run is refused.
+        The run (:func:`diagram_manifest`).
     store_dir : path, optional
         The point store; a temporary directory if omitted.
     executor : concurrent.futures.Executor, optional
-        Runs the tasks (any Executor: process pool, Dask's ``Client.get_executor()``); the
-        store directory must be visible to its workers.
+        Any executor (process pool, Dask's ``Client.get_executor()``) that sees the store.
     workers : int, optional
-        Without an executor: > 1 runs the tasks in that many local processes
-        (:func:`fempipe.core.parallel.run_tasks`); 1 or None in this process.
+        Without an executor: > 1 local processes (:func:`fempipe.core.parallel.run_tasks`).
     progress : callable, optional
-        ``progress(done, total)`` as points finish or load; with workers, from the store's
-        count of sweep points (``total`` given).
+        ``progress(done, total)``; with workers, the store's count (``total`` given).
     total : int, optional
-        The number of points, if known.
-
-    Returns
-    -------
-    list
-        The tasks' results.
 
     Raises
     ------
     Exception
-        The error of the first task that failed, once all have ended.
+        The first failed task's error, once all have ended.
     """
     if workers is not None and int(workers) < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")

@@ -1,19 +1,12 @@
 """The periodic-orbit problem by single shooting, as a continuation problem.
 
-In u = (x0, T, v) with x = (q, q') (see :mod:`fempipe.analyses.periodic`):
+In u = (x0, T, v): phi_T(x0; v) - x0 = 0 and the phase condition <f_ref, x0 - x_ref> = 0, with
+phi_T the discrete Radau flow (:func:`period_flow`).  :class:`OrbitProblem` is it at one phase
+section as a :class:`fempipe.solvers.continuation.ContinuationProblem` (bordered chord matrix
+``[[M - I, F(phi_T), d phi_T / dv], [f_ref, 0, 0], [row]]``); :class:`CycleCorrector` is the
+branches' Newton corrector (chord Newton with a trust region).
 
-    phi_T(x0; v) - x0 = 0                    (2n equations)
-    <f_ref, x0 - x_ref> = 0                  (phase condition)
-
-with phi_T the discrete flow of :class:`fempipe.solvers.radau.Radau` over T
-(:func:`period_flow`).  :class:`OrbitProblem` is this problem at one phase
-section in the form of :class:`fempipe.solvers.continuation.ContinuationProblem`
-(the state (x0, T), the parameter v; the derivatives are the flow with its
-monodromy matrix and d phi_T / dv; the bordered matrix the chord matrix
-``[[M - I, F(phi_T), d phi_T / dv], [f_ref, 0, 0], [row]]``).
-:class:`CycleCorrector` is the Newton corrector of the branches (chord
-Newton with a trust region, the monodromy at the orbit where asked), and
-turns a converged orbit into a :class:`~fempipe.analyses.periodic.results.CyclePoint`.
+Derivation: docs/theory/numerics.md, "Branches of periodic orbits".
 """
 
 from __future__ import annotations
@@ -45,30 +38,17 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: The corrector's monodromy is taken within this fraction of the orbit's
-#: amplitude of the converged orbit on the continuation's own steps: their
-#: multipliers decide stability and locate folds, period doublings and
-#: Neimark-Sacker points (refined separately), and carry an error of about
-#: this size (measured: the largest non-trivial |rho| 0.158056 against
-#: 0.157639 of a shot at rtol 1e-10, N = 4, alpha = 0, v = 10).
+#: On the continuation's own steps the monodromy is taken within this fraction of the
+#: orbit's amplitude; their multipliers (stability, special points) carry an error of
+#: about this size (docs/theory/numerics.md).
 MONODROMY_NEAR = 1e-3
-#: ... and within this fraction at the requested v, whose multipliers are
-#: reported: the iterate predicted to be the last is integrated with the
-#: sensitivity, and one more such flow follows where the iteration still
-#: ended farther away.  Measured on Fig. 7 (P3:16, 36 v): the trivial
-#: multiplier within 1.3e-6 of 1 at every requested v (7.7e-4 with
-#: MONODROMY_NEAR).  With the landings seeded from the previous point
-#: (``seed`` of the corrector) the run takes 49 flows with the sensitivity
-#: and 108 without, against 55 and 70 with MONODROMY_NEAR and no seeding
-#: (74 and 54 with this constant but no seeding): about the same CPU.
+#: ... and within this fraction at the requested v, whose multipliers are reported.
 MONODROMY_AT_ORBIT = 1e-6
 
 
 @dataclass
 class Flow:
-    """phi_T(x) of one integration: the end state and its time derivative, the
-    monodromy and d phi_T / dv (with the sensitivity), the step counts and the
-    step record (for the tip extrema)."""
+    """phi_T(x): end state, its derivative, monodromy and d phi_T / dv, steps, step record."""
 
     xT: np.ndarray
     fT: np.ndarray
@@ -107,14 +87,8 @@ def period_flow(model: PipeModel, x: np.ndarray, T: float, rtol: float, sensitiv
 
 
 class OrbitProblem:
-    """The periodic-orbit problem at the phase section through ``u_ref``.
-
-    The section passes through the state of ``u_ref`` orthogonal (in the
-    metric ``S``) to the flow there; flows are integrated at ``rtol``.
-    Implements :class:`fempipe.solvers.continuation.ContinuationProblem` with
-    y = u = (x0, T, v): ``derivatives`` is a :class:`Flow` with the
-    sensitivity, ``inner(a, b) = (S a) . (S b)``.
-    """
+    """The periodic-orbit problem at the phase section through ``u_ref`` (orthogonal to the
+    flow there in the metric ``S``), a ``ContinuationProblem`` in y = u = (x0, T, v)."""
 
     def __init__(self, corrector: CycleCorrector, u_ref: np.ndarray, rtol: float) -> None:
         n2 = 2 * corrector.n
@@ -150,8 +124,7 @@ class OrbitProblem:
     def solve_bordered(
         self, lin: Flow, row: np.ndarray | None, rhs: np.ndarray, *, determinant: bool = False
     ) -> BorderedSolution:
-        """The chord matrix of the flow ``lin`` (without the v column and
-        ``row`` when ``row`` is None: at fixed v), solved for ``rhs``."""
+        """The chord matrix of the flow ``lin`` (at fixed v where ``row`` is None), solved."""
         n2 = self.n2
         fixed_v = row is None
         k = n2 + (1 if fixed_v else 2)
@@ -181,7 +154,7 @@ class OrbitProblem:
 
 
 class CycleCorrector:
-    """Newton correctors of one branch (see :mod:`fempipe.analyses.periodic`).
+    """Newton correctors of one branch.
 
     Parameters
     ----------
@@ -219,25 +192,17 @@ class CycleCorrector:
         return self.model.with_params(self.model.params.with_flow(float(v)))
 
     def residual_norm(self, r: np.ndarray, T: float) -> float:
-        """RMS of r = (q part, q' part), q' scaled by T / 2 pi (the limit cycles'
-        :func:`~fempipe.analyses.limit_cycle.state_distance`)."""
+        """RMS of r = (q part, q' part), q' scaled by T / 2 pi (:func:`state_distance`)."""
         return state_distance(r[: self.n], r[self.n :], T / (2 * math.pi))
 
     def tip_extrema(self, v: float, record: list) -> dict:
-        """[min, max] of the tip coordinates over the period integrated in ``record``
-        (its Radau steps), at flow velocity v: the collocation polynomial of every
-        step sampled 8 times, each extremum refined by a bounded scalar minimization
-        (:func:`~fempipe.analyses.limit_cycle.tips.tip_extrema`, ``refine="bounded"``)."""
+        """[min, max] of the tip over the period in ``record`` (its Radau steps), refined."""
         m = self.at(v)
-        return tip_extrema(m.disc, CollocationOrbit(record), m.params.alpha, refine="bounded")
+        return tip_extrema(m, CollocationOrbit(record), refine="bounded")
 
     def rtol_after(self, previous: CyclePoint | None) -> float:
-        """Integration tolerance for the next point: ``rtol`` times the distance
-        of the previous orbit's nearest non-trivial multiplier from 1 (at least
-        a tenth).  An error e of the flow map moves the fixed point by about
-        e / |1 - mu|, so near the Hopf point and near folds (mu -> 1) the flow
-        is integrated more accurately (measured at P3:16, alpha = 0, v = 6.4,
-        mu = 0.87: tip error 1.4e-6 at rtol = 1e-5, 2e-7 at 1e-6)."""
+        """``rtol`` times the distance of the previous orbit's nearest non-trivial multiplier
+        from 1 (at least a tenth): an error e of the flow moves the orbit by e / |1 - mu|."""
         if previous is None:
             return 0.1 * self.rtol
         mu = nontrivial_multipliers(previous.multipliers)
@@ -253,28 +218,13 @@ class CycleCorrector:
         monodromy_at: float = MONODROMY_NEAR,
         seed: Flow | None = None,
     ) -> tuple:
-        """Newton on the extended system from ``u_pred``: pseudo-arclength with the
-        (z-space) ``tangent``, or at the fixed v of ``u_pred`` if ``tangent`` is None.
+        """Newton from ``u_pred``: pseudo-arclength along ``tangent``, or at fixed v if None.
 
-        The monodromy returned (and so the Floquet multipliers) is taken at an
-        iterate within ``monodromy_at`` times the orbit's amplitude of the
-        converged orbit (the chord iteration reuses an older one; for
-        :data:`MONODROMY_AT_ORBIT` the iterate predicted to be the last takes
-        the sensitivity, and where the converged orbit is still farther, one
-        more flow with the sensitivity is integrated at it):
-        :data:`MONODROMY_NEAR` on the continuation's own steps,
-        :data:`MONODROMY_AT_ORBIT` at the requested v, whose multipliers are
-        reported.
-
-        ``seed``, a flow with the sensitivity at a nearby orbit (the previous
-        point's last flow), gives the chord matrix of the first iteration, so
-        that it needs no sensitivity of its own; if the residual then falls
-        less than four times, the matrix is computed afresh as usual.
-
-        The phase section passes through the state of ``u_ref`` (the last point of
-        the branch; the predictor when None), orthogonal to the flow there: the
-        new x0 does not drift along the orbit from one point to the next, so
-        that secants measure the change of the orbit, not of its phase.
+        The monodromy returned is taken within ``monodromy_at`` times the orbit's amplitude
+        (:data:`MONODROMY_NEAR`, :data:`MONODROMY_AT_ORBIT`).  ``seed``, a flow with the
+        sensitivity at a nearby orbit, gives the first chord matrix.  The phase section
+        passes through ``u_ref`` (the branch's last point; None: the predictor), so that x0
+        does not drift along the orbit and secants measure the change of the orbit.
 
         Returns (u, flow of the last iterate, monodromy, iterations, rejected steps).
         """
@@ -345,12 +295,7 @@ class CycleCorrector:
         raise CorrectorError(f"no convergence in {self.max_iter} Newton iterations")
 
     def _evaluate(self, section, u, u_pred, tangent, need: bool) -> tuple:
-        """(flow, r, g, c) at the iterate u: the flow's residual r = phi_T(x0) - x0,
-        the phase g and the arclength condition c (0 at a fixed v).
-
-        One integration gives the residual and, where ``need``, the derivatives
-        (the section's residual() and derivatives() in one).
-        """
+        """(flow, r, g, c) at u: r = phi_T(x0) - x0, phase g, arclength c; one integration."""
         n2 = 2 * self.n
         x = u[:n2]
         try:
@@ -381,16 +326,14 @@ class CycleCorrector:
             raise CorrectorError("the period became negative")
 
     def _at_orbit(self, section, u, fl, u_mono, monodromy, monodromy_at, it, rejected):
-        """(flow, monodromy, iterations, rejected steps) of a converged orbit: once
-        more with the sensitivity at the orbit where the chord's monodromy was
-        taken farther than ``monodromy_at`` times the orbit's amplitude."""
+        """(flow, monodromy, iterations, rejected) of a converged orbit, the monodromy taken
+        again at it if the chord's was farther than ``monodromy_at`` times its amplitude."""
         n2 = 2 * self.n
         T = u[n2]
         amplitude = self.residual_norm(fl.fT * T / (2 * math.pi), T)
         if u_mono is None or self.residual_norm(u[:n2] - u_mono[:n2], T) > monodromy_at * amplitude:
-            # The multipliers of a matrix taken this far from the orbit
-            # (small orbits near the Hopf point) would be off by as much
-            # (measured: the trivial one at 1.03): once more at the orbit.
+            # The multipliers of a matrix taken this far from the orbit (small orbits
+            # near the Hopf point) would be off by as much: once more at the orbit.
             fl = section.flow(u, sensitivity=True)
             self.integrations += 1
             rejected += fl.rejected

@@ -1,8 +1,7 @@
 """The results of a continuation of periodic orbits: Hopf points, orbits, branches.
 
-The orbits carry their Floquet multipliers (the eigenvalues of the monodromy
-matrix, by decreasing modulus); the one closest to 1 is the trivial one (the
-phase along the orbit) and :func:`nontrivial_multipliers` removes it.
+An orbit's Floquet multipliers are by decreasing modulus; :func:`nontrivial_multipliers`
+removes the trivial one (closest to 1).
 """
 
 from __future__ import annotations
@@ -24,14 +23,12 @@ __all__ = [
     "swing",
 ]
 
-#: A computed orbit whose tip swings (max - min of eta_tip) less than this has
-#: come back to an equilibrium.
+#: An orbit whose eta_tip swings (max - min) less than this is back at an equilibrium.
 MIN_SWING = 2e-3
 
 
 class CycleContinuationError(SolverError):
-    """A branch of periodic orbits could not be continued (the corrector failed
-    at the smallest step); ``branch`` holds the points finished before."""
+    """A branch of periodic orbits could not be continued; ``branch`` holds its finished part."""
 
     def __init__(self, message: str, branch: CycleBranch | None = None) -> None:
         super().__init__(message)
@@ -91,13 +88,12 @@ class CyclePoint:
         Floquet multipliers by decreasing modulus (the trivial one included).
     stable : bool
         All non-trivial multipliers inside the unit circle.
-    source : str
-        ``"grid"`` (landed on a requested v) or ``"continuation"`` (a step of
-        its own).
+    source : {"grid", "continuation"}
+        Landed on a requested v, or a step of its own.
     iterations, residual : int, float
         Newton iterations (integrations) and final RMS residual.
     steps, rejected_steps : int
-        Integration steps of the last period and rejected ones over the corrector.
+        Integration steps of the last period; rejected ones over the corrector.
     wall_time : float
     """
 
@@ -184,8 +180,7 @@ class CycleBranch:
     end_reason : str
         Why the continuation stopped.
     steps, rejected_steps, newton_iterations : int
-        Accepted continuation steps, rejected (halved) ones, and integrations
-        over all correctors.
+        Accepted and rejected steps, integrations over all correctors.
     wall_time : float
     """
 

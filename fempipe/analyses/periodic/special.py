@@ -1,10 +1,7 @@
-"""Bifurcations of periodic orbits found on a finished branch.
+"""Bifurcations of periodic orbits found on a finished branch: folds, period doublings,
+Neimark-Sacker points, located between consecutive points.
 
-Between two consecutive points of a branch (Kuznetsov, Ch. 4 and 5; Seydel,
-Sec. 7.4): a *fold* where v turns back (located at the vertex of the parabola
-v(s) through three points), a *period doubling* where a real multiplier passes
--1 and a *Neimark-Sacker* point where a complex pair passes the unit circle
-(located by the secant of the test function |mu| - 1 on the step).
+Method: docs/theory/numerics.md, "Branches of periodic orbits".
 """
 
 from __future__ import annotations

@@ -75,22 +75,9 @@ def sweep_3d(
 ) -> list[BifurcationPoint]:
     """Sweep the flow velocity in 3-D, each point from the previous attractor.
 
-    Parameters
-    ----------
-    model : PipeModel
-        The planar model (discretization, parameters); ``params.v`` is replaced.
-    values : sequence of float
-    direction : {"up", "down"}
-    store : PointStore, optional
-        Finished points are read from and written to it (resume).
-    progress : callable, optional
-        Called with each finished (or loaded) point.
-    **motion_options
-        Passed to :func:`simulate_3d` (``out_of_plane_amplitude``, ``t_max``, ``rtol`` ...).
-
-    Returns
-    -------
-    list of BifurcationPoint
+    As :func:`fempipe.analyses.bifurcation.sweep`: ``model`` the planar model; ``store``
+    read and written (resume); ``progress(point)``; ``**motion_options`` passed to
+    :func:`simulate_3d` (``out_of_plane_amplitude``, ``t_max``, ``rtol`` ...).
     """
 
     def step(i: int, v: float, prev: BifurcationPoint | None) -> BifurcationPoint:
@@ -112,18 +99,8 @@ def _sweep_task(model, values, direction, options, store, on_point) -> list[Bifu
 
 @dataclass(frozen=True)
 class Diagram3D:
-    """The attractors of the 3-D model against v.
-
-    Attributes
-    ----------
-    points : list of dict
-        :meth:`BifurcationPoint.to_dict` of every point, by direction, then sweep order.
-    wall_time : float
-    cpu_time : float
-        Sum of the points' own (loaded points included).
-    manifest : dict
-        The run's ``run.json``.
-    """
+    """The attractors of the 3-D model against v: the points (dicts, by direction and sweep
+    order), the run's wall time, the sum of the points' CPU times, the manifest."""
 
     points: list
     wall_time: float
@@ -154,12 +131,9 @@ def compute_diagram_3d(
     ----------
     model : PipeModel
     values : sequence of float
-        Flow velocities.
     directions : sequence of {"up", "down"}
-    store_dir : path, optional
-        Point store (:func:`fempipe.analyses.periodic.points.run_diagram`).
-    progress : callable, optional
-        ``progress(done, total)`` as points finish (or load from the store).
+    store_dir, progress
+        As :func:`fempipe.analyses.periodic.points.run_diagram`.
     **motion_options
         Passed to :func:`simulate_3d`; part of the store's manifest.
 
