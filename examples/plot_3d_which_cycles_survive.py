@@ -5,7 +5,7 @@ Which planar cycles survive in three dimensions
 The paper's model is planar: its limit cycles are motions in the plane of gravity and the clamp.
 A round pipe may leave that plane.  A planar cycle is a solution of the 3-D model too
 (:class:`fempipe.SpaceModel`: its states with no out-of-plane part are the planar model's), and
-:func:`fempipe.out_of_plane_floquet` computes the Floquet multipliers of perturbations out of
+:func:`fempipe.compute_out_of_plane_floquet` computes the Floquet multipliers of perturbations out of
 the plane in two independent ways: by default from the linear equation of out-of-plane
 perturbations about the moving planar state (one unknown, the out-of-plane rotation psi), and
 with ``method="3d"`` from the 3-D model's monodromy along the cycle (its out-of-plane block).
@@ -32,8 +32,8 @@ results = {}
 for alpha, name in ((0.0, "hanging, alpha = 0"), (np.pi, "standing, alpha = pi")):
     model = fempipe.PipeModel(disc, fempipe.Params(alpha=alpha, v=10.0))
     cycle = fempipe.find_attractor(model, t_max=150.0).cycle
-    oop = fempipe.out_of_plane_floquet(model, cycle)  # the linear psi equation
-    oop3 = fempipe.out_of_plane_floquet(model, cycle, method="3d")  # the 3-D model
+    oop = fempipe.compute_out_of_plane_floquet(model, cycle)  # the linear psi equation
+    oop3 = fempipe.compute_out_of_plane_floquet(model, cycle, method="3d")  # the 3-D model
     results[name] = (cycle, oop, oop3)
     verdict = "survives" if oop.stable else "does not survive"
     print(

@@ -138,7 +138,7 @@ def fake_floquet(monkeypatch):
             cpu_time=0.0,
         )
 
-    monkeypatch.setattr(oop, "out_of_plane_floquet", fake)
+    monkeypatch.setattr(oop, "compute_out_of_plane_floquet", fake)
     return calls
 
 

@@ -17,15 +17,15 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from fempipe import FiniteElement
+from fempipe import FiniteElement, Params, PipeModel
 from fempipe.analyses.limit_cycle.tips import (
     TIP_KEYS,
     CollocationOrbit,
     QuinticOrbit,
     TipTrace,
-    tip_coordinates,
     tip_extrema,
 )
+from fempipe.model.kinematics import tip_values
 from fempipe.solvers.radau import C as RADAU_NODES
 from fempipe.solvers.radau import Radau, StepRecord
 
@@ -35,6 +35,16 @@ PERIOD = 2 * math.pi / OMEGA
 _SHAPES = np.random.default_rng(33).standard_normal((4, DISC.n)) * np.array(
     [[0.2], [0.5], [0.4], [0.15]]
 )
+
+
+def _model(alpha: float) -> PipeModel:
+    return PipeModel(DISC, Params(alpha=alpha))
+
+
+def _tips(q, alpha: float) -> dict:
+    """The tip coordinates :data:`TIP_KEYS` of states q."""
+    tip = tip_values(DISC, q, alpha)
+    return {k: tip[k] for k in TIP_KEYS}
 
 
 def exact(t, derivative: int = 0) -> np.ndarray:
@@ -52,14 +62,14 @@ def exact(t, derivative: int = 0) -> np.ndarray:
 def reference_extrema(alpha: float) -> dict:
     """[min, max] of each tip coordinate of the exact orbit over one period."""
     ts = np.linspace(0.0, PERIOD, 20001)
-    tips = tip_coordinates(DISC, exact(ts), alpha)
+    tips = _tips(exact(ts), alpha)
     out = {}
     for key in TIP_KEYS:
         ext = []
         for sign in (1.0, -1.0):
             k = int(np.argmin(sign * tips[key]))
             r = minimize_scalar(
-                lambda t, key=key, sign=sign: sign * tip_coordinates(DISC, exact(t), alpha)[key][0],
+                lambda t, key=key, sign=sign: sign * _tips(exact(t), alpha)[key][0],
                 bounds=(ts[k] - 2 * (ts[1] - ts[0]), ts[k] + 2 * (ts[1] - ts[0])),
                 method="bounded",
                 options={"xatol": 1e-13},
@@ -91,7 +101,7 @@ def collocation(m: int) -> CollocationOrbit:
 
 def trace(m: int, alpha: float, per_step: int = 4) -> TipTrace:
     """A trace recorded from a stepper whose dense output is the exact orbit."""
-    out = TipTrace(DISC, alpha, per_step=per_step)
+    out = TipTrace(_model(alpha), per_step=per_step)
     t = step_ends(m)
     for t0, t1 in zip(t[:-1], t[1:], strict=True):
         out.record(SimpleNamespace(t_old=t0, t=t1, q=exact(t1)[0], dense=lambda s: (exact(s)[0],)))
@@ -108,8 +118,8 @@ ALPHAS = [0.0, math.pi / 3]
 def _sup_error(orbit, alpha: float) -> float:
     """The largest error of the interpolant's tip coordinates over the period (dense grid)."""
     ts = np.linspace(0.0, PERIOD, 4001)[:-1]
-    mine = tip_coordinates(DISC, orbit(ts), alpha)
-    theirs = tip_coordinates(DISC, exact(ts), alpha)
+    mine = _tips(orbit(ts), alpha)
+    theirs = _tips(exact(ts), alpha)
     return max(np.abs(mine[k] - theirs[k]).max() for k in TIP_KEYS)
 
 
@@ -129,9 +139,9 @@ def test_extrema_of_an_interpolated_orbit(alpha, build, kwargs, least_order):
     falls at the interpolant's order: mean observed order from 12 to 96 steps."""
     ref = reference_extrema(alpha)
     orbit = build(24)
-    error = _errors(tip_extrema(DISC, orbit, alpha, **kwargs), ref).max()
+    error = _errors(tip_extrema(_model(alpha), orbit, **kwargs), ref).max()
     assert error <= _sup_error(orbit, alpha) + 1e-12
-    e = [_errors(tip_extrema(DISC, build(m), alpha, **kwargs), ref).max() for m in (12, 96)]
+    e = [_errors(tip_extrema(_model(alpha), build(m), **kwargs), ref).max() for m in (12, 96)]
     assert math.log2(e[0] / e[1]) / 3 >= least_order, e
 
 
@@ -142,12 +152,12 @@ def test_extrema_of_a_trace(alpha):
     O(h^3); mean observed order from 12 to 96 steps."""
     ref = reference_extrema(alpha)
     e = [
-        _errors(tip_extrema(DISC, trace(m, alpha), alpha, per_step=4, fine=0), ref).max()
+        _errors(tip_extrema(_model(alpha), trace(m, alpha), per_step=4, fine=0), ref).max()
         for m in (12, 96)
     ]
     assert math.log2(e[0] / e[1]) / 3 >= 2.5, e
     part = trace(24, alpha)[3:]  # a range of steps is a trace of its own
-    found = tip_extrema(DISC, part, alpha, per_step=4, fine=0)
+    found = tip_extrema(_model(alpha), part, per_step=4, fine=0)
     for k in TIP_KEYS:
         assert found[k][0] <= part.values(k).min() and found[k][1] >= part.values(k).max()
 
@@ -167,19 +177,18 @@ def test_a_trace_of_a_parabola_gives_its_vertex():
 def test_arguments_are_checked():
     orbit, alpha = quintic(12), 0.0
     with pytest.raises(ValueError, match="refine"):
-        tip_extrema(DISC, orbit, alpha, refine="golden")
+        tip_extrema(_model(alpha), orbit, refine="golden")
     with pytest.raises(ValueError, match="fine"):
-        tip_extrema(DISC, orbit, alpha, fine=-1)
+        tip_extrema(_model(alpha), orbit, fine=-1)
     samples = trace(12, alpha)
     with pytest.raises(ValueError, match="per_step"):
-        tip_extrema(DISC, samples, alpha, per_step=8, fine=0)
+        tip_extrema(_model(alpha), samples, per_step=8, fine=0)
     with pytest.raises(TypeError):  # a trace cannot be evaluated between its samples
-        tip_extrema(DISC, samples, alpha, per_step=4)
+        tip_extrema(_model(alpha), samples, per_step=4)
 
 
 def test_collocation_orbit_is_the_integrator_s_cubic():
     """Inside a step the collocation orbit is the integrator's dense output (to round-off)."""
-    from fempipe import Params, PipeModel
     from fempipe.model.dynamics_problem import PipeDynamics
 
     model = PipeModel(DISC, Params(alpha=0.3))

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from fempipe.analyses.limit_cycle import find_attractor
-from fempipe.analyses.space.floquet import out_of_plane_floquet
+from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.operators import PipeModel
 from fempipe.model.out_of_plane import OutOfPlaneOperators
@@ -92,8 +92,8 @@ def test_linear_and_3d_multipliers_converge_to_each_other():
     for ne in (3, 6):
         model = PipeModel(FiniteElement(ne, 3), params)
         cycle = find_attractor(model).cycle
-        lin = out_of_plane_floquet(model, cycle)
-        full = out_of_plane_floquet(model, cycle, method="3d")
+        lin = compute_out_of_plane_floquet(model, cycle)
+        full = compute_out_of_plane_floquet(model, cycle, method="3d")
         assert lin.method == "linear" and full.method == "3d"
         assert lin.stable == full.stable
         diff[ne] = abs(lin.multipliers[0] - full.multipliers[0])

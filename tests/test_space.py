@@ -264,17 +264,16 @@ def test_power_balance_with_flow_and_damping():
 
 
 def test_shooting_a_planar_cycle_in_3d_gives_the_planar_cycle():
-    """The planar shooting on the 3-D model, from a planar cycle: the same period and tips,
-    and the 3-D monodromy holds the planar multipliers."""
+    """The shooting on the 3-D model, from a planar cycle: the same period and tips, and
+    the 3-D monodromy holds the planar multipliers."""
     from fempipe.analyses.limit_cycle import find_attractor, shoot
-    from fempipe.analyses.space.shooting import shoot_space
 
     disc = FiniteElement(3, 3)
     planar = PipeModel(disc, Params(alpha=np.pi / 2, v=10.0))
     att = find_attractor(planar)
-    cycle = shoot(planar, att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-8)
-    space = shoot_space(
-        SpaceModel(disc, planar.params),
+    cycle = shoot(PipeDynamics(planar), att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-8)
+    space = shoot(
+        SpaceDynamics(SpaceModel(disc, planar.params)),
         planar_state(cycle.q0),
         planar_state(cycle.qdot0),
         cycle.period,

@@ -1,4 +1,4 @@
-"""simulate_space's classification (fempipe.analyses.space.motion)."""
+"""simulate_3d's classification (fempipe.analyses.space.motion)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from fempipe.analyses.space.motion import REST_TIME, _settled, simulate_space, two_frequencies
+from fempipe.analyses.space.motion import REST_TIME, _settled, simulate_3d, two_frequencies
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
@@ -31,7 +31,7 @@ def test_a_decaying_oscillation_out_of_the_plane_is_an_equilibrium():
     swing: its returns agree to the recurrence tolerance once it is small, which is not a
     periodic motion (the swings shrink by e^(Re lambda T) a return)."""
     model = PipeModel(FiniteElement(3, 3), Params(alpha=math.pi / 2, v=5.5))
-    r = simulate_space(model, t_max=60.0)
+    r = simulate_3d(model, t_max=60.0)
     assert r.kind == "equilibrium" and r.period is None
     assert abs(r.tip["Y_tip"][1]) < 1e-8
 
@@ -48,7 +48,7 @@ def test_equilibrium_after_a_crossing():
     x, w = disc.quad.x, disc.quad.w
     mode = np.linalg.solve(Phi.T @ (w[:, None] * Phi), Phi.T @ (w * np.sin(0.5 * math.pi * x)))
     start = (planar_state(-0.02 * mode), planar_state(0.5 * mode))
-    r = simulate_space(model, initial=start, t_max=15.0, use_shooting=False)
+    r = simulate_3d(model, initial=start, t_max=15.0, use_shooting=False)
     space = SpaceModel(disc, model.params)
     eta = space.tip_coordinates(r.U)["eta_tip"]
     assert eta[0] < 0.0 < eta[-1]  # the section (eta_tip + Y_tip = 0 here) was crossed

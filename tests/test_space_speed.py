@@ -142,7 +142,7 @@ def test_space_cycle_benchmark_is_registered():
 def test_whirl_verdict_keeps_a_multiplier_near_but_not_at_one():
     """At an axisymmetric alpha the verdict leaves out the rotation's second 1 only where there
     is one: a whirl (one trivial multiplier) with another multiplier 1.04 is unstable."""
-    from fempipe.analyses.space.shooting import largest_nontrivial
+    from fempipe.analyses.limit_cycle import largest_nontrivial
 
     assert largest_nontrivial([1.0, 1.0 - 1e-3, 0.5], True) == 0.5  # two 1s: the rotation moves it
     assert largest_nontrivial([1.0, 1.04, 0.5], True) == pytest.approx(1.04)  # a whirl

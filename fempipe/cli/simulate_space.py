@@ -1,23 +1,12 @@
 """``fempipe simulate --3d``: the nonlinear motion in three dimensions and its attractor.
 
-The 3-D model (:mod:`fempipe.model.space`) from the planar static state
-perturbed in the plane (``--mode``, ``--amplitude``) and out of it
-(``--out-of-plane-amplitude``, the out-of-plane rotation of the same sine
-mode), integrated until the attractor is recognized
-(:func:`fempipe.analyses.space.simulate_space`).
-
-``--json`` prints ``{"model": "3d", "attractor" ("equilibrium", "periodic",
-"whirl", "quasi-periodic", "non-periodic"), "motion" ("planar" or "nonplanar"), "period",
-"period_n", "whirl_rate", "tip": {"eta_tip", "X_tip", "Z_tip", "Y_tip": [min,
-max]}, "planarity", "frequencies" (the tip's two leading frequencies of a
-quasi-periodic motion), "steps", "rejected_steps", "t_end", "cpu_time", ...}``;
-Y_tip is the tip's coordinate out of the plane of the static state.
-``--out DIR`` writes simulate.json, tip.csv (tau, eta_tip, X_tip, Z_tip,
-Y_tip at every step), trajectory.pvd with its VTU frames (the last
-``--frames`` steps' worth of the run, at most 400), tip_orbit.png (the tip's
-path from above, from the side and from the front, each view framed on the
-motion) and snapshots_3d.png (the pipe over one oscillation, colored by tau);
-both mark the static state the motion left.
+The 3-D model from the planar static state perturbed in the plane (``--mode``,
+``--amplitude``) and out of it (``--out-of-plane-amplitude``), integrated until the attractor
+is recognized (:func:`fempipe.analyses.space.simulate_3d`).  ``--json`` prints the attractor
+(:meth:`~fempipe.analyses.space.motion.Motion3D.to_dict`, ``"model": "3d"``); ``--out DIR``
+writes simulate.json, tip.csv (tau and the tip coordinates at every step), trajectory.pvd
+with its VTU frames (at most 400), tip_orbit.png and snapshots_3d.png.
+Keys and files: docs/cli/commands.md.
 """
 
 from __future__ import annotations
@@ -27,18 +16,20 @@ import time
 
 import numpy as np
 
+from fempipe.analyses.space import simulate_3d
+from fempipe.analyses.space.verdict import equilibrium_verdict
+from fempipe.analyses.stability import linearly_stable
+from fempipe.analyses.statics import solve_static
 from fempipe.cli import common, reporting
 from fempipe.cli.parsing import CLIError
+from fempipe.io import json_dumps
+from fempipe.model.operators import PipeModel
+from fempipe.model.space import SpaceModel, planar_state
 
 TIP3_COLUMNS = ("tau", "eta_tip", "X_tip", "Z_tip", "Y_tip")
 
 
 def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
-    from fempipe.analyses.space import simulate_space
-    from fempipe.io import json_dumps
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.space import SpaceModel
-
     if args.sigma > 0:
         raise CLIError("--sigma", "a pulsating flow is not available with --3d (use sigma = 0)")
     if args.error_estimate:
@@ -48,7 +39,7 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
     start = time.perf_counter()
     with reporting.progress(args, 100, f"simulate --3d v={params.v:g}") as bar:
         on_time = reporting.time_progress(bar, args.t_max)
-        motion = simulate_space(
+        motion = simulate_3d(
             model,
             mode=args.mode,
             amplitude=args.amplitude,
@@ -80,21 +71,15 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
 
 
 def _static_state(model) -> tuple:
-    """``(U, stable)``: the static state the motion starts from, as 3-D unknowns, and
-    whether it is linearly stable in three dimensions (None where undecided), for the
-    figures."""
-    from fempipe.analyses.space.verdict import equilibrium_verdict
-    from fempipe.analyses.stability import linearly_stable
-    from fempipe.analyses.statics import solve_static
-    from fempipe.model.space import planar_state
-
+    """``(U, stable)``: the static state as 3-D unknowns and its 3-D linear stability (None
+    where undecided), for the figures."""
     q = solve_static(model).q
     verdict = equilibrium_verdict(model, q, linearly_stable(model, q))
     return planar_state(q), verdict["stable_3d"]
 
 
 def _write(output: reporting.Output, result: dict, space, motion, static) -> None:
-    import matplotlib
+    import matplotlib  # only with --out
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

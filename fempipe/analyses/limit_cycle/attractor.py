@@ -1,8 +1,8 @@
 """The attractor reached from an initial state (:func:`find_attractor`).
 
-Integration past the transient with a Poincare section of the tip motion,
-recognition of an equilibrium or of a recurrence of the section, and the
-shooting from there (the stages of :mod:`fempipe.analyses.limit_cycle`).
+Integration past the transient with a Poincare section of eta_tip, recognition of an
+equilibrium or of a recurrence of the section, and the shooting from there.  The stages:
+docs/theory/numerics.md, "Attractors and limit cycles".
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from fempipe.analyses.statics import NewtonError, solve_static
 from fempipe.core.parallel import single_blas_thread
 from fempipe.core.rootfinding import brentq
 from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
+from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
@@ -24,15 +25,15 @@ from ..dynamics import Trajectory, make_initial_state
 from ..stability import linearly_stable
 from .results import Attractor, ShootingError, state_distance
 from .shooting import shoot
-from .tips import TIP_KEYS, TipTrace, eta_tip, tip_coordinates, tip_extrema
+from .tips import TIP_KEYS, TipTrace, eta_tip, tip_extrema
 
 __all__ = ["MAX_WAITS", "find_attractor", "recurrence"]
 
 log = logging.getLogger(__name__)
 
-#: Returns within ``recurrence_tol`` that :func:`find_attractor` integrates past
-#: (fast contraction, not yet within ``start_tol``) before it shoots anyway:
-#: from 2e-2, eight returns contracting 2x reach 8e-5, far below start_tol = 1e-3.
+#: Returns within ``recurrence_tol`` that :func:`find_attractor` integrates past (fast
+#: contraction, not yet within ``start_tol``) before it shoots anyway: from 2e-2, eight
+#: returns contracting 2x reach 8e-5.
 MAX_WAITS = 8
 
 #: Steps whose tip samples the transient keeps (memory bound on long runs).
@@ -40,13 +41,8 @@ MAX_TRACE_STEPS = 20000
 
 
 def _linearly_stable(model: PipeModel, q_static: np.ndarray) -> bool:
-    """The equilibrium test's criterion: :func:`fempipe.analyses.stability.linearly_stable`,
-    the decision of ``spectrum`` and ``critical``.
-
-    A discretization that resolves no mode gives no decision (None), which
-    never lets the finder stop at an equilibrium: the attractor is then found
-    by integration alone.
-    """
+    """:func:`~fempipe.analyses.stability.linearly_stable`; no decision (None) never stops
+    the search at an equilibrium."""
     return linearly_stable(model, q_static) is True
 
 
@@ -75,42 +71,30 @@ def find_attractor(
     ----------
     model : PipeModel
     q0, qdot0 : ndarray, optional
-        Initial state; default the static state plus ``perturbation`` rad in
-        the first sine mode, at rest.
+        Initial state; default the static state plus ``perturbation`` rad in the first
+        sine mode, at rest.
     t_max : float
         Longest integration (tau) before declaring the motion non-periodic.
     rtol : float
         Tolerance of the transient integration.
     shoot_rtol, shoot_tol : float
-        Integration tolerance and Newton tolerance of the shooting.  The
-        default 1e-5 gives the period to 5e-8 and the tip extrema to 5e-7
-        (relative, measured at four flutter cycles; docs/theory/numerics.md);
-        1e-7 would take three times the steps per period for 100x more accuracy
-        than the 1e-6 asked of the cycle.
+        Integration and Newton tolerances of the shooting (docs/theory/numerics.md).
     use_shooting : bool
-        If False, a periodic orbit is accepted when successive section returns
-        agree to ``converged_tol`` (plain long integration).
+        If False, a periodic orbit is accepted when successive section returns agree to
+        ``converged_tol``.
     recurrence_tol : float
-        Section returns this close (RMS, rad) start the shooting if they
-        approach each other slowly (the return distance falls less than 2x
-        per return: near a bifurcation, where Newton's method is needed).
+        Section returns this close (RMS) start the shooting if they approach each other
+        slowly (less than 2x per return).
     start_tol : float
-        Section returns that approach each other fast (more than 2x per
-        return, measured on two successive returns) are integrated on until
-        this close before the shooting starts: a period of plain integration
-        costs about a third of a shooting iteration (which also integrates the
-        monodromy matrix) and, at the 0.15 contraction per period of the
-        paper's cycle at v = 10, gains more than Newton's first iteration
-        does from 2e-2.  From 1e-3 Newton needs one step and the check.
+        Returns that approach each other fast are integrated on until this close before
+        the shooting starts (a plain period costs a third of a Newton iteration).
     equilibrium_radius : float
-        Within this RMS distance of a linearly stable static state, and still
-        approaching it, the attractor is that equilibrium (its basin contains
-        this neighbourhood as long as the linearization dominates; the
-        criterion also asks the distance to decrease).
+        Within this RMS distance of a linearly stable static state, and approaching it,
+        the attractor is that equilibrium.
     n_max : int
         Largest period-n looked for.
     record : bool
-        Keep the transient trajectory (every step) in ``Attractor.trajectory``.
+        Keep the transient trajectory in ``Attractor.trajectory``.
     callback : callable, optional
         Called with tau after every step.
 
@@ -121,7 +105,7 @@ def find_attractor(
     Raises
     ------
     ValueError
-        If the model has hysteretic damping (no time-domain meaning).
+        If the model has hysteretic damping.
     """
     refuse_hysteretic(model.params, "find_attractor")
     if not t_max > 0:
@@ -147,16 +131,7 @@ def find_attractor(
 def recurrence(sec_t: list, sec_x: list, n_max: int):
     """(n, d_n) for the smallest n whose return distance d_n = |x_k - x_{k-n}| is within
     a factor 2 of the smallest over n <= n_max; None before the second section point.
-
-    Parameters
-    ----------
-    sec_t : list of float
-        Times of the section points.
-    sec_x : list of (ndarray, ndarray)
-        (q, q') at the section points.
-    n_max : int
-        Largest period-n looked for.
-    """
+    ``sec_t`` are the times and ``sec_x`` the states (q, q') of the section points."""
     k = len(sec_x) - 1
     d = []
     for nn in range(1, min(n_max, k) + 1):
@@ -173,10 +148,7 @@ def recurrence(sec_t: list, sec_x: list, n_max: int):
 
 
 class _AttractorSearch:
-    """The state of one :func:`find_attractor`: the transient, its section, the shooting.
-
-    The options are those of :func:`find_attractor`.
-    """
+    """The state of one :func:`find_attractor` (its options): transient, section, shooting."""
 
     def __init__(self, model: PipeModel, **options) -> None:
         self.model = model
@@ -224,7 +196,7 @@ class _AttractorSearch:
         self.sec_t: list[float] = []
         self.sec_x: list[tuple[np.ndarray, np.ndarray]] = []
         self.sec_i: list[int] = []  # index into ``trace`` at each section point
-        self.trace = TipTrace(disc, self.alpha, per_step=4)  # tip coordinates on every step
+        self.trace = TipTrace(self.model, per_step=4)  # tip coordinates on every step
         self.s_old = eta_tip(disc, stepper.q) - self.level
         self.next_eq_check = 0.5
         self.d_prev = (
@@ -273,7 +245,7 @@ class _AttractorSearch:
             self.sec_i = [i - drop for i in self.sec_i]
 
     def _tip(self, trace: TipTrace) -> dict:
-        return tip_extrema(self.disc, trace, self.alpha, per_step=trace.per_step, fine=0)
+        return tip_extrema(self.model, trace, per_step=trace.per_step, fine=0)
 
     def _finish(
         self, kind, period=None, period_n=None, tip=None, cycle=None, q=None, p=None, msg=""
@@ -331,7 +303,7 @@ class _AttractorSearch:
         if q_s is not None and self.stable:
             d = state_distance(stepper.q - q_s, stepper.qdot, 0.05)
             if d < self.equilibrium_radius and d <= self.d_prev:
-                tv = tip_coordinates(self.disc, q_s, self.alpha)
+                tv = tip_values(self.disc, q_s, self.alpha)
                 tip = {k: [float(tv[k]), float(tv[k])] for k in TIP_KEYS}
                 return self._finish("equilibrium", tip=tip, q=q_s.copy(), p=np.zeros(self.n))
             self.d_prev = d if d < self.equilibrium_radius else math.inf
@@ -397,7 +369,7 @@ class _AttractorSearch:
         stats = self.stats
         try:
             cyc = shoot(
-                self.model,
+                PipeDynamics(self.model),
                 qk,
                 pk,
                 T_guess,

@@ -1,7 +1,7 @@
 """What the limit-cycle search returns: :class:`LimitCycle`, :class:`Attractor`, :class:`ShootingError`.
 
-Also the one distance between two states that the search, the shooting and
-the CLI's display use (:func:`state_distance`).
+Also the distance between two states (:func:`state_distance`) and the largest non-trivial
+Floquet multiplier (:func:`largest_nontrivial`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,18 @@ from fempipe.core.errors import SolverError
 
 from ..dynamics import Trajectory
 
-__all__ = ["ShootingError", "LimitCycle", "Attractor", "state_distance"]
+__all__ = [
+    "NEUTRAL_TOLERANCE",
+    "ShootingError",
+    "LimitCycle",
+    "Attractor",
+    "largest_nontrivial",
+    "state_distance",
+]
+
+#: At an axisymmetric alpha a second multiplier this close to 1 is the rotation's (exactly 1
+#: in the continuum; measured 1.0e-3 off on P3:4); a whirl has no second one.
+NEUTRAL_TOLERANCE = 2e-2
 
 
 class ShootingError(SolverError):
@@ -31,22 +42,26 @@ class ShootingError(SolverError):
 
 
 def state_distance(dq: np.ndarray, dp: np.ndarray, timescale: float):
-    """RMS distance of two states; velocities scaled by a time scale (period / 2 pi).
-
-    Parameters
-    ----------
-    dq, dp : ndarray, shape (..., n)
-        Differences of the positions and of the velocities.
-    timescale : float
-        Multiplies the velocity differences (T / 2 pi for an orbit of period T).
-
-    Returns
-    -------
-    float or ndarray
-        Along the last axis: a float for one pair of states, an array for stacked ones.
-    """
+    """RMS distance of two states along the last axis (differences ``dq``, ``dp``), the
+    velocities scaled by ``timescale`` (T / 2 pi for an orbit of period T)."""
     d = np.sqrt(np.mean(dq**2, axis=-1) + np.mean((dp * timescale) ** 2, axis=-1))
     return float(d) if d.ndim == 0 else d
+
+
+def largest_nontrivial(mu, axisymmetric: bool = False) -> float:
+    """The largest modulus of the Floquet multipliers ``mu`` without the trivial ones.
+
+    The phase's (closest to 1) always; for a 3-D cycle at an axisymmetric alpha also the
+    rotation's second 1, when one lies within :data:`NEUTRAL_TOLERANCE` of 1 (a whirl, which
+    the rotation maps onto its own time shift, has only the phase's).
+    """
+    mu = np.asarray(mu)
+    near = np.argsort(np.abs(mu - 1.0), kind="stable")
+    drop = 1
+    if axisymmetric and mu.size > 1 and abs(mu[near[1]] - 1.0) < NEUTRAL_TOLERANCE:
+        drop = 2
+    others = np.delete(mu, near[:drop])
+    return float(np.max(np.abs(others))) if others.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -56,31 +71,28 @@ class LimitCycle:
     Attributes
     ----------
     period : float
-        Period T in units of tau (of the whole orbit, n section crossings).
+        Period T in units of tau (the whole orbit, n section crossings).
     q0, qdot0 : ndarray, shape (n,)
-        State on the orbit where eta_tip = ``level`` (upward).
+        State on the orbit where the section variable is ``level`` (upward).
     level : float
-        Section level of eta_tip.
     tip : dict
-        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` on the orbit.
+        ``{key: [min, max]}`` of the tip coordinates on the orbit.
     floquet_multipliers : ndarray, complex
-        Eigenvalues of the monodromy matrix, by decreasing modulus: that of
-        the converged Newton iterate, one polishing step (below the shooting
-        tolerance) from ``q0``, ``qdot0`` (see :func:`~fempipe.analyses.limit_cycle.shoot`).
+        Eigenvalues of the monodromy matrix of the converged Newton iterate, by decreasing
+        modulus.
     stable : bool
-        All multipliers except the trivial one (closest to 1) inside the unit circle.
+        The non-trivial multipliers (:func:`largest_nontrivial`) inside the unit circle.
     iterations : int
-        Newton iterations (period integrations; the polishing step included).
+        Newton iterations (the polishing step included).
     residual : float
-        Final RMS of phi_T(x0) - x0 (q in rad, q' scaled by T / 2 pi).
+        Final RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi).
     orbit_t, orbit_q, orbit_qdot : ndarray
-        The orbit sampled at 200 equally spaced times over one period.
+        The orbit at equally spaced times over one period.
     steps : int
         Integration steps over the last period.
     total_steps, rejected_steps : int
-        Steps (accepted, rejected) over all Newton iterations.
+        Over all Newton iterations.
     wall_time : float
-        Seconds spent in the shooting.
     """
 
     period: float
@@ -102,11 +114,8 @@ class LimitCycle:
 
     @property
     def max_nontrivial_multiplier(self) -> float:
-        mu = self.floquet_multipliers
-        if mu.size < 2:
-            return 0.0
-        trivial = int(np.argmin(np.abs(mu - 1.0)))
-        return float(np.max(np.abs(np.delete(mu, trivial))))
+        """:func:`largest_nontrivial` without the rotation's multiplier."""
+        return largest_nontrivial(self.floquet_multipliers)
 
     def to_dict(self, n_multipliers: int = 6) -> dict:
         mu = self.floquet_multipliers[:n_multipliers]
@@ -131,19 +140,18 @@ class Attractor:
     kind : str
         ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
     period : float or None
-        Period of the periodic orbit.
     period_n : int or None
-        Number of distinct section points (1 for period-1, 2 for period-2, ...).
+        Distinct section points (1 for period-1, 2 for period-2, ...).
     tip : dict
-        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` on the attractor.
+        ``{key: [min, max]}`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS`.
     cycle : LimitCycle or None
     q, qdot : ndarray, shape (n,)
-        A state on the attractor (to start the next point of a sweep from).
+        A state on the attractor.
     params : Params
     t_end : float
         Time integrated before the attractor was recognized.
     stats : dict
-        Integration diagnostics summed over the transient and the shooting.
+        Integration diagnostics of the transient and the shooting.
     trajectory : Trajectory or None
         The transient, if recorded.
     """

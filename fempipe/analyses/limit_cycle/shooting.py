@@ -1,11 +1,14 @@
-"""Newton shooting for a periodic orbit, with the monodromy matrix (:func:`shoot`).
+"""Newton shooting for a periodic orbit of a planar or 3-D dynamics problem (:func:`shoot`).
 
-Newton's method on ``phi_T(x0) - x0 = 0`` with the phase condition
-``eta_tip(x0) = level``, unknowns (x0, T); the Jacobian is bordered by the
-flow at the end of the period and the gradient of the phase condition.  The
-monodromy matrix is the exact derivative of the discrete Radau flow map, so
-Newton converges quadratically and its eigenvalues are the Floquet
-multipliers to the integration accuracy.
+Newton's method on ``phi_T(x0) - x0 = 0`` with the phase condition ``section_value(x0) =
+level`` (:func:`~fempipe.analyses.limit_cycle.tips.section_value`), unknowns (x0, T).  The
+monodromy matrix is the exact derivative of the discrete Radau flow map: Newton converges
+quadratically and its eigenvalues are the Floquet multipliers to the integration accuracy.
+At an axisymmetric inclination of the 3-D model every orbit turned about the vertical is an
+orbit: the bordered Newton matrix is singular along that rotation and the step is its
+minimum-norm least-squares solution.
+
+Derivation and accuracy: docs/theory/numerics.md, "Attractors and limit cycles".
 """
 
 from __future__ import annotations
@@ -20,12 +23,12 @@ import numpy as np
 import scipy.linalg as sla
 
 from fempipe.core.parallel import single_blas_thread
-from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
-from fempipe.model.operators import PipeModel
+from fempipe.model.dynamics_problem import ModelDynamics
+from fempipe.model.space import SpaceModel
 from fempipe.solvers.radau import Radau
 
-from .results import LimitCycle, ShootingError, state_distance
-from .tips import QuinticOrbit, eta_tip, eta_tip_gradient, tip_extrema
+from .results import LimitCycle, ShootingError, largest_nontrivial, state_distance
+from .tips import QuinticOrbit, section_gradient, section_value, tip_extrema
 
 __all__ = ["shoot", "Shooter"]
 
@@ -33,7 +36,7 @@ log = logging.getLogger(__name__)
 
 
 def shoot(
-    model: PipeModel,
+    problem: ModelDynamics,
     q0: np.ndarray,
     qdot0: np.ndarray,
     period: float,
@@ -50,57 +53,50 @@ def shoot(
 
     Parameters
     ----------
-    model : PipeModel
+    problem : PipeDynamics or SpaceDynamics
+        The autonomous dynamics problem (steady flow) of a planar or 3-D model.
     q0, qdot0 : ndarray, shape (n,)
         Initial guess on or near the orbit.
     period : float
         Initial guess of the period.
     level : float, optional
-        Phase condition eta_tip(q0) = level (default: eta_tip of the guess).
+        Phase condition section_value(q0) = level (default: that of the guess).
     rtol : float
         Integration tolerance; the orbit is accurate to about this level.
     tol : float
-        Convergence when the RMS of phi_T(x0) - x0 (velocities scaled by
-        T / 2 pi) is below ``tol``; must exceed the integration error.
+        Convergence when the RMS of phi_T(x0) - x0 (velocities scaled by T / 2 pi) and the
+        phase condition are below ``tol``; must exceed the integration error.
     max_iter : int
     n_samples : int
         Samples of the orbit stored for plotting.
     reuse_monodromy : bool
-        Chord-Newton: keep the monodromy matrix of an earlier iterate while
-        the residual falls at least 4x per iteration (an iteration without the
-        variational step costs about a third).  The Floquet multipliers are
-        then those of the last iterate where the matrix was computed, within
-        one Newton step of the orbit: good for telling stable from unstable,
-        not for quoting digits.  Default False (exact multipliers).
+        Chord-Newton: keep the monodromy of an earlier iterate while the residual falls at
+        least 4x per iteration; its multipliers are then one Newton step off the orbit.
     polish : bool
-        Once converged with a residual between ``tol`` / 10 and ``tol``, take
-        the next Newton step too and integrate one plain period (no
-        monodromy) from there; its
-        orbit, tips, period and residual are reported if its residual is
-        smaller (it is O(residual^2) up to the integration's own noise).  The
-        Floquet multipliers stay those of the converged iterate, one step
-        (< ``tol``) from the reported state: the monodromy is not integrated
-        again for a change of that order.  ``iterations`` counts the polish.
+        Once converged with a residual above ``tol`` / 10, take the next Newton step and
+        report one plain period from there if its residual is smaller (the multipliers stay
+        those of the converged iterate).
 
     Returns
     -------
     LimitCycle
+        In 3-D ``tip`` has Y_tip too and ``floquet_multipliers`` are all 6 n of the 3-D
+        monodromy (in-plane, out-of-plane and the gauge's).
 
     Raises
     ------
     ShootingError
         Naming v, the iterations and the last residual.
-    ValueError
-        If the model has hysteretic damping (no time-domain meaning).
     """
-    refuse_hysteretic(model.params, "shoot")
+    if not problem.autonomous:
+        raise ValueError("shoot needs an autonomous problem (a steady flow)")
     if not period > 0:
         raise ValueError(f"period must be > 0, got {period}")
     q = np.array(q0, dtype=float)
     p = np.array(qdot0, dtype=float)
-    level = eta_tip(model.disc, q) if level is None else float(level)
+    level = section_value(problem.model, q) if level is None else float(level)
     shooter = Shooter(
-        model,
+        problem,
         level,
         rtol=rtol,
         tol=tol,
@@ -112,25 +108,14 @@ def shoot(
 
 
 class Shooter:
-    """The Newton iteration of :func:`shoot` on one model and section level.
+    """The Newton iteration of :func:`shoot` on one problem and section level.
 
-    Parameters
-    ----------
-    model : PipeModel
-    level : float
-        Phase condition eta_tip(q0) = level.
-    rtol, tol, n_samples, reuse_monodromy, polish
-        As in :func:`shoot`.
-
-    Attributes
-    ----------
-    total_steps, rejected : int
-        Integration steps (accepted, rejected) over all periods so far.
+    ``total_steps`` and ``rejected`` count the integration steps over all periods so far.
     """
 
     def __init__(
         self,
-        model: PipeModel,
+        problem: ModelDynamics,
         level: float,
         *,
         rtol: float,
@@ -139,18 +124,18 @@ class Shooter:
         reuse_monodromy: bool,
         polish: bool,
     ) -> None:
-        self.model = model
-        self.disc, self.alpha, self.n = model.disc, model.params.alpha, model.n
+        self.problem, self.model, self.n = problem, problem.model, problem.n
         self.level = level
         self.rtol, self.tol, self.n_samples = rtol, tol, n_samples
         self.reuse_monodromy, self.polish = reuse_monodromy, polish
+        three_d = isinstance(self.model, SpaceModel)
+        #: the rotation about the vertical maps 3-D orbits to orbits
+        self.axisymmetric = three_d and abs(math.sin(self.model.params.alpha)) < 1e-12
+        # The 3-D tips: 16 samples a step on the quintic, no further refinement.
+        self.tip_options = {"per_step": 16, "fine": 0} if three_d else {}
         self.t_start = time.perf_counter()
         self.total_steps = self.rejected = 0
         self.Phi = None
-
-    def problem(self) -> PipeDynamics:
-        """The integrator's problem of the model (one per integrated period)."""
-        return PipeDynamics(self.model)
 
     def run(self, q: np.ndarray, p: np.ndarray, T: float, max_iter: int) -> LimitCycle:
         """Newton iterations from (q, p, T) until converged; raise ShootingError if not."""
@@ -166,7 +151,7 @@ class Shooter:
                 self.rejected += stepper.stats.rejected_steps
                 scale = T / (2 * math.pi)
                 res = state_distance(stepper.q - q, stepper.qdot - p, scale)
-                g = self.phase(q) - self.level
+                g = section_value(self.model, q) - self.level
                 log.debug("shooting it %d: T=%.10g residual %.3e phase %.3e", it, T, res, g)
                 if need:
                     self.Phi = stepper.sensitivity_matrix
@@ -190,7 +175,7 @@ class Shooter:
                     break
         raise ShootingError(
             f"shooting did not converge at v = {self.model.params.v:.6g}, alpha = "
-            f"{self.alpha:.6g}: residual {res:.3e} after {it} Newton iterations",
+            f"{self.model.params.alpha:.6g}: residual {res:.3e} after {it} Newton iterations",
             iterations=it,
             residual=res,
         )
@@ -198,7 +183,7 @@ class Shooter:
     def one_period(self, q: np.ndarray, p: np.ndarray, T: float, sensitivity: bool):
         """Integrate (q, p) over T; the stepper, the step ends and the orbit samples."""
         n_samples = self.n_samples
-        stepper = Radau(self.problem(), q, p, 0.0, rtol=self.rtol, sensitivity=sensitivity)
+        stepper = Radau(self.problem, q, p, 0.0, rtol=self.rtol, sensitivity=sensitivity)
         tt = np.linspace(0.0, T, n_samples)
         orbit_q, orbit_p, k = [q.copy()], [p.copy()], 1
         ends = [(0.0, q.copy(), p.copy(), stepper.qddot.copy())]
@@ -220,14 +205,15 @@ class Shooter:
         J = np.zeros((2 * n + 1, 2 * n + 1))
         J[: 2 * n, : 2 * n] = self.Phi - np.eye(2 * n)
         J[: 2 * n, -1] = np.concatenate([stepper.qdot, stepper.qddot])
-        J[-1, :n] = self.phase_gradient(q)
+        J[-1, :n] = section_gradient(self.model, q)
         rhs = -np.concatenate([stepper.q - q, stepper.qdot - p, [g]])
+        if self.axisymmetric:
+            dx = np.linalg.lstsq(J, rhs, rcond=1e-10)[0]
+            return dx if np.all(np.isfinite(dx)) else None
         try:
-            # Near an equilibrium (a decaying oscillation, the Hopf point) the
-            # bordered matrix is nearly singular; the step is still judged by
-            # the next period's residual, and an orbit that collapses to the
-            # equilibrium is refused below, so scipy's warning would only
-            # reach the user's terminal as noise.
+            # Near an equilibrium (a decaying oscillation, the Hopf point) the matrix is
+            # nearly singular; the next period's residual judges the step and an orbit
+            # collapsing to the equilibrium is refused, so scipy's warning is only noise.
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", sla.LinAlgWarning)
                 dx = sla.solve(J, rhs)
@@ -235,29 +221,20 @@ class Shooter:
             return None
         return dx if np.all(np.isfinite(dx)) else None
 
-    def phase(self, q: np.ndarray) -> float:
-        """The section variable whose value ``level`` fixes the phase: eta_tip."""
-        return eta_tip(self.disc, q)
-
-    def phase_gradient(self, q: np.ndarray) -> np.ndarray:
-        """d(:meth:`phase`)/dq, shape (n,)."""
-        return eta_tip_gradient(self.disc, q)
-
     def tips(self, ends: list) -> dict:
         """Tip extrema of one period on the quintic interpolant of its step ends."""
-        return tip_extrema(self.disc, QuinticOrbit(*zip(*ends, strict=True)), self.alpha)
+        orbit = QuinticOrbit(*zip(*ends, strict=True))
+        return tip_extrema(self.model, orbit, **self.tip_options)
 
     def converged(self, best: tuple, dx: np.ndarray | None) -> LimitCycle:
         """The cycle of a converged iterate ``best`` = (it, q, p, T, res, tip, stepper, tt,
         orbit_q, orbit_p), polished by the Newton step ``dx`` if that helps."""
         it, q, p, T, res, tip = best[:6]
         if max(hi - lo for lo, hi in tip.values()) < 2e-3:
-            # The equilibrium is a periodic orbit of any period, and
-            # Newton started near a decaying oscillation can stop on
-            # the way to it once A |1 - exp(sigma T)| < tol: measured
-            # A = 7e-6 at v_cr - 0.13.  Genuine Hopf cycles this small
-            # (A ~ 0.5 sqrt(v - v_cr) < 1e-3) exist only within 4e-6
-            # of v_cr, so tip swings below 2e-3 are not reported as cycles.
+            # The equilibrium is a periodic orbit of any period, and Newton started near a
+            # decaying oscillation can stop on the way to it once A |1 - exp(sigma T)| < tol
+            # (A = 7e-6 at v_cr - 0.13).  Hopf cycles this small (A ~ 0.5 sqrt(v - v_cr))
+            # exist only within 4e-6 of v_cr: tip swings below 2e-3 are not cycles.
             raise ShootingError(
                 f"shooting converged to an equilibrium at v = {self.model.params.v:.6g}",
                 iterations=it,
@@ -286,18 +263,13 @@ class Shooter:
             rejected_steps=self.rejected,
             wall_time=time.perf_counter() - self.t_start,
         )
-        return replace(cycle, stable=cycle.max_nontrivial_multiplier < 1.0)
+        return replace(cycle, stable=largest_nontrivial(mu, self.axisymmetric) < 1.0)
 
     def polished(self, best: tuple, dx: np.ndarray) -> tuple:
         """``best`` moved by one more Newton step if a plain period confirms it."""
-        # The converged iterate is up to tol from the cycle (1.4e-7
-        # measured on four beam modes: the alpha = 0 cycle's
-        # eta_tip extrema 1.4e-7 asymmetric).  One more Newton step
-        # with the same matrix lands within O(res^2) of it; a plain
-        # period checks it and gives the orbit, tips and period.
-        # Below tol / 10 the iterate is as close as the shooting
-        # map's own integration error (its fixed point moves by
-        # ~1e-7 in the tips between runs at rtol 1e-5): no gain.
+        # The converged iterate is up to tol from the cycle; one more step with the same
+        # matrix lands within O(res^2) of it, and a plain period checks it.  Below tol / 10
+        # the iterate is as close as the map's own integration error: no gain.
         n = self.n
         it, q, p, T, res = best[:5]
         q2, p2, T2 = q + dx[:n], p + dx[n : 2 * n], T + dx[-1]
@@ -305,7 +277,7 @@ class Shooter:
         self.total_steps += st2.stats.steps
         self.rejected += st2.stats.rejected_steps
         res2 = state_distance(st2.q - q2, st2.qdot - p2, T2 / (2 * math.pi))
-        g2 = self.phase(q2) - self.level
+        g2 = section_value(self.model, q2) - self.level
         log.debug("shooting polish: T=%.10g residual %.3e", T2, res2)
         if res2 < res and abs(g2) < self.tol:
             return (it + 1, q2, p2, T2, res2, self.tips(ends2), st2, tt2, oq2, op2)

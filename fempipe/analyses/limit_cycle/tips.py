@@ -1,17 +1,13 @@
-"""Tip coordinates on attractors and their extrema over one period.
+"""Tip coordinates on attractors, the Poincare section, and their extrema over a period.
 
-The [min, max] of the tip coordinates (:data:`TIP_KEYS`) over a computed period is taken by
-one routine, :func:`tip_extrema`, on samples of the orbit from one of three sources (the
-:class:`OrbitSamples` protocol): :class:`QuinticOrbit`, the quintic Hermite interpolant
-through (q, q', q'') at the step ends (the cycles of
-:func:`~fempipe.analyses.limit_cycle.shoot`); :class:`CollocationOrbit`, the integrator's
-collocation polynomials of the steps (the branches of periodic orbits); :class:`TipTrace`,
-tip coordinates recorded on the collocation polynomial of every step while integrating (the
-transient of :func:`~fempipe.analyses.limit_cycle.find_attractor`), which cannot be
-evaluated between its samples.  Each extremum of the samples is then refined, by a parabola
-through three samples (``refine="parabola"``: on ``fine + 1`` new samples between the
-neighbours of the extremum, or on the samples themselves if ``fine = 0``), or by a bounded
-scalar minimization on the interpolant between the neighbours (``refine="bounded"``).
+:func:`tip_extrema` takes the [min, max] of the tip coordinates (:data:`TIP_KEYS`, in 3-D
+:data:`TIP_KEYS_3D`) over one period of an orbit given as an :class:`OrbitSamples`:
+:class:`QuinticOrbit` (quintic Hermite interpolant through (q, q', q'') at the step ends),
+:class:`CollocationOrbit` (the integrator's collocation polynomials) or :class:`TipTrace`
+(samples recorded while integrating).  :func:`section_value` is the section variable of the
+shooting, eta_tip in the plane, eta_tip + Y_tip in 3-D.
+
+Accuracy of the extrema: docs/theory/numerics.md, "Attractors and limit cycles".
 """
 
 from __future__ import annotations
@@ -22,13 +18,16 @@ import numpy as np
 
 from fempipe.model.discretization import Discretization
 from fempipe.model.kinematics import tip_values
+from fempipe.model.space import SpaceModel
 from fempipe.solvers.radau.collocation import product_weights
 
 __all__ = [
     "TIP_KEYS",
-    "tip_coordinates",
+    "TIP_KEYS_3D",
     "eta_tip",
     "eta_tip_gradient",
+    "section_value",
+    "section_gradient",
     "OrbitSamples",
     "QuinticOrbit",
     "CollocationOrbit",
@@ -36,51 +35,60 @@ __all__ = [
     "tip_extrema",
 ]
 
-#: Tip coordinates recorded on attractors: eta(1) in the local frame,
-#: X_g(1) (along gravity) and Z_g(1) (horizontal) in the global frame, Eq. (28).
+#: Tip coordinates recorded on attractors: eta(1) in the local frame, X_g(1) (along gravity)
+#: and Z_g(1) (horizontal) in the global frame, Eq. (28).
 TIP_KEYS = ("eta_tip", "X_tip", "Z_tip")
+#: Those of the 3-D model, with Y_tip out of the plane of the static state.
+TIP_KEYS_3D = (*TIP_KEYS, "Y_tip")
 
 
-def tip_coordinates(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
-    """The tip coordinates recorded on attractors (:data:`TIP_KEYS`) of one state
-    (n,) or many (m, n): those of :func:`fempipe.model.kinematics.tip_values`.
-
-    The arguments come in the package's one order: the discretization, the state
-    arrays, then alpha (a scalar; a call in another order raises TypeError).
-    """
-    if np.ndim(alpha) != 0:
-        raise TypeError(
-            "tip_coordinates(disc, q, alpha): alpha must be a scalar, the last argument"
-        )
-    tip = tip_values(disc, q, alpha)
+def _tips(model, q: np.ndarray) -> dict:
+    """The tip coordinates of one state (n,) or many (m, n) of a planar or 3-D model."""
+    if isinstance(model, SpaceModel):
+        return model.tip_coordinates(q)
+    tip = tip_values(model.disc, q, model.params.alpha)
     return {k: tip[k] for k in TIP_KEYS}
 
 
 def eta_tip(disc: Discretization, q: np.ndarray) -> float:
-    """eta_tip, the Poincare section coordinate (independent of alpha)."""
+    """eta_tip of a planar state (independent of alpha)."""
     return tip_values(disc, q, 0.0)["eta_tip"]
 
 
 def eta_tip_gradient(disc: Discretization, q: np.ndarray) -> np.ndarray:
-    """d eta_tip / dq = \\int phi_j cos theta: the phase condition's row of the Jacobian."""
+    """d eta_tip / dq = \\int phi_j cos theta."""
     th = disc.Phi @ q
     return np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(th)))
 
 
-# ---------------------------------------------------------------------------
-# Samples of an orbit
-# ---------------------------------------------------------------------------
+def section_value(model, q: np.ndarray) -> float:
+    """The section variable: the tip's displacement along e_2 + e_3 (eta_tip + Y_tip).
+
+    eta_tip in the plane; in 3-D it oscillates at the period of an out-of-plane swing, where
+    eta_tip alone swings at twice that frequency (a figure eight) or not at all.
+    """
+    if isinstance(model, SpaceModel):
+        d = model.tip_coordinates(q)
+        return d["eta_tip"] + d["Y_tip"]
+    return eta_tip(model.disc, q)
+
+
+def section_gradient(model, q: np.ndarray) -> np.ndarray:
+    """d :func:`section_value` / dq, shape (n,)."""
+    if isinstance(model, SpaceModel):
+        g = model.tip_position_gradient(q)
+        return g[1] + g[2]
+    return eta_tip_gradient(model.disc, q)
+
+
 class OrbitSamples(Protocol):
     """What :func:`tip_extrema` needs of an orbit over one period."""
 
     #: End of the period (the start is the first step's).
     t_end: float
 
-    def tip_samples(
-        self, disc: Discretization, alpha: float, per_step: int
-    ) -> tuple[np.ndarray, dict]:
-        """Times (m,) and tip coordinates (:func:`tip_coordinates`, arrays (m,)) of
-        ``per_step`` samples per step, in time order."""
+    def tip_samples(self, model, per_step: int) -> tuple[np.ndarray, dict]:
+        """Times (m,) and tip coordinates (arrays (m,)) of ``per_step`` samples per step."""
 
     def __call__(self, t: float | np.ndarray) -> np.ndarray:
         """q at tau = t, (n,) for a float, (m, n) for an array of times."""
@@ -110,17 +118,13 @@ _QUINTIC = np.array(
 
 
 class QuinticOrbit:
-    """The quintic Hermite interpolant of q(t) through the accepted steps.
+    """The quintic Hermite interpolant of q(t) through the step ends, O(h^6) like them
+    (the collocation cubic is O(h^4) inside a step); its samples include the last end.
 
     Parameters
     ----------
     t, q, p, a : array_like
-        Times and (q, q', q'') at the step ends (shapes (m,), (m, n)).
-
-    The interpolant through q, q' and q'' at both ends of a step is accurate
-    to O(h^6), like the step ends themselves; the integrator's own dense
-    output (the collocation cubic) is only O(h^4) inside a step.  Its samples
-    include the last step end.
+        Times and (q, q', q'') at the step ends, shapes (m,), (m, n).
     """
 
     def __init__(self, t, q, p, a) -> None:
@@ -146,22 +150,19 @@ class QuinticOrbit:
         q = np.einsum("md,mdn->mn", basis, self.data[k])
         return q[0] if scalar else q
 
-    def tip_samples(
-        self, disc: Discretization, alpha: float, per_step: int
-    ) -> tuple[np.ndarray, dict]:
+    def tip_samples(self, model, per_step: int) -> tuple[np.ndarray, dict]:
         ts = _step_times(self.t[:-1], self.h, per_step, end=self.t[-1])
-        return ts, tip_coordinates(disc, self(ts), alpha)
+        return ts, _tips(model, self(ts))
 
 
 class CollocationOrbit:
-    """The collocation polynomials of the accepted steps of one period.
+    """The collocation polynomials of the steps of one period (samples without the last end).
 
     Parameters
     ----------
     record : list of tuple
-        ``(t_old, h, q_old, Q)`` per step: its start, length, q at the start
-        and the stage values Q (3, n) (``Radau.last``).  Its samples do not
-        include the last step end.
+        ``(t_old, h, q_old, Q)`` per step: start, length, q at the start, stage values
+        Q (3, n) (``Radau.last``).
     """
 
     def __init__(self, record: list) -> None:
@@ -181,35 +182,22 @@ class CollocationOrbit:
         w = product_weights(np.array([(t - t0) / h]))[0]
         return w @ np.vstack([q_old[None, :], Q])
 
-    def tip_samples(
-        self, disc: Discretization, alpha: float, per_step: int
-    ) -> tuple[np.ndarray, dict]:
+    def tip_samples(self, model, per_step: int) -> tuple[np.ndarray, dict]:
         s = np.linspace(0.0, 1.0, per_step + 1)[:-1]
         L = product_weights(s)  # (per_step, 4)
         nodes = np.stack([np.vstack([q_old[None, :], Q]) for _, _, q_old, Q in self.record])
         qs = np.einsum("sj,mjn->msn", L, nodes).reshape(-1, nodes.shape[-1])
         h = np.array([r[1] for r in self.record])
-        return _step_times(self.starts, h, per_step), tip_coordinates(disc, qs, alpha)
+        return _step_times(self.starts, h, per_step), _tips(model, qs)
 
 
 class TipTrace:
-    """Tip coordinates recorded on every step of an integration.
+    """Tip coordinates recorded on every step of an integration of a planar ``model``:
+    ``per_step`` samples on each step's collocation polynomial (the last at its end).  It
+    cannot be evaluated between its samples: :func:`tip_extrema` needs ``fine = 0``."""
 
-    Each accepted step of a :class:`fempipe.solvers.radau.Radau` adds
-    ``per_step`` samples on its collocation polynomial (the last at the step
-    end).  A trace is an :class:`OrbitSamples` that cannot be evaluated
-    between its samples: :func:`tip_extrema` refines its extrema with
-    ``fine = 0``.
-
-    Parameters
-    ----------
-    disc : Discretization
-    alpha : float
-    per_step : int
-    """
-
-    def __init__(self, disc: Discretization, alpha: float, per_step: int = 4) -> None:
-        self.disc, self.alpha, self.per_step = disc, alpha, int(per_step)
+    def __init__(self, model, per_step: int = 4) -> None:
+        self.model, self.per_step = model, int(per_step)
         self.steps: list[tuple[np.ndarray, dict]] = []
 
     def record(self, stepper) -> None:
@@ -217,14 +205,14 @@ class TipTrace:
         t_old, t = stepper.t_old, stepper.t
         ts = np.linspace(t_old, t, self.per_step + 1)[1:]
         qs = np.array([stepper.dense(s)[0] for s in ts[:-1]] + [stepper.q])
-        self.steps.append((ts, tip_coordinates(self.disc, qs, self.alpha)))
+        self.steps.append((ts, _tips(self.model, qs)))
 
     def __len__(self) -> int:
         return len(self.steps)
 
     def __getitem__(self, steps: slice) -> TipTrace:
         """The trace of a range of steps."""
-        out = TipTrace(self.disc, self.alpha, self.per_step)
+        out = TipTrace(self.model, self.per_step)
         out.steps = self.steps[steps]
         return out
 
@@ -236,33 +224,28 @@ class TipTrace:
         return np.concatenate([s[0] for s in self.steps])
 
     def values(self, key: str) -> np.ndarray:
-        """The samples of one tip coordinate (a key of :data:`TIP_KEYS`)."""
+        """The samples of one tip coordinate."""
         return np.concatenate([s[1][key] for s in self.steps])
 
-    def tip_samples(
-        self, disc: Discretization, alpha: float, per_step: int
-    ) -> tuple[np.ndarray, dict]:
-        if per_step != self.per_step or alpha != self.alpha:
+    def tip_samples(self, model, per_step: int) -> tuple[np.ndarray, dict]:
+        if per_step != self.per_step or model.params.alpha != self.model.params.alpha:
             raise ValueError(
                 f"the trace was recorded with per_step = {self.per_step}, alpha = "
-                f"{self.alpha:g}, not {per_step}, {alpha:g}"
+                f"{self.model.params.alpha:g}, not {per_step}, {model.params.alpha:g}"
             )
-        return self.times(), {k: self.values(k) for k in TIP_KEYS}
+        return self.times(), {k: self.values(k) for k in self.steps[0][1]}
 
     def __call__(self, t):
         raise TypeError("a TipTrace has no values between its samples: use fine = 0")
 
 
-# ---------------------------------------------------------------------------
-# The extrema
-# ---------------------------------------------------------------------------
 def _vertex(t: np.ndarray, y: np.ndarray, k: int) -> float:
     """The extreme value of the parabola through the samples k - 1, k, k + 1, or y[k]."""
     if 0 < k < y.size - 1 and t[k + 1] > t[k] > t[k - 1]:
         y0, y1, y2 = y[k - 1], y[k], y[k + 1]
         h0, h1 = t[k] - t[k - 1], t[k + 1] - t[k]
-        # The samples of a trace are unequally spaced where one step ends and the next,
-        # of another length, begins: divided differences, not the equal-spacing formula.
+        # Divided differences: where two steps of different lengths meet, the samples of a
+        # trace are unequally spaced.
         d0, d1 = (y1 - y0) / h0, (y2 - y1) / h1
         curvature = (d1 - d0) / (h0 + h1)
         if curvature != 0:
@@ -272,9 +255,8 @@ def _vertex(t: np.ndarray, y: np.ndarray, k: int) -> float:
 
 
 def tip_extrema(
-    disc: Discretization,
+    model,
     orbit: OrbitSamples,
-    alpha: float,
     *,
     per_step: int = 8,
     refine: Literal["parabola", "bounded"] = "parabola",
@@ -282,55 +264,39 @@ def tip_extrema(
 ) -> dict[str, list[float]]:
     """[min, max] of the tip coordinates over one period of an orbit.
 
-    The coordinates are sampled ``per_step`` times per step; each extremum
-    of the samples is then refined between its neighbouring samples (the
-    next step end after the last sample).
+    Each extremum of ``per_step`` samples per step is refined between its neighbouring
+    samples.
 
     Parameters
     ----------
-    disc : Discretization
+    model : PipeModel or SpaceModel
     orbit : OrbitSamples
-        :class:`QuinticOrbit`, :class:`CollocationOrbit` or :class:`TipTrace`.
-    alpha : float
-        Inclination, rad.
     per_step : int
         Samples per step (that of a :class:`TipTrace`).
     refine : {'parabola', 'bounded'}
-        ``"parabola"``: sample the interpolant ``fine`` times between the
-        neighbours (``fine = 0``: keep the samples) and take the extremum of
-        the parabola through the extreme sample and its neighbours.
-        ``"bounded"``: minimize the coordinate on the interpolant between the
-        neighbours (``scipy.optimize.minimize_scalar``, ``xatol`` 1e-10 of
-        max(1, t_end)); ``fine`` is not used.
+        ``"parabola"``: the vertex of the parabola through the extreme sample and its
+        neighbours, after ``fine`` new samples between the neighbours (0: none).
+        ``"bounded"``: ``scipy.optimize.minimize_scalar`` on the interpolant between the
+        neighbours (``xatol`` 1e-10 max(1, t_end)).
     fine : int
-        New samples of the parabola refinement.
 
     Returns
     -------
     dict
-        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}``.
-
-    Notes
-    -----
-    Measured: the collocation cubic with 8 samples per step and a parabola
-    put eta_tip's maximum 4e-6 off the cycle's at v = 12 (alpha = 0, rtol
-    1e-5, a sharp peak); the quintic interpolant with ``fine = 32`` is within
-    1e-8 of a run at rtol 1e-10.
+        ``{key: [min, max]}`` for :data:`TIP_KEYS` (:data:`TIP_KEYS_3D` in 3-D).
     """
     if refine not in ("parabola", "bounded"):
         raise ValueError(f"refine must be 'parabola' or 'bounded', got {refine!r}")
     if int(fine) < 0:
         raise ValueError(f"fine must be >= 0, got {fine}")
-    ts, tips = orbit.tip_samples(disc, alpha, per_step)
+    ts, tips = orbit.tip_samples(model, per_step)
     extremum = _bounded if refine == "bounded" else _parabola
     out = {}
-    for key in TIP_KEYS:
+    for key in tips:
         y = np.asarray(tips[key])
-        lo, hi = (extremum(disc, orbit, alpha, key, ts, y, sign, int(fine)) for sign in (1.0, -1.0))
+        lo, hi = (extremum(model, orbit, key, ts, y, sign, int(fine)) for sign in (1.0, -1.0))
         if refine == "bounded":
-            # The bookkeeping of the branches of periodic orbits, kept for their bits.
-            ext = [lo, hi]
-            out[key] = [float(min(ext)), float(max(ext))]
+            out[key] = [float(min(lo, hi)), float(max(lo, hi))]
         else:
             out[key] = [min(lo, float(y.min())), max(hi, float(y.max()))]
     return out
@@ -343,27 +309,27 @@ def _bracket(orbit: OrbitSamples, ts: np.ndarray, k: int) -> tuple[float, float]
     return a, b
 
 
-def _parabola(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
+def _parabola(model, orbit, key, ts, y, sign, fine) -> float:
     """The minimum (sign 1) or maximum (sign -1): parabola through the extreme sample."""
     pick = np.argmin if sign > 0 else np.argmax
     k = int(pick(y))
     if fine > 0:
         a, b = _bracket(orbit, ts, k)
         ts = np.linspace(a, b, fine + 1)
-        y = tip_coordinates(disc, orbit(ts), alpha)[key]
+        y = _tips(model, orbit(ts))[key]
         k = int(pick(y))
     v = _vertex(ts, y, k)
     return min(v, float(y.min())) if sign > 0 else max(v, float(y.max()))
 
 
-def _bounded(disc, orbit, alpha, key, ts, y, sign, fine) -> float:
+def _bounded(model, orbit, key, ts, y, sign, fine) -> float:
     """The minimum (sign 1) or maximum (sign -1): bounded minimization on the interpolant."""
-    from scipy.optimize import minimize_scalar
+    from scipy.optimize import minimize_scalar  # not at import: keeps it off simulate's start
 
     k = int(np.argmin(sign * y))
     a, b = _bracket(orbit, ts, k)
     r = minimize_scalar(
-        lambda t: sign * tip_coordinates(disc, orbit(t), alpha)[key],
+        lambda t: sign * _tips(model, orbit(t))[key],
         bounds=(a, b),
         method="bounded",
         options={"xatol": 1e-10 * max(1.0, orbit.t_end)},

@@ -1,18 +1,13 @@
 """Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
 
-A planar limit cycle of the paper's model (:mod:`fempipe.analyses.limit_cycle`) is a periodic
-solution of the 3-D model too, and by the mirror symmetry e_3 -> -e_3 the linearized motion
-about it splits into planar perturbations (theta) and out-of-plane ones.
-:func:`out_of_plane_floquet` computes the out-of-plane multipliers two independent ways:
-by default (``method="linear"``) from the linear equation of out-of-plane perturbations about
-the moving planar state (:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`:
-one unknown psi, no gauge), or (``method="3d"``) from the out-of-plane block of the 3-D
-model's monodromy (:mod:`fempipe.model.space`), integrated block by block
-(``decoupled_blocks``, rule 7 of :mod:`fempipe.solvers.radau.contract`), whose gauge
-multipliers (about e^(-50 T) and smaller) are left out.  The two differ by their
-discretization errors and converge to each other.  A planar cycle survives in 3-D when every
-out-of-plane multiplier is inside the unit circle; at alpha = 0 and pi one of them, the
-cycle turned about the vertical, is exactly 1 in the continuum (the trivial one there).
+A planar limit cycle is a periodic solution of the 3-D model too, and by the mirror symmetry
+e_3 -> -e_3 its perturbations split into planar and out-of-plane ones.
+:func:`compute_out_of_plane_floquet` computes the out-of-plane multipliers from the linear
+equation about the moving planar state (``method="linear"``,
+:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`) or from the out-of-plane
+block of the 3-D model's monodromy (``method="3d"``, gauge multipliers left out); the two
+converge to each other.  At alpha = 0 and pi one of them, the cycle turned about the
+vertical, is 1 in the continuum.
 
 Derivation and measurements: docs/theory/out_of_plane.md, "About a moving planar state", and
 docs/theory/space.md, "What it answers".
@@ -33,7 +28,7 @@ from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 
-__all__ = ["METHODS", "OutOfPlaneFloquet", "out_of_plane_floquet"]
+__all__ = ["METHODS", "OutOfPlaneFloquet", "compute_out_of_plane_floquet"]
 
 
 @dataclass(frozen=True)
@@ -45,24 +40,21 @@ class OutOfPlaneFloquet:
     multipliers : ndarray, complex
         The out-of-plane multipliers, by decreasing modulus (the gauge's left out).
     planar_multipliers : ndarray, complex
-        The planar block's, by decreasing modulus (the planar model's, recomputed).
+        The planar block's, by decreasing modulus.
     axisymmetric : bool
         sin(alpha) = 0: one multiplier is the neutral rotation about the vertical.
     trivial : complex or None
-        At an axisymmetric alpha, the multiplier closest to 1 (that rotation).
+        At an axisymmetric alpha, the multiplier closest to 1.
     max_nontrivial : float
         The largest modulus of the others.
     stable : bool
-        ``max_nontrivial < 1``: the cycle is stable against out-of-plane perturbations.
+        ``max_nontrivial < 1``.
     gauge_largest : float
-        The largest modulus among the 2 n multipliers left out as the gauge's
-        (method "3d"; 0 for "linear", which has no gauge).
+        The largest modulus of the gauge's multipliers (0 for ``"linear"``).
     steps : int
-        Integration steps over the period.
     cpu_time : float
-        CPU seconds.
     method : str
-        ``"linear"`` or ``"3d"`` (:func:`out_of_plane_floquet`).
+        ``"linear"`` or ``"3d"``.
     """
 
     multipliers: np.ndarray
@@ -78,14 +70,12 @@ class OutOfPlaneFloquet:
 
     @property
     def symmetry_defect(self) -> float | None:
-        """|trivial - 1| at an axisymmetric alpha (else None): how far the discretization
-        is from the exact neutral rotation about the vertical, a measured lower bound
-        on the error of its out-of-plane multipliers."""
+        """|trivial - 1| at an axisymmetric alpha (else None): a lower bound on the
+        discretization error of the out-of-plane multipliers."""
         return None if self.trivial is None else float(abs(self.trivial - 1.0))
 
     def to_dict(self, n_multipliers: int = 6) -> dict:
-        """JSON-able: the leading multipliers as [re, im] pairs, the verdict, and at an
-        axisymmetric alpha the neutral multiplier and its distance from 1."""
+        """The leading multipliers as [re, im] pairs, the verdict, the neutral multiplier."""
         trivial = self.trivial
         return {
             "out_of_plane_floquet_multipliers": [
@@ -101,11 +91,11 @@ class OutOfPlaneFloquet:
         }
 
 
-#: The two computations of :func:`out_of_plane_floquet`.
+#: The two computations of :func:`compute_out_of_plane_floquet`.
 METHODS = ("linear", "3d")
 
 
-def out_of_plane_floquet(
+def compute_out_of_plane_floquet(
     model: PipeModel, cycle: LimitCycle, *, rtol: float = 1e-7, method: str = "linear"
 ) -> OutOfPlaneFloquet:
     """The Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
@@ -115,17 +105,12 @@ def out_of_plane_floquet(
     model : PipeModel
         The planar model the cycle was computed on.
     cycle : LimitCycle
-        The planar cycle (its state ``q0``, ``qdot0`` and ``period``).
+        The planar cycle.
     rtol : float
         Integration tolerance over the period.
     method : {"linear", "3d"}
-        ``"linear"``: the linear out-of-plane equation about the moving planar
-        state (:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`,
-        one unknown psi, no gauge); ``"3d"``: the 3-D model along the cycle (its
-        out-of-plane block, gauge multipliers left out).  The two are independent
-        discretizations of the same multipliers and converge to each other (at
-        alpha = pi/2, v = 10 the leading multipliers differ by 5e-4, 2e-5, 3e-7 in
-        modulus on P3:4/8/16; docs/theory/out_of_plane.md); "linear" is the cheaper.
+        The linear out-of-plane equation (one unknown psi, no gauge; the cheaper) or the
+        out-of-plane block of the 3-D model along the cycle.
 
     Returns
     -------

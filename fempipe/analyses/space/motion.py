@@ -1,20 +1,15 @@
-"""The nonlinear motion of the pipe in three dimensions and its attractor.
+"""The nonlinear motion of the pipe in three dimensions and its attractor (:func:`simulate_3d`).
 
-:func:`simulate_space` integrates the 3-D model (:mod:`fempipe.model.space`) from the planar
-static state, perturbed in the plane and out of it, with the Radau integrator, until the
-attractor is recognized on a Poincare section, and classifies it: ``equilibrium`` (the
-motion dies out); ``periodic`` (successive returns agree), ``planar`` when the tip stays in
-one vertical plane (for an inclined pipe, the plane of its static state), ``nonplanar``
-otherwise; ``whirl``, a non-planar periodic motion of an axisymmetric pipe (sin alpha = 0)
-whose tip turns about the vertical at a constant distance (``whirl_rate``: rad per unit tau,
-positive from e_2 towards e_3, right-handed about the clamp's axis e_1); ``quasi-periodic``,
-no recurrence before ``t_max`` and two strong peaks at incommensurate frequencies in the
-tip's spectrum over the second half of the run (:func:`tip_frequencies`,
-:func:`two_frequencies`); ``non-periodic``, no recurrence and no such pair.
+The 3-D model (:mod:`fempipe.model.space`) is integrated from the planar static state,
+perturbed in the plane and out of it, until the attractor is recognized on a Poincare
+section (:func:`~fempipe.analyses.limit_cycle.section_value`, eta_tip + Y_tip, crossing its
+static value upwards), and classified: ``equilibrium``; ``periodic``, ``planar`` when the
+tip stays in one vertical plane, ``nonplanar`` otherwise; ``whirl``, a non-planar periodic
+motion of an axisymmetric pipe whose tip turns about the vertical at a constant distance;
+``quasi-periodic``, no recurrence and two incommensurate peaks in the tip's spectrum
+(:func:`two_frequencies`); ``non-periodic``.
 
-The section is the tip's displacement along e_2 + e_3 (eta_tip + Y_tip,
-:func:`~fempipe.analyses.space.shooting.section_value`) crossing its static value upwards; a
-section state is located on the integrator's collocation polynomial by the secant method.
+Classification and measurements: docs/theory/space.md.
 """
 
 from __future__ import annotations
@@ -31,24 +26,21 @@ from ...model.space import SpaceModel, planar_state
 from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
 from ..dynamics import make_initial_state
-from ..limit_cycle.results import LimitCycle, ShootingError
+from ..limit_cycle import TIP_KEYS_3D, LimitCycle, ShootingError, section_value, shoot
 from ..statics import solve_static
-from .shooting import section_value, shoot_space
 from .whirl import tip_turn
 
 __all__ = [
-    "SpaceMotion",
+    "Motion3D",
     "out_of_plane_perturbation",
-    "simulate_space",
+    "simulate_3d",
     "tip_frequencies",
     "two_frequencies",
 ]
 
-TIP3_KEYS = ("eta_tip", "X_tip", "Z_tip", "Y_tip")
-
 
 @dataclass(frozen=True)
-class SpaceMotion:
+class Motion3D:
     """The attractor of a 3-D motion and the trajectory that reached it.
 
     Attributes
@@ -57,30 +49,27 @@ class SpaceMotion:
         ``"equilibrium"``, ``"periodic"``, ``"whirl"``, ``"quasi-periodic"`` or
         ``"non-periodic"``.
     motion : str
-        ``"planar"`` or ``"nonplanar"`` (the module docstring says which).
+        ``"planar"`` or ``"nonplanar"``.
     period : float or None
     period_n : int or None
         Section points per period.
     whirl_rate : float or None
-        Angular velocity of a whirl about the vertical, rad per unit tau.
+        Angular velocity of a whirl about the vertical (right-handed about e_1), rad per tau.
     tip : dict
-        ``[min, max]`` of eta_tip, X_tip, Z_tip, Y_tip over the last period (or
-        the last tenth of the run).
-    frequencies : tuple of float or None
-        For a motion without recurrence: the two incommensurate frequencies (cycles per
-        unit tau) of a quasi-periodic motion, or the strongest one of a non-periodic one.
-    cycle : LimitCycle or None
-        The periodic orbit by shooting (:func:`~fempipe.analyses.space.shooting.shoot_space`):
-        period, tips and the 3-D Floquet multipliers come from it.
+        ``[min, max]`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS_3D` over the last
+        period (or the last tenth of the run).
     planarity : float
-        How far the tip is from one vertical plane over that window: the ratio
-        of the smaller to the larger principal extent of its horizontal path
+        The smaller over the larger principal extent of the tip's horizontal path
         (axisymmetric pipe), or the out-of-plane extent over the in-plane one.
+    frequencies : tuple of float or None
+        Without recurrence: the two incommensurate frequencies (cycles per tau) of a
+        quasi-periodic motion, or the strongest one.
+    cycle : LimitCycle or None
+        The orbit by shooting: period, tips and 3-D Floquet multipliers.
     t, U, Udot : ndarray
         The trajectory at every accepted step.
     steps, rejected_steps : int
-    t_end : float
-    cpu_time : float
+    t_end, cpu_time : float
     """
 
     kind: str
@@ -124,9 +113,8 @@ class SpaceMotion:
 
 def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int, amplitude: float):
     """(a, b) of an out-of-plane rotation psi = amplitude sin((2 mode - 1) pi xi / 2) about the
-    planar state q_static: a = psi sin(theta/2) / 2, b = -psi cos(theta/2) / 2 (to first order
-    psi = 2 (a sin(theta/2) - b cos(theta/2)), the gauge g = 0), fitted in L2 at the quadrature
-    points."""
+    planar state q_static: a = psi sin(theta/2) / 2, b = -psi cos(theta/2) / 2 (first order,
+    gauge g = 0), fitted in L2 at the quadrature points."""
     disc = model.disc
     Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
     x, w = disc.quad.x, disc.quad.w
@@ -137,10 +125,6 @@ def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int
     return fit(0.5 * psi * np.sin(theta / 2)), fit(-0.5 * psi * np.cos(theta / 2))
 
 
-def _section_value(model: SpaceModel, U) -> float:
-    return section_value(model, U)
-
-
 def _locate(model, stepper, t0, t1, g0, g1, level):
     """The section crossing in [t0, t1] on the step's dense output (secant, 30 iterations)."""
     a, b, fa, fb = t0, t1, g0 - level, g1 - level
@@ -148,7 +132,7 @@ def _locate(model, stepper, t0, t1, g0, g1, level):
         t = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
         t = min(max(t, a), b)
         q, p = stepper.dense(t)
-        ft = _section_value(model, q) - level
+        ft = section_value(model, q) - level
         if abs(ft) < 1e-13 or abs(b - a) < 1e-14:
             return t, q, p
         if (ft > 0) == (fb > 0):
@@ -160,7 +144,7 @@ def _locate(model, stepper, t0, t1, g0, g1, level):
 
 def _window_tips(model: SpaceModel, U: np.ndarray) -> dict:
     tips = model.tip_coordinates(np.atleast_2d(U))
-    return {k: [float(tips[k].min()), float(tips[k].max())] for k in TIP3_KEYS}
+    return {k: [float(tips[k].min()), float(tips[k].max())] for k in TIP_KEYS_3D}
 
 
 def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
@@ -174,7 +158,7 @@ def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
     return float(extent[1] / extent[0]) if extent[0] > 0 else (0.0 if extent[1] == 0 else math.inf)
 
 
-def simulate_space(
+def simulate_3d(
     model: PipeModel,
     *,
     mode: int = 1,
@@ -191,44 +175,38 @@ def simulate_space(
     n_max: int = 8,
     callback: Callable[[float], None] | None = None,
     initial: tuple[np.ndarray, np.ndarray] | None = None,
-) -> SpaceMotion:
+) -> Motion3D:
     """Integrate the 3-D model from the perturbed static state and classify its attractor.
 
     Parameters
     ----------
     model : PipeModel
-        The planar model (its discretization and parameters); the static
-        state is its planar static state.
+        The planar model; the motion starts from its static state.
     mode, amplitude : int, float
         The in-plane perturbation (sine mode, rad), as the planar ``simulate``.
     out_of_plane_amplitude : float
         The out-of-plane rotation psi of the same sine mode, rad.
     t_max : float
-        Longest integration.
     rtol : float
         Integration tolerance.
     recurrence_tol : float
-        Successive section states agree to this (RMS of U, and of U_dot
-        scaled by the return time / 2 pi): periodic without shooting.
+        Successive section states agree to this (RMS, U_dot scaled by the return time /
+        2 pi): periodic without shooting.
     start_tol : float
-        Successive section states agree to this: the orbit is shot from the last one
-        (:func:`~fempipe.analyses.space.shooting.shoot_space`, at ``shoot_rtol``); if the
-        shooting fails the integration goes on to ``recurrence_tol``.
+        Successive section states agree to this: the orbit is shot from the last one (at
+        ``shoot_rtol``); if that fails the integration goes on.
     use_shooting : bool
-        Shoot the orbit (default) or only integrate.
     min_swing : float
         Shoot only when the section variable swings by more than this between returns.
     planar_tol : float
-        :attr:`SpaceMotion.planarity` below this: a planar motion.
+        :attr:`Motion3D.planarity` below this: a planar motion.
     n_max : int
         Longest period-n looked for.
     callback : callable, optional
-        Called with tau after every step (progress).
+        Called with tau after every step.
     initial : (U0, Ud0), optional
-        A 3-D state (:class:`~fempipe.model.space.SpaceModel` unknowns and their rates) to
-        start from instead of the perturbed static state (``mode``, ``amplitude`` and
-        ``out_of_plane_amplitude`` are then not used), e.g. a planar cycle's state with an
-        out-of-plane perturbation.  The section level stays the static state's.
+        A 3-D state to start from instead of the perturbed static state; the section level
+        stays the static state's.
     """
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)
@@ -239,13 +217,13 @@ def simulate_space(
         U0, Ud0 = _perturbed_static_state(
             model, space, q_s, mode, amplitude, out_of_plane_amplitude
         )
-    level = _section_value(space, planar_state(q_s))
+    level = section_value(space, planar_state(q_s))
     stepper = Radau(SpaceDynamics(space), U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     watch = _Returns(
         space,
         level,
-        _section_value(space, stepper.q),
+        section_value(space, stepper.q),
         scale=max(1.0, float(np.sqrt(np.mean(U0**2)))),
         shoot=use_shooting,
         shoot_rtol=shoot_rtol,
@@ -273,7 +251,7 @@ def simulate_space(
     kind, motion, planarity, whirl_rate, tip, frequencies = _classify(
         space, kind, period, cycle, t, U, planar_tol
     )
-    return SpaceMotion(
+    return Motion3D(
         kind=kind,
         motion=motion,
         period=period,
@@ -295,14 +273,12 @@ def simulate_space(
 
 
 class _Returns:
-    """The returns of the motion to the section (the static state's level of
-    :func:`_section_value`, upwards) and what they tell: a periodic orbit, by
-    shooting once the returns almost repeat or by recurrence alone.
+    """The upward returns of the motion to the section and what they tell.
 
-    :meth:`step` is called after every accepted step with the stepper; it returns
-    ``(kind, period_n, period, cycle)`` once the motion is periodic, else None.
-    ``sections`` (time, U, U_dot at each return) and ``swings`` (the section
-    variable's range between returns) are what :func:`_settled` reads.
+    :meth:`step`, after every accepted step, returns ``(kind, period_n, period, cycle)`` once
+    the motion is periodic (shot once the returns almost repeat, or by recurrence alone).
+    ``sections`` (t, U, U_dot at each return) and ``swings`` (the section variable's range
+    between returns) are what :func:`_settled` reads.
     """
 
     def __init__(
@@ -328,7 +304,7 @@ class _Returns:
         self.attempts = 0
 
     def step(self, stepper, t_old: float, t: float, q: np.ndarray):
-        g = _section_value(self.space, q)
+        g = section_value(self.space, q)
         g_old, self.g_old = self.g_old, g
         self.swing = [min(self.swing[0], g), max(self.swing[1], g)]
         if not g_old < self.level <= g:
@@ -367,9 +343,8 @@ class _Returns:
         self.attempts += 1
         _t, q_k, p_k = self.sections[-1]
         try:
-            cycle = shoot_space(
-                self.space, q_k, p_k, first[1], level=self.level, rtol=self.shoot_rtol
-            )
+            problem = SpaceDynamics(self.space)
+            cycle = shoot(problem, q_k, p_k, first[1], level=self.level, rtol=self.shoot_rtol)
         except ShootingError:
             return None
         if not cycle.stable:
@@ -432,11 +407,8 @@ STEADY_SWING = 1e-3
 
 def _settled(t: float, p: np.ndarray, sections: list, swings: list, scale: float) -> bool:
     """Whether the motion has come to rest: slow, and either no section crossing for
-    :data:`REST_TIME` (since the start when there was none) or crossings of a swing below
-    :data:`REST_SWING` (an oscillation about the section level that has died out).  A motion
-    that crossed the section on its way to an equilibrium away from it (a buckled state, an
-    offset equilibrium) must count as at rest too, so the test is the time since the *last*
-    crossing, not whether there ever was one."""
+    :data:`REST_TIME` since the last one (a motion may cross on its way to an offset
+    equilibrium) or a swing below :data:`REST_SWING` (an oscillation that has died out)."""
     if float(np.sqrt(np.mean(np.square(p)))) >= REST_RATE:
         return False
     last = sections[-1][0] if sections else 0.0
@@ -475,14 +447,11 @@ def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) 
 
 
 def tip_frequencies(t: np.ndarray, signals: list, n_peaks: int = 6) -> list[tuple[float, float]]:
-    """The strongest peaks of the summed power spectrum of ``signals`` sampled at ``t``.
+    """``(frequency, amplitude)`` of the strongest peaks of the summed power spectrum of
+    ``signals`` at ``t`` (cycles per tau; amplitude relative to the strongest), strongest first.
 
-    The signals are resampled uniformly (as many points as steps, linear
-    interpolation of the accepted steps), their mean removed, Hann-windowed; a
-    peak's frequency is refined by the parabola through the log power of its
-    three bins.  Returns ``(frequency, amplitude)`` pairs (cycles per unit tau;
-    amplitude the square root of the peak power relative to the strongest),
-    strongest first.
+    Resampled uniformly, mean removed, Hann-windowed; a peak refined by the parabola through
+    the log power of its three bins.
     """
     t = np.asarray(t, dtype=float)
     m = max(256, t.size)
@@ -511,13 +480,10 @@ def tip_frequencies(t: np.ndarray, signals: list, n_peaks: int = 6) -> list[tupl
 def two_frequencies(
     t: np.ndarray, signals: list, floor: float = 0.05, q_max: int = 8, min_cycles: float = 20.0
 ):
-    """``(f1, f2)`` if the spectrum (:func:`tip_frequencies`) has a second strong peak
-    (amplitude above ``floor`` of the strongest, f1) that is no harmonic or combination of
-    f1: its ratio to f1 differs from every p/q with q <= ``q_max`` by more than twice the
-    frequency resolution (1 / duration) over f1, and the record holds at least
-    ``min_cycles`` cycles of both (a short transient is not called quasi-periodic).  Else
-    ``(f1,)``, or None without a peak.
-    """
+    """``(f1, f2)`` if the spectrum (:func:`tip_frequencies`) has a second peak above
+    ``floor`` of the strongest f1 whose ratio to f1 is no p/q with q <= ``q_max`` (to twice
+    the frequency resolution), both with ``min_cycles`` cycles in the record; else ``(f1,)``,
+    or None without a peak."""
     peaks = tip_frequencies(t, signals)
     if not peaks:
         return None

@@ -1,10 +1,9 @@
-"""Does a planar attractor survive in three dimensions?
+"""Does a planar attractor survive in three dimensions (:func:`classify_3d`)?
 
-The verdict the planar ``simulate`` reports beside its attractor: for a
-limit cycle, its out-of-plane Floquet multipliers
-(:func:`~fempipe.analyses.space.floquet.out_of_plane_floquet`); for an
-equilibrium, the out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`).
-A non-periodic planar motion gets no verdict.
+For a limit cycle its out-of-plane Floquet multipliers
+(:func:`~fempipe.analyses.space.floquet.compute_out_of_plane_floquet`), for an equilibrium
+the out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`); a non-periodic motion gets no
+verdict.  Docs: docs/theory/space.md, "What it answers".
 """
 
 from __future__ import annotations
@@ -15,33 +14,24 @@ from ...model.operators import PipeModel
 from ...model.out_of_plane import out_of_plane_model
 from ..limit_cycle.results import Attractor
 from ..stability import linearly_stable
-from .floquet import OutOfPlaneFloquet, out_of_plane_floquet
+from .floquet import OutOfPlaneFloquet, compute_out_of_plane_floquet
 
 __all__ = [
     "ROUGH_DEFECT",
+    "classify_3d",
     "cycle_entries",
     "equilibrium_verdict",
     "rough_verdict_note",
-    "three_dimensional_verdict",
 ]
 
-#: A neutral multiplier further than this from 1 marks a discretization whose out-of-plane
-#: multipliers are rough (the hanging pipe's cycle at v = 10, linear method: finite
-#: elements 1.9e-3 on P3:4, 1.5e-4 on P3:6; three sine modes 0.31, four 0.16; the 3-D
-#: model's: 1.0e-3, 8.5e-6, 0.23, 0.09).
+#: A neutral multiplier further than this from 1 marks rough out-of-plane multipliers (the
+#: hanging pipe's cycle at v = 10: 1.9e-3 on P3:4, 0.31 on three sine modes).
 ROUGH_DEFECT = 1e-2
 
 
 def rough_verdict_note(disc_name: str, defect: float | None) -> str | None:
-    """A warning for the 3-D verdict of a few modes or a coarse mesh, or None.
-
-    The rotation about the vertical (a symmetry of the continuum at alpha = 0 and pi) is
-    kept by a discretization only up to its error; a few sine modes keep it poorly, and
-    their out-of-plane multipliers are then off by far more than the neutral one (hanging
-    pipe, v = 10, three sine modes: no multiplier is near 1, the nearest is
-    0.755 +- 0.190i, and the largest 0.778 against 0.796 converged; the 3-D model's
-    0.767 +- 0.032i and 0.768).
-    """
+    """A warning for the 3-D verdict of a modal discretization or a coarse mesh (neutral
+    multiplier ``defect`` above :data:`ROUGH_DEFECT`), or None."""
     modal = disc_name.startswith("modal")
     if defect is not None and defect > ROUGH_DEFECT:
         return (
@@ -58,7 +48,7 @@ def rough_verdict_note(disc_name: str, defect: float | None) -> str | None:
     return None
 
 
-def three_dimensional_verdict(model: PipeModel, att: Attractor, *, rtol: float = 1e-7) -> dict:
+def classify_3d(model: PipeModel, att: Attractor, *, rtol: float = 1e-7) -> dict:
     """``stable_3d`` and the out-of-plane evidence for a planar attractor.
 
     Parameters
@@ -72,13 +62,11 @@ def three_dimensional_verdict(model: PipeModel, att: Attractor, *, rtol: float =
     Returns
     -------
     dict
-        ``stable_3d`` (True, False or None when nothing is decided) and, for a
-        limit cycle, ``out_of_plane_floquet_multipliers`` (the six largest,
-        ``[re, im]``), ``max_nontrivial_out_of_plane_multiplier`` and
-        ``stable_out_of_plane``; for an equilibrium ``stable_out_of_plane``.
+        ``stable_3d`` (None when undecided) and the out-of-plane entries of a cycle
+        (:func:`cycle_entries`) or ``stable_out_of_plane`` of an equilibrium.
     """
     if att.kind == "periodic" and att.cycle is not None:
-        oop = out_of_plane_floquet(model, att.cycle, rtol=rtol)
+        oop = compute_out_of_plane_floquet(model, att.cycle, rtol=rtol)
         return cycle_entries(model, oop, att.cycle.stable)
     if att.kind == "equilibrium":
         return equilibrium_verdict(model, att.q, True)
@@ -87,9 +75,7 @@ def three_dimensional_verdict(model: PipeModel, att: Attractor, *, rtol: float =
 
 def cycle_entries(model: PipeModel, oop: OutOfPlaneFloquet, stable_in_plane: bool) -> dict:
     """The verdict of a planar cycle from its out-of-plane multipliers ``oop``: their
-    :meth:`~fempipe.analyses.space.floquet.OutOfPlaneFloquet.to_dict`, ``stable_3d``
-    (stable in the plane and out of it), ``out_of_plane_cpu_time`` and, where the
-    verdict is rough, ``stable_3d_note`` (:func:`rough_verdict_note`)."""
+    ``to_dict``, ``stable_3d``, ``out_of_plane_cpu_time`` and ``stable_3d_note`` if rough."""
     out = oop.to_dict()
     out["stable_3d"] = bool(stable_in_plane and oop.stable)
     out["out_of_plane_cpu_time"] = oop.cpu_time

@@ -1,19 +1,12 @@
 """Whirls of an axisymmetric pipe: periodic orbits that turn rigidly about the vertical.
 
-At sin(alpha) = 0 (hanging or standing) a turn about the clamp's axis e_1 maps motions to
-motions, and the flutter is a Hopf bifurcation with O(2) symmetry: standing waves (the
-planar cycles) and rotating waves, the *whirls*, in which the pipe's shape turns rigidly
-about e_1 at a rate omega, branch together.  In the continuum a whirl is a steady state in
-the turning frame (:mod:`fempipe.validation.whirl_bvp` solves it as such); on a mesh the
-turn is a symmetry only up to the discretization error (the chart of
-:mod:`fempipe.model.space_chart` is nonlinear in the angle of the turn), so the discrete
-whirl is a periodic orbit, found here by Newton shooting
-(:func:`~fempipe.analyses.space.shooting.shoot_space`).
+At sin(alpha) = 0 the flutter is a Hopf bifurcation with O(2) symmetry: standing waves (the
+planar cycles) and rotating waves, the *whirls*, whose shape turns rigidly about e_1 at a
+rate omega, branch together.  On a mesh the turn is a symmetry only up to the discretization
+error, so the discrete whirl is a periodic orbit, found by Newton shooting
+(:func:`~fempipe.analyses.limit_cycle.shoot`); :func:`find_whirl` measures how rigid it is.
+:func:`whirl_state` and :func:`whirl_guess_from_cycle` give starting guesses.
 
-:func:`whirl_state` writes a tangent field turning at omega as a state of
-:class:`~fempipe.model.space.SpaceModel`; :func:`whirl_guess_from_cycle` starts from a planar
-cycle (its state plus i times its state a quarter period before, turned by 90 degrees);
-:func:`find_whirl` shoots and measures how rigid the discrete whirl's rotation is.
 Measurements: docs/theory/space.md, "The whirl of the hanging pipe".
 """
 
@@ -28,8 +21,7 @@ import numpy as np
 from ...model.space import SpaceModel
 from ...model.space_dynamics import SpaceDynamics
 from ...solvers.radau import Radau
-from ..limit_cycle.results import LimitCycle
-from .shooting import shoot_space
+from ..limit_cycle import LimitCycle, largest_nontrivial, shoot
 
 __all__ = [
     "Whirl",
@@ -48,33 +40,22 @@ class Whirl:
     Attributes
     ----------
     v : float
-        Flow velocity.
     omega : float
-        Rotation rate 2 pi / T, signed: positive right-handed about e_1 (from e_2 towards
-        e_3), as :attr:`fempipe.analyses.space.SpaceMotion.whirl_rate`.
+        Rotation rate 2 pi / T, positive right-handed about e_1 (from e_2 towards e_3).
     period : float
     radius : float
-        Time average over one period of the tip's distance from the vertical,
-        sqrt(eta_tip^2 + Y_tip^2) (trapezoidal rule on the integrator's step ends: a plain mean
-        of the step ends weights the stretches where the steps are short, measured 1e-4 off
-        on P3:3).
+        Time average (trapezoidal, on the step ends) of the tip's distance from the vertical.
     radius_variation : float
-        (max - min) / radius of that distance over the step ends: zero for a rigid rotation.
+        (max - min) / radius of that distance: zero for a rigid rotation.
     rotation_defect : float
-        Largest distance, over the orbit and the cell edges, between the centerline and the
-        centerline at tau = 0 turned by omega tau about e_1: zero for a rigid rotation; on a
-        mesh a discretization error.
+        Largest distance between the centerline and that at tau = 0 turned by omega tau.
     multipliers : ndarray of complex
-        The largest Floquet multipliers (by modulus, 8 of them).
+        The 8 largest Floquet multipliers.
     max_nontrivial : float
-        The largest modulus leaving out the multiplier 1.  A whirl has one trivial
-        multiplier, not two: its shift in time *is* its turn about e_1 (the monodromy is
-        exp(T L) of the Jacobian L in the frame turning with it, whose symmetry eigenvalue
-        0 is that of the phase).
+        The largest modulus without the multiplier 1 (one only: a whirl's time shift is its
+        turn about e_1).
     stable : bool
-        ``max_nontrivial < 1``.
     cycle : LimitCycle
-        The shot orbit.
     """
 
     v: float
@@ -115,18 +96,9 @@ def _fit(model: SpaceModel, f: np.ndarray) -> np.ndarray:
 def tangent_state(
     model: SpaceModel, t: np.ndarray, t_dot: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(U, U_dot) of a tangent field and its rate given at the quadrature points.
-
-    The chart's gauge-free representative (least |(a, b)| on the fiber,
-    :mod:`fempipe.model.space_chart`) of t = (cos psi cos theta, cos psi sin theta, sin psi)
-    is ``a = rho sin(theta/2)``, ``b = -rho cos(theta/2)``, rho = tan(psi/2); its rates follow
-    from theta_dot and psi_dot.  Singular only where t = +-e_3.
-
-    Parameters
-    ----------
-    model : SpaceModel
-    t, t_dot : ndarray, shape (n_q, 3)
-    """
+    """(U, U_dot) of a tangent field ``t`` and its rate ``t_dot`` (n_q, 3) at the quadrature
+    points: the chart's gauge-free representative of t = (cos psi cos theta, cos psi sin
+    theta, sin psi), a = rho sin(theta/2), b = -rho cos(theta/2), rho = tan(psi/2)."""
     t = t / np.linalg.norm(t, axis=1, keepdims=True)
     theta = np.arctan2(t[:, 1], t[:, 0])
     psi = np.arcsin(np.clip(t[:, 2], -1.0, 1.0))
@@ -154,12 +126,8 @@ def whirl_state(
 
 
 def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.0):
-    """(U, U_dot, period) of a whirl guessed from a planar cycle (a standing wave).
-
-    In-plane angle theta(xi, tau) of the cycle and out-of-plane angle psi = theta(xi, tau -
-    T/4): to first order the standing wave plus i times its copy turned by 90 degrees a
-    quarter period apart, a rotating wave (right-handed about e_1).
-    """
+    """(U, U_dot, period) of a whirl guessed from a planar cycle: theta(xi, tau) in the plane
+    and psi = theta(xi, tau - T/4) out of it, to first order a rotating wave."""
     T = cycle.period
     n = model.n_theta
     Phi = model.disc.Phi
@@ -185,9 +153,8 @@ def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.
 
 
 def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
-    """tau and U at the accepted steps of one period from the cycle's start: the measures of
-    rigidity need states at the step ends (the integrator's accurate points; its dense
-    output between them is of lower order, measured 1e-3 off the radius on P3:4)."""
+    """tau and U at the step ends of one period (the dense output between them is of lower
+    order, too rough for the measures of rigidity)."""
     stepper = Radau(SpaceDynamics(model), cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
     ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
     for t, q, _ in stepper.steps(cycle.period):
@@ -197,8 +164,7 @@ def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
 
 
 def _radius_statistics(ts: np.ndarray, rad: np.ndarray) -> tuple[float, float]:
-    """(time average, (max - min) / time average) of the tip radius sampled at the times ts
-    (not equally spaced) over one period: the trapezoidal rule, exact to O(step^2)."""
+    """(time average, (max - min) / time average) of the tip radius at the times ``ts``."""
     mean = float(np.trapezoid(rad, ts) / (ts[-1] - ts[0]))
     return mean, float((rad.max() - rad.min()) / mean)
 
@@ -214,13 +180,9 @@ def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: f
 
 
 def tip_turn(tips: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(distance from the vertical, unwrapped angle) of the tip, from
-    :meth:`~fempipe.model.space.SpaceModel.tip_coordinates` of a sequence of states.
-
-    In the pipe's frame (eta_tip along e_2, Y_tip along e_3), so that the angle grows for a
-    turn right-handed about e_1 whatever the inclination: at alpha = pi the files' Z_tip is
-    -eta_tip, and the angle of (Z_tip, Y_tip) would turn the other way.
-    """
+    """(distance from the vertical, unwrapped angle) of the tip from ``tips`` of a sequence of
+    states, in the pipe's frame (eta_tip, Y_tip): the angle grows for a turn right-handed about
+    e_1 whatever the inclination."""
     eta, y = np.asarray(tips["eta_tip"]), np.asarray(tips["Y_tip"])
     return np.hypot(eta, y), np.unwrap(np.arctan2(y, eta))
 
@@ -244,18 +206,18 @@ def find_whirl(
     U0, Ud0, period : ndarray, ndarray, float
         The guess (:func:`whirl_state`, :func:`whirl_guess_from_cycle`).
     rtol, tol, max_iter
-        As :func:`~fempipe.analyses.space.shooting.shoot_space`.
+        As :func:`~fempipe.analyses.limit_cycle.shoot`.
 
     Raises
     ------
     ValueError
         If the pipe is not axisymmetric.
-    fempipe.analyses.limit_cycle.ShootingError
+    ShootingError
         If Newton does not converge.
     """
     if abs(math.sin(model.params.alpha)) > 1e-12:
         raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
-    cycle = shoot_space(model, U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
+    cycle = shoot(SpaceDynamics(model), U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
     ts, Us = _step_ends(model, cycle, rtol)
     rad, ang = tip_turn(model.tip_coordinates(Us))
     turn = ang[-1] - ang[0]
@@ -264,9 +226,7 @@ def find_whirl(
         omega = math.nan  # not one turn a period: no whirl
     mu = np.asarray(cycle.floquet_multipliers)
     order = np.argsort(-np.abs(mu))
-    trivial = np.argsort(np.abs(mu - 1.0))[:1]
-    others = np.delete(mu, trivial)
-    largest = float(np.max(np.abs(others))) if others.size else 0.0
+    largest = largest_nontrivial(mu)
     mean, variation = _radius_statistics(ts, rad)
     return Whirl(
         v=float(model.params.v),
