@@ -6,8 +6,8 @@ Every command takes ``--error-estimate``: fempipe recomputes the result on a ref
 discretization (elements halved, or twice the modes) and reports beside each number Q an
 estimate of its discretization error, ``max(3 |Q - Q_refined| 2^p / (2^p - 1), floor)`` with the
 theoretical order p (2k for P_k; Roache's Grid Convergence Index).  In the library:
-:func:`fempipe.refined_static_states` and :func:`fempipe.with_static_estimates` (and their
-``stability`` and ``attractor`` siblings).  Here the static tip positions of a coarse P2:2
+:func:`fempipe.estimate_errors` of the static states, a stability analysis or an
+attractor.  Here the static tip positions of a coarse P2:2
 model, whose errors are large enough to see, along a path in v.
 """
 
@@ -29,8 +29,7 @@ points = []
 for sol in sols:
     tip = {k: float(x) for k, x in fempipe.tip_values(disc, sol.q, alpha).items()}
     points.append({"v": sol.params.v, **tip, "tip_drop": tip["X_tip"] - np.cos(alpha)})
-refined = fempipe.refined_static_states(model, sols, "v")
-result = fempipe.with_static_estimates({"points": points}, sols, refined)
+result = fempipe.estimate_errors({"points": points}, model, sols)
 print(result["error_estimate"])
 est = np.array([p["X_tip_error"] for p in result["points"]])
 for p in result["points"]:

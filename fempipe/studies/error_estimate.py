@@ -1,20 +1,15 @@
-"""Error estimates of reported numbers from one refinement (the Grid Convergence Index).
+"""Error estimates of reported numbers from one refinement (Roache's Grid Convergence Index).
 
-A number Q_h computed on a discretization (the coarse, reported value) is computed again on a
-refined one (:func:`refine`: finite elements h-refined, the modal method with twice the modes,
-plus one for an odd N), and its error is estimated by Roache's Grid Convergence Index for a
-two-grid study, stated for the coarse grid (:func:`estimate`):
+A number Q_h (the coarse, reported value) is computed again on the refined discretization
+(:func:`refine`) and its error estimated for the coarse grid (:func:`estimate`):
 
     err(Q_h) = max(Fs |Q_h - Q_{h/r}| r^p / (r^p - 1), floor),     Fs = 3,
 
-with the refinement ratio r (:func:`refinement_ratio`), the theoretical order p of the error
+r the refinement ratio (:func:`refinement_ratio`), p the theoretical order
 (:func:`expected_order`; without one the bracket is 1) and the floor the solver's tolerance
-on the value, below which a difference says nothing about the discretization.
-:class:`ErrorEstimate` describes how an estimate was formed, for the JSON of the commands;
-:mod:`fempipe.studies.estimates` attaches estimates to whole results, as ``fempipe static``,
-``critical`` and ``simulate`` report them with ``--error-estimate``.
-
-Derivation, references and the measured reliability: docs/cli/options.md, "Error estimates".
+on the value.  :class:`ErrorEstimate` describes the method in the JSON;
+:func:`fempipe.studies.estimates.estimate_errors` attaches the estimates to a result.
+Derivation and measured reliability: docs/cli/options.md, "Error estimates".
 """
 
 from __future__ import annotations
@@ -26,7 +21,10 @@ import numpy as np
 from fempipe.model.discretization import FiniteElement, Modal
 
 __all__ = [
+    "ERROR",
     "RATIO",
+    "REFINED",
+    "STATIC_TIP_KEYS",
     "SAFETY_FACTOR",
     "ErrorEstimate",
     "describe",
@@ -37,22 +35,20 @@ __all__ = [
     "refinement_ratio",
 ]
 
+#: Suffixes of the keys inserted beside a reported key ``Q``: ``Q_error``, ``Q_refined``.
+ERROR, REFINED = "_error", "_refined"
+#: The tip values of a static state (dimensionless, Eq. (28)), in table order.
+STATIC_TIP_KEYS = ("theta_tip", "eta_tip", "X_tip", "Z_tip", "varsigma_tip")
 #: Roache's safety factor for a study with two grids (docs/cli/options.md, "Error estimates").
 SAFETY_FACTOR = 3.0
 #: The refinement ratio of :func:`refine`: elements halved, modes doubled.
 RATIO = 2.0
-#: The order of the sine modes in N (docs, "Why the sine modes converge only
-#: algebraically").
+#: The order of the sine modes in N (docs/theory/convergence.md).
 SINE_ORDER = 3.0
 
 
 def _modal_basis(disc: Modal) -> str:
-    """The name of a modal basis, ``"sine"`` for the paper's modes.
-
-    Read from the attribute ``basis`` (a name) or, failing that, from
-    ``to_dict()["basis"]``, so that a class without the attribute is the
-    paper's sine basis.
-    """
+    """The name of a modal basis (attribute or ``to_dict()["basis"]``), ``"sine"`` by default."""
     basis = getattr(disc, "basis", None)
     if isinstance(basis, str):
         return basis
@@ -61,24 +57,9 @@ def _modal_basis(disc: Modal) -> str:
 
 
 def refine(disc):
-    """The refined discretization of the estimate.
+    """The refined discretization: every element halved, or 2N (2N + 1 for odd N) modes.
 
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-
-    Returns
-    -------
-    FiniteElement or Modal
-        ``disc.refined(2)`` for finite elements (every element halved, the
-        same degree and Gauss rule); ``Modal(2 N)`` for even N and
-        ``Modal(2 N + 1)`` for odd N, with the same basis and Gauss points per
-        cell, for the modal method (:func:`refinement_ratio`).
-
-    Raises
-    ------
-    TypeError
-        For another kind of discretization.
+    The degree, basis and Gauss rule are kept.  Raises TypeError for another discretization.
 
     Examples
     --------
@@ -90,9 +71,7 @@ def refine(disc):
     if isinstance(disc, FiniteElement):
         return disc.refined(int(RATIO))
     if isinstance(disc, Modal):
-        # 2N + 1 for odd N: the error of the sine modes alternates with the
-        # parity of N, so an odd N is compared with an odd refinement (with
-        # 2N the estimate missed the error at odd N, ratios down to 0.17).
+        # 2N + 1 for odd N: the error of the sine modes alternates with the parity of N.
         n = int(RATIO) * disc.n_modes + disc.n_modes % 2
         basis = _modal_basis(disc)
         if basis == "sine":
@@ -111,25 +90,9 @@ def refinement_ratio(disc) -> float:
 def expected_order(disc, params=None) -> float | None:
     """The theoretical order p of the error in the refinement of :func:`refine`.
 
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-    params : Params, optional
-        The case: some variants of the pipe lower the order (below).
-
-    Returns
-    -------
-    float or None
-        2k for Lagrange P_k elements (error ~ h^(2k) of tip values,
-        eigenvalues and v_cr); 3 for the sine modes (error ~ N^-3); for
-        another modal basis the class's ``expected_order`` if it states one,
-        else None (unknown).  With ``params``: a spring inside an element
-        makes the second derivative of theta jump inside it, and P_k then
-        converges as h^3 at best (min(2k, 3)); every beam mode has
-        theta''(1) = 0, which an end mass or a spring at the tip violates
-        (order 2), and a continuous third derivative, which a spring inside
-        the pipe violates (order 3).  The sine modes keep N^-3 (docs,
-        "Variants of the pipe").
+    2k for P_k elements, 3 for the sine modes, a modal class's ``expected_order``, else None.
+    With ``params`` (docs/theory/variants.md): a spring inside an element gives min(2k, 3);
+    for beam modes an end mass or a spring at the tip gives 2, a spring inside 3.
     """
     base = _paper_order(disc)
     if params is None or base is None:
@@ -161,21 +124,14 @@ def _paper_order(disc) -> float | None:
 
 
 def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0):
-    """Grid Convergence Index of the coarse value: its error estimated from one refinement.
-
-    ``max(Fs |coarse - fine| r^p / (r^p - 1), floor)`` with Fs =
-    :data:`SAFETY_FACTOR`; without an order (None) the factor r^p / (r^p - 1) is 1.
-    If the error of the coarse value is C h^p, |coarse - fine| r^p / (r^p - 1) is that
-    error itself once the sequence is asymptotic; Fs = 3 is Roache's factor for two grids,
-    where the observed order cannot be checked (docs/cli/options.md, "Error estimates").
+    """Grid Convergence Index of the coarse value: ``max(Fs |coarse - fine| r^p / (r^p - 1), floor)``.
 
     Parameters
     ----------
     coarse, fine : float or array_like
-        The reported value and the value on the refined discretization
-        (broadcast against each other).
+        The reported and the refined value (broadcast).
     order : float or None
-        Order p of the error in the refinement; None if unknown.
+        Order p of the error; None if unknown (factor 1).
     ratio : float
         Refinement ratio r > 1.
     floor : float or array_like
@@ -184,12 +140,7 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
     Returns
     -------
     float or ndarray
-        A float for scalar input. NaN where a value is NaN.
-
-    Raises
-    ------
-    ValueError
-        If ``ratio <= 1`` or ``order <= 0``.
+        NaN where a value is NaN.
 
     Examples
     --------
@@ -218,17 +169,9 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
 class ErrorEstimate:
     """How the error estimates of a result were formed (``"error_estimate"`` in the JSON).
 
-    Attributes
-    ----------
-    method : {'h-refinement', 'N-doubling'}
-    discretization, refined : str
-        The reported discretization and the refined one (``P3:16``, ``P3:32``).
-    safety_factor : float
-    order : float or None
-        The order p used (None: unknown, factor 1).
-    ratio : float
-    floor : str
-        What sets the smallest estimate (the solver's tolerance).
+    ``method`` is 'h-refinement' or 'N-doubling'; ``discretization`` and ``refined`` name
+    the two discretizations; ``order`` is p (None: unknown); ``floor`` says what sets the
+    smallest estimate.
     """
 
     method: str
@@ -249,8 +192,7 @@ class ErrorEstimate:
         return f"max({fs} |Q - Q_refined| {r}^{p} / ({r}^{p} - 1), floor)"
 
     def to_dict(self) -> dict:
-        """``{"method", "discretization", "refined", "safety_factor", "order", "ratio",
-        "formula", "floor", "reference"}``."""
+        """The JSON entry, with the formula and the reference."""
         order = self.order
         if order is not None and float(order).is_integer():
             order = int(order)
@@ -268,18 +210,8 @@ class ErrorEstimate:
 
 
 def describe(disc, refined=None, floor: str = "", params=None) -> ErrorEstimate:
-    """The :class:`ErrorEstimate` of ``disc`` refined by :func:`refine`.
-
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-    refined : FiniteElement or Modal, optional
-        ``refine(disc)`` if already built.
-    floor : str
-        What sets the floor of the estimates (stated in the JSON).
-    params : Params, optional
-        The case, for the order (:func:`expected_order`).
-    """
+    """The :class:`ErrorEstimate` of ``disc`` refined to ``refined`` (default :func:`refine`);
+    ``floor`` says what sets the floor, ``params`` the case (:func:`expected_order`)."""
     refined = refine(disc) if refined is None else refined
     return ErrorEstimate(
         method="h-refinement" if isinstance(disc, FiniteElement) else "N-doubling",
@@ -293,23 +225,17 @@ def describe(disc, refined=None, floor: str = "", params=None) -> ErrorEstimate:
 
 
 def match_events(coarse, fine) -> tuple[list[int | None], list[int]]:
-    """Pair the stability events of two runs by what they are, not by list position.
+    """Pair the stability events of two runs by branch, type, mode and plane, not by position.
 
-    Two events are the same when they have the same branch, type, mode and
-    plane (``StabilityEvent`` attributes or dict keys ``branch``, ``type``,
-    ``mode``, ``plane``, "in" when absent); the k-th such event of the coarse list (in its order: along
-    each branch) is paired with the k-th of the refined list.
-
-    Parameters
-    ----------
-    coarse, fine : sequence of StabilityEvent or dict
+    The k-th coarse event of a kind is paired with the k-th refined one (``StabilityEvent``
+    or dict; plane "in" when absent).
 
     Returns
     -------
     pairs : list of int or None
         For each coarse event, the index of its refined event, or None.
     unmatched : list of int
-        Indices of the refined events that no coarse event is paired with.
+        The refined events no coarse event is paired with.
     """
 
     def key(ev):

@@ -1,60 +1,58 @@
-"""Error estimates attached to results: the refined run and the ``Q_error`` keys beside ``Q``.
+"""Error estimates attached to a result: the refined run and ``Q_error``, ``Q_refined`` beside ``Q``.
 
-A result (the static states of a path, the stability analysis of a branch, an attractor) is
-computed again on the refined discretization of
-:func:`fempipe.studies.error_estimate.refine`, and beside each reported number ``Q`` of the
-result's JSON-ready dict two keys are inserted: ``Q_error``, the estimate of
-:func:`fempipe.studies.error_estimate.estimate` (the Grid Convergence Index, its floor the
-solver's tolerance on the value, relative), and ``Q_refined``, the refined value.  A
-top-level ``"error_estimate"`` entry (:func:`header`) describes the method with the notes of
-the comparison (an event found on one discretization only, attractors of different kinds, a
-refined solve that failed).
-
-Each kind of result has two functions, ``refined_*`` (the computation repeated on the refined
-discretization, a typed :class:`Refined` record) and ``with_*_estimates`` (the result with the
-estimates beside its numbers): :func:`refined_static_states` and
-:func:`with_static_estimates`, :func:`refined_stability` and
-:func:`with_stability_estimates`, :func:`refined_attractor` and
-:func:`with_attractor_estimates`.  They are what ``fempipe static``, ``critical`` and
-``simulate`` report with ``--error-estimate`` (docs/cli/options.md, "Error estimates").
+:func:`estimate_errors` computes a result again on the refined discretization of
+:func:`fempipe.studies.error_estimate.refine` and inserts beside each reported number ``Q`` of
+its JSON-ready dict ``Q_error`` (:func:`fempipe.studies.error_estimate.estimate`) and
+``Q_refined``, with a top-level ``"error_estimate"`` entry describing the method
+(:class:`~fempipe.studies.error_estimate.ErrorEstimate`) and the notes of the comparison.
+What ``fempipe static``, ``critical`` and ``simulate`` report with ``--error-estimate``
+(docs/cli/options.md, "Error estimates").
 """
 
-from .attractor import (
-    AttractorSummary,
-    RefinedAttractor,
-    refined_attractor,
-    refined_cycle,
-    with_attractor_estimates,
-)
-from .shape import ERROR, REFINED, Refined, beside, header, with_estimate
-from .stability import EVENT_TOL, RefinedStability, refined_stability, with_stability_estimates
-from .static import (
-    NEWTON_TOL,
-    STATIC_TIP_KEYS,
-    RefinedStatic,
-    refined_static_states,
-    with_static_estimates,
-)
+from __future__ import annotations
 
-__all__ = [
-    "ERROR",
-    "EVENT_TOL",
-    "NEWTON_TOL",
-    "REFINED",
-    "STATIC_TIP_KEYS",
-    "AttractorSummary",
-    "Refined",
-    "RefinedAttractor",
-    "RefinedStability",
-    "RefinedStatic",
-    "beside",
-    "header",
-    "refined_attractor",
-    "refined_cycle",
-    "refined_stability",
-    "refined_static_states",
-    "with_attractor_estimates",
-    "with_estimate",
-    "with_stability_estimates",
-    "with_static_estimates",
-]
+from collections.abc import Sequence
+
+from fempipe.analyses.dynamics import Trajectory
+from fempipe.analyses.limit_cycle import Attractor
+from fempipe.model.operators import PipeModel
+
+from .attractor import estimate_attractor_errors
+from .stability import EVENT_TOL, estimate_stability_errors
+from .static import NEWTON_TOL, estimate_static_errors
+
+__all__ = ["EVENT_TOL", "NEWTON_TOL", "estimate_errors"]
+
+
+def estimate_errors(result: dict, model: PipeModel, computed, **options) -> dict:
+    """``result`` with the error estimates of its numbers, from a refined run of ``computed``.
+
+    Parameters
+    ----------
+    result : dict
+        The JSON-ready dict of the reported computation (updated and returned).
+    model : PipeModel
+        The reported model.
+    computed
+        What was computed, which sets the refined run: a sequence of ``StaticSolution``
+        (:func:`~fempipe.studies.estimates.static.estimate_static_errors`), a stability
+        analysis (:func:`~fempipe.studies.estimates.stability.estimate_stability_errors`),
+        an ``Attractor`` or the ``Trajectory`` of a pulsating flow
+        (:func:`~fempipe.studies.estimates.attractor.estimate_attractor_errors`).
+    **options
+        Those of the function for ``computed``: ``pipe`` (an SI pipe: its values get
+        estimates too), ``fine`` (the refined discretization if built), ``callback``
+        (progress) and the options of the refined computation.
+
+    Returns
+    -------
+    dict
+        ``result`` with ``Q_error``, ``Q_refined`` and ``"error_estimate"``.
+    """
+    if isinstance(computed, Attractor | Trajectory):
+        return estimate_attractor_errors(result, model, computed, **options)
+    if hasattr(computed, "events"):
+        return estimate_stability_errors(result, model, computed, **options)
+    if isinstance(computed, Sequence):
+        return estimate_static_errors(result, model, computed, **options)
+    raise TypeError(f"no error estimate for a {type(computed).__name__}")

@@ -1,10 +1,9 @@
 """Error estimates of an attractor: found again on the refined discretization.
 
-A limit cycle is shot from the coarse cycle transferred to the refined space,
-an equilibrium solved by Newton from the coarse one, a pulsating flow
-integrated again; beside the period and the tip extrema ``Q_error`` and
-``Q_refined`` are inserted, if both attractors are of the same kind
-(``fempipe simulate --error-estimate``).
+A limit cycle is shot from the coarse cycle transferred to the refined space, an equilibrium
+solved by Newton from the coarse one, a pulsating flow integrated again; the period and tip
+extrema get estimates if both attractors are of the same kind.  docs/cli/options.md,
+"Error estimates".
 """
 
 from __future__ import annotations
@@ -12,38 +11,30 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from fempipe.analyses.dynamics import PulsatingFlow, Trajectory, make_initial_state, simulate
+from fempipe.analyses.limit_cycle import TIP_KEYS, ShootingError, find_attractor, shoot
+from fempipe.analyses.stability import linearly_stable
+from fempipe.analyses.statics import solve_static
 from fempipe.core.errors import SolverError
+from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import tip_values
+from fempipe.model.operators import PipeModel
 from fempipe.model.projection import project
-from fempipe.studies.error_estimate import describe, estimate, refine
+from fempipe.solvers.radau import IntegrationError
+from fempipe.studies.error_estimate import ERROR, REFINED, describe, estimate, refine
 
-from .shape import ERROR, REFINED, Refined, beside, header
+from .shape import beside, header, pair
 
-__all__ = [
-    "AttractorSummary",
-    "RefinedAttractor",
-    "refined_attractor",
-    "refined_cycle",
-    "with_attractor_estimates",
-]
+__all__ = ["AttractorSummary", "estimate_attractor_errors", "refine_cycle"]
 
 
 @dataclass(frozen=True)
 class AttractorSummary:
     """What is compared of an attractor: its kind, period and tip extrema.
 
-    Attributes
-    ----------
-    kind : str
-        ``"equilibrium"``, ``"periodic"``, ``"non-periodic"``, ``"forced"``,
-        ``"unstable equilibrium"``, ``"unstable periodic"``.
-    label : str
-        The kind with the period-n of a periodic attractor
-        (``"periodic (period-2)"``): attractors compare only if equal.
-    period : float or None
-    tip : dict or None
-        ``{"eta_tip": [min, max], ...}`` (the keys of
-        :data:`fempipe.analyses.limit_cycle.TIP_KEYS`).
+    ``kind`` is "equilibrium", "periodic", "non-periodic", "forced", "unstable equilibrium"
+    or "unstable periodic"; ``label`` adds the period-n of a periodic attractor (attractors
+    compare only if their labels are equal); ``tip`` is ``{"eta_tip": [min, max], ...}``.
     """
 
     kind: str
@@ -53,105 +44,91 @@ class AttractorSummary:
 
     @classmethod
     def of(cls, kind: str, period=None, period_n=None, tip=None) -> AttractorSummary:
-        """The summary of an attractor of ``kind`` (the label with ``period_n``)."""
         label = f"periodic (period-{period_n})" if kind == "periodic" and period_n else kind
         return cls(kind, label, period, tip)
 
 
-@dataclass(frozen=True)
-class RefinedAttractor(Refined):
-    """:func:`refined_attractor`.
-
-    Attributes
-    ----------
-    coarse : AttractorSummary or None
-        The reported attractor (None for a pulsating flow: its tip extrema are
-        the result's).
-    refined : AttractorSummary or None
-        The attractor on the refined discretization (None if there is nothing
-        to compare).
-    floor : float
-        The relative solver tolerance of the values.
-    """
-
-    coarse: AttractorSummary | None = None
-    refined: AttractorSummary | None = None
-    floor: float = 0.0
-
-
-def refined_attractor(
-    model,
-    attractor,
-    q_static,
+def estimate_attractor_errors(
+    result: dict,
+    model: PipeModel,
+    computed,
     *,
+    q_static,
     t_max: float,
     rtol: float,
     shoot_rtol: float,
     use_shooting: bool = True,
     mode: int = 1,
     amplitude: float = 0.01,
-    flow=None,
+    pipe=None,
     fine=None,
     callback: Callable[[float], None] | None = None,
-) -> RefinedAttractor:
-    """The attractor found again on the refined discretization, without a new transient
-    where it can.
+) -> dict:
+    """``result`` with the estimates beside ``period`` and ``tip`` (and ``period_s``, ``tip_m``).
 
-    A limit cycle is shot from the coarse cycle transferred to the refined
-    space (:func:`refined_cycle`), an equilibrium solved by Newton from the
-    coarse one (and its linear stability checked); a pulsating flow is
-    integrated again from the refined static state.  A non-periodic
-    attractor is not refined (a note says so).
+    Adds ``period_error``, ``period_refined``, ``tip_error``, ``tip_refined`` (the shape of
+    ``tip``) and ``attractor_refined``; attractors of different kinds give None and a note.
+    A non-periodic attractor is not refined.
 
     Parameters
     ----------
+    result : dict
+        The attractor's dict (``period``, ``tip``; with an SI pipe ``period_s``, ``tip_m``).
     model : PipeModel
         The reported model.
-    attractor : Attractor or None
-        :func:`fempipe.analyses.limit_cycle.find_attractor`'s result; None for
-        a pulsating flow.
+    computed : Attractor or Trajectory
+        :func:`fempipe.analyses.limit_cycle.find_attractor`'s result, or the trajectory of a
+        pulsating flow (its ``flow``), integrated again from the refined static state.
     q_static : ndarray
         The coarse static state (the start of a pulsating flow's run).
-    t_max, rtol, shoot_rtol, use_shooting : float, float, float, bool
+    t_max, rtol, shoot_rtol, use_shooting
         As for :func:`~fempipe.analyses.limit_cycle.find_attractor`.
     mode, amplitude : int, float
-        The initial perturbation of a pulsating flow's run
-        (:func:`fempipe.analyses.dynamics.make_initial_state`).
-    flow : PulsatingFlow, optional
-        The pulsating flow (with ``attractor`` None).
+        The initial perturbation of a pulsating flow's run (:func:`make_initial_state`).
+    pipe : PipeSI, optional
     fine : FiniteElement or Modal, optional
         ``refine(model.disc)`` if already built.
     callback : callable, optional
         ``callback(tau)`` as the refined integrations advance.
-
-    Returns
-    -------
-    RefinedAttractor
-        ``floor``: ``rtol`` for a pulsating flow, Newton's 1e-10 for an
-        equilibrium, ``shoot_rtol`` for a cycle.
     """
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.model.operators import PipeModel
-
-    att = attractor
+    forced = isinstance(computed, Trajectory)
+    att = None if forced else computed
     disc, params = model.disc, model.params
     fine = refine(disc) if fine is None else fine
     fine_model = PipeModel(fine, params)
     notes: list[str] = []
-    floor, what, coarse = _coarse_summary(att, rtol, shoot_rtol)
+    if forced:
+        floor, what = rtol, f"--rtol {rtol:g}"
+        coarse = AttractorSummary("forced", "forced", None, result["tip"])
+    elif att.kind == "equilibrium":
+        floor, what = 1e-10, "Newton's tolerance 1e-10"
+        coarse = AttractorSummary.of("equilibrium", tip=att.tip)
+    else:
+        floor, what = shoot_rtol, f"--shoot-rtol {shoot_rtol:g}"
+        coarse = AttractorSummary.of(att.kind, att.period, att.period_n, att.tip)
     info = describe(disc, fine, floor=f"{what} max(1, |Q|)", params=params)
     refined = None
     try:
-        if att is None:
-            refined = _refined_forced(
-                model, fine_model, q_static, t_max, rtol, mode, amplitude, flow, callback
-            )
+        if forced:
+            flow = PulsatingFlow(**computed.flow)
+            q_s = solve_static(fine_model, project(disc, q_static, fine)).q
+            q0, p0 = make_initial_state(fine_model, mode, amplitude, q_static=q_s)
+            tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
+            tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
+            tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
+            refined = AttractorSummary.of("forced", tip=tip)
         elif att.kind == "equilibrium":
-            refined = _refined_equilibrium(model, fine_model, att.q)
+            q = solve_static(fine_model, project(disc, att.q, fine)).q
+            if linearly_stable(fine_model, q) is True:
+                tv = tip_values(fine, q, params.alpha)
+                tip = {k: [float(tv[k])] * 2 for k in TIP_KEYS}
+                refined = AttractorSummary.of("equilibrium", tip=tip)
+            else:
+                refined = AttractorSummary.of("unstable equilibrium")
         elif att.kind == "non-periodic":
             notes.append("a non-periodic attractor has no error estimate; not refined")
         else:
-            refined, cycle_notes = refined_cycle(
+            refined, cycle_notes = refine_cycle(
                 model,
                 att,
                 fine_model,
@@ -165,63 +142,13 @@ def refined_attractor(
     except SolverError as exc:
         notes.append(f"the refined computation on {fine.name} failed ({exc}); no estimates")
         refined = None
-    return RefinedAttractor(fine, info, tuple(notes), coarse, refined, floor)
+    return _attach(result, info, notes, coarse, refined, floor, pipe)
 
 
-def _coarse_summary(att, rtol: float, shoot_rtol: float) -> tuple:
-    """``(floor, floor's text, coarse summary)`` of a reported attractor (None: a pulsating flow)."""
-    summary = AttractorSummary.of
-    if att is None:  # a pulsating flow: the whole integration again
-        floor, what = rtol, f"--rtol {rtol:g}"
-        coarse = None  # filled in by with_attractor_estimates from the result
-    elif att.kind == "equilibrium":
-        floor, what = 1e-10, "Newton's tolerance 1e-10"
-        coarse = summary("equilibrium", tip=att.tip)
-    else:
-        floor, what = shoot_rtol, f"--shoot-rtol {shoot_rtol:g}"
-        coarse = summary(att.kind, att.period, att.period_n, att.tip)
-    return floor, what, coarse
-
-
-def _refined_forced(
-    model, fine_model, q_static, t_max, rtol, mode, amplitude, flow, callback
-) -> AttractorSummary:
-    """A pulsating flow integrated again from the refined static state: its tip extrema
-    over the second half of the run."""
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.analyses.dynamics import make_initial_state, simulate
-    from fempipe.analyses.limit_cycle import TIP_KEYS
-    from fempipe.analyses.statics import solve_static
-
-    disc, fine, params = model.disc, fine_model.disc, model.params
-    q_s = solve_static(fine_model, project(disc, q_static, fine)).q
-    q0, p0 = make_initial_state(fine_model, mode, amplitude, q_static=q_s)
-    tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
-    tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
-    tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
-    return AttractorSummary.of("forced", tip=tip)
-
-
-def _refined_equilibrium(model, fine_model, q_coarse) -> AttractorSummary:
-    """The equilibrium solved by Newton on the refined discretization from the coarse
-    one, with its tip values if it is linearly stable."""
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.analyses.limit_cycle import TIP_KEYS
-    from fempipe.analyses.stability import linearly_stable
-    from fempipe.analyses.statics import solve_static
-
-    disc, fine, params = model.disc, fine_model.disc, model.params
-    q = solve_static(fine_model, project(disc, q_coarse, fine)).q
-    if linearly_stable(fine_model, q) is True:
-        tv = tip_values(fine, q, params.alpha)
-        return AttractorSummary.of("equilibrium", tip={k: [float(tv[k])] * 2 for k in TIP_KEYS})
-    return AttractorSummary.of("unstable equilibrium")
-
-
-def refined_cycle(
-    model,
+def refine_cycle(
+    model: PipeModel,
     attractor,
-    fine_model,
+    fine_model: PipeModel,
     *,
     t_max: float,
     rtol: float,
@@ -231,26 +158,9 @@ def refined_cycle(
 ) -> tuple[AttractorSummary, list[str]]:
     """The refined limit cycle: shot from the coarse cycle, else found by integration.
 
-    Parameters
-    ----------
-    model, fine_model : PipeModel
-        The reported model and the refined one.
-    attractor : Attractor
-        The reported periodic attractor.
-    t_max, rtol, shoot_rtol, use_shooting, callback
-        As for :func:`refined_attractor` (the integration if the shooting fails).
-
-    Returns
-    -------
-    summary : AttractorSummary
-        ``"unstable periodic"`` if the shot cycle is unstable.
-    notes : list of str
-        A note if the shooting failed and the cycle was found by integration.
+    Returns its summary ("unstable periodic" if the shot cycle is unstable) and a note if
+    the shooting failed.
     """
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-    from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
-    from fempipe.solvers.radau import IntegrationError
-
     disc, att, summary = model.disc, attractor, AttractorSummary.of
     fine = fine_model.disc
     c = att.cycle
@@ -259,7 +169,7 @@ def refined_cycle(
     notes = []
     if c is not None:
         try:
-            cyc = shoot(fine_model, q0, p0, c.period, rtol=shoot_rtol)
+            cyc = shoot(PipeDynamics(fine_model), q0, p0, c.period, rtol=shoot_rtol)
         except (ShootingError, IntegrationError) as exc:
             notes.append(
                 f"shooting on {fine.name} from the coarse cycle failed ({exc}); integrated"
@@ -281,35 +191,8 @@ def refined_cycle(
     return summary(fa.kind, fa.period, fa.period_n, fa.tip), notes
 
 
-def with_attractor_estimates(result: dict, refined: RefinedAttractor, pipe=None) -> dict:
-    """``result`` with the estimates beside ``period`` and ``tip`` (and ``period_s``, ``tip_m``).
-
-    Adds ``period_error``, ``period_refined``, ``tip_error`` and
-    ``tip_refined`` (``{"eta_tip": [error of min, error of max], ...}``, the
-    shape of ``tip``) and ``attractor_refined``.  If the attractors differ in
-    kind (periodic, period-n, equilibrium; a refined cycle that is unstable)
-    there is no error number (None) and a note says so.
-
-    Parameters
-    ----------
-    result : dict
-        The attractor's dict (``"period"``, ``"tip"``, with an SI pipe
-        ``"period_s"``, ``"tip_m"``).
-    refined : RefinedAttractor
-        :func:`refined_attractor` of the same attractor.
-    pipe : PipeSI, optional
-
-    Returns
-    -------
-    dict
-        With the top-level ``"error_estimate"`` (:func:`header`).
-    """
-    info, floor, fine = refined.info, refined.floor, refined.refined
-    notes = list(refined.notes)
-    order = info.order
-    coarse = refined.coarse
-    if coarse is None:  # a pulsating flow
-        coarse = AttractorSummary("forced", "forced", None, result["tip"])
+def _attach(result, info, notes, coarse, fine, floor, pipe) -> dict:
+    """``result`` with the estimates of the attractor ``coarse`` against ``fine``."""
     same = fine is not None and fine.label == coarse.label
     if fine is not None and not same:
         notes.append(
@@ -320,7 +203,7 @@ def with_attractor_estimates(result: dict, refined: RefinedAttractor, pipe=None)
     def err(a, b):
         if a is None or b is None:
             return None
-        return estimate(a, b, order, info.ratio, floor=floor * max(1.0, abs(a)))
+        return estimate(a, b, info.order, info.ratio, floor=floor * max(1.0, abs(a)))
 
     fine_tip = fine.tip if same else None
     fine_period = fine.period if same else None
@@ -331,36 +214,19 @@ def with_attractor_estimates(result: dict, refined: RefinedAttractor, pipe=None)
             for k, lo_hi in result["tip"].items()
         }
     period_error = err(result.get("period"), fine_period)
-    result = beside(
-        result, "period", {"period" + ERROR: period_error, "period" + REFINED: fine_period}
-    )
+    result = beside(result, "period", pair("period", period_error, fine_period))
     result = beside(result, "tip", {"tip" + ERROR: tip_error, "tip" + REFINED: fine_tip})
     result = beside(result, "attractor", {"attractor_refined": None if fine is None else fine.kind})
     if pipe is not None:
-        result = _with_si_attractor_estimates(
-            result, pipe, period_error, fine_period, tip_error, fine_tip
+        L = pipe.L
+
+        def scaled(d):
+            return None if d is None else {k: [x * L for x in v] for k, v in d.items()}
+
+        result = beside(
+            result, "period_s", pair("period_s", period_error, fine_period, pipe.time_scale)
         )
+        tip_m = {"tip_m" + ERROR: scaled(tip_error), "tip_m" + REFINED: scaled(fine_tip)}
+        result = beside(result, "tip_m", tip_m)
     result["error_estimate"] = header(info, notes)
     return result
-
-
-def _with_si_attractor_estimates(result, pipe, period_error, fine_period, tip_error, fine_tip):
-    """``period_s`` and ``tip_m`` with their estimates (the dimensionless ones scaled)."""
-    ts, L = pipe.time_scale, pipe.L
-
-    def scaled(d):
-        return None if d is None else {k: [x * L for x in v] for k, v in d.items()}
-
-    result = beside(
-        result,
-        "period_s",
-        {
-            "period_s" + ERROR: None if period_error is None else period_error * ts,
-            "period_s" + REFINED: None if fine_period is None else fine_period * ts,
-        },
-    )
-    return beside(
-        result,
-        "tip_m",
-        {"tip_m" + ERROR: scaled(tip_error), "tip_m" + REFINED: scaled(fine_tip)},
-    )
