@@ -1,12 +1,8 @@
 """Exception types shared by the solvers and the command line.
 
-Every numerical failure -- a Newton iteration that does not converge
-(:class:`fempipe.analyses.statics.NewtonError`), a time integration that cannot
-continue (:class:`fempipe.analyses.dynamics.IntegrationError`), a shooting that finds
-no periodic orbit (:class:`fempipe.analyses.limit_cycle.ShootingError`) -- derives
-from :class:`SolverError`, so a caller (the ``fempipe`` command) catches them
-once.  Bad input derives from :class:`ValueError`; :class:`ParamError` names
-the parameter that is wrong.
+Every numerical failure (Newton, time integration, shooting) derives from
+:class:`SolverError`, so the ``fempipe`` command catches them once; bad input derives from
+:class:`ValueError`, and :class:`ParamError` names the wrong parameter.
 """
 
 from __future__ import annotations
@@ -25,13 +21,8 @@ class SolverError(RuntimeError):
 class ParamError(ValueError):
     """A physical parameter outside its allowed range.
 
-    Parameters
-    ----------
-    field : str
-        Name of the offending field (``"gamma"``, ``"v"``, ``"L"``, ...), so
-        a caller can point at the input that set it without parsing the text.
-    message : str
-        What is wrong and what is allowed.
+    ``field`` names it (``"gamma"``, ``"v"``, ``"L"``, ...), so a caller can point at the input
+    without parsing ``message`` (what is wrong and what is allowed).
     """
 
     def __init__(self, field: str, message: str) -> None:

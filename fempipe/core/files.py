@@ -1,15 +1,9 @@
 """Writing files atomically, and strict JSON.
 
-Every writer of the package writes to a temporary file in the destination
-directory and moves it into place with :func:`os.replace`, so a reader (or a
-crashed run) never sees a half-written file: the destination either keeps
-its old content or gets the complete new one.  JSON (:func:`write_json`,
-:func:`json_dumps`) is strict: numpy scalars and arrays are converted,
-NaN/inf become ``null``.
-
-These writers are in the core, not in :mod:`fempipe.io`, because the
-analyses persist resumable stores with them (the point stores of
-:mod:`fempipe.analyses.bifurcation`); :mod:`fempipe.io` re-exports them.
+Every writer writes a temporary file in the destination directory and moves it into place
+(:func:`os.replace`), so no reader sees a half-written file.  JSON is strict: numpy types
+converted, NaN/inf as ``null``.  In the core because the analyses persist resumable point
+stores with them; :mod:`fempipe.io` re-exports them.
 """
 
 from __future__ import annotations
@@ -35,10 +29,8 @@ __all__ = [
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; move it onto ``path`` on success.
-
-    The temporary file keeps the destination's suffix (some writers choose the
-    format from it).  On an exception it is removed and ``path`` is untouched.
+    """Yield a temporary path beside ``path`` (same suffix); move it onto ``path`` on success,
+    remove it on an exception.
 
     Examples
     --------
@@ -69,13 +61,9 @@ def _umask() -> int:
 
 
 def to_jsonable(obj):
-    """Recursively convert numpy types, tuples, paths and non-finite floats for strict JSON.
-
-    Mappings become dicts with string keys, tuples and arrays become lists,
-    numpy scalars become Python scalars, NaN and +-inf become ``None`` (JSON
-    has no such numbers), :class:`~pathlib.Path` becomes ``str`` and an
-    object with ``to_dict()`` becomes that dict.  The one JSON sanitiser of
-    the package: result files, ``--json`` output and the validation report.
+    """Recursively convert for strict JSON: mappings to dicts with string keys, tuples and arrays
+    to lists, numpy scalars to Python, NaN and +-inf to ``None``, paths to ``str``, objects with
+    ``to_dict()`` to that dict.  The package's one JSON sanitiser.
     """
     if isinstance(obj, Mapping):
         return {str(k): to_jsonable(v) for k, v in obj.items()}

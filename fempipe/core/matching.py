@@ -1,16 +1,10 @@
 """Optimal assignment of eigenvalues to predictions or to canonical modes.
 
-Tracking matches each spectrum to the previous one by the assignment of
-least total cost.  Almost always every row's cheapest column is a different
-one; that assignment is then optimal (no assignment costs less than the sum
-of the row minima) and is found in one ``argmin``.  Otherwise each row first
-takes a free column of its own least cost, and the rows left over are added
-by shortest augmenting paths (D. F. Crouse, "On implementing 2D rectangular
-assignment algorithms", IEEE Trans. Aerosp. Electron. Syst. 52 (2016),
-Algorithm 1, the algorithm of :func:`scipy.optimize.linear_sum_assignment`),
-warm-started from the duals u_i = min_j c_ij, v_j = 0.  Importing
-:mod:`scipy.optimize` for it would cost about a third of the start-up of
-``fempipe critical``.
+Usually every row's cheapest column differs, and that assignment is optimal (one
+``argmin``); otherwise the rows left over are added by shortest augmenting paths (Crouse,
+IEEE Trans. Aerosp. Electron. Syst. 52 (2016), Algorithm 1, as
+:func:`scipy.optimize.linear_sum_assignment`), warm-started from u_i = min_j c_ij, v_j = 0.
+Importing :mod:`scipy.optimize` would cost about a third of a command's start-up.
 """
 
 from __future__ import annotations
@@ -29,9 +23,7 @@ def assignment(cost: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     rows, cols : ndarray of int
-        ``rows = arange(m)`` and the column assigned to each row.  Where
-        several assignments share the least cost (for instance duplicated
-        columns) any of them may be returned.
+        ``arange(m)`` and each row's column (any one of equal-cost assignments).
     """
     cost = np.asarray(cost, dtype=float)
     m, n = cost.shape

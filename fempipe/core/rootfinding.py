@@ -1,13 +1,9 @@
 """Brent's bracketing root finder, without importing :mod:`scipy.optimize`.
 
-Importing :mod:`scipy.optimize` loads scipy's optimizers, sparse graph,
-spatial and special-function packages, about a third of the start-up of a
-``fempipe critical`` or ``fempipe simulate`` process, for the one scalar
-root finder those commands need.  :func:`brentq` is the algorithm of
-R. P. Brent, *Algorithms for Minimization without Derivatives* (1973),
-Ch. 4, step for step as scipy's C implementation writes it, so that its
-iterates, and hence its roots, are the same floating-point numbers as
-``scipy.optimize.brentq``'s (the tests compare them).
+Importing :mod:`scipy.optimize` for one scalar root finder would cost about a third of a
+command's start-up.  :func:`brentq` is Brent's algorithm (*Algorithms for Minimization
+without Derivatives*, 1973, Ch. 4) step for step as scipy's C code writes it, so its roots
+are the same floating-point numbers as ``scipy.optimize.brentq``'s (tested).
 """
 
 from __future__ import annotations
@@ -29,32 +25,23 @@ def brentq(
     rtol: float = RTOL_MIN,
     maxiter: int = 100,
 ) -> float:
-    """A root of ``f`` in the bracket ``[a, b]`` by Brent's method.
+    """A root of ``f`` in the bracket ``[a, b]`` by Brent's method, as ``scipy.optimize.brentq``.
 
     Parameters
     ----------
     f : callable
-        Scalar function; ``f(a)`` and ``f(b)`` must differ in sign.
+        Scalar function; ``f(a)`` and ``f(b)`` differ in sign.
     a, b : float
         The bracket.
     xtol, rtol : float
-        The root is returned once it is known to within
-        ``xtol + rtol * |x|`` (``xtol > 0``, ``rtol >= 4 eps``).
+        Returned once known to within ``xtol + rtol * |x|`` (``xtol > 0``, ``rtol >= 4 eps``).
     maxiter : int
         Most iterations before :class:`RuntimeError`.
-
-    Returns
-    -------
-    float
-        The root, as ``scipy.optimize.brentq(f, a, b, xtol, rtol, maxiter)``
-        returns it.
 
     Raises
     ------
     ValueError
-        Bad tolerances, a bracket without a sign change, or ``f`` not finite.
-    RuntimeError
-        No convergence in ``maxiter`` iterations.
+        Bad tolerances, no sign change, or ``f`` not finite.
     """
     if not xtol > 0:
         raise ValueError(f"xtol must be > 0, got {xtol}")
