@@ -262,12 +262,18 @@ def test_failure_names_v_and_step_and_keeps_the_points(monkeypatch):
         return real(m, x, T, rtol, sensitivity)
 
     monkeypatch.setattr(per, "period_flow", failing)
+    states = []
     with pytest.raises(CycleContinuationError) as exc:
-        continue_cycles(model, hopf, (6.0, 7.0), [6.65])
+        continue_cycles(model, hopf, (6.0, 7.0), [6.65], on_point=states.append)
     msg = str(exc.value)
     assert "cannot be continued beyond v = " in msg and "(step " in msg
     kept = exc.value.branch.points
     assert kept and all(p.v <= hopf.v + 0.05 for p in kept)
+    # Resumed from its last state, the failed branch fails again with its points (no work).
+    with pytest.raises(CycleContinuationError) as again:
+        continue_cycles(model, hopf, (6.0, 7.0), [6.65], resume=states[-1])
+    assert str(again.value) == msg
+    assert [p.v for p in again.value.branch.points] == [p.v for p in kept]
 
 
 def _pt(v, T, mu):

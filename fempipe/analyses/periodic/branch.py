@@ -422,7 +422,8 @@ def continue_cycles(
     max_iter : int
         Newton iterations per corrector.
     resume : dict, optional
-        The state an interrupted run passed to ``on_point``: the branch continues from there.
+        The state an interrupted run passed to ``on_point``: the branch continues from there
+        (a failed one raises its error again).
     on_point : callable, optional
         Called after every accepted point with the branch's plain-JSON state.
 
@@ -457,7 +458,10 @@ def continue_cycles(
     if resume is not None:
         ds = policy.resume(resume)
         if resume.get("end_reason") is not None:
-            return policy.branch(resume["end_reason"], policy.integ_before, policy.wall_before)
+            br = policy.branch(resume["end_reason"], policy.integ_before, policy.wall_before)
+            if resume["end_reason"] == "failed":
+                raise CycleContinuationError(resume["error"], br)
+            return br
     with single_blas_thread():
         return continue_curve(policy, ds)
 

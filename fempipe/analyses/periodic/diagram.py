@@ -23,7 +23,6 @@ from .hopf import analyse_static, equilibrium_tip, point_dict, primary_states, s
 from .out_of_plane import VerdictStore, branch_verdicts, equilibrium_verdict
 from .points import PointStore, diagram_manifest, run_diagram
 from .results import CycleContinuationError, CyclePoint, HopfPoint
-from .special import cycle_branch
 
 __all__ = ["N_MULTIPLIERS", "CycleDiagram", "compute_cycle_diagram", "cycle_point_dict"]
 
@@ -150,20 +149,6 @@ def _alpha_task(
                 on_point()
 
         try:
-            if resume is not None and resume.get("end_reason") == "failed":
-                raise CycleContinuationError(
-                    resume["error"],
-                    cycle_branch(
-                        name,
-                        h,
-                        [CyclePoint.from_dict(d) for d in resume["points"]],
-                        "failed",
-                        resume["steps"],
-                        resume["rejected_steps"],
-                        resume["newton_iterations"],
-                        resume["wall_time"],
-                    ),
-                )
             br = continue_cycles(
                 model,
                 h,

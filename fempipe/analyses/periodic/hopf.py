@@ -20,6 +20,7 @@ from fempipe.core.companion import first_order_matrix
 from fempipe.model.kinematics import tip_values
 from fempipe.model.operators import PipeModel
 
+from .points import POINT_KEYS
 from .results import HopfPoint
 
 __all__ = [
@@ -147,20 +148,8 @@ def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
 
 
 def point_dict(v, direction, index, alpha, attractor) -> dict:
-    """The keys of a diagram's point, the tips and period empty."""
-    return {
-        "v": float(v),
-        "direction": direction,
-        "index": index,
-        "alpha": float(alpha),
-        "attractor": attractor,
-        "eta_tip": None,
-        "X_tip": None,
-        "Z_tip": None,
-        "period": None,
-        "period_n": None,
-        "max_multiplier": None,
-        "steps": 0,
-        "rejected_steps": 0,
-        "wall_time": 0.0,
-    }
+    """The keys of a diagram's point (:data:`POINT_KEYS`), the tips and period empty."""
+    d = dict.fromkeys(POINT_KEYS)
+    d.update(v=float(v), direction=direction, index=index, alpha=float(alpha))
+    d.update(attractor=attractor, steps=0, rejected_steps=0, wall_time=0.0)
+    return d

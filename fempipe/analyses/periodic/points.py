@@ -28,6 +28,8 @@ from fempipe.core.parallel import run_tasks
 
 __all__ = [
     "DIRECTIONS",
+    "POINT_KEYS",
+    "POINT_KEYS_3D",
     "BifurcationPoint",
     "PointStore",
     "diagram_manifest",
@@ -38,8 +40,8 @@ __all__ = [
 
 DIRECTIONS = ("up", "down")
 
-# The JSON keys of a point, in order: planar sweep, 3-D sweep.
-_KEYS = (
+#: The JSON keys of a point, in order: planar, and (:data:`POINT_KEYS_3D`) of the 3-D model.
+POINT_KEYS = (
     "v",
     "direction",
     "index",
@@ -55,7 +57,7 @@ _KEYS = (
     "rejected_steps",
     "wall_time",
 )
-_KEYS_3D = (
+POINT_KEYS_3D = (
     "v",
     "direction",
     "index",
@@ -122,7 +124,7 @@ class BifurcationPoint:
     def to_dict(self, state: bool = False) -> dict:
         """Plain JSON; with ``state`` also the state (as the point store keeps it)."""
         is_3d = self.motion is not None
-        d = {k: getattr(self, k) for k in (_KEYS_3D if is_3d else _KEYS)}
+        d = {k: getattr(self, k) for k in (POINT_KEYS_3D if is_3d else POINT_KEYS)}
         if self.three_d is not None:
             d.update(self.three_d)
         if state:
@@ -140,7 +142,7 @@ class BifurcationPoint:
         is_3d = "U" in d
         q, qdot = ("U", "Udot") if is_3d else ("q", "qdot")
         return cls(
-            **{k: d[k] for k in (_KEYS_3D if is_3d else _KEYS)},
+            **{k: d[k] for k in (POINT_KEYS_3D if is_3d else POINT_KEYS)},
             q=np.asarray(d[q], dtype=float),
             qdot=np.asarray(d[qdot], dtype=float),
             three_d=d.get("three_d"),
