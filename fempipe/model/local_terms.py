@@ -1,8 +1,4 @@
-"""The local terms of Eq. (20): bending, Kelvin-Voigt, gravity and the follower force.
-
-Their weak forms (:mod:`fempipe.model.weak_form`) and the Jacobians of the
-static ones.
-"""
+"""The local terms of Eq. (20): bending, Kelvin-Voigt, gravity, the follower force (docs/theory/weak_form.md)."""
 
 from __future__ import annotations
 
@@ -47,11 +43,7 @@ class LocalTerms(WeakForm):
         return self.params.v * self.params.v * self._test(np.sin(fl.theta_tip - fl.theta))
 
     def _follower_weights(self, fl: Fields) -> tuple[np.ndarray, np.ndarray]:
-        """d(follower)/dq = ``Phi^T diag(d) Phi + tip_col tip^T``: (d, tip_col).
-
-        The theta(1) dependence couples every row to the tip dofs: a rank-one
-        update, which is one extra column for finite elements.
-        """
+        """d(follower)/dq = ``Phi^T diag(d) Phi + tip_col tip^T`` as (d, tip_col): theta(1) adds a rank-one column."""
         v2 = self.params.v * self.params.v
         c = np.cos(fl.theta_tip - fl.theta)
         return -v2 * self.w * c, v2 * self._test(c)

@@ -1,8 +1,7 @@
-"""The nonlocal terms of Eq. (20): inertia, centripetal, Coriolis and flow acceleration.
+r"""The nonlocal terms of Eq. (20): inertia, centripetal, Coriolis, flow acceleration.
 
-The double and single integrals of Eq. (20) in weak form,
-``\\int phi_i n . C^R F`` (:meth:`~fempipe.model.weak_form.WeakForm._project`),
-and the pipe's mass matrix.
+Each is a projection ``\int phi_i n . C^R F``; the pipe's mass matrix is here too
+(docs/theory/weak_form.md).
 """
 
 from __future__ import annotations
@@ -18,11 +17,7 @@ class NonlocalTerms(WeakForm):
     """Inertia, centripetal, Coriolis and flow-acceleration terms of Eq. (20)."""
 
     def inertia(self, fl: Fields) -> np.ndarray:
-        """Eq. (20) theta_ddot terms of the double integrals: ``M_pipe(q) q''``.
-
-        The pipe's own inertia; with an end mass the whole inertia is
-        ``inertia + end_mass_inertia`` (= M(q) q'' + its centripetal part).
-        """
+        """The theta_ddot terms of Eq. (20)'s double integrals, ``M_pipe(q) q''`` (end mass apart)."""
         return self._project(self.quad.cumulative(fl.theta_ddot[:, None] * fl.normal), fl)
 
     def centripetal(self, fl: Fields) -> np.ndarray:

@@ -1,9 +1,7 @@
 """Transfer of a state between discretizations: the L2 projection of theta.
 
-Used wherever the result of one discretization seeds a computation on
-another: a limit cycle shot on a refined mesh from a coarse one, the members
-of a convergence study started from one seed, the refined run of an error
-estimate started from the coarse state.
+Seeds a computation on one discretization with the result of another (a refined shooting,
+a convergence study's members, an error estimate's refined run).
 """
 
 from __future__ import annotations
@@ -16,23 +14,10 @@ __all__ = ["project"]
 
 
 def project(src: Discretization, q: np.ndarray, dst: Discretization) -> np.ndarray:
-    """Coefficients on ``dst`` of the L2 projection of theta = ``src``\\ (q).
+    r"""Coefficients on ``dst`` of the L2 projection of theta = ``src``\ (q): ``G c = \int phi_i theta``.
 
-    Solves ``G c = \\int phi_i theta`` with the Gram matrix G of ``dst`` and
-    its quadrature.  When the space of ``src`` lies in that of ``dst`` (a
-    mesh and its refinement, the first N of more modes) and the quadrature of
-    ``dst`` integrates its functions exactly (elements) or to round-off
-    (modes), theta is transferred exactly.
-
-    Parameters
-    ----------
-    src, dst : Discretization
-    q : ndarray, shape (src.n,) or (src.n, m)
-        One state or m states (columns).
-
-    Returns
-    -------
-    ndarray, shape (dst.n,) or (dst.n, m)
+    Exact when ``src``'s space lies in ``dst``'s (a refinement, more modes).  ``q`` has shape
+    (src.n,) or (src.n, m) (states as columns); the result (dst.n,) or (dst.n, m).
     """
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla

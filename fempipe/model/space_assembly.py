@@ -1,10 +1,8 @@
 """What the Jacobians of the 3-D weak form need of a discretization, made once per discretization.
 
-:class:`Seeds` holds the bases at the quadrature points, the integration operators with
-the matrices that pull derivatives back through them, and the test functions that seed
-:func:`fempipe.core.dual.pullback`; :meth:`Seeds.assemble` turns a pull-back into the
-Jacobian of :class:`fempipe.model.space.SpaceModel`.  The weak form itself is in
-:mod:`fempipe.model.space`.
+:class:`Seeds`: the bases, the integration operators with their transposes and the test
+seeds of :func:`fempipe.core.dual.pullback`; :meth:`Seeds.assemble` turns a pull-back into
+the Jacobian of :class:`fempipe.model.space.SpaceModel`.
 """
 
 from __future__ import annotations
@@ -37,13 +35,9 @@ KINDS = (
 
 
 class Seeds:
-    """What the Dual fields and the Jacobian assembly of a discretization need (dense).
-
-    Phi, dPhi, tip; the integration operators as matrices along the quadrature
-    points (C, C^R and the integral over the pipe, with their transposes, which pull
-    the derivatives back, :func:`fempipe.core.dual.pullback`); the top-level seeds
-    of the two parts of the weak form, ``seed[q, c', (c, i)] = test_i(q) w_q
-    delta_cc'`` (``\\int test_i A_c``).
+    """Phi, dPhi, tip, the integration operators C, C^R and the integral over the pipe as dense
+    matrices with their transposes, and the seeds ``seed[q, c', (c, i)] = test_i(q) w_q delta_cc'``
+    of the weak form's two parts.
     """
 
     def __init__(self, disc: Discretization) -> None:
@@ -93,12 +87,8 @@ class Seeds:
         return s
 
     def assemble(self, W: np.ndarray, G: np.ndarray | None, blocks) -> np.ndarray:
-        """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G).
-
-        W (n_q, S, 15, R): derivatives with respect to the local quantities of
-        :data:`KINDS`, multiplied here by their bases (sparse for elements: a
-        point sees the p + 1 functions of its cell); G (S, R, 9 nt): those
-        through the tip values, already by the unknowns.
+        """The Jacobian (S, R, len(blocks) 3 nt) from a pullback (W, G): W (n_q, S, 15, R) times the
+        bases of :data:`KINDS`, plus G (S, R, 9 nt) through the tip values.
         """
         nt = self.Phi.shape[1]
         n_q, S, _, R = W.shape

@@ -1,11 +1,8 @@
 """The 3-D pipe's equations of motion as the integrator's problem.
 
-:class:`SpaceDynamics` implements the contract
-:class:`fempipe.solvers.radau.contract.ImplicitSecondOrderProblem` for a
-:class:`~fempipe.model.space.SpaceModel`, as
-:class:`~fempipe.model.dynamics_problem.PipeDynamics` does for the planar
-model: the Radau integrator, shooting and the Floquet multipliers run on it
-unchanged.
+:class:`SpaceDynamics` is to :class:`~fempipe.model.space.SpaceModel` what
+:class:`~fempipe.model.dynamics_problem.PipeDynamics` is to the planar model: the Radau
+integrator, shooting and the Floquet multipliers run on it unchanged.
 """
 
 from __future__ import annotations
@@ -32,14 +29,7 @@ class _VelocityDerivative:
 
 
 class SpaceDynamics(ModelDynamics):
-    """The 3-D weak form as an implicit second-order problem (the integrator's contract).
-
-    Parameters
-    ----------
-    model : SpaceModel
-    flow : callable tau -> (v, v_dot), optional
-        Unsteady flow (rule 9); default the steady ``model.params.v``.
-    """
+    """The 3-D weak form as an implicit second-order problem; ``flow`` tau -> (v, v_dot) optional (rule 9)."""
 
     #: the three stage Jacobians of the sensitivity are one evaluation of the weak form
     #: with S = 3 (:meth:`SpaceModel.jacobians`), cheaper than three evaluations of one

@@ -1,20 +1,10 @@
 """Pseudo-arclength continuation: one engine for every branch of the package.
 
-* :mod:`~fempipe.solvers.continuation.protocol` -- what the engine asks of a
-  problem (:class:`ContinuationProblem`: the residual, its derivatives, the
-  bordered solve, the inner product) and of a problem's policy
-  (:class:`ContinuationPolicy`: predictor, corrector, acceptance, step
-  control, landing, detection of special points);
-* :mod:`~fempipe.solvers.continuation.engine` -- the loop
-  (:func:`continue_curve`);
-* :mod:`~fempipe.solvers.continuation.keller` -- Keller's method with the
-  exact tangent (:class:`KellerPolicy`), the static branches' policy;
-* :mod:`~fempipe.solvers.continuation.linalg` -- a linear solve that also
-  gives the sign of the determinant (the test function of branch points).
-
-The static branches of the pipe (in v, gamma, alpha) are
-:func:`fempipe.analyses.statics.continue_static`; the branches of periodic orbits
-:func:`fempipe.analyses.periodic.continue_cycles`.
+:mod:`~fempipe.solvers.continuation.protocol` (what the engine asks of a problem and its
+policy), :mod:`~fempipe.solvers.continuation.engine` (the loop, :func:`continue_curve`),
+:mod:`~fempipe.solvers.continuation.keller` (Keller's method, :class:`KellerPolicy`) and
+:mod:`~fempipe.solvers.continuation.linalg` (a solve with the determinant's sign).  Users:
+:func:`fempipe.analyses.statics.continue_static`, :func:`fempipe.analyses.periodic.continue_cycles`.
 """
 
 from .engine import continue_curve

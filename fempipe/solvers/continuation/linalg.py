@@ -1,8 +1,5 @@
-"""A linear solve that also gives the sign and size of the determinant.
-
-The test function of a branch point is the determinant of the bordered
-Jacobian (it changes sign at a simple branch point, not at a fold); it comes
-from the LU factorisation that solves for the tangent, at no extra cost.
+"""A linear solve that also gives the sign and size of the determinant: the test function of
+branch points (it flips at a simple branch point, not at a fold), from the same LU.
 """
 
 from __future__ import annotations
@@ -33,10 +30,7 @@ def permutation_sign(perm: np.ndarray) -> int:
 
 
 def solve_with_determinant(A, b: np.ndarray) -> tuple[np.ndarray, int, float]:
-    """Solve A x = b; sign(det A) and log|det A| from the same LU factorisation.
-
-    Dense ``A``: LAPACK's LU (scipy.linalg.lu_factor); sparse: SuperLU.
-    """
+    """Solve A x = b with sign(det A) and log|det A| from the same LU (LAPACK dense, SuperLU sparse)."""
     if sp.issparse(A):
         lu = spla.splu(A.tocsc())
         d = lu.U.diagonal()  # SuperLU's L has a unit diagonal

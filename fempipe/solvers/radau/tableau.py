@@ -1,15 +1,9 @@
 """The Radau IIA (s = 3) tableau and RADAU5's constants.
 
-The constants of this module, the Newton tolerance and iteration limit, the
-step-size limits and safety factor and the predictive controller
-(:func:`fempipe.solvers.radau.integrator.predict_factor`) are those of Hairer &
-Wanner's RADAU5 as transcribed in scipy.integrate.Radau
-(scipy/integrate/_ivp/radau.py: C, E, MU_REAL, NEWTON_MAXITER, MIN_FACTOR,
-MAX_FACTOR, predict_factor); see E. Hairer, G. Wanner, Solving Ordinary
-Differential Equations II, Sec. IV.8.  A and its eigendecomposition are
-computed here instead of scipy's tabulated T, TI, because the stages are
-solved for the accelerations of the second-order system, not for first-order
-increments.
+The constants, Newton limits, step-size limits and the predictive controller are Hairer &
+Wanner's RADAU5 (Solving ODEs II, Sec. IV.8) as transcribed in ``scipy.integrate.Radau``.
+A and its eigendecomposition are computed here, because the stages are solved for the
+accelerations of the second-order system.
 """
 
 from __future__ import annotations
