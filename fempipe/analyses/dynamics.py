@@ -1,20 +1,11 @@
 """Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
 
-The time integration itself is :class:`fempipe.solvers.radau.Radau`, an L-stable
-Radau IIA method written on the second-order residual form of Eq. (20)
-(docs/theory/numerics.md says why), which takes the pipe as the problem
-:class:`fempipe.model.dynamics_problem.PipeDynamics` (model and flow) by the
-contract of :mod:`fempipe.solvers.radau.contract`; this module drives it: :func:`simulate` records a
+The L-stable Radau IIA method :class:`fempipe.solvers.radau.Radau` integrates the problem
+:class:`fempipe.model.dynamics_problem.PipeDynamics`; :func:`simulate` records a
 :class:`Trajectory`, :func:`simulate_steps` yields the states step by step,
-:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`make_initial_state` a
-perturbed static state.  ``Radau``, ``IntegrationError`` and ``acceleration``
-are importable from here too.
-
-Energy
-------
-:func:`energy_rate` gives dE/dtau from the power of the non-conservative
-terms, derived from Eq. (20) (see its docstring); the tests check it against
-the residual at random states and along computed trajectories.
+:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`make_initial_state` a perturbed
+static state and :func:`energy_rate` the power balance dE/dtau.
+Numerics: docs/theory/numerics.md.
 """
 
 from __future__ import annotations
@@ -47,22 +38,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class PulsatingFlow:
-    """Unsteady flow v(tau) = v0 (1 + sigma sin(omega tau)).
+    """Unsteady flow v(tau) = v0 (1 + sigma sin(omega tau)), v0 >= 0, 0 <= sigma <= 1, omega >= 0.
 
-    Parameters
-    ----------
-    v0 : float
-        Mean flow velocity (>= 0).
-    sigma : float
-        Relative pulsation amplitude, 0 <= sigma <= 1 (so that v >= 0, the
-        model assumes discharge at the free end).
-    omega : float
-        Pulsation frequency in units of 1/tau (>= 0).
-
-    Notes
-    -----
-    Its derivative v_dot = v0 sigma omega cos(omega tau) drives the
-    flow-acceleration terms of Eq. (20), which the paper writes and never uses.
+    Its derivative drives the flow-acceleration terms of Eq. (20).
     """
 
     v0: float
@@ -92,32 +70,13 @@ class PulsatingFlow:
 
 
 def power_terms(model: PipeModel, q: np.ndarray, qdot: np.ndarray, v_dot: float = 0.0) -> dict:
-    """Power of each non-conservative term of Eq. (20); dE/dtau = -sum.
+    """Power of each non-conservative term of Eq. (20), and ``"dE_dtau"`` = -(their sum).
 
-    With E = T + V (:meth:`PipeModel.energy`), the inertia terms are the
-    Lagrange derivative of T = (1/2) q'^T M(q) q' and bending plus gravity the
-    gradient of V, so q'^T R = dE/dtau + q'^T (non-conservative forces) = 0:
-
-    ``coriolis``           2 v sqrt(beta) \\int theta_dot n . \\int_xi^1 theta_dot n
-                           = v sqrt(beta) |r_dot(1)|^2  (symmetric double integral),
-    ``follower``           v^2 \\int theta_dot sin(theta(1) - theta) = v^2 t(1) . r_dot(1),
-    ``kelvin_voigt``       mu q'^T K q',
-    ``flow_acceleration``  sqrt(beta) v_dot \\int theta_dot n . \\int_xi^1 t
-                           = sqrt(beta) v_dot \\int_0^1 t . r_dot  (swap the order),
-    ``external_damping``   sigma \\int theta_dot n . \\int_xi^1 r_dot
-                           = sigma \\int_0^1 |r_dot|^2  (swap the order),
-
-    with r_dot(xi) = \\int_0^xi theta_dot n the centerline velocity and
-    t = (cos theta, sin theta) the tangent.  The first three are the power
-    balance of steady flow; the fourth is zero for steady flow; the fifth is
-    the dissipation of the external viscous damping (zero for sigma = 0).  The
-    end mass and the springs are conservative: E includes their kinetic and
-    potential energies, and the jet leaves the end mass as it leaves the pipe.
-
-    Returns
-    -------
-    dict
-        The five powers and ``"dE_dtau"`` = -(their sum).
+    With r_dot = \\int_0^xi theta_dot n and t the tangent: ``coriolis`` v sqrt(beta)
+    |r_dot(1)|^2, ``follower`` v^2 t(1) . r_dot(1), ``kelvin_voigt`` mu q'^T K q',
+    ``flow_acceleration`` sqrt(beta) v_dot \\int t . r_dot, ``external_damping``
+    sigma \\int |r_dot|^2 (E = T + V of :meth:`PipeModel.energy`; the balance:
+    docs/theory/conventions.md).
     """
     p = model.params
     fl = model.fields(q, qdot)
@@ -148,19 +107,17 @@ def make_initial_state(
     amplitude: float = 0.01,
     q_static: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The static state plus a small perturbation in a chosen mode, at rest.
+    """The static state plus ``amplitude`` sin((2r - 1) pi xi / 2) in theta (Eq. (22)), at rest.
 
     Parameters
     ----------
     model : PipeModel
     mode : int
-        r >= 1: the perturbation is amplitude * sin((2r - 1) pi xi / 2) in
-        theta (the paper's r-th mode, Eq. (22)), L2-projected on the
-        discretization.
+        r >= 1; the perturbation is L2-projected on the discretization.
     amplitude : float
         In rad.
     q_static : ndarray, optional
-        The static state; solved with :func:`fempipe.analyses.statics.solve_static` if omitted.
+        The static state (default :func:`~fempipe.analyses.statics.solve_static`).
 
     Returns
     -------
@@ -189,14 +146,9 @@ def simulate_steps(
     t0: float = 0.0,
     **options,
 ) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
-    """Time stepping of the pipe's motion as a generator of (tau, q, q').
-
-    The motion of Eq. (20), integrated by :class:`Radau`.
-
-    Yields the initial state first, then the state after every accepted step
-    of :class:`Radau` (options are passed on: ``rtol``, ``atol``, ``max_step``,
-    ``h_fixed``; ``flow`` goes to the problem, :class:`PipeDynamics`).
-    """
+    """The motion of Eq. (20) as a generator of (tau, q, q'): the initial state, then every
+    accepted step of :class:`Radau` (``flow`` goes to :class:`PipeDynamics`, the other
+    options to :class:`Radau`)."""
     problem = PipeDynamics(model, options.pop("flow", None))
     stepper = Radau(problem, q0, qdot0, t0, **options)
     yield stepper.t, stepper.q.copy(), stepper.qdot.copy()
@@ -205,20 +157,8 @@ def simulate_steps(
 
 @dataclass(frozen=True)
 class Trajectory:
-    """A computed trajectory with the integrator's diagnostics.
-
-    Attributes
-    ----------
-    t : ndarray, shape (m,)
-        Output times tau.
-    q, qdot : ndarray, shape (m, n)
-    steps, rejected_steps, newton_failures : int
-    n_residual, n_jacobian, n_lu : int
-        Residual evaluations, Jacobian evaluations, factorisation pairs.
-    wall_time : float
-        Seconds spent stepping.
-    rtol : float
-    """
+    """A computed trajectory: times ``t`` (m,), states ``q``, ``qdot`` (m, n), the
+    integrator's counters (``n_lu``: factorization pairs), ``wall_time`` and ``flow``."""
 
     t: np.ndarray
     q: np.ndarray
@@ -286,24 +226,20 @@ def simulate(
     h_fixed: float | None = None,
     callback: Callable[[float], None] | None = None,
 ) -> Trajectory:
-    """Integrate the pipe's motion from tau = t0 to t_end, with its record and diagnostics.
-
-    The motion of Eq. (20), by :class:`Radau`.
+    """Integrate the motion of Eq. (20) from tau = t0 to t_end by :class:`Radau`.
 
     Parameters
     ----------
     model, q0, qdot0, t0, t_end
         Model, initial state and time span (t_end > t0).
     n_out : int, optional
-        Number of equally spaced output times (dense output of the
-        collocation polynomial); default: every accepted step.
+        Equally spaced output times (dense output); default every accepted step.
     rtol, atol, max_step, h_fixed
         See :class:`Radau`.
     flow : PulsatingFlow or callable tau -> (v, v_dot), optional
-        Unsteady flow (:class:`~fempipe.model.dynamics_problem.PipeDynamics`);
-        default the steady ``model.params.v``.
+        Unsteady flow; default the steady ``model.params.v``.
     callback : callable, optional
-        Called with tau after every step (progress).
+        ``callback(tau)`` after every step.
 
     Returns
     -------

@@ -1,17 +1,10 @@
 """A user's numbers against fempipe: each value beside fempipe's and fempipe's error estimate.
 
-A user's result for one case -- a static tip value, the critical flow velocity or its
-frequency, a limit cycle's amplitude or period -- is set beside fempipe's value of the same
-:class:`~fempipe.studies.convergence.Quantity` on one discretization (computed exactly as
-``fempipe convergence`` computes it), with fempipe's error estimated from one refinement
-(:mod:`fempipe.studies.error_estimate`).  The difference user - fempipe is **resolved** when it
-exceeds that estimate: fempipe's discretization error cannot explain it, so the difference is
-the user's (truncation, model, measurement); otherwise only a finer ``disc`` can tell.
-
-:func:`compare_values` runs the comparisons (in worker processes if asked,
-:func:`fempipe.core.parallel.run_tasks`); a comparison whose computation fails (Newton, no
-v_cr in the flow range, no limit cycle) is kept with the failure's message and no fempipe
-value, and does not stop the others.  docs/cli/commands.md, "fempipe compare".
+A user's value of a :class:`~fempipe.studies.convergence.Quantity` is set beside fempipe's on
+one discretization, with fempipe's error estimated from one refinement
+(:mod:`fempipe.studies.error_estimate`).  The difference is **resolved** when it exceeds that
+estimate: fempipe's discretization error cannot explain it.  A comparison whose computation
+fails keeps its message.  docs/cli/commands.md, "fempipe compare".
 """
 
 from __future__ import annotations
@@ -36,11 +29,8 @@ __all__ = [
     "evaluate",
 ]
 
-#: The quantities a user's value can be compared for (real numbers; the
-#: complex ``eigenvalue`` of :data:`fempipe.studies.convergence.QUANTITIES` is not one).
-#: ``fempipe compare`` compares a user's ``v_cr`` and ``frequency`` with the
-#: planar model's (``Quantity(planar=True)``), the ``_in_plane`` and
-#: ``_out_of_plane`` forms with each plane's.
+#: The real quantities a user's value can be compared for (``fempipe compare`` compares
+#: ``v_cr`` and ``frequency`` with the planar model's, ``Quantity(planar=True)``).
 COMPARABLE = (
     "v_cr",
     "frequency",
@@ -59,23 +49,9 @@ COMPARABLE = (
 
 @dataclass(frozen=True)
 class Evaluation:
-    """fempipe's value of a quantity and its error estimate from one refinement.
-
-    Attributes
-    ----------
-    value : float
-        The quantity on the reported discretization.
-    refined : float or None
-        The quantity on ``refine(disc)``; None if that computation failed.
-    error_estimate : float or None
-        :func:`fempipe.studies.error_estimate.estimate` of ``value`` against
-        ``refined`` (floor: ``Quantity.tolerance * max(1, |value|)``); None
-        without a refined value.
-    note : str or None
-        Why there is no estimate (the refined computation's failure).
-    cpu_time : float
-        CPU seconds of both computations.
-    """
+    """fempipe's ``value`` of a quantity, its ``refined`` value (None if that failed), the
+    ``error_estimate`` (floor ``Quantity.tolerance * max(1, |value|)``), a ``note`` on a
+    missing estimate and the ``cpu_time`` of both."""
 
     value: float
     refined: float | None
@@ -87,26 +63,8 @@ class Evaluation:
 def evaluate(quantity: Quantity, disc) -> Evaluation:
     """The quantity on ``disc`` and on ``refine(disc)``, and the error estimate of the first.
 
-    A limit cycle is found once on ``disc`` (a transient and a shooting) and
-    the refined shooting starts from it (:meth:`Quantity.seeded`), as in
-    ``fempipe convergence``.
-
-    Parameters
-    ----------
-    quantity : Quantity
-        A real quantity (:data:`COMPARABLE`).
-    disc : FiniteElement or Modal
-        The reported discretization.
-
-    Returns
-    -------
-    Evaluation
-
-    Raises
-    ------
-    SolverError
-        If the value on ``disc`` cannot be computed (a failure on the refined
-        discretization is recorded in :attr:`Evaluation.note` instead).
+    A limit cycle found on ``disc`` seeds the refined shooting.  Raises SolverError if the
+    value on ``disc`` fails (a refined failure is the :attr:`Evaluation.note`).
     """
     t0 = time.process_time()
     if quantity.name in CYCLE_QUANTITIES:
@@ -131,19 +89,8 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
 
 @dataclass(frozen=True)
 class Comparison:
-    """A user's value of one quantity beside fempipe's.
-
-    Attributes
-    ----------
-    quantity : Quantity
-        What is compared, with the case's parameters.
-    user : float
-        The user's value.
-    evaluation : Evaluation or None
-        fempipe's value and estimate; None if the computation failed.
-    failure : str or None
-        The failure's message.
-    """
+    """A user's value of ``quantity`` beside fempipe's ``evaluation`` (None, with the
+    ``failure`` message, if the computation failed)."""
 
     quantity: Quantity
     user: float
@@ -180,8 +127,7 @@ class Comparison:
         return bool(abs(self.difference) > self.error_estimate)
 
     def to_dict(self) -> dict:
-        """``{"quantity", "user", "fempipe", "difference", "relative_difference",
-        "error_estimate", "resolved", "refined", "failure", "note", "cpu_time"}``."""
+        """The JSON row of ``fempipe compare``."""
         ev = self.evaluation
         return {
             "quantity": self.quantity.name,
@@ -212,18 +158,16 @@ def compare_values(
     pairs : sequence of (Quantity, float)
         What to compute and the user's value of it.
     disc : FiniteElement or Modal
-        The reported discretization (refined once for the estimates).
+        The reported discretization.
     workers : int, optional
-        Processes computing the comparisons in parallel
-        (:func:`fempipe.core.parallel.run_tasks`).
+        Processes (:func:`fempipe.core.parallel.run_tasks`).
     callback : callable, optional
         ``callback(done, total)`` as each comparison finishes.
 
     Returns
     -------
     list of Comparison
-        One per pair, in order; a :class:`~fempipe.core.errors.SolverError` or
-        ``ValueError`` of a computation is that comparison's ``failure``.
+        A SolverError or ValueError of a computation is that comparison's ``failure``.
     """
     for q, _ in pairs:
         if q.name not in COMPARABLE:
@@ -248,12 +192,8 @@ def compare_values(
 def estimate_description(
     disc, quantities: Sequence[str] = COMPARABLE, shoot_rtol: float = 1e-9
 ) -> dict:
-    """The top-level ``"error_estimate"`` of a comparison: method, formula, floors, criterion.
-
-    :meth:`fempipe.studies.error_estimate.ErrorEstimate.to_dict` of ``disc`` with
-    ``floors`` (quantity -> its relative solver tolerance,
-    :attr:`Quantity.tolerance`) and ``resolved`` (the criterion) added.
-    """
+    """The top-level ``"error_estimate"`` of a comparison: the method of ``disc`` with the
+    ``floors`` (:attr:`Quantity.tolerance` of each quantity) and the ``resolved`` criterion."""
     floors = {}
     for name in quantities:
         kw = {"v_max": 1.0} if name in CRITICAL_QUANTITIES else {}

@@ -35,30 +35,11 @@ TIP_WINDOW = 0.15
 class ParametricChart:
     """The regions of instability of a pulsating flow in the (omega, sigma) plane.
 
-    Attributes
-    ----------
-    params : Params
-        The pipe, with v the mean flow v0.
-    discretization : dict
-    band : (float, float)
-        The frequencies searched.
-    sigmas : tuple of float
-        The amplitudes at which the boundaries are given.
-    eigenvalues : tuple of complex
-        The mean flow's eigenvalues the candidates are built from, one per oscillating mode
-        (Im lambda > -Re lambda: damped below the ratio 1/sqrt(2)); their imaginary parts
-        are the frequencies omega_k.
-    modes : tuple of int
-        Their mode numbers (as :func:`fempipe.analyses.stability.compute_spectrum` numbers them:
-        carried by continuity from v = 0).
-    regions : tuple of ParametricRegion
-        By increasing threshold frequency.
-    closed : tuple of Candidate
-        The candidates searched that stay closed up to max(sigmas).
-    omega_tol, sigma_tol : float
-        The tolerances to which edges and thresholds are located.
-    evaluations : int
-        Monodromy matrices computed.
+    ``params`` has v = v0; ``eigenvalues`` are the mean flow's, one per oscillating mode
+    (damped below the ratio 1/sqrt(2); their imaginary parts the omega_k), numbered ``modes``
+    as :func:`~fempipe.analyses.stability.compute_spectrum` does; ``regions`` by increasing
+    threshold frequency; ``closed`` the candidates that stay closed up to max(``sigmas``);
+    ``evaluations`` the monodromy matrices computed.
     """
 
     params: Params
@@ -78,9 +59,7 @@ class ParametricChart:
         return tuple(float(lam.imag) for lam in self.eigenvalues)
 
     def to_dict(self) -> dict:
-        """JSON: ``regions[]`` with ``mode``, ``kind``, ``order``, ``plane``, ``omega_nominal``,
-        ``sigma_threshold``, ``omega_threshold``, ``multiplier`` [re, im] and ``boundary``
-        rows [sigma, omega_lo, omega_hi]; one entry per plane."""
+        """The JSON of ``fempipe parametric``: each region once per plane."""
         regions = []
         for r in self.regions:
             c = r.candidate

@@ -29,23 +29,10 @@ __all__ = ["ForcedResponse", "solve_forced_response"]
 
 @dataclass(frozen=True)
 class ForcedResponse:
-    """The periodic response to a pulsating flow.
-
-    Attributes
-    ----------
-    q0, qdot0 : ndarray, shape (n,)
-        The state at tau = 0 (a multiple of the period: the pulsation's phase 0).
-    period : float
-        2 pi / omega.
-    multipliers : ndarray of complex, shape (2n,)
-        The Floquet multipliers of the motion in the plane, largest modulus first.
-    iterations : int
-        Newton steps on the period map.
-    residual : float
-        |x(T) - x(0)| of the returned state, relative to max(1, |x(0)|).
-    amplitude : float
-        (max - min) / 2 of theta(1) over the period, sampled at the steps.
-    """
+    """The periodic response to a pulsating flow: the state ``q0``, ``qdot0`` at phase 0,
+    the ``period`` 2 pi / omega, the in-plane Floquet ``multipliers`` (largest first), the
+    Newton ``iterations``, the relative ``residual`` |x(T) - x(0)| and the ``amplitude``
+    (max - min) / 2 of theta(1)."""
 
     q0: np.ndarray
     qdot0: np.ndarray

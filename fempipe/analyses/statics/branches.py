@@ -1,17 +1,11 @@
-"""Branches of static equilibria (Eq. (31a)) by pseudo-arclength continuation:
-folds, bifurcation points and branch switching at pitchforks.
+"""Branches of static equilibria (Eq. (31a)) by pseudo-arclength continuation, with folds,
+bifurcation points and branch switching at pitchforks.
 
-The branch is walked by the engine of :mod:`fempipe.solvers.continuation`
-with Keller's policy (:class:`fempipe.solvers.continuation.KellerPolicy`: the
-exact tangent, a Newton corrector on the bordered system) on the problem
-:class:`~fempipe.analyses.statics.family.StaticFamily`.  What is the pipe's
-own is said here: a point converges when the forces balance
-(:func:`fempipe.analyses.statics.equilibrium.force_balance`), the branch lands exactly on
-the requested parameter value, or on v = 0 (gamma = 0) when it leaves the
-physical range, and a stalled branch is a :class:`NewtonError`.  Folds are
-sign changes of the parameter component of the tangent; bifurcation points
-sign changes of the determinant of the bordered Jacobian, which keeps its
-sign at folds.
+Keller's policy of :mod:`fempipe.solvers.continuation` on the problem
+:class:`~fempipe.analyses.statics.family.StaticFamily`; the pipe's own here: convergence by
+force balance, landing exactly on the requested value (or on v = 0, gamma = 0 when the branch
+leaves the physical range).  Folds are sign changes of the tangent's parameter component,
+bifurcation points of the bordered Jacobian's determinant.  docs/theory/numerics.md.
 """
 
 from __future__ import annotations
@@ -50,21 +44,14 @@ __all__ = [
 
 @dataclass(frozen=True)
 class BranchPoint(CurvePoint):
-    """One point of a continuation branch: ``q``, the parameter ``value``, the
-    unit ``tangent`` (dq, dlambda) in the arclength norm, the corrector's
-    ``iterations`` and ``residual_norm``, and ``det_sign``, the sign of det of
-    the bordered Jacobian (it flips at bifurcations)."""
+    """One point of a branch: ``q``, ``value``, the unit ``tangent``, the corrector's
+    ``iterations`` and ``residual_norm``, and ``det_sign`` (it flips at bifurcations)."""
 
 
 @dataclass(frozen=True)
 class SpecialPoint(CurveEvent):
-    """A fold or a branch point located on a branch.
-
-    ``kind`` is ``"fold"`` (the parameter turns back: a saddle-node of the
-    static problem) or ``"bifurcation"`` (a branch crosses; a pitchfork in the
-    symmetric cases alpha = 0, pi); ``index`` the branch segment
-    [index, index + 1] that contains it.
-    """
+    """A ``"fold"`` or a ``"bifurcation"`` (a pitchfork at alpha = 0, pi) located on a
+    branch, in its segment [index, index + 1]."""
 
     def to_dict(self, parameter: str) -> dict:
         return {"type": self.kind, parameter: self.value}
@@ -72,21 +59,9 @@ class SpecialPoint(CurveEvent):
 
 @dataclass
 class Branch:
-    """A branch of static solutions traced in ``parameter``.
-
-    Attributes
-    ----------
-    parameter : str
-        ``"v"``, ``"gamma"`` or ``"alpha"``.
-    points : list of BranchPoint
-    special : list of SpecialPoint
-        Folds and bifurcation points, located to ``locate_tol`` in arclength.
-    steps, rejected_steps : int
-        Continuation diagnostics.
-    end_reason : str
-        ``"stop"`` (reached the requested value), ``"returned to v = 0"``
-        (the branch folded back out of the physical range) or ``"max_steps"``.
-    """
+    """A branch of static states traced in ``parameter`` ("v", "gamma" or "alpha"): its
+    ``points``, the folds and bifurcations in ``special``, the step counts and
+    ``end_reason`` ("stop", "returned to v = 0" or "max_steps")."""
 
     parameter: str
     base: Params
@@ -117,13 +92,8 @@ class Branch:
 
 
 class StaticBranchPolicy(KellerPolicy):
-    """Keller's policy with the pipe's convergence test, landing and errors.
-
-    A point converges when the forces balance to ``tol``; once the parameter
-    passes ``stop`` (or v, gamma pass 0 downwards, out of the physical range)
-    the last point is replaced by the state at exactly that value, by Newton
-    at fixed parameter from the interpolated state, and the branch ends.
-    """
+    """Keller's policy with the pipe's convergence test (force balance), landing on ``stop``
+    (or on 0 for v, gamma) by Newton at fixed parameter, and errors."""
 
     point_type = BranchPoint
     event_type = SpecialPoint
@@ -152,8 +122,6 @@ class StaticBranchPolicy(KellerPolicy):
         crossed = (new.value - stop) * (1 if self.going_up else -1) >= 0
         left = parameter in ("v", "gamma") and new.value < 0 <= prev.value
         if crossed or left:
-            # Land exactly on the stop value (or on the end of the physical
-            # range, 0) by Newton at fixed parameter.
             target = stop if crossed else 0.0
             end = solve_static(
                 self.family.at(target), q0=interp_state(prev, new, target), tol=self.tol
@@ -200,14 +168,8 @@ def continue_static(
     tangent: np.ndarray | None = None,
     callback: Callable[[BranchPoint], None] | None = None,
 ) -> Branch:
-    """Pseudo-arclength continuation of static states in ``parameter``.
-
-    Starts at ``model.params`` (Newton from ``q0``), walks with adaptive
-    arclength steps until the parameter passes ``stop`` (the last point is
-    corrected to lie exactly at ``stop``) or ``max_steps`` is reached.  Folds
-    (the parameter turns back) and bifurcation points (sign change of the
-    determinant of the bordered Jacobian, which does not change at folds) are
-    detected and located by bisection in arclength.
+    """Pseudo-arclength continuation of static states in ``parameter`` from ``model.params``
+    to exactly ``stop``, folds and bifurcation points located by bisection in arclength.
 
     Parameters
     ----------
@@ -224,7 +186,7 @@ def continue_static(
     tangent : ndarray, shape (n + 1,), optional
         Initial tangent (for branch switching); overrides ``direction``.
     callback : callable, optional
-        Called with each accepted :class:`BranchPoint` (progress).
+        Called with each accepted :class:`BranchPoint`.
 
     Returns
     -------
@@ -233,8 +195,7 @@ def continue_static(
     Raises
     ------
     NewtonError
-        If the first point does not converge, or the step size falls below
-        ``ds_min`` (with the parameter value reached).
+        If the first point does not converge, or the step falls below ``ds_min``.
     """
     family = StaticFamily(model, parameter)
     n = model.n
@@ -275,19 +236,9 @@ def switch_branch(
     ds: float = 0.05,
     **kwargs,
 ) -> tuple[Branch, Branch]:
-    """Follow both branches that cross ``point`` (a located bifurcation).
-
-    The bifurcating direction is the null vector of dR/dq orthogonal (in the
-    arclength metric) to the known branch's tangent; each new branch starts one
-    step ``ds`` away along ``+/-`` that direction and is then continued towards
-    ``stop``.  At the pitchforks of alpha = 0 and alpha = pi these are the two
-    mirror-image buckled branches theta and -theta.
-
-    Returns
-    -------
-    (Branch, Branch)
-        The branches leaving along +phi and -phi.
-    """
+    """The two branches leaving the bifurcation ``point`` along +phi and -phi, continued to
+    ``stop``: phi the null vector of [dR/dq, dR/dlambda] orthogonal to the known tangent
+    (the mirror-image buckled branches at alpha = 0, pi)."""
     family = StaticFamily(model, parameter)
     n = model.n
     m = family.at(point.value)

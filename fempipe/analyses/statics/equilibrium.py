@@ -1,17 +1,12 @@
 """One static equilibrium of Eq. (31a) by Newton's method, and what "converged" means.
 
-The static residual is ``R(q, 0, 0; params)`` of :class:`~fempipe.model.operators.PipeModel`,
-the weak form of
+The static residual ``R(q, 0, 0)`` is the weak form of
 
     -theta'' + gamma (1 - xi) sin(theta + alpha) + v^2 sin(theta(1) - theta) = 0,
-    theta(0) = 0, theta'(1) = 0,
+    theta(0) = 0, theta'(1) = 0;
 
-the sum of three forces: bending, gravity and the follower force of the jet.
-:func:`solve_static` runs Newton's method (:func:`fempipe.solvers.newton.newton`) and
-accepts a state only when the residual is small compared with each of them
-(:func:`force_balance`), and reports loads beyond floating-point range as a
-:class:`NewtonError`.  The branches and paths of :mod:`fempipe.analyses.statics`
-(continued by the engine of :mod:`fempipe.solvers.continuation`) are built on it.
+:func:`solve_static` accepts a state only when R is small compared with each of its forces
+(:func:`force_balance`).  The branches of :mod:`fempipe.analyses.statics` are built on it.
 """
 
 from __future__ import annotations
@@ -35,16 +30,8 @@ __all__ = [
 
 
 class NewtonError(SolverError):
-    """Newton's method did not converge, or met a non-finite residual.
-
-    Attributes
-    ----------
-    params : Params
-        The parameter point.
-    iterations : int
-    residual : float
-        Last residual norm (Euclidean norm of the weak-form residual).
-    """
+    """Newton's method did not converge, or met a non-finite residual (``params``,
+    ``iterations``, ``residual``: the last residual norm)."""
 
     def __init__(self, message: str, params: Params, iterations: int, residual: float) -> None:
         super().__init__(message)
@@ -53,29 +40,15 @@ class NewtonError(SolverError):
         self.residual = residual
 
     def __reduce__(self):
-        # Rebuilt from all the constructor's arguments, so that the error of a
-        # worker process reaches its parent intact.
+        # so that the error of a worker process reaches its parent intact
         return type(self), (str(self), self.params, self.iterations, self.residual)
 
 
 @dataclass(frozen=True)
 class StaticSolution:
-    """A converged static state.
-
-    Attributes
-    ----------
-    q : ndarray, shape (n,)
-    params : Params
-    iterations : int
-        Newton iterations used, all of them: for a state reached by gravity
-        loading (:func:`fempipe.analyses.statics.solve_sagged`) those of the loading
-        included.
-    residual_norm : float
-        Euclidean norm of R(q, 0, 0) at return.
-    loading_iterations : int
-        The part of ``iterations`` spent on the gravity loading (the
-        continuation in gamma from 0); 0 for Newton from a neighbouring state.
-    """
+    """A converged static state: ``q``, ``params``, the Newton ``iterations`` (those of the
+    gravity loading of :func:`~fempipe.analyses.statics.solve_sagged` included, and counted
+    apart in ``loading_iterations``) and ``residual_norm``, ||R(q, 0, 0)||."""
 
     q: np.ndarray
     params: Params
@@ -92,33 +65,19 @@ class StaticSolution:
         }
 
 
-#: Largest number of unknowns for which Newton's method and the continuation
-#: use the dense static Jacobian: below it scipy.sparse's constructors alone cost
-#: more than the dense Jacobian and its LU (at P3:16, n = 48, many times more).
+#: Largest number of unknowns for which Newton's method and the continuation use the dense
+#: static Jacobian: below it the sparse constructors cost more than the dense LU.
 DENSE_MAX_N = 400
 
 
 def force_balance(model: PipeModel, q: np.ndarray) -> tuple[np.ndarray, float, float]:
     """R(q, 0, 0), its norm, and the size of the forces it balances.
 
-    R = bending + gravity + follower + springs.  A state is an equilibrium
-    when R is small compared with each of these forces as they act at q:
-    ``||R|| <= tol (||bending|| + gravity load + ||follower|| + ||springs||)``.
-
-    * Bending, K q, the follower term, v^2 \\int phi_i sin(theta(1) - theta),
-      and the springs (:meth:`PipeModel.spring`) vanish with q, also in
-      floating point to round-off: they are measured as they are.
-    * Gravity, gamma \\int phi_i (1 - xi + Gamma) sin(theta + alpha) (the
-      pipe and its end mass), is measured by its load
-      ``gamma ||\\int phi_i (1 - xi + Gamma)||`` (:meth:`PipeModel.gravity_load`)
-      whatever the lever arm: sin(theta + alpha) carries an absolute
-      round-off error of ~1e-16 at every angle (sin(pi) = 1.2e-16), so the
-      straight column at alpha = pi is an equilibrium to that accuracy.
-
-    Scaling by the load coefficients (1 + gamma + v^2) instead would accept an
-    unbalanced load whenever another coefficient is huge: at v = 1e100 the
-    straight pipe, where the follower term vanishes, would "converge" with
-    the whole gravity load unbalanced.
+    A state is an equilibrium when ``||R|| <= tol (||bending|| + gravity load +
+    ||follower|| + ||springs||)``, each force as it acts at q; gravity is measured by its
+    load (:meth:`PipeModel.gravity_load`), as sin(theta + alpha) carries an absolute
+    round-off of ~1e-16 at every angle.  Scaling by the coefficients 1 + gamma + v^2
+    instead would accept an unbalanced gravity load at v = 1e100.
     """
     with np.errstate(over="ignore", invalid="ignore"):  # reported as non-finite
         b, g, f, k = model.static_terms(q)
@@ -149,19 +108,15 @@ def solve_static(
     tol: float = 1e-10,
     max_iter: int = 40,
 ) -> StaticSolution:
-    """Solve the static problem by Newton's method with the analytic Jacobian.
-
-    The static problem is Eq. (31a), in weak form.
+    """The static state of Eq. (31a) by Newton's method with a line search on ||R||.
 
     Parameters
     ----------
     model : PipeModel
     q0 : ndarray, shape (n,), optional
-        Initial guess (default: the straight pipe, theta = 0).
+        Initial guess (default the straight pipe).
     tol : float
-        Convergence when ``||R|| <= tol (||bending|| + gravity load +
-        ||follower||)``, each term of R measured at the state (see
-        :func:`force_balance`), and the last Newton step is below
+        Relative force balance (:func:`force_balance`); the last step must also be below
         ``1e-9 (1 + ||q||)``.
     max_iter : int
 
@@ -172,13 +127,7 @@ def solve_static(
     Raises
     ------
     NewtonError
-        Naming the parameter point, iterations and residual; also when the
-        residual is not finite (loads beyond floating-point range).
-
-    Notes
-    -----
-    A backtracking line search on ||R|| (:func:`fempipe.solvers.newton.newton`) keeps the
-    iteration from jumping between the many equilibria of a large-deformation problem.
+        Also when the residual is not finite (loads beyond floating-point range).
     """
     q = np.zeros(model.n) if q0 is None else np.array(q0, dtype=float)
     dense = model.n <= DENSE_MAX_N

@@ -1,13 +1,9 @@
-"""The static problem of Eq. (31a) along one parameter, as a continuation problem.
+"""The static problem of Eq. (31a) along v, gamma or alpha as a continuation problem.
 
-:class:`StaticFamily` is R(q; lambda) = 0 for the pipe models along v, gamma or
-alpha, in the form the pseudo-arclength engine asks for
-(:class:`fempipe.solvers.continuation.ContinuationProblem`): y = (q, lambda),
-the residual, the derivatives ``(dR/dq, dR/dlambda)``, the bordered solve and
-the inner product.  Arclength is measured in the discretization-independent
-norm ``||(theta, lambda)||^2 = \\int_0^1 theta^2 dxi + lambda^2`` (the Gram
-matrix of the discretization), so step sizes mean the same thing on every
-mesh.
+:class:`StaticFamily` is R(q; lambda) = 0 in the form of
+:class:`fempipe.solvers.continuation.ContinuationProblem`, arclength measured in
+``||(theta, lambda)||^2 = \\int_0^1 theta^2 dxi + lambda^2`` (the Gram matrix), so that
+step sizes mean the same on every mesh.
 """
 
 from __future__ import annotations
@@ -30,21 +26,11 @@ CONTINUATION_PARAMETERS = ("v", "gamma", "alpha")
 
 
 class StaticFamily:
-    """The pipe models along one parameter: the physics a continuation walks through.
+    """The pipe models along ``parameter`` ('v', 'gamma' or 'alpha') from ``model``.
 
-    The arclength engine asks only for the model at a parameter value and
-    for dR/dlambda; what a value means for the pipe is said here.  v and
-    gamma are physical only when >= 0, but a branch may pass through 0 (a
-    buckled branch at alpha = pi returns to v = 0), so the corrector may ask
-    for negative values.  They are mapped to their mirror images: R depends
-    on v only through v^2, and gamma < 0 is |gamma| with alpha + pi.
-    dR/dlambda carries the sign of the map.
-
-    Parameters
-    ----------
-    model : PipeModel
-        The model at the start (its parameter value is replaced along the branch).
-    parameter : {'v', 'gamma', 'alpha'}
+    A branch may pass through v = 0 or gamma = 0, so negative values are mapped to their
+    mirror images (R depends on v^2; gamma < 0 is |gamma| with alpha + pi), dR/dlambda
+    carrying the sign of the map.
     """
 
     def __init__(self, model: PipeModel, parameter: str) -> None:
@@ -78,8 +64,7 @@ class StaticFamily:
         return -d if (value < 0 and self.parameter != "alpha") else d
 
     def balanced(self, y: np.ndarray, tol: float) -> float | None:
-        """||R|| at y = (q, lambda) if the forces balance to ``tol``
-        (:func:`fempipe.analyses.statics.equilibrium.force_balance`), else None."""
+        """||R|| at y = (q, lambda) if the forces balance to ``tol``, else None."""
         n = self.n
         _, rn, scale = force_balance(self.at(y[n]), y[:n])
         return rn if rn <= tol * scale else None
@@ -101,8 +86,7 @@ class StaticFamily:
     def solve_bordered(
         self, lin: tuple, row: np.ndarray | None, rhs: np.ndarray, *, determinant: bool = False
     ) -> BorderedSolution:
-        """[[dR/dq, dR/dlambda], [row]] z = rhs: the pseudo-arclength Jacobian
-        (``row`` None: dR/dq z = rhs)."""
+        """[[dR/dq, dR/dlambda], [row]] z = rhs (``row`` None: dR/dq z = rhs)."""
         J, Rl = lin
         if row is None:
             A = J

@@ -1,11 +1,6 @@
-"""The state a pipe reaches when gravity is switched on, and states along a path.
-
-:func:`solve_sagged` follows the straight pipe at gamma = 0 to the actual
-gamma (the primary branch of every stability analysis); :func:`solve_path`
-gives the states along a list of parameter values, what ``fempipe static``
-computes, by Newton (:func:`fempipe.analyses.statics.equilibrium.solve_static`) bridged by
-continuation (:func:`~fempipe.analyses.statics.branches.continue_static`) where
-Newton fails.
+"""The state a pipe reaches when gravity is switched on (:func:`solve_sagged`), and the
+states along a list of parameter values (:func:`solve_path`, what ``fempipe static``
+computes): Newton bridged by continuation where it fails.
 """
 
 from __future__ import annotations
@@ -31,23 +26,11 @@ log = logging.getLogger(__name__)
 def solve_sagged(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
     """The static state reached by switching gravity on slowly: continuation in gamma from 0.
 
-    At gamma = 0 the straight pipe is the solution for every v and alpha;
-    following it to the actual gamma gives the state a pipe reaches when it
-    is loaded, which is the primary branch of every stability analysis.
-    Newton from the straight pipe is not used: for alpha >= ~150 deg and
-    gamma = 18.9 it converges to the nearly straight, unstable equilibrium
-    (theta_tip = +0.93 at 160 deg instead of -2.25).  At alpha = 0 and pi the
-    loaded state is the straight pipe (the pitchfork there is not taken).
-
-    Near alpha = pi the loaded branch turns sharply where the perfect column
-    would buckle (gamma = 7.837), and a large continuation step can land on
-    the unstable near-straight state or on the mirror-image (unfavoured)
-    lean.  The result is therefore checked -- for sin(alpha) != 0 gravity
-    rotates the pipe towards the plumb line, so theta_tip sin(alpha) < 0,
-    and at v = 0 the state must be a minimum of the potential energy (the
-    static Jacobian, symmetric there, positive definite) -- and the loading
-    is repeated with steps 1, 0.5, 0.1 and 0.02 until it passes (measured:
-    alpha = 179 deg needs 0.5, 179.99 deg needs 0.1).
+    The primary branch of every stability analysis.  Newton from the straight pipe would
+    find the nearly straight, unstable state for alpha >= ~150 deg.  Near alpha = pi a large
+    step can land on the unstable or the mirror-image state, so the result is checked
+    (theta_tip sin(alpha) < 0; at v = 0 a minimum of the potential energy) and the loading
+    repeated with smaller steps until it passes.
     """
     p = model.params
     if p.gamma == 0.0:
@@ -97,17 +80,10 @@ def solve_path(
     tol: float = 1e-10,
     callback: Callable[[int, StaticSolution], None] | None = None,
 ) -> list[StaticSolution]:
-    """Static states at the given parameter values, following one branch.
+    """Static states at ``values`` of ``parameter`` along one branch, in order.
 
-    The first value is solved by Newton from ``q0`` (default: the
-    gravity-sagged state of :func:`solve_sagged`); each
-    next one starts from a linear extrapolation of the previous two.  If Newton
-    fails (a fast-changing or folded branch), the gap is bridged by
-    pseudo-arclength continuation, which passes folds.
-
-    Returns
-    -------
-    list of StaticSolution, one per value, in the given order.
+    The first from ``q0`` (default :func:`solve_sagged`), each next one by Newton from the
+    extrapolation of the previous two, the gap bridged by continuation where Newton fails.
     """
     values = [float(x) for x in values]
     if not values:

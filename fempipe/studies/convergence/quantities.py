@@ -1,10 +1,5 @@
-"""The quantities of a convergence study and the families of discretizations it runs on.
-
-A :class:`Quantity` is one number of the user's case as a function of the
-discretization (a static tip value, the critical flow velocity or its
-frequency, an eigenvalue, a limit cycle's amplitude or period); a
-:class:`Family` is a sequence of discretizations of one kind.
-"""
+"""The quantities of a convergence study (:class:`Quantity`, one number of the user's case as
+a function of the discretization) and the families of discretizations (:class:`Family`)."""
 
 from __future__ import annotations
 
@@ -87,10 +82,8 @@ PARAMETRIC_QUANTITIES = ("sigma_threshold", "omega_threshold")
 #: where sigma is flat: docs/theory/parametric.md).
 PARAMETRIC_TOL = 1e-11
 
-#: Tolerances the quantities are computed to, relative to max(1, |Q|): below
-#: them a difference between two discretizations is solver noise.  Newton
-#: (static, 1e-12 on the residual), Brent on v (1e-10, the events of
-#: :mod:`fempipe.analyses.stability`), the shooting's integration (``shoot_rtol``).
+#: Tolerances the quantities are computed to, relative to max(1, |Q|): Newton on static
+#: states, Brent on v for the stability events.
 STATIC_TOL = 1e-12
 EVENT_TOL = 1e-10
 
@@ -113,19 +106,8 @@ def doubling(low: int, high: int) -> list[int]:
 
 @dataclass(frozen=True)
 class Family:
-    """A sequence of discretizations of one kind.
-
-    Parameters
-    ----------
-    kind : {'fe', 'modal'}
-    sizes : tuple of int
-        Element counts (fe) or numbers of modes (modal), each usually the
-        double of the last.
-    degree : int
-        Element degree k of P_k (fe).
-    basis : {'sine', 'beam'}
-        Modal basis (modal).
-    """
+    """A sequence of discretizations of one ``kind`` ('fe': P_``degree`` on ``sizes``
+    elements; 'modal': ``sizes`` modes of ``basis``)."""
 
     kind: str
     sizes: tuple[int, ...]
@@ -148,9 +130,8 @@ class Family:
         return int(size) * self.degree if self.kind == "fe" else int(size)
 
     def order_for(self, params: Params | None) -> float | None:
-        """Theoretical order for the case ``params`` (variants can lower it, see
-        :func:`fempipe.studies.error_estimate.expected_order`), judged on the coarser of the two
-        finest members (a spring is a mesh node there or not)."""
+        """Theoretical order for ``params`` (:func:`~fempipe.studies.error_estimate.expected_order`)
+        on the coarser of the two finest members."""
         size = self.sizes[-2] if len(self.sizes) > 1 else self.sizes[-1]
         return expected_order(self.discretization(size), params)
 
@@ -169,27 +150,19 @@ class Quantity:
     name : str
         A key of :data:`QUANTITIES`.
     params : Params
-        alpha, beta, gamma, mu and v (the flow velocity of static, eigenvalue
-        and limit-cycle quantities; the start of the range for v_cr and
-        frequency).
+        The case; v the flow velocity (the start of the range for the critical quantities).
     v_max : float, optional
-        End of the flow range of v_cr and frequency.
+        End of the flow range of the critical quantities.
     mode : int
-        Mode number k of ``eigenvalue`` (1-based, carried by continuity from
-        v = 0, see :mod:`fempipe.analyses.stability`).
+        Mode number of ``eigenvalue`` (carried by continuity from v = 0).
     shoot_rtol : float
-        Integration tolerance of the limit cycle's shooting (its accuracy).
+        Integration tolerance of the limit cycle's shooting.
     seed : tuple, optional
-        ``(disc, q0, qdot0, period)``: a limit cycle on another
-        discretization to start the shooting from (see :meth:`seeded`).
+        ``(disc, q0, qdot0, period)``: a cycle to start the shooting from (:meth:`seeded`).
     planar : bool
-        ``v_cr`` and ``frequency`` of the paper's planar model (the same
-        numbers as ``v_cr_in_plane`` and ``frequency_in_plane``) instead of
-        those of three dimensions; ``fempipe compare`` sets it for a user's
-        ``v_cr`` and ``frequency`` (its module docstring).
+        ``v_cr`` and ``frequency`` in the plane (as ``*_in_plane``) instead of in 3-D.
     omega_band : (float, float), optional
-        The pulsation frequencies searched by ``sigma_threshold`` and ``omega_threshold``
-        (the straight pipe under the mean flow ``params.v``).
+        The pulsation frequencies searched by the parametric thresholds.
     sigma_max : float
         The largest pulsation amplitude searched by them.
 
@@ -284,7 +257,6 @@ class Quantity:
     def _parametric(self, model) -> float:
         """The threshold of the first region of parametric resonance to open in the band."""
         from fempipe.analyses.parametric import compute_parametric_chart
-        from fempipe.core.errors import SolverError
 
         chart = compute_parametric_chart(
             model, self.params.v, self.omega_band, [self.sigma_max], sigma_tol=PARAMETRIC_TOL
@@ -371,20 +343,8 @@ class Quantity:
 
 
 def static_tip_state(disc, params: Params) -> np.ndarray:
-    """Static state on the primary branch at ``params.v``, followed from v = 0.
-
-    Parameters
-    ----------
-    disc : Discretization
-    params : Params
-        The case; ``params.v`` is the flow velocity of the state.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        The state of :func:`fempipe.analyses.statics.solve_path` (tolerance
-        :data:`STATIC_TOL`) at ``params.v``.
-    """
+    """The static state at ``params.v`` on the primary branch, followed from v = 0 by
+    :func:`~fempipe.analyses.statics.solve_path` to :data:`STATIC_TOL`."""
     # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.statics import solve_path
     from fempipe.model.operators import PipeModel

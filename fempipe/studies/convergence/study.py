@@ -30,32 +30,9 @@ ORDER_BAND = 0.5
 
 @dataclass(frozen=True)
 class Series:
-    """One family's members: sizes, dofs, values, errors and the fitted order.
-
-    Attributes
-    ----------
-    family : str
-        ``fe-P1`` ..., ``modal-sine``, ``modal-beam``.
-    n : ndarray of int
-        Element counts (fe) or numbers of modes (modal).
-    dofs : ndarray of int
-    values : ndarray
-        NaN where the computation failed (see ``failures``).
-    errors : ndarray
-        |value - reference|.
-    observed_order : float
-        In dofs (error ~ dofs^-order); NaN if fewer than two usable points.
-    fit : tuple of int
-        Indices of the points the fit used.
-    expected_order : float or None
-    extrapolated : complex or float or None
-        Richardson value of the finest two members (None if not formed).
-    extrapolation_error : float or None
-    failures : dict
-        index -> message of the solver failure.
-    cpu_time : float
-        CPU seconds of the members' computations.
-    """
+    """One family's members: sizes ``n``, ``dofs``, ``values`` (NaN where ``failures``
+    holds the message), ``errors`` against the reference, the ``observed_order`` in dofs fitted
+    on the points ``fit``, and the Richardson value of the finest two members."""
 
     family: str
     n: np.ndarray
@@ -199,21 +176,18 @@ def run_study(
         ``quantity(disc) -> value``; picklable for ``workers > 1``.
     families : sequence of Family
     tolerance : float, optional
-        Relative accuracy of the solver (default ``quantity.tolerance``):
-        the floor of the reference's error estimate and of the fits.
+        Relative solver accuracy, the floor of the estimates (default ``quantity.tolerance``).
     workers : int, optional
         Processes computing members in parallel.
     callback : callable, optional
         ``callback(done, total)`` after each member.
     independent : sequence of (str, value)
-        Further independent values (e.g. a strong-form solution) listed with
-        their distance to the reference.
+        Further independent values listed with their distance to the reference.
 
     Returns
     -------
     ConvergenceStudy
-        Members whose solver failed have value NaN and their message in
-        ``Series.failures``; they are left out of the reference and the fits.
+        Failed members are NaN, left out of the reference and the fits.
     """
     t_start = time.process_time()
     families = list(families)
