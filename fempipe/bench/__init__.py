@@ -1,20 +1,12 @@
 """Performance benchmarks (timings, never unit tests).
 
-A benchmark is a function ``fn(quick: bool = False) -> dict`` registered under a name with
-:func:`fempipe.bench.harness.register` (``@register("my_solver")``), in a module listed in
-:data:`BENCHMARK_MODULES` so that :func:`available` imports it; ``fempipe bench`` runs them all
-or ``--only NAME``.  A result dict may carry a ``"table"`` (list of flat dicts), which the CLI
-prints as a table; everything else is printed as ``key: value``.
+A benchmark is ``fn(quick: bool = False) -> dict``, registered with
+:func:`fempipe.bench.harness.register` in a module of :data:`BENCHMARK_MODULES`;
+``fempipe bench`` runs them all or ``--only NAME``.  A result's ``"table"`` (list of flat
+dicts) is printed as a table, the rest as ``key: value``.  One module per subject; what they
+share is :mod:`~fempipe.bench.harness`; this module is the registry and the runner.
 
-The benchmarks, one module per subject: :mod:`~fempipe.bench.static`,
-:mod:`~fempipe.bench.critical`, :mod:`~fempipe.bench.convergence`,
-:mod:`~fempipe.bench.startup`, :mod:`~fempipe.bench.dynamics`,
-:mod:`~fempipe.bench.stability`, :mod:`~fempipe.bench.bifurcation`,
-:mod:`~fempipe.bench.hopf`, :mod:`~fempipe.bench.output`, :mod:`~fempipe.bench.space` and
-:mod:`~fempipe.bench.parametric`;
-what they share (the registration, the timers, the cases) is :mod:`~fempipe.bench.harness`.
-This module is the registry of the modules and the runner.  What each measures:
-docs/cli/commands.md, "fempipe bench".
+What each measures: docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations
@@ -79,19 +71,15 @@ def run(
     ----------
     names : list of str, optional
     quick : bool
-        Smaller problems and one repetition (a smoke run, not a measurement).
+        Smaller problems, one repetition (a smoke run).
     callback : callable, optional
-        Called as ``callback(name, result)`` after each benchmark.
+        ``callback(name, result)`` after each benchmark.
 
     Returns
     -------
     dict
-        ``{"environment": ..., "quick": quick, "benchmarks": {name: result}}``.
-
-    Raises
-    ------
-    ValueError
-        For an unknown name (naming the known ones).
+        ``{"environment": ..., "quick": quick, "benchmarks": {name: result}}``; ValueError
+        for an unknown name.
     """
     table = available()
     names = list(table) if not names else list(names)

@@ -1,15 +1,9 @@
-"""Benchmarks of the bifurcation diagrams by continuation; not timed tests.
+"""Benchmarks of the bifurcation diagrams by continuation, as fresh processes.
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only fig07_continuation``).
-
-* ``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7: alpha = 0, the
-  paper's beta, gamma, mu, the default discretization, ``--method continuation``) as a fresh
-  process: CPU seconds (user + sys of the finished child, ``resource.getrusage``), start-up
-  included; target :data:`FIG07_TARGET_S`.  Not in quick mode: the same diagram by
-  ``--method sweep`` (up and down, one process), its CPU seconds and the ratio, and the
-  largest differences of the period and tip extrema of the stable orbits where both give one.
-* ``fig08_10_continuation``: ``--alphas pi/4,pi/2,3pi/4,pi`` (Figs. 8-10), the same way,
-  without the sweep; target :data:`FIG08_10_TARGET_S` for the four together.
+``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7), target
+:data:`FIG07_TARGET_S`; not in quick mode also ``--method sweep``, the ratio and the largest
+differences of the stable orbits.  ``fig08_10_continuation``: ``--alphas pi/4,pi/2,3pi/4,pi``
+(Figs. 8-10), target :data:`FIG08_10_TARGET_S`.
 """
 
 from __future__ import annotations
@@ -33,8 +27,7 @@ def _process_cpu(argv: list[str]) -> tuple[float, dict]:
 
 
 def _agreement(cont: dict, sweep: dict) -> dict:
-    """Largest |difference| of period and tip extrema between the stable orbits of the
-    continuation at the requested v and the periodic attractors of the sweep."""
+    """Largest |difference| of period and tip extrema between continued stable orbits and swept attractors."""
     cyc = {}
     for p in cont["points"]:
         if p["direction"] == "continuation" and p["requested"] and p["stable"]:

@@ -1,19 +1,10 @@
-"""Benchmarks of the nonlinear dynamics; not timed tests.
+"""Benchmarks of the nonlinear dynamics: ``limit_cycle`` and ``fig7``.
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only limit_cycle,fig7``); also
+``limit_cycle``: whole ``fempipe simulate --alpha 0 --v 10 --json`` processes (the paper's
+case, start-up included) against the same command at ``--shoot-rtol 1e-10``, then in-process
+:func:`fempipe.analyses.limit_cycle.find_attractor` rows.  ``fig7``: the Fig. 7 diagram,
+36 velocities swept up and down on 2 workers.  Also
 ``python -m fempipe.bench.dynamics [--skip-fig7] [--workers 2] [--out FILE.json]``.
-
-* ``limit_cycle``: one converged limit cycle (alpha = 0, v = 10, the paper's beta, gamma, mu:
-  :data:`fempipe.model.params.PAPER_CASE`) from the static state + perturbation, transient and
-  shooting included, as the user runs it: the CPU seconds (user + sys of the finished
-  children) of whole ``fempipe simulate --alpha 0 --v 10 --json`` processes, start-up
-  included, median of 5, and the period and tip extrema against the same command with
-  ``--shoot-rtol 1e-10``; targets :data:`PROCESS_TARGET_S` and :data:`ACCURACY_TARGET` at the
-  default discretization.  In-process rows (wall time of
-  :func:`fempipe.analyses.limit_cycle.find_attractor`) for P3:16 and the paper's modal N = 4
-  follow.
-* ``fig7``: the Fig. 7 diagram, alpha = 0, 36 velocities from 5 to 12, swept up and down (the
-  two sweeps in parallel); target :data:`FIG7_TARGET_S` on 2 cores.
 """
 
 from __future__ import annotations
@@ -109,11 +100,7 @@ def _relative_errors(d: dict, ref: dict) -> dict:
 
 
 def bench_limit_cycle_process(alpha: float = 0.0, v: float = 10.0, runs: int = 5) -> dict:
-    """Whole ``fempipe simulate --alpha A --v V --json`` processes: median CPU-s, errors.
-
-    The reference is the same command with ``--shoot-rtol 1e-10`` (the same
-    discretization), run once.
-    """
+    """Median CPU-s of whole ``simulate --alpha A --v V --json`` processes, errors against ``--shoot-rtol 1e-10``."""
     argv = ["simulate", "--alpha", repr(alpha), "--v", repr(v), "--json"]
     _, ref = _process_cpu([*argv, "--shoot-rtol", "1e-10"])
     cpus, d = [], None
@@ -142,10 +129,7 @@ def bench_limit_cycle_process(alpha: float = 0.0, v: float = 10.0, runs: int = 5
 
 @register("limit_cycle")
 def limit_cycle(quick: bool = False) -> dict:
-    """One converged limit cycle: whole-process CPU-s of ``simulate --alpha 0 --v 10
-    --json`` (median of 5; errors against ``--shoot-rtol 1e-10``), then the
-    in-process find_attractor for P3:16 and modal N = 4 (quick: one process
-    run, P3:8 and modal N = 3 in-process)."""
+    """One converged limit cycle, as a process and in-process (quick: smaller discretizations)."""
     proc = bench_limit_cycle_process(runs=1 if quick else 5)
     specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
     rows = [bench_limit_cycle(s) for s in specs]
@@ -161,10 +145,7 @@ def limit_cycle(quick: bool = False) -> dict:
 
 @register("fig7")
 def fig7(quick: bool = False) -> dict:
-    """The Fig. 7 sweep (36 v, up and down, 2 workers), P3:16 and modal N = 4.
-
-    quick: 4 velocities on P3:8 and modal N = 3.
-    """
+    """The Fig. 7 sweep (36 v, up and down, 2 workers) on P3:16 and modal N = 4 (quick: 4 v, P3:8, N = 3)."""
     specs = ("P3:8", "modal:3") if quick else (DEFAULT_FE, "modal:4")
     rows = [bench_fig7(s, workers=2, n_values=4 if quick else 36) for s in specs]
     table = [

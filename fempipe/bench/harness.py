@@ -1,9 +1,6 @@
-"""What the benchmarks share: their registration, two timers and two cases.
-
-A benchmark module registers its functions with :func:`register` (into :data:`BENCHMARKS`)
-and times them with :func:`best_time` (in this process) or :func:`child_cpu_seconds` (a
-fresh ``python``); :data:`PAPER` and :data:`TEXIER_DORBOLO` are the cases several of them
-run.  The registry of the modules and the runner are :mod:`fempipe.bench`.
+"""What the benchmarks share: :func:`register`, the timers :func:`best_time` (in process) and
+:func:`child_cpu_seconds` (a fresh ``python``), and the cases :data:`PAPER` and
+:data:`TEXIER_DORBOLO`.
 """
 
 from __future__ import annotations
@@ -65,24 +62,12 @@ _BYTECODE_CACHE: str | None = None
 
 
 def child_cpu_seconds(argv: list[str], env: dict | None = None) -> tuple[float, str]:
-    """User + system CPU seconds and stdout of one fresh ``python ARGV`` (``sys.executable``).
+    """User + system CPU seconds and stdout of one fresh ``python ARGV``.
 
-    ``env`` changes the child's environment: ``{name: value}``, a value of
-    None removes the variable.
-
-    The CPU time is the change of ``getrusage(RUSAGE_CHILDREN)`` over the run.
-    All children of a benchmark run share one bytecode cache
-    (``PYTHONPYCACHEPREFIX``, a temporary directory removed at exit): an installed
-    package loads its modules from compiled bytecode, and with
-    PYTHONDONTWRITEBYTECODE set (as some harnesses do) fempipe's modules would
-    otherwise be compiled from source at every start while numpy's and scipy's
-    load their installed .pyc files.  The first run of a command fills the cache;
-    benchmarks make one untimed run first.
-
-    Raises
-    ------
-    RuntimeError
-        If the process fails, with the end of its stderr.
+    ``env`` changes the child's environment (a value None removes the variable).  All children
+    share one bytecode cache (``PYTHONPYCACHEPREFIX``), so fempipe loads compiled bytecode as
+    numpy and scipy do, even under PYTHONDONTWRITEBYTECODE.  RuntimeError with the end of
+    stderr if the process fails.
     """
     global _BYTECODE_CACHE
     if _BYTECODE_CACHE is None:

@@ -1,17 +1,9 @@
-"""The benchmark ``simulate_output`` (registered with :mod:`fempipe.bench`): what writing the
-files of ``fempipe simulate`` costs beside its computation.
+"""Benchmark ``simulate_output``: what writing the files of ``fempipe simulate`` costs beside
+its computation.
 
-``fempipe simulate --alpha 0 --v 10 --planar`` (the paper's case, P3:16) finds the limit cycle
-and prints its JSON (``--planar``: without the out-of-plane Floquet multipliers, whose 3-D
-monodromy would make the files look cheaper than they are); with ``--out DIR`` it also writes
-three figures, the animation pipe.gif, trajectory.pvd with its VTU frames, tip.csv and
-simulate.json.  The benchmark runs both commands as the user does, each in a fresh
-``python -m fempipe`` process, and reports their CPU seconds and the ratio; the target is
-that the files cost at most twice the computation (the ratio at most
-:data:`OUTPUT_RATIO_TARGET`).  Most of
-what the files cost is matplotlib's: importing it, the PNG figures (half of it their
-constrained layout), the GIF (half of it the time label's mathtext, parsed anew for every
-frame); the VTU frames are a small part.
+``fempipe simulate --alpha 0 --v 10 --planar`` with and without ``--out DIR`` (figures,
+GIF, VTU frames, CSV, JSON), each a fresh process; target: the ratio at most
+:data:`OUTPUT_RATIO_TARGET`.
 """
 
 from __future__ import annotations
@@ -32,19 +24,9 @@ SIMULATE = ("simulate", "--alpha", "0", "--v", "10", "--planar", "--json")
 
 @register("simulate_output")
 def bench_simulate_output(quick: bool = False) -> dict:
-    """CPU seconds of ``fempipe simulate --alpha 0 --v 10`` with and without --out.
-
-    Target: the ratio at most :data:`OUTPUT_RATIO_TARGET`.
-
-    Each run is a new ``python -m fempipe`` process (``sys.executable``,
-    ``MPLBACKEND=Agg``); its CPU time is user + system of the finished
-    process (``getrusage(RUSAGE_CHILDREN)``: what ``time.process_time()``
-    counts inside it, start-up included).  The two commands alternate, after
-    one untimed run of each (the bytecode cache, the font cache), so that a
-    drift of the machine's speed hits both; median of 5 pairs (quick: 1).
-    ``ratio`` is the median of the pairs' ratios, ``files_seconds`` the
-    difference of the medians.  Every ``--out`` run writes into a new
-    temporary directory, removed afterwards.
+    """CPU seconds of ``fempipe simulate --alpha 0 --v 10`` with and without --out, alternating
+    after one untimed run each; median of 5 pairs (quick: 1).  ``ratio`` is the median of the
+    pairs' ratios, ``files_seconds`` the difference of the medians.
     """
     runs = 1 if quick else 5
     env = {"MPLBACKEND": "Agg"}

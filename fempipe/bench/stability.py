@@ -42,18 +42,14 @@ def _child(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
 
 
 def _blas_env(one_thread: bool) -> dict:
-    """The baseline's environment changes: one BLAS thread, or the defaults as written
-    (only the variables fempipe's command line set in this process are removed)."""
+    """The baseline's environment: one BLAS thread, or as written (unset what fempipe's command line set)."""
     if one_thread:
         return dict.fromkeys(parallel.BLAS_THREAD_VARIABLES, "1")
     return dict.fromkeys(parallel.BLAS_SET_BY_FEMPIPE)
 
 
 def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
-    """Per (label, argv, reference, env): median CPU seconds of ``runs`` fresh processes, the last
-    one's v_cr error, and every run's CPU seconds by round.  Commands run in turns after one
-    untimed run each, so drifts of the machine's speed hit all alike.
-    """
+    """Per command: median CPU seconds of ``runs`` fresh processes in turns, its v_cr error, CPU by round."""
     for _, argv, _, env in commands:
         _child(argv, env)
     times: list[list[float]] = [[] for _ in commands]
@@ -86,8 +82,7 @@ def _classical_reference() -> float:
 
 
 def _curved_reference(spec: str) -> float:
-    """v_cr in three dimensions of the paper's case at alpha = pi/2 on the finite elements
-    ``spec`` (what ``fempipe critical`` computes without ``--planar``)."""
+    """v_cr in 3-D of the paper's case at alpha = pi/2 on the finite elements ``spec``."""
     model = PipeModel(discretization_from_name(spec), Params(alpha=math.pi / 2, **PAPER_CASE))
     return float(find_critical_velocity(model, v_max=10.0, planes=PLANES).v_cr)
 

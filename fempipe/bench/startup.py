@@ -24,15 +24,8 @@ _STARTUP_COMMANDS: tuple[tuple[str, list[str], bool], ...] = (
 
 @register("startup")
 def bench_startup(quick: bool = False) -> dict:
-    """CPU seconds of ``import fempipe`` and ``fempipe --help`` in a fresh python.
-
-    Target: :data:`STARTUP_TARGET`.
-
-    Each command runs as a new ``python`` process (``sys.executable``); its
-    user + system CPU time is the change of ``getrusage(RUSAGE_CHILDREN)``,
-    median of 5 runs (quick: 1).  ``import numpy`` and ``import scipy.linalg``
-    are the floors for comparison: the package loads scipy and scikit-fem
-    only when a computation needs them.
+    """CPU seconds of ``import fempipe`` and ``fempipe --help`` in fresh processes, median of 5
+    (quick: 1), against ``import numpy`` and ``import scipy.linalg``; target :data:`STARTUP_TARGET`.
     """
     runs = 1 if quick else 5
     rows = []

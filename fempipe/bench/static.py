@@ -1,16 +1,9 @@
-"""The static benchmarks (registered with :mod:`fempipe.bench`).
+"""The static benchmarks.
 
-``static_path``
-    A 61-point path in v = 0..10 at the default discretization, the paper's
-    case (:data:`fempipe.model.params.PAPER_CASE`) at alpha = pi/2 and the
-    Texier--Dorbolo pipe (the paper's Section 3.1, Fig. 2(b)) at alpha = pi/2, through
-    :func:`fempipe.analyses.statics.solve_path` (what ``fempipe static`` does) and,
-    for comparison, the pseudo-arclength :func:`fempipe.analyses.statics.continue_static`
-    from v = 0 to 10.
-``static_scaling``
-    The same 61-point path (paper's case) on P3 meshes of 8, 16, ..., 256
-    elements: wall time per point and the exponent p of time ~ n_elements^p,
-    fitted over the whole range and over the finest three meshes.
+``static_path``: a 61-point path in v = 0..10 at alpha = pi/2 (the paper's case and the
+Texier--Dorbolo pipe) through :func:`fempipe.analyses.statics.solve_path` and, for
+comparison, :func:`fempipe.analyses.statics.continue_static`.  ``static_scaling``: the same
+path on P3 meshes of 8 to 256 elements, time per point and its exponent in n_elements.
 """
 
 from __future__ import annotations

@@ -192,19 +192,12 @@ def _init_worker(parent: int) -> None:
 def process_pool(
     workers: int, mp_context: multiprocessing.context.BaseContext | None = None
 ) -> ProcessPoolExecutor:
-    """A ``ProcessPoolExecutor`` whose workers never outlive this process.
+    """A ``ProcessPoolExecutor`` of ``workers`` processes that never outlive this process.
 
     Each worker uses one BLAS thread, ignores SIGINT, dies on SIGTERM and exits within
-    :data:`PARENT_POLL` seconds of this process's death (at once on Linux, by a parent-death
-    signal, which Linux sends when the *thread* that started the worker exits: use the pool
-    from that thread).
-
-    Parameters
-    ----------
-    workers : int
-        Number of worker processes (>= 1).
-    mp_context : multiprocessing context, optional
-        How workers are started; default: the platform's.
+    :data:`PARENT_POLL` seconds of this process's death (on Linux at once, by a parent-death
+    signal sent when the creating *thread* exits: use the pool from that thread).
+    ``mp_context`` chooses how workers start.
     """
     # concurrent.futures and multiprocessing are imported here: a serial run does
     # not pay for them at start-up.
@@ -254,11 +247,10 @@ def run_tasks(
     on_result: Callable[[int, object], None] | None = None,
     heartbeat: Callable[[], None] | None = None,
 ) -> list:
-    """Run ``fn(*task)`` for every task, in parallel if asked; results in task order.
+    """Run ``fn(*task)`` for every task, in parallel if asked; per task its result or exception.
 
-    A task raising an ``Exception`` leaves it in its slot and the others run on; an interrupt,
-    ``SystemExit`` or a callback's exception cancels what has not started, terminates the
-    workers of a pool started here, and propagates.
+    A task's ``Exception`` stays in its slot; an interrupt, ``SystemExit`` or a callback's
+    exception cancels what has not started, terminates a pool started here, and propagates.
 
     Parameters
     ----------
@@ -267,21 +259,13 @@ def run_tasks(
     tasks : sequence of tuple
         Positional arguments of each call.
     workers : int, optional
-        Without ``executor``: > 1 starts a :func:`process_pool` of ``min(workers, len(tasks))``
-        processes; None or 1 runs here.
+        > 1 starts a :func:`process_pool` (without ``executor``); None or 1 runs here.
     executor : concurrent.futures.Executor, optional
-        Any executor; not shut down, only unstarted tasks are cancelled on an interrupt.
-    callback : callable, optional
-        ``callback(done, total, result)`` as each task finishes.
-    on_result : callable, optional
-        ``on_result(index, result)`` as each task finishes.
+        Any executor; not shut down.
+    callback, on_result : callable, optional
+        ``callback(done, total, result)``, ``on_result(index, result)`` as each task finishes.
     heartbeat : callable, optional
         Called every :data:`HEARTBEAT` seconds while parallel tasks run.
-
-    Returns
-    -------
-    list
-        Per task its return value or the exception it raised.
     """
     tasks = [tuple(t) for t in tasks]
     total = len(tasks)

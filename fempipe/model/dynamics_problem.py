@@ -110,24 +110,11 @@ class ModelDynamics:
 class PipeDynamics(ModelDynamics):
     """Eq. (20) of a pipe model as an implicit second-order problem.
 
-    Parameters
-    ----------
-    model : PipeModel
-        Supplies ``residual``, ``jacobians`` and ``mass_matrix``.
-    flow : PulsatingFlow or callable tau -> (v, v_dot), optional
-        Unsteady flow (rule 9); default the steady ``model.params.v`` (autonomous, rule 5).
-
-    Attributes
-    ----------
-    n : int
-    autonomous : bool
-        ``flow is None``.
-    stage_residuals, stage_jacobians : callable or None
-        The batched :class:`~fempipe.model.batched.StageKernels`, steady plain pipe only (rule 6).
-    prefers_batched_stage_jacobians : bool
-        The kernels exist and n_q n <= :data:`BATCHED_STAGES_MAX` (rule 7).
-    parameter_derivative : callable or None
-        ``(Q, P, A) -> dR/dv`` of the stages, steady flow only (rule 8).
+    ``model`` supplies ``residual``, ``jacobians`` and ``mass_matrix``; ``flow`` (tau -> (v,
+    v_dot), rule 9) replaces the steady ``model.params.v``.  The optional members of rules 6-8
+    (``stage_residuals``, ``stage_jacobians``: the batched
+    :class:`~fempipe.model.batched.StageKernels`; ``prefers_batched_stage_jacobians`` up to
+    :data:`BATCHED_STAGES_MAX`; ``parameter_derivative``) exist for steady flow only.
     """
 
     def __init__(

@@ -19,25 +19,12 @@ __all__ = ["FiniteElement"]
 
 
 class FiniteElement:
-    """Lagrange finite elements of degree ``degree`` on a line mesh of [0, 1].
+    """Lagrange finite elements of degree ``degree`` (1 to 10) on a line mesh of [0, 1].
 
-    Parameters
-    ----------
-    n_elements : int, optional
-        Number of uniform elements (ignored with ``nodes``).
-    degree : int
-        Polynomial degree, 1 to 10.
-    nodes : array_like, optional
-        Mesh nodes of a graded mesh, increasing from 0 to 1.
-    n_gauss : int, optional
-        Gauss points per element; the default ``2 * degree`` (>= 2) keeps the nodal
-        superconvergence O(h^(2k)) of P_k in tip values and eigenvalues.
-
-    Notes
-    -----
-    scikit-fem assembles ``K`` and ``gram`` on the package's own Gauss rule, so they and the
-    nonlinear terms share points and weights.  theta(0) = 0 removes the ``clamp`` dofs;
-    theta'(1) = 0 is natural.
+    ``n_elements`` uniform elements, or the increasing ``nodes`` from 0 to 1 of a graded mesh.
+    ``n_gauss`` points per element (default ``2 * degree``, >= 2) keep the nodal
+    superconvergence O(h^(2k)) of P_k.  ``K`` and ``gram`` are assembled by scikit-fem on the
+    same Gauss rule as the nonlinear terms; theta(0) = 0 removes the ``clamp`` dofs.
     """
 
     def __init__(
@@ -179,13 +166,10 @@ class FiniteElement:
 
 
 def _element_line_pp(degree: int):
-    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points' shape and values.
-
-    The stock cache is keyed by the number of points only, which breaks
-    :meth:`FiniteElement.evaluate` at as many points as a cell has Gauss points (scikit-fem
-    12.0.2).  Built on first use (importing fempipe does not import scikit-fem) and found by
-    name when unpickled.
-    """
+    """scikit-fem's ``ElementLinePp(degree)`` with its value cache keyed by the points, not their number."""
+    # The stock cache, keyed by the number of points only, breaks FiniteElement.evaluate at as
+    # many points as a cell has Gauss points (scikit-fem 12.0.2).  Built on first use, so that
+    # importing fempipe does not import scikit-fem; found by name when unpickled.
     # Build the class once: a second class of the same qualified name would make
     # every element made from the first one unpicklable.
     cls = globals().get("_ElementLinePp") or __getattr__("_ElementLinePp")

@@ -19,29 +19,21 @@ __all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
 
 
 class Modal:
-    """Modal Galerkin discretization: N global modes of [0, 1] (contract:
-    :class:`fempipe.model.discretization.Discretization`).
+    """Modal Galerkin discretization: N global modes of [0, 1] (docs/theory/convergence.md).
 
-    Both bases have theta(0) = 0 and theta'(1) = 0 built in.  ``basis="sine"``: the paper's
-    phi_r = sin(k_r xi), k_r = (2r - 1) pi / 2 (Eq. (22)), K = diag(k_r^2 / 2), error ~ N^-3.
-    ``basis="beam"``: psi_r = phi_r' / lambda_r of the clamped-free beam modes, exact for the
-    straight pipe without flow and gravity, K = diag(lambda_r^2), a non-diagonal Gram matrix,
-    error ~ N^-4 (docs/theory/convergence.md).
+    ``basis="sine"``: the paper's sin(k_r xi), k_r = (2r - 1) pi / 2 (Eq. (22)), error ~ N^-3;
+    ``basis="beam"``: the slopes of the clamped-free beam modes, exact for the straight pipe
+    without flow and gravity, error ~ N^-4.
 
     Parameters
     ----------
     n_modes : int
         N >= 1.
     n_cells, n_gauss : int, optional
-        Quadrature of the nonlinear integrals; the default, max(32, 4N) cells of 8 points,
-        integrates to near round-off, so the error is the modal truncation alone.
+        Quadrature of the nonlinear integrals (default max(32, 4N) cells of 8 points: the
+        error is the truncation alone).
     basis : {"sine", "beam"}
-        Keyword only.
-
-    Attributes
-    ----------
-    k : ndarray, shape (N,)
-        Wavenumbers: (2r - 1) pi / 2 (sine) or lambda_r (beam).
+        Keyword only.  ``k`` holds the wavenumbers k_r or lambda_r.
     """
 
     #: The accepted values of ``basis``.
@@ -131,19 +123,7 @@ EXPECTED_ORDER = {"sine": 3.0, "beam": 4.0}
 
 
 def beam_roots(n: int) -> np.ndarray:
-    """lambda_r, r = 1..n, the roots of cos(lambda) cosh(lambda) = -1, to machine precision.
-
-    Brent's method on cos(lambda) + 1 / cosh(lambda) = 0 (docs/theory/convergence.md).
-
-    Parameters
-    ----------
-    n : int
-        Number of roots, >= 0.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-    """
+    """The ``n`` roots lambda_r of cos(lambda) cosh(lambda) = -1 to machine precision (Brent)."""
     out = np.empty(int(n))
     for r in range(1, int(n) + 1):
         c = (2 * r - 1) * np.pi / 2.0
@@ -152,23 +132,10 @@ def beam_roots(n: int) -> np.ndarray:
 
 
 def beam_mode_slopes(lam: np.ndarray, xi: np.ndarray, derivative: int = 0) -> np.ndarray:
-    """psi_r(xi) = phi_r'(xi) / lambda_r or a derivative, shape (len(xi), len(lam)).
+    """psi_r(xi) = phi_r'(xi) / lambda_r or its ``derivative`` (0 to 3), shape (len(xi), len(lam)).
 
-    Evaluated in a form without overflow or cancellation, accurate to round-off for any
-    lambda (docs/theory/convergence.md, "The form without overflow").
-
-    Parameters
-    ----------
-    lam : array_like, shape (N,)
-        Roots of cos(lambda) cosh(lambda) = -1 (:func:`beam_roots`).
-    xi : array_like, shape (m,)
-        Points of [0, 1].
-    derivative : int
-        0 to 3.
-
-    Returns
-    -------
-    ndarray, shape (m, N)
+    Accurate to round-off for any lambda (docs/theory/convergence.md, "The form without
+    overflow"); ``lam`` from :func:`beam_roots`, ``xi`` in [0, 1].
     """
     if derivative not in (0, 1, 2, 3):
         raise ValueError(f"derivative must be 0, 1, 2 or 3, got {derivative}")

@@ -28,26 +28,11 @@ __all__ = ["Fields", "PipeModel"]
 class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, SpringTerms):
     r"""The pipe's residual in weak form and its analytic Jacobians.
 
-    Parameters
-    ----------
-    disc : Discretization
-        :class:`~fempipe.model.discretization.FiniteElement` or
-        :class:`~fempipe.model.discretization.Modal`.
-    params : Params
-        Dimensionless parameters with the variants.
-
-    Attributes
-    ----------
-    disc, params, quad, x, w
-        The discretization, the parameters, ``disc.quad`` and its points and weights.
-    test_matrix : ndarray or sparse, shape (n, n_q)
-        ``Phi^T W``: ``test_matrix @ f`` is ``\int phi_i f``.
-
-    Notes
-    -----
-    The Jacobians in q' and q'' are dense (the nonlocal terms couple all dofs), and so is a
-    spring's block of the static Jacobian.  ``params.hysteretic_damping`` has no term here: it
-    acts in the linear stability problem only, and the time-domain solvers refuse it.
+    ``disc`` is a :class:`~fempipe.model.discretization.FiniteElement` or
+    :class:`~fempipe.model.discretization.Modal`, ``params`` the dimensionless parameters;
+    ``test_matrix`` is ``Phi^T W`` (``test_matrix @ f`` = ``\int phi_i f``).  The Jacobians in
+    q' and q'' are dense (the nonlocal terms couple all dofs).  Hysteretic damping has no term
+    here: it acts in the linear stability problem only.
     """
 
     def __init__(self, disc: Discretization, params: Params) -> None:

@@ -26,8 +26,7 @@ __all__ = ["OutOfPlaneMotion", "OutOfPlaneVariation"]
 
 @dataclass(frozen=True)
 class _Base:
-    """The planar motion at the quadrature points: the static model's state at tau
-    (theta, theta', theta(1): :meth:`OutOfPlaneOperators.state`) and the rates."""
+    """The planar motion at the quadrature points: the static model's state at tau and the rates."""
 
     state: object
     rate: np.ndarray  # theta_dot

@@ -114,8 +114,7 @@ def _gradient(p: _Point) -> tuple:
 
 
 def _hessian(p: _Point, w) -> tuple:
-    """(H, h) with ``H[:, :, c] = hess P [e_c, w]`` and ``h[:, c] = hess D [e_c, w]``:
-    hess P [v, w] = H v, hess D [v, w] = h . v."""
+    """(H, h) with hess P [v, w] = H v and hess D [v, w] = h . v."""
     wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
     c, s = p.c, p.s
     Pz4 = 0.5 * (p.a * s - p.b * c)  # P_z / 4
@@ -131,8 +130,7 @@ def _hessian(p: _Point, w) -> tuple:
 
 
 def _hessian_quadratic(p: _Point, w) -> tuple:
-    """(hess P [w, w], hess D [w, w]): :func:`_hessian` applied to w itself, without the
-    matrix (the acceleration needs the quadratic form along u_dot only)."""
+    """(hess P [w, w], hess D [w, w]) without forming the matrices of :func:`_hessian`."""
     wt, wa, wb = w[:, 0], w[:, 1], w[:, 2]
     Pz4 = 0.5 * (p.a * p.s - p.b * p.c)  # P_z / 4
     wt2 = wt * wt

@@ -18,8 +18,7 @@ __all__ = ["SpaceDynamics"]
 
 
 class _VelocityDerivative:
-    """dR/dv of the stages (:meth:`SpaceModel.velocity_derivative`): one evaluation of the
-    fields for all stages (R is quadratic in v, dR/dv = 2 v follower_1 + coriolis_1)."""
+    """dR/dv of the stages by one :meth:`SpaceModel.velocity_derivative`."""
 
     def __init__(self, model: SpaceModel) -> None:
         self.model = model

@@ -72,8 +72,7 @@ class SpringTerms(WeakForm):
         return [-kappa * d for kappa, _r, _t, _n, _b, d in self._spring_states(q)]
 
     def _spring_states(self, q: np.ndarray):
-        """Per spring: (kappa, rule, t, n, b_s, d) with d = r(xi_s) - (xi_s, 0) and
-        ``b_s[i] = \\int_0^xi_s phi_i n = d r(xi_s) / d q_i``."""
+        """Per spring (kappa, rule, t, n, b_s, d): d = r(xi_s) - (xi_s, 0), b_s = d r(xi_s) / d q."""
         q = np.asarray(q)
         out = []
         for kappa, xi_s in self.params.springs:

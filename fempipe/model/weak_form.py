@@ -112,14 +112,12 @@ class WeakForm:
         return self._test(np.einsum("qc,qcj->qj", fl.normal, G))
 
     def _normal_weight(self, F: np.ndarray, fl: Fields) -> np.ndarray:
-        """Derivative of ``\\int phi_i n . C^R F`` through n(theta) (dn = -t dtheta):
-        ``Phi^T diag(d) Phi`` with the d returned here."""
+        r"""The d of ``Phi^T diag(d) Phi``, the derivative of ``\int phi_i n . C^R F`` through n(theta)."""
         return -np.einsum("qc,qc->q", fl.tangent, self.quad.from_tip(F)) * self.w
 
     @property
     def _Phi_dense(self) -> np.ndarray:
-        """Phi as a dense array, cached per discretization: the dense Jacobians use it
-        every call, on models made by :meth:`with_params` (which share the discretization)."""
+        """Phi as a dense array, cached per discretization (shared by :meth:`with_params` models)."""
         return _dense_forms(self.disc)[0]
 
     @property

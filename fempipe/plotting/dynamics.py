@@ -336,20 +336,10 @@ def animation_figure(
 def render_frames(fig, draw, n_frames: int, full_redraw: bool = False) -> list:
     """The frames of an animation figure as RGBA PIL images, one per frame.
 
-    The figure is laid out and drawn once; each frame is that background with only the
-    artists ``draw(k)`` returns drawn over it (blitting).  They are the last of their axes in
-    drawing order, so a frame has the pixels of a full redraw, which re-runs the layout and
-    every text at each frame.
-
-    Parameters
-    ----------
-    fig : matplotlib Figure
-    draw : callable
-        ``draw(k)`` updates the figure to frame k, returns the changed artists.
-    n_frames : int
-    full_redraw : bool
-        Draw every frame whole with ``FuncAnimation(..., blit=False)``: the reference the
-        blitted frames are tested against.
+    The figure is laid out and drawn once; each frame redraws only the artists ``draw(k)``
+    returns (blitting), the last of their axes in drawing order, so its pixels are a full
+    redraw's.  ``full_redraw`` draws every frame whole with ``FuncAnimation(..., blit=False)``:
+    the reference the blitted frames are tested against.
     """
     from PIL import Image
 

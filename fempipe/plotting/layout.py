@@ -14,20 +14,10 @@ __all__ = ["declutter", "shared_legend"]
 def declutter(
     ax, texts: Sequence, pad: float = 2.0, keep_clear: Sequence = (), draw: bool = True
 ) -> list:
-    """Hide every text of ``texts`` that overlaps an earlier visible one; return the kept texts.
+    """Hide every text of ``texts`` (by priority) that overlaps an earlier visible one, the axes'
+    edge or ``keep_clear`` artists, with ``pad`` pixels of clearance; return the kept texts.
 
-    Parameters
-    ----------
-    ax : matplotlib Axes
-        The texts' axes; a label reaching outside it is hidden too.
-    texts : sequence of matplotlib Text
-        In order of priority.
-    pad : float
-        Clearance between labels, pixels.
-    keep_clear : sequence of Artist
-        Artists (a legend) no kept label may overlap.
-    draw : bool
-        Draw the figure first (False: the caller just drew it).
+    ``draw`` False: the caller just drew the figure.
     """
     fig = ax.figure
     if draw:

@@ -19,9 +19,7 @@ def _sub(k: int) -> str:
 
 
 def _outline(region, band: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The region's boundary as one closed curve through its threshold: (omega, sigma) and
-    which points were computed (an edge beyond the band or in another region is drawn at
-    the band's limit, unmarked)."""
+    """The region's boundary as a closed curve through its threshold, and which points were computed."""
     rows = [(s, lo, hi) for s, lo, hi in region.boundary if s > region.sigma_threshold]
     sig = [region.sigma_threshold] + [s for s, _, _ in rows]
     lo = [region.omega_threshold] + [w for _, w, _ in rows]

@@ -221,8 +221,7 @@ def _snapshot_window(motion) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _frame_3d(ax, pts: np.ndarray) -> None:
-    """Equal scales on the pipe's extent plus :data:`MARGIN`; each box side at least a
-    fifth of the longest (a planar pipe has no thickness out of its plane)."""
+    """Equal scales on the pipe's extent plus :data:`MARGIN`, each side at least a fifth of the longest."""
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     span = np.maximum(hi - lo, 0.2 * np.max(hi - lo)) * (1 + 2 * MARGIN)
     mid = (lo + hi) / 2

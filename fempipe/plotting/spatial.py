@@ -15,9 +15,7 @@ def _monotone(v: np.ndarray) -> bool:
 
 
 def _unstable_at(v: np.ndarray, theta: np.ndarray, branch, monotone: bool) -> np.ndarray:
-    """Whether ``branch`` (one plane's analysis) is unstable at the points (v, theta(1)): from its
-    events below each v where the branch is monotone in v, else its nearest sample.
-    """
+    """Whether one plane's ``branch`` is unstable at the points (v, theta(1)), by its events or nearest sample."""
     if branch is None or branch.v.size == 0:
         return np.zeros(v.size, bool)
     if monotone:
@@ -31,8 +29,7 @@ def _unstable_at(v: np.ndarray, theta: np.ndarray, branch, monotone: bool) -> np
 
 
 def _theta_at(b, v: float) -> float:
-    """theta(1) of branch ``b`` at ``v``: interpolated between the samples around the
-    sample nearest in v (on a branch through a fold v alone does not say where)."""
+    """theta(1) of branch ``b`` at ``v``, interpolated about the sample nearest in v."""
     j = int(np.argmin(np.abs(b.v - v)))
     for k in (j - 1, j):
         if 0 <= k < b.v.size - 1 and (b.v[k] - v) * (b.v[k + 1] - v) <= 0 and b.v[k] != b.v[k + 1]:
@@ -148,15 +145,13 @@ def _key(result, colors, v_cr_line) -> list:
 
 
 def _plane_words(result) -> str | None:
-    """The words " in both planes" where the two planes lose stability at the same v (the
-    straight pipe), else None (the critical event's plane names itself)."""
+    """The words ' in both planes' if both planes lose stability at the same v, else None."""
     vi, vo = result.in_plane.v_cr, result.out_of_plane.v_cr
     return " in both planes" if vi is not None and vi == vo else None
 
 
 def _zoom_window(result) -> tuple[float, float] | None:
-    """The v-interval around the two planes' first losses when they are too close to tell
-    apart at the scale of the whole range (None otherwise)."""
+    """The v-interval about the two planes' first losses when too close to tell apart, else None."""
     vi, vo = result.in_plane.v_cr, result.out_of_plane.v_cr
     lo, hi = result.in_plane.v_range
     if vi is None or vo is None or vi == vo or abs(vi - vo) >= ZOOM_BELOW * (hi - lo):

@@ -15,24 +15,11 @@ __all__ = ["continue_curve"]
 
 
 def continue_curve(policy: ContinuationPolicy, h: float) -> Any:
-    """Follow a curve F(y) = 0 from its last known point with first step ``h``.
+    """Follow a curve F(y) = 0 from its last known point with first step ``h``; return the branch.
 
-    Each step: predict a point at arclength ``h``; correct onto the curve (pseudo-arclength
-    condition, or a fixed parameter where a requested value lies ahead); accept, or reject and
-    retry shorter after a sharp turn or a failure; land on requested values passed; detect and
-    locate special points by sign changes of test functions; adapt the step.
-
-    Parameters
-    ----------
-    policy : ContinuationPolicy
-        The problem's choices for each of these steps, holding the branch.
-    h : float
-        The first step length (arclength in the problem's inner product).
-
-    Returns
-    -------
-    object
-        What ``policy.finish`` returns: the branch.
+    Each step predicts, corrects onto the curve, accepts or rejects (retried shorter), lands
+    on requested values, detects and locates special points, and adapts the step, each by the
+    ``policy``'s choices (docs/theory/numerics.md).
     """
     while True:
         reason = policy.stop_before()

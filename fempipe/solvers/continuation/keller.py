@@ -174,8 +174,8 @@ def interpolate_zero(problem: ContinuationProblem, lo: tuple, hi: tuple):
 class KellerPolicy:
     """Pseudo-arclength continuation with the exact tangent (the static branches' policy).
 
-    Keeps ``points``, ``events``, ``steps`` and ``rejected_steps``.  Subclasses choose
-    :attr:`point_type`, :attr:`event_type`, :meth:`converged`, :meth:`land` and :meth:`stalled`.
+    Keeps ``points``, ``events``, ``steps`` and ``rejected_steps``; subclasses choose
+    :attr:`point_type`, :attr:`event_type`, :meth:`converged`, :meth:`land`, :meth:`stalled`.
 
     Parameters
     ----------
@@ -187,11 +187,9 @@ class KellerPolicy:
     max_steps : int
         Attempted steps before the branch ends.
     tol : float
-        Tolerance of :meth:`converged` (norm of F by default).
-    detect : bool
-        Locate folds and branch points.
-    locate_tol : float
-        Their bracket in arclength.
+        Tolerance of :meth:`converged`.
+    detect, locate_tol : bool, float
+        Locate folds and branch points, to this bracket in arclength.
     callback : callable, optional
         Called with each accepted point.
     """

@@ -123,27 +123,16 @@ class Radau:
     Parameters
     ----------
     problem : ImplicitSecondOrderProblem
-        The residual and its Jacobians by the rules of :mod:`fempipe.solvers.radau.contract`
-        (e.g. :class:`fempipe.model.dynamics_problem.PipeDynamics`); a model is not a problem.
+        The residual and Jacobians by the rules of :mod:`fempipe.solvers.radau.contract`.
     q0, qdot0 : ndarray, shape (n,)
-        Initial state (not modified).
-    t0 : float
-        Initial time tau_0.
+        Initial state (not modified), at time ``t0``.
     rtol, atol : float
-        Local error tolerances on (q, q'), against ``atol + rtol |y|``; ``atol`` defaults to
-        ``rtol`` (theta is O(1) rad).
-    max_step : float
-        Largest step.
-    first_step : float, optional
-        First step (default: from the size of q'' and the tolerance).
-    h_fixed : float, optional
-        Fixed step size, no error control (convergence-order studies).
-    sensitivity : bool
-        Accumulate the derivative of the flow map with respect to the initial state
-        (:attr:`sensitivity_matrix`, the monodromy over a period).
-    velocity_sensitivity : bool
-        With ``sensitivity`` and a ``parameter_derivative``, also the derivative with respect
-        to v at fixed initial state (:attr:`velocity_sensitivity`).
+        Local error tolerances on (q, q'); ``atol`` defaults to ``rtol``.
+    max_step, first_step, h_fixed : float
+        Largest step; first step (default from q''); fixed step without error control.
+    sensitivity, velocity_sensitivity : bool
+        Accumulate d(q, q')/d(q0, qdot0) (:attr:`sensitivity_matrix`, the monodromy over a
+        period) and, with a ``parameter_derivative``, d(q, q')/dv (:attr:`velocity_sensitivity`).
 
     Notes
     -----
@@ -292,10 +281,7 @@ class Radau:
         return Q, P
 
     def _newton(self, t: float, h: float, acc: np.ndarray, scale: np.ndarray, max_iter=None):
-        """Solve the stage equations; return (converged, iterations, acc, rate).
-
-        RADAU5's acceptance test with the previous step's contraction (docs/theory/numerics.md).
-        """
+        """Solve the stage equations; (converged, iterations, acc, rate), RADAU5's acceptance test."""
         max_iter = NEWTON_MAXITER if max_iter is None else max_iter
         _, lu_r, lu_c = self._lu
         n = self.n

@@ -17,21 +17,10 @@ __all__ = ["chain_step", "chain_step_blocks", "step_derivative"]
 
 
 def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np.ndarray:
-    """The part of d y1 / d (y0, p) through the stage accelerations.
+    """The part of d y1 / d (y0, p) through the stage accelerations, shape (2n, 2n) or (2n, 2n + 1).
 
-    Parameters
-    ----------
-    h : float
-        Step size.
-    Ks, Ds, Ms : ndarray, shape (3, n, n)
-        dR/dq, dR/dq', dR/dq'' at the three stages.
-    dR_dp : ndarray, shape (3, n), optional
-        dR/dp at the stages.
-
-    Returns
-    -------
-    ndarray, shape (2n, 2n) or (2n, 2n + 1)
-        (dq1, dp1) by (q0, p0[, p]), without the ``[[I, h I], [0, I]]`` of :func:`chain_step`.
+    ``Ks, Ds, Ms`` (3, n, n) are dR/dq, dR/dq', dR/dq'' at the stages, ``dR_dp`` (3, n) the
+    parameter column; :func:`chain_step` adds ``[[I, h I], [0, I]]``.
     """
     n = Ks.shape[1]
     # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
