@@ -17,6 +17,7 @@ import numpy as np
 
 from .operators import PipeModel
 from .quadrature import LineQuadrature
+from .weak_form import as_dense
 
 __all__ = [
     "DENSE_INTEGRALS_MAX",
@@ -42,15 +43,11 @@ DENSE_OPERATORS_MAX = 32768
 DENSE_INTEGRALS_MAX = 128
 
 
-def _as_dense(a) -> np.ndarray:
-    return np.asarray(a.toarray() if hasattr(a, "toarray") else a, dtype=float)
-
-
 def stage_operators(model: PipeModel):
     """(Phi, K, Phi^T W): dense up to :data:`DENSE_OPERATORS_MAX` entries n_q n, else the model's."""
     Phi, K, PhiT_W = model.disc.Phi, model.disc.K, model.test_matrix
     if model.quad.n_q * model.n <= DENSE_OPERATORS_MAX:
-        Phi, K, PhiT_W = (_as_dense(a) for a in (Phi, K, PhiT_W))
+        Phi, K, PhiT_W = (as_dense(a) for a in (Phi, K, PhiT_W))
     return Phi, K, PhiT_W
 
 
@@ -120,8 +117,8 @@ class StageKernels:
         # The residual's operators (sparse on large discretizations) ...
         self._res_ops = stage_operators(model)
         # ... and the Jacobians' (always dense).
-        self._Phi = _as_dense(disc.Phi)
-        self._K = _as_dense(disc.K)
+        self._Phi = as_dense(disc.Phi)
+        self._K = as_dense(disc.K)
         self._tip = np.asarray(disc.tip, dtype=float)
         self._lever = p.gamma * (1.0 - model.x)[:, None]
         self._w = model.w

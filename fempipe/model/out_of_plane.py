@@ -17,9 +17,9 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .operators import PipeModel
+from .weak_form import as_dense
 
 __all__ = [
     "OutOfPlaneMatrices",
@@ -28,10 +28,6 @@ __all__ = [
     "in_plane_model",
     "out_of_plane_model",
 ]
-
-
-def _dense(A) -> np.ndarray:
-    return A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -98,8 +94,8 @@ class OutOfPlaneOperators:
         """Phi, dPhi dense; the pipe's mass, the integrals C^R phi_j and \\int phi_i."""
         d = _FIXED.get(self.disc)
         if d is None:
-            Phi = _dense(self.disc.Phi)
-            dPhi = _dense(self.disc.dPhi)
+            Phi = as_dense(self.disc.Phi)
+            dPhi = as_dense(self.disc.dPhi)
             CPhi = self.quad.cumulative(Phi)  # w = C psi: out-of-plane deflection
             RPhi = self.quad.from_tip(Phi)  # \int_xi^1 psi
             WPhi = Phi * self.w[:, None]
@@ -111,7 +107,7 @@ class OutOfPlaneOperators:
                 "coriolis": WPhi.T @ RPhi,
                 "integral": WPhi.sum(axis=0),  # \int phi_i = (C phi_i)(1)
                 "gram": WPhi.T @ Phi,
-                "K": _dense(self.disc.K),
+                "K": as_dense(self.disc.K),
             }
             # ||K||_2 of the bending matrix, the leading part of K at every state:
             # the scale of neutral_residual, one SVD per discretization.
@@ -168,7 +164,7 @@ class OutOfPlaneOperators:
             self.params.springs, self.model.spring_forces(st.q), strict=True
         ):
             rule = self.model.part_rule(xi_s)
-            P = _dense(rule.Phi)
+            P = as_dense(rule.Phi)
             b = P.T @ rule.w
             th = P @ st.q
             axial = force[0] * np.cos(th) + force[1] * np.sin(th)

@@ -13,14 +13,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from .discretization import Discretization
+from .weak_form import as_dense
 
 __all__ = ["KINDS", "Seeds"]
 
 _SEEDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _dense(A) -> np.ndarray:
-    return A.toarray() if hasattr(A, "toarray") else np.asarray(A, dtype=float)
 
 
 #: The pointwise quantities the local derivatives are taken with respect to, in
@@ -42,8 +39,8 @@ class Seeds:
 
     def __init__(self, disc: Discretization) -> None:
         quad = disc.quad
-        self.Phi = _dense(disc.Phi)
-        self.dPhi = _dense(disc.dPhi)
+        self.Phi = as_dense(disc.Phi)
+        self.dPhi = as_dense(disc.dPhi)
         self.tip = np.asarray(disc.tip, dtype=float)
         # (op, op^T as a matrix): the integrals and the matrices that pull derivatives back
         eye = np.eye(quad.n_q)

@@ -46,8 +46,8 @@ def scale_rows(d: np.ndarray, A):
 
 
 def as_dense(A) -> np.ndarray:
-    """A as a dense array (sparse matrices converted)."""
-    return A.toarray() if sp.issparse(A) else np.asarray(A)
+    """A as a dense float array (sparse matrices converted)."""
+    return A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
 
 
 _DENSE_FORMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
