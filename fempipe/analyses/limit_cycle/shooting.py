@@ -131,8 +131,8 @@ class Shooter:
         three_d = isinstance(self.model, SpaceModel)
         #: the rotation about the vertical maps 3-D orbits to orbits
         self.axisymmetric = three_d and abs(math.sin(self.model.params.alpha)) < 1e-12
-        # The 3-D tips: 16 samples a step on the quintic, no further refinement.
-        self.tip_options = {"per_step": 16, "fine": 0} if three_d else {}
+        # The 3-D tips: 16 samples a step on the quintic, a parabola through them.
+        self.tip_options = {"per_step": 16, "fine": 0, "uniform": True} if three_d else {}
         self.t_start = time.perf_counter()
         self.total_steps = self.rejected = 0
         self.Phi = None

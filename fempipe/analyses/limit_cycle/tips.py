@@ -261,6 +261,7 @@ def tip_extrema(
     per_step: int = 8,
     refine: Literal["parabola", "bounded"] = "parabola",
     fine: int = 32,
+    uniform: bool = False,
 ) -> dict[str, list[float]]:
     """[min, max] of the tip coordinates over one period of an orbit.
 
@@ -279,6 +280,9 @@ def tip_extrema(
         ``"bounded"``: ``scipy.optimize.minimize_scalar`` on the interpolant between the
         neighbours (``xatol`` 1e-10 max(1, t_end)).
     fine : int
+    uniform : bool
+        With ``fine = 0``: the parabola through samples taken as equally spaced (the 3-D
+        shooting's tips), not at their times.
 
     Returns
     -------
@@ -290,6 +294,10 @@ def tip_extrema(
     if int(fine) < 0:
         raise ValueError(f"fine must be >= 0, got {fine}")
     ts, tips = orbit.tip_samples(model, per_step)
+    if uniform:
+        if fine != 0 or refine != "parabola":
+            raise ValueError("uniform needs refine='parabola' and fine = 0")
+        ts = np.arange(ts.size, dtype=float)
     extremum = _bounded if refine == "bounded" else _parabola
     out = {}
     for key in tips:
