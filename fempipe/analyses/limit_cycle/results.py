@@ -71,28 +71,20 @@ class LimitCycle:
     Attributes
     ----------
     period : float
-        Period T in units of tau (the whole orbit, n section crossings).
-    q0, qdot0 : ndarray, shape (n,)
+        Period T in tau (the whole orbit, n section crossings).
+    q0, qdot0, level : ndarray, ndarray, float
         State on the orbit where the section variable is ``level`` (upward).
-    level : float
     tip : dict
         ``{key: [min, max]}`` of the tip coordinates on the orbit.
-    floquet_multipliers : ndarray, complex
-        Eigenvalues of the monodromy matrix of the converged Newton iterate, by decreasing
-        modulus.
-    stable : bool
-        The non-trivial multipliers (:func:`largest_nontrivial`) inside the unit circle.
-    iterations : int
-        Newton iterations (the polishing step included).
-    residual : float
-        Final RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi).
+    floquet_multipliers, stable : ndarray, bool
+        Eigenvalues of the converged iterate's monodromy by decreasing modulus; the
+        non-trivial ones (:func:`largest_nontrivial`) inside the unit circle.
+    iterations, residual : int, float
+        Newton iterations (with the polish); final RMS of phi_T(x0) - x0.
     orbit_t, orbit_q, orbit_qdot : ndarray
         The orbit at equally spaced times over one period.
-    steps : int
-        Integration steps over the last period.
-    total_steps, rejected_steps : int
-        Over all Newton iterations.
-    wall_time : float
+    steps, total_steps, rejected_steps, wall_time : int, int, int, float
+        Steps of the last period; steps and rejected steps of all iterations.
     """
 
     period: float
@@ -139,21 +131,14 @@ class Attractor:
     ----------
     kind : str
         ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
-    period : float or None
-    period_n : int or None
-        Distinct section points (1 for period-1, 2 for period-2, ...).
+    period, period_n : float or None, int or None
+        Period and distinct section points (1 for period-1, ...).
     tip : dict
         ``{key: [min, max]}`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS`.
-    cycle : LimitCycle or None
-    q, qdot : ndarray, shape (n,)
-        A state on the attractor.
-    params : Params
-    t_end : float
-        Time integrated before the attractor was recognized.
-    stats : dict
-        Integration diagnostics of the transient and the shooting.
-    trajectory : Trajectory or None
-        The transient, if recorded.
+    cycle, q, qdot, params : LimitCycle or None, ndarray, ndarray, Params
+        The shot orbit; a state on the attractor.
+    t_end, stats, trajectory : float, dict, Trajectory or None
+        Time integrated; diagnostics of the transient and the shooting; the transient.
     """
 
     kind: str

@@ -54,39 +54,29 @@ def shoot(
     Parameters
     ----------
     problem : PipeDynamics or SpaceDynamics
-        The autonomous dynamics problem (steady flow) of a planar or 3-D model.
-    q0, qdot0 : ndarray, shape (n,)
-        Initial guess on or near the orbit.
-    period : float
-        Initial guess of the period.
+        The autonomous dynamics problem of a planar or 3-D model.
+    q0, qdot0, period : ndarray, ndarray, float
+        Initial guess of a state on the orbit and of the period.
     level : float, optional
         Phase condition section_value(q0) = level (default: that of the guess).
-    rtol : float
-        Integration tolerance; the orbit is accurate to about this level.
-    tol : float
-        Convergence when the RMS of phi_T(x0) - x0 (velocities scaled by T / 2 pi) and the
-        phase condition are below ``tol``; must exceed the integration error.
-    max_iter : int
+    rtol, tol, max_iter : float, float, int
+        Integration tolerance; Newton's on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi)
+        and on the phase, above the integration error.
     n_samples : int
         Samples of the orbit stored for plotting.
     reuse_monodromy : bool
-        Chord-Newton: keep the monodromy of an earlier iterate while the residual falls at
-        least 4x per iteration; its multipliers are then one Newton step off the orbit.
+        Chord-Newton while the residual falls 4x per iteration (multipliers one step off).
     polish : bool
-        Once converged with a residual above ``tol`` / 10, take the next Newton step and
-        report one plain period from there if its residual is smaller (the multipliers stay
-        those of the converged iterate).
+        Report one more Newton step's plain period if its residual is smaller.
 
     Returns
     -------
     LimitCycle
-        In 3-D ``tip`` has Y_tip too and ``floquet_multipliers`` are all 6 n of the 3-D
-        monodromy (in-plane, out-of-plane and the gauge's).
+        In 3-D with Y_tip and all 6 n multipliers (in-plane, out-of-plane, gauge).
 
     Raises
     ------
     ShootingError
-        Naming v, the iterations and the last residual.
     """
     if not problem.autonomous:
         raise ValueError("shoot needs an autonomous problem (a steady flow)")

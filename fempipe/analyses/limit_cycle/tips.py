@@ -118,14 +118,8 @@ _QUINTIC = np.array(
 
 
 class QuinticOrbit:
-    """The quintic Hermite interpolant of q(t) through the step ends, O(h^6) like them
-    (the collocation cubic is O(h^4) inside a step); its samples include the last end.
-
-    Parameters
-    ----------
-    t, q, p, a : array_like
-        Times and (q, q', q'') at the step ends, shapes (m,), (m, n).
-    """
+    """The quintic Hermite interpolant of q(t) through the times ``t`` and (q, q', q'') =
+    (``q``, ``p``, ``a``) at the step ends, O(h^6) like them; samples include the last end."""
 
     def __init__(self, t, q, p, a) -> None:
         t, q, p, a = (np.asarray(x, dtype=float) for x in (t, q, p, a))
@@ -156,14 +150,8 @@ class QuinticOrbit:
 
 
 class CollocationOrbit:
-    """The collocation polynomials of the steps of one period (samples without the last end).
-
-    Parameters
-    ----------
-    record : list of tuple
-        ``(t_old, h, q_old, Q)`` per step: start, length, q at the start, stage values
-        Q (3, n) (``Radau.last``).
-    """
+    """The collocation polynomials of the steps of one period from ``record``, ``(t_old, h,
+    q_old, Q)`` per step (``Radau.last``); samples without the last end."""
 
     def __init__(self, record: list) -> None:
         self.record = record
@@ -263,10 +251,8 @@ def tip_extrema(
     fine: int = 32,
     uniform: bool = False,
 ) -> dict[str, list[float]]:
-    """[min, max] of the tip coordinates over one period of an orbit.
-
-    Each extremum of ``per_step`` samples per step is refined between its neighbouring
-    samples.
+    """[min, max] of the tip coordinates over one period of an orbit: each extremum of
+    ``per_step`` samples per step refined between its neighbouring samples.
 
     Parameters
     ----------

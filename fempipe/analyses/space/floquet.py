@@ -37,24 +37,15 @@ class OutOfPlaneFloquet:
 
     Attributes
     ----------
-    multipliers : ndarray, complex
-        The out-of-plane multipliers, by decreasing modulus (the gauge's left out).
-    planar_multipliers : ndarray, complex
-        The planar block's, by decreasing modulus.
-    axisymmetric : bool
-        sin(alpha) = 0: one multiplier is the neutral rotation about the vertical.
-    trivial : complex or None
-        At an axisymmetric alpha, the multiplier closest to 1.
-    max_nontrivial : float
-        The largest modulus of the others.
-    stable : bool
-        ``max_nontrivial < 1``.
+    multipliers, planar_multipliers : ndarray, complex
+        The out-of-plane (the gauge's left out) and the planar block's, by decreasing modulus.
+    axisymmetric, trivial : bool, complex or None
+        sin(alpha) = 0, and then the multiplier closest to 1 (the rotation about the vertical).
+    max_nontrivial, stable : float, bool
+        The largest modulus of the others; ``max_nontrivial < 1``.
     gauge_largest : float
         The largest modulus of the gauge's multipliers (0 for ``"linear"``).
-    steps : int
-    cpu_time : float
-    method : str
-        ``"linear"`` or ``"3d"``.
+    steps, cpu_time, method : int, float, str
     """
 
     multipliers: np.ndarray

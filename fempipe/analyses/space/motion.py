@@ -45,14 +45,10 @@ class Motion3D:
 
     Attributes
     ----------
-    kind : str
+    kind, motion : str
         ``"equilibrium"``, ``"periodic"``, ``"whirl"``, ``"quasi-periodic"`` or
-        ``"non-periodic"``.
-    motion : str
-        ``"planar"`` or ``"nonplanar"``.
-    period : float or None
-    period_n : int or None
-        Section points per period.
+        ``"non-periodic"``; ``"planar"`` or ``"nonplanar"``.
+    period, period_n : float or None, int or None
     whirl_rate : float or None
         Angular velocity of a whirl about the vertical (right-handed about e_1), rad per tau.
     tip : dict
@@ -68,8 +64,7 @@ class Motion3D:
         The orbit by shooting: period, tips and 3-D Floquet multipliers.
     t, U, Udot : ndarray
         The trajectory at every accepted step.
-    steps, rejected_steps : int
-    t_end, cpu_time : float
+    steps, rejected_steps, t_end, cpu_time : int, int, float, float
     """
 
     kind: str
@@ -182,31 +177,22 @@ def simulate_3d(
     ----------
     model : PipeModel
         The planar model; the motion starts from its static state.
-    mode, amplitude : int, float
-        The in-plane perturbation (sine mode, rad), as the planar ``simulate``.
-    out_of_plane_amplitude : float
-        The out-of-plane rotation psi of the same sine mode, rad.
-    t_max : float
-    rtol : float
-        Integration tolerance.
+    mode, amplitude, out_of_plane_amplitude : int, float, float
+        The sine mode and its in-plane and out-of-plane (psi) amplitudes, rad.
+    t_max, rtol : float
     recurrence_tol : float
-        Successive section states agree to this (RMS, U_dot scaled by the return time /
-        2 pi): periodic without shooting.
-    start_tol : float
-        Successive section states agree to this: the orbit is shot from the last one (at
-        ``shoot_rtol``); if that fails the integration goes on.
-    use_shooting : bool
+        Successive section states agree to this (RMS): periodic without shooting.
+    start_tol, shoot_rtol, use_shooting : float, float, bool
+        Successive section states agree to ``start_tol``: the orbit is shot from the last.
     min_swing : float
         Shoot only when the section variable swings by more than this between returns.
     planar_tol : float
         :attr:`Motion3D.planarity` below this: a planar motion.
     n_max : int
-        Longest period-n looked for.
     callback : callable, optional
         Called with tau after every step.
     initial : (U0, Ud0), optional
-        A 3-D state to start from instead of the perturbed static state; the section level
-        stays the static state's.
+        A 3-D state to start from instead of the perturbed static state.
     """
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)

@@ -39,10 +39,9 @@ class Whirl:
 
     Attributes
     ----------
-    v : float
+    v, period : float
     omega : float
         Rotation rate 2 pi / T, positive right-handed about e_1 (from e_2 towards e_3).
-    period : float
     radius : float
         Time average (trapezoidal, on the step ends) of the tip's distance from the vertical.
     radius_variation : float
@@ -51,11 +50,8 @@ class Whirl:
         Largest distance between the centerline and that at tau = 0 turned by omega tau.
     multipliers : ndarray of complex
         The 8 largest Floquet multipliers.
-    max_nontrivial : float
-        The largest modulus without the multiplier 1 (one only: a whirl's time shift is its
-        turn about e_1).
-    stable : bool
-    cycle : LimitCycle
+    max_nontrivial, stable, cycle : float, bool, LimitCycle
+        The largest modulus without the one multiplier 1 (a whirl's time shift is its turn).
     """
 
     v: float
