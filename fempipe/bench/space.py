@@ -29,8 +29,7 @@ from dataclasses import replace
 import numpy as np
 
 from fempipe.analyses.limit_cycle import find_attractor, shoot
-from fempipe.analyses.space.floquet import out_of_plane_floquet
-from fempipe.analyses.space.shooting import shoot_space
+from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
 from fempipe.bench.harness import register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
 from fempipe.model.dynamics_problem import PipeDynamics
@@ -60,13 +59,13 @@ def bench_space_cycle(quick: bool = False) -> dict:
     planar = PipeModel(disc, params)
     space = SpaceModel(disc, params)
     guess = find_attractor(planar).cycle
-    t_planar, cycle = _cpu(lambda: shoot(planar, guess.q0, guess.qdot0, guess.period), repeats)
-    t_space, cycle3 = _cpu(
-        lambda: shoot_space(space, planar_state(guess.q0), planar_state(guess.qdot0), guess.period),
-        repeats,
+    t_planar, cycle = _cpu(
+        lambda: shoot(PipeDynamics(planar), guess.q0, guess.qdot0, guess.period), repeats
     )
-    t_oop, oop = _cpu(lambda: out_of_plane_floquet(planar, cycle), repeats)
-    t_oop3, oop3 = _cpu(lambda: out_of_plane_floquet(planar, cycle, method="3d"), repeats)
+    U0, Ud0 = planar_state(guess.q0), planar_state(guess.qdot0)
+    t_space, cycle3 = _cpu(lambda: shoot(SpaceDynamics(space), U0, Ud0, guess.period), repeats)
+    t_oop, oop = _cpu(lambda: compute_out_of_plane_floquet(planar, cycle), repeats)
+    t_oop3, oop3 = _cpu(lambda: compute_out_of_plane_floquet(planar, cycle, method="3d"), repeats)
     U, Ud = planar_state(cycle.q0), planar_state(cycle.qdot0)
     Udd = space.acceleration(U, Ud)
     stages = (np.tile(U, (3, 1)), np.tile(Ud, (3, 1)), np.tile(Udd, (3, 1)))
@@ -166,7 +165,9 @@ def bench_space_nonplanar_cycle(quick: bool = False) -> dict:
     pm = planar_model(elements, alpha)
     space = SpaceModel(pm.disc, replace(pm.params, v=v))
     repeats = 1 if quick else 2
-    t_shoot, cycle = _cpu(lambda: shoot_space(space, found.q0, found.qdot0, found.period), repeats)
+    t_shoot, cycle = _cpu(
+        lambda: shoot(SpaceDynamics(space), found.q0, found.qdot0, found.period), repeats
+    )
     t_period, steps = _cpu(
         lambda: _period(SpaceDynamics(space), found.q0, found.qdot0, found.period), repeats
     )

@@ -1,5 +1,11 @@
-"""Parts (c)-(e) of the case ``out_of_plane``: the strong form against fempipe and the
-classical theory, the observed orders, the out-of-plane v_cr against the in-plane one.
+"""Parts (c) to (e) of the out-of-plane validation case (fempipe.validation.out_of_plane).
+
+(c) :func:`agreement_checks`, :func:`inclined_variants_check` and
+:func:`classical_check`: the strong form of :mod:`fempipe.validation.lateral`
+against fempipe and the classical theory; (d) :func:`order_checks`, the
+observed orders of the out-of-plane v_cr; (e) :func:`finding_checks`, the
+out-of-plane v_cr against the in-plane one.  Parts (a) and (b), and the
+helpers for the spectra, are in :mod:`fempipe.validation.out_of_plane_runs`.
 """
 
 from __future__ import annotations
@@ -8,6 +14,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
@@ -25,6 +32,15 @@ from .out_of_plane_runs import (
     pencil_eigenvalues,
     refinement_slope,
 )
+
+__all__ = [
+    "agreement_checks",
+    "classical_check",
+    "finding_checks",
+    "inclined_variants_check",
+    "order_checks",
+]
+
 
 # ---------------------------------------------------------------------------
 # (c) the strong form against fempipe
@@ -111,7 +127,20 @@ def agreement_checks(ref, quick: bool):
     checks.append(measure("strong_converged", float(diff), p=p0, v=s0.v_cr))
     table = Table(
         "(c) Out-of-plane onset: strong form against fempipe " + fe,
-        (f"pipe | α | β | γ | μ | v_cr strong | v_cr {fe} | Δv | ω strong | ω {fe} | Δω | kind"),
+        (
+            "pipe",
+            "α",
+            "β",
+            "γ",
+            "μ",
+            "v_cr strong",
+            f"v_cr {fe}",
+            "Δv",
+            "ω strong",
+            f"ω {fe}",
+            "Δω",
+            "kind",
+        ),
         tuple(rows),
     )
     return checks, [table], requires, strong
@@ -218,7 +247,18 @@ def finding_checks(ref, quick: bool):
     table = Table(
         f"(e) Critical flow velocity in and out of the plane (β = {base['beta']:g}, "
         f"γ = {base['gamma']:g}, FE {fe})",
-        "μ | α | v_cr in plane | kind | ω | v_cr out of plane | kind | ω | out − in | relative",
+        (
+            "μ",
+            "α",
+            "v_cr in plane",
+            "kind",
+            "ω",
+            "v_cr out of plane",
+            "kind",
+            "ω",
+            "out − in",
+            "relative",
+        ),
         tuple(rows),
         note="At α = π the primary branch is the straight standing pipe, buckled at v = 0 "
         "(γ > 7.837) in every plane alike; on its buckled branch the out-of-plane spectrum "
