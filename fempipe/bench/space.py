@@ -1,22 +1,12 @@
-"""Benchmark of the 3-D model's limit cycles against the planar ones; not a timed test.
+"""Benchmarks of the 3-D model's limit cycles against the planar ones (``OPENBLAS_NUM_THREADS=1``).
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only space_cycle``); measure with
-``OPENBLAS_NUM_THREADS=1``.
+``space_cycle``: shooting one planar cycle (alpha = pi/2, v = 10) with its Floquet
+multipliers, planar and in 3-D from the same guess, their ratio, the out-of-plane
+multipliers by both methods, one period with the monodromy of each model and where the 3-D
+period's CPU goes.  ``space_nonplanar_cycle``: a cycle that leaves the plane (alpha = pi/2,
+v = 6), one period with its full monodromy, CPU per step against the planar cycle's.
 
-* ``space_cycle``: the CPU seconds (``time.process_time``, median of 3) of Newton shooting
-  one limit cycle with its Floquet multipliers, planar and in 3-D, from the same guess with
-  the same tolerances (alpha = pi/2, v = 10, the default discretization), and their ratio
-  (target 5); the out-of-plane Floquet multipliers of the planar cycle by both methods; the
-  3-D stage Jacobians of one step; one period with the monodromy of each model (like for
-  like), and where the 3-D period's CPU goes (stage Jacobians, residuals, the rest:
-  ``ratio_per_period_without_weak_form``, the ratio no faster weak form could go below).
-  The cycle is planar, so its 3-D Jacobians decouple into in-plane and out-of-plane blocks
-  (rule 7 of :mod:`fempipe.solvers.radau.contract`); a non-planar cycle costs more.
-* ``space_nonplanar_cycle``: a non-planar cycle (alpha = pi/2, v = 6, between the
-  out-of-plane and the in-plane v_cr), found on P3:4 from the Hopf normal form and carried to
-  the default discretization, then shot again from its converged state and integrated over
-  one period with the full monodromy (timed): the CPU per step against the planar cycle's.
-  docs/cli/commands.md, "fempipe bench", and docs/theory/space.md, "The weak form".
+docs/cli/commands.md, "fempipe bench"; docs/theory/space.md, "The weak form".
 """
 
 from __future__ import annotations
