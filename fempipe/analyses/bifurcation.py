@@ -1,11 +1,9 @@
 """Bifurcation diagrams of the tip response against the flow velocity by sweeps (Figs. 7-10).
 
-:func:`sweep` steps v up or down, each point starting from the attractor of the previous one
-(a stable cycle is first continued by shooting from the previous one) and recording, with
-:func:`fempipe.analyses.limit_cycle.find_attractor`, the kind of attractor, its period and the
-extrema of eta(1), X_g(1), Z_g(1).  Up and down sweeps show hysteresis where a stable
-equilibrium and a stable cycle coexist.  :func:`compute_bifurcation_diagram` runs independent
-sweeps (up and down, several alpha) in parallel, resumable from a point store
+:func:`sweep` steps v up or down, each point starting from the previous attractor and
+recording (:func:`fempipe.analyses.limit_cycle.find_attractor`) its kind, period and the
+extrema of eta(1), X_g(1), Z_g(1).  :func:`compute_bifurcation_diagram` runs independent
+sweeps (up and down, several alpha) in parallel, resumable
 (:mod:`fempipe.analyses.periodic.points`).
 
 How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
@@ -137,11 +135,8 @@ def sweep(
 
 
 def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
-    """``stable_3d`` of a sweep's attractor and its out-of-plane evidence.
-
-    A cycle: its out-of-plane Floquet multipliers (the orbit ``cycle``, or the stored
-    point's state and period); an equilibrium: its out-of-plane spectrum; else None.
-    """
+    """``stable_3d`` and its evidence: a cycle's out-of-plane multipliers (of ``cycle``, or
+    the stored point's state and period), an equilibrium's out-of-plane spectrum."""
     if point.attractor == "equilibrium":
         return equilibrium_verdict(m, point.q, True)
     if point.attractor != "periodic" or point.period is None:

@@ -157,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError("--v", "no flow velocities to sweep")
     n_alpha = 1 if alphas is None else len(alphas)
     total = len(setup.v) * len(args.directions) * n_alpha
-    flow_opt = "--U" if args.U is not None else "--v"
+    flow_opt = common.flow_option(args)
     parsing.check_count(
         flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions x alphas)"
     )
@@ -221,7 +221,7 @@ def _run_continuation(args: argparse.Namespace, setup, alphas) -> int:
     from fempipe.core.errors import SolverError
     from fempipe.model.operators import PipeModel
 
-    flow_opt = "--U" if args.U is not None else "--v"
+    flow_opt = common.flow_option(args)
     if len(set(setup.v)) < 2:
         raise CLIError(flow_opt, "continuation needs a range of v (at least two values)")
     if args.dask is not None:
@@ -273,7 +273,7 @@ def _run_3d(args: argparse.Namespace, setup) -> int:
     from fempipe.model.operators import PipeModel
 
     _refuse_3d(args)
-    flow_opt = "--U" if args.U is not None else "--v"
+    flow_opt = common.flow_option(args)
     if not setup.v:
         raise CLIError(flow_opt, "no flow velocities to sweep")
     large = parsing.allow_large(args)

@@ -397,7 +397,7 @@ def continue_cycles(
     Parameters
     ----------
     model : PipeModel
-        alpha, beta, gamma, mu from ``model.params`` (its v is ignored).
+        Its v is ignored.
     hopf : HopfPoint
         Where the branch starts (:func:`find_hopf_points`).
     v_range : (float, float)
@@ -405,7 +405,6 @@ def continue_cycles(
     values : sequence of float
         Requested v, landed on exactly every time the branch passes them (``source="grid"``).
     name : str
-        Branch name.
     rtol : float
         Integration tolerance, scaled down near a multiplier 1
         (:meth:`~fempipe.analyses.periodic.problem.CycleCorrector.rtol_after`); at the
@@ -418,9 +417,8 @@ def continue_cycles(
         1 / (1 - mu) for a multiplier mu near 1).
     ds, ds_min, ds_max : float
         First, smallest and largest arclength step.
-    max_steps : int
-    max_iter : int
-        Newton iterations per corrector.
+    max_steps, max_iter : int
+        Steps of the branch, Newton iterations per corrector.
     resume : dict, optional
         The state an interrupted run passed to ``on_point``: the branch continues from there
         (a failed one raises its error again).

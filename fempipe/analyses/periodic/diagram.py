@@ -220,10 +220,9 @@ def compute_cycle_diagram(
 ) -> CycleDiagram:
     """Bifurcation diagram by continuation: equilibria and periodic orbits against v (Figs. 7-10).
 
-    For each alpha: the stability events of the primary static branch, its equilibria at the
-    requested v with their linear stability, and the branch of periodic orbits of Eq. (20)
-    born at every Hopf point (:func:`continue_cycles`).  A branch that ends at another Hopf
-    point is not followed a second time from there.
+    For each alpha: the equilibria of the primary static branch at the requested v with
+    their stability, and the branch of periodic orbits of Eq. (20) born at every Hopf point
+    (:func:`continue_cycles`; one that ends at another Hopf point is not followed again).
 
     Parameters
     ----------

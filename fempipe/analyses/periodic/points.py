@@ -41,43 +41,13 @@ __all__ = [
 DIRECTIONS = ("up", "down")
 
 #: The JSON keys of a point, in order: planar, and (:data:`POINT_KEYS_3D`) of the 3-D model.
-POINT_KEYS = (
-    "v",
-    "direction",
-    "index",
-    "alpha",
-    "attractor",
-    "eta_tip",
-    "X_tip",
-    "Z_tip",
-    "period",
-    "period_n",
-    "max_multiplier",
-    "steps",
-    "rejected_steps",
-    "wall_time",
+POINT_KEYS = tuple(
+    "v direction index alpha attractor eta_tip X_tip Z_tip period period_n max_multiplier "
+    "steps rejected_steps wall_time".split()
 )
-POINT_KEYS_3D = (
-    "v",
-    "direction",
-    "index",
-    "alpha",
-    "attractor",
-    "motion",
-    "eta_tip",
-    "X_tip",
-    "Z_tip",
-    "Y_tip",
-    "period",
-    "period_n",
-    "whirl_rate",
-    "planarity",
-    "stable",
-    "started",
-    "steps",
-    "rejected_steps",
-    "t_end",
-    "cpu_time",
+POINT_KEYS_3D = tuple(
+    "v direction index alpha attractor motion eta_tip X_tip Z_tip Y_tip period period_n "
+    "whirl_rate planarity stable started steps rejected_steps t_end cpu_time".split()
 )
 
 

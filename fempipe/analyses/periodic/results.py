@@ -77,24 +77,12 @@ class HopfPoint:
 class CyclePoint:
     """One periodic orbit of a branch.
 
-    Attributes
-    ----------
-    v, period : float
-    q0, qdot0 : ndarray, shape (n,)
-        The orbit's state on the phase section.
-    tip : dict
-        ``{"eta_tip": [min, max], "X_tip": [...], "Z_tip": [...]}`` over one period.
-    multipliers : ndarray, complex
-        Floquet multipliers by decreasing modulus (the trivial one included).
-    stable : bool
-        All non-trivial multipliers inside the unit circle.
-    source : {"grid", "continuation"}
-        Landed on a requested v, or a step of its own.
-    iterations, residual : int, float
-        Newton iterations (integrations) and final RMS residual.
-    steps, rejected_steps : int
-        Integration steps of the last period; rejected ones over the corrector.
-    wall_time : float
+    ``q0``, ``qdot0``: its state on the phase section; ``tip``: [min, max] of the tip
+    coordinates over a period; ``multipliers``: Floquet multipliers by decreasing modulus
+    (the trivial one included); ``stable``: the non-trivial ones inside the unit circle;
+    ``source``: ``"grid"`` (a requested v) or ``"continuation"``; ``iterations``,
+    ``residual``: Newton's integrations and final RMS residual; ``steps``: integration steps
+    of the last period, ``rejected_steps`` over the corrector.
     """
 
     v: float
@@ -145,17 +133,8 @@ class CyclePoint:
 
 @dataclass(frozen=True)
 class CycleSpecialPoint:
-    """A bifurcation of periodic orbits located on a branch.
-
-    Attributes
-    ----------
-    v : float
-    type : {"fold", "period_doubling", "neimark_sacker"}
-    period : float
-        Interpolated at v.
-    index : int
-        Index of the branch point after which it lies.
-    """
+    """A bifurcation of periodic orbits on a branch: ``type`` fold, period_doubling or
+    neimark_sacker, its v and period, after the branch point ``index``."""
 
     v: float
     type: str
@@ -168,21 +147,9 @@ class CycleSpecialPoint:
 
 @dataclass(frozen=True)
 class CycleBranch:
-    """A branch of periodic orbits born at a Hopf point, in arclength order.
-
-    Attributes
-    ----------
-    name : str
-        ``"H1"``, ``"H2"``, ... by increasing v_H.
-    hopf : HopfPoint
-    points : tuple of CyclePoint
-    special_points : tuple of CycleSpecialPoint
-    end_reason : str
-        Why the continuation stopped.
-    steps, rejected_steps, newton_iterations : int
-        Accepted and rejected steps, integrations over all correctors.
-    wall_time : float
-    """
+    """A branch of periodic orbits born at a Hopf point (``name`` ``"H1"``, ``"H2"``, ... by
+    increasing v_H): its points in arclength order, special points, why it ended, its
+    accepted and rejected steps and integrations over all correctors."""
 
     name: str
     hopf: HopfPoint
