@@ -82,10 +82,10 @@ def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: in
 
 
 def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
-    """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip (Eqs. (5), (28)).
+    """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
 
-    The one place the package computes the tip's geometry: integrals of cos theta, sin theta
-    over [0, 1] by the discretization's Gauss rule.
+    Eqs. (5) and (28) at xi = 1, the one place the package computes the tip's geometry:
+    integrals of cos theta, sin theta over [0, 1] by the discretization's Gauss rule.
 
     Parameters
     ----------
