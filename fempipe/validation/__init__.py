@@ -1,21 +1,14 @@
 """The validation suite: the paper's figures by FE and modal Galerkin, side by side.
 
-One importable case per figure of Chen, Hu, Dai & Wang (2020).  Each case module declares
-``CASE``, a :class:`~fempipe.validation.case.Case` (name, figure, title, what the paper shows),
-and defines ``run(quick=False) -> CaseResult`` (the data and the measurements, judged by
-:mod:`fempipe.validation.evaluate`) and ``plot(result, fig=None) -> Figure`` (the figure drawn
-as the paper does, with the mesh-converged FE result and modal N = 3 and N = 4 overlaid).
-``references/<case>.json`` holds a case's reference numbers with their sources, its caption
-and the specs of its checks (claim, limit or reference, tolerance, why, source).
+One case module per figure of Chen, Hu, Dai & Wang (2020) or per variant of the pipe.  Each
+declares ``CASE`` (:class:`~fempipe.validation.case.Case`) and defines ``run(quick=False) ->
+CaseResult`` and ``plot(result, fig=None) -> Figure``; ``references/<case>.json`` holds its
+reference numbers with their sources, its caption and its check specs.
+:func:`fempipe.validation.suite.run_suite` runs them all (``fempipe validate``).
+Docs: docs/verification.md.
 
 >>> from fempipe.validation import load_case
 >>> res = load_case("fig02b").run(quick=True)      # doctest: +SKIP
->>> [c.name for c in res.checks if not c.passed]   # doctest: +SKIP
-
-:func:`fempipe.validation.suite.run_suite` runs them all (in parallel) and writes the Markdown
-report; ``fempipe validate`` is its command line.  Every case needs every part of fempipe: a
-module that fails to import fails the case loudly.  The folder ``validation/`` at the top of
-the repository (not installed) holds what is made from the suite: docs/verification.md.
 """
 
 from __future__ import annotations
@@ -51,18 +44,14 @@ CASES: tuple[str, ...] = (
     "fig12",
     "symmetry",
     "convergence",
-    # The classical variants of the straight pipe against the classical
-    # linear theory (fempipe.validation.classical) and the literature.
+    # variants of the straight pipe against the classical theory (classical.py)
     "end_mass",
     "external_damping",
     "hysteretic",
     "springs",
-    # The motion out of the plane (fempipe.model.out_of_plane) against an
-    # independent strong form (fempipe.validation.lateral).
+    # the motion out of the plane against a strong form (lateral.py)
     "out_of_plane",
-    # The pipe in three dimensions (fempipe.model.space): the non-planar oscillation's
-    # onset against its Hopf normal form, its mesh convergence, and the hanging pipe's
-    # whirl against a rotating-frame BVP (fempipe.validation.whirl_bvp).
+    # the 3-D model: Hopf onset, mesh convergence, whirl against a rotating-frame BVP
     "space_onset",
     "space_convergence",
     "space_whirl",

@@ -1,17 +1,9 @@
 """An independent solver of the static problem, for checking the weak form.
 
-Eq. (31a) in strong form, with the variants of the pipe (an end mass Gamma at xi = 1 and
-linear springs (kappa_j, xi_j), each a point force at which theta'' jumps), is a
-boundary-value problem with theta(1) and the spring points r(xi_j) as unknown parameters.
-:func:`solve_static_bvp` integrates it with scipy's collocation solver ``solve_bvp``
-(4th-order Lobatto IIIA, adaptive mesh), carrying the global coordinates X_g, Z_g as two more
-states so that the tip position is part of the solution; with springs the interval is cut at
-their positions and the pieces are solved as one system joined by continuity, so that the
-collocation never straddles a jump.  It shares no code with fempipe's discretizations,
-quadrature or residual: agreement to the BVP tolerance checks the weak form, the integration
-operators and Newton at once.
-
-Derivation: docs/theory/independent.md, "The static problem in strong form".
+Eq. (31a) in strong form with an end mass and springs (point forces where theta'' jumps), a
+BVP with theta(1) and the spring points r(xi_j) as parameters, carrying X_g, Z_g as states;
+solved by scipy's ``solve_bvp`` on pieces cut at the springs.  It shares no code with
+fempipe's discretizations.  Derivation: docs/theory/independent.md.
 """
 
 from __future__ import annotations
@@ -73,26 +65,20 @@ def solve_static_bvp(
     end_mass: float = 0.0,
     springs=(),
 ) -> BVPSolution:
-    """Solve Eq. (31a) by collocation (scipy ``solve_bvp``).
+    """Solve Eq. (31a) by collocation (scipy ``solve_bvp``); RuntimeError if it fails.
 
     Parameters
     ----------
     alpha, gamma, v : float
-        Inclination (rad), gravity parameter, flow velocity.
+        Inclination, gravity parameter, flow velocity.
     guess : callable, optional
-        ``guess(xi) -> theta`` selecting the branch (the problem has several
-        equilibria for large gamma); default the straight pipe.
+        ``guess(xi) -> theta`` selecting the branch (default: the straight pipe).
     tol : float
-        Collocation residual tolerance of ``solve_bvp``.
+        Collocation tolerance.
     end_mass : float
-        Gamma = M_e / ((m+M) L), a point mass at xi = 1.
+        Gamma = M_e / ((m+M) L) at xi = 1.
     springs : sequence of (kappa, xi_s)
-        Linear springs tying r(xi_s) to (xi_s, 0), 0 < xi_s <= 1.
-
-    Raises
-    ------
-    RuntimeError
-        If ``solve_bvp`` does not converge, with its message.
+        Linear springs tying r(xi_s) to (xi_s, 0).
     """
     from scipy.integrate import solve_bvp
 

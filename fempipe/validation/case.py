@@ -1,17 +1,12 @@
 """A validation case, declared once: what it reproduces, its references, its result.
 
-Every case module of :mod:`fempipe.validation` declares one :class:`Case`: its name, the
-paper's figure, a title and what the paper shows there.  Its reference file
-``references/<name>.json`` (:func:`load_references`) holds the reference numbers, each a
-value with its source, the figure's caption (a template of the reference values) and the
-specs of the case's checks (:mod:`fempipe.validation.evaluate`).  A run measures and returns
-:meth:`Case.result`, which judges every measurement by its spec.
-
-A check of the file without placeholders must be measured by every run (``"required":
-"full"``: by every full run; ``false``: when it applies); a run adds the members of a family
-of checks it must measure.  A required check that a run did not measure is a failed numerics
-check in that result: a code path that silently skipped a comparison fails the case instead
-of shrinking the report.
+``references/<name>.json`` (:func:`load_references`) holds a case's declaration (``"case"``:
+the paper's figure, title, what the paper shows; :meth:`Case.load`), its reference numbers
+with their sources, the caption template and the check specs
+(:mod:`fempipe.validation.evaluate`).  A run returns :meth:`Case.result`, which judges every
+measurement by its spec.  A check without placeholders must be measured by every run
+(``"required": "full"``: every full run; ``false``: when it applies): a required check a run
+did not measure fails the case.
 """
 
 from __future__ import annotations
@@ -32,18 +27,15 @@ _REFERENCE_DIR = Path(__file__).with_name("references")
 
 @dataclass(frozen=True)
 class References:
-    """The reference file of one case, ``references/<case>.json``.
-
-    ``entries`` are the reference numbers, each ``{"value": ..., "source": "..."}``;
-    ``about`` the file's ``"_about"`` text (where the numbers come from as a whole);
-    ``caption`` the figure's caption template; ``checks`` the check specs by name.
-    """
+    """``references/<case>.json``: ``entries`` ``{"value", "source"}`` by name, ``about``
+    its ``"_about"`` text, ``caption`` the caption template, ``checks`` the specs by name."""
 
     case: str
     about: str
     entries: Mapping[str, Mapping[str, Any]]
     caption: str = ""
     checks: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    declaration: Mapping[str, Any] = field(default_factory=dict)
 
     def value(self, key: str, quick: bool = False) -> Any:
         """The value of ``key``; with ``quick``, that of ``key + "_quick"`` (which must exist)."""
@@ -54,8 +46,7 @@ class References:
         return self.entries[key]["source"]
 
     def names(self, quick: bool) -> dict:
-        """The values the templates name: every entry (in the quick suite its ``_quick``
-        variant, where there is one) and ``"sources"``, their sources."""
+        """The values the templates name (quick: the ``_quick`` variants) and ``"sources"``."""
         key = {
             k: f"{k}_quick" if quick and f"{k}_quick" in self.entries else k for k in self.entries
         }
@@ -65,7 +56,7 @@ class References:
 
 
 def _check_spec(path: Path, name: str, spec: Any) -> None:
-    """Raise ValueError unless ``spec`` is a valid check spec (evaluate's module docstring)."""
+    """Raise ValueError unless ``spec`` is a valid check spec."""
     if not isinstance(spec, dict) or spec.get("kind") not in KINDS:
         raise ValueError(f"{path}: check {name!r} needs a kind, one of {', '.join(KINDS)}")
     missing = {"claim", "source"} | ({"why"} if spec["kind"] != "holds" else set())
@@ -80,14 +71,7 @@ def _check_spec(path: Path, name: str, spec: Any) -> None:
 
 
 def load_references(case: str) -> References:
-    """The reference file of ``case``, ``references/<case>.json``.
-
-    Raises
-    ------
-    ValueError
-        If the file has no ``"_about"``, an entry lacks ``value`` or ``source``, or a check
-        spec is not valid.
-    """
+    """The reference file ``references/<case>.json``; ValueError if it is malformed."""
     path = _REFERENCE_DIR / f"{case}.json"
     with path.open(encoding="utf-8") as fh:
         data = json.load(fh)
@@ -100,11 +84,12 @@ def load_references(case: str) -> References:
     for key, entry in entries.items():
         if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
             raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
-    return References(case, data["_about"], entries, data.get("caption", ""), checks)
+    meta = (data.get("caption", ""), checks, data.get("case", {}))
+    return References(case, data["_about"], entries, *meta)
 
 
 #: The keys of a reference file that are not reference numbers.
-_META = ("caption", "checks")
+_META = ("caption", "checks", "case")
 
 
 def not_emitted(name: str, case: str) -> Check:
@@ -122,9 +107,7 @@ def not_emitted(name: str, case: str) -> Check:
 
 
 def required(checks: Mapping[str, Mapping], quick: bool) -> list[str]:
-    """The checks of a spec section that every run (``quick`` or full) must measure: each
-    check without placeholders (``"required": "full"``: in the full suite, ``false``:
-    none), and the members of a family that its ``"required"`` lists."""
+    """The checks every run must measure (module docstring) and the listed family members."""
     names = []
     for name, spec in checks.items():
         want = spec.get("required", True)
@@ -137,27 +120,22 @@ def required(checks: Mapping[str, Mapping], quick: bool) -> list[str]:
 
 @dataclass(frozen=True)
 class Case:
-    """One validation case: a figure of the paper (or a study) and its checks.
-
-    Attributes
-    ----------
-    name : str
-        Module name (``fig02b``), also the reference file's name.
-    figure : str
-        The paper's figure it reproduces (``Fig. 2(b)``).
-    title : str
-    paper_shows : tuple of str
-        What the paper shows there, in words; each is checked.
-    not_checked : tuple of str
-        Statements of the paper this case cannot check (said so in the
-        report, never counted as reproduced).
-    """
+    """One validation case: module ``name`` (also its reference file's), the paper's
+    ``figure``, ``title``, ``paper_shows`` (each checked) and ``not_checked`` (statements
+    it cannot check, said so in the report)."""
 
     name: str
     figure: str
     title: str
     paper_shows: tuple[str, ...]
     not_checked: tuple[str, ...] = ()
+
+    @classmethod
+    def load(cls, name: str) -> Case:
+        """The case ``name`` as its reference file's ``"case"`` section declares it."""
+        d = load_references(name).declaration
+        shows, skipped = tuple(d["paper_shows"]), tuple(d.get("not_checked", ()))
+        return cls(name, d["figure"], d["title"], shows, skipped)
 
     @property
     def references(self) -> References:
@@ -166,8 +144,7 @@ class Case:
 
     @property
     def caption(self) -> str:
-        """The figure's caption in the report, filled from the (full suite's) reference values:
-        parameters, discretizations in words, the key of colors, line styles and markers."""
+        """The figure's caption, filled from the full suite's reference values."""
         refs = self.references
         return fill(refs.caption, refs.names(quick=False))
 
@@ -187,19 +164,9 @@ class Case:
         explained: Iterable[str] = (),
         requires: Iterable[str] = (),
     ) -> CaseResult:
-        """The case's result: every measurement judged by its spec, every required check
-        that is missing added as failed.
-
-        Parameters
-        ----------
-        measured : iterable of Measured
-        quick : bool
-            Whether the quick version ran.
-        tables, findings, data, explained
-            As :class:`~fempipe.validation.checks.CaseResult`.
-        requires : iterable of str
-            Names of checks this run must measure besides the file's required ones.
-        """
+        """Every measurement judged by its spec, every missing required check added as
+        failed; ``requires``: checks this run must measure besides the file's required ones
+        (the other arguments as :class:`~fempipe.validation.checks.CaseResult`)."""
         refs = self.references
         names = refs.names(quick)
         checks = tuple(evaluate(_spec(refs, m.spec), m, names) for m in measured)
@@ -211,7 +178,7 @@ class Case:
             figure=self.figure,
             title=self.title,
             paper_shows=self.paper_shows,
-            caption=fill(refs.caption, refs.names(quick=False)),
+            caption=self.caption,
             not_checked=self.not_checked,
             checks=checks + missing,
             tables=tuple(tables),

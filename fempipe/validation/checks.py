@@ -1,20 +1,10 @@
 """Checks, tables and case results: the vocabulary of the validation suite.
 
-A validation case compares what fempipe computes with a reference and says
-whether they agree.  Every comparison is a :class:`Check` that carries its own
-tolerance, the reason for that tolerance and the source of the reference
-number, so a reader of the report can judge it without reading the code.
-
-Checks come in two categories:
-
-``numerics``
-    fempipe against an independent computation (a refined mesh, the other
-    discretization, an independent ODE boundary-value solver, a symmetry, a
-    classical value).  These must pass; a failure is a bug in fempipe.
-``paper``
-    a statement or number of the paper (Chen, Hu, Dai & Wang 2020) against
-    fempipe's mesh-converged answer.  A failure here is a *finding*: the
-    paper and the converged model disagree, and the report says by how much.
+Every comparison is a :class:`Check` carrying its tolerance, why it has that size and the
+source of the reference, so the report can be judged without the code.  Two categories:
+``numerics`` (fempipe against an independent computation: refined mesh, other
+discretization, ODE solver, symmetry, classical value; must pass) and ``paper`` (a statement
+of Chen, Hu, Dai & Wang 2020 against fempipe's converged answer; a failure is a *finding*).
 """
 
 from __future__ import annotations
@@ -33,26 +23,9 @@ CATEGORIES = ("numerics", "paper")
 
 @dataclass(frozen=True)
 class Check:
-    """One comparison with a pass/fail verdict.
-
-    Attributes
-    ----------
-    name : str
-        Short identifier, unique within its case.
-    claim : str
-        The statement checked, in words ("flutter in the second mode").
-    category : {'numerics', 'paper'}
-        See the module docstring.
-    passed : bool
-    measured : float or str
-        What fempipe computed.
-    reference : float or str or None
-        The number or statement it is compared with.
-    tolerance : str
-        The acceptance criterion, with why it has that size.
-    source : str
-        Where the reference comes from (paper section/figure/equation, a
-        classical result with its citation, or the independent computation).
+    """One comparison with a verdict: ``name`` (unique in its case), ``claim`` in words,
+    ``category`` (``numerics``, ``paper``), ``passed``, ``measured``, ``reference``,
+    ``tolerance`` (the criterion and why) and ``source`` of the reference.
     """
 
     name: str
@@ -84,12 +57,18 @@ def format_cell(x: Any) -> str:
 
 @dataclass(frozen=True)
 class Table:
-    """A small table for the report: a title, column names and rows of cells."""
+    """A small table for the report: a title, column names (a tuple, or one string
+    ``"a | b | c"``) and rows of cells."""
 
     title: str
     columns: tuple[str, ...]
     rows: tuple[tuple[Any, ...], ...]
     note: str = ""
+
+    def __post_init__(self) -> None:
+        if isinstance(self.columns, str):
+            object.__setattr__(self, "columns", tuple(self.columns.split(" | ")))
+        object.__setattr__(self, "rows", tuple(self.rows))
 
     def to_markdown(self) -> str:
         head = "| " + " | ".join(format_cell(c) for c in self.columns) + " |"
@@ -106,34 +85,11 @@ class Table:
 
 @dataclass(frozen=True)
 class CaseResult:
-    """What one validation case returns.
+    """What one case returns.
 
-    Attributes
-    ----------
-    case : str
-        Module name (``fig02b``).
-    figure : str
-        The paper's figure it reproduces (``Fig. 2(b)``).
-    title : str
-    paper_shows : tuple of str
-        What the paper shows there, in words; each is checked below.
-    checks : tuple of Check
-    tables : tuple of Table
-    findings : tuple of str
-        Disagreements with the paper, with the measurement.
-    explained : tuple of str
-        Names of failed paper checks that a finding already explains (the
-        report lists them once, by the finding's text).
-    data : dict
-        Arrays the figure is drawn from (not serialised by ``to_dict``).
-    quick : bool
-        Whether the quick (coarser) version ran.
-    runtime : float
-        Wall time of ``run``, s (measured by :mod:`fempipe.validation.suite`).
-    caption : str
-        The figure's caption (see :class:`fempipe.validation.case.Case`).
-    not_checked : tuple of str
-        Statements of the paper the case cannot check.
+    ``explained``: failed paper checks a finding already states; ``data``: the figure's arrays
+    (not serialised); ``runtime``: wall time of ``run`` in s; the other fields as
+    :class:`~fempipe.validation.case.Case` and the report.
     """
 
     case: str
@@ -176,12 +132,8 @@ class CaseResult:
 
 
 def merge_results(results: list[CaseResult]) -> CaseResult:
-    """One CaseResult from the parts of a case run separately (in order).
-
-    Checks and findings are concatenated, tables with the same title get their
-    rows concatenated, ``data`` dicts are merged (dict values merged key by
-    key), runtimes are summed (the compute time of the case, whatever ran in
-    parallel).
+    """One CaseResult from the parts of a case run separately: checks, findings and same-titled
+    tables concatenated, ``data`` merged key by key, runtimes summed.
     """
     if not results:
         raise ValueError("nothing to merge")

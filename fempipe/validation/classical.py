@@ -1,22 +1,12 @@
 """The classical linear theory of the straight pipe: an independent check of fempipe.
 
-This module solves the textbook equation of small lateral motions eta(xi, tau) of a
-cantilevered pipe conveying fluid (Paidoussis, *Fluid-Structure Interactions*, vol. 1, 1998,
-Sec. 3.3.5, Eqs. (3.70)-(3.71)), with the variants of the pipe (end mass, external damping,
-hysteretic loss factor, springs), written from that equation alone: it knows neither the
-rotation angle theta nor the geometrically exact weak form of
-:mod:`fempipe.model.operators`.  It is valid for the straight pipe only: hanging
-(alpha = 0), standing (alpha = pi) or without gravity (gamma = 0).
-
-:class:`StraightPipe` is the problem; :func:`eigenvalues` its spectrum (eta ~ exp(lambda
-tau), Re lambda > 0 unstable; with hysteretic damping the roots consistent with
-1 + i mu_h sgn(omega)); :func:`spectral_abscissa` and :func:`critical_velocity` (a scan of v,
-then Brent's method) its stability.  The two discretizations, Paidoussis' beam-mode Galerkin
-method (:class:`BeamGalerkin`) and Legendre spectral elements (:class:`LegendreGalerkin`, the
-reference of the validation cases), are in :mod:`fempipe.validation.classical_galerkin`, the
-closed forms in :mod:`fempipe.validation.classical_limits`; this module re-exports them, so
-``fempipe.validation.classical`` is the one name to use.  Derivation and measured errors:
-docs/theory/independent.md, "The classical linear theory of the straight pipe".
+Small lateral motions eta(xi, tau) of a cantilevered pipe conveying fluid (Paidoussis,
+*Fluid-Structure Interactions* vol. 1, 1998, Eqs. (3.70)-(3.71)) with end mass, external
+damping, hysteretic loss and springs, written from that equation alone (no theta, no weak form
+of :mod:`fempipe.model.operators`); valid for the straight pipe only (alpha = 0, pi, or
+gamma = 0).  :func:`eigenvalues`, :func:`spectral_abscissa`, :func:`critical_velocity`; the
+discretizations (:mod:`.classical_galerkin`) and closed forms (:mod:`.classical_limits`) are
+re-exported here.  Derivation and errors: docs/theory/independent.md.
 """
 
 from __future__ import annotations
@@ -80,20 +70,16 @@ class StraightPipe:
 
     Parameters
     ----------
-    beta : float
-        Mass ratio M/(m+M).
-    gamma : float
-        Gravity parameter (m+M) g L^3/EI >= 0.
+    beta, gamma : float
+        Mass ratio M/(m+M); gravity parameter (m+M) g L^3/EI >= 0.
     standing : bool
-        False: hanging (gravity pulls towards the free end, alpha = 0); True:
-        standing (alpha = pi, gravity compresses the pipe).
+        False: hanging (alpha = 0); True: standing (alpha = pi, compressed).
     mu : float
-        Kelvin-Voigt damping (fempipe's mu; Paidoussis' alpha).
+        Kelvin-Voigt damping (Paidoussis' alpha).
     end_mass : float
         Gamma = M_e/((m+M) L).
     sigma : float
-        External viscous damping c L^2/(EI (m+M))^(1/2) (a force -c eta_dot
-        per unit length on the pipe, not on the end mass).
+        External viscous damping c L^2/(EI (m+M))^(1/2) on the pipe (not the end mass).
     mu_h : float
         Hysteretic loss factor: EI -> EI (1 + i mu_h sgn(omega)).
     springs : tuple of (kappa, xi_s)
@@ -121,13 +107,7 @@ class StraightPipe:
 
     @classmethod
     def from_params(cls, params) -> StraightPipe:
-        """The straight pipe of a :class:`fempipe.model.params.Params` (alpha = 0 or pi, or gamma = 0).
-
-        Raises
-        ------
-        ValueError
-            If the pipe is inclined (its static state is curved: not this theory).
-        """
+        """The straight pipe of a :class:`~fempipe.model.params.Params`; ValueError if inclined."""
         c = math.cos(params.alpha)
         if params.gamma != 0.0 and abs(abs(c) - 1.0) > 1e-14:
             raise ValueError(
@@ -179,21 +159,10 @@ class _Problem:
 def eigenvalues(
     pipe: StraightPipe, v: float, method: str = "galerkin", n: int | None = None
 ) -> np.ndarray:
-    """The consistent eigenvalues lambda (eta ~ e^{lambda tau}) at flow velocity ``v``.
+    """The consistent eigenvalues lambda (eta ~ e^{lambda tau}) at ``v``, sorted by |lambda|.
 
-    Parameters
-    ----------
-    pipe : StraightPipe
-    v : float
-        Flow velocity.
-    method, n : str, int
-        The discretization (:func:`discretization`).
-
-    Returns
-    -------
-    ndarray of complex
-        Sorted by |lambda|; with hysteretic damping, those of the module
-        docstring (Im > 0 from 1 + i mu_h, their conjugates, the real ones).
+    With hysteretic damping: Im > 0 from 1 + i mu_h, their conjugates and the real ones.
+    ``method``, ``n``: the discretization (:func:`discretization`).
     """
     lam = _Problem(pipe, discretization(method, n)).eigenvalues(v)
     return lam[np.argsort(np.abs(lam))]
@@ -216,44 +185,16 @@ def spectral_abscissa(
     lam_max: float = LAM_MAX,
     tol: float = TOL,
 ) -> tuple[float, complex]:
-    """The stability margin max(Re lambda - tol max(1, |lambda|)) and the eigenvalue attaining it.
-
-    Parameters
-    ----------
-    pipe : StraightPipe
-    v : float
-        Flow velocity.
-    method, n : str, int
-        The discretization (:func:`discretization`).
-    lam_max, tol : float
-        Only |lambda| < ``lam_max`` count; an unstable real part exceeds
-        ``tol`` max(1, |lambda|) (docs/theory/independent.md).
-
-    Returns
-    -------
-    margin : float
-        Positive: unstable.
-    lam : complex
-        The eigenvalue attaining it.
+    """``(margin, lam)``: max(Re lambda - tol max(1, |lambda|)) over |lambda| < ``lam_max``
+    (positive: unstable) and the eigenvalue attaining it.
     """
     return _abscissa(_Problem(pipe, discretization(method, n)).eigenvalues(v), lam_max, tol)
 
 
 @dataclass(frozen=True)
 class Onset:
-    """The first loss of stability found by :func:`critical_velocity`.
-
-    Attributes
-    ----------
-    v_cr : float
-        Critical flow velocity (nan if stable up to ``v_max``).
-    lam : complex
-        The crossing eigenvalue (Im lambda >= 0): its imaginary part is the
-        frequency omega at the onset (0 for divergence).
-    kind : str
-        ``"flutter"``, ``"divergence"``, ``"unstable at v_min"`` or ``"stable"``.
-    method : str
-        The discretization's label.
+    """The first loss of stability: ``v_cr`` (nan if none), the crossing eigenvalue ``lam``
+    (Im >= 0), ``kind`` (flutter, divergence, unstable at v_min, stable), ``method``.
     """
 
     v_cr: float
@@ -279,25 +220,10 @@ def critical_velocity(
     lam_max: float = LAM_MAX,
     tol: float = TOL,
 ) -> Onset:
-    """The first flow velocity in [v_min, v_max] at which the straight pipe loses stability.
+    """The first v in [v_min, v_max] at which the straight pipe loses stability.
 
-    Scan v with ``step``; in the first interval where the stability margin
-    (:func:`spectral_abscissa`) turns positive, Brent's method to ``xtol``.
-    A stability window narrower than ``step`` can be missed.
-
-    Parameters
-    ----------
-    pipe : StraightPipe
-    v_max, v_min : float
-        The range of v.
-    method, n : str, int
-        The discretization (:func:`discretization`).
-    step : float
-        Scan step in v.
-    xtol : float
-        Brent's tolerance in v.
-    lam_max, tol : float
-        Which eigenvalues decide and the size of an unstable real part.
+    A scan with ``step`` (a narrower stability window can be missed), then Brent's method to
+    ``xtol`` on the margin of :func:`spectral_abscissa`; ``method``, ``n``: the discretization.
     """
     prob = _Problem(pipe, discretization(method, n))
     label = prob.disc.label()

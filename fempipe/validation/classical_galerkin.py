@@ -1,11 +1,9 @@
 """The two discretizations of the classical linear theory (:mod:`fempipe.validation.classical`).
 
-:class:`BeamGalerkin`, Paidoussis' Galerkin method on the clamped-free beam
-functions, and :class:`LegendreGalerkin`, C^1 Legendre spectral elements cut
-at the springs; both give the pencil of the quadratic eigenproblem
+:class:`BeamGalerkin` (Paidoussis' clamped-free beam functions) and :class:`LegendreGalerkin`
+(C^1 Legendre spectral elements cut at the springs) give the pencil of
 (K + lambda C + lambda^2 M) x = 0, solved by :func:`quadratic_eigenvalues`.
-The weak form and the measured errors: docs/theory/independent.md, "The classical
-linear theory of the straight pipe".
+Weak form and errors: docs/theory/independent.md.
 """
 
 from __future__ import annotations
@@ -21,18 +19,6 @@ from scipy.optimize import brentq
 if TYPE_CHECKING:
     from .classical import StraightPipe
 
-__all__ = [
-    "BeamGalerkin",
-    "LegendreGalerkin",
-    "beam_mode_coefficients",
-    "beam_mode_values",
-    "cantilever_roots",
-    "discretization",
-    "gauss_cells",
-    "legendre_local_basis",
-    "quadratic_eigenvalues",
-]
-
 
 # ---------------------------------------------------------------------------
 # Clamped-free beam modes
@@ -40,12 +26,7 @@ __all__ = [
 
 @functools.cache
 def cantilever_roots(n: int) -> np.ndarray:
-    """The first ``n`` roots lambda_r of cos(lambda) cosh(lambda) = -1.
-
-    Written as cos(lambda) + 1/cosh(lambda) = 0 (no overflow); root r lies
-    in [(r - 1) pi, r pi], where the left side changes sign once, and is
-    found by Brent's method to 1e-15.
-    """
+    """The first ``n`` roots of cos(lambda) + 1/cosh(lambda) = 0, root r in [(r-1) pi, r pi]."""
 
     def f(x):
         return math.cos(x) + 1.0 / math.cosh(x)
@@ -55,12 +36,7 @@ def cantilever_roots(n: int) -> np.ndarray:
 
 
 def beam_mode_coefficients(lam: np.ndarray):
-    """a, b, s of phi = a e^{lam(x-1)} + b e^{-lam x} - cos(lam x) + s sin(lam x).
-
-    phi_r = cosh - cos - s (sinh - sin) with s = (cosh lam + cos lam)/(sinh lam
-    + sin lam); cosh(lam x) - s sinh(lam x) = a e^{lam (x - 1)} + b e^{-lam x}
-    with a = (1 - s) e^{lam}/2 and b = (1 + s)/2, all written with e^{-lam}.
-    """
+    """a, b, s of phi = a e^{lam(x-1)} + b e^{-lam x} - cos(lam x) + s sin(lam x) (no overflow)."""
     em = np.exp(-lam)
     s = (1.0 + em * em + 2.0 * np.cos(lam) * em) / (1.0 - em * em + 2.0 * np.sin(lam) * em)
     # With the equivalent s = (sinh - sin)/(cosh + cos) (cos cosh = -1),
@@ -71,22 +47,8 @@ def beam_mode_coefficients(lam: np.ndarray):
 
 
 def beam_mode_values(n: int, x: np.ndarray, derivative: int = 0) -> np.ndarray:
-    """The ``derivative``-th derivative of the first ``n`` clamped-free beam modes at ``x``.
-
-    Parameters
-    ----------
-    n : int
-        Number of modes.
-    x : array_like
-        Points in [0, 1].
-    derivative : int
-        0 ... 4.
-
-    Returns
-    -------
-    ndarray, shape (len(x), n)
-        phi_r^(k)(x_j), with int_0^1 phi_r^2 = 1 (the textbook normalization,
-        |phi_r(1)| = 2).
+    """The ``derivative``-th derivative (0-4) of the first ``n`` beam modes at ``x``, shape
+    (len(x), n), normalized to int phi_r^2 = 1.
     """
     lam = cantilever_roots(n)
     a, b, s = beam_mode_coefficients(lam)
@@ -114,18 +76,11 @@ _SHIFTS = (-1.0, -1.37)
 
 
 def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """The 2n roots lambda of det(lambda^2 M + lambda C + K) = 0.
+    """The 2n roots of det(lambda^2 M + lambda C + K) = 0, shifted: lambda = s + 1/nu.
 
-    With lambda = s + 1/nu (s = -1) the problem becomes
-    nu^2 K_s + nu C_s + M = 0, K_s = K + s C + s^2 M, C_s = C + 2 s M, whose
-    companion matrix [[0, I], [-K_s^-1 M, -K_s^-1 C_s]] has a norm of the
-    order of the largest 1/|lambda - s|.  Its round-off therefore stays at the
-    scale of the low modes whatever the discretization: the direct companion
-    of (q, q') has a norm of the order of the stiffest mode's omega^2 (and
-    mu omega^2 with Kelvin-Voigt damping), whose round-off shifts an
-    eigenvalue near zero (a divergence) by 1e-6 at 40 modes and splits the
-    double eigenvalue of a coalescence (Beck's column) early.  K_s is
-    singular only if s is an eigenvalue (then the next shift is used).
+    The companion of nu^2 K_s + nu C_s + M (K_s = K + s C + s^2 M, C_s = C + 2 s M) has a norm of
+    the low modes' order, so a divergence or a coalescence keeps its accuracy however stiff the
+    discretization; the next shift is used if s is an eigenvalue.
     """
     n = M.shape[0]
     for s in _SHIFTS:
@@ -147,13 +102,7 @@ def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.nda
 
 
 class BeamGalerkin:
-    """Paidoussis' Galerkin method on ``n`` clamped-free beam modes (docs/theory/independent.md).
-
-    Parameters
-    ----------
-    n : int
-        Number of modes.
-    """
+    """Paidoussis' Galerkin method on ``n`` clamped-free beam modes."""
 
     name = "beam-mode Galerkin"
 
@@ -178,13 +127,7 @@ class BeamGalerkin:
         return f"beam modes N = {self.n}"
 
     def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0):
-        """The v-independent pieces of K(v) = K0 + v^2 Kv, C(v) = C0 + v Cv and M.
-
-        Returns
-        -------
-        K0, Kv, C0, Cv, M : ndarray
-            K0 complex when ``pipe.mu_h`` > 0 (1 + i mu_h_sign mu_h).
-        """
+        """``K0, Kv, C0, Cv, M`` of K = K0 + v^2 Kv, C = C0 + v Cv (K0 complex with ``mu_h``)."""
         L4 = np.diag(self.lam4)
         K0 = (1.0 + 1j * mu_h_sign * pipe.mu_h) * L4 if pipe.mu_h else L4.astype(float)
         K0 = K0 + pipe.sign * pipe.gamma * (self.e_free + pipe.end_mass * self.e_tip)
@@ -203,14 +146,7 @@ class BeamGalerkin:
 
 
 def legendre_local_basis(p: int):
-    """The C^1 basis of one element on t in [-1, 1], as Legendre series.
-
-    Four Hermite cubics (value and d/dt at t = -1, value and d/dt at t = 1)
-    and the bubbles psi_k, k = 2 ... p, with psi_k'' = P_k and
-    psi_k(-1) = psi_k'(-1) = 0; psi_k(1) = psi_k'(1) = 0 follows from the
-    orthogonality of P_k (k >= 2) to 1 and t.  The bending stiffness of the
-    bubbles is therefore diagonal, int psi_j'' psi_k'' = 2/(2k + 1) delta_jk.
-    """
+    """The C^1 basis on [-1, 1] as Legendre series: four Hermite cubics and bubbles psi_k'' = P_k."""
     from numpy.polynomial import Legendre, Polynomial
 
     hermite = [
@@ -225,20 +161,8 @@ def legendre_local_basis(p: int):
 
 
 class LegendreGalerkin:
-    """A spectral-element Galerkin method on the weak form (docs/theory/independent.md).
-
-    One element per segment between the springs (a spring sits on a node),
-    each carrying polynomials of degree p + 2: the Hermite cubics (eta and
-    eta' continuous at the nodes: C^1, conforming for the fourth-order
-    problem) and p - 1 bubbles whose second derivatives are the Legendre
-    polynomials P_2 ... P_p.  The integrands are polynomials, integrated
-    exactly by Gauss-Legendre with p + 6 points; the solution is analytic on
-    each element, so the error falls faster than any power of p.
-
-    Parameters
-    ----------
-    p : int
-        Highest Legendre degree of the bubbles' second derivatives (>= 2).
+    """Spectral elements: one per segment between springs, Hermite cubics plus ``p`` - 1 bubbles
+    (psi'' = P_2 ... P_p), integrated exactly; the error falls faster than any power of p.
     """
 
     name = "Legendre spectral Galerkin"
@@ -260,8 +184,7 @@ class LegendreGalerkin:
         return f"Legendre p = {self.p}"
 
     def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0):
-        """K0, Kv, C0, Cv, M as :meth:`BeamGalerkin.pencil`, in the M-orthonormal modes of
-        the bending stiffness."""
+        """As :meth:`BeamGalerkin.pencil`, in the M-orthonormal modes of the bending stiffness."""
         nodes = [0.0, *sorted({x for _, x in pipe.springs if x < 1.0}), 1.0]
         S = len(nodes) - 1
         nb = self.p - 1  # bubbles per element
@@ -313,16 +236,8 @@ class LegendreGalerkin:
 
 
 def discretization(method: str = "galerkin", n: int | None = None):
-    """A discretization by name.
-
-    Parameters
-    ----------
-    method : {"galerkin", "legendre"}
-        Paidoussis' beam-mode Galerkin method (:class:`BeamGalerkin`, default
-        N = 20) or the spectral elements (:class:`LegendreGalerkin`, default
-        p = 24).
-    n : int, optional
-        N or p.
+    """``"galerkin"`` (:class:`BeamGalerkin`, N = 20) or ``"legendre"`` (:class:`LegendreGalerkin`,
+    p = 24); ``n`` overrides N or p.
     """
     if method == "galerkin":
         return BeamGalerkin(20 if n is None else n)

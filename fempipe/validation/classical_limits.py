@@ -1,8 +1,5 @@
-"""Closed forms the classical solvers (:mod:`fempipe.validation.classical`) are checked against.
-
-Blevins's tip-mass frequencies, Greenhill's heavy column with an end weight
-(Bessel functions), the divergence of a pipe with a tip spring (Chen,
-Paidoussis Eq. (3.119)) and the limit of large external damping.
+"""Closed forms the classical solvers are checked against: Blevins's tip-mass frequencies,
+Greenhill's heavy column with an end weight, Chen's tip spring, the large-damping limit.
 """
 
 from __future__ import annotations
@@ -21,14 +18,6 @@ from .classical_galerkin import LegendreGalerkin
 if TYPE_CHECKING:
     from .classical import StraightPipe
 
-__all__ = [
-    "heavy_column_buckling",
-    "large_damping_limit",
-    "stiffness_roots",
-    "tip_mass_frequencies",
-    "tip_spring_divergence",
-]
-
 
 # ---------------------------------------------------------------------------
 # Closed forms the solvers are checked against
@@ -44,12 +33,9 @@ def _roots(f, a: float, b: float, n_grid: int = 4000, count: int | None = None) 
 
 
 def tip_mass_frequencies(end_mass: float, n: int = 3) -> np.ndarray:
-    """Frequencies omega_r = l_r^2 of the gravity-free cantilever with a tip mass, at v = 0.
+    """omega_r = l_r^2 of the gravity-free cantilever with a tip mass at v = 0 (Blevins 1979).
 
-    The roots of 1 + cos l cosh l + Gamma l (cos l sinh l - sin l cosh l) = 0
-    (Blevins, *Formulas for Natural Frequency and Mode Shape*, 1979:
-    cantilever with a mass at the free end), divided by cosh l so that
-    nothing overflows.
+    Roots of 1 + cos l cosh l + Gamma l (cos l sinh l - sin l cosh l) = 0, divided by cosh l.
     """
 
     def f(x):
@@ -65,12 +51,8 @@ def tip_mass_frequencies(end_mass: float, n: int = 3) -> np.ndarray:
 def heavy_column_buckling(end_mass: float) -> float:
     """gamma at which the standing column (v = 0) buckles under its weight and the end mass's.
 
-    With y = eta' and s = 1 + Gamma - xi, the static equation integrates to
-    y'' + gamma s y = 0, y = 0 at the clamp (s = 1 + Gamma), dy/ds = 0 at the
-    free end (s = Gamma), whose solutions are y = s^(1/2) [A J_(1/3)(z) +
-    B J_(-1/3)(z)], z = (2/3) gamma^(1/2) s^(3/2).  The smallest gamma with a
-    nontrivial (A, B); for Gamma = 0 it is Greenhill's J_(-1/3)((2/3)
-    gamma^(1/2)) = 0, gamma = 7.8373.
+    y = eta' solves y'' + gamma s y = 0 (s = 1 + Gamma - xi): y = s^(1/2) [A J_(1/3)(z) +
+    B J_(-1/3)(z)], z = (2/3) gamma^(1/2) s^(3/2); Gamma = 0: Greenhill's gamma = 7.8373.
     """
     from scipy.special import jv, jvp
 
@@ -92,12 +74,8 @@ def heavy_column_buckling(end_mass: float) -> float:
 
 
 def tip_spring_divergence(kappa: float) -> float:
-    """The divergence velocity of the gravity-free cantilever with a spring kappa at its tip.
-
-    The smallest positive root of u^3 + kappa (sin u - u cos u) = 0
-    (Paidoussis 1998, Eq. (3.119), after Chen 1971a); nan when there is none
-    below 3 pi (small kappa: no divergence).  kappa -> infinity gives the
-    clamped-pinned pipe, tan u = u, u = 4.4934.
+    """Divergence v of the gravity-free cantilever with a tip spring kappa: the smallest root of
+    u^3 + kappa (sin u - u cos u) = 0 below 3 pi (Paidoussis 1998, Eq. (3.119)), else nan.
     """
     r = _roots(lambda u: u**3 + kappa * (math.sin(u) - u * math.cos(u)), 0.1, 3 * math.pi, count=1)
     return float(r[0]) if r.size else float("nan")
@@ -107,10 +85,8 @@ def tip_spring_divergence(kappa: float) -> float:
 def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1e4) -> np.ndarray:
     """The roots nu of K(v) x = nu M x (no damping, no Coriolis), |nu| < ``nu_max``.
 
-    When the damping is sigma times the mass (beta = 0, no Kelvin-Voigt, no end
-    mass), each nu = a + ib gives lambda^2 + sigma lambda + nu = 0, whose roots
-    are stable iff a > 0 and b^2 < sigma^2 a: the whole damped problem follows
-    from these roots, and for sigma -> infinity stability needs only a > 0.
+    With damping sigma M, lambda^2 + sigma lambda + nu = 0 is stable iff a > 0 and b^2 < sigma^2 a
+    (nu = a + ib): for sigma -> infinity only a > 0 is left.
     """
     K0, Kv, _, _, M = LegendreGalerkin(p).pencil(replace(pipe, sigma=0.0, mu=0.0, beta=0.0))
     nu = np.linalg.eigvals(np.linalg.solve(M, K0 + v * v * Kv))
@@ -118,11 +94,7 @@ def stiffness_roots(pipe: StraightPipe, v: float, p: int = 16, nu_max: float = 1
 
 
 def large_damping_limit(pipe: StraightPipe, v_max: float, p: int = 16, step: float = 0.05) -> float:
-    """The v_cr of ``pipe`` as its external damping sigma -> infinity (damping = sigma M).
-
-    The first v at which a root nu of :func:`stiffness_roots` has Re nu < 0,
-    by a scan and Brent's method; nan if none up to ``v_max``.
-    """
+    """v_cr as sigma -> infinity: the first v with Re nu < 0 (:func:`stiffness_roots`), else nan."""
 
     def f(v):
         return float(np.min(stiffness_roots(pipe, v, p).real))

@@ -1,20 +1,10 @@
 """The convergence study: error against degrees of freedom, FE P1/P2/P3 and modal N.
 
-For each quantity Q (a static tip value; v_cr for each alpha of Fig. 6; a limit-cycle
-amplitude) the study computes Q on a sequence of meshes for each element degree and for
-increasing numbers of sine modes, then
-
-* takes as reference the Richardson extrapolation of the two finest P3 values,
-  ``Q_ref = Q_h + (Q_h - Q_2h) / (2^p - 1)`` with the theoretical order p, and as its error
-  estimate the correction itself (an upper bound once the sequence is asymptotic);
-* fits the observed order as the least-squares slope of log(error) against log(dofs) over the
-  last three points whose error is well above the reference's own uncertainty and round-off;
-* tabulates the error of the paper's N = 3 and N = 4 against the reference.
-
-FE tip values of P_k converge as h^(2k) (nodal superconvergence, kept by the Gauss
-integration operators of :mod:`fempipe.model.quadrature`); the sine modes only as N^-3,
-because each has phi''(0) = 0 where Eq. (31a) gives theta''(0) != 0 (the derivation:
-docs/theory/conventions.md, "Why the sine modes converge only algebraically").
+Each quantity (a static tip value, v_cr per alpha of Fig. 6, a limit-cycle amplitude) on
+refined meshes and increasing sine modes; the reference is the Richardson extrapolation of the
+two finest P3 values (its correction the error estimate), the observed order the slope of the
+last three errors above the reference's uncertainty.  FE tip values of P_k converge as
+h^(2k), the sine modes as N^-3 (docs/theory/conventions.md).
 """
 
 from __future__ import annotations
@@ -31,22 +21,14 @@ from fempipe.studies.convergence import estimate_order, extrapolate_richardson
 from .bvp import solve_static_bvp
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .dynamic_runs import cycle_on
 from .evaluate import Measured, measure
 from .fig02b import pipe
 from .onset import critical_velocity
 from .static_shapes import static_shapes
 
-CASE = Case(
-    name="convergence",
-    figure="Convergence study",
-    title="Error against degrees of freedom: FE P1, P2, P3 and modal N",
-    paper_shows=(
-        "N = 3 is converged for the static shapes (Sec. 3.1, Fig. 2(a))",
-        "the stability results are converged in the Galerkin discretization (Sec. 4)",
-        "N = 3 and N = 4 agree for the nonlinear oscillations (Sec. 5, Fig. 7)",
-    ),
-)
+CASE = Case.load("convergence")
 
 
 @dataclass(frozen=True)
@@ -88,20 +70,10 @@ def run_study(
     paper_modes: Sequence[int] = (3, 4),
     roundoff: float = 1e-12,
 ) -> Study:
-    """Compute ``quantity`` on every discretization and fit the orders.
+    """Compute ``quantity`` by ``compute(disc)`` on every discretization and fit the orders.
 
-    Parameters
-    ----------
-    compute : callable
-        ``compute(disc) -> float``.
-    fe_elements : dict
-        degree (str or int) -> list of element counts, each the double of the last.
-    modes : sequence of int
-        Modal truncations N.
-    fe_order : dict
-        degree -> theoretical order in h (Richardson uses that of the highest degree).
-    roundoff : float
-        Errors below ``roundoff * max(1, |Q|)`` are not used in the fits.
+    ``fe_elements``: degree -> element counts, each doubling; ``modes``: N; ``fe_order``: degree
+    -> theoretical order; errors below ``roundoff * max(1, |Q|)`` are not fitted.
     """
     raw: dict[str, tuple[np.ndarray, np.ndarray, float | None]] = {}
     for deg, ns in fe_elements.items():
@@ -248,14 +220,7 @@ def _paper_table(studies: Sequence[Study]) -> Table:
             )
     return Table(
         "Error of the paper's N = 3 and N = 4 against the converged FE answer",
-        (
-            "quantity",
-            "modes",
-            "modal value",
-            "converged FE (Richardson)",
-            "error",
-            "relative error",
-        ),
+        "quantity | modes | modal value | converged FE (Richardson) | error | relative error",
         tuple(rows),
     )
 
@@ -290,14 +255,7 @@ def _reference_table(studies: Sequence[Study]) -> Table:
         rows.append((s.quantity, s.reference, s.reference_error, name, val, diff))
     return Table(
         "Richardson-extrapolated references",
-        (
-            "quantity",
-            "reference",
-            "error estimate",
-            "independent check",
-            "its value",
-            "|difference|",
-        ),
+        "quantity | reference | error estimate | independent check | its value | |difference|",
         tuple(rows),
         note="Reference: the two finest P3 values extrapolated with p = 6; error estimate: "
         "the size of the Richardson correction.",
@@ -423,22 +381,17 @@ def draw_orders(studies: Sequence[Study], ax=None):
 
 def plot(result: CaseResult, fig=None):
     """Log-log error against dofs: static tip, v_cr at α = 0 and 90°, limit cycle; orders vs α."""
-    from .drawing import new_figure
 
     studies = result.data["studies"]
     shown = [s for s in studies if not s.quantity.startswith("v_cr")]
     vc = [s for s in studies if s.quantity.startswith("v_cr")]
     shown[1:1] = [s for s in vc if s.quantity.endswith(("= 0°", "= 90°"))]
     n = len(shown) + (1 if len(vc) > 1 else 0)
-    if fig is None:
-        fig, axes = new_figure(n, ncols=min(n, 3), size=4.5)
-    else:
-        axes = list(fig.subplots(1, n, squeeze=False).ravel())
+    fig, axes = figure_panels(fig, n, ncols=min(n, 3), size=4.5)
     for ax, s in zip(axes, shown, strict=False):
         draw_study(s, ax=ax)
     if len(vc) > 1:
         draw_orders(studies, ax=axes[len(shown)])
-    from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

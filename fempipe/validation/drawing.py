@@ -1,9 +1,7 @@
 """Drawing helpers shared by the figure cases (matplotlib imported lazily).
 
-Conventions, as in the paper's figures: shapes in the global frame with Z_g
-horizontal and X_g pointing down (gravity down), equal axis scales; the
-mesh-converged FE result solid, the paper's modal N = 3 dashed and N = 4
-dotted, one color per flow velocity.
+As in the paper: shapes in the global frame, X_g down (gravity), equal scales; FE solid,
+N = 3 dashed, N = 4 dotted, one color per flow velocity.
 """
 
 from __future__ import annotations
@@ -12,21 +10,9 @@ import textwrap
 
 import numpy as np
 
-__all__ = [
-    "DISC_COLORS",
-    "LINESTYLES",
-    "color_for",
-    "discretization_legend",
-    "legend_columns",
-    "draw_continued",
-    "draw_diagram",
-    "draw_orbit_shapes",
-    "draw_shapes",
-    "finish_figure",
-    "new_figure",
-    "plot_shape_panels",
-    "style_for",
-]
+from fempipe.model.params import PAPER_CASE
+
+from ..plotting.static import UNSTABLE_COLOR
 
 LINESTYLES = {"FE": "-", "N = 3": "--", "N = 4": ":", "N = 2": "-."}
 #: Colors of the discretizations where color does not already mean v or a
@@ -35,12 +21,7 @@ DISC_COLORS = {"FE": "k", "N = 3": "#D55E00", "N = 4": "#0072B2", "N = 2": "#009
 
 
 def legend_columns(fig, handles) -> int:
-    """Columns of a legend below the panels that fit the figure's width.
-
-    About 2.1 inches per entry at 9 pt: the longest labels used here
-    ("FE P3:32, P3:64 (converged)") take two columns' room only on the
-    widest figures.
-    """
+    """Columns of a legend below the panels that fit the figure's width (~0.075 in per character)."""
     longest = max((len(h.get_label()) for h in handles), default=1)
     per_entry = 0.75 + 0.075 * longest  # inches: handle, gap, ~0.075 in per character at 9 pt
     return max(1, min(len(handles), int(fig.get_figwidth() // per_entry)))
@@ -86,29 +67,20 @@ def new_figure(n_panels: int, ncols: int | None = None, size: float = 3.6):
 
 
 def figure_panels(fig, n_panels: int, ncols: int | None = None, size: float = 3.6):
-    """``(fig, axes)``: a :func:`new_figure`, or ``n_panels`` axes in one row of ``fig``
-    (a figure the caller made, e.g. the report's)."""
+    """``(fig, axes)``: a :func:`new_figure`, or ``n_panels`` axes in one row of ``fig``."""
     if fig is None:
         return new_figure(n_panels, ncols=ncols, size=size)
     return fig, list(fig.subplots(1, n_panels, squeeze=False).ravel())
 
 
 def paper_case_line() -> str:
-    """The paper's reference parameters as a line of a figure title:
-    ``β = 0.142, γ = 18.9, μ = 0.005`` (:data:`fempipe.model.params.PAPER_CASE`)."""
-    from fempipe.model.params import PAPER_CASE
+    """``β = 0.142, γ = 18.9, μ = 0.005``: the paper's case as a line of a figure title."""
 
     return f"β = {PAPER_CASE['beta']:g}, γ = {PAPER_CASE['gamma']:g}, μ = {PAPER_CASE['mu']:g}"
 
 
 def finish_figure(fig, title: str, parameters: str | None = None):
-    """The report style: one title per figure, panels lettered (a), (b), ...
-
-    Panel titles keep what differs between panels; the figure title says
-    what they share, and ``parameters`` (e.g. :func:`paper_case_line`), on a
-    line of its own under it, the parameters a reader of the figure alone
-    needs.  The layout is constrained so that no label leaves the canvas.
-    """
+    """The report style: one wrapped title (``parameters`` on a line under it), panels lettered."""
     axes = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
     if len(axes) > 1:
         for k, ax in enumerate(axes):
@@ -139,28 +111,11 @@ def draw_shapes(
     stable=None,
     legend: bool = True,
 ):
-    """Overlay the centerlines of several discretizations.
+    """Overlay the centerlines of ``families`` (label -> StaticShapes), lengths times ``scale``.
 
-    Parameters
-    ----------
-    ax : matplotlib Axes
-    families : dict label -> StaticShapes
-    scale : float
-        Multiply lengths (e.g. L in mm for Fig. 2(b)).
-    unit : str
-        Axis unit text.
-    v_label : callable, optional
-        ``v_label(i, v) -> str`` for the legend (default ``v = ...``).
-    stable : sequence of bool, optional
-        Linear stability of the state at each v: unstable ones are drawn
-        grey (every discretization) and named "(unstable)" in the legend.
-    legend : bool
-        Draw the axes' legend (False when the figure has one legend for
-        all panels).
+    ``v_label(i, v)`` names the legend entries; states not ``stable`` are drawn grey.
     """
     import matplotlib.pyplot as plt
-
-    from ..plotting.static import UNSTABLE_COLOR
 
     first = next(iter(families.values()))
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(first.v)))
@@ -194,18 +149,9 @@ def draw_shapes(
 
 
 def plot_shape_panels(result, fig, title, figure_title: str, **figure_options):
-    """One panel of overlaid shapes per entry of ``result.data["panels"]``.
-
-    ``title(panel)`` gives each panel's title, ``figure_title`` the figure's;
-    ``figure_options`` go to :func:`new_figure` when ``fig`` is None.
-    Linearly unstable states (``panel.stable``) are drawn grey.  Returns the
-    figure.
-    """
+    """One panel of overlaid shapes per ``result.data["panels"]``, titled ``title(panel)``."""
     panels = result.data["panels"]
-    if fig is None:
-        fig, axes = new_figure(len(panels), **figure_options)
-    else:
-        axes = list(fig.subplots(1, len(panels), squeeze=False).ravel())
+    fig, axes = figure_panels(fig, len(panels), **figure_options)
     for ax, p in zip(axes, panels, strict=False):
         draw_shapes(ax, p.fams, stable=p.stable or None, legend=False)
         ax.set_title(title(p))
@@ -218,8 +164,6 @@ def _shape_legend(fig, panels) -> None:
     """One legend below the panels: colors are v, line styles discretizations."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
-
-    from ..plotting.static import UNSTABLE_COLOR
 
     v = panels[0].fe.v
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(v)))
@@ -259,8 +203,7 @@ def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
 
 
 def _runs(stable: list) -> list[tuple[int, int, bool]]:
-    """(start, stop, stable) of the runs of equal stability; neighbouring runs share
-    their boundary point so that the drawn line has no gap."""
+    """(start, stop, stable) of the runs of equal stability, sharing their boundary points."""
     out, i = [], 0
     while i < len(stable):
         j = i
@@ -272,8 +215,7 @@ def _runs(stable: list) -> list[tuple[int, int, bool]]:
 
 
 def _with_hopf(static: list, hopf: list, key: str) -> list:
-    """(v, [lo, hi], stable) of the static points with the Hopf points inserted
-    (tip interpolated), so that the line changes style at v_H, not at a grid v."""
+    """(v, [lo, hi], stable) of the static points with the Hopf points inserted."""
     out = [(p.v, getattr(p, key), p.stable) for p in static]
     for h in hopf:
         vh = h["v"]
@@ -288,13 +230,9 @@ def _with_hopf(static: list, hopf: list, key: str) -> list:
 
 
 def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict | None = None):
-    """A continued bifurcation diagram (:class:`~fempipe.validation.dynamic_runs.ContinuedDiagram`
-    per discretization): the static branch and the extrema of every branch of
-    periodic orbits as lines, solid where stable and dashed where unstable, and
-    the stable state at each requested v marked as :func:`draw_diagram` marks
-    a sweep (FE open circles, N = 3 '+', N = 4 'x'); Hopf points as filled dots.
-    ``attractors`` (label -> points) replaces the marked states (e.g. a sweep's
-    buckled equilibria at alpha = pi, which are not on the continued branch)."""
+    """Continued diagrams by label: every branch's extrema, solid where stable, dashed where not;
+    the stable state at each v marked (FE o, N = 3 +, N = 4 x, or ``attractors``); Hopf dots.
+    """
     from matplotlib.lines import Line2D
 
     marks = {"FE": ("o", 4), "N = 3": ("+", 7), "N = 4": ("x", 6)}
@@ -336,11 +274,8 @@ def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict |
 
 
 def draw_orbit_shapes(ax, shapes: dict):
-    """Oscillating shapes and static shapes in the global frame, one color per v.
-
-    An oscillation is a bundle of thin lines (shapes at equally spaced
-    phases of one period); a static state is one thick line drawn above the
-    bundles, so that it is never hidden under them.
+    """Shapes in the global frame, one color per v: an oscillation a bundle of thin lines, a static
+    state one thick line above them.
     """
     import matplotlib.pyplot as plt
 

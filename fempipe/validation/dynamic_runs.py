@@ -1,14 +1,8 @@
 """Shared computations of the nonlinear-oscillation cases (Figs. 7-12).
 
-Each discretization (the converged FE mesh and the paper's N = 3, N = 4)
-gets the same treatment: sweeps in v with :func:`fempipe.analyses.bifurcation.sweep`
-(each point starts from the previous attractor), limit cycles with
-:func:`fempipe.analyses.limit_cycle.find_attractor` and one period of the cycle
-resampled with :func:`fempipe.analyses.dynamics.simulate` for time traces, phase
-portraits and oscillating shapes.
-
-The linear onset used to check the sweeps comes from
-:mod:`fempipe.validation.onset` (independent of :mod:`fempipe.analyses.stability`).
+Each discretization (the converged FE mesh, the paper's N = 3 and N = 4) gets the same
+treatment: bifurcation diagrams by continuation (:func:`continued_diagram`) checked by
+integration (:func:`sweep_check`), sweeps up in v, limit cycles and resampled orbits.
 """
 
 from __future__ import annotations
@@ -35,29 +29,6 @@ from fempipe.model.projection import project
 
 from .static_shapes import PAPER_MODES, static_shapes
 
-__all__ = [
-    "DYN_FE",
-    "DYN_FE_QUICK",
-    "ContinuedDiagram",
-    "DiagramPoint",
-    "continued_diagram",
-    "continued_from",
-    "sweep_check",
-    "checked_attractor",
-    "Orbit",
-    "attractor",
-    "cycle_on",
-    "cycle_traces",
-    "cycles_at",
-    "dyn_discretizations",
-    "dyn_modal",
-    "modal_label",
-    "model_for",
-    "orbit",
-    "project",
-    "sweep_up",
-]
-
 #: FE mesh for the dynamics: the limit-cycle amplitude at alpha = 0, v = 10 of
 #: P3:8 agrees with P3:16 to ~1e-6 (convergence case); quick runs use P3:4 (~2e-4).
 DYN_FE = "P3:8"
@@ -65,16 +36,8 @@ DYN_FE_QUICK = "P3:4"
 
 
 def dyn_modal(n_modes: int, basis: str = "sine") -> Modal:
-    """The modal discretization of the dynamic runs: N modes on max(8, 4 N) cells of
-    8 Gauss points.
-
-    The default quadrature of :class:`~fempipe.model.discretization.Modal`,
-    max(32, 4 N) cells, is as fine as it is for the shapes of Figs. 2 and 4,
-    sampled cell by cell; the dynamic runs need tip values only, and every
-    stage of a time step walks the quadrature points.  Measured on limit
-    cycles shot at rtol 1e-10 (alpha = 0, pi/2, pi; N = 3, 4): period and
-    tip extrema equal to those on 32 cells within 1.5e-14, a shot 3 to 6
-    times cheaper.
+    """N modes on max(8, 4 N) cells of 8 Gauss points: the dynamic runs need tip values only, and
+    cycles equal those on 32 cells within 1.5e-14 at a third of the cost.
     """
     return Modal(n_modes, n_cells=max(8, 4 * n_modes), basis=basis)
 
@@ -90,8 +53,7 @@ def dyn_discretizations(quick: bool) -> dict:
 
 
 def modal_label(disc: Modal) -> str:
-    """The label of a modal discretization: ``N = 3`` (the paper's sine modes) or
-    ``N = 3 (beam)``; :func:`attractor` rebuilds the discretization from it."""
+    """``N = 3`` (the paper's sine modes) or ``N = 3 (beam)``; :func:`attractor` parses it back."""
     return f"N = {disc.n_modes}" + ("" if disc.basis == "sine" else f" ({disc.basis})")
 
 
@@ -101,13 +63,8 @@ def model_for(disc, alpha: float, v: float) -> PipeModel:
 
 
 def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
-    """Bifurcation points for increasing v (the paper's diagrams are swept up).
-
-    The first point starts from the gravity-sagged static state (continuation
-    in gamma, :func:`~fempipe.validation.static_shapes.static_shapes`) plus
-    ``perturbation`` rad in the first sine mode; at alpha = pi that state is
-    the straight pipe and the +mode-1 kick selects the left buckled branch
-    (Z_g < 0), the one the paper plots.
+    """Bifurcation points for increasing v from the sagged static state + ``perturbation`` rad in
+    mode 1 (at alpha = pi this selects the left buckled branch, the paper's).
     """
     values = sorted(float(v) for v in values)
     m = model_for(disc, alpha, values[0])
@@ -134,8 +91,7 @@ _MODAL_LABEL = re.compile(r"^N = (\d+)(?: \((\w+)\))?$")
 
 
 def _disc_from_spec(spec: str):
-    """The discretization of a label: ``N = 3``, ``N = 3 (beam)`` (:func:`modal_label`,
-    on the quadrature of :func:`dyn_modal`), ``FE P3:8`` or any ``disc.name``."""
+    """The discretization of a label: ``N = 3``, ``N = 3 (beam)``, ``FE P3:8`` or a ``disc.name``."""
     m = _MODAL_LABEL.match(spec)
     if m:
         return dyn_modal(int(m.group(1)), basis=m.group(2) or "sine")
@@ -143,18 +99,14 @@ def _disc_from_spec(spec: str):
 
 
 def attractor(label: str, alpha: float, v: float):
-    """The attractor reached from the static state + 0.01 rad in mode 1, cycles shot to
-    :data:`CHECK_SHOOT_RTOL` (cached per process)."""
+    """The attractor from the static state + 0.01 rad in mode 1 (cached; cycles to CHECK_SHOOT_RTOL)."""
     return _attractor_cached(label, float(alpha), float(v))
 
 
 @dataclass(frozen=True)
 class Orbit:
-    """One period of a limit cycle, resampled.
-
-    ``t`` (m,), ``tip`` dict of (m,) arrays (eta_tip, X_tip, Z_tip),
-    ``tip_rate`` dict of (m,) arrays (their tau-derivatives), ``shapes`` a
-    list of (Z_g, X_g) centerlines at ``n_shapes`` phases.
+    """Resampled periods of a limit cycle: ``t``, ``tip`` and ``tip_rate`` (eta_tip, X_tip, Z_tip),
+    ``shapes`` (Z_g, X_g) at ``n_shapes`` phases.
     """
 
     label: str
@@ -208,14 +160,26 @@ def orbit(
     return Orbit(label, alpha, v, period, traj.t - traj.t[0], tip, tip_rate, shapes)
 
 
-def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
-    """The limit cycle of ``disc`` at (alpha, v), as a LimitCycle.
+def attractor_shapes(discs: dict, alpha: float, vs, checked: list, fallback=None) -> dict:
+    """The FE orbits at ``vs`` on the attractors found by integration (``checked[0]``,
+    :func:`sweep_check`), else on a sweep's state ``fallback[v]``."""
+    label = next(iter(discs))
+    shapes = {}
+    for v in vs:
+        att = checked[0]["attractors"].get(float(v))
+        if att is None:  # alpha = pi below the flutter: the sweep's state
+            att = fallback[v]
+            periodic = att.attractor == "periodic"
+        else:
+            periodic = att.kind == "periodic"
+        per = att.period if periodic else None
+        shapes[v] = orbit(label, discs[label], alpha, v, att.q, att.qdot, per)
+    return shapes
 
-    With ``guess = (q0, qdot0, period)`` on ``guess_disc`` (another
-    discretization's cycle), shoot from its L2 projection: a few Newton
-    iterations instead of a transient.  Otherwise (or if shooting fails)
-    integrate past the transient with :func:`fempipe.analyses.limit_cycle.find_attractor`.
-    Returns None if the attractor is not periodic.
+
+def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
+    """The limit cycle of ``disc`` at (alpha, v), shot from the projection of ``guess`` (q0, qdot0,
+    period on ``guess_disc``) if given, else by integration; None if not periodic.
     """
     m = model_for(disc, alpha, v)
     if guess is not None:
@@ -231,12 +195,7 @@ def cycle_on(disc, alpha: float, v: float, guess_disc=None, guess=None):
 
 @functools.lru_cache(maxsize=4)
 def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
-    """Limit cycles at flow ``v`` for each alpha and discretization (cached per process).
-
-    The FE cycle is found from the static state (transient, then shooting);
-    N = 3 and N = 4 shoot from its projection.  Returns
-    ``{(alpha, label): LimitCycle or None}``.
-    """
+    """``{(alpha, label): LimitCycle or None}`` at flow ``v``; N = 3, 4 shot from the FE cycle."""
     discs = dyn_discretizations(quick)
     fe_label = next(iter(discs))
     out = {}
@@ -273,11 +232,9 @@ def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class DiagramPoint:
-    """An equilibrium or a periodic orbit of a continued diagram, with the attributes
-    of a sweep's point that the cases read (``v``, ``attractor``, tip extrema
-    ``eta_tip``, ``X_tip``, ``Z_tip`` as [min, max], ``period``, ``period_n``,
-    ``max_multiplier``) plus ``stable`` (linear or Floquet), ``branch``
-    (``"static"``, ``"H1"``, ...) and ``requested`` (landed on a requested v)."""
+    """An equilibrium or periodic orbit of a continued diagram: tip extrema [min, max], period,
+    multipliers, ``stable``, ``branch`` (``static``, ``H1``, ...), ``requested`` (on a requested v).
+    """
 
     v: float
     attractor: str
@@ -294,17 +251,11 @@ class DiagramPoint:
 
 @dataclass(frozen=True)
 class ContinuedDiagram:
-    """The static branch and the cycle branches from each Hopf point of one
-    discretization at one alpha (:func:`fempipe.analyses.periodic.compute_cycle_diagram`).
+    """The static branch and the cycle branches from each Hopf point of one discretization at one
+    alpha (:func:`fempipe.analyses.periodic.compute_cycle_diagram`).
 
-    ``static`` the equilibria at the requested v; ``branches`` name -> points in
-    arclength order; ``hopf`` the Hopf points (dicts with ``v``, ``omega``);
-    ``special`` folds, period doublings, Neimark-Sacker points; ``errors`` the
-    branches that could not be continued (their points are kept); ``filled``
-    the orbits at requested v that the branch passed without landing on them
-    (near a Hopf point, where v is no local parameter of the branch), shot
-    (:func:`fempipe.analyses.limit_cycle.shoot`) from the orbit interpolated between the
-    two continued orbits around v (branch ``"H1 (shot)"``).
+    ``filled``: orbits at requested v the branch passed near a Hopf point, shot from the orbit
+    interpolated between its neighbours (branch ``"H1 (shot)"``).
     """
 
     label: str
@@ -319,8 +270,7 @@ class ContinuedDiagram:
     filled: tuple = ()
 
     def cycles_at(self, v: float, stable: bool | None = True) -> list:
-        """The orbits landed on at the requested v (only stable ones by default),
-        and the ones :attr:`filled` in by integration."""
+        """The orbits at the requested v (by default the stable ones), landed on or filled."""
         pts = [p for br in self.branches.values() for p in br] + list(self.filled)
         return [
             p
@@ -333,8 +283,7 @@ class ContinuedDiagram:
         return next(p for p in self.static if abs(p.v - v) < 1e-9)
 
     def attractor_at(self, v: float):
-        """What a sweep up from the sagged state ends on at v: the stable equilibrium
-        if there is one, else the stable orbit of largest swing (None if neither)."""
+        """What a sweep up ends on at v: the stable equilibrium, else the widest stable orbit, else None."""
         eq = self.equilibrium_at(v)
         if eq.stable:
             return eq
@@ -392,10 +341,9 @@ def _continued_cached(label: str, alpha: float, values: tuple) -> ContinuedDiagr
 
 
 def continued_from(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:
-    """The :class:`ContinuedDiagram` of a :func:`~fempipe.analyses.periodic.compute_cycle_diagram`
-    result ``dg`` whose store ``store`` is still on disk (for a case that continues with
-    options of its own, e.g. the 3-D verdicts of the orbits); ``t0``: process time at
-    its start."""
+    """The :class:`ContinuedDiagram` of a ``compute_cycle_diagram`` result ``dg`` whose ``store`` is on
+    disk; ``t0``: process time at its start.
+    """
     return _continued(label, alpha, values, disc, dg, store, t0)
 
 
@@ -465,31 +413,23 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
 
 
 def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:
-    """The bifurcation diagram of the discretization ``label`` (as :func:`attractor`)
-    at ``alpha`` by continuation: the primary static branch with its linear
-    stability and every branch of periodic orbits born at its Hopf points,
-    stable and unstable, landed on each requested v (cached per process)."""
+    """The diagram of ``label`` at ``alpha`` by continuation: the static branch and every orbit
+    branch born at its Hopf points, landed on each requested v (cached).
+    """
     return _continued_cached(label, float(alpha), tuple(sorted(float(v) for v in values)))
 
 
 def checked_attractor(label: str, alpha: float, v: float):
-    """The attractor reached by integration from the static state + 0.01 rad in
-    mode 1 (:func:`attractor`: cycles shot to :data:`CHECK_SHOOT_RTOL`; cached per process)."""
+    """The attractor reached by integration (:func:`attractor`)."""
     return attractor(label, alpha, v)
 
 
 def sweep_check(diag: ContinuedDiagram, vs) -> dict:
-    """The brute-force check of a continued diagram at a few v.
+    """The brute-force check of a continued diagram at the v ``vs``.
 
-    At each v the attractor reached by integration (:func:`checked_attractor`)
-    is looked for among the diagram's stable states at v: a periodic attractor
-    among the stable orbits (its period and tip extrema compared), an
-    equilibrium among the stable equilibria (tip compared).  Returns
-    ``{"period": max |dT|, "tip": max |d tip extremum| over the orbits,
-    "eq_tip": max over the equilibria, "flagged": [text of every attractor
-    found by integration that is on no stable continued state], "unsettled":
-    [integrations that found no attractor by their t_max, where the diagram has a
-    stable orbit: inconclusive, not a disagreement], "attractors": {v: Attractor}}``.
+    The attractor found by integration must be among the diagram's stable states.  Returns
+    ``period``, ``tip``, ``eq_tip`` (largest differences), ``flagged`` (attractors on no stable
+    continued state), ``unsettled`` (no attractor by t_max: inconclusive) and ``attractors``.
     """
     out = {
         "period": 0.0,

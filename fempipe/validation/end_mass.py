@@ -9,11 +9,12 @@ Swanson: an end mass destabilizes the horizontal undamped pipe (a ``paper`` chec
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import brentq
+
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.model.discretization import parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
-from scipy.optimize import brentq
 
 from . import classical
 from .case import Case, References

@@ -1,19 +1,13 @@
 """Checks from data: what a case measured, judged by the check specs of its reference file.
 
-``references/<case>.json`` holds a ``"checks"`` section: per check its kind (``below``: the
-measured value at most a limit; ``close``: within a tolerance of a reference; ``holds``: a
-statement the case judges), claim, limit or reference and tolerance, why and source.  A case
-only measures: it returns one :class:`Measured` per check (:func:`measure`), and
-:func:`evaluate` builds the :class:`~fempipe.validation.checks.Check` from it and its spec.
-
-Texts are templates (:func:`fill`): ``{x}`` is the measurement's field ``x``, else the
-reference value ``x`` (in the quick suite ``x_quick`` where there is one); ``{sources[x]}``
-is the source of ``x``; ``{limit}``, ``{reference}``, ``{atol}``, ``{rtol}`` the check's own
-numbers.  A list is formatted item by item and joined by ", "; the format ``π`` writes an
-angle as a multiple of π.  A number of a spec is a number or a template that fills to one;
-one the spec leaves out is the measurement's field of that name.  The spec's key is the
-check's name, itself a template for a family of checks (one per inclination, say).
-docs/verification.md describes the format.
+``references/<case>.json`` has a ``"checks"`` section: per check its kind (``below`` a
+limit, ``close`` to a reference, ``holds``: a verdict of the case), claim, numbers, why and
+source.  A case returns one :class:`Measured` per check (:func:`measure`); :func:`evaluate`
+builds the :class:`~fempipe.validation.checks.Check`.  Texts are templates (:func:`fill`):
+``{x}`` is the measurement's field ``x``, else the reference value ``x`` (quick suite:
+``x_quick`` if any), ``{sources[x]}`` its source, ``{limit}`` etc. the check's numbers; lists
+are joined by ", ", the format ``π`` writes an angle as a multiple of π.  A spec's key is
+the check's name, itself a template for a family.  Format: docs/verification.md.
 """
 
 from __future__ import annotations
@@ -41,10 +35,7 @@ SPEC_KEYS = {"kind", "claim", "why", "source", "category", "reference", "measure
 
 
 def alpha_name(alpha: float) -> str:
-    """The inclination as a multiple of pi (``π/4``, ``3π/4``, ``-2π/3``, ``0``) when it is one.
-
-    Denominators up to 12; any other angle is printed with 4 decimals.
-    """
+    """The angle as a multiple of π (``π/4``, ``-2π/3``, ``0``; denominators <= 12), else 4 decimals."""
     k = Fraction(alpha / np.pi).limit_denominator(12)
     if abs(float(k) * np.pi - alpha) > 1e-12:
         return f"{alpha:.4f}"
@@ -76,11 +67,7 @@ def fill(template: str, names: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True)
 class Measured:
-    """What a case measured for the check ``spec`` of its reference file.
-
-    ``value`` is the measured number (``below``, ``close``) or text (``holds``), ``ok``
-    whether a ``holds`` statement holds, ``fields`` the values of the spec's placeholders.
-    """
+    """What a case measured for check ``spec``: ``value``, ``ok`` (``holds``), template ``fields``."""
 
     spec: str
     value: Any = None
@@ -106,13 +93,10 @@ def _number(spec: Mapping, key: str, default: float | None, m: Measured, names: 
 
 
 def evaluate(spec: Mapping, m: Measured, names: Mapping[str, Any]) -> Check:
-    """The check of the measurement ``m`` by its ``spec`` (``names``: the reference values).
+    """The check of ``m`` by ``spec``; ``names``: reference values and ``"sources"``.
 
-    ``names`` maps the references' names to their values and ``"sources"`` to their
-    sources (:meth:`fempipe.validation.case.References.names`); the measurement's fields
-    and the check's numbers are added to it for the templates.  ``below``: ``measured <=
-    limit``; ``close``: ``|measured - reference| <= atol + rtol |reference|``; ``holds``:
-    the case's verdict ``ok``.
+    ``below``: measured <= limit; ``close``: |measured - reference| <= atol + rtol |reference|;
+    ``holds``: the case's verdict ``ok``.
     """
     kind = spec["kind"]
     names = {**names, **m.fields}

@@ -10,6 +10,7 @@ damping against the classical theory.
 from __future__ import annotations
 
 import numpy as np
+
 from fempipe.model.params import Params
 
 from . import classical

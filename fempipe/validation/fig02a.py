@@ -1,10 +1,5 @@
-"""Fig. 2(a): convergence of the static shapes in the number of modes N.
-
-The paper's Fig. 2(a) overlays static shapes (gamma = 18.9) for several N
-and concludes "N = 3 is valid".  This case draws the shapes by the
-mesh-converged FE and by N = 2, 3, 4 modes, and measures how far each modal
-centerline is from the converged one.  FE is itself checked against a 2x
-refined mesh and against an independent collocation solution of Eq. (31a).
+"""Fig. 2(a): static shapes (gamma = 18.9) by converged FE and N = 2, 3, 4 modes: how far each
+modal centerline is from FE; FE against a refined mesh and the collocation solver.
 """
 
 from __future__ import annotations
@@ -13,18 +8,11 @@ import numpy as np
 
 from .case import Case
 from .checks import CaseResult
+from .drawing import plot_shape_panels
 from .evaluate import measure
 from .static_shapes import panel_checks, panel_table, static_panel
 
-CASE = Case(
-    name="fig02a",
-    figure="Fig. 2(a)",
-    title="Static shapes, γ = 18.9, α = π/3: convergence in the number of modes N",
-    paper_shows=(
-        "N = 3 modes are enough for the static shapes (Sec. 3.1)",
-        "the modal shapes converge as N grows",
-    ),
-)
+CASE = Case.load("fig02a")
 
 
 def run(quick: bool = False) -> CaseResult:
@@ -49,7 +37,6 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """Shapes in the global frame, FE solid, N = 2 dash-dot, N = 3 dashed, N = 4 dotted."""
-    from .drawing import plot_shape_panels
 
     return plot_shape_panels(
         result,

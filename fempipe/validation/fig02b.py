@@ -1,20 +1,8 @@
-"""Fig. 2(b): the Texier-Dorbolo pipe, static shapes against flow velocity.
+"""Fig. 2(b): the Texier-Dorbolo pipe, static shapes against flow velocity (SI units).
 
-The paper validates its model against Texier & Dorbolo's horizontal pipe
-(L = 94 mm, EI = 1.8e-5 N m^2, m = 15.9 g/m, M = 5.8 g/m, alpha = pi/2),
-whose dimensionless groups it gives in Eq. (29).  This case converts the SI
-pipe, computes the static shapes for U = 0..3 m/s with the mesh-converged
-FE and the paper's N = 3 and N = 4 modes, and checks
-
-* the SI conversion against Eq. (29);
-* FE against a 2x refined mesh and against an independent collocation
-  solution of the strong form (scipy ``solve_bvp``);
-* the paper's statements: the largest deformation is at U = 0 and the pipe
-  straightens as U grows.
-
-Texier & Dorbolo's measured shapes are not reproduced here: the paper shows
-them only as figure points and the measurements are not available to us, so
-the experimental comparison of Fig. 2(b) cannot be repeated numerically.
+Checks the conversion to Eq. (29), FE against a refined mesh and the collocation solver, and
+the paper's statements (largest deformation at U = 0, straightening as U grows).  Texier &
+Dorbolo's measured shapes are not available: the experimental comparison is not repeated.
 """
 
 from __future__ import annotations
@@ -26,24 +14,11 @@ from fempipe.model.params import PipeSI
 from .bvp import solve_static_bvp
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import draw_shapes, figure_panels, finish_figure
 from .evaluate import measure
 from .static_shapes import discretizations, refined, static_shapes
 
-CASE = Case(
-    name="fig02b",
-    figure="Fig. 2(b)",
-    title="Texier-Dorbolo pipe: static shapes for U = 0..3 m/s (SI units)",
-    paper_shows=(
-        "β = 0.2673, γ = 9.8129, v = 1.6874 U for the Texier-Dorbolo pipe (Eq. (29))",
-        "the model agrees with Texier & Dorbolo's theory",
-        "the largest static deformation is at v = 0; the pipe straightens as the flow grows",
-    ),
-    not_checked=(
-        "the model agrees with Texier & Dorbolo's experiment: their measured shapes are not "
-        "available, so the model (Eq. (31a)) is verified against an independent strong-form "
-        "solver instead and the experimental claim is neither reproduced nor contradicted",
-    ),
-)
+CASE = Case.load("fig02b")
 
 
 def pipe() -> PipeSI:
@@ -84,14 +59,7 @@ def run(quick: bool = False) -> CaseResult:
     ]
     table_fe = Table(
         "Tip position of the Texier-Dorbolo pipe (converged FE)",
-        (
-            "U (m/s)",
-            "v",
-            "tip drop X_g(1) L (mm)",
-            "Z_g(1) L (mm)",
-            "θ(1) (rad)",
-            "BVP tip drop (mm)",
-        ),
+        "U (m/s) | v | tip drop X_g(1) L (mm) | Z_g(1) L (mm) | θ(1) (rad) | BVP tip drop (mm)",
         tuple(
             (
                 U[i],
@@ -120,11 +88,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _shapes(p, v: np.ndarray) -> tuple[dict, str, float]:
-    """The shapes on every discretization (the converged FE first), and the FE's mesh error.
-
-    Returns the families by label, the FE's label and the largest tip difference from
-    the 2x refined mesh.
-    """
+    """The shapes by label (FE first), the FE label and its mesh error (tips against 2x refined)."""
     discs = discretizations()
     fams = {
         label: static_shapes(d, p.alpha, p.gamma, v, beta=p.beta, mu=0.0, name=label)
@@ -170,12 +134,8 @@ def _modal_checks(si: PipeSI, U, v, fams: dict, fe_label: str) -> tuple[list, li
 
 def plot(result: CaseResult, fig=None):
     """Shapes in mm, gravity down, one color per U; FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import draw_shapes, new_figure
 
-    if fig is None:
-        fig, axes = new_figure(1, size=5.0)
-    else:
-        axes = fig.subplots(1, 1, squeeze=False).ravel()
+    fig, axes = figure_panels(fig, 1, size=5.0)
     U = result.data["U"]
     draw_shapes(
         axes[0],
@@ -185,7 +145,6 @@ def plot(result: CaseResult, fig=None):
         v_label=lambda i, v: f"U = {U[i]:g} m/s",
     )
     axes[0].set_title("Texier-Dorbolo pipe, α = π/2")
-    from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -1,11 +1,6 @@
-"""Fig. 3: static shapes of the horizontal pipe for gamma = 10, 30, 100.
-
-Checks the paper's statements of Sec. 3.2: the deformation grows with the
-gravity parameter, and for large gamma the pipe approaches a plumb line
-(theta ~ -alpha).  The plumb-line limit is measured as the L2 distance
-``||theta + alpha||`` over the pipe, which must shrink as gamma grows; near
-the clamp theta(0) = 0 forces a boundary layer of width ~ gamma^(-1/3), so it
-never vanishes.
+"""Fig. 3: static shapes of the horizontal pipe for gamma = 10, 30, 100: the deformation grows
+with gamma and approaches the plumb line, measured by ||theta + alpha||_L2 (a boundary layer
+of width ~ gamma^(-1/3) at the clamp keeps it above zero).
 """
 
 from __future__ import annotations
@@ -14,18 +9,11 @@ import numpy as np
 
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import plot_shape_panels
 from .evaluate import measure
 from .static_shapes import panel_checks, panel_table, static_panel
 
-CASE = Case(
-    name="fig03",
-    figure="Fig. 3",
-    title="Static shapes, α = π/2, γ = 10, 30, 100: the effect of gravity",
-    paper_shows=(
-        "the deformation becomes larger as γ increases (Sec. 3.2)",
-        "for sufficiently large γ the pipe is close to a plumb line, θ ≈ -α (Sec. 3.2)",
-    ),
-)
+CASE = Case.load("fig03")
 
 
 def _plumb_distance(fam, alpha: float) -> np.ndarray:
@@ -69,7 +57,6 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """One panel per γ; FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import plot_shape_panels
 
     return plot_shape_panels(
         result,

@@ -1,10 +1,5 @@
-"""Fig. 4: static shapes for gamma = 18.9 and several inclinations alpha.
-
-Checks the paper's statements of Sec. 3.3 and conclusion (ii): the
-deformation depends strongly on alpha and hardly on beta.  The second is in
-fact exact: beta does not appear in the static equation (31a), so in
-dimensionless variables the static state does not depend on beta at all.  The
-case measures that (to round-off) and reports it as a finding.
+"""Fig. 4: static shapes for gamma = 18.9 and several alpha: alpha matters, beta does not (beta
+is absent from Eq. (31a): exactly independent, reported as a finding).
 """
 
 from __future__ import annotations
@@ -15,18 +10,11 @@ from fempipe.model.discretization import parse_discretization
 
 from .case import Case, alpha_name
 from .checks import CaseResult
+from .drawing import plot_shape_panels
 from .evaluate import measure
 from .static_shapes import CONVERGED_FE, panel_checks, panel_table, static_panel, static_shapes
 
-CASE = Case(
-    name="fig04",
-    figure="Fig. 4",
-    title="Static shapes, γ = 18.9, α = π/2, 3π/4, 9π/10: the effect of inclination",
-    paper_shows=(
-        "the inclination α has a significant effect on the static deformation (Sec. 3.3)",
-        "the static deformation is hardly affected by the mass ratio β (conclusion (ii))",
-    ),
-)
+CASE = Case.load("fig04")
 
 
 def run(quick: bool = False) -> CaseResult:
@@ -72,7 +60,6 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """One panel per α; FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import plot_shape_panels
 
     return plot_shape_panels(
         result,

@@ -9,6 +9,7 @@ onset (:mod:`fempipe.validation.onset`); mesh convergence of the events.
 from __future__ import annotations
 
 import numpy as np
+
 from fempipe.analyses.stability import analyse_stability, trace_root_locus
 from fempipe.model.discretization import Modal, parse_discretization
 from fempipe.model.operators import PipeModel

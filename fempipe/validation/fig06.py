@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from fempipe.analyses import stability
 from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.model.discretization import Modal, parse_discretization

@@ -1,33 +1,33 @@
 """Fig. 7: bifurcation diagram of the hanging pipe (alpha = 0), N = 3 against N = 4.
 
-The paper sweeps v for alpha = 0 with N = 3 and N = 4 modes and concludes from their agreement
-that N = 3 is acceptable.  This case follows the static branch and the periodic orbits over
-the same range by continuation, with the converged FE mesh as well, and checks
-
-* the onset of the limit cycle against the linear critical velocity of each discretization
-  (an independent bisection on the spectrum): the branch of periodic orbits is continued from
-  the Hopf point of the static branch (:func:`fempipe.analyses.periodic.compute_cycle_diagram`), so
-  the onset is v_H itself, not a bracket of sweep velocities;
-* the continuation against brute force: at v = 6.3, 6.5, 10 the attractor reached by
-  integration from the sagged state must be a stable continued state (cycles to 1e-6 in
-  period and tip extrema); one that is not is flagged in the check;
-* the paper's statements: equilibrium below v_cr, period-1 limit cycle above, N = 3 and N = 4
-  agreeing, large amplitudes, and the bracket 6.3 < v_cr < 6.5 implied by the shapes of
-  Fig. 7(c);
-* how far N = 3 and N = 4 are from the converged answer.
+The static branch and the periodic orbits born at its Hopf point, by continuation, for the
+converged FE mesh and N = 3, 4.  Checks the onset against the independent linear v_cr, the
+continuation against integration at v = 6.3, 6.5, 10, and the paper's statements (period-1
+cycle above v_cr, N = 3 and 4 agree, large amplitudes, 6.3 < v_cr < 6.5).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from fempipe.analyses.periodic.out_of_plane import cycle_verdict
+from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
+
 from .case import Case, label_tag
 from .checks import CaseResult, Table
+from .drawing import (
+    draw_continued,
+    draw_orbit_shapes,
+    figure_panels,
+    finish_figure,
+    paper_case_line,
+)
 from .dynamic_runs import (
     attractor,
+    attractor_shapes,
     continued_diagram,
     dyn_discretizations,
-    orbit,
+    model_for,
     sweep_check,
 )
 from .evaluate import Measured, measure
@@ -37,6 +37,7 @@ from .out_of_plane_branches import (
     caption_text,
     change_texts,
     continued_with_verdicts,
+    fe_disc,
     leading_text,
     marks,
     survival_text,
@@ -46,17 +47,7 @@ from .out_of_plane_branches import (
 )
 from .static_shapes import PAPER_MODES
 
-CASE = Case(
-    name="fig07",
-    figure="Fig. 7",
-    title="Bifurcation diagrams of the tip, α = 0: N = 3, N = 4 and converged FE",
-    paper_shows=(
-        "the pipe is stable below v_cr and oscillates on a limit cycle above (Sec. 5)",
-        "the onset agrees with the linear stability analysis (Sec. 5)",
-        "N = 3 and N = 4 agree well, so N = 3 is acceptable (Sec. 5)",
-        "the oscillation amplitudes are large",
-    ),
-)
+CASE = Case.load("fig07")
 
 
 def eta_amplitude(p) -> float:
@@ -78,13 +69,8 @@ def onset_bracket(points) -> tuple[float, float]:
 
 
 def onset_check(spec: str, diag, v_lin: float, tol: float, **fields) -> tuple:
-    """The onset of a continued diagram against a linear critical velocity.
-
-    Passes when the first Hopf point of the static branch is ``v_lin`` to ``tol``, the
-    equilibria at the requested v below it are stable and the orbits born there are
-    stable at the requested v above it (the flutter is supercritical: the cycle appears
-    where the equilibrium loses stability).  Returns (measurement, v_H, last stable
-    equilibrium v, first v with a stable orbit).
+    """The first Hopf point of ``diag`` against ``v_lin`` to ``tol``, with stable equilibria below
+    and stable orbits above it; returns (measurement, v_H, last equilibrium v, first orbit v).
     """
     v_h = diag.hopf[0]["v"] if diag.hopf else float("nan")
     lo, hi = onset_bracket(diag.attractors())
@@ -97,9 +83,7 @@ def onset_check(spec: str, diag, v_lin: float, tol: float, **fields) -> tuple:
 
 
 def sweep_agreement(spec: str, results: list, tol: float, **fields) -> Measured:
-    """The brute-force check: the attractors found by integration at a few v lie on
-    the stable continued states (:func:`~fempipe.validation.dynamic_runs.sweep_check`
-    results of several diagrams)."""
+    """The attractors found by integration lie on stable continued states (``sweep_check`` results)."""
     dT = max(r["period"] for r in results)
     dtip = max(r["tip"] for r in results)
     deq = max(r["eq_tip"] for r in results)
@@ -116,10 +100,9 @@ def sweep_agreement(spec: str, results: list, tol: float, **fields) -> Measured:
 
 
 def period_one(spec: str, diags: dict, checked: list, **fields) -> Measured:
-    """The post-flutter attractors are period-1: the stable continued cycles at the
-    requested v have every non-trivial multiplier inside the unit circle, their branches
-    no period doubling or Neimark-Sacker point, and every cycle found by integration
-    (``checked``, :func:`~fempipe.validation.dynamic_runs.sweep_check`) is period-1."""
+    """The stable continued cycles and the integrated ones are period-1, with no period doubling or
+    Neimark-Sacker point on the branches.
+    """
     stable_cyc = [
         p
         for dg in diags.values()
@@ -147,8 +130,7 @@ def period_one(spec: str, diags: dict, checked: list, **fields) -> Measured:
 
 
 def run(quick: bool = False) -> CaseResult:
-    """Diagrams by continuation, the brute-force check, onsets and checks; see the module
-    docstring."""
+    """Diagrams, the brute-force check, onsets and checks (module docstring)."""
     ref = CASE.references
     alpha = ref.value("alpha")
     values = ref.value("v", quick)
@@ -190,7 +172,7 @@ def run(quick: bool = False) -> CaseResult:
         data={
             "sweeps": sweeps,
             "diagrams": diags,
-            "shapes": _shapes(discs, alpha, shape_v, checked),
+            "shapes": attractor_shapes(discs, alpha, shape_v, checked),
             "alpha": alpha,
             "out_of_plane": oop,
             "out_of_plane_caption": caption_text(quick),
@@ -200,15 +182,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _onsets(ref, discs: dict, alpha: float, diags: dict) -> tuple[list[Measured], dict]:
-    """The linear v_cr of every discretization and the onset check of its diagram.
-
-    Returns
-    -------
-    checks : list of Measured
-        ``onset_<tag>`` of every discretization (:func:`onset_check`).
-    onsets : dict
-        ``(last equilibrium v, first periodic v, linear v_cr, Hopf point v_H)`` by label.
-    """
+    """``onset_<tag>`` checks and ``{label: (last equilibrium v, first periodic v, v_cr, v_H)}``."""
     checks, onsets = [], {}
     for label, d in discs.items():
         v_lin = critical_velocity(d, alpha).v_cr
@@ -224,8 +198,7 @@ def _onsets(ref, discs: dict, alpha: float, diags: dict) -> tuple[list[Measured]
 def _paper_checks(
     ref, diags: dict, sweeps: dict, checked: list, onsets: dict, fe_label: str
 ) -> list[Measured]:
-    """The brute-force check and the paper's statements: period-1 cycles, the bracket
-    6.3 < v_cr < 6.5, N = 3 against N = 4 and against FE, the large amplitude."""
+    """The brute-force check and the paper's statements."""
     checks = [
         sweep_agreement("sweep_agreement", checked, ref.value("sweep_tol")),
         period_one("period_one", diags, checked),
@@ -254,15 +227,9 @@ def _paper_checks(
 
 
 def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], tuple]:
-    """The largest out-of-plane multiplier of the FE cycle at v = 10 against that of the
-    P3:16 cycle (:func:`attractor`, shot to rtol 1e-8), and the P3:16 cycle's by the
-    linear out-of-plane equation against the 3-D model's; returns the measurements and the
-    P3:16 orbit's row of the verdict table."""
-    from fempipe.analyses.periodic.out_of_plane import cycle_verdict
-    from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
-
-    from .dynamic_runs import model_for
-    from .out_of_plane_branches import fe_disc
+    """The out-of-plane multiplier at v = 10 on P3:16 against the FE one and the 3-D model's;
+    the measurements and the P3:16 row of the verdict table.
+    """
 
     fine = attractor("FE P3:16", alpha, 10.0)
     fine_model = model_for(fe_disc("FE P3:16"), alpha, 10.0)
@@ -318,16 +285,9 @@ def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
     return Table(
         "Onset and the limit cycle at v = 10 (α = 0)",
         (
-            "discretization",
-            "linear v_cr",
-            "last equilibrium v",
-            "first periodic v",
-            "η(1) amplitude at v = 10",
-            "period at v = 10",
-            "X_g(1) min",
-            "X_g(1) max",
-            "max |ρ| (Floquet multipliers)",
-            "Hopf point v_H",
+            "discretization | linear v_cr | last equilibrium v | first periodic v | "
+            "η(1) amplitude at v = 10 | period at v = 10 | X_g(1) min | X_g(1) max | "
+            "max |ρ| (Floquet multipliers) | Hopf point v_H"
         ),
         tuple(rows),
         note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ. "
@@ -336,33 +296,10 @@ def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
     )
 
 
-def _shapes(discs: dict, alpha: float, shape_v, checked: list) -> dict:
-    """The FE shapes at ``shape_v``, on the attractors found by integration (the first
-    diagram's :func:`~fempipe.validation.dynamic_runs.sweep_check` in ``checked``)."""
-    fe_label = next(iter(discs))
-    shapes = {}
-    for v in shape_v:
-        att = checked[0]["attractors"][float(v)]
-        shapes[v] = orbit(
-            fe_label,
-            discs[fe_label],
-            alpha,
-            v,
-            att.q,
-            att.qdot,
-            att.period if att.kind == "periodic" else None,
-        )
-    return shapes
-
-
 def plot(result: CaseResult, fig=None):
     """(a) η(1), (b) X_g(1), (c) Z_g(1) extrema against v; (d) shapes at v = 6.3, 6.5, 10 (FE)."""
-    from .drawing import draw_continued, draw_orbit_shapes, new_figure
 
-    if fig is None:
-        fig, axes = new_figure(4, ncols=2, size=4.0)
-    else:
-        axes = list(fig.subplots(2, 2).ravel())
+    fig, axes = figure_panels(fig, 4, ncols=2, size=4.0)
     d = result.data
     for ax, key, lab, _tag in zip(
         axes[:3],
@@ -379,7 +316,6 @@ def plot(result: CaseResult, fig=None):
         ax.set_title(f"extrema of {lab}", fontsize=10)
     draw_orbit_shapes(axes[3], d["shapes"])
     axes[3].set_title("inset of Fig. 7(c): shapes (converged FE)", fontsize=9)
-    from .drawing import finish_figure, paper_case_line
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig

@@ -1,17 +1,10 @@
-"""Figs. 8-10: bifurcation diagrams for alpha = pi/4, pi/2, 3pi/4, pi.
+"""Figs. 8-10: bifurcation diagrams of eta(1), X_g(1), Z_g(1) for alpha = pi/4, pi/2, 3pi/4, pi.
 
-The tip response eta(1) (Fig. 8) and its global coordinates X_g(1) (Fig. 9)
-and Z_g(1) (Fig. 10) against v, for the converged FE mesh and the paper's
-N = 3 and N = 4, by continuation of the static branch and of the periodic
-orbits born at its Hopf points (:func:`fempipe.analyses.periodic.compute_cycle_diagram`; at
-alpha = pi the buckled equilibria below the flutter from a sweep up, which the
-continued straight branch does not contain).  The attractor found by
-integration at the shape velocities must be a stable continued state (to 1e-6
-in period and tip extrema).  Checks the onset (the Hopf point) against the
-linear critical velocity of each discretization, and the paper's statements: period-1 cycles, the
-buckling / restabilization / flutter sequence at alpha = pi, tip excursions
-close to the pipe length at v = 10, and the onset brackets implied by the
-shape velocities the paper chose for Fig. 9.
+Continued static branch and orbits (at alpha = pi the buckled equilibria below the flutter
+from a sweep up), FE and N = 3, 4, checked by integration at the shape velocities.  Checks
+the onset against the linear v_cr, period-1 cycles, the buckling / restabilization / flutter
+sequence at alpha = pi, tip excursions near the pipe length at v = 10 and the onset brackets
+implied by the paper's shape velocities.
 """
 
 from __future__ import annotations
@@ -26,8 +19,16 @@ from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case, alpha_name, label_tag
 from .checks import CaseResult, Table
-from .dynamic_runs import continued_diagram, dyn_discretizations, orbit, sweep_check, sweep_up
+from .drawing import draw_continued, draw_orbit_shapes, finish_figure, paper_case_line
+from .dynamic_runs import (
+    attractor_shapes,
+    continued_diagram,
+    dyn_discretizations,
+    sweep_check,
+    sweep_up,
+)
 from .evaluate import Measured, measure
+from .fig05 import first_flutter
 from .fig07 import eta_amplitude, onset_bracket, onset_check, period_one, sweep_agreement
 from .onset import critical_velocity
 from .out_of_plane_branches import (
@@ -43,16 +44,7 @@ from .out_of_plane_branches import (
 )
 from .static_shapes import PAPER_MODES
 
-CASE = Case(
-    name="fig08_10",
-    figure="Figs. 8-10",
-    title="Bifurcation diagrams of η(1), X_g(1), Z_g(1) for α = π/4, π/2, 3π/4, π",
-    paper_shows=(
-        "stable below v_cr, period-1 limit cycles above, onset as in the stability analysis",
-        "α = π: buckling, regained stability, then flutter as v grows",
-        "the oscillation amplitude at v = 10 is close to the pipe length",
-    ),
-)
+CASE = Case.load("fig08_10")
 
 
 def parts(quick: bool = False) -> list[int]:
@@ -73,33 +65,8 @@ def _required(name: str, is_pi: bool, labels) -> list[str]:
 
 @dataclass
 class _Inclination:
-    """The computed parts of one α: the diagrams, the sweeps and the brute-force check.
-
-    Attributes
-    ----------
-    alpha : float
-    name : str
-        :func:`~fempipe.validation.case.alpha_name` of ``alpha``.
-    is_pi : bool
-        Whether ``alpha`` is π (the hanging-up pipe, which buckles).
-    shape_v : tuple of float
-        The paper's three shape velocities of Fig. 9.
-    values : list of float
-        The requested v of the diagrams.
-    diags : dict
-        The continued diagrams by discretization label.
-    hopf_v : dict
-        The first Hopf point of each diagram (inf if none).
-    sweeps : dict
-        The stable state a sweep up ends on at each v, by label.
-    check_v : list of float
-        The v of the check by integration.
-    checked : list of dict
-        :func:`~fempipe.validation.dynamic_runs.sweep_check` of every diagram.
-    fe_pts : dict
-        The FE sweep's states by v.
-    oop : OutOfPlaneBranches
-        The 3-D verdicts of the FE diagram's orbits.
+    """The computed parts of one α: ``diags`` and ``sweeps`` by label, first Hopf points ``hopf_v``,
+    the check by integration at ``check_v`` (``checked``), ``fe_pts`` by v, 3-D verdicts ``oop``.
     """
 
     alpha: float
@@ -117,11 +84,7 @@ class _Inclination:
 
 
 def run(quick: bool = False, part: int | None = None) -> CaseResult:
-    """Sweeps and checks; see the module docstring.
-
-    ``part`` (an index of :func:`parts`) restricts the run to one alpha; the
-    suite merges the parts with :func:`fempipe.validation.checks.merge_results`.
-    """
+    """Sweeps and checks (module docstring); ``part``: one alpha (:func:`parts`)."""
     ref = CASE.references
     alphas = ref.value("alpha", quick)
     if part is not None:
@@ -156,7 +119,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             "alpha": alpha,
             "sweeps": inc.sweeps,
             "diagrams": inc.diags,
-            "shapes": _shapes(inc, discs),
+            "shapes": attractor_shapes(discs, alpha, inc.shape_v, inc.checked, inc.fe_pts),
         }
     return CASE.result(
         checks,
@@ -169,8 +132,7 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
 
 
 def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
-    """The diagrams of every discretization at ``alpha``, the sweeps up, and the check
-    by integration at a few v."""
+    """The diagrams, sweeps and check by integration at ``alpha``."""
     ref = CASE.references
     is_pi = abs(alpha - np.pi) < 1e-12
     shape_v = ref.value("shape_v")[ref.value("alpha").index(alpha)]
@@ -226,15 +188,7 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
 
 
 def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Measured], dict]:
-    """The linear onset of every discretization and (α ≠ π) its check against the diagram.
-
-    Returns
-    -------
-    checks : list of Measured
-        ``onset_<name>_<tag>`` of every discretization (none at α = π).
-    onsets : dict
-        ``(linear v_cr, last equilibrium v, first periodic v, Hopf point v_H)`` by label.
-    """
+    """``onset_<name>_<tag>`` checks (none at α = π) and ``{label: (v_cr, lo, hi, v_H)}``."""
     checks, onsets = [], {}
     tol = CASE.references.value("onset_tol")
     for label, d in discs.items():
@@ -255,9 +209,7 @@ def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Measured], dict]:
 
 
 def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Measured]:
-    """The states at the paper's shape velocities (FE): the onset bracket they imply
-    (α ≠ π), or the buckling / restabilization / flutter sequence and its jumps against
-    the stability analysis (α = π)."""
+    """The states at the paper's shape velocities: the onset bracket, or the α = π sequence."""
     fe_label = next(iter(discs))
     fe_pts = inc.fe_pts
     v1, v2, _ = inc.shape_v
@@ -307,8 +259,7 @@ def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Measured]:
 
 
 def _attractor_checks(inc: _Inclination, fe_label: str) -> list[Measured]:
-    """Period-1 attractors, the tip excursion at v = 10, and N = 3 / N = 4 against FE
-    at every v of the diagram."""
+    """Period-1, the tip excursion at v = 10, N = 3 and N = 4 against FE."""
     name = inc.name
     checks = [period_one("period_one_{alpha}", inc.diags, inc.checked, alpha=name)]
     p10 = inc.fe_pts[10.0]
@@ -355,40 +306,14 @@ def _rows(inc: _Inclination, discs: dict, onsets: dict) -> list[tuple]:
     return rows
 
 
-def _shapes(inc: _Inclination, discs: dict) -> dict:
-    """The FE shapes at the paper's shape velocities: on the attractor found by
-    integration, or (α = π below the flutter) on the sweep's state."""
-    fe_label = next(iter(discs))
-    shapes = {}
-    for v in inc.shape_v:
-        att = inc.checked[0]["attractors"].get(float(v))
-        if att is None:  # alpha = pi below the flutter: the sweep's state
-            att = inc.fe_pts[v]
-            q, qdot = att.q, att.qdot
-            per = att.period if att.attractor == "periodic" else None
-        else:
-            q, qdot = att.q, att.qdot
-            per = att.period if att.kind == "periodic" else None
-        shapes[v] = orbit(fe_label, discs[fe_label], inc.alpha, v, q, qdot, per)
-    return shapes
-
-
 def _table(rows: list[tuple]) -> Table:
     """The table of onsets and limit cycles at v = 10 (rows of :func:`_rows`)."""
     return Table(
         "Onsets and limit cycles at v = 10",
         (
-            "α",
-            "discretization",
-            "linear v_cr",
-            "last equilibrium v",
-            "first periodic v",
-            "attractor at v = 10",
-            "period",
-            "X_g(1) range",
-            "Z_g(1) range",
-            "η(1) amplitude",
-            "Hopf point v_H",
+            "α | discretization | linear v_cr | last equilibrium v | first periodic v | "
+            "attractor at v = 10 | period | X_g(1) range | Z_g(1) range | η(1) amplitude | "
+            "Hopf point v_H"
         ),
         tuple(rows),
         note="Ranges are peak-to-peak (units of L); α = π: linear v_cr is the flutter of the "
@@ -402,27 +327,16 @@ def _straight_flutter(disc) -> float:
     """alpha = pi: v of the flutter that destabilizes the restabilized straight pipe."""
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = analyse_stability(m, v_max=6.0, follow_bifurcations=False)
-    prim = next(b for b in res.branches if b.name == "primary")
-    return next((e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan"))
+    return first_flutter(res)
 
 
 def _pi_cross_checks(disc, pts, diag) -> list[Measured]:
-    """alpha = pi: the sweep's jumps against the events of :func:`fempipe.analyses.stability.analyse_stability`.
-
-    Up-sweep from the left buckled state: it stays buckled up to the fold of
-    the buckled branch (a subcritical pitchfork makes the straight state
-    stable a little earlier, at the restabilization), jumps to the straight
-    pipe, and starts to oscillate at the flutter of the straight pipe.  A
-    sweep without the buckled, straight or periodic states emits no check for
-    that jump: the case's declaration then fails it as not computed.
+    """alpha = pi: the sweep's jumps (fold of the buckled branch, flutter of the straight pipe)
+    against the stability analysis; a missing jump emits no check (then failed as not computed).
     """
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = analyse_stability(m, v_max=6.0, follow_bifurcations=True)
-    prim = next(b for b in res.branches if b.name == "primary")
-    # The flutter that destabilizes the restabilized straight pipe.
-    flutter = next(
-        (e.v for e in prim.events if e.type == "flutter" and e.stable_before), float("nan")
-    )
+    flutter = first_flutter(res)  # destabilizes the restabilized straight pipe
     folds = [f for b in res.branches if b.name != "primary" for f in b.folds]
     fold = min(folds) if folds else float("nan")
     buckled = [p.v for p in pts if p.attractor == "equilibrium" and abs(p.Z_tip[0]) > 0.1]
@@ -454,15 +368,8 @@ FIGURES = {
 
 
 def plot(result: CaseResult, fig=None, which: str = "fig09"):
-    """One of the paper's Figs. 8-10 (``which``, a key of :data:`FIGURES`).
-
-    One panel per α of the tip extrema against v (FE open circles, N = 3 +,
-    N = 4 x); Fig. 9 adds, beside each, the shapes (FE) at the paper's three
-    velocities: static states thick, oscillations as bundles.
-    """
+    """One of Figs. 8-10 (``which``): tip extrema against v per α; Fig. 9 adds the FE shapes."""
     import matplotlib.pyplot as plt
-
-    from .drawing import draw_continued, draw_orbit_shapes, finish_figure, paper_case_line
 
     paper, key, lab, what = FIGURES[which]
     panels = result.data["panels"]

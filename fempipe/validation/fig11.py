@@ -1,11 +1,8 @@
 """Fig. 11: time traces of the tip position at v = 10 for several alpha.
 
-The limit cycle at v = 10 of each inclination, computed by shooting
-(:func:`fempipe.analyses.limit_cycle.shoot`, Floquet multipliers from the monodromy
-matrix) for the converged FE mesh and for N = 3 and N = 4, drawn over three
-periods.  Checks: the cycles are periodic and stable, the tip excursion is
-close to the pipe length, and how well N = 3 and N = 4 reproduce the
-converged period and tip ranges.
+The limit cycle at v = 10 of each inclination, shot (Floquet multipliers from the monodromy)
+for FE and N = 3, 4, drawn over three periods.  Checks: periodic and stable, tip excursion
+near the pipe length, the modal period and tip ranges against FE.
 """
 
 from __future__ import annotations
@@ -16,18 +13,11 @@ from fempipe.model.discretization import parse_discretization
 
 from .case import Case, alpha_name
 from .checks import CaseResult, Table
+from .drawing import color_for, discretization_legend, finish_figure, paper_case_line, style_for
 from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations
 from .evaluate import Measured, measure
 
-CASE = Case(
-    name="fig11",
-    figure="Fig. 11",
-    title="Time traces of X_g(1), Z_g(1) at v = 10",
-    paper_shows=(
-        "at v = 10 the pipe oscillates periodically with a tip excursion of the order of its "
-        "length",
-    ),
-)
+CASE = Case.load("fig11")
 
 
 def run(quick: bool = False) -> CaseResult:
@@ -51,21 +41,7 @@ def run(quick: bool = False) -> CaseResult:
 
 
 def _cycle_traces_at(alphas, discs: dict, cycles: dict) -> dict:
-    """The tip traces of every found cycle, by α name and discretization label.
-
-    Parameters
-    ----------
-    alphas : sequence of float
-    discs : dict
-        Discretizations by label, the converged FE first.
-    cycles : dict
-        The limit cycles by (α, label) (None where none was found).
-
-    Returns
-    -------
-    dict
-        ``{α name: {label: trace}}``; an α whose FE cycle was not found is absent.
-    """
+    """``{α name: {label: trace}}`` of every found cycle (an α without an FE cycle is absent)."""
     fe_label = next(iter(discs))
     traces = {}
     for a in alphas:
@@ -93,20 +69,7 @@ def _fine_cycle(v: float, discs: dict, cycles: dict):
 
 
 def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple[list, list]:
-    """The checks of every α (and of the mesh, if ``fine`` is given) and the names required.
-
-    Parameters
-    ----------
-    alphas, discs, cycles, traces
-        As :func:`_cycle_traces_at` and its result.
-    fine : limit cycle or None
-        :func:`_fine_cycle` (the full suite), None (the quick suite).
-
-    Returns
-    -------
-    checks : list of Check
-    requires : list of str
-    """
+    """The checks of every α (and of the mesh with ``fine``, full suite) and the names required."""
     ref = CASE.references
     fe_label = next(iter(discs))
     checks, requires = [], []
@@ -149,8 +112,7 @@ def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple
 
 
 def _modal_checks(name: str, lb: str, c, t_: dict, fe, fx: dict, fe_label: str) -> list:
-    """Period and tip extrema of the modal cycle ``c`` (traces ``t_``) against the FE
-    cycle ``fe`` (traces ``fx``) at the inclination ``name``."""
+    """Period and tip extrema of the modal cycle ``c`` against the FE cycle ``fe``."""
     dev = max(
         max(abs(t_[k].min() - fx[k].min()), abs(t_[k].max() - fx[k].max()))
         for k in ("X_tip", "Z_tip")
@@ -201,15 +163,8 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
     return Table(
         "Limit cycles at v = 10",
         (
-            "α",
-            "discretization",
-            "period",
-            "relative period error",
-            "X_g(1) min",
-            "X_g(1) max",
-            "Z_g(1) min",
-            "Z_g(1) max",
-            "max |ρ| (Floquet multipliers)",
+            "α | discretization | period | relative period error | X_g(1) min | X_g(1) max | "
+            "Z_g(1) min | Z_g(1) max | max |ρ| (Floquet multipliers)"
         ),
         tuple(rows),
         note="Period in τ; positions in units of L; the trivial multiplier 1 is excluded.",
@@ -217,14 +172,8 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
 
 
 def plot(result: CaseResult, fig=None):
-    """One row per α: X_g(1)(τ) and Z_g(1)(τ); FE solid, N = 3 dashed, N = 4 dotted.
-
-    Every discretization is drawn over the same τ window (the shortest of
-    the computed ones), so that the drift of the modal periods is seen.
-    """
+    """One row per α: X_g(1)(τ) and Z_g(1)(τ) over a common τ window."""
     import matplotlib.pyplot as plt
-
-    from .drawing import color_for, discretization_legend, finish_figure, paper_case_line, style_for
 
     traces = result.data["traces"]
     n = max(len(traces), 1)

@@ -1,8 +1,5 @@
-"""Fig. 12: phase trajectories of the horizontal tip position at v = 10.
-
-(Z_g(1), dZ_g(1)/dtau) over one period of the limit cycle for each
-inclination, converged FE with N = 3 and N = 4 overlaid.  Checks: the orbit
-closes (periodicity of the computed cycle), and how far the paper's truncations are from the converged loop.
+"""Fig. 12: phase trajectories (Z_g(1), dZ_g(1)/dtau) at v = 10 over one period, FE with
+N = 3, 4 overlaid.  Checks: the orbit closes, and the truncations' distance from FE.
 """
 
 from __future__ import annotations
@@ -11,15 +8,18 @@ import numpy as np
 
 from .case import Case, alpha_name
 from .checks import CaseResult, Table
+from .drawing import (
+    color_for,
+    discretization_legend,
+    figure_panels,
+    finish_figure,
+    paper_case_line,
+    style_for,
+)
 from .dynamic_runs import cycle_traces, cycles_at, dyn_discretizations
 from .evaluate import measure
 
-CASE = Case(
-    name="fig12",
-    figure="Fig. 12",
-    title="Phase trajectories of Z_g(1) at v = 10",
-    paper_shows=("the phase trajectories at v = 10 are closed: the motions are periodic (Sec. 5)",),
-)
+CASE = Case.load("fig12")
 
 
 def _loop_distance(a: dict, b: dict) -> float:
@@ -77,12 +77,8 @@ def run(quick: bool = False) -> CaseResult:
     table = Table(
         "Phase trajectories at v = 10",
         (
-            "α",
-            "discretization",
-            "Z_g(1) range",
-            "dZ_g(1)/dτ range",
-            "turning points of Z_g(1) per period",
-            "distance to FE loop",
+            "α | discretization | Z_g(1) range | dZ_g(1)/dτ range | "
+            "turning points of Z_g(1) per period | distance to FE loop"
         ),
         tuple(rows),
         note="Turning points: sign changes of dZ_g(1)/dτ in one period (2 = a simple loop; "
@@ -100,13 +96,10 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """One panel per α: dZ_g(1)/dτ against Z_g(1); FE solid, N = 3 dashed, N = 4 dotted."""
-    from .drawing import color_for, discretization_legend, new_figure, style_for
 
     loops = result.data["loops"]
-    if fig is None:
-        fig, axes = new_figure(max(len(loops), 1), ncols=min(max(len(loops), 1), 2), size=4.0)
-    else:
-        axes = list(fig.subplots(1, max(len(loops), 1), squeeze=False).ravel())
+    n = max(len(loops), 1)
+    fig, axes = figure_panels(fig, n, ncols=min(n, 2), size=4.0)
     for ax, (name, tr) in zip(axes, loops.items(), strict=False):
         for lb, t_ in tr.items():
             ax.plot(t_["Z_tip"], t_["Z_tip_rate"], style_for(lb), color=color_for(lb), lw=1.3)
@@ -115,7 +108,6 @@ def plot(result: CaseResult, fig=None):
         ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
         ax.grid(alpha=0.3)
     discretization_legend(fig, next(iter(loops.values()), {}))
-    from .drawing import finish_figure, paper_case_line
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig

@@ -1,19 +1,10 @@
 """Hysteretic damping: Paidoussis' hanging cantilevers conveying air (Table 3.4).
 
-Paidoussis (1998), Table 3.4, p. 143 (after Paidoussis 1970) gives the theory's
-critical flow velocity u_cf and frequency omega_cf of two hanging cantilevers
-(alpha = 0) without damping and with the hysteretic loss factor mu = 0.02,
-EI -> EI (1 + i mu sgn(omega)) (fempipe's ``hysteretic_damping``).  This case
-computes them with fempipe (FE P3:16, :func:`fempipe.analyses.stability.find_critical_velocity`)
-and with the classical theory of :mod:`fempipe.validation.classical`, checks
-that the two agree to 1e-6, and compares both with the printed numbers
-(``paper`` checks: a disagreement is a finding about the table, not a failure
-of fempipe).
-
-At the onset lambda = i omega, E (1 + i mu_h) equals the Kelvin-Voigt E (1 +
-mu lambda) with mu = mu_h / omega, so the Kelvin-Voigt pipe with that mu has
-the same critical eigenvalue at the same v: a check of how fempipe selects
-the hysteretic roots, with its own Kelvin-Voigt term as the reference.
+u_cf and omega_cf of two hanging cantilevers without damping and with the hysteretic loss
+mu = 0.02 (Paidoussis 1998, Table 3.4), by fempipe (FE P3:16) and the classical theory (to
+1e-6), against the printed numbers (``paper`` checks).  At the onset E (1 + i mu_h) equals the
+Kelvin-Voigt E (1 + mu lambda) with mu = mu_h / omega: fempipe's Kelvin-Voigt term checks how
+it selects the hysteretic roots.
 """
 
 from __future__ import annotations
@@ -25,26 +16,14 @@ from fempipe.model.discretization import parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
 
+from . import classical as cm
 from .case import Case, References
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import Measured, measure
 from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
-CASE = Case(
-    name="hysteretic",
-    figure="Païdoussis (1998) Table 3.4",
-    title="Hysteretic damping: hanging cantilevers conveying air, v_cr and ω_cf",
-    paper_shows=(
-        "Table 3.4, theory: u_cf = 6.15, 5.62 and ω_cf = 21.3, 19.5 without damping",
-        "Table 3.4, theory: u_cf = 6.33, 5.79 and ω_cf = 19.7, 18.1 with hysteretic μ = 0.02",
-        "p. 118 (Païdoussis & Issid 1974, Fig. 3.34(b)): β = 0.65, γ = 10, hysteretic μ = 0.1 "
-        "flutters at u_cf ≃ 11 (12.88 undamped)",
-    ),
-    not_checked=(
-        "the experimental columns of Table 3.4 (u_cf = 6.33, 6.05; ω_cf = 18.0, 19.5): drawn, "
-        "not checked; the question here is the theory",
-    ),
-)
+CASE = Case.load("hysteretic")
 
 
 def _tag(pipe: dict) -> str:
@@ -105,10 +84,7 @@ def run(quick: bool = False) -> CaseResult:
 def _agreement_checks(
     pipes: list, dampings: dict, classical: dict, fe: dict, v_max: float
 ) -> tuple[list, list]:
-    """The classical theory converged, fempipe's FE against it, Kelvin-Voigt against mu_h.
-
-    Returns the measurements and the names of the FE checks this run must emit.
-    """
+    """The classical theory converged, FE against it, Kelvin-Voigt against mu_h; the FE names."""
     mu_h = dampings["muh"]
     checks = [converged(_params(pipes[1], mu_h), v_max, step=0.05)]
     requires = []
@@ -122,11 +98,7 @@ def _agreement_checks(
 
 
 def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict, quick: bool):
-    """The printed theory against the converged answer (FE where computed).
-
-    Returns the measurements, the table, the findings on the printed numbers that are
-    not reproduced and the names of the checks those findings explain.
-    """
+    """The printed theory against the converged answer: measurements, table, findings, explained."""
     pipes, v_max = ref.value("pipes"), ref.value("v_max")
     checks, rows, findings, explained = [], [], [], []
     failed: dict = {}
@@ -170,15 +142,8 @@ def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict, quick
     table = Table(
         "Païdoussis (1998) Table 3.4: the table's theory, the classical theory and fempipe",
         (
-            "β×10³",
-            "γ",
-            "μ_h",
-            "u_cf table",
-            "u_cf classical",
-            f"u_cf FE {FE}",
-            "ω_cf table",
-            "ω_cf classical",
-            f"ω_cf FE {FE}",
+            f"β×10³ | γ | μ_h | u_cf table | u_cf classical | u_cf FE {FE} | ω_cf table | "
+            f"ω_cf classical | ω_cf FE {FE}"
         ),
         tuple(rows),
         note="classical: Legendre spectral elements p = 16 (converged to 1e-9); FE computed at "
@@ -200,13 +165,9 @@ def _issid_checks() -> list:
 
 
 def _finding(pipe: dict, mu_h: float, bad: list, cl, fe, v_max: float, exp: dict) -> str:
-    """One finding for the printed numbers of a table row that are not reproduced.
-
-    With the converged values, those of Paidoussis' beam-mode Galerkin method
-    on 2 to 10 modes (a truncation could explain a printed number), and a note
-    when the printed theory equals the row's experimental value ``exp``.
+    """One finding for a row's printed numbers not reproduced, with the beam-mode Galerkin values
+    on 2 to 10 modes and a note when the printed theory equals the experiment ``exp``.
     """
-    from . import classical as cm
 
     pipe_c = cm.StraightPipe.from_params(_params(pipe, mu_h))
     trunc = {
@@ -243,7 +204,6 @@ def _kelvin_voigt_check(pipe: dict, mu_h: float, onset) -> Measured:
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(μ_h), (b) ω_cf(μ_h): classical lines, FE dots, Table 3.4 crosses and squares."""
-    from .drawing import figure_panels, finish_figure
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)

@@ -1,19 +1,10 @@
 """The motion out of the plane in strong form: an independent check of fempipe.model.out_of_plane.
 
-This module solves the classical fourth-order equation of the out-of-plane deflection
-w(xi, tau) of the pipe about a planar static state theta^s(xi) (Chen et al. 2020,
-Eq. (31a)), written from that equation alone: it knows neither the out-of-plane rotation
-psi = w' of :mod:`fempipe.model.out_of_plane` nor fempipe's discretizations, quadrature or
-operators.  The static state comes from :func:`fempipe.validation.bvp.solve_static_bvp`
-(scipy's ``solve_bvp`` on the strong form of Eq. (31a)), independent of fempipe too
-(:func:`static_state`, :func:`loaded_state`).  The equation (with the static axial force N,
-the curvature's softening theta'^2, the jet, the variants and the objective Kelvin-Voigt
-damping) is discretized in its weak form by C^1 spectral elements (:class:`HermiteSpectral`:
-Hermite cubics and Legendre bubbles, a node at every spring); :class:`LateralProblem` gives
-its spectrum and :func:`critical_velocity` the first crossing along the static branch.
-
-Derivation, weak form and checks: docs/theory/independent.md, "The motion out of the plane
-in strong form".
+The fourth-order equation of the out-of-plane deflection w(xi, tau) about a planar static
+state theta^s (from :func:`fempipe.validation.bvp.solve_static_bvp`), written from that
+equation alone, discretized by C^1 spectral elements (:class:`HermiteSpectral`);
+:class:`LateralProblem` gives its spectrum along the static branch and
+:func:`critical_velocity` the first crossing.  Derivation: docs/theory/independent.md.
 """
 
 from __future__ import annotations
@@ -33,17 +24,6 @@ from .bvp import BVPSolution, solve_static_bvp
 from .classical import Onset
 from .classical_galerkin import legendre_local_basis
 
-__all__ = [
-    "HermiteSpectral",
-    "LateralProblem",
-    "Onset",
-    "StaticState",
-    "critical_velocity",
-    "eigen",
-    "loaded_state",
-    "static_state",
-]
-
 #: Only eigenvalues with |lambda| below this decide stability (the lowest
 #: eight modes or so), as in :mod:`fempipe.validation.classical`.
 LAM_MAX = 1000.0
@@ -62,16 +42,8 @@ SCAN_TOL = 1e-8
 
 @dataclass(frozen=True)
 class StaticState:
-    """A planar static state theta^s from ``solve_bvp``, and its axial force.
-
-    Attributes
-    ----------
-    params : Params
-        The pipe (alpha, gamma, end mass, springs) and its flow velocity v.
-    bvp : BVPSolution
-        ``bvp.sol(xi)`` gives (theta, theta', X_g, Z_g).
-    spring_forces : tuple of ndarray
-        F_s = -kappa_s (r(xi_s) - (xi_s, 0)) in the pipe's frame, per spring.
+    """A planar static state from ``solve_bvp`` (``bvp.sol(xi)``: theta, theta', X_g, Z_g) and the
+    spring forces F_s = -kappa_s (r(xi_s) - (xi_s, 0)).
     """
 
     params: object
@@ -110,16 +82,8 @@ class StaticState:
 
 
 def static_state(params, guess=None, tol: float = BVP_TOL) -> StaticState:
-    """The static state of Eq. (31a) at ``params.v`` by ``solve_bvp``.
-
-    Parameters
-    ----------
-    params : Params
-        alpha, gamma, v, end_mass, springs are used.
-    guess : StaticState or callable, optional
-        A nearby state (its theta^s) or ``guess(xi) -> theta``: selects the branch.
-    tol : float
-        ``solve_bvp`` tolerance.
+    """The static state of Eq. (31a) at ``params.v`` by ``solve_bvp``; ``guess`` (a state or
+    ``guess(xi) -> theta``) selects the branch.
     """
     if isinstance(guess, StaticState):
         guess = guess.theta
@@ -142,14 +106,9 @@ def static_state(params, guess=None, tol: float = BVP_TOL) -> StaticState:
 
 
 def loaded_state(params, steps: int = 4, tol: float = BVP_TOL) -> StaticState:
-    """The state a pipe reaches when gravity is switched on: gamma from 0 in steps.
-
-    At gamma = 0 the straight pipe is the state; each step starts from the
-    previous one (loose tolerance on the way), so that the branch reached is
-    the loaded one, not a near-straight unstable equilibrium of the leaning
-    pipe (alpha near pi).  Gravity turns the pipe towards the plumb line,
-    theta(1) sin(alpha) < 0: a state that does not is loaded again with
-    twice the steps (up to 64).  At alpha = 0 and pi this is the straight pipe.
+    """The state reached as gravity is switched on, gamma from 0 in steps (the loaded branch, not a
+    near-straight unstable one); redone with twice the steps (up to 64) if the pipe does not turn
+    towards the plumb line.
     """
     s = math.sin(params.alpha)
     while True:
@@ -183,17 +142,8 @@ def _reference(p: int, nq: int):
 
 
 class HermiteSpectral:
-    """C^1 spectral elements for the weak form of docs/theory/independent.md.
-
-    Parameters
-    ----------
-    p : int
-        Highest Legendre degree of the bubbles' second derivatives (>= 2): each
-        element carries polynomials of degree p + 2.
-    elements : int
-        Elements of equal length (the springs' positions are added as nodes).
-    extra_points : int
-        Gauss points per element beyond p (the integrands carry theta^s).
+    """C^1 spectral elements: degree ``p`` + 2 on each of ``elements`` (plus a node at every
+    spring), ``extra_points`` more Gauss points per element.
     """
 
     name = "Hermite-Legendre spectral elements"
@@ -209,8 +159,7 @@ class HermiteSpectral:
         )
 
     def layout(self, params):
-        """Nodes (with the springs) and, at the quadrature points: xi, weights, element index,
-        and the basis values/first/second derivatives as (n_points, ndof) arrays."""
+        """Nodes, and at the quadrature points: xi, weights, element, basis values and derivatives."""
         nodes = np.unique(
             np.r_[np.linspace(0.0, 1.0, self.elements + 1), [x for _, x in params.springs]]
         )
@@ -271,15 +220,7 @@ class HermiteSpectral:
         return out
 
     def matrices(self, state: StaticState):
-        """K, C, M (docs/theory/independent.md) about ``state`` at its v, and the tip and spring rows.
-
-        Returns
-        -------
-        K, C, M : ndarray, shape (ndof, ndof)
-        parts : dict
-            ``bending`` (\\int u'' w''), ``material`` (\\int B u B w), ``U0`` and ``x``
-            (basis values at the quadrature points), ``w`` (weights).
-        """
+        """K, C, M about ``state`` at its v and ``parts``: ``bending``, ``material``, ``U0``, ``x``, ``w``."""
         p = state.params
         nodes, x, wq, (U0, U1, U2) = self.layout(p)
         S = nodes.size - 1
@@ -316,12 +257,8 @@ class HermiteSpectral:
 
 
 def eigen(K, C, M, bending=None, vectors: bool = False):
-    """Eigenvalues lambda of (K + lambda C + lambda^2 M) a = 0 (and the vectors a).
-
-    In the M-orthonormal modes of ``bending`` (default K's symmetric part
-    plus M) the stiff bubbles decouple from the low modes; then the reversed
-    companion form with the shift s = -1 (lambda = s + 1/nu), whose norm is
-    of the order of the low modes' 1/|lambda - s| (classical.py).
+    """Eigenvalues (and vectors) of (K + lambda C + lambda^2 M) a = 0, in the M-orthonormal modes
+    of ``bending``, by the shifted reversed companion (as classical.py).
     """
     Kb = 0.5 * (K + K.T) + M if bending is None else bending
     d = 1.0 / np.sqrt(np.diag(M))
@@ -360,17 +297,8 @@ def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
 
 
 class LateralProblem:
-    """A pipe on a discretization, with its static branch followed in v.
-
-    Parameters
-    ----------
-    params : Params
-        The pipe; its v is ignored (``eigenvalues(v)``).  Hysteretic damping
-        is not modelled.
-    disc : HermiteSpectral
-    start : StaticState, optional
-        The state at the first v asked (default :func:`loaded_state` there);
-        each next v starts from the cached state nearest in v.
+    """A pipe (hysteretic damping not modelled) on ``disc``, its static branch followed in v from
+    ``start`` (default :func:`loaded_state`).
     """
 
     def __init__(self, params, disc: HermiteSpectral, start: StaticState | None = None) -> None:
@@ -384,10 +312,7 @@ class LateralProblem:
             self._tols[float(start.params.v)] = 0.0
 
     def state(self, v: float, tol: float = BVP_TOL) -> StaticState:
-        """The static state at ``v`` on the branch followed from the cached ones.
-
-        A cached state at ``v`` is reused if it was solved to ``tol`` or tighter.
-        """
+        """The static state at ``v``, from the nearest cached one (reused if solved to ``tol``)."""
         v = float(v)
         if v in self._states and self._tols.get(v, 0.0) <= tol:
             return self._states[v]
@@ -422,18 +347,11 @@ def critical_velocity(
     tol: float = TOL,
     start: StaticState | None = None,
 ) -> Onset:
-    """The first flow velocity in [v_min, v_max] at which the motion out of the plane is unstable.
+    """The first v in [v_min, v_max] at which the motion out of the plane is unstable.
 
-    The static branch is followed from ``v_min`` (``start``, default the loaded
-    state) in steps ``step``; in the first interval where the stability margin
-    max(Re lambda - tol max(1, |lambda|)) over |lambda| < ``lam_max`` turns
-    positive, Brent's method to ``xtol`` on the largest Re lambda itself (the
-    jet damps every mode for v > 0, so it is negative below the crossing).
-
-    Returns
-    -------
-    Onset
-        As :func:`fempipe.validation.classical.critical_velocity`.
+    The branch is followed in ``step``; in the first interval where the margin (as
+    :func:`fempipe.validation.classical.spectral_abscissa`) turns positive, Brent's method to
+    ``xtol`` on the largest Re lambda.  Returns a classical :class:`~.classical.Onset`.
     """
     disc = HermiteSpectral() if disc is None else disc
     prob = LateralProblem(params, disc, start)

@@ -1,20 +1,10 @@
 """Critical flow velocities, computed independently of :mod:`fempipe.analyses.stability`.
 
-v_cr is the first flow velocity at which the static state (on the
-gravity-sagged branch) loses linear stability: the spectral abscissa, the
-largest real part of the eigenvalues of the linearized problem
-(lambda^2 M^d + lambda C^d + K^d) x = 0 (Eqs. (31b)-(33), via
-:func:`spectrum`, a dense QZ of the first-order pencil), changes sign from negative
-to positive.  It is bracketed on a grid in v and located by Brent's method,
-with each trial static state solved by Newton from the nearest state already
-known.  Kelvin-Voigt damping (mu > 0) gives the unresolved high modes of a
-fine mesh large negative real parts, so they never decide the sign.
-
-This is a second, deliberately simple implementation of what
-:func:`fempipe.analyses.stability.critical_velocity` computes: the Fig. 5 and Fig. 6
-cases compare the two.  With ``plane="out"`` the linearized problem is the
-motion out of the plane of the static state (:mod:`fempipe.model.out_of_plane`),
-the first instability of an inclined round pipe.
+v_cr is where the spectral abscissa of the linearized problem about the sagged static state
+(Eqs. (31b)-(33), dense QZ) turns positive: bracketed on a grid in v, located by Brent's
+method, each static state by Newton from the nearest known one.  The Fig. 5 and 6 cases
+compare it with :func:`fempipe.analyses.stability.critical_velocity`; ``plane="out"``: the
+motion out of the plane (:mod:`fempipe.model.out_of_plane`).
 """
 
 from __future__ import annotations
@@ -26,7 +16,10 @@ from scipy.optimize import brentq
 
 from fempipe.analyses.statics import NewtonError, solve_static
 from fempipe.model.operators import PipeModel
+from fempipe.model.out_of_plane import OutOfPlaneOperators
 from fempipe.model.params import PAPER_CASE, Params
+
+from .static_shapes import static_shapes
 
 __all__ = ["Onset", "critical_velocity", "spectrum"]
 
@@ -44,7 +37,6 @@ class _Branch:
     """Static states on the sagged branch, by Newton from the nearest known state."""
 
     def __init__(self, disc, alpha: float, beta: float, gamma: float, mu: float, v0: float):
-        from .static_shapes import static_shapes
 
         self.disc = disc
         self.base = Params(alpha=alpha, beta=beta, gamma=gamma, mu=mu, v=v0)
@@ -55,11 +47,7 @@ class _Branch:
         return PipeModel(self.disc, self.base.with_flow(v))
 
     def state(self, v: float) -> np.ndarray:
-        """Static state at v, stepping from the nearest known state (halving on failure).
-
-        Raises NewtonError if the steps fall below 1e-7: the branch has a fold
-        (it does not reach v).
-        """
+        """Static state at v from the nearest known one (halving steps; NewtonError below 1e-7)."""
         u = min(self.known, key=lambda x: abs(x - v))
         q = self.known[u]
         h = v - u
@@ -78,17 +66,12 @@ class _Branch:
 
 
 def spectrum(model: PipeModel, q_static: np.ndarray, plane: str = "in") -> np.ndarray:
-    """Eigenvalues lambda (theta ~ e^{lambda tau}) of the linearization, sorted by Re.
-
-    ``plane="out"``: of the motion out of the plane of the static state.
-    """
+    """Eigenvalues of the linearization in or out of the ``plane``, sorted by Re."""
     import scipy.linalg as sla
 
     if plane == "in":
         K, D, M = model.jacobians(q_static)
     else:
-        from fempipe.model.out_of_plane import OutOfPlaneOperators
-
         mats = OutOfPlaneOperators(model).matrices(q_static)
         K, D, M = mats.K, mats.C, mats.M
     n = model.n
@@ -103,11 +86,8 @@ def spectrum(model: PipeModel, q_static: np.ndarray, plane: str = "in") -> np.nd
 
 @dataclass(frozen=True)
 class Onset:
-    """The first loss of stability on the sagged branch.
-
-    ``v_cr`` (NaN if none below ``v_max``; 0 if unstable at rest),
-    ``frequency`` = |Im lambda| of the crossing eigenvalue (0: divergence),
-    ``kind`` ``"flutter"`` or ``"divergence"``, ``evaluations`` of the spectrum.
+    """The first loss of stability: ``v_cr`` (NaN if none; 0 if unstable at rest), ``frequency``
+    |Im lambda| (0: divergence), ``kind``, ``evaluations`` of the spectrum.
     """
 
     v_cr: float
@@ -127,20 +107,8 @@ def critical_velocity(
     xtol: float = 1e-10,
     plane: str = "in",
 ) -> Onset:
-    """v_cr of the sagged static branch by bracketing and Brent's method.
-
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-    alpha, beta, gamma, mu : float
-        Inclination and the groups of Eq. (19) (default: the paper's
-        reference case, :data:`fempipe.model.params.PAPER_CASE`).
-    v_max, dv : float
-        The bracketing grid 0, dv, 2 dv, ... up to v_max.
-    xtol : float
-        Absolute tolerance in v of Brent's method.
-    plane : {"in", "out"}
-        The motion in the plane of the static state (Eq. (32)) or out of it.
+    """v_cr of the sagged static branch by bracketing on 0, dv, ... v_max and Brent's method to
+    ``xtol``; ``alpha``, ``beta``, ``gamma``, ``mu`` default to the paper's case.
     """
     br = _Branch(disc, alpha, beta, gamma, mu, 0.0)
     count = 0

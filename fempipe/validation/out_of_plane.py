@@ -1,22 +1,12 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
-:mod:`fempipe.model.out_of_plane` linearizes the motion out of the plane of a planar static
-state (docs/theory/out_of_plane.md).  This case checks it four ways and reports what it finds:
-
-(a) **The straight pipe.**  Hanging, and standing below buckling, a round straight pipe has no
-    preferred plane: the out-of-plane K, C, M (and the hysteretic stiffness) equal the in-plane
-    ones to round-off, and so do the spectra, on P3, sine and beam modes, every variant on.
-(b) **The buckled standing pipe** (alpha = pi, gamma above Greenhill's 7.837): turning the
-    buckled shape about the vertical costs nothing (lambda = 0, psi = sin theta^s).  fempipe
-    restores this null vector exactly; the residual ||K x|| of the uncorrected operator must
-    fall under refinement, and the other eigenvalues are stable and equal the strong form's.
-(c) **An independent strong form** (:mod:`fempipe.validation.lateral`): the critical
-    velocities and flutter frequencies agree to 1e-8 at alpha = pi/4, pi/2, 3pi/4 for the
-    paper's case (mu = 0, 0.005) and Texier & Dorbolo's pipe, and the spectra of an inclined
-    pipe with every variant agree.
-(d) **Convergence.**  The observed orders of the out-of-plane v_cr: h^2k for P_k, N^-3 for
-    the sine modes, N^-4 for the beam modes (those of the planar problem).
-(e) **The finding.**  The out-of-plane v_cr against the in-plane one (Fig. 6), alpha in [0, pi].
+:mod:`fempipe.model.out_of_plane` (docs/theory/out_of_plane.md) checked five ways:
+(a) the straight pipe: out-of-plane K, C, M and spectra equal the in-plane ones;
+(b) the buckled standing pipe: the rotation about the vertical is an exact null vector, the
+    other eigenvalues equal the strong form's;
+(c) the strong form of :mod:`fempipe.validation.lateral`: v_cr and frequencies to 1e-8;
+(d) the observed orders of the out-of-plane v_cr;
+(e) the finding: the out-of-plane v_cr against the in-plane one (Fig. 6).
 """
 
 from __future__ import annotations
@@ -31,17 +21,9 @@ from . import out_of_plane_agreement as agreement
 from . import out_of_plane_runs as runs
 from .case import Case
 from .checks import CaseResult
+from .drawing import figure_panels, finish_figure
 
-CASE = Case(
-    name="out_of_plane",
-    figure="Out of the plane (cf. Fig. 6)",
-    title="The motion out of the plane: strong form, symmetries and the first instability",
-    paper_shows=(
-        "Fig. 6 and Sec. 4: the critical flow velocity v_cr(α) of the pipe, from the planar "
-        "linear problem (Eqs. (31b)-(33)); checked here against the motion out of the plane",
-    ),
-    not_checked=("the paper shows no out-of-plane result: its model is planar (Eq. (20))",),
-)
+CASE = Case.load("out_of_plane")
 
 
 @single_blas
@@ -109,8 +91,6 @@ def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) in and out of the plane; (b) convergence of the out-of-plane v_cr."""
     from matplotlib.lines import Line2D
     from matplotlib.ticker import NullFormatter
-
-    from .drawing import figure_panels, finish_figure
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)

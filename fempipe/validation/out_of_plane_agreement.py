@@ -1,11 +1,5 @@
-"""Parts (c) to (e) of the out-of-plane validation case (fempipe.validation.out_of_plane).
-
-(c) :func:`agreement_checks`, :func:`inclined_variants_check` and
-:func:`classical_check`: the strong form of :mod:`fempipe.validation.lateral`
-against fempipe and the classical theory; (d) :func:`order_checks`, the
-observed orders of the out-of-plane v_cr; (e) :func:`finding_checks`, the
-out-of-plane v_cr against the in-plane one.  Parts (a) and (b), and the
-helpers for the spectra, are in :mod:`fempipe.validation.out_of_plane_runs`.
+"""Parts (c)-(e) of the case ``out_of_plane``: the strong form against fempipe and the
+classical theory, the observed orders, the out-of-plane v_cr against the in-plane one.
 """
 
 from __future__ import annotations
@@ -32,15 +26,6 @@ from .out_of_plane_runs import (
     pencil_eigenvalues,
     refinement_slope,
 )
-
-__all__ = [
-    "agreement_checks",
-    "classical_check",
-    "finding_checks",
-    "inclined_variants_check",
-    "order_checks",
-]
-
 
 # ---------------------------------------------------------------------------
 # (c) the strong form against fempipe
@@ -127,20 +112,7 @@ def agreement_checks(ref, quick: bool):
     checks.append(measure("strong_converged", float(diff), p=p0, v=s0.v_cr))
     table = Table(
         "(c) Out-of-plane onset: strong form against fempipe " + fe,
-        (
-            "pipe",
-            "α",
-            "β",
-            "γ",
-            "μ",
-            "v_cr strong",
-            f"v_cr {fe}",
-            "Δv",
-            "ω strong",
-            f"ω {fe}",
-            "Δω",
-            "kind",
-        ),
+        (f"pipe | α | β | γ | μ | v_cr strong | v_cr {fe} | Δv | ω strong | ω {fe} | Δω | kind"),
         tuple(rows),
     )
     return checks, [table], requires, strong
@@ -247,18 +219,7 @@ def finding_checks(ref, quick: bool):
     table = Table(
         f"(e) Critical flow velocity in and out of the plane (β = {base['beta']:g}, "
         f"γ = {base['gamma']:g}, FE {fe})",
-        (
-            "μ",
-            "α",
-            "v_cr in plane",
-            "kind",
-            "ω",
-            "v_cr out of plane",
-            "kind",
-            "ω",
-            "out − in",
-            "relative",
-        ),
+        "μ | α | v_cr in plane | kind | ω | v_cr out of plane | kind | ω | out − in | relative",
         tuple(rows),
         note="At α = π the primary branch is the straight standing pipe, buckled at v = 0 "
         "(γ > 7.837) in every plane alike; on its buckled branch the out-of-plane spectrum "

@@ -1,16 +1,9 @@
 """Which planar orbits of Figs. 7-10 survive in three dimensions.
 
-The paper's post-flutter motions are planar limit cycles.  A round pipe may
-leave the plane, so each is checked on the 3-D model: its out-of-plane Floquet
-multipliers (:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`).  The
-FE diagram of a case is continued once, with the 3-D verdicts of a subset of
-each branch's orbits (:class:`~fempipe.analyses.periodic.out_of_plane.Spread`:
-about :data:`N_FULL` orbits spread along the branch, the last one and the
-orbit at v = 10; in the quick suite only v = 10), and where the largest
-non-trivial out-of-plane multiplier crosses 1 between two of them, the
-crossing is located by regula falsi on the multiplier
-(:func:`~fempipe.analyses.periodic.out_of_plane.locate_change`; full suite
-only, the quick suite gives the bracket).
+The FE diagram of a case is continued once with the out-of-plane Floquet multipliers
+(:func:`fempipe.analyses.periodic.out_of_plane.cycle_verdict`) of about :data:`N_FULL` orbits
+per branch, its last one and v = 10 (quick suite: v = 10 only); where the largest crosses 1
+between two of them the crossing is located by regula falsi (full suite only).
 """
 
 from __future__ import annotations
@@ -27,7 +20,9 @@ from fempipe.analyses.periodic.out_of_plane import Spread, locate_change
 from fempipe.analyses.periodic.results import CyclePoint
 from fempipe.model.discretization import parse_discretization
 
+from .checks import Table
 from .dynamic_runs import FIRST_DS, ContinuedDiagram, continued_from, model_for
+from .evaluate import measure
 
 __all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts", "caption_text"]
 
@@ -41,22 +36,10 @@ LOCATE_TOL = 2e-3
 class OutOfPlaneBranches:
     """The 3-D verdicts along the cycle branches of one continued diagram.
 
-    Attributes
-    ----------
-    label : str
-    alpha : float
-    checked : list of dict
-        The orbits with a verdict: ``branch``, ``v``, ``stable`` (in the plane),
-        ``max_multiplier`` (in-plane), ``max_oop`` (the largest non-trivial
-        out-of-plane multiplier's modulus), ``stable_3d``, ``eta_tip``, ``X_tip``,
-        ``Z_tip``, ``planar_block`` (the out-of-plane Floquet run's planar block's largest
-        non-trivial modulus), ``neutral`` (complex, at sin alpha = 0), ``multipliers``.
-    changes : list of dict
-        Where the out-of-plane verdict changes between two checked orbits of a
-        branch: ``branch``, ``bracket`` [v, v], ``direction`` ("loses" or
-        "regains" stability with increasing v), ``v`` (located, or None).
-    cpu_time : float
-        CPU seconds of the verdicts and the location.
+    ``checked``: dicts of the orbits with a verdict (``branch``, ``v``, ``stable`` in the plane,
+    ``max_multiplier``, ``max_oop``, ``stable_3d``, tip extrema, ``planar_block``, ``neutral``,
+    ``multipliers``); ``changes``: where the verdict changes (``branch``, ``bracket``,
+    ``direction`` loses/regains, located ``v`` or None); ``cpu_time`` in s.
     """
 
     label: str
@@ -104,9 +87,7 @@ def caption_text(quick: bool) -> str:
 def continued_with_verdicts(
     label: str, alpha: float, values, quick: bool
 ) -> tuple[ContinuedDiagram, OutOfPlaneBranches]:
-    """The continued diagram of ``label`` at ``alpha`` (as
-    :func:`fempipe.validation.dynamic_runs.continued_diagram`) and the 3-D verdicts
-    of its orbits (cached per process)."""
+    """The continued diagram of ``label`` at ``alpha`` and the 3-D verdicts of its orbits (cached)."""
     return _cached(label, float(alpha), tuple(sorted(float(v) for v in values)), bool(quick))
 
 
@@ -167,8 +148,7 @@ def _summary(d: dict) -> dict:
 
 
 def _changes(model, name: str, states: list, checked: list, locate: bool) -> list[dict]:
-    """Brackets (and, with ``locate``, the located v) of the out-of-plane verdict's
-    changes between consecutive checked orbits of a branch."""
+    """Brackets (and, with ``locate``, the v) of the verdict's changes along a branch."""
     out = []
     pts = sorted(checked, key=lambda p: p["index"])
     for a, b in zip(pts, pts[1:], strict=False):
@@ -195,19 +175,13 @@ def _changes(model, name: str, states: list, checked: list, locate: bool) -> lis
 
 
 def neutral_deviation(branches: OutOfPlaneBranches) -> float:
-    """|ρ_neutral - 1| of the paper's cycle at v = 10 (sin alpha = 0; nan elsewhere).
-
-    At v = 10 the other multipliers are far from 1; near a crossing of |ρ| = 1 the
-    neutral one and the crossing one are nearly degenerate and the mesh error
-    of either is magnified (P3:8, α = π: 2.9e-3 along the branch, 6.1e-4 at v = 10).
-    """
+    """|ρ_neutral - 1| of the paper's cycle at v = 10 (sin alpha = 0; nan elsewhere)."""
     p = branches.at(10.0)
     return float("nan") if p is None or p["neutral"] is None else float(abs(p["neutral"] - 1.0))
 
 
 def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
-    """max | |ρ| of the out-of-plane Floquet run's planar block - |ρ| of the planar orbit |
-    (non-trivial largest moduli) over the checked orbits."""
+    """Largest | |ρ| of the Floquet run's planar block - |ρ| of the planar orbit | (checked orbits)."""
     d = [
         abs(p["planar_block"] - p["max_multiplier"])
         for p in branches.checked
@@ -217,9 +191,9 @@ def planar_block_deviation(branches: OutOfPlaneBranches) -> float:
 
 
 def stretches(br: OutOfPlaneBranches, branch: str) -> list[tuple[float, float, bool]]:
-    """The stretches of a branch's checked orbits (stable in the plane) with one 3-D
-    verdict, ``(v_from, v_to, stable_3d)`` in branch order; a boundary is the located
-    crossing, or ``nan`` when not located."""
+    """``(v_from, v_to, stable_3d)`` of a branch's stretches with one verdict (boundary nan if not
+    located).
+    """
     pts = sorted(
         (p for p in br.checked if p["branch"] == branch and p["stable"]), key=lambda p: p["index"]
     )
@@ -239,8 +213,7 @@ def stretches(br: OutOfPlaneBranches, branch: str) -> list[tuple[float, float, b
 
 
 def survival_text(name: str, br: OutOfPlaneBranches) -> str:
-    """One sentence: which planar limit cycles of the diagram at alpha = ``name`` (stable in
-    the plane) survive in 3-D, by stretches of v, and the verdict at v = 10."""
+    """One sentence: which planar cycles at alpha = ``name`` survive in 3-D, and at v = 10."""
     parts = []
     for branch in sorted({p["branch"] for p in br.checked}):
         st = stretches(br, branch)
@@ -280,11 +253,9 @@ def _num(v: float) -> str:
 
 
 def unstable_runs(br: OutOfPlaneBranches, diag: ContinuedDiagram) -> list[list]:
-    """Runs of consecutive orbits of ``diag``'s branches (stable in the plane) that are
-    unstable in 3-D: between the first and the last checked orbit of its branch, each
-    orbit takes the verdict of the nearer checked orbit, and between two checked orbits
-    of different verdicts the located crossing (or, not located, the bracket's
-    midpoint) decides."""
+    """Runs of orbits (stable in the plane) unstable in 3-D: each orbit takes the verdict of the
+    nearer checked orbit, or the side of the located crossing (else the bracket's midpoint).
+    """
     runs = []
     for name, pts in diag.branches.items():
         chk = sorted((p for p in br.checked if p["branch"] == name), key=lambda p: p["index"])
@@ -322,9 +293,9 @@ def unstable_runs(br: OutOfPlaneBranches, diag: ContinuedDiagram) -> list[list]:
 
 
 def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
-    """A thick translucent red band under the extrema of ``key`` where the planar orbits
-    are stable in the plane but unstable in 3-D (:func:`unstable_runs`), and red open
-    triangles at the checked ones; True if any were drawn."""
+    """A red band where the orbits are unstable in 3-D and red triangles at the checked ones;
+    True if any were drawn.
+    """
     runs = unstable_runs(br, diag)
     bad = [p for p in br.checked if p["stable"] and p["stable_3d"] is False]
     for side in (0, 1):
@@ -355,8 +326,7 @@ def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
 
 
 def add_legend_entry(ax) -> None:
-    """The legend of a panel with the entries of :func:`marks` added, below the axes
-    (inside them it would cover the branches)."""
+    """The panel's legend below the axes with the entries of :func:`marks`."""
     from matplotlib.lines import Line2D
 
     leg = ax.get_legend()
@@ -385,10 +355,7 @@ def add_legend_entry(ax) -> None:
 
 
 def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) -> list:
-    """Measurements ``planar_block<suffix>`` and, at sin alpha = 0 in the full suite (on P3:4
-    at alpha = pi the neutral multiplier is not resolved), ``neutral_oop<suffix>``: two
-    independent checks of the out-of-plane monodromy (``suffix``: ``""`` or ``"_{alpha}"``)."""
-    from .evaluate import measure
+    """``planar_block<suffix>`` and, at sin alpha = 0 in the full suite, ``neutral_oop<suffix>``."""
 
     out = [measure(f"planar_block{suffix}", planar_block_deviation(br), alpha=name, label=br.label)]
     p10 = br.at(10.0)
@@ -431,7 +398,6 @@ def leading_text(multipliers, neutral) -> str:
 
 def verdict_table(rows: list[tuple], changes: list[str], quick: bool) -> object:
     """The out-of-plane Floquet multipliers of the checked planar orbits."""
-    from .checks import Table
 
     which = (
         "the orbit at v = 10 (quick suite)"
@@ -449,15 +415,8 @@ def verdict_table(rows: list[tuple], changes: list[str], quick: bool) -> object:
     return Table(
         "Do the planar limit cycles survive in 3-D? Out-of-plane Floquet multipliers",
         (
-            "α",
-            "discretization",
-            "branch",
-            "v",
-            "stable in plane",
-            "max |ρ| in plane",
-            "max |ρ| out of plane",
-            "leading out-of-plane ρ",
-            "stable in 3-D",
+            "α | discretization | branch | v | stable in plane | max |ρ| in plane | "
+            "max |ρ| out of plane | leading out-of-plane ρ | stable in 3-D"
         ),
         tuple(rows),
         note=note,

@@ -1,14 +1,5 @@
-"""The computations of the out-of-plane validation case (fempipe.validation.out_of_plane).
-
-One function per part of the case, each returning its checks and tables:
-(a) :func:`identity_checks`, the straight pipe, out of the plane = in the plane;
-(b) :func:`buckled_checks`, the neutral rotation of the buckled standing pipe;
-here, with the spectra's helpers the parts share (:func:`pencil_eigenvalues`,
-:func:`outside_cluster`, ...).  Parts (c) to (e), the strong form of
-:mod:`fempipe.validation.lateral` against fempipe, the classical theory, the
-observed orders and the finding, are in
-:mod:`fempipe.validation.out_of_plane_agreement`.  Their parameters come from
-the case's reference file (``references/out_of_plane.json``).
+"""Parts (a) and (b) of the case ``out_of_plane`` (the straight pipe, the buckled standing
+pipe's neutral rotation) and the spectral helpers the parts share.
 """
 
 from __future__ import annotations
@@ -29,19 +20,6 @@ from fempipe.model.params import Params
 from . import lateral
 from .checks import Table
 from .evaluate import measure
-
-__all__ = [
-    "CLUSTER",
-    "LAM_MAX",
-    "buckled_checks",
-    "dense",
-    "identity_checks",
-    "in_cluster",
-    "nearest_distance",
-    "outside_cluster",
-    "pencil_eigenvalues",
-    "refinement_slope",
-]
 
 #: Kelvin-Voigt roots near -1/mu: a cluster of nearly equal roots (one per
 #: unresolved mode), sensitive at the square root of round-off; the spectra
@@ -67,11 +45,8 @@ def _rel(a, b) -> float:
 
 
 def pencil_eigenvalues(K, C, M, vectors=False):
-    """All eigenvalues (and vectors) of (K + lambda C + lambda^2 M) x = 0, by QZ.
-
-    On the first-order pencil [[0, I], [-K, -C]] - lambda [[I, 0], [0, M]]:
-    the companion of M^-1 K, M^-1 C loses the eigenvalue near zero to 6e-6
-    with Kelvin-Voigt damping (P3:32, measured), QZ keeps it to 1e-13.
+    """All eigenvalues (and vectors) of (K + lambda C + lambda^2 M) x = 0 by QZ on the first-order
+    pencil (the companion of M^-1 K loses the eigenvalue near zero to 6e-6 with Kelvin-Voigt).
     """
     n = K.shape[0]
     I, Z = np.eye(n), np.zeros((n, n))
@@ -147,16 +122,8 @@ def identity_checks(ref):
     table = Table(
         "(a) The straight pipe: out of the plane against in the plane (relative differences)",
         (
-            "state",
-            "discretization",
-            "max |θˢ|",
-            "K",
-            "C",
-            "M",
-            "hysteretic",
-            "eigenvalues",
-            "λ (outside cluster)",
-            "λ (cluster at −1/μ)",
+            "state | discretization | max |θˢ| | K | C | M | hysteretic | eigenvalues | "
+            "λ (outside cluster) | λ (cluster at −1/μ)"
         ),
         tuple(rows),
     )
@@ -282,12 +249,8 @@ def _residual_orders(ref, p: Params, tip: float, quick: bool) -> tuple[list, Tab
 
 
 def buckled_checks(ref, quick: bool):
-    """(b) The neutral rotation of the buckled standing pipe: its checks and table.
-
-    fempipe's out-of-plane spectrum has lambda = 0 with the projection of
-    sin theta^s as its eigenvector, and so has the strong form of
-    :mod:`fempipe.validation.lateral`; the other eigenvalues agree; the
-    residual of the uncorrected stiffness falls at its expected order.
+    """(b) The neutral rotation of the buckled standing pipe, by fempipe and the strong form, and
+    the order at which the uncorrected stiffness's residual falls.
     """
     b = dict(ref.value("buckled"))
     tip = b.pop("guess_tip")

@@ -1,8 +1,4 @@
-"""The Markdown validation report (``REPORT.md``) and its JSON twin.
-
-Everything in the report is produced by the run that writes it: the numbers
-in the tables, the pass/fail marks, the runtimes.  Nothing is pasted.
-"""
+"""The Markdown validation report (``REPORT.md``) and ``results.json``, made by the run alone."""
 
 from __future__ import annotations
 
@@ -10,6 +6,7 @@ import os
 import re
 from pathlib import Path
 
+from ..io import write_json, write_text
 from .checks import Check, Table, format_cell
 from .suite import CaseOutcome, SuiteResult
 
@@ -26,8 +23,7 @@ def _source_labels(suite: SuiteResult) -> dict[str, str]:
 
 
 def _check_row(c: Check, sources: dict[str, str] | None = None, short: bool = False) -> str:
-    """One check as a table row; a repeated source is cited by its label.  ``short``: the
-    tolerance without its reason, no source."""
+    """One check as a table row (``short``: no reason, no source)."""
     mark = "✅ pass" if c.passed else ("❌ FAIL" if c.category == "numerics" else "⚠️ differs")
     cells = [mark, c.category, c.claim, format_cell(c.measured), format_cell(c.reference)]
     if short:
@@ -137,8 +133,7 @@ CASE_BUDGET = 8192
 
 
 def _linked(t, tables_dir: Path | None, inline: bool) -> bool:
-    """Whether a table goes to a CSV file beside the report: when it is long, or not
-    ``inline``; never without ``tables_dir``."""
+    """Whether a table goes to a CSV file: long or not ``inline``, and ``tables_dir`` given."""
     return tables_dir is not None and (not inline or len(t.rows) > MAX_INLINE_ROWS)
 
 
@@ -157,8 +152,6 @@ def _write_csv(path: Path, t) -> None:
     import csv
     import io
 
-    from ..io import write_text
-
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(t.columns)
@@ -169,11 +162,8 @@ def _write_csv(path: Path, t) -> None:
 def render_report(
     suite: SuiteResult, figures_dir: str = ".", tables_dir: str | os.PathLike | None = None
 ) -> str:
-    """The report as Markdown text; figure links are relative to ``figures_dir``.
-
-    Tables longer than :data:`MAX_INLINE_ROWS`, and those that would take a case's section
-    past :data:`CASE_BUDGET`, are written as CSV files into ``tables_dir`` (the report's
-    directory) and linked; without ``tables_dir`` they stay inline.
+    """The report as Markdown (figure links relative to ``figures_dir``); long tables, and those
+    past a case's :data:`CASE_BUDGET`, go to CSV files in ``tables_dir`` when given.
     """
     tables_path = None if tables_dir is None else Path(tables_dir)
     cmd = "fempipe validate" + (" --quick" if suite.quick else "")
@@ -294,8 +284,7 @@ def _size(lines: list[str]) -> int:
 def _case_section(
     o: CaseOutcome, sources: dict[str, str], figures_dir: str, tables_path: Path | None
 ) -> list[str]:
-    """One case's section, within :data:`CASE_BUDGET` where ``tables_path`` is given; the
-    CSV files it links are written there once its form is chosen."""
+    """One case's section within :data:`CASE_BUDGET`; writes the CSV files it links."""
     r = o.result
     if r is None or tables_path is None:
         return _case_lines(o, sources, figures_dir, tables_path, set(), 0)
@@ -335,10 +324,9 @@ def _case_lines(
     outside: set[int],
     checks_level: int,
 ) -> list[str]:
-    """One case's section: what the paper shows, its figures, checks and tables; the tables
-    ``outside`` as links to CSV files.  ``checks_level`` 0: every check with its reason and
-    source; 1: without them; 2: only the checks that did not pass inline (1 and 2: every
-    check, with its reason and source, in a linked CSV file).  Writes nothing."""
+    """One case's section; tables ``outside`` linked; ``checks_level`` 0: checks with reasons,
+    1: without, 2: only the failed ones inline (1, 2: all in a CSV file).
+    """
     lines = ["", f'<a id="{o.name}"></a>', ""]
     r = o.result
     if r is None:
@@ -390,7 +378,6 @@ def _case_lines(
 
 def write_report(suite: SuiteResult, out: str | os.PathLike) -> Path:
     """Write ``REPORT.md`` and ``results.json`` into ``out`` (atomically); return the report path."""
-    from ..io import write_json, write_text
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,22 +1,9 @@
 """Mesh convergence of the non-planar cycle of the horizontal pipe, against the planar cycle's.
 
-The non-planar limit cycle of the paper's pipe at alpha = pi/2, v = 6 (born at the
-out-of-plane v_cr 5.82, :mod:`fempipe.validation.space_onset`) is shot on the 3-D model
-(:func:`fempipe.analyses.space.shooting.shoot_space`) on P3 meshes of 2 to 8 elements, the
-first from the Hopf normal form's prediction, each next from the previous one projected.
-For its period and tip extrema (Y_tip out of the plane; X_tip along gravity, Z_tip
-horizontal in the plane) the case reports two observed orders in h ~ 1/N:
-
-* the **local order** of the three finest meshes N1 < N2 < N3, the p that solves
-  (Q1 - Q2) / (Q2 - Q3) = (N1^-p - N2^-p) / (N2^-p - N3^-p) (no reference value needed);
-* the **slope against the finest mesh**, the least-squares slope of log |Q_N - Q_finest|
-  against log N over the meshes N <= finest / 2 (where the finest mesh's own error
-  biases |Q_N - Q_finest| by at most 2^-6).
-
-The same two orders of the planar cycle of Eq. (20) at alpha = pi/2, v = 6.5 (above the
-in-plane v_cr 6.21, a similar distance past its Hopf point), on the same meshes, are the
-yardstick: global quantities of P3 converge as h^6 in the plane (the suite's convergence
-case), and the 3-D model, the same elements for each of its three fields, must do as well.
+The non-planar cycle at alpha = pi/2, v = 6 on P3 meshes of 2 to 8 elements (each shot from
+the previous one projected).  Its period and tip extrema give a local order (three finest
+meshes, no reference needed) and a slope against the finest mesh (meshes N <= finest / 2);
+the planar cycle at v = 6.5 on the same meshes, converging as h^6, is the yardstick.
 """
 
 from __future__ import annotations
@@ -28,24 +15,15 @@ from scipy.optimize import brentq
 
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import finish_figure, paper_case_line
 from .evaluate import measure
 from .space_runs import planar_cycles, space_cycles
 
-CASE = Case(
-    name="space_convergence",
-    figure="Convergence out of the plane (3-D)",
-    title="Mesh convergence of the non-planar cycle (α = π/2) against the planar one",
-    paper_shows=(
-        "Sec. 5 and Figs. 7-11: the limit cycles above v_cr, converged in the Galerkin "
-        "discretization; checked here for the non-planar cycle of the horizontal pipe, "
-        "against the planar cycle's convergence",
-    ),
-)
+CASE = Case.load("space_convergence")
 
 
 def local_order(ns, values) -> float:
-    """p with (Q1 - Q2) / (Q2 - Q3) = (N1^-p - N2^-p) / (N2^-p - N3^-p) (nan if none in
-    (0.5, 30): the three values are not monotone or not asymptotic)."""
+    """p with (Q1 - Q2) / (Q2 - Q3) = (N1^-p - N2^-p) / (N2^-p - N3^-p) in (0.5, 30), else nan."""
     (n1, n2, n3), (a, b, c) = ns, values
     if b == c or (a - b) / (b - c) <= 0:
         return math.nan
@@ -69,8 +47,7 @@ def quantities(cycle, keys) -> dict:
 
 
 def orders(ns: list[int], table: dict) -> dict:
-    """``{quantity: {"monotone", "values", "errors", "local", "slope", "fit"}}`` (module
-    docstring); ``monotone``: the values move one way from mesh to mesh."""
+    """``{quantity: {"monotone", "values", "errors", "local", "slope", "fit"}}``."""
     out = {}
     finest = ns[-1]
     fit = [i for i, n in enumerate(ns[:-1]) if n <= finest / 2]
@@ -215,7 +192,6 @@ def _draw_errors(ax, ns, qs: dict, title: str) -> None:
 
 def plot(result: CaseResult, fig=None):
     """(a) 3-D errors, (b) planar errors, (c) local orders of both."""
-    from .drawing import finish_figure, paper_case_line
 
     if fig is None:
         import matplotlib.pyplot as plt

@@ -1,20 +1,10 @@
 """The onset of the non-planar oscillation of the horizontal pipe: normal form against shooting.
 
-At alpha = pi/2 the planar static state of the paper's pipe loses stability out of its plane
-(the out-of-plane v_cr, :mod:`fempipe.model.out_of_plane`, lies below the in-plane one of
-Fig. 6) and a non-planar limit cycle is born.  This case checks, on one P3 mesh at a time (both
-computations on the same mesh, so the comparison is free of discretization error):
-
-(a) **v_cr.**  The critical pair of the 3-D model's exact Jacobian
-    (:func:`fempipe.analyses.space.onset.hopf_normal_form_3d`) crosses the imaginary axis
-    at the out-of-plane model's v_cr (two discretizations of one linear problem);
-(b) **The amplitude.**  Cycles shot on the full 3-D model
-    (:func:`fempipe.analyses.limit_cycle.shoot`) at v = v_cr + delta have
-    A^2 = ((max Y_tip - min Y_tip) / 2)^2 linear in delta with the slope c^2 of the normal
-    form: A^2 / delta fitted as c^2 (1 + k delta + ...) must give 1 at delta -> 0 to 1e-4;
-(c) **The frequency.**  The period tends to 2 pi / omega;
-(d) **The symmetry.**  The critical mode is out of the plane (mirror-odd), Y_tip swings
-    symmetrically, and the cycles are stable (the Hopf point is supercritical, l1 < 0).
+At alpha = pi/2 the paper's pipe first loses stability out of its plane.  On each P3 mesh:
+(a) the 3-D Jacobian's critical pair crosses at the out-of-plane model's v_cr; (b) shot
+cycles at v_cr + delta have A^2 / delta -> c^2 of the normal form (to 1e-4); (c) the period
+tends to 2 pi / omega; (d) the mode is mirror-odd, Y_tip swings symmetrically, the Hopf point
+is supercritical.
 """
 
 from __future__ import annotations
@@ -25,19 +15,11 @@ import numpy as np
 
 from .case import Case
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure, paper_case_line
 from .evaluate import measure
 from .space_runs import amplitude, fit_slope, onset, space_cycle_near_onset
 
-CASE = Case(
-    name="space_onset",
-    figure="Onset out of the plane (3-D)",
-    title="The non-planar oscillation of the horizontal pipe is born at the out-of-plane v_cr",
-    paper_shows=(
-        "Sec. 4 and Fig. 6: the pipe loses stability by flutter at the critical velocity of "
-        "the linear analysis, and Sec. 5: a limit cycle grows from it; checked here in three "
-        "dimensions, where the horizontal pipe's first flutter is out of its plane",
-    ),
-)
+CASE = Case.load("space_onset")
 
 
 def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) -> tuple:
@@ -134,16 +116,8 @@ def run(quick: bool = False) -> CaseResult:
     table = Table(
         "The out-of-plane Hopf point (α = π/2) and the slope of A² at the onset",
         (
-            "mesh",
-            "v_cr (3-D Jacobian)",
-            "v_cr (out-of-plane model)",
-            "l1",
-            "uncertainty of l1",
-            "ω",
-            "Re λ'(v)",
-            "c",
-            "A²/(c² δ) at δ → 0, minus 1",
-            "k",
+            "mesh | v_cr (3-D Jacobian) | v_cr (out-of-plane model) | l1 | uncertainty of l1 | "
+            "ω | Re λ'(v) | c | A²/(c² δ) at δ → 0, minus 1 | k"
         ),
         tuple(rows),
         note="l1 with the critical mode of unit L2 norm over (θ, a, b); c of "
@@ -160,12 +134,8 @@ COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7")
 
 def plot(result: CaseResult, fig=None):
     """(a) A²/(c² δ) and its fit, (b) A against δ with c √δ, (c) the period against δ."""
-    from .drawing import finish_figure, new_figure, paper_case_line
 
-    if fig is None:
-        fig, axes = new_figure(3, ncols=3, size=4.0)
-    else:
-        axes = list(fig.subplots(1, 3, squeeze=False).ravel())
+    fig, axes = figure_panels(fig, 3, ncols=3, size=4.0)
     ax_r, ax_a, ax_t = axes
     for color, mk, m in zip(COLORS, "osD^", result.data["meshes"], strict=False):
         d = np.array(m["deltas"])

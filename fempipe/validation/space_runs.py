@@ -1,9 +1,5 @@
-"""Computations of the 3-D cases: the out-of-plane Hopf point and the cycles born there.
-
-Shared by :mod:`fempipe.validation.space_onset` (the normal form against shot
-cycles near the onset) and :mod:`fempipe.validation.space_convergence` (the
-cycles' mesh convergence).  Everything is on the paper's reference case
-(:data:`fempipe.model.params.PAPER_CASE`) at the inclination alpha.
+"""Computations of the 3-D cases on the paper's case: the out-of-plane Hopf point and the
+cycles born there (for ``space_onset`` and ``space_convergence``).
 """
 
 from __future__ import annotations
@@ -25,15 +21,6 @@ from fempipe.model.projection import project
 from fempipe.model.space import SpaceModel
 from fempipe.model.space_dynamics import SpaceDynamics
 
-__all__ = [
-    "Onset",
-    "amplitude",
-    "onset",
-    "planar_cycles",
-    "space_cycle_near_onset",
-    "space_cycles",
-]
-
 #: Default integration and Newton tolerances of the shot cycles: the tip extrema and
 #: periods to ~1e-9, far below the differences the cases measure (>= 1e-8).
 RTOL, TOL = 1e-9, 1e-8
@@ -54,10 +41,8 @@ def planar_model(elements: int, alpha: float, v: float = 0.0) -> PipeModel:
 
 
 def onset(elements: int, alpha: float, v_max: float = 7.0) -> Onset:
-    """The normal form of the first out-of-plane Hopf point on P3:``elements``.
-
-    The out-of-plane model's v_cr (:func:`find_critical_velocity`) starts the secant on
-    the 3-D Jacobian; the sagged static state there starts Newton.
+    """The normal form of the first out-of-plane Hopf point on P3:``elements``, started from the
+    out-of-plane v_cr and the sagged state there.
     """
     pm = planar_model(elements, alpha)
     vo = find_critical_velocity(pm, v_max=v_max, planes=PLANES).out_of_plane.v_cr
@@ -90,11 +75,8 @@ def _project3(src, U: np.ndarray, dst) -> np.ndarray:
 def space_cycles(
     elements: list[int], alpha: float, v: float, rtol: float = RTOL
 ) -> dict[int, LimitCycle]:
-    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine (integration
-    tolerance ``rtol``, Newton's 10 ``rtol``).
-
-    The first is shot from the normal form's prediction on its own mesh, each next
-    from the previous one projected (a few Newton iterations).
+    """The non-planar cycle at (alpha, v) on each P3 mesh, coarse to fine: the first from the
+    normal form, each next from the previous one projected (Newton to 10 ``rtol``).
     """
     out: dict[int, LimitCycle] = {}
     prev = None
@@ -119,8 +101,7 @@ def space_cycles(
 def planar_cycles(
     elements: list[int], alpha: float, v: float, rtol: float = RTOL
 ) -> dict[int, LimitCycle]:
-    """The planar cycle of Eq. (20) at (alpha, v) on each P3 mesh, as :func:`space_cycles`
-    (the first from the transient, :func:`find_attractor`)."""
+    """The planar cycle at (alpha, v) on each P3 mesh, as :func:`space_cycles` (first by integration)."""
     out: dict[int, LimitCycle] = {}
     prev = None
     for ne in elements:

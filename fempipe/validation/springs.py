@@ -1,20 +1,10 @@
 """Springs: Chen's spring-supported cantilever and a spring inside the hanging pipe.
 
-A linear spring kappa = k L^3/EI tying the point xi_s to its undeformed
-position (fempipe's ``springs``).  At the tip of the gravity-free pipe
-(Chen 1971a, Paidoussis 1998 p. 158) a soft spring delays flutter and a stiff
-one brings divergence instead, at the root of u^3 + kappa (sin u - u cos u)
-= 0 (Eq. (3.119)), whatever beta.  This case computes v_cr(kappa) with fempipe
-(FE P3:16) and with the classical theory of
-:mod:`fempipe.validation.classical`, checks that they agree to 1e-6 and that
-fempipe's divergence velocity is the root of Eq. (3.119), and checks Fig.
-3.62's picture (flutter at small kappa, divergence at large kappa) at two
-mass ratios.
-
-A spring inside the paper's hanging pipe (Sugiyama et al. 1985a) makes
-eta''' jump: fempipe against the classical theory again (springs on mesh
-nodes), and a table of how Paidoussis' beam-mode Galerkin method converges
-there (as N^-3: the beam functions are smooth across the spring).
+A spring kappa at the tip of the gravity-free pipe (Chen 1971a; Paidoussis 1998 p. 158)
+delays flutter and, stiff, brings divergence at the root of Eq. (3.119): v_cr(kappa) by
+fempipe (FE P3:16) and the classical theory (to 1e-6), and Fig. 3.62's picture at two beta.
+A spring inside the paper's hanging pipe (Sugiyama et al. 1985a): fempipe against the
+classical theory, and how the beam-mode Galerkin method converges there (N^-3).
 """
 
 from __future__ import annotations
@@ -29,19 +19,11 @@ from fempipe.model.params import Params
 from . import classical
 from .case import Case, References
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import measure
 from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
 
-CASE = Case(
-    name="springs",
-    figure="Païdoussis (1998) Eq. (3.119), Fig. 3.62",
-    title="Springs: the spring-supported cantilever (Chen) and a spring inside the hanging pipe",
-    paper_shows=(
-        "with a spring at the free end, flutter for small K and divergence for larger K "
-        "(Païdoussis 1998, Fig. 3.62, Chen 1971a)",
-    ),
-    not_checked=("Fig. 3.62's curves and Fig. 3.64's experiments: no number is printed",),
-)
+CASE = Case.load("springs")
 
 
 def _tip(base: dict, kappa: float) -> Params:
@@ -232,8 +214,6 @@ def _curve(ax, points: dict, color: str, xfloor: float | None = None):
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(κ) with a tip spring, (b) v_cr(κ) with a spring inside the hanging pipe."""
     from matplotlib.lines import Line2D
-
-    from .drawing import figure_panels, finish_figure
 
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)

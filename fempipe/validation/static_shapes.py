@@ -1,10 +1,7 @@
 """Static states on one branch for the figure cases of Section 3 (Figs. 2-4).
 
-Every discretization follows the same branch: the gravity-sagged state is
-reached by continuation in gamma from the straight pipe at gamma = 0 (where
-theta = 0 is exact), then followed in v.  Starting Newton from theta = 0 at
-the target gamma instead may land on another equilibrium for a nearly upright
-pipe (alpha = 9 pi / 10), which is why the path matters.
+Every discretization reaches the sagged state by continuation in gamma from the straight
+pipe, then follows it in v (Newton from theta = 0 may land elsewhere near alpha = 9 pi/10).
 """
 
 from __future__ import annotations
@@ -14,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fempipe.analyses.stability import linearly_stable
 from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import Modal, parse_discretization
 from fempipe.model.kinematics import shape, tip_values
@@ -23,20 +21,6 @@ from fempipe.model.params import PAPER_CASE, Params
 from .bvp import solve_static_bvp
 from .checks import Table
 from .evaluate import Measured, measure
-
-__all__ = [
-    "CONVERGED_FE",
-    "PAPER_MODES",
-    "Panel",
-    "StaticShapes",
-    "discretizations",
-    "panel_checks",
-    "panel_table",
-    "refined",
-    "shape_distance",
-    "static_panel",
-    "static_shapes",
-]
 
 #: The FE discretization whose static tip values are converged to < 1e-8
 #: (each case checks this against a 2x refined mesh).
@@ -55,18 +39,8 @@ def discretizations(extra_modes: Sequence[int] = ()) -> dict[str, object]:
 
 @dataclass(frozen=True)
 class StaticShapes:
-    """Static states at several v on one branch, one discretization.
-
-    Attributes
-    ----------
-    v : ndarray, shape (k,)
-    q : list of ndarray
-    tips : dict of ndarray, shape (k,)
-        theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
-    X_g, Z_g, theta : ndarray, shape (k, m)
-        Centerlines on the common grid ``xi`` (m points).
-    xi : ndarray, shape (m,)
-    newton_iterations : ndarray, shape (k,)
+    """Static states at several ``v`` on one branch: ``q``, ``tips`` (theta_tip, varsigma_tip,
+    eta_tip, X_tip, Z_tip), centerlines ``X_g``, ``Z_g``, ``theta`` on the grid ``xi``.
     """
 
     name: str
@@ -82,12 +56,7 @@ class StaticShapes:
 
 
 def _common_grid(disc, q, alpha, xi):
-    """Centerline on a common grid: densely sampled shape, then interpolated.
-
-    16 samples per quadrature cell make the linear interpolation error
-    ~ (h/16)^2 / 8 * curvature < 1e-5 for the figures; precise comparisons use
-    tip values, which are exact Gauss integrals.
-    """
+    """Centerline sampled 16 points per cell and interpolated to ``xi`` (error < 1e-5)."""
     s = shape(disc, q, alpha, points_per_cell=16)
     return (
         np.interp(xi, s.xi, s.X_g),
@@ -109,17 +78,8 @@ def static_shapes(
 ) -> StaticShapes:
     """Static states at ``v_values`` (ascending from >= 0) on the sagged branch.
 
-    Parameters
-    ----------
-    disc : FiniteElement or Modal
-    alpha, gamma, beta, mu : float
-        Inclination and the dimensionless groups of Eq. (19) (default: the
-        paper's reference case, :data:`fempipe.model.params.PAPER_CASE`).
-    v_values : sequence of float
-    n_gamma_steps : int
-        Newton steps of the continuation in gamma from 0 at v = 0.
-    n_points : int
-        Points of the common xi grid for the centerlines.
+    ``beta``, ``mu`` default to the paper's case; ``n_gamma_steps``: continuation steps in gamma;
+    ``n_points``: points of the common xi grid.
     """
     v_values = np.asarray(v_values, dtype=float)
     if np.any(np.diff(v_values) < 0) or np.any(v_values < 0):
@@ -163,23 +123,15 @@ def shape_distance(a: StaticShapes, b: StaticShapes) -> np.ndarray:
 
 
 def refined(disc):
-    """The 2x refined copy of a discretization: every element split in two, or twice
-    the modes of the same modal basis."""
+    """The 2x refined discretization (elements split, or twice the modes)."""
     return disc.refined(2)
 
 
 @dataclass(frozen=True)
 class Panel:
-    """One panel of a static figure: the shapes of every discretization.
-
-    ``fams`` maps labels (``"FE P3:16"``, ``"N = 3"``, ...) to
-    :class:`StaticShapes`; ``mesh_error`` is the largest tip-position change
-    under 2x refinement of the FE mesh; ``bvp_error`` the largest tip-position
-    difference from the independent collocation solver; ``modal_error`` maps
-    the modal labels to the largest centerline distance from the FE result;
-    ``stable`` the linear stability of each FE state
-    (:func:`fempipe.analyses.stability.linearly_stable`, Eq. (32)), so that a figure
-    can draw an unstable equilibrium differently.
+    """One panel of a static figure: ``fams`` by label, ``mesh_error`` (tip change under 2x
+    refinement), ``bvp_error`` (tip against the collocation solver), ``modal_error`` (largest
+    centerline distance from FE by label), ``stable`` (each FE state's linear stability).
     """
 
     title: str
@@ -204,12 +156,8 @@ def static_panel(
     extra_modes: Sequence[int] = (),
     max_doublings: int = 3,
 ) -> Panel:
-    """Shapes by converged FE and modal N, plus the mesh and BVP cross-checks.
-
-    The FE mesh starts at :data:`CONVERGED_FE` and is doubled (at most
-    ``max_doublings`` times) until the tip positions change by less than 1e-9;
-    the panel keeps the last mesh and its change under doubling as
-    ``mesh_error``.
+    """Shapes by FE (refined from :data:`CONVERGED_FE` until the tips change by < 1e-9, at most
+    ``max_doublings`` times) and modal N, with the mesh and BVP cross-checks.
     """
     discs = discretizations(extra_modes)
     fams = {
@@ -249,7 +197,6 @@ def static_panel(
 
 def _stability(disc, fam: StaticShapes) -> tuple[bool, ...]:
     """Linear stability of each state of a family (the criterion of ``fempipe critical``)."""
-    from fempipe.analyses.stability import linearly_stable
 
     model = PipeModel(disc, fam.params)
     return tuple(
@@ -259,8 +206,7 @@ def _stability(disc, fam: StaticShapes) -> tuple[bool, ...]:
 
 
 def panel_checks(panels: Sequence[Panel]) -> list[Measured]:
-    """The standard measurements of a static figure: ``fe_mesh_converged``, ``fe_vs_bvp``,
-    ``modal_3_shape`` and ``modal_4_shape`` (on the worst panel)."""
+    """``fe_mesh_converged``, ``fe_vs_bvp``, ``modal_3_shape``, ``modal_4_shape`` (worst panel)."""
     worst = {n: max(panels, key=lambda p, n=n: p.modal_error[f"N = {n}"]) for n in PAPER_MODES}
     meshes = sorted({next(iter(p.fams))[3:] for p in panels})
     return [

@@ -1,11 +1,6 @@
-"""Run the validation cases (in parallel) and collect their results.
-
-:func:`run_suite` runs each case of :data:`fempipe.validation.CASES` in its
-own worker process (:func:`fempipe.core.parallel.run_tasks`), draws its figure
-there (matplotlib, Agg backend) and returns a :class:`SuiteResult`;
-:func:`fempipe.validation.report.write_report` turns that into the Markdown
-report.  A case that raises (an import error included) is recorded with its
-error and the suite goes on: what finished is kept.
+"""Run the validation cases (in parallel, :func:`fempipe.core.parallel.run_tasks`), draw their
+figures (Agg) and collect a :class:`SuiteResult`; a case that raises is recorded with its
+error and the suite goes on.  The report: :mod:`fempipe.validation.report`.
 """
 
 from __future__ import annotations
@@ -21,8 +16,10 @@ from pathlib import Path
 
 from fempipe.core.parallel import run_tasks
 
+from ..core.version import __version__
+from ..io import write_figure
 from . import CASES, load_case
-from .checks import CaseResult
+from .checks import CaseResult, merge_results
 
 __all__ = ["CaseOutcome", "SuiteResult", "run_case", "run_suite"]
 
@@ -79,12 +76,8 @@ def _format(exc: BaseException) -> str:
 
 @dataclass(frozen=True)
 class CaseOutcome:
-    """One case of a suite run: its result, or why there is none.
-
-    ``status`` is ``"ok"`` (ran; see ``result``) or ``"error"`` (raised,
-    an import error included; ``error`` holds the traceback).  ``figure`` is
-    the PNG file name, if drawn; ``figures`` every PNG of the case (a case
-    that reproduces several of the paper's figures draws one file each).
+    """One case of a run: ``status`` ``"ok"`` (see ``result``) or ``"error"`` (``error``: the
+    traceback); ``figures`` its PNG files, ``figure`` the first.
     """
 
     name: str
@@ -153,18 +146,11 @@ class SuiteResult:
 
 
 def _draw(name: str, module, result: CaseResult, out) -> tuple[str, ...]:
-    """Draw a case's figures into ``out``; return the file names.
-
-    One file ``<name>.png`` from ``module.plot``, or, for a case that
-    defines ``plots`` (several of the paper's figures), one file per figure
-    it returns.
-    """
+    """Draw a case's figures (``module.plots`` or ``module.plot``) into ``out``; their file names."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..io import write_figure
 
     plots = getattr(module, "plots", None)
     figs = plots(result) if plots is not None else {name: module.plot(result)}
@@ -218,10 +204,7 @@ def _timed(run: Callable[..., CaseResult], quick: bool, **kwargs) -> CaseResult:
 
 
 def run_case(name: str, quick: bool = False, out: str | os.PathLike | None = None) -> CaseOutcome:
-    """Run one case; draw its figure into ``out`` (if given) as ``<name>.png``.
-
-    Never raises for a failing case: the outcome records the error.
-    """
+    """Run one case and draw its figures into ``out`` (if given); never raises."""
     t0 = time.perf_counter()
     try:
         module = load_case(name)
@@ -251,7 +234,6 @@ def _parts(name: str, quick: bool) -> list | None:
 
 def _merge_parts(name: str, quick: bool, out, pieces: list, wall: float) -> CaseOutcome:
     """Merge the parts of a split case and draw its figure here."""
-    from .checks import merge_results
 
     errors = [p for status, p in pieces if status != "ok"]
     if errors:
@@ -268,8 +250,6 @@ def _environment(workers: int) -> dict:
     import numpy
     import scipy
     import skfem
-
-    from ..core.version import __version__
 
     commit = None
     try:
@@ -315,22 +295,18 @@ def run_suite(
     Parameters
     ----------
     quick : bool
-        The quick versions (coarser sweeps; the default test suite runs them).
+        The quick versions (coarser sweeps).
     out : path, optional
-        Directory for the case figures (PNG).  Nothing is written without it.
+        Directory for the figures (PNG); nothing is written without it.
     workers : int
-        Worker processes of :func:`fempipe.core.parallel.process_pool` (1: run in
-        this process).  Cases are independent;
-        the most expensive start first.  A case that defines ``parts(quick)``
-        (Figs. 8-10: one part per alpha) is run part by part in parallel and
-        merged (:func:`fempipe.validation.checks.merge_results`) before its
-        figure is drawn in this process.
+        Worker processes (1: this process); the most expensive cases start first, a case with
+        ``parts(quick)`` runs part by part and is merged here.
     cases : sequence of str, optional
         Subset of case names (default: all).
     executor : concurrent.futures.Executor, optional
-        Use this instead of a new process pool (``workers`` is then ignored).
+        Use this instead of a new process pool.
     callback : callable, optional
-        Called with each finished :class:`CaseOutcome` (progress).
+        Called with each finished :class:`CaseOutcome`.
     """
     names = list(CASES) if cases is None else list(cases)
     for n in names:

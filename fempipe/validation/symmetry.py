@@ -1,21 +1,11 @@
 """Sec. 5, closing remark: the symmetries of Eq. (20).
 
-The paper ends Sec. 5 with "the solution for a given value of alpha is antisymmetric with the
-solution for alpha - pi, since sin(theta + alpha) = -sin(theta + alpha - pi)".  That identity
-only says that alpha -> alpha - pi flips the sign of the gravity term (gamma -> -gamma): it
-turns gravity upside down, so a pipe clamped at 3 pi / 4 (pointing obliquely up) is not the
-mirror image of one clamped at -pi / 4 (pointing obliquely down).  The symmetry Eq. (20) does
-have is (theta, alpha) -> (-theta, -alpha) (every term is odd under it), so the solution for
--alpha is minus the solution for alpha, and at alpha = 0 and pi the problem is symmetric under
-theta -> -theta (mirror buckled branches).  This case measures both on static states
-(converged FE):
-
-* ``||theta_alpha + theta_{-alpha}||``: zero to round-off (the true symmetry);
-* ``||theta_alpha + theta_{alpha - pi}||``: O(1) (the paper's claim fails);
-* at alpha = pi above the Greenhill load, the two buckled states are mirror images.
-
-The paper's conclusion that 0 <= alpha <= pi suffices is still right, by the true symmetry
-alpha -> -alpha and 2 pi periodicity, not by the one it gives.
+The paper says the solution for alpha is antisymmetric with that for alpha - pi; but
+alpha -> alpha - pi turns gravity upside down.  The true symmetry is (theta, alpha) ->
+(-theta, -alpha), with mirror buckled branches at alpha = 0, pi.  Measured on converged static
+states: ||theta_alpha + theta_{-alpha}|| (round-off), ||theta_alpha + theta_{alpha - pi}||
+(O(1): the claim fails), and the mirror buckled states at alpha = pi.  0 <= alpha <= pi still
+suffices, by the true symmetry and 2 pi periodicity.
 """
 
 from __future__ import annotations
@@ -30,19 +20,11 @@ from fempipe.model.params import Params
 
 from .case import Case, alpha_name
 from .checks import CaseResult, Table
+from .drawing import figure_panels, finish_figure
 from .evaluate import measure
 from .static_shapes import CONVERGED_FE, static_shapes
 
-CASE = Case(
-    name="symmetry",
-    figure="Sec. 5 (end)",
-    title="Symmetries: α → −α is a mirror symmetry; α → α − π is not",
-    paper_shows=(
-        "the solution for α is antisymmetric with the solution for α − π (Sec. 5, end)",
-        "at α = 0 or π the problem is symmetric; the buckled branches at α = π come in mirror "
-        "pairs",
-    ),
-)
+CASE = Case.load("symmetry")
 
 
 def _l2(disc, q) -> float:
@@ -131,13 +113,9 @@ def run(quick: bool = False) -> CaseResult:
 
 def plot(result: CaseResult, fig=None):
     """Left: α and −α (mirror images); middle: the paper's pairs α, α − π; right: α = π buckled."""
-    from .drawing import new_figure
 
     d = result.data
-    if fig is None:
-        fig, axes = new_figure(3, ncols=3)
-    else:
-        axes = list(fig.subplots(1, 3, squeeze=False).ravel())
+    fig, axes = figure_panels(fig, 3, ncols=3)
     sh = d["shapes"]
     a = alpha_name(d["mirror"])
     groups = [
@@ -161,7 +139,6 @@ def plot(result: CaseResult, fig=None):
         ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
         ax.legend(fontsize=9)
         ax.grid(alpha=0.3)
-    from .drawing import finish_figure
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

@@ -1,21 +1,9 @@
 """What the four variant cases share: fempipe's v_cr, the classical one, their agreement.
 
-The cases ``end_mass``, ``external_damping``, ``hysteretic`` and ``springs`` each compare
-fempipe's critical flow velocity of a straight pipe (hanging, standing or gravity-free: the
-static state is the undeformed pipe) with the classical linear theory of
-:mod:`fempipe.validation.classical`, which solves another equation (the lateral displacement
-eta, not the rotation theta) by another method (spectral elements in eta).  Both are
-converged far below the agreement asked for:
-
-* fempipe's FE P3:16 (the suite's converged mesh): its v_cr of the paper's hanging pipe
-  equals P3:64 to 3e-10, and the variant terms converge at the element order (a spring inside
-  an element lowers the order to 3, so the cases put springs on nodes);
-* the classical solver on Legendre elements of degree p + 2 = 18: p = 16 and p = 32 agree to
-  1e-9 (checked in each case).
-
-Their difference must be below the ``agreement`` of each case's reference file, 1e-6, which
-leaves two orders for the v_cr tolerances of the two critical-velocity searches (fempipe's
-crossing to about 1e-8, the classical Brent to 1e-12).
+``end_mass``, ``external_damping``, ``hysteretic`` and ``springs`` compare fempipe's v_cr of
+a straight pipe (FE P3:16, equal to P3:64 to 3e-10) with the classical theory of
+:mod:`fempipe.validation.classical` (Legendre p = 16, equal to p = 32 to 1e-9); their
+difference must be below 1e-6.
 """
 
 from __future__ import annotations
@@ -76,8 +64,7 @@ def agreement(spec: str, fe: FeOnset, cl: classical.Onset, **fields) -> Measured
 
 
 def converged(params: Params, v_max: float, step: float | None = None, **fields) -> Measured:
-    """``classical_converged``: the classical v_cr on p = 16 against p = 32 (spectral
-    convergence); ``step`` that of the classical search (its default if None)."""
+    """``classical_converged``: the classical v_cr on p = 16 against p = 32."""
     kw = {} if step is None else {"step": step}
     a = classical_onset(params, v_max, CLASSICAL_P, **kw).v_cr
     b = classical_onset(params, v_max, 2 * CLASSICAL_P, **kw).v_cr

@@ -1,18 +1,11 @@
 """The whirl of the hanging pipe as a steady state in a rotating frame: an independent BVP.
 
-At an axisymmetric inclination (sin alpha = 0) a *whirl* is a motion in which the pipe's
-shape turns rigidly about the clamp's axis e_1 at a rate omega.  In the frame turning with it
-the shape is steady, and the motion of the continuum (the weak form of
-:mod:`fempipe.model.space`, written here in strong form, with the objective Kelvin-Voigt
-damping, whose curvature rate in a whirl is k = -omega t') is a boundary-value problem in xi
-alone: 13 functions y = (r, t, t', G, Q) (:func:`whirl_rhs`) and omega, with a phase
-condition that fixes the rotation.  The straight pipe solves it for every omega, so v is left
-free and an amplitude is fixed instead: the tip's deflection next to the Hopf point, then the
-curvature energy, continued and adjusted until v is met (:func:`solve_whirl_bvp`,
-:class:`WhirlBVP`).  The module shares no code with fempipe's discretizations, quadrature or
-residual: scipy's collocation solver ``solve_bvp`` does the work.
-
-Derivation: docs/theory/independent.md, "The whirl of the hanging pipe in a rotating frame".
+At sin alpha = 0 a whirl turns the pipe's shape rigidly about e_1 at a rate omega; in the
+turning frame the continuum (the strong form of :mod:`fempipe.model.space`, objective
+Kelvin-Voigt damping) is a BVP in xi for 13 functions y = (r, t, t', G, Q) and omega, with a
+phase condition.  v is left free and an amplitude fixed, continued until v is met
+(:func:`solve_whirl_bvp`).  scipy's ``solve_bvp`` does the work; no fempipe code is shared.
+Derivation: docs/theory/independent.md.
 """
 
 from __future__ import annotations
@@ -30,29 +23,10 @@ E1 = np.array([1.0, 0.0, 0.0])
 
 @dataclass(frozen=True)
 class WhirlBVP:
-    """A whirl of the continuum.
-
-    Attributes
-    ----------
-    v, omega : float
-        Flow velocity and rotation rate (rad per unit tau, right-handed about e_1).
-    period : float
-        2 pi / |omega|.
-    radius : float
-        The tip's distance from the vertical, sqrt(r_2(1)^2 + r_3(1)^2).
-    tip : ndarray, shape (3,)
-        r(1) at the instant of the phase condition (r_3(1) = 0).
-    dissipation, supply : float
-        Power per unit tau: lost to the Kelvin-Voigt damping (``mu omega^2 \\int |t'|^2``),
-        to the fluid (``v sqrt(beta) |r_dot(1)|^2``) and to external damping
-        (``sigma \\int |r_dot|^2``); supplied by the follower force
-        (``-v^2 r_dot(1) . t(1)``).  In a whirl the energy is constant: they must agree
-        (to the BVP's tolerance).
-    rms_residual : float
-        Largest relative residual of the collocation (solve_bvp's ``rms_residuals``).
-    n_nodes : int
-    sol : callable
-        ``sol(xi)`` -> y (13, len(xi)): r, t, t', G, Q.
+    """A whirl of the continuum: ``v``, ``omega`` (about e_1), ``period``, tip ``radius`` from the
+    vertical, ``tip`` r(1) at the phase condition; ``dissipation`` and ``supply`` (power lost to
+    damping and the fluid, supplied by the follower force: equal in a whirl);
+    ``rms_residual``, ``n_nodes``, ``sol(xi)`` -> y (13, n).
     """
 
     v: float
@@ -93,8 +67,7 @@ def _tip_force(yb, omega, v, gamma, end_mass, alpha):
 
 
 def _solve(xi, y, p, *, fixed_v, R, prm, tol, max_nodes, energy=None):
-    """One solve_bvp: p = (omega,) with v = fixed_v, or (omega, v) with r_2(1) = R or, if
-    ``energy`` is given, with Q(0) = \\int_0^1 |t'|^2 = energy."""
+    """One solve_bvp: omega with v fixed, or (omega, v) with r_2(1) = R or Q(0) = ``energy``."""
     beta, gamma, mu, alpha, sigma, end_mass = (
         prm[k] for k in ("beta", "gamma", "mu", "alpha", "sigma", "end_mass")
     )
@@ -119,10 +92,7 @@ def _solve(xi, y, p, *, fixed_v, R, prm, tol, max_nodes, energy=None):
 
 
 def _initial_guess(xi, amplitude, v, gamma, end_mass, slope=None):
-    """A bent pipe under the axial force of the straight one, G = (v^2 - gamma (1 - xi +
-    Gamma)) e_1: with the complex lateral slope ``slope`` (t_2 + i t_3 at xi, e.g. a linear
-    whirl mode) scaled to the tip amplitude r_2(1) = amplitude, else theta = amplitude
-    sin(pi xi / 2) in the (e_1, e_2) plane."""
+    """A bent pipe under the straight pipe's axial force, shaped by ``slope`` or a sine."""
     if slope is None:
         slope = np.sin(0.5 * math.pi * xi) + 0j
     w = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(xi))])
@@ -189,23 +159,18 @@ def solve_whirl_bvp(
     Parameters
     ----------
     v : float
-        Flow velocity of the whirl wanted (above the Hopf point).
+        Flow velocity of the whirl (above the Hopf point).
     beta, gamma, mu, alpha, end_mass, sigma : float
-        The pipe's parameters (:class:`fempipe.model.params.Params`; sin alpha must be 0).
+        The pipe (sin alpha must be 0).
     hopf : (v, omega)
-        A guess of the Hopf point (flutter onset and frequency).
+        A guess of the Hopf point.
     slope : ndarray of complex, optional
-        A guess of the critical mode's slope t_2 + i t_3 on ``np.linspace(0, 1, slope.size)``
-        (e.g. the flutter eigenmode's theta): the continuation starts from it at the tip
-        amplitude ``start_radius``.  The guesses only start the continuation; the whirl does
-        not depend on them (a planar guess may lead to another solution, e.g. a whirling
-        hanging chain at v ~ 0).
+        A guess of the critical mode's t_2 + i t_3 on ``np.linspace(0, 1, slope.size)``.
     start_radius, max_step : float
-        The whirl of tip amplitude ``start_radius`` (v free) next to the Hopf point starts a
-        continuation in Q(0) = \\int |t'|^2, in steps of at most ``max_step`` (halved on
-        failure), until v passes the wanted one; then v is fixed and the amplitude freed.
+        Tip amplitude of the first whirl (v free); steps in Q(0) = int |t'|^2 (halved on
+        failure) until v is passed, then v fixed.
     tol : float
-        solve_bvp's tolerance of the final solve (the continuation uses 100 tol).
+        solve_bvp's tolerance of the final solve (100 tol on the way).
     max_nodes : int
     """
     if abs(math.sin(alpha)) > 1e-12:
