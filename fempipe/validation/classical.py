@@ -168,7 +168,7 @@ def eigenvalues(
     return lam[np.argsort(np.abs(lam))]
 
 
-def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
+def margin_of(lam: np.ndarray, lam_max: float, tol: float):
     """max Re lambda - tol max(1, |lambda|) over |lambda| < lam_max, and its eigenvalue."""
     keep = lam[np.abs(lam) < lam_max]
     score = keep.real - tol * np.maximum(1.0, np.abs(keep))
@@ -188,7 +188,7 @@ def spectral_abscissa(
     """``(margin, lam)``: max(Re lambda - tol max(1, |lambda|)) over |lambda| < ``lam_max``
     (positive: unstable) and the eigenvalue attaining it.
     """
-    return _abscissa(_Problem(pipe, discretization(method, n)).eigenvalues(v), lam_max, tol)
+    return margin_of(_Problem(pipe, discretization(method, n)).eigenvalues(v), lam_max, tol)
 
 
 @dataclass(frozen=True)
@@ -226,30 +226,30 @@ def critical_velocity(
     ``xtol`` on the margin of :func:`spectral_abscissa`; ``method``, ``n``: the discretization.
     """
     prob = _Problem(pipe, discretization(method, n))
-    label = prob.disc.label()
 
     def margin(v):
-        return _abscissa(prob.eigenvalues(v), lam_max, tol)
+        return margin_of(prob.eigenvalues(v), lam_max, tol)
 
     def abscissa(v):
-        return _abscissa(prob.eigenvalues(v), lam_max, 0.0)[0]
+        return margin_of(prob.eigenvalues(v), lam_max, 0.0)[0]
 
+    return scan_onset(margin, abscissa, v_min, v_max, step, xtol, prob.disc.label())
+
+
+def scan_onset(margin, abscissa, v_min, v_max, step, xtol, label, probe=None) -> Onset:
+    """The first v where ``probe(v)`` (default ``margin(v)[0]``) turns positive on a grid of
+    ``step``, then Brent's method to ``xtol`` on ``abscissa`` (the largest Re lambda) if it is
+    negative below (damped), else on the margin; the eigenvalue from ``margin`` just above."""
     f0, lam0 = margin(v_min)
     if f0 > 0.0:
         return Onset(v_min, lam0, "unstable at v_min", label)
-    grid = np.arange(v_min, v_max + step / 2, step)[1:]
+    probe = probe or (lambda v: margin(v)[0])
     v_prev = v_min
     rtol = 4 * np.finfo(float).eps
-    for v in grid:
-        f, _ = margin(v)
-        if f > 0.0:
-            if abscissa(v_prev) < 0.0:
-                # Damped below the onset: the exact zero of the largest real part.
-                v_cr = brentq(abscissa, v_prev, v, xtol=xtol, rtol=rtol)
-            else:
-                # Undamped (real parts zero to round-off below): the margin.
-                v_cr = brentq(lambda s: margin(s)[0], v_prev, v, xtol=xtol, rtol=rtol)
-            # The crossing eigenvalue just above the onset.
+    for v in np.arange(v_min, v_max + step / 2, step)[1:]:
+        if probe(v) > 0.0:
+            f = abscissa if abscissa(v_prev) < 0.0 else (lambda s: margin(s)[0])
+            v_cr = brentq(f, v_prev, v, xtol=xtol, rtol=rtol)
             _, lam = margin(v_cr + 2 * xtol)
             lam = complex(lam.real, abs(lam.imag))
             kind = "flutter" if abs(lam.imag) > 1e-6 * max(1.0, abs(lam)) else "divergence"

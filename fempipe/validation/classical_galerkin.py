@@ -75,8 +75,8 @@ def gauss_cells(cells: int, points: int = 8):
 _SHIFTS = (-1.0, -1.37)
 
 
-def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.ndarray:
-    """The 2n roots of det(lambda^2 M + lambda C + K) = 0, shifted: lambda = s + 1/nu.
+def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray, vectors: bool = False):
+    """The 2n roots of det(lambda^2 M + lambda C + K) = 0 (and the vectors), lambda = s + 1/nu.
 
     The companion of nu^2 K_s + nu C_s + M (K_s = K + s C + s^2 M, C_s = C + 2 s M) has a norm of
     the low modes' order, so a divergence or a coalescence keeps its accuracy however stiff the
@@ -97,8 +97,12 @@ def quadratic_eigenvalues(K: np.ndarray, C: np.ndarray, M: np.ndarray) -> np.nda
     A[:n, n:] = np.eye(n)
     A[n:, :n] = -X[:, :n]
     A[n:, n:] = -X[:, n:]
-    nu = np.linalg.eigvals(A)
-    return s + 1.0 / nu[nu != 0.0]
+    if not vectors:
+        nu = np.linalg.eigvals(A)
+        return s + 1.0 / nu[nu != 0.0]
+    nu, Z = np.linalg.eig(A)
+    keep = nu != 0.0
+    return s + 1.0 / nu[keep], Z[:n, keep]
 
 
 class BeamGalerkin:

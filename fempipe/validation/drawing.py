@@ -183,25 +183,6 @@ def _shape_legend(fig, panels) -> None:
     )
 
 
-def draw_diagram(ax, sweeps: dict, key: str, ylabel: str):
-    """Tip extrema against v: FE open circles, N = 3 '+', N = 4 'x'."""
-    marks = {"FE": ("o", 4), "N = 3": ("+", 7), "N = 4": ("x", 6)}
-    for label, pts in sweeps.items():
-        mk, ms = marks["FE" if label.startswith("FE") else label]
-        v = np.array([p.v for p in pts])
-        lo = np.array([getattr(p, key)[0] for p in pts])
-        hi = np.array([getattr(p, key)[1] for p in pts])
-        c = color_for(label)
-        mfc = "none" if mk == "o" else None
-        ax.plot(v, hi, mk, ms=ms, color=c, label=label, mfc=mfc)
-        ax.plot(v, lo, mk, ms=ms, color=c, mfc=mfc)
-    ax.set_xlabel("v")
-    ax.set_ylabel(ylabel + r" ($/L$)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=9)
-    return ax
-
-
 def _runs(stable: list) -> list[tuple[int, int, bool]]:
     """(start, stop, stable) of the runs of equal stability, sharing their boundary points."""
     out, i = [], 0

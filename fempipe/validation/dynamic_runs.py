@@ -266,7 +266,6 @@ class ContinuedDiagram:
     hopf: list
     special: list
     errors: list
-    cpu_time: float
     filled: tuple = ()
 
     def cycles_at(self, v: float, stable: bool | None = True) -> list:
@@ -329,27 +328,17 @@ FIRST_DS = 0.01
 
 @functools.lru_cache(maxsize=16)
 def _continued_cached(label: str, alpha: float, values: tuple) -> ContinuedDiagram:
-    import time
-
-    t0 = time.process_time()
     disc = _disc_from_spec(label)
     with tempfile.TemporaryDirectory(prefix="fempipe-validate-") as tmp:
         dg = compute_cycle_diagram(
             model_for(disc, alpha, values[0]), list(values), store_dir=tmp, ds=FIRST_DS
         )
-        return _continued(label, alpha, values, disc, dg, Path(tmp), t0)
+        return continued_from(label, alpha, values, disc, dg, Path(tmp))
 
 
-def continued_from(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:
-    """The :class:`ContinuedDiagram` of a ``compute_cycle_diagram`` result ``dg`` whose ``store`` is on
-    disk; ``t0``: process time at its start.
-    """
-    return _continued(label, alpha, values, disc, dg, store, t0)
-
-
-def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> ContinuedDiagram:
-    import time
-
+def continued_from(label, alpha, values, disc, dg, store: Path) -> ContinuedDiagram:
+    """The :class:`ContinuedDiagram` of a ``compute_cycle_diagram`` result ``dg`` whose
+    ``store`` is on disk."""
     pts = [_diagram_point(d) for d in dg.points]
     branches: dict = {}
     for p in pts:
@@ -407,7 +396,6 @@ def _continued(label, alpha, values, disc, dg, store: Path, t0: float) -> Contin
         hopf=list(dg.hopf_points),
         special=list(dg.special_points),
         errors=list(dg.errors),
-        cpu_time=time.process_time() - t0,
         filled=tuple(filled),
     )
 
@@ -417,11 +405,6 @@ def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:
     branch born at its Hopf points, landed on each requested v (cached).
     """
     return _continued_cached(label, float(alpha), tuple(sorted(float(v) for v in values)))
-
-
-def checked_attractor(label: str, alpha: float, v: float):
-    """The attractor reached by integration (:func:`attractor`)."""
-    return attractor(label, alpha, v)
 
 
 def sweep_check(diag: ContinuedDiagram, vs) -> dict:
@@ -440,7 +423,7 @@ def sweep_check(diag: ContinuedDiagram, vs) -> dict:
         "attractors": {},
     }
     for v in vs:
-        att = checked_attractor(diag.label, diag.alpha, v)
+        att = attractor(diag.label, diag.alpha, v)
         out["attractors"][float(v)] = att
         if att.kind == "periodic":
             best = None

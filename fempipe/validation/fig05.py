@@ -31,9 +31,7 @@ CASE = Case.load("fig05")
 
 
 def _changes_stability(e) -> bool:
-    """The event changes whether the state is stable (one mode crossing while another keeps the
-    state unstable does not).
-    """
+    """Whether the event changes the state's stability (not one mode's while another is unstable)."""
     return e.at_start or e.stable_before != e.stable_after
 
 

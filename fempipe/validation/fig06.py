@@ -72,16 +72,8 @@ def run(quick: bool = False) -> CaseResult:
         tables=_tables(alphas, betas, gammas, cv),
         data={
             "alphas": alphas,
-            "by_beta": {b: _v_cr(c) for b, c in cv.by_beta.items()},
-            "by_gamma": {g: _v_cr(c) for g, c in cv.by_gamma.items()},
-            "modal": {k: _v_cr(c) for k, c in cv.modal.items()},
-            "kind_by_beta": {b: [o.kind for o in c] for b, c in cv.by_beta.items()},
-            "kind_by_gamma": {g: [o.kind for o in c] for g, c in cv.by_gamma.items()},
-            "out_by_beta": {b: _v_cr(c) for b, c in cv.out_beta.items()},
-            "out_by_gamma": {g: _v_cr(c) for g, c in cv.out_gamma.items()},
+            "curves": cv,
             "headline": _headline(alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma),
-            "out_kind_by_beta": {b: [o.kind for o in c] for b, c in cv.out_beta.items()},
-            "out_kind_by_gamma": {g: [o.kind for o in c] for g, c in cv.out_gamma.items()},
         },
         requires=requires,
     )
@@ -320,36 +312,21 @@ CURVE_COLORS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9"
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) for each β, (b) for each γ; N = 3 dashed and N = 4 dotted on the reference."""
 
-    d = result.data
+    cv = result.data["curves"]
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.5)
-    a = d["alphas"] / np.pi
-    for ax, fam, kinds, sym, fixed, outs, out_kinds in (
-        (
-            axes[0],
-            d["by_beta"],
-            d.get("kind_by_beta", {}),
-            "β",
-            f"γ = {BASE_GAMMA:g}",
-            d.get("out_by_beta", {}),
-            d.get("out_kind_by_beta", {}),
-        ),
-        (
-            axes[1],
-            d["by_gamma"],
-            d.get("kind_by_gamma", {}),
-            "γ",
-            f"β = {BASE_BETA:g}",
-            d.get("out_by_gamma", {}),
-            d.get("out_kind_by_gamma", {}),
-        ),
-    ):
+    a = result.data["alphas"] / np.pi
+    panels = (
+        (axes[0], cv.by_beta, cv.out_beta, "β", f"γ = {BASE_GAMMA:g}", BASE_BETA),
+        (axes[1], cv.by_gamma, cv.out_gamma, "γ", f"β = {BASE_BETA:g}", BASE_GAMMA),
+    )
+    for ax, fam, outs, sym, fixed, ref in panels:
         folds = False
-        for k, (val, v) in enumerate(fam.items()):
-            v = np.asarray(v, dtype=float)
+        for k, (val, onsets) in enumerate(fam.items()):
+            v = _v_cr(onsets)
             # The reference case has the same color in both panels.
-            is_ref = val == (BASE_BETA if sym == "β" else BASE_GAMMA)
+            is_ref = val == ref
             color = "k" if is_ref else CURVE_COLORS[k % len(CURVE_COLORS)]
-            flutter = np.array([kd == "flutter" for kd in kinds.get(val, ["flutter"] * len(v))])
+            flutter = np.array([o.kind == "flutter" for o in onsets])
             # A first instability that is not flutter (a fold) is not on the flutter curve.
             ax.plot(
                 a,
@@ -361,16 +338,15 @@ def plot(result: CaseResult, fig=None):
                 label=f"{sym} = {val:g}" + (" (reference)" if is_ref else ""),
             )
             if val in outs:
-                vo = np.asarray(outs[val], dtype=float)
-                fo = np.array([kd == "flutter" for kd in out_kinds.get(val, ["flutter"] * len(vo))])
-                ax.plot(a, np.where(fo, vo, np.nan), "^-.", ms=4, mfc="none", lw=0.9, color=color)
+                fo = np.array([o.kind == "flutter" for o in outs[val]])
+                vo = np.where(fo, _v_cr(outs[val]), np.nan)
+                ax.plot(a, vo, "^-.", ms=4, mfc="none", lw=0.9, color=color)
             if not flutter.all():
                 folds = True
                 ax.plot(a[~flutter], v[~flutter], "D", ms=7, mfc="none", mew=1.5, color=color)
         for n, ls in ((3, "--"), (4, ":")):
-            ax.plot(
-                a, d["modal"][f"N = {n}"], ls, color="0.45", lw=1.2, label=f"N = {n} (reference)"
-            )
+            v = _v_cr(cv.modal[f"N = {n}"])
+            ax.plot(a, v, ls, color="0.45", lw=1.2, label=f"N = {n} (reference)")
         if folds:
             ax.plot([], [], "D", ms=7, mfc="none", mew=1.5, color="0.3", label="fold, not flutter")
         if outs:

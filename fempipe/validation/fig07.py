@@ -227,9 +227,7 @@ def _paper_checks(
 
 
 def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], tuple]:
-    """The out-of-plane multiplier at v = 10 on P3:16 against the FE one and the 3-D model's;
-    the measurements and the P3:16 row of the verdict table.
-    """
+    """The out-of-plane multiplier at v = 10 on P3:16 against FE and the 3-D model; its table row."""
 
     fine = attractor("FE P3:16", alpha, 10.0)
     fine_model = model_for(fe_disc("FE P3:16"), alpha, 10.0)

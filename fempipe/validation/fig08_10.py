@@ -331,9 +331,7 @@ def _straight_flutter(disc) -> float:
 
 
 def _pi_cross_checks(disc, pts, diag) -> list[Measured]:
-    """alpha = pi: the sweep's jumps (fold of the buckled branch, flutter of the straight pipe)
-    against the stability analysis; a missing jump emits no check (then failed as not computed).
-    """
+    """alpha = pi: the sweep's jumps (fold, flutter) against the stability analysis."""
     m = PipeModel(disc, Params(alpha=np.pi, **PAPER_CASE))
     res = analyse_stability(m, v_max=6.0, follow_bifurcations=True)
     flutter = first_flutter(res)  # destabilizes the restabilized straight pipe

@@ -165,9 +165,7 @@ def _issid_checks() -> list:
 
 
 def _finding(pipe: dict, mu_h: float, bad: list, cl, fe, v_max: float, exp: dict) -> str:
-    """One finding for a row's printed numbers not reproduced, with the beam-mode Galerkin values
-    on 2 to 10 modes and a note when the printed theory equals the experiment ``exp``.
-    """
+    """One finding on a row's printed numbers, with beam-mode Galerkin values on 2 to 10 modes."""
 
     pipe_c = cm.StraightPipe.from_params(_params(pipe, mu_h))
     trunc = {

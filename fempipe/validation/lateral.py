@@ -16,13 +16,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg as sla
 from numpy.polynomial import legendre as leg
-from scipy.optimize import brentq
 
 from fempipe.core.parallel import single_blas
 
 from .bvp import BVPSolution, solve_static_bvp
-from .classical import Onset
-from .classical_galerkin import legendre_local_basis
+from .classical import Onset, margin_of, scan_onset
+from .classical_galerkin import legendre_local_basis, quadratic_eigenvalues
 
 #: Only eigenvalues with |lambda| below this decide stability (the lowest
 #: eight modes or so), as in :mod:`fempipe.validation.classical`.
@@ -265,35 +264,10 @@ def eigen(K, C, M, bending=None, vectors: bool = False):
     _, Q = sla.eigh(Kb * np.outer(d, d), M * np.outer(d, d))
     Q = d[:, None] * Q
     Kq, Cq, Mq = (Q.T @ A @ Q for A in (K, C, M))
-    n = M.shape[0]
-    for s in (-1.0, -1.37):
-        Ks = Kq + s * Cq + s * s * Mq
-        try:
-            X = np.linalg.solve(Ks, np.hstack([Mq, Cq + 2.0 * s * Mq]))
-        except np.linalg.LinAlgError:
-            continue
-        if np.all(np.isfinite(X)):
-            break
-    else:  # pragma: no cover - both shifts eigenvalues
-        raise np.linalg.LinAlgError("the quadratic pencil is singular at both shifts")
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -X[:, :n]
-    A[n:, n:] = -X[:, n:]
     if not vectors:
-        nu = np.linalg.eigvals(A)
-        return s + 1.0 / nu[nu != 0.0]
-    nu, Z = np.linalg.eig(A)
-    keep = nu != 0.0
-    return s + 1.0 / nu[keep], Q @ Z[:n, keep]
-
-
-def _abscissa(lam: np.ndarray, lam_max: float, tol: float):
-    """max Re lambda - tol max(1, |lambda|) over |lambda| < lam_max, and its eigenvalue."""
-    keep = lam[np.abs(lam) < lam_max]
-    score = keep.real - tol * np.maximum(1.0, np.abs(keep))
-    i = int(np.argmax(score))
-    return float(score[i]), complex(keep[i])
+        return quadratic_eigenvalues(Kq, Cq, Mq)
+    lam, Z = quadratic_eigenvalues(Kq, Cq, Mq, vectors=True)
+    return lam, Q @ Z
 
 
 class LateralProblem:
@@ -355,25 +329,14 @@ def critical_velocity(
     """
     disc = HermiteSpectral() if disc is None else disc
     prob = LateralProblem(params, disc, start)
-    label = disc.label()
 
     def margin(v, t=tol, bvp_tol=BVP_TOL):
-        return _abscissa(prob.eigenvalues(v, tol=bvp_tol), lam_max, t)
+        return margin_of(prob.eigenvalues(v, tol=bvp_tol), lam_max, t)
 
-    f0, lam0 = margin(v_min)
-    if f0 > 0.0:
-        return Onset(v_min, lam0, "unstable at v_min", label)
-    v_prev = v_min
-    rtol = 4 * np.finfo(float).eps
-    for v in np.arange(v_min, v_max + step / 2, step)[1:]:
-        if margin(v, bvp_tol=SCAN_TOL)[0] > 0.0:
-            if margin(v_prev, 0.0)[0] < 0.0:
-                v_cr = brentq(lambda s: margin(s, 0.0)[0], v_prev, v, xtol=xtol, rtol=rtol)
-            else:  # undamped below: the margin
-                v_cr = brentq(lambda s: margin(s)[0], v_prev, v, xtol=xtol, rtol=rtol)
-            _, lam = margin(v_cr + 2 * xtol)
-            lam = complex(lam.real, abs(lam.imag))
-            kind = "flutter" if abs(lam.imag) > 1e-6 * max(1.0, abs(lam)) else "divergence"
-            return Onset(float(v_cr), lam, kind, label)
-        v_prev = float(v)
-    return Onset(float("nan"), complex("nan"), "stable", label)
+    def abscissa(v):
+        return margin(v, 0.0)[0]
+
+    def probe(v):
+        return margin(v, bvp_tol=SCAN_TOL)[0]
+
+    return scan_onset(margin, abscissa, v_min, v_max, step, xtol, disc.label(), probe)

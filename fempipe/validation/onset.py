@@ -24,12 +24,8 @@ from .static_shapes import static_shapes
 __all__ = ["Onset", "critical_velocity", "spectrum"]
 
 
-#: Newton iterations per static step of :class:`_Branch`.  From the state one
-#: step away Newton converges in 3 to 5 iterations (quadratically); beyond a
-#: fold it cannot converge, and the fold is located by many such attempts
-#: (bisection to 1e-6, each halving its step down to 1e-7): the library's 40
-#: iterations, each with a line search, made those failures 80 % of the
-#: time of Fig. 6 (measured, alpha = 11 pi/12, gamma = 30).
+#: Newton iterations per static step of :class:`_Branch`: one step away Newton converges in
+#: 3 to 5; beyond a fold it cannot, and failing fast keeps the fold's bisection cheap.
 NEWTON_ITERATIONS = 12
 
 
@@ -118,6 +114,11 @@ def critical_velocity(
         count += 1
         return float(spectrum(br.model(v), br.state(v), plane)[0].real)
 
+    def onset(lo: float, hi: float) -> Onset:
+        v_cr = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
+        freq = abs(spectrum(br.model(v_cr), br.state(v_cr), plane)[0].imag)
+        return Onset(float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count)
+
     g_prev, v_prev = growth(0.0), 0.0
     if g_prev > 0:
         return Onset(0.0, float("nan"), "unstable at rest", count)
@@ -139,19 +140,9 @@ def critical_velocity(
                     hi = mid
             else:
                 return Onset(float(lo), 0.0, "fold", count)
-            v_cr = brentq(growth, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps)
-            lam = spectrum(br.model(v_cr), br.state(v_cr), plane)[0]
-            freq = abs(lam.imag)
-            return Onset(
-                float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
-            )
+            return onset(lo, hi)
         if g > 0:
-            v_cr = brentq(growth, v_prev, v, xtol=xtol, rtol=4 * np.finfo(float).eps)
-            lam = spectrum(br.model(v_cr), br.state(v_cr), plane)[0]
-            freq = abs(lam.imag)
-            return Onset(
-                float(v_cr), float(freq), "flutter" if freq > 1e-6 else "divergence", count
-            )
+            return onset(v_prev, v)
         v_prev = v
         v += dv
     return Onset(float("nan"), float("nan"), "stable", count)

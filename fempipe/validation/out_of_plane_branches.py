@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 import json
 import tempfile
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,14 +38,13 @@ class OutOfPlaneBranches:
     ``checked``: dicts of the orbits with a verdict (``branch``, ``v``, ``stable`` in the plane,
     ``max_multiplier``, ``max_oop``, ``stable_3d``, tip extrema, ``planar_block``, ``neutral``,
     ``multipliers``); ``changes``: where the verdict changes (``branch``, ``bracket``,
-    ``direction`` loses/regains, located ``v`` or None); ``cpu_time`` in s.
+    ``direction`` loses/regains, located ``v`` or None).
     """
 
     label: str
     alpha: float
     checked: list
     changes: list
-    cpu_time: float
 
     def at(self, v: float) -> dict | None:
         """The checked orbit at ``v`` that is stable in the plane (the paper's cycle)."""
@@ -100,7 +98,6 @@ def fe_disc(label: str):
 
 @functools.lru_cache(maxsize=8)
 def _cached(label: str, alpha: float, values: tuple, quick: bool):
-    t0 = time.process_time()
     disc = fe_disc(label)
     select = AtVelocities((10.0,)) if quick else Spread(N_FULL, (10.0,))
     model = model_for(disc, alpha, values[0])
@@ -108,8 +105,7 @@ def _cached(label: str, alpha: float, values: tuple, quick: bool):
         dg = compute_cycle_diagram(
             model, list(values), store_dir=tmp, ds=FIRST_DS, out_of_plane=select
         )
-        diag = continued_from(label, alpha, values, disc, dg, Path(tmp), t0)
-        t1 = time.process_time()
+        diag = continued_from(label, alpha, values, disc, dg, Path(tmp))
         checked = [
             _summary(d)
             for d in dg.points
@@ -123,8 +119,7 @@ def _cached(label: str, alpha: float, values: tuple, quick: bool):
             changes += _changes(
                 model, name, states, [p for p in checked if p["branch"] == name], locate=not quick
             )
-    cpu = sum(p["cpu_time"] for p in checked) + (time.process_time() - t1)
-    return diag, OutOfPlaneBranches(label, alpha, checked, changes, cpu)
+    return diag, OutOfPlaneBranches(label, alpha, checked, changes)
 
 
 def _summary(d: dict) -> dict:
@@ -143,7 +138,6 @@ def _summary(d: dict) -> dict:
         "planar_block": d["planar_block_max_multiplier"],
         "neutral": None if neutral is None else complex(*neutral),
         "multipliers": [complex(*z) for z in d["out_of_plane_floquet_multipliers"]],
-        "cpu_time": d["out_of_plane_cpu_time"],
     }
 
 

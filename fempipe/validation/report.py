@@ -324,9 +324,7 @@ def _case_lines(
     outside: set[int],
     checks_level: int,
 ) -> list[str]:
-    """One case's section; tables ``outside`` linked; ``checks_level`` 0: checks with reasons,
-    1: without, 2: only the failed ones inline (1, 2: all in a CSV file).
-    """
+    """One case's section; ``checks_level`` 0: checks with reasons, 1: without, 2: failed only."""
     lines = ["", f'<a id="{o.name}"></a>', ""]
     r = o.result
     if r is None:
