@@ -208,16 +208,8 @@ def _paper_table(studies: Sequence[Study]) -> Table:
     rows = []
     for s in studies:
         for n, val in s.paper_modes.items():
-            rows.append(
-                (
-                    s.quantity,
-                    f"N = {n}",
-                    val,
-                    s.reference,
-                    val - s.reference,
-                    abs(val - s.reference) / max(abs(s.reference), 1e-300),
-                )
-            )
+            rows.append((s.quantity, f"N = {n}", val, s.reference, val - s.reference,
+                         abs(val - s.reference) / max(abs(s.reference), 1e-300)))  # fmt: skip
     return Table(
         "Error of the paper's N = 3 and N = 4 against the converged FE answer",
         "quantity | modes | modal value | converged FE (Richardson) | error | relative error",
@@ -229,16 +221,10 @@ def _order_table(studies: Sequence[Study]) -> Table:
     rows = []
     for s in studies:
         for ser in s.series.values():
-            rows.append(
-                (
-                    s.quantity,
-                    ser.label,
-                    ser.order,
-                    "" if ser.expected is None else ser.expected,
-                    ", ".join(str(int(ser.dofs[i])) for i in ser.fit),
-                    float(np.min(ser.errors)),
-                )
-            )
+            rows.append((s.quantity, ser.label, ser.order,
+                         "" if ser.expected is None else ser.expected,
+                         ", ".join(str(int(ser.dofs[i])) for i in ser.fit),
+                         float(np.min(ser.errors))))  # fmt: skip
     return Table(
         "Observed orders (error ~ dofs^-p)",
         ("quantity", "series", "observed p", "theory p", "dofs used in fit", "smallest |error|"),

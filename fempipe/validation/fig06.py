@@ -196,17 +196,9 @@ def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Tabl
         out_rows.append(
             (_deg(a), fe_v, base[i].frequency, o.v_cr, o.frequency, (o.v_cr - fe_v) / fe_v)
         )
-        rows.append(
-            (
-                _deg(a),
-                fe_v,
-                base[i].frequency,
-                cv.modal["N = 3"][i].v_cr,
-                cv.modal["N = 3"][i].v_cr - fe_v,
-                cv.modal["N = 4"][i].v_cr,
-                cv.modal["N = 4"][i].v_cr - fe_v,
-            )
-        )
+        rows.append((_deg(a), fe_v, base[i].frequency, cv.modal["N = 3"][i].v_cr,
+                     cv.modal["N = 3"][i].v_cr - fe_v, cv.modal["N = 4"][i].v_cr,
+                     cv.modal["N = 4"][i].v_cr - fe_v))  # fmt: skip
     table = Table(
         f"v_cr for β = {BASE_BETA}, γ = {BASE_GAMMA}, μ = {MU} (converged FE and the paper's modes)",
         (

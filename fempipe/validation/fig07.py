@@ -34,7 +34,6 @@ from .evaluate import Measured, measure
 from .onset import critical_velocity
 from .out_of_plane_branches import (
     add_legend_entry,
-    caption_text,
     change_texts,
     continued_with_verdicts,
     fe_disc,
@@ -170,12 +169,9 @@ def run(quick: bool = False) -> CaseResult:
         ),
         findings=(survival_text("0", oop) + ".",),
         data={
-            "sweeps": sweeps,
             "diagrams": diags,
             "shapes": attractor_shapes(discs, alpha, shape_v, checked),
-            "alpha": alpha,
             "out_of_plane": oop,
-            "out_of_plane_caption": caption_text(quick),
         },
         requires=requires,
     )
@@ -241,17 +237,8 @@ def _oop_fine_checks(alpha: float, fe_label: str, oop) -> tuple[list[Measured], 
         [complex(*z) for z in got["out_of_plane_floquet_multipliers"]],
         None if neutral is None else complex(*neutral),
     )
-    row = (
-        "0",
-        "FE P3:16",
-        "(shot)",
-        10.0,
-        "yes" if fine.cycle.stable else "no",
-        fine.cycle.max_nontrivial_multiplier,
-        linear,
-        lead,
-        "yes" if got["stable_3d"] else "no",
-    )
+    row = ("0", "FE P3:16", "(shot)", 10.0, "yes" if fine.cycle.stable else "no",
+           fine.cycle.max_nontrivial_multiplier, linear, lead, "yes" if got["stable_3d"] else "no")  # fmt: skip
     checks = [
         measure("oop_mesh", abs(linear - mine), fe=fe_label),
         measure("oop_methods", abs(linear - full.max_nontrivial)),
@@ -266,20 +253,8 @@ def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
         lo, hi, v_lin, v_h = onsets[label]
         pts = {p.v: p for p in sweeps[label] if p is not None}
         p10 = pts[10.0]
-        rows.append(
-            (
-                label,
-                v_lin,
-                lo,
-                hi,
-                eta_amplitude(p10),
-                p10.period,
-                p10.X_tip[0],
-                p10.X_tip[1],
-                p10.max_multiplier,
-                v_h,
-            )
-        )
+        rows.append((label, v_lin, lo, hi, eta_amplitude(p10), p10.period, p10.X_tip[0],
+                     p10.X_tip[1], p10.max_multiplier, v_h))  # fmt: skip
     return Table(
         "Onset and the limit cycle at v = 10 (α = 0)",
         (

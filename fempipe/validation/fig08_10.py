@@ -288,21 +288,9 @@ def _rows(inc: _Inclination, discs: dict, onsets: dict) -> list[tuple]:
     for label in discs:
         v_lin, lo, hi, v_h = onsets[label]
         p10 = {p.v: p for p in inc.sweeps[label] if p is not None}[10.0]
-        rows.append(
-            (
-                inc.name,
-                label,
-                v_lin,
-                lo,
-                hi,
-                p10.attractor,
-                p10.period,
-                p10.X_tip[1] - p10.X_tip[0],
-                p10.Z_tip[1] - p10.Z_tip[0],
-                eta_amplitude(p10),
-                v_h,
-            )
-        )
+        rows.append((inc.name, label, v_lin, lo, hi, p10.attractor, p10.period,
+                     p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0], eta_amplitude(p10),
+                     v_h))  # fmt: skip
     return rows
 
 

@@ -147,19 +147,9 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
             if c is None:
                 continue
             t_ = traces[name][lb]
-            rows.append(
-                (
-                    name,
-                    lb,
-                    c.period,
-                    (c.period - fe.period) / fe.period,
-                    t_["X_tip"].min(),
-                    t_["X_tip"].max(),
-                    t_["Z_tip"].min(),
-                    t_["Z_tip"].max(),
-                    c.max_nontrivial_multiplier,
-                )
-            )
+            rows.append((name, lb, c.period, (c.period - fe.period) / fe.period, t_["X_tip"].min(),
+                         t_["X_tip"].max(), t_["Z_tip"].min(), t_["Z_tip"].max(),
+                         c.max_nontrivial_multiplier))  # fmt: skip
     return Table(
         "Limit cycles at v = 10",
         (

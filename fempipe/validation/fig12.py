@@ -60,16 +60,8 @@ def run(quick: bool = False) -> CaseResult:
         turns = int(np.count_nonzero(np.diff(np.sign(np.append(rate, rate[0]))) != 0))
         for lb, t_ in tr.items():
             dist = 0.0 if lb == fe_label else _loop_distance(t_, fe)
-            rows.append(
-                (
-                    name,
-                    lb,
-                    np.ptp(t_["Z_tip"]),
-                    np.ptp(t_["Z_tip_rate"]),
-                    turns if lb == fe_label else "",
-                    dist,
-                )
-            )
+            rows.append((name, lb, np.ptp(t_["Z_tip"]), np.ptp(t_["Z_tip_rate"]),
+                         turns if lb == fe_label else "", dist))  # fmt: skip
             if lb == fe_label:
                 continue
             fields = {"alpha": name, "n": lb[-1], "label": lb, "fe": fe_label}

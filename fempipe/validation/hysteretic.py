@@ -120,19 +120,9 @@ def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict, quick
             chk = CASE.check(m, quick)
             if not chk.passed:
                 failed.setdefault((k, d), []).append((chk, printed, val, ref.value(unit)))
-        rows.append(
-            (
-                f"{pipes[k]['beta'] * 1e3:.2f}",
-                pipes[k]["gamma"],
-                dampings[d],
-                printed_u,
-                cl.v_cr,
-                f.v_cr if f is not None else "—",
-                printed_w,
-                cl.frequency,
-                f.frequency if f is not None else "—",
-            )
-        )
+        rows.append((f"{pipes[k]['beta'] * 1e3:.2f}", pipes[k]["gamma"], dampings[d], printed_u,
+                     cl.v_cr, f.v_cr if f is not None else "—", printed_w, cl.frequency,
+                     f.frequency if f is not None else "—"))  # fmt: skip
     for (k, d), bad in failed.items():
         exp = {"u_cf": ref.value("u_cf_exp")[k], "omega_cf": ref.value("omega_cf_exp")[k]}
         findings.append(

@@ -30,28 +30,16 @@ CASE = Case.load("out_of_plane")
 def run(quick: bool = False) -> CaseResult:
     """(a)-(e) of the module docstring."""
     ref = CASE.references
-    checks, tables, requires = [], [], []
-    c, t = runs.identity_checks(ref)
-    checks += c
-    tables += t
-    c, t = runs.buckled_checks(ref, quick)
-    checks += c
-    tables += t
-    c, t, req, strong = agreement.agreement_checks(ref, quick)
-    checks += c
-    tables += t
-    requires += req
-    checks.append(agreement.inclined_variants_check(ref))
+    c1, t1 = runs.identity_checks(ref)
+    c2, t2 = runs.buckled_checks(ref, quick)
+    c3, t3, r3, strong = agreement.agreement_checks(ref, quick)
+    c3.append(agreement.inclined_variants_check(ref))
     key = ("paper", round(0.5 * math.pi, 12), 0.0)
-    c, t, req, order_curves = agreement.order_checks(ref, quick, strong[key].v_cr)
-    checks += c
-    tables += t
-    requires += req
+    c4, t4, r4, order_curves = agreement.order_checks(ref, quick, strong[key].v_cr)
     if not quick:
-        checks.append(agreement.classical_check(ref))
-    c, t, findings, explained, curves = agreement.finding_checks(ref, quick)
-    checks += c
-    tables += t
+        c4.append(agreement.classical_check(ref))
+    c5, t5, findings, explained, curves = agreement.finding_checks(ref, quick)
+    checks, tables, requires = c1 + c2 + c3 + c4 + c5, t1 + t2 + t3 + t4 + t5, r3 + r4
     return CASE.result(
         checks,
         quick=quick,

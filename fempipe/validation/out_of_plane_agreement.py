@@ -83,22 +83,8 @@ def agreement_checks(ref, quick: bool):
             checks.append(
                 measure("strong_vs_fe_{quantity}_{tag}", diff, quantity=q, fe=a, strong=b, **fields)
             )
-        rows.append(
-            (
-                who,
-                alpha_name(p.alpha),
-                p.beta,
-                p.gamma,
-                p.mu,
-                s.v_cr,
-                v_fe,
-                v_fe - s.v_cr,
-                s.frequency,
-                w_fe,
-                w_fe - s.frequency,
-                s.kind,
-            )
-        )
+        rows.append((who, alpha_name(p.alpha), p.beta, p.gamma, p.mu, s.v_cr, v_fe, v_fe - s.v_cr,
+                     s.frequency, w_fe, w_fe - s.frequency, s.kind))  # fmt: skip
     # The strong form converged: the crossing eigenvalue on p and on the larger p,
     # about the same static state.
     p0 = runs[0][0]
@@ -202,20 +188,10 @@ def finding_checks(ref, quick: bool):
             vi, vo = float(ri.v_cr), float(ro.v_cr)
             curves.setdefault(mu, []).append((a, vi, vo))
             found.append((a, mu, vi, vo))
-            rows.append(
-                (
-                    mu,
-                    alpha_name(a),
-                    vi,
-                    ci.type if ci else "stable",
-                    ci.frequency if ci else math.nan,
-                    vo,
-                    co.type if co else "stable",
-                    co.frequency if co else math.nan,
-                    vo - vi,
-                    (vo - vi) / vi if vi > 0 else "—",
-                )
-            )
+            rows.append((mu, alpha_name(a), vi, ci.type if ci else "stable",
+                         ci.frequency if ci else math.nan, vo, co.type if co else "stable",
+                         co.frequency if co else math.nan, vo - vi,
+                         (vo - vi) / vi if vi > 0 else "—"))  # fmt: skip
     table = Table(
         f"(e) Critical flow velocity in and out of the plane (β = {base['beta']:g}, "
         f"γ = {base['gamma']:g}, FE {fe})",

@@ -23,7 +23,7 @@ from .checks import Table
 from .dynamic_runs import FIRST_DS, ContinuedDiagram, continued_from, model_for
 from .evaluate import measure
 
-__all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts", "caption_text"]
+__all__ = ["N_FULL", "OutOfPlaneBranches", "continued_with_verdicts"]
 
 #: Orbits per branch whose out-of-plane multipliers the full suite computes.
 N_FULL = 8
@@ -65,21 +65,6 @@ class AtVelocities:
 
     def __call__(self, points) -> list[int]:
         return [i for i, p in enumerate(points) if any(abs(p.v - w) < 1e-9 for w in self.v_keep)]
-
-
-def caption_text(quick: bool) -> str:
-    """The caption's sentence on the 3-D verdicts."""
-    which = (
-        "the orbit at v = 10"
-        if quick
-        else f"about {N_FULL} orbits spread along each branch, the last one and v = 10, "
-        "the crossing of |ρ| = 1 located by regula falsi between two of them"
-    )
-    return (
-        "Planar orbits stable in the plane but unstable in 3-D (an out-of-plane Floquet "
-        f"multiplier |ρ| > 1 on the 3-D model, FE) lie on a red band, the checked ones "
-        f"marked by red triangles; checked: {which}."
-    )
 
 
 def continued_with_verdicts(
@@ -365,19 +350,9 @@ def verdict_rows(name: str, br: OutOfPlaneBranches) -> list[tuple]:
     rows = []
     for p in sorted(br.checked, key=lambda p: (p["branch"], p["v"])):
         lead = leading_text(p["multipliers"], p["neutral"])
-        rows.append(
-            (
-                name,
-                br.label,
-                p["branch"],
-                p["v"],
-                "yes" if p["stable"] else "no",
-                p["max_multiplier"],
-                p["max_oop"],
-                lead,
-                {True: "yes", False: "no", None: "-"}[p["stable_3d"]],
-            )
-        )
+        rows.append((name, br.label, p["branch"], p["v"], "yes" if p["stable"] else "no",
+                     p["max_multiplier"], p["max_oop"], lead,
+                     {True: "yes", False: "no", None: "-"}[p["stable_3d"]]))  # fmt: skip
     return rows
 
 

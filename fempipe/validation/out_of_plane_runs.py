@@ -218,15 +218,8 @@ def _residual_orders(ref, p: Params, tip: float, quick: bool) -> tuple[list, Tab
         slopes = [
             refinement_slope(meshes[k : k + 2], res[k : k + 2]) for k in range(len(meshes) - 1)
         ]
-        rows.append(
-            (
-                deg,
-                ", ".join(map(str, meshes)),
-                ", ".join(f"{r:.3g}" for r in res),
-                ", ".join(f"{s:.2f}" for s in slopes),
-                order,
-            )
-        )
+        rows.append((deg, ", ".join(map(str, meshes)), ", ".join(f"{r:.3g}" for r in res),
+                     ", ".join(f"{s:.2f}" for s in slopes), order))  # fmt: skip
         ok = bool(np.all(np.diff(res) < 0) and abs(slopes[-1] - order) <= 0.3)
         fields = {"p": p, "meshes": meshes, "last": meshes[-1], "slopes": slopes}
         checks.append(

@@ -132,12 +132,8 @@ def run(quick: bool = False) -> CaseResult:
             else ""
         ),
     )
-    requires = [
-        f"order_{q.replace(' ', '_')}" if q in asymptotic else f"order_band_{q.replace(' ', '_')}"
-        for q in checked
-    ] + [f"order_vs_planar_{q.replace(' ', '_')}" for q in compared]
     # The checks emitted depend on monotonicity; these must always be among them.
-    requires += ["order_period", "order_vs_planar_period", "order_max_Y_tip"]
+    requires = ["order_period", "order_vs_planar_period", "order_max_Y_tip"]
     skipped = [q for q in q3 if q not in checked]
     findings = [
         f"3-D cycle, {q}: not monotone under refinement (values "

@@ -57,18 +57,8 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
             stable=stable,
         ),
     ]
-    row = (
-        tag,
-        nf.v,
-        nf.checks.v_out_of_plane,
-        nf.l1,
-        nf.uncertainty,
-        nf.omega,
-        nf.transversality,
-        c,
-        r0 - 1.0,
-        k,
-    )
+    row = (tag, nf.v, nf.checks.v_out_of_plane, nf.l1, nf.uncertainty, nf.omega, nf.transversality,
+           c, r0 - 1.0, k)  # fmt: skip
     data = {
         "tag": tag,
         "deltas": list(map(float, deltas)),

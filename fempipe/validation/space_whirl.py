@@ -96,7 +96,6 @@ def run(quick: bool = False) -> CaseResult:
             "whirls": {n: x.to_dict() for n, x in whirls},
             "tip_whirl": (d["Z_tip"], d["Y_tip"]),
             "tip_planar": tips_planar,
-            "free": {n: f for n, f in zip(free_meshes, free, strict=True)},
         },
     )
 

@@ -231,17 +231,8 @@ def panel_table(panels: Sequence[Panel], title: str) -> Table:
                     if label == next(iter(p.fams))
                     else float(np.hypot(fam.X_g[i] - fe.X_g[i], fam.Z_g[i] - fe.Z_g[i]).max())
                 )
-                rows.append(
-                    (
-                        p.title,
-                        label,
-                        v,
-                        fam.tips["X_tip"][i],
-                        fam.tips["Z_tip"][i],
-                        fam.tips["theta_tip"][i],
-                        err,
-                    )
-                )
+                rows.append((p.title, label, v, fam.tips["X_tip"][i], fam.tips["Z_tip"][i],
+                             fam.tips["theta_tip"][i], err))  # fmt: skip
     return Table(
         title,
         ("panel", "discretization", "v", "X_g(1)", "Z_g(1)", "θ(1)", "max distance to FE"),

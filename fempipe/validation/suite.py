@@ -173,23 +173,19 @@ def _kept(result: CaseResult) -> dict:
 def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcome:
     """Draw the figure (if ``out``) and wrap the result without its arrays."""
     figures: tuple[str, ...] = ()
+    error = ""
     if out is not None:
         try:
             figures = _draw(name, module, result, out)
         except Exception:
             log.exception("figure of validation case %s failed", name)
-            return CaseOutcome(
-                name,
-                "error",
-                result=replace(result, data=_kept(result)),
-                error="figure: " + traceback.format_exc(),
-                wall_time=time.perf_counter() - t0,
-            )
+            error = "figure: " + traceback.format_exc()
     # The arrays stay behind: the report needs only checks, tables, figure.
     return CaseOutcome(
         name,
-        "ok",
+        "error" if error else "ok",
         result=replace(result, data=_kept(result)),
+        error=error,
         figure=figures[0] if figures else None,
         figures=figures,
         wall_time=time.perf_counter() - t0,
@@ -246,27 +242,19 @@ def _merge_parts(name: str, quick: bool, out, pieces: list, wall: float) -> Case
 
 def _environment(workers: int) -> dict:
     import platform
+    import subprocess
 
     import numpy
     import scipy
     import skfem
 
     commit = None
+    root = Path(__file__).resolve().parents[2]
+    git = ["git", "-C", str(root), "rev-parse", "--short", "HEAD"]
     try:
-        import subprocess
-
-        root = Path(__file__).resolve().parents[2]
         if (root / ".git").exists():
-            commit = (
-                subprocess.run(
-                    ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
-                    capture_output=True,
-                    text=True,
-                    check=False,
-                    timeout=10,
-                ).stdout.strip()
-                or None
-            )
+            run = subprocess.run(git, capture_output=True, text=True, check=False, timeout=10)
+            commit = run.stdout.strip() or None
     except (OSError, subprocess.SubprocessError):
         commit = None
     return {
