@@ -1,11 +1,8 @@
 """Cases files: a user's results, one case per CSV row, read and checked (:func:`read_cases`).
 
-The format (columns :data:`COLUMNS`: quantities, parameters dimensionless or SI, the flow range
-of the critical quantities, a label; ``#`` comments) is in docs/cli/commands.md, "fempipe
-compare".  Every value is checked against the accepted ranges (:mod:`fempipe.io.ranges`) before
-anything is computed; the first bad one raises :class:`~fempipe.core.errors.ParamError` whose
-message names the file, the row and line, and the column: ``FILE: row N (line L), column C:
-message`` (``FILE: header, column C: ...``, ``FILE: message``).
+The format (columns :data:`COLUMNS`; ``#`` comments): docs/cli/commands.md, "fempipe compare".
+Every value is checked against :mod:`fempipe.io.ranges` first; the first bad one raises
+:class:`~fempipe.core.errors.ParamError` ``FILE: row N (line L), column C: message``.
 """
 
 from __future__ import annotations
@@ -71,26 +68,10 @@ def fempipe_quantity(name: str, planar: bool) -> str:
 
 @dataclass(frozen=True)
 class Case:
-    """One data row, checked.
-
-    Attributes
-    ----------
-    row, line : int
-        Data row (from 1) and line of the file (from 1).
-    values : dict
-        Quantity -> the user's value, in the file's column order.
-    params : Params
-        alpha, beta, gamma, mu and the row's flow v (0 if not given).
-    v : float or None
-        The row's flow velocity.
-    v_range : tuple of float or None
-        ``(v_min, v_max)`` of the critical quantities.
-    defaults : dict
-        Parameters not given and the value taken.
-    pipe, U, U_range
-        The SI pipe and the flows in m/s of an SI file (else None).
-    label : str or None
-    """
+    """One data row, checked: ``row`` and ``line`` (from 1), ``values`` (quantity -> the user's
+    value), ``params`` (at the row's flow ``v``, 0 if none), ``v_range`` (of the critical
+    quantities), ``defaults`` (parameters not given -> the value taken), the SI ``pipe``, ``U``,
+    ``U_range`` (else None) and ``label``."""
 
     row: int
     line: int
@@ -395,24 +376,9 @@ def _flows(values, names, nums, flow, flow_cols, pipe, v_max_default, defaults, 
 
 
 def read_cases(path, v_max: float = DEFAULT_V_MAX) -> list[Case]:
-    """Read and check a whole cases file before anything is computed.
-
-    Parameters
-    ----------
-    path : path-like
-        The CSV file.
-    v_max : float
-        End of the flow range of the critical quantities where a row gives none.
-
-    Returns
-    -------
-    list of Case
-
-    Raises
-    ------
-    ParamError
-        At the first bad value, naming the file, the row and line, and the column.
-    """
+    """The :class:`Case` of every row of the CSV file ``path``, all checked before anything is
+    computed; ``v_max``: end of a critical quantity's flow range where a row gives none.
+    ParamError at the first bad value, naming the file, the row and line, and the column."""
     path = str(path)
     lines = _read_lines(path)
     (header_line, header), rows = lines[0], lines[1:]

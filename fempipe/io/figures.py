@@ -20,30 +20,13 @@ def write_figure(path: str | os.PathLike, fig, **savefig_kwargs) -> Path:
 
 
 def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Path:
-    """An animated GIF of RGBA frames (PIL images), looping, atomically.
+    """An animated GIF of RGBA frames (PIL images), looping, ``int(1000 / fps)`` ms a frame,
+    atomically; ValueError without frames.
 
-    Every frame lasts ``int(1000 / fps)`` ms and the GIF loops forever, as
-    matplotlib's ``PillowWriter`` writes it.  The colors: a GIF frame has a
-    palette of at most 256 colors, and an antialiased figure has about 500.
-    ``PillowWriter`` lets Pillow build an adaptive palette (median cut) for
-    every frame, most of the cost of writing the GIF of ``fempipe simulate``.
-    Here the frames share one palette, Pillow's adaptive palette
-    of the first frame, and each pixel takes the palette color nearest to it
-    (:func:`quantize_frames`); the frames of an animation differ in a few
-    moving artists, whose colors the first frame holds too.  Measured on the
-    GIF of ``fempipe simulate --alpha 0 --v 10`` (47 frames of 440 x 480):
-    0.36 % of the pixels differ from the rendered frame with either palette,
-    the mean error is 0.008 (per-frame palettes 0.007) of 255, the largest
-    58 (per-frame palettes 81).  The shared palette is written as it is
-    (``optimize=False``: Pillow's reduction of each frame's palette to its
-    used colors would be most of the encoding's cost, for a file about a third
-    smaller; without it the file has about the size of ``PillowWriter``'s).  Frames with transparency are encoded as
-    ``PillowWriter`` encodes them.
-
-    Raises
-    ------
-    ValueError
-        Without frames (nothing is written).
+    Opaque frames share one palette (:func:`quantize_frames`; an antialiased figure has more
+    than a GIF's 256 colors, and a palette per frame is most of the cost), written as it is
+    (``optimize=False``); frames with transparency are encoded as matplotlib's ``PillowWriter``
+    encodes them.
     """
     if not frames:
         raise ValueError("an animation needs at least one frame")
@@ -67,13 +50,8 @@ def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Pat
 
 
 def quantize_frames(frames: Sequence) -> list | None:
-    """Opaque frames (PIL, RGB or RGBA) as palette images sharing one palette.
-
-    The palette is Pillow's adaptive palette (median cut, 256 colors) of the
-    first frame; every pixel of every frame takes the palette color nearest
-    to it (Euclidean in RGB), looked up in a table filled once per distinct
-    color.  None if a frame has a transparent pixel.
-    """
+    """Opaque frames (PIL) as palette images sharing Pillow's adaptive palette of the first
+    frame, each pixel the nearest palette color (RGB); None if a pixel is transparent."""
     import numpy as np
     from PIL import Image
 

@@ -1,7 +1,7 @@
-"""Deformed centerlines as VTU files (meshio), in the VTK frame of :mod:`fempipe.io`.
+"""Deformed centerlines as VTU files (meshio) and ParaView time series (:func:`write_series`).
 
-Gravity along -y: a centerline point is ``(x, y, z) = (Z_g, -X_g, 0)``
-(Eq. (28)), the frame of every figure and of :mod:`fempipe.io.trajectory`.
+The VTK frame of :mod:`fempipe.io`: gravity along -y, a centerline point at
+``(x, y, z) = (Z_g, -X_g, 0)`` (Eq. (28)).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import re
 import zlib
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -26,6 +27,7 @@ __all__ = [
     "read_field_data",
     "write_shapes",
     "read_shapes",
+    "write_series",
 ]
 
 
@@ -46,13 +48,8 @@ def write_vtu(
     point_data: Mapping[str, np.ndarray],
     field_data: Mapping[str, float | Sequence[float]] | None = None,
 ) -> Path:
-    """Write line cells with point data and field data as a VTU file, atomically.
-
-    meshio writes the points, cells and point data; the field data (numbers
-    or lists of numbers, e.g. ``{"time": 1.5, "v": 4.0, "alpha": 0.0}``) go
-    into a ``<FieldData>`` block of the grid, which VTK's XML readers (and
-    ParaView) show as field data.  NaN values are written as ``nan``.
-    """
+    """Write line cells with point data (meshio) and field data (numbers or lists, e.g.
+    ``{"time": 1.5}``, a ``<FieldData>`` block that ParaView shows) as a VTU file, atomically."""
     return write_text(path, _with_field_data(_meshio_xml(points, lines, point_data), field_data))
 
 
@@ -104,15 +101,9 @@ def _zlib_base64(data: np.ndarray) -> str:
 
 
 class _VTUTemplate:
-    """The text of meshio's VTU file for one mesh, with the arrays' places kept open.
-
-    The frames of a trajectory share their cells and the names, shapes and
-    types of their arrays; only the numbers change.  meshio builds an XML tree
-    for every file (most of the cost of a small frame); this fills the text
-    meshio wrote for the first frame with each frame's arrays, encoded as
-    meshio encodes them.  ``valid`` says whether that reproduces meshio's text
-    of the first frame exactly.
-    """
+    """meshio's VTU text of one frame with the arrays' places open, to be filled with the
+    arrays of other frames of the same layout (meshio's XML tree is most of a small frame's
+    cost); ``valid``: the first frame filled back is meshio's text exactly."""
 
     def __init__(self, xml: str, points: np.ndarray, point_data: Mapping) -> None:
         self.pieces: list[str] = []
@@ -156,34 +147,13 @@ def write_vtu_frames(
     frames: Iterable[tuple[np.ndarray, Mapping, Mapping | None]],
     lines: np.ndarray,
 ) -> list[Path]:
-    """Write many VTU files of the same line cells into ``directory``, as
-    :func:`write_vtu` writes each, all or none.
+    """Write one VTU file per name and frame ``(points, point_data, field_data)`` of the line
+    cells ``lines`` into ``directory``, as :func:`write_vtu` would, all or none.
 
-    Parameters
-    ----------
-    directory : path-like
-        Created if missing.
-    names : sequence of str
-        The file names, one per frame.
-    frames : iterable of (points, point_data, field_data)
-        One per name, the arguments of :func:`write_vtu`.
-    lines : ndarray
-        The line cells, shared by every frame.
-
-    Returns
-    -------
-    list of Path
-
-    Notes
-    -----
-    The first frame is written by meshio; the others by filling its text with
-    their arrays (:class:`_VTUTemplate`), byte for byte the file meshio would
-    write (checked on the first frame: otherwise, or for a frame whose arrays
-    differ in name, shape or type, meshio writes it).  The files are written
-    into a new hidden directory beside ``directory`` and moved into it once
-    all are written (:func:`_all_or_none`), so a failure leaves none of them;
-    a file per file atomic write (a temporary name, then a rename) cost twice
-    as much for the 400 small frames of a trajectory.
+    The first frame by meshio, the others by filling its text (:class:`_VTUTemplate`; meshio
+    again if the template does not reproduce the first frame or a frame's layout differs).
+    The files go into a hidden directory beside ``directory`` and are moved in together
+    (:func:`_all_or_none`).
     """
     lines = np.asarray(lines)
     template = None
@@ -205,9 +175,8 @@ def write_vtu_frames(
 
 @contextlib.contextmanager
 def _all_or_none(directory: str | os.PathLike) -> Iterator[Path]:
-    """Yield a new private directory beside ``directory``; on success move its files
-    into ``directory`` (the whole directory, if ``directory`` does not exist yet),
-    on an exception remove it.  The files of a failed write never appear."""
+    """A new private directory beside ``directory``, its files moved into ``directory`` on
+    success (the whole directory if new), removed on an exception."""
     import shutil
     import tempfile
 
@@ -251,33 +220,22 @@ def write_shapes(
     length: float | None = None,
     params: Mapping[str, float] | None = None,
 ) -> Path:
-    """Write deformed centerlines to one VTU file, atomically.
-
-    Each shape becomes a polyline of ``line`` cells in the VTK frame of the
-    module docstring (gravity along -y); all shapes share one file and are
-    told apart by the point data ``shape_index`` and ``parameter``.
+    """Write deformed centerlines to one VTU file, atomically (polylines in the VTK frame,
+    told apart by the point data ``shape_index`` and ``parameter``).
 
     Parameters
     ----------
     path : path-like
-        Destination, normally ending in ``.vtu``.
     shapes : sequence of Shape
-        :class:`fempipe.model.kinematics.Shape` (or objects with the attributes in
-        :data:`SHAPE_FIELDS`), dimensionless.
+        :class:`fempipe.model.kinematics.Shape` (the attributes :data:`SHAPE_FIELDS`).
     values : sequence of float
-        The continuation value of each shape (e.g. v), same length.
+        The continuation value of each shape.
     parameter : str
         Name of ``values`` in the point data.
     length : float, optional
-        Pipe length in m: points are then in metres (the point data stay
-        dimensionless, with ``X_g_m``, ``Z_g_m`` added).
+        Pipe length in m: points in metres, ``X_g_m``, ``Z_g_m`` added.
     params : mapping, optional
-        The fixed parameters (alpha, beta, gamma, mu, v, ...), written as field
-        data beside ``time`` = 0 and ``{parameter}_values`` (one per shape).
-
-    Returns
-    -------
-    Path
+        Fixed parameters, field data beside ``time`` = 0 and ``{parameter}_values``.
     """
     if len(shapes) != len(values):
         raise ValueError(f"got {len(shapes)} shapes but {len(values)} values")
@@ -311,11 +269,7 @@ def write_shapes(
 
 
 def read_shapes(path: str | os.PathLike) -> list[dict[str, np.ndarray]]:
-    """Read a file written by :func:`write_shapes` back, one dict per shape.
-
-    Each dict holds the point data of one shape (``xi``, ``theta``, ...,
-    the continuation value) and ``points``, shape (m, 3).
-    """
+    """A file of :func:`write_shapes`, one dict per shape: its point data and ``points``."""
     import meshio
 
     mesh = meshio.read(path)
@@ -327,3 +281,27 @@ def read_shapes(path: str | os.PathLike) -> list[dict[str, np.ndarray]]:
         d["points"] = np.asarray(mesh.points)[sel]
         out.append(d)
     return out
+
+
+def write_series(path: str | os.PathLike, t, frames: Iterable, n_points: int) -> Path:
+    """A ParaView time series: one VTU per time ``t`` in ``path``'s stem directory (``frames``:
+    ``(points, point_data, field_data)`` of a polyline of ``n_points``, all or none), then the
+    index ``path`` (.pvd), atomically: a reader never sees it point at missing frames."""
+    path = Path(path)
+    if path.suffix != ".pvd":
+        raise ValueError(f"trajectory path must end in .pvd, got {path.name!r}")
+    frames_dir = path.with_suffix("")
+    names = [f"frame_{k:05d}.vtu" for k in range(len(t))]
+    cells = np.stack([np.arange(n_points - 1), np.arange(1, n_points)], axis=1)
+    write_vtu_frames(frames_dir, names, frames, cells)
+    lines = [
+        '<?xml version="1.0"?>',
+        '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+        "  <Collection>",
+    ]
+    for tk, name in zip(t, names, strict=True):
+        f = quoteattr(f"{frames_dir.name}/{name}")
+        lines.append(f'    <DataSet timestep="{float(tk)!r}" group="" part="0" file={f}/>')
+    lines += ["  </Collection>", "</VTKFile>"]
+    write_text(path, "\n".join(lines) + "\n")
+    return path

@@ -1,8 +1,7 @@
 """CSV tables: one row per result, a header cell ``name [unit]`` per column.
 
-The convention (the units ``[L]``, ``[T]``, ``[rad]``, ``[1]``, ``[-]``, ...)
-is described in :mod:`fempipe.io`; the unit of every column is stated once,
-in :data:`CSV_UNITS`.
+The units (``[L]``, ``[T]``, ``[rad]``, ``[1]``, ``[-]``, ...): :mod:`fempipe.io`; the unit of
+every column is stated once, in :data:`CSV_UNITS`.
 """
 
 from __future__ import annotations
@@ -22,129 +21,44 @@ from fempipe.core.files import write_text
 __all__ = ["CSV_UNITS", "ERROR_SUFFIX", "csv_header", "write_csv", "read_csv"]
 
 
+def _units(text: str) -> dict[str, str]:
+    """``"name unit name unit ..."`` as a dict."""
+    words = text.split()
+    return dict(zip(words[::2], words[1::2], strict=True))
+
+
 #: The unit of every CSV column (the package docstring of :mod:`fempipe.io`; docs/cli/options.md).
-CSV_UNITS: Mapping[str, str] = {
-    # flow, parameters and continuation values
-    "v": "1",
-    "alpha": "rad",
-    "beta": "1",
-    "gamma": "1",
-    "mu": "1",
-    "U": "m/s",
-    # tip of a static state (fempipe static)
-    "theta_tip": "rad",
-    "eta_tip": "L",
-    "X_tip": "L",
-    "Z_tip": "L",
-    "Y_tip": "L",
-    "varsigma_tip": "L",
-    "tip_drop": "L",
-    "X_tip_m": "m",
-    "Z_tip_m": "m",
-    "eta_tip_m": "m",
-    "varsigma_tip_m": "m",
-    "tip_drop_mm": "mm",
-    "newton_iterations": "-",
-    "gravity_loading_iterations": "-",
-    "residual_norm": "1",
-    "includes_gravity_loading": "-",
-    "stable": "-",
-    # stability in three dimensions: the verdict or value of each plane (in the
-    # plane of the static state or out of it), and which plane
-    "stable_in_plane": "-",
-    "stable_out_of_plane": "-",
-    "plane": "-",
-    # eigenvalues (fempipe spectrum): lambda and Omega = -i lambda per unit tau
-    "mode": "-",
-    "lambda_re": "1/T",
-    "lambda_im": "1/T",
-    "Omega_re": "1/T",
-    "Omega_im": "1/T",
-    "eigenvalue_index": "-",
-    "pair_member": "-",
-    "system_stable": "-",
-    # parametric resonance (fempipe parametric): one row per chart, region, plane and sigma
-    "discretization": "-",
-    "kind": "-",
-    "order": "-",
-    "sigma_threshold": "1",
-    "omega_threshold": "1/T",
-    "sigma": "1",
-    "omega_lo": "1/T",
-    "omega_hi": "1/T",
-    # stability events (fempipe critical) and the stability map
-    "type": "-",
-    "branch": "-",
-    "frequency": "1/T",
-    "stable_before": "-",
-    "stable_after": "-",
-    "at_start": "-",
-    "eigenvalue_re": "1/T",
-    "eigenvalue_im": "1/T",
-    "v_cr": "1",
-    "v_flutter": "1",
-    "U_cr": "m/s",
-    "v_cr_in_plane": "1",
-    "v_cr_out_of_plane": "1",
-    "frequency_in_plane": "1/T",
-    "frequency_out_of_plane": "1/T",
-    "type_in_plane": "-",
-    "type_out_of_plane": "-",
-    "mode_in_plane": "-",
-    "mode_out_of_plane": "-",
-    "v_flutter_in_plane": "1",
-    "v_flutter_out_of_plane": "1",
-    "first_plane": "-",
-    "U_cr_in_plane": "m/s",
-    "U_cr_out_of_plane": "m/s",
-    "error": "-",
-    # the tip's time series (fempipe simulate)
-    "tau": "T",
-    "theta_tip_rate": "rad/T",
-    "eta_tip_rate": "L/T",
-    "X_tip_rate": "L/T",
-    "Z_tip_rate": "L/T",
-    # convergence studies (fempipe convergence): one row per member of a family,
-    # the value of the quantity under its own name and its distance to the
-    # reference as <quantity>_error
-    "family": "-",
-    "n": "-",
-    "dofs": "-",
-    "lc_amplitude": "L",
-    "lc_period": "T",
-    "theta_tip_error": "rad",
-    "X_tip_error": "L",
-    "Z_tip_error": "L",
-    "eta_tip_error": "L",
-    "v_cr_error": "1",
-    "frequency_error": "1/T",
-    "eigenvalue_error": "1/T",
-    "lc_amplitude_error": "L",
-    "lc_period_error": "T",
-    # comparisons of a user's values (fempipe compare): one row per data row and
-    # quantity; user, fempipe, difference, error_estimate and refined are in the
-    # unit of the row's quantity, stated in its column "unit", so their header
-    # carries "-"
-    "row": "-",
-    "label": "-",
-    "quantity": "-",
-    "fempipe_quantity": "-",
-    "unit": "-",
-    "user": "-",
-    "fempipe": "-",
-    "difference": "-",
-    "relative_difference": "1",
-    "error_estimate": "-",
-    "resolved": "-",
-    "verdict": "-",
-    "refined": "-",
-    "v_min": "1",
-    "v_max": "1",
-    "U_min": "m/s",
-    "U_max": "m/s",
-    "failure": "-",
-    "note": "-",
-}
+#: Per command: static (tip values), spectrum (lambda, Omega = -i lambda per unit tau),
+#: parametric (one row per chart, region, plane and sigma), critical and stability-map (the
+#: verdict or value of each plane), simulate (tau and the tip's rates), convergence (one row
+#: per member, ``<quantity>_error`` its distance to the reference), compare (user, fempipe,
+#: difference, error_estimate, refined in the unit of the row's column "unit": "-").
+CSV_UNITS: Mapping[str, str] = _units(
+    """
+    v 1  alpha rad  beta 1  gamma 1  mu 1  U m/s
+    theta_tip rad  eta_tip L  X_tip L  Z_tip L  Y_tip L  varsigma_tip L  tip_drop L
+    X_tip_m m  Z_tip_m m  eta_tip_m m  varsigma_tip_m m  tip_drop_mm mm
+    newton_iterations -  gravity_loading_iterations -  residual_norm 1
+    includes_gravity_loading -  stable -  stable_in_plane -  stable_out_of_plane -  plane -
+    mode -  lambda_re 1/T  lambda_im 1/T  Omega_re 1/T  Omega_im 1/T  eigenvalue_index -
+    pair_member -  system_stable -
+    discretization -  kind -  order -  sigma_threshold 1  omega_threshold 1/T  sigma 1
+    omega_lo 1/T  omega_hi 1/T
+    type -  branch -  frequency 1/T  stable_before -  stable_after -  at_start -
+    eigenvalue_re 1/T  eigenvalue_im 1/T  v_cr 1  v_flutter 1  U_cr m/s  v_cr_in_plane 1
+    v_cr_out_of_plane 1  frequency_in_plane 1/T  frequency_out_of_plane 1/T
+    type_in_plane -  type_out_of_plane -  mode_in_plane -  mode_out_of_plane -
+    v_flutter_in_plane 1  v_flutter_out_of_plane 1  first_plane -  U_cr_in_plane m/s
+    U_cr_out_of_plane m/s  error -
+    tau T  theta_tip_rate rad/T  eta_tip_rate L/T  X_tip_rate L/T  Z_tip_rate L/T
+    family -  n -  dofs -  lc_amplitude L  lc_period T  theta_tip_error rad  X_tip_error L
+    Z_tip_error L  eta_tip_error L  v_cr_error 1  frequency_error 1/T  eigenvalue_error 1/T
+    lc_amplitude_error L  lc_period_error T
+    row -  label -  quantity -  fempipe_quantity -  unit -  user -  fempipe -  difference -
+    relative_difference 1  error_estimate -  resolved -  verdict -  refined -  v_min 1
+    v_max 1  U_min m/s  U_max m/s  failure -  note -
+    """
+)
 
 _HEADER_CELL = re.compile(r"(?P<name>[^\s\[\]]+) \[(?P<unit>[^\[\]]+)\]")
 _INTEGER = re.compile(r"[+-]?[0-9]+")
@@ -156,19 +70,10 @@ ERROR_SUFFIX = "_error"
 
 
 def csv_header(name: str) -> str:
-    """The header cell of column ``name``: ``"name [unit]"`` with the unit of :data:`CSV_UNITS`.
-
-    The error estimate ``<name>_error`` of a column (:data:`ERROR_SUFFIX`)
-    has the unit of ``<name>``.
-
-    Raises
-    ------
-    ValueError
-        If ``name`` has no unit in :data:`CSV_UNITS`.
-    """
+    """``"name [unit]"`` with the unit of :data:`CSV_UNITS` (``<name>_error``: that of
+    ``<name>``); ValueError if ``name`` has none."""
     unit = CSV_UNITS.get(name)
     if unit is None and name.endswith(ERROR_SUFFIX):
-        # The error estimate of a column has the unit of the column.
         unit = CSV_UNITS.get(name.removesuffix(ERROR_SUFFIX))
     if unit is None:
         raise ValueError(f"CSV column {name!r} has no unit: add it to fempipe.io.CSV_UNITS")
@@ -180,24 +85,9 @@ def write_csv(
     rows: Sequence[Mapping],
     columns: Sequence[str] | None = None,
 ) -> Path:
-    """Write a list of flat dicts as CSV with a header, atomically.
-
-    The header cells are :func:`csv_header` of the keys (``theta_tip [rad]``);
-    floats are written with all their digits (``repr``), ``None`` as an
-    empty cell.
-
-    Parameters
-    ----------
-    rows : sequence of mapping
-        One dict per row; missing keys give empty cells.
-    columns : sequence of str, optional
-        Column order (default: keys in order of first appearance).
-
-    Raises
-    ------
-    ValueError
-        If a column has no unit in :data:`CSV_UNITS` (nothing is written).
-    """
+    """Write flat dicts as CSV, atomically: header cells :func:`csv_header`, floats with all
+    their digits, ``None`` and missing keys empty; ``columns`` default: keys in order of first
+    appearance.  ValueError (nothing written) if a column has no unit."""
     if columns is None:
         columns = []
         for row in rows:
@@ -212,24 +102,9 @@ def write_csv(
 
 
 def read_csv(path: str | os.PathLike) -> dict[str, np.ndarray]:
-    """The columns of a CSV file written by :func:`write_csv`, by bare name.
-
-    Each header cell must be ``name [unit]`` (:mod:`fempipe.io`); the unit is dropped, so
-    ``read_csv(path)["X_tip"]`` is the column ``X_tip [L]``.  A
-    column of ``True``/``False`` becomes a bool array, one of integers an int
-    array, one of numbers a float array (an empty cell is NaN) and any other
-    a str array.
-
-    Raises
-    ------
-    ValueError
-        If a header cell has no unit or a name appears twice.
-
-    Examples
-    --------
-    >>> tip = read_csv("out/tip.csv")   # doctest: +SKIP
-    >>> tip["tau"], tip["X_tip"]        # doctest: +SKIP
-    """
+    """The columns of a CSV file of :func:`write_csv` by bare name (``read_csv(p)["X_tip"]`` is
+    ``X_tip [L]``): bool, int, float (empty NaN) or str arrays.  ValueError if a header cell
+    has no unit or a name appears twice."""
     with open(path, newline="", encoding="utf-8") as f:
         table = list(csv.reader(f))
     if not table:

@@ -1,17 +1,10 @@
-"""The moving pipe as a time series of meshio files that ParaView opens.
+"""The moving pipe as a ParaView time series (``NAME.pvd`` and one VTU per time in ``NAME/``).
 
-Format: a ParaView collection ``NAME.pvd`` (a small XML list of ``(timestep, file)``) plus
-one VTU file per output time in ``NAME/``, written by meshio.  Each VTU holds the centerline
-in the package's one VTK frame (:mod:`fempipe.io`: x = Z_g horizontal, y = -X_g, z = 0) as
-``line`` cells, as point data ``xi``, ``theta`` (rad), ``varsigma``, ``eta``, ``X_g``,
-``Z_g`` (the arrays of ``shapes.vtu``), ``theta_dot`` (rad per unit tau) and ``velocity``
-(the centerline velocity r_dot in the same frame, 3 components), and as field data ``time``
-(tau), ``v`` and the parameters.  VTU rather than XDMF: docs/cli/options.md, "VTK files".
-
-The frames are written into a hidden directory and moved into ``NAME/`` once all are
-written (:func:`fempipe.io.meshes.write_vtu_frames`: all or none), then the ``.pvd`` index,
-atomically (:func:`fempipe.io.atomic_path`), so a reader never sees an index pointing at
-missing frames, nor a half frame.
+Each VTU holds the centerline in the VTK frame of :mod:`fempipe.io` as ``line`` cells, the
+point data ``xi``, ``theta``, ``varsigma``, ``eta``, ``X_g``, ``Z_g`` (those of ``shapes.vtu``),
+``theta_dot`` and ``velocity`` (r_dot, 3 components) and the field data ``time`` (tau), ``v``
+and the parameters; written all or none (:func:`fempipe.io.meshes.write_series`).  Format and
+the choice of VTU: docs/cli/options.md, "VTK files".  Also the tip's time series (tip.csv).
 """
 
 from __future__ import annotations
@@ -19,13 +12,11 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from fempipe.core.files import write_text
 from fempipe.io import SHAPE_FIELDS, screen_points
-from fempipe.io.meshes import write_vtu_frames
+from fempipe.io.meshes import write_series
 from fempipe.model.discretization import Discretization
 from fempipe.model.kinematics import Shape, shape, tip_values, tip_velocity
 from fempipe.model.quadrature import lagrange_integrals
@@ -41,26 +32,12 @@ __all__ = [
 
 
 class CenterlineSampler:
-    """The centerline of many states of one discretization, sampled at the same points.
+    """The centerlines of many states of one discretization at the same sample points.
 
-    :func:`fempipe.model.kinematics.shape` recomputes, for every state, what
-    depends on the sample points only: the basis at the points
-    (``disc.evaluate`` locates every point in the mesh) and the Lagrange
-    integrals of the interior points, most of the cost of a frame.  Here they
-    are computed once and each state costs the products that
-    depend on it, the operations of ``shape`` in the same order, so the
-    numbers are the same bit for bit.  (theta at the points is
-    ``disc.basis_values(xi) @ q``: for finite elements the sum of
-    ``disc.evaluate`` without the clamped dof's term, which is 0.)  That is
-    checked on the first state (against ``shape`` and ``disc.evaluate``); on
-    any difference the sampler falls back to those functions for every state.
-
-    Parameters
-    ----------
-    disc : Discretization
-    alpha : float
-    points_per_cell : int
-        As in :func:`~fempipe.model.kinematics.shape`.
+    What depends on the points only (the basis there, the Lagrange integrals) is computed once;
+    each state then costs the operations of :func:`fempipe.model.kinematics.shape` in the same
+    order, the same numbers bit for bit.  Checked on the first state against ``shape`` and
+    ``disc.evaluate``; on any difference every state falls back to them.
     """
 
     def __init__(self, disc: Discretization, alpha: float, points_per_cell: int = 4) -> None:
@@ -133,12 +110,8 @@ def frame_data(
     points_per_cell: int = 4,
     sampler: CenterlineSampler | None = None,
 ):
-    """Points (m, 3) and point data of one frame (see module docstring).
-
-    ``sampler``: a :class:`CenterlineSampler` of ``disc``, ``alpha`` and
-    ``points_per_cell``, reused over the frames of a trajectory (the same
-    numbers, computed without the per-state set-up).
-    """
+    """Points (m, 3) and point data of one frame; ``sampler``: a :class:`CenterlineSampler` of
+    ``disc``, ``alpha`` and ``points_per_cell`` reused over the frames."""
     if sampler is None:
         s = shape(disc, q, alpha, points_per_cell=points_per_cell)
         theta_dot = disc.evaluate(qdot, s.xi)
@@ -174,26 +147,8 @@ def write_trajectory(
     points_per_cell: int = 4,
     params=None,
 ) -> Path:
-    """Write a trajectory as ``path`` (.pvd) plus one VTU per time in ``path``'s stem directory.
-
-    Parameters
-    ----------
-    path : path-like
-        The collection file, ending in ``.pvd``.
-    disc : Discretization
-    t : sequence of float, shape (m,)
-    q, qdot : ndarray, shape (m, n)
-    alpha : float
-    params : Params, optional
-        Written as field data (v, alpha, beta, gamma, mu) beside ``time``.
-
-    Returns
-    -------
-    Path of the .pvd file.
-    """
-    path = Path(path)
-    if path.suffix != ".pvd":
-        raise ValueError(f"trajectory path must end in .pvd, got {path.name!r}")
+    """Write a trajectory ``t``, ``q``, ``qdot`` (shape (m, n)) as ``path`` (.pvd) plus one VTU
+    per time in ``path``'s stem directory; ``params``: field data (v, alpha, beta, gamma, mu)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     qdot = np.atleast_2d(np.asarray(qdot, dtype=float))
     t = np.asarray(t, dtype=float)
@@ -202,28 +157,14 @@ def write_trajectory(
     field = {}
     if params is not None:
         field = {k: float(getattr(params, k)) for k in ("v", "alpha", "beta", "gamma", "mu")}
-    frames_dir = path.with_suffix("")
     sampler = CenterlineSampler(disc, alpha, points_per_cell)
-    m = sampler.xi.size
-    cells = np.stack([np.arange(m - 1), np.arange(1, m)], axis=1)
-    names = [f"frame_{k:05d}.vtu" for k in range(t.size)]
 
     def frames():
         for k in range(t.size):
             pts, data = frame_data(disc, q[k], qdot[k], alpha, points_per_cell, sampler)
             yield pts, data, {"time": float(t[k])} | field
 
-    write_vtu_frames(frames_dir, names, frames(), cells)
-    entries = [(float(tk), f"{frames_dir.name}/{name}") for tk, name in zip(t, names, strict=True)]
-    lines = ['<?xml version="1.0"?>']
-    lines.append('<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">')
-    lines.append("  <Collection>")
-    for tk, f in entries:
-        lines.append(f'    <DataSet timestep="{tk!r}" group="" part="0" file={quoteattr(f)}/>')
-    lines.append("  </Collection>")
-    lines.append("</VTKFile>")
-    write_text(path, "\n".join(lines) + "\n")
-    return path
+    return write_series(path, t, frames(), sampler.xi.size)
 
 
 def read_trajectory(path: str | os.PathLike) -> tuple[np.ndarray, list]:
@@ -256,24 +197,8 @@ TIP_COLUMNS = (
 
 
 def tip_rows(disc, t, q, qdot, alpha: float, output_dt: float | None = None) -> list[dict]:
-    """The tip's time series: theta(1), eta(1), X_g(1), Z_g(1) and their rates, Eq. (28).
-
-    Parameters
-    ----------
-    disc : Discretization
-    t : ndarray, shape (m,)
-        Accepted step times.
-    q, qdot : ndarray, shape (m, n)
-    alpha : float
-    output_dt : float, optional
-        A uniform output step: the states in between are the cubic Hermite interpolants
-        through (q, qdot) at the steps.
-
-    Returns
-    -------
-    list of dict
-        Rows with the keys :data:`TIP_COLUMNS`.
-    """
+    """Rows :data:`TIP_COLUMNS` of the tip's time series, Eq. (28), at the steps ``t`` or, with
+    ``output_dt``, on a uniform grid (cubic Hermite interpolants through (q, qdot))."""
     t, q, qdot = np.asarray(t, float), np.asarray(q, float), np.asarray(qdot, float)
     if output_dt is not None:
         from scipy.interpolate import CubicHermiteSpline  # scipy: not for the CLI's start-up
