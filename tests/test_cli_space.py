@@ -35,7 +35,7 @@ def test_simulate_3d_writes_its_files(tmp_path, capsys):
 
 
 def test_simulate_3d_text_names_the_cycle_multipliers_and_frequencies(capsys):
-    from fempipe.cli.simulate_space import _summary
+    from fempipe.cli.simulate import _summary_3d
 
     r = {
         "params": {"alpha": 1.57, "beta": 0.142, "gamma": 18.9, "mu": 0.005, "v": 6.5},
@@ -51,9 +51,9 @@ def test_simulate_3d_text_names_the_cycle_multipliers_and_frequencies(capsys):
         "t_end": 3.9,
         "cpu_time": 1.0,
     }
-    _summary(r)
+    _summary_3d(r)
     assert "|Floquet multipliers| 1, 0.7554, 0.2 (stable)" in capsys.readouterr().out
-    _summary(r | {"stable": False, "attractor": "quasi-periodic", "frequencies": [1.5, 2.25]})
+    _summary_3d(r | {"stable": False, "attractor": "quasi-periodic", "frequencies": [1.5, 2.25]})
     text = capsys.readouterr().out
     assert "(unstable)" in text and "frequencies 1.5, 2.25" in text
 

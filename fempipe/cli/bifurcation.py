@@ -1,16 +1,11 @@
 """``fempipe bifurcation``: tip extrema against v, by continuation (default) or by sweeps.
 
-``--method continuation`` follows the equilibria of the primary static branch and the branch
-of periodic orbits born at every Hopf point
-(:func:`fempipe.analyses.periodic.compute_cycle_diagram`); ``--method sweep`` steps through
-the attractors up and down, each point from the previous one
-(:func:`fempipe.analyses.bifurcation.compute_bifurcation_diagram`), in parallel on
-``--workers`` or a Dask cluster (``--dask``).  Both give each planar state its 3-D verdict
-(``--planar`` leaves it out).  ``--3d`` sweeps the attractors of the 3-D model instead
-(:func:`fempipe.analyses.space.diagram.compute_diagram_3d`).  ``--out DIR`` keeps the point
-store DIR/points/: rerunning the same command resumes.
-
-The options, the ``--json`` keys and the files: docs/cli/commands.md, "fempipe bifurcation".
+``--method continuation`` follows the primary static branch and the periodic orbits born at its
+Hopf points (:func:`fempipe.analyses.periodic.compute_cycle_diagram`); ``--method sweep`` steps
+through the attractors up and down (:func:`fempipe.analyses.bifurcation.compute_bifurcation_diagram`,
+on ``--workers`` or ``--dask``); ``--3d`` sweeps the 3-D model's attractors.  ``--out DIR`` keeps
+the point store DIR/points/: a rerun resumes.  Keys and files: docs/cli/commands.md,
+"fempipe bifurcation".
 """
 
 from __future__ import annotations
@@ -35,9 +30,7 @@ KEYS_3D = ("Y_tip", "eta_tip", "X_tip", "Z_tip")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default="5:12:36")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "5:12:36")
     g = parser.add_argument_group("sweep")
     g.add_argument(
         "--method",

@@ -1,10 +1,9 @@
 """The options shared by the ``fempipe`` subcommands, declared once, and :func:`setup_from_args`.
 
-Physical parameters come dimensionless (``--alpha --beta --gamma --mu``, flow ``--v``) or in SI
-units (``--length --EI --m --M``, optional ``--g --a``, flow ``--U`` in m/s), Eq. (19).  argparse
-checks each option alone (:mod:`fempipe.cli.parsing`); :func:`setup_from_args` checks what
-depends on several (the SI pipe, ``--U``, the variants, the work limits) and raises
-:class:`~fempipe.cli.parsing.CLIError`.  The options: docs/cli/options.md.
+Parameters dimensionless (``--alpha --beta --gamma --mu``, ``--v``) or SI (``--length --EI --m
+--M``, ``--g --a``, ``--U`` in m/s), Eq. (19).  argparse checks each option alone
+(:mod:`fempipe.cli.parsing`); :func:`setup_from_args` what depends on several (CLIError).  The
+options: docs/cli/options.md.
 """
 
 from __future__ import annotations
@@ -22,6 +21,9 @@ from .parsing import CLIError
 
 __all__ = [
     "Setup",
+    "add_problem_arguments",
+    "number",
+    "option",
     "add_discretization_arguments",
     "add_error_estimate_argument",
     "add_flow_arguments",
@@ -35,6 +37,28 @@ __all__ = [
     "refuse_hysteretic",
     "setup_from_args",
 ]
+
+
+def add_problem_arguments(
+    parser: argparse.ArgumentParser, flow: str | None, alpha: bool = True
+) -> None:
+    """:func:`add_physical_arguments`, :func:`add_flow_arguments` (default ``flow``) and
+    :func:`add_discretization_arguments`."""
+    add_physical_arguments(parser, alpha)
+    add_flow_arguments(parser, flow)
+    add_discretization_arguments(parser)
+
+
+def option(group, name: str, metavar: str, parse, default, help: str, **kw) -> None:
+    """``name`` whose value ``parse(text)`` checks (its ValueError a usage error naming it)."""
+    type_ = parsing.option_type(name, parse)
+    group.add_argument(name, metavar=metavar, type=type_, default=default, help=help, **kw)
+
+
+def number(group, name: str, metavar: str, default, help: str, *bounds, strict_low=False) -> None:
+    """``name``, a finite number within ``bounds`` (low, high: :func:`parsing.number_type`)."""
+    type_ = parsing.number_type(name, *bounds, strict_low=strict_low)
+    group.add_argument(name, metavar=metavar, type=type_, default=default, help=help)
 
 
 def add_physical_arguments(parser: argparse.ArgumentParser, alpha: bool = True) -> None:
@@ -205,12 +229,8 @@ def add_integration_arguments(
         default="300",
         help=f"longest integration {per} (300; above {parsing.T_MAX:g} needs --allow-large)",
     )
-    g.add_argument(
-        "--rtol",
-        metavar="TOL",
-        type=parsing.number_type("--rtol", 0.0, 0.1, strict_low=True),
-        default="1e-5",
-        help="tolerance of the transient (1e-5)",
+    number(
+        g, "--rtol", "TOL", "1e-5", "tolerance of the transient (1e-5)", 0.0, 0.1, strict_low=True
     )
     add_shoot_rtol_argument(g, shoot_help, shoot_rtol)
     return g
@@ -218,13 +238,7 @@ def add_integration_arguments(
 
 def add_shoot_rtol_argument(group, help: str, default: str = "1e-9") -> None:
     """``--shoot-rtol TOL``: the integration tolerance of a limit cycle's shooting."""
-    group.add_argument(
-        "--shoot-rtol",
-        metavar="TOL",
-        type=parsing.number_type("--shoot-rtol", 0.0, 0.1, strict_low=True),
-        default=default,
-        help=f"{help} ({default})",
-    )
+    number(group, "--shoot-rtol", "TOL", default, f"{help} ({default})", 0.0, 0.1, strict_low=True)
 
 
 def add_workers_argument(group, help: str, default: str | None = "1") -> None:

@@ -1,11 +1,8 @@
 """``fempipe convergence``: a convergence study of one quantity of the user's case.
 
-``--quantity`` (a static tip value, v_cr or the critical frequency in three dimensions or one
-plane, an eigenvalue, the limit cycle's amplitude or period, a parametric threshold) on FE meshes
-of doubling element counts and on doubling numbers of modes, against the Richardson
-extrapolated reference, with each family's observed order
-(:func:`fempipe.studies.convergence.run_study`); static tip values also by collocation
-(scipy ``solve_bvp``).  Keys and files: docs/cli/commands.md, "fempipe convergence".
+FE meshes of doubling element counts and doubling numbers of modes against the Richardson
+extrapolated reference, each family's observed order (:func:`fempipe.studies.convergence.run_study`);
+static tip values also by collocation.  Keys and files: docs/cli/commands.md, "fempipe convergence".
 """
 
 from __future__ import annotations
@@ -94,12 +91,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "sigma_threshold, omega_threshold: where the straight pipe first resonates under a "
         "pulsating flow about the mean flow --v, in the --omega band",
     )
-    g.add_argument(
-        "--mode",
-        metavar="K",
-        type=parsing.option_type("--mode", parsing.positive_int),
-        default="1",
-        help="mode number of --quantity eigenvalue (1)",
+    common.option(
+        g, "--mode", "K", parsing.positive_int, "1", "mode number of --quantity eigenvalue (1)"
     )
     g.add_argument(
         "--omega",

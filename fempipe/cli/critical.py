@@ -1,12 +1,10 @@
 """``fempipe critical``: the critical flow velocity and every stability event on the static branches.
 
-Follows the gravity-loaded branch over the range of ``--v``, locates every change of stability
-and fold to 1e-10 in v, follows the branches born at branch points and reports the first loss
-of stability as v_cr, in three dimensions (both planes,
-:func:`fempipe.analyses.stability.analyse_stability`) or with ``--planar`` in the plane; each
-flutter with its Hopf normal form; with ``--error-estimate`` the estimates from the refined
-discretization.  A primary branch cut short by the step budget (:func:`step_budget`) exits 1
-unless ``--allow-partial``.  Keys and files: docs/cli/commands.md, "fempipe critical".
+Events located to 1e-10 in v on the gravity-loaded branch and the branches born at branch points,
+in three dimensions or with ``--planar`` in the plane
+(:func:`fempipe.analyses.stability.analyse_stability`), each flutter with its Hopf normal form.
+A primary branch cut short by :func:`step_budget` exits 1 unless ``--allow-partial``.  Keys and
+files: docs/cli/commands.md, "fempipe critical".
 """
 
 from __future__ import annotations
@@ -25,9 +23,7 @@ EXAMPLES = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default="0,10")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "0,10")
     g = parser.add_argument_group("stability")
     g.add_argument(
         "--no-branches",

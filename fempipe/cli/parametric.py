@@ -1,9 +1,8 @@
 """``fempipe parametric``: where a pulsating flow v0 (1 + sigma sin(omega tau)) destabilizes the pipe.
 
 The regions of parametric resonance of the straight pipe in the (omega, sigma) plane
-(:func:`fempipe.analyses.parametric.compute_parametric_chart`): each region's mode and kind, its
-threshold and its boundary at each ``--sigma``, beside the same chart on the paper's sine modes
-(``--compare-modal``).  Method: docs/theory/parametric.md; keys and files:
+(:func:`fempipe.analyses.parametric.compute_parametric_chart`), beside the charts on the paper's
+sine modes (``--compare-modal``).  Method: docs/theory/parametric.md; keys and files:
 docs/cli/commands.md, "fempipe parametric".
 """
 
@@ -24,9 +23,7 @@ EXAMPLES = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default=None)
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, None)
     g = parser.add_argument_group("pulsation")
     g.add_argument(
         "--omega",

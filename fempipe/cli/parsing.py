@@ -1,11 +1,8 @@
-"""Parsers of option values and the work limits of ``fempipe``; :class:`CLIError`.
+"""Parsers of option values, the work limits of ``fempipe`` and :class:`CLIError`.
 
-Each parser checks one option: an argparse ``type=`` callable made by :func:`option_type` (its
-error the one-line usage error naming the option) or a function raising :class:`CLIError`.  The
-accepted ranges are those of :mod:`fempipe.io.ranges`; more than :data:`MAX_VALUES` values in
-a list (or points of a map or sweep), more than :data:`MAX_DOFS` unknowns or ``--t-max`` above
-:data:`T_MAX` need ``--allow-large``, so that a typing slip does not start hours of work
-(docs/cli/options.md, "Work limits").
+The accepted ranges are those of :mod:`fempipe.io.ranges`; more than :data:`MAX_VALUES` values,
+:data:`MAX_DOFS` unknowns or ``--t-max`` above :data:`T_MAX` need ``--allow-large``, so that a
+typing slip does not start hours of work (docs/cli/options.md, "Work limits").
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """What a ``fempipe`` command shows and writes: progress, result files, tables, error estimates.
 
-``--out DIR`` is checked before any computation (:func:`check_out_dir`); the files of a run go
-into a hidden staging directory inside DIR and are moved in together at the end
-(:class:`Output`), so a run that fails leaves DIR as it was.  Progress is a tqdm bar, or a line
-on stderr every :data:`LOG_INTERVAL` s outside a terminal (:func:`progress`).  Conventions:
-docs/cli/options.md.
+``--out DIR`` is checked before any computation (:func:`check_out_dir`); a run's files are staged
+inside DIR and moved in together at the end (:class:`Output`): a failed run leaves DIR as it was.
+Conventions: docs/cli/options.md.
 """
 
 from __future__ import annotations

@@ -1,11 +1,9 @@
 """``fempipe simulate``: nonlinear time integration of Eq. (20) and its attractor.
 
-From the static state plus a small perturbation in a sine mode, past the transient: the
-attractor classified (equilibrium, periodic, period-n, non-periodic), a limit cycle shot with
-its Floquet multipliers and, unless ``--planar``, whether it survives out of the plane; with
-``--sigma`` > 0 a pulsating flow, integrated to ``--t-max``; with ``--error-estimate`` the
-estimates from the refined discretization; ``--3d`` the 3-D model
-(:mod:`fempipe.cli.simulate_space`).  Keys and files: docs/cli/commands.md, "fempipe simulate".
+From the static state perturbed in a sine mode: the attractor classified, a limit cycle shot with
+its Floquet multipliers and its verdict out of the plane (unless ``--planar``); ``--sigma`` > 0 a
+pulsating flow; ``--3d`` the 3-D model (:func:`run_3d`).  Keys and files: docs/cli/commands.md,
+"fempipe simulate".
 """
 
 from __future__ import annotations
@@ -43,9 +41,7 @@ def _short(x: float) -> str:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default="10")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "10")
     g = common.add_integration_arguments(
         parser,
         shoot_rtol=_short(SHOOT_RTOL),
@@ -58,12 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     # None: resolved in run() (ERROR_ESTIMATE_SHOOT_RTOL with --error-estimate).
     parser.set_defaults(shoot_rtol=None)
     num = parsing.number_type
-    g.add_argument(
-        "--mode",
-        metavar="R",
-        type=parsing.option_type("--mode", parsing.positive_int),
-        default="1",
-        help="sine mode r of the initial perturbation (1)",
+    common.option(
+        g, "--mode", "R", parsing.positive_int, "1", "sine mode r of the initial perturbation (1)"
     )
     g.add_argument(
         "--amplitude",
@@ -81,8 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--3d",
         dest="three_d",
         action="store_true",
-        help="integrate the 3-D model instead (fempipe.cli.simulate_space: motion, Y_tip, "
-        "whirl_rate)",
+        help="integrate the 3-D model instead (motion, Y_tip, whirl_rate)",
     )
     g.add_argument(
         "--out-of-plane-amplitude",
@@ -163,8 +154,6 @@ def run(args: argparse.Namespace) -> int:
             common.flow_option(args), f"simulate takes a single flow velocity, got {len(setup.v)}"
         )
     if args.three_d:
-        from fempipe.cli.simulate_space import run_3d
-
         return run_3d(args, setup)
     args.shoot_rtol = shoot_rtol_of(args)
     t_max, rtol, shoot_rtol = args.t_max, args.rtol, args.shoot_rtol
@@ -260,10 +249,14 @@ def _result(setup: common.Setup, traj, att, wall_time: float, args: argparse.Nam
         d.pop("params")
         result.update(d)
     result["wall_time"] = wall_time
-    if setup.pipe is not None:
-        ts = setup.pipe.time_scale
-        result["period_s"] = result["period"] * ts if result.get("period") else None
-        result["tip_m"] = {k: [x * setup.pipe.L for x in v] for k, v in result["tip"].items()}
+    return _with_si(result, setup.pipe)
+
+
+def _with_si(result: dict, pipe) -> dict:
+    """``period_s`` and ``tip_m`` with an SI pipe."""
+    if pipe is not None:
+        result["period_s"] = result["period"] * pipe.time_scale if result.get("period") else None
+        result["tip_m"] = {k: [x * pipe.L for x in v] for k, v in result["tip"].items()}
     return result
 
 
@@ -400,3 +393,101 @@ def _print_summary(r: dict) -> None:
         reporting.print_footer(
             r["error_estimate"], where=f" (attractor there: {r['attractor_refined']})"
         )
+
+
+#: Columns of tip.csv of ``--3d``.
+TIP3_COLUMNS = ("tau", "eta_tip", "X_tip", "Z_tip", "Y_tip")
+
+
+def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
+    """``--3d``: the 3-D model from the static state perturbed in and out of the plane
+    (:func:`fempipe.analyses.space.simulate_3d`), ``"model": "3d"``."""
+    from fempipe.analyses.space import simulate_3d
+    from fempipe.model.operators import PipeModel
+
+    if args.sigma > 0:
+        raise CLIError("--sigma", "a pulsating flow is not available with --3d (use sigma = 0)")
+    if args.error_estimate:
+        raise CLIError("--error-estimate", "no error estimate is available with --3d yet")
+    model = PipeModel(setup.disc, setup.params)
+    start = time.perf_counter()
+    with reporting.progress(args, 100, f"simulate --3d v={setup.params.v:g}") as bar:
+        motion = simulate_3d(
+            model,
+            mode=args.mode,
+            amplitude=args.amplitude,
+            out_of_plane_amplitude=args.out_of_plane_amplitude,
+            t_max=args.t_max,
+            rtol=args.rtol,
+            callback=reporting.time_progress(bar, args.t_max),
+        )
+    result = setup.to_dict()
+    result["params"]["v"] = setup.params.v
+    result["model"] = "3d"
+    result.update(motion.to_dict())
+    result["wall_time"] = time.perf_counter() - start
+    result = _with_si(result, setup.pipe)
+    reporting.deliver(
+        args,
+        result,
+        write=lambda out: _write_3d(out, result, model, motion),
+        text=lambda: _summary_3d(result),
+    )
+    return 0
+
+
+def _write_3d(output: reporting.Output, result: dict, model, motion) -> None:
+    reporting.agg()
+    from fempipe.analyses.space.verdict import equilibrium_verdict
+    from fempipe.analyses.stability import linearly_stable
+    from fempipe.analyses.statics import solve_static
+    from fempipe.io.space_trajectory import write_space_trajectory
+    from fempipe.model.space import SpaceModel, planar_state
+    from fempipe.plotting.space import plot_space_snapshots, plot_tip_orbit
+
+    space = SpaceModel(model.disc, model.params)
+    q = solve_static(model).q  # the static state and its 3-D verdict, for the figures
+    static = planar_state(q), equilibrium_verdict(model, q, linearly_stable(model, q))["stable_3d"]
+    output.json("simulate.json", result)
+    rows = [
+        {"tau": float(t)} | space.tip_coordinates(U)
+        for t, U in zip(motion.t, motion.U, strict=True)
+    ]
+    output.csv("tip.csv", rows, TIP3_COLUMNS)
+    keep = np.unique(np.linspace(0, motion.t.size - 1, min(400, motion.t.size)).round().astype(int))
+    output.record(
+        write_space_trajectory(output.path("trajectory.pvd"), space, motion.t[keep], motion.U[keep])
+    )
+    output.record(output.path("trajectory"))
+    for name, plot in (
+        ("tip_orbit.png", plot_tip_orbit),
+        ("snapshots_3d.png", plot_space_snapshots),
+    ):
+        # tight: a 3-D axes' labels reach beyond the box the layout gives it
+        output.figure(name, plot(space, motion, static=static), dpi=130, bbox_inches="tight")
+
+
+def _summary_3d(r: dict) -> None:
+    p = r["params"]
+    print(
+        f"alpha = {p['alpha']:.6g}, beta = {p['beta']:.6g}, gamma = {p['gamma']:.6g}, "
+        f"mu = {p['mu']:.6g}, v = {p['v']:.6g} (3-D)"
+    )
+    line = f"attractor: {r['attractor']}, motion {r['motion']}"
+    if r.get("period"):
+        line += f", period {r['period']:.8g}"
+    if r.get("whirl_rate") is not None:
+        line += f", whirl rate {r['whirl_rate']:.6g}"
+    print(line)
+    for k, (lo, hi) in r["tip"].items():
+        print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
+    if r.get("floquet_multipliers"):
+        mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"][:6])
+        verdict = "stable" if r.get("stable") else "unstable"
+        print(f"  |Floquet multipliers| {mus} ({verdict})")
+    if r.get("frequencies"):
+        print(f"  frequencies {', '.join(f'{f:.6g}' for f in r['frequencies'])}")
+    print(
+        f"  planarity {r['planarity']:.3g}, steps {r['steps']}, rejected {r['rejected_steps']}, "
+        f"tau {r['t_end']:.4g}, CPU {r['cpu_time']:.1f} s"
+    )

@@ -1,10 +1,8 @@
 """``fempipe spectrum``: eigenvalues of the linearized problem, Eq. (32), against the flow velocity.
 
-Follows the static branch over ``--v`` (:func:`fempipe.analyses.stability.trace_root_locus`),
-mode numbers carried by continuity from v = 0; lambda (Re lambda > 0 unstable) and the paper's
-Omega = -i lambda.  The motion out of the plane is analysed about the same states and
-``stable`` is the verdict in three dimensions; ``--planar``: the paper's planar model alone.
-Keys and files: docs/cli/commands.md, "fempipe spectrum".
+Mode numbers carried by continuity from v = 0 (:func:`fempipe.analyses.stability.trace_root_locus`),
+in and out of the plane (``stable``: the verdict in three dimensions) or with ``--planar`` in the
+plane only.  Keys and files: docs/cli/commands.md, "fempipe spectrum".
 """
 
 from __future__ import annotations
@@ -22,9 +20,7 @@ EXAMPLES = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default="0:10:51")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "0:10:51")
     g = parser.add_argument_group("spectrum")
     g.add_argument(
         "--modes",

@@ -1,10 +1,8 @@
 """``fempipe stability-map``: the critical flow velocity against the inclination (Fig. 6).
 
-v_cr at every alpha of ``--alphas`` for each curve (each beta of ``--betas`` at ``--gamma``, each
-gamma of ``--gammas`` at ``--beta``), in three dimensions or with ``--planar`` in the plane, the
-variants of the pipe applied to every point (:func:`fempipe.analyses.stability.map_stability`);
-points run on ``--workers`` processes, a failed one reported without stopping the others.  Keys
-and files: docs/cli/commands.md, "fempipe stability-map".
+v_cr at every alpha of ``--alphas`` for each beta of ``--betas`` and gamma of ``--gammas``
+(:func:`fempipe.analyses.stability.map_stability`), a failed point reported without stopping the
+others.  Keys and files: docs/cli/commands.md, "fempipe stability-map".
 """
 
 from __future__ import annotations
@@ -26,9 +24,7 @@ EXAMPLES = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser, alpha=False)
-    common.add_flow_arguments(parser, default="0,10")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "0,10", alpha=False)
     g = parser.add_argument_group("map")
     g.add_argument(
         "--alphas",

@@ -1,10 +1,8 @@
 """``fempipe static``: the large static deformation, Eq. (31a), along a list of flow velocities.
 
-Newton and continuation from the gravity-sagged state (:func:`fempipe.analyses.statics.solve_path`),
-in v or, with ``--continuation gamma|alpha``, in gravity or inclination at one flow; each state's
-linear stability in three dimensions (both planes) or, with ``--planar``, in its plane; with
-``--error-estimate`` each tip value's estimate from the refined discretization
-(:mod:`fempipe.studies.estimates`).  Keys and files: docs/cli/commands.md, "fempipe static".
+Newton and continuation (:func:`fempipe.analyses.statics.solve_path`) in v or, with
+``--continuation gamma|alpha``, at one flow; each state's linear stability in three dimensions
+or, with ``--planar``, in its plane.  Keys and files: docs/cli/commands.md, "fempipe static".
 """
 
 from __future__ import annotations
@@ -27,9 +25,7 @@ EXAMPLES = (
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    common.add_physical_arguments(parser)
-    common.add_flow_arguments(parser, default="0:10:11")
-    common.add_discretization_arguments(parser)
+    common.add_problem_arguments(parser, "0:10:11")
     g = parser.add_argument_group("continuation")
     g.add_argument(
         "--continuation",
