@@ -65,7 +65,7 @@ def find_attractor(
     perturbation: float = 0.01,
     callback: Callable[[float], None] | None = None,
 ) -> Attractor:
-    """Integrate past the transient and classify the attractor.
+    """Integrate past the transient and classify the attractor (docs/theory/numerics.md).
 
     Parameters
     ----------
@@ -73,28 +73,23 @@ def find_attractor(
     q0, qdot0 : ndarray, optional
         Initial state; default the static state plus ``perturbation`` rad in the first
         sine mode, at rest.
-    t_max : float
-        Longest integration (tau) before declaring the motion non-periodic.
-    rtol : float
-        Tolerance of the transient integration.
+    t_max, rtol : float
+        Longest integration (tau; then non-periodic) and its tolerance.
     shoot_rtol, shoot_tol : float
-        Integration and Newton tolerances of the shooting (docs/theory/numerics.md).
-    use_shooting : bool
-        If False, a periodic orbit is accepted when successive section returns agree to
+        Integration and Newton tolerances of the shooting.
+    use_shooting, converged_tol : bool, float
+        Without shooting a periodic orbit is accepted when successive returns agree to
         ``converged_tol``.
-    recurrence_tol : float
-        Section returns this close (RMS) start the shooting if they approach each other
-        slowly (less than 2x per return).
-    start_tol : float
-        Returns that approach each other fast are integrated on until this close before
-        the shooting starts (a plain period costs a third of a Newton iteration).
+    recurrence_tol, start_tol : float
+        Returns this close (RMS) start the shooting; returns that approach fast (2x per
+        return) are integrated on until ``start_tol`` close first.
     equilibrium_radius : float
         Within this RMS distance of a linearly stable static state, and approaching it,
         the attractor is that equilibrium.
     n_max : int
         Largest period-n looked for.
     record : bool
-        Keep the transient trajectory in ``Attractor.trajectory``.
+        Keep the transient in ``Attractor.trajectory``.
     callback : callable, optional
         Called with tau after every step.
 

@@ -391,8 +391,8 @@ def continue_cycles(
 ) -> CycleBranch:
     """Follow the periodic orbits of Eq. (20) born at a Hopf point by pseudo-arclength continuation.
 
-    Single shooting in (x0, T, v) with the exact monodromy of the discrete flow, a Poincare
-    phase condition, and Keller's arclength condition or a fixed v on the requested values.
+    Single shooting in (x0, T, v) with the exact monodromy, a Poincare phase condition and
+    Keller's arclength condition (or v fixed on ``values``); docs/theory/numerics.md.
 
     Parameters
     ----------
@@ -401,27 +401,21 @@ def continue_cycles(
     hopf : HopfPoint
         Where the branch starts (:func:`find_hopf_points`).
     v_range : (float, float)
-        The branch ends once it leaves this range of v.
+        The branch ends once it leaves this range.
     values : sequence of float
-        Requested v, landed on exactly every time the branch passes them (``source="grid"``).
+        v landed on every time the branch passes (``source="grid"``).
     name : str
     rtol : float
-        Integration tolerance, scaled down near a multiplier 1
-        (:meth:`~fempipe.analyses.periodic.problem.CycleCorrector.rtol_after`); at the
-        requested v times :data:`GRID_RTOL_FACTOR`.  Accuracy: docs/theory/numerics.md.
-    tol : float
-        Newton tolerance on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi), on the phase
-        and the arclength conditions.
-    xtol : float
-        Newton tolerance on the correction (the residual understates the error by
-        1 / (1 - mu) for a multiplier mu near 1).
+        Integration tolerance (scaled down near a multiplier 1; times :data:`GRID_RTOL_FACTOR`
+        at ``values``).
+    tol, xtol : float
+        Newton tolerances on the RMS residual and on the correction.
     ds, ds_min, ds_max : float
         First, smallest and largest arclength step.
     max_steps, max_iter : int
         Steps of the branch, Newton iterations per corrector.
     resume : dict, optional
-        The state an interrupted run passed to ``on_point``: the branch continues from there
-        (a failed one raises its error again).
+        An interrupted run's state (from ``on_point``) to continue from.
     on_point : callable, optional
         Called after every accepted point with the branch's plain-JSON state.
 
@@ -432,7 +426,7 @@ def continue_cycles(
     Raises
     ------
     CycleContinuationError
-        The corrector failed at the smallest step; names v and carries the finished branch.
+        The corrector failed at the smallest step (carries the finished branch).
     ValueError
         Bad arguments or hysteretic damping.
     """

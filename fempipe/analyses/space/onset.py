@@ -27,12 +27,7 @@ from fempipe.model.space import SpaceModel, planar_state
 
 from ..stability.hopf.flutter import EVENT_KEYS
 from ..stability.hopf.lyapunov import lyapunov_coefficient
-from ..stability.hopf.normal_form import (
-    HopfChecks3D,
-    HopfNormalForm,
-    amplitude_coefficient,
-    cycle_side,
-)
+from ..stability.hopf.normal_form import HopfChecks3D, HopfNormalForm
 from ..stability.hopf.pipe import dense, pipe_jacobian
 from ..statics import solve_sagged
 
@@ -165,7 +160,7 @@ def hopf_normal_form_3d(
     A = jac(x0)
     lam_all = np.linalg.eigvals(A)
     real = lam_all[np.abs(lam_all.imag) <= 1e-9 * np.abs(lam_all)].real
-    q, p, w = hc.q, hc.p, hc.omega
+    q, p = hc.q, hc.p
     # lambda'(v) = p^H (dA/dv) q along the branch, tangent q_v = -R_q^{-1} R_v.
     rv = pm.static_parameter_derivative(q0, "v")
     qv = -np.linalg.solve(dense(pm.static_jacobian(q0)), rv)
@@ -182,9 +177,7 @@ def hopf_normal_form_3d(
     lp = _pair_at(model, planar, v + hv, q0)[0]
     lm = _pair_at(model, planar, v - hv, q0)[0]
     check = (lp.real - lm.real) / (2.0 * hv)
-    slope, side = cycle_side(hc, dlam)
     gY = model.tip_position_gradient(U0)[2]
-    coef = {"Y_tip": amplitude_coefficient(gY, q, slope)} if side == "above" else {}
     nt = planar.disc.n
     checks = HopfChecks3D(
         v_out_of_plane=None if v_out_of_plane is None else float(v_out_of_plane),
@@ -194,24 +187,7 @@ def hopf_normal_form_3d(
         next_real_part=_next_real_part(lam_all, hc.eigenvalue),
         secant_iterations=its,
     )
-    return HopfNormalForm(
-        v=float(v),
-        l1=hc.l1,
-        uncertainty=hc.uncertainty,
-        criticality=hc.criticality,
-        omega=w,
-        eigenvalue=hc.eigenvalue,
-        eigenvalue_derivative=dlam,
-        transversality=float(dlam.real),
-        rho2_slope=float(slope),
-        side=side,
-        amplitude_coefficients=coef,
-        q_static=U0,
-        eigenvector=q,
-        coefficient=hc,
-        section_gradient=gY,
-        checks=checks,
-    )
+    return HopfNormalForm.of(hc, v, dlam, U0, {"Y_tip": gY}, gY, checks, sides=("above",))
 
 
 def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:

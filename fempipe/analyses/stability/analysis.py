@@ -55,45 +55,31 @@ def analyse_stability(
     v_max, v_min : float
         The flow range, 0 <= v_min < v_max.
     planes : tuple of {'in', 'out'}
-        The linear problems analysed along the same static branches: in the plane of
-        the static states (Eq. (32)) and/or out of it (:mod:`fempipe.model.out_of_plane`).
-    follow_bifurcations : bool
-        Also analyse the branches born at branch points (pitchforks at alpha = 0, pi).
-    max_depth : int
-        Generations of branches to follow (1: those born on the primary branch).
+        The linear problems: in the plane (Eq. (32)) and/or out of it.
+    follow_bifurcations, max_depth : bool, int
+        Also analyse the branches born at branch points, to ``max_depth`` generations.
     q0 : ndarray, optional
-        Initial guess of the primary state at v_min (default: gravity loading).
-    ds_max : float
-        Largest continuation step (arclength in (theta L2, v)).
+        Primary state's guess at v_min (default: gravity loading).
+    ds_max, max_steps : float, int
+        Largest continuation step (arclength in (theta L2, v)) and step count.
     method : {'auto', 'qz', 'shift-invert'}
-        Eigensolver; ``auto`` is shift-invert (only resolved eigenvalues are used).
     tolerance : float
         :data:`RESOLUTION_TOL` of the resolved modes.
     stop_at_first : bool
         Stop each plane's primary branch at its first loss of stability.
     callback : callable, optional
-        ``callback(branch_name, v)`` after every sample (progress).
+        ``callback(branch_name, v)`` after every sample.
 
     Returns
     -------
-    StabilityResult
-        For one plane; :class:`StabilityInPlanes` for ``("in", "out")``.
-
-    Raises
-    ------
-    ParamError
-        If ``planes`` is not a tuple of distinct "in", "out".
-    NewtonError
-        If the static state cannot be followed.
+    StabilityResult or StabilityInPlanes
+        The latter for ``("in", "out")``.
 
     Notes
     -----
-    The branches are continued and switched once; each plane's analysis runs along the
-    same points (the out-of-plane one every :data:`OUT_OF_PLANE_STRIDE`-th point, or as
-    the in-plane one on a straight branch, where the two pencils are the same matrices).
-    Where theta = 0 is the static state (alpha = 0, pi) the straight branch is not
-    continued and its spectra use fixed matrices (docs/theory/stability.md, "The straight
-    branch"; tests/test_stability_fast.py).
+    The out-of-plane analysis runs every :data:`OUT_OF_PLANE_STRIDE`-th point of the same
+    branches; the straight branch (alpha = 0, pi) is not continued (docs/theory/stability.md,
+    "The straight branch").
     """
     models = plane_models(model, planes)
     model = models[0]

@@ -87,9 +87,6 @@ class Branch:
     def bifurcations(self) -> list[SpecialPoint]:
         return [s for s in self.special if s.kind == "bifurcation"]
 
-    def params_at(self, value: float) -> Params:
-        return replace(self.base, **{self.parameter: value})
-
 
 class StaticBranchPolicy(KellerPolicy):
     """Keller's policy with the pipe's convergence test (force balance), landing on ``stop``

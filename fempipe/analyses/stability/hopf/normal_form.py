@@ -21,20 +21,18 @@ from .pipe import dense, pipe_derivatives, pipe_jacobian
 
 @dataclass(frozen=True)
 class HopfChecks3D:
-    """Diagnostics of the 3-D model's normal form (:func:`~fempipe.analyses.space.onset.hopf_normal_form_3d`).
+    """Diagnostics of :func:`~fempipe.analyses.space.onset.hopf_normal_form_3d`.
 
     Attributes
     ----------
     v_out_of_plane : float or None
         v_cr of the linear out-of-plane model (the secant's start), if given.
     transversality_check : float
-        Re lambda'(v) by a central difference of Re lambda on the branch (independent check).
+        Re lambda'(v) by a central difference of Re lambda on the branch.
     in_plane_fraction : float
         \\|q_theta\\| / \\|q_U\\|: 0 for the mirror-odd (out-of-plane) eigenvector.
-    largest_real_eigenvalue : float
-        The largest real eigenvalue at v (the gauge's relaxation, far from critical).
-    next_real_part : float
-        The largest Re lambda besides the critical pair (the spectral gap).
+    largest_real_eigenvalue, next_real_part : float
+        The largest real eigenvalue (the gauge's); the largest Re lambda but the pair.
     secant_iterations : int
     """
 
@@ -52,38 +50,27 @@ class HopfNormalForm:
 
     Attributes
     ----------
-    v : float
-        Flow velocity of the Hopf point.
-    l1 : float
-        First Lyapunov coefficient (q's positions of unit L2 norm).
-    uncertainty : float
-        Numerical uncertainty of l1 (docs/theory/stability.md, "Derivatives").
+    v, omega : float
+        Flow velocity of the Hopf point and Im lambda there.
+    l1, uncertainty : float
+        First Lyapunov coefficient (q's positions of unit L2 norm) and its uncertainty.
     criticality : {'supercritical', 'subcritical', 'degenerate'}
-    omega : float
-        Im lambda at v.
-    eigenvalue : complex
-        The critical eigenvalue at v (Re ~ 0).
-    eigenvalue_derivative : complex
-        lambda'(v) along the static branch.
-    transversality : float
-        Re lambda'(v).
-    rho2_slope : float
-        rho^2 / (v - v_cr) = -Re(lambda') / (omega l1).
+    eigenvalue, eigenvalue_derivative : complex
+        The critical eigenvalue (Re ~ 0) and lambda'(v) along the static branch.
+    transversality, rho2_slope : float
+        Re lambda'(v); rho^2 / (v - v_cr) = -Re(lambda') / (omega l1).
     side : {'above', 'below'} or None
         Side of v_cr where the cycles exist (None if degenerate or not transversal).
     amplitude_coefficients : dict
-        c of ``(max - min)/2 ~ c sqrt(|v - v_cr|)`` per tip coordinate: ``theta_tip`` and
-        ``eta_tip`` (planar), ``Y_tip`` (3-D, where the cycles exist above v_cr).
-    q_static : ndarray, shape (n,)
-        The equilibrium (planar q, or the 3-D U).
-    eigenvector : ndarray of complex, shape (2n,)
-        q of the normal form (x - x0 ~ 2 rho Re(q e^{i omega tau})).
+        c of ``(max - min)/2 ~ c sqrt(|v - v_cr|)``: ``theta_tip``, ``eta_tip`` (planar),
+        ``Y_tip`` (3-D, where the cycles exist above v_cr).
+    q_static, eigenvector : ndarray
+        The equilibrium (planar q or 3-D U) and q (x - x0 ~ 2 rho Re(q e^{i omega tau})).
     coefficient : HopfCoefficient
-        The generic result (step diagnostics).
-    section_gradient : ndarray, shape (n,)
+    section_gradient : ndarray
         Gradient of the Poincare section variable (eta_tip; 3-D: Y_tip).
     checks : HopfChecks3D or None
-        The 3-D model's diagnostics; None for the planar pipe.
+        The 3-D model's diagnostics.
     """
 
     v: float
@@ -102,6 +89,32 @@ class HopfNormalForm:
     coefficient: HopfCoefficient = field(repr=False)
     section_gradient: np.ndarray = field(repr=False, default=None)
     checks: HopfChecks3D | None = None
+
+    @classmethod
+    def of(cls, hc, v, dlam, q_static, gradients, section, checks=None, sides=("above", "below")):
+        """From the coefficient ``hc`` and lambda'(v) = ``dlam``; amplitude coefficients of
+        ``gradients`` (name: d coordinate / dq) where the cycles exist on one of ``sides``."""
+        slope, side = cycle_side(hc, dlam)
+        g = gradients.items() if side in sides else ()
+        coef = {k: amplitude_coefficient(x, hc.q, slope) for k, x in g}
+        return cls(
+            v=float(v),
+            l1=hc.l1,
+            uncertainty=hc.uncertainty,
+            criticality=hc.criticality,
+            omega=hc.omega,
+            eigenvalue=hc.eigenvalue,
+            eigenvalue_derivative=dlam,
+            transversality=float(dlam.real),
+            rho2_slope=float(slope),
+            side=side,
+            amplitude_coefficients=coef,
+            q_static=q_static,
+            eigenvector=hc.q,
+            coefficient=hc,
+            section_gradient=section,
+            checks=checks,
+        )
 
     def rho(self, v: float) -> float:
         """Predicted normal-form amplitude rho at v (nan on the side without cycles)."""
@@ -241,7 +254,7 @@ def first_lyapunov_coefficient(
     hc = lyapunov_coefficient(
         lambda x: pipe_jacobian(model, x), x0, omega=omega, norm=G, step=step, derivatives=deriv
     )
-    q, p, w = hc.q, hc.p, hc.omega
+    q, p = hc.q, hc.p
     # lambda'(v) = p^H (dA/dv) q along the branch, tangent q_v = -R_q^{-1} R_v.
     v = model.params.v
     rv = model.static_parameter_derivative(q0, "v")
@@ -253,27 +266,9 @@ def first_lyapunov_coefficient(
     s = max(1.0, float(np.linalg.norm(xv)))  # a step of unit size in (x, v)
     dA = deriv(xv / s, hv, 1.0 / s)[0] * s
     dlam = complex(np.conj(p) @ (dA @ q))
-    slope, side = cycle_side(hc, dlam)
     # d(theta_tip)/dq and d(eta_tip)/dq = int phi_j cos theta.
     grads = {
         "theta_tip": np.asarray(disc.tip, dtype=float),
         "eta_tip": np.asarray(disc.Phi.T @ (disc.quad.w * np.cos(disc.Phi @ q0))),
     }
-    coef = {} if side is None else {k: amplitude_coefficient(g, q, slope) for k, g in grads.items()}
-    return HopfNormalForm(
-        v=float(v),
-        l1=hc.l1,
-        uncertainty=hc.uncertainty,
-        criticality=hc.criticality,
-        omega=w,
-        eigenvalue=hc.eigenvalue,
-        eigenvalue_derivative=dlam,
-        transversality=float(dlam.real),
-        rho2_slope=float(slope),
-        side=side,
-        amplitude_coefficients=coef,
-        q_static=q0,
-        eigenvector=q,
-        coefficient=hc,
-        section_gradient=grads["eta_tip"],
-    )
+    return HopfNormalForm.of(hc, v, dlam, q0, grads, grads["eta_tip"])
