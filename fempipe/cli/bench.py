@@ -88,8 +88,5 @@ def print_results(result: dict) -> None:
         rows = res.get("table")
         if rows:
             cols = list(dict.fromkeys(k for r in rows for k in r))
-            cells = [[_fmt(r.get(c, "")) for c in cols] for r in rows]
-            widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
-            print("  " + "  ".join(c.rjust(w) for c, w in zip(cols, widths, strict=True)))
-            for row in cells:
-                print("  " + "  ".join(s.rjust(w) for s, w in zip(row, widths, strict=True)))
+            columns = [(c, lambda r, c=c: _fmt(r.get(c, ""))) for c in cols]
+            reporting.print_table(columns, rows, indent="  ")

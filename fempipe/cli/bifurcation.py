@@ -144,16 +144,7 @@ def run(args: argparse.Namespace) -> int:
     alphas = None
     if args.alphas is not None:
         alphas = parsing.parse_alpha_list(args.alphas, "--alphas", parsing.allow_large(args))
-    large = parsing.allow_large(args)
-    parsing.check_count("--t-max", args.t_max, parsing.T_MAX, large, "time units")
-    if not setup.v:
-        raise CLIError("--v", "no flow velocities to sweep")
-    n_alpha = 1 if alphas is None else len(alphas)
-    total = len(setup.v) * len(args.directions) * n_alpha
-    flow_opt = common.flow_option(args)
-    parsing.check_count(
-        flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions x alphas)"
-    )
+    total = _check_work(args, setup, 1 if alphas is None else len(alphas))
     if args.method == "continuation":
         return _run_continuation(args, setup, alphas)
     executor = client = None
@@ -194,6 +185,19 @@ def run(args: argparse.Namespace) -> int:
     result["wall_time"] = diagram.wall_time
     _deliver(args, store_dir, result, KEYS)
     return 0
+
+
+def _check_work(args, setup, n_alpha: int | None) -> int:
+    """The number of points (``n_alpha`` None: a 3-D sweep), within the work limits."""
+    flow_opt = common.flow_option(args)
+    if not setup.v:
+        raise CLIError(flow_opt if n_alpha is None else "--v", "no flow velocities to sweep")
+    large = parsing.allow_large(args)
+    parsing.check_count("--t-max", args.t_max, parsing.T_MAX, large, "time units")
+    total = len(setup.v) * len(args.directions) * (n_alpha or 1)
+    what = "points (v x directions" + (")" if n_alpha is None else " x alphas)")
+    parsing.check_count(flow_opt, total, parsing.MAX_VALUES, large, what)
+    return total
 
 
 def _store_dir(args) -> Path | None:
@@ -266,13 +270,7 @@ def _run_3d(args: argparse.Namespace, setup) -> int:
     from fempipe.model.operators import PipeModel
 
     _refuse_3d(args)
-    flow_opt = common.flow_option(args)
-    if not setup.v:
-        raise CLIError(flow_opt, "no flow velocities to sweep")
-    large = parsing.allow_large(args)
-    parsing.check_count("--t-max", args.t_max, parsing.T_MAX, large, "time units")
-    total = len(setup.v) * len(args.directions)
-    parsing.check_count(flow_opt, total, parsing.MAX_VALUES, large, "points (v x directions)")
+    total = _check_work(args, setup, None)
     store_dir = _store_dir(args)
     with reporting.progress(args, total, "bifurcation --3d") as bar:
         diagram = compute_diagram_3d(
@@ -312,18 +310,10 @@ def _deliver(args, store_dir, result: dict, keys) -> None:
 
 
 def _write_outputs(output: reporting.Output, result: dict, keys) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    reporting.agg()
     figure = diagram_figure_3d if result.get("model") == "3d" else diagram_figure
     for key in keys:
-        fig = figure(result, key)
-        try:
-            output.figure(f"{key}.png", fig, dpi=130)
-        finally:
-            plt.close(fig)
+        output.figure(f"{key}.png", figure(result, key), dpi=130)
     output.json("bifurcation.json", result)
 
 
@@ -459,50 +449,54 @@ def diagram_figure_3d(result: dict, key: str):
 
 
 def _print_table(result: dict) -> None:
-    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle branch
-    (``H1``, ...) or the sweep's direction; ``stable``: ``-`` for a sweep's attractor;
-    ``point``: ``requested`` (a v of ``--v``) or ``step`` (the continuation's own);
-    ``3d``: ``stable_3d``, where the verdicts were computed."""
-    three = any("stable_3d" in pt for pt in result["points"])
-    print(
-        f"{'alpha':>8s} {'branch':>6s} {'v':>8s}  {'attractor':<12s} {'stable':<6s} "
-        f"{'point':<9s} {'period':>10s} {'eta_min':>9s} {'eta_max':>9s} {'X_min':>9s} "
-        f"{'X_max':>9s} {'Z_min':>9s} {'Z_max':>9s}" + (f" {'3d':<4s}" if three else "")
-    )
-    for pt in result["points"]:
-        per = f"{pt['period']:.6g}" if pt["period"] else "-"
-        stable = _yes_no(pt.get("stable"))
-        point = "requested" if pt.get("requested", True) else "step"
-        branch = {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
-            pt["direction"], pt["direction"]
-        )
-        print(
-            f"{pt['alpha']:8.4g} {branch:>6s} {pt['v']:8.4g}  {pt['attractor']:<12s} "
-            f"{stable:<6s} {point:<9s} {per:>10s} {pt['eta_tip'][0]:9.5f} "
-            f"{pt['eta_tip'][1]:9.5f} {pt['X_tip'][0]:9.5f} {pt['X_tip'][1]:9.5f} "
-            f"{pt['Z_tip'][0]:9.5f} {pt['Z_tip'][1]:9.5f}"
-            + (f" {_yes_no(pt.get('stable_3d')):<4s}" if three else "")
-        )
+    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle branch (``H1``,
+    ...) or the sweep's direction; ``stable``: ``-`` for a sweep's attractor; ``point``:
+    ``requested`` (a v of ``--v``) or ``step``; ``3d``: ``stable_3d`` where computed."""
+    cols = [
+        ("alpha", lambda pt: f"{pt['alpha']:.4g}"),
+        (
+            "branch",
+            lambda pt: {"continuation": pt.get("branch", "c"), "static": "eq"}.get(
+                pt["direction"], pt["direction"]
+            ),
+        ),
+        ("v", lambda pt: f"{pt['v']:.4g}"),
+        ("attractor", lambda pt: pt["attractor"], "<"),
+        ("stable", lambda pt: _yes_no(pt.get("stable")), "<"),
+        ("point", lambda pt: "requested" if pt.get("requested", True) else "step", "<"),
+        *_extrema_columns(("eta", "X", "Z")),
+    ]
+    if any("stable_3d" in pt for pt in result["points"]):
+        cols.append(("3d", lambda pt: _yes_no(pt.get("stable_3d")), "<"))
+    reporting.print_table(cols, result["points"])
     for sp in result.get("special_points", []):
         print(
             f"special point: alpha {sp['alpha']:.4g} {sp['branch']} {sp['type']} v = {sp['v']:.6g}"
         )
 
 
+def _extrema_columns(names) -> list:
+    """The period, then min and max of each ``NAME_tip``."""
+    cols = [("period", lambda pt: f"{pt['period']:.6g}" if pt["period"] else "-")]
+    for name in names:
+        for i, end in enumerate(("min", "max")):
+            cols.append((f"{name}_{end}", lambda pt, k=f"{name}_tip", i=i: f"{pt[k][i]:.5f}"))
+    return cols
+
+
 def _print_table_3d(result: dict) -> None:
     """One line per point of a 3-D run."""
-    print(
-        f"{'dir':>4s} {'v':>8s}  {'attractor':<12s} {'motion':<9s} {'period':>10s} "
-        f"{'whirl':>8s} {'Y_min':>9s} {'Y_max':>9s} {'eta_min':>9s} {'eta_max':>9s}"
+    cols = [
+        ("dir", lambda pt: pt["direction"]),
+        ("v", lambda pt: f"{pt['v']:.4g}"),
+        ("attractor", lambda pt: pt["attractor"], "<"),
+        ("motion", lambda pt: pt["motion"], "<"),
+        *_extrema_columns(("Y", "eta")),
+    ]
+    cols.insert(
+        5, ("whirl", lambda pt: "-" if pt["whirl_rate"] is None else f"{pt['whirl_rate']:.4g}")
     )
-    for pt in result["points"]:
-        per = f"{pt['period']:.6g}" if pt["period"] else "-"
-        wr = f"{pt['whirl_rate']:.4g}" if pt["whirl_rate"] is not None else "-"
-        print(
-            f"{pt['direction']:>4s} {pt['v']:8.4g}  {pt['attractor']:<12s} {pt['motion']:<9s} "
-            f"{per:>10s} {wr:>8s} {pt['Y_tip'][0]:9.5f} {pt['Y_tip'][1]:9.5f} "
-            f"{pt['eta_tip'][0]:9.5f} {pt['eta_tip'][1]:9.5f}"
-        )
+    reporting.print_table(cols, result["points"])
 
 
 def _yes_no(flag) -> str:

@@ -248,12 +248,6 @@ def add_workers_argument(group, help: str, default: str | None = "1") -> None:
     )
 
 
-def add_mode_argument(group, help: str) -> None:
-    """``--mode K``, a positive integer (default 1)."""
-    type_ = parsing.option_type("--mode", parsing.positive_int)
-    group.add_argument("--mode", metavar="K", type=type_, default="1", help=help)
-
-
 def add_planar_argument(group, what: str) -> None:
     """``--planar``: the paper's planar model alone; ``what`` says what changes."""
     group.add_argument(

@@ -187,9 +187,7 @@ def _print(result: dict, pipe) -> None:
     with_errors = "error_estimate" in result
 
     def num(d: dict, key: str, spec: str) -> str:
-        if with_errors and key + reporting.ERROR in d:
-            return reporting.pm(d[key], d[key + reporting.ERROR], spec)
-        return spec.format(d[key])
+        return reporting.value(d, key, spec, with_errors)
 
     print(f"stability for {lo:g} <= v <= {hi:g}, {head}; discretization {disc}")
     v_cr = result["v_cr"]
@@ -209,24 +207,28 @@ def _print(result: dict, pipe) -> None:
     if not result["events"]:
         print(f"events: none (no eigenvalue crosses Re lambda = 0 for {lo:g} <= v <= {hi:g})")
         return
-    w_v, w_f = (25, 21) if with_errors else (15, 11)
-    print(
-        f"{'branch':>8} {'plane':>5} {'type':>20} {'v':>{w_v}} {'mode':>5} {'Im lambda':>{w_f}}  "
-        "system below -> above"
-    )
-    for ev in result["events"]:
-        mode = "-" if ev["mode"] is None else str(ev["mode"])
+
+    def change(ev: dict) -> str:
         before, after = (
             "stable" if ev[k] else "unstable" for k in ("stable_before", "stable_after")
         )
         note = f"  ({ev['error_note']})" if ev.get("error_note") else ""
-        if ev["type"] == "flutter":
-            note += reporting_hopf(ev)
-        print(
-            f"{ev['branch']:>8} {ev.get('plane', 'in'):>5} {ev['type']:>20} "
-            f"{num(ev, 'v', '{:15.10f}'):>{w_v}} {mode:>5} "
-            f"{num(ev, 'frequency', '{:11.6f}'):>{w_f}}  {before} -> {after}{note}"
+        return f"{before} -> {after}{note}" + (
+            reporting_hopf(ev) if ev["type"] == "flutter" else ""
         )
+
+    reporting.print_table(
+        [
+            ("branch", lambda ev: ev["branch"]),
+            ("plane", lambda ev: ev.get("plane", "in")),
+            ("type", lambda ev: ev["type"]),
+            ("v", lambda ev: num(ev, "v", "{:.10f}")),
+            ("mode", lambda ev: "-" if ev["mode"] is None else str(ev["mode"])),
+            ("Im lambda", lambda ev: num(ev, "frequency", "{:.6f}")),
+            ("system below -> above", change, "<"),
+        ],
+        result["events"],
+    )
     print(
         "mode k: the eigenvalue that is the k-th natural mode of the pipe without flow "
         "(v = 0, same alpha, beta, gamma, mu), followed in v by continuity"

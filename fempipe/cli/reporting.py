@@ -34,6 +34,8 @@ __all__ = [
     "error_columns",
     "pm",
     "print_footer",
+    "print_table",
+    "value",
     "progress",
     "time_progress",
 ]
@@ -334,3 +336,29 @@ def print_footer(est: Mapping, where: str = "") -> None:
 def pm(value, error, spec: str = "{:+.6f}") -> str:
     """``"value ± error"`` (two digits; ``± ?`` without an error)."""
     return f"{spec.format(value)} ± {'?' if error is None else f'{error:.1e}'}"
+
+
+def value(d: Mapping, key: str, spec: str, with_errors: bool = False) -> str:
+    """``d[key]`` formatted by ``spec``, as :func:`pm` with its error estimate when there is one."""
+    if with_errors and key + ERROR in d:
+        return pm(d[key], d[key + ERROR], spec)
+    return spec.format(d[key])
+
+
+def print_table(columns: Sequence[tuple], rows: Iterable, indent: str = "") -> None:
+    """Rows under their headers, each column as wide as its widest cell, two spaces apart.
+
+    ``columns``: ``(header, cell)`` with ``cell(row) -> str``, right-aligned, or
+    ``(header, cell, "<")`` left-aligned.
+    """
+    cells = [[col[1](row) for col in columns] for row in rows]
+    widths = [max([len(c[0])] + [len(r[i]) for r in cells]) for i, c in enumerate(columns)]
+    aligns = [c[2] if len(c) > 2 else ">" for c in columns]
+
+    def line(texts) -> str:
+        parts = [f"{t:{a}{w}}" for t, a, w in zip(texts, aligns, widths, strict=True)]
+        return (indent + "  ".join(parts)).rstrip()
+
+    print(line([c[0] for c in columns]))
+    for r in cells:
+        print(line(r))

@@ -85,31 +85,26 @@ def run(args: argparse.Namespace) -> int:
 
 def _with_out_of_plane(result: dict, locus, out_locus) -> dict:
     """The planar result with the out-of-plane spectrum and the verdict in three dimensions."""
-    out_points = out_locus.to_dict()["points"]
     points = []
-    for pt, po in zip(result["points"], out_points, strict=True):
-        stable = pt["stable"] and po["stable"]
+    for pt, po in zip(result["points"], out_locus.to_dict()["points"], strict=True):
         points.append(
-            {
-                "v": pt["v"],
-                "stable": stable,
-                "max_real": max(pt["max_real"], po["max_real"]),
-                "theta_tip": pt["theta_tip"],
-                "eigenvalues": [dict(e, plane="in") for e in pt["eigenvalues"]],
-                "stable_in_plane": pt["stable"],
-                "stable_out_of_plane": po["stable"],
-                "max_real_in_plane": pt["max_real"],
-                "max_real_out_of_plane": po["max_real"],
-                "eigenvalues_out_of_plane": [dict(e, plane="out") for e in po["eigenvalues"]],
-            }
+            {"v": pt["v"], "stable": pt["stable"] and po["stable"]}
+            | {"max_real": max(pt["max_real"], po["max_real"]), "theta_tip": pt["theta_tip"]}
+            | {"eigenvalues": [dict(e, plane="in") for e in pt["eigenvalues"]]}
+            | {"stable_in_plane": pt["stable"], "stable_out_of_plane": po["stable"]}
+            | {"max_real_in_plane": pt["max_real"], "max_real_out_of_plane": po["max_real"]}
+            | {"eigenvalues_out_of_plane": [dict(e, plane="out") for e in po["eigenvalues"]]}
         )
-    out = {"params": result["params"], "modes": result["modes"], "points": points}
-    out["modes_out_of_plane"] = out_locus.modes.tolist()
-    out["discretization"] = result["discretization"]
-    out["n_spectra"] = locus.n_spectra + out_locus.n_spectra
-    out["n_spectra_in_plane"] = locus.n_spectra
-    out["n_spectra_out_of_plane"] = out_locus.n_spectra
-    return out
+    return {
+        "params": result["params"],
+        "modes": result["modes"],
+        "points": points,
+        "modes_out_of_plane": out_locus.modes.tolist(),
+        "discretization": result["discretization"],
+        "n_spectra": locus.n_spectra + out_locus.n_spectra,
+        "n_spectra_in_plane": locus.n_spectra,
+        "n_spectra_out_of_plane": out_locus.n_spectra,
+    }
 
 
 def _rows(result: dict, key: str = "eigenvalues") -> list[dict]:

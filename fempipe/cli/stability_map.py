@@ -150,26 +150,23 @@ def _print(result: dict) -> None:
             "v_cr: the first loss of stability in three dimensions (plane: in the plane of the "
             "static state or out of it); in, out: each plane's v_cr"
         )
-    planes = f" {'plane':>5} {'v_cr in':>14} {'v_cr out':>14}" if spatial else ""
-    print(
-        f"{'alpha/pi':>9} {'beta':>7} {'gamma':>7} {'v_cr':>14} {'type':>11} {'mode':>5} "
-        f"{'v_flutter':>14}{planes}"
-    )
 
     def num(x) -> str:
         return "-" if x is None else f"{x:.10f}"
 
-    for r in result["points"]:
-        t = "error" if r.get("error") else (r.get("type") or "stable")
-        mode = "-" if r.get("mode") is None else str(r["mode"])
-        cells = ""
-        if spatial:
-            plane = r.get("first_plane") or "-"
-            cells = (
-                f" {plane:>5} {num(r.get('v_cr_in_plane')):>14} "
-                f"{num(r.get('v_cr_out_of_plane')):>14}"
-            )
-        print(
-            f"{r['alpha'] / math.pi:9.4f} {r['beta']:7.4g} {r['gamma']:7.4g} {num(r['v_cr']):>14} "
-            f"{t:>11} {mode:>5} {num(r.get('v_flutter')):>14}{cells}"
-        )
+    cols = [
+        ("alpha/pi", lambda r: f"{r['alpha'] / math.pi:.4f}"),
+        ("beta", lambda r: f"{r['beta']:.4g}"),
+        ("gamma", lambda r: f"{r['gamma']:.4g}"),
+        ("v_cr", lambda r: num(r["v_cr"])),
+        ("type", lambda r: "error" if r.get("error") else (r.get("type") or "stable")),
+        ("mode", lambda r: "-" if r.get("mode") is None else str(r["mode"])),
+        ("v_flutter", lambda r: num(r.get("v_flutter"))),
+    ]
+    if spatial:
+        cols += [
+            ("plane", lambda r: r.get("first_plane") or "-"),
+            ("v_cr in", lambda r: num(r.get("v_cr_in_plane"))),
+            ("v_cr out", lambda r: num(r.get("v_cr_out_of_plane"))),
+        ]
+    reporting.print_table(cols, result["points"])

@@ -247,6 +247,7 @@ def _print(result: dict, parameter: str, pipe) -> None:
             f"SI pipe: L = {pipe.L:g} m, EI = {pipe.EI:g} N m^2, m = {pipe.m:g} kg/m, "
             f"M = {pipe.M:g} kg/m, g = {pipe.g:g} m/s^2; v = {1 / pipe.velocity_scale:.6g} U"
         )
+    with_errors = "error_estimate" in result
     cols = [] if parameter == "v" else [(parameter, parameter, "{:9.5f}")]
     cols.append(("v", "v", "{:8.4f}"))
     if pipe is not None:
@@ -258,26 +259,10 @@ def _print(result: dict, parameter: str, pipe) -> None:
     cols.append(("stable", "stable", "{!s:>6}"))
     if planes:
         cols += [("stable_in_plane", "in", "{!s:>5}"), ("stable_out_of_plane", "out", "{!s:>5}")]
-    with_errors = "error_estimate" in result
-
-    def cell(row, key, fmt):
-        if with_errors and key + reporting.ERROR in row:
-            return reporting.pm(row[key], row[key + reporting.ERROR], fmt)
-        return fmt.format(row[key])
-
-    sample = result["points"][0]
-    widths = [
-        max(
-            len(h),
-            len(cell(sample, k, f)) if with_errors else len(f.format(0 if "d}" in f else 0.0)),
-        )
-        for k, h, f in cols
-    ]
-    print("  ".join(h.rjust(w) for (_, h, _), w in zip(cols, widths, strict=True)))
-    for row in result["points"]:
-        print(
-            "  ".join(cell(row, k, f).rjust(w) for (k, _, f), w in zip(cols, widths, strict=True))
-        )
+    reporting.print_table(
+        [(h, lambda row, k=k, f=f: reporting.value(row, k, f, with_errors)) for k, h, f in cols],
+        result["points"],
+    )
     if with_errors:
         reporting.print_footer(result["error_estimate"])
     if any(row["stable"] is False for row in result["points"]):

@@ -337,9 +337,7 @@ def _dimensionless(nums: dict, alpha: float, defaults: dict, err: _CellError) ->
                 flow[name] = x
         elif name in ("beta", "gamma", "mu"):
             defaults[name] = getattr(ranges, f"DEFAULT_{name.upper()}")
-    groups = {
-        k: nums.get(k, getattr(ranges, f"DEFAULT_{k.upper()}")) for k in ("beta", "gamma", "mu")
-    }
+    groups = {k: nums.get(k, defaults.get(k)) for k in ("beta", "gamma", "mu")}
     return Params(alpha=alpha, **groups), flow, {k: k for k in ("v", "v_min", "v_max")}
 
 

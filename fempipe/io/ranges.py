@@ -123,18 +123,14 @@ def check_v(x: float, option: str = "--v") -> float:
 def check_pipe(params: Params) -> Params:
     """``params`` of an SI pipe if its gamma and mu lie in their ranges (ParamError naming
     the group otherwise)."""
-    if params.gamma > GAMMA_MAX:
-        raise ParamError(
-            "gamma",
-            f"the pipe has gamma = (m+M) g L^3/EI = {params.gamma:g}, outside "
-            f"0 <= gamma <= {GAMMA_MAX:g} ({WHY['gamma']})",
-        )
-    if params.mu > MU_MAX:
-        raise ParamError(
-            "mu",
-            f"the pipe has mu = sqrt(EI/(m+M)) a/L^2 = {params.mu:g}, outside "
-            f"0 <= mu <= {MU_MAX:g} ({WHY['mu']})",
-        )
+    for field, formula in (("gamma", "(m+M) g L^3/EI"), ("mu", "sqrt(EI/(m+M)) a/L^2")):
+        x = getattr(params, field)
+        if x > HIGH[field]:
+            raise ParamError(
+                field,
+                f"the pipe has {field} = {formula} = {x:g}, outside 0 <= {field} <= "
+                f"{HIGH[field]:g} ({WHY[field]})",
+            )
     return params
 
 
