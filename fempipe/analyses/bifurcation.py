@@ -1,12 +1,8 @@
 """Bifurcation diagrams of the tip response against the flow velocity by sweeps (Figs. 7-10).
 
-:func:`sweep` steps v up or down, each point starting from the previous attractor and
-recording (:func:`fempipe.analyses.limit_cycle.find_attractor`) its kind, period and the
-extrema of eta(1), X_g(1), Z_g(1).  :func:`compute_bifurcation_diagram` runs independent
-sweeps (up and down, several alpha) in parallel, resumable
-(:mod:`fempipe.analyses.periodic.points`).
-
-How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
+:func:`sweep` steps v up or down, each point starting from the previous attractor;
+:func:`compute_bifurcation_diagram` runs sweeps (up, down, several alpha) in parallel,
+resumable.  Details: docs/theory/numerics.md, "Bifurcation sweeps".
 """
 
 from __future__ import annotations
@@ -76,16 +72,14 @@ def sweep(
         Start of the first point (default: static state + perturbation).
     perturbation : float
         Rotation (rad, first sine mode) added after an equilibrium.
-    store : PointStore, optional
-        Finished points are read from and written to it (resume).
-    alpha_index : int
-        This sweep's alpha in the store's file names.
+    store, alpha_index : PointStore, optional; int
+        Finished points are read from and written to it (file names by alpha index).
     progress : callable, optional
         Called with each finished (or loaded) point.
     continue_cycles : bool
-        After a stable cycle, first shoot from it; else :func:`find_attractor`.
+        After a stable cycle, first shoot from it.
     out_of_plane : bool
-        Also each attractor's 3-D verdict; a stored point gains it on a rerun.
+        Also each attractor's 3-D verdict (a stored point gains it on a rerun).
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
@@ -142,21 +136,7 @@ def _three_d_verdict(m: PipeModel, point: BifurcationPoint, cycle=None) -> dict:
     if point.attractor != "periodic" or point.period is None:
         return {"stable_3d": None}
     if cycle is None:
-        empty = np.zeros(0)
-        cycle = LimitCycle(
-            period=float(point.period),
-            q0=point.q,
-            qdot0=point.qdot,
-            level=math.nan,
-            tip={},
-            floquet_multipliers=np.zeros(0, complex),
-            stable=True,
-            iterations=0,
-            residual=0.0,
-            orbit_t=empty,
-            orbit_q=empty,
-            orbit_qdot=empty,
-        )
+        cycle = LimitCycle(float(point.period), point.q, point.qdot)  # what the monodromy needs
     stable = point.max_multiplier is None or point.max_multiplier < 1.0
     try:
         return cycle_verdict(m, cycle, stable)
@@ -316,8 +296,7 @@ def compute_bifurcation_diagram(
     store_dir, executor, workers, progress
         As :func:`fempipe.analyses.periodic.points.run_diagram`.
     out_of_plane : bool
-        Each point's 3-D verdict (:func:`sweep`); not in the manifest (a planar run's
-        store is resumed, adding it).
+        Each point's 3-D verdict (:func:`sweep`).
     **attractor_options
         Passed to :func:`fempipe.analyses.limit_cycle.find_attractor`.
 
@@ -328,8 +307,8 @@ def compute_bifurcation_diagram(
     Raises
     ------
     ValueError
-        Hysteretic damping, no values, a bad direction or worker count;
-        :class:`~fempipe.core.errors.PointStoreMismatchError` for a store of another run.
+        Hysteretic damping, no values, a bad direction or worker count
+        (PointStoreMismatchError for a store of another run).
     """
     refuse_hysteretic(model.params, "compute_bifurcation_diagram")
     t0 = time.perf_counter()

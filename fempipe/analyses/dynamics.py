@@ -1,10 +1,6 @@
 """Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
 
-The L-stable Radau IIA method :class:`fempipe.solvers.radau.Radau` integrates the problem
-:class:`fempipe.model.dynamics_problem.PipeDynamics`; :func:`simulate` records a
-:class:`Trajectory`, :func:`simulate_steps` yields the states step by step,
-:class:`PulsatingFlow` is an unsteady flow v(tau), :func:`make_initial_state` a perturbed
-static state and :func:`energy_rate` the power balance dE/dtau.
+Radau IIA (:class:`fempipe.solvers.radau.Radau`) on :class:`fempipe.model.dynamics_problem.PipeDynamics`.
 Numerics: docs/theory/numerics.md.
 """
 
@@ -107,21 +103,10 @@ def make_initial_state(
     amplitude: float = 0.01,
     q_static: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The static state plus ``amplitude`` sin((2r - 1) pi xi / 2) in theta (Eq. (22)), at rest.
+    """The static state plus ``amplitude`` sin((2 mode - 1) pi xi / 2) in theta (Eq. (22)), at rest.
 
-    Parameters
-    ----------
-    model : PipeModel
-    mode : int
-        r >= 1; the perturbation is L2-projected on the discretization.
-    amplitude : float
-        In rad.
-    q_static : ndarray, optional
-        The static state (default :func:`~fempipe.analyses.statics.solve_static`).
-
-    Returns
-    -------
-    (q0, qdot0) : ndarrays, shape (n,)
+    The perturbation is L2-projected; ``q_static`` default :func:`~fempipe.analyses.statics.solve_static`.
+    Returns (q0, qdot0).
     """
     if int(mode) < 1:
         raise ValueError(f"mode must be an integer >= 1, got {mode}")
@@ -155,6 +140,10 @@ def simulate_steps(
     yield from stepper.steps(t_end)
 
 
+#: The integrator's counters a :class:`Trajectory` keeps (and ``stats()`` reports, in this order).
+_COUNTERS = "steps rejected_steps newton_failures n_residual n_jacobian n_lu wall_time".split()
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """A computed trajectory: times ``t`` (m,), states ``q``, ``qdot`` (m, n), the
@@ -176,31 +165,11 @@ class Trajectory:
     @classmethod
     def recorded(cls, t, q, qdot, stats, rtol: float, flow: dict | None = None) -> Trajectory:
         """A trajectory from recorded samples and a stepper's running statistics."""
-        return cls(
-            t=np.asarray(t),
-            q=np.asarray(q),
-            qdot=np.asarray(qdot),
-            steps=stats.steps,
-            rejected_steps=stats.rejected_steps,
-            newton_failures=stats.newton_failures,
-            n_residual=stats.n_residual,
-            n_jacobian=stats.n_jacobian,
-            n_lu=stats.n_lu,
-            wall_time=stats.wall_time,
-            rtol=rtol,
-            flow=flow,
-        )
+        counts = {k: getattr(stats, k) for k in _COUNTERS}
+        return cls(np.asarray(t), np.asarray(q), np.asarray(qdot), **counts, rtol=rtol, flow=flow)
 
     def stats(self) -> dict:
-        return {
-            "steps": self.steps,
-            "rejected_steps": self.rejected_steps,
-            "newton_failures": self.newton_failures,
-            "n_residual": self.n_residual,
-            "n_jacobian": self.n_jacobian,
-            "n_lu": self.n_lu,
-            "wall_time": self.wall_time,
-        }
+        return {k: getattr(self, k) for k in _COUNTERS}
 
     def to_dict(self) -> dict:
         d = self.stats()
@@ -226,18 +195,17 @@ def simulate(
     h_fixed: float | None = None,
     callback: Callable[[float], None] | None = None,
 ) -> Trajectory:
-    """Integrate the motion of Eq. (20) from tau = t0 to t_end by :class:`Radau`.
+    """Integrate the motion of Eq. (20) from tau = t0 to t_end > t0 by :class:`Radau`.
 
     Parameters
     ----------
     model, q0, qdot0, t0, t_end
-        Model, initial state and time span (t_end > t0).
     n_out : int, optional
         Equally spaced output times (dense output); default every accepted step.
     rtol, atol, max_step, h_fixed
         See :class:`Radau`.
     flow : PulsatingFlow or callable tau -> (v, v_dot), optional
-        Unsteady flow; default the steady ``model.params.v``.
+        Default the steady ``model.params.v``.
     callback : callable, optional
         ``callback(tau)`` after every step.
 

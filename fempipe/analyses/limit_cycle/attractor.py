@@ -275,9 +275,7 @@ class _AttractorSearch:
 
     # -- equilibrium -------------------------------------------------------
     def _equilibrium(self) -> Attractor | None:
-        """The equilibrium if the state is close to a linearly stable static state and
-        not moving away from it (checked every 0.5 tau, about two flutter periods, so
-        that the exchange between q and q' averages out)."""
+        """The equilibrium if near a linearly stable static state and not leaving it (checked every 0.5 tau)."""
         stepper, model = self.stepper, self.model
         if stepper.t < self.next_eq_check:
             return None

@@ -6,6 +6,7 @@ Floquet multiplier (:func:`largest_nontrivial`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -75,30 +76,26 @@ class LimitCycle:
     q0, qdot0, level : ndarray, ndarray, float
         State on the orbit where the section variable is ``level`` (upward).
     tip : dict
-        ``{key: [min, max]}`` of the tip coordinates on the orbit.
     floquet_multipliers, stable : ndarray, bool
-        Eigenvalues of the converged iterate's monodromy by decreasing modulus; the
-        non-trivial ones (:func:`largest_nontrivial`) inside the unit circle.
+        By decreasing modulus; the non-trivial ones inside the unit circle.
     iterations, residual : int, float
-        Newton iterations (with the polish); final RMS of phi_T(x0) - x0.
     orbit_t, orbit_q, orbit_qdot : ndarray
         The orbit at equally spaced times over one period.
     steps, total_steps, rejected_steps, wall_time : int, int, int, float
-        Steps of the last period; steps and rejected steps of all iterations.
     """
 
     period: float
     q0: np.ndarray
     qdot0: np.ndarray
-    level: float
-    tip: dict
-    floquet_multipliers: np.ndarray
-    stable: bool
-    iterations: int
-    residual: float
-    orbit_t: np.ndarray = field(repr=False)
-    orbit_q: np.ndarray = field(repr=False)
-    orbit_qdot: np.ndarray = field(repr=False)
+    level: float = math.nan
+    tip: dict = field(default_factory=dict)
+    floquet_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    stable: bool = True
+    iterations: int = 0
+    residual: float = 0.0
+    orbit_t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    orbit_q: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    orbit_qdot: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     steps: int = 0
     total_steps: int = 0
     rejected_steps: int = 0
@@ -131,14 +128,9 @@ class Attractor:
     ----------
     kind : str
         ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
-    period, period_n : float or None, int or None
-        Period and distinct section points (1 for period-1, ...).
-    tip : dict
-        ``{key: [min, max]}`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS`.
+    period, period_n, tip : float or None, int or None, dict
     cycle, q, qdot, params : LimitCycle or None, ndarray, ndarray, Params
-        The shot orbit; a state on the attractor.
     t_end, stats, trajectory : float, dict, Trajectory or None
-        Time integrated; diagnostics of the transient and the shooting; the transient.
     """
 
     kind: str

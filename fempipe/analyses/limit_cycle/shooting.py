@@ -1,12 +1,9 @@
 """Newton shooting for a periodic orbit of a planar or 3-D dynamics problem (:func:`shoot`).
 
-Newton's method on ``phi_T(x0) - x0 = 0`` with the phase condition ``section_value(x0) =
-level`` (:func:`~fempipe.analyses.limit_cycle.tips.section_value`), unknowns (x0, T).  The
-monodromy matrix is the exact derivative of the discrete Radau flow map: Newton converges
-quadratically and its eigenvalues are the Floquet multipliers to the integration accuracy.
-At an axisymmetric inclination of the 3-D model every orbit turned about the vertical is an
-orbit: the bordered Newton matrix is singular along that rotation and the step is its
-minimum-norm least-squares solution.
+Unknowns (x0, T): ``phi_T(x0) - x0 = 0`` and ``section_value(x0) = level``, with the exact
+monodromy of the discrete Radau flow (its eigenvalues the Floquet multipliers).  At an
+axisymmetric inclination in 3-D the bordered matrix is singular along the rotation about the
+vertical: the step is the minimum-norm least-squares one.
 
 Derivation and accuracy: docs/theory/numerics.md, "Attractors and limit cycles".
 """
@@ -54,29 +51,24 @@ def shoot(
     Parameters
     ----------
     problem : PipeDynamics or SpaceDynamics
-        The autonomous dynamics problem of a planar or 3-D model.
+        An autonomous dynamics problem.
     q0, qdot0, period : ndarray, ndarray, float
         Initial guess of a state on the orbit and of the period.
     level : float, optional
         Phase condition section_value(q0) = level (default: that of the guess).
     rtol, tol, max_iter : float, float, int
-        Integration tolerance; Newton's on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi)
-        and on the phase, above the integration error.
+        Integration tolerance; Newton's on the RMS of phi_T(x0) - x0 (q' scaled by T / 2 pi).
     n_samples : int
-        Samples of the orbit stored for plotting.
+        Samples of the orbit stored.
     reuse_monodromy : bool
-        Chord-Newton while the residual falls 4x per iteration (multipliers one step off).
+        Chord-Newton while the residual falls 4x per iteration.
     polish : bool
         Report one more Newton step's plain period if its residual is smaller.
 
     Returns
     -------
     LimitCycle
-        In 3-D with Y_tip and all 6 n multipliers (in-plane, out-of-plane, gauge).
-
-    Raises
-    ------
-    ShootingError
+        In 3-D with Y_tip and all 6 n multipliers (ShootingError if Newton fails).
     """
     if not problem.autonomous:
         raise ValueError("shoot needs an autonomous problem (a steady flow)")

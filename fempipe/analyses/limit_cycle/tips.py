@@ -1,13 +1,9 @@
 """Tip coordinates on attractors, the Poincare section, and their extrema over a period.
 
-:func:`tip_extrema` takes the [min, max] of the tip coordinates (:data:`TIP_KEYS`, in 3-D
-:data:`TIP_KEYS_3D`) over one period of an orbit given as an :class:`OrbitSamples`:
-:class:`QuinticOrbit` (quintic Hermite interpolant through (q, q', q'') at the step ends),
-:class:`CollocationOrbit` (the integrator's collocation polynomials) or :class:`TipTrace`
-(samples recorded while integrating).  :func:`section_value` is the section variable of the
-shooting, eta_tip in the plane, eta_tip + Y_tip in 3-D.
-
-Accuracy of the extrema: docs/theory/numerics.md, "Attractors and limit cycles".
+:func:`tip_extrema` of an :class:`OrbitSamples` (:class:`QuinticOrbit`,
+:class:`CollocationOrbit`, :class:`TipTrace`); :func:`section_value` is the shooting's
+section variable (eta_tip; eta_tip + Y_tip in 3-D).
+Accuracy: docs/theory/numerics.md, "Attractors and limit cycles".
 """
 
 from __future__ import annotations
@@ -251,24 +247,19 @@ def tip_extrema(
     fine: int = 32,
     uniform: bool = False,
 ) -> dict[str, list[float]]:
-    """[min, max] of the tip coordinates over one period of an orbit: each extremum of
-    ``per_step`` samples per step refined between its neighbouring samples.
+    """[min, max] of the tip coordinates over one period: each extremum of ``per_step`` samples per
+    step refined between its neighbouring samples.
 
     Parameters
     ----------
     model : PipeModel or SpaceModel
     orbit : OrbitSamples
     per_step : int
-        Samples per step (that of a :class:`TipTrace`).
-    refine : {'parabola', 'bounded'}
-        ``"parabola"``: the vertex of the parabola through the extreme sample and its
-        neighbours, after ``fine`` new samples between the neighbours (0: none).
-        ``"bounded"``: ``scipy.optimize.minimize_scalar`` on the interpolant between the
-        neighbours (``xatol`` 1e-10 max(1, t_end)).
-    fine : int
+    refine, fine : {'parabola', 'bounded'}, int
+        The vertex of the parabola through the extreme sample and its neighbours (after ``fine``
+        new samples between them), or ``minimize_scalar`` on the interpolant (xatol 1e-10).
     uniform : bool
-        With ``fine = 0``: the parabola through samples taken as equally spaced (the 3-D
-        shooting's tips), not at their times.
+        With ``fine = 0``: the parabola through samples taken as equally spaced.
 
     Returns
     -------

@@ -1,12 +1,8 @@
 """Branches of periodic orbits of Eq. (20) by pseudo-arclength continuation in v.
 
-A flutter event of the static branch is a Hopf point, where a family of periodic orbits is
-born; this package follows it in v, stable and unstable orbits alike, with their Floquet
-multipliers and special points.  Modules: ``results`` (Hopf points, orbits, branches),
-``hopf`` (:func:`find_hopf_points`, the static equilibria), ``problem`` (the shooting problem
-and its corrector), ``branch`` (:func:`continue_cycles`), ``special`` (folds, period doublings,
-Neimark-Sacker points), ``points`` (the points, store and driver of every diagram),
-``diagram`` (:func:`compute_cycle_diagram`), ``out_of_plane`` (the 3-D verdicts).
+From every Hopf point (a flutter event) the family of orbits is followed in v, stable and
+unstable alike, with Floquet multipliers and special points (folds, period doublings,
+Neimark-Sacker points); ``points`` holds every diagram's store and driver.
 
 Derivation: docs/theory/numerics.md, "Branches of periodic orbits".
 """

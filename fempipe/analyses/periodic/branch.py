@@ -93,11 +93,6 @@ class AcceptedOrbit:
     flow: Flow
 
 
-def u_of(pt: CyclePoint) -> np.ndarray:
-    """u = (q0, qdot0, T, v) of an orbit."""
-    return np.r_[pt.q0, pt.qdot0, pt.period, pt.v]
-
-
 class CycleBranchPolicy:
     """The :class:`~fempipe.solvers.continuation.ContinuationPolicy` of a branch of
     periodic orbits; holds the branch (``points``, their ``us``, the counters)."""
@@ -152,7 +147,7 @@ class CycleBranchPolicy:
         self.steps, self.rejected = int(state["steps"]), int(state["rejected_steps"])
         self.integ_before = int(state["newton_iterations"])
         self.wall_before = float(state["wall_time"])
-        self.us = [self.u_H] + [u_of(p) for p in self.points]
+        self.us = [self.u_H] + [np.r_[p.q0, p.qdot0, p.period, p.v] for p in self.points]
         return float(state["ds"])
 
     def branch(self, reason: str, its: int, wall: float) -> CycleBranch:

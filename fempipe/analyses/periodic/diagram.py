@@ -59,17 +59,9 @@ def cycle_point_dict(pt: CyclePoint, branch: str, index: int, alpha: float) -> d
 class CycleDiagram:
     """A bifurcation diagram by continuation: equilibria and periodic orbits.
 
-    Attributes
-    ----------
-    points : list of dict
-        By alpha: the equilibria (``direction="static"``) at the requested v, then every
-        branch's orbits (``direction="continuation"``) in arclength order.
-    branches, special_points, hopf_points : list of dict
-        With ``alpha`` (special points also with ``branch``).
-    errors : list of str
-        Branches that could not be continued (their finished points are kept).
-    wall_time : float
-    manifest : dict
+    ``points``: by alpha the equilibria (``direction="static"``) at the requested v, then every
+    branch's orbits (``"continuation"``) in arclength order; ``branches``, ``special_points``,
+    ``hopf_points``: dicts with ``alpha``; ``errors``: branches not continued.
     """
 
     points: list
@@ -220,9 +212,9 @@ def compute_cycle_diagram(
 ) -> CycleDiagram:
     """Bifurcation diagram by continuation: equilibria and periodic orbits against v (Figs. 7-10).
 
-    For each alpha: the equilibria of the primary static branch at the requested v with
-    their stability, and the branch of periodic orbits of Eq. (20) born at every Hopf point
-    (:func:`continue_cycles`; one that ends at another Hopf point is not followed again).
+    For each alpha: the primary static branch's equilibria at ``values`` and the orbits born at
+    every Hopf point (:func:`continue_cycles`; a branch ending at another Hopf point is not
+    followed again).
 
     Parameters
     ----------
@@ -232,22 +224,18 @@ def compute_cycle_diagram(
     alphas : sequence of float, optional
         Inclinations; default ``[model.params.alpha]``.
     store_dir, executor, workers
-        As :func:`fempipe.analyses.periodic.points.run_diagram`: the store keeps the static
-        part and every branch's state after each accepted point; a rerun resumes.
+        As :func:`fempipe.analyses.periodic.points.run_diagram` (a rerun resumes).
     progress : callable, optional
-        ``progress(done, None)`` (in this process) whenever a point is finished.
+        ``progress(done, None)`` whenever a point is finished.
     out_of_plane : bool or callable, optional
-        Also the 3-D verdicts (:mod:`fempipe.analyses.periodic.out_of_plane`): of the static
-        points, and of the orbits (all with True, or the indices a callable such as
-        :class:`~fempipe.analyses.periodic.out_of_plane.EveryKth` picks); kept in the store,
-        not in the manifest (a planar run's store is resumed, adding them).
+        Also the 3-D verdicts of the static points and of the orbits (all, or the indices a
+        callable such as :class:`~fempipe.analyses.periodic.out_of_plane.EveryKth` picks).
     **options
-        Passed to :func:`continue_cycles` (``rtol``, ``tol``, ``ds``, ``ds_max`` ...).
+        Passed to :func:`continue_cycles`.
 
     Returns
     -------
     CycleDiagram
-        Failed branches are listed in ``errors`` with their finished points kept.
     """
     refuse_hysteretic(model.params, "compute_cycle_diagram")
     t0 = time.perf_counter()

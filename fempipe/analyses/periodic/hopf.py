@@ -61,15 +61,12 @@ def find_hopf_points(
 ) -> tuple[list[HopfPoint], float]:
     """The Hopf points of the primary static branch that matter for [v_min, v_max].
 
-    The stability events with a non-zero frequency (a complex pair crossing Re lambda = 0)
-    of :func:`fempipe.analyses.stability.analyse_stability` from ``v_min``, or from 0 if
-    the branch is unstable at ``v_min`` (the orbits of earlier Hopf points reach the range).
+    The flutter-type events of :func:`fempipe.analyses.stability.analyse_stability` from
+    ``v_min``, or from 0 if the branch is unstable there.
 
     Returns
     -------
-    hopf : list of HopfPoint, by increasing v
-    v_start : float
-        Start of the analysis (``v_min`` or 0).
+    hopf, v_start : list of HopfPoint (by v), float
     """
     hopf, v_start, _ = analyse_static(model, v_min, v_max, ds_max)
     return hopf, v_start

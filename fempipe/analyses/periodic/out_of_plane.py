@@ -1,12 +1,9 @@
 """Do the planar orbits and equilibria of a bifurcation diagram survive in 3-D?
 
-A planar orbit of Eq. (20) is an orbit of the 3-D model too (mirror symmetry), observed only
-when stable in the plane and out of it: for an orbit its out-of-plane Floquet multipliers
-decide (:func:`fempipe.analyses.space.compute_out_of_plane_floquet`), for an equilibrium its
-out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`).  :class:`VerdictStore` keeps a
-branch's verdicts in the diagram's point store; :func:`locate_change` finds the v between two
-orbits where the largest out-of-plane multiplier crosses the unit circle.
-
+A planar orbit is one of the 3-D model too (mirror symmetry), observed only when stable out
+of the plane as well: an orbit's out-of-plane Floquet multipliers, an equilibrium's
+out-of-plane spectrum decide.  :class:`VerdictStore` keeps them in the point store;
+:func:`locate_change` finds where the largest out-of-plane multiplier crosses 1.
 Theory: docs/theory/space.md.
 """
 
@@ -45,20 +42,15 @@ __all__ = [
 def as_limit_cycle(pt: CyclePoint) -> LimitCycle:
     """The orbit of a continued point as a :class:`LimitCycle` (its state, period,
     tip and multipliers; no trajectory): what the out-of-plane monodromy needs."""
-    empty = np.zeros(0)
     return LimitCycle(
         period=float(pt.period),
         q0=np.asarray(pt.q0, dtype=float),
         qdot0=np.asarray(pt.qdot0, dtype=float),
-        level=math.nan,
         tip=dict(pt.tip),
         floquet_multipliers=np.asarray(pt.multipliers),
         stable=bool(pt.stable),
         iterations=pt.iterations,
         residual=pt.residual,
-        orbit_t=empty,
-        orbit_q=empty,
-        orbit_qdot=empty,
     )
 
 
@@ -68,17 +60,14 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
     Parameters
     ----------
     model : PipeModel
-        At the orbit's v.
     cycle : LimitCycle
     stable_in_plane : bool
-        The orbit's planar verdict (its in-plane Floquet multipliers).
 
     Returns
     -------
     dict
         The keys of :func:`fempipe.analyses.space.verdict.cycle_entries` and
-        ``planar_block_max_multiplier`` (the planar multipliers again, from the
-        out-of-plane run's planar block: evidence to check the verdict by).
+        ``planar_block_max_multiplier`` (the planar multipliers again: evidence).
     """
     oop = compute_out_of_plane_floquet(model, cycle)
     out = cycle_entries(model, oop, stable_in_plane)
@@ -176,15 +165,11 @@ def locate_change(
     tol: float = 1e-3,
     max_iter: int = 6,
 ) -> dict | None:
-    """The v between two orbits of a branch where the largest non-trivial out-of-plane
-    multiplier crosses 1, by regula falsi (Illinois) on ``mu - 1``, each orbit shot from the
-    state interpolated between the two; until the bracket is shorter than ``tol``.
+    """The v between two orbits where the largest non-trivial out-of-plane multiplier crosses 1:
+    regula falsi (Illinois) on ``mu - 1`` until the bracket is shorter than ``tol``.
 
-    Returns
-    -------
-    dict or None
-        ``{"v", "v_bracket": [lo, hi], "iterations", "cpu_time"}`` (v: the secant's root in the last bracket), or
-        None when the two do not bracket a crossing or an orbit cannot be shot.
+    Returns ``{"v", "v_bracket", "iterations", "cpu_time"}``, or None without a bracketed
+    crossing or when an orbit cannot be shot.
     """
     import time
 

@@ -1,14 +1,9 @@
 """The points of a bifurcation diagram, their store and the resumable diagram driver.
 
-A :class:`BifurcationPoint` is one finished point of a sweep, planar or of the 3-D model.
-A :class:`PointStore` keeps finished points as one JSON file each, written atomically, in a
-directory claimed by the run's manifest (``run.json``).  :func:`sweep_points` steps v through
-ordered values reusing the stored points, :func:`run_diagram` runs a diagram's independent
-tasks (sweeps, alphas) in this process or on workers.  Every diagram
-(:mod:`fempipe.analyses.bifurcation`, :mod:`fempipe.analyses.periodic.diagram`,
-:mod:`fempipe.analyses.space.diagram`) is a thin user of them.
-
-How a point starts and how the store resumes: docs/theory/numerics.md, "Bifurcation sweeps".
+:class:`PointStore` keeps finished points as one JSON file each (written atomically) in a
+directory claimed by the run's manifest; :func:`sweep_points` steps v reusing stored points,
+:func:`run_diagram` runs a diagram's independent tasks here or on workers.
+Details: docs/theory/numerics.md, "Bifurcation sweeps".
 """
 
 from __future__ import annotations
@@ -285,20 +280,16 @@ def run_diagram(
     Parameters
     ----------
     task : callable
-        ``task(*args, store, on_point)`` per ``args`` of ``tasks``; ``on_point`` (None in a
-        worker) is called with each finished point.
+        ``task(*args, store, on_point)`` per ``args`` of ``tasks`` (``on_point`` None in a worker).
     tasks : sequence of tuple
     manifest : dict
         The run (:func:`diagram_manifest`).
     store_dir : path, optional
         The point store; a temporary directory if omitted.
-    executor : concurrent.futures.Executor, optional
-        Any executor (process pool, Dask's ``Client.get_executor()``) that sees the store.
-    workers : int, optional
-        Without an executor: > 1 local processes (:func:`fempipe.core.parallel.run_tasks`).
-    progress : callable, optional
-        ``progress(done, total)``; with workers, the store's count (``total`` given).
-    total : int, optional
+    executor, workers : Executor, int, optional
+        Any executor that sees the store, or > 1 local processes.
+    progress, total : callable, int, optional
+        ``progress(done, total)``.
 
     Raises
     ------

@@ -1,10 +1,8 @@
 """The periodic-orbit problem by single shooting, as a continuation problem.
 
-In u = (x0, T, v): phi_T(x0; v) - x0 = 0 and the phase condition <f_ref, x0 - x_ref> = 0, with
-phi_T the discrete Radau flow (:func:`period_flow`).  :class:`OrbitProblem` is it at one phase
-section as a :class:`fempipe.solvers.continuation.ContinuationProblem` (bordered chord matrix
+In u = (x0, T, v): phi_T(x0; v) - x0 = 0 and <f_ref, x0 - x_ref> = 0 (bordered chord matrix
 ``[[M - I, F(phi_T), d phi_T / dv], [f_ref, 0, 0], [row]]``); :class:`CycleCorrector` is the
-branches' Newton corrector (chord Newton with a trust region).
+branches' chord Newton with a trust region.
 
 Derivation: docs/theory/numerics.md, "Branches of periodic orbits".
 """
@@ -160,13 +158,9 @@ class CycleCorrector:
     ----------
     model : PipeModel
     hopf : HopfPoint
-        The branch's Hopf point (its period T_H scales the metric).
-    rtol : float
-        Integration tolerance.
-    tol, xtol : float
-        Newton tolerances on the residual and on the correction.
-    max_iter : int
-        Newton iterations per corrector.
+        The branch's Hopf point (its period scales the metric).
+    rtol, tol, xtol, max_iter : float, float, float, int
+        Integration tolerance; Newton's on the residual and the correction; iterations.
     """
 
     def __init__(
@@ -220,13 +214,10 @@ class CycleCorrector:
     ) -> tuple:
         """Newton from ``u_pred``: pseudo-arclength along ``tangent``, or at fixed v if None.
 
-        The monodromy returned is taken within ``monodromy_at`` times the orbit's amplitude
-        (:data:`MONODROMY_NEAR`, :data:`MONODROMY_AT_ORBIT`).  ``seed``, a flow with the
-        sensitivity at a nearby orbit, gives the first chord matrix.  The phase section
-        passes through ``u_ref`` (the branch's last point; None: the predictor), so that x0
-        does not drift along the orbit and secants measure the change of the orbit.
-
-        Returns (u, flow of the last iterate, monodromy, iterations, rejected steps).
+        The monodromy is taken within ``monodromy_at`` times the orbit's amplitude; ``seed`` (a flow
+        with the sensitivity at a nearby orbit) gives the first chord matrix; the phase section
+        passes through ``u_ref`` (None: the predictor).  Returns (u, flow, monodromy, iterations,
+        rejected steps).
         """
         n2 = 2 * self.n
         rtol = self.rtol if rtol is None else rtol
@@ -277,7 +268,8 @@ class CycleCorrector:
             # Converged when the residual is small and so is the correction it
             # asks for: the error of this iterate (the residual alone hides it
             # where a multiplier is near 1, e.g. close to the Hopf point).
-            correction = self._correction_size(du, T, fixed_v)
+            dv = 0.0 if fixed_v else abs(du[-1])  # state part (as the residual), T relative, v
+            correction = max(self.residual_norm(du[:n2], T), abs(du[n2]) / T, dv)
             if (
                 res < self.tol
                 and abs(g) < self.tol
@@ -307,11 +299,6 @@ class CycleCorrector:
         g = section.phase(x)
         c = 0.0 if tangent is None else float(tangent @ (self.S * (u - u_pred)))
         return fl, r, g, c
-
-    def _correction_size(self, du: np.ndarray, T: float, fixed_v: bool) -> float:
-        """The size of a Newton correction: its state part (as the residual), T relative, v."""
-        n2 = 2 * self.n
-        return max(self.residual_norm(du[:n2], T), abs(du[n2]) / T, 0.0 if fixed_v else abs(du[-1]))
 
     def _damped_update(self, u: np.ndarray, du: np.ndarray, fixed_v: bool) -> None:
         """u += lam du in place, the step limited to 0.3 in the metric (the trust region)."""

@@ -44,13 +44,10 @@ class HopfPoint:
 
     Attributes
     ----------
-    v, omega : float
-        Flow velocity and frequency Im lambda of the critical pair.
-    event_type : str
-        The stability event (``flutter``, ``restabilization``, ``mode_restabilization``).
+    v, omega, event_type : float, float, str
     q_static : ndarray, shape (n,)
     eigenvector : ndarray, complex, shape (2 n,)
-        z = (q, i omega q) with A z = i omega z, scaled to unit RMS of its q part.
+        z = (q, i omega q) with A z = i omega z, unit RMS of its q part.
     """
 
     v: float
@@ -75,14 +72,9 @@ class HopfPoint:
 
 @dataclass(frozen=True)
 class CyclePoint:
-    """One periodic orbit of a branch.
-
-    ``q0``, ``qdot0``: its state on the phase section; ``tip``: [min, max] of the tip
-    coordinates over a period; ``multipliers``: Floquet multipliers by decreasing modulus
-    (the trivial one included); ``stable``: the non-trivial ones inside the unit circle;
-    ``source``: ``"grid"`` (a requested v) or ``"continuation"``; ``iterations``,
-    ``residual``: Newton's integrations and final RMS residual; ``steps``: integration steps
-    of the last period, ``rejected_steps`` over the corrector.
+    """One periodic orbit of a branch: its state on the phase section, tips, Floquet multipliers
+    (by modulus, the trivial one included), ``source`` ``"grid"`` or ``"continuation"``, Newton's
+    integrations and residual, the last period's steps and the corrector's rejected ones.
     """
 
     v: float

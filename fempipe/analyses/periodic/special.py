@@ -50,15 +50,11 @@ def cycle_branch(
     )
 
 
-def _is_real(z: np.ndarray) -> np.ndarray:
-    return np.abs(z.imag) <= 1e-10 * np.maximum(1.0, np.abs(z))
-
-
 def _tests(pt: CyclePoint) -> tuple[int, int, float, float]:
     """(real multipliers below -1, complex ones outside the unit circle,
     the most negative real multiplier + 1, the largest complex modulus - 1)."""
     mu = nontrivial_multipliers(pt.multipliers)
-    real = _is_real(mu)
+    real = np.abs(mu.imag) <= 1e-10 * np.maximum(1.0, np.abs(mu))
     neg = mu[real & (mu.real < 0)].real
     # A "complex pair" within NEAR_ONE of +1 is two real multipliers near 1 (the
     # trivial one and the one through +1 near a Hopf point or a fold) that the

@@ -1,16 +1,11 @@
 """Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
 
-A planar limit cycle is a periodic solution of the 3-D model too, and by the mirror symmetry
-e_3 -> -e_3 its perturbations split into planar and out-of-plane ones.
-:func:`compute_out_of_plane_floquet` computes the out-of-plane multipliers from the linear
-equation about the moving planar state (``method="linear"``,
-:class:`~fempipe.model.out_of_plane_motion.OutOfPlaneVariation`) or from the out-of-plane
-block of the 3-D model's monodromy (``method="3d"``, gauge multipliers left out); the two
-converge to each other.  At alpha = 0 and pi one of them, the cycle turned about the
-vertical, is 1 in the continuum.
+By the mirror symmetry e_3 -> -e_3 a planar cycle's perturbations split into planar and
+out-of-plane ones; the latter from the linear equation about the moving planar state
+(``method="linear"``) or the out-of-plane block of the 3-D monodromy (``method="3d"``, gauge
+left out).  At alpha = 0, pi one of them (the turned cycle) is 1 in the continuum.
 
-Derivation and measurements: docs/theory/out_of_plane.md, "About a moving planar state", and
-docs/theory/space.md, "What it answers".
+Derivation: docs/theory/out_of_plane.md, "About a moving planar state"; docs/theory/space.md.
 """
 
 from __future__ import annotations
@@ -38,13 +33,12 @@ class OutOfPlaneFloquet:
     Attributes
     ----------
     multipliers, planar_multipliers : ndarray, complex
-        The out-of-plane (the gauge's left out) and the planar block's, by decreasing modulus.
+        Out-of-plane (no gauge) and the planar block's, by decreasing modulus.
     axisymmetric, trivial : bool, complex or None
-        sin(alpha) = 0, and then the multiplier closest to 1 (the rotation about the vertical).
+        sin(alpha) = 0, and then the multiplier closest to 1.
     max_nontrivial, stable : float, bool
-        The largest modulus of the others; ``max_nontrivial < 1``.
     gauge_largest : float
-        The largest modulus of the gauge's multipliers (0 for ``"linear"``).
+        0 for ``"linear"``.
     steps, cpu_time, method : int, float, str
     """
 
@@ -94,14 +88,12 @@ def compute_out_of_plane_floquet(
     Parameters
     ----------
     model : PipeModel
-        The planar model the cycle was computed on.
+        The planar model of the cycle.
     cycle : LimitCycle
-        The planar cycle.
     rtol : float
-        Integration tolerance over the period.
     method : {"linear", "3d"}
-        The linear out-of-plane equation (one unknown psi, no gauge; the cheaper) or the
-        out-of-plane block of the 3-D model along the cycle.
+        The linear out-of-plane equation (one unknown psi, the cheaper) or the 3-D model's
+        out-of-plane block.
 
     Returns
     -------

@@ -1,13 +1,8 @@
 """The nonlinear motion of the pipe in three dimensions and its attractor (:func:`simulate_3d`).
 
-The 3-D model (:mod:`fempipe.model.space`) is integrated from the planar static state,
-perturbed in the plane and out of it, until the attractor is recognized on a Poincare
-section (:func:`~fempipe.analyses.limit_cycle.section_value`, eta_tip + Y_tip, crossing its
-static value upwards), and classified: ``equilibrium``; ``periodic``, ``planar`` when the
-tip stays in one vertical plane, ``nonplanar`` otherwise; ``whirl``, a non-planar periodic
-motion of an axisymmetric pipe whose tip turns about the vertical at a constant distance;
-``quasi-periodic``, no recurrence and two incommensurate peaks in the tip's spectrum
-(:func:`two_frequencies`); ``non-periodic``.
+The 3-D model is integrated from the perturbed planar static state until the attractor is
+recognized on the Poincare section eta_tip + Y_tip: equilibrium, periodic (planar or
+nonplanar), whirl, quasi-periodic (two incommensurate spectral peaks) or non-periodic.
 
 Classification and measurements: docs/theory/space.md.
 """
@@ -28,7 +23,7 @@ from ...solvers.radau import Radau
 from ..dynamics import make_initial_state
 from ..limit_cycle import TIP_KEYS_3D, LimitCycle, ShootingError, section_value, shoot
 from ..statics import solve_static
-from .whirl import tip_turn
+from .whirl import fit_l2, tip_turn
 
 __all__ = [
     "Motion3D",
@@ -50,18 +45,15 @@ class Motion3D:
         ``"non-periodic"``; ``"planar"`` or ``"nonplanar"``.
     period, period_n : float or None, int or None
     whirl_rate : float or None
-        Angular velocity of a whirl about the vertical (right-handed about e_1), rad per tau.
+        Angular velocity of a whirl, right-handed about e_1, rad per tau.
     tip : dict
-        ``[min, max]`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS_3D` over the last
-        period (or the last tenth of the run).
+        ``[min, max]`` of :data:`~fempipe.analyses.limit_cycle.TIP_KEYS_3D` on the attractor.
     planarity : float
-        The smaller over the larger principal extent of the tip's horizontal path
-        (axisymmetric pipe), or the out-of-plane extent over the in-plane one.
+        Smaller over larger principal extent of the tip's horizontal path (axisymmetric pipe),
+        or out-of-plane over in-plane extent.
     frequencies : tuple of float or None
-        Without recurrence: the two incommensurate frequencies (cycles per tau) of a
-        quasi-periodic motion, or the strongest one.
+        Without recurrence: the two incommensurate frequencies (cycles per tau), or the strongest.
     cycle : LimitCycle or None
-        The orbit by shooting: period, tips and 3-D Floquet multipliers.
     t, U, Udot : ndarray
         The trajectory at every accepted step.
     steps, rejected_steps, t_end, cpu_time : int, int, float, float
@@ -110,14 +102,10 @@ def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int
     """(a, b) of an out-of-plane rotation psi = amplitude sin((2 mode - 1) pi xi / 2) about the
     planar state q_static: a = psi sin(theta/2) / 2, b = -psi cos(theta/2) / 2 (first order,
     gauge g = 0), fitted in L2 at the quadrature points."""
-    disc = model.disc
-    Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
-    x, w = disc.quad.x, disc.quad.w
-    theta = Phi @ q_static
-    psi = amplitude * np.sin((2 * mode - 1) * math.pi * x / 2)
-    G = Phi.T @ (w[:, None] * Phi)
-    fit = lambda f: np.linalg.solve(G, Phi.T @ (w * f))  # noqa: E731
-    return fit(0.5 * psi * np.sin(theta / 2)), fit(-0.5 * psi * np.cos(theta / 2))
+    Phi = model.disc.Phi
+    theta = (Phi.toarray() if hasattr(Phi, "toarray") else np.asarray(Phi)) @ q_static
+    psi = amplitude * np.sin((2 * mode - 1) * math.pi * model.disc.quad.x / 2)
+    return tuple(fit_l2(model, s * psi * f(theta / 2)) for s, f in ((0.5, np.sin), (-0.5, np.cos)))
 
 
 def _locate(model, stepper, t0, t1, g0, g1, level):
@@ -135,11 +123,6 @@ def _locate(model, stepper, t0, t1, g0, g1, level):
         else:
             a, fa = t, ft
     return t, q, p
-
-
-def _window_tips(model: SpaceModel, U: np.ndarray) -> dict:
-    tips = model.tip_coordinates(np.atleast_2d(U))
-    return {k: [float(tips[k].min()), float(tips[k].max())] for k in TIP_KEYS_3D}
 
 
 def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
@@ -180,19 +163,17 @@ def simulate_3d(
     mode, amplitude, out_of_plane_amplitude : int, float, float
         The sine mode and its in-plane and out-of-plane (psi) amplitudes, rad.
     t_max, rtol : float
-    recurrence_tol : float
-        Successive section states agree to this (RMS): periodic without shooting.
-    start_tol, shoot_rtol, use_shooting : float, float, bool
-        Successive section states agree to ``start_tol``: the orbit is shot from the last.
-    min_swing : float
-        Shoot only when the section variable swings by more than this between returns.
+    recurrence_tol, start_tol : float
+        Returns that agree to this (RMS): periodic without shooting; shot from the last.
+    shoot_rtol, use_shooting, min_swing : float, bool, float
+        Shoot only when the section variable swings by more than ``min_swing``.
     planar_tol : float
         :attr:`Motion3D.planarity` below this: a planar motion.
     n_max : int
     callback : callable, optional
         Called with tau after every step.
     initial : (U0, Ud0), optional
-        A 3-D state to start from instead of the perturbed static state.
+        A 3-D state to start from instead.
     """
     start = time.process_time()
     space = SpaceModel(model.disc, model.params)
@@ -259,13 +240,7 @@ def simulate_3d(
 
 
 class _Returns:
-    """The upward returns of the motion to the section and what they tell.
-
-    :meth:`step`, after every accepted step, returns ``(kind, period_n, period, cycle)`` once
-    the motion is periodic (shot once the returns almost repeat, or by recurrence alone).
-    ``sections`` (t, U, U_dot at each return) and ``swings`` (the section variable's range
-    between returns) are what :func:`_settled` reads.
-    """
+    """The upward returns to the section; :meth:`step` gives ``(kind, period_n, period, cycle)`` once periodic."""
 
     def __init__(
         self,
@@ -304,7 +279,8 @@ class _Returns:
         found = _recurrence(self.sections, self.n_max, self.recurrence_tol, self.scale)
         # A decaying oscillation's returns agree too once it is small: periodic only
         # when the swing has stopped shrinking.
-        if found is not None and _steady(self.swings):
+        sw = self.swings
+        if found is not None and len(sw) > 2 and abs(sw[-1] - sw[-2]) <= STEADY_SWING * sw[-1]:
             return "periodic", found[0], found[1], None
         return None
 
@@ -350,10 +326,7 @@ def _perturbed_static_state(model, space, q_s, mode, amplitude, out_of_plane_amp
 
 
 def _classify(space, kind, period, cycle, t, U, planar_tol):
-    """(kind, motion, planarity, whirl_rate, tip, frequencies) of a finished run: planar or
-    not over the attractor's window, a periodic non-planar motion of an axisymmetric pipe
-    that turns about the vertical is a whirl, a non-periodic one with two incommensurate
-    peaks in the tip's spectrum quasi-periodic."""
+    """(kind, motion, planarity, whirl_rate, tip, frequencies) of a finished run."""
     window = t >= (t[-1] - period if period else 0.9 * t[-1])
     wU, wt = U[window], t[window]
     if cycle is not None:  # the attractor's own orbit
@@ -366,7 +339,11 @@ def _classify(space, kind, period, cycle, t, U, planar_tol):
         whirl_rate = _whirl_rate(space, wU, wt, period)
         if whirl_rate is not None:
             kind = "whirl"
-    tip = cycle.tip if cycle is not None else _window_tips(space, wU)
+    if cycle is not None:
+        tip = cycle.tip
+    else:
+        d = space.tip_coordinates(np.atleast_2d(wU))
+        tip = {k: [float(d[k].min()), float(d[k].max())] for k in TIP_KEYS_3D}
     frequencies = None
     if kind == "non-periodic":
         half = t >= 0.5 * t[-1]
@@ -392,18 +369,11 @@ STEADY_SWING = 1e-3
 
 
 def _settled(t: float, p: np.ndarray, sections: list, swings: list, scale: float) -> bool:
-    """Whether the motion has come to rest: slow, and either no section crossing for
-    :data:`REST_TIME` since the last one (a motion may cross on its way to an offset
-    equilibrium) or a swing below :data:`REST_SWING` (an oscillation that has died out)."""
+    """At rest: slow, and no return for :data:`REST_TIME` or a swing below :data:`REST_SWING`."""
     if float(np.sqrt(np.mean(np.square(p)))) >= REST_RATE:
         return False
     last = sections[-1][0] if sections else 0.0
     return t - last > REST_TIME or bool(swings and swings[-1] < REST_SWING * scale)
-
-
-def _steady(swings: list) -> bool:
-    """The section variable's last two swings agree to :data:`STEADY_SWING` (relative)."""
-    return len(swings) > 2 and abs(swings[-1] - swings[-2]) <= STEADY_SWING * swings[-1]
 
 
 def _recurrence(sections, n_max: int, tol: float, scale: float):

@@ -1,15 +1,10 @@
 """The onset of the non-planar oscillation: the Hopf normal form of the 3-D model.
 
-Where the linear analysis out of the plane (:func:`fempipe.analyses.stability.find_critical_velocity`
-with ``planes=("in", "out")``) finds that a planar static state loses stability out of its plane
-first (the horizontal pipe, alpha = pi/2), a non-planar periodic orbit is born at that v_cr.
-:func:`hopf_normal_form_3d` computes its normal form on the 3-D model (:mod:`fempipe.model.space`)
-as the planar one does on Eq. (20): the exact Jacobian (the planar one's code), the planar static
-state lifted to 3-D where the critical pair crosses (:func:`locate_hopf`), l1, the transversality,
-and the tip's swing out of the plane, ``(max Y_tip - min Y_tip) / 2 ~ c sqrt(v - v_cr)``.
+Where a planar static state loses stability out of its plane first (alpha = pi/2), a
+non-planar orbit is born; :func:`hopf_normal_form_3d` gives its normal form on the 3-D model
+at the crossing (:func:`locate_hopf`), with ``(max Y_tip - min Y_tip) / 2 ~ c sqrt(v - v_cr)``.
 
-Derivation and symmetry: docs/theory/space.md, "The onset of the non-planar oscillation";
-checked against shot cycles by :mod:`fempipe.validation.space_onset`.
+Derivation: docs/theory/space.md, "The onset of the non-planar oscillation".
 """
 
 from __future__ import annotations
@@ -71,25 +66,22 @@ def _pair_at(model: SpaceModel, planar: PipeModel, v: float, q0: np.ndarray):
 def locate_hopf(
     planar: PipeModel, q_guess: np.ndarray, v_guess: float, *, dv: float = 1e-3
 ) -> tuple[float, np.ndarray, int]:
-    """The v where the critical pair of the 3-D Jacobian at the planar static state crosses
-    the imaginary axis: a secant on Re lambda(v) along the static branch.
+    """The v where the critical pair of the 3-D Jacobian at the planar static state crosses the
+    imaginary axis: a secant on Re lambda(v) along the static branch.
 
     Parameters
     ----------
     planar : PipeModel
-        The planar pipe (its static branch is the 3-D model's, planar reduction).
-    q_guess : ndarray, shape (n,)
-        A static state near the crossing (Newton's start).
-    v_guess : float
-        A velocity near the crossing (e.g. the out-of-plane model's v_cr).
+    q_guess, v_guess : ndarray, float
+        A static state and velocity near the crossing (e.g. the out-of-plane v_cr).
     dv : float
         The secant's second point is v_guess + dv.
 
     Returns
     -------
-    (v, q, iterations) with \\|Re lambda(v)\\| <= :data:`HOPF_TOL` |lambda|, or where the
-    secant's step in v has fallen below :data:`HOPF_V_TOL` (on fine meshes the round-off of
-    the dense eigenvalues, about 1e-8 in Re lambda on P3:16, is above HOPF_TOL |lambda|).
+    (v, q, iterations)
+        With \\|Re lambda\\| <= :data:`HOPF_TOL` |lambda|, or the secant's step below
+        :data:`HOPF_V_TOL` (the round-off of Re lambda on fine meshes).
     """
     model = SpaceModel(planar.disc, planar.params)
     v0, v1 = float(v_guess), float(v_guess) + dv
@@ -123,27 +115,23 @@ def hopf_normal_form_3d(
     v_out_of_plane: float | None = None,
     step: float | None = None,
 ) -> HopfNormalForm:
-    """The Hopf normal form of the 3-D model where the planar static state loses stability
-    out of its plane (docs/theory/space.md, "The onset of the non-planar oscillation").
+    """The Hopf normal form of the 3-D model where the planar static state loses stability out of
+    its plane (docs/theory/space.md, "The onset of the non-planar oscillation").
 
     Parameters
     ----------
     planar : PipeModel
-        The planar pipe (springs and hysteretic damping are refused by :class:`SpaceModel`).
-    q_guess : ndarray, shape (n,)
-        A planar static state near the Hopf point (Newton's start).
-    v_guess : float
-        A velocity near it, e.g. the out-of-plane v_cr.
+    q_guess, v_guess : ndarray, float
+        A planar static state and velocity near the Hopf point (e.g. the out-of-plane v_cr).
     v_out_of_plane : float, optional
-        The out-of-plane v_cr, kept for comparison (``checks.v_out_of_plane``).
+        The out-of-plane v_cr, kept for comparison.
     step : float, optional
-        A fixed difference step of :func:`lyapunov_coefficient`; default its ladder.
+        A fixed difference step of :func:`lyapunov_coefficient`.
 
     Returns
     -------
     HopfNormalForm
-        With ``amplitude_coefficients["Y_tip"]`` (where the cycles exist above v_cr) and
-        :class:`HopfChecks3D`.
+        With ``amplitude_coefficients["Y_tip"]`` and :class:`HopfChecks3D`.
     """
     v, q0, its = locate_hopf(planar, q_guess, v_guess)
     params = replace(planar.params, v=v)

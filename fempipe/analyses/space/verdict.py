@@ -49,21 +49,14 @@ def rough_verdict_note(disc_name: str, defect: float | None) -> str | None:
 
 
 def classify_3d(model: PipeModel, att: Attractor, *, rtol: float = 1e-7) -> dict:
-    """``stable_3d`` and the out-of-plane evidence for a planar attractor.
+    """``stable_3d`` (None when undecided) and the out-of-plane evidence for a planar attractor.
 
     Parameters
     ----------
     model : PipeModel
-        The planar model of the attractor.
     att : Attractor
     rtol : float
         Integration tolerance of the out-of-plane monodromy.
-
-    Returns
-    -------
-    dict
-        ``stable_3d`` (None when undecided) and the out-of-plane entries of a cycle
-        (:func:`cycle_entries`) or ``stable_out_of_plane`` of an equilibrium.
     """
     if att.kind == "periodic" and att.cycle is not None:
         oop = compute_out_of_plane_floquet(model, att.cycle, rtol=rtol)

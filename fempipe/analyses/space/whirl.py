@@ -1,13 +1,9 @@
 """Whirls of an axisymmetric pipe: periodic orbits that turn rigidly about the vertical.
 
-At sin(alpha) = 0 the flutter is a Hopf bifurcation with O(2) symmetry: standing waves (the
-planar cycles) and rotating waves, the *whirls*, whose shape turns rigidly about e_1 at a
-rate omega, branch together.  On a mesh the turn is a symmetry only up to the discretization
-error, so the discrete whirl is a periodic orbit, found by Newton shooting
-(:func:`~fempipe.analyses.limit_cycle.shoot`); :func:`find_whirl` measures how rigid it is.
-:func:`whirl_state` and :func:`whirl_guess_from_cycle` give starting guesses.
-
-Measurements: docs/theory/space.md, "The whirl of the hanging pipe".
+At sin(alpha) = 0 the flutter is an O(2) Hopf point: standing waves (the planar cycles) and
+rotating waves (whirls) branch together.  On a mesh the turn is a symmetry only to the
+discretization error: the whirl is shot as a periodic orbit and :func:`find_whirl` measures
+how rigid it is.  Measurements: docs/theory/space.md, "The whirl of the hanging pipe".
 """
 
 from __future__ import annotations
@@ -39,19 +35,16 @@ class Whirl:
 
     Attributes
     ----------
-    v, period : float
-    omega : float
-        Rotation rate 2 pi / T, positive right-handed about e_1 (from e_2 towards e_3).
-    radius : float
-        Time average (trapezoidal, on the step ends) of the tip's distance from the vertical.
-    radius_variation : float
-        (max - min) / radius of that distance: zero for a rigid rotation.
+    v, period, omega : float
+        omega = 2 pi / T, right-handed about e_1.
+    radius, radius_variation : float
+        Time average of the tip's distance from the vertical and its (max - min) / radius.
     rotation_defect : float
         Largest distance between the centerline and that at tau = 0 turned by omega tau.
     multipliers : ndarray of complex
         The 8 largest Floquet multipliers.
     max_nontrivial, stable, cycle : float, bool, LimitCycle
-        The largest modulus without the one multiplier 1 (a whirl's time shift is its turn).
+        Without the one multiplier 1 (a whirl's time shift is its turn).
     """
 
     v: float
@@ -80,13 +73,13 @@ class Whirl:
         }
 
 
-def _fit(model: SpaceModel, f: np.ndarray) -> np.ndarray:
-    """The finite element function nearest f at the quadrature points (L2)."""
+def fit_l2(model: SpaceModel, f: np.ndarray) -> np.ndarray:
+    """The finite element function(s) nearest f (n_q or (n_q, k)) at the quadrature points (L2)."""
     disc = model.disc
     Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
     w = model.w
     G = Phi.T @ (w[:, None] * Phi)
-    return np.linalg.solve(G, Phi.T @ (w[:, None] * f))
+    return np.linalg.solve(G, Phi.T @ (w * f.T).T)
 
 
 def tangent_state(
@@ -108,7 +101,7 @@ def tangent_state(
     ud = np.column_stack(
         [th_dot, rho_dot * s + 0.5 * rho * c * th_dot, -rho_dot * c + 0.5 * rho * s * th_dot]
     )
-    return _fit(model, u).T.ravel(), _fit(model, ud).T.ravel()
+    return fit_l2(model, u).T.ravel(), fit_l2(model, ud).T.ravel()
 
 
 def whirl_state(
@@ -198,18 +191,11 @@ def find_whirl(
     Parameters
     ----------
     model : SpaceModel
-        At an axisymmetric inclination (sin alpha = 0).
+        At an axisymmetric inclination (sin alpha = 0, else ValueError).
     U0, Ud0, period : ndarray, ndarray, float
         The guess (:func:`whirl_state`, :func:`whirl_guess_from_cycle`).
     rtol, tol, max_iter
-        As :func:`~fempipe.analyses.limit_cycle.shoot`.
-
-    Raises
-    ------
-    ValueError
-        If the pipe is not axisymmetric.
-    ShootingError
-        If Newton does not converge.
+        As :func:`~fempipe.analyses.limit_cycle.shoot` (ShootingError).
     """
     if abs(math.sin(model.params.alpha)) > 1e-12:
         raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")

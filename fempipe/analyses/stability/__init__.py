@@ -1,15 +1,9 @@
 """Linear stability of the static states: spectra, critical velocities, events.
 
-The linearization of Eq. (20) about a static state is Eq. (31b), discretized as Eq. (32)
-(M^d, C^d, K^d of Eqs. (33a)-(33c)); its quadratic eigenproblem is solved in first-order
-form.  Eigenvalues are lambda (Re lambda > 0 unstable) and the paper's Omega = -i lambda.
-Only resolved modes are reported (:func:`resolution`), numbered by continuity along the
-static branch; one criterion decides stability (:func:`linearly_stable`).  Every analysis
-takes ``planes``: the motion in the plane of the static state and/or out of it.
-
-Main names: :func:`compute_spectrum`, :func:`trace_root_locus`, :func:`analyse_stability`,
-:func:`find_critical_velocity`, :func:`map_stability` (Fig. 6); ``hopf`` gives the Hopf
-criticality of the flutter events.
+Eq. (31b) about a static state, discretized as Eq. (32) (Eqs. (33a)-(33c)), solved in
+first-order form; lambda with Re lambda > 0 unstable, the paper's Omega = -i lambda.  Only
+resolved modes count, numbered by continuity from v = 0; every analysis takes ``planes``
+(in the plane of the static state and/or out of it).
 
 Derivation, resolved modes, mode numbers and events: docs/theory/stability.md.
 """

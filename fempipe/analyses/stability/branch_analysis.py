@@ -172,12 +172,7 @@ class BranchAnalysis:
         return bool(self.stop_at_first and _unstable_count(e) > 0)
 
     def _number(self, first: ClassifiedSpectrum) -> None:
-        """Mode numbers at the branch's first state (docs/theory/stability.md, "Mode numbers").
-
-        Carried from v = 0 along the branch (:func:`reference_tracker`); on a
-        branch born at a branch point, from the parent branch's sample nearest
-        the first state.
-        """
+        """Mode numbers at the first state: from v = 0, or from the parent branch's nearest sample."""
         if self.parent is None:
             tracker, n = reference_tracker(self.model, first, self.res, self.method)
         else:

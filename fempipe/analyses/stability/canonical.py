@@ -45,12 +45,9 @@ class Resolution:
     n_resolved : int
         Leading canonical modes within ``tolerance`` of the exact frequencies.
     frequencies, exact, rel_error : ndarray, shape (n,)
-        Discrete and exact canonical frequencies and |omega_h / omega - 1|.
     tolerance : float
-    basis : ndarray, shape (n, n)
-        Canonical modes, M(0)-orthonormal (columns).
-    mass : ndarray, shape (n, n)
-        M(0), the mass matrix of the straight pipe.
+    basis, mass : ndarray, shape (n, n)
+        Canonical modes, M(0)-orthonormal columns; M(0).
     """
 
     n_resolved: int

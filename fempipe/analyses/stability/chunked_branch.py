@@ -1,11 +1,8 @@
 """A static branch continued in v piece by piece, and the straight branch without continuation.
 
-:class:`ChunkedBranch` is what the stability analysis walks along: the points
-of :func:`fempipe.analyses.statics.continue_static`, produced as far as the
-analysis asks, or, where the primary branch is the straight pipe with no
-branch point in the range (alpha = 0 or pi), the same points written down
-without a Newton iteration (the Notes of
-:func:`~fempipe.analyses.stability.stability_analysis`).
+:class:`ChunkedBranch` yields :func:`fempipe.analyses.statics.continue_static`'s points as far
+as the analysis asks, or on the straight pipe with no branch point (alpha = 0, pi) the same
+points without Newton (docs/theory/stability.md, "The straight branch").
 """
 
 from __future__ import annotations
@@ -142,15 +139,7 @@ STRAIGHT_STEP = 4.0
 
 
 def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[float]:
-    """The v of the points :func:`fempipe.analyses.statics.continue_static` visits on a straight branch.
-
-    There the tangent is (0, 1), the corrector converges in one iteration,
-    and the step grows by 1.5 from ``ds`` up to ``ds_max``; the last point
-    lands on ``stop``.  The same floating-point operations, so the same values
-    (with the continuation's ``ds`` and ``ds_max``; the spectra of the straight
-    branch are taken with ``ds = ds_max = STRAIGHT_STEP`` times the
-    continuation's, :data:`STRAIGHT_STEP`).
-    """
+    """The v :func:`~fempipe.analyses.statics.continue_static` visits on a straight branch (same operations, same values)."""
     values, v, h = [v_a], v_a, ds
     while True:
         v = v + h
@@ -164,15 +153,9 @@ def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[
 def _straight_without_branch_points(model: PipeModel, lo: float, hi: float, kw: dict) -> bool:
     """Whether the primary branch over [lo, hi] is the straight pipe with no branch point on it.
 
-    True when theta = 0 is a static state at every v (alpha = 0 or pi,
-    :func:`~fempipe.analyses.stability.linear.straight_is_static`), the continuation
-    would reach ``hi`` within its step budget, and the static Jacobian K^d(v)
-    (:class:`~fempipe.analyses.stability.linear.StraightPencil`) keeps the sign of its
-    determinant at every point the continuation would visit: a sign change
-    is a branch point (a pitchfork), where the general path locates it and
-    switches branches.  The same test on the same points as
-    :meth:`fempipe.solvers.continuation.KellerPolicy.detect`, whose bordered determinant is
-    det K^d times the tangent's v component, 1, on this branch.
+    theta = 0 static at every v (alpha = 0, pi), ``hi`` within the step budget, and det K^d of
+    the same sign at every point the continuation would visit (the test of
+    :meth:`fempipe.solvers.continuation.KellerPolicy.detect` on this branch).
     """
     if not straight_is_static(model.params):
         return False
@@ -191,12 +174,7 @@ def _straight_without_branch_points(model: PipeModel, lo: float, hi: float, kw: 
 def _straight_piece(
     model: PipeModel, v_a: float, stop: float, ds: float, ds_max: float, max_steps: int
 ) -> Branch:
-    """The straight branch from v_a to stop as :func:`fempipe.analyses.statics.continue_static` returns it.
-
-    Only called after :func:`_straight_without_branch_points`: the points
-    are theta = 0 at the values of :func:`_straight_values`, no folds, no
-    branch points, no Newton iterations.
-    """
+    """The straight branch from v_a to stop as :func:`~fempipe.analyses.statics.continue_static` returns it."""
     n = model.n
     tangent = np.zeros(n + 1)
     tangent[n] = 1.0

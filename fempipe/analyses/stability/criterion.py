@@ -43,20 +43,17 @@ def linearly_stable(
 ) -> bool | None:
     """Whether the static state q is linearly stable (docs/theory/stability.md, "Linear stability").
 
-    No resolved eigenvalue of Eq. (32) with Re lambda > ``STABILITY_TOL`` max(1, |lambda|):
-    the decision of ``compute_spectrum(model, q).stable`` and of every analysis.
+    No resolved eigenvalue of Eq. (32) with Re lambda > ``STABILITY_TOL`` max(1, |lambda|).
 
     Parameters
     ----------
     model : PipeModel
     q : ndarray, shape (n,)
-        A static state of ``model``.
     tolerance : float
         :data:`RESOLUTION_TOL`.
     sparse : bool, optional
-        Only the lowest ``SPARSE_MODES`` modes, by shift-invert Arnoldi in O(n) (the modes
-        above are damped and never decide; the dense criterion where K^d is singular);
-        default: finite elements with n > ``QZ_MAX_N``.
+        Only the lowest ``SPARSE_MODES`` modes by shift-invert Arnoldi; default: finite
+        elements with n > ``QZ_MAX_N``.
 
     Returns
     -------
@@ -174,9 +171,7 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
 
 
 def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
-    """The lowest roots with hysteretic damping (one step of mu_h, matched by eigenvalue and
-    eigenvector as :func:`~.hysteretic.hysteretic_roots` does), or :data:`_DENSE` where a
-    relevant match is ambiguous."""
+    """The lowest roots with hysteretic damping (one step of mu_h), or :data:`_DENSE` if a match is ambiguous."""
     n = model.n
     try:
         Kc = sp.csc_matrix(model.static_jacobian(q)) + 1j * mu_h * sp.csc_matrix(model.disc.K)

@@ -20,13 +20,7 @@ _GEEV_LWORK: dict = {}
 
 
 def _dense_eig(T: np.ndarray, rows: int, vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """Eigenvalues of the real matrix T and the first ``rows`` rows of its right eigenvectors.
-
-    LAPACK's geev as :func:`scipy.linalg.eig` calls it (same workspace size,
-    so the same results to the bit), without its per-call workspace query
-    and with the complex eigenvectors formed for the rows asked for only:
-    the shift-invert solve needs the theta part, half of each vector.
-    """
+    """LAPACK geev as :func:`scipy.linalg.eig` calls it (the same bits), eigenvectors' first ``rows`` rows only."""
     if T.dtype != np.float64:
         out = sla.eig(T, right=vectors)
         return (out[0], out[1][:rows]) if vectors else (out, None)
@@ -68,13 +62,9 @@ def quadratic_eigen(
 ) -> tuple[np.ndarray, np.ndarray | None, str]:
     """All eigenvalues and theta-parts of the eigenvectors of (lambda^2 M + lambda C + K) x = 0.
 
-    ``qz``: the generalised Schur decomposition of the first-order pencil
-    (backward stable; used up to n = 200).  ``shift-invert``: the standard
-    eigenproblem of (A - sigma B)^{-1} B with a real shift, for larger n: the
-    low modes, the ones that matter, are its largest eigenvalues and come out
-    with full relative accuracy, and it is much faster than QZ at such n.  Both keep exact conjugate pairs (real arithmetic).  With
-    ``vectors=False`` only the eigenvalues are computed (X is None): 40 % less
-    work for the dense eigensolver.
+    ``qz``: the generalized Schur decomposition of the first-order pencil (backward stable);
+    ``shift-invert``: (A - sigma B)^{-1} B with a real shift, the low modes its largest
+    eigenvalues.  Both keep exact conjugate pairs.
 
     Parameters
     ----------
@@ -83,16 +73,16 @@ def quadratic_eigen(
     method : {'auto', 'qz', 'shift-invert'}
         ``auto``: QZ up to n = :data:`QZ_MAX_N`, shift-invert above.
     vectors : bool
-        Whether to compute the eigenvectors.
+        Whether to compute the eigenvectors (X None otherwise).
 
     Returns
     -------
     lam : ndarray of complex, shape (m,)
         The finite eigenvalues (m <= 2n).
     X : ndarray of complex, shape (n, m), or None
-        Their theta-parts, unit Euclidean norm (None if ``vectors`` is False).
+        Their theta-parts, unit Euclidean norm.
     method : str
-        The method used (``auto`` resolved).
+        The method used.
     """
     n = K.shape[0]
     if method == "auto":

@@ -12,6 +12,8 @@ import numpy as np
 
 from fempipe.model.params import Params
 
+_EVENT_KEYS = "v type branch frequency mode stable_before stable_after plane".split()
+
 
 @dataclass(frozen=True)
 class StabilityEvent:
@@ -25,19 +27,13 @@ class StabilityEvent:
         As v increases (docs/theory/stability.md, "Stability events").
     branch : str
         Branch name (``"primary"``, ``"B1+"``, ...).
-    frequency : float
-        Im lambda = Re Omega at the crossing (0 for real roots and folds).
-    mode : int or None
-        Number of the crossing mode.
-    eigenvalue : complex
-        lambda at the crossing.
+    frequency, mode, eigenvalue : float, int or None, complex
+        Im lambda at the crossing (0 for real roots and folds), the mode number, lambda.
     at_start : bool
         Unstable already at the start of the branch's v-range (listed at that v).
     stable_before, stable_after : bool
-        Stability of the whole branch just below / above the event (a fold: in branch
-        order), in the event's plane.
+        Stability of the whole branch just below / above the event, in the event's plane.
     plane : {'in', 'out'}
-        The motion that loses (or regains) stability.
     """
 
     v: float
@@ -53,26 +49,14 @@ class StabilityEvent:
 
     def to_dict(self) -> dict:
         """The contract of ``fempipe critical --json``."""
-        return {
-            "v": self.v,
-            "type": self.type,
-            "branch": self.branch,
-            "frequency": self.frequency,
-            "mode": self.mode,
-            "stable_before": self.stable_before,
-            "stable_after": self.stable_after,
-            "plane": self.plane,
-        }
+        return {k: getattr(self, k) for k in _EVENT_KEYS}
 
     def details(self) -> dict:
-        d = self.to_dict()
-        d.update(
-            {
-                "eigenvalue": [float(self.eigenvalue.real), float(self.eigenvalue.imag)],
-                "at_start": self.at_start,
-            }
-        )
-        return d
+        z = self.eigenvalue
+        return self.to_dict() | {
+            "eigenvalue": [float(z.real), float(z.imag)],
+            "at_start": self.at_start,
+        }
 
 
 @dataclass(frozen=True)
@@ -81,18 +65,13 @@ class BranchStability:
 
     Attributes
     ----------
-    name : str
-    parent : str or None
-        Branch it bifurcates from.
-    born_at : float or None
-        v of the branch point it starts from.
+    name, parent, born_at : str, str or None, float or None
+        The branch, the one it bifurcates from and the v of that branch point.
     v, theta_tip, max_real : ndarray, shape (m,)
-        At every sample.
     n_unstable : ndarray of int, shape (m,)
         Unstable resolved eigenvalues (a complex pair counts 2).
     events : tuple of StabilityEvent
     folds, bifurcations : tuple of float
-        v of the folds and branch points.
     end_reason : str
         Why the continuation stopped (:class:`fempipe.analyses.statics.Branch`).
     """
@@ -137,21 +116,13 @@ class StabilityResult:
 
     Attributes
     ----------
-    params : Params
-        (v is the start of the range.)
-    discretization : dict
-    v_range : (float, float)
-    v_cr : float or None
-        First v at which the primary branch is not stable; None if stable throughout.
-    critical : StabilityEvent or None
-        The event that defines v_cr.
+    params, discretization, v_range : Params, dict, (float, float)
+    v_cr, critical : float or None, StabilityEvent or None
+        First v at which the primary branch is not stable (None if stable) and its event.
     v_flutter : float or None
         First flutter on the primary branch (Fig. 6).
-    events : tuple of StabilityEvent
-        All branches, by branch then v.
-    branches : tuple of BranchStability
+    events, branches : tuple of StabilityEvent, tuple of BranchStability
     n_spectra : int
-        Eigenproblems solved.
     plane : {'in', 'out'}
     """
 

@@ -124,17 +124,13 @@ def hysteretic_roots(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The roots of Eq. (32) with the hysteretic bending stiffness Kb (1 + i mu_h sgn(omega)).
 
-    (lambda^2 M + lambda C + K + i mu_h sgn(Im lambda) Kb) x = 0, solved from the roots
-    ``lam0`` of the real problem: each root with Im lambda > 0 continued in mu_h, its
-    conjugate mirrored, real roots (and pairs reaching Im lambda <= 0) kept
-    (docs/theory/conventions.md, "Hysteretic damping").
+    Each root of the real problem with Im lambda > 0 continued in mu_h, its conjugate mirrored,
+    real roots kept (docs/theory/conventions.md, "Hysteretic damping").
 
     Parameters
     ----------
-    K, C, M : ndarray, shape (n, n)
-        K^d, C^d, M^d of Eqs. (33a)-(33c).
-    Kb : ndarray, shape (n, n)
-        The bending part of K^d (``disc.K``).
+    K, C, M, Kb : ndarray, shape (n, n)
+        K^d, C^d, M^d of Eqs. (33a)-(33c) and the bending part of K^d.
     mu_h : float
         Loss factor, > 0.
     lam0, X0 : ndarray

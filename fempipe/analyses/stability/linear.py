@@ -39,35 +39,22 @@ def plane_models(model: PipeModel, planes) -> list[PipeModel]:
 
 
 def linearized_matrices(model: PipeModel, q: np.ndarray):
-    """K^d, C^d, M^d of Eqs. (33a)-(33c) at the static state q.
-
-    They are the analytic Jacobians dR/dq, dR/dq', dR/dq'' of the residual of
-    Eq. (20) at (q, 0, 0): the same code that drives Newton's method and the
-    time integrators, so the physics is written once
-    (:meth:`~fempipe.model.operators.PipeModel.static_jacobians`, which leaves out
-    the terms of ``jacobians`` that vanish at q' = q'' = 0).
+    """K^d, C^d, M^d of Eqs. (33a)-(33c) at the static state q: dR/dq, dR/dq', dR/dq'' at (q, 0, 0).
 
     Returns
     -------
     K, C, M : ndarray, shape (n, n)
-        Stiffness (bending, gravity, follower: not symmetric for v > 0),
-        damping (Coriolis 2 v sqrt(beta) and Kelvin-Voigt mu), mass (SPD).
+        Stiffness (not symmetric for v > 0), damping (Coriolis and Kelvin-Voigt), mass (SPD).
     """
     return model.linearization(np.asarray(q, dtype=float))
 
 
 class StraightPencil:
-    """K^d, C^d, M^d at the straight state theta = 0 as functions of v alone.
+    """K^d, C^d, M^d at theta = 0 as functions of v alone: K0 + v^2 K2, C0 + v C1, M.
 
-    At q = 0 every term of Eqs. (33a)-(33c) is a fixed matrix times 1, v or
-    v^2 (fields at theta = 0 do not depend on v): the follower term carries
-    v^2, the Coriolis term 2 v sqrt(beta), everything else (bending, gravity
-    with cos(alpha), Kelvin-Voigt, external damping, end mass, springs) none.
-    So K = K0 + v^2 K2, C = C0 + v C1 and M are formed from three calls of
-    :func:`linearized_matrices` (at v = 0 and v = 1) and then cost two
-    matrix sums per state instead of a Jacobian assembly; they equal the
-    assembled ones to round-off.  This holds at q = 0 for any alpha; q = 0 is
-    a static state only where sin(alpha) = 0 (:func:`straight_is_static`).
+    Formed from :func:`linearized_matrices` at v = 0 and 1; equal to the assembled ones to
+    round-off (docs/theory/stability.md, "The straight branch").  q = 0 is a static state only
+    where sin(alpha) = 0 (:func:`straight_is_static`).
     """
 
     def __init__(self, model: PipeModel) -> None:

@@ -82,17 +82,12 @@ class StabilityMap:
 
     Attributes
     ----------
-    alphas : ndarray, shape (n_alpha,)
-    curves : tuple of (beta, gamma)
-    base : Params
-        mu, the variants of the pipe and the defaults.
-    v_max : float
-        Upper end of the searched range (v_cr is None if stable up to it).
+    alphas, curves, base, v_max : ndarray, tuple of (beta, gamma), Params, float
     points : list of list of dict
-        ``points[c][a]``: the keys of :data:`PLANAR_KEYS` (or ``error``); in both planes
-        those of the first loss of stability of either plane plus :data:`PLANE_KEYS`.
+        ``points[c][a]``: the keys of :data:`PLANAR_KEYS` (or ``error``); in both planes those
+        of the first loss of stability plus :data:`PLANE_KEYS`.
     planar : bool
-        The paper's planar model alone (no out-of-plane analysis).
+        The paper's planar model alone.
     """
 
     alphas: np.ndarray

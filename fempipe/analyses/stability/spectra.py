@@ -27,23 +27,15 @@ class Spectrum:
     ----------
     params : Params
     q : ndarray, shape (n,)
-        The static state theta^s.
-    lam : ndarray of complex, shape (m,)
-        Resolved eigenvalues (theta^d ∝ e^{lambda tau}) by mode number, upper half first.
-    mode : ndarray of int, shape (m,)
-        Mode numbers (1-based), carried by continuity from v = 0.
+    lam, mode : ndarray of complex, ndarray of int, shape (m,)
+        Resolved eigenvalues, upper half first, and their mode numbers (from v = 0).
     vectors : ndarray of complex, shape (n, m)
         theta-parts of the eigenvectors (unit norm).
     share : ndarray, shape (m,)
         Share of each eigenvector on resolved canonical modes (>= 1/2).
     n_computed, n_resolved_modes : int
-        Eigenvalues computed (2 n); canonical modes resolved.
-    max_real_unresolved : float
-        Largest Re lambda among the discarded eigenvalues (diagnostic).
-    static_residual : float
-        Norm of the static residual at q.
+    max_real_unresolved, static_residual : float
     method : str
-        ``"qz"`` or ``"shift-invert"``.
     """
 
     params: Params
@@ -104,8 +96,7 @@ def compute_spectrum(
 ) -> Spectrum:
     """Every resolved eigenvalue of Eq. (32) about a static state, with its mode number.
 
-    At v != 0 the mode numbers cost a path back to v = 0; for the decision alone use
-    :func:`linearly_stable`.
+    The mode numbers cost a path back to v = 0; for the decision alone use :func:`linearly_stable`.
 
     Parameters
     ----------
@@ -113,7 +104,6 @@ def compute_spectrum(
     q : ndarray, shape (n,), optional
         The static state; default :func:`fempipe.analyses.statics.solve_sagged`.
     method : {'auto', 'qz', 'shift-invert'}
-        Dense eigensolver (:func:`quadratic_eigen`).
     tolerance : float
         :data:`RESOLUTION_TOL`.
 
@@ -123,10 +113,8 @@ def compute_spectrum(
 
     Raises
     ------
-    ValueError
-        If the discretization resolves no mode.
-    NewtonError
-        If the branch through q cannot be continued back to v = 0.
+    ValueError, NewtonError
+        No resolved mode; no branch back to v = 0.
     """
     res = resolution(model.disc, tolerance)
     if res.n_resolved == 0:
@@ -160,20 +148,15 @@ def compute_spectrum(
 
 @dataclass(frozen=True)
 class ModeShape:
-    """A mode shape about a static state: ``Re(a e^{lambda tau})`` times the complex fields,
-    normalized to max |theta^d| = 1, real and positive where largest.
+    """A mode shape ``Re(a e^{lambda tau})`` about a static state, max |theta^d| = 1, real positive there.
 
     Attributes
     ----------
     xi : ndarray, shape (m,)
-    theta : ndarray of complex, shape (m,)
-        theta^d(xi).
-    X_g, Z_g : ndarray of complex, shape (m,)
-        Displacement of the centerline (Eq. (28) linearized).
+    theta, X_g, Z_g : ndarray of complex, shape (m,)
+        theta^d and the centerline's displacement (Eq. (28) linearized).
     X_static, Z_static : ndarray, shape (m,)
-        The static centerline.
-    lam : complex
-    mode : int
+    lam, mode : complex, int
     """
 
     xi: np.ndarray

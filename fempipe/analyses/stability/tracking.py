@@ -184,9 +184,6 @@ class TrackedPath:
         """Tracked eigenvalues, shape (n_samples, k)."""
         return np.array([e.lam[i] for e, i in self.samples])
 
-    def tracked_resolved(self) -> np.ndarray:
-        return np.array([e.resolved[i] for e, i in self.samples])
-
     def start_labelled(self, e: ClassifiedSpectrum, tracker: ModeTracker) -> None:
         """Start at ``e`` with mode numbers given by ``tracker`` (indices into e)."""
         self.tracker = tracker
@@ -268,17 +265,13 @@ class RootLocus:
     Attributes
     ----------
     params : Params
-        The fixed parameters (v is the first value).
     v : ndarray, shape (m,)
     lam : ndarray of complex, shape (m, k)
         Column j belongs to mode ``modes[j]`` (modes 1..n_modes and every unstable one).
     modes : ndarray of int, shape (k,)
-    resolved : ndarray of bool, shape (m, k)
-    max_real : ndarray, shape (m,)
-        Largest Re lambda of all resolved eigenvalues.
-    stable : ndarray of bool, shape (m,)
-    theta_tip : ndarray, shape (m,)
-        Static tip rotation (which branch).
+    resolved, stable : ndarray of bool
+    max_real, theta_tip : ndarray, shape (m,)
+        Largest resolved Re lambda; static tip rotation.
     n_spectra : int
         Spectra computed, including those inserted for tracking.
     plane : {'in', 'out'}
@@ -338,31 +331,23 @@ def trace_root_locus(
     Parameters
     ----------
     model : PipeModel
-        Parameters other than v are taken from ``model.params``.
     values : sequence of float
         Flow velocities, in the order the branch is followed.
     planes : tuple of {'in', 'out'}
-        The motion in the plane of the static states (Eq. (32)) and/or out of it, about
-        the same static states, each plane's mode numbers carried from v = 0.
+        In the plane (Eq. (32)) and/or out of it, about the same static states.
     q0 : ndarray, optional
         Static state at ``values[0]`` (default: :func:`~fempipe.analyses.statics.solve_sagged`).
     n_modes : int or None
-        Report modes 1..n_modes (None: every resolved mode) and every mode unstable at
-        some v.
+        Report modes 1..n_modes (None: all resolved) and every mode unstable at some v.
     callback : callable, optional
-        ``callback(i, v)`` after each value (all planes).
+        ``callback(i, v)`` after each value.
 
     Returns
     -------
     RootLocus
-        For one plane; ``(in_plane, out_of_plane)`` for ``("in", "out")``.
+        ``(in_plane, out_of_plane)`` for ``("in", "out")``.
     """
-    loci = _loci(plane_models(model, planes), values, q0, n_modes, method, tolerance, callback)
-    return loci[0] if len(loci) == 1 else tuple(loci)
-
-
-def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[RootLocus]:
-    """The root loci of each model (one pipe, its planes) along one static path."""
+    models = plane_models(model, planes)
     model = models[0]
     values = [float(x) for x in values]
     if not values:
@@ -395,15 +380,16 @@ def _loci(models, values, q0, n_modes, method, tolerance, callback) -> list[Root
         if callback:
             callback(i, values[i])
     tips = np.array([float(model.disc.tip @ st.q) for st in states])
-    return [
+    loci = [
         _locus_of(m, path, kept, m0.params, values, tips, n_modes)
         for m, path, kept in zip(models, paths, keep, strict=True)
     ]
+    return loci[0] if len(loci) == 1 else tuple(loci)
 
 
 def _locus_of(model, path, keep, params, values, tips, n_modes) -> RootLocus:
     lam = path.tracked()[keep]
-    resolved = path.tracked_resolved()[keep]
+    resolved = np.array([e.resolved[i] for e, i in path.samples])[keep]
     labels = path.labels
     # Every mode unstable somewhere is listed: the eigenvalue that decides ``stable``.
     unstable = resolved & (lam.real > STABILITY_TOL * np.maximum(1.0, np.abs(lam)))

@@ -178,10 +178,8 @@ def continue_static(
         Initial guess for the first point.
     ds, ds_min, ds_max : float
         Initial, minimal and maximal arclength steps.
-    direction : {+1, -1}, optional
-        Initial direction in the parameter (default: towards ``stop``).
-    tangent : ndarray, shape (n + 1,), optional
-        Initial tangent (for branch switching); overrides ``direction``.
+    direction, tangent : {+1, -1}, ndarray, optional
+        Initial direction (default: towards ``stop``), or tangent (branch switching).
     callback : callable, optional
         Called with each accepted :class:`BranchPoint`.
 

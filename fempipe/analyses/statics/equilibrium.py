@@ -115,10 +115,8 @@ def solve_static(
     model : PipeModel
     q0 : ndarray, shape (n,), optional
         Initial guess (default the straight pipe).
-    tol : float
-        Relative force balance (:func:`force_balance`); the last step must also be below
-        ``1e-9 (1 + ||q||)``.
-    max_iter : int
+    tol, max_iter : float, int
+        Relative force balance (:func:`force_balance`; last step also below 1e-9 (1 + ||q||)).
 
     Returns
     -------
@@ -127,7 +125,6 @@ def solve_static(
     Raises
     ------
     NewtonError
-        Also when the residual is not finite (loads beyond floating-point range).
     """
     q = np.zeros(model.n) if q0 is None else np.array(q0, dtype=float)
     dense = model.n <= DENSE_MAX_N

@@ -46,19 +46,14 @@ def _key(ev) -> tuple:
 def event_states(model: PipeModel, result) -> dict:
     """Static states at the flutter events of a :class:`~fempipe.analyses.stability.StabilityResult`.
 
-    The primary branch is followed again from its start (``result.v_range[0]``,
-    gravity loading, :func:`fempipe.analyses.statics.solve_path`, which passes folds by
-    continuation) through every flutter v in steps of at most
-    :data:`PATH_STEP`.  Events of other branches, and instabilities present at
-    the start of the range (no crossing), get a reason instead.
-    :func:`normal_forms` accepts a state only if its critical eigenvalue is
-    the event's to :data:`STATE_MATCH_TOL` (a Newton step onto another branch
-    would not pass).
+    The primary branch is followed again from its start through every flutter v in steps of at
+    most :data:`PATH_STEP`; events of other branches and instabilities present at the start get
+    a reason instead.
 
     Returns
     -------
     dict
-        ``{(branch, type, v, mode): ndarray q or str reason}`` for the flutter events.
+        ``{(branch, type, v, mode): ndarray q or str reason}``.
     """
     out: dict = {}
     flutter = [ev for ev in result.events if ev.type == "flutter"]
@@ -157,14 +152,11 @@ _NOT_PRIMARY = dict.fromkeys(EVENT_KEYS) | {
 def decorate_events(
     result_dict: dict, model: PipeModel, result, out_of_plane: dict | None = None
 ) -> dict:
-    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json``.
+    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json`` (modified, returned).
 
-    In ``events``, ``critical`` (when a flutter) and ``branches[*].events``;
-    ``hopf_note`` is null, or why the other keys are null (hysteretic
-    damping, a state not reconstructed).  The flutters out of the plane take their keys
-    from ``out_of_plane``, ``{(branch, v): keys}`` (the 3-D model's normal form,
-    :func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).  ``result_dict`` is
-    modified and returned.
+    ``hopf_note`` is null, or why the other keys are; the flutters out of the plane take their
+    keys from ``out_of_plane``, ``{(branch, v): keys}``
+    (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).
     """
     forms = normal_forms(model, result)
     out_of_plane = out_of_plane or {}

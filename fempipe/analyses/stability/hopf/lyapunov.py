@@ -31,26 +31,20 @@ class HopfCoefficient:
 
     Attributes
     ----------
-    l1 : float
-        First Lyapunov coefficient Re(c1) / omega.
-    uncertainty : float
-        Spread of l1 over the steps used, plus the rounding level (docs/theory/stability.md).
+    l1, uncertainty : float
+        First Lyapunov coefficient Re(c1) / omega; its spread over the steps plus rounding.
     c1 : complex
         Cubic coefficient of z' = lambda z + c1 |z|^2 z.
-    eigenvalue : complex
-        The critical eigenvalue of A (Im > 0).
-    omega : float
-        Im of it.
+    eigenvalue, omega : complex, float
+        The critical eigenvalue of A (Im > 0) and its Im.
     q, p : ndarray of complex, shape (N,)
         Right and adjoint eigenvectors, p^H q = 1, q normalized by ``norm``.
-    step : float
-        The difference step h of ``l1``.
-    l1_2h : float
-        l1 computed with the next larger step (diagnostic).
+    step, l1_2h : float
+        The difference step h of ``l1``; l1 with the next larger step.
     terms : tuple of complex
         <p, C(q,q,qbar)>, -2 <p, B(q, A^-1 B(q,qbar))>, <p, B(qbar, (2iw-A)^-1 B(q,q))>.
     ladder : tuple of (float, float)
-        (h, l1(h)) for every step tried: the plateau.
+        (h, l1(h)) for every step tried.
     """
 
     l1: float
@@ -118,23 +112,17 @@ def lyapunov_coefficient(
     Parameters
     ----------
     jacobian : callable
-        ``jacobian(x) -> ndarray (N, N)``, the analytic D_x F at any x (the
-        multilinear forms B, C are its differences, docs/theory/stability.md).
+        ``jacobian(x) -> ndarray (N, N)``, the analytic D_x F.
     x0 : ndarray, shape (N,)
-        The equilibrium, F(x0) = 0, where A = jacobian(x0) has a pair +- i omega.
+        The equilibrium, where A = jacobian(x0) has a pair +- i omega.
     omega : float, optional
-        Frequency of the critical pair (the eigenvalue nearest i omega is
-        taken); default the pair nearest the imaginary axis.
+        Frequency of the critical pair; default the pair nearest the imaginary axis.
     norm : ndarray, shape (N, N), optional
-        Hermitian positive semi-definite G with q^H G q = 1 fixing the scale
-        of q (and so of l1); default the identity.
+        Hermitian positive semi-definite G with q^H G q = 1; default the identity.
     step : float, optional
-        A fixed difference step h for q of that unit size, > 0; default the
-        ladder :data:`STEP_LADDER` (docs/theory/stability.md).
+        A fixed difference step h > 0; default the ladder :data:`STEP_LADDER`.
     derivatives : callable, optional
-        ``(u, h) -> (DJ[u], D2J[u, u])`` for real u; default
-        :func:`jacobian_differences`.  A problem-specific form can avoid the
-        rounding of large constant parts of J (the pipe's, :func:`pipe_derivatives`).
+        ``(u, h) -> (DJ[u], D2J[u, u])``; default :func:`jacobian_differences`.
 
     Returns
     -------

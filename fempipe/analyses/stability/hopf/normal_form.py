@@ -124,13 +124,15 @@ class HopfNormalForm:
     def initial_state(
         self, v: float, phase: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, float]:
-        """(q, q', T) on the predicted cycle at v, a starting guess for shooting.
-
-        The default phase puts the section variable at its static value and rising.
-        """
-        return predicted_cycle_state(
-            self.q_static, self.eigenvector, self.section_gradient, self.rho(v), self.omega, phase
-        )
+        """(q, q', T) = q_static + 2 rho Re(q e^{i phase}), 2 pi / omega on the predicted cycle
+        at v; the default phase puts the section variable at its static value and rising."""
+        n = self.q_static.size
+        if phase is None:
+            # s - s0 ~ 2 rho Re(g e^{i phase}), g = ds . q: zero and rising where g e^{i phase} = -i |g|
+            g = complex(self.section_gradient @ self.eigenvector[:n])
+            phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
+        x = 2.0 * self.rho(v) * np.real(self.eigenvector * np.exp(1j * phase))
+        return self.q_static + x[:n], x[n:], 2.0 * math.pi / self.omega
 
     def event_keys(self) -> dict:
         """The Hopf keys of a flutter event of ``fempipe critical --json`` (:data:`~.flutter.EVENT_KEYS`)."""
@@ -186,28 +188,6 @@ def amplitude_coefficient(gradient: np.ndarray, eigenvector: np.ndarray, slope: 
     return float(2.0 * abs(gradient @ eigenvector[:n]) * math.sqrt(abs(slope)))
 
 
-def predicted_cycle_state(
-    x_static: np.ndarray,
-    eigenvector: np.ndarray,
-    section_gradient: np.ndarray,
-    rho: float,
-    omega: float,
-    phase: float | None = None,
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """(q, q', T) = x_static + 2 rho Re(eigenvector e^{i phase}), 2 pi / omega.
-
-    The default phase puts the section variable (gradient ``section_gradient``) at its
-    static value and rising.
-    """
-    n = x_static.size
-    if phase is None:
-        # s - s0 ~ 2 rho Re(g e^{i phase}), g = ds . q: zero and rising where g e^{i phase} = -i |g|
-        g = complex(section_gradient @ eigenvector[:n])
-        phase = float(np.angle(-1j * np.conj(g))) if g != 0 else 0.0
-    x = 2.0 * rho * np.real(eigenvector * np.exp(1j * phase))
-    return x_static + x[:n], x[n:], 2.0 * math.pi / omega
-
-
 @single_blas
 def first_lyapunov_coefficient(
     model: PipeModel,
@@ -221,14 +201,12 @@ def first_lyapunov_coefficient(
     Parameters
     ----------
     model : PipeModel
-        With v at the Hopf point (a flutter event's v).
     q_static : ndarray, shape (n,)
-        The static state there (Eq. (31a)).
+        The static state (Eq. (31a)).
     omega : float, optional
-        Frequency of the crossing pair (the event's ``frequency``); default
-        the pair nearest the imaginary axis.
+        Frequency of the crossing pair; default the pair nearest the imaginary axis.
     step : float, optional
-        A fixed difference step h, > 0; default the ladder (docs/theory/stability.md, "Derivatives").
+        A fixed difference step h > 0; default the ladder (docs/theory/stability.md, "Derivatives").
 
     Returns
     -------
@@ -237,8 +215,7 @@ def first_lyapunov_coefficient(
     Raises
     ------
     ValueError
-        With hysteretic damping (no equation of motion in time), or if the
-        state has no complex pair.
+        With hysteretic damping, or without a complex pair.
     """
     if model.params.hysteretic_damping > 0.0:
         raise ValueError(

@@ -49,23 +49,19 @@ def _without_bending(model: PipeModel) -> PipeModel:
 
 
 def _mirror_even(model: PipeModel, x0: np.ndarray) -> bool:
-    """Whether J is even about x0: the straight pipe x0 = 0 at alpha = 0 or pi, where the
-    mirror (theta, alpha) -> (-theta, -alpha) makes F odd (a PipeModel subclass may add
-    terms that are not: it takes the general path)."""
+    """Whether J is even about x0 (x0 = 0 at alpha = 0, pi; a PipeModel subclass takes the general path)."""
     return type(model) is PipeModel and straight_is_static(model.params) and not np.any(x0)
 
 
 def pipe_derivatives(
     model: PipeModel, x0: np.ndarray, mirror: bool | None = None
 ) -> Callable[[np.ndarray, float, float], tuple[np.ndarray, np.ndarray]]:
-    """``(u, h, dv=0) -> (DJ[u], D2J[u, u])`` of :func:`pipe_jacobian` about x0, without
-    differencing the bending matrix.
+    """``(u, h, dv=0) -> (DJ[u], D2J[u, u])`` of :func:`pipe_jacobian` about x0 without differencing
+    the bending matrix (docs/theory/stability.md, "Derivatives").
 
-    The lower block of J is ``-N (Kc + X(x))``, N = M(q)^{-1}, Kc = [K, mu K] constant; with
-    Y = N0 (Kc + X(x0)) and differences of M and X only, DJ = N0 (DM Y - DX) and
-    D2J = N0 (D2M Y - D2X - 2 DM N0 (DM Y - DX)): rounding eps |M|, eps |X| over h^2 instead
-    of eps |K| / h^2.  ``dv`` moves v by ``h dv`` along with x (lambda'(v)).  Where J is
-    even (``mirror``, default :func:`_mirror_even`) one evaluation replaces two.
+    With N0 = M(q0)^{-1}, Y = N0 (Kc + X(x0)): DJ = N0 (DM Y - DX), D2J = N0 (D2M Y - D2X - 2 DM
+    N0 (DM Y - DX)).  ``dv`` moves v by ``h dv`` with x; where J is even (``mirror``) one
+    evaluation replaces two.
     """
     n = model.n
     bare = _without_bending(model)
