@@ -8,9 +8,7 @@ differences of the stable orbits.  ``fig08_10_continuation``: ``--alphas pi/4,pi
 
 from __future__ import annotations
 
-import json
-
-from fempipe.bench.harness import child_cpu_seconds, register
+from fempipe.bench.harness import child_json, register
 
 #: Whole-process CPU target of Fig. 7 by continuation.
 FIG07_TARGET_S = 20.0
@@ -18,12 +16,6 @@ FIG07_TARGET_S = 20.0
 FIG08_10_TARGET_S = 120.0
 FIG07 = ["bifurcation", "--v", "5:12:36", "--json", "--quiet"]
 FIG08_10 = [*FIG07, "--alphas", "pi/4,pi/2,3pi/4,pi"]
-
-
-def _process_cpu(argv: list[str]) -> tuple[float, dict]:
-    """CPU seconds (user + sys) of one finished ``python -m fempipe ARGV`` and its JSON."""
-    cpu, out = child_cpu_seconds(["-m", "fempipe", *argv])
-    return cpu, json.loads(out)
 
 
 def _agreement(cont: dict, sweep: dict) -> dict:
@@ -62,7 +54,7 @@ def _summary(d: dict) -> dict:
 
 
 def _bench(argv: list[str], target: float, name: str, with_sweep: bool) -> dict:
-    cpu, d = _process_cpu(argv)
+    cpu, d = child_json(["-m", "fempipe", *argv])
     out = {
         "name": name,
         "command": "fempipe " + " ".join(argv),
@@ -72,7 +64,7 @@ def _bench(argv: list[str], target: float, name: str, with_sweep: bool) -> dict:
         **_summary(d),
     }
     if with_sweep:
-        cpu_sweep, sweep = _process_cpu([*argv, "--method", "sweep"])
+        cpu_sweep, sweep = child_json(["-m", "fempipe", *argv, "--method", "sweep"])
         out["sweep_cpu_s"] = cpu_sweep
         out["sweep_over_continuation"] = cpu_sweep / cpu
         out["agreement_with_sweep"] = _agreement(d, sweep)

@@ -9,7 +9,6 @@ against a classical Galerkin is :mod:`fempipe.bench.stability`.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
@@ -20,7 +19,7 @@ from fempipe.analyses.stability import (
     map_stability,
     resolution,
 )
-from fempipe.bench.harness import PAPER, best_time, register
+from fempipe.bench.harness import PAPER, best_time, in_turns, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
@@ -69,14 +68,14 @@ def bench_critical_3d(quick: bool = False) -> dict:
     cases = []
     for alpha in (math.pi / 4, math.pi / 2, 3 * math.pi / 4, math.pi):
         model = PipeModel(disc, Params(**{**PAPER, "alpha": alpha}))
-        t_in, t_3d, res3 = math.inf, math.inf, None
-        for _ in range(repeats):
-            t0 = time.process_time()
-            planar = analyse_stability(model, 10.0)
-            t_in = min(t_in, time.process_time() - t0)
-            t0 = time.process_time()
-            res3 = analyse_stability(model, 10.0, planes=PLANES)
-            t_3d = min(t_3d, time.process_time() - t0)
+        (t_in, t_3d), (planar, res3) = in_turns(
+            [
+                lambda _, model=model: analyse_stability(model, 10.0),
+                lambda _, model=model: analyse_stability(model, 10.0, planes=PLANES),
+            ],
+            repeats,
+        )
+        t_in, t_3d = min(t_in), min(t_3d)
         cases.append(
             {
                 "alpha": alpha,
@@ -107,11 +106,11 @@ def bench_stability_curve(quick: bool = False) -> dict:
     n_alpha = 5 if quick else 37
     alphas = np.linspace(0.0, math.pi, n_alpha)
     disc = parse_discretization(DEFAULT_FE)
-    t0 = time.perf_counter()
-    smap = map_stability(
-        disc, alphas, [(PAPER["beta"], PAPER["gamma"])], mu=PAPER["mu"], v_max=10.0, workers=2
+    t, smap = best_time(
+        lambda: map_stability(
+            disc, alphas, [(PAPER["beta"], PAPER["gamma"])], mu=PAPER["mu"], v_max=10.0, workers=2
+        )
     )
-    t = time.perf_counter() - t0
     rows = smap.rows()
     return {
         "n_alpha": n_alpha,

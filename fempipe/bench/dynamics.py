@@ -12,13 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import time
 
 import numpy as np
 
 from fempipe.analyses.bifurcation import compute_bifurcation_diagram
 from fempipe.analyses.limit_cycle import find_attractor
-from fempipe.bench.harness import child_cpu_seconds, register
+from fempipe.bench.harness import best_time, child_json, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
@@ -32,9 +31,7 @@ def _disc(spec: str):
 def bench_limit_cycle(spec: str = DEFAULT_FE) -> dict:
     """One converged limit cycle at alpha = 0, v = 10; returns timing and the cycle."""
     model = PipeModel(_disc(spec), Params(alpha=0.0, v=10.0, **PAPER_CASE))
-    t0 = time.perf_counter()
-    att = find_attractor(model)
-    wall = time.perf_counter() - t0
+    wall, att = best_time(lambda: find_attractor(model))
     return {
         "name": "limit_cycle",
         "disc": spec,
@@ -51,9 +48,9 @@ def bench_fig7(spec: str = DEFAULT_FE, workers: int = 2, n_values: int = 36) -> 
     """The Fig. 7 sweep up and down in parallel; returns timing and a summary."""
     model = PipeModel(_disc(spec), Params(alpha=0.0, **PAPER_CASE))
     values = np.linspace(5.0, 12.0, n_values)
-    t0 = time.perf_counter()
-    d = compute_bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
-    wall = time.perf_counter() - t0
+    wall, d = best_time(
+        lambda: compute_bifurcation_diagram(model, values, workers=workers, shoot_rtol=1e-6)
+    )
     pts = d.points
     first_periodic = {
         direction: min(
@@ -84,12 +81,6 @@ PROCESS_TARGET_S = 2.0
 ACCURACY_TARGET = 1e-6
 
 
-def _process_cpu(argv: list[str]) -> tuple[float, dict]:
-    """CPU seconds (user + sys) of one finished ``python -m fempipe ARGV`` and its JSON."""
-    cpu, out = child_cpu_seconds(["-m", "fempipe", *argv])
-    return cpu, json.loads(out)
-
-
 def _relative_errors(d: dict, ref: dict) -> dict:
     """|x / x_ref - 1| of the period and of every tip extremum."""
     errs = {"period": abs(d["period"] / ref["period"] - 1.0)}
@@ -102,10 +93,10 @@ def _relative_errors(d: dict, ref: dict) -> dict:
 def bench_limit_cycle_process(alpha: float = 0.0, v: float = 10.0, runs: int = 5) -> dict:
     """Median CPU-s of whole ``simulate --alpha A --v V --json`` processes, errors against ``--shoot-rtol 1e-10``."""
     argv = ["simulate", "--alpha", repr(alpha), "--v", repr(v), "--json"]
-    _, ref = _process_cpu([*argv, "--shoot-rtol", "1e-10"])
+    _, ref = child_json(["-m", "fempipe", *argv, "--shoot-rtol", "1e-10"])
     cpus, d = [], None
     for _ in range(runs):
-        cpu, d = _process_cpu(argv)
+        cpu, d = child_json(["-m", "fempipe", *argv])
         cpus.append(cpu)
     errs = _relative_errors(d, ref)
     worst = max([errs["period"], *(x for k in errs if k != "period" for x in errs[k])])

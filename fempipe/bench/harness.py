@@ -1,11 +1,12 @@
-"""What the benchmarks share: :func:`register`, the timers :func:`best_time` (in process) and
-:func:`child_cpu_seconds` (a fresh ``python``), and the cases :data:`PAPER` and
-:data:`TEXIER_DORBOLO`.
+"""What the benchmarks share: :func:`register`, the timers :func:`best_time`, :func:`in_turns`
+(in process), :func:`child_cpu_seconds` and :func:`child_json` (a fresh ``python``), and the
+cases :data:`PAPER` and :data:`TEXIER_DORBOLO`.
 """
 
 from __future__ import annotations
 
 import atexit
+import json
 import math
 import os
 import resource
@@ -24,6 +25,8 @@ __all__ = [
     "TEXIER_DORBOLO",
     "best_time",
     "child_cpu_seconds",
+    "child_json",
+    "in_turns",
     "register",
 ]
 
@@ -48,14 +51,28 @@ def register(name: str) -> Callable[[Callable[..., dict]], Callable[..., dict]]:
     return deco
 
 
-def best_time(fn: Callable[[], object], repeats: int) -> tuple[float, object]:
-    """Minimum wall time of ``repeats`` calls (the least disturbed run) and the last result."""
-    best, result = math.inf, None
+def best_time(fn: Callable[[], object], repeats: int = 1, clock=time.perf_counter, stat=min):
+    """``stat`` (min: the least disturbed run) of the ``clock`` seconds of ``repeats`` calls, and the last result."""
+    times, result = [], None
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = clock()
         result = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, result
+        times.append(clock() - t0)
+    return stat(times), result
+
+
+def in_turns(fns: list[Callable], repeats: int, clock=time.process_time) -> tuple[list, list]:
+    """The ``clock`` seconds of ``fns`` called in turns ``repeats`` times (per function, by round)
+    and their last results; each function gets the previous one's result (None for the first)."""
+    times: list[list[float]] = [[] for _ in fns]
+    results: list = [None] * len(fns)
+    for _ in range(repeats):
+        prev = None
+        for i, fn in enumerate(fns):
+            t0 = clock()
+            prev = results[i] = fn(prev)
+            times[i].append(clock() - t0)
+    return times, results
 
 
 _BYTECODE_CACHE: str | None = None
@@ -88,3 +105,9 @@ def child_cpu_seconds(argv: list[str], env: dict | None = None) -> tuple[float, 
         raise RuntimeError(f"python {' '.join(argv)} failed: {res.stderr.strip()[-500:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return cpu, res.stdout
+
+
+def child_json(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
+    """:func:`child_cpu_seconds` of ``python ARGV`` with its stdout parsed as JSON."""
+    cpu, out = child_cpu_seconds(argv, env)
+    return cpu, json.loads(out)

@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import math
 import statistics
-import time
 
 from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.hopf import normal_forms
-from fempipe.bench.harness import register
+from fempipe.bench.harness import in_turns, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
 from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
@@ -33,15 +32,13 @@ def bench_hopf(quick: bool = False) -> dict:
     table = []
     for alpha in alphas:
         model = PipeModel(disc, Params(alpha=alpha))
-        t_an, t_nf = [], []
-        for _ in range(repeats):
-            t0 = time.process_time()
-            res = analyse_stability(model, v_max=16.0)
-            t1 = time.process_time()
-            forms = normal_forms(model, res)
-            t2 = time.process_time()
-            t_an.append(t1 - t0)
-            t_nf.append(t2 - t1)
+        (t_an, t_nf), (_, forms) = in_turns(
+            [
+                lambda _, model=model: analyse_stability(model, v_max=16.0),
+                lambda res, model=model: normal_forms(model, res),
+            ],
+            repeats,
+        )
         first = min(forms.items(), key=lambda kv: kv[0][2]) if forms else None
         nf = None if first is None or isinstance(first[1], str) else first[1]
         a, h = statistics.median(t_an), statistics.median(t_nf)

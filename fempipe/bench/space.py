@@ -20,7 +20,7 @@ import numpy as np
 
 from fempipe.analyses.limit_cycle import find_attractor, shoot
 from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
-from fempipe.bench.harness import register
+from fempipe.bench.harness import best_time, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.operators import PipeModel
@@ -32,12 +32,8 @@ from fempipe.validation.space_runs import planar_model, space_cycles
 
 
 def _cpu(fn, repeats: int):
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t0)
-    return statistics.median(times), out
+    """Median CPU seconds of ``repeats`` calls and the last result."""
+    return best_time(fn, repeats, time.process_time, statistics.median)
 
 
 @register("space_cycle")

@@ -10,14 +10,13 @@ The benchmark in full: docs/cli/commands.md, "fempipe bench".
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from fempipe.analyses.stability import PLANES, find_critical_velocity
-from fempipe.bench.harness import child_cpu_seconds, register
+from fempipe.bench.harness import child_json, register
 from fempipe.core import parallel
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.operators import PipeModel
@@ -35,12 +34,6 @@ BASELINE = Path(__file__).resolve().parents[1] / "validation" / "classical_basel
 TARGET_RATIO = 1.0
 
 
-def _child(argv: list[str], env: dict | None = None) -> tuple[float, dict]:
-    """(user + system CPU seconds, parsed JSON stdout) of one fresh ``python argv``."""
-    cpu, out = child_cpu_seconds(argv, env)
-    return cpu, json.loads(out)
-
-
 def _blas_env(one_thread: bool) -> dict:
     """The baseline's environment: one BLAS thread, or as written (unset what fempipe's command line set)."""
     if one_thread:
@@ -51,12 +44,12 @@ def _blas_env(one_thread: bool) -> dict:
 def _rows(commands: list[tuple], runs: int) -> tuple[list[dict], list]:
     """Per command: median CPU seconds of ``runs`` fresh processes in turns, its v_cr error, CPU by round."""
     for _, argv, _, env in commands:
-        _child(argv, env)
+        child_json(argv, env)
     times: list[list[float]] = [[] for _ in commands]
     outs: list = [None] * len(commands)
     for _ in range(runs):
         for i, (_, argv, _, env) in enumerate(commands):
-            cpu, outs[i] = _child(argv, env)
+            cpu, outs[i] = child_json(argv, env)
             times[i].append(cpu)
     rows = []
     for (label, _, reference, _), t, out in zip(commands, times, outs, strict=True):

@@ -39,54 +39,25 @@ __all__ = [
 
 @runtime_checkable
 class Discretization(Protocol):
-    r"""What every solver of the package uses of a discretization; nothing else is asked of it.
+    r"""What every solver of the package uses of a discretization; nothing else is asked of it."""
 
-    Attributes
-    ----------
-    n : int
-        Number of unknowns q_j.
-    quad : LineQuadrature
-        Points, weights and integration operators.
-    Phi, dPhi : ndarray or sparse matrix, shape (n_q, n)
-        phi_j and phi_j' at the quadrature points.
-    tip : ndarray, shape (n,)
-        phi_j(1).
-    K : ndarray or sparse matrix, shape (n, n)
-        Bending stiffness ``\int phi_i' phi_j'``.
-    gram : ndarray or sparse matrix, shape (n, n)
-        ``\int phi_i phi_j``, the metric of theta.
-    sparse : bool
-        Whether ``Phi``, ``K`` and ``gram`` are sparse.
-    name : str
-        The CLI spelling (``P3:16``, ``modal:4``, ``modal-beam:4``).
-
-    Methods
-    -------
-    evaluate(q, xi)
-        theta at arbitrary points.
-    basis_values(xi)
-        phi_j at arbitrary points, shape (m, n) (sparse for finite elements).
-    to_dict()
-        A JSON-able description.
-    """
-
-    n: int
-    quad: LineQuadrature
-    Phi: np.ndarray | sp.csr_matrix
-    dPhi: np.ndarray | sp.csr_matrix
-    tip: np.ndarray
-    K: np.ndarray | sp.csr_matrix
-    gram: np.ndarray | sp.csr_matrix
-    sparse: bool
+    n: int  # number of unknowns q_j
+    quad: LineQuadrature  # points, weights and integration operators
+    Phi: np.ndarray | sp.csr_matrix  # phi_j at the quadrature points, shape (n_q, n)
+    dPhi: np.ndarray | sp.csr_matrix  # phi_j' there
+    tip: np.ndarray  # phi_j(1), shape (n,)
+    K: np.ndarray | sp.csr_matrix  # bending stiffness \int phi_i' phi_j', shape (n, n)
+    gram: np.ndarray | sp.csr_matrix  # \int phi_i phi_j, the metric of theta
+    sparse: bool  # whether Phi, K and gram are sparse
 
     @property
-    def name(self) -> str: ...
+    def name(self) -> str: ...  # the CLI spelling: P3:16, modal:4, modal-beam:4
 
-    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray: ...
+    def evaluate(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray: ...  # theta at xi
 
-    def basis_values(self, xi: np.ndarray) -> np.ndarray | sp.csr_matrix: ...
+    def basis_values(self, xi: np.ndarray) -> np.ndarray | sp.csr_matrix: ...  # (m, n)
 
-    def to_dict(self) -> dict: ...
+    def to_dict(self) -> dict: ...  # a JSON-able description
 
 
 _FE_RE = re.compile(r"^[Pp](\d+)\s*:\s*(\d+)$")
@@ -111,22 +82,8 @@ def parse_fe_spec(text: str) -> tuple[int, int]:
 def parse_discretization(
     fe: str | None = None, modal: int | str | None = None, basis: str = "sine"
 ) -> FiniteElement | Modal:
-    """Build a discretization from ``--fe P2:16`` / ``--modal 4 [--basis beam]``.
-
-    Parameters
-    ----------
-    fe : str, optional
-        ``Pk:n``; :data:`DEFAULT_FE` when neither is given.
-    modal : int or str, optional
-        Number of modes N >= 1.
-    basis : {"sine", "beam"}
-        The modal basis; only ``"sine"`` goes without ``modal``.
-
-    Raises
-    ------
-    ValueError
-        Naming the option and the allowed forms.
-    """
+    """Build a discretization from ``--fe Pk:n`` (:data:`DEFAULT_FE` when neither is given) or
+    ``--modal N [--basis beam]``; ValueError naming the option and the allowed forms."""
     if basis not in Modal.BASES:
         raise ValueError(f"--basis expects one of {', '.join(Modal.BASES)}, got {basis!r}")
     if fe is not None and modal is not None:

@@ -317,11 +317,6 @@ class SpaceModel:
         """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
         return self.quad.cumulative(fl.t_dot[:, :, 0])
 
-    def tip_tangent(self, U) -> np.ndarray:
-        """t(1), shape (3,)."""
-        u1 = self._seeds.tip @ np.asarray(U).reshape(3, self.n_theta).T
-        return tangent(u1[None, :, None])[0, :, 0]
-
     def tangents(self, U) -> np.ndarray:
         """t at the quadrature points, shape (n_q, 3, S), from the chart alone."""
         U = np.atleast_2d(np.asarray(U, dtype=float))

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fempipe.model.discretization import Discretization
-from fempipe.plotting.style import new_axes
+from fempipe.plotting.style import finish_axes, new_axes, runs
 
 __all__ = [
     "plot_time_traces",
@@ -57,12 +57,8 @@ def plot_time_traces(disc: Discretization, t, q, alpha: float, ax=None, title: s
     tip = _tip_series(disc, q, None, alpha)
     ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
     ax.plot(t, tip["Z_tip"], label=_LABEL["Z_tip"] + " (horizontal)")
-    ax.set_xlabel(r"$\tau$")
-    ax.set_ylabel(r"tip position ($/L$)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
-    ax.grid(alpha=0.3)
-    if title:
-        ax.set_title(title)
+    finish_axes(ax, r"$\tau$", r"tip position ($/L$)", title)
     return ax
 
 
@@ -83,13 +79,9 @@ def plot_phase_portrait(
     tip = _tip_series(disc, q, qdot, alpha)
     dot = tip["Z_dot"] if coordinate == "Z_tip" else tip["X_dot"]
     ax.plot(tip[coordinate], dot, lw=1.0, label=label)
-    ax.set_xlabel(_LABEL[coordinate])
-    ax.set_ylabel(r"$d$" + _LABEL[coordinate] + r"$/d\tau$")
-    ax.grid(alpha=0.3)
+    finish_axes(ax, _LABEL[coordinate], r"$d$" + _LABEL[coordinate] + r"$/d\tau$", title)
     if label:
         ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
     return ax
 
 
@@ -117,6 +109,15 @@ def plot_oscillating_shapes(
             lw=1.2,
             label="shapes over the shown time\n(color: early to late)" if j == 0 else None,
         )
+    _global_frame(ax, alpha)
+    ax.legend(fontsize=9, loc="best", framealpha=0.9)
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def _global_frame(ax, alpha: float) -> None:
+    """The undeformed pipe, the clamp and the frame of the centerlines: gravity down the page."""
     ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8, label="undeformed")
     ax.plot([0], [0], "ks", ms=6, label="clamp")
     ax.set_aspect("equal")
@@ -125,10 +126,6 @@ def plot_oscillating_shapes(
     ax.set_xlim(-1.1, 1.1)
     ax.set_ylim(1.1, -1.1)  # X_g points along gravity: down the page
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=9, loc="best", framealpha=0.9)
-    if title:
-        ax.set_title(title)
-    return ax
 
 
 def plot_bifurcation(
@@ -187,26 +184,12 @@ def plot_bifurcation(
             fontsize=9,
             color="C2",
         )
-    ax.set_xlabel(r"$v$")
-    ax.set_ylabel(_LABEL[key] + " extrema")
-    ax.grid(alpha=0.3)
+    finish_axes(ax, r"$v$", _LABEL[key] + " extrema", title)
     ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
     if caption:
         # Inside the axes, bottom left: kept by any layout engine.
         ax.text(0.01, 0.01, caption, transform=ax.transAxes, fontsize=6, va="bottom", wrap=True)
     return ax
-
-
-def _runs(flags: list) -> list[tuple[int, int]]:
-    """Index ranges [i, j] of equal consecutive flags, overlapping by one point so the pieces meet."""
-    out, start = [], 0
-    for k in range(1, len(flags) + 1):
-        if k == len(flags) or flags[k] != flags[start]:
-            out.append((start, min(k, len(flags) - 1)))
-            start = k
-    return out
 
 
 def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> None:
@@ -251,15 +234,14 @@ def _plot_continuation(ax, points: Sequence[dict], key: str, label, hopf=()) -> 
             v, lo, hi = np.r_[hv, v], np.r_[hy, lo], np.r_[hy, hi]
             flags = [flags[0], *flags]
             pts = [pts[0], *pts]
-        for i, j in _runs(flags):
-            ls = "-" if flags[i] else "--"
+        for stable, sl in runs(flags):
+            ls = "-" if stable else "--"
             what = "equilibria" if kind == "static" else f"orbits {name}"
-            text = f"{what}, {'stable' if flags[i] else 'unstable'}"
+            text = f"{what}, {'stable' if stable else 'unstable'}"
             if label:
                 text = f"{label}: {text}"
             lab = None if text in shown else text
             shown.add(text)
-            sl = slice(i, j + 1)
             ax.plot(v[sl], hi[sl], ls, color=color, lw=1.3, label=lab)
             if kind == "cycle":
                 ax.plot(v[sl], lo[sl], ls, color=color, lw=1.3)
@@ -306,17 +288,10 @@ def animation_figure(
         period = float(t[-1] - t[0])
         q, t = q[:-1], t[:-1]
     fig, ax = plt.subplots(figsize=(4.4, 4.8), layout="constrained")
-    ax.plot([0, np.sin(alpha)], [0, np.cos(alpha)], "k--", lw=0.8)
-    ax.plot([0], [0], "ks", ms=6)
+    _global_frame(ax, alpha)
     (line,) = ax.plot([], [], "C0", lw=2.5)
     (tip,) = ax.plot([], [], "C3o", ms=5)
     label = ax.text(0.03, 0.97, "", transform=ax.transAxes, va="top", fontsize=10)
-    ax.set_aspect("equal")
-    ax.set_xlim(-1.1, 1.1)
-    ax.set_ylim(1.1, -1.1)  # gravity down the page
-    ax.set_xlabel(r"$Z_g$ ($/L$)")
-    ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
-    ax.grid(alpha=0.3)
     if title:
         ax.set_title(title, fontsize=9)
 

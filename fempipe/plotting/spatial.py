@@ -6,7 +6,7 @@ import numpy as np
 
 from .stability import mark_v_cr
 from .static import OUT_OF_PLANE_STYLE
-from .style import EVENT_MARKERS, new_axes, parameter_text, place_legend
+from .style import EVENT_MARKERS, new_axes, parameter_text, place_legend, runs
 
 
 def _monotone(v: np.ndarray) -> bool:
@@ -61,15 +61,6 @@ def branch_pieces(b, bo) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return v, theta, kind
 
 
-def _runs(kind: np.ndarray):
-    """``(kind, first segment, last segment)`` of each run of equal kinds."""
-    start = 0
-    for k in range(1, kind.size + 1):
-        if k == kind.size or kind[k] != kind[start]:
-            yield int(kind[start]), start, k - 1
-            start = k
-
-
 #: The marks of the events: in the plane open (a white face hides the curve) and large,
 #: out of it filled, small and white-edged, drawn over them, so that events at the same
 #: v show both (the straight pipe loses stability in every plane at once).
@@ -92,9 +83,9 @@ def _draw_branches(ax, result, colors) -> list:
         c = colors[i % len(colors)]
         bo = outs.get(b.name)
         v, theta, kind = branch_pieces(b, bo)
-        for k, first, last in _runs(kind):
+        for k, sl in runs(kind):
             ls, lw = _PIECES[k]
-            ax.plot(v[first : last + 2], theta[first : last + 2], ls=ls, color=c, lw=lw)
+            ax.plot(v[sl], theta[sl], ls=ls, color=c, lw=lw)
         for branch, plane in ((b, "in"), (bo, "out")):
             if branch is None:
                 continue

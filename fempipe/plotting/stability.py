@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .layout import declutter
-from .style import EVENT_MARKERS, mask_edges, new_axes, parameter_text
+from .style import EVENT_MARKERS, finish_axes, mask_edges, new_axes, parameter_text
 
 #: The color of the v_cr line (:func:`mark_v_cr`): no branch is drawn in it.
 V_CR_COLOR = "#B2182B"
@@ -235,15 +235,15 @@ def plot_stability_map(smap, ax=None, title=None):
         other = np.array([pt.get("type") in ("divergence", "fold") for pt in smap.points[c]])
         if other.any():
             ax.plot(a[other], vcr[c][other], "s", ms=5, mfc="none", color=line.get_color())
-    ax.set_xlabel(r"$\alpha/\pi$")
-    ax.set_ylabel(r"$v_{cr}$")
-    ax.set_title(
+    finish_axes(
+        ax,
+        r"$\alpha/\pi$",
+        r"$v_{cr}$",
         title
         or rf"flutter velocity (○, $\mu$ = {smap.base.mu:g}); □ earlier loss of stability "
         "(divergence, fold)",
         fontsize=10,
     )
-    ax.grid(alpha=0.3)
     ax.legend(fontsize=9)
     return ax
 
@@ -310,15 +310,15 @@ def _plot_spatial_map(smap, ax, title):
                 alpha=_BAND["alpha"],
                 zorder=1,
             )
-    ax.set_xlabel(r"$\alpha/\pi$")
-    ax.set_ylabel(r"$v_{cr}$")
-    ax.set_title(
+    finish_axes(
+        ax,
+        r"$\alpha/\pi$",
+        r"$v_{cr}$",
         title
         or rf"critical flow velocity, $\mu$ = {smap.base.mu:g}: in the plane ○ flutter, "
         "□ earlier loss\n(divergence, fold); out of the plane △, ◇; band: the first of the two",
         fontsize=10,
     )
-    ax.grid(alpha=0.3)
     handles, _ = ax.get_legend_handles_labels()
     grey = "0.35"
     handles += [
@@ -380,13 +380,13 @@ def plot_branches(result, ax=None, title=None):
         Line2D([], [], color="0.3", ls="", marker=EVENT_MARKERS.get(k, "x"), mfc="none", label=k)
         for k in dict.fromkeys(e.type for e in result.events)
     ]
-    ax.set_xlabel("v")
-    ax.set_ylabel(r"$\theta(1)$ of the static state (rad)")
-    ax.set_title(
+    finish_axes(
+        ax,
+        "v",
+        r"$\theta(1)$ of the static state (rad)",
         title or f"{parameter_text(result.params, v=False)}: solid stable, dashed unstable",
         fontsize=10,
     )
-    ax.grid(alpha=0.3)
     ax.legend(handles=handles, fontsize=9)
     return ax
 

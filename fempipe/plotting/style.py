@@ -9,10 +9,12 @@ import numpy as np
 __all__ = [
     "EVENT_MARKERS",
     "angle_text",
+    "finish_axes",
     "mask_edges",
     "new_axes",
     "parameter_text",
     "place_legend",
+    "runs",
 ]
 
 #: The marker of each stability event (:class:`fempipe.analyses.stability.StabilityEvent`
@@ -29,11 +31,30 @@ def new_axes(ax=None, size=(6.0, 4.5)):
     return ax
 
 
+def finish_axes(ax, xlabel: str, ylabel: str, title: str | None = None, **title_kw) -> None:
+    """The axis labels, a light grid and the title if any."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, **title_kw)
+
+
 def mask_edges(mask: np.ndarray) -> np.ndarray:
     """The samples next to a True sample of ``mask`` (so stable and unstable pieces join)."""
     out = np.zeros_like(mask)
     out[1:] |= mask[:-1]
     out[:-1] |= mask[1:]
+    return out
+
+
+def runs(flags) -> list[tuple]:
+    """``(flag, slice)`` of each run of equal consecutive ``flags``, one point past its end so the pieces meet."""
+    out, start = [], 0
+    for k in range(1, len(flags) + 1):
+        if k == len(flags) or flags[k] != flags[start]:
+            out.append((flags[start], slice(start, k + 1)))
+            start = k
     return out
 
 

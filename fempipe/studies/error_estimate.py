@@ -20,21 +20,6 @@ import numpy as np
 
 from fempipe.model.discretization import FiniteElement, Modal
 
-__all__ = [
-    "ERROR",
-    "RATIO",
-    "REFINED",
-    "STATIC_TIP_KEYS",
-    "SAFETY_FACTOR",
-    "ErrorEstimate",
-    "describe",
-    "estimate",
-    "expected_order",
-    "match_events",
-    "refine",
-    "refinement_ratio",
-]
-
 #: Suffixes of the keys inserted beside a reported key ``Q``: ``Q_error``, ``Q_refined``.
 ERROR, REFINED = "_error", "_refined"
 #: The tip values of a static state (dimensionless, Eq. (28)), in table order.

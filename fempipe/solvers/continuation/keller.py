@@ -19,18 +19,6 @@ import numpy as np
 
 from .protocol import ContinuationError, ContinuationProblem, CorrectorError, SharpTurnError
 
-__all__ = [
-    "CurveEvent",
-    "CurvePoint",
-    "KellerPolicy",
-    "KellerStep",
-    "correct",
-    "interpolate_zero",
-    "locate",
-    "normalize",
-    "tangent",
-]
-
 
 @dataclass(frozen=True)
 class CurvePoint:

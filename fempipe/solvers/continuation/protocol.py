@@ -19,15 +19,6 @@ import numpy as np
 
 from fempipe.core.errors import SolverError
 
-__all__ = [
-    "BorderedSolution",
-    "ContinuationError",
-    "ContinuationPolicy",
-    "ContinuationProblem",
-    "CorrectorError",
-    "SharpTurnError",
-]
-
 
 class CorrectorError(Exception):
     """A step failed (no convergence, or a failed integration); the engine asks for a shorter one."""

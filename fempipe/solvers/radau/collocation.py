@@ -15,18 +15,6 @@ import numpy as np
 
 from .tableau import C
 
-__all__ = [
-    "INCREMENT_MATRIX",
-    "LAGRANGE_WEIGHTS",
-    "NODES",
-    "evaluate_increment",
-    "evaluate_lagrange",
-    "evaluate_product",
-    "increment_weights",
-    "lagrange_weights",
-    "product_weights",
-]
-
 #: Nodes of the collocation polynomial on s = (t - t_old)/h: 0 and c_1, c_2, c_3 = 1.
 NODES = np.r_[0.0, C]
 #: Cubic through (0, 0) and (c_i, Z_i): coefficients of s, s^2, s^3 (rows) per Z_i.

@@ -230,7 +230,6 @@ class Radau:
         )
         self.velocity_sensitivity = np.zeros(2 * n) if self._stage_residuals_v is not None else None
 
-    # ------------------------------------------------------------------
     def _acceleration(self, t, q, p):
         self.stats.n_residual += 1
         return self.problem.acceleration(t, q, p)
@@ -265,7 +264,6 @@ class Radau:
     def _scale(self, q, p):
         return self.atol + self.rtol * np.abs(np.concatenate([q, p]))
 
-    # ------------------------------------------------------------------
     def _guess(self, t: float, h: float) -> np.ndarray:
         """Stage accelerations extrapolated from the previous step's polynomial."""
         if self._prev is None:
@@ -350,7 +348,6 @@ class Radau:
             err = _rms(np.concatenate([e_q, e_p]) / scale)
         return err
 
-    # ------------------------------------------------------------------
     def step(self, t_bound: float = math.inf) -> None:
         """Advance by one accepted step, not beyond ``t_bound``; IntegrationError if h reaches round-off."""
         t0_wall = time.perf_counter()
@@ -477,7 +474,6 @@ class Radau:
         if with_v:
             self.velocity_sensitivity = dv
 
-    # ------------------------------------------------------------------
     def dense(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(q, q') at tau = t inside the last step, from the collocation polynomial."""
         if self.last is None:

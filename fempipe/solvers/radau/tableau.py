@@ -12,25 +12,6 @@ import math
 
 import numpy as np
 
-__all__ = [
-    "A",
-    "A2",
-    "C",
-    "E",
-    "EIGENVALUES",
-    "JACOBIAN_RATE",
-    "MAX_FACTOR",
-    "MIN_FACTOR",
-    "MU_REAL",
-    "NEWTON_MAXITER",
-    "T",
-    "T0",
-    "T1I",
-    "T1R",
-    "TI",
-    "diagonalise_a",
-]
-
 _S6 = math.sqrt(6.0)
 #: Nodes c_i of the stages (c_3 = 1: stiffly accurate).
 C = np.array([(4.0 - _S6) / 10.0, (4.0 + _S6) / 10.0, 1.0])

@@ -16,20 +16,6 @@ from fempipe.model.projection import project
 
 from ..error_estimate import expected_order
 
-__all__ = [
-    "QUANTITIES",
-    "STATIC_QUANTITIES",
-    "CRITICAL_QUANTITIES",
-    "CYCLE_QUANTITIES",
-    "PARAMETRIC_QUANTITIES",
-    "STATIC_TOL",
-    "EVENT_TOL",
-    "Quantity",
-    "Family",
-    "doubling",
-    "static_tip_state",
-]
-
 #: quantity -> (description, unit).  The static tip values are those of
 #: :func:`fempipe.model.kinematics.tip_values` (Eq. (5), (28)).
 QUANTITIES: dict[str, tuple[str, str]] = {
@@ -99,11 +85,6 @@ def doubling(low: int, high: int) -> list[int]:
     return out
 
 
-# ---------------------------------------------------------------------------
-# Families of discretizations
-# ---------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class Family:
     """A sequence of discretizations of one ``kind`` ('fe': P_``degree`` on ``sizes``
@@ -136,45 +117,19 @@ class Family:
         return expected_order(self.discretization(size), params)
 
 
-# ---------------------------------------------------------------------------
-# Quantities
-# ---------------------------------------------------------------------------
-
-
 @dataclass(frozen=True)
 class Quantity:
-    """One number of the user's case, as a function of the discretization.
+    """One number of the user's case as a function of the discretization; calling it returns
+    the value (complex for ``eigenvalue``) or raises :class:`fempipe.core.errors.SolverError`.
 
-    Parameters
-    ----------
-    name : str
-        A key of :data:`QUANTITIES`.
-    params : Params
-        The case; v the flow velocity (the start of the range for the critical quantities).
-    v_max : float, optional
-        End of the flow range of the critical quantities.
-    mode : int
-        Mode number of ``eigenvalue`` (carried by continuity from v = 0).
-    shoot_rtol : float
-        Integration tolerance of the limit cycle's shooting.
-    seed : tuple, optional
-        ``(disc, q0, qdot0, period)``: a cycle to start the shooting from (:meth:`seeded`).
-    planar : bool
-        ``v_cr`` and ``frequency`` in the plane (as ``*_in_plane``) instead of in 3-D.
-    omega_band : (float, float), optional
-        The pulsation frequencies searched by the parametric thresholds.
-    sigma_max : float
-        The largest pulsation amplitude searched by them.
-
-    The critical quantities (:data:`CRITICAL_QUANTITIES`): ``v_cr`` and
-    ``frequency`` are those of the first loss of stability in three
-    dimensions, the earlier of the motion in the plane of the static state
-    and out of it (:func:`fempipe.analyses.stability.find_critical_velocity`);
-    ``*_in_plane`` those of the plane alone (``planes=("in",)``), ``*_out_of_plane`` those
-    of the motion out of it (``planes=("out",)``, the same static branch).
-
-    Calling it on a discretization returns the value (complex for
-    ``eigenvalue``), or raises :class:`fempipe.core.errors.SolverError`.
+    ``name`` is a key of :data:`QUANTITIES`, ``params`` the case (v the start of the flow range
+    ``v_max`` of the critical quantities), ``mode`` the mode of ``eigenvalue`` (carried by
+    continuity from v = 0), ``shoot_rtol`` the cycle's shooting tolerance, ``seed``
+    ``(disc, q0, qdot0, period)`` a cycle to start from (:meth:`seeded`), ``planar`` takes
+    ``v_cr`` and ``frequency`` in the plane, ``omega_band`` and ``sigma_max`` bound the search
+    of the parametric thresholds.  ``v_cr`` and ``frequency`` are those of the first loss of
+    stability in 3-D (:func:`fempipe.analyses.stability.find_critical_velocity`), ``*_in_plane``
+    and ``*_out_of_plane`` those of one plane about the same static branch.
     """
 
     name: str
@@ -271,7 +226,6 @@ class Quantity:
 
     def _critical(self, model) -> float:
         """v_cr or the frequency of the critical event, in 3-D or in one plane."""
-        # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.analyses.stability import PLANES, find_critical_velocity
 
         name, plane = self.name, "3-D"
@@ -293,7 +247,6 @@ class Quantity:
 
     def cycle(self, disc):
         """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
-        # Imported here: the CLI loads this module at start-up (--help); these load scipy.
         from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
         from fempipe.model.dynamics_problem import PipeDynamics
         from fempipe.model.operators import PipeModel
@@ -345,7 +298,6 @@ class Quantity:
 def static_tip_state(disc, params: Params) -> np.ndarray:
     """The static state at ``params.v`` on the primary branch, followed from v = 0 by
     :func:`~fempipe.analyses.statics.solve_path` to :data:`STATIC_TOL`."""
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.statics import solve_path
     from fempipe.model.operators import PipeModel
 
@@ -363,7 +315,6 @@ def _static_tip(model, key: str) -> float:
 
 
 def _eigenvalue(model, mode: int) -> complex:
-    # Imported here: the CLI loads this module at start-up (--help); these load scipy.
     from fempipe.analyses.stability import compute_spectrum
 
     q = static_tip_state(model.disc, model.params)

@@ -109,12 +109,6 @@ class ConvergenceStudy:
     fit_floor: float
     cpu_time: float
 
-    def series_of(self, family: str) -> Series:
-        for s in self.series:
-            if s.family == family:
-                return s
-        raise KeyError(family)
-
     def to_dict(self) -> dict:
         """The contract of ``fempipe convergence --json`` (see the docs)."""
         q = self.quantity
@@ -141,11 +135,6 @@ def _number(x):
         return [float(x.real), float(x.imag)]
     x = float(x)
     return x if math.isfinite(x) else None
-
-
-# ---------------------------------------------------------------------------
-# The study
-# ---------------------------------------------------------------------------
 
 
 def _member(quantity: Callable, family: Family, size: int) -> tuple[complex | float, float]:
