@@ -36,7 +36,7 @@ def _exercise(key: str, tol: float, source: str):
 
 
 def exercises() -> list[str]:
-    """The keys of the exercises that :func:`check` knows, ``"1.1"`` to ``"7.3"``."""
+    """The keys of the exercises that :func:`check` knows, ``"1.1"`` to ``"8.3"``."""
     return sorted(_EXERCISES, key=lambda k: tuple(map(int, k.split("."))))
 
 
@@ -258,3 +258,54 @@ def _end_mass_x() -> float:
 def _richardson_x() -> float:
     p = _si_params()
     return _bvp(p.alpha, p.gamma, p.v, tol=1e-11).X_tip
+
+
+# -- lesson 8 ------------------------------------------------------------------
+
+
+@_exercise("8.1", 1e-6, "a product of fourth-order Magnus propagators (200 steps, expm)")
+def _mathieu_multiplier() -> float:
+    from scipy.linalg import expm
+
+    delta, eps, c, steps = 0.25, 0.4, 0.1, 200
+    h = 2 * math.pi / steps
+    nodes = (0.5 - math.sqrt(3) / 6, 0.5 + math.sqrt(3) / 6)  # Gauss points of one step
+    Phi = np.eye(2)
+    for k in range(steps):
+        A1, A2 = (
+            np.array([[0.0, 1.0], [-(delta + eps * math.cos((k + s) * h)), -c]]) for s in nodes
+        )
+        Phi = expm(h / 2 * (A1 + A2) + math.sqrt(3) / 12 * h * h * (A2 @ A1 - A1 @ A2)) @ Phi
+    rho = np.linalg.eigvals(Phi)
+    return float(rho[np.argmax(np.abs(rho))].real)
+
+
+def _hanging_reduced(elements: int):
+    from fempipe import FiniteElement, Params, PipeModel
+    from fempipe.analyses.parametric import PulsationPencil, ReducedPulsation
+
+    model = PipeModel(
+        FiniteElement(elements, 3), Params(alpha=0.0, beta=0.2, gamma=10.0, mu=0.005, v=6.0)
+    )
+    return ReducedPulsation(PulsationPencil.of(model), 6.0, pairs=3)
+
+
+@_exercise("8.2", 1e-5, "the threshold located by fempipe on a finer mesh, P3:12")
+def _pulsation_threshold() -> float:
+    from fempipe.analyses.parametric import Candidate, locate_region
+    from fempipe.core.parallel import single_blas_thread
+
+    reduced = _hanging_reduced(12)
+    nominal = Candidate("principal", 1, (2,), 2 * reduced.eigenvalues[1].imag)
+    with single_blas_thread():
+        region, _ = locate_region(reduced, nominal, (27.0, 32.0), [0.15])
+    return region.sigma_threshold
+
+
+@_exercise("8.3", 1e-7, "the monodromy by Radau IIA (1024 steps per period)")
+def _hill_outside() -> float:
+    from fempipe.analyses.parametric import floquet_multipliers
+    from fempipe.core.parallel import single_blas_thread
+
+    with single_blas_thread():
+        return float(floquet_multipliers(_hanging_reduced(6), 0.3, 21.0, steps=1024)[0].real)

@@ -9,8 +9,9 @@ characteristic equations, exact integrals of polynomials), the theoretical order
 theory).  Every exercise's solution, collapsed in the lesson's text, is run too: the numbers
 its text states must be the ones its code computes, and ``fempipe.course.check`` must accept
 its answer and reject a wrong one.  Run as a script, a lesson writes its figures.  The
-lessons, their solutions and two script runs take about 12 CPU-s (in the default test run); the
-notebook tests need the docs extra and are slow-marked (CI runs them after installing it).
+lessons, their solutions and two script runs take about 40 CPU-s in the default test run
+(lesson 8's Floquet multipliers 28 of them); the notebook tests need the docs extra and are
+slow-marked (CI runs them after installing it).
 """
 
 from __future__ import annotations
@@ -207,6 +208,33 @@ def test_lesson_07_modal_vs_fe():
     assert g["api_orders"]["modal-beam"] == pytest.approx(4.0, abs=0.3)
     # the study's reference, formed without the answer, against solve_bvp
     assert np.isclose(g["study"].reference.value, g["reference"], rtol=0, atol=1e-9)
+
+
+def test_lesson_08_floquet():
+    g = run_lesson("lesson_08")
+    # Mathieu: Liouville's det Phi = exp(-c T); the tongue opens near eps = c (averaging)
+    assert g["liouville"] < 1e-9
+    assert g["eps_threshold"] == pytest.approx(g["c"], abs=0.01)
+    # the pipe at sigma = 0: exp(lambda T) to Radau's error; the region is mode 2's
+    # principal one near 2 omega_2, its multiplier -1 at the edges and the threshold
+    assert g["rest_error"] < 1e-8
+    region = g["region"]
+    assert region.candidate.mode == (2,) and region.candidate.kind == "principal"
+    assert region.omega_threshold == pytest.approx(2 * g["omega_2"], rel=0.01)
+    assert region.multiplier == pytest.approx(-1.0, abs=1e-6)
+    assert [r.real for r in g["edge_rho"]] == pytest.approx([-1.0, -1.0], abs=1e-6)
+    # the edges of the sweep are the chart's at sigma = 0.2 (docs/theory/parametric.md's
+    # P3:16 threshold 0.0883031 is 1.3e-6 below P3:6's)
+    (row,) = [r for r in region.boundary if r[0] == 0.2]
+    assert g["edges"] == pytest.approx(row[1:], abs=1e-6)
+    assert region.sigma_threshold == pytest.approx(0.0883031386, abs=3e-6)
+    # Hill's method converges to the monodromy's multiplier, exponentially in the harmonics
+    errors = g["hill_errors"]
+    assert errors[8] < 1e-10 and errors[1] > 1e-3
+    assert errors[4] < 1e-3 * errors[2]
+    # Eq. (20) with the pulsating flow grows by the largest multiplier per period inside
+    assert g["sim_ratio"] == pytest.approx(g["rho_in"].real, abs=1e-4)
+    assert g["decay"] < 0.02
 
 
 @pytest.mark.parametrize("path", LESSONS, ids=lambda p: p.stem[:9])
