@@ -3,14 +3,11 @@
 ``limit_cycle``: whole ``fempipe simulate --alpha 0 --v 10 --json`` processes (the paper's
 case, start-up included) against the same command at ``--shoot-rtol 1e-10``, then in-process
 :func:`fempipe.analyses.limit_cycle.find_attractor` rows.  ``fig7``: the Fig. 7 diagram,
-36 velocities swept up and down on 2 workers.  Also
-``python -m fempipe.bench.dynamics [--skip-fig7] [--workers 2] [--out FILE.json]``.
+36 velocities swept up and down on 2 workers.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
 
 import numpy as np
@@ -143,27 +140,3 @@ def fig7(quick: bool = False) -> dict:
         {k: r[k] for k in ("disc", "workers", "n_points", "wall_time", "target_s")} for r in rows
     ]
     return {"target_s": FIG7_TARGET_S, "table": table, "details": rows}
-
-
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--skip-fig7", action="store_true")
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default=None)
-    args = ap.parse_args()
-    rows = [bench_limit_cycle_process()]
-    print(json.dumps(rows[-1]), flush=True)
-    for spec in (DEFAULT_FE, "modal:4"):
-        rows.append(bench_limit_cycle(spec))
-        print(json.dumps(rows[-1]), flush=True)
-    if not args.skip_fig7:
-        for spec in (DEFAULT_FE, "modal:4"):
-            rows.append(bench_fig7(spec, workers=args.workers))
-            print(json.dumps(rows[-1]), flush=True)
-    if args.out:
-        with open(args.out, "w") as fh:
-            json.dump(rows, fh, indent=1)
-
-
-if __name__ == "__main__":
-    main()
