@@ -1,7 +1,6 @@
 """Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
 
-Radau IIA (:class:`fempipe.solvers.radau.Radau`) on :class:`fempipe.model.dynamics_problem.PipeDynamics`.
-Numerics: docs/theory/numerics.md.
+Radau IIA on :class:`~fempipe.model.dynamics_problem.PipeDynamics`; docs/theory/numerics.md.
 """
 
 from __future__ import annotations
@@ -105,7 +104,7 @@ def make_initial_state(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The static state plus ``amplitude`` sin((2 mode - 1) pi xi / 2) in theta (Eq. (22)), at rest.
 
-    The perturbation is L2-projected; ``q_static`` default :func:`~fempipe.analyses.statics.solve_static`.
+    L2-projected; ``q_static`` default :func:`~fempipe.analyses.statics.solve_static`.
     Returns (q0, qdot0).
     """
     if int(mode) < 1:

@@ -150,13 +150,8 @@ class _AttractorSearch:
         self.disc, self.alpha, self.n = model.disc, model.params.alpha, model.n
         for name, value in options.items():
             setattr(self, name, value)
-        self.stats = {
-            "steps": 0,
-            "rejected_steps": 0,
-            "n_residual": 0,
-            "n_jacobian": 0,
-            "wall_time": 0.0,
-        }
+        counts = dict.fromkeys(("steps", "rejected_steps", "n_residual", "n_jacobian"), 0)
+        self.stats = counts | {"wall_time": 0.0}
 
     # -- the start ---------------------------------------------------------
     def _static_start(self, q0, qdot0, perturbation: float):
@@ -275,7 +270,7 @@ class _AttractorSearch:
 
     # -- equilibrium -------------------------------------------------------
     def _equilibrium(self) -> Attractor | None:
-        """The equilibrium if near a linearly stable static state and not leaving it (checked every 0.5 tau)."""
+        """The equilibrium if near a linearly stable static state and not leaving it (every 0.5 tau)."""
         stepper, model = self.stepper, self.model
         if stepper.t < self.next_eq_check:
             return None

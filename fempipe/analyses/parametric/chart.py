@@ -1,11 +1,8 @@
 """The chart of parametric resonance of the straight pipe: every region of (omega, sigma).
 
-:func:`compute_parametric_chart` searches every principal and combination resonance of the mean
-flow's frequencies whose nominal frequency lies in the band, keeps those that open for
-sigma up to the largest requested and whose critical multiplier has the character of their
-kind, and returns them with their thresholds and boundaries.  On the straight pipe the
-motion out of the plane is the motion in it (the pipe is round and the state axisymmetric):
-every region holds in both planes.  Derivation: docs/theory/parametric.md.
+Every principal and combination resonance with nominal frequency in the band that opens for
+sigma up to the largest requested; on the straight (round, axisymmetric) pipe every region
+holds in both planes.  Derivation: docs/theory/parametric.md.
 """
 
 from __future__ import annotations
@@ -132,25 +129,22 @@ def compute_parametric_chart(
     Parameters
     ----------
     model : PipeModel
-        The pipe (alpha = 0 or pi; its v is replaced by ``v0``).
+        alpha = 0 or pi; its v is replaced by ``v0`` (below v_cr).
     v0 : float
-        The mean flow velocity, below the pipe's critical velocity.
     band : (float, float)
         The pulsation frequencies searched, 0 < lo < hi.
     sigmas : sequence of float
-        Amplitudes in (0, 1] at which the boundaries are located; the largest bounds the
-        threshold search.
+        Amplitudes in (0, 1] of the boundaries; the largest bounds the threshold search.
     max_order : int
-        The largest order n of the resonances searched (omega near 2 omega_k / n).
+        The largest order n searched (omega near 2 omega_k / n).
     pairs : int, optional
-        Modes of the mean flow in the Ritz basis (default: those with frequency up to the
-        band's top, and one more, at least 3).
+        Modes of the mean flow in the Ritz basis (default: up to the band's top, and one more).
     omega_tol, sigma_tol : float
-        Tolerances (relative to max(1, value)) of the edges and of the thresholds.
+        Relative tolerances of the edges and of the thresholds.
     steps : int
         Radau IIA steps per period.
     callback : callable, optional
-        ``callback(candidate, region_or_None)`` after each candidate (progress).
+        ``callback(candidate, region_or_None)`` after each candidate.
     """
     lo, hi = float(band[0]), float(band[1])
     if not (math.isfinite(lo) and math.isfinite(hi)) or not 0 < lo < hi:

@@ -1,16 +1,11 @@
-"""Floquet multipliers of the straight pipe under a pulsating flow (the terms of Eq. (20) in v, v^2, dv/dtau).
+"""Floquet multipliers of the straight pipe under a pulsating flow v0 (1 + sigma sin(omega tau)).
 
-Where the straight state theta = 0 solves Eq. (20) at every flow (alpha = 0 or pi), a
-pulsating flow v(tau) = v0 (1 + sigma sin(omega tau)) leaves it in place and acts on small
-motions through time-periodic coefficients:
+At alpha = 0, pi the straight state stays in place and small motions obey (Eq. (20))
 
-    M q'' + (C0 + v C1) q' + (K0 + v^2 K2 + dv/dtau K3) q = 0,
+    M q'' + (C0 + v C1) q' + (K0 + v^2 K2 + dv/dtau K3) q = 0;
 
-C1 the Coriolis term, K2 the follower force, K3 the flow acceleration.  The multipliers are the
-eigenvalues of the monodromy matrix over one period 2 pi / omega, computed on the lowest modes
-of the pipe (a Ritz projection that is the full problem when every mode is kept) with the
-L-stable Radau IIA method.  Derivation and the truncation's convergence:
-docs/theory/parametric.md.
+the multipliers are the eigenvalues of the monodromy over 2 pi / omega, on a Ritz basis of
+the lowest modes, by Radau IIA.  Derivation and convergence: docs/theory/parametric.md.
 """
 
 from __future__ import annotations
@@ -50,13 +45,7 @@ class PulsationPencil:
 
     @classmethod
     def of(cls, model: PipeModel) -> PulsationPencil:
-        """The matrices of ``model`` (its v is ignored) at the straight state.
-
-        Raises
-        ------
-        ValueError
-            If theta = 0 is not a static state (alpha is neither 0 nor pi).
-        """
+        """The matrices of ``model`` (its v ignored) at theta = 0; ValueError unless alpha is 0 or pi."""
         if not straight_is_static(model.params):
             raise ValueError(
                 f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
@@ -80,28 +69,18 @@ class PulsationPencil:
 
 
 class ReducedPulsation:
-    """The pulsating problem projected on the low modes of the mean flow, with their static
-    corrections.
-
-    The basis holds the real and imaginary parts of the ``pairs`` eigenvectors of lowest
-    |lambda| of the mean problem (v = v0, no pulsation), so that the multipliers at
-    sigma = 0 are exactly exp(lambda T), and the static responses K(v0)^-1 X of the
-    pulsating terms (X = K2 Phi, K3 Phi, C1 Phi): what the modes left out do, quasi-statically,
-    under the pulsation.  Orthonormalized in M, it carries the same equation with the projected
-    matrices (a Ritz projection; docs/theory/parametric.md measures how fast it converges).
-    Its first-order form is integrated over one period by the three-stage Radau IIA method
-    with fixed steps (L-stable: modes stiff with Kelvin-Voigt damping decay as they should).
+    """The pulsating problem projected on the low modes of the mean flow and their static corrections
+    (a Ritz basis, M-orthonormal; docs/theory/parametric.md), integrated over one period by
+    Radau IIA with fixed steps; at sigma = 0 the multipliers are exactly exp(lambda T).
 
     Parameters
     ----------
     pencil : PulsationPencil
     v0 : float
-        The mean flow velocity.
     pairs : int, optional
         Keep this many eigenvectors of lowest |lambda| (a complex pair counts once).
     targets : sequence of complex, optional
-        Instead, keep the eigenvectors whose eigenvalues are nearest to these (the modes of
-        :func:`fempipe.analyses.stability.compute_spectrum`).
+        Instead, those nearest these eigenvalues.
 
     Attributes
     ----------

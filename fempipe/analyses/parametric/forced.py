@@ -1,12 +1,8 @@
 """The periodic response of a bent pipe to a pulsating flow, and its Floquet multipliers.
 
-For 0 < alpha < pi the static shape depends on the flow, so a pulsating flow
-v0 (1 + sigma sin(omega tau)) moves the pipe: Eq. (20) has a periodic solution of the
-pulsation's period 2 pi / omega near the static state.  :func:`solve_forced_response` finds it by
-Newton's method on the period map (the monodromy matrix from the integrator's sensitivity,
-the problem being non-autonomous: no phase condition) and returns its multipliers, those of
-the motion in the plane.  At sigma = 0 it is the static state, and its multipliers are
-exp(lambda T) of the static state's spectrum.  Derivation: docs/theory/parametric.md.
+For 0 < alpha < pi the pulsation moves the pipe: a periodic solution of period 2 pi / omega
+near the static state, found by Newton on the period map (non-autonomous: no phase
+condition); at sigma = 0 the static state.  Derivation: docs/theory/parametric.md.
 """
 
 from __future__ import annotations
@@ -86,17 +82,10 @@ def solve_forced_response(
         Amplitude (0 <= sigma <= 1) and frequency (> 0) of the pulsation.
     guess : (q0, qdot0), optional
         A starting state (default the static state at the mean flow).
-    steps : int
-        At least this many Radau IIA steps per period (more where the error control asks).
-    rtol : float
-        The integrator's relative tolerance.
+    steps, rtol : int, float
+        At least this many Radau IIA steps per period; the integrator's tolerance.
     tol : float
-        Newton stops when |x(T) - x(0)| <= tol max(1, |x(0)|).
-
-    Raises
-    ------
-    SolverError
-        If Newton's method does not converge (naming sigma, omega and the residual).
+        Newton stops when |x(T) - x(0)| <= tol max(1, |x(0)|) (else SolverError).
     """
     if omega <= 0:
         raise ValueError(f"omega must be > 0, got {omega}")

@@ -1,12 +1,8 @@
 """The regions of the (omega, sigma) plane where a pulsating flow destabilizes the straight pipe.
 
-Each candidate resonance of the mean flow's frequencies omega_k (principal, omega near
-2 omega_k / n; combination, omega near (omega_j +- omega_k) / n) is searched near its
-nominal frequency: its threshold is the least sigma at which the largest Floquet multiplier
-reaches modulus 1 (a minimum over omega of the critical sigma, located by Brent's methods),
-and its boundary at each requested sigma is the pair of frequencies where the multiplier's
-modulus crosses 1 (bracketed outward from inside the region, then located to ``omega_tol``).
-Derivation: docs/theory/parametric.md.
+Each candidate (principal, omega ~ 2 omega_k / n; combination, (omega_j +- omega_k) / n) has
+a threshold, the least sigma at which the largest multiplier reaches modulus 1, and at each
+requested sigma a boundary, where that modulus crosses 1.  Derivation: docs/theory/parametric.md.
 """
 
 from __future__ import annotations
@@ -46,17 +42,13 @@ class ParametricRegion:
     ----------
     candidate : Candidate
     sigma_threshold, omega_threshold : float
-        The least sigma at which the region opens, and the omega there.
     multiplier : complex
-        The critical Floquet multiplier at the threshold (modulus 1: real negative for an
-        odd-order principal region, real positive for an even one, complex for a
+        The critical multiplier at the threshold (real < 0 odd principal, > 0 even, complex
         combination).
     boundary : tuple of (sigma, omega_lo, omega_hi)
-        At each requested sigma at or above the threshold; ``nan`` where the region runs
-        into a neighbouring one before its edge (the edge of their union is beyond the limits
-        searched) or beyond the band.
+        At each requested sigma from the threshold; ``nan`` where the region runs into another
+        or out of the band.
     evaluations : int
-        Monodromy matrices computed.
     """
 
     candidate: Candidate

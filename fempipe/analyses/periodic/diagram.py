@@ -55,6 +55,10 @@ def cycle_point_dict(pt: CyclePoint, branch: str, index: int, alpha: float) -> d
     return d
 
 
+#: The lists of a :class:`CycleDiagram`, joined over the alphas.
+_PARTS = ("points", "branches", "special_points", "hopf_points", "errors")
+
+
 @dataclass(frozen=True)
 class CycleDiagram:
     """A bifurcation diagram by continuation: equilibria and periodic orbits.
@@ -73,15 +77,12 @@ class CycleDiagram:
     manifest: dict
 
     def to_dict(self) -> dict:
-        return {
-            "points": list(self.points),
-            "branches": list(self.branches),
-            "special_points": list(self.special_points),
-            "hopf_points": list(self.hopf_points),
-            "errors": list(self.errors),
+        d = {k: list(getattr(self, k)) for k in _PARTS}
+        m = self.manifest
+        return d | {
             "wall_time": self.wall_time,
-            "discretization": self.manifest["discretization"],
-            "params": self.manifest["params"],
+            "discretization": m["discretization"],
+            "params": m["params"],
         }
 
 
@@ -260,11 +261,7 @@ def compute_cycle_diagram(
         progress=progress,
     )
     return CycleDiagram(
-        points=[p for r in results for p in r["points"]],
-        branches=[b for r in results for b in r["branches"]],
-        special_points=[s for r in results for s in r["special_points"]],
-        hopf_points=[h for r in results for h in r["hopf_points"]],
-        errors=[e for r in results for e in r["errors"]],
+        **{k: [x for r in results for x in r[k]] for k in _PARTS},
         wall_time=time.perf_counter() - t0,
         manifest=manifest,
     )

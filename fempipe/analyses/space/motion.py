@@ -240,7 +240,7 @@ def simulate_3d(
 
 
 class _Returns:
-    """The upward returns to the section; :meth:`step` gives ``(kind, period_n, period, cycle)`` once periodic."""
+    """The upward returns to the section; :meth:`step` gives (kind, period_n, period, cycle)."""
 
     def __init__(
         self,
@@ -404,10 +404,8 @@ def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) 
 
 def tip_frequencies(t: np.ndarray, signals: list, n_peaks: int = 6) -> list[tuple[float, float]]:
     """``(frequency, amplitude)`` of the strongest peaks of the summed power spectrum of
-    ``signals`` at ``t`` (cycles per tau; amplitude relative to the strongest), strongest first.
-
-    Resampled uniformly, mean removed, Hann-windowed; a peak refined by the parabola through
-    the log power of its three bins.
+    ``signals`` (cycles per tau; relative amplitude): resampled, Hann-windowed, each peak
+    refined by the parabola through the log power of its three bins.
     """
     t = np.asarray(t, dtype=float)
     m = max(256, t.size)

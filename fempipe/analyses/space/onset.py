@@ -179,13 +179,9 @@ def hopf_normal_form_3d(
 
 
 def out_of_plane_event_keys(planar: PipeModel, v: float) -> dict:
-    """The Hopf keys (:data:`~fempipe.analyses.stability.hopf.EVENT_KEYS`) of ``fempipe
-    critical``'s flutter out of the plane at ``v`` on the primary branch.
-
-    From the 3-D model's normal form at the sagged static state (the in-plane ``theta_tip``
-    and ``eta_tip`` coefficients null: they do not swing at first order).  Where there is
-    none (sin alpha = 0, where the pair is double; a failed computation) the keys are null
-    and ``hopf_note`` says why.
+    """The Hopf keys (:data:`~fempipe.analyses.stability.hopf.EVENT_KEYS`) of the flutter out of
+    the plane at ``v`` on the primary branch, from the 3-D normal form (``theta_tip``, ``eta_tip``
+    null); where there is none (sin alpha = 0; a failure) null with ``hopf_note`` saying why.
     """
 
     def unavailable(reason: str) -> dict:

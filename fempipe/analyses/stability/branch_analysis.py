@@ -39,15 +39,8 @@ def _unstable_count(e: ClassifiedSpectrum) -> int:
 
 
 def peak_candidates(x: np.ndarray, lam: np.ndarray) -> np.ndarray:
-    """The tracked eigenvalues that may pass the extremum test of ``BranchAnalysis._peak``.
-
-    ``lam`` has shape (3, k): the tracked eigenvalues at the three samples
-    ``x``.  The same tests as the loop there (all three on one side of the
-    margin, the parabola's extremum inside the samples and pointing towards
-    zero, within half the spread of the samples), vectorized over the k
-    eigenvalues with the parabola in closed form and with a margin, so that
-    the exact per-eigenvalue test (``np.polyfit``) runs only on the few that
-    can pass it.
+    """The tracked eigenvalues (``lam`` (3, k) at the samples ``x``) that may pass the extremum test
+    of ``BranchAnalysis._peak``: its tests vectorized with a margin, the exact one left to those.
     """
     r = lam.real
     tol = STABILITY_TOL * np.maximum(1.0, np.abs(lam))
@@ -87,14 +80,9 @@ def _state_sign(lam: complex) -> int:
 
 
 class BranchAnalysis:
-    """Spectra, tracking and events along one continuation branch.
-
-    Three passes: (1) a spectrum at every continuation point (folds inserted,
-    tracking refined where ambiguous); (2) a peak check: where a tracked
-    Re lambda has an extremum towards zero between three samples, it is
-    maximised and, if it crosses, the extremum becomes a sample; (3) every
-    sign change of a tracked Re lambda between neighbouring samples is
-    located by Brent's method.
+    """Spectra, tracking and events along one continuation branch, in three passes: a spectrum at
+    every point; extrema of Re lambda towards zero between samples maximised (and made samples if
+    they cross); every sign change located by Brent (docs/theory/stability.md, "Stability events").
     """
 
     def __init__(
@@ -172,7 +160,7 @@ class BranchAnalysis:
         return bool(self.stop_at_first and _unstable_count(e) > 0)
 
     def _number(self, first: ClassifiedSpectrum) -> None:
-        """Mode numbers at the first state: from v = 0, or from the parent branch's nearest sample."""
+        """Mode numbers at the first state: from v = 0, or from the parent's nearest sample."""
         if self.parent is None:
             tracker, n = reference_tracker(self.model, first, self.res, self.method)
         else:
@@ -442,12 +430,8 @@ class BranchAnalysis:
         return None
 
     def refined_bifurcation(self, value: float) -> float:
-        """A branch point's v from the located real-root crossing, if there is one.
-
-        The continuation locates branch points by bisection on the sign of a
-        determinant, which stops where the corrector fails near the singular
-        point (measured: 7e-8 off in v at alpha = pi); the real eigenvalue
-        through zero located by Brent is exact to 1e-10.
+        """A branch point's v from the real root located through zero by Brent (to 1e-10; the
+        continuation's bisection on a determinant stops where the corrector fails, ~7e-8 off).
         """
         near = [
             ev.v

@@ -24,12 +24,8 @@ from .linear import straight_is_static, straight_pencil
 
 
 class ChunkedBranch:
-    """A static branch continued in v piece by piece, seen as one branch.
-
-    With ``chunk`` set, the continuation advances ``chunk`` in v at a time and
-    only as far as the analysis asks (``stop_at_first``: no continuation
-    beyond the first loss of stability); otherwise in one piece.  Fold and
-    branch-point indices are renumbered to the concatenated point list.
+    """A static branch continued in v piece by piece (``chunk`` in v at a time, as far as the
+    analysis asks), seen as one branch with renumbered fold and branch-point indices.
     """
 
     def __init__(self, branch: Branch | None = None) -> None:
@@ -139,7 +135,7 @@ STRAIGHT_STEP = 4.0
 
 
 def _straight_values(v_a: float, stop: float, ds: float, ds_max: float) -> list[float]:
-    """The v :func:`~fempipe.analyses.statics.continue_static` visits on a straight branch (same operations, same values)."""
+    """The v ``continue_static`` visits on a straight branch (the same operations, so values)."""
     values, v, h = [v_a], v_a, ds
     while True:
         v = v + h
@@ -174,7 +170,7 @@ def _straight_without_branch_points(model: PipeModel, lo: float, hi: float, kw: 
 def _straight_piece(
     model: PipeModel, v_a: float, stop: float, ds: float, ds_max: float, max_steps: int
 ) -> Branch:
-    """The straight branch from v_a to stop as :func:`~fempipe.analyses.statics.continue_static` returns it."""
+    """The straight branch from v_a to stop as ``continue_static`` returns it."""
     n = model.n
     tangent = np.zeros(n + 1)
     tangent[n] = 1.0

@@ -108,13 +108,10 @@ def classify_inherited(
     matrices: tuple[np.ndarray, np.ndarray, np.ndarray],
     ref: ClassifiedSpectrum,
 ) -> ClassifiedSpectrum:
-    """:func:`classify_spectrum` with eigenvalues only, the classification taken from ``ref``.
-
-    Each eigenvalue takes the share and weights of the nearest eigenvalue of ``ref`` (the
-    same straight pencil) when the match is sure (:data:`INHERIT_SPAN`,
-    :data:`INHERIT_MARGIN`, :data:`INHERIT_MATCH`; heavily damped roots below the light
-    resolved ones need not be); otherwise, and with hysteretic damping, the spectrum is
-    solved with its eigenvectors (docs/theory/stability.md, "Stability events").
+    """:func:`classify_spectrum` with eigenvalues only, each taking the share and weights of its
+    nearest eigenvalue of ``ref`` (the same straight pencil) when the match is sure
+    (:data:`INHERIT_SPAN`, :data:`INHERIT_MARGIN`, :data:`INHERIT_MATCH`); otherwise, and with
+    hysteretic damping, solved with eigenvectors.
     """
     origin = ref.v if ref.origin_v is None else ref.origin_v
     if model.params.hysteretic_damping > 0.0 or abs(model.params.v - origin) > INHERIT_SPAN:

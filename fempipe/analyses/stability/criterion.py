@@ -171,7 +171,7 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
 
 
 def _sparse_hysteretic(model: PipeModel, q, op_parts, lam0, X0, relevant, mu_h: float, k: int):
-    """The lowest roots with hysteretic damping (one step of mu_h), or :data:`_DENSE` if a match is ambiguous."""
+    """The lowest roots with hysteretic damping (one step of mu_h), or _DENSE if ambiguous."""
     n = model.n
     try:
         Kc = sp.csc_matrix(model.static_jacobian(q)) + 1j * mu_h * sp.csc_matrix(model.disc.K)

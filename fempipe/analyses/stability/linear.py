@@ -93,10 +93,5 @@ def straight_pencil(model: PipeModel) -> StraightPencil:
 
 
 def straight_is_static(params: Params) -> bool:
-    """Whether theta = 0 solves Eq. (31a) for every v: alpha = 0 or pi (mod 2 pi).
-
-    Then gravity acts along the straight pipe, the follower term
-    v^2 sin(theta(1) - theta) and the springs vanish with theta, and the
-    residual is zero (to the 1e-16 of sin(pi) at alpha = pi).
-    """
+    """Whether theta = 0 solves Eq. (31a) for every v: alpha = 0 or pi (mod 2 pi)."""
     return abs(math.sin(params.alpha)) < 1e-12

@@ -150,11 +150,9 @@ def map_stability(
 ) -> StabilityMap:
     """v_cr against alpha for each (beta, gamma) in ``curves``, in parallel (Fig. 6).
 
-    Each point is an independent :func:`find_critical_velocity` in both planes (with
-    ``planar``, in the plane alone); ``options`` are passed on (``ds_max`` defaults to
-    0.2: Brent locates v_cr whatever the sampling).  A point that fails is recorded with
-    its error.  ``variants`` gives the variant fields of
-    :class:`~fempipe.model.params.Params` of every point (default: the paper's pipe).
+    Each point is a :func:`find_critical_velocity` in both planes (``planar``: in the plane);
+    ``options`` passed on (``ds_max`` default 0.2); a failed point keeps its error; ``variants``:
+    the variant fields of every point's :class:`~fempipe.model.params.Params`.
     """
     alphas = np.asarray([float(a) for a in alphas])
     curves = tuple((float(b), float(g)) for b, g in curves)

@@ -148,7 +148,7 @@ def compute_spectrum(
 
 @dataclass(frozen=True)
 class ModeShape:
-    """A mode shape ``Re(a e^{lambda tau})`` about a static state, max |theta^d| = 1, real positive there.
+    """A mode shape ``Re(a e^{lambda tau})`` about a static state, max |theta^d| = 1 (real > 0).
 
     Attributes
     ----------

@@ -26,11 +26,9 @@ log = logging.getLogger(__name__)
 def solve_sagged(model: PipeModel, tol: float = 1e-10) -> StaticSolution:
     """The static state reached by switching gravity on slowly: continuation in gamma from 0.
 
-    The primary branch of every stability analysis.  Newton from the straight pipe would
-    find the nearly straight, unstable state for alpha >= ~150 deg.  Near alpha = pi a large
-    step can land on the unstable or the mirror-image state, so the result is checked
-    (theta_tip sin(alpha) < 0; at v = 0 a minimum of the potential energy) and the loading
-    repeated with smaller steps until it passes.
+    The primary branch of every stability analysis (Newton from the straight pipe finds the
+    unstable state for alpha >= ~150 deg); checked (theta_tip sin(alpha) < 0; at v = 0 a minimum
+    of the potential energy) and repeated with smaller steps until it passes.
     """
     p = model.params
     if p.gamma == 0.0:

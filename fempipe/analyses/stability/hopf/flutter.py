@@ -152,7 +152,7 @@ _NOT_PRIMARY = dict.fromkeys(EVENT_KEYS) | {
 def decorate_events(
     result_dict: dict, model: PipeModel, result, out_of_plane: dict | None = None
 ) -> dict:
-    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json`` (modified, returned).
+    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json`` (in place; returned).
 
     ``hopf_note`` is null, or why the other keys are; the flutters out of the plane take their
     keys from ``out_of_plane``, ``{(branch, v): keys}``

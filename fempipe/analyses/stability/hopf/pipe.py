@@ -49,7 +49,7 @@ def _without_bending(model: PipeModel) -> PipeModel:
 
 
 def _mirror_even(model: PipeModel, x0: np.ndarray) -> bool:
-    """Whether J is even about x0 (x0 = 0 at alpha = 0, pi; a PipeModel subclass takes the general path)."""
+    """Whether J is even about x0 (x0 = 0 at alpha = 0, pi; not for a PipeModel subclass)."""
     return type(model) is PipeModel and straight_is_static(model.params) and not np.any(x0)
 
 
