@@ -270,7 +270,7 @@ class _AttractorSearch:
 
     # -- equilibrium -------------------------------------------------------
     def _equilibrium(self) -> Attractor | None:
-        """The equilibrium if near a linearly stable static state and not leaving it (every 0.5 tau)."""
+        """The equilibrium if near a linearly stable static state, not leaving it (each 0.5 tau)."""
         stepper, model = self.stepper, self.model
         if stepper.t < self.next_eq_check:
             return None

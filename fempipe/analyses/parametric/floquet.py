@@ -45,7 +45,7 @@ class PulsationPencil:
 
     @classmethod
     def of(cls, model: PipeModel) -> PulsationPencil:
-        """The matrices of ``model`` (its v ignored) at theta = 0; ValueError unless alpha is 0 or pi."""
+        """The matrices of ``model`` (v ignored) at theta = 0; ValueError unless alpha = 0, pi."""
         if not straight_is_static(model.params):
             raise ValueError(
                 f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
@@ -69,7 +69,7 @@ class PulsationPencil:
 
 
 class ReducedPulsation:
-    """The pulsating problem projected on the low modes of the mean flow and their static corrections
+    """The pulsating problem on the low modes of the mean flow and their static corrections
     (a Ritz basis, M-orthonormal; docs/theory/parametric.md), integrated over one period by
     Radau IIA with fixed steps; at sigma = 0 the multipliers are exactly exp(lambda T).
 

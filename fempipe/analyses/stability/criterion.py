@@ -25,11 +25,7 @@ from .hysteretic import RELEVANT_SHARE, ConjugateHalves, match_roots, relevant_r
 
 @single_blas
 def growth_rate(model: PipeModel, q: np.ndarray, *, tolerance: float = RESOLUTION_TOL) -> float:
-    """Largest Re lambda of the resolved eigenvalues of Eq. (32) at q (:attr:`Spectrum.max_real`).
-
-    Its sign is not the stability decision (round-off at v = mu = 0): use
-    :func:`linearly_stable`.
-    """
+    """Largest resolved Re lambda of Eq. (32) at q (the decision is :func:`linearly_stable`)."""
     res = resolution(model.disc, tolerance)
     return classify_spectrum(model, np.asarray(q, dtype=float), res, "auto").max_real
 

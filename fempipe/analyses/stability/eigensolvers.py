@@ -20,7 +20,7 @@ _GEEV_LWORK: dict = {}
 
 
 def _dense_eig(T: np.ndarray, rows: int, vectors: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """LAPACK geev as scipy.linalg.eig calls it (the same bits), eigenvectors' first ``rows`` rows."""
+    """LAPACK geev as scipy.linalg.eig calls it (same bits); eigenvectors' first ``rows`` rows."""
     if T.dtype != np.float64:
         out = sla.eig(T, right=vectors)
         return (out[0], out[1][:rows]) if vectors else (out, None)

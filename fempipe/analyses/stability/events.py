@@ -171,12 +171,8 @@ def first_of(in_plane: StabilityEvent | None, out_of_plane: StabilityEvent | Non
 
 @dataclass(frozen=True)
 class StabilityInPlanes:
-    """The static branches' stability in and out of their plane (``planes=("in", "out")``).
-
-    Attributes
-    ----------
-    in_plane, out_of_plane : StabilityResult
-        The two analyses along the same branches.
+    """The static branches' stability in (``in_plane``) and out of (``out_of_plane``) their plane,
+    two :class:`StabilityResult` along the same branches (``planes=("in", "out")``).
     """
 
     in_plane: StabilityResult

@@ -41,10 +41,7 @@ def plane_models(model: PipeModel, planes) -> list[PipeModel]:
 def linearized_matrices(model: PipeModel, q: np.ndarray):
     """K^d, C^d, M^d of Eqs. (33a)-(33c) at the static state q: dR/dq, dR/dq', dR/dq'' at (q, 0, 0).
 
-    Returns
-    -------
-    K, C, M : ndarray, shape (n, n)
-        Stiffness (not symmetric for v > 0), damping (Coriolis and Kelvin-Voigt), mass (SPD).
+    K is not symmetric for v > 0; C holds Coriolis and Kelvin-Voigt; M is SPD.
     """
     return model.linearization(np.asarray(q, dtype=float))
 

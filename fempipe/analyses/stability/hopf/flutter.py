@@ -89,13 +89,7 @@ def event_states(model: PipeModel, result) -> dict:
 
 @single_blas
 def normal_forms(model: PipeModel, result) -> dict:
-    """The Hopf normal form of every flutter event of ``result`` (a StabilityResult).
-
-    Returns
-    -------
-    dict
-        ``{(branch, type, v, mode): HopfNormalForm or str reason}``.
-    """
+    """``{(branch, type, v, mode): HopfNormalForm or reason}`` of ``result``'s flutter events."""
     if model.params.hysteretic_damping > 0.0:
         reason = "hysteretic damping is a frequency-domain model without an equation of motion"
         return {_key(ev): reason for ev in result.events if ev.type == "flutter"}
@@ -152,7 +146,7 @@ _NOT_PRIMARY = dict.fromkeys(EVENT_KEYS) | {
 def decorate_events(
     result_dict: dict, model: PipeModel, result, out_of_plane: dict | None = None
 ) -> dict:
-    """Add :data:`EVENT_KEYS` to every flutter event of ``fempipe critical --json`` (in place; returned).
+    """Add :data:`EVENT_KEYS` to the flutter events of ``fempipe critical --json`` (in place).
 
     ``hopf_note`` is null, or why the other keys are; the flutters out of the plane take their
     keys from ``out_of_plane``, ``{(branch, v): keys}``
