@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from .classical import StraightPipe
 
 
-# ---------------------------------------------------------------------------
 # Clamped-free beam modes
 
 
@@ -67,7 +66,6 @@ def gauss_cells(cells: int, points: int = 8):
     return x, (h * w / 2.0).ravel()
 
 
-# ---------------------------------------------------------------------------
 # Discretizations
 
 

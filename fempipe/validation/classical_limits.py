@@ -19,7 +19,6 @@ if TYPE_CHECKING:
     from .classical import StraightPipe
 
 
-# ---------------------------------------------------------------------------
 # Closed forms the solvers are checked against
 
 

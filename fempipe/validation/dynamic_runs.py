@@ -74,10 +74,8 @@ def sweep_up(disc, alpha: float, values, perturbation: float = 0.01) -> list:
     return sweep(m, values, "up", q0=q0, qdot0=qdot0, perturbation=perturbation)
 
 
-#: Shooting tolerance of every limit cycle found by integration here: 1e-7 puts
-#: its period and tip extrema within ~1e-8 of the converged cycle (the library's
-#: default 1e-5 only to ~5e-7 relative, too close to the 1e-6 asked of the
-#: agreement with the continuation and to the mesh differences the cases measure).
+#: Shooting tolerance of the cycles found by integration: period and tip extrema to ~1e-8,
+#: well below the 1e-6 asked of the agreement with the continuation.
 CHECK_SHOOT_RTOL = 1e-7
 
 
@@ -227,9 +225,7 @@ def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
     return out
 
 
-# ---------------------------------------------------------------------------
-# Bifurcation diagrams by continuation (fempipe.analyses.periodic), checked by integration
-# ---------------------------------------------------------------------------
+# Bifurcation diagrams by continuation, checked by integration
 @dataclass(frozen=True)
 class DiagramPoint:
     """An equilibrium or periodic orbit of a continued diagram: tip extrema [min, max], period,
@@ -318,11 +314,8 @@ def _max_nontrivial(cycle) -> float | None:
     return float(np.max(np.abs(np.delete(mu, int(np.argmin(np.abs(mu - 1.0)))))))
 
 
-#: First arclength step of the continuation from a Hopf point: the first orbit
-#: lies at v - v_H ~ ds^2 (about 3e-4 here against 3e-2 at the default 0.1), so
-#: that requested v close above v_H are passed between two continued orbits
-#: (and shot from them, see ContinuedDiagram.filled); the step grows by 1.5 per
-#: easy step, at no measurable extra cost.
+#: First arclength step from a Hopf point: the first orbit at v - v_H ~ ds^2 ~ 3e-4, so
+#: that requested v just above v_H lie between two continued orbits (ContinuedDiagram.filled).
 FIRST_DS = 0.01
 
 

@@ -35,7 +35,6 @@ BVP_TOL = 1e-10
 SCAN_TOL = 1e-8
 
 
-# ---------------------------------------------------------------------------
 # The planar static state (independent: solve_bvp on Eq. (31a))
 
 
@@ -120,7 +119,6 @@ def loaded_state(params, steps: int = 4, tol: float = BVP_TOL) -> StaticState:
         steps *= 2
 
 
-# ---------------------------------------------------------------------------
 # C^1 spectral elements in w
 
 
@@ -251,7 +249,6 @@ class HermiteSpectral:
         return K, C, M, parts
 
 
-# ---------------------------------------------------------------------------
 # The quadratic eigenproblem
 
 

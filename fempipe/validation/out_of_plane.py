@@ -72,9 +72,6 @@ def _headline(curves: dict) -> str:
     return "; ".join(parts)
 
 
-# ---------------------------------------------------------------------------
-
-
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) in and out of the plane; (b) convergence of the out-of-plane v_cr."""
     from matplotlib.lines import Line2D

@@ -27,7 +27,6 @@ from .out_of_plane_runs import (
     refinement_slope,
 )
 
-# ---------------------------------------------------------------------------
 # (c) the strong form against fempipe
 
 
@@ -132,7 +131,6 @@ def inclined_variants_check(ref):
     )
 
 
-# ---------------------------------------------------------------------------
 # (d) observed orders
 
 
@@ -169,7 +167,6 @@ def order_checks(ref, quick: bool, v_ref: float):
     return checks, [table], requires, curves
 
 
-# ---------------------------------------------------------------------------
 # (e) in the plane against out of the plane
 
 
@@ -233,9 +230,6 @@ def finding_checks(ref, quick: bool):
     if at0:
         checks.append(measure("alpha0_in_equals_out", max(abs(r[8]) for r in at0)))
     return checks, [table], findings, explained, curves
-
-
-# ---------------------------------------------------------------------------
 
 
 def classical_check(ref):

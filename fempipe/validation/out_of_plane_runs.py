@@ -86,7 +86,6 @@ def refinement_slope(ns, errs) -> float:
     return float(-math.log(errs[-1] / errs[-2]) / math.log(ns[-1] / ns[-2]))
 
 
-# ---------------------------------------------------------------------------
 # (a) the straight pipe: out of the plane = in the plane
 
 
@@ -130,7 +129,6 @@ def identity_checks(ref):
     return checks, [table]
 
 
-# ---------------------------------------------------------------------------
 # (b) the buckled standing pipe: the neutral rotation mode
 
 
