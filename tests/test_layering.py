@@ -73,8 +73,8 @@ ALLOWED_LAZY_CYCLES: frozenset[tuple[str, ...]] = frozenset(
     }
 )
 
-#: (e) The most imports inside functions outside fempipe/cli (the target is 60).
-MAX_FUNCTION_IMPORTS = 100
+#: (e) The most imports inside functions outside fempipe/cli.
+MAX_FUNCTION_IMPORTS = 30
 
 
 @dataclass(frozen=True)
