@@ -229,7 +229,7 @@ def test_bifurcation_panels_name_the_papers_panel_only_for_the_papers_case():
     Z_g with (a)-(d) alpha = pi/4 ... pi; another case or inclination gets no 'cf.'."""
     import math
 
-    from fempipe.cli.bifurcation import paper_panel
+    from fempipe.plotting.dynamics import paper_panel
     from fempipe.model.params import PAPER_CASE
 
     p = dict(PAPER_CASE, end_mass=0.0, springs=[])

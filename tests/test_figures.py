@@ -344,7 +344,7 @@ def test_bifurcation_command_figures_have_one_legend_below_the_panels(method, ca
     once, text >= 9 pt, nothing cut or overlapping."""
     from clirun import run_json
 
-    from fempipe.cli.bifurcation import diagram_figure
+    from fempipe.plotting.dynamics import diagram_figure
 
     argv = [
         "bifurcation",

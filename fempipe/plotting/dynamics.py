@@ -9,12 +9,15 @@ and returns the Axes.
 
 from __future__ import annotations
 
+import math
 import os
+import textwrap
 from collections.abc import Sequence
 
 import numpy as np
 
 from fempipe.model.discretization import Discretization
+from fempipe.model.params import PAPER_CASE, VARIANT_FIELDS
 from fempipe.plotting.style import finish_axes, new_axes, runs
 
 __all__ = [
@@ -22,6 +25,9 @@ __all__ = [
     "plot_phase_portrait",
     "plot_oscillating_shapes",
     "plot_bifurcation",
+    "diagram_figure",
+    "diagram_figure_3d",
+    "paper_panel",
     "animate",
     "animation_figure",
     "render_frames",
@@ -399,3 +405,129 @@ def animate(
         plt.close(fig)
     write_gif(path, frames, fps=fps)
     return path
+
+
+#: The diagram keys in the column order of the paper's Figs. 7-10.
+_PAPER_KEYS = ("eta_tip", "X_tip", "Z_tip")
+#: 3-D diagrams: marker per attractor kind, color per direction; filled where non-planar.
+_MARKS = {
+    "equilibrium": "s",
+    "periodic": "o",
+    "whirl": "D",
+    "quasi-periodic": "^",
+    "non-periodic": "x",
+}
+_COLORS = {"up": "tab:blue", "down": "tab:red"}
+_LABELS_3D = {
+    "Y_tip": "Y(1) (out of plane)",
+    "eta_tip": "η(1)",
+    "X_tip": "X_g(1)",
+    "Z_tip": "Z_g(1)",
+}
+
+
+def diagram_figure(result: dict, key: str):
+    """The figure of ``key`` of a ``fempipe bifurcation`` result: one panel per inclination,
+    the run's parameters above, one legend below the panels."""
+    import matplotlib.pyplot as plt
+
+    from fempipe.plotting.layout import shared_legend
+
+    p = result["params"]
+    groups = sorted({pt["alpha"] for pt in result["points"]})
+    fig, axes = plt.subplots(
+        1, len(groups), figsize=(5.5 * len(groups), 4.6), squeeze=False, layout="constrained"
+    )
+    for ax, a in zip(axes[0], groups, strict=True):
+        plot_bifurcation(
+            [pt for pt in result["points"] if pt["alpha"] == a],
+            key,
+            ax=ax,
+            title=f"α = {math.degrees(a):.4g}°, β = {p['beta']:.4g}, "
+            f"γ = {p['gamma']:.4g}" + paper_panel(key, a, p),
+            special_points=[s for s in result.get("special_points", []) if s["alpha"] == a],
+            hopf_points=[h for h in result.get("hopf_points", []) if h["alpha"] == a],
+        )
+    shared_legend(fig, axes[0])
+    disc = result.get("discretization", {})
+    name = _mesh(disc)
+    if disc.get("kind") != "fe":
+        name = f"{name} {disc.get('n_modes', disc.get('n_dofs', ''))}"
+    caption = f"μ = {p['mu']:.4g}, {name.strip()}; " + (
+        "continuation of equilibria and periodic orbits (solid stable, dashed unstable; "
+        "dots: requested v)"
+        if result.get("method") == "continuation"
+        else "sweeps of attractors up and down"
+    )
+    # Wrapped to the figure's width (about 70 characters of 9 pt per 5.5 in).
+    fig.suptitle(textwrap.fill(caption, 70 * len(groups)), fontsize=9)
+    return fig
+
+
+def paper_panel(key: str, alpha: float, params: dict) -> str:
+    """`` (cf. Fig. 8(b))``: the panel of the paper's Figs. 7-10 a diagram redraws, or ``""``.
+
+    Fig. 7 is alpha = 0 with (a) eta(1), (b) X_g(1), (c) Z_g(1); Figs. 8, 9 and 10 are eta(1),
+    X_g(1) and Z_g(1) with (a)-(d) alpha = pi/4, pi/2, 3pi/4, pi, all for the reference case.
+    """
+    if any(not math.isclose(params.get(k, math.nan), v) for k, v in PAPER_CASE.items()):
+        return ""
+    if any(params.get(k) for k in VARIANT_FIELDS):
+        return ""  # a variant of the pipe: the paper has no such figure
+    column = _PAPER_KEYS.index(key)
+    if math.isclose(alpha, 0.0, abs_tol=1e-12):
+        return f" (cf. Fig. 7({'abc'[column]}))"
+    for k in range(1, 5):
+        if math.isclose(alpha, k * math.pi / 4):
+            return f" (cf. Fig. {8 + column}({'abcd'[k - 1]}))"
+    return ""
+
+
+def _mesh(disc: dict) -> str:
+    """``P3:16``, or the modal kind."""
+    if disc.get("kind") == "fe":
+        return f"{disc.get('element')}:{disc.get('n_elements')}"
+    return str(disc.get("kind", ""))
+
+
+def diagram_figure_3d(result: dict, key: str):
+    """[min, max] of ``key`` against v of a 3-D run: the marker by attractor kind, the color
+    by sweep direction (down shifted a hair to the right), filled where the motion is
+    non-planar; the run's parameters above."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
+    pts = result["points"]
+    vs = [p["v"] for p in pts]
+    shift = 0.004 * (max(vs) - min(vs)) if len(set(vs)) > 1 else 0.0
+    for p in pts:
+        x = p["v"] + (shift if p["direction"] == "down" else 0.0)
+        c = _COLORS[p["direction"]]
+        face = c if p["motion"] == "nonplanar" else "none"
+        ax.plot(
+            [x, x], p[key], ls="", marker=_MARKS.get(p["attractor"], "x"), ms=5, color=c, mfc=face
+        )
+    handles = [
+        Line2D([], [], ls="-", lw=3, color=c, label=f"sweep {d}")
+        for d, c in _COLORS.items()
+        if any(p["direction"] == d for p in pts)
+    ]
+    handles += [
+        Line2D([], [], ls="", marker=m, color="0.3", mfc="none", label=k)
+        for k, m in _MARKS.items()
+        if any(p["attractor"] == k for p in pts)
+    ]
+    handles.append(Line2D([], [], ls="", marker="o", color="0.3", mfc="0.3", label="non-planar"))
+    ax.legend(handles=handles, fontsize=8, loc="best")
+    ax.set_xlabel("v")
+    ax.set_ylabel(_LABELS_3D[key] + " (/L), min and max")
+    ax.grid(alpha=0.3)
+    p = result["params"]
+    caption = (
+        f"3-D attractors, α = {math.degrees(p['alpha']):.4g}°, β = {p['beta']:.4g}, "
+        f"γ = {p['gamma']:.4g}, μ = {p['mu']:.4g}, {_mesh(result.get('discretization', {}))}; "
+        "open: planar motion, filled: non-planar"
+    )
+    ax.set_title(textwrap.fill(caption, 80), fontsize=9)
+    return fig
