@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import argparse
 
-from fempipe.cli import common, reporting
-from fempipe.cli.parsing import CLIError
+from fempipe.cli import common, parsing, reporting
 
 EXAMPLES = ("fempipe bench --list", "fempipe bench --only startup,hopf --json")
 
@@ -36,14 +35,7 @@ def run(args: argparse.Namespace) -> int:
             doc = (fn.__doc__ or "").strip().splitlines()
             print(f"{name:20s} {doc[0] if doc else ''}")
         return 0
-    names = None
-    if args.only:
-        names = [n.strip() for item in args.only for n in item.split(",") if n.strip()]
-        unknown = [n for n in names if n not in table]
-        if unknown:
-            raise CLIError(
-                "--only", f"unknown benchmark {unknown[0]!r}; known: {', '.join(sorted(table))}"
-            )
+    names = parsing.parse_names("--only", args.only, sorted(table), "benchmark")
     n = len(names) if names else len(table)
     with reporting.progress(args, n, "bench") as bar:
         result = bench.run(names, quick=args.quick, callback=lambda name, res: bar.update())

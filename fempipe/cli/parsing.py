@@ -30,6 +30,7 @@ __all__ = [
     "option_type",
     "parse_band",
     "parse_alpha_list",
+    "parse_names",
     "parse_values",
     "positive_int",
     "value_list",
@@ -102,29 +103,13 @@ def _amount(x: float) -> str:
     return str(int(x)) if float(x).is_integer() and abs(x) < 1e15 else f"{x:g}"
 
 
-def _split_values(text: str, option: str) -> tuple[list[float] | None, float, float, int]:
-    """``(items, start, stop, count)``: items for ``0,2,4``, None for a range."""
+def _split_values(text: str, option: str, number=None) -> tuple[list | None, float, float, int]:
+    """``(items, start, stop, count)``: items for ``0,2,4``, None for a range; ``number``
+    parses an item or a range end (default a finite float)."""
     s = str(text).strip()
     forms = "a list 0,2,4 or start:stop:count such as 0:6:13"
-    if ":" in s:
-        parts = s.split(":")
-        if len(parts) != 3:
-            raise ValueError(f"{option} expects {forms}, got {text!r}")
-        try:
-            start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
-        except ValueError:
-            raise ValueError(f"{option} expects {forms} (count an integer), got {text!r}") from None
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            raise ValueError(f"{option} range ends must be finite, got {text!r}")
-        if count < 1:
-            raise ValueError(f"{option} count must be >= 1, got {count}")
-        if count == 1 and start != stop:
-            raise ValueError(f"{option} count 1 needs start == stop, got {text!r}")
-        return None, start, stop, count
-    out = []
-    for item in s.split(","):
-        if not item.strip():
-            raise ValueError(f"{option} expects {forms}; empty item in {text!r}")
+
+    def finite(item: str) -> float:
         try:
             value = float(item)
         except ValueError:
@@ -133,20 +118,44 @@ def _split_values(text: str, option: str) -> tuple[list[float] | None, float, fl
             ) from None
         if not math.isfinite(value):
             raise ValueError(f"{option} values must be finite, got {item.strip()!r}")
-        out.append(value)
+        return value
+
+    number = number or finite
+    if ":" in s:
+        parts = s.split(":")
+        if len(parts) != 3:
+            raise ValueError(f"{option} expects {forms}, got {text!r}")
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise ValueError(f"{option} expects {forms} (count an integer), got {text!r}") from None
+        start, stop = number(parts[0]), number(parts[1])
+        if count < 1:
+            raise ValueError(f"{option} count must be >= 1, got {count}")
+        if count == 1 and start != stop:
+            raise ValueError(f"{option} count 1 needs start == stop, got {text!r}")
+        return None, start, stop, count
+    items = s.split(",")
+    if any(not item.strip() for item in items):
+        raise ValueError(f"{option} expects {forms}; empty item in {text!r}")
+    out = [number(item) for item in items]
     return out, out[0], out[-1], len(out)
 
 
-def parse_values(text: str, option: str) -> list[float]:
-    """``0,2,4``, ``3`` or ``start:stop:count`` (``count`` values from start to stop, both
-    included, like ``numpy.linspace``); ValueError naming ``option``."""
-    items, start, stop, count = _split_values(text, option)
+def _expand(items: list | None, start: float, stop: float, count: int) -> list[float]:
+    """The values of :func:`_split_values`: a range like ``numpy.linspace``, stop hit exactly."""
     if items is not None:
         return items
     if count == 1:
         return [start]
     step = (stop - start) / (count - 1)
-    return [start + i * step for i in range(count - 1)] + [stop]  # stop hit exactly
+    return [start + i * step for i in range(count - 1)] + [stop]
+
+
+def parse_values(text: str, option: str) -> list[float]:
+    """``0,2,4``, ``3`` or ``start:stop:count`` (``count`` values from start to stop, both
+    included); ValueError naming ``option``."""
+    return _expand(*_split_values(text, option))
 
 
 def value_list(text: str, option: str) -> ValueList:
@@ -270,26 +279,25 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
             raise CLIError("--U", str(exc)) from None
 
 
+def parse_names(option: str, given: list[str] | None, known, what: str) -> list[str] | None:
+    """The names of a repeatable, comma-separated ``option`` (None if not given); CLIError
+    naming the first unknown one."""
+    if not given:
+        return None
+    names = [n.strip() for item in given for n in item.split(",") if n.strip()]
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise CLIError(option, f"unknown {what} {unknown[0]!r}; known: {', '.join(known)}")
+    return names
+
+
 def parse_alpha_list(text: str, option: str, allow_large: bool = False) -> list[float]:
     """Inclinations ``0,pi/4,pi/2`` or ``start:stop:count`` in any ``--alpha`` spelling
     (``0deg:180deg:7``); CLIError naming ``option`` (also past :data:`MAX_VALUES`)."""
-
-    def alpha(s: str) -> float:
-        return check_alpha(parse_alpha(s), s)
-
-    text = str(text)
     try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError(f"{option} expects start:stop:count, got {text!r}")
-            start, stop = alpha(parts[0]), alpha(parts[1])
-            return value_list(f"{start!r}:{stop!r}:{parts[2]}", option).values(allow_large)
-        items = text.split(",")
-        if any(not s.strip() for s in items):
-            raise ValueError(f"{option} has an empty item in {text!r}")
-        check_count(option, len(items), MAX_VALUES, allow_large, "values")
-        return [alpha(s) for s in items]
+        split = _split_values(text, option, lambda s: check_alpha(parse_alpha(s), s))
+        check_count(option, split[3], MAX_VALUES, allow_large, "values")
+        return _expand(*split)
     except CLIError:
         raise
     except ValueError as exc:

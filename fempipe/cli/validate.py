@@ -9,8 +9,7 @@ import argparse
 import os
 import sys
 
-from fempipe.cli import common, reporting
-from fempipe.cli.parsing import CLIError
+from fempipe.cli import common, parsing, reporting
 
 EXAMPLES = (
     "fempipe validate --quick                   # into fempipe-out/validate",
@@ -54,12 +53,7 @@ def run(args: argparse.Namespace) -> int:
             print(name)
         return 0
     workers = args.workers or max(1, min(os.cpu_count() or 1, 4))
-    cases = None
-    if args.case:
-        cases = [c.strip() for item in args.case for c in item.split(",") if c.strip()]
-        unknown = [c for c in cases if c not in CASES]
-        if unknown:
-            raise CLIError("--case", f"unknown case {unknown[0]!r}; choose from {', '.join(CASES)}")
+    cases = parsing.parse_names("--case", args.case, list(CASES), "case")
     out = args.out or DEFAULT_OUT
     reporting.check_out_dir(out)
 
