@@ -273,16 +273,8 @@ def _bvp_value(quantity) -> tuple[str, float] | None:
         )
     except RuntimeError:
         return None  # the study stands without it; the output lists no collocation value
-    value = {
-        "theta_tip": bvp.theta_tip,
-        "X_tip": bvp.X_tip,
-        "Z_tip": bvp.Z_tip,
-        "eta_tip": bvp.eta_tip,
-    }[quantity.name]
-    return (
-        f"solve_bvp (collocation of Eq. (31a), tolerance 1e-11, {bvp.n_nodes} nodes)",
-        float(value),
-    )
+    method = f"solve_bvp (collocation of Eq. (31a), tolerance 1e-11, {bvp.n_nodes} nodes)"
+    return method, float(getattr(bvp, quantity.name))  # theta_tip, X_tip, Z_tip or eta_tip
 
 
 def _write(output: reporting.Output, result: dict, study) -> None:

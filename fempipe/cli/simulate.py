@@ -365,22 +365,20 @@ def _print_summary(r: dict) -> None:
         if r.get("period_n"):
             line += f" (period-{r['period_n']})"
     print(line)
-    errors = r.get("tip_error") if with_errors else None
-    for k, (lo, hi) in r["tip"].items():
+    errors = (r.get("tip_error") or {}) if with_errors else {}
+    for k, ends in r["tip"].items():
         if with_errors:
-            e_lo, e_hi = errors[k] if errors else (None, None)
-            lo_s, hi_s = reporting.pm(lo, e_lo, "{: .8f}"), reporting.pm(hi, e_hi, "{: .8f}")
-            print(f"  {k:8s} min {lo_s}  max {hi_s}")
+            ends = [
+                reporting.pm(x, e, "{: .8f}")
+                for x, e in zip(ends, errors.get(k, (None,) * 2), strict=True)
+            ]
         else:
-            print(f"  {k:8s} min {lo: .8f}  max {hi: .8f}")
-    if r.get("floquet_multipliers"):
-        mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r["floquet_multipliers"])
-        print(f"  |Floquet multipliers| {mus}")
-    if r.get("out_of_plane_floquet_multipliers"):
-        mus = ", ".join(
-            f"{abs(complex(a, b)):.4g}" for a, b in r["out_of_plane_floquet_multipliers"]
-        )
-        print(f"  |out-of-plane Floquet multipliers| {mus}")
+            ends = [f"{x: .8f}" for x in ends]
+        print(f"  {k:8s} min {ends[0]}  max {ends[1]}")
+    for key, what in (("", ""), ("out_of_plane_", "out-of-plane ")):
+        if r.get(key + "floquet_multipliers"):
+            mus = ", ".join(f"{abs(complex(a, b)):.4g}" for a, b in r[key + "floquet_multipliers"])
+            print(f"  |{what}Floquet multipliers| {mus}")
     if "stable_3d" in r:
         verdict = {True: "stable", False: "unstable", None: "undecided"}[r["stable_3d"]]
         print(f"  in three dimensions: {verdict}")
