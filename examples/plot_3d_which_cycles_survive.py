@@ -4,7 +4,7 @@ Which planar cycles survive in three dimensions
 
 The paper's model is planar: its limit cycles are motions in the plane of gravity and the clamp.
 A round pipe may leave that plane.  A planar cycle is a solution of the 3-D model too
-(:class:`fempipe.SpaceModel`: its states with no out-of-plane part are the planar model's), and
+(:class:`fempipe.PipeModel3D`: its states with no out-of-plane part are the planar model's), and
 :func:`fempipe.compute_out_of_plane_floquet` computes the Floquet multipliers of perturbations out of
 the plane in two independent ways: by default from the linear equation of out-of-plane
 perturbations about the moving planar state (one unknown, the out-of-plane rotation psi), and

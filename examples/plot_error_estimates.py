@@ -27,7 +27,7 @@ flows = [0.0, 1.0, 2.0, 3.0, 4.0]
 sols = fempipe.solve_path(model, flows)
 points = []
 for sol in sols:
-    tip = {k: float(x) for k, x in fempipe.tip_values(disc, sol.q, alpha).items()}
+    tip = {k: float(x) for k, x in fempipe.compute_tip(disc, sol.q, alpha).items()}
     points.append({"v": sol.params.v, **tip, "tip_drop": tip["X_tip"] - np.cos(alpha)})
 result = fempipe.estimate_errors({"points": points}, model, sols)
 print(result["error_estimate"])
@@ -47,7 +47,7 @@ RESULT = float(est[2])
 # The true error, against P3:32, lies below the estimate by the safety factor 3 or so.
 fine = fempipe.PipeModel(fempipe.FiniteElement(32, 3), model.params)
 exact = [
-    fempipe.tip_values(fine.disc, s.q, alpha)["X_tip"] for s in fempipe.solve_path(fine, flows)
+    fempipe.compute_tip(fine.disc, s.q, alpha)["X_tip"] for s in fempipe.solve_path(fine, flows)
 ]
 true = np.abs(np.array([p["X_tip"] for p in points]) - exact)
 print("true errors:", ", ".join(f"{e:.1e}" for e in true))

@@ -25,8 +25,8 @@ fe_sols = fempipe.solve_path(fe, flows)
 n3_sols = fempipe.solve_path(n3, flows)
 x_fe, x_n3 = [], []
 for v, a, b in zip(flows, fe_sols, n3_sols, strict=True):
-    x_fe.append(fempipe.tip_values(fe.disc, a.q, alpha)["X_tip"])
-    x_n3.append(fempipe.tip_values(n3.disc, b.q, alpha)["X_tip"])
+    x_fe.append(fempipe.compute_tip(fe.disc, a.q, alpha)["X_tip"])
+    x_n3.append(fempipe.compute_tip(n3.disc, b.q, alpha)["X_tip"])
     print(
         f"v = {v:.0f}: X_tip P3:8 = {x_fe[-1]:.8f}, N = 3 = {x_n3[-1]:.8f}, "
         f"N = 3 error {x_n3[-1] - x_fe[-1]:+.2e} L"
@@ -42,7 +42,7 @@ RESULT = x_fe[2]
 # bends the pipe most.
 fig, ax = plt.subplots(figsize=(5, 3.6), layout="constrained")
 for v, a, b in zip(flows, fe_sols, n3_sols, strict=True):
-    s, t = fempipe.shape(fe.disc, a.q, alpha), fempipe.shape(n3.disc, b.q, alpha)
+    s, t = fempipe.compute_shape(fe.disc, a.q, alpha), fempipe.compute_shape(n3.disc, b.q, alpha)
     (line,) = ax.plot(s.Z_g, -s.X_g, label=f"v = {v:.0f}")
     ax.plot(t.Z_g, -t.X_g, "--", color=line.get_color())
 ax.set_aspect("equal")

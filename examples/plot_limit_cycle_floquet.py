@@ -38,7 +38,7 @@ RESULT = float(abs(trivial))
 # %%
 # The orbit and the multipliers
 # -----------------------------
-tips = [fempipe.tip_values(model.disc, q, params.alpha) for q in cycle.orbit_q]
+tips = [fempipe.compute_tip(model.disc, q, params.alpha) for q in cycle.orbit_q]
 fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(6.4, 3.2), layout="constrained")
 ax1.plot([t["Z_tip"] for t in tips], [-t["X_tip"] for t in tips])
 ax1.set_xlabel("Z_g(1)")

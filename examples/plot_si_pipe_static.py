@@ -34,7 +34,7 @@ U = [0.0, 1.0, 2.0, 3.0]
 sols = fempipe.solve_path(model, [pipe.v_of_U(u) for u in U])
 drops_mm = []
 for u, sol in zip(U, sols, strict=True):
-    tip = fempipe.tip_values(disc, sol.q, pipe.alpha)
+    tip = fempipe.compute_tip(disc, sol.q, pipe.alpha)
     drops_mm.append(tip["X_tip"] * pipe.L * 1e3)
     print(
         f"U = {u:.0f} m/s: tip {drops_mm[-1]:6.2f} mm below the clamp, theta(1) = "
@@ -47,10 +47,10 @@ RESULT = drops_mm[2] / (pipe.L * 1e3)
 # %%
 # The shapes
 # ----------
-# :func:`fempipe.shape` gives the centerline (X_g down, Z_g horizontal, Eq. (28)).
+# :func:`fempipe.compute_shape` gives the centerline (X_g down, Z_g horizontal, Eq. (28)).
 fig, ax = plt.subplots(figsize=(5, 3.2), layout="constrained")
 for u, sol in zip(U, sols, strict=True):
-    s = fempipe.shape(disc, sol.q, pipe.alpha)
+    s = fempipe.compute_shape(disc, sol.q, pipe.alpha)
     ax.plot(s.Z_g * pipe.L * 1e3, -s.X_g * pipe.L * 1e3, label=f"U = {u:.0f} m/s")
 ax.set_aspect("equal")
 ax.set_xlabel("horizontal (mm)")

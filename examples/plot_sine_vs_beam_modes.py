@@ -25,7 +25,7 @@ params = fempipe.Params(alpha=np.pi / 2, gamma=10.0, v=2.0)
 def theta_tip(disc: object) -> float:
     """The static tip rotation theta(1) on one discretization."""
     model = fempipe.PipeModel(disc, params)
-    return fempipe.tip_values(disc, fempipe.solve_static(model).q, params.alpha)["theta_tip"]
+    return fempipe.compute_tip(disc, fempipe.solve_static(model).q, params.alpha)["theta_tip"]
 
 
 reference = theta_tip(fempipe.FiniteElement(32, 3))

@@ -39,7 +39,7 @@ tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=15.0, v=0.0))
 folds = []
 for branch in (right, left):
     # which branch leans which way depends on the sign of a null vector (round-off): ask
-    lean = fempipe.tip_values(disc, branch.points[-1].q, np.pi)["theta_tip"]
+    lean = fempipe.compute_tip(disc, branch.points[-1].q, np.pi)["theta_tip"]
     direction = -1 if lean > 0 else 1
     arc = fempipe.continue_static(
         tilted,
@@ -57,7 +57,7 @@ print("folds at alpha =", ", ".join(f"{a:.6f}" for a in sorted(set(np.round(fold
 
 def tip(points: list) -> tuple[np.ndarray, np.ndarray]:
     """(parameter, theta(1)) along a branch."""
-    th = [fempipe.tip_values(disc, p.q, np.pi)["theta_tip"] for p in points]
+    th = [fempipe.compute_tip(disc, p.q, np.pi)["theta_tip"] for p in points]
     return np.array([p.value for p in points]), np.array(th)
 
 

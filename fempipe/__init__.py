@@ -6,12 +6,12 @@ the paper's sine modes, and the pipe in three dimensions.  The public names, by 
 users do (the API reference groups them alike):
 
 * the model: :class:`Params`, :class:`PipeSI`, :func:`parse_discretization`,
-  :class:`PipeModel`, :func:`shape`, :func:`tip_values`;
+  :class:`PipeModel`, :func:`shape`, :func:`compute_tip`;
 * statics (Eq. (31a)): :func:`solve_static`, :func:`solve_path`, :func:`continue_static`;
 * linear stability (Eqs. (31b)-(33)): :func:`compute_spectrum`, :func:`find_critical_velocity`
   (in and out of the plane), :func:`map_stability`;
 * dynamics: :func:`simulate`, :func:`find_attractor`, :func:`shoot`, :func:`continue_cycles`,
-  :func:`compute_bifurcation_diagram`; in three dimensions :class:`SpaceModel`,
+  :func:`compute_bifurcation_diagram`; in three dimensions :class:`PipeModel3D`,
   :func:`simulate_3d`, :func:`compute_out_of_plane_floquet`, :func:`find_whirl`;
 * studies: :func:`run_study`, :func:`compare_values` and the error estimates.
 
@@ -34,12 +34,12 @@ _LAZY: dict[str, str] = {
     "FiniteElement": "model.discretization",
     "Modal": "model.discretization",
     "parse_discretization": "model.discretization",
-    "PipeModel": "model.operators",
-    "OutOfPlaneModel": "model.out_of_plane",
-    "out_of_plane_model": "model.out_of_plane",
-    "OutOfPlaneMotion": "model.out_of_plane_motion",
-    "shape": "model.kinematics",
-    "tip_values": "model.kinematics",
+    "PipeModel": "model.plane.operators",
+    "OutOfPlaneModel": "model.out_of_plane.model",
+    "build_out_of_plane_model": "model.out_of_plane.model",
+    "OutOfPlaneMotion": "model.out_of_plane.motion",
+    "compute_shape": "model.kinematics",
+    "compute_tip": "model.kinematics",
     "ParamError": "core.errors",
     "SolverError": "core.errors",
     # Statics: equilibria, paths and branches (Eq. (31a))
@@ -78,17 +78,18 @@ _LAZY: dict[str, str] = {
     "compute_cycle_diagram": "analyses.periodic",
     "CycleDiagram": "analyses.periodic",
     "compute_bifurcation_diagram": "analyses.bifurcation",
+    "compute_parametric_chart": "analyses.parametric",
     # The pipe in three dimensions
-    "SpaceModel": "model.space",
-    "simulate_3d": "analyses.space",
-    "Motion3D": "analyses.space",
-    "compute_out_of_plane_floquet": "analyses.space",
-    "classify_3d": "analyses.space",
-    "compute_diagram_3d": "analyses.space.diagram",
-    "hopf_normal_form_3d": "analyses.space",
+    "PipeModel3D": "model.three_d.model",
+    "simulate_3d": "analyses.three_d",
+    "Motion3D": "analyses.three_d",
+    "compute_out_of_plane_floquet": "analyses.three_d",
+    "classify_3d": "analyses.three_d",
+    "compute_diagram_3d": "analyses.three_d.diagram",
+    "hopf_normal_form_3d": "analyses.three_d",
     "HopfNormalForm": "analyses.stability.hopf",
-    "find_whirl": "analyses.space",
-    "Whirl": "analyses.space",
+    "find_whirl": "analyses.three_d",
+    "Whirl": "analyses.three_d",
     # Studies: convergence, a user's values against fempipe, error estimates
     "run_study": "studies.convergence",
     "ConvergenceStudy": "studies.convergence",
@@ -126,10 +127,10 @@ __all__ = [
     "parse_discretization",
     "PipeModel",
     "OutOfPlaneModel",
-    "out_of_plane_model",
+    "build_out_of_plane_model",
     "OutOfPlaneMotion",
-    "shape",
-    "tip_values",
+    "compute_shape",
+    "compute_tip",
     "ParamError",
     "SolverError",
     "solve_static",
@@ -164,7 +165,8 @@ __all__ = [
     "compute_cycle_diagram",
     "CycleDiagram",
     "compute_bifurcation_diagram",
-    "SpaceModel",
+    "compute_parametric_chart",
+    "PipeModel3D",
     "simulate_3d",
     "Motion3D",
     "compute_out_of_plane_floquet",
@@ -202,6 +204,7 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         find_attractor,
         shoot,
     )
+    from fempipe.analyses.parametric import compute_parametric_chart
     from fempipe.analyses.periodic import (
         CycleBranch,
         CycleDiagram,
@@ -209,16 +212,6 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         continue_cycles,
         find_hopf_points,
     )
-    from fempipe.analyses.space import (
-        Motion3D,
-        Whirl,
-        classify_3d,
-        compute_out_of_plane_floquet,
-        find_whirl,
-        hopf_normal_form_3d,
-        simulate_3d,
-    )
-    from fempipe.analyses.space.diagram import compute_diagram_3d
     from fempipe.analyses.stability import (
         StabilityInPlanes,
         StabilityResult,
@@ -239,13 +232,23 @@ if TYPE_CHECKING:  # static analysers and IDEs see the eager imports
         solve_static,
         switch_branch,
     )
+    from fempipe.analyses.three_d import (
+        Motion3D,
+        Whirl,
+        classify_3d,
+        compute_out_of_plane_floquet,
+        find_whirl,
+        hopf_normal_form_3d,
+        simulate_3d,
+    )
+    from fempipe.analyses.three_d.diagram import compute_diagram_3d
     from fempipe.core.errors import ParamError, SolverError
     from fempipe.model.discretization import FiniteElement, Modal, parse_discretization
-    from fempipe.model.kinematics import shape, tip_values
-    from fempipe.model.operators import PipeModel
-    from fempipe.model.out_of_plane import OutOfPlaneModel, out_of_plane_model
-    from fempipe.model.out_of_plane_motion import OutOfPlaneMotion
+    from fempipe.model.kinematics import compute_shape, compute_tip
+    from fempipe.model.out_of_plane.model import OutOfPlaneModel, build_out_of_plane_model
+    from fempipe.model.out_of_plane.motion import OutOfPlaneMotion
     from fempipe.model.params import Params, PipeSI
+    from fempipe.model.plane.operators import PipeModel
     from fempipe.studies.compare import Comparison, compare_values
     from fempipe.studies.convergence import (
         ConvergenceStudy,

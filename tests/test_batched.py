@@ -1,4 +1,4 @@
-"""The batched stage kernels of the pipe (fempipe.model.batched) equal the plain terms.
+"""The batched stage kernels of the pipe (fempipe.model.plane.batched) equal the plain terms.
 
 Every public kernel of :class:`StageKernels` (residual, Jacobians, dR/dv), the
 integration operators they use and the problem's choice between batched and
@@ -14,8 +14,8 @@ import pytest
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.analyses.dynamics import Radau, make_initial_state
 from fempipe.model import batched, dynamics_problem
-from fempipe.model.batched import StageKernels, integral_operators, projection_fields
 from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.plane.batched import StageKernels, integral_operators, projection_fields
 from fempipe.model.quadrature import LineQuadrature
 from fempipe.solvers.radau.contract import ImplicitSecondOrderProblem
 

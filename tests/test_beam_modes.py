@@ -20,7 +20,7 @@ from decimal import Decimal, localcontext
 import numpy as np
 import pytest
 
-from fempipe import FiniteElement, Modal, Params, PipeModel, find_critical_velocity, tip_values
+from fempipe import FiniteElement, Modal, Params, PipeModel, compute_tip, find_critical_velocity
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import (
@@ -191,7 +191,7 @@ def test_default_quadrature_resolves_the_modes_in_the_solution(n):
 
     def tips(disc):
         m = PipeModel(disc, CURVED)
-        t = tip_values(disc, solve_static(m, q0=solve_sagged(m).q, tol=1e-12).q, CURVED.alpha)
+        t = compute_tip(disc, solve_static(m, q0=solve_sagged(m).q, tol=1e-12).q, CURVED.alpha)
         return np.array([t["theta_tip"], t["X_tip"]])
 
     default = Modal(n, basis="beam")
@@ -289,7 +289,7 @@ def test_linear_frequencies_at_rest_are_exact():
 def _curved_tips(disc) -> np.ndarray:
     m = PipeModel(disc, CURVED)
     q = solve_static(m, q0=solve_sagged(m).q, tol=1e-12).q
-    t = tip_values(disc, q, CURVED.alpha)
+    t = compute_tip(disc, q, CURVED.alpha)
     return np.array([t["theta_tip"], t["X_tip"]])
 
 

@@ -229,8 +229,8 @@ def test_bifurcation_panels_name_the_papers_panel_only_for_the_papers_case():
     Z_g with (a)-(d) alpha = pi/4 ... pi; another case or inclination gets no 'cf.'."""
     import math
 
-    from fempipe.plotting.dynamics import paper_panel
     from fempipe.model.params import PAPER_CASE
+    from fempipe.plotting.dynamics import paper_panel
 
     p = dict(PAPER_CASE, end_mass=0.0, springs=[])
     keys = ("eta_tip", "X_tip", "Z_tip")

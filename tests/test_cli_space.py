@@ -99,7 +99,7 @@ def test_planar_simulate_warns_that_few_sine_modes_give_rough_3d_verdicts(capsys
 
 
 def test_rough_verdict_note_names_the_discretization_and_the_defect():
-    from fempipe.analyses.space.verdict import ROUGH_DEFECT, rough_verdict_note
+    from fempipe.analyses.three_d.verdict import ROUGH_DEFECT, rough_verdict_note
 
     assert rough_verdict_note("P3:8", 1.5e-5) is None
     assert rough_verdict_note("P3:8", None) is None
@@ -118,7 +118,7 @@ def fake_floquet(monkeypatch):
     """The out-of-plane monodromy replaced by a stand-in (its multiplier v - 5.6, so that
     it crosses 1 at v = 6.6), counting its calls: the plumbing without the ~2 s per orbit."""
     import fempipe.analyses.periodic.out_of_plane as oop
-    from fempipe.analyses.space import OutOfPlaneFloquet
+    from fempipe.analyses.three_d import OutOfPlaneFloquet
 
     calls = []
 

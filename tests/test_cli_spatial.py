@@ -2,7 +2,7 @@
 
 The pipe is round: beside the motion in the plane of its static state (the
 paper's Eq. (32)) each command analyses the motion out of it
-(:mod:`fempipe.model.out_of_plane`), and its verdicts and critical velocities are
+(:mod:`fempipe.model.out_of_plane.model`), and its verdicts and critical velocities are
 those of three dimensions; ``--planar`` gives the paper's planar output as
 before.  Small discretizations (four sine modes, P3:8) keep each run to
 seconds.  The paper's case at alpha = pi/2 loses stability out of the plane
@@ -118,8 +118,8 @@ def test_argand_marks_the_out_of_plane_loci():
 
     from fempipe.analyses.stability import trace_root_locus
     from fempipe.model.discretization import Modal
-    from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
+    from fempipe.model.plane.operators import PipeModel
     from fempipe.plotting.stability import plot_argand
 
     values = [0.0, 2.0, 4.0, 6.0]
@@ -219,12 +219,12 @@ def test_shapes_tell_the_out_of_plane_instability():
 def _shapes(values):
     from fempipe.analyses.statics import solve_path
     from fempipe.model.discretization import Modal
-    from fempipe.model.kinematics import shape
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.kinematics import compute_shape
     from fempipe.model.params import Params
+    from fempipe.model.plane.operators import PipeModel
 
     model = PipeModel(Modal(4), Params(alpha=math.pi / 2))
-    return [shape(model.disc, s.q, math.pi / 2) for s in solve_path(model, values)]
+    return [compute_shape(model.disc, s.q, math.pi / 2) for s in solve_path(model, values)]
 
 
 # ---------------------------------------------------------------------------
@@ -239,8 +239,8 @@ def test_stability_map_in_three_dimensions(capsys, tmp_path):
     the plane first at pi/2 (the library's find_critical_velocity); --planar as before."""
     from fempipe.analyses.stability import find_critical_velocity
     from fempipe.model.discretization import Modal
-    from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
+    from fempipe.model.plane.operators import PipeModel
 
     argv = ["stability-map", "--alphas", "0,pi/2", "--modal", "4", "--json", "--quiet"]
     d = run_json(capsys, [*argv, "--out", str(tmp_path)])

@@ -206,7 +206,7 @@ def test_out_writes_the_four_files(td_out):
 
 def test_out_shapes_read_back_with_meshio(td_out):
     """The VTU shapes agree with the JSON tip values, which come from a different code
-    path (Gauss sums in tip_values vs sampled shapes): tip theta to 1e-12 (both exact for
+    path (Gauss sums in compute_tip vs sampled shapes): tip theta to 1e-12 (both exact for
     the FE interpolant), tip position to 1e-12 (same quadrature rule, different sums)."""
     import meshio
 

@@ -15,8 +15,8 @@ import scipy.linalg as sla
 
 from fempipe.core.companion import first_order_matrix, first_order_pencil
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 
 def _matrices(n: int = 7, seed: int = 3):

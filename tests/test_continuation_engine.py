@@ -64,8 +64,8 @@ def test_toy_and_package_problems_satisfy_the_protocol():
     from fempipe.analyses.periodic import OrbitProblem
     from fempipe.analyses.statics import StaticFamily
     from fempipe.model.discretization import parse_discretization
-    from fempipe.model.operators import PipeModel
     from fempipe.model.params import Params
+    from fempipe.model.plane.operators import PipeModel
 
     assert isinstance(circle(), ContinuationProblem)
     model = PipeModel(parse_discretization("P2:4"), Params(v=1.0))

@@ -231,7 +231,7 @@ def test_bench_convergence_vcr_quick_measures_the_orders():
     # against P3:16 computed directly (1e-9 bounds P3:16's own error, 2.5e-10).
     from fempipe.analyses.stability import find_critical_velocity
     from fempipe.model.discretization import FiniteElement
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     fine = find_critical_velocity(
         PipeModel(FiniteElement(16, 3), Params(alpha=np.pi / 2, beta=0.142, gamma=18.9, mu=5e-3)),

@@ -25,7 +25,7 @@ from fempipe.analyses.limit_cycle.tips import (
     TipTrace,
     tip_extrema,
 )
-from fempipe.model.kinematics import tip_values
+from fempipe.model.kinematics import compute_tip
 from fempipe.solvers.radau import C as RADAU_NODES
 from fempipe.solvers.radau import Radau, StepRecord
 
@@ -43,7 +43,7 @@ def _model(alpha: float) -> PipeModel:
 
 def _tips(q, alpha: float) -> dict:
     """The tip coordinates :data:`TIP_KEYS` of states q."""
-    tip = tip_values(DISC, q, alpha)
+    tip = compute_tip(DISC, q, alpha)
     return {k: tip[k] for k in TIP_KEYS}
 
 

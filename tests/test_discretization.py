@@ -78,14 +78,14 @@ def test_tip_values_closed_form_and_vectorized():
     """theta = c xi (represented by P3): eta(1) = (1 - cos c)/c,
     X_g(1) = (sin(c + alpha) - sin alpha)/c, Z_g(1) = (cos alpha - cos(c + alpha))/c,
     varsigma(1) = sin(c)/c - 1 (Eqs. (5), (28)); m states at once give the same."""
-    from fempipe.model.kinematics import tip_values, tip_velocity
+    from fempipe.model.kinematics import compute_tip, tip_velocity
 
     disc, alpha = FiniteElement(4, 3), 0.7
     cs = np.array([0.4, -1.3, 2.0])
     Q = np.array([_interpolate(disc, lambda x, c=c: c * x) for c in cs])
-    many = tip_values(disc, Q, alpha)
+    many = compute_tip(disc, Q, alpha)
     for i, c in enumerate(cs):
-        one = tip_values(disc, Q[i], alpha)
+        one = compute_tip(disc, Q[i], alpha)
         exact = {
             "theta_tip": c,
             "varsigma_tip": np.sin(c) / c - 1.0,

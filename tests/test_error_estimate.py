@@ -24,7 +24,7 @@ from fempipe.analyses.stability.hopf import EVENT_KEYS as HOPF_KEYS
 from fempipe.analyses.statics import solve_path
 from fempipe.cli import main
 from fempipe.io import read_csv
-from fempipe.model.kinematics import tip_values
+from fempipe.model.kinematics import compute_tip
 from fempipe.model.projection import project
 from fempipe.studies.error_estimate import (
     SAFETY_FACTOR,
@@ -90,7 +90,7 @@ SIMULATE_KEYS = {
     "max_nontrivial_multiplier",
     "t_transient",
     "message",
-    # the planar equilibrium's verdict out of the plane (fempipe.analyses.space)
+    # the planar equilibrium's verdict out of the plane (fempipe.analyses.three_d)
     "stable_out_of_plane",
     "stable_3d",
     "steps",
@@ -231,7 +231,7 @@ def test_match_events_by_branch_type_and_mode_not_position():
 def _static_reference(alpha, vs):
     disc = FiniteElement(64, 3)
     sols = solve_path(PipeModel(disc, Params(alpha=alpha)), vs)
-    return [tip_values(disc, s.q, alpha) for s in sols]
+    return [compute_tip(disc, s.q, alpha) for s in sols]
 
 
 @pytest.mark.parametrize(
@@ -527,7 +527,7 @@ def test_static_estimate_bounds_the_error_with_a_spring_inside_an_element(capsys
     # P3 on 70 elements has a node at 0.3: the reference converges as h^6.
     ref_disc = FiniteElement(70, 3)
     (sol,) = solve_path(PipeModel(ref_disc, p), [0.0, 2.0])[-1:]
-    ref = tip_values(ref_disc, sol.q, p.alpha)
+    ref = compute_tip(ref_disc, sol.q, p.alpha)
     (pt,) = d["points"]
     for k in TIP:
         assert_bounds(pt[k + "_error"], pt[k], ref[k], k)
@@ -546,7 +546,7 @@ def test_library_attaches_the_static_estimates_of_the_cli(capsys):
     seen = []
     points = []
     for sol in sols:
-        tip = tip_values(model.disc, sol.q, math.pi / 2)
+        tip = compute_tip(model.disc, sol.q, math.pi / 2)
         row = {k: tip[k] for k in STATIC_TIP_KEYS}
         row["tip_drop"] = tip["X_tip"] - math.cos(math.pi / 2)
         points.append(row)

@@ -8,7 +8,7 @@
   is compared with Pillow's own per-frame palette;
 * :class:`fempipe.io.trajectory.CenterlineSampler` and
   :func:`fempipe.io.meshes.write_vtu_frames` must give the numbers and bytes of
-  :func:`fempipe.model.kinematics.shape` and meshio, bit for bit;
+  :func:`fempipe.model.kinematics.compute_shape` and meshio, bit for bit;
 * a writer that fails leaves no file, half or whole, behind.
 """
 
@@ -123,14 +123,14 @@ def test_gif_frames_within_the_palette_error(frames, tmp_path):
     ids=["P3:5", "modal:4", "modal-beam:3"],
 )
 def test_sampler_is_shape_bit_for_bit(disc):
-    """CenterlineSampler gives the arrays of kinematics.shape and disc.evaluate exactly."""
+    """CenterlineSampler gives the arrays of kinematics.compute_shape and disc.evaluate exactly."""
     from fempipe.io.trajectory import CenterlineSampler, frame_data
-    from fempipe.model.kinematics import shape
+    from fempipe.model.kinematics import compute_shape
 
     _, q, qdot, alpha = _orbit(disc, n=5)
     sampler = CenterlineSampler(disc, alpha, points_per_cell=4)
     for k in range(q.shape[0]):
-        ref, got = shape(disc, q[k], alpha, points_per_cell=4), sampler.shape(q[k], qdot[k])
+        ref, got = compute_shape(disc, q[k], alpha, points_per_cell=4), sampler.shape(q[k], qdot[k])
         for f in ("xi", "theta", "varsigma", "eta", "X_g", "Z_g"):
             np.testing.assert_array_equal(getattr(got, f), getattr(ref, f), err_msg=f)
         np.testing.assert_array_equal(sampler.evaluate(qdot[k]), disc.evaluate(qdot[k], ref.xi))

@@ -28,8 +28,8 @@ from matplotlib.text import Annotation, Text  # noqa: E402
 from mpl_toolkits.mplot3d.axis3d import Axis as Axis3D  # noqa: E402
 
 from fempipe.model.discretization import Modal  # noqa: E402
-from fempipe.model.operators import PipeModel  # noqa: E402
 from fempipe.model.params import PAPER_CASE, Params  # noqa: E402
+from fempipe.model.plane.operators import PipeModel  # noqa: E402
 
 #: Overlap below this many square pixels is anti-aliasing, not a collision.
 _MIN_OVERLAP_PX2 = 2.0
@@ -153,13 +153,13 @@ def _model(alpha: float, v: float = 0.0) -> PipeModel:
 def _shapes_figure():
     from fempipe.analyses.stability import linearly_stable
     from fempipe.analyses.statics import solve_path
-    from fempipe.model.kinematics import shape
+    from fempipe.model.kinematics import compute_shape
     from fempipe.plotting.static import plot_shapes
 
     model = _model(math.pi / 2)
     values = np.linspace(0.0, 10.0, 11)
     sols = solve_path(model, values, parameter="v")
-    shapes = [shape(model.disc, s.q, model.params.alpha) for s in sols]
+    shapes = [compute_shape(model.disc, s.q, model.params.alpha) for s in sols]
     stable = [
         linearly_stable(model.with_params(replace(model.params, v=v)), s.q)
         for v, s in zip(values, sols, strict=True)

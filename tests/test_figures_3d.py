@@ -24,8 +24,8 @@ import pytest  # noqa: E402
 from test_figures import small_texts, text_faults  # noqa: E402
 
 from fempipe.model.discretization import discretization_from_name  # noqa: E402
-from fempipe.model.operators import PipeModel  # noqa: E402
 from fempipe.model.params import Params  # noqa: E402
+from fempipe.model.plane.operators import PipeModel  # noqa: E402
 
 #: The inclination in radians, as "alpha = 1.571" or "$\alpha$ = 1.047" (not followed by °).
 RADIANS = re.compile(r"(alpha|α)\$?\s*=\s*-?\d+(\.\d+)?(?![\d.°])")
@@ -72,12 +72,12 @@ def _motion():
     """A swing in and out of the plane about the (unstable) static state at v = 8.2, one
     period per unit tau, with the Motion3D fields the figures read."""
     from fempipe.analyses.dynamics import make_initial_state
-    from fempipe.analyses.space.motion import Motion3D, out_of_plane_perturbation
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.space import SpaceModel, planar_state
+    from fempipe.analyses.three_d.motion import Motion3D, out_of_plane_perturbation
+    from fempipe.model.three_d.model import PipeModel3D, planar_state
 
     model = PipeModel(discretization_from_name("P2:4"), Params(v=8.2, **CASE))
-    space = SpaceModel(model.disc, model.params)
+    space = PipeModel3D(model.disc, model.params)
     q_s = solve_static(model).q
     q1, _ = make_initial_state(model, 1, 0.08, q_static=q_s)
     a, b = out_of_plane_perturbation(space, q_s, 1, 0.12)
@@ -98,8 +98,8 @@ def test_tip_orbit_views_are_framed_on_the_motion():
     """tip_orbit.png: each view has equal scales, encloses the tip's path and is at least
     half filled by it in both directions (the clamp at the origin left it 18 % of the width);
     X_g points down the page; the unstable static state is open and grey."""
-    from fempipe.plotting.space import plot_tip_orbit
     from fempipe.plotting.static import UNSTABLE_COLOR
+    from fempipe.plotting.three_d import plot_tip_orbit
 
     space, motion, static = _motion()
     fig = plot_tip_orbit(space, motion, static=static)
@@ -132,10 +132,10 @@ def test_tip_orbit_views_are_framed_on_the_motion():
 def test_snapshots_are_framed_on_the_pipe_with_a_tau_colorbar():
     """snapshots_3d.png: the 3-D box fits the pipe (the fixed +-1 cube left it small), equal
     scales, X_g down, a colour bar labelled tau for the snapshots' colours."""
-    from fempipe.plotting.space import plot_space_snapshots
+    from fempipe.plotting.three_d import plot_snapshots_3d
 
     space, motion, static = _motion()
-    fig = plot_space_snapshots(space, motion, static=static)
+    fig = plot_snapshots_3d(space, motion, static=static)
     try:
         ax = fig.axes[0]
         pts = np.vstack([np.column_stack(ln.get_data_3d()) for ln in ax.get_lines()])
@@ -185,10 +185,10 @@ def test_spatial_branches_show_every_event_and_v_cr(case):
     another (marks at one place differ in size, the smaller on top), a vertical line at
     v_cr with its value in the legend; the two planes' close first losses (alpha = 60°)
     in an inset where the dash-dot piece between them shows."""
-    from fempipe.plotting.spatial import plot_spatial_branches
+    from fempipe.plotting.planes import plot_branches_in_planes
 
     result = _spatial(**case)
-    ax = plot_spatial_branches(result)
+    ax = plot_branches_in_planes(result)
     fig = ax.figure
     try:
         marks = _event_marks(ax)

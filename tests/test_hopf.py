@@ -31,8 +31,8 @@ from fempipe.analyses.stability.linear import linearized_matrices
 from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.dynamics_problem import PipeDynamics, acceleration
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 
 # ---------------------------------------------------------------- generic --

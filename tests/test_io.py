@@ -19,7 +19,7 @@ from fempipe.io import (
     write_json,
     write_shapes,
 )
-from fempipe.model.kinematics import shape
+from fempipe.model.kinematics import compute_shape
 
 
 def test_json_is_numpy_safe_and_strict(tmp_path):
@@ -99,7 +99,7 @@ def two_shapes():
     for v in (0.0, 3.0):
         p = Params(alpha=np.pi / 2, v=v)
         sol = solve_static(PipeModel(disc, p))
-        out.append(shape(disc, sol.q, p.alpha))
+        out.append(compute_shape(disc, sol.q, p.alpha))
     return out
 
 

@@ -12,7 +12,7 @@ from fempipe.analyses.limit_cycle import ShootingError, find_attractor, recurren
 from fempipe.analyses.stability import compute_spectrum, growth_rate, linearly_stable
 from fempipe.analyses.statics import solve_static
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import tip_values
+from fempipe.model.kinematics import compute_tip
 
 # P3 on 4 elements: v_cr within 1e-4 of the converged value (the stability
 # tests) and cheap enough for the default run.
@@ -77,7 +77,7 @@ def test_equilibrium_below_v_cr():
     att = find_attractor(m)
     assert att.kind == "equilibrium"
     q = solve_static(m).q
-    tip = tip_values(DISC, q, 0.0)
+    tip = compute_tip(DISC, q, 0.0)
     assert att.tip["X_tip"] == [pytest.approx(tip["X_tip"])] * 2
 
 

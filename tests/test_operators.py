@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from fempipe.model.discretization import FiniteElement, Modal
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.quadrature import LineQuadrature
 
 DISCS = {

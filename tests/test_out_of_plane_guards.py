@@ -1,13 +1,13 @@
 """The out-of-plane multipliers of a moving planar state against Liouville's identity.
 
 For the linear equation M psi_ddot + C(tau) psi_dot + K(tau) psi = 0 about any planar
-motion (:class:`fempipe.model.out_of_plane_motion.OutOfPlaneMotion`), the first-order
+motion (:class:`fempipe.model.out_of_plane.motion.OutOfPlaneMotion`), the first-order
 form has the trace -tr(M^-1 C(tau)), so the monodromy over [0, T] has the determinant
 
     prod rho_k = exp(-\\int_0^T tr(M^-1 C(tau)) dtau)      (Liouville).
 
 The left side comes from the integrator's sensitivity of the variational problem
-(:func:`fempipe.analyses.space.floquet.compute_out_of_plane_floquet`); the right side is a
+(:func:`fempipe.analyses.three_d.floquet.compute_out_of_plane_floquet`); the right side is a
 quadrature of the damping matrices along the same planar motion, integrated again here.
 Liouville's identity holds for every motion, not only a cycle, so a short transient of
 large amplitude serves.  The sine modes keep every multiplier well above the round-off
@@ -22,12 +22,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
+from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
 from fempipe.model.discretization import Modal
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane_motion import OutOfPlaneMotion
+from fempipe.model.out_of_plane.motion import OutOfPlaneMotion
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import Radau
 from fempipe.solvers.radau.tableau import A
 

@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 from fempipe.analyses.limit_cycle import find_attractor
-from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
+from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators
-from fempipe.model.out_of_plane_motion import OutOfPlaneMotion, OutOfPlaneVariation
+from fempipe.model.out_of_plane.model import OutOfPlaneOperators
+from fempipe.model.out_of_plane.motion import OutOfPlaneMotion, OutOfPlaneVariation
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 
 VARIANTS = Params(alpha=0.7, v=3.0, mu=0.05, end_mass=0.3, external_damping=0.2)
 
@@ -44,12 +44,12 @@ def test_at_rest_the_matrices_are_the_static_models():
 
 def test_base_force_is_the_3d_models_force_field():
     """G_0 of a moving planar state: every term (inertia, Coriolis, jet, gravity, end mass,
-    external damping) against :meth:`SpaceModel.force_field` at the same planar state."""
+    external damping) against :meth:`PipeModel3D.force_field` at the same planar state."""
     model = PipeModel(FiniteElement(5, 3), VARIANTS)
     q, qd, qdd = _state(model, 2)
     motion = OutOfPlaneMotion(model)
     G0 = motion.base_force(motion.base(q, qd, qdd))
-    space = SpaceModel(model.disc, VARIANTS)
+    space = PipeModel3D(model.disc, VARIANTS)
     fl = space.fields(planar_state(q), planar_state(qd), planar_state(qdd))
     G = np.asarray(space.force_field(fl))[:, :, 0]
     assert np.abs(G[:, 2]).max() == 0.0

@@ -1,9 +1,9 @@
-"""The motion out of the plane: fempipe.model.out_of_plane against the strong form and its symmetries.
+"""The motion out of the plane: fempipe.model.out_of_plane.model against the strong form and its symmetries.
 
 :mod:`fempipe.validation.lateral` solves the out-of-plane problem in strong
 form (the deflection w on C^1 spectral elements about ``solve_bvp``'s static
 state), sharing no code with fempipe's discretizations, quadrature, operators
-or :mod:`fempipe.model.out_of_plane`.  Every reference below is an independent
+or :mod:`fempipe.model.out_of_plane.model`.  Every reference below is an independent
 computation (the strong form, the classical straight-pipe theory, the
 in-plane problem) or an exact symmetry; no number is pasted.
 """
@@ -19,9 +19,9 @@ import scipy.linalg as sla
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
+from fempipe.model.out_of_plane.model import OutOfPlaneOperators, build_out_of_plane_model
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.validation import classical, lateral
 
 PAPER = {"beta": 0.142, "gamma": 18.9}
@@ -92,7 +92,7 @@ def test_straight_pipe_out_of_plane_equals_in_plane(disc, alpha, gamma):
     """A straight round pipe has no preferred plane: same K, C, M and eigenvalues."""
     p = Params(alpha=alpha, beta=0.142, gamma=gamma, v=2.0, hysteretic_damping=0.01, **VARIANTS)
     m = PipeModel(disc, p)
-    mo = out_of_plane_model(m)
+    mo = build_out_of_plane_model(m)
     q = np.zeros(disc.n)
     for a, b in zip(mo.linearization(q), m.linearization(q), strict=True):
         b = b.toarray() if hasattr(b, "toarray") else np.asarray(b)

@@ -32,8 +32,8 @@ from fempipe.analyses.statics import solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import parse_discretization
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 # P2:4 flutters at v_H = 6.3398 (alpha = 0); the requested values straddle it, and
 # 6.345 lies between v_H and the first orbit of the continuation (a step passes it).
@@ -174,7 +174,7 @@ def test_hopf_points_carry_the_equilibrium_where_the_branch_starts(run, capsys):
     the diagram's points): the straight pipe at alpha = 0, and at alpha = pi/2
     the static solution at v_H solved on its own (the figures mark the Hopf
     point there, also when v_H lies outside the requested v)."""
-    from fempipe.model.kinematics import tip_values
+    from fempipe.model.kinematics import compute_tip
 
     d, _ = run
     (h,) = d["hopf_points"]
@@ -195,7 +195,7 @@ def test_hopf_points_carry_the_equilibrium_where_the_branch_starts(run, capsys):
     assert 6.0 < h["v"] < 7.0
     disc = parse_discretization(modal=2)
     m = PipeModel(disc, Params(alpha=math.pi / 2, v=h["v"]))
-    tip = tip_values(disc, solve_static(m).q, math.pi / 2)
+    tip = compute_tip(disc, solve_static(m).q, math.pi / 2)
     for k in ("eta_tip", "X_tip", "Z_tip"):
         assert h[k][0] == h[k][1]
         assert abs(h[k][0] - tip[k]) < 1e-8, k
@@ -239,7 +239,9 @@ def test_interrupted_branch_resumes_to_the_same_points(run, tmp_path):
 
     values = [float(v) for v in VALUES.split(",")]
     with pytest.raises(StopError):
-        compute_cycle_diagram(model, values, store_dir=tmp_path, progress=stop_after_three, rtol=1e-5)
+        compute_cycle_diagram(
+            model, values, store_dir=tmp_path, progress=stop_after_three, rtol=1e-5
+        )
     branch = json.loads((tmp_path / "a00-H1.json").read_text())
     assert 3 <= len(branch["points"]) < 8 and branch["end_reason"] is None
     diag = compute_cycle_diagram(model, values, store_dir=tmp_path, rtol=1e-5)

@@ -13,12 +13,12 @@ import pytest
 
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import out_of_plane_model
+from fempipe.model.out_of_plane.model import build_out_of_plane_model
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
-from fempipe.model.space_chart import _Point, fiber_direction, tangent
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.chart import _Point, fiber_direction, tangent
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 from fempipe.solvers.radau import Radau
 
 VARIANTS = Params(alpha=0.7, v=3.0, mu=0.05, end_mass=0.3, external_damping=0.2)
@@ -96,7 +96,7 @@ def test_planar_tangent_is_the_planar_models():
 def test_planar_states_give_the_planar_weak_form(disc):
     rng = np.random.default_rng(3)
     q, qd, qdd = rng.normal(size=(3, disc.n))
-    planar, space = PipeModel(disc, VARIANTS), SpaceModel(disc, VARIANTS)
+    planar, space = PipeModel(disc, VARIANTS), PipeModel3D(disc, VARIANTS)
     n = disc.n
     r2 = planar.residual(q, qd, qdd)
     r3 = space.residual(planar_state(q), planar_state(qd), planar_state(qdd))
@@ -115,7 +115,7 @@ def test_planar_states_give_the_planar_weak_form(disc):
 @pytest.mark.parametrize("disc", [FiniteElement(3, 2), Modal(3)], ids=lambda d: d.name)
 def test_jacobians_match_finite_differences(disc):
     rng = np.random.default_rng(4)
-    model = SpaceModel(disc, VARIANTS)
+    model = PipeModel3D(disc, VARIANTS)
     U, Ud, Udd = rng.normal(scale=0.6, size=(3, model.n))
     exact = model.jacobians(U, Ud, Udd)
     for k in range(3):
@@ -144,7 +144,7 @@ def _fit(disc, f) -> np.ndarray:
 
 
 def _run(model, U0, Ud0, t_end, rtol=1e-9):
-    problem = SpaceDynamics(model) if isinstance(model, SpaceModel) else PipeDynamics(model)
+    problem = PipeDynamics3D(model) if isinstance(model, PipeModel3D) else PipeDynamics(model)
     stepper = Radau(problem, U0, Ud0, rtol=rtol)
     for _ in stepper.steps(t_end):
         pass
@@ -157,7 +157,7 @@ def test_planar_motion_follows_the_planar_solver():
     q0 = _fit(disc, lambda x: 0.3 * np.sin(np.pi * x / 2))
     qd0 = _fit(disc, lambda x: -0.5 * x**2)
     planar = _run(PipeModel(disc, params), q0, qd0, 0.4)
-    space = _run(SpaceModel(disc, params), planar_state(q0), planar_state(qd0), 0.4)
+    space = _run(PipeModel3D(disc, params), planar_state(q0), planar_state(qd0), 0.4)
     n = disc.n
     assert np.array_equal(space.q[n:], np.zeros(2 * n))
     assert np.abs(space.q[:n] - planar.q).max() < 1e-7 * np.abs(planar.q).max()
@@ -166,7 +166,7 @@ def test_planar_motion_follows_the_planar_solver():
 
 def test_mirror_symmetry_out_of_the_plane():
     disc = FiniteElement(3, 2)
-    model = SpaceModel(disc, Params(alpha=1.1, v=5.0, mu=0.01))
+    model = PipeModel3D(disc, Params(alpha=1.1, v=5.0, mu=0.01))
     n = disc.n
     U0 = np.concatenate(
         [_fit(disc, lambda x: 0.4 * x), _fit(disc, lambda x: 0.1 * x), 0 * _fit(disc, lambda x: x)]
@@ -191,7 +191,7 @@ def test_hanging_pipe_is_isotropic():
     errors = []
     for n_el in (2, 4):
         disc = FiniteElement(n_el, 3)
-        model = SpaceModel(disc, Params(alpha=0.0, v=4.0, mu=0.01))
+        model = PipeModel3D(disc, Params(alpha=0.0, v=4.0, mu=0.01))
         n = disc.n
         f = _fit(disc, lambda x: 0.8 * np.sin(np.pi * x / 2))
         zero = np.zeros(n)
@@ -217,7 +217,7 @@ def _balance(model, U0, Ud0, t_end, rtol):
     weights = A[-1]  # Radau IIA is stiffly accurate: the last row of A are the weights
 
     E0 = model.energy(U0, Ud0)
-    stepper = Radau(SpaceDynamics(model), U0, Ud0, rtol=rtol)
+    stepper = Radau(PipeDynamics3D(model), U0, Ud0, rtol=rtol)
     work, drift, balance = 0.0, 0.0, 0.0
     for _, q, p in stepper.steps(t_end):
         rec = stepper.last
@@ -238,7 +238,7 @@ def test_energy_is_conserved_without_flow_and_damping():
     drifts = []
     for n_el in (2, 4):
         disc = FiniteElement(n_el, 3)
-        model = SpaceModel(disc, Params(alpha=0.5, v=0.0, mu=0.0, gamma=10.0))
+        model = PipeModel3D(disc, Params(alpha=0.5, v=0.0, mu=0.0, gamma=10.0))
         n = disc.n
         s = _fit(disc, lambda x: np.sin(np.pi * x / 2))
         Ud0 = np.r_[0.5 * s, np.zeros(n), -0.2 * s]
@@ -253,7 +253,7 @@ def test_energy_is_conserved_without_flow_and_damping():
 
 def test_power_balance_with_flow_and_damping():
     disc = FiniteElement(3, 3)
-    model = SpaceModel(disc, Params(alpha=1.2, v=3.0, mu=0.02, end_mass=0.2, external_damping=0.3))
+    model = PipeModel3D(disc, Params(alpha=1.2, v=3.0, mu=0.02, end_mass=0.2, external_damping=0.3))
     n = disc.n
     s = _fit(disc, lambda x: np.sin(np.pi * x / 2))
     drift, balance, E0, _ = _balance(
@@ -273,7 +273,7 @@ def test_shooting_a_planar_cycle_in_3d_gives_the_planar_cycle():
     att = find_attractor(planar)
     cycle = shoot(PipeDynamics(planar), att.cycle.q0, att.cycle.qdot0, att.cycle.period, rtol=1e-8)
     space = shoot(
-        SpaceDynamics(SpaceModel(disc, planar.params)),
+        PipeDynamics3D(PipeModel3D(disc, planar.params)),
         planar_state(cycle.q0),
         planar_state(cycle.qdot0),
         cycle.period,
@@ -307,11 +307,11 @@ def test_linearization_out_of_the_plane_is_the_out_of_plane_models():
         params = Params(alpha=1.2, v=4.0, mu=0.05)
         planar = PipeModel(disc, params)
         q = solve_static(planar).q
-        ref = _first_order_eigenvalues(*out_of_plane_model(planar).linearization(q))
+        ref = _first_order_eigenvalues(*build_out_of_plane_model(planar).linearization(q))
         ref = ref[np.argsort(np.abs(ref))][:6]
         n = disc.n
         out = np.r_[n : 3 * n]
-        blocks = [J[np.ix_(out, out)] for J in SpaceModel(disc, params).jacobians(planar_state(q))]
+        blocks = [J[np.ix_(out, out)] for J in PipeModel3D(disc, params).jacobians(planar_state(q))]
         lam = _first_order_eigenvalues(*blocks)
         lam = lam[np.abs(lam + 75.0) > 40.0]  # the gauge's roots, near -50 and -100
         errors.append(max(np.min(np.abs(lam - r)) / abs(r) for r in ref))

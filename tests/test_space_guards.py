@@ -1,10 +1,10 @@
 """The 3-D model's terms against the kinematics alone: each term's virtual power, the gauge.
 
 At random non-planar states (U, U', U'') every term of the weak form
-(:mod:`fempipe.model.space`) is isolated as a difference of residuals in its own
+(:mod:`fempipe.model.three_d.model`) is isolated as a difference of residuals in its own
 parameter (sigma, mu, v, beta, Gamma, gamma, v_dot, the gauge's weight) and tested
 with U' (its power).  The references are computed here from the chart alone
-(:func:`fempipe.model.space_chart.tangent`, the fields evaluated on a fine uniform
+(:func:`fempipe.model.three_d.chart.tangent`, the fields evaluated on a fine uniform
 grid of their own): the centerline velocity and acceleration by central differences in
 tau along U + tau U' + tau^2 U''/2, the co-rotational curvature rate from a
 twist-free (parallel-transported) section frame.  None of the model's term methods,
@@ -26,11 +26,11 @@ import numpy as np
 import pytest
 
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.out_of_plane import out_of_plane_model
+from fempipe.model.out_of_plane.model import build_out_of_plane_model
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel
-from fempipe.model.space_chart import _Point, fiber_direction, tangent
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.chart import _Point, fiber_direction, tangent
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D
 
 M_FINE = 20000
 EPS = 1e-5
@@ -126,7 +126,7 @@ DISC = FiniteElement(4, 3)
 
 
 def _residual(U, Ud, Udd, v_dot=0.0, weight=None, **params):
-    model = SpaceModel(DISC, Params(**{**BASE, **params}))
+    model = PipeModel3D(DISC, Params(**{**BASE, **params}))
     if weight is not None:
         model.gauge_weight = weight
     return model.residual(U, Ud, Udd, v_dot)
@@ -224,7 +224,7 @@ def test_gauge_term_is_its_equation():
     computed here from the chart's fiber by central differences in tau, on a Gauss rule
     of its own (8 points a cell; the model has 6)."""
     U, Ud, Udd = _state(DISC, 5)
-    model = SpaceModel(DISC, Params(**BASE))
+    model = PipeModel3D(DISC, Params(**BASE))
     w_g = model.gauge_weight
     got = _residual(U, Ud, Udd) - _residual(U, Ud, Udd, weight=0.0)
 
@@ -263,23 +263,23 @@ def _out_of_plane_roots(n_el: int, params: Params, k: int = 6):
     """The k roots of least modulus of the out-of-plane model about the static state, the
     discretization and the state."""
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     disc = FiniteElement(n_el, 3)
     planar = PipeModel(disc, params)
     q = solve_static(planar).q
-    lam = _first_order_eigenvalues(*out_of_plane_model(planar).linearization(q))
+    lam = _first_order_eigenvalues(*build_out_of_plane_model(planar).linearization(q))
     return lam[np.argsort(np.abs(lam))][:k], disc, q, planar
 
 
 def _space_block_roots(disc, params, q) -> np.ndarray:
     """The roots of the out-of-plane block (fields a, b) of the 3-D Jacobians about the
     planar state q, without the gauge's (near -50 and -100)."""
-    from fempipe.model.space import planar_state
+    from fempipe.model.three_d.model import planar_state
 
     n = disc.n
     out = np.r_[n : 3 * n]
-    J = SpaceModel(disc, params).jacobians(planar_state(q))
+    J = PipeModel3D(disc, params).jacobians(planar_state(q))
     lam = _first_order_eigenvalues(*(X[np.ix_(out, out)] for X in J))
     return lam[np.abs(lam + 75.0) > 40.0]
 
@@ -327,7 +327,7 @@ def test_hanging_pipe_out_of_plane_roots_are_the_in_plane_ones():
 
 
 # --------------------------------------------------------- a conservation law of the motion --
-def _angular_momentum(model: SpaceModel, U, Ud, eps: float = 1e-6) -> float:
+def _angular_momentum(model: PipeModel3D, U, Ud, eps: float = 1e-6) -> float:
     """e_1 . \\int_0^1 r x r_dot: the angular momentum about the vertical through the clamp
     (alpha = 0: gravity along e_1), from the chart's tangents (r_dot by central differences)."""
     t = model.tangents(U)[:, :, 0]
@@ -352,13 +352,13 @@ def test_angular_momentum_about_the_vertical_is_conserved():
     drifts = {}
     for n_el in (2, 3):
         disc = FiniteElement(n_el, 3)
-        model = SpaceModel(disc, Params(alpha=0.0, v=0.0, mu=0.0, gamma=10.0))
+        model = PipeModel3D(disc, Params(alpha=0.0, v=0.0, mu=0.0, gamma=10.0))
         P = disc.Phi.toarray()
         s = np.linalg.lstsq(P, np.sin(np.pi * disc.quad.x / 2), rcond=None)[0]
         zero = np.zeros_like(s)
         U0, Ud0 = np.r_[0.6 * s, zero, zero], np.r_[zero, zero, -0.8 * s]
         L0 = _angular_momentum(model, U0, Ud0)
-        stepper = Radau(SpaceDynamics(model), U0, Ud0, rtol=1e-9)
+        stepper = Radau(PipeDynamics3D(model), U0, Ud0, rtol=1e-9)
         drift = max(abs(_angular_momentum(model, q, p) - L0) for _, q, p in stepper.steps(0.25))
         assert np.abs(stepper.q[disc.n :]).max() > 0.05  # the motion left the plane
         drifts[n_el] = drift / abs(L0)
@@ -372,7 +372,7 @@ def test_weak_form_vanishes_on_the_whirl_of_the_rotating_frame_bvp():
     """The whirl of the hanging pipe at v = 7 (tip radius 0.24, every nonlinear term at
     large amplitude), solved as a steady state of the rotating frame by scipy's solve_bvp
     (:mod:`fempipe.validation.whirl_bvp`, no code shared with the weak form), turned rigidly
-    at its rate omega and put on P3:N (:func:`fempipe.analyses.space.whirl.whirl_state`,
+    at its rate omega and put on P3:N (:func:`fempipe.analyses.three_d.whirl.whirl_state`,
     the rates by five-point differences in tau): the residual of the 3-D weak form without
     its gauge (which the physics does not see) falls with the mesh.
 
@@ -382,7 +382,7 @@ def test_weak_form_vanishes_on_the_whirl_of_the_rotating_frame_bvp():
     does not fall."""
     from test_space_whirl import _flutter_mode
 
-    from fempipe.analyses.space.whirl import whirl_state
+    from fempipe.analyses.three_d.whirl import whirl_state
     from fempipe.validation.whirl_bvp import solve_whirl_bvp
 
     lam, slope = _flutter_mode()
@@ -396,7 +396,7 @@ def test_weak_form_vanishes_on_the_whirl_of_the_rotating_frame_bvp():
 
     rel = {}
     for n_el in (4, 8):
-        model = SpaceModel(FiniteElement(n_el, 3), Params(alpha=0.0, v=7.0))
+        model = PipeModel3D(FiniteElement(n_el, 3), Params(alpha=0.0, v=7.0))
         model.gauge_weight = 0.0
         h = 2e-3
         U2, U1, U0, V1, V2 = (turned(model, k * h) for k in (2, 1, 0, -1, -2))

@@ -1,4 +1,4 @@
-"""simulate_3d's classification (fempipe.analyses.space.motion)."""
+"""simulate_3d's classification (fempipe.analyses.three_d.motion)."""
 
 from __future__ import annotations
 
@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 
-from fempipe.analyses.space.motion import REST_TIME, _settled, simulate_3d, two_frequencies
+from fempipe.analyses.three_d.motion import REST_TIME, _settled, simulate_3d, two_frequencies
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 
 
 def test_rest_counts_from_the_last_crossing():
@@ -49,7 +49,7 @@ def test_equilibrium_after_a_crossing():
     mode = np.linalg.solve(Phi.T @ (w[:, None] * Phi), Phi.T @ (w * np.sin(0.5 * math.pi * x)))
     start = (planar_state(-0.02 * mode), planar_state(0.5 * mode))
     r = simulate_3d(model, initial=start, t_max=15.0, use_shooting=False)
-    space = SpaceModel(disc, model.params)
+    space = PipeModel3D(disc, model.params)
     eta = space.tip_coordinates(r.U)["eta_tip"]
     assert eta[0] < 0.0 < eta[-1]  # the section (eta_tip + Y_tip = 0 here) was crossed
     assert r.kind == "equilibrium"
@@ -82,18 +82,18 @@ def test_a_growing_out_of_plane_oscillation_needs_no_step_halving():
     """The integrator's simplified Newton iteration (mass matrix frozen at a step's start)
     converges on non-planar motion at the steps its error control asks for: the horizontal
     pipe above its out-of-plane v_cr, from the static state perturbed in and out of its plane.
-    A heavy gauge (weight 1 instead of SpaceModel.gauge_weight, model docstring) failed 103
+    A heavy gauge (weight 1 instead of PipeModel3D.gauge_weight, model docstring) failed 103
     times in the 168 steps of this run."""
-    from fempipe.analyses.space.motion import _perturbed_static_state
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.space_dynamics import SpaceDynamics
+    from fempipe.analyses.three_d.motion import _perturbed_static_state
+    from fempipe.model.three_d.dynamics import PipeDynamics3D
     from fempipe.solvers.radau import Radau
 
     model = PipeModel(FiniteElement(4, 3), Params(alpha=math.pi / 2, v=10.0))
-    space = SpaceModel(model.disc, model.params)
+    space = PipeModel3D(model.disc, model.params)
     U0, Ud0 = _perturbed_static_state(model, space, solve_static(model).q, 1, 0.01, 0.01)
     n = model.disc.n
-    stepper = Radau(SpaceDynamics(space), U0, Ud0, rtol=1e-6)
+    stepper = Radau(PipeDynamics3D(space), U0, Ud0, rtol=1e-6)
     for _ in stepper.steps(0.3):
         pass
     assert np.abs(stepper.q[n:]).max() > 1e-3  # out of the plane

@@ -1,5 +1,5 @@
 """The onset of the non-planar oscillation of the horizontal pipe: the Hopf normal form of
-the 3-D model (fempipe.analyses.space.onset) against independent computations.
+the 3-D model (fempipe.analyses.three_d.onset) against independent computations.
 
 * v_cr of the 3-D Jacobian against the linear out-of-plane model's (another model of the
   same linear problem: the two differ by their discretization errors, which fall with the
@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from fempipe.analyses.limit_cycle import shoot
-from fempipe.model.space import SpaceModel
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D
 from fempipe.validation import space_runs
 
 ALPHA = math.pi / 2
@@ -40,9 +40,9 @@ def near_onset_cycle(delta: float):
     on = onset(3)
     nf = on.normal_form
     v = nf.v + delta
-    model = SpaceModel(on.planar.disc, replace(on.planar.params, v=v))
+    model = PipeModel3D(on.planar.disc, replace(on.planar.params, v=v))
     U0, Ud0, T = nf.initial_state(v)
-    return shoot(SpaceDynamics(model), U0, Ud0, T, rtol=1e-6, tol=1e-5)
+    return shoot(PipeDynamics3D(model), U0, Ud0, T, rtol=1e-6, tol=1e-5)
 
 
 def test_v_cr_of_the_3d_jacobian_is_the_out_of_plane_models():

@@ -17,15 +17,15 @@ import pytest
 from fempipe.core.dual import Dual, matvec, pullback
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 from fempipe.solvers.radau import Radau
 
 PARAMS = Params(alpha=0.7, v=3.0, mu=0.05, end_mass=0.3, external_damping=0.2)
 
 
 def test_batched_stage_jacobians_equal_one_by_one():
-    model = SpaceModel(FiniteElement(3, 2), PARAMS)
+    model = PipeModel3D(FiniteElement(3, 2), PARAMS)
     rng = np.random.default_rng(7)
     Q, P, A = rng.normal(scale=0.6, size=(3, 3, model.n))
     batch = model.jacobians(Q, P, A)
@@ -35,7 +35,7 @@ def test_batched_stage_jacobians_equal_one_by_one():
 
 
 def test_velocity_derivative_is_the_difference_quotient_in_v():
-    model = SpaceModel(FiniteElement(3, 2), PARAMS)
+    model = PipeModel3D(FiniteElement(3, 2), PARAMS)
     rng = np.random.default_rng(8)
     Q, P, A = rng.normal(scale=0.6, size=(3, 2, model.n))
     v, dv = PARAMS.v, 1.0
@@ -43,12 +43,12 @@ def test_velocity_derivative_is_the_difference_quotient_in_v():
     down = model.with_params(replace(PARAMS, v=v - dv)).residual(Q, P, A)
     # R is quadratic in v: the central difference is exact up to round-off
     fd = (up - down) / (2 * dv)
-    exact = SpaceDynamics(model).parameter_derivative(Q, P, A)
+    exact = PipeDynamics3D(model).parameter_derivative(Q, P, A)
     assert np.abs(exact - fd).max() < 1e-12 * np.abs(up).max()
 
 
 def _sensitivity(model, U0, Ud0, split: bool):
-    problem = SpaceDynamics(model)
+    problem = PipeDynamics3D(model)
     if not split:
         problem.decoupled_blocks = None
     stepper = Radau(problem, U0, Ud0, h_fixed=2e-3, sensitivity=True, velocity_sensitivity=True)
@@ -58,7 +58,7 @@ def _sensitivity(model, U0, Ud0, split: bool):
 
 
 def test_split_sensitivity_at_planar_states_equals_the_full_one():
-    model = SpaceModel(FiniteElement(3, 2), PARAMS)
+    model = PipeModel3D(FiniteElement(3, 2), PARAMS)
     nt = model.n_theta
     rng = np.random.default_rng(9)
     q, qd = rng.normal(scale=0.5, size=(2, nt))
@@ -77,7 +77,7 @@ def test_split_sensitivity_at_planar_states_equals_the_full_one():
 
 
 def test_split_is_not_used_away_from_planar_states():
-    model = SpaceModel(FiniteElement(3, 2), PARAMS)
+    model = PipeModel3D(FiniteElement(3, 2), PARAMS)
     rng = np.random.default_rng(10)
     U0, Ud0 = rng.normal(scale=0.3, size=(2, model.n))
     split = _sensitivity(model, U0, Ud0, True)
@@ -133,7 +133,7 @@ def test_matvec_carries_the_derivatives_of_the_broadcast_product():
 
 def test_space_cycle_benchmark_is_registered():
     from fempipe.bench import available
-    from fempipe.bench.space import bench_space_cycle, bench_space_nonplanar_cycle
+    from fempipe.bench.three_d import bench_space_cycle, bench_space_nonplanar_cycle
 
     assert available()["space_cycle"] is bench_space_cycle
     assert available()["space_nonplanar_cycle"] is bench_space_nonplanar_cycle

@@ -1,5 +1,5 @@
 """The whirl of the hanging pipe: the rotating-frame BVP (fempipe.validation.whirl_bvp) and the
-periodic orbit of the 3-D model (fempipe.analyses.space.whirl)."""
+periodic orbit of the 3-D model (fempipe.analyses.three_d.whirl)."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from fempipe.analyses.space.whirl import find_whirl, whirl_state
 from fempipe.analyses.stability.eigensolvers import quadratic_eigen
 from fempipe.analyses.stability.linear import linearized_matrices
+from fempipe.analyses.three_d.whirl import find_whirl, whirl_state
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.model import PipeModel3D
 from fempipe.validation.whirl_bvp import solve_whirl_bvp
 
 
@@ -92,7 +92,7 @@ def test_bvp_power_balance_and_rigidity(flutter):
 
 
 def test_curvature_rate_of_a_turning_shape():
-    """SpaceModel.curvature_rate of a non-planar shape turning rigidly at omega about e_1 is
+    """PipeModel3D.curvature_rate of a non-planar shape turning rigidly at omega about e_1 is
     k = -omega t' (the twist-free frame anchored at the clamp turns at omega (e_1 - t)), not
     zero: to the fit's error, falling with h."""
     omega = 3.0
@@ -103,7 +103,7 @@ def test_curvature_rate_of_a_turning_shape():
 
     errs = []
     for ne in (2, 4):
-        sp = SpaceModel(FiniteElement(ne, 3), Params(alpha=0.0, v=5.0))
+        sp = PipeModel3D(FiniteElement(ne, 3), Params(alpha=0.0, v=5.0))
         U, Ud = whirl_state(sp, shape, omega)
         fl = sp.fields(U, Ud)
         k = sp.curvature_rate(fl)[:, :, 0]
@@ -119,7 +119,7 @@ def test_radius_is_a_time_average_on_unequal_steps():
     steps ten times shorter where the radius is large the plain mean of the samples is 4.0e-4
     off (half the modulation's amplitude eps R0), the time average only by the trapezoidal
     rule's O(step^2) error (1.2e-7 on these coarse steps); the variation is 2 eps."""
-    from fempipe.analyses.space.whirl import _radius_statistics
+    from fempipe.analyses.three_d.whirl import _radius_statistics
 
     R0, eps, omega = 0.38, 2e-3, 24.5
     T = 2 * math.pi / omega
@@ -145,9 +145,9 @@ def test_tip_turn_is_right_handed_about_e1_at_both_axisymmetric_inclinations(alp
     """A bent shape turned by +phi about e_1 (from e_2 towards e_3) for phi from 0 to 2 pi:
     the tip's angle grows by 2 pi at alpha = 0 and at alpha = pi (where the files' Z_tip is
     -eta_tip, and the angle of (Z_tip, Y_tip) would fall by 2 pi), at a constant distance."""
-    from fempipe.analyses.space.whirl import tangent_state, tip_turn
+    from fempipe.analyses.three_d.whirl import tangent_state, tip_turn
 
-    sp = SpaceModel(FiniteElement(3, 3), Params(alpha=alpha, v=5.0))
+    sp = PipeModel3D(FiniteElement(3, 3), Params(alpha=alpha, v=5.0))
     th = 0.8 * np.sin(0.5 * np.pi * sp.x)
     base = np.column_stack([np.cos(th), np.sin(th), np.zeros_like(th)])
     states = []
@@ -168,7 +168,7 @@ def test_whirl_by_shooting_matches_the_bvp(flutter):
     pair of multipliers of modulus 1.40 on P3:3): the planar cycle is the attractor."""
     lam, slope = flutter
     b = solve_whirl_bvp(10.0, hopf=(6.33, abs(lam.imag)), slope=slope, tol=1e-9)
-    sp = SpaceModel(FiniteElement(3, 3), Params(alpha=0.0, v=10.0))
+    sp = PipeModel3D(FiniteElement(3, 3), Params(alpha=0.0, v=10.0))
     U, Ud = whirl_state(sp, lambda x: b.sol(x)[3:6], b.omega)
     w = find_whirl(sp, U, Ud, b.period)
     assert abs(w.omega - b.omega) < 0.1
@@ -188,15 +188,15 @@ def test_guess_from_a_planar_cycle_turns():
     from dataclasses import replace
 
     from fempipe.analyses.limit_cycle.attractor import find_attractor
-    from fempipe.analyses.space.whirl import whirl_guess_from_cycle
-    from fempipe.model.space import planar_state
+    from fempipe.analyses.three_d.whirl import whirl_guess_from_cycle
+    from fempipe.model.three_d.model import planar_state
 
     disc = FiniteElement(3, 3)
     params = Params(alpha=0.0, v=6.5)
     cycle = find_attractor(PipeModel(disc, params)).cycle
     lift = np.vectorize(planar_state, signature="(n)->(m)")
     cycle3 = replace(cycle, orbit_q=lift(cycle.orbit_q), orbit_qdot=lift(cycle.orbit_qdot))
-    space = SpaceModel(disc, params)
+    space = PipeModel3D(disc, params)
     radius, angle = [], []
     for tau in np.linspace(0.0, cycle.period, 5)[:4]:
         U, _, T = whirl_guess_from_cycle(space, cycle3, tau)

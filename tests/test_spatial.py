@@ -15,9 +15,13 @@ from fempipe.analyses.stability import analyse_stability, find_critical_velocity
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.cli import main
 from fempipe.model.discretization import FiniteElement, Modal
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators, in_plane_model, out_of_plane_model
+from fempipe.model.out_of_plane.model import (
+    OutOfPlaneOperators,
+    build_in_plane_model,
+    build_out_of_plane_model,
+)
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 0.005}
 
@@ -91,7 +95,7 @@ def test_straight_pipe_out_of_plane_equals_in_plane(disc):
     )
     model = PipeModel(disc, p)
     q = np.zeros(disc.n)
-    out = out_of_plane_model(model)
+    out = build_out_of_plane_model(model)
     for a, b in zip(model.linearization(q), out.linearization(q), strict=True):
         assert np.abs(a - b).max() <= 1e-13 * max(1.0, np.abs(a).max())
 
@@ -126,7 +130,7 @@ def test_neutral_rotation_mode_of_the_buckled_standing_pipe():
         mats = ops.matrices(q.q)
         resid.append(mats.neutral_residual)
         assert np.linalg.norm(mats.K @ mats.neutral) <= 1e-12 * np.linalg.norm(mats.K)
-        spec = compute_spectrum(out_of_plane_model(model), q.q)
+        spec = compute_spectrum(build_out_of_plane_model(model), q.q)
         k = int(np.argmin(np.abs(spec.lam)))
         assert abs(spec.lam[k]) <= 1e-9
         x = np.real(spec.vectors[:, k] / spec.vectors[np.argmax(np.abs(mats.neutral)), k])
@@ -220,11 +224,11 @@ def test_critical_error_estimate_keys(capsys):
 
 def test_with_params_keeps_the_plane():
     planar = PipeModel(FiniteElement(4, 2), Params(alpha=1.0))
-    model = out_of_plane_model(planar)
-    assert model.plane == "out" and out_of_plane_model(model) is model
+    model = build_out_of_plane_model(planar)
+    assert model.plane == "out" and build_out_of_plane_model(model) is model
     assert model.with_params(replace(model.params, v=2.0)).plane == "out"
-    back = in_plane_model(model)
-    assert type(back) is PipeModel and back.plane == "in" and in_plane_model(planar) is planar
+    back = build_in_plane_model(model)
+    assert type(back) is PipeModel and back.plane == "in" and build_in_plane_model(planar) is planar
     assert back.disc is planar.disc and back.params == planar.params
 
 
@@ -254,10 +258,10 @@ def test_planes_is_validated_and_chooses_the_result():
             find_critical_velocity(model, 2.0, planes=planes)
         assert err.value.field == "planes"
     with pytest.raises(ParamError, match="planes"):
-        trace_root_locus(out_of_plane_model(model), [0.0, 1.0])
+        trace_root_locus(build_out_of_plane_model(model), [0.0, 1.0])
     with pytest.raises(ParamError, match="'in', 'out'"):
         analyse_stability(model, 2.0, planes=("in", "z"))
-    out = find_critical_velocity(out_of_plane_model(model), 10.0, planes=("out",))
+    out = find_critical_velocity(build_out_of_plane_model(model), 10.0, planes=("out",))
     same = find_critical_velocity(model, 10.0, planes=("out",))
     assert isinstance(out, StabilityResult) and out.plane == "out"
     assert out.v_cr == same.v_cr

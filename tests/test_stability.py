@@ -29,7 +29,7 @@ from fempipe.analyses.stability import (
     trace_root_locus,
 )
 from fempipe.analyses.statics import solve_sagged
-from fempipe.model.kinematics import shape
+from fempipe.model.kinematics import compute_shape
 
 PAPER = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
 P3_16 = FiniteElement(16, 3)
@@ -471,7 +471,7 @@ def test_root_locus_tracks_modes_by_continuity():
 
 def test_mode_shape_global_frame_is_the_derivative_of_the_centerline():
     """The global-frame mode shape equals a finite difference of
-    kinematics.shape along the mode (step 1e-6: error ~1e-12 + 1e-10)."""
+    kinematics.compute_shape along the mode (step 1e-6: error ~1e-12 + 1e-10)."""
     model = PipeModel(P3_16, Params(alpha=np.pi / 4, v=3.0, **PAPER))
     spec = compute_spectrum(model)
     k = int(np.flatnonzero(spec.mode == 2)[0])
@@ -482,8 +482,8 @@ def test_mode_shape_global_frame_is_the_derivative_of_the_centerline():
     x = spec.vectors[:, k] * (ms.theta[j] / P3_16.evaluate(spec.vectors[:, k], ms.xi)[j])
     h = 1e-6
     for part, d in (("real", x.real), ("imag", x.imag)):
-        plus = shape(P3_16, spec.q + h * d, np.pi / 4)
-        minus = shape(P3_16, spec.q - h * d, np.pi / 4)
+        plus = compute_shape(P3_16, spec.q + h * d, np.pi / 4)
+        minus = compute_shape(P3_16, spec.q - h * d, np.pi / 4)
         dX = (plus.X_g - minus.X_g) / (2 * h)
         dZ = (plus.Z_g - minus.Z_g) / (2 * h)
         assert np.allclose(getattr(ms.X_g, part), dX, atol=1e-8)

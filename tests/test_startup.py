@@ -111,6 +111,7 @@ from fempipe.analyses.limit_cycle import (  # noqa: E402
     find_attractor,
     shoot,
 )
+from fempipe.analyses.parametric import compute_parametric_chart  # noqa: E402
 from fempipe.analyses.periodic import (  # noqa: E402
     CycleBranch,
     CycleDiagram,
@@ -118,16 +119,6 @@ from fempipe.analyses.periodic import (  # noqa: E402
     continue_cycles,
     find_hopf_points,
 )
-from fempipe.analyses.space import (  # noqa: E402
-    Motion3D,
-    Whirl,
-    classify_3d,
-    compute_out_of_plane_floquet,
-    find_whirl,
-    hopf_normal_form_3d,
-    simulate_3d,
-)
-from fempipe.analyses.space.diagram import compute_diagram_3d  # noqa: E402
 from fempipe.analyses.stability import (  # noqa: E402
     StabilityInPlanes,
     StabilityResult,
@@ -148,6 +139,16 @@ from fempipe.analyses.statics import (  # noqa: E402
     solve_static,
     switch_branch,
 )
+from fempipe.analyses.three_d import (  # noqa: E402
+    Motion3D,
+    Whirl,
+    classify_3d,
+    compute_out_of_plane_floquet,
+    find_whirl,
+    hopf_normal_form_3d,
+    simulate_3d,
+)
+from fempipe.analyses.three_d.diagram import compute_diagram_3d  # noqa: E402
 from fempipe.core.errors import (  # noqa: E402
     ParamError,
     SolverError,
@@ -158,24 +159,24 @@ from fempipe.model.discretization import (  # noqa: E402
     parse_discretization,
 )
 from fempipe.model.kinematics import (  # noqa: E402
-    shape,
-    tip_values,
+    compute_shape,
+    compute_tip,
 )
-from fempipe.model.operators import (  # noqa: E402
-    PipeModel,
-)
-from fempipe.model.out_of_plane import (  # noqa: E402
+from fempipe.model.out_of_plane.model import (  # noqa: E402
     OutOfPlaneModel,
-    out_of_plane_model,
+    build_out_of_plane_model,
 )
-from fempipe.model.out_of_plane_motion import (  # noqa: E402
+from fempipe.model.out_of_plane.motion import (  # noqa: E402
     OutOfPlaneMotion,
 )
 from fempipe.model.params import (  # noqa: E402
     Params,
     PipeSI,
 )
-from fempipe.model.space import SpaceModel  # noqa: E402
+from fempipe.model.plane.operators import (  # noqa: E402
+    PipeModel,
+)
+from fempipe.model.three_d.model import PipeModel3D  # noqa: E402
 from fempipe.studies.compare import (  # noqa: E402
     Comparison,
     compare_values,
@@ -200,10 +201,10 @@ PUBLIC = {
     "parse_discretization": parse_discretization,
     "PipeModel": PipeModel,
     "OutOfPlaneModel": OutOfPlaneModel,
-    "out_of_plane_model": out_of_plane_model,
+    "build_out_of_plane_model": build_out_of_plane_model,
     "OutOfPlaneMotion": OutOfPlaneMotion,
-    "shape": shape,
-    "tip_values": tip_values,
+    "compute_shape": compute_shape,
+    "compute_tip": compute_tip,
     "ParamError": ParamError,
     "SolverError": SolverError,
     "solve_static": solve_static,
@@ -238,7 +239,8 @@ PUBLIC = {
     "compute_cycle_diagram": compute_cycle_diagram,
     "CycleDiagram": CycleDiagram,
     "compute_bifurcation_diagram": compute_bifurcation_diagram,
-    "SpaceModel": SpaceModel,
+    "compute_parametric_chart": compute_parametric_chart,
+    "PipeModel3D": PipeModel3D,
     "simulate_3d": simulate_3d,
     "Motion3D": Motion3D,
     "compute_out_of_plane_floquet": compute_out_of_plane_floquet,

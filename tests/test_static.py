@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from fempipe import FiniteElement, Modal, Params, PipeModel, PipeSI, tip_values
+from fempipe import FiniteElement, Modal, Params, PipeModel, PipeSI, compute_tip
 from fempipe.analyses.statics import (
     NewtonError,
     continue_static,
@@ -22,7 +22,7 @@ TIP_KEYS = ("theta_tip", "eta_tip", "X_tip")
 def tips(disc, params, q0=None):
     model = PipeModel(disc, params)
     sol = solve_static(model, q0=q0) if q0 is not None else solve_sagged(model)
-    return np.array([tip_values(disc, sol.q, params.alpha)[k] for k in TIP_KEYS])
+    return np.array([compute_tip(disc, sol.q, params.alpha)[k] for k in TIP_KEYS])
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +91,7 @@ def hanging(alpha, gamma):
     disc = FiniteElement(nodes=nodes, degree=3)
     model = PipeModel(disc, Params(alpha=alpha, gamma=1.0, v=0.0))
     sol = solve_path(model, np.geomspace(1.0, gamma, 25), parameter="gamma")[-1]
-    return tip_values(disc, sol.q, alpha)
+    return compute_tip(disc, sol.q, alpha)
 
 
 @pytest.mark.parametrize("alpha", [np.pi / 2, 3 * np.pi / 4])
@@ -149,8 +149,8 @@ def test_standing_column_buckles_at_greenhill_load():
     assert abs(bif[0].value - gamma_cr) < 1e-6
     # Both buckled branches: mirror images (theta -> -theta symmetry at alpha = pi).
     b1, b2 = switch_branch(model, bif[0], "gamma", stop=12.0)
-    t1 = tip_values(disc, b1.points[-1].q, np.pi)["theta_tip"]
-    t2 = tip_values(disc, b2.points[-1].q, np.pi)["theta_tip"]
+    t1 = compute_tip(disc, b1.points[-1].q, np.pi)["theta_tip"]
+    t2 = compute_tip(disc, b2.points[-1].q, np.pi)["theta_tip"]
     assert b1.points[-1].value == b2.points[-1].value == 12.0
     assert abs(t1) > 0.5 and abs(t1 + t2) < 1e-8
     assert np.allclose(b1.points[-1].q, -b2.points[-1].q, atol=1e-8)
@@ -187,7 +187,7 @@ def test_buckled_branches_fold_and_reconnect_in_v():
     column = continue_static(model.with_params(Params(alpha=np.pi, gamma=0.0)), "gamma", stop=18.9)
     up, _ = switch_branch(model, column.bifurcations[0], "gamma", stop=18.9)
     buckled = up.points[-1]
-    assert abs(tip_values(disc, buckled.q, np.pi)["theta_tip"]) > 1.0
+    assert abs(compute_tip(disc, buckled.q, np.pi)["theta_tip"]) > 1.0
     branch = continue_static(model, "v", stop=6.0, q0=buckled.q, ds=0.2)
     assert branch.end_reason == "returned to v = 0"
     assert np.allclose(branch.points[-1].q, -buckled.q, atol=1e-7)

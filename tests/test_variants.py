@@ -24,9 +24,9 @@ from fempipe.analyses.dynamics import Radau, acceleration, make_initial_state, p
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.model.discretization import FiniteElement, Modal
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
 from fempipe.model.params import Params, PipeSI
+from fempipe.model.plane.operators import PipeModel
 from fempipe.validation.bvp import solve_static_bvp
 
 DISCS = {
@@ -296,7 +296,7 @@ def test_statics_against_strong_form_bvp(case):
     )
     disc = FiniteElement(32, 3)
     m = PipeModel(disc, Params(**c))
-    tip = tip_values(disc, solve_sagged(m, tol=1e-12).q, c["alpha"])
+    tip = compute_tip(disc, solve_sagged(m, tol=1e-12).q, c["alpha"])
     inside = any(x not in (0.5, 1.0) for _, x in c.get("springs", ()))
     tol = 1e-6 if inside else 1e-9
     assert abs(tip["theta_tip"] - ref.theta_tip) < tol
@@ -306,7 +306,7 @@ def test_statics_against_strong_form_bvp(case):
     assert abs(tip["varsigma_tip"] - ref.varsigma_tip) < tol
     # The variant matters: the paper's pipe is far from it.
     plain = Params(alpha=c["alpha"], gamma=c["gamma"], v=c["v"])
-    tip0 = tip_values(disc, solve_sagged(PipeModel(disc, plain)).q, c["alpha"])
+    tip0 = compute_tip(disc, solve_sagged(PipeModel(disc, plain)).q, c["alpha"])
     assert abs(tip0["theta_tip"] - ref.theta_tip) > 1e-2
 
 
@@ -439,7 +439,7 @@ def _slopes(errors, ns):
 def _static_tip(disc, c):
     m = PipeModel(disc, Params(**c))
     q = solve_static(m, q0=solve_sagged(m, tol=1e-10).q, tol=1e-12).q
-    return tip_values(disc, q, c["alpha"])["theta_tip"]
+    return compute_tip(disc, q, c["alpha"])["theta_tip"]
 
 
 @pytest.mark.parametrize(

@@ -46,7 +46,7 @@ from fempipe import FiniteElement, Params, PipeModel
 from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.statics import solve_path
 from fempipe.cli import main as cli_main
-from fempipe.model.kinematics import tip_values
+from fempipe.model.kinematics import compute_tip
 
 #: The paper's reference case.
 CASE = {"beta": 0.142, "gamma": 18.9, "mu": 5e-3}
@@ -125,7 +125,7 @@ def static_reference(alpha: float, vs: Sequence[float], n_elements: int = 128) -
     for n in (n_elements // 2, n_elements):
         disc = FiniteElement(n, 3)
         sols = solve_path(PipeModel(disc, Params(alpha=alpha, **CASE)), list(vs))
-        tips.append([tip_values(disc, s.q, alpha) for s in sols])
+        tips.append([compute_tip(disc, s.q, alpha) for s in sols])
     for k in STATIC_QUANTITIES:
         coarse = np.array([t[k] for t in tips[0]])
         fine = np.array([t[k] for t in tips[1]])

@@ -33,8 +33,8 @@ from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.hopf import normal_forms
 from fempipe.model.discretization import discretization_from_name
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 
 def onset_table(

@@ -112,7 +112,7 @@ print(f"observed order in N: {galerkin_order:.2f}")
 # parameter) shares no code with it.
 model = fempipe.PipeModel(fempipe.FiniteElement(16, 2), params)
 q = fempipe.solve_static(model).q
-X_fe = fempipe.tip_values(model.disc, q, params.alpha)["X_tip"]
+X_fe = fempipe.compute_tip(model.disc, q, params.alpha)["X_tip"]
 X_bvp = solve_static_bvp(params.alpha, params.gamma, params.v, tol=1e-11).X_tip
 print(f"X_g(1): fempipe P2:16 {X_fe:.10f}, solve_bvp {X_bvp:.10f}, difference {X_fe - X_bvp:.1e}")
 

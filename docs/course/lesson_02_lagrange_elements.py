@@ -158,7 +158,7 @@ params = fempipe.PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058, g=9.8, alpha=np.
 basis, u, its = static_fe(16, 2, params.alpha, params.gamma, params.v)
 ours = x_g.assemble(basis, theta=basis.interpolate(u), alpha=params.alpha)
 model = fempipe.PipeModel(fempipe.FiniteElement(16, 2), params)
-theirs = fempipe.tip_values(model.disc, fempipe.solve_static(model).q, params.alpha)["X_tip"]
+theirs = fempipe.compute_tip(model.disc, fempipe.solve_static(model).q, params.alpha)["X_tip"]
 X_bvp = solve_static_bvp(params.alpha, params.gamma, params.v, tol=1e-11).X_tip
 print(f"X_g(1): this lesson's P2:16 {ours:.12f} after {its} Newton steps, fempipe {theirs:.12f}")
 print(f"        scipy's solve_bvp on the strong form {X_bvp:.12f}: difference {ours - X_bvp:.1e}")

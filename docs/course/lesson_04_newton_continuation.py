@@ -69,7 +69,7 @@ right, left = fempipe.switch_branch(standing, pitchfork, "gamma", stop=12.0, ds=
 tilted = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi, gamma=12.0, v=0.0))
 # Which of the two branches leans which way depends on the sign of a null vector (round-off
 # decides it): take the one leaning to negative theta(1), so that alpha grows against it.
-lean = fempipe.tip_values(disc, right.points[-1].q, np.pi)["theta_tip"]
+lean = fempipe.compute_tip(disc, right.points[-1].q, np.pi)["theta_tip"]
 leaning = left if lean > 0 else right
 arc = fempipe.continue_static(
     tilted, "alpha", stop=np.pi + 0.8, q0=leaning.points[-1].q, ds=0.05, ds_max=0.1, direction=1
@@ -79,7 +79,7 @@ J_fold = tilted.with_params(fempipe.Params(alpha=fold.value, gamma=12.0, v=0.0))
 sv = np.linalg.svd(J_fold.static_jacobian(fold.q, dense=True), compute_uv=False)
 fold_singularity = sv[-1] / sv[0]
 print(f"fold at alpha = {fold.value:.8f}; sigma_min / sigma_max of dR/dq: {fold_singularity:.1e}")
-fold_tip = fempipe.tip_values(disc, fold.q, fold.value)["theta_tip"]
+fold_tip = fempipe.compute_tip(disc, fold.q, fold.value)["theta_tip"]
 print(f"theta(1) at the fold: {fold_tip:.4f}")
 natural_failed, reached = False, np.pi
 try:  # natural-parameter continuation: step alpha past the fold from the same branch
@@ -89,16 +89,16 @@ try:  # natural-parameter continuation: step alpha past the fold from the same b
             tilted.with_params(fempipe.Params(alpha=a, gamma=12.0, v=0.0)), q0=q_prev
         ).q
         reached = a
-    jumped = fempipe.tip_values(disc, q_prev, a)["theta_tip"]
+    jumped = fempipe.compute_tip(disc, q_prev, a)["theta_tip"]
     print(f"natural continuation past the fold landed on theta(1) = {jumped:.4f}: another branch")
 except fempipe.NewtonError as exc:
     natural_failed = True
     print(f"natural continuation failed past the fold (last solved alpha = {reached:.5f}): {exc}")
 
 fig, ax = plt.subplots(figsize=(5, 3.4), layout="constrained")
-th = [fempipe.tip_values(disc, p.q, p.value)["theta_tip"] for p in arc.points]
+th = [fempipe.compute_tip(disc, p.q, p.value)["theta_tip"] for p in arc.points]
 ax.plot([p.value for p in arc.points], th, "-")
-ax.plot(fold.value, fempipe.tip_values(disc, fold.q, fold.value)["theta_tip"], "ko")
+ax.plot(fold.value, fempipe.compute_tip(disc, fold.q, fold.value)["theta_tip"], "ko")
 ax.set_xlabel("alpha")
 ax.set_ylabel("theta(1)")
 ax.set_title(f"gamma = 12, v = 0, P3:8: fold at alpha = {fold.value:.4f}", fontsize=9)
@@ -178,7 +178,7 @@ show_or_save()  # run as a script: a window, or PNG files without a display
 #       imperfect = fempipe.PipeModel(disc, fempipe.Params(alpha=np.pi + 0.05, gamma=0.0, v=0.0))
 #       path = fempipe.continue_static(imperfect, "gamma", stop=12.0, ds=0.5, ds_max=1.0)
 #       n_special = len(path.special)
-#       answer = fempipe.tip_values(disc, path.points[-1].q, np.pi + 0.05)["theta_tip"]
+#       answer = fempipe.compute_tip(disc, path.points[-1].q, np.pi + 0.05)["theta_tip"]
 #       print(f"gamma = 12: theta(1) = {answer:.6f}, {n_special} special points")
 #       check("4.3", answer)
 #

@@ -32,7 +32,7 @@ reference = solve_static_bvp(alpha, params.gamma, params.v, tol=1e-11).X_tip
 def x_tip(disc: object) -> float:
     """X_g(1) of the static state on one discretization."""
     model = fempipe.PipeModel(disc, params)
-    return fempipe.tip_values(disc, fempipe.solve_static(model).q, alpha)["X_tip"]
+    return fempipe.compute_tip(disc, fempipe.solve_static(model).q, alpha)["X_tip"]
 
 
 results = {}
@@ -185,7 +185,7 @@ for s in study.series:
 #
 #       def x_heavy(disc):
 #           q_heavy = fempipe.solve_static(fempipe.PipeModel(disc, heavy)).q
-#           return fempipe.tip_values(disc, q_heavy, alpha)["X_tip"]
+#           return fempipe.compute_tip(disc, q_heavy, alpha)["X_tip"]
 #
 #       e_sine, e_beam = (
 #           [abs(x_heavy(fempipe.Modal(n, basis=b)) - ref_heavy) for n in (16, 32)]

@@ -20,7 +20,7 @@ import numpy as np
 from fempipe.analyses.periodic.out_of_plane import cycle_verdict, equilibrium_verdict
 from fempipe.core.errors import SolverError
 from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .dynamics import IntegrationError, make_initial_state
 from .limit_cycle import Attractor, LimitCycle, ShootingError, find_attractor, shoot

@@ -14,7 +14,7 @@ import scipy.sparse.linalg as spla
 
 from fempipe.analyses.statics import solve_static
 from fempipe.model.dynamics_problem import PipeDynamics, acceleration
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
 __all__ = [

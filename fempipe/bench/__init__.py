@@ -37,7 +37,7 @@ BENCHMARK_MODULES: tuple[str, ...] = (
     "fempipe.bench.bifurcation",
     "fempipe.bench.hopf",
     "fempipe.bench.output",
-    "fempipe.bench.space",
+    "fempipe.bench.three_d",
     "fempipe.bench.parametric",
 )
 

@@ -21,8 +21,8 @@ from fempipe.analyses.stability import (
 )
 from fempipe.bench.harness import PAPER, best_time, in_turns, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 #: Seconds allowed for the v_cr of ``stability_vcr``.
 VCR_TARGET_S = 3.0

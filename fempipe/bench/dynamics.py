@@ -16,8 +16,8 @@ from fempipe.analyses.bifurcation import compute_bifurcation_diagram
 from fempipe.analyses.limit_cycle import find_attractor
 from fempipe.bench.harness import best_time, child_json, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 
 def _disc(spec: str):

@@ -19,8 +19,8 @@ from fempipe.analyses.stability import analyse_stability
 from fempipe.analyses.stability.hopf import normal_forms
 from fempipe.bench.harness import in_turns, register
 from fempipe.model.discretization import DEFAULT_FE, discretization_from_name
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 
 @register("hopf")

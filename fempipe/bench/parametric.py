@@ -16,8 +16,8 @@ from fempipe.analyses.parametric import compute_parametric_chart
 from fempipe.analyses.stability import find_critical_velocity
 from fempipe.bench.harness import best_time, register
 from fempipe.model.discretization import DEFAULT_FE, parse_discretization
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 #: CPU seconds allowed for one region (threshold and boundary at 10 amplitudes).
 REGION_TARGET_S = 30.0

@@ -19,8 +19,8 @@ from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.bench.harness import child_json, register
 from fempipe.core import parallel
 from fempipe.model.discretization import discretization_from_name
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.validation.classical import StraightPipe
 from fempipe.validation.classical import critical_velocity as classical_critical_velocity
 

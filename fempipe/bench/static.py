@@ -15,9 +15,9 @@ import numpy as np
 from fempipe.analyses.statics import continue_static, solve_path
 from fempipe.bench.harness import PAPER, TEXIER_DORBOLO, best_time, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, parse_discretization
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
 from fempipe.model.params import Params, PipeSI
+from fempipe.model.plane.operators import PipeModel
 
 
 def _fit_exponent(n: np.ndarray, t: np.ndarray) -> float:
@@ -30,8 +30,8 @@ def _path_case(name: str, params, disc, values: list[float], repeats: int) -> di
     t_path, sols = best_time(lambda: solve_path(model, values), repeats)
     t_arc, branch = best_time(lambda: continue_static(model, "v", stop=values[-1]), repeats)
     last = sols[-1]
-    tip = tip_values(disc, last.q, params.alpha)
-    tip_arc = tip_values(disc, branch.points[-1].q, params.alpha)
+    tip = compute_tip(disc, last.q, params.alpha)
+    tip_arc = compute_tip(disc, branch.points[-1].q, params.alpha)
     return {
         "case": name,
         "discretization": disc.name,

@@ -131,7 +131,7 @@ def _on_progress(bar):
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.bifurcation import compute_bifurcation_diagram
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     common.refuse_hysteretic(args, "bifurcation")
     setup = common.setup_from_args(args)
@@ -214,7 +214,7 @@ def _run_continuation(args: argparse.Namespace, setup, alphas) -> int:
     """``--method continuation``."""
     from fempipe.analyses.periodic import compute_cycle_diagram
     from fempipe.core.errors import SolverError
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     flow_opt = common.flow_option(args)
     if len(set(setup.v)) < 2:
@@ -264,8 +264,8 @@ def _refuse_3d(args: argparse.Namespace) -> None:
 
 def _run_3d(args: argparse.Namespace, setup) -> int:
     """``--3d``: the attractors of the 3-D model swept against v."""
-    from fempipe.analyses.space.diagram import compute_diagram_3d
-    from fempipe.model.operators import PipeModel
+    from fempipe.analyses.three_d.diagram import compute_diagram_3d
+    from fempipe.model.plane.operators import PipeModel
 
     _refuse_3d(args)
     total = _check_work(args, setup, None)

@@ -60,7 +60,7 @@ def step_budget(v_min: float, v_max: float, ds_max: float) -> int:
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.stability import PLANES, analyse_stability
     from fempipe.analyses.stability.hopf import decorate_events
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     setup = common.setup_from_args(args)
     flow_opt = common.flow_option(args)
@@ -159,9 +159,9 @@ def _write(output: reporting.Output, result: dict, res) -> None:
     for r in rows:
         r["eigenvalue_re"], r["eigenvalue_im"] = r.pop("eigenvalue")
     if hasattr(res, "in_plane"):
-        from fempipe.plotting.spatial import plot_spatial_branches
+        from fempipe.plotting.planes import plot_branches_in_planes
 
-        ax = plot_spatial_branches(res)
+        ax = plot_branches_in_planes(res)
     else:
         ax = plot_branches(res)
     output.json("critical.json", result)
@@ -171,8 +171,8 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 
 def _out_of_plane_forms(result: dict, model) -> dict:
     """``{(branch, v): keys}`` of the primary branch's flutters out of the plane: the 3-D
-    model's Hopf normal form (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`)."""
-    from fempipe.analyses.space.onset import out_of_plane_event_keys
+    model's Hopf normal form (:func:`fempipe.analyses.three_d.onset.out_of_plane_event_keys`)."""
+    from fempipe.analyses.three_d.onset import out_of_plane_event_keys
 
     return {
         ("primary", float(ev["v"])): out_of_plane_event_keys(model, float(ev["v"]))

@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
 
     from fempipe.analyses.parametric import compute_parametric_chart
     from fempipe.model.discretization import Modal
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     setup = common.setup_from_args(args, need_flow=False)
     if len(setup.v) != 1:

@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.dynamics import PulsatingFlow, make_initial_state, simulate
     from fempipe.analyses.limit_cycle import find_attractor
     from fempipe.analyses.statics import solve_static
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     common.refuse_hysteretic(args, "simulate")
     setup = common.setup_from_args(args)
@@ -206,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
             bar.update(100 - advance.done)
         result = _result(setup, traj, att, wall_time, args)
         if att is not None and not args.planar:
-            from fempipe.analyses.space import classify_3d
+            from fempipe.analyses.three_d import classify_3d
 
             result.update(classify_3d(model, att, rtol=shoot_rtol * 1e-2))
         if args.error_estimate:
@@ -226,14 +226,14 @@ def run(args: argparse.Namespace) -> int:
 def _result(setup: common.Setup, traj, att, wall_time: float, args: argparse.Namespace) -> dict:
     """The JSON of the run: the attractor (or the forced response), the steps, SI values."""
     from fempipe.analyses.limit_cycle import TIP_KEYS
-    from fempipe.model.kinematics import tip_values
+    from fempipe.model.kinematics import compute_tip
 
     params, disc, sigma, omega = setup.params, setup.disc, args.sigma, args.omega
     result = setup.to_dict()
     result["params"]["v"] = params.v
     if att is None:
         half = traj.t >= 0.5 * traj.t[-1]
-        tc = tip_values(disc, traj.q[half], params.alpha)
+        tc = compute_tip(disc, traj.q[half], params.alpha)
         result.update(
             {
                 "attractor": "forced",
@@ -399,9 +399,9 @@ TIP3_COLUMNS = ("tau", "eta_tip", "X_tip", "Z_tip", "Y_tip")
 
 def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
     """``--3d``: the 3-D model from the static state perturbed in and out of the plane
-    (:func:`fempipe.analyses.space.simulate_3d`), ``"model": "3d"``."""
-    from fempipe.analyses.space import simulate_3d
-    from fempipe.model.operators import PipeModel
+    (:func:`fempipe.analyses.three_d.simulate_3d`), ``"model": "3d"``."""
+    from fempipe.analyses.three_d import simulate_3d
+    from fempipe.model.plane.operators import PipeModel
 
     if args.sigma > 0:
         raise CLIError("--sigma", "a pulsating flow is not available with --3d (use sigma = 0)")
@@ -436,14 +436,14 @@ def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
 
 def _write_3d(output: reporting.Output, result: dict, model, motion) -> None:
     reporting.agg()
-    from fempipe.analyses.space.verdict import equilibrium_verdict
     from fempipe.analyses.stability import linearly_stable
     from fempipe.analyses.statics import solve_static
-    from fempipe.io.space_trajectory import write_space_trajectory
-    from fempipe.model.space import SpaceModel, planar_state
-    from fempipe.plotting.space import plot_space_snapshots, plot_tip_orbit
+    from fempipe.analyses.three_d.verdict import equilibrium_verdict
+    from fempipe.io.trajectory_3d import write_trajectory_3d
+    from fempipe.model.three_d.model import PipeModel3D, planar_state
+    from fempipe.plotting.three_d import plot_snapshots_3d, plot_tip_orbit
 
-    space = SpaceModel(model.disc, model.params)
+    space = PipeModel3D(model.disc, model.params)
     q = solve_static(model).q  # the static state and its 3-D verdict, for the figures
     static = planar_state(q), equilibrium_verdict(model, q, linearly_stable(model, q))["stable_3d"]
     output.json("simulate.json", result)
@@ -454,12 +454,12 @@ def _write_3d(output: reporting.Output, result: dict, model, motion) -> None:
     output.csv("tip.csv", rows, TIP3_COLUMNS)
     keep = np.unique(np.linspace(0, motion.t.size - 1, min(400, motion.t.size)).round().astype(int))
     output.record(
-        write_space_trajectory(output.path("trajectory.pvd"), space, motion.t[keep], motion.U[keep])
+        write_trajectory_3d(output.path("trajectory.pvd"), space, motion.t[keep], motion.U[keep])
     )
     output.record(output.path("trajectory"))
     for name, plot in (
         ("tip_orbit.png", plot_tip_orbit),
-        ("snapshots_3d.png", plot_space_snapshots),
+        ("snapshots_3d.png", plot_snapshots_3d),
     ):
         # tight: a 3-D axes' labels reach beyond the box the layout gives it
         output.figure(name, plot(space, motion, static=static), dpi=130, bbox_inches="tight")

@@ -48,7 +48,7 @@ def _modes(text: str) -> int | None:
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.stability import PLANES, trace_root_locus
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     setup = common.setup_from_args(args)
     n_modes = args.modes

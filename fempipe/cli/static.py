@@ -75,8 +75,8 @@ def _continuation_values(args: argparse.Namespace, setup: common.Setup) -> tuple
 
 def run(args: argparse.Namespace) -> int:
     from fempipe.analyses.statics import NewtonError, solve_path
-    from fempipe.model.kinematics import shape
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.kinematics import compute_shape
+    from fempipe.model.plane.operators import PipeModel
 
     setup = common.setup_from_args(args)
     pipe, disc = setup.pipe, setup.disc
@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             result = _with_estimates(result, model, sols, parameter, pipe, bar)
 
     def write(output: reporting.Output) -> None:
-        shapes = [shape(disc, sol.q, sol.params.alpha) for sol in sols]
+        shapes = [compute_shape(disc, sol.q, sol.params.alpha) for sol in sols]
         _write(output, result, shapes, values, parameter, pipe)
 
     reporting.deliver(args, result, write=write, text=lambda: _print(result, parameter, pipe))
@@ -155,22 +155,22 @@ def _stability(model, q, planar: bool = False) -> dict:
     """``stable`` in three dimensions (stable in both planes; unstable if unstable in either;
     else None) and each plane's verdict; with ``planar`` the in-plane ``stable`` alone."""
     from fempipe.analyses.stability import linearly_stable
-    from fempipe.model.out_of_plane import out_of_plane_model
+    from fempipe.model.out_of_plane.model import build_out_of_plane_model
 
     inp = linearly_stable(model, q)
     if planar:
         return {"stable": inp}
-    out = linearly_stable(out_of_plane_model(model), q)
+    out = linearly_stable(build_out_of_plane_model(model), q)
     both = False if False in (inp, out) else None if None in (inp, out) else True
     return {"stable": both, "stable_in_plane": inp, "stable_out_of_plane": out}
 
 
 def _point(disc, sol, parameter: str, pipe) -> dict:
     """One row of the results: tip values, Newton diagnostics, SI values with an SI pipe."""
-    from fempipe.model.kinematics import tip_values
+    from fempipe.model.kinematics import compute_tip
 
     p = sol.params
-    tip = tip_values(disc, sol.q, p.alpha)
+    tip = compute_tip(disc, sol.q, p.alpha)
     row: dict = {"v": p.v}
     if parameter != "v":
         row[parameter] = getattr(p, parameter)

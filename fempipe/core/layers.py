@@ -15,7 +15,7 @@ __all__ = ["FACADE", "LAYERS", "layer_of"]
 
 #: (layer name, module prefixes) in rank order, lowest first.  A module belongs
 #: to the layer of its longest matching prefix (the prefix itself or a module
-#: below it: ``fempipe.model`` holds ``fempipe.model.operators``).
+#: below it: ``fempipe.model`` holds ``fempipe.model.plane.operators``).
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("core", ("fempipe.core",)),
     ("model", ("fempipe.model",)),
@@ -24,14 +24,14 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analyses.stability", ("fempipe.analyses.stability",)),
     ("analyses.dynamics", ("fempipe.analyses.dynamics",)),
     ("analyses.limit_cycle", ("fempipe.analyses.limit_cycle",)),
-    ("analyses.space", ("fempipe.analyses.space",)),
+    ("analyses.three_d", ("fempipe.analyses.three_d",)),
     ("analyses.parametric", ("fempipe.analyses.parametric",)),
     (
         "analyses.branches",
         (
             "fempipe.analyses.bifurcation",
             "fempipe.analyses.periodic",
-            "fempipe.analyses.space.diagram",  # the 3-D diagram: a diagram over the 3-D motion
+            "fempipe.analyses.three_d.diagram",  # the 3-D diagram: a diagram over the 3-D motion
         ),
     ),
     ("studies", ("fempipe.studies",)),
@@ -52,7 +52,7 @@ def layer_of(module: str) -> tuple[int, str] | None:
 
     Examples
     --------
-    >>> layer_of("fempipe.model.operators")
+    >>> layer_of("fempipe.model.plane.operators")
     (1, 'model')
     >>> layer_of("fempipe")
     (16, 'facade')

@@ -18,7 +18,7 @@ import numpy as np
 from fempipe.io import SHAPE_FIELDS, screen_points
 from fempipe.io.meshes import write_series
 from fempipe.model.discretization import Discretization
-from fempipe.model.kinematics import Shape, shape, tip_values, tip_velocity
+from fempipe.model.kinematics import Shape, compute_shape, compute_tip, tip_velocity
 from fempipe.model.quadrature import lagrange_integrals
 
 __all__ = [
@@ -35,7 +35,7 @@ class CenterlineSampler:
     """The centerlines of many states of one discretization at the same sample points.
 
     What depends on the points only (the basis there, the Lagrange integrals) is computed once;
-    each state then costs the operations of :func:`fempipe.model.kinematics.shape` in the same
+    each state then costs the operations of :func:`fempipe.model.kinematics.compute_shape` in the same
     order, the same numbers bit for bit.  Checked on the first state against ``shape`` and
     ``disc.evaluate``; on any difference every state falls back to them.
     """
@@ -43,7 +43,7 @@ class CenterlineSampler:
     def __init__(self, disc: Discretization, alpha: float, points_per_cell: int = 4) -> None:
         self.disc, self.alpha, self.points_per_cell = disc, float(alpha), points_per_cell
         quad = disc.quad
-        self.xi = shape(disc, np.zeros(disc.n), alpha, points_per_cell).xi
+        self.xi = compute_shape(disc, np.zeros(disc.n), alpha, points_per_cell).xi
         self._cells = np.clip(
             np.searchsorted(quad.edges, self.xi, side="right") - 1, 0, quad.n_cells - 1
         )
@@ -74,7 +74,10 @@ class CenterlineSampler:
     def _check(self, q: np.ndarray, qdot: np.ndarray | None) -> None:
         """Compare the fast path with ``shape`` and ``disc.evaluate`` on one state, bitwise."""
         self._checked = True
-        ref, fast = shape(self.disc, q, self.alpha, self.points_per_cell), self._fast_shape(q)
+        ref, fast = (
+            compute_shape(self.disc, q, self.alpha, self.points_per_cell),
+            self._fast_shape(q),
+        )
         same = all(
             np.array_equal(getattr(ref, f), getattr(fast, f)) for f in ("xi", *_SHAPE_ARRAYS)
         )
@@ -83,13 +86,13 @@ class CenterlineSampler:
         if not same:
             self._basis = None
 
-    def shape(self, q: np.ndarray, qdot: np.ndarray | None = None):
-        """:class:`~fempipe.model.kinematics.Shape` of the state q (as ``shape(disc, q, alpha)``)."""
+    def compute_shape(self, q: np.ndarray, qdot: np.ndarray | None = None):
+        """:class:`~fempipe.model.kinematics.Shape` of the state q (as ``compute_shape(disc, q, alpha)``)."""
         q = np.asarray(q)
         if not self._checked:
             self._check(q, None if qdot is None else np.asarray(qdot))
         if self._basis is None:
-            return shape(self.disc, q, self.alpha, self.points_per_cell)
+            return compute_shape(self.disc, q, self.alpha, self.points_per_cell)
         return self._fast_shape(q)
 
     def evaluate(self, q: np.ndarray) -> np.ndarray:
@@ -113,7 +116,7 @@ def frame_data(
     """Points (m, 3) and point data of one frame; ``sampler``: a :class:`CenterlineSampler` of
     ``disc``, ``alpha`` and ``points_per_cell`` reused over the frames."""
     if sampler is None:
-        s = shape(disc, q, alpha, points_per_cell=points_per_cell)
+        s = compute_shape(disc, q, alpha, points_per_cell=points_per_cell)
         theta_dot = disc.evaluate(qdot, s.xi)
     else:
         s = sampler.shape(q, qdot)
@@ -208,7 +211,7 @@ def tip_rows(disc, t, q, qdot, alpha: float, output_dt: float | None = None) -> 
         n = int(np.floor((t[-1] - t[0]) / output_dt * (1 + 1e-12))) + 1
         t = t[0] + output_dt * np.arange(n)
         q, qdot = spline(t), spline.derivative()(t)
-    pos = tip_values(disc, q, alpha)
+    pos = compute_tip(disc, q, alpha)
     vel = tip_velocity(disc, q, qdot, alpha)
     cols = {"tau": t, **{k: pos[k] for k in TIP_COLUMNS[1:5]}}
     cols["theta_tip_rate"] = np.asarray(disc.tip @ qdot.T)

@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
-from .finite_element import FiniteElement
-from .modal import EXPECTED_ORDER, Modal, beam_mode_slopes, beam_roots
-from .quadrature import LineQuadrature
+from fempipe.model.finite_element import FiniteElement
+from fempipe.model.modal import EXPECTED_ORDER, Modal, beam_mode_slopes, beam_roots
+from fempipe.model.quadrature import LineQuadrature
 
 if TYPE_CHECKING:  # imported where used: importing fempipe does not load scipy
     import scipy.sparse as sp

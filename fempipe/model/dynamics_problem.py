@@ -1,7 +1,7 @@
 """The pipe's equations of motion as the integrator's problem: Eq. (20) in residual form.
 
 :class:`PipeDynamics` implements :class:`fempipe.solvers.radau.contract.ImplicitSecondOrderProblem`
-(whose docstring numbers the rules cited here) for a :class:`~fempipe.model.operators.PipeModel`
+(whose docstring numbers the rules cited here) for a :class:`~fempipe.model.plane.operators.PipeModel`
 with a steady or unsteady flow.  :func:`refuse_hysteretic` is the refusal every time-domain
 entry point makes first.  Method: docs/theory/numerics.md, "Time integration".
 """
@@ -14,8 +14,8 @@ from dataclasses import replace
 import numpy as np
 import scipy.linalg as sla
 
-from .batched import StageKernels
-from .operators import PipeModel
+from fempipe.model.plane.batched import StageKernels
+from fempipe.model.plane.operators import PipeModel
 
 __all__ = [
     "BATCHED_STAGES_MAX",
@@ -113,7 +113,7 @@ class PipeDynamics(ModelDynamics):
     ``model`` supplies ``residual``, ``jacobians`` and ``mass_matrix``; ``flow`` (tau -> (v,
     v_dot), rule 9) replaces the steady ``model.params.v``.  The optional members of rules 6-8
     (``stage_residuals``, ``stage_jacobians``: the batched
-    :class:`~fempipe.model.batched.StageKernels`; ``prefers_batched_stage_jacobians`` up to
+    :class:`~fempipe.model.plane.batched.StageKernels`; ``prefers_batched_stage_jacobians`` up to
     :data:`BATCHED_STAGES_MAX`; ``parameter_derivative``) exist for steady flow only.
     """
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .quadrature import LineQuadrature
+from fempipe.model.quadrature import LineQuadrature
 
 if TYPE_CHECKING:  # imported where used: importing fempipe does not load scipy
     import scipy.sparse as sp

@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .discretization import Discretization
-from .quadrature import lagrange_integrals
+from fempipe.model.discretization import Discretization
+from fempipe.model.quadrature import lagrange_integrals
 
-__all__ = ["Shape", "shape", "tip_values", "tip_velocity"]
+__all__ = ["Shape", "compute_shape", "compute_tip", "tip_velocity"]
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,9 @@ def _edge_points(disc: Discretization, points_per_cell: int) -> np.ndarray:
     return np.append(inner, 1.0)
 
 
-def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: int = 4) -> Shape:
+def compute_shape(
+    disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: int = 4
+) -> Shape:
     """Centerline of the state q.
 
     Parameters
@@ -81,7 +83,7 @@ def shape(disc: Discretization, q: np.ndarray, alpha: float, points_per_cell: in
     )
 
 
-def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
+def compute_tip(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
     """Tip rotation and positions: theta_tip, varsigma_tip, eta_tip, X_tip, Z_tip.
 
     Eqs. (5) and (28) at xi = 1, the one place the package computes the tip's geometry:
@@ -117,7 +119,7 @@ def tip_values(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
 def tip_velocity(disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float) -> dict:
     """Tip velocities, d/dtau of varsigma_tip, eta_tip, X_tip, Z_tip (Eq. (27)).
 
-    Shapes as in :func:`tip_values`, with ``qdot`` shaped like ``q``.
+    Shapes as in :func:`compute_tip`, with ``qdot`` shaped like ``q``.
     """
     q, qdot = np.asarray(q), np.asarray(qdot)
     th = disc.Phi @ q.T

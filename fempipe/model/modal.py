@@ -12,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from fempipe.core.rootfinding import brentq
-
-from .quadrature import LineQuadrature
+from fempipe.model.quadrature import LineQuadrature
 
 __all__ = ["EXPECTED_ORDER", "Modal", "beam_mode_slopes", "beam_roots"]
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .discretization import Discretization
+from fempipe.model.discretization import Discretization
 
 __all__ = ["project"]
 

@@ -1,9 +1,9 @@
 """The weak form of Eq. (20), one operator per physical term: the shared part.
 
 The residual R(q, q', q'') is a sum of terms with analytic derivatives, grouped by kind:
-:class:`~fempipe.model.local_terms.LocalTerms`, :class:`~fempipe.model.nonlocal_terms.NonlocalTerms`,
-:mod:`~fempipe.model.variants` and :class:`~fempipe.model.springs.SpringTerms`, summed by
-:class:`~fempipe.model.operators.PipeModel`.  This module holds what they share:
+:class:`~fempipe.model.plane.local_terms.LocalTerms`, :class:`~fempipe.model.plane.nonlocal_terms.NonlocalTerms`,
+:mod:`~fempipe.model.plane.variants` and :class:`~fempipe.model.plane.springs.SpringTerms`, summed by
+:class:`~fempipe.model.plane.operators.PipeModel`.  This module holds what they share:
 :class:`Fields`, the test integral and the projection n . C^R.
 
 Derivation and the table of terms: docs/theory/weak_form.md; variants: docs/theory/variants.md.
@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .discretization import Discretization
-from .params import Params
-from .quadrature import LineQuadrature
+from fempipe.model.discretization import Discretization
+from fempipe.model.params import Params
+from fempipe.model.quadrature import LineQuadrature
 
 __all__ = ["Fields", "WeakForm", "as_dense", "scale_rows"]
 
@@ -64,7 +64,7 @@ def _dense_forms(disc: Discretization) -> tuple[np.ndarray, np.ndarray]:
 class WeakForm:
     r"""What the terms share: the fields, the test integral, the projection.
 
-    The base of the term classes and so of :class:`~fempipe.model.operators.PipeModel`, which
+    The base of the term classes and so of :class:`~fempipe.model.plane.operators.PipeModel`, which
     sets ``disc``, ``params``, ``quad``, ``x``, ``w`` and ``test_matrix`` (``Phi^T W``:
     ``test_matrix @ f`` is ``\int phi_i f``).
     """

@@ -38,9 +38,9 @@ _LABEL = {"eta_tip": r"$\eta(1)$", "X_tip": r"$X_{g}(1)$", "Z_tip": r"$Z_{g}(1)$
 
 def _tip_series(disc: Discretization, q: np.ndarray, qdot: np.ndarray | None, alpha: float) -> dict:
     """Tip coordinates (and their rates X_dot, Z_dot) of the states q, shape (m, n)."""
-    from fempipe.model.kinematics import tip_values, tip_velocity
+    from fempipe.model.kinematics import compute_tip, tip_velocity
 
-    out = tip_values(disc, np.atleast_2d(q), alpha)
+    out = compute_tip(disc, np.atleast_2d(q), alpha)
     if qdot is not None:
         rates = tip_velocity(disc, np.atleast_2d(q), np.atleast_2d(qdot), alpha)
         out["Z_dot"] = rates["Z_tip"]
@@ -100,14 +100,14 @@ def plot_oscillating_shapes(
     """
     import matplotlib.pyplot as plt
 
-    from fempipe.model.kinematics import shape
+    from fempipe.model.kinematics import compute_shape
 
     ax = new_axes(ax, (4.5, 5))
     q = np.atleast_2d(q)
     idx = np.linspace(0, q.shape[0] - 1, min(n_shapes, q.shape[0])).round().astype(int)
     cmap = plt.get_cmap("viridis")
     for j, k in enumerate(idx):
-        s = shape(disc, q[k], alpha)
+        s = compute_shape(disc, q[k], alpha)
         ax.plot(
             s.Z_g,
             s.X_g,

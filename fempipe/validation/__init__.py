@@ -19,42 +19,30 @@ from types import ModuleType
 from .case import Case, References, load_references
 from .checks import CaseResult, Check, Table
 
-__all__ = [
-    "CASES",
-    "Case",
-    "CaseResult",
-    "Check",
-    "References",
-    "Table",
-    "load_case",
-    "load_references",
-]
+__all__ = ["CASES", "Case", "CaseResult", "Check", "References", "Table"]
+__all__ += ["load_case", "load_references"]
 
 #: Case modules in the paper's order, then the variants of the pipe.
 CASES: tuple[str, ...] = (
-    "fig02a",
-    "fig02b",
-    "fig03",
-    "fig04",
-    "fig05",
-    "fig06",
-    "fig07",
-    "fig08_10",
-    "fig11",
-    "fig12",
-    "symmetry",
-    "convergence",
+    *(
+        "fig02a",
+        "fig02b",
+        "fig03",
+        "fig04",
+        "fig05",
+        "fig06",
+        "fig07",
+        "fig08_10",
+        "fig11",
+        "fig12",
+    ),
+    *("symmetry", "convergence"),
     # variants of the straight pipe against the classical theory (classical.py)
-    "end_mass",
-    "external_damping",
-    "hysteretic",
-    "springs",
+    *("end_mass", "external_damping", "hysteretic", "springs"),
     # the motion out of the plane against a strong form (lateral.py)
     "out_of_plane",
     # the 3-D model: Hopf onset, mesh convergence, whirl against a rotating-frame BVP
-    "space_onset",
-    "space_convergence",
-    "space_whirl",
+    *("space_onset", "space_convergence", "space_whirl"),
 )
 
 

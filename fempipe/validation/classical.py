@@ -3,7 +3,7 @@
 Small lateral motions eta(xi, tau) of a cantilevered pipe conveying fluid (Paidoussis,
 *Fluid-Structure Interactions* vol. 1, 1998, Eqs. (3.70)-(3.71)) with end mass, external
 damping, hysteretic loss and springs, written from that equation alone (no theta, no weak form
-of :mod:`fempipe.model.operators`); valid for the straight pipe only (alpha = 0, pi, or
+of :mod:`fempipe.model.plane.operators`); valid for the straight pipe only (alpha = 0, pi, or
 gamma = 0).  :func:`eigenvalues`, :func:`spectral_abscissa`, :func:`critical_velocity`; the
 discretizations (:mod:`.classical_galerkin`) and closed forms (:mod:`.classical_limits`) are
 re-exported here.  Derivation and errors: docs/theory/independent.md.

@@ -22,8 +22,8 @@ from fempipe.analyses.limit_cycle import TIP_KEYS, ShootingError, find_attractor
 from fempipe.analyses.periodic import compute_cycle_diagram
 from fempipe.model.discretization import Modal, discretization_from_name, parse_discretization
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import shape, tip_values, tip_velocity
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_shape, compute_tip, tip_velocity
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 from fempipe.model.projection import project
 
@@ -132,8 +132,8 @@ def orbit(
     """Resample ``periods`` periods from a state on the attractor (or the static shape)."""
     m = model_for(disc, alpha, v)
     if period is None:  # an equilibrium: a single shape
-        s = shape(disc, q, alpha)
-        tv = tip_values(disc, q, alpha)
+        s = compute_shape(disc, q, alpha)
+        tv = compute_tip(disc, q, alpha)
         tip = {k: np.array([tv[k]]) for k in TIP_KEYS}
         return Orbit(
             label,
@@ -146,14 +146,14 @@ def orbit(
             [(s.Z_g, s.X_g)],
         )
     traj = simulate(m, q, qdot, periods * period, n_out=n_out, rtol=1e-8)
-    tv = tip_values(disc, traj.q, alpha)
+    tv = compute_tip(disc, traj.q, alpha)
     tip = {k: tv[k] for k in TIP_KEYS}
     rates = [tip_velocity(disc, qq, pp, alpha) for qq, pp in zip(traj.q, traj.qdot, strict=True)]
     tip_rate = {k: np.array([r[k] for r in rates]) for k in ("eta_tip", "X_tip", "Z_tip")}
     idx = np.linspace(0, np.searchsorted(traj.t, traj.t[0] + period) - 1, n_shapes).astype(int)
     shapes = []
     for i in idx:
-        s = shape(disc, traj.q[i], alpha)
+        s = compute_shape(disc, traj.q[i], alpha)
         shapes.append((s.Z_g, s.X_g))
     return Orbit(label, alpha, v, period, traj.t - traj.t[0], tip, tip_rate, shapes)
 
@@ -211,7 +211,7 @@ def cycles_at(alphas: tuple, v: float, quick: bool) -> dict:
 def cycle_traces(disc, alpha: float, cycle, periods: int = 3) -> dict:
     """Tip coordinates and their rates along ``periods`` periods of a cycle."""
     q, p = cycle.orbit_q[:-1], cycle.orbit_qdot[:-1]  # the last sample repeats the first
-    tv = tip_values(disc, q, alpha)
+    tv = compute_tip(disc, q, alpha)
     tip = {k: tv[k] for k in TIP_KEYS}
     rates = [tip_velocity(disc, a, b, alpha) for a, b in zip(q, p, strict=True)]
     dt = cycle.orbit_t[1] - cycle.orbit_t[0]

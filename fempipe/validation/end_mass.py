@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
 
 from . import classical

@@ -12,7 +12,7 @@ import numpy as np
 
 from fempipe.analyses.stability import analyse_stability, trace_root_locus
 from fempipe.model.discretization import Modal, parse_discretization
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from ..plotting.stability import direction_arrow, mode_color

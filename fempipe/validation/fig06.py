@@ -16,7 +16,7 @@ import numpy as np
 from fempipe.analyses import stability
 from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.model.discretization import Modal, parse_discretization
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from fempipe.analyses.periodic.out_of_plane import cycle_verdict
-from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
+from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
 
 from .case import Case, label_tag
 from .checks import CaseResult, Table

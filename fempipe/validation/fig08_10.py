@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fempipe.analyses.stability import analyse_stability
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
 
 from .case import Case, alpha_name, label_tag

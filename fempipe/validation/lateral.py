@@ -1,4 +1,4 @@
-"""The motion out of the plane in strong form: an independent check of fempipe.model.out_of_plane.
+"""The motion out of the plane in strong form: an independent check of fempipe.model.out_of_plane.model.
 
 The fourth-order equation of the out-of-plane deflection w(xi, tau) about a planar static
 state theta^s (from :func:`fempipe.validation.bvp.solve_static_bvp`), written from that

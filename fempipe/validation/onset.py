@@ -4,7 +4,7 @@ v_cr is where the spectral abscissa of the linearized problem about the sagged s
 (Eqs. (31b)-(33), dense QZ) turns positive: bracketed on a grid in v, located by Brent's
 method, each static state by Newton from the nearest known one.  The Fig. 5 and 6 cases
 compare it with :func:`fempipe.analyses.stability.critical_velocity`; ``plane="out"``: the
-motion out of the plane (:mod:`fempipe.model.out_of_plane`).
+motion out of the plane (:mod:`fempipe.model.out_of_plane.model`).
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from fempipe.analyses.statics import NewtonError, solve_static
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators
+from fempipe.model.out_of_plane.model import OutOfPlaneOperators
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 from .static_shapes import static_shapes
 

@@ -1,6 +1,6 @@
 """The motion out of the plane: a second computation, the symmetries, and the first instability.
 
-:mod:`fempipe.model.out_of_plane` (docs/theory/out_of_plane.md) checked five ways:
+:mod:`fempipe.model.out_of_plane.model` (docs/theory/out_of_plane.md) checked five ways:
 (a) the straight pipe: out-of-plane K, C, M and spectra equal the in-plane ones;
 (b) the buckled standing pipe: the rotation about the vertical is an exact null vector, the
     other eigenvalues equal the strong form's;

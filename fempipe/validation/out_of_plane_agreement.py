@@ -12,8 +12,8 @@ import numpy as np
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import out_of_plane_model
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.out_of_plane.model import build_out_of_plane_model
 from fempipe.model.params import Params
 
 from . import classical, lateral
@@ -32,7 +32,7 @@ from .out_of_plane_runs import (
 
 def _pair(p: Params, fe: str, v_max: float, v_min: float = 0.0, p_spec: int = 24):
     """The out-of-plane onset by fempipe (FE) and by the strong form."""
-    m = out_of_plane_model(PipeModel(discretization_from_name(fe), p))
+    m = build_out_of_plane_model(PipeModel(discretization_from_name(fe), p))
     r = stability.find_critical_velocity(m, v_max=v_max, v_min=v_min, planes=("out",))
     s = lateral.critical_velocity(p, v_max, v_min=v_min, disc=lateral.HermiteSpectral(p_spec))
     c = r.critical
@@ -117,7 +117,7 @@ def inclined_variants_check(ref):
     # gravity continuation does, at 1/40 of its cost with two springs); the tips are compared.
     q = solve_static(m).q
     tip_gap = abs(float(m.disc.tip @ q) - st.theta_tip)
-    lam_f = pencil_eigenvalues(*out_of_plane_model(m).linearization(q))
+    lam_f = pencil_eigenvalues(*build_out_of_plane_model(m).linearization(q))
     err = nearest_distance(lam_f, lam_s)
     springs = ", ".join(f"κ = {k:g} at ξ_s = {x:g}" for k, x in p.springs)
     return measure(

@@ -109,21 +109,14 @@ def _cached(label: str, alpha: float, values: tuple, quick: bool):
 
 def _summary(d: dict) -> dict:
     neutral = d.get("neutral_out_of_plane_multiplier")
-    return {
-        "branch": d["branch"],
-        "index": d["index"],
-        "v": d["v"],
-        "stable": bool(d["stable"]),
-        "max_multiplier": d["max_multiplier"],
-        "max_oop": d["max_nontrivial_out_of_plane_multiplier"],
-        "stable_3d": d["stable_3d"],
-        "eta_tip": d["eta_tip"],
-        "X_tip": d["X_tip"],
-        "Z_tip": d["Z_tip"],
-        "planar_block": d["planar_block_max_multiplier"],
-        "neutral": None if neutral is None else complex(*neutral),
-        "multipliers": [complex(*z) for z in d["out_of_plane_floquet_multipliers"]],
-    }
+    out = {k: d[k] for k in ("branch", "index", "v")}
+    out.update(stable=bool(d["stable"]), max_multiplier=d["max_multiplier"])
+    out.update(max_oop=d["max_nontrivial_out_of_plane_multiplier"], stable_3d=d["stable_3d"])
+    out.update({k: d[k] for k in ("eta_tip", "X_tip", "Z_tip")})
+    out.update(planar_block=d["planar_block_max_multiplier"])
+    out["neutral"] = None if neutral is None else complex(*neutral)
+    out["multipliers"] = [complex(*z) for z in d["out_of_plane_floquet_multipliers"]]
+    return out
 
 
 def _changes(model, name: str, states: list, checked: list, locate: bool) -> list[dict]:
@@ -142,11 +135,12 @@ def _changes(model, name: str, states: list, checked: list, locate: bool) -> lis
         if locate:
             found = locate_change(model, sa, sb, a["max_oop"], b["max_oop"], tol=LOCATE_TOL)
             where = None if found is None else found["v"]
+        direction = "loses" if loses else "regains"
         out.append(
             {
                 "branch": name,
                 "bracket": sorted([a["v"], b["v"]]),
-                "direction": "loses" if loses else "regains",
+                "direction": direction,
                 "v": where,
             }
         )
@@ -173,9 +167,8 @@ def stretches(br: OutOfPlaneBranches, branch: str) -> list[tuple[float, float, b
     """``(v_from, v_to, stable_3d)`` of a branch's stretches with one verdict (boundary nan if not
     located).
     """
-    pts = sorted(
-        (p for p in br.checked if p["branch"] == branch and p["stable"]), key=lambda p: p["index"]
-    )
+    pts = [p for p in br.checked if p["branch"] == branch and p["stable"]]
+    pts.sort(key=lambda p: p["index"])
     if not pts:
         return []
     cross = {tuple(c["bracket"]): c["v"] for c in br.changes if c["branch"] == branch}
@@ -203,7 +196,7 @@ def survival_text(name: str, br: OutOfPlaneBranches) -> str:
             which = (
                 f"the one checked (v = {a:.4g}) is"
                 if a == b
-                else (f"all checked ({a:.4g} ≤ v ≤ {b:.4g}) are")
+                else f"all checked ({a:.4g} ≤ v ≤ {b:.4g}) are"
             )
             parts.append(f"{branch}: {which} " + ("stable in 3-D" if ok else "unstable in 3-D"))
             continue
@@ -277,30 +270,14 @@ def marks(ax, br: OutOfPlaneBranches, diag: ContinuedDiagram, key: str) -> bool:
     """
     runs = unstable_runs(br, diag)
     bad = [p for p in br.checked if p["stable"] and p["stable_3d"] is False]
+    tri = {"ms": 7, "color": "tab:red", "mfc": "none", "mew": 1.2, "zorder": 5}
     for side in (0, 1):
-        ax.plot(
-            [p["v"] for p in bad],
-            [p[key][side] for p in bad],
-            "v",
-            ms=7,
-            color="tab:red",
-            mfc="none",
-            mew=1.2,
-            zorder=5,
-        )
+        ax.plot([p["v"] for p in bad], [p[key][side] for p in bad], "v", **tri)
+    band = {"lw": 6, "color": "tab:red", "alpha": 0.3, "solid_capstyle": "butt", "zorder": 1}
     for run in runs:
         v = [p.v for p in run]
         for side in (0, 1):
-            ax.plot(
-                v,
-                [getattr(p, key)[side] for p in run],
-                "-",
-                lw=6,
-                color="tab:red",
-                alpha=0.3,
-                solid_capstyle="butt",
-                zorder=1,
-            )
+            ax.plot(v, [getattr(p, key)[side] for p in run], "-", **band)
     return bool(runs or bad)
 
 
@@ -313,24 +290,10 @@ def add_legend_entry(ax) -> None:
     band = Line2D(
         [], [], lw=6, color="tab:red", alpha=0.3, label="stable in plane, unstable in 3-D"
     )
-    tri = Line2D(
-        [],
-        [],
-        ls="",
-        marker="v",
-        ms=7,
-        color="tab:red",
-        mfc="none",
-        label="checked: unstable in 3-D",
-    )
-    ax.legend(
-        handles=[*handles, band, tri],
-        fontsize=9,
-        ncol=3,
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.16),
-        frameon=False,
-    )
+    tri = {"ls": "", "marker": "v", "ms": 7, "color": "tab:red", "mfc": "none"}
+    handles += [band, Line2D([], [], label="checked: unstable in 3-D", **tri)]
+    below = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "frameon": False}
+    ax.legend(handles=handles, fontsize=9, ncol=3, **below)
 
 
 def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) -> list:
@@ -339,9 +302,8 @@ def verdict_checks(suffix: str, name: str, br: OutOfPlaneBranches, quick: bool) 
     out = [measure(f"planar_block{suffix}", planar_block_deviation(br), alpha=name, label=br.label)]
     p10 = br.at(10.0)
     if not quick and p10 is not None and p10["neutral"] is not None:
-        out.append(
-            measure(f"neutral_oop{suffix}", neutral_deviation(br), alpha=name, label=br.label)
-        )
+        dev = neutral_deviation(br)
+        out.append(measure(f"neutral_oop{suffix}", dev, alpha=name, label=br.label))
     return out
 
 

@@ -13,8 +13,8 @@ import scipy.linalg as sla
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.model.discretization import discretization_from_name
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import OutOfPlaneOperators, out_of_plane_model
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.out_of_plane.model import OutOfPlaneOperators, build_out_of_plane_model
 from fempipe.model.params import Params
 
 from . import lateral
@@ -100,7 +100,7 @@ def identity_checks(ref):
         worst_m, worst_l, worst_c = 0.0, 0.0, 0.0
         for name in ref.value("identity_discretizations"):
             m = PipeModel(_disc(name), p)
-            mo = out_of_plane_model(m)
+            mo = build_out_of_plane_model(m)
             q = solve_sagged(m).q
             mats = [
                 _rel(a, b) for a, b in zip(mo.linearization(q), m.linearization(q), strict=True)

@@ -65,7 +65,7 @@ def _headline(suite: SuiteResult) -> list[str]:
         "",
         "The paper, like every planar model, computes the flutter of the pipe in the plane of "
         "its static deformation. A round pipe is free to leave that plane, and its motion out "
-        "of the plane (`fempipe.model.out_of_plane`, checked against an independent strong-form "
+        "of the plane (`fempipe.model.out_of_plane.model`, checked against an independent strong-form "
         "solver to 1e-8) **loses stability first**: "
         + "; ".join(parts)
         + ". At α = 0, and on the straight standing pipe, the two planes coincide; the buckled "

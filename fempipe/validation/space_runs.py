@@ -9,17 +9,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fempipe.analyses.limit_cycle import LimitCycle, find_attractor, shoot
-from fempipe.analyses.space.onset import hopf_normal_form_3d
 from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.analyses.stability.hopf import HopfNormalForm
 from fempipe.analyses.statics import solve_sagged
+from fempipe.analyses.three_d.onset import hopf_normal_form_3d
 from fempipe.model.discretization import FiniteElement
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.projection import project
-from fempipe.model.space import SpaceModel
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D
 
 #: Default integration and Newton tolerances of the shot cycles: the tip extrema and
 #: periods to ~1e-9, far below the differences the cases measure (>= 1e-8).
@@ -62,9 +62,9 @@ def space_cycle_near_onset(on: Onset, delta: float) -> LimitCycle:
     """The non-planar cycle at v_cr + delta, shot from the normal form's prediction."""
     nf = on.normal_form
     v = nf.v + delta
-    model = SpaceModel(on.planar.disc, replace(on.planar.params, v=v))
+    model = PipeModel3D(on.planar.disc, replace(on.planar.params, v=v))
     U0, Ud0, T = nf.initial_state(v)
-    return shoot(SpaceDynamics(model), U0, Ud0, T, rtol=RTOL, tol=TOL)
+    return shoot(PipeDynamics3D(model), U0, Ud0, T, rtol=RTOL, tol=TOL)
 
 
 def _project3(src, U: np.ndarray, dst) -> np.ndarray:
@@ -91,8 +91,8 @@ def space_cycles(
             U0 = _project3(src, c.q0, pm.disc)
             Ud0 = _project3(src, c.qdot0, pm.disc)
             T = c.period
-        model = SpaceModel(pm.disc, replace(pm.params, v=v))
-        cyc = shoot(SpaceDynamics(model), U0, Ud0, T, rtol=rtol, tol=10.0 * rtol)
+        model = PipeModel3D(pm.disc, replace(pm.params, v=v))
+        cyc = shoot(PipeDynamics3D(model), U0, Ud0, T, rtol=rtol, tol=10.0 * rtol)
         out[ne] = cyc
         prev = (pm.disc, cyc)
     return out

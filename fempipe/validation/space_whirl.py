@@ -2,7 +2,7 @@
 
 Hanging, the pipe is axisymmetric: planar cycles and whirls are born together (O(2) Hopf).
 The whirl at v = 10 by (a) the BVP of :mod:`fempipe.validation.whirl_bvp` (power balance
-checked), (b) the FE periodic orbit (:func:`fempipe.analyses.space.find_whirl`) on cubic
+checked), (b) the FE periodic orbit (:func:`fempipe.analyses.three_d.find_whirl`) on cubic
 meshes, rate and tip radius against the BVP's, converging in h, and (b') the BVP's whirl as a
 state of the FE model over half a turn; (c) the finding: the whirl is unstable, the planar
 cycle is the attractor.  docs/theory/space.md.
@@ -15,15 +15,15 @@ import math
 import numpy as np
 
 from fempipe.analyses.limit_cycle.attractor import find_attractor
-from fempipe.analyses.space.whirl import find_whirl, whirl_state
+from fempipe.analyses.three_d.whirl import find_whirl, whirl_state
 from fempipe.analyses.stability.eigensolvers import quadratic_eigen
 from fempipe.analyses.stability.linear import linearized_matrices
 from fempipe.core.parallel import single_blas
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.model import PipeModel3D, planar_state
+from fempipe.model.three_d.dynamics import PipeDynamics3D
 from fempipe.solvers.radau import Radau
 
 from .case import Case
@@ -71,7 +71,7 @@ def run(quick: bool = False) -> CaseResult:
     ne, w = whirls[-1]
     tag = f"P3:{ne}"
     checks += _whirl_checks(ref, bvp, whirls, quick)
-    space = SpaceModel(FiniteElement(meshes[-1], 3), Params(alpha=0.0, v=v))
+    space = PipeModel3D(FiniteElement(meshes[-1], 3), Params(alpha=0.0, v=v))
     planar = find_attractor(PipeModel(space.disc, space.params))
     tips_planar = None
     if planar.cycle is not None:
@@ -131,7 +131,7 @@ def _shot_whirls(bvp, meshes, v: float) -> tuple[list, list]:
 
     rows, whirls = [], []
     for ne in meshes:
-        space = SpaceModel(FiniteElement(ne, 3), Params(alpha=0.0, v=v))
+        space = PipeModel3D(FiniteElement(ne, 3), Params(alpha=0.0, v=v))
         U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
         w = find_whirl(space, U, Ud, bvp.period)
         whirls.append((ne, w))
@@ -176,9 +176,9 @@ def _tables(bvp, v: float, rows, free_meshes, free) -> tuple[Table, Table]:
 def _free_rotation(bvp, n_elements: int, v: float) -> tuple[float, float]:
     """(rate, radius variation) of the FE motion from the BVP's whirl over half a period."""
 
-    space = SpaceModel(FiniteElement(n_elements, 3), Params(alpha=0.0, v=v))
+    space = PipeModel3D(FiniteElement(n_elements, 3), Params(alpha=0.0, v=v))
     U, Ud = whirl_state(space, lambda x: bvp.sol(x)[3:6], bvp.omega)
-    stepper = Radau(SpaceDynamics(space), U, Ud, rtol=1e-9)
+    stepper = Radau(PipeDynamics3D(space), U, Ud, rtol=1e-9)
     ts, Us = [0.0], [U]
     for t, q, _ in stepper.steps(0.5 * bvp.period):
         ts.append(t)

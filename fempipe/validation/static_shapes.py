@@ -14,9 +14,9 @@ import numpy as np
 from fempipe.analyses.stability import linearly_stable
 from fempipe.analyses.statics import solve_path
 from fempipe.model.discretization import Modal, parse_discretization
-from fempipe.model.kinematics import shape, tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_shape, compute_tip
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 from .bvp import solve_static_bvp
 from .checks import Table
@@ -57,7 +57,7 @@ class StaticShapes:
 
 def _common_grid(disc, q, alpha, xi):
     """Centerline sampled 16 points per cell and interpolated to ``xi`` (error < 1e-5)."""
-    s = shape(disc, q, alpha, points_per_cell=16)
+    s = compute_shape(disc, q, alpha, points_per_cell=16)
     return (
         np.interp(xi, s.xi, s.X_g),
         np.interp(xi, s.xi, s.Z_g),
@@ -97,7 +97,7 @@ def static_shapes(
     tips: dict[str, list] = {}
     X, Z, T = [], [], []
     for s in sols:
-        for k, val in tip_values(disc, s.q, alpha).items():
+        for k, val in compute_tip(disc, s.q, alpha).items():
             tips.setdefault(k, []).append(val)
         x_, z_, t_ = _common_grid(disc, s.q, alpha, xi)
         X.append(x_)

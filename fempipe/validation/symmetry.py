@@ -14,8 +14,8 @@ import numpy as np
 
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.kinematics import shape
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_shape
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
 
 from .case import Case, alpha_name
@@ -83,8 +83,8 @@ def run(quick: bool = False) -> CaseResult:
         measure("buckled_mirror", buck_dev),
     ]
     buckled = {
-        "+": shape(disc, up.q, bk["alpha"]),
-        "−": shape(disc, down.q, bk["alpha"]),
+        "+": compute_shape(disc, up.q, bk["alpha"]),
+        "−": compute_shape(disc, down.q, bk["alpha"]),
     }
     findings = (
         "The paper's closing remark of Sec. 5 is wrong: α → α − π flips the sign of the gravity "

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from fempipe.analyses import stability
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
 
 from . import classical

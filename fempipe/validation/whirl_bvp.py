@@ -1,7 +1,7 @@
 """The whirl of the hanging pipe as a steady state in a rotating frame: an independent BVP.
 
 At sin alpha = 0 a whirl turns the pipe's shape rigidly about e_1 at a rate omega; in the
-turning frame the continuum (the strong form of :mod:`fempipe.model.space`, objective
+turning frame the continuum (the strong form of :mod:`fempipe.model.three_d.model`, objective
 Kelvin-Voigt damping) is a BVP in xi for 13 functions y = (r, t, t', G, Q) and omega, with a
 phase condition.  v is left free and an amplitude fixed, continued until v is met
 (:func:`solve_whirl_bvp`).  scipy's ``solve_bvp`` does the work; no fempipe code is shared.

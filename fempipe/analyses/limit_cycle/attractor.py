@@ -17,8 +17,8 @@ from fempipe.analyses.statics import NewtonError, solve_static
 from fempipe.core.parallel import single_blas_thread
 from fempipe.core.rootfinding import brentq
 from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
 from ..dynamics import Trajectory, make_initial_state
@@ -291,7 +291,7 @@ class _AttractorSearch:
         if q_s is not None and self.stable:
             d = state_distance(stepper.q - q_s, stepper.qdot, 0.05)
             if d < self.equilibrium_radius and d <= self.d_prev:
-                tv = tip_values(self.disc, q_s, self.alpha)
+                tv = compute_tip(self.disc, q_s, self.alpha)
                 tip = {k: [float(tv[k]), float(tv[k])] for k in TIP_KEYS}
                 return self._finish("equilibrium", tip=tip, q=q_s.copy(), p=np.zeros(self.n))
             self.d_prev = d if d < self.equilibrium_radius else math.inf

@@ -21,7 +21,7 @@ import scipy.linalg as sla
 
 from fempipe.core.parallel import single_blas_thread
 from fempipe.model.dynamics_problem import ModelDynamics
-from fempipe.model.space import SpaceModel
+from fempipe.model.three_d.model import PipeModel3D
 from fempipe.solvers.radau import Radau
 
 from .results import LimitCycle, ShootingError, largest_nontrivial, state_distance
@@ -50,7 +50,7 @@ def shoot(
 
     Parameters
     ----------
-    problem : PipeDynamics or SpaceDynamics
+    problem : PipeDynamics or PipeDynamics3D
         An autonomous dynamics problem.
     q0, qdot0, period : ndarray, ndarray, float
         Initial guess of a state on the orbit and of the period.
@@ -110,7 +110,7 @@ class Shooter:
         self.level = level
         self.rtol, self.tol, self.n_samples = rtol, tol, n_samples
         self.reuse_monodromy, self.polish = reuse_monodromy, polish
-        three_d = isinstance(self.model, SpaceModel)
+        three_d = isinstance(self.model, PipeModel3D)
         #: the rotation about the vertical maps 3-D orbits to orbits
         self.axisymmetric = three_d and abs(math.sin(self.model.params.alpha)) < 1e-12
         # The 3-D tips: 16 samples a step on the quintic, a parabola through them.

@@ -13,8 +13,8 @@ from typing import Literal, Protocol
 import numpy as np
 
 from fempipe.model.discretization import Discretization
-from fempipe.model.kinematics import tip_values
-from fempipe.model.space import SpaceModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.three_d.model import PipeModel3D
 from fempipe.solvers.radau.collocation import product_weights
 
 __all__ = [
@@ -40,15 +40,15 @@ TIP_KEYS_3D = (*TIP_KEYS, "Y_tip")
 
 def _tips(model, q: np.ndarray) -> dict:
     """The tip coordinates of one state (n,) or many (m, n) of a planar or 3-D model."""
-    if isinstance(model, SpaceModel):
+    if isinstance(model, PipeModel3D):
         return model.tip_coordinates(q)
-    tip = tip_values(model.disc, q, model.params.alpha)
+    tip = compute_tip(model.disc, q, model.params.alpha)
     return {k: tip[k] for k in TIP_KEYS}
 
 
 def eta_tip(disc: Discretization, q: np.ndarray) -> float:
     """eta_tip of a planar state (independent of alpha)."""
-    return tip_values(disc, q, 0.0)["eta_tip"]
+    return compute_tip(disc, q, 0.0)["eta_tip"]
 
 
 def eta_tip_gradient(disc: Discretization, q: np.ndarray) -> np.ndarray:
@@ -63,7 +63,7 @@ def section_value(model, q: np.ndarray) -> float:
     eta_tip in the plane; in 3-D it oscillates at the period of an out-of-plane swing, where
     eta_tip alone swings at twice that frequency (a figure eight) or not at all.
     """
-    if isinstance(model, SpaceModel):
+    if isinstance(model, PipeModel3D):
         d = model.tip_coordinates(q)
         return d["eta_tip"] + d["Y_tip"]
     return eta_tip(model.disc, q)
@@ -71,7 +71,7 @@ def section_value(model, q: np.ndarray) -> float:
 
 def section_gradient(model, q: np.ndarray) -> np.ndarray:
     """d :func:`section_value` / dq, shape (n,)."""
-    if isinstance(model, SpaceModel):
+    if isinstance(model, PipeModel3D):
         g = model.tip_position_gradient(q)
         return g[1] + g[2]
     return eta_tip_gradient(model.disc, q)
@@ -252,7 +252,7 @@ def tip_extrema(
 
     Parameters
     ----------
-    model : PipeModel or SpaceModel
+    model : PipeModel or PipeModel3D
     orbit : OrbitSamples
     per_step : int
     refine, fine : {'parabola', 'bounded'}, int

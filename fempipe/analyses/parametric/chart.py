@@ -15,8 +15,8 @@ import numpy as np
 
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from .floquet import PulsationPencil, ReducedPulsation
 from .regions import Candidate, ParametricRegion, candidates, locate_region

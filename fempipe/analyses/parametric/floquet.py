@@ -19,7 +19,7 @@ import scipy.linalg as sla
 
 from fempipe.analyses.stability.hopf.pipe import dense
 from fempipe.analyses.stability.linear import straight_is_static, straight_pencil
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import A as RADAU_A
 from fempipe.solvers.radau import C as RADAU_C
 

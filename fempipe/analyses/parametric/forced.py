@@ -16,8 +16,8 @@ from fempipe.analyses.dynamics import PulsatingFlow
 from fempipe.analyses.statics import solve_sagged
 from fempipe.core.errors import SolverError
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import Radau
 
 __all__ = ["ForcedResponse", "solve_forced_response"]
@@ -56,9 +56,9 @@ def _period_map(
         sensitivity=True,
     )
     alpha = model.params.alpha
-    tips = [tip_values(model.disc, x[:n], alpha)["theta_tip"]]
+    tips = [compute_tip(model.disc, x[:n], alpha)["theta_tip"]]
     for _, q, _ in stepper.steps(T):
-        tips.append(tip_values(model.disc, q, alpha)["theta_tip"])
+        tips.append(compute_tip(model.disc, q, alpha)["theta_tip"])
     return np.r_[stepper.q, stepper.qdot], stepper.sensitivity_matrix, tips
 
 

@@ -23,8 +23,8 @@ from fempipe.analyses.dynamics import PulsatingFlow
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.core.errors import SolverError
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.radau import IntegrationError, Radau
 
 from .floquet import PulsationPencil, ReducedPulsation
@@ -165,7 +165,7 @@ class _PeriodMap:
 def _extremes(model: PipeModel, qs: np.ndarray) -> tuple[float, tuple, tuple]:
     """max |theta(1)| (a parabola through the largest sample and its neighbours on the closed
     orbit), and the (min, max) of X_tip and Z_tip."""
-    tips = tip_values(model.disc, qs[:-1], model.params.alpha)
+    tips = compute_tip(model.disc, qs[:-1], model.params.alpha)
     th = np.abs(tips["theta_tip"])
     k = int(np.argmax(th))
     a, b, c = th[k - 1], th[k], th[(k + 1) % th.size]

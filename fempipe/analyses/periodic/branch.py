@@ -21,7 +21,7 @@ import numpy as np
 
 from fempipe.core.parallel import single_blas_thread
 from fempipe.model.dynamics_problem import refuse_hysteretic
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.continuation import CorrectorError, SharpTurnError, continue_curve
 
 from .problem import MONODROMY_AT_ORBIT, MONODROMY_NEAR, CycleCorrector, Flow

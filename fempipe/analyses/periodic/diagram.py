@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from fempipe.analyses.limit_cycle import TIP_KEYS
 from fempipe.core.files import write_text
 from fempipe.model.dynamics_problem import refuse_hysteretic
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .branch import continue_cycles
 from .hopf import analyse_static, equilibrium_tip, point_dict, primary_states, static_points

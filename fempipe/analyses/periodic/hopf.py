@@ -17,8 +17,8 @@ from fempipe.analyses.limit_cycle import TIP_KEYS
 from fempipe.analyses.stability import analyse_stability, linearized_matrices, linearly_stable
 from fempipe.analyses.statics import solve_path
 from fempipe.core.companion import first_order_matrix
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 
 from .points import POINT_KEYS
 from .results import HopfPoint
@@ -140,7 +140,7 @@ def static_points(
 
 def equilibrium_tip(model: PipeModel, q: np.ndarray) -> dict:
     """``{"eta_tip": [y, y], ...}``: an equilibrium's tip in the [min, max] form of the points."""
-    tip = tip_values(model.disc, q, model.params.alpha)
+    tip = compute_tip(model.disc, q, model.params.alpha)
     return {k: [float(tip[k]), float(tip[k])] for k in TIP_KEYS}
 
 

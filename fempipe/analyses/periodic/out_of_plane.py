@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from fempipe.analyses.limit_cycle import LimitCycle, ShootingError, shoot
-from fempipe.analyses.space import compute_out_of_plane_floquet
-from fempipe.analyses.space.verdict import cycle_entries, equilibrium_verdict
+from fempipe.analyses.three_d import compute_out_of_plane_floquet
+from fempipe.analyses.three_d.verdict import cycle_entries, equilibrium_verdict
 from fempipe.core.errors import SolverError
 from fempipe.core.files import write_text
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .results import CyclePoint, nontrivial_multipliers
 
@@ -66,7 +66,7 @@ def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) ->
     Returns
     -------
     dict
-        The keys of :func:`fempipe.analyses.space.verdict.cycle_entries` and
+        The keys of :func:`fempipe.analyses.three_d.verdict.cycle_entries` and
         ``planar_block_max_multiplier`` (the planar multipliers again: evidence).
     """
     oop = compute_out_of_plane_floquet(model, cycle)

@@ -19,7 +19,7 @@ import numpy as np
 from fempipe.analyses.limit_cycle import state_distance
 from fempipe.analyses.limit_cycle.tips import CollocationOrbit, tip_extrema
 from fempipe.model.dynamics_problem import PipeDynamics, acceleration
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, CorrectorError
 from fempipe.solvers.radau import IntegrationError, Radau
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from fempipe.analyses.statics import NewtonError, switch_branch
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .branch_analysis import BranchAnalysis
 from .canonical import RESOLUTION_TOL, resolution

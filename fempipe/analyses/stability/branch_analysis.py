@@ -17,7 +17,7 @@ import numpy as np
 
 from fempipe.analyses.statics import NewtonError
 from fempipe.core.rootfinding import brentq
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .canonical import Resolution
 from .chunked_branch import ChunkedBranch

@@ -11,8 +11,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from fempipe.core.rootfinding import brentq
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 #: Relative frequency error up to which a discretization resolves a canonical mode.
 RESOLUTION_TOL = 0.05

@@ -18,7 +18,7 @@ from fempipe.analyses.statics import (
     solve_sagged,
     solve_static,
 )
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .linear import straight_is_static, straight_pencil
 

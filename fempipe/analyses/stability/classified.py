@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fempipe.core.matching import assignment
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .canonical import RESOLVED_SHARE, Resolution, canonical_weights
 from .eigensolvers import quadratic_eigen

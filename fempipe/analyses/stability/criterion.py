@@ -14,8 +14,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from fempipe.core.parallel import single_blas, single_blas_thread
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from .canonical import RESOLUTION_TOL, RESOLVED_SHARE, cantilever_frequencies, resolution
 from .classified import STABILITY_TOL, classify_spectrum
@@ -60,7 +60,7 @@ def linearly_stable(
     if sparse is None:
         sparse = bool(disc.sparse) and disc.n > QZ_MAX_N
     # The sparse path applies the planar operators without forming them; the
-    # out-of-plane problem is formed densely (fempipe.model.out_of_plane).
+    # out-of-plane problem is formed densely (fempipe.model.out_of_plane.model).
     if sparse and model.plane == "in":
         decision = _sparse_stable(model, np.asarray(q, dtype=float), tolerance)
         if decision is not _DENSE:

@@ -13,9 +13,9 @@ from dataclasses import replace
 import numpy as np
 
 from fempipe.core.errors import ParamError
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import in_plane_model, out_of_plane_model
+from fempipe.model.out_of_plane.model import build_in_plane_model, build_out_of_plane_model
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 #: The planes of the linear problems about a planar static state.
 PLANES = ("in", "out")
@@ -33,8 +33,8 @@ def plane_models(model: PipeModel, planes) -> list[PipeModel]:
         raise ParamError(
             "planes", f"model is linearized out of the plane; pass planes=('out',), got {planes!r}"
         )
-    planar = in_plane_model(model)
-    build = {"in": lambda: planar, "out": lambda: out_of_plane_model(model)}
+    planar = build_in_plane_model(model)
+    build = {"in": lambda: planar, "out": lambda: build_out_of_plane_model(model)}
     return [build[p]() for p in PLANES if p in planes]
 
 

@@ -9,8 +9,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fempipe.core.parallel import run_tasks
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import VARIANT_FIELDS, Params
+from fempipe.model.plane.operators import PipeModel
 
 from .analysis import analyse_stability, find_critical_velocity
 from .events import StabilityResult

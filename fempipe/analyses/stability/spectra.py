@@ -10,9 +10,9 @@ import numpy as np
 
 from fempipe.analyses.statics import solve_sagged
 from fempipe.core.parallel import single_blas
-from fempipe.model.kinematics import shape
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_shape
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from .canonical import RESOLUTION_TOL, resolution
 from .classified import STABILITY_TOL, classify_spectrum, eigenvalue_dict, mode_order
@@ -184,12 +184,12 @@ class ModeShape:
 
 def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> ModeShape:
     """Shape of the resolved eigenvalue ``spec.lam[index]`` in theta and in the global frame
-    (the complex-step derivative of :func:`fempipe.model.kinematics.shape` along the mode)."""
+    (the complex-step derivative of :func:`fempipe.model.kinematics.compute_shape` along the mode)."""
     if not -spec.lam.size <= index < spec.lam.size:
         raise ValueError(f"index must be in [0, {spec.lam.size}), got {index}")
     x = spec.vectors[:, index]
     alpha = spec.params.alpha
-    base = shape(disc, spec.q, alpha, points_per_cell)
+    base = compute_shape(disc, spec.q, alpha, points_per_cell)
     theta = disc.evaluate(x, base.xi)
     k = int(np.argmax(np.abs(theta)))
     scale = np.abs(theta[k]) / theta[k] if theta[k] != 0 else 1.0
@@ -197,7 +197,7 @@ def mode_shape(disc, spec: Spectrum, index: int, points_per_cell: int = 4) -> Mo
     h = 1e-30  # complex step: Im f(q + i h d) / h = f'(q) d exactly
     parts = []
     for d in (x.real, x.imag):
-        s = shape(disc, spec.q + 1j * h * d, alpha, points_per_cell)
+        s = compute_shape(disc, spec.q + 1j * h * d, alpha, points_per_cell)
         parts.append((np.imag(s.X_g) / h, np.imag(s.Z_g) / h))
     return ModeShape(
         xi=base.xi,

@@ -20,8 +20,8 @@ from fempipe.analyses.statics import (
 )
 from fempipe.core.matching import assignment
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from .canonical import RESOLUTION_TOL, Resolution, resolution
 from .classified import (

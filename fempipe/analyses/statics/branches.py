@@ -16,8 +16,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.sparse as sp
 
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.continuation import (
     CurveEvent,
     CurvePoint,

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fempipe.core.errors import SolverError
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.newton import NewtonConvergenceError, newton
 
 __all__ = [

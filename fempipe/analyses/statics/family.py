@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.solvers.continuation import BorderedSolution, solve_with_determinant
 from fempipe.solvers.newton import linear_solve
 

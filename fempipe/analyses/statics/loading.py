@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .branches import continue_static
 from .equilibrium import NewtonError, StaticSolution, solve_static

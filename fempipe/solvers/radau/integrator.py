@@ -99,8 +99,8 @@ def _checked(problem) -> ImplicitSecondOrderProblem:
     raise TypeError(
         f"Radau integrates a dynamics problem (fempipe.solvers.radau.ImplicitSecondOrderProblem); "
         f"a {type(problem).__name__} has no {missing}: build one with "
-        "fempipe.model.dynamics_problem.PipeDynamics(model) (a SpaceModel: "
-        "fempipe.model.space_dynamics.SpaceDynamics(model))"
+        "fempipe.model.dynamics_problem.PipeDynamics(model) (a PipeModel3D: "
+        "fempipe.model.three_d.dynamics.PipeDynamics3D(model))"
     )
 
 

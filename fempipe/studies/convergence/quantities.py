@@ -10,14 +10,14 @@ import numpy as np
 
 from fempipe.core.errors import SolverError
 from fempipe.model.discretization import FiniteElement, Modal
-from fempipe.model.kinematics import tip_values
+from fempipe.model.kinematics import compute_tip
 from fempipe.model.params import Params
 from fempipe.model.projection import project
 
 from ..error_estimate import expected_order
 
 #: quantity -> (description, unit).  The static tip values are those of
-#: :func:`fempipe.model.kinematics.tip_values` (Eq. (5), (28)).
+#: :func:`fempipe.model.kinematics.compute_tip` (Eq. (5), (28)).
 QUANTITIES: dict[str, tuple[str, str]] = {
     "theta_tip": ("static tip rotation theta(1)", "rad"),
     "X_tip": ("static tip position X_g(1), down the plumb line", "L"),
@@ -192,7 +192,7 @@ class Quantity:
 
     def __call__(self, disc) -> float | complex:
         # Imported here: the CLI loads this module at start-up (--help); these load scipy.
-        from fempipe.model.operators import PipeModel
+        from fempipe.model.plane.operators import PipeModel
 
         model = PipeModel(disc, self.params)
         if self.name in STATIC_QUANTITIES:
@@ -249,7 +249,7 @@ class Quantity:
         """The limit cycle of ``disc`` (from :attr:`seed` if given, else a transient)."""
         from fempipe.analyses.limit_cycle import ShootingError, find_attractor, shoot
         from fempipe.model.dynamics_problem import PipeDynamics
-        from fempipe.model.operators import PipeModel
+        from fempipe.model.plane.operators import PipeModel
 
         model = PipeModel(disc, self.params)
         if self.seed is not None:
@@ -299,7 +299,7 @@ def static_tip_state(disc, params: Params) -> np.ndarray:
     """The static state at ``params.v`` on the primary branch, followed from v = 0 by
     :func:`~fempipe.analyses.statics.solve_path` to :data:`STATIC_TOL`."""
     from fempipe.analyses.statics import solve_path
-    from fempipe.model.operators import PipeModel
+    from fempipe.model.plane.operators import PipeModel
 
     v = params.v
     # Steps of at most 0.5 in v keep the path on the branch the pipe follows
@@ -311,7 +311,7 @@ def static_tip_state(disc, params: Params) -> np.ndarray:
 
 def _static_tip(model, key: str) -> float:
     q = static_tip_state(model.disc, model.params)
-    return float(tip_values(model.disc, q, model.params.alpha)[key])
+    return float(compute_tip(model.disc, q, model.params.alpha)[key])
 
 
 def _eigenvalue(model, mode: int) -> complex:

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 from fempipe.analyses.dynamics import Trajectory
 from fempipe.analyses.limit_cycle import Attractor
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .attractor import estimate_attractor_errors
 from .stability import EVENT_TOL, estimate_stability_errors

@@ -17,8 +17,8 @@ from fempipe.analyses.stability import linearly_stable
 from fempipe.analyses.statics import solve_static
 from fempipe.core.errors import SolverError
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.projection import project
 from fempipe.solvers.radau import IntegrationError
 from fempipe.studies.error_estimate import ERROR, REFINED, describe, estimate, refine
@@ -114,13 +114,13 @@ def estimate_attractor_errors(
             q_s = solve_static(fine_model, project(disc, q_static, fine)).q
             q0, p0 = make_initial_state(fine_model, mode, amplitude, q_static=q_s)
             tr = simulate(fine_model, q0, p0, t_max, rtol=rtol, flow=flow, callback=callback)
-            tc = tip_values(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
+            tc = compute_tip(fine, tr.q[tr.t >= 0.5 * tr.t[-1]], params.alpha)
             tip = {k: [float(tc[k].min()), float(tc[k].max())] for k in TIP_KEYS}
             refined = AttractorSummary.of("forced", tip=tip)
         elif att.kind == "equilibrium":
             q = solve_static(fine_model, project(disc, att.q, fine)).q
             if linearly_stable(fine_model, q) is True:
-                tv = tip_values(fine, q, params.alpha)
+                tv = compute_tip(fine, q, params.alpha)
                 tip = {k: [float(tv[k])] * 2 for k in TIP_KEYS}
                 refined = AttractorSummary.of("equilibrium", tip=tip)
             else:

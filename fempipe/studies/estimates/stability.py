@@ -11,7 +11,7 @@ from collections.abc import Callable
 # the module, not its names: a test replaces its analyse_stability
 from fempipe.analyses import stability
 from fempipe.core.errors import SolverError
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 from fempipe.studies.error_estimate import ERROR, REFINED, describe, match_events, refine
 
 from .shape import beside, header, pair, with_estimate

@@ -10,8 +10,8 @@ import math
 from collections.abc import Callable, Sequence
 
 from fempipe.analyses.statics import NewtonError, solve_static
-from fempipe.model.kinematics import tip_values
-from fempipe.model.operators import PipeModel
+from fempipe.model.kinematics import compute_tip
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.projection import project
 from fempipe.studies.error_estimate import ERROR, STATIC_TIP_KEYS, describe, refine
 
@@ -80,7 +80,7 @@ def estimate_static_errors(
         if callback is not None:
             callback(i, state)
         alpha = sol.params.alpha
-        tip = None if state is None else tip_values(fine, state.q, alpha)
+        tip = None if state is None else compute_tip(fine, state.q, alpha)
         val = {k: None if tip is None else float(tip[k]) for k in STATIC_TIP_KEYS}
         val["tip_drop"] = None if tip is None else float(tip["X_tip"]) - math.cos(alpha)
         for k in (*STATIC_TIP_KEYS, "tip_drop"):

@@ -15,7 +15,7 @@ import numpy as np
 
 from fempipe.analyses.statics import NewtonError, solve_path
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from ..linear import straight_is_static
 from .normal_form import HopfNormalForm, first_lyapunov_coefficient
@@ -150,7 +150,7 @@ def decorate_events(
 
     ``hopf_note`` is null, or why the other keys are; the flutters out of the plane take their
     keys from ``out_of_plane``, ``{(branch, v): keys}``
-    (:func:`fempipe.analyses.space.onset.out_of_plane_event_keys`).
+    (:func:`fempipe.analyses.three_d.onset.out_of_plane_event_keys`).
     """
     forms = normal_forms(model, result)
     out_of_plane = out_of_plane or {}
@@ -159,7 +159,7 @@ def decorate_events(
         if d is None or d.get("type") != "flutter":
             return
         if d.get("plane", "in") != "in":
-            # the 3-D model's normal form (fempipe.analyses.space.onset.out_of_plane_event_keys)
+            # the 3-D model's normal form (fempipe.analyses.three_d.onset.out_of_plane_event_keys)
             d.update(out_of_plane.get((d["branch"], float(d["v"])), _NOT_PRIMARY))
             return
         key = (d["branch"], d["type"], float(d["v"]), d["mode"])

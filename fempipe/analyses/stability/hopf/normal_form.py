@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from .lyapunov import HopfCoefficient, lyapunov_coefficient
 from .pipe import dense, pipe_derivatives, pipe_jacobian
@@ -21,7 +21,7 @@ from .pipe import dense, pipe_derivatives, pipe_jacobian
 
 @dataclass(frozen=True)
 class HopfChecks3D:
-    """Diagnostics of :func:`~fempipe.analyses.space.onset.hopf_normal_form_3d`.
+    """Diagnostics of :func:`~fempipe.analyses.three_d.onset.hopf_normal_form_3d`.
 
     Attributes
     ----------

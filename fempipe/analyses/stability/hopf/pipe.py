@@ -12,7 +12,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from fempipe.core.companion import first_order_matrix
-from fempipe.model.operators import PipeModel
+from fempipe.model.plane.operators import PipeModel
 
 from ..linear import straight_is_static
 
@@ -22,7 +22,7 @@ def pipe_jacobian(model, x: np.ndarray) -> np.ndarray:
 
     ``[[0, I], [-M^{-1} R_q, -M^{-1} R_q']]`` with the analytic Jacobians at the acceleration
     a = -M^{-1} R(q, q', 0) (docs/theory/stability.md, "First-order form"); ``model`` is a
-    :class:`PipeModel` or the 3-D :class:`~fempipe.model.space.SpaceModel` (x = (U, U')).
+    :class:`PipeModel` or the 3-D :class:`~fempipe.model.three_d.model.PipeModel3D` (x = (U, U')).
     """
     n = model.n
     q, qd = x[:n], x[n:]

@@ -13,13 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from fempipe.io.meshes import write_series
-from fempipe.model.space import SpaceModel
-from fempipe.model.space_chart import tangent
+from fempipe.model.three_d.chart import tangent
+from fempipe.model.three_d.model import PipeModel3D
 
-__all__ = ["space_frame_points", "write_space_trajectory"]
+__all__ = ["frame_points_3d", "write_trajectory_3d"]
 
 
-def space_frame_points(model: SpaceModel, U: np.ndarray) -> tuple[np.ndarray, dict]:
+def frame_points_3d(model: PipeModel3D, U: np.ndarray) -> tuple[np.ndarray, dict]:
     """(points (m, 3) in the VTK frame, point data) of the centerline of U.
 
     The points are the cell edges and the quadrature points, where the
@@ -51,8 +51,8 @@ def space_frame_points(model: SpaceModel, U: np.ndarray) -> tuple[np.ndarray, di
     return points, data
 
 
-def write_space_trajectory(
-    path: str | os.PathLike, model: SpaceModel, t: np.ndarray, U: np.ndarray
+def write_trajectory_3d(
+    path: str | os.PathLike, model: PipeModel3D, t: np.ndarray, U: np.ndarray
 ) -> Path:
     """Write ``path`` (.pvd) and one VTU per time in ``path``'s stem directory, all or none."""
     t = np.asarray(t, dtype=float)
@@ -61,7 +61,5 @@ def write_space_trajectory(
         raise ValueError("t and U must describe the same number of frames")
     p = model.params
     field = {k: float(getattr(p, k)) for k in ("v", "alpha", "beta", "gamma", "mu")}
-    frames = (
-        (*space_frame_points(model, U[k]), {"time": float(t[k])} | field) for k in range(t.size)
-    )
+    frames = ((*frame_points_3d(model, U[k]), {"time": float(t[k])} | field) for k in range(t.size))
     return write_series(path, t, frames, model.quad.edges.size + model.quad.x.size)

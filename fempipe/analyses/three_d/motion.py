@@ -16,14 +16,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...model.operators import PipeModel
-from ...model.space import SpaceModel, planar_state
-from ...model.space_dynamics import SpaceDynamics
+from fempipe.analyses.three_d.whirl import fit_l2, tip_turn
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
+
 from ...solvers.radau import Radau
 from ..dynamics import make_initial_state
 from ..limit_cycle import TIP_KEYS_3D, LimitCycle, ShootingError, section_value, shoot
 from ..statics import solve_static
-from .whirl import fit_l2, tip_turn
 
 __all__ = [
     "Motion3D",
@@ -98,7 +99,9 @@ class Motion3D:
         }
 
 
-def out_of_plane_perturbation(model: SpaceModel, q_static: np.ndarray, mode: int, amplitude: float):
+def out_of_plane_perturbation(
+    model: PipeModel3D, q_static: np.ndarray, mode: int, amplitude: float
+):
     """(a, b) of an out-of-plane rotation psi = amplitude sin((2 mode - 1) pi xi / 2) about the
     planar state q_static: a = psi sin(theta/2) / 2, b = -psi cos(theta/2) / 2 (first order,
     gauge g = 0), fitted in L2 at the quadrature points."""
@@ -125,7 +128,7 @@ def _locate(model, stepper, t0, t1, g0, g1, level):
     return t, q, p
 
 
-def _planarity(model: SpaceModel, U: np.ndarray, axisymmetric: bool) -> float:
+def _planarity(model: PipeModel3D, U: np.ndarray, axisymmetric: bool) -> float:
     d = model.tip_coordinates(np.atleast_2d(U))
     tips = np.column_stack([d["eta_tip"], d["Y_tip"]])
     centred = tips - tips.mean(axis=0)
@@ -176,7 +179,7 @@ def simulate_3d(
         A 3-D state to start from instead.
     """
     start = time.process_time()
-    space = SpaceModel(model.disc, model.params)
+    space = PipeModel3D(model.disc, model.params)
     q_s = solve_static(model).q
     if initial is not None:
         U0, Ud0 = (np.array(x, dtype=float) for x in initial)
@@ -185,7 +188,7 @@ def simulate_3d(
             model, space, q_s, mode, amplitude, out_of_plane_amplitude
         )
     level = section_value(space, planar_state(q_s))
-    stepper = Radau(SpaceDynamics(space), U0, Ud0, rtol=rtol)
+    stepper = Radau(PipeDynamics3D(space), U0, Ud0, rtol=rtol)
     ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
     watch = _Returns(
         space,
@@ -305,7 +308,7 @@ class _Returns:
         self.attempts += 1
         _t, q_k, p_k = self.sections[-1]
         try:
-            problem = SpaceDynamics(self.space)
+            problem = PipeDynamics3D(self.space)
             cycle = shoot(problem, q_k, p_k, first[1], level=self.level, rtol=self.shoot_rtol)
         except ShootingError:
             return None
@@ -391,7 +394,7 @@ def _recurrence(sections, n_max: int, tol: float, scale: float):
     return None
 
 
-def _whirl_rate(model: SpaceModel, U: np.ndarray, t: np.ndarray, period: float) -> float | None:
+def _whirl_rate(model: PipeModel3D, U: np.ndarray, t: np.ndarray, period: float) -> float | None:
     """The tip's angular velocity about the vertical if it turns at a constant distance, else None."""
     radius, angle = tip_turn(model.tip_coordinates(np.atleast_2d(U)))
     if radius.min() < 0.95 * radius.max():

@@ -1,7 +1,7 @@
 """Bifurcation diagrams of the 3-D model: its attractors against v, by resumable sweeps.
 
 At each v the 3-D model is integrated until its attractor is recognized
-(:func:`~fempipe.analyses.space.motion.simulate_3d`); the point records its kind
+(:func:`~fempipe.analyses.three_d.motion.simulate_3d`); the point records its kind
 (equilibrium, periodic, whirl, quasi-periodic, non-periodic), whether the motion is planar,
 the tip's [min, max] in the plane and out of it (Y_tip), the period and the whirl rate.  Each
 point starts from the state the previous one ended on; after an equilibrium, and at the first
@@ -20,7 +20,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ...model.operators import PipeModel
+from fempipe.analyses.three_d.motion import Motion3D, simulate_3d
+from fempipe.model.plane.operators import PipeModel
+
 from ..limit_cycle import TIP_KEYS_3D
 from ..periodic.points import (
     BifurcationPoint,
@@ -30,7 +32,6 @@ from ..periodic.points import (
     run_diagram,
     sweep_points,
 )
-from .motion import Motion3D, simulate_3d
 
 __all__ = ["Diagram3D", "compute_diagram_3d", "sweep_3d"]
 

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dynamics_problem import PipeDynamics
-from .operators import PipeModel
-from .out_of_plane import OutOfPlaneOperators
+from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.out_of_plane.model import OutOfPlaneOperators
+from fempipe.model.plane.operators import PipeModel
 
 __all__ = ["OutOfPlaneMotion", "OutOfPlaneVariation"]
 
@@ -60,7 +60,7 @@ class OutOfPlaneMotion:
     # ---------------------------------------------------- stiffness --
     def base_force(self, b: _Base) -> np.ndarray:
         """G_0, the force field of the planar motion, shape (n_q, 2): the 3-D model's
-        :meth:`~fempipe.model.space.SpaceModel.force_field` at the planar state.
+        :meth:`~fempipe.model.three_d.model.PipeModel3D.force_field` at the planar state.
         """
         p, quad, st = self.params, self.quad, b.state
         t = np.stack([np.cos(st.theta), np.sin(st.theta)], axis=1)

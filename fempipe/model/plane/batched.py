@@ -1,6 +1,6 @@
 """The pipe's residual, Jacobians and dR/dv at several states in one call (the Radau stages).
 
-On small meshes :meth:`PipeModel.residual <fempipe.model.operators.PipeModel.residual>` is
+On small meshes :meth:`PipeModel.residual <fempipe.model.plane.operators.PipeModel.residual>` is
 mostly call overhead, so :class:`StageKernels` evaluates the terms of Eq. (20) for S states
 stacked in (S, n) arrays at once, for the pipe without variants and steady flow
 (:meth:`StageKernels.for_model` returns None otherwise).  The integration operators are
@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from .operators import PipeModel
-from .quadrature import LineQuadrature
-from .weak_form import as_dense
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.quadrature import LineQuadrature
+from fempipe.model.weak_form import as_dense
 
 __all__ = [
     "DENSE_INTEGRALS_MAX",
@@ -107,7 +107,7 @@ class StageKernels:
     """Residual, Jacobians and dR/dv of the pipe without variants at S stacked states.
 
     Build it with :meth:`for_model`.  Each method takes rows ``Q, P, A`` of shape (S, n) and
-    equals the :class:`~fempipe.model.operators.PipeModel` term row by row, to round-off.
+    equals the :class:`~fempipe.model.plane.operators.PipeModel` term row by row, to round-off.
     """
 
     def __init__(self, model: PipeModel) -> None:

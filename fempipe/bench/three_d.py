@@ -19,14 +19,14 @@ from dataclasses import replace
 import numpy as np
 
 from fempipe.analyses.limit_cycle import find_attractor, shoot
-from fempipe.analyses.space.floquet import compute_out_of_plane_floquet
+from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
 from fempipe.bench.harness import best_time, register
 from fempipe.model.discretization import DEFAULT_FE, FiniteElement, discretization_from_name
 from fempipe.model.dynamics_problem import PipeDynamics
-from fempipe.model.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.model.space import SpaceModel, planar_state
-from fempipe.model.space_dynamics import SpaceDynamics
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 from fempipe.solvers.radau import Radau
 from fempipe.validation.space_runs import planar_model, space_cycles
 
@@ -43,13 +43,13 @@ def bench_space_cycle(quick: bool = False) -> dict:
     repeats = 1 if quick else 3
     params = Params(alpha=math.pi / 2, v=10.0)
     planar = PipeModel(disc, params)
-    space = SpaceModel(disc, params)
+    space = PipeModel3D(disc, params)
     guess = find_attractor(planar).cycle
     t_planar, cycle = _cpu(
         lambda: shoot(PipeDynamics(planar), guess.q0, guess.qdot0, guess.period), repeats
     )
     U0, Ud0 = planar_state(guess.q0), planar_state(guess.qdot0)
-    t_space, cycle3 = _cpu(lambda: shoot(SpaceDynamics(space), U0, Ud0, guess.period), repeats)
+    t_space, cycle3 = _cpu(lambda: shoot(PipeDynamics3D(space), U0, Ud0, guess.period), repeats)
     t_oop, oop = _cpu(lambda: compute_out_of_plane_floquet(planar, cycle), repeats)
     t_oop3, oop3 = _cpu(lambda: compute_out_of_plane_floquet(planar, cycle, method="3d"), repeats)
     U, Ud = planar_state(cycle.q0), planar_state(cycle.qdot0)
@@ -62,7 +62,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
         lambda: _period(PipeDynamics(planar), cycle.q0, cycle.qdot0, cycle.period), repeats
     )
     t_ps, steps_s = _cpu(
-        lambda: _period(SpaceDynamics(space), U, planar_state(cycle.qdot0), cycle.period),
+        lambda: _period(PipeDynamics3D(space), U, planar_state(cycle.qdot0), cycle.period),
         repeats,
     )
     shares = _period_shares(disc, params, U, planar_state(cycle.qdot0), cycle.period)
@@ -110,7 +110,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
 def _period_shares(disc, params, U, Ud, period: float) -> dict:
     """One 3-D period with the monodromy on a model that accounts its weak form's CPU."""
 
-    class Accounted(SpaceModel):
+    class Accounted(PipeModel3D):
         jacobians_cpu = residuals_cpu = 0.0
 
         def jacobians(self, *args, **kwargs):
@@ -126,7 +126,7 @@ def _period_shares(disc, params, U, Ud, period: float) -> dict:
             return out
 
     t0 = time.process_time()
-    _period(SpaceDynamics(Accounted(disc, params)), U, Ud, period)
+    _period(PipeDynamics3D(Accounted(disc, params)), U, Ud, period)
     return {
         "space_period_instrumented_cpu_s": time.process_time() - t0,
         "space_period_jacobians_cpu_s": Accounted.jacobians_cpu,
@@ -149,13 +149,13 @@ def bench_space_nonplanar_cycle(quick: bool = False) -> dict:
     alpha, v = math.pi / 2, 6.0
     found = space_cycles(sorted({4, elements}), alpha, v)[elements]
     pm = planar_model(elements, alpha)
-    space = SpaceModel(pm.disc, replace(pm.params, v=v))
+    space = PipeModel3D(pm.disc, replace(pm.params, v=v))
     repeats = 1 if quick else 2
     t_shoot, cycle = _cpu(
-        lambda: shoot(SpaceDynamics(space), found.q0, found.qdot0, found.period), repeats
+        lambda: shoot(PipeDynamics3D(space), found.q0, found.qdot0, found.period), repeats
     )
     t_period, steps = _cpu(
-        lambda: _period(SpaceDynamics(space), found.q0, found.qdot0, found.period), repeats
+        lambda: _period(PipeDynamics3D(space), found.q0, found.qdot0, found.period), repeats
     )
     return {
         "discretization": pm.disc.name,

@@ -203,7 +203,7 @@ def _zoom(ax, result, colors, window) -> None:
     ax.indicate_inset_zoom(inset, edgecolor="0.4")
 
 
-def plot_spatial_branches(result, ax=None, title=None):
+def plot_branches_in_planes(result, ax=None, title=None):
     """theta(1) of the static branches against v, stable in 3-D or not, with both planes' events.
 
     Solid stable in 3-D, dashed unstable in the plane, dash-dot unstable out of it only.  Events:

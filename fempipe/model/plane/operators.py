@@ -1,8 +1,8 @@
 """The pipe model: the weak form of Eq. (20) summed, with its analytic Jacobians.
 
-:class:`PipeModel` sums the physical terms (:mod:`~fempipe.model.local_terms`,
-:mod:`~fempipe.model.nonlocal_terms`, :mod:`~fempipe.model.variants`,
-:mod:`~fempipe.model.springs`): the residual R(q, q', q''), its Jacobians (the same ones
+:class:`PipeModel` sums the physical terms (:mod:`~fempipe.model.plane.local_terms`,
+:mod:`~fempipe.model.plane.nonlocal_terms`, :mod:`~fempipe.model.plane.variants`,
+:mod:`~fempipe.model.plane.springs`): the residual R(q, q', q''), its Jacobians (the same ones
 serve Newton's method, the stability matrices of Eqs. (31b)-(33) and the implicit
 integrators), the mass matrix, the static problem and the energy.
 
@@ -14,13 +14,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .discretization import Discretization
-from .local_terms import LocalTerms
-from .nonlocal_terms import NonlocalTerms
-from .params import Params
-from .springs import PartRule, SpringTerms
-from .variants import EndMassTerms, ExternalDampingTerm
-from .weak_form import Fields
+from fempipe.model.discretization import Discretization
+from fempipe.model.params import Params
+from fempipe.model.plane.local_terms import LocalTerms
+from fempipe.model.plane.nonlocal_terms import NonlocalTerms
+from fempipe.model.plane.springs import PartRule, SpringTerms
+from fempipe.model.plane.variants import EndMassTerms, ExternalDampingTerm
+from fempipe.model.weak_form import Fields
 
 __all__ = ["Fields", "PipeModel"]
 
@@ -47,7 +47,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         self._part_rules: dict[float, PartRule] = {}
 
     #: The plane of the linear problem of :meth:`linearization` (``"out"`` for
-    #: :func:`fempipe.model.out_of_plane.out_of_plane_model`).
+    #: :func:`fempipe.model.out_of_plane.model.build_out_of_plane_model`).
     plane = "in"
 
     def with_params(self, params: Params) -> PipeModel:

@@ -16,10 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...model.operators import PipeModel
-from ...model.out_of_plane_motion import OutOfPlaneVariation
-from ...model.space import SpaceModel, planar_state
-from ...model.space_dynamics import SpaceDynamics
+from fempipe.model.out_of_plane.motion import OutOfPlaneVariation
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
+
 from ...solvers.radau import Radau
 from ..limit_cycle.results import LimitCycle
 
@@ -104,7 +105,7 @@ def compute_out_of_plane_floquet(
     start = time.process_time()
     nt = model.disc.n
     if method == "3d":
-        problem = SpaceDynamics(SpaceModel(model.disc, model.params))
+        problem = PipeDynamics3D(PipeModel3D(model.disc, model.params))
         q0, p0, n_fields = planar_state(cycle.q0), planar_state(cycle.qdot0), 3
     else:
         problem = OutOfPlaneVariation(model)

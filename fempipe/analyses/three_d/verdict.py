@@ -1,8 +1,8 @@
 """Does a planar attractor survive in three dimensions (:func:`classify_3d`)?
 
 For a limit cycle its out-of-plane Floquet multipliers
-(:func:`~fempipe.analyses.space.floquet.compute_out_of_plane_floquet`), for an equilibrium
-the out-of-plane spectrum (:mod:`fempipe.model.out_of_plane`); a non-periodic motion gets no
+(:func:`~fempipe.analyses.three_d.floquet.compute_out_of_plane_floquet`), for an equilibrium
+the out-of-plane spectrum (:mod:`fempipe.model.out_of_plane.model`); a non-periodic motion gets no
 verdict.  Docs: docs/theory/space.md, "What it answers".
 """
 
@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model.operators import PipeModel
-from ...model.out_of_plane import out_of_plane_model
+from fempipe.analyses.three_d.floquet import OutOfPlaneFloquet, compute_out_of_plane_floquet
+from fempipe.model.out_of_plane.model import build_out_of_plane_model
+from fempipe.model.plane.operators import PipeModel
+
 from ..limit_cycle.results import Attractor
 from ..stability import linearly_stable
-from .floquet import OutOfPlaneFloquet, compute_out_of_plane_floquet
 
 __all__ = [
     "ROUGH_DEFECT",
@@ -81,6 +82,6 @@ def cycle_entries(model: PipeModel, oop: OutOfPlaneFloquet, stable_in_plane: boo
 def equilibrium_verdict(model: PipeModel, q: np.ndarray, stable_in_plane: bool | None) -> dict:
     """``stable_out_of_plane`` (the out-of-plane spectrum at ``q``) and ``stable_3d``
     (None when the planar verdict is unknown)."""
-    out_stable = bool(linearly_stable(out_of_plane_model(model), q))
+    out_stable = bool(linearly_stable(build_out_of_plane_model(model), q))
     both = None if stable_in_plane is None else bool(stable_in_plane and out_stable)
     return {"stable_out_of_plane": out_stable, "stable_3d": both}

@@ -2,7 +2,7 @@
 
 :class:`Seeds`: the bases, the integration operators with their transposes and the test
 seeds of :func:`fempipe.core.dual.pullback`; :meth:`Seeds.assemble` turns a pull-back into
-the Jacobian of :class:`fempipe.model.space.SpaceModel`.
+the Jacobian of :class:`fempipe.model.three_d.model.PipeModel3D`.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import weakref
 import numpy as np
 import scipy.sparse as sp
 
-from .discretization import Discretization
-from .weak_form import as_dense
+from fempipe.model.discretization import Discretization
+from fempipe.model.weak_form import as_dense
 
 __all__ = ["KINDS", "Seeds"]
 

@@ -1,8 +1,8 @@
 """The pipe in three dimensions: the geometrically exact weak form, one method per term.
 
-:class:`SpaceModel` is the planar model's pipe (Eq. (20)) in space, under the same
+:class:`PipeModel3D` is the planar model's pipe (Eq. (20)) in space, under the same
 assumptions, on the same discretizations.  The unknown is the tangent t through the chart of
-:mod:`fempipe.model.space_chart`, three fields U = (theta_dofs, a_dofs, b_dofs); the
+:mod:`fempipe.model.three_d.chart`, three fields U = (theta_dofs, a_dofs, b_dofs); the
 ``gauge`` term gives the chart's free direction an equation of its own, zero at planar
 states (:func:`planar_state`).  Jacobians are exact, by :class:`~fempipe.core.dual.Dual`
 fields pulled back through the transposed integration operators.
@@ -15,24 +15,24 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..core.dual import Dual, cross, dot, linear_functional, pullback, stack
-from .discretization import Discretization
-from .params import Params
-from .space_assembly import KINDS, Seeds
-from .space_chart import SpaceFields, space_fields, tangent
+from fempipe.core.dual import Dual, cross, dot, linear_functional, pullback, stack
+from fempipe.model.discretization import Discretization
+from fempipe.model.params import Params
+from fempipe.model.three_d.assembly import KINDS, Seeds
+from fempipe.model.three_d.chart import Fields3D, compute_fields_3d, tangent
 
 __all__ = [
     "GAUGE_DAMPING",
     "GAUGE_STIFFNESS",
     "GAUGE_WEIGHT",
-    "SpaceModel",
+    "PipeModel3D",
     "planar_state",
     "plane_of",
 ]
 
 #: c_g and k_g of the gauge equation: the gauge relaxes with the rates 50 and 100 (roots of
 #: s^2 + c_g s + k_g), so that its Floquet multipliers (e^(-50 T) and below) lie far
-#: inside those of the physics (:mod:`fempipe.analyses.space.floquet`).
+#: inside those of the physics (:mod:`fempipe.analyses.three_d.floquet`).
 GAUGE_DAMPING = 150.0
 GAUGE_STIFFNESS = 5000.0
 #: w_g: the weight of the gauge equation in the weak form (docs/theory/space.md: a heavier
@@ -52,7 +52,7 @@ def plane_of(U: np.ndarray) -> np.ndarray:
     return U[: U.size // 3].copy()
 
 
-class SpaceModel:
+class PipeModel3D:
     """The residual of the 3-D weak form and its exact Jacobians.
 
     Parameters
@@ -98,9 +98,9 @@ class SpaceModel:
             for B in (self._seeds.Phi, self._seeds.dPhi)
         )
 
-    def with_params(self, params: Params) -> SpaceModel:
+    def with_params(self, params: Params) -> PipeModel3D:
         """The model on the same discretization with other parameters."""
-        return SpaceModel(self.disc, params)
+        return PipeModel3D(self.disc, params)
 
     @property
     def gravity_direction(self) -> np.ndarray:
@@ -109,7 +109,7 @@ class SpaceModel:
         return np.array([np.cos(a), -np.sin(a), 0.0])
 
     # ------------------------------------------------------- fields --
-    def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> SpaceFields:
+    def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> Fields3D:
         """The kinematics at the quadrature points, with derivatives if ``blocks`` is not empty.
 
         U, Ud, Udd have shape (3 n,) or (S, 3 n); the fields have a last axis of length S.  With
@@ -135,7 +135,7 @@ class SpaceModel:
                 val = Dual(val, np.broadcast_to(loc, val.shape + loc.shape[-1:]))
             out[name] = val
         tip_val = (U.reshape(S, 3, nt) @ s.tip).T[None]  # (1, 3, S)
-        return space_fields(
+        return compute_fields_3d(
             out["u"],
             out["u_dot"],
             out["u_ddot"],
@@ -152,22 +152,22 @@ class SpaceModel:
         return x.nonlocal_map(op, adjoint)
 
     # ------------------------------------------- the terms: force fields G --
-    def inertia(self, fl: SpaceFields) -> Dual:
+    def inertia(self, fl: Fields3D) -> Dual:
         """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
         return self._integral(self._integral(fl.t_ddot, "C"), "CR")
 
-    def coriolis(self, fl: SpaceFields) -> Dual:
+    def coriolis(self, fl: Fields3D) -> Dual:
         """``2 v sqrt(beta) C^R t_dot``."""
         p = self.params
         return (2.0 * p.v * np.sqrt(p.beta)) * self._integral(fl.t_dot, "CR")
 
-    def flow_acceleration(self, fl: SpaceFields, v_dot: float) -> Dual | None:
+    def flow_acceleration(self, fl: Fields3D, v_dot: float) -> Dual | None:
         """``v_dot sqrt(beta) C^R t`` (unsteady flow)."""
         if not v_dot:
             return None
         return (v_dot * np.sqrt(self.params.beta)) * self._integral(fl.t, "CR")
 
-    def follower(self, fl: SpaceFields) -> Dual:
+    def follower(self, fl: Fields3D) -> Dual:
         """``v^2 t(1)``: the jet's reaction and the fluid's centrifugal force, Eq. (14)."""
         v = self.params.v
         return (v * v) * fl.t_tip
@@ -178,14 +178,14 @@ class SpaceModel:
         lever = 1.0 - self.x + p.end_mass
         return -p.gamma * lever[:, None, None] * self.gravity_direction[None, :, None]
 
-    def end_mass_inertia(self, fl: SpaceFields) -> Dual | None:
+    def end_mass_inertia(self, fl: Fields3D) -> Dual | None:
         """``Gamma r_ddot(1)``: the end mass's inertia, felt by every section."""
         G = self.params.end_mass
         if not G:
             return None
         return G * self._integral(fl.t_ddot, "int")  # (1, 3, S)
 
-    def external_damping(self, fl: SpaceFields) -> Dual | None:
+    def external_damping(self, fl: Fields3D) -> Dual | None:
         """``sigma C^R C t_dot``: a viscous force -sigma r_dot along the pipe."""
         sigma = self.params.external_damping
         if not sigma:
@@ -193,19 +193,19 @@ class SpaceModel:
         rdot = self._integral(fl.t_dot, "C")
         return sigma * self._integral(rdot, "CR")
 
-    def bending(self, fl: SpaceFields) -> tuple[Dual, Dual]:
+    def bending(self, fl: Fields3D) -> tuple[Dual, Dual]:
         """(A, B): the variation of ``(1/2) \\int |t'|^2`` is ``\\int A_c phi_i + B_c phi_i'``."""
         tp = fl.t_prime
         A = stack([dot(tp, fl.dt_prime[c]) for c in range(3)], axis=1)
         B = stack([dot(tp, fl.J[c]) for c in range(3)], axis=1)
         return A, B
 
-    def curvature_rate(self, fl: SpaceFields) -> Dual:
+    def curvature_rate(self, fl: Fields3D) -> Dual:
         """k = t x t_dot' + Omega t': the co-rotational rate of the curvature vector."""
         Omega = self._integral(dot(fl.t_prime, cross(fl.t, fl.t_dot)), "C")
         return cross(fl.t, fl.t_dot_prime) + fl.t_prime * Omega[:, None]
 
-    def kelvin_voigt(self, fl: SpaceFields) -> tuple[Dual, Dual] | None:
+    def kelvin_voigt(self, fl: Fields3D) -> tuple[Dual, Dual] | None:
         """(A, B) of the objective Kelvin-Voigt damping (docs/theory/space.md)."""
         mu = self.params.mu
         if not mu:
@@ -218,7 +218,7 @@ class SpaceModel:
         B = stack([dot(fl.J[c], kxt) for c in range(3)], axis=1)
         return mu * A, mu * B
 
-    def gauge(self, fl: SpaceFields) -> Dual:
+    def gauge(self, fl: Fields3D) -> Dual:
         """A of the gauge term: ``w_g r_g f_c`` (docs/theory/space.md)."""
         f, u = fl.fiber, fl.u
         rate = dot(f, fl.u_dot)
@@ -231,7 +231,7 @@ class SpaceModel:
         return f * (self.gauge_weight * r)[:, None]
 
     # ------------------------------------------------------- totals --
-    def force_field(self, fl: SpaceFields, v_dot: float = 0.0) -> Dual:
+    def force_field(self, fl: Fields3D, v_dot: float = 0.0) -> Dual:
         """The sum G of the force fields of all terms tested as ``\\int delta t . G``."""
         G = self.inertia(fl) + self.coriolis(fl) + self.follower(fl) + self.gravity()
         for extra in (
@@ -243,7 +243,7 @@ class SpaceModel:
                 G = G + extra
         return G
 
-    def _weak_form(self, fl: SpaceFields, v_dot: float) -> tuple:
+    def _weak_form(self, fl: Fields3D, v_dot: float) -> tuple:
         """(A, B): the residual is ``\\int phi_i A_c + phi_i' B_c`` (Duals or arrays (n_q, 3, S))."""
         G = self.force_field(fl, v_dot)
         A, B = self.bending(fl)
@@ -313,7 +313,7 @@ class SpaceModel:
         return -sla.cho_solve(sla.cho_factor(M), self.residual(U, Ud, None, v_dot))
 
     # ------------------------------------------------------ geometry --
-    def centerline_velocity(self, fl: SpaceFields) -> np.ndarray:
+    def centerline_velocity(self, fl: Fields3D) -> np.ndarray:
         """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
         return self.quad.cumulative(fl.t_dot[:, :, 0])
 
@@ -342,7 +342,7 @@ class SpaceModel:
         the plane of the static state), Y_tip (out of it).
 
         Floats for one state, arrays (S,) for S states; for a planar state those of
-        :func:`fempipe.model.kinematics.tip_values`.
+        :func:`fempipe.model.kinematics.compute_tip`.
         """
         r1 = np.tensordot(self.w, self.tangents(U), axes=(0, 0))  # (3, S)
         a = self.params.alpha

@@ -1,6 +1,6 @@
 """The variant terms of the pipe: an end mass and external viscous damping.
 
-Zero by default; the springs are :mod:`fempipe.model.springs`.  Derivation:
+Zero by default; the springs are :mod:`fempipe.model.plane.springs`.  Derivation:
 docs/theory/variants.md.
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .weak_form import Fields, WeakForm
+from fempipe.model.weak_form import Fields, WeakForm
 
 __all__ = ["EndMassTerms", "ExternalDampingTerm"]
 

@@ -12,14 +12,14 @@ import textwrap
 
 import numpy as np
 
-from fempipe.io.space_trajectory import space_frame_points
-from fempipe.model.space import SpaceModel
+from fempipe.io.trajectory_3d import frame_points_3d
+from fempipe.model.three_d.model import PipeModel3D
 
 from .layout import shared_legend
 from .static import UNSTABLE_COLOR
 from .style import parameter_text
 
-__all__ = ["plot_space_snapshots", "plot_tip_orbit"]
+__all__ = ["plot_snapshots_3d", "plot_tip_orbit"]
 
 #: Axis labels of the frame, as the planar figures word them.
 _AXIS = {
@@ -34,7 +34,7 @@ MARGIN = 0.08
 _RATIO = (0.4, 2.5)
 
 
-def _caption(model: SpaceModel, motion, window: str, width: int = 140) -> str:
+def _caption(model: PipeModel3D, motion, window: str, width: int = 140) -> str:
     """The parameters, then the attractor and what is drawn, wrapped to ``width`` characters."""
     head = f"{parameter_text(model.params)} ({model.disc.name})"
     kind = f"{motion.kind}, {motion.motion}"
@@ -103,7 +103,7 @@ def _view_limits(x: np.ndarray, y: np.ndarray) -> tuple[tuple, tuple]:
     return (cx - hx, cx + hx), (cy - hy, cy + hy)
 
 
-def _static_tip(model: SpaceModel, static, tips: dict) -> dict | None:
+def _static_tip(model: PipeModel3D, static, tips: dict) -> dict | None:
     """The static state's tip and verdict if within the tip path's extent of the window, else None."""
     if static is None:
         return None
@@ -124,7 +124,7 @@ def _static_label(stable) -> str:
     )
 
 
-def plot_tip_orbit(model: SpaceModel, motion, static=None):
+def plot_tip_orbit(model: PipeModel3D, motion, static=None):
     """The tip's path over the window from above, the side and the front; returns the Figure.
 
     ``static`` = (3-D state, stable in 3-D or None): its tip is marked when near the motion,
@@ -233,7 +233,7 @@ def _frame_3d(ax, pts: np.ndarray) -> None:
     ax.set_box_aspect(span, zoom=0.85)
 
 
-def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12, static=None):
+def plot_snapshots_3d(model: PipeModel3D, motion, n_snapshots: int = 12, static=None):
     """The centerline at ``n_snapshots`` times over one oscillation in 3-D, colored by τ, with the
     tip's path and ``static`` as in :func:`plot_tip_orbit`; returns the Figure.
     """
@@ -254,7 +254,7 @@ def plot_space_snapshots(model: SpaceModel, motion, n_snapshots: int = 12, stati
     drawn = [np.zeros((1, 3))]  # the clamp
 
     def draw(U, **kw):
-        _, d = space_frame_points(model, U)
+        _, d = frame_points_3d(model, U)
         xyz = np.column_stack([d["Z_g"], d["Y_g"], d["X_g"]])
         ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], **kw)
         drawn.append(xyz)

@@ -4,7 +4,7 @@ The linear problem, in the rotation psi of the tangent out of the plane (psi(0) 
 psi'(1) = 0), about any planar static state of Eq. (31a), on the planar model's
 discretizations.  :class:`OutOfPlaneOperators` is its weak form, one method per term;
 :class:`OutOfPlaneModel` carries it as a pipe model so the stability solvers run on it
-unchanged (:func:`out_of_plane_model`, :func:`in_plane_model`).  On the buckled branches of
+unchanged (:func:`build_out_of_plane_model`, :func:`build_in_plane_model`).  On the buckled branches of
 the standing pipe, the rotation about the vertical is made an exact neutral mode.
 
 Derivation: docs/theory/out_of_plane.md.
@@ -18,15 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .operators import PipeModel
-from .weak_form import as_dense
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.weak_form import as_dense
 
 __all__ = [
     "OutOfPlaneMatrices",
     "OutOfPlaneModel",
     "OutOfPlaneOperators",
-    "in_plane_model",
-    "out_of_plane_model",
+    "build_in_plane_model",
+    "build_out_of_plane_model",
 ]
 
 
@@ -74,7 +74,7 @@ _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 class OutOfPlaneOperators:
     """The weak form of the out-of-plane problem, one method per term.
 
-    ``model`` is the planar :class:`~fempipe.model.operators.PipeModel`.  The state-independent
+    ``model`` is the planar :class:`~fempipe.model.plane.operators.PipeModel`.  The state-independent
     matrices are computed once per discretization.
     """
 
@@ -253,7 +253,7 @@ def axisymmetric(params) -> bool:
 class OutOfPlaneModel(PipeModel):
     """The planar pipe whose linearization is the out-of-plane problem.
 
-    Static states, residual and static Jacobian are the :class:`~fempipe.model.operators.PipeModel`'s;
+    Static states, residual and static Jacobian are the :class:`~fempipe.model.plane.operators.PipeModel`'s;
     :meth:`linearization` and :meth:`hysteretic_stiffness` are out of the plane, so every
     stability solver analyses the motion out of the plane when given this model.
     """
@@ -277,14 +277,14 @@ class OutOfPlaneModel(PipeModel):
         return C @ np.asarray(qdot) + M @ np.asarray(qddot)
 
 
-def out_of_plane_model(model: PipeModel) -> OutOfPlaneModel:
+def build_out_of_plane_model(model: PipeModel) -> OutOfPlaneModel:
     """An :class:`OutOfPlaneModel` of ``model``'s pipe (``model`` itself if it is one)."""
     if isinstance(model, OutOfPlaneModel):
         return model
     return OutOfPlaneModel(model.disc, model.params)
 
 
-def in_plane_model(model: PipeModel) -> PipeModel:
+def build_in_plane_model(model: PipeModel) -> PipeModel:
     """``model``'s pipe with its linearization in the plane (a PipeModel unless it already is one)."""
     if model.plane == "in":
         return model

@@ -4,7 +4,7 @@ The unknowns u = (theta, a, b), each discretized like theta, give the tangent as
 of e_1 under the unnormalized quaternion (cos(theta/2), a, b, sin(theta/2)):
 t = (cos theta + a^2 - b^2, sin theta + 2 a b, 2 (a s - b c)) / (1 + a^2 + b^2), the planar
 tangent for a = b = 0.  The map has rank 2 everywhere; t does not change along the fiber
-(:func:`fiber_direction`).  :func:`space_fields` gives t and its derivatives as
+(:func:`fiber_direction`).  :func:`compute_fields_3d` gives t and its derivatives as
 :class:`~fempipe.core.dual.Dual` values.
 
 Derivation: docs/theory/space.md, "The unknown".
@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.dual import Dual, cos, matvec, sin, stack
+from fempipe.core.dual import Dual, cos, matvec, sin, stack
 
-__all__ = ["SpaceFields", "fiber_direction", "space_fields", "tangent"]
+__all__ = ["Fields3D", "fiber_direction", "compute_fields_3d", "tangent"]
 
 
 def _vec(x, y, z) -> Dual:
@@ -79,7 +79,7 @@ def _fiber_rate(p: _Point, ud: Dual) -> Dual:
 
 
 @dataclass(frozen=True)
-class SpaceFields:
+class Fields3D:
     """The kinematics of a 3-D state at the quadrature points (all (n_q, 3) Duals).
 
     ``u, u_dot, u_ddot, u_prime, u_dot_prime`` the fields, ``t, t_dot, t_ddot, t_prime,
@@ -146,8 +146,8 @@ def _dot(x, y):
     return (x * y).sum(axis=1)
 
 
-def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
-    """The kinematics of :class:`SpaceFields`, every derivative of t a product with the gradient and Hessian formed once."""
+def compute_fields_3d(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> Fields3D:
+    """The kinematics of :class:`Fields3D`, every derivative of t a product with the gradient and Hessian formed once."""
     p = _Point.of(u)
     P, D = p.numerator()
     inv = 1.0 / D
@@ -176,7 +176,7 @@ def space_fields(u, u_dot, u_ddot, u_prime, u_dot_prime, u_tip) -> SpaceFields:
     ) * inv[:, None, None]
     J = [Jm[:, :, c] for c in range(3)]
     dtp = [dtm[:, :, c] for c in range(3)]
-    return SpaceFields(
+    return Fields3D(
         u=u,
         u_dot=u_dot,
         u_ddot=u_ddot,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .weak_form import Fields, WeakForm
+from fempipe.model.weak_form import Fields, WeakForm
 
 __all__ = ["NonlocalTerms"]
 

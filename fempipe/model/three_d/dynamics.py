@@ -1,6 +1,6 @@
 """The 3-D pipe's equations of motion as the integrator's problem.
 
-:class:`SpaceDynamics` is to :class:`~fempipe.model.space.SpaceModel` what
+:class:`PipeDynamics3D` is to :class:`~fempipe.model.three_d.model.PipeModel3D` what
 :class:`~fempipe.model.dynamics_problem.PipeDynamics` is to the planar model: the Radau
 integrator, shooting and the Floquet multipliers run on it unchanged.
 """
@@ -11,31 +11,31 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .dynamics_problem import ModelDynamics
-from .space import SpaceModel
+from fempipe.model.dynamics_problem import ModelDynamics
+from fempipe.model.three_d.model import PipeModel3D
 
-__all__ = ["SpaceDynamics"]
+__all__ = ["PipeDynamics3D"]
 
 
 class _VelocityDerivative:
-    """dR/dv of the stages by one :meth:`SpaceModel.velocity_derivative`."""
+    """dR/dv of the stages by one :meth:`PipeModel3D.velocity_derivative`."""
 
-    def __init__(self, model: SpaceModel) -> None:
+    def __init__(self, model: PipeModel3D) -> None:
         self.model = model
 
     def __call__(self, Q: np.ndarray, P: np.ndarray, Acc: np.ndarray) -> np.ndarray:
         return self.model.velocity_derivative(np.atleast_2d(Q), np.atleast_2d(P))
 
 
-class SpaceDynamics(ModelDynamics):
+class PipeDynamics3D(ModelDynamics):
     """The 3-D weak form as an implicit second-order problem; ``flow`` tau -> (v, v_dot) optional (rule 9)."""
 
     #: the three stage Jacobians of the sensitivity are one evaluation of the weak form
-    #: with S = 3 (:meth:`SpaceModel.jacobians`), cheaper than three evaluations of one
+    #: with S = 3 (:meth:`PipeModel3D.jacobians`), cheaper than three evaluations of one
     prefers_batched_stage_jacobians = True
 
     def __init__(
-        self, model: SpaceModel, flow: Callable[[float], tuple[float, float]] | None = None
+        self, model: PipeModel3D, flow: Callable[[float], tuple[float, float]] | None = None
     ) -> None:
         self.model = model
         self.flow = flow
@@ -59,7 +59,7 @@ class SpaceDynamics(ModelDynamics):
         return self.model.jacobians(np.atleast_2d(Q), np.atleast_2d(P), np.atleast_2d(A))
 
     def solve_acceleration(self, model, q, qdot, v_dot: float) -> np.ndarray:
-        """:meth:`SpaceModel.acceleration`."""
+        """:meth:`PipeModel3D.acceleration`."""
         return model.acceleration(q, qdot, v_dot)
 
     def describe(self) -> str:

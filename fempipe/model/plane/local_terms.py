@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .weak_form import Fields, WeakForm, scale_rows
+from fempipe.model.weak_form import Fields, WeakForm, scale_rows
 
 __all__ = ["LocalTerms"]
 

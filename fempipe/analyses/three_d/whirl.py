@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...model.space import SpaceModel
-from ...model.space_dynamics import SpaceDynamics
+from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D
+
 from ...solvers.radau import Radau
 from ..limit_cycle import LimitCycle, largest_nontrivial, shoot
 
@@ -73,7 +74,7 @@ class Whirl:
         }
 
 
-def fit_l2(model: SpaceModel, f: np.ndarray) -> np.ndarray:
+def fit_l2(model: PipeModel3D, f: np.ndarray) -> np.ndarray:
     """The finite element function(s) nearest f (n_q or (n_q, k)) at the quadrature points (L2)."""
     disc = model.disc
     Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
@@ -83,7 +84,7 @@ def fit_l2(model: SpaceModel, f: np.ndarray) -> np.ndarray:
 
 
 def tangent_state(
-    model: SpaceModel, t: np.ndarray, t_dot: np.ndarray
+    model: PipeModel3D, t: np.ndarray, t_dot: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """(U, U_dot) of a tangent field ``t`` and its rate ``t_dot`` (n_q, 3) at the quadrature
     points: the chart's gauge-free representative of t = (cos psi cos theta, cos psi sin
@@ -105,7 +106,7 @@ def tangent_state(
 
 
 def whirl_state(
-    model: SpaceModel, tangent: Callable[[np.ndarray], np.ndarray], omega: float
+    model: PipeModel3D, tangent: Callable[[np.ndarray], np.ndarray], omega: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """(U, U_dot) of the shape ``tangent(xi)`` (shape (3, m) at m points) turning at omega
     about e_1: t_dot = omega e_1 x t."""
@@ -114,7 +115,7 @@ def whirl_state(
     return tangent_state(model, t, t_dot)
 
 
-def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.0):
+def whirl_guess_from_cycle(model: PipeModel3D, cycle: LimitCycle, tau: float = 0.0):
     """(U, U_dot, period) of a whirl guessed from a planar cycle: theta(xi, tau) in the plane
     and psi = theta(xi, tau - T/4) out of it, to first order a rotating wave."""
     T = cycle.period
@@ -141,10 +142,10 @@ def whirl_guess_from_cycle(model: SpaceModel, cycle: LimitCycle, tau: float = 0.
     return U, Ud, T
 
 
-def _step_ends(model: SpaceModel, cycle: LimitCycle, rtol: float):
+def _step_ends(model: PipeModel3D, cycle: LimitCycle, rtol: float):
     """tau and U at the step ends of one period (the dense output between them is of lower
     order, too rough for the measures of rigidity)."""
-    stepper = Radau(SpaceDynamics(model), cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
+    stepper = Radau(PipeDynamics3D(model), cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
     ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
     for t, q, _ in stepper.steps(cycle.period):
         ts.append(t)
@@ -158,7 +159,7 @@ def _radius_statistics(ts: np.ndarray, rad: np.ndarray) -> tuple[float, float]:
     return mean, float((rad.max() - rad.min()) / mean)
 
 
-def _rotation_defect(model: SpaceModel, ts: np.ndarray, Us: np.ndarray, omega: float) -> float:
+def _rotation_defect(model: PipeModel3D, ts: np.ndarray, Us: np.ndarray, omega: float) -> float:
     r0 = model.centerline(Us[0])
     worst = 0.0
     for tau, U in zip(ts, Us, strict=True):
@@ -177,7 +178,7 @@ def tip_turn(tips: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def find_whirl(
-    model: SpaceModel,
+    model: PipeModel3D,
     U0: np.ndarray,
     Ud0: np.ndarray,
     period: float,
@@ -190,7 +191,7 @@ def find_whirl(
 
     Parameters
     ----------
-    model : SpaceModel
+    model : PipeModel3D
         At an axisymmetric inclination (sin alpha = 0, else ValueError).
     U0, Ud0, period : ndarray, ndarray, float
         The guess (:func:`whirl_state`, :func:`whirl_guess_from_cycle`).
@@ -199,7 +200,7 @@ def find_whirl(
     """
     if abs(math.sin(model.params.alpha)) > 1e-12:
         raise ValueError("a whirl needs an axisymmetric pipe: sin(alpha) = 0")
-    cycle = shoot(SpaceDynamics(model), U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
+    cycle = shoot(PipeDynamics3D(model), U0, Ud0, period, rtol=rtol, tol=tol, max_iter=max_iter)
     ts, Us = _step_ends(model, cycle, rtol)
     rad, ang = tip_turn(model.tip_coordinates(Us))
     turn = ang[-1] - ang[0]

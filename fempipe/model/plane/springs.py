@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .weak_form import WeakForm, as_dense, scale_rows
+from fempipe.model.weak_form import WeakForm, as_dense, scale_rows
 
 __all__ = ["PartRule", "SpringTerms"]
 

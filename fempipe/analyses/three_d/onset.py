@@ -16,9 +16,9 @@ import numpy as np
 
 from fempipe.analyses.statics import solve_static
 from fempipe.core.parallel import single_blas
-from fempipe.model.operators import PipeModel
-from fempipe.model.out_of_plane import axisymmetric
-from fempipe.model.space import SpaceModel, planar_state
+from fempipe.model.out_of_plane.model import axisymmetric
+from fempipe.model.plane.operators import PipeModel
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 
 from ..stability.hopf.flutter import EVENT_KEYS
 from ..stability.hopf.lyapunov import lyapunov_coefficient
@@ -56,7 +56,7 @@ def _static(planar: PipeModel, v: float, q0: np.ndarray) -> np.ndarray:
     return solve_static(planar.with_params(replace(planar.params, v=v)), q0, tol=1e-12).q
 
 
-def _pair_at(model: SpaceModel, planar: PipeModel, v: float, q0: np.ndarray):
+def _pair_at(model: PipeModel3D, planar: PipeModel, v: float, q0: np.ndarray):
     q = _static(planar, v, q0)
     m = model.with_params(replace(model.params, v=v))
     x = np.concatenate([planar_state(q), np.zeros(model.n)])
@@ -83,7 +83,7 @@ def locate_hopf(
         With \\|Re lambda\\| <= :data:`HOPF_TOL` |lambda|, or the secant's step below
         :data:`HOPF_V_TOL` (the round-off of Re lambda on fine meshes).
     """
-    model = SpaceModel(planar.disc, planar.params)
+    model = PipeModel3D(planar.disc, planar.params)
     v0, v1 = float(v_guess), float(v_guess) + dv
     l0, q = _pair_at(model, planar, v0, q_guess)
     l1, q = _pair_at(model, planar, v1, q)
@@ -136,7 +136,7 @@ def hopf_normal_form_3d(
     v, q0, its = locate_hopf(planar, q_guess, v_guess)
     params = replace(planar.params, v=v)
     pm = planar.with_params(params)
-    model = SpaceModel(planar.disc, params)
+    model = PipeModel3D(planar.disc, params)
     n = model.n
     U0 = planar_state(q0)
     x0 = np.concatenate([U0, np.zeros(n)])

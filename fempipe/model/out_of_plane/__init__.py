@@ -1,0 +1,1 @@
+"""The linear motion out of the plane of a planar state (docs/theory/out_of_plane.md)."""
