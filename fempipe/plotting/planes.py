@@ -209,7 +209,7 @@ def plot_branches_in_planes(result, ax=None, title=None):
     Solid stable in 3-D, dashed unstable in the plane, dash-dot unstable out of it only.  Events:
     large open markers in the plane, small filled ones out of it.  The vertical line is the 3-D
     v_cr; an inset shows the two planes' first losses when closer than :data:`ZOOM_BELOW` of the
-    range.  ``result`` is a SpatialStability; returns the Axes.
+    range.  ``result`` is a StabilityInPlanes; returns the Axes.
     """
     import matplotlib.pyplot as plt
 

@@ -218,7 +218,7 @@ def plot_stability_map(smap, ax=None, title=None):
     the 3-D v_cr.  The key is below the axes.
     """
     if not getattr(smap, "planar", True):
-        return _plot_spatial_map(smap, ax, title)
+        return _plot_map_in_planes(smap, ax, title)
     ax = new_axes(ax)
     a = np.asarray(smap.alphas) / np.pi
     flutter, vcr = smap.array("v_flutter"), smap.array("v_cr")
@@ -252,7 +252,7 @@ def plot_stability_map(smap, ax=None, title=None):
 _BAND = {"lw": 8.0, "alpha": 0.22, "solid_capstyle": "round"}
 
 
-def _plot_spatial_map(smap, ax, title):
+def _plot_map_in_planes(smap, ax, title):
     """:func:`plot_stability_map` of a map in three dimensions (its docstring)."""
     from matplotlib.lines import Line2D
 
