@@ -221,9 +221,8 @@ def _continue(
         end, _, _ = flow(y[:-1], *sw(y[-1] + h), sensitivity=False)
         return (end - y[:-1] - G) / h
 
-    def correct(y, row, target, column=None):
-        """Newton on G(y) = 0, row . y = target: (y, iterations, residual, S, qs, G) or None;
-        the parameter's column of the Jacobian ``column`` if given (a chord), else fresh."""
+    def correct(y, row, target):
+        """Newton on G(y) = 0, row . y = target: (y, iterations, residual, S, qs, G) or None."""
         for it in range(max_iterations + 1):
             try:
                 G, S, qs = evaluate(y)
@@ -237,7 +236,7 @@ def _continue(
                 return None
             J = np.zeros((2 * n + 1, 2 * n + 1))
             J[:-1, :-1] = S - np.eye(2 * n)
-            J[:-1, -1] = d_parameter(y, G) if column is None else column
+            J[:-1, -1] = d_parameter(y, G)
             J[-1] = row
             y = y + np.linalg.solve(J, -np.r_[G, row @ y - target])
         return None
@@ -309,8 +308,7 @@ def _continue(
         # the tangent: the null vector of [S - I, G_p] continuing the previous direction
         J = np.zeros((2 * n + 1, 2 * n + 1))
         J[:-1, :-1] = S - np.eye(2 * n)
-        column = d_parameter(y, G)
-        J[:-1, -1] = column
+        J[:-1, -1] = d_parameter(y, G)
         J[-1] = weight**2 * tangent
         new = np.linalg.solve(J, np.r_[np.zeros(2 * n), 1.0])
         tangent = new / math.sqrt(dot(new, new))
@@ -326,11 +324,15 @@ def _continue(
                 break
         if found is None:
             break
-    first = points[0]
-    moved = math.copysign(1.0, getattr(first, parameter) - start)
-    if moved == inward and first.stable:
+    # the first step's direction (omega - omega_edge ~ amplitude^2, the same sign) and the
+    # stability of the small orbit after it (at the first, a multiplier is 1 to O(amplitude^2))
+    small = points[min(1, len(points) - 1)]
+    moved = math.copysign(1.0, getattr(small, parameter) - getattr(points[0], parameter))
+    if len(points) == 1:
+        moved = math.copysign(1.0, getattr(small, parameter) - start)
+    if moved == inward and small.stable:
         criticality = "supercritical"
-    elif moved != inward and not first.stable:
+    elif moved != inward and not small.stable:
         criticality = "subcritical"
     else:
         criticality = "undetermined"
@@ -360,8 +362,8 @@ def continue_subharmonic(
     max_points: int = 40,
     max_amplitude: float = 1.5,
     steps: int = 128,
-    rtol: float = 1e-9,
-    atol: float = 1e-9,
+    rtol: float = 1e-8,
+    atol: float = 1e-8,
     tol: float = 1e-8,
     max_iterations: int = 8,
 ) -> SubharmonicBranch:
@@ -423,8 +425,8 @@ def continue_subharmonic_in_sigma(
     max_points: int = 40,
     max_amplitude: float = 1.5,
     steps: int = 128,
-    rtol: float = 1e-9,
-    atol: float = 1e-9,
+    rtol: float = 1e-8,
+    atol: float = 1e-8,
     tol: float = 1e-8,
     max_iterations: int = 8,
 ) -> SubharmonicBranch:
