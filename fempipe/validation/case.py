@@ -36,6 +36,7 @@ class References:
     caption: str = ""
     checks: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     declaration: Mapping[str, Any] = field(default_factory=dict)
+    tables: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
     def value(self, key: str, quick: bool = False) -> Any:
         """The value of ``key``; with ``quick``, that of ``key + "_quick"`` (which must exist)."""
@@ -44,6 +45,13 @@ class References:
     def source(self, key: str) -> str:
         """Where the value of ``key`` comes from (for a tolerance: why it has that size)."""
         return self.entries[key]["source"]
+
+    def table(self, name: str, rows: Iterable, **values: Any) -> Table:
+        """The table ``name`` of the ``"tables"`` section: its title, columns (``"a | b"``) and
+        note templates filled from ``values`` (``str.format``), and ``rows``."""
+        t = self.tables[name]
+        title, columns, note = (t.get(k, "").format(**values) for k in ("title", "columns", "note"))
+        return Table(title, columns, tuple(rows), note)
 
     def names(self, quick: bool) -> dict:
         """The values the templates name (quick: the ``_quick`` variants) and ``"sources"``."""
@@ -84,12 +92,12 @@ def load_references(case: str) -> References:
     for key, entry in entries.items():
         if not isinstance(entry, dict) or "value" not in entry or "source" not in entry:
             raise ValueError(f"{path}: entry {key!r} needs 'value' and 'source'")
-    meta = (data.get("caption", ""), checks, data.get("case", {}))
+    meta = (data.get("caption", ""), checks, data.get("case", {}), data.get("tables", {}))
     return References(case, data["_about"], entries, *meta)
 
 
 #: The keys of a reference file that are not reference numbers.
-_META = ("caption", "checks", "case")
+_META = ("caption", "checks", "case", "tables")
 
 
 def not_emitted(name: str, case: str) -> Check:

@@ -10,7 +10,7 @@ h^(2k), the sine modes as N^-3 (docs/theory/conventions.md).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from fempipe.studies.convergence import estimate_order, extrapolate_richardson
 from .bvp import solve_static_bvp
 from .case import Case
 from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .drawing import figure_panels, finish_figure, label_axes
 from .dynamic_runs import cycle_on
 from .evaluate import Measured, measure
 from .fig02b import pipe
@@ -105,14 +105,9 @@ def study_checks(study: Study, tag: str) -> list[Measured]:
     fields = {"tag": tag, "quantity": study.quantity}
     checks = [
         measure(
-            "{tag}_order_{degree}",
-            s.order,
-            degree=label[-2:],
-            label=label,
-            reference=s.expected,
-            **fields,
+            "{tag}_order_{degree}", s.order, degree=k[-2:], label=k, reference=s.expected, **fields
         )
-        for label, s in study.series.items()
+        for k, s in study.series.items()
         if s.expected is not None
     ]
     m = study.series["modal"]
@@ -121,37 +116,21 @@ def study_checks(study: Study, tag: str) -> list[Measured]:
     return checks
 
 
-def _static_compute(p):
-
-    def compute(disc) -> float:
-        return float(
-            static_shapes(disc, p.alpha, p.gamma, [p.v], beta=p.beta, mu=0.0).tips["X_tip"][0]
-        )
-
-    return compute
-
-
 def static_study(quick: bool) -> tuple[Study, list]:
     """(a) The Texier-Dorbolo tip drop X_g(1) at U = 2 m/s."""
     ref = CASE.references
     si = pipe()
     p = si.params(ref.value("static_U"))
-    st = run_study(
-        "static tip drop X_g(1) (Texier-Dorbolo, U = 2 m/s)",
-        _static_compute(p),
-        ref.value("fe_elements", quick),
-        ref.value("modes", quick),
-        ref.value("fe_order"),
-    )
+
+    def compute(disc) -> float:
+        shapes = static_shapes(disc, p.alpha, p.gamma, [p.v], beta=p.beta, mu=0.0)
+        return float(shapes.tips["X_tip"][0])
+
+    quantity = "static tip drop X_g(1) (Texier-Dorbolo, U = 2 m/s)"
+    meshes = (ref.value("fe_elements", quick), ref.value("modes", quick), ref.value("fe_order"))
+    st = run_study(quantity, compute, *meshes)
     bvp = solve_static_bvp(p.alpha, p.gamma, p.v, tol=1e-11)
-    st = Study(
-        st.quantity,
-        st.reference,
-        st.reference_error,
-        st.series,
-        st.paper_modes,
-        ("solve_bvp", bvp.X_tip),
-    )
+    st = replace(st, independent=("solve_bvp", bvp.X_tip))
     checks = study_checks(st, "static")
     atol = max(1e-10, 10 * st.reference_error)
     checks.append(measure("static_reference_vs_bvp", st.reference, reference=bvp.X_tip, atol=atol))
@@ -167,14 +146,9 @@ def vcr_studies(quick: bool) -> tuple[list, list]:
         def compute(disc, a=a) -> float:
             return critical_velocity(disc, a, **PAPER_CASE, xtol=1e-12).v_cr
 
-        st = run_study(
-            f"v_cr, α = {np.degrees(a):.0f}°",
-            compute,
-            ref.value("vcr_fe_elements", quick),
-            ref.value("vcr_modes", quick),
-            ref.value("fe_order"),
-            roundoff=1e-11,
-        )
+        meshes = (ref.value("vcr_fe_elements", quick), ref.value("vcr_modes", quick))
+        name = f"v_cr, α = {np.degrees(a):.0f}°"
+        st = run_study(name, compute, *meshes, ref.value("fe_order"), roundoff=1e-11)
         studies.append(st)
         checks += study_checks(st, f"vcr{np.degrees(a):.0f}")
     return studies, checks
@@ -192,16 +166,10 @@ def lco_study() -> tuple[Study, list]:
         c = cycle_on(disc, a, v, seed_disc, guess)
         return float("nan") if c is None else 0.5 * (c.tip["eta_tip"][1] - c.tip["eta_tip"][0])
 
-    st = run_study(
-        "limit-cycle amplitude of η(1), α = 0, v = 10",
-        compute,
-        ref.value("lco_fe_elements"),
-        ref.value("lco_modes"),
-        ref.value("fe_order"),
-        roundoff=ref.value("lco_floor"),
-    )
-    checks = study_checks(st, "lco")
-    return st, checks
+    meshes = (ref.value(k) for k in ("lco_fe_elements", "lco_modes", "fe_order"))
+    name = "limit-cycle amplitude of η(1), α = 0, v = 10"
+    st = run_study(name, compute, *meshes, roundoff=ref.value("lco_floor"))
+    return st, study_checks(st, "lco")
 
 
 def _paper_table(studies: Sequence[Study]) -> Table:
@@ -210,11 +178,7 @@ def _paper_table(studies: Sequence[Study]) -> Table:
         for n, val in s.paper_modes.items():
             rows.append((s.quantity, f"N = {n}", val, s.reference, val - s.reference,
                          abs(val - s.reference) / max(abs(s.reference), 1e-300)))  # fmt: skip
-    return Table(
-        "Error of the paper's N = 3 and N = 4 against the converged FE answer",
-        "quantity | modes | modal value | converged FE (Richardson) | error | relative error",
-        tuple(rows),
-    )
+    return CASE.references.table("paper", tuple(rows))
 
 
 def _order_table(studies: Sequence[Study]) -> Table:
@@ -225,12 +189,7 @@ def _order_table(studies: Sequence[Study]) -> Table:
                          "" if ser.expected is None else ser.expected,
                          ", ".join(str(int(ser.dofs[i])) for i in ser.fit),
                          float(np.min(ser.errors))))  # fmt: skip
-    return Table(
-        "Observed orders (error ~ dofs^-p)",
-        ("quantity", "series", "observed p", "theory p", "dofs used in fit", "smallest |error|"),
-        tuple(rows),
-        note="For FE, dofs ∝ 1/h, so p is the order in h; for the modes, the order in N.",
-    )
+    return CASE.references.table("orders", tuple(rows))
 
 
 def _reference_table(studies: Sequence[Study]) -> Table:
@@ -239,13 +198,7 @@ def _reference_table(studies: Sequence[Study]) -> Table:
         name, val = s.independent if s.independent else ("—", "—")
         diff = abs(s.reference - val) if s.independent else "—"
         rows.append((s.quantity, s.reference, s.reference_error, name, val, diff))
-    return Table(
-        "Richardson-extrapolated references",
-        "quantity | reference | error estimate | independent check | its value | |difference|",
-        tuple(rows),
-        note="Reference: the two finest P3 values extrapolated with p = 6; error estimate: "
-        "the size of the Richardson correction.",
-    )
+    return CASE.references.table("references", tuple(rows))
 
 
 def run(quick: bool = False) -> CaseResult:
@@ -254,35 +207,17 @@ def run(quick: bool = False) -> CaseResult:
     requires = study_names("static", ref.value("fe_elements", quick))
     for a in ref.value("vcr_alpha", quick):
         requires += study_names(f"vcr{np.degrees(a):.0f}", ref.value("vcr_fe_elements", quick))
-    studies, checks = [], []
-    st, ch = static_study(quick)
-    studies.append(st)
-    checks += ch
+    st, checks = static_study(quick)
     sts, ch = vcr_studies(quick)
-    studies += sts
-    checks += ch
+    studies, checks = [st, *sts], checks + ch
     if not quick:
         requires += study_names("lco", ref.value("lco_fe_elements"))
         st, ch = lco_study()
-        studies.append(st)
-        checks += ch
-    rows = tuple(r for s in studies for r in s.to_rows())
-    data_table = Table(
-        "All values and errors",
-        ("quantity", "series", "dofs", "value", "|error|"),
-        rows,
-    )
+        studies, checks = [*studies, st], checks + ch
+    data_table = ref.table("values", (r for s in studies for r in s.to_rows()))
+    tables = (_paper_table(studies), _reference_table(studies), _order_table(studies), data_table)
     return CASE.result(
-        checks,
-        quick=quick,
-        requires=requires,
-        tables=(
-            _paper_table(studies),
-            _reference_table(studies),
-            _order_table(studies),
-            data_table,
-        ),
-        data={"studies": studies},
+        checks, quick=quick, requires=requires, tables=tables, data={"studies": studies}
     )
 
 
@@ -299,41 +234,25 @@ def draw_study(study: Study, ax=None):
     markers = {"FE P1": "o-", "FE P2": "s-", "FE P3": "^-", "modal": "d--"}
     for label, s in study.series.items():
         ok = s.errors > 0
-        ax.loglog(
-            s.dofs[ok],
-            s.errors[ok],
-            markers.get(label, ".-"),
-            color=SERIES_COLORS.get(label),
-            ms=4,
-            label=f"{label}: p = {s.order:.2f}"
-            + (f" (theory {s.expected:g})" if s.expected else ""),
-        )
+        lab = f"{label}: p = {s.order:.2f}" + (f" (theory {s.expected:g})" if s.expected else "")
+        style = markers.get(label, ".-")
+        ax.loglog(s.dofs[ok], s.errors[ok], style, color=SERIES_COLORS.get(label), ms=4, label=lab)
         if len(s.fit) >= 2:
             ax.loglog(s.dofs[list(s.fit)], s.errors[list(s.fit)], "k-", lw=2.5, alpha=0.25)
     for n, val in study.paper_modes.items():
         e = abs(val - study.reference)
         # N = 3 and N = 4 lie one dof apart: N = 3 is labelled on the left, the others right.
         left = n == min(study.paper_modes)
-        ax.annotate(
-            f"N = {n}",
-            (n, e),
-            textcoords="offset points",
-            xytext=(-5, 4) if left else (5, -4),
-            ha="right" if left else "left",
-            va="bottom" if left else "top",
-            fontsize=9,
-        )
+        place = {"xytext": (-5, 4), "ha": "right", "va": "bottom"} if left else {}
+        place = place or {"xytext": (5, -4), "ha": "left", "va": "top"}
+        ax.annotate(f"N = {n}", (n, e), textcoords="offset points", fontsize=9, **place)
     if study.reference_error > 0:
-        ax.axhline(
-            study.reference_error, color="0.5", ls=":", lw=1, label="reference error estimate"
-        )
+        err = study.reference_error
+        ax.axhline(err, color="0.5", ls=":", lw=1, label="reference error estimate")
     from matplotlib.ticker import NullFormatter
 
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("degrees of freedom")
-    ax.set_ylabel("|error|")
-    ax.set_title(study.quantity, fontsize=9)
-    ax.grid(alpha=0.3, which="both")
+    label_axes(ax, "degrees of freedom", "|error|", study.quantity, grid="both", fontsize=9)
     ax.legend(fontsize=9)
     return ax
 
@@ -347,20 +266,12 @@ def draw_orders(studies: Sequence[Study], ax=None):
     vc = [s for s in studies if s.quantity.startswith("v_cr")]
     alphas = [float(s.quantity.split("=")[1].strip().rstrip("°")) for s in vc]
     for label, mk in (("FE P1", "o-"), ("FE P2", "s-"), ("FE P3", "^-"), ("modal", "d--")):
-        ax.plot(
-            alphas,
-            [s.series[label].order for s in vc],
-            mk,
-            color=SERIES_COLORS[label],
-            ms=4,
-            label=label,
-        )
+        orders = [s.series[label].order for s in vc]
+        ax.plot(alphas, orders, mk, color=SERIES_COLORS[label], ms=4, label=label)
     for p in (2, 4, 6):
         ax.axhline(p, color="0.6", lw=0.8, ls=":")
-    ax.set_xlabel("α (degrees)")
-    ax.set_ylabel("observed order p")
-    ax.set_title("v_cr: observed orders against α (theory 2, 4, 6)", fontsize=9)
-    ax.grid(alpha=0.3)
+    title = "v_cr: observed orders against α (theory 2, 4, 6)"
+    label_axes(ax, "α (degrees)", "observed order p", title, fontsize=9)
     ax.legend(fontsize=9, loc="center right")
     return ax
 

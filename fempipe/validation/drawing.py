@@ -34,14 +34,35 @@ def color_for(label: str) -> str:
 
 def discretization_legend(fig, labels) -> None:
     """One legend below the panels for the discretizations (style and color)."""
+    legend_below(
+        fig, [(lb, {"ls": style_for(lb), "color": color_for(lb), "lw": 1.4}) for lb in labels]
+    )
+
+
+def label_axes(ax, xlabel: str, ylabel: str, title: str | None = None, grid=True, fontsize=10):
+    """A panel's axis labels, its title and its grid (``grid="both"``: minor ticks too)."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title is not None:
+        ax.set_title(title, fontsize=fontsize)
+    if grid == "both":
+        ax.grid(alpha=0.3, which="both")
+    elif grid:
+        ax.grid(alpha=0.3)
+
+
+def legend_below(fig, entries, ncols: int | None = None, fontsize: float = 9) -> None:
+    """One legend below the panels; ``entries``: ``(label, Line2D options)`` pairs."""
     from matplotlib.lines import Line2D
 
-    handles = [
-        Line2D([], [], ls=style_for(lb), color=color_for(lb), lw=1.4, label=lb) for lb in labels
-    ]
-    fig.legend(
-        handles=handles, loc="outside lower center", ncols=legend_columns(fig, handles), fontsize=9
-    )
+    handles = [Line2D([], [], label=label, **kw) for label, kw in entries]
+    ncols = legend_columns(fig, handles) if ncols is None else ncols
+    fig.legend(handles=handles, loc="outside lower center", ncols=ncols, fontsize=fontsize)
+
+
+#: Legend entries of the variant cases: the classical theory's line, fempipe's FE dots.
+DOTS = {"ls": "", "marker": "o", "color": "k"}
+CLASSICAL_LINE = ("classical theory", {"color": "#0072B2", "lw": 1.5})
 
 
 def style_for(label: str) -> str:
@@ -140,9 +161,7 @@ def draw_shapes(
     if not ax.yaxis_inverted():
         ax.invert_yaxis()  # X_g along gravity: down
     u = f" ({unit})" if unit else r" ($/L$)"
-    ax.set_xlabel(r"$Z_g$" + u)
-    ax.set_ylabel(r"$X_g$" + u + r"  (gravity $\downarrow$)")
-    ax.grid(alpha=0.3)
+    label_axes(ax, r"$Z_g$" + u, r"$X_g$" + u + r"  (gravity $\downarrow$)")
     if legend:
         ax.legend(fontsize=9, loc="best")
     return ax
@@ -242,9 +261,7 @@ def draw_continued(ax, diagrams: dict, key: str, ylabel: str, attractors: dict |
             if dg.static:
                 y0 = getattr(min(dg.static, key=lambda p, h=h: abs(p.v - h["v"])), key)[0]
                 ax.plot([h["v"]], [y0], ".", ms=7, color=c)
-    ax.set_xlabel("v")
-    ax.set_ylabel(ylabel + r" ($/L$)")
-    ax.grid(alpha=0.3)
+    label_axes(ax, "v", ylabel + r" ($/L$)")
     handles, _ = ax.get_legend_handles_labels()
     handles += [
         Line2D([], [], ls="-", color="0.4", label="stable"),
@@ -277,9 +294,7 @@ def draw_orbit_shapes(ax, shapes: dict):
     ax.set_aspect("equal", adjustable="datalim")
     if not ax.yaxis_inverted():
         ax.invert_yaxis()
-    ax.set_xlabel(r"$Z_g$ ($/L$)")
-    ax.set_ylabel(r"$X_g$ ($/L$, gravity $\downarrow$)")
-    ax.grid(alpha=0.3)
+    label_axes(ax, r"$Z_g$ ($/L$)", r"$X_g$ ($/L$, gravity $\downarrow$)")
     # Below the axes: the bundles fill the frame wherever a legend would go.
     ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2)
     return ax

@@ -23,8 +23,8 @@ from fempipe.analyses.periodic import compute_cycle_diagram
 from fempipe.model.discretization import Modal, discretization_from_name, parse_discretization
 from fempipe.model.dynamics_problem import PipeDynamics
 from fempipe.model.kinematics import compute_shape, compute_tip, tip_velocity
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.projection import project
 
 from .static_shapes import PAPER_MODES, static_shapes
@@ -135,26 +135,15 @@ def orbit(
         s = compute_shape(disc, q, alpha)
         tv = compute_tip(disc, q, alpha)
         tip = {k: np.array([tv[k]]) for k in TIP_KEYS}
-        return Orbit(
-            label,
-            alpha,
-            v,
-            float("nan"),
-            np.zeros(1),
-            tip,
-            {k: np.zeros(1) for k in tip},
-            [(s.Z_g, s.X_g)],
-        )
+        rest = {k: np.zeros(1) for k in tip}
+        return Orbit(label, alpha, v, float("nan"), np.zeros(1), tip, rest, [(s.Z_g, s.X_g)])
     traj = simulate(m, q, qdot, periods * period, n_out=n_out, rtol=1e-8)
     tv = compute_tip(disc, traj.q, alpha)
     tip = {k: tv[k] for k in TIP_KEYS}
     rates = [tip_velocity(disc, qq, pp, alpha) for qq, pp in zip(traj.q, traj.qdot, strict=True)]
     tip_rate = {k: np.array([r[k] for r in rates]) for k in ("eta_tip", "X_tip", "Z_tip")}
     idx = np.linspace(0, np.searchsorted(traj.t, traj.t[0] + period) - 1, n_shapes).astype(int)
-    shapes = []
-    for i in idx:
-        s = compute_shape(disc, traj.q[i], alpha)
-        shapes.append((s.Z_g, s.X_g))
+    shapes = [(s.Z_g, s.X_g) for s in (compute_shape(disc, traj.q[i], alpha) for i in idx)]
     return Orbit(label, alpha, v, period, traj.t - traj.t[0], tip, tip_rate, shapes)
 
 
@@ -291,19 +280,11 @@ class ContinuedDiagram:
 
 
 def _diagram_point(d: dict) -> DiagramPoint:
-    return DiagramPoint(
-        v=float(d["v"]),
-        attractor=d["attractor"],
-        eta_tip=list(d["eta_tip"]),
-        X_tip=list(d["X_tip"]),
-        Z_tip=list(d["Z_tip"]),
-        period=d["period"],
-        period_n=d["period_n"],
-        max_multiplier=d["max_multiplier"],
-        stable=d["stable"],
-        branch=d["branch"],
-        requested=bool(d["requested"]),
-    )
+    tips = {k: list(d[k]) for k in TIP_KEYS}
+    rest = {
+        k: d[k] for k in ("attractor", "period", "period_n", "max_multiplier", "stable", "branch")
+    }
+    return DiagramPoint(v=float(d["v"]), requested=bool(d["requested"]), **tips, **rest)
 
 
 def _max_nontrivial(cycle) -> float | None:
@@ -323,9 +304,8 @@ FIRST_DS = 0.01
 def _continued_cached(label: str, alpha: float, values: tuple) -> ContinuedDiagram:
     disc = _disc_from_spec(label)
     with tempfile.TemporaryDirectory(prefix="fempipe-validate-") as tmp:
-        dg = compute_cycle_diagram(
-            model_for(disc, alpha, values[0]), list(values), store_dir=tmp, ds=FIRST_DS
-        )
+        model = model_for(disc, alpha, values[0])
+        dg = compute_cycle_diagram(model, list(values), store_dir=tmp, ds=FIRST_DS)
         return continued_from(label, alpha, values, disc, dg, Path(tmp))
 
 
@@ -345,9 +325,7 @@ def continued_from(label, alpha, values, disc, dg, store: Path) -> ContinuedDiag
         # between the two continued orbits around v.
         landed = {round(p.v, 9) for p in br if p.requested}
         path = store / f"a00-{name}.json"
-        if (
-            not path.exists()
-        ):  # a store layout of another fempipe.analyses.periodic: nothing to fill
+        if not path.exists():  # a store layout of another fempipe.analyses.periodic
             continue
         states = json.loads(path.read_text())["points"]
         for v in values:
@@ -364,33 +342,14 @@ def continued_from(label, alpha, values, disc, dg, store: Path) -> ContinuedDiag
                         c = shoot(PipeDynamics(model_for(disc, alpha, v)), q, qd, float(T))
                     except ShootingError:
                         break
-                    filled.append(
-                        DiagramPoint(
-                            v=v,
-                            attractor="periodic",
-                            eta_tip=list(c.tip["eta_tip"]),
-                            X_tip=list(c.tip["X_tip"]),
-                            Z_tip=list(c.tip["Z_tip"]),
-                            period=float(c.period),
-                            period_n=1,
-                            max_multiplier=_max_nontrivial(c),
-                            stable=bool(c.stable),
-                            branch=f"{name} (shot)",
-                            requested=True,
-                        )
-                    )
+                    tips = {k: list(c.tip[k]) for k in TIP_KEYS}
+                    filled.append(DiagramPoint(v, "periodic", **tips, period=float(c.period),
+                                               period_n=1, max_multiplier=_max_nontrivial(c),
+                                               stable=bool(c.stable), branch=f"{name} (shot)",
+                                               requested=True))  # fmt: skip
                     break
-    return ContinuedDiagram(
-        label=label,
-        alpha=alpha,
-        values=values,
-        static=static,
-        branches=branches,
-        hopf=list(dg.hopf_points),
-        special=list(dg.special_points),
-        errors=list(dg.errors),
-        filled=tuple(filled),
-    )
+    found = (list(dg.hopf_points), list(dg.special_points), list(dg.errors))
+    return ContinuedDiagram(label, alpha, values, static, branches, *found, tuple(filled))
 
 
 def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:

@@ -13,15 +13,15 @@ from scipy.optimize import brentq
 
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from . import classical
 from .case import Case, References
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .checks import CaseResult
+from .drawing import CLASSICAL_LINE, DOTS, figure_panels, finish_figure, label_axes, legend_below
 from .evaluate import measure
-from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
+from .variant_runs import FE, agreement, classical_onset, converged, fe_cell, fe_onset
 
 CASE = Case.load("end_mass")
 
@@ -47,25 +47,16 @@ def run(quick: bool = False) -> CaseResult:
     checks.append(converged(_params(ref.value("hanging"), 0.3), 12.0))
     hs_check, hs_table = _hill_swanson(ref)
     checks.append(hs_check)
-    tables = []
-    for fam in families:
-        base = ref.value(fam)
-        tables.append(
-            Table(
-                f"v_cr against Γ, {fam} pipe (β = {base['beta']:g}, γ = {base['gamma']:g}, "
-                f"μ = {base['mu']:g})",
-                ("Γ", "v_cr classical", "ω classical", f"v_cr FE {FE}"),
-                tuple(
-                    (
-                        G,
-                        o.v_cr,
-                        o.frequency,
-                        fe[fam][G].v_cr if G in fe[fam] else "—",
-                    )
-                    for G, o in families[fam].items()
-                ),
-            )
+    tables = [
+        ref.table(
+            "family",
+            [(G, o.v_cr, o.frequency, fe_cell(fe[fam].get(G))) for G, o in families[fam].items()],
+            family=fam,
+            FE=FE,
+            **ref.value(fam),
         )
+        for fam in families
+    ]
     tables.append(hs_table)
     return CASE.result(
         checks,
@@ -136,18 +127,12 @@ def _hill_swanson(ref: References) -> tuple:
         hs_rows.append((beta, *v))
     measured = "; ".join(f"β = {r[0]:g}: " + " > ".join(f"{x:.4f}" for x in r[1:]) for r in hs_rows)
     check = measure("hill_swanson", measured, ok=ok)
-    table = Table(
-        "Hill & Swanson's statement: v_cr of the horizontal undamped pipe (classical theory)",
-        ("β", "Γ = 0", f"Γ = {masses[0]:g}", f"Γ = {masses[1]:g}"),
-        tuple(hs_rows),
-    )
+    table = CASE.references.table("hill_swanson", hs_rows, m0=masses[0], m1=masses[1])
     return check, table
 
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(Γ) hanging, (b) v_cr(Γ) horizontal: classical lines, FE dots."""
-    from matplotlib.lines import Line2D
-
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     for ax, fam in zip(axes, ("hanging", "horizontal"), strict=True):
@@ -157,27 +142,16 @@ def plot(result: CaseResult, fig=None):
         fg = sorted(d["fe"][fam])
         ax.plot(fg, [d["fe"][fam][g] for g in fg], "o", color="k", ms=6)
         if fam == "horizontal":
-            ax.plot(
-                d["masses"],
-                [curve[g][0] for g in d["masses"]],
-                "D",
-                ms=9,
-                mfc="none",
-                mew=1.4,
-                color="#D55E00",
-            )
+            v_masses = [curve[g][0] for g in d["masses"]]
+            ax.plot(d["masses"], v_masses, "D", ms=9, mfc="none", mew=1.4, color="#D55E00")
         p = d["params"][fam]
-        ax.set_title(f"{fam}, β = {p['beta']:g}, γ = {p['gamma']:g}, μ = {p['mu']:g}", fontsize=10)
-        ax.set_xlabel(r"end mass $\Gamma = M_e/((m+M)L)$")
-        ax.set_ylabel(r"$v_{cr}$")
-        ax.grid(alpha=0.3)
-    handles = [
-        Line2D([], [], color="#0072B2", lw=1.5, label="classical theory"),
-        Line2D([], [], ls="", marker="o", color="k", label=f"fempipe FE {FE}"),
-        Line2D(
-            [], [], ls="", marker="D", mfc="none", color="#D55E00", label="Hill & Swanson's masses"
-        ),
+        title = f"{fam}, β = {p['beta']:g}, γ = {p['gamma']:g}, μ = {p['mu']:g}"
+        label_axes(ax, r"end mass $\Gamma = M_e/((m+M)L)$", r"$v_{cr}$", title)
+    entries = [
+        CLASSICAL_LINE,
+        (f"fempipe FE {FE}", DOTS),
+        ("Hill & Swanson's masses", {"ls": "", "marker": "D", "mfc": "none", "color": "#D55E00"}),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    legend_below(fig, entries, ncols=3)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

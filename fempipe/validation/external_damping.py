@@ -15,10 +15,10 @@ from fempipe.model.params import Params
 
 from . import classical
 from .case import Case
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .checks import CaseResult
+from .drawing import CLASSICAL_LINE, DOTS, figure_panels, finish_figure, label_axes, legend_below
 from .evaluate import measure
-from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
+from .variant_runs import FE, agreement, classical_onset, converged, fe_cell, fe_onset
 
 CASE = Case.load("external_damping")
 
@@ -113,38 +113,22 @@ def _limit_and_paper_checks(beck, fe_beck, v_inf: float, s_top: float) -> list:
     return checks
 
 
-def _tables(h: dict, beck, fe_beck, hanging, fe_hanging, v_inf: float) -> tuple[Table, Table]:
+def _tables(h: dict, beck, fe_beck, hanging, fe_hanging, v_inf: float) -> tuple:
     """The tables of Beck's column and of the hanging pipe."""
+    ref = CASE.references
     rows = [
-        (
-            s,
-            beck[s].v_cr ** 2,
-            fe_beck[s].v_cr ** 2 if s in fe_beck else "—",
-            beck[s].frequency,
-        )
+        (s, beck[s].v_cr ** 2, fe_beck[s].v_cr ** 2 if s in fe_beck else "—", beck[s].frequency)
         for s in sorted(beck)
     ]
-    table = Table(
-        "Beck's column with external damping: v_cr² = P L²/EI",
-        ("σ", "v_cr² classical", f"v_cr² FE {FE}", "ω at the onset"),
-        tuple(rows),
-        note=f"σ → ∞ limit of the theory: v_cr² = {v_inf**2:.6f} (Plaut & Infante: 37.7).",
+    hrows = [(s, hanging[s].v_cr, fe_cell(fe_hanging.get(s))) for s in sorted(hanging)]
+    return (
+        ref.table("beck", rows, FE=FE, v2=v_inf**2),
+        ref.table("hanging", hrows, FE=FE, **h),
     )
-    htab = Table(
-        f"Hanging pipe β = {h['beta']:g}, γ = {h['gamma']:g}, μ = {h['mu']:g} with external damping",
-        ("σ", "v_cr classical", f"v_cr FE {FE}"),
-        tuple(
-            (s, hanging[s].v_cr, fe_hanging[s].v_cr if s in fe_hanging else "—")
-            for s in sorted(hanging)
-        ),
-    )
-    return table, htab
 
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr²(σ) of Beck's column, (b) v_cr(σ) of the hanging pipe."""
-    from matplotlib.lines import Line2D
-
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     ax = axes[0]
@@ -153,37 +137,28 @@ def plot(result: CaseResult, fig=None):
     x = np.where(s > 0, s, floor)
     ax.plot(x, [d["beck"][k] ** 2 for k in s], "-", color="#0072B2", lw=1.5)
     fe = sorted(d["fe_beck"])
-    ax.plot(
-        [k if k > 0 else floor for k in fe],
-        [d["fe_beck"][k] ** 2 for k in fe],
-        "o",
-        color="k",
-        ms=6,
-    )
+    fe_x = [k if k > 0 else floor for k in fe]
+    ax.plot(fe_x, [d["fe_beck"][k] ** 2 for k in fe], "o", color="k", ms=6)
     for y in d["printed"]:
         ax.axhline(y, ls="--", color="#D55E00", lw=1.2)
     ax.axhline(d["v_inf"] ** 2, ls=":", color="0.3", lw=1.4)
     ax.set_xscale("log")
-    ax.set_xlabel(r"external damping $\sigma$ ($\sigma = 0$ at the left edge)")
-    ax.set_ylabel(r"$v_{cr}^2 = PL^2/EI$")
-    ax.set_title("Beck's column", fontsize=10)
-    ax.grid(alpha=0.3)
+    xlabel = r"external damping $\sigma$ ($\sigma = 0$ at the left edge)"
+    label_axes(ax, xlabel, r"$v_{cr}^2 = PL^2/EI$", "Beck's column")
     ax = axes[1]
     hs = sorted(d["hanging"])
     ax.plot(hs, [d["hanging"][k] for k in hs], "-", color="#0072B2", lw=1.5)
     hf = sorted(d["fe_hanging"])
     ax.plot(hf, [d["fe_hanging"][k] for k in hf], "o", color="k", ms=6)
     h = d["hanging_params"]
-    ax.set_xlabel(r"external damping $\sigma$")
-    ax.set_ylabel(r"$v_{cr}$")
-    ax.set_title(f"hanging pipe, β = {h['beta']:g}, γ = {h['gamma']:g}", fontsize=10)
-    ax.grid(alpha=0.3)
-    handles = [
-        Line2D([], [], color="#0072B2", lw=1.5, label="classical theory"),
-        Line2D([], [], ls="", marker="o", color="k", label=f"fempipe FE {FE}"),
-        Line2D([], [], ls="--", color="#D55E00", label="Plaut & Infante: 20.05, 37.7"),
-        Line2D([], [], ls=":", color="0.3", lw=1.4, label="theory, σ → ∞"),
+    title = f"hanging pipe, β = {h['beta']:g}, γ = {h['gamma']:g}"
+    label_axes(ax, r"external damping $\sigma$", r"$v_{cr}$", title)
+    entries = [
+        CLASSICAL_LINE,
+        (f"fempipe FE {FE}", DOTS),
+        ("Plaut & Infante: 20.05, 37.7", {"ls": "--", "color": "#D55E00"}),
+        ("theory, σ → ∞", {"ls": ":", "color": "0.3", "lw": 1.4}),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=9)
+    legend_below(fig, entries, ncols=2)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

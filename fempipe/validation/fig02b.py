@@ -13,7 +13,7 @@ from fempipe.model.params import PipeSI
 
 from .bvp import solve_static_bvp
 from .case import Case
-from .checks import CaseResult, Table
+from .checks import CaseResult
 from .drawing import draw_shapes, figure_panels, finish_figure
 from .evaluate import measure
 from .static_shapes import discretizations, refined, static_shapes
@@ -37,9 +37,7 @@ def run(quick: bool = False) -> CaseResult:
     fams, fe_label, mesh_err = _shapes(p, v)
     fe = fams[fe_label]
     bvp_X, bvp_Z = _bvp_tips(p, v, fe)
-    bvp_err = max(
-        np.max(np.abs(fe.tips["X_tip"] - bvp_X)), np.max(np.abs(fe.tips["Z_tip"] - bvp_Z))
-    )
+    bvp_err = max(np.max(np.abs(fe.tips[k] - b)) for k, b in (("X_tip", bvp_X), ("Z_tip", bvp_Z)))
     drop_mm = fe.tips["X_tip"] * si.L * 1e3
     modal, rows = _modal_checks(si, U, v, fams, fe_label)
     measured = [
@@ -57,28 +55,12 @@ def run(quick: bool = False) -> CaseResult:
         measure("straightens", ok=bool(np.all(np.diff(drop_mm) < 0)), drop=drop_mm),
         *modal,
     ]
-    table_fe = Table(
-        "Tip position of the Texier-Dorbolo pipe (converged FE)",
-        "U (m/s) | v | tip drop X_g(1) L (mm) | Z_g(1) L (mm) | θ(1) (rad) | BVP tip drop (mm)",
-        tuple(
-            (
-                U[i],
-                v[i],
-                drop_mm[i],
-                fe.tips["Z_tip"][i] * si.L * 1e3,
-                fe.tips["theta_tip"][i],
-                bvp_X[i] * si.L * 1e3,
-            )
-            for i in range(len(U))
-        ),
-        note=f"{fe_label}; BVP: independent collocation solution. Dimensionless: β = {p.beta:.6f}, "
-        f"γ = {p.gamma:.6f}, v/U = {si.v_of_U(1.0):.6f} s/m.",
-    )
-    table_modal = Table(
-        "The paper's modal truncations against the converged FE",
-        ("modes", "U (m/s)", "v", "tip drop (mm)", "|tip drop error| (mm)", "max shape error (mm)"),
-        tuple(rows),
-    )
+    z_mm, bvp_mm = fe.tips["Z_tip"] * si.L * 1e3, bvp_X * si.L * 1e3
+    fe_rows = [(U[i], v[i], drop_mm[i], z_mm[i], fe.tips["theta_tip"][i], bvp_mm[i])
+               for i in range(len(U))]  # fmt: skip
+    dimensionless = {"beta": p.beta, "gamma": p.gamma, "v_over_U": si.v_of_U(1.0)}
+    table_fe = ref.table("tips", fe_rows, fe=fe_label, **dimensionless)
+    table_modal = ref.table("modal", rows)
     return CASE.result(
         measured,
         quick=quick,
@@ -106,10 +88,8 @@ def _bvp_tips(p, v: np.ndarray, fe) -> tuple[np.ndarray, np.ndarray]:
     bvp_X = np.empty_like(v)
     bvp_Z = np.empty_like(v)
     for i, vi in enumerate(v):
-        theta_fe = fe.theta[i]
-        sol = solve_static_bvp(
-            p.alpha, p.gamma, vi, guess=lambda x, t=theta_fe: np.interp(x, fe.xi, t)
-        )
+        guess = lambda x, t=fe.theta[i]: np.interp(x, fe.xi, t)  # noqa: E731
+        sol = solve_static_bvp(p.alpha, p.gamma, vi, guess=guess)
         bvp_X[i], bvp_Z[i] = sol.X_tip, sol.Z_tip
     return bvp_X, bvp_Z
 
@@ -125,10 +105,8 @@ def _modal_checks(si: PipeSI, U, v, fams: dict, fe_label: str) -> tuple[list, li
         shape_mm = np.max(np.hypot(fam.X_g - fe.X_g, fam.Z_g - fe.Z_g), axis=1) * si.L * 1e3
         limit = 0.01 * si.L * 1e3
         measured.append(measure(f"modal_{label[-1]}_shape", float(np.max(shape_mm)), limit=limit))
-        for i in range(len(U)):
-            rows.append(
-                (label, U[i], v[i], fam.tips["X_tip"][i] * si.L * 1e3, err_mm[i], shape_mm[i])
-            )
+        drop = fam.tips["X_tip"] * si.L * 1e3
+        rows += [(label, U[i], v[i], drop[i], err_mm[i], shape_mm[i]) for i in range(len(U))]
     return measured, rows
 
 
@@ -137,12 +115,9 @@ def plot(result: CaseResult, fig=None):
 
     fig, axes = figure_panels(fig, 1, size=5.0)
     U = result.data["U"]
+    label = lambda i, v: f"U = {U[i]:g} m/s"  # noqa: E731
     draw_shapes(
-        axes[0],
-        result.data["fams"],
-        scale=result.data["L"] * 1e3,
-        unit="mm",
-        v_label=lambda i, v: f"U = {U[i]:g} m/s",
+        axes[0], result.data["fams"], scale=result.data["L"] * 1e3, unit="mm", v_label=label
     )
     axes[0].set_title("Texier-Dorbolo pipe, α = π/2")
 

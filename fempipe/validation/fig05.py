@@ -12,13 +12,20 @@ import numpy as np
 
 from fempipe.analyses.stability import analyse_stability, trace_root_locus
 from fempipe.model.discretization import Modal, parse_discretization
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 from ..plotting.stability import direction_arrow, mode_color
 from .case import Case, References, alpha_name, label_tag
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure, legend_columns, paper_case_line, style_for
+from .checks import CaseResult
+from .drawing import (
+    figure_panels,
+    finish_figure,
+    label_axes,
+    legend_columns,
+    paper_case_line,
+    style_for,
+)
 from .dynamic_runs import dyn_discretizations
 from .evaluate import measure
 from .onset import critical_velocity as independent_vcr
@@ -69,13 +76,7 @@ def run(quick: bool = False) -> CaseResult:
         else:
             checks += _pi_checks(ref, fe)
         checks.append(_mesh_check(a, fe_label, fe, v_max))
-    table = Table(
-        "Stability events on the static branches (v ≤ 10)",
-        ("α", "discretization", "branch", "event", "v", "mode", "frequency Im λ"),
-        tuple(rows),
-        note="primary: the gravity-loaded branch (α = π: the straight pipe); B1±: the buckled "
-        "branches born at its branch point. Events located to 1e-10 in v.",
-    )
+    table = CASE.references.table("events", tuple(rows))
     return CASE.result(
         checks,
         quick=quick,
@@ -184,10 +185,7 @@ def plot(result: CaseResult, fig=None):
                     marks = np.isclose(rl.v % 2.0, 0.0) & keep
                     ax.plot(z.real[marks], z.imag[marks], "k.", ms=4)
         ax.axhline(0.0, color="0.5", lw=0.8)
-        ax.set_xlabel(r"Re $\Omega$")
-        ax.set_ylabel(r"Im $\Omega$  (< 0 unstable)")
-        ax.set_title(f"α = {name}", fontsize=10)
-        ax.grid(alpha=0.3)
+        label_axes(ax, r"Re $\Omega$", r"Im $\Omega$  (< 0 unstable)", f"α = {name}")
     handles = [
         Line2D([], [], color=mode_color(m), lw=2, label=f"mode {m}") for m in sorted(modes_seen)
     ]
@@ -220,7 +218,5 @@ def _growth_panel(ax, fams: dict, mode_color, style_for) -> None:
     # Zoomed on the sign changes (buckling, restabilization, flutter); the
     # decay rates of the stable roots far below are not the point.
     ax.set_ylim(-8.0, 8.0)
-    ax.set_xlabel("v")
-    ax.set_ylabel(r"growth rate Re $\lambda$ = $-$Im $\Omega$  (> 0 unstable)")
-    ax.set_title("α = π: growth rate of modes 1 and 2", fontsize=10)
-    ax.grid(alpha=0.3)
+    ylabel = r"growth rate Re $\lambda$ = $-$Im $\Omega$  (> 0 unstable)"
+    label_axes(ax, "v", ylabel, "α = π: growth rate of modes 1 and 2")

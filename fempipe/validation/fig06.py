@@ -16,12 +16,12 @@ import numpy as np
 from fempipe.analyses import stability
 from fempipe.analyses.stability import PLANES, find_critical_velocity
 from fempipe.model.discretization import Modal, parse_discretization
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 from .case import Case
 from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .drawing import figure_panels, finish_figure, label_axes
 from .evaluate import Measured, measure
 from .onset import Onset, critical_velocity
 
@@ -66,17 +66,10 @@ def run(quick: bool = False) -> CaseResult:
     checks += _out_of_plane_checks(fe, alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma)
     requires = [f"falls_with_alpha_b{b:g}" for b in betas]
     requires += [f"falls_with_alpha_g{g:g}" for g in gammas if g != BASE_GAMMA]
-    return CASE.result(
-        checks,
-        quick=quick,
-        tables=_tables(alphas, betas, gammas, cv),
-        data={
-            "alphas": alphas,
-            "curves": cv,
-            "headline": _headline(alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma),
-        },
-        requires=requires,
-    )
+    headline = _headline(alphas, cv.by_beta, cv.by_gamma, cv.out_beta, cv.out_gamma)
+    data = {"alphas": alphas, "curves": cv, "headline": headline}
+    tables = _tables(alphas, betas, gammas, cv)
+    return CASE.result(checks, quick=quick, tables=tables, data=data, requires=requires)
 
 
 def _curves(fe, alphas: np.ndarray, betas, gammas) -> _Curves:
@@ -104,13 +97,8 @@ def _mesh_check(alphas: np.ndarray, base: list[Onset]) -> Measured:
     """Mesh convergence of the reference curve: P3:8 against P3:16 at three α."""
     fine = parse_discretization(fe="P3:16")
     idx = [0, len(alphas) // 2, len(alphas) - 1]
-    dmesh = max(
-        abs(
-            critical_velocity(fine, alphas[i], beta=BASE_BETA, gamma=BASE_GAMMA, mu=MU).v_cr
-            - base[i].v_cr
-        )
-        for i in idx
-    )
+    case = {"beta": BASE_BETA, "gamma": BASE_GAMMA, "mu": MU}
+    dmesh = max(abs(critical_velocity(fine, alphas[i], **case).v_cr - base[i].v_cr) for i in idx)
     return measure("fe_mesh", dmesh, fe=FE, degrees=[_deg(alphas[i]) for i in idx])
 
 
@@ -141,16 +129,13 @@ def _falls_with_alpha(alphas: np.ndarray, spec: str, v, **fields) -> Measured:
 
 def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Measured]:
     """v_cr falls with α, rises with β, and the effect of γ changes sign with α (Sec. 4)."""
+    spec_b, spec_g = "falls_with_alpha_b{beta:g}", "falls_with_alpha_g{gamma:g}"
     checks = [
-        _falls_with_alpha(
-            alphas, "falls_with_alpha_b{beta:g}", _v_cr(cv.by_beta[b]), beta=b, gamma0=BASE_GAMMA
-        )
+        _falls_with_alpha(alphas, spec_b, _v_cr(cv.by_beta[b]), beta=b, gamma0=BASE_GAMMA)
         for b in betas
     ]
     checks += [
-        _falls_with_alpha(
-            alphas, "falls_with_alpha_g{gamma:g}", _v_cr(cv.by_gamma[g]), gamma=g, beta0=BASE_BETA
-        )
+        _falls_with_alpha(alphas, spec_g, _v_cr(cv.by_gamma[g]), gamma=g, beta0=BASE_BETA)
         for g in gammas
         if g != BASE_GAMMA
     ]
@@ -158,31 +143,21 @@ def _trend_checks(alphas: np.ndarray, betas, gammas, cv: _Curves) -> list[Measur
     b = sorted(betas)
     rise = np.diff([_v_cr(cv.by_beta[x]) for x in b], axis=0)
     worst = np.unravel_index(np.argmin(rise), rise.shape)
+    fields = {"b0": b[worst[0]], "b1": b[worst[0] + 1], "at": _deg(alphas[worst[1]])}
     checks.append(
-        measure(
-            "rises_with_beta",
-            ok=bool(np.all(rise > 0)),
-            increase=np.min(rise),
-            b0=b[worst[0]],
-            b1=b[worst[0] + 1],
-            at=_deg(alphas[worst[1]]),
-        )
+        measure("rises_with_beta", ok=bool(np.all(rise > 0)), increase=np.min(rise), **fields)
     )
     # gamma effect changes sign with alpha.
     G = np.array([_v_cr(cv.by_gamma[g]) for g in sorted(gammas)])
     d_small, d_large = G[-1, 0] - G[0, 0], G[-1, -1] - G[0, -1]
-    checks.append(
-        measure(
-            "gamma_sign_change",
-            ok=d_small > 0 and d_large < 0,
-            small=d_small,
-            large=d_large,
-            gamma_min=min(gammas),
-            gamma_max=max(gammas),
-            a0=_deg(alphas[0]),
-            a1=_deg(alphas[-1]),
-        )
-    )
+    fields = {
+        "small": d_small,
+        "large": d_large,
+        "gamma_min": min(gammas),
+        "gamma_max": max(gammas),
+    }
+    fields.update(a0=_deg(alphas[0]), a1=_deg(alphas[-1]))
+    checks.append(measure("gamma_sign_change", ok=d_small > 0 and d_large < 0, **fields))
     return checks
 
 
@@ -199,35 +174,19 @@ def _tables(alphas: np.ndarray, betas, gammas, cv: _Curves) -> tuple[Table, Tabl
         rows.append((_deg(a), fe_v, base[i].frequency, cv.modal["N = 3"][i].v_cr,
                      cv.modal["N = 3"][i].v_cr - fe_v, cv.modal["N = 4"][i].v_cr,
                      cv.modal["N = 4"][i].v_cr - fe_v))  # fmt: skip
-    table = Table(
-        f"v_cr for β = {BASE_BETA}, γ = {BASE_GAMMA}, μ = {MU} (converged FE and the paper's modes)",
+    ref, case = CASE.references, {"beta": BASE_BETA, "gamma": BASE_GAMMA, "mu": MU, "FE": FE}
+    parameters = " | ".join([*[f"β = {b:g}" for b in betas], *[f"γ = {g:g}" for g in gammas]])
+    grid_rows = [
         (
-            f"α | v_cr FE {FE} | crossing frequency Im λ | v_cr N = 3 | error N = 3 | "
-            f"v_cr N = 4 | error N = 4"
-        ),
-        tuple(rows),
-        note="Brent's method on the spectral abscissa to 1e-10 in v; FE P3:8 agrees with P3:16 "
-        "to the 'fe_mesh' check.",
-    )
-    grid = Table(
-        f"v_cr (FE) for all β (γ = {BASE_GAMMA:g}) and γ (β = {BASE_BETA:g})",
-        ("α", *[f"β = {b:g}" for b in betas], *[f"γ = {g:g}" for g in gammas]),
-        tuple(
-            (
-                _deg(a),
-                *[cv.by_beta[b][i].v_cr for b in betas],
-                *[cv.by_gamma[g][i].v_cr for g in gammas],
-            )
-            for i, a in enumerate(alphas)
-        ),
-    )
-    out_table = Table(
-        f"v_cr in and out of the plane, β = {BASE_BETA}, γ = {BASE_GAMMA}, μ = {MU} (FE {FE})",
-        "α | v_cr in the plane | Im λ in | v_cr out of the plane | Im λ out | (out - in) / in",
-        tuple(out_rows),
-        note="The round pipe first loses stability out of the plane of its static state at "
-        "every inclined α: the paper's v_cr (in the plane) is not the pipe's.",
-    )
+            _deg(a),
+            *[cv.by_beta[b][i].v_cr for b in betas],
+            *[cv.by_gamma[g][i].v_cr for g in gammas],
+        )
+        for i, a in enumerate(alphas)
+    ]
+    table = ref.table("modes", rows, **case)
+    grid = ref.table("grid", grid_rows, parameters=parameters, **case)
+    out_table = ref.table("planes", out_rows, **case)
     return table, out_table, grid
 
 
@@ -320,15 +279,8 @@ def plot(result: CaseResult, fig=None):
             color = "k" if is_ref else CURVE_COLORS[k % len(CURVE_COLORS)]
             flutter = np.array([o.kind == "flutter" for o in onsets])
             # A first instability that is not flutter (a fold) is not on the flutter curve.
-            ax.plot(
-                a,
-                np.where(flutter, v, np.nan),
-                "o-",
-                ms=3.5,
-                lw=1.4,
-                color=color,
-                label=f"{sym} = {val:g}" + (" (reference)" if is_ref else ""),
-            )
+            lab = f"{sym} = {val:g}" + (" (reference)" if is_ref else "")
+            ax.plot(a, np.where(flutter, v, np.nan), "o-", ms=3.5, lw=1.4, color=color, label=lab)
             if val in outs:
                 fo = np.array([o.kind == "flutter" for o in outs[val]])
                 vo = np.where(fo, _v_cr(outs[val]), np.nan)
@@ -343,10 +295,7 @@ def plot(result: CaseResult, fig=None):
             ax.plot([], [], "D", ms=7, mfc="none", mew=1.5, color="0.3", label="fold, not flutter")
         if outs:
             ax.plot([], [], "^-.", ms=4, mfc="none", lw=0.9, color="0.3", label="out of the plane")
-        ax.set_xlabel(r"$\alpha / \pi$")
-        ax.set_ylabel(r"$v_{cr}$")
-        ax.set_title(f"{fixed}, several {sym}", fontsize=10)
-        ax.grid(alpha=0.3)
+        label_axes(ax, r"$\alpha / \pi$", r"$v_{cr}$", f"{fixed}, several {sym}")
         # Below the panel: inside, the key would hide the beta = 0.5 and gamma = 5 curves.
         ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
 

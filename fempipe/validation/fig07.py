@@ -255,18 +255,7 @@ def _table(discs: dict, onsets: dict, sweeps: dict) -> Table:
         p10 = pts[10.0]
         rows.append((label, v_lin, lo, hi, eta_amplitude(p10), p10.period, p10.X_tip[0],
                      p10.X_tip[1], p10.max_multiplier, v_h))  # fmt: skip
-    return Table(
-        "Onset and the limit cycle at v = 10 (α = 0)",
-        (
-            "discretization | linear v_cr | last equilibrium v | first periodic v | "
-            "η(1) amplitude at v = 10 | period at v = 10 | X_g(1) min | X_g(1) max | "
-            "max |ρ| (Floquet multipliers) | Hopf point v_H"
-        ),
-        tuple(rows),
-        note="The amplitude is half the peak-to-peak range of η(1) (units of L); the period in τ. "
-        "The diagrams are continued (static branch and the orbits born at the Hopf point); "
-        "'last equilibrium' and 'first periodic' are the requested v on either side of v_H.",
-    )
+    return CASE.references.table("onsets", tuple(rows))
 
 
 def plot(result: CaseResult, fig=None):

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from fempipe.analyses.stability import analyse_stability
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import PAPER_CASE, Params
+from fempipe.model.plane.operators import PipeModel
 
 from .case import Case, alpha_name, label_tag
-from .checks import CaseResult, Table
+from .checks import CaseResult
 from .drawing import draw_continued, draw_orbit_shapes, finish_figure, paper_case_line
 from .dynamic_runs import (
     attractor_shapes,
@@ -95,15 +95,9 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
     for alpha in alphas:
         inc = _inclination(alpha, discs, quick)
         requires += _required(inc.name, inc.is_pi, discs) + [f"sweep_agreement_{inc.name}"]
-        checks.append(
-            sweep_agreement(
-                "sweep_agreement_{alpha}",
-                inc.checked,
-                ref.value("sweep_tol"),
-                alpha=inc.name,
-                check_v=inc.check_v,
-            )
-        )
+        fields = {"alpha": inc.name, "check_v": inc.check_v}
+        tol = ref.value("sweep_tol")
+        checks.append(sweep_agreement("sweep_agreement_{alpha}", inc.checked, tol, **fields))
         onset_checks, onsets = _onsets(inc, discs)
         checks += onset_checks
         checks += _shape_velocity_checks(inc, discs)
@@ -121,11 +115,12 @@ def run(quick: bool = False, part: int | None = None) -> CaseResult:
             "diagrams": inc.diags,
             "shapes": attractor_shapes(discs, alpha, inc.shape_v, inc.checked, inc.fe_pts),
         }
+    tables = (ref.table("onsets", rows), verdict_table(oop_rows, changes, quick))
     return CASE.result(
         checks,
         quick=quick,
-        tables=(_table(rows), verdict_table(oop_rows, changes, quick)),
-        findings=tuple(findings),
+        tables=tables,
+        findings=findings,
         data={"panels": panels},
         requires=requires,
     )
@@ -171,20 +166,10 @@ def _inclination(alpha: float, discs: dict, quick: bool) -> _Inclination:
     if is_pi:
         above = [v for v in values if v > hopf_v[fe_label]]
         check_v = sorted({v for v in shape_v if v > hopf_v[fe_label]} | set(above[:1]))
-    return _Inclination(
-        alpha=alpha,
-        name=alpha_name(alpha),
-        is_pi=is_pi,
-        shape_v=shape_v,
-        values=values,
-        diags=diags,
-        hopf_v=hopf_v,
-        sweeps=sweeps,
-        check_v=check_v,
-        checked=[sweep_check(dg, check_v) for dg in diags.values()],
-        fe_pts={p.v: p for p in sweeps[fe_label] if p is not None},
-        oop=oop,
-    )
+    checked = [sweep_check(dg, check_v) for dg in diags.values()]
+    fe_pts = {p.v: p for p in sweeps[fe_label] if p is not None}
+    return _Inclination(alpha, alpha_name(alpha), is_pi, shape_v, values, diags, hopf_v, sweeps,
+                        check_v, checked, fe_pts, oop)  # fmt: skip
 
 
 def _onsets(inc: _Inclination, discs: dict) -> tuple[list[Measured], dict]:
@@ -229,32 +214,14 @@ def _shape_velocity_checks(inc: _Inclination, discs: dict) -> list[Measured]:
     consistent = all(fe_diag.equilibrium_at(v).stable for v in straight) and not any(
         fe_diag.equilibrium_at(v).stable for v in buckled
     )
-    seq_ok = bool(
-        buckled
-        and straight
-        and flutter
-        and consistent
-        and max(buckled) < min(straight)
-        and max(straight) < min(flutter)
-    )
-    sequence = measure(
-        "pi_sequence",
-        ok=seq_ok,
-        buckled=buckled,
-        straight=straight,
-        periodic_from=min(flutter) if flutter else None,
-        consistent="stable" if consistent else "NOT stable",
-    )
-    shapes = measure(
-        "pi_shape_velocities",
-        ok=a1 == "equilibrium" and abs(fe_pts[v1].Z_tip[0]) > 0.1,
-        v1=v1,
-        v2=v2,
-        a1=a1,
-        a2=a2,
-        z1=fe_pts[v1].Z_tip[0],
-        z2=fe_pts[v2].Z_tip,
-    )
+    ordered = buckled and straight and flutter and max(buckled) < min(straight)
+    seq_ok = bool(ordered and max(straight) < min(flutter) and consistent)
+    sequence = measure("pi_sequence", ok=seq_ok, buckled=buckled, straight=straight,
+                       periodic_from=min(flutter) if flutter else None,
+                       consistent="stable" if consistent else "NOT stable")  # fmt: skip
+    z1 = fe_pts[v1].Z_tip[0]
+    fields = {"v1": v1, "v2": v2, "a1": a1, "a2": a2, "z1": z1, "z2": fe_pts[v2].Z_tip}
+    shapes = measure("pi_shape_velocities", ok=a1 == "equilibrium" and abs(z1) > 0.1, **fields)
     return [sequence, *_pi_cross_checks(discs[fe_label], pts, fe_diag), shapes]
 
 
@@ -292,23 +259,6 @@ def _rows(inc: _Inclination, discs: dict, onsets: dict) -> list[tuple]:
                      p10.X_tip[1] - p10.X_tip[0], p10.Z_tip[1] - p10.Z_tip[0], eta_amplitude(p10),
                      v_h))  # fmt: skip
     return rows
-
-
-def _table(rows: list[tuple]) -> Table:
-    """The table of onsets and limit cycles at v = 10 (rows of :func:`_rows`)."""
-    return Table(
-        "Onsets and limit cycles at v = 10",
-        (
-            "α | discretization | linear v_cr | last equilibrium v | first periodic v | "
-            "attractor at v = 10 | period | X_g(1) range | Z_g(1) range | η(1) amplitude | "
-            "Hopf point v_H"
-        ),
-        tuple(rows),
-        note="Ranges are peak-to-peak (units of L); α = π: linear v_cr is the flutter of the "
-        "restabilized straight pipe (it buckles at v = 0), and the first periodic v follows the "
-        "buckled branch and the restabilized straight state (see checks).  The diagrams are continued (static branch, orbits born at the Hopf "
-        "points); at α = π the buckled equilibria below the flutter come from a sweep.",
-    )
 
 
 def _straight_flutter(disc) -> float:

@@ -13,7 +13,14 @@ from fempipe.model.discretization import parse_discretization
 
 from .case import Case, alpha_name
 from .checks import CaseResult, Table
-from .drawing import color_for, discretization_legend, finish_figure, paper_case_line, style_for
+from .drawing import (
+    color_for,
+    discretization_legend,
+    finish_figure,
+    label_axes,
+    paper_case_line,
+    style_for,
+)
 from .dynamic_runs import cycle_on, cycle_traces, cycles_at, dyn_discretizations
 from .evaluate import Measured, measure
 
@@ -31,13 +38,9 @@ def run(quick: bool = False) -> CaseResult:
     # Mesh convergence of one cycle (full suite only).
     fine = None if quick else _fine_cycle(v, discs, cycles)
     checks, requires = _case_checks(alphas, discs, cycles, traces, fine)
-    return CASE.result(
-        checks,
-        quick=quick,
-        tables=(_cycle_table(alphas, discs, cycles, traces),),
-        data={"traces": traces, "v": v},
-        requires=requires,
-    )
+    tables = (_cycle_table(alphas, discs, cycles, traces),)
+    data = {"traces": traces, "v": v}
+    return CASE.result(checks, quick=quick, tables=tables, data=data, requires=requires)
 
 
 def _cycle_traces_at(alphas, discs: dict, cycles: dict) -> dict:
@@ -59,13 +62,8 @@ def _fine_cycle(v: float, discs: dict, cycles: dict):
     """The α = π/2 cycle on P3:16, shot from the projection of the converged FE cycle."""
     fe_label = next(iter(discs))
     c8 = cycles[(np.pi / 2, fe_label)]
-    return cycle_on(
-        parse_discretization(fe="P3:16"),
-        np.pi / 2,
-        v,
-        discs[fe_label],
-        (c8.q0, c8.qdot0, c8.period),
-    )
+    guess = (c8.q0, c8.qdot0, c8.period)
+    return cycle_on(parse_discretization(fe="P3:16"), np.pi / 2, v, discs[fe_label], guess)
 
 
 def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple[list, list]:
@@ -83,18 +81,11 @@ def _case_checks(alphas, discs: dict, cycles: dict, traces: dict, fine) -> tuple
         ]
         fe = cycles[(a, fe_label)]
         found = {lb: cycles[(a, lb)] is not None for lb in discs}
+        rho = {lb: cycles[(a, lb)].max_nontrivial_multiplier for lb in discs if found[lb]}
         multipliers = ", ".join(
-            f"{lb}: "
-            + (
-                f"|ρ|max = {cycles[(a, lb)].max_nontrivial_multiplier:.3g}"
-                if found[lb]
-                else "not periodic"
-            )
-            for lb in discs
+            f"{lb}: " + (f"|ρ|max = {rho[lb]:.3g}" if found[lb] else "not periodic") for lb in discs
         )
-        ok = all(found.values()) and all(
-            cycles[(a, lb)].max_nontrivial_multiplier < 1 for lb in discs
-        )
+        ok = all(found.values()) and all(r < 1 for r in rho.values())
         checks.append(measure("periodic_{alpha}", multipliers, ok=ok, alpha=name))
         if fe is None:
             continue
@@ -150,15 +141,7 @@ def _cycle_table(alphas, discs: dict, cycles: dict, traces: dict) -> Table:
             rows.append((name, lb, c.period, (c.period - fe.period) / fe.period, t_["X_tip"].min(),
                          t_["X_tip"].max(), t_["Z_tip"].min(), t_["Z_tip"].max(),
                          c.max_nontrivial_multiplier))  # fmt: skip
-    return Table(
-        "Limit cycles at v = 10",
-        (
-            "α | discretization | period | relative period error | X_g(1) min | X_g(1) max | "
-            "Z_g(1) min | Z_g(1) max | max |ρ| (Floquet multipliers)"
-        ),
-        tuple(rows),
-        note="Period in τ; positions in units of L; the trivial multiplier 1 is excluded.",
-    )
+    return CASE.references.table("cycles", tuple(rows))
 
 
 def plot(result: CaseResult, fig=None):
@@ -177,19 +160,12 @@ def plot(result: CaseResult, fig=None):
             labels[lb] = None
             keep = np.asarray(t_["t"]) <= window * (1 + 1e-12)
             for ax, key in zip(row, ("X_tip", "Z_tip"), strict=True):
-                ax.plot(
-                    np.asarray(t_["t"])[keep],
-                    np.asarray(t_[key])[keep],
-                    style_for(lb),
-                    color=color_for(lb),
-                    lw=1.3,
-                )
+                t, y = np.asarray(t_["t"])[keep], np.asarray(t_[key])[keep]
+                ax.plot(t, y, style_for(lb), color=color_for(lb), lw=1.3)
         for ax, lab in zip(row, (r"$X_g(1)$ ($/L$)", r"$Z_g(1)$ ($/L$)"), strict=True):
-            ax.set_xlabel(r"$\tau$ (from a section crossing)")
-            ax.set_ylabel(lab)
+            title = f"α = {name}, v = {result.data['v']:g}"
+            label_axes(ax, r"$\tau$ (from a section crossing)", lab, title)
             ax.set_xlim(0.0, window)
-            ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
-            ax.grid(alpha=0.3)
     discretization_legend(fig, labels)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())
     return fig

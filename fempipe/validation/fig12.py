@@ -7,12 +7,13 @@ from __future__ import annotations
 import numpy as np
 
 from .case import Case, alpha_name
-from .checks import CaseResult, Table
+from .checks import CaseResult
 from .drawing import (
     color_for,
     discretization_legend,
     figure_panels,
     finish_figure,
+    label_axes,
     paper_case_line,
     style_for,
 )
@@ -66,17 +67,7 @@ def run(quick: bool = False) -> CaseResult:
                 continue
             fields = {"alpha": name, "n": lb[-1], "label": lb, "fe": fe_label}
             checks.append(measure("loop_{alpha}_{n}", dist, **fields))
-    table = Table(
-        "Phase trajectories at v = 10",
-        (
-            "α | discretization | Z_g(1) range | dZ_g(1)/dτ range | "
-            "turning points of Z_g(1) per period | distance to FE loop"
-        ),
-        tuple(rows),
-        note="Turning points: sign changes of dZ_g(1)/dτ in one period (2 = a simple loop; "
-        "more = the loop folds over itself, still one period). Distance: largest distance of the loop's points from the FE loop, both axes scaled "
-        "by the FE loop's ranges.",
-    )
+    table = CASE.references.table("phase", tuple(rows))
     return CASE.result(
         checks,
         quick=quick,
@@ -95,10 +86,12 @@ def plot(result: CaseResult, fig=None):
     for ax, (name, tr) in zip(axes, loops.items(), strict=False):
         for lb, t_ in tr.items():
             ax.plot(t_["Z_tip"], t_["Z_tip_rate"], style_for(lb), color=color_for(lb), lw=1.3)
-        ax.set_xlabel(r"$Z_g(1)$ ($/L$)")
-        ax.set_ylabel(r"$\mathrm{d}Z_g(1)/\mathrm{d}\tau$")
-        ax.set_title(f"α = {name}, v = {result.data['v']:g}", fontsize=10)
-        ax.grid(alpha=0.3)
+        label_axes(
+            ax,
+            r"$Z_g(1)$ ($/L$)",
+            r"$\mathrm{d}Z_g(1)/\mathrm{d}\tau$",
+            f"α = {name}, v = {result.data['v']:g}",
+        )
     discretization_legend(fig, next(iter(loops.values()), {}))
 
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", paper_case_line())

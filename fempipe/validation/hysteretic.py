@@ -13,15 +13,15 @@ import numpy as np
 
 from fempipe.analyses.stability import compute_spectrum
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from . import classical as cm
 from .case import Case, References
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .checks import CaseResult
+from .drawing import DOTS, figure_panels, finish_figure, label_axes, legend_below
 from .evaluate import Measured, measure
-from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
+from .variant_runs import FE, agreement, classical_onset, converged, fe_cell, fe_onset
 
 CASE = Case.load("hysteretic")
 
@@ -121,24 +121,14 @@ def _table_3_4(ref: References, dampings: dict, classical: dict, fe: dict, quick
             if not chk.passed:
                 failed.setdefault((k, d), []).append((chk, printed, val, ref.value(unit)))
         rows.append((f"{pipes[k]['beta'] * 1e3:.2f}", pipes[k]["gamma"], dampings[d], printed_u,
-                     cl.v_cr, f.v_cr if f is not None else "—", printed_w, cl.frequency,
-                     f.frequency if f is not None else "—"))  # fmt: skip
+                     cl.v_cr, fe_cell(f), printed_w, cl.frequency, fe_cell(f, "frequency")))  # fmt: skip
     for (k, d), bad in failed.items():
         exp = {"u_cf": ref.value("u_cf_exp")[k], "omega_cf": ref.value("omega_cf_exp")[k]}
         findings.append(
             _finding(pipes[k], dampings[d], bad, classical[(k, d)], fe.get((k, d)), v_max, exp)
         )
         explained += [b[0].name for b in bad]
-    table = Table(
-        "Païdoussis (1998) Table 3.4: the table's theory, the classical theory and fempipe",
-        (
-            f"β×10³ | γ | μ_h | u_cf table | u_cf classical | u_cf FE {FE} | ω_cf table | "
-            f"ω_cf classical | ω_cf FE {FE}"
-        ),
-        tuple(rows),
-        note="classical: Legendre spectral elements p = 16 (converged to 1e-9); FE computed at "
-        "every point of the full run, at β = 2.03×10⁻³, μ_h = 0.02 in the quick one.",
-    )
+    table = ref.table("table_3_4", rows, FE=FE)
     return checks, table, findings, explained
 
 
@@ -212,27 +202,17 @@ def plot(result: CaseResult, fig=None):
                 )
             m, us, ws = d["experiment"]
             ax.plot(m, (us, ws)[j][k], "s", ms=7, mfc="none", mew=1.3, color=colors[k])
-        ax.set_xlabel(r"hysteretic loss factor $\mu_h$")
-        ax.set_ylabel(ylabel)
-        ax.grid(alpha=0.3)
-    from matplotlib.lines import Line2D
-
-    handles = [
-        Line2D(
-            [],
-            [],
-            color=colors[k],
-            lw=1.5,
-            label=f"β = {p['beta'] * 1e3:.2f}×10⁻³, γ = {p['gamma']:g}",
-        )
+        label_axes(ax, r"hysteretic loss factor $\mu_h$", ylabel)
+    entries = [
+        (f"β = {p['beta'] * 1e3:.2f}×10⁻³, γ = {p['gamma']:g}", {"color": colors[k], "lw": 1.5})
         for k, p in enumerate(d["pipes"])
     ]
-    handles += [
-        Line2D([], [], ls="", marker="o", color="0.3", label=f"fempipe FE {FE}"),
-        Line2D([], [], ls="", marker="x", mew=1.6, color="k", label="Table 3.4, theory"),
-        Line2D([], [], ls="", marker="s", mfc="none", color="0.3", label="Table 3.4, experiment"),
+    entries += [
+        (f"fempipe FE {FE}", dict(DOTS, color="0.3")),
+        ("Table 3.4, theory", {"ls": "", "marker": "x", "mew": 1.6, "color": "k"}),
+        ("Table 3.4, experiment", {"ls": "", "marker": "s", "mfc": "none", "color": "0.3"}),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    legend_below(fig, entries, ncols=3)
     axes[0].set_title("critical flow velocity", fontsize=10)
     axes[1].set_title("frequency at the onset", fontsize=10)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")

@@ -21,7 +21,7 @@ from . import out_of_plane_agreement as agreement
 from . import out_of_plane_runs as runs
 from .case import Case
 from .checks import CaseResult
-from .drawing import figure_panels, finish_figure
+from .drawing import figure_panels, finish_figure, label_axes, legend_below
 
 CASE = Case.load("out_of_plane")
 
@@ -74,7 +74,6 @@ def _headline(curves: dict) -> str:
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(α) in and out of the plane; (b) convergence of the out-of-plane v_cr."""
-    from matplotlib.lines import Line2D
     from matplotlib.ticker import NullFormatter
 
     d = result.data
@@ -93,39 +92,30 @@ def plot(result: CaseResult, fig=None):
             ax.plot(np.degrees(alpha), v, "o", mfc="none", mec="k", ms=9, mew=1.2)
     ax.set_xlim(-8.0, 188.0)
     ax.set_xticks([0, 45, 90, 135, 180])
-    ax.set_xlabel("inclination α (degrees)")
-    ax.set_ylabel(r"$v_{cr}$")
-    ax.set_title("in and out of the plane", fontsize=10)
-    ax.grid(alpha=0.3)
+    label_axes(ax, "inclination α (degrees)", r"$v_{cr}$", "in and out of the plane")
     ax = axes[1]
     styles = {"P1": "#009E73", "P2": "#CC79A7", "P3": "k", "sine": "#E69F00", "beam": "#56B4E9"}
-    handles = [
-        Line2D([], [], color="0.3", lw=1.4, label="in the plane"),
-        Line2D([], [], color="0.3", lw=1.4, ls="--", label="out of the plane"),
-        Line2D([], [], color="#0072B2", lw=1.4, label="μ = 0"),
-        Line2D([], [], color="#D55E00", lw=1.4, label="μ = 0.005"),
-        Line2D([], [], ls="", marker="o", mfc="none", mec="k", label="strong form"),
+    entries = [
+        ("in the plane", {"color": "0.3", "lw": 1.4}),
+        ("out of the plane", {"color": "0.3", "lw": 1.4, "ls": "--"}),
+        ("μ = 0", {"color": "#0072B2", "lw": 1.4}),
+        ("μ = 0.005", {"color": "#D55E00", "lw": 1.4}),
+        ("strong form", {"ls": "", "marker": "o", "mfc": "none", "mec": "k"}),
     ]
     for fam, (dofs, errs, slope) in d["orders"].items():
         ax.loglog(dofs, errs, "-o", ms=4, color=styles.get(fam, "0.4"), lw=1.4)
-        handles.append(
-            Line2D(
-                [],
-                [],
-                color=styles.get(fam, "0.4"),
-                marker="o",
-                ms=4,
-                label=f"{fam} (slope {slope:.1f})",
+        entries.append(
+            (
+                f"{fam} (slope {slope:.1f})",
+                {"color": styles.get(fam, "0.4"), "marker": "o", "ms": 4},
             )
         )
     # Minor ticks unlabelled: over less than a decade matplotlib labels them, overlapping.
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.yaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("unknowns")
-    ax.set_ylabel(r"$|v_{cr} - v_{ref}|$ out of the plane")
-    ax.set_title("convergence, α = π/2, μ = 0", fontsize=10)
-    ax.grid(alpha=0.3, which="both")
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    ylabel = r"$|v_{cr} - v_{ref}|$ out of the plane"
+    label_axes(ax, "unknowns", ylabel, "convergence, α = π/2, μ = 0", grid="both")
+    legend_below(fig, entries, ncols=3)
     pc = d["paper_case"]
     finish_figure(fig, CASE.title, parameters=f"β = {pc['beta']:g}, γ = {pc['gamma']:g}")
     return fig

@@ -12,13 +12,12 @@ import numpy as np
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import FiniteElement, Modal, discretization_from_name
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.out_of_plane.model import build_out_of_plane_model
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from . import classical, lateral
 from .case import alpha_name
-from .checks import Table
 from .evaluate import measure
 from .out_of_plane_runs import (
     nearest_distance,
@@ -95,11 +94,7 @@ def agreement_checks(ref, quick: bool):
         crossing.append(lam[np.argmin(np.abs(lam - s0.lam))])
     diff = abs(crossing[1] - crossing[0])
     checks.append(measure("strong_converged", float(diff), p=p0, v=s0.v_cr))
-    table = Table(
-        "(c) Out-of-plane onset: strong form against fempipe " + fe,
-        (f"pipe | α | β | γ | μ | v_cr strong | v_cr {fe} | Δv | ω strong | ω {fe} | Δω | kind"),
-        tuple(rows),
-    )
+    table = ref.table("onset", rows, fe=fe)
     return checks, [table], requires, strong
 
 
@@ -158,12 +153,7 @@ def order_checks(ref, quick: bool, v_ref: float):
         for n, dof, err in zip(ns, dofs, errs, strict=True):
             rows.append((fam, n, dof, err))
         rows.append((fam, "slopes", "", ", ".join(f"{s:.2f}" for s in slopes)))
-    table = Table(
-        f"(d) Error of the out-of-plane v_cr (α = π/2, μ = 0) against the strong form "
-        f"({v_ref:.12f})",
-        ("discretization", "elements / modes", "unknowns", "|v_cr − v_ref|"),
-        tuple(rows),
-    )
+    table = ref.table("orders", rows, v_ref=v_ref)
     return checks, [table], requires, curves
 
 
@@ -189,15 +179,7 @@ def finding_checks(ref, quick: bool):
                          ci.frequency if ci else math.nan, vo, co.type if co else "stable",
                          co.frequency if co else math.nan, vo - vi,
                          (vo - vi) / vi if vi > 0 else "—"))  # fmt: skip
-    table = Table(
-        f"(e) Critical flow velocity in and out of the plane (β = {base['beta']:g}, "
-        f"γ = {base['gamma']:g}, FE {fe})",
-        "μ | α | v_cr in plane | kind | ω | v_cr out of plane | kind | ω | out − in | relative",
-        tuple(rows),
-        note="At α = π the primary branch is the straight standing pipe, buckled at v = 0 "
-        "(γ > 7.837) in every plane alike; on its buckled branch the out-of-plane spectrum "
-        "holds the neutral rotation and is otherwise stable (checks of (b)).",
-    )
+    table = ref.table("planes", rows, fe=fe, **base)
     inside = [f for f in found if 0.0 < f[0] < math.pi - 1e-12]
     checks, findings, explained = [], [], []
     if inside:

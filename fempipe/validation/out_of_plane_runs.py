@@ -13,9 +13,9 @@ import scipy.linalg as sla
 from fempipe.analyses import stability
 from fempipe.analyses.statics import solve_sagged, solve_static
 from fempipe.model.discretization import discretization_from_name
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.out_of_plane.model import OutOfPlaneOperators, build_out_of_plane_model
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from . import lateral
 from .checks import Table
@@ -118,14 +118,7 @@ def identity_checks(ref):
         fields = {"where": where, "p": p}
         checks.append(measure("identity_matrices_{where}", worst_m, **fields))
         checks.append(measure("identity_spectrum_{where}", worst_l, cluster=worst_c, **fields))
-    table = Table(
-        "(a) The straight pipe: out of the plane against in the plane (relative differences)",
-        (
-            "state | discretization | max |θˢ| | K | C | M | hysteretic | eigenvalues | "
-            "λ (outside cluster) | λ (cluster at −1/μ)"
-        ),
-        tuple(rows),
-    )
+    table = ref.table("identity", tuple(rows))
     return checks, [table]
 
 
@@ -230,12 +223,7 @@ def _residual_orders(ref, p: Params, tip: float, quick: bool) -> tuple[list, Tab
                 **fields,
             )
         )
-    table = Table(
-        f"(b) Neutral mode of the buckled standing pipe (γ = {p.gamma:g}, v = {p.v:g}): "
-        "residual of the uncorrected stiffness on the projection of sin θˢ",
-        ("degree", "elements", "‖K x‖/(‖K‖ ‖x‖)", "slopes", "expected"),
-        tuple(rows),
-    )
+    table = ref.table("neutral", rows, gamma=p.gamma, v=p.v)
     return checks, table
 
 

@@ -14,8 +14,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .case import Case
-from .checks import CaseResult, Table
-from .drawing import finish_figure, paper_case_line
+from .checks import CaseResult
+from .drawing import finish_figure, label_axes, paper_case_line
 from .evaluate import measure
 from .space_runs import planar_cycles, space_cycles
 
@@ -109,29 +109,10 @@ def run(quick: bool = False) -> CaseResult:
     for label, qs in ((f"3-D, v = {v3:g}", q3), (f"planar, v = {v2:g}", q2)):
         for q, s in qs.items():
             rows.append((label, q, *s["values"], s["local"], s["slope"], s["monotone"]))
-    table = Table(
-        "Period and tip extrema of the cycles on P3:N, and their observed orders in 1/N",
-        (
-            "cycle",
-            "quantity",
-            *[f"N = {n}" for n in ns],
-            "local order",
-            "slope vs finest",
-            "monotone",
-        ),
-        tuple(rows),
-        note=f"local order: from N = {', '.join(map(str, ns[-3:]))}; slope: of "
-        "log |Q_N - Q_finest| over N <= finest / 2. The planar cycles' median local order: "
-        f"{p2_local:.2f}."
-        + (
-            " Quick run: P3's order is checked for "
-            + ", ".join(asymptotic)
-            + f"; the other extrema are pre-asymptotic on these meshes and checked against "
-            f"the band [{band[0]:g}, {band[1]:g}] (the full run checks them all against h^6)."
-            if quick
-            else ""
-        ),
-    )
+    extra = ref.tables["orders_quick"]["note"] if quick else ""
+    extra = extra.format(asymptotic=", ".join(asymptotic), lo=band[0], hi=band[1])
+    meshes, last = " | ".join(f"N = {n}" for n in ns), ", ".join(map(str, ns[-3:]))
+    table = ref.table("orders", rows, meshes=meshes, last=last, p2_local=p2_local, quick=extra)
     # The checks emitted depend on monotonicity; these must always be among them.
     requires = ["order_period", "order_vs_planar_period", "order_max_Y_tip"]
     skipped = [q for q in q3 if q not in checked]
@@ -178,10 +159,7 @@ def _draw_errors(ax, ns, qs: dict, title: str) -> None:
     ax.loglog(ns[:-1], e0 * (ns[:-1] / ns[0]) ** -6.0, "--", color="0.5", lw=1, label="N^-6")
     ax.set_xticks(ns[:-1], [str(n) for n in ns[:-1]])
     ax.minorticks_off()
-    ax.set_xlabel("elements N")
-    ax.set_ylabel("|Q_N - Q_finest|")
-    ax.set_title(title, fontsize=9)
-    ax.grid(alpha=0.3, which="both")
+    label_axes(ax, "elements N", "|Q_N - Q_finest|", title, grid="both", fontsize=9)
     # below the axes: inside, the legend would cover the coarse meshes' errors
     ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncols=2, frameon=False)
 

@@ -14,8 +14,8 @@ import math
 import numpy as np
 
 from .case import Case
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure, paper_case_line
+from .checks import CaseResult
+from .drawing import figure_panels, finish_figure, label_axes, paper_case_line
 from .evaluate import measure
 from .space_runs import amplitude, fit_slope, onset, space_cycle_near_onset
 
@@ -36,43 +36,29 @@ def _mesh_checks(tag: str, on, cycles, deltas, degree: int, ref, quick: bool) ->
     asym = max(abs(c.tip["Y_tip"][0] + c.tip["Y_tip"][1]) for c in cycles)
     tol_v = ref.value("v_cr_tolerance")[tag.split(":")[1]]
     stable = [bool(c.stable) for c in cycles]
+    d_v = abs(nf.v - nf.checks.v_out_of_plane)
+    d_tr = abs(nf.transversality - nf.checks.transversality_check) / abs(nf.transversality)
+    supercritical = nf.criticality == "supercritical" and all(stable)
     checks = [
-        measure(
-            "v_cr_vs_out_of_plane_{tag}", abs(nf.v - nf.checks.v_out_of_plane), limit=tol_v, tag=tag
-        ),
+        measure("v_cr_vs_out_of_plane_{tag}", d_v, limit=tol_v, tag=tag),
         measure("amplitude_slope_{tag}", abs(r0 - 1.0), tag=tag),
         measure("l1_resolved_{tag}", nf.uncertainty / abs(nf.l1), tag=tag),
         measure("period_{tag}", abs(T0 - T_nf) / T_nf, tag=tag),
-        measure(
-            "transversality_{tag}",
-            abs(nf.transversality - nf.checks.transversality_check) / abs(nf.transversality),
-            tag=tag,
-        ),
+        measure("transversality_{tag}", d_tr, tag=tag),
         measure("mirror_{tag}", max(nf.checks.in_plane_fraction, asym), tag=tag),
-        measure(
-            "supercritical_{tag}",
-            ok=nf.criticality == "supercritical" and all(stable),
-            tag=tag,
-            l1=nf.l1,
-            stable=stable,
-        ),
+        measure("supercritical_{tag}", ok=supercritical, tag=tag, l1=nf.l1, stable=stable),
     ]
     row = (tag, nf.v, nf.checks.v_out_of_plane, nf.l1, nf.uncertainty, nf.omega, nf.transversality,
            c, r0 - 1.0, k)  # fmt: skip
-    data = {
-        "tag": tag,
-        "deltas": list(map(float, deltas)),
-        "amplitudes": amps.tolist(),
-        "ratios": ratios.tolist(),
-        "periods": periods.tolist(),
-        "r0": r0,
-        "k": k,
-        "degree": degree,
-        "c": c,
-        "period_nf": T_nf,
-        "normal_form": nf.to_dict(),
-    }
+    data = {"tag": tag, "deltas": list(map(float, deltas)), "amplitudes": amps.tolist(),
+            "ratios": ratios.tolist(), "periods": periods.tolist(), "r0": r0, "k": k,
+            "degree": degree, "c": c, "period_nf": T_nf, "normal_form": nf.to_dict()}  # fmt: skip
     return checks, row, data
+
+
+#: The checks of each mesh.
+_CHECKS = ("v_cr_vs_out_of_plane", "amplitude_slope", "l1_resolved", "period", "transversality",
+           "mirror", "supercritical")  # fmt: skip
 
 
 def run(quick: bool = False) -> CaseResult:
@@ -85,37 +71,15 @@ def run(quick: bool = False) -> CaseResult:
     requires = []
     for ne, deltas in meshes.items():
         tag = f"P3:{ne}"
-        requires += [
-            f"{k}_{tag}"
-            for k in (
-                "v_cr_vs_out_of_plane",
-                "amplitude_slope",
-                "l1_resolved",
-                "period",
-                "transversality",
-                "mirror",
-                "supercritical",
-            )
-        ]
+        requires += [f"{k}_{tag}" for k in _CHECKS]
         on = onset(int(ne), alpha)
         cycles = [space_cycle_near_onset(on, d) for d in deltas]
         ch, row, d = _mesh_checks(tag, on, cycles, np.array(deltas), degree, ref, quick)
         checks += ch
         rows.append(row)
         data.append(d)
-    table = Table(
-        "The out-of-plane Hopf point (α = π/2) and the slope of A² at the onset",
-        (
-            "mesh | v_cr (3-D Jacobian) | v_cr (out-of-plane model) | l1 | uncertainty of l1 | "
-            "ω | Re λ'(v) | c | A²/(c² δ) at δ → 0, minus 1 | k"
-        ),
-        tuple(rows),
-        note="l1 with the critical mode of unit L2 norm over (θ, a, b); c of "
-        "(max Y_tip - min Y_tip)/2 ~ c √(v - v_cr); k of A²/δ = c² (1 + k δ + ...).",
-    )
-    return CASE.result(
-        checks, quick=quick, tables=(table,), data={"meshes": data}, requires=requires
-    )
+    tables = (ref.table("onset", rows),)
+    return CASE.result(checks, quick=quick, tables=tables, data={"meshes": data}, requires=requires)
 
 
 #: Color-blind-safe colors (Okabe & Ito), one per mesh.
@@ -146,17 +110,17 @@ def plot(result: CaseResult, fig=None):
                   label=f"{tag}: fit")  # fmt: skip
     ax_t.plot([0.0], [0.0], "k*", ms=10, label="normal form: T = 2π/ω")
     ax_r.axhline(1.0, color="0.5", lw=0.8, ls=":")
-    ax_r.set_xlabel("δ = v - v_cr (10⁻³)")
-    ax_r.set_ylabel("A² / (c² δ)")
-    ax_r.set_title("slope of A² against the normal form", fontsize=9)
-    ax_a.set_xlabel("δ = v - v_cr")
-    ax_a.set_ylabel("A = (max Y_tip - min Y_tip) / 2")
-    ax_a.set_title("out-of-plane swing of the tip", fontsize=9)
-    ax_t.set_xlabel("δ = v - v_cr (10⁻³)")
-    ax_t.set_ylabel("(T - 2π/ω) / (2π/ω)  (10⁻⁶)")
-    ax_t.set_title("period against the normal form's", fontsize=9)
+    labels = {
+        ax_r: ("δ = v - v_cr (10⁻³)", "A² / (c² δ)", "slope of A² against the normal form"),
+        ax_a: ("δ = v - v_cr", "A = (max Y_tip - min Y_tip) / 2", "out-of-plane swing of the tip"),
+        ax_t: (
+            "δ = v - v_cr (10⁻³)",
+            "(T - 2π/ω) / (2π/ω)  (10⁻⁶)",
+            "period against the normal form's",
+        ),
+    }
     for ax in axes:
-        ax.grid(alpha=0.3, which="both")
+        label_axes(ax, *labels[ax], grid="both", fontsize=9)
         ax.legend(fontsize=9)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}", f"{paper_case_line()}, α = π/2, 3-D model")
     return fig

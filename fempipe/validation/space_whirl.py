@@ -15,20 +15,20 @@ import math
 import numpy as np
 
 from fempipe.analyses.limit_cycle.attractor import find_attractor
-from fempipe.analyses.three_d.whirl import find_whirl, whirl_state
 from fempipe.analyses.stability.eigensolvers import quadratic_eigen
 from fempipe.analyses.stability.linear import linearized_matrices
+from fempipe.analyses.three_d.whirl import find_whirl, whirl_state
 from fempipe.core.parallel import single_blas
 from fempipe.model.discretization import FiniteElement
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
-from fempipe.model.three_d.model import PipeModel3D, planar_state
+from fempipe.model.plane.operators import PipeModel
 from fempipe.model.three_d.dynamics import PipeDynamics3D
+from fempipe.model.three_d.model import PipeModel3D, planar_state
 from fempipe.solvers.radau import Radau
 
 from .case import Case
 from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .drawing import figure_panels, finish_figure, label_axes
 from .evaluate import measure
 from .whirl_bvp import solve_whirl_bvp
 
@@ -85,18 +85,15 @@ def run(quick: bool = False) -> CaseResult:
         f"({tag}) has ω = {w.omega:.6g}, and Floquet multipliers of modulus up to "
         f"{w.max_nontrivial:.4g}: unstable, the planar cycle is the attractor."
     ]
+    data = {"v": v, "bvp": {"omega": bvp.omega, "radius": bvp.radius, "period": bvp.period}}
+    data.update(whirls={n: x.to_dict() for n, x in whirls}, tip_whirl=(d["Z_tip"], d["Y_tip"]))
+    tables = [table, free_table]
     return CASE.result(
         checks,
         quick=quick,
-        tables=[table, free_table],
+        tables=tables,
         findings=findings,
-        data={
-            "v": v,
-            "bvp": {"omega": bvp.omega, "radius": bvp.radius, "period": bvp.period},
-            "whirls": {n: x.to_dict() for n, x in whirls},
-            "tip_whirl": (d["Z_tip"], d["Y_tip"]),
-            "tip_planar": tips_planar,
-        },
+        data={**data, "tip_planar": tips_planar},
     )
 
 
@@ -153,18 +150,10 @@ def _shot_whirls(bvp, meshes, v: float) -> tuple[list, list]:
 
 def _tables(bvp, v: float, rows, free_meshes, free) -> tuple[Table, Table]:
     """The shot whirls against the BVP, and the free motion from the BVP's state."""
-    table = Table(
-        f"The whirl at v = {v:g}: FE against the rotating-frame BVP (ω = {bvp.omega:.8g}, "
-        f"radius {bvp.radius:.8g}, period {bvp.period:.8g})",
-        (
-            "mesh | ω | period | tip radius | Δω | Δradius | radius variation | "
-            "rotation defect | largest |multiplier|"
-        ),
-        tuple(tuple(r) for r in rows),
-    )
-    free_table = Table(
-        "The FE motion from the BVP's whirl state, half a period",
-        ("mesh", "rate", "rate - ω_BVP", "radius variation"),
+    whirl = {"v": v, "omega": bvp.omega, "radius": bvp.radius, "period": bvp.period}
+    table = CASE.references.table("whirl", (tuple(r) for r in rows), **whirl)
+    free_table = CASE.references.table(
+        "free",
         tuple(
             (f"P3:{n}", r, r - bvp.omega, var)
             for n, (r, var) in zip(free_meshes, free, strict=True)
@@ -203,14 +192,8 @@ def plot(result: CaseResult, fig=None):
     z, y = d["tip_whirl"]
     # the finest mesh's whirl (the one drawn): unstable orbits dashed, as in every figure
     stable = d["whirls"][max(d["whirls"], key=int)]["stable"]
-    ax.plot(
-        z,
-        y,
-        "-" if stable else "--",
-        color="#0072B2",
-        lw=2.0,
-        label="whirl, FE" + ("" if stable else " (unstable)"),
-    )
+    lab = "whirl, FE" + ("" if stable else " (unstable)")
+    ax.plot(z, y, "-" if stable else "--", color="#0072B2", lw=2.0, label=lab)
     R = d["bvp"]["radius"]
     a = np.linspace(0, 2 * np.pi, 361)
     ax.plot(R * np.cos(a), R * np.sin(a), "-", color="k", lw=0.8, label="whirl, BVP")
@@ -219,11 +202,8 @@ def plot(result: CaseResult, fig=None):
         ax.plot(zp, yp, "-", color="#D55E00", lw=2.0, label="planar cycle")
     ax.set_aspect("equal")
     ax.set_ylim(-1.3 * R, 2.0 * R)  # room for the legend above the orbits
-    ax.set_xlabel("Z_tip")
-    ax.set_ylabel("Y_tip")
-    ax.set_title(f"tip from above, v = {d['v']:g}", fontsize=10)
+    label_axes(ax, "Z_tip", "Y_tip", f"tip from above, v = {d['v']:g}")
     ax.legend(fontsize=9, loc="upper center", ncols=2)
-    ax.grid(alpha=0.3)
     ax = axes[1]
     ns = sorted(d["whirls"])
     om = [abs(d["whirls"][n]["omega"] - d["bvp"]["omega"]) for n in ns]
@@ -232,10 +212,7 @@ def plot(result: CaseResult, fig=None):
     ax.loglog(ns, rr, "-s", color="#009E73", label="|Δ radius|")
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xticks(ns, [str(n) for n in ns])
-    ax.set_xlabel("elements (cubic)")
-    ax.set_ylabel("FE - BVP")
-    ax.set_title("against the rotating-frame BVP", fontsize=10)
+    label_axes(ax, "elements (cubic)", "FE - BVP", "against the rotating-frame BVP", grid="both")
     ax.legend(fontsize=9)
-    ax.grid(alpha=0.3, which="both")
     finish_figure(fig, CASE.title, parameters="α = 0, β = 0.142, γ = 18.9, μ = 0.005")
     return fig

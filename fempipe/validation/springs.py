@@ -18,10 +18,10 @@ from fempipe.model.params import Params
 
 from . import classical
 from .case import Case, References
-from .checks import CaseResult, Table
-from .drawing import figure_panels, finish_figure
+from .checks import CaseResult
+from .drawing import DOTS, figure_panels, finish_figure, label_axes, legend_below
 from .evaluate import measure
-from .variant_runs import FE, agreement, classical_onset, converged, fe_onset
+from .variant_runs import FE, agreement, classical_onset, converged, fe_cell, fe_onset
 
 CASE = Case.load("springs")
 
@@ -154,44 +154,25 @@ def _checks(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple[list,
     return checks, requires
 
 
-def _tables(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple[Table, ...]:
+def _tables(ref: References, tip: _TipRuns, inner: _InteriorRuns) -> tuple:
     """The tip-spring, interior-spring and beam-mode Galerkin tables."""
     base, hb = ref.value("tip"), ref.value("interior")
     k_g, x_g = ref.value("interior_springs_fe")[0]
     reference = inner.classical[x_g][k_g].v_cr
+    tip_rows = [
+        (k, o.v_cr, o.kind, _root_cell(classical.tip_spring_divergence(k)), fe_cell(tip.fe.get(k)))
+        for k, o in tip.classical.items()
+    ]
+    inner_rows = [
+        (x, k, o.v_cr, o.kind, fe_cell(inner.fe.get((k, x))))
+        for x, c in inner.classical.items()
+        for k, o in sorted(c.items())
+    ]
+    gal_rows = [(n, v, v - reference) for n, v in zip(inner.modes, inner.galerkin, strict=True)]
     return (
-        Table(
-            f"Tip spring, β = {base['beta']:g}, γ = 0: v_cr against κ",
-            ("κ", "v_cr classical", "kind", "Eq. (3.119) root", f"v_cr FE {FE}"),
-            tuple(
-                (
-                    k,
-                    o.v_cr,
-                    o.kind,
-                    _root_cell(classical.tip_spring_divergence(k)),
-                    tip.fe[k].v_cr if k in tip.fe else "—",
-                )
-                for k, o in tip.classical.items()
-            ),
-        ),
-        Table(
-            f"Spring inside the hanging pipe (β = {hb['beta']:g}, γ = {hb['gamma']:g}, "
-            f"μ = {hb['mu']:g}): v_cr against κ",
-            ("ξ_s", "κ", "v_cr classical", "kind", f"v_cr FE {FE}"),
-            tuple(
-                (x, k, o.v_cr, o.kind, inner.fe[(k, x)].v_cr if (k, x) in inner.fe else "—")
-                for x, c in inner.classical.items()
-                for k, o in sorted(c.items())
-            ),
-        ),
-        Table(
-            f"Païdoussis' beam-mode Galerkin method with a spring κ = {k_g:g} at ξ_s = {x_g:g} "
-            "(hanging pipe)",
-            ("beam modes N", "v_cr", "error"),
-            tuple((n, v, v - reference) for n, v in zip(inner.modes, inner.galerkin, strict=True)),
-            note=f"reference: Legendre spectral elements, v_cr = {reference:.10f}; the beam "
-            "functions are smooth across the spring, where η‴ jumps, so the error falls as N⁻³.",
-        ),
+        ref.table("tip", tip_rows, FE=FE, **base),
+        ref.table("interior", inner_rows, FE=FE, **hb),
+        ref.table("galerkin", gal_rows, kappa=k_g, xi=x_g, reference=reference),
     )
 
 
@@ -213,8 +194,6 @@ def _curve(ax, points: dict, color: str, xfloor: float | None = None):
 
 def plot(result: CaseResult, fig=None):
     """(a) v_cr(κ) with a tip spring, (b) v_cr(κ) with a spring inside the hanging pipe."""
-    from matplotlib.lines import Line2D
-
     d = result.data
     fig, axes = figure_panels(fig, 2, ncols=2, size=4.2)
     ax = axes[0]
@@ -224,11 +203,9 @@ def plot(result: CaseResult, fig=None):
     fk = sorted(d["fe_tip"])
     ax.plot(fk, [d["fe_tip"][k] for k in fk], "o", color="k", ms=5)
     ax.set_xscale("log")
-    ax.set_xlabel(r"tip spring $\kappa = kL^3/EI$")
-    ax.set_ylabel(r"$v_{cr}$")
     p = d["tip_params"]
-    ax.set_title(f"tip spring, β = {p['beta']:g}, γ = 0", fontsize=10)
-    ax.grid(alpha=0.3)
+    title = f"tip spring, β = {p['beta']:g}, γ = 0"
+    label_axes(ax, r"tip spring $\kappa = kL^3/EI$", r"$v_{cr}$", title)
     ax = axes[1]
     colors = {0.5: "#0072B2", 0.75: "#D55E00"}
     floor = None
@@ -239,19 +216,18 @@ def plot(result: CaseResult, fig=None):
     for (k, _x), v in d["fe_interior"].items():
         ax.plot(k if k > 0 else floor, v, "o", color="k", ms=5)
     ax.set_xscale("log")
-    ax.set_xlabel(r"spring $\kappa$ at $\xi_s$ ($\kappa = 0$ at the left edge)")
-    ax.set_ylabel(r"$v_{cr}$")
     p = d["interior_params"]
-    ax.set_title(f"hanging, β = {p['beta']:g}, γ = {p['gamma']:g}", fontsize=10)
-    ax.grid(alpha=0.3)
-    handles = [
-        Line2D([], [], color="#0072B2", lw=1.4, label="classical, tip / ξ_s = 0.5"),
-        Line2D([], [], color="#D55E00", lw=1.4, label="classical, ξ_s = 0.75"),
-        Line2D([], [], ls="--", color="#D55E00", lw=1.3, label="Eq. (3.119), divergence"),
-        Line2D([], [], ls="", marker="o", mfc="none", color="0.3", label="flutter"),
-        Line2D([], [], ls="", marker="s", mfc="none", color="0.3", label="divergence"),
-        Line2D([], [], ls="", marker="o", color="k", label=f"fempipe FE {FE}"),
+    xlabel = r"spring $\kappa$ at $\xi_s$ ($\kappa = 0$ at the left edge)"
+    label_axes(ax, xlabel, r"$v_{cr}$", f"hanging, β = {p['beta']:g}, γ = {p['gamma']:g}")
+    ring = {"ls": "", "marker": "o", "mfc": "none", "color": "0.3"}
+    entries = [
+        ("classical, tip / ξ_s = 0.5", {"color": "#0072B2", "lw": 1.4}),
+        ("classical, ξ_s = 0.75", {"color": "#D55E00", "lw": 1.4}),
+        ("Eq. (3.119), divergence", {"ls": "--", "color": "#D55E00", "lw": 1.3}),
+        ("flutter", ring),
+        ("divergence", dict(ring, marker="s")),
+        (f"fempipe FE {FE}", DOTS),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=9)
+    legend_below(fig, entries, ncols=3)
     finish_figure(fig, f"{CASE.figure}: {CASE.title}")
     return fig

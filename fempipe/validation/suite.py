@@ -26,18 +26,8 @@ __all__ = ["CaseOutcome", "SuiteResult", "run_case", "run_suite"]
 log = logging.getLogger(__name__)
 
 #: Rough relative cost of the full cases, to start the longest first.
-_COST = {
-    "space_convergence": 150,
-    "space_onset": 110,
-    "fig08_10": 100,
-    "convergence": 90,
-    "fig07": 80,
-    "fig06": 70,
-    "out_of_plane": 60,
-    "fig11": 40,
-    "fig12": 39,
-    "fig05": 20,
-}
+_COST = {"space_convergence": 150, "space_onset": 110, "fig08_10": 100, "convergence": 90,
+         "fig07": 80, "fig06": 70, "out_of_plane": 60, "fig11": 40, "fig12": 39, "fig05": 20}  # fmt: skip
 
 
 #: Cases that share cached computations run one after the other in one worker.

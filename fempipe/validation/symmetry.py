@@ -15,11 +15,11 @@ import numpy as np
 from fempipe.analyses.statics import solve_static
 from fempipe.model.discretization import parse_discretization
 from fempipe.model.kinematics import compute_shape
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from .case import Case, alpha_name
-from .checks import CaseResult, Table
+from .checks import CaseResult
 from .drawing import figure_panels, finish_figure
 from .evaluate import measure
 from .static_shapes import CONVERGED_FE, static_shapes
@@ -95,12 +95,7 @@ def run(quick: bool = False) -> CaseResult:
         f"the true symmetry (θ, α) → (−θ, −α) holds to {mirror_dev:.1e}. The paper's conclusion "
         "that 0 ≤ α ≤ π suffices survives, by the true symmetry.",
     )
-    table = Table(
-        "Antisymmetry test on static states (converged FE)",
-        ("pair", "map", "||θ_α||_L2", "||θ_α + θ_pair||_L2"),
-        tuple(rows),
-        note="Zero in the last column means the two states are mirror images.",
-    )
+    table = CASE.references.table("antisymmetry", tuple(rows))
     return CASE.result(
         measured,
         quick=quick,

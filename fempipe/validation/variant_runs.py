@@ -13,14 +13,12 @@ from dataclasses import dataclass
 
 from fempipe.analyses import stability
 from fempipe.model.discretization import parse_discretization
-from fempipe.model.plane.operators import PipeModel
 from fempipe.model.params import Params
+from fempipe.model.plane.operators import PipeModel
 
 from . import classical
 from .evaluate import Measured, measure
 from .static_shapes import CONVERGED_FE
-
-__all__ = ["CLASSICAL_P", "FE", "FeOnset", "agreement", "classical_onset", "converged", "fe_onset"]
 
 #: fempipe's converged discretization for the variant cases.
 FE = CONVERGED_FE
@@ -46,6 +44,11 @@ def fe_onset(params: Params, v_max: float) -> FeOnset:
     if c is None:
         return FeOnset(math.nan, "stable", math.nan, None)
     return FeOnset(float(res.v_cr), c.type, float(c.frequency), c.mode)
+
+
+def fe_cell(onset, attr: str = "v_cr"):
+    """An FE onset's ``attr`` for a table cell ("—" where it was not computed: ``None``)."""
+    return "—" if onset is None else getattr(onset, attr)
 
 
 def classical_onset(
