@@ -9,7 +9,7 @@ of Chen, Hu, Dai & Wang 2020 against fempipe's converged answer; a failure is a 
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -116,19 +116,15 @@ class CaseResult:
         return tuple(c for c in self.checks if not c.passed)
 
     def to_dict(self) -> dict:
-        return {
-            "case": self.case,
-            "figure": self.figure,
-            "title": self.title,
-            "paper_shows": list(self.paper_shows),
-            "quick": self.quick,
-            "runtime": self.runtime,
-            "checks": [c.to_dict() for c in self.checks],
-            "tables": [t.to_dict() for t in self.tables],
-            "findings": list(self.findings),
-            "caption": self.caption,
-            "not_checked": list(self.not_checked),
-        }
+        out = {k: getattr(self, k) for k in ("case", "figure", "title")}
+        out.update(paper_shows=list(self.paper_shows), quick=self.quick, runtime=self.runtime)
+        out.update(
+            checks=[c.to_dict() for c in self.checks], tables=[t.to_dict() for t in self.tables]
+        )
+        out.update(
+            findings=list(self.findings), caption=self.caption, not_checked=list(self.not_checked)
+        )
+        return out
 
 
 def merge_results(results: list[CaseResult]) -> CaseResult:
@@ -142,9 +138,7 @@ def merge_results(results: list[CaseResult]) -> CaseResult:
     for r in results:
         for t in r.tables:
             old = tables.get(t.title)
-            tables[t.title] = (
-                t if old is None else Table(t.title, t.columns, old.rows + t.rows, t.note)
-            )
+            tables[t.title] = t if old is None else replace(t, rows=old.rows + t.rows)
     data: dict = {}
     for r in results:
         for k, v in r.data.items():
@@ -152,18 +146,12 @@ def merge_results(results: list[CaseResult]) -> CaseResult:
                 data[k] = {**data[k], **v}
             else:
                 data.setdefault(k, v)
-    return CaseResult(
-        case=first.case,
-        figure=first.figure,
-        title=first.title,
-        paper_shows=first.paper_shows,
-        checks=tuple(c for r in results for c in r.checks),
-        tables=tuple(tables.values()),
-        findings=tuple(f for r in results for f in r.findings),
-        data=data,
-        quick=first.quick,
-        runtime=sum(r.runtime for r in results),
-        explained=tuple(e for r in results for e in r.explained),
-        caption=first.caption,
-        not_checked=first.not_checked,
+    joined = {k: tuple(x for r in results for x in getattr(r, k)) for k in _JOINED}
+    tables = tuple(tables.values())
+    return replace(
+        first, **joined, tables=tables, data=data, runtime=sum(r.runtime for r in results)
     )
+
+
+#: The fields of the parts of a case that :func:`merge_results` concatenates.
+_JOINED = ("checks", "findings", "explained")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .case import Case
-from .checks import CaseResult, Table
+from .checks import CaseResult
 from .drawing import plot_shape_panels
 from .evaluate import measure
 from .static_shapes import panel_checks, panel_table, static_panel
@@ -41,12 +41,9 @@ def run(quick: bool = False) -> CaseResult:
         measure("grows_with_gamma", per_v(drop, ".4f"), ok=bool(np.all(np.diff(drop, axis=0) > 0))),
         measure("plumb_line", per_v(plumb, ".3f"), ok=bool(np.all(np.diff(plumb, axis=0) < 0))),
     ]
-    plumb_table = Table(
-        "Distance from the plumb line, ||θ + α||_L2, converged FE",
-        ("γ", *[f"v = {vv:g}" for vv in v]),
-        tuple((g, *plumb[i]) for i, g in enumerate(gammas)),
-        note="||θ + α|| = 0 would be a vertical line; θ(0) = 0 keeps a boundary layer at the clamp.",
-    )
+    velocities = " | ".join(f"v = {vv:g}" for vv in v)
+    rows = [(g, *plumb[i]) for i, g in enumerate(gammas)]
+    plumb_table = ref.table("plumb", rows, velocities=velocities)
     return CASE.result(
         measured,
         quick=quick,

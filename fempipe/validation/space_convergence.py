@@ -109,8 +109,10 @@ def run(quick: bool = False) -> CaseResult:
     for label, qs in ((f"3-D, v = {v3:g}", q3), (f"planar, v = {v2:g}", q2)):
         for q, s in qs.items():
             rows.append((label, q, *s["values"], s["local"], s["slope"], s["monotone"]))
-    extra = ref.tables["orders_quick"]["note"] if quick else ""
-    extra = extra.format(asymptotic=", ".join(asymptotic), lo=band[0], hi=band[1])
+    extra = ""
+    if quick:
+        extra = ref.tables["orders_quick"]["note"]
+        extra = extra.format(asymptotic=", ".join(asymptotic), lo=band[0], hi=band[1])
     meshes, last = " | ".join(f"N = {n}" for n in ns), ", ".join(map(str, ns[-3:]))
     table = ref.table("orders", rows, meshes=meshes, last=last, p2_local=p2_local, quick=extra)
     # The checks emitted depend on monotonicity; these must always be among them.
