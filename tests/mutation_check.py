@@ -91,9 +91,13 @@ def _m(model, term, change, path, old, new):
     return Mutation(model, term, change, f"fempipe/{path}", old, new, tests)
 
 
-LT, NT, VT = "model/local_terms.py", "model/nonlocal_terms.py", "model/variants.py"
-OP, BT, SP = "model/operators.py", "model/batched.py", "model/space.py"
-OOP, OM = "model/out_of_plane.py", "model/out_of_plane_motion.py"
+LT, NT, VT = (
+    "model/plane/local_terms.py",
+    "model/plane/nonlocal_terms.py",
+    "model/plane/variants.py",
+)
+OP, BT, SP = "model/plane/operators.py", "model/plane/batched.py", "model/three_d/model.py"
+OOP, OM = "model/out_of_plane/model.py", "model/out_of_plane/motion.py"
 FLIP = "flip sign"
 
 MUTATIONS = (
@@ -134,7 +138,7 @@ MUTATIONS = (
     _m("planar", "external_damping", FLIP, VT,
        "return sigma * self._project(",
        "return -sigma * self._project("),
-    _m("planar", "spring", FLIP, "model/springs.py",
+    _m("planar", "spring", FLIP, "model/plane/springs.py",
        "r = r + kappa * (b @ d)",
        "r = r - kappa * (b @ d)"),
     # ----------------------------------------------------------- planar: Jacobians --

@@ -13,8 +13,9 @@ import pytest
 
 from fempipe import FiniteElement, Modal, Params, PipeModel
 from fempipe.analyses.dynamics import Radau, make_initial_state
-from fempipe.model import batched, dynamics_problem
+from fempipe.model import dynamics_problem
 from fempipe.model.dynamics_problem import PipeDynamics
+from fempipe.model.plane import batched
 from fempipe.model.plane.batched import StageKernels, integral_operators, projection_fields
 from fempipe.model.quadrature import LineQuadrature
 from fempipe.solvers.radau.contract import ImplicitSecondOrderProblem

@@ -1,4 +1,4 @@
-"""Motion of the pipe (Eq. (20)): trajectories, unsteady flow, initial states, energy.
+"""Motion of the pipe. Eq. (20): trajectories, unsteady flow, initial states, energy.
 
 Radau IIA on :class:`~fempipe.model.dynamics_problem.PipeDynamics`; docs/theory/numerics.md.
 """
@@ -102,7 +102,7 @@ def make_initial_state(
     amplitude: float = 0.01,
     q_static: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The static state plus ``amplitude`` sin((2 mode - 1) pi xi / 2) in theta (Eq. (22)), at rest.
+    """The static state plus ``amplitude`` sin((2 mode - 1) pi xi / 2) in theta, at rest. Eq. (22).
 
     L2-projected; ``q_static`` default :func:`~fempipe.analyses.statics.solve_static`.
     Returns (q0, qdot0).
@@ -130,8 +130,9 @@ def simulate_steps(
     t0: float = 0.0,
     **options,
 ) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
-    """The motion of Eq. (20) as a generator of (tau, q, q'): the initial state, then every
-    accepted step of :class:`Radau` (``flow`` goes to :class:`PipeDynamics`, the other
+    """The motion as a generator of (tau, q, q'): the initial state, then every accepted step.
+
+    Eq. (20) integrated by :class:`Radau` (``flow`` goes to :class:`PipeDynamics`, the other
     options to :class:`Radau`)."""
     problem = PipeDynamics(model, options.pop("flow", None))
     stepper = Radau(problem, q0, qdot0, t0, **options)
@@ -194,7 +195,7 @@ def simulate(
     h_fixed: float | None = None,
     callback: Callable[[float], None] | None = None,
 ) -> Trajectory:
-    """Integrate the motion of Eq. (20) from tau = t0 to t_end > t0 by :class:`Radau`.
+    """Integrate the motion from tau = t0 to t_end > t0 by :class:`Radau`. Eq. (20).
 
     Parameters
     ----------

@@ -86,7 +86,7 @@ class CenterlineSampler:
         if not same:
             self._basis = None
 
-    def compute_shape(self, q: np.ndarray, qdot: np.ndarray | None = None):
+    def shape(self, q: np.ndarray, qdot: np.ndarray | None = None):
         """:class:`~fempipe.model.kinematics.Shape` of the state q (as ``compute_shape(disc, q, alpha)``)."""
         q = np.asarray(q)
         if not self._checked:

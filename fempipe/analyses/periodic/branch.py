@@ -384,7 +384,7 @@ def continue_cycles(
     resume: dict | None = None,
     on_point: Callable[[dict], None] | None = None,
 ) -> CycleBranch:
-    """Follow the periodic orbits of Eq. (20) born at a Hopf point by pseudo-arclength continuation.
+    """Follow the periodic orbits born at a Hopf point by pseudo-arclength continuation. Eq. (20).
 
     Single shooting in (x0, T, v) with the exact monodromy, a Poincare phase condition and
     Keller's arclength condition (or v fixed on ``values``); docs/theory/numerics.md.

@@ -211,7 +211,7 @@ def compute_cycle_diagram(
     out_of_plane=None,
     **options,
 ) -> CycleDiagram:
-    """Bifurcation diagram by continuation: equilibria and periodic orbits against v (Figs. 7-10).
+    """Bifurcation diagram by continuation: equilibria and periodic orbits against v, as in Figs 7-10.
 
     For each alpha: the primary static branch's equilibria at ``values`` and the orbits born at
     every Hopf point (:func:`continue_cycles`; a branch ending at another Hopf point is not

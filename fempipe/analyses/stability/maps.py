@@ -148,7 +148,7 @@ def map_stability(
     planar: bool = False,
     **options,
 ) -> StabilityMap:
-    """v_cr against alpha for each (beta, gamma) in ``curves``, in parallel (Fig. 6).
+    """v_cr against alpha for each (beta, gamma) in ``curves``, in parallel, as in Fig 6.
 
     Each point is a :func:`find_critical_velocity` in both planes (``planar``: in the plane);
     ``options`` passed on (``ds_max`` default 0.2); a failed point keeps its error; ``variants``:

@@ -94,7 +94,7 @@ def compute_spectrum(
     method: str = "auto",
     tolerance: float = RESOLUTION_TOL,
 ) -> Spectrum:
-    """Every resolved eigenvalue of Eq. (32) about a static state, with its mode number.
+    """Every resolved eigenvalue about a static state, with its mode number. Eq. (32).
 
     The mode numbers cost a path back to v = 0; for the decision alone use :func:`linearly_stable`.
 

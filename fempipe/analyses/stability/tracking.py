@@ -326,7 +326,7 @@ def trace_root_locus(
     tolerance: float = RESOLUTION_TOL,
     callback: Callable[[int, float], None] | None = None,
 ) -> RootLocus | tuple[RootLocus, RootLocus]:
-    """Spectra along the static branch at the flow velocities ``values``: a root locus (Fig. 5).
+    """Spectra along the static branch at the flow velocities ``values``: a root locus, as in Fig 5.
 
     Parameters
     ----------

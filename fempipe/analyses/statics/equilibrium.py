@@ -108,7 +108,7 @@ def solve_static(
     tol: float = 1e-10,
     max_iter: int = 40,
 ) -> StaticSolution:
-    """The static state of Eq. (31a) by Newton's method with a line search on ||R||.
+    """The static state by Newton's method with a line search on ||R||. Eq. (31a).
 
     Parameters
     ----------
