@@ -60,18 +60,7 @@ ALLOWED_CYCLES: frozenset[tuple[str, ...]] = frozenset()
 LAZY_REGISTRIES = frozenset({"_LAZY", "SUBCOMMANDS"})
 
 #: (d) Cycles through imports inside functions, each as the sorted tuple of its modules.
-ALLOWED_LAZY_CYCLES: frozenset[tuple[str, ...]] = frozenset(
-    {
-        # classical.py imports its two halves and they name its StraightPipe under
-        # TYPE_CHECKING: StraightPipe to a module of their own (the validation suite's
-        # restructuring).
-        (
-            "fempipe.validation.classical",
-            "fempipe.validation.classical_galerkin",
-            "fempipe.validation.classical_limits",
-        ),
-    }
-)
+ALLOWED_LAZY_CYCLES: frozenset[tuple[str, ...]] = frozenset()
 
 #: (e) The most imports inside functions outside fempipe/cli.
 MAX_FUNCTION_IMPORTS = 30

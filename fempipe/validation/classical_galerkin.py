@@ -10,15 +10,12 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import brentq
 
-if TYPE_CHECKING:
-    from .classical import StraightPipe
-
+from .straight_pipe import StraightPipe
 
 # Clamped-free beam modes
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
@@ -14,10 +13,7 @@ from scipy.optimize import brentq
 from fempipe.core.parallel import single_blas
 
 from .classical_galerkin import LegendreGalerkin
-
-if TYPE_CHECKING:
-    from .classical import StraightPipe
-
+from .straight_pipe import StraightPipe
 
 # Closed forms the solvers are checked against
 
