@@ -44,12 +44,7 @@ def first_order_pencil(K, C, M) -> tuple[np.ndarray, np.ndarray]:
 
 
 def first_order_matrix(
-    K,
-    C,
-    M,
-    *,
-    factor: Literal["cholesky", "lu"] = "cholesky",
-    mass_factor: tuple | None = None,
+    K, C, M, *, factor: Literal["cholesky", "lu"] = "cholesky", mass_factor: tuple | None = None
 ) -> np.ndarray:
     """B^{-1} A = [[0, I], [-M^{-1} K, -M^{-1} C]], without forming M^{-1}.
 

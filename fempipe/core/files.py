@@ -18,13 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = [
-    "atomic_path",
-    "to_jsonable",
-    "json_dumps",
-    "write_text",
-    "write_json",
-]
+__all__ = ["atomic_path", "to_jsonable", "json_dumps", "write_text", "write_json"]
 
 
 @contextlib.contextmanager

@@ -35,13 +35,7 @@ class FiniteElement:
         n_gauss: int | None = None,
     ) -> None:
         import scipy.sparse as sp
-        from skfem import (
-            Basis,
-            BilinearForm,
-            ElementLineP1,
-            ElementLineP2,
-            MeshLine,
-        )
+        from skfem import Basis, BilinearForm, ElementLineP1, ElementLineP2, MeshLine
 
         degree = int(degree)
         if not 1 <= degree <= 10:

@@ -61,8 +61,7 @@ def compute_shape(
     quad = disc.quad
     theta_q = disc.Phi @ np.asarray(q)
     f = np.stack(
-        [np.cos(theta_q), np.sin(theta_q), np.cos(theta_q + alpha), np.sin(theta_q + alpha)],
-        axis=1,
+        [np.cos(theta_q), np.sin(theta_q), np.cos(theta_q + alpha), np.sin(theta_q + alpha)], axis=1
     )
     # Integrals at the sample points: edges exactly; interior points by the
     # same cell-wise Gauss interpolation as the integration operator.

@@ -39,12 +39,7 @@ class Modal:
     BASES = ("sine", "beam")
 
     def __init__(
-        self,
-        n_modes: int = 4,
-        n_cells: int | None = None,
-        n_gauss: int = 8,
-        *,
-        basis: str = "sine",
+        self, n_modes: int = 4, n_cells: int | None = None, n_gauss: int = 8, *, basis: str = "sine"
     ) -> None:
         n_modes = int(n_modes)
         if n_modes < 1:

@@ -113,8 +113,5 @@ def newton(
         if rn <= tol * scale and lam * np.linalg.norm(dx) <= 1e-9 * (1.0 + np.linalg.norm(x)):
             return NewtonResult(x=x, iterations=it, residual_norm=rn)
     raise NewtonConvergenceError(
-        f"Newton did not converge: residual {rn:.3e} after {it} iterations",
-        it,
-        rn,
-        finite=True,
+        f"Newton did not converge: residual {rn:.3e} after {it} iterations", it, rn, finite=True
     )

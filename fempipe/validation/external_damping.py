@@ -121,10 +121,7 @@ def _tables(h: dict, beck, fe_beck, hanging, fe_hanging, v_inf: float) -> tuple:
         for s in sorted(beck)
     ]
     hrows = [(s, hanging[s].v_cr, fe_cell(fe_hanging.get(s))) for s in sorted(hanging)]
-    return (
-        ref.table("beck", rows, FE=FE, v2=v_inf**2),
-        ref.table("hanging", hrows, FE=FE, **h),
-    )
+    return (ref.table("beck", rows, FE=FE, v2=v_inf**2), ref.table("hanging", hrows, FE=FE, **h))
 
 
 def plot(result: CaseResult, fig=None):

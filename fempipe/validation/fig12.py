@@ -69,11 +69,7 @@ def run(quick: bool = False) -> CaseResult:
             checks.append(measure("loop_{alpha}_{n}", dist, **fields))
     table = CASE.references.table("phase", tuple(rows))
     return CASE.result(
-        checks,
-        quick=quick,
-        tables=(table,),
-        data={"loops": loops, "v": v},
-        requires=requires,
+        checks, quick=quick, tables=(table,), data={"loops": loops, "v": v}, requires=requires
     )
 
 

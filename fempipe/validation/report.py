@@ -161,12 +161,7 @@ def render_report(
     """
     tables_path = None if tables_dir is None else Path(tables_dir)
     cmd = "fempipe validate" + (" --quick" if suite.quick else "")
-    lines = [
-        *_introduction(suite, cmd),
-        *_headline(suite),
-        *_findings(suite),
-        *_summary(suite),
-    ]
+    lines = [*_introduction(suite, cmd), *_headline(suite), *_findings(suite), *_summary(suite)]
     sources = _source_labels(suite)
     if sources:
         lines += [

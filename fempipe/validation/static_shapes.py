@@ -58,11 +58,7 @@ class StaticShapes:
 def _common_grid(disc, q, alpha, xi):
     """Centerline sampled 16 points per cell and interpolated to ``xi`` (error < 1e-5)."""
     s = compute_shape(disc, q, alpha, points_per_cell=16)
-    return (
-        np.interp(xi, s.xi, s.X_g),
-        np.interp(xi, s.xi, s.Z_g),
-        np.interp(xi, s.xi, s.theta),
-    )
+    return (np.interp(xi, s.xi, s.X_g), np.interp(xi, s.xi, s.Z_g), np.interp(xi, s.xi, s.theta))
 
 
 def static_shapes(

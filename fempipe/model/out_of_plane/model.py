@@ -119,10 +119,7 @@ class OutOfPlaneOperators:
         f = self.fixed()
         q = np.asarray(q, dtype=float)
         return _State(
-            theta=f["Phi"] @ q,
-            dtheta=f["dPhi"] @ q,
-            theta_tip=float(self.disc.tip @ q),
-            q=q,
+            theta=f["Phi"] @ q, dtheta=f["dPhi"] @ q, theta_tip=float(self.disc.tip @ q), q=q
         )
 
     def weighted_gram(self, d: np.ndarray) -> np.ndarray:
