@@ -312,10 +312,8 @@ def dot(x, y):
 
 
 def matvec(M, v):
-    """``M v`` at every point and state, M (m, 3, 3, S), v (m, 3, S), contracted over M's axis 2.
-
-    As ``(M * v[:, None]).sum(axis=2)`` without forming its (m, 3, 3, S, L) product.
-    """
+    """``M v`` at every point and state, M (m, 3, 3, S), v (m, 3, S): ``(M * v[:, None]).sum(2)``
+    without its (m, 3, 3, S, L) product."""
     if not isinstance(M, Dual) and not isinstance(v, Dual):
         return np.einsum("nijs,njs->nis", M, v)
     Mv, vv = _val(M), _val(v)

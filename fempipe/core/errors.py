@@ -11,11 +11,8 @@ __all__ = ["ParamError", "PointStoreMismatchError", "SolverError"]
 
 
 class SolverError(RuntimeError):
-    """A solver failed to produce a result it could vouch for.
-
-    ``str()`` says which solver, where (the parameters) and why; the
-    subclasses carry the details as attributes.
-    """
+    """A solver failed to produce a result it could vouch for; ``str()`` says which solver,
+    where (the parameters) and why, the subclasses carry the details as attributes."""
 
 
 class ParamError(ValueError):

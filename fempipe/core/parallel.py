@@ -51,11 +51,8 @@ _PR_SET_PDEATHSIG = 1
 
 
 class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived (see :func:`interruptible`).
-
-    A ``KeyboardInterrupt``, so the per-task ``except Exception`` of :func:`run_tasks` never
-    swallows it.  ``signum`` is the signal; ``exit_code`` is 128 + ``signum``.
-    """
+    """SIGINT or SIGTERM (``signum``; ``exit_code`` 128 + ``signum``) arrived: a
+    ``KeyboardInterrupt``, so that :func:`run_tasks`'s ``except Exception`` never swallows it."""
 
     def __init__(self, signum: int) -> None:
         self.signum = int(signum)
@@ -102,10 +99,7 @@ def interruptible() -> Iterator[None]:
 
 
 def single_blas_thread() -> contextlib.AbstractContextManager:
-    """Context manager: one BLAS thread in this process while it is active.
-
-    For the model's small dense solves, where thread start-up costs more than the arithmetic.
-    """
+    """One BLAS thread in this process while active (small dense solves: start-up > arithmetic)."""
     return _blas_controller().limit(limits=1, user_api="blas")
 
 

@@ -72,10 +72,8 @@ class _PerStageVelocityDerivative:
 
 
 class ModelDynamics:
-    """What the integrator's problem of a model with a steady or unsteady flow shares.
-
-    A subclass sets ``model`` and ``flow`` and implements :meth:`solve_acceleration`.
-    """
+    """The integrator's problem of a model, steady or unsteady flow: a subclass sets ``model``
+    and ``flow`` and implements :meth:`solve_acceleration`."""
 
     model: PipeModel
     flow: Callable[[float], tuple[float, float]] | None

@@ -116,10 +116,8 @@ def compute_tip(disc: Discretization, q: np.ndarray, alpha: float) -> dict:
 
 
 def tip_velocity(disc: Discretization, q: np.ndarray, qdot: np.ndarray, alpha: float) -> dict:
-    """Tip velocities, d/dtau of varsigma_tip, eta_tip, X_tip, Z_tip (Eq. (27)).
-
-    Shapes as in :func:`compute_tip`, with ``qdot`` shaped like ``q``.
-    """
+    """Tip velocities, d/dtau of varsigma_tip, eta_tip, X_tip, Z_tip (Eq. (27)); shapes as in
+    :func:`compute_tip`, ``qdot`` shaped like ``q``."""
     q, qdot = np.asarray(q), np.asarray(qdot)
     th = disc.Phi @ q.T
     thd = disc.Phi @ qdot.T

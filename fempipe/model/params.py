@@ -189,7 +189,6 @@ class PipeSI:
             mu = math.inf
         return {"beta": (self.M / mt, "M"), "gamma": (gamma, "EI"), "mu": (mu, "a")}
 
-    # --- Eq. (19) scales -------------------------------------------------
     @property
     def time_scale(self) -> float:
         """Seconds per unit of tau: L^2 sqrt((m+M)/EI)."""

@@ -82,7 +82,6 @@ class LineQuadrature:
     def uniform(cls, n_cells: int, n_gauss: int) -> LineQuadrature:
         return cls(np.linspace(0.0, 1.0, int(n_cells) + 1), n_gauss)
 
-    # -- the operators ----------------------------------------------------
     def _cells(self, f: np.ndarray) -> np.ndarray:
         """View f (n_q along axis 0) as (n_cells, n_gauss, ...)."""
         return f.reshape((self.n_cells, self.n_gauss) + f.shape[1:])
@@ -119,13 +118,9 @@ class LineQuadrature:
         """``\\int_0^1 f``; quadrature index on axis 0 of f."""
         return np.tensordot(self.w, np.asarray(f), axes=(0, 0))
 
-    # -- the same operators with the trailing axes flattened -------------
     def cumulative_cells(self, f: np.ndarray) -> np.ndarray:
-        """:meth:`cumulative` with the trailing axes flattened into one matrix product.
-
-        Summed in another order: a ``matmul`` keeps its speed for many trailing axes, where the
-        einsum does not (the batched stage kernels use it).
-        """
+        """:meth:`cumulative` with the trailing axes flattened into one ``matmul`` (fast for many
+        trailing axes, unlike the einsum; summed in another order)."""
         nc, ng = self.n_cells, self.n_gauss
         fc = f.reshape(nc, ng, -1)
         local = np.matmul(self.collocation, fc) * self.h[:, None, None]

@@ -25,10 +25,8 @@ Balance = Callable[[np.ndarray], tuple[np.ndarray, float, float]]
 
 
 class NewtonConvergenceError(SolverError):
-    """Newton's method did not converge, or met a non-finite residual or scale (``finite`` False).
-
-    ``iterations`` done and the last ``residual`` norm (nan if not finite).
-    """
+    """Newton's method did not converge, or met a non-finite residual or scale (``finite``
+    False): ``iterations`` done and the last ``residual`` norm (nan if not finite)."""
 
     def __init__(self, message: str, iterations: int, residual: float, finite: bool) -> None:
         super().__init__(message)

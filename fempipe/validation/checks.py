@@ -85,12 +85,8 @@ class Table:
 
 @dataclass(frozen=True)
 class CaseResult:
-    """What one case returns.
-
-    ``explained``: failed paper checks a finding already states; ``data``: the figure's arrays
-    (not serialised); ``runtime``: wall time of ``run`` in s; the other fields as
-    :class:`~fempipe.validation.case.Case` and the report.
-    """
+    """What one case returns: ``explained``, failed paper checks a finding already states;
+    ``data``, the figure's arrays (not serialised); ``runtime``, wall time of ``run`` in s."""
 
     case: str
     figure: str

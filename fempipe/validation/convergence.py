@@ -70,11 +70,8 @@ def run_study(
     paper_modes: Sequence[int] = (3, 4),
     roundoff: float = 1e-12,
 ) -> Study:
-    """Compute ``quantity`` by ``compute(disc)`` on every discretization and fit the orders.
-
-    ``fe_elements``: degree -> element counts, each doubling; ``modes``: N; ``fe_order``: degree
-    -> theoretical order; errors below ``roundoff * max(1, |Q|)`` are not fitted.
-    """
+    """``compute(disc)`` on every discretization (``fe_elements``: degree -> doubling element
+    counts; ``modes``: N) and the fitted orders; errors below ``roundoff * max(1, |Q|)`` unfitted."""
     raw: dict[str, tuple[np.ndarray, np.ndarray, float | None]] = {}
     for deg, ns in fe_elements.items():
         deg = int(deg)

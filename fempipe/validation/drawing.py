@@ -132,10 +132,8 @@ def draw_shapes(
     stable=None,
     legend: bool = True,
 ):
-    """Overlay the centerlines of ``families`` (label -> StaticShapes), lengths times ``scale``.
-
-    ``v_label(i, v)`` names the legend entries; states not ``stable`` are drawn grey.
-    """
+    """Overlay the centerlines of ``families`` (label -> StaticShapes), lengths times ``scale``;
+    ``v_label(i, v)`` names the legend entries, states not ``stable`` are grey."""
     import matplotlib.pyplot as plt
 
     first = next(iter(families.values()))

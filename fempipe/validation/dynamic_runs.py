@@ -236,12 +236,8 @@ class DiagramPoint:
 
 @dataclass(frozen=True)
 class ContinuedDiagram:
-    """The static branch and the cycle branches from each Hopf point of one discretization at one
-    alpha (:func:`fempipe.analyses.periodic.compute_cycle_diagram`).
-
-    ``filled``: orbits at requested v the branch passed near a Hopf point, shot from the orbit
-    interpolated between its neighbours (branch ``"H1 (shot)"``).
-    """
+    """The static branch and the cycle branches from each Hopf point at one alpha; ``filled``:
+    orbits shot at requested v a branch passed near a Hopf point (branch ``"H1 (shot)"``)."""
 
     label: str
     alpha: float
@@ -360,20 +356,11 @@ def continued_diagram(label: str, alpha: float, values) -> ContinuedDiagram:
 
 
 def sweep_check(diag: ContinuedDiagram, vs) -> dict:
-    """The brute-force check of a continued diagram at the v ``vs``.
-
-    The attractor found by integration must be among the diagram's stable states.  Returns
-    ``period``, ``tip``, ``eq_tip`` (largest differences), ``flagged`` (attractors on no stable
-    continued state), ``unsettled`` (no attractor by t_max: inconclusive) and ``attractors``.
-    """
-    out = {
-        "period": 0.0,
-        "tip": 0.0,
-        "eq_tip": 0.0,
-        "flagged": [],
-        "unsettled": [],
-        "attractors": {},
-    }
+    """The attractors by integration at ``vs`` against the diagram's stable states: ``period``,
+    ``tip``, ``eq_tip`` (largest differences), ``flagged`` (on no stable continued state),
+    ``unsettled`` (no attractor by t_max: inconclusive) and ``attractors``."""
+    out = {"period": 0.0, "tip": 0.0, "eq_tip": 0.0, "flagged": [], "unsettled": []}
+    out["attractors"] = {}
     for v in vs:
         att = attractor(diag.label, diag.alpha, v)
         out["attractors"][float(v)] = att

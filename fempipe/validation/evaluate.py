@@ -93,11 +93,8 @@ def _number(spec: Mapping, key: str, default: float | None, m: Measured, names: 
 
 
 def evaluate(spec: Mapping, m: Measured, names: Mapping[str, Any]) -> Check:
-    """The check of ``m`` by ``spec``; ``names``: reference values and ``"sources"``.
-
-    ``below``: measured <= limit; ``close``: |measured - reference| <= atol + rtol |reference|;
-    ``holds``: the case's verdict ``ok``.
-    """
+    """The check of ``m`` by ``spec`` (``below``: measured <= limit; ``close``: |measured -
+    reference| <= atol + rtol |reference|; ``holds``: verdict ``ok``); ``names``: references."""
     kind = spec["kind"]
     names = {**names, **m.fields}
     nums = {k: _number(spec, k, d, m, names) for k, d in KINDS[kind].items()}

@@ -51,11 +51,6 @@ class OutOfPlaneBranches:
         pts = [p for p in self.checked if abs(p["v"] - v) < 1e-9 and p["stable"]]
         return pts[0] if pts else None
 
-    def first_unstable_3d(self) -> float | None:
-        """The smallest v of a planar-stable checked orbit that is unstable out of plane."""
-        vs = [p["v"] for p in self.checked if p["stable"] and p["stable_3d"] is False]
-        return min(vs) if vs else None
-
 
 @dataclass(frozen=True)
 class AtVelocities:

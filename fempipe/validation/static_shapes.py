@@ -72,11 +72,8 @@ def static_shapes(
     n_gamma_steps: int = 8,
     n_points: int = 201,
 ) -> StaticShapes:
-    """Static states at ``v_values`` (ascending from >= 0) on the sagged branch.
-
-    ``beta``, ``mu`` default to the paper's case; ``n_gamma_steps``: continuation steps in gamma;
-    ``n_points``: points of the common xi grid.
-    """
+    """Static states at ``v_values`` (ascending from >= 0) on the sagged branch; ``n_gamma_steps``
+    continuation steps in gamma, ``n_points`` on the common xi grid."""
     v_values = np.asarray(v_values, dtype=float)
     if np.any(np.diff(v_values) < 0) or np.any(v_values < 0):
         raise ValueError("v_values must be ascending and >= 0")

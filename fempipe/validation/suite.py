@@ -47,15 +47,10 @@ def _case_groups(order: list[str]) -> list[tuple[str, ...]]:
     return tasks
 
 
-def run_group(names: tuple[str, ...], quick: bool, out) -> list[CaseOutcome]:
-    """Run cases one after the other in this process (they share caches)."""
-    return [run_case(n, quick, out) for n in names]
-
-
 def _run_task(names: tuple[str, ...], quick: bool, out, part):
     """One task of :func:`run_suite`: a group of cases, or one part of a split case."""
     if part is None:
-        return run_group(names, quick, out)
+        return [run_case(n, quick, out) for n in names]  # one process: shared caches
     return run_part(names[0], quick, part)
 
 
@@ -170,7 +165,6 @@ def _finish(name: str, module, result: CaseResult, out, t0: float) -> CaseOutcom
         except Exception:
             log.exception("figure of validation case %s failed", name)
             error = "figure: " + traceback.format_exc()
-    # The arrays stay behind: the report needs only checks, tables, figure.
     return CaseOutcome(
         name,
         "error" if error else "ok",
@@ -220,7 +214,6 @@ def _parts(name: str, quick: bool) -> list | None:
 
 def _merge_parts(name: str, quick: bool, out, pieces: list, wall: float) -> CaseOutcome:
     """Merge the parts of a split case and draw its figure here."""
-
     errors = [p for status, p in pieces if status != "ok"]
     if errors:
         return CaseOutcome(name, "error", error="\n".join(errors), wall_time=wall)

@@ -72,11 +72,8 @@ _FIXED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class OutOfPlaneOperators:
-    """The weak form of the out-of-plane problem, one method per term.
-
-    ``model`` is the planar :class:`~fempipe.model.plane.operators.PipeModel`.  The state-independent
-    matrices are computed once per discretization.
-    """
+    """The weak form of the out-of-plane problem, one method per term, about the planar
+    :class:`~fempipe.model.plane.operators.PipeModel` ``model``."""
 
     def __init__(self, model: PipeModel) -> None:
         self.model = model
@@ -89,7 +86,6 @@ class OutOfPlaneOperators:
     def params(self):
         return self.model.params
 
-    # -------------------------------------------------- fixed pieces --
     def fixed(self) -> dict:
         """Phi, dPhi dense; the pipe's mass, the integrals C^R phi_j and \\int phi_i."""
         d = _FIXED.get(self.disc)
@@ -127,7 +123,6 @@ class OutOfPlaneOperators:
         Phi = self.fixed()["Phi"]
         return (Phi * (self.w * d)[:, None]).T @ Phi
 
-    # ---------------------------------------------------- stiffness --
     def bending(self, st: _State) -> np.ndarray:
         r"""``\int phi_i' phi_j' - \int theta^s'^2 phi_i phi_j``: out of the plane the static curvature softens the pipe."""
         return self.fixed()["K"] - self.weighted_gram(st.dtheta**2)
@@ -168,7 +163,6 @@ class OutOfPlaneOperators:
             S += kappa * np.outer(b, b) + (P * (rule.w * axial)[:, None]).T @ P
         return S
 
-    # ------------------------------------------------- rate matrices --
     def inertia(self) -> np.ndarray:
         """``\\int (C phi_i)(C phi_j) + Gamma (\\int phi_i)(\\int phi_j)``: the mass, SPD."""
         f = self.fixed()
@@ -202,7 +196,6 @@ class OutOfPlaneOperators:
         """``mu \\int B phi_i B phi_j``: the objective Kelvin-Voigt damping (docs/theory/out_of_plane.md)."""
         return self.params.mu * self.material_bending(st)
 
-    # -------------------------------------------------------- totals --
     def matrices(self, q: np.ndarray) -> OutOfPlaneMatrices:
         """K, C, M about the planar static state q (with the neutral mode where it exists)."""
         st = self.state(q)

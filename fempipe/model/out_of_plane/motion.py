@@ -57,7 +57,6 @@ class OutOfPlaneMotion:
             accel=f["Phi"] @ qddot,
         )
 
-    # ---------------------------------------------------- stiffness --
     def base_force(self, b: _Base) -> np.ndarray:
         """G_0, the force field of the planar motion, shape (n_q, 2): the 3-D model's
         :meth:`~fempipe.model.three_d.model.PipeModel3D.force_field` at the planar state.
@@ -88,7 +87,6 @@ class OutOfPlaneMotion:
         f = self.static.fixed()
         return (self.params.v**2) * np.outer(f["integral"], self.model.disc.tip)
 
-    # ------------------------------------------------ Kelvin-Voigt --
     def kelvin_voigt(self, b: _Base) -> tuple[np.ndarray, np.ndarray]:
         """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state; stiffness zero at rest."""
         f = self.static.fixed()
@@ -108,7 +106,6 @@ class OutOfPlaneMotion:
         mu = self.params.mu
         return mu * damping, mu * stiffness
 
-    # -------------------------------------------------------- totals --
     def matrices(self, q, qdot, qddot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(K, C, M) about the planar state (q, q', q'')."""
         b = self.base(np.asarray(q, float), np.asarray(qdot, float), np.asarray(qddot, float))

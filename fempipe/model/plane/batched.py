@@ -104,11 +104,8 @@ def projection_fields(quad: LineQuadrature):
 
 
 class StageKernels:
-    """Residual, Jacobians and dR/dv of the pipe without variants at S stacked states.
-
-    Build it with :meth:`for_model`.  Each method takes rows ``Q, P, A`` of shape (S, n) and
-    equals the :class:`~fempipe.model.plane.operators.PipeModel` term row by row, to round-off.
-    """
+    """Residual, Jacobians and dR/dv of the pipe without variants at S stacked states (rows
+    ``Q, P, A`` of shape (S, n)), equal to the ``PipeModel``'s row by row, to round-off."""
 
     def __init__(self, model: PipeModel) -> None:
         p = model.params

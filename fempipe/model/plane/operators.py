@@ -57,12 +57,9 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         new.params = params
         return new
 
-    # ------------------------------------------------------- totals --
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        r"""``M_ij = \int_0^1 (C phi_i n).(C phi_j n) + Gamma b_i . b_j``, dense SPD, shape (n, n).
-
-        ``d (inertia + end_mass_inertia) / d q''`` in Gram form, which makes the symmetry exact.
-        """
+        r"""``M_ij = \int_0^1 (C phi_i n).(C phi_j n) + Gamma b_i . b_j``, dense SPD, shape (n, n):
+        ``d (inertia + end_mass_inertia) / d q''`` in Gram form, which makes the symmetry exact."""
         fl = self.fields(q)
         M = self._pipe_mass(fl)
         G = self.params.end_mass
@@ -94,10 +91,7 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return r
 
     def rate_terms(self, q, qdot, qddot) -> np.ndarray:
-        """``C^d q' + M^d q''`` at the static state q (Eqs. (33b), (33c)), without forming them.
-
-        Equals ``jacobians(q)[1] @ qdot + jacobians(q)[2] @ qddot``.
-        """
+        """``C^d q' + M^d q''`` at the static state q (Eqs. (33b), (33c)), without forming them."""
         fl = self.fields(q, qdot, qddot)
         r = self.kelvin_voigt(qdot) + self.coriolis(fl) + self.inertia(fl)
         p = self.params
@@ -155,10 +149,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         raise ValueError(f"continuation parameter must be 'v', 'gamma' or 'alpha', got {name!r}")
 
     def jacobians(self, q, qdot=None, qddot=None, v_dot: float = 0.0):
-        """Analytic ``(dR/dq, dR/dq', dR/dq'')``, each dense, shape (n, n).
-
-        At a static state these are the K^d, C^d, M^d of Eqs. (31b)-(33).
-        """
+        """Analytic ``(dR/dq, dR/dq', dR/dq'')``, dense (n, n): at a static state K^d, C^d, M^d
+        of Eqs. (31b)-(33)."""
         n = self.n
         qdot = np.zeros(n) if qdot is None else np.asarray(qdot)
         qddot = np.zeros(n) if qddot is None else np.asarray(qddot)
@@ -250,7 +242,6 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
             J = J + self.spring_jacobian(q, dense=True)
         return J
 
-    # ------------------------------------------------------- energy --
     def kinetic_energy(self, q, qdot) -> float:
         """``T = (1/2) \\int_0^1 |r_dot|^2 + (Gamma/2) |r_dot(1)|^2 = (1/2) q'^T M(q) q'``."""
         fl = self.fields(q, qdot)

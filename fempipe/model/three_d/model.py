@@ -27,7 +27,6 @@ __all__ = [
     "GAUGE_WEIGHT",
     "PipeModel3D",
     "planar_state",
-    "plane_of",
 ]
 
 #: c_g and k_g of the gauge equation: the gauge relaxes with the rates 50 and 100 (roots of
@@ -44,12 +43,6 @@ def planar_state(q: np.ndarray) -> np.ndarray:
     """The 3-D state U = (q, 0, 0) of a planar state q (the exact planar reduction)."""
     q = np.asarray(q, dtype=float)
     return np.concatenate([q, np.zeros(2 * q.size)])
-
-
-def plane_of(U: np.ndarray) -> np.ndarray:
-    """The theta part of a 3-D state: the planar state when a = b = 0."""
-    U = np.asarray(U)
-    return U[: U.size // 3].copy()
 
 
 class PipeModel3D:
@@ -108,7 +101,6 @@ class PipeModel3D:
         a = self.params.alpha
         return np.array([np.cos(a), -np.sin(a), 0.0])
 
-    # ------------------------------------------------------- fields --
     def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> Fields3D:
         """The kinematics at the quadrature points, with derivatives if ``blocks`` is not empty.
 
@@ -151,7 +143,6 @@ class PipeModel3D:
             return op(x)
         return x.nonlocal_map(op, adjoint)
 
-    # ------------------------------------------- the terms: force fields G --
     def inertia(self, fl: Fields3D) -> Dual:
         """``C^R C t_ddot``: the pipe's inertia force beyond xi, centripetal part included."""
         return self._integral(self._integral(fl.t_ddot, "C"), "CR")
@@ -230,7 +221,6 @@ class PipeModel3D:
         )
         return f * (self.gauge_weight * r)[:, None]
 
-    # ------------------------------------------------------- totals --
     def force_field(self, fl: Fields3D, v_dot: float = 0.0) -> Dual:
         """The sum G of the force fields of all terms tested as ``\\int delta t . G``."""
         G = self.inertia(fl) + self.coriolis(fl) + self.follower(fl) + self.gravity()
@@ -276,11 +266,8 @@ class PipeModel3D:
         return r if np.ndim(U) == 2 else r[0]
 
     def jacobians(self, U, Ud=None, Udd=None, v_dot: float = 0.0):
-        """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each; dR/dU'' symmetrized.
-
-        For S states (rows of (S, 3 n) arrays), arrays (S, 3 n, 3 n) from one evaluation of the
-        weak form.
-        """
+        """Exact ``(dR/dU, dR/dU', dR/dU'')``, dense (3 n, 3 n) each, dR/dU'' symmetrized; for S
+        states (rows of (S, 3 n) arrays), (S, 3 n, 3 n) from one evaluation of the weak form."""
         blocks = ("q", "qdot", "qddot")
         A, B = self._weak_form(self.fields(U, Ud, Udd, blocks=blocks), v_dot)
         D = self._derivatives(A, B, blocks)
@@ -290,10 +277,8 @@ class PipeModel3D:
         return out if np.ndim(U) == 2 else tuple(x[0] for x in out)
 
     def velocity_derivative(self, U, Ud) -> np.ndarray:
-        """dR/dv at fixed (U, U', U''), steady flow: the weak form of ``2 sqrt(beta) C^R t_dot + 2 v t(1)``.
-
-        Shape (3 n,), or (S, 3 n) for S states.
-        """
+        """dR/dv at fixed (U, U', U''), steady flow: the weak form of ``2 sqrt(beta) C^R t_dot +
+        2 v t(1)``, shape (3 n,), or (S, 3 n) for S states."""
         fl = self.fields(U, Ud)
         p = self.params
         G = 2.0 * np.sqrt(p.beta) * self._integral(fl.t_dot, "CR") + (2.0 * p.v) * fl.t_tip
@@ -312,7 +297,6 @@ class PipeModel3D:
         M = self.mass_matrix(U)
         return -sla.cho_solve(sla.cho_factor(M), self.residual(U, Ud, None, v_dot))
 
-    # ------------------------------------------------------ geometry --
     def centerline_velocity(self, fl: Fields3D) -> np.ndarray:
         """r_dot = C t_dot at the quadrature points, shape (n_q, 3)."""
         return self.quad.cumulative(fl.t_dot[:, :, 0])
@@ -356,7 +340,6 @@ class PipeModel3D:
             return {k: float(v[0]) for k, v in out.items()}
         return out
 
-    # ------------------------------------------------------- energy --
     def kinetic_energy(self, U, Ud) -> float:
         """``T = (1/2) \\int |r_dot|^2 + (Gamma/2) |r_dot(1)|^2``."""
         fl = self.fields(U, Ud)

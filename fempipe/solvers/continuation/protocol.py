@@ -58,10 +58,8 @@ class ContinuationProblem(Protocol):
     def solve_bordered(
         self, lin: Any, row: np.ndarray | None, rhs: np.ndarray, *, determinant: bool = False
     ) -> BorderedSolution:
-        """Solve ``[[F_x, F_lambda], [row]] z = rhs`` (``row`` None: ``F_x z = rhs`` at fixed lambda).
-
-        With ``determinant``, also sign and log|det| of the bordered matrix.
-        """
+        """Solve ``[[F_x, F_lambda], [row]] z = rhs`` (``row`` None: ``F_x z = rhs``); with
+        ``determinant``, also sign and log|det| of the bordered matrix."""
 
     def inner(self, a: np.ndarray, b: np.ndarray) -> float:
         """The inner product of arclength, <a, b>."""

@@ -55,11 +55,8 @@ class IntegrationError(SolverError):
 
 
 class StepRecord(NamedTuple):
-    """One accepted step (contract rule 13); unpacks as ``(t_old, h, q_old, p_old, Q, P, A)``.
-
-    t_old and h are its start and size, q_old and p_old q and q' at t_old, Q, P, A (shape
-    (3, n)) q, q', q'' at the stages t_old + c_i h (the last is the step's end).
-    """
+    """One accepted step (rule 13), ``(t_old, h, q_old, p_old, Q, P, A)``: start, size, q and q'
+    at t_old, and (shape (3, n)) q, q', q'' at the stages t_old + c_i h (the last: the end)."""
 
     t_old: float
     h: float

@@ -44,10 +44,8 @@ def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np
 
 
 def chain_step(D: np.ndarray, h: float, S: np.ndarray, dy_dp: np.ndarray | None = None):
-    """Chain one step's derivative D with the derivatives so far: Y1 = [[I, h I], [0, I]] Y + D Y.
-
-    Returns (d y1/d y0, d y1/dp), the latter None without ``dy_dp``.
-    """
+    """Y1 = [[I, h I], [0, I]] Y + D Y for one step's derivative D: (d y1/d y0, d y1/dp), the
+    latter None without ``dy_dp``."""
     n = S.shape[0] // 2
     with_p = dy_dp is not None
     Y = np.column_stack([S, dy_dp]) if with_p else S
