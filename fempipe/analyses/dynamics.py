@@ -56,7 +56,7 @@ class PulsatingFlow:
             raise ValueError(f"omega must be >= 0, got {self.omega}")
 
     def __call__(self, tau: float) -> tuple[float, float]:
-        """Return (v, v_dot) at time tau."""
+        """(v, v_dot) at tau."""
         s = self.sigma * math.sin(self.omega * tau)
         return self.v0 * (1.0 + s), self.v0 * self.sigma * self.omega * math.cos(self.omega * tau)
 
@@ -208,10 +208,6 @@ def simulate(
         Default the steady ``model.params.v``.
     callback : callable, optional
         ``callback(tau)`` after every step.
-
-    Returns
-    -------
-    Trajectory
     """
     if not t_end > t0:
         raise ValueError(f"t_end must be > t0 = {t0}, got {t_end}")
@@ -225,22 +221,17 @@ def simulate(
         max_step=max_step,
         h_fixed=h_fixed,
     )
-    ts, qs, ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
+    samples = [(stepper.t, stepper.q.copy(), stepper.qdot.copy())]
     grid = np.linspace(t0, t_end, n_out) if n_out else None
     k = 1
     for t, q, p in stepper.steps(t_end):
         if grid is None:
-            ts.append(t)
-            qs.append(q)
-            ps.append(p)
-        else:
-            while k < grid.size and grid[k] <= t + 1e-14:
-                qq, pp = stepper.dense(grid[k]) if grid[k] < t else (q, p)
-                ts.append(grid[k])
-                qs.append(qq)
-                ps.append(pp)
-                k += 1
+            samples.append((t, q, p))
+        while grid is not None and k < grid.size and grid[k] <= t + 1e-14:
+            samples.append((grid[k], *(stepper.dense(grid[k]) if grid[k] < t else (q, p))))
+            k += 1
         if callback is not None:
             callback(t)
+    ts, qs, ps = zip(*samples, strict=True)
     flow_dict = flow.to_dict() if hasattr(flow, "to_dict") else None
     return Trajectory.recorded(ts, qs, ps, stepper.stats, rtol, flow_dict)

@@ -130,15 +130,9 @@ class StaticBranchPolicy(KellerPolicy):
 
     def finish(self, reason: str, h: float) -> Branch:
         self.end_reason = reason
-        return Branch(
-            parameter=self.family.parameter,
-            base=self.family.model.params,
-            points=self.points,
-            special=self.events,
-            steps=self.steps,
-            rejected_steps=self.rejected_steps,
-            end_reason=reason,
-        )
+        family = self.family
+        fields = (family.model.params, self.points, self.events, self.steps, self.rejected_steps)
+        return Branch(family.parameter, *fields, reason)
 
 
 def interp_state(a: CurvePoint, b: CurvePoint, value: float) -> np.ndarray:
@@ -236,21 +230,15 @@ def switch_branch(
     (the mirror-image buckled branches at alpha = 0, pi)."""
     family = StaticFamily(model, parameter)
     n = model.n
-    m = family.at(point.value)
-    J = m.static_jacobian(point.q)
-    Jd = J.toarray() if sp.issparse(J) else J
+    J = family.at(point.value).static_jacobian(point.q)
     Rl = family.dR_dlambda(point.q, point.value)
-    # Null space of [J, R_lambda] (dimension 2 at a simple branch point).
-    A = np.hstack([Jd, Rl[:, None]])
-    _, _, Vt = np.linalg.svd(A)
+    # the null space of [J, R_lambda] (dimension 2 at a simple branch point)
+    _, _, Vt = np.linalg.svd(np.hstack([J.toarray() if sp.issparse(J) else J, Rl[:, None]]))
     N2 = Vt[-2:].T
-    # Remove the component along the known tangent, in the arclength metric.
-    t0 = point.tangent
-    dot = family.inner
-    cand = [N2[:, 0], N2[:, 1]]
-    cand = [c - dot(c, t0) / dot(t0, t0) * t0 for c in cand]
-    phi = max(cand, key=lambda c: dot(c, c))
-    phi = normalize(family, phi)
+    # less its component along the known tangent, in the arclength metric
+    t0, dot = point.tangent, family.inner
+    cand = [c - dot(c, t0) / dot(t0, t0) * t0 for c in (N2[:, 0], N2[:, 1])]
+    phi = normalize(family, max(cand, key=lambda c: dot(c, c)))
     tol = kwargs.get("tol", 1e-10)
     out = []
     for sgn in (1.0, -1.0):
@@ -265,8 +253,5 @@ def switch_branch(
             )
         y = res[0]
         start = family.at(float(y[n]))
-        br = continue_static(
-            start, parameter, stop=stop, q0=y[:n], tangent=sgn * phi, ds=ds, **kwargs
-        )
-        out.append(br)
+        out.append(continue_static(start, parameter, stop, y[:n], ds, tangent=sgn * phi, **kwargs))
     return out[0], out[1]

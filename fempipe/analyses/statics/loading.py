@@ -84,40 +84,29 @@ def solve_path(
     extrapolation of the previous two, the gap bridged by continuation where Newton fails.
     """
     values = [float(x) for x in values]
-    if not values:
-        return []
     out: list[StaticSolution] = []
-    prev_q: list[np.ndarray] = []
-    prev_v: list[float] = []
     guess = q0
     for i, value in enumerate(values):
         m = model.with_params(replace(model.params, **{parameter: value}))
-        if not prev_q and q0 is None:
+        if i == 0 and q0 is None:
             sol = solve_sagged(m, tol=tol)
-            out.append(sol)
-            prev_q.append(sol.q)
-            prev_v.append(value)
-            if callback:
-                callback(i, sol)
-            continue
-        if len(prev_q) >= 2 and prev_v[-1] != prev_v[-2]:
-            s = (value - prev_v[-1]) / (prev_v[-1] - prev_v[-2])
-            guess = prev_q[-1] + s * (prev_q[-1] - prev_q[-2])
-        elif prev_q:
-            guess = prev_q[-1]
-        try:
-            sol = solve_static(m, q0=guess, tol=tol)
-        except NewtonError:
-            if not prev_q:
-                raise
-            start = model.with_params(replace(model.params, **{parameter: prev_v[-1]}))
-            br = continue_static(start, parameter, stop=value, q0=prev_q[-1], tol=tol, detect=False)
-            if br.points[-1].value != value:
-                raise
-            sol = solve_static(m, q0=br.points[-1].q, tol=tol)
+        else:
+            if i >= 2 and values[i - 1] != values[i - 2]:
+                s = (value - values[i - 1]) / (values[i - 1] - values[i - 2])
+                guess = out[-1].q + s * (out[-1].q - out[-2].q)
+            elif i:
+                guess = out[-1].q
+            try:
+                sol = solve_static(m, q0=guess, tol=tol)
+            except NewtonError:
+                if not i:
+                    raise
+                start = model.with_params(replace(model.params, **{parameter: values[i - 1]}))
+                br = continue_static(start, parameter, value, q0=out[-1].q, tol=tol, detect=False)
+                if br.points[-1].value != value:
+                    raise
+                sol = solve_static(m, q0=br.points[-1].q, tol=tol)
         out.append(sol)
-        prev_q.append(sol.q)
-        prev_v.append(value)
         if callback:
             callback(i, sol)
     return out

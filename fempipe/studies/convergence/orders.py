@@ -17,8 +17,7 @@ def estimate_order(
     Returns ``(order, indices)``; order is positive for a decaying error and
     NaN if fewer than two usable points exist.
     """
-    dofs = np.asarray(dofs, dtype=float)
-    errors = np.asarray(errors, dtype=float)
+    dofs, errors = np.asarray(dofs, dtype=float), np.asarray(errors, dtype=float)
     ok = np.flatnonzero(np.isfinite(errors) & (errors > floor))
     # The finest usable points are consecutive refinements: the asymptotic range.
     idx = tuple(int(i) for i in ok[-n_points:])
@@ -62,8 +61,7 @@ def extrapolate(f, values: np.ndarray, tol: float, p: float | None):
     tol : float
         Relative accuracy of the solver: the floor of the error estimate.
     p : float or None
-        Theoretical order in the ratio of the sizes (None: the observed
-        local order of the last three members).
+        Theoretical order (None: the observed local order of the last three members).
 
     Returns
     -------
@@ -82,15 +80,10 @@ def extrapolate(f, values: np.ndarray, tol: float, p: float | None):
         if lo.size == 0 or not np.isfinite(lo[-1]) or lo[-1] <= 0:
             # No theory and no measured order: the last difference is the estimate.
             raw = float(abs(values[j] - values[i]))
-            return (
-                complex(values[j]) if np.iscomplexobj(values) else float(values[j]),
-                max(raw, floor),
-                (
-                    f"finest member n = {f.sizes[j]}, estimate |Q(n={f.sizes[j]}) - "
-                    f"Q(n={f.sizes[i]})| (no order known)"
-                ),
-                raw,
-            )
+            value = complex(values[j]) if np.iscomplexobj(values) else float(values[j])
+            n_i, n_j = f.sizes[i], f.sizes[j]
+            how = f"finest member n = {n_j}, estimate |Q(n={n_j}) - Q(n={n_i})| (no order known)"
+            return value, max(raw, floor), how, raw
         p = float(lo[-1])
         source = f"observed local order {p:.2f}"
     else:

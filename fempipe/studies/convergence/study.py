@@ -192,17 +192,14 @@ def run_study(
     tol = quantity.tolerance if tolerance is None else float(tolerance)
     params = getattr(quantity, "params", None)
     raw = _members(families, results)
-    # Richardson per family from its two finest usable members.
-    extrap = {}
-    for f, values, _fails, _cpu in raw:
-        extrap[f.label] = extrapolate(f, values, tol, f.order_for(params))
+    # Richardson per family from its two finest usable members
+    extrap = {f.label: extrapolate(f, values, tol, f.order_for(params)) for f, values, *_ in raw}
     reference, ref_raw = _reference(extrap, raw, independent)
     scale = max(1.0, abs(reference.value))
 
-    # Fit only errors well above the reference's own (before it was raised to
-    # the solver tolerance) and above the solver tolerance: this leaves out
-    # the finest member of the reference family, whose error is the
-    # correction itself.
+    # Fit only errors well above the reference's own (before it was raised to the solver
+    # tolerance) and above the solver tolerance: this leaves out the finest member of the
+    # reference family, whose error is the correction itself.
     floor = max(10.0 * ref_raw, tol * scale)
     series = []
     for f, values, fails, cpu in raw:
@@ -229,25 +226,17 @@ def run_study(
     cpu = time.process_time() - t_start
     if (workers or 1) > 1:
         cpu += sum(s.cpu_time for s in series)  # the members ran in worker processes
-    return ConvergenceStudy(
-        quantity=quantity,
-        reference=reference,
-        series=tuple(series),
-        fit_floor=floor,
-        cpu_time=cpu,
-    )
+    return ConvergenceStudy(quantity, reference, tuple(series), floor, cpu)
 
 
 def _members(families: list[Family], results: list) -> list[tuple]:
     """``(family, values, failures, cpu)`` per family from the members' results in order."""
     is_complex = any(isinstance(r, tuple) and isinstance(r[0], complex) for r in results)
-    raw = []
-    k = 0
+    raw, members = [], iter(results)
     for f in families:
         vals, fails, cpu = [], {}, 0.0
-        for i, _ in enumerate(f.sizes):
-            r = results[k]
-            k += 1
+        for i in range(len(f.sizes)):
+            r = next(members)
             if isinstance(r, SolverError | ValueError):
                 # A member too coarse for the quantity (no resolved mode,
                 # Newton lost on P1:2, ...): recorded, left out of the fits.
@@ -278,25 +267,11 @@ def _reference(
     # smallest correction.
     best = min(usable, key=lambda k: (usable[k][1], usable[k][3]))
     ref, ref_err, how, ref_raw = usable[best]
-    indep = []
-    for label, (val, err, _how, _raw) in usable.items():
-        if label != best:
-            indep.append(
-                {
-                    "method": f"Richardson of {label}",
-                    "value": val,
-                    "error_estimate": err,
-                    "difference": float(abs(val - ref)),
-                }
-            )
-    for name, val in independent:
-        indep.append(
-            {
-                "method": name,
-                "value": val,
-                "error_estimate": None,
-                "difference": float(abs(val - ref)),
-            }
-        )
+    rows = [(f"Richardson of {k}", e[0], e[1]) for k, e in usable.items() if k != best]
+    rows += [(name, val, None) for name, val in independent]
+    indep = tuple(
+        {"method": m, "value": val, "error_estimate": err, "difference": float(abs(val - ref))}
+        for m, val, err in rows
+    )
     method = f"Richardson extrapolation of {best}: {how}"
-    return Reference(ref, ref_err, method, best, tuple(indep)), ref_raw
+    return Reference(ref, ref_err, method, best, indep), ref_raw
