@@ -71,21 +71,17 @@ def find_attractor(
     ----------
     model : PipeModel
     q0, qdot0 : ndarray, optional
-        Initial state; default the static state plus ``perturbation`` rad in the first
-        sine mode, at rest.
+        Initial state; default the static state + ``perturbation`` rad (first sine mode).
     t_max, rtol : float
         Longest integration (tau; then non-periodic) and its tolerance.
     shoot_rtol, shoot_tol : float
         Integration and Newton tolerances of the shooting.
     use_shooting, converged_tol : bool, float
-        Without shooting a periodic orbit is accepted when successive returns agree to
-        ``converged_tol``.
+        Without shooting, a cycle is accepted when returns agree to ``converged_tol``.
     recurrence_tol, start_tol : float
-        Returns this close (RMS) start the shooting; returns that approach fast (2x per
-        return) are integrated on until ``start_tol`` close first.
+        Returns this close (RMS) start the shooting; fast ones (2x) wait for ``start_tol``.
     equilibrium_radius : float
-        Within this RMS distance of a linearly stable static state, and approaching it,
-        the attractor is that equilibrium.
+        RMS distance to a linearly stable static state, approached, that is the attractor.
     n_max : int
         Largest period-n looked for.
     record : bool
@@ -124,9 +120,8 @@ def find_attractor(
 
 
 def recurrence(sec_t: list, sec_x: list, n_max: int):
-    """(n, d_n) for the smallest n whose return distance d_n = |x_k - x_{k-n}| is within
-    a factor 2 of the smallest over n <= n_max; None before the second section point.
-    ``sec_t`` are the times and ``sec_x`` the states (q, q') of the section points."""
+    """(n, d_n) for the smallest n whose return distance |x_k - x_{k-n}| (section times
+    ``sec_t``, states ``sec_x``) is within 2x the smallest over n <= n_max; None at first."""
     k = len(sec_x) - 1
     d = []
     for nn in range(1, min(n_max, k) + 1):
@@ -148,8 +143,7 @@ class _AttractorSearch:
     def __init__(self, model: PipeModel, **options) -> None:
         self.model = model
         self.disc, self.alpha, self.n = model.disc, model.params.alpha, model.n
-        for name, value in options.items():
-            setattr(self, name, value)
+        self.__dict__.update(options)
         counts = dict.fromkeys(("steps", "rejected_steps", "n_residual", "n_jacobian"), 0)
         self.stats = counts | {"wall_time": 0.0}
 
@@ -243,13 +237,7 @@ class _AttractorSearch:
         """The Attractor, with the statistics of the transient added to ``stats``."""
         stepper, stats = self.stepper, self.stats
         st = stepper.stats
-        stats.update(
-            steps=stats["steps"] + st.steps,
-            rejected_steps=stats["rejected_steps"] + st.rejected_steps,
-            n_residual=stats["n_residual"] + st.n_residual,
-            n_jacobian=stats["n_jacobian"] + st.n_jacobian,
-            wall_time=stats["wall_time"] + st.wall_time,
-        )
+        stats.update({k: v + getattr(st, k) for k, v in stats.items()})
         traj = None
         if self.record:
             traj = Trajectory.recorded(self.rec_t, self.rec_q, self.rec_p, st, self.rtol)

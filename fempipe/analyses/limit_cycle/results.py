@@ -58,9 +58,8 @@ def largest_nontrivial(mu, axisymmetric: bool = False) -> float:
     """
     mu = np.asarray(mu)
     near = np.argsort(np.abs(mu - 1.0), kind="stable")
-    drop = 1
-    if axisymmetric and mu.size > 1 and abs(mu[near[1]] - 1.0) < NEUTRAL_TOLERANCE:
-        drop = 2
+    rotation = axisymmetric and mu.size > 1 and abs(mu[near[1]] - 1.0) < NEUTRAL_TOLERANCE
+    drop = 2 if rotation else 1
     others = np.delete(mu, near[:drop])
     return float(np.max(np.abs(others))) if others.size else 0.0
 
@@ -122,16 +121,8 @@ class LimitCycle:
 
 @dataclass(frozen=True)
 class Attractor:
-    """The attractor reached from an initial state.
-
-    Attributes
-    ----------
-    kind : str
-        ``"equilibrium"``, ``"periodic"`` or ``"non-periodic"``.
-    period, period_n, tip : float or None, int or None, dict
-    cycle, q, qdot, params : LimitCycle or None, ndarray, ndarray, Params
-    t_end, stats, trajectory : float, dict, Trajectory or None
-    """
+    """The attractor reached from an initial state: ``kind`` ``"equilibrium"``, ``"periodic"``
+    or ``"non-periodic"``, its cycle if shot, the end state (q, qdot) at ``t_end``."""
 
     kind: str
     period: float | None

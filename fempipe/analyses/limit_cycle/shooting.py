@@ -14,7 +14,6 @@ import logging
 import math
 import time
 import warnings
-from dataclasses import replace
 
 import numpy as np
 import scipy.linalg as sla
@@ -77,34 +76,16 @@ def shoot(
     q = np.array(q0, dtype=float)
     p = np.array(qdot0, dtype=float)
     level = section_value(problem.model, q) if level is None else float(level)
-    shooter = Shooter(
-        problem,
-        level,
-        rtol=rtol,
-        tol=tol,
-        n_samples=n_samples,
-        reuse_monodromy=reuse_monodromy,
-        polish=polish,
-    )
+    shooter = Shooter(problem, level, rtol, tol, n_samples, reuse_monodromy, polish)
     return shooter.run(q, p, float(period), max_iter)
 
 
 class Shooter:
-    """The Newton iteration of :func:`shoot` on one problem and section level.
-
-    ``total_steps`` and ``rejected`` count the integration steps over all periods so far.
-    """
+    """The Newton iteration of :func:`shoot` on one problem and section level
+    (``total_steps``, ``rejected``: the integration steps over all periods so far)."""
 
     def __init__(
-        self,
-        problem: ModelDynamics,
-        level: float,
-        *,
-        rtol: float,
-        tol: float,
-        n_samples: int,
-        reuse_monodromy: bool,
-        polish: bool,
+        self, problem: ModelDynamics, level, rtol, tol, n_samples, reuse_monodromy, polish
     ) -> None:
         self.problem, self.model, self.n = problem, problem.model, problem.n
         self.level = level
@@ -122,8 +103,7 @@ class Shooter:
     def run(self, q: np.ndarray, p: np.ndarray, T: float, max_iter: int) -> LimitCycle:
         """Newton iterations from (q, p, T) until converged; raise ShootingError if not."""
         n, tol = self.n, self.tol
-        res = math.inf
-        res_prev = math.inf
+        res = res_prev = math.inf
         stale = False
         with single_blas_thread():
             for it in range(1, max_iter + 1):
@@ -227,14 +207,14 @@ class Shooter:
         if self.polish and dx is not None and res > 0.1 * self.tol:
             best = self.polished(best, dx)
         it_, q_, p_, T_, res_, tip_, st_, tt_, oq_, op_ = best
-        cycle = LimitCycle(
+        return LimitCycle(
             period=T_,
             q0=q_,
             qdot0=p_,
             level=self.level,
             tip=tip_,
             floquet_multipliers=mu,
-            stable=True,
+            stable=largest_nontrivial(mu, self.axisymmetric) < 1.0,
             iterations=it_,
             residual=res_,
             orbit_t=tt_,
@@ -245,7 +225,6 @@ class Shooter:
             rejected_steps=self.rejected,
             wall_time=time.perf_counter() - self.t_start,
         )
-        return replace(cycle, stable=largest_nontrivial(mu, self.axisymmetric) < 1.0)
 
     def polished(self, best: tuple, dx: np.ndarray) -> tuple:
         """``best`` moved by one more Newton step if a plain period confirms it."""

@@ -115,14 +115,12 @@ class CycleBranchPolicy:
         on_point: Callable[[dict], None] | None,
     ) -> None:
         self.t_start = time.perf_counter()
-        self.v_lo, self.v_hi = v_range
-        v_lo, v_hi = v_range
+        self.v_lo, self.v_hi = v_lo, v_hi = v_range
         self.grid = np.array(sorted(float(v) for v in values if v_lo <= v <= v_hi))
         self.cont = cont = CycleCorrector(model, hopf, rtol, tol, xtol, max_iter)
         self.name, self.hopf, self.on_point = name, hopf, on_point
         self.ds_min, self.ds_max, self.max_steps = ds_min, ds_max, max_steps
-        n = model.n
-        self.n = n
+        self.n = n = model.n
         self.u_H = np.r_[hopf.q_static, np.zeros(n), cont.T_H, hopf.v]
         self.points: list[CyclePoint] = []
         self.seed = None  # the last flow with the sensitivity of the previous point, if any
@@ -310,9 +308,7 @@ class CycleBranchPolicy:
             us.append(got[0])
 
     def detect(self, step: CycleStep, new: AcceptedOrbit) -> None:
-        # The special points are found from the whole branch when it ends
-        # (:func:`fempipe.analyses.periodic.special.special_points`).
-        return None
+        return None  # special points come from the whole branch (special_points)
 
     def append(self, new: AcceptedOrbit) -> None:
         self.points.append(new.point)
@@ -401,8 +397,7 @@ def continue_cycles(
         v landed on every time the branch passes (``source="grid"``).
     name : str
     rtol : float
-        Integration tolerance (scaled down near a multiplier 1; times :data:`GRID_RTOL_FACTOR`
-        at ``values``).
+        Integration tolerance (smaller near a multiplier 1 and at ``values``).
     tol, xtol : float
         Newton tolerances on the RMS residual and on the correction.
     ds, ds_min, ds_max : float
@@ -467,8 +462,7 @@ def _checked_range(v_range, ds, ds_min, ds_max, tol, rtol) -> tuple[float, float
 
 def predict(S: np.ndarray, us: list, tangent: np.ndarray, h: float) -> np.ndarray:
     """The point at arclength h ahead: on the polynomial through the last four (or three)
-    points in chord length when they are about evenly spaced and h is not much longer than
-    their spacing, else on the tangent."""
+    about evenly spaced points in chord length (h at most 1.5 gaps), else on the tangent."""
     for m in (4, 3):
         if len(us) < m:
             continue

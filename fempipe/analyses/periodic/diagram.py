@@ -106,12 +106,10 @@ def _alpha_task(
     else:
         hopf, v_start, events = analyse_static(model, v_lo, v_hi)
         eq_points = static_points(model, values, v_start, events)
-        saved = {
-            "hopf": [h.to_dict(state=True) for h in hopf],
-            "v_start": v_start,
-            "points": eq_points,
-        }
-        write_text(static_path, json.dumps(saved))
+        hopf_dicts = [h.to_dict(state=True) for h in hopf]
+        write_text(
+            static_path, json.dumps({"hopf": hopf_dicts, "v_start": v_start, "points": eq_points})
+        )
     if out_of_plane:
         v_start = json.loads(static_path.read_text())["v_start"]
         _static_verdicts(model, values, v_start, eq_points, store.directory, alpha_index)
@@ -211,11 +209,8 @@ def compute_cycle_diagram(
     out_of_plane=None,
     **options,
 ) -> CycleDiagram:
-    """Bifurcation diagram by continuation: equilibria and periodic orbits against v, as in Figs 7-10.
-
-    For each alpha: the primary static branch's equilibria at ``values`` and the orbits born at
-    every Hopf point (:func:`continue_cycles`; a branch ending at another Hopf point is not
-    followed again).
+    """Per alpha, the primary static branch's equilibria at ``values`` and the orbits born at
+    every Hopf point (:func:`continue_cycles`; once per branch), as in Figs 7-10.
 
     Parameters
     ----------

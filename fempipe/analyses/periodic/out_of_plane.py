@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -55,20 +56,9 @@ def as_limit_cycle(pt: CyclePoint) -> LimitCycle:
 
 
 def cycle_verdict(model: PipeModel, cycle: LimitCycle, stable_in_plane: bool) -> dict:
-    """The out-of-plane multipliers of a planar orbit and ``stable_3d``.
-
-    Parameters
-    ----------
-    model : PipeModel
-    cycle : LimitCycle
-    stable_in_plane : bool
-
-    Returns
-    -------
-    dict
-        The keys of :func:`fempipe.analyses.three_d.verdict.cycle_entries` and
-        ``planar_block_max_multiplier`` (the planar multipliers again: evidence).
-    """
+    """The out-of-plane multipliers of a planar orbit and ``stable_3d``: the keys of
+    :func:`fempipe.analyses.three_d.verdict.cycle_entries` and ``planar_block_max_multiplier``
+    (the planar multipliers again: evidence)."""
     oop = compute_out_of_plane_floquet(model, cycle)
     out = cycle_entries(model, oop, stable_in_plane)
     # Evidence to check the verdict by: the out-of-plane run's planar block (the
@@ -171,15 +161,12 @@ def locate_change(
     Returns ``{"v", "v_bracket", "iterations", "cpu_time"}``, or None without a bracketed
     crossing or when an orbit cannot be shot.
     """
-    import time
-
     t0 = time.process_time()
     if (mu_a - 1.0) * (mu_b - 1.0) > 0:
         return None
     # Bracket ends [v, mu - 1]; Illinois: the end kept twice in a row has its value halved.
     lo, hi = [a.v, mu_a - 1.0], [b.v, mu_b - 1.0]
-    side = 0
-    it = 0
+    side = it = 0
     while it < max_iter and abs(hi[0] - lo[0]) >= tol:
         it += 1
         v = lo[0] - lo[1] * (hi[0] - lo[0]) / (hi[1] - lo[1])

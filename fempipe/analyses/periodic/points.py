@@ -249,8 +249,7 @@ class _Progress:
 
     def __init__(self, store: PointStore, total, progress) -> None:
         self.store, self.total, self.progress = store, total, progress
-        self.done = 0
-        self.shown = -1
+        self.done, self.shown = 0, -1
 
     def tick(self, *_point) -> None:
         self.done += 1

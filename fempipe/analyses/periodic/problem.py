@@ -91,14 +91,13 @@ class OrbitProblem:
     def __init__(self, corrector: CycleCorrector, u_ref: np.ndarray, rtol: float) -> None:
         n2 = 2 * corrector.n
         self.n2, self.S, self.at, self.rtol = n2, corrector.S, corrector.at, rtol
-        x_ref = u_ref[:n2]
+        self.x_ref = x_ref = u_ref[:n2]
         m_ref = corrector.at(u_ref[-1])
         f_ref = np.r_[x_ref[n2 // 2 :], acceleration(m_ref, x_ref[: n2 // 2], x_ref[n2 // 2 :])]
         # Orthogonal in the metric: on a near-Hopf orbit, an ellipse in the
         # plane of Re z, Im z, a section through a principal axis stays there.
         f_ref = self.S[:n2] ** 2 * f_ref
         self.f_ref = f_ref / np.linalg.norm(f_ref)
-        self.x_ref = x_ref
 
     def flow(self, u: np.ndarray, sensitivity: bool) -> Flow:
         """phi_T(x0; v) at u (raises IntegrationError)."""
@@ -152,25 +151,15 @@ class OrbitProblem:
 
 
 class CycleCorrector:
-    """Newton correctors of one branch.
-
-    Parameters
-    ----------
-    model : PipeModel
-    hopf : HopfPoint
-        The branch's Hopf point (its period scales the metric).
-    rtol, tol, xtol, max_iter : float, float, float, int
-        Integration tolerance; Newton's on the residual and the correction; iterations.
-    """
+    """Newton correctors of one branch from the Hopf point ``hopf`` (its period scales the
+    metric); ``rtol`` of the integration, ``tol``/``xtol`` of Newton on the residual and the
+    correction, ``max_iter`` iterations."""
 
     def __init__(
         self, model: PipeModel, hopf: HopfPoint, rtol: float, tol: float, xtol: float, max_iter: int
     ):
-        self.model = model
-        self.xtol = xtol
-        self.n = model.n
-        self.hopf = hopf
-        self.rtol, self.tol, self.max_iter = rtol, tol, max_iter
+        self.model, self.hopf, self.n = model, hopf, model.n
+        self.rtol, self.tol, self.xtol, self.max_iter = rtol, tol, xtol, max_iter
         self.T_H = 2 * math.pi / hopf.omega
         n = self.n
         s = self.T_H / (2 * math.pi)
@@ -178,8 +167,7 @@ class CycleCorrector:
         self.S = np.r_[
             np.full(n, 1 / math.sqrt(n)), np.full(n, s / math.sqrt(n)), 1 / self.T_H, 1.0
         ]
-        self.integrations = 0
-        self.rejected_integration_steps = 0
+        self.integrations = self.rejected_integration_steps = 0
 
     def at(self, v: float) -> PipeModel:
         """The model at flow velocity v."""
@@ -191,8 +179,7 @@ class CycleCorrector:
 
     def tip_extrema(self, v: float, record: list) -> dict:
         """[min, max] of the tip over the period in ``record`` (its Radau steps), refined."""
-        m = self.at(v)
-        return tip_extrema(m, CollocationOrbit(record), refine="bounded")
+        return tip_extrema(self.at(v), CollocationOrbit(record), refine="bounded")
 
     def rtol_after(self, previous: CyclePoint | None) -> float:
         """``rtol`` times the distance of the previous orbit's nearest non-trivial multiplier
@@ -295,10 +282,8 @@ class CycleCorrector:
         except IntegrationError as exc:
             raise CorrectorError(str(exc)) from None
         self.integrations += 1
-        r = fl.xT - x
-        g = section.phase(x)
         c = 0.0 if tangent is None else float(tangent @ (self.S * (u - u_pred)))
-        return fl, r, g, c
+        return fl, fl.xT - x, section.phase(x), c
 
     def _damped_update(self, u: np.ndarray, du: np.ndarray, fixed_v: bool) -> None:
         """u += lam du in place, the step limited to 0.3 in the metric (the trust region)."""

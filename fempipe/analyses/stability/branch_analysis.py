@@ -98,19 +98,13 @@ class BranchAnalysis:
         parent: BranchAnalysis | None = None,
         stride: int = 1,
     ) -> None:
-        self.model = model
         # Every stride-th continuation point is a sample (folds and the last
         # point always are); the tracker inserts states where it is unsure.
-        self.stride = int(stride)
-        self.res = res
-        self.method = method
-        self.branch = branch
-        self.name = name
+        self.model, self.stride, self.res, self.method = model, int(stride), res, method
+        self.branch, self.name, self.parent = branch, name, parent
         self.v_lo, self.v_hi = v_range
         self.path = TrackedPath(model, res, method, inherit=True)
-        self.parent = parent
-        self.stop_at_first = stop_at_first
-        self.callback = callback
+        self.stop_at_first, self.callback = stop_at_first, callback
         # (position s, event, unstable count before, after) in branch order
         self.events: list[tuple[float, StabilityEvent, int, int]] = []
 
@@ -175,8 +169,7 @@ class BranchAnalysis:
         ref, idx = self.path.samples[k]
         path = TrackedPath(self.model, self.res, self.method)
         path.start_labelled(ref, ModeTracker(self.path.labels, idx))
-        target = replace(e, s=ref.s + dist[k])
-        path.add(target)
+        path.add(replace(e, s=ref.s + dist[k]))
         return complete_tracker(e, ModeTracker(path.labels, path.samples[-1][1])), path.n_spectra
 
     def _retrack(self, eigs: list[ClassifiedSpectrum]) -> None:
@@ -356,17 +349,9 @@ class BranchAnalysis:
                 typ = "divergence" if real else "flutter"
             else:
                 typ = "restabilization" if after == 0 else "mode_restabilization"
-            ev = StabilityEvent(
-                v=v0,
-                type=typ,
-                branch=self.name,
-                frequency=0.0 if real else float(abs(lam0.imag)),
-                mode=int(labels[j]),
-                eigenvalue=complex(lam0.real, abs(lam0.imag)),
-                stable_before=bool(count == 0),
-                stable_after=bool(after == 0),
-                plane=self.model.plane,
-            )
+            freq = 0.0 if real else float(abs(lam0.imag))
+            lam = complex(lam0.real, abs(lam0.imag))
+            ev = self._event(v0, typ, freq, labels[j], lam, count == 0, after == 0)
             self.events.append((s0, ev, ca, cb))
             count = after
 
@@ -376,18 +361,24 @@ class BranchAnalysis:
         before = _unstable_count(samples[k - 1][0])
         after = _unstable_count(samples[k + 1][0]) if k + 1 < len(samples) else before
         j = int(np.argmin(np.abs(f.lam[i_f])))
-        ev = StabilityEvent(
-            v=float(f.v),
-            type="fold",
-            branch=self.name,
-            frequency=0.0,
-            mode=int(self.path.labels[j]),
-            eigenvalue=complex(f.lam[i_f][j]),
-            stable_before=bool(before == 0),
-            stable_after=bool(after == 0),
-            plane=self.model.plane,
-        )
+        lam = f.lam[i_f][j]
+        ev = self._event(f.v, "fold", 0.0, self.path.labels[j], lam, before == 0, after == 0)
         self.events.append((f.s, ev, before, after))
+
+    def _event(self, v, typ, frequency, mode, lam, stable_before, stable_after, **kw):
+        """The StabilityEvent of this branch and plane."""
+        return StabilityEvent(
+            v=float(v),
+            type=typ,
+            branch=self.name,
+            frequency=frequency,
+            mode=int(mode),
+            eigenvalue=complex(lam),
+            stable_before=bool(stable_before),
+            stable_after=bool(stable_after),
+            plane=self.model.plane,
+            **kw,
+        )
 
     def _start_events(self) -> None:
         """Instabilities present at the branch end with the smaller v (listed at that v)."""
@@ -402,18 +393,8 @@ class BranchAnalysis:
             real = abs(lam.imag) <= IMAG_TOL * max(1.0, abs(lam))
             if not real and lam.imag < 0:
                 continue
-            ev = StabilityEvent(
-                v=float(end.v),
-                type="divergence" if real else "flutter",
-                branch=self.name,
-                frequency=0.0 if real else float(lam.imag),
-                mode=int(label),
-                eigenvalue=complex(lam),
-                at_start=True,
-                stable_before=False,
-                stable_after=False,
-                plane=self.model.plane,
-            )
+            typ, freq = ("divergence", 0.0) if real else ("flutter", float(lam.imag))
+            ev = self._event(end.v, typ, freq, label, lam, False, False, at_start=True)
             self.events.append((end.s, ev, n_u, n_u))
 
     # -- results -----------------------------------------------------------

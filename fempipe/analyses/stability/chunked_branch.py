@@ -25,8 +25,7 @@ from .linear import straight_is_static, straight_pencil
 
 class ChunkedBranch:
     """A static branch continued in v piece by piece (``chunk`` in v at a time, as far as the
-    analysis asks), seen as one branch with renumbered fold and branch-point indices.
-    """
+    analysis asks), seen as one branch with renumbered fold and branch-point indices."""
 
     def __init__(self, branch: Branch | None = None) -> None:
         self.points: list = []
@@ -123,14 +122,9 @@ class ChunkedBranch:
                 return
 
 
-#: Step in v between the spectra of a straight branch, in units of ds_max
-#: (Notes of :func:`stability_analysis`).  On 55 straight cases (alpha = 0, and pi
-#: below buckling; P3:16, v in [0, 16]; beta 0.1-0.9, gamma 0-40, mu 0-0.05 and every
-#: variant) the factors 3, 4 and 5 give the events of factor 1 to 2.5e-11 with about half
-#: its spectra.  Beyond, the tracker's halving can insert more spectra than the larger
-#: step saves (the hanging pipe, beta = 0.2, gamma = 10: 35 spectra for 4, 94 for 6), so
-#: 4 keeps a margin.  The step is taken from v_min on, not grown to from 0.05: the same
-#: events (to 2.4e-11) with fewer spectra.
+#: Step in v between the spectra of a straight branch, in units of ds_max, from v_min on:
+#: 3 to 5 give the events of 1 to 2.5e-11 with half the spectra; beyond, the tracker's
+#: halving inserts more than the step saves (docs/theory/stability.md, "The straight branch").
 STRAIGHT_STEP = 4.0
 
 

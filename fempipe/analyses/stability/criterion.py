@@ -37,9 +37,8 @@ def linearly_stable(
     tolerance: float = RESOLUTION_TOL,
     sparse: bool | None = None,
 ) -> bool | None:
-    """Whether the static state q is linearly stable (docs/theory/stability.md, "Linear stability").
-
-    No resolved eigenvalue of Eq. (32) with Re lambda > ``STABILITY_TOL`` max(1, |lambda|).
+    """Whether the static state q is linearly stable: no resolved eigenvalue of Eq. (32) with
+    Re lambda > ``STABILITY_TOL`` max(1, |lambda|) (docs/theory/stability.md).
 
     Parameters
     ----------
@@ -108,8 +107,7 @@ def _low_canonical_modes(disc, tolerance: float):
     w2, basis = w2[o], basis[:, o]
     err = np.abs(np.sqrt(np.maximum(w2, 0.0)) / cantilever_frequencies(k) - 1.0)
     bad = np.flatnonzero(err > tolerance)
-    out = (basis, int(bad[0]) if bad.size else k, model0)
-    per_disc[tolerance] = out
+    per_disc[tolerance] = out = (basis, int(bad[0]) if bad.size else k, model0)
     return out
 
 
@@ -123,12 +121,10 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
         lu = spla.splu(sp.csc_matrix(model.static_jacobian(q)))
     except RuntimeError:  # K^d exactly singular: a fold or a branch point
         return _DENSE
-    mu = model.params.mu
 
     def op_parts(z):
         # M y + C x for real z: every rate term of the model.
-        x, y = z[:n], z[n:]
-        return model.rate_terms(q, x, y)
+        return model.rate_terms(q, z[:n], z[n:])
 
     def op(z):
         # (A)^{-1} B z for A = [[0, I], [-K, -C]], B = diag(I, M): eigenvalue 1/lambda.
@@ -139,6 +135,7 @@ def _sparse_stable(model: PipeModel, q: np.ndarray, tolerance: float):
     # -1 / mu, which Arnoldi would have to resolve: only omega < 0.5 / mu is computed
     # (above, Re lambda < -mu omega^2 / 2 < -1 / (8 mu)).
     omega = cantilever_frequencies(SPARSE_MODES)
+    mu = model.params.mu
     limit = 0.5 / mu if mu > 0.0 else math.inf
     k = min(2 * max(2, int(np.count_nonzero(omega < limit))), 2 * n - 2)
     nu, Z = spla.eigs(T, k=k, which="LM", ncv=min(2 * n, 2 * k + 1))

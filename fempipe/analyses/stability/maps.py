@@ -172,13 +172,8 @@ def map_stability(
             p = replace(base, alpha=a, beta=beta, gamma=gamma, v=0.0)
             tasks.append((disc, p, v_max, options, planar))
     out = run_tasks(_map_point, tasks, workers=workers, executor=executor, callback=callback)
-    points = []
-    for c in range(len(curves)):
-        row = []
-        for a in range(alphas.size):
-            r = out[c * alphas.size + a]
-            row.append(r if isinstance(r, dict) else {"v_cr": None, "error": str(r)})
-        points.append(row)
+    out = [r if isinstance(r, dict) else {"v_cr": None, "error": str(r)} for r in out]
+    points = [out[c * alphas.size : (c + 1) * alphas.size] for c in range(len(curves))]
     return StabilityMap(
         alphas=alphas,
         curves=curves,
@@ -204,9 +199,7 @@ def trace_root_loci(
     callback: Callable[[int, int, object], None] | None = None,
     **options,
 ) -> list:
-    """:func:`trace_root_locus` of several parameter points (Fig. 5), in parallel.
-
-    Returns a list of RootLocus (or the exception of a failed point).
-    """
+    """:func:`trace_root_locus` of several parameter points (Fig. 5), in parallel: a list of
+    RootLocus (or the exception of a failed point)."""
     tasks = [(disc, p, list(values), options) for p in params]
     return run_tasks(_locus_task, tasks, workers=workers, executor=executor, callback=callback)

@@ -43,11 +43,8 @@ LABEL_MODES = 8
 
 
 class ModeTracker:
-    """Carries mode numbers along a sequence of states by continuity.
-
-    ``labels[j]``: the mode number of tracked eigenvalue j, whose index into the first
-    state's spectrum is ``first_idx[j]``.
-    """
+    """Mode numbers carried by continuity: ``labels[j]`` of the tracked eigenvalue j, whose
+    index into the first state's spectrum is ``first_idx[j]``."""
 
     def __init__(self, labels: np.ndarray, first_idx: np.ndarray) -> None:
         self.labels = np.asarray(labels, dtype=int)
@@ -83,14 +80,10 @@ class ModeTracker:
 def _predict(samples: list[tuple[ClassifiedSpectrum, np.ndarray]], s: float) -> np.ndarray:
     """Linear prediction of the tracked eigenvalues at position s."""
     e1, i1 = samples[-1]
-    lam1 = e1.lam[i1]
-    if len(samples) < 2:
-        return lam1
+    if len(samples) < 2 or samples[-2][0].s == e1.s:
+        return e1.lam[i1]
     e0, i0 = samples[-2]
-    lam0 = e0.lam[i0]
-    if e1.s == e0.s:
-        return lam1
-    return lam1 + (s - e1.s) / (e1.s - e0.s) * (lam1 - lam0)
+    return e1.lam[i1] + (s - e1.s) / (e1.s - e0.s) * (e1.lam[i1] - e0.lam[i0])
 
 
 def state_l2(model: PipeModel, dq: np.ndarray) -> float:
@@ -103,19 +96,11 @@ class TrackedPath:
     """Spectra along a sequence of static states, with tracking and refinement."""
 
     def __init__(
-        self,
-        model: PipeModel,
-        res: Resolution,
-        method: str,
-        max_depth: int = 6,
-        inherit: bool = False,
+        self, model: PipeModel, res: Resolution, method: str, max_depth: int = 6, inherit=False
     ) -> None:
-        self.model = model
-        # Straight states may inherit their classification (classify_inherited).
-        self.inherit = inherit
-        self.res = res
-        self.method = method
-        self.max_depth = max_depth
+        # inherit: straight states may inherit their classification (classify_inherited).
+        self.model, self.res, self.method = model, res, method
+        self.inherit, self.max_depth = inherit, max_depth
         self.samples: list[tuple[ClassifiedSpectrum, np.ndarray]] = []
         self.tracker: ModeTracker | None = None
         self.n_spectra = 0
@@ -295,22 +280,20 @@ class RootLocus:
     def to_dict(self) -> dict:
         p = self.params.to_dict()
         p.pop("v", None)
-        points = []
-        for i, v in enumerate(self.v):
-            eig = [
-                eigenvalue_dict(self.lam[i, j], int(self.modes[j]))
-                for j in range(self.modes.size)
-                if self.resolved[i, j]
-            ]
-            points.append(
-                {
-                    "v": float(v),
-                    "stable": bool(self.stable[i]),
-                    "max_real": float(self.max_real[i]),
-                    "theta_tip": float(self.theta_tip[i]),
-                    "eigenvalues": eig,
-                }
-            )
+        points = [
+            {
+                "v": float(v),
+                "stable": bool(self.stable[i]),
+                "max_real": float(self.max_real[i]),
+                "theta_tip": float(self.theta_tip[i]),
+                "eigenvalues": [
+                    eigenvalue_dict(self.lam[i, j], int(self.modes[j]))
+                    for j in range(self.modes.size)
+                    if self.resolved[i, j]
+                ],
+            }
+            for i, v in enumerate(self.v)
+        ]
         return {"params": p, "modes": self.modes.tolist(), "points": points}
 
 
@@ -396,16 +379,14 @@ def _locus_of(model, path, keep, params, values, tips, n_modes) -> RootLocus:
     cols = np.ones(labels.size, dtype=bool) if n_modes is None else labels <= int(n_modes)
     cols = np.flatnonzero(cols | unstable.any(axis=0))
     cols = cols[np.argsort(labels[cols], kind="stable")]
-    max_real = np.array([path.samples[k][0].max_real for k in keep])
-    stable = np.array([not path.samples[k][0].unstable.any() for k in keep])
     return RootLocus(
         params=params,
         v=np.array(values),
         lam=lam[:, cols],
         modes=labels[cols].copy(),
         resolved=resolved[:, cols],
-        max_real=max_real,
-        stable=stable,
+        max_real=np.array([path.samples[k][0].max_real for k in keep]),
+        stable=np.array([not path.samples[k][0].unstable.any() for k in keep]),
         theta_tip=tips,
         n_spectra=path.n_spectra,
         plane=model.plane,

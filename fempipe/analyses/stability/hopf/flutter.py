@@ -46,14 +46,9 @@ def _key(ev) -> tuple:
 def event_states(model: PipeModel, result) -> dict:
     """Static states at the flutter events of a :class:`~fempipe.analyses.stability.StabilityResult`.
 
-    The primary branch is followed again from its start through every flutter v in steps of at
-    most :data:`PATH_STEP`; events of other branches and instabilities present at the start get
-    a reason instead.
-
-    Returns
-    -------
-    dict
-        ``{(branch, type, v, mode): ndarray q or str reason}``.
+    ``{(branch, type, v, mode): q or reason}``: the primary branch followed again from its start
+    in steps of at most :data:`PATH_STEP`; a reason for other branches and for instabilities
+    present at the start.
     """
     out: dict = {}
     flutter = [ev for ev in result.events if ev.type == "flutter"]
@@ -69,7 +64,7 @@ def event_states(model: PipeModel, result) -> dict:
         return out
     v_lo = float(result.v_range[0])
     targets = sorted({float(ev.v) for ev in primary})
-    values, states = [v_lo], {}
+    values = [v_lo]
     for vt in targets:
         k = max(1, math.ceil((vt - values[-1]) / PATH_STEP))
         values.extend(np.linspace(values[-1], vt, k + 1)[1:].tolist())
@@ -80,8 +75,7 @@ def event_states(model: PipeModel, result) -> dict:
         for ev in primary:
             out[_key(ev)] = f"the static state was not found on the way to v = {ev.v:.10g} ({exc})"
         return out
-    for v, sol in zip(values, sols, strict=True):
-        states[v] = sol.q
+    states = {v: sol.q for v, sol in zip(values, sols, strict=True)}
     for ev in primary:
         out[_key(ev)] = states[float(ev.v)]
     return out

@@ -172,20 +172,17 @@ def lyapunov_coefficient(
         k = int(np.argmin(spreads))
         mid, spread = k + 1, spreads[k]
     c1, terms = runs[mid]
-    l1 = l1s[mid]
     size = sum(abs(t) for t in terms) / (2.0 * w)
-    unc = spread + ROUNDING_LEVEL * size
-    step = ladder[mid]
     l1_2h = l1s[mid + 1] if mid + 1 < len(l1s) else math.nan
     return HopfCoefficient(
-        l1=float(l1),
-        uncertainty=float(unc),
+        l1=float(l1s[mid]),
+        uncertainty=float(spread + ROUNDING_LEVEL * size),
         c1=complex(c1),
         eigenvalue=lam,
         omega=w,
         q=q,
         p=p,
-        step=float(step),
+        step=float(ladder[mid]),
         l1_2h=float(l1_2h),
         terms=terms,
         ladder=tuple(zip(ladder, l1s, strict=True)),
