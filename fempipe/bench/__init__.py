@@ -1,12 +1,8 @@
-"""Performance benchmarks (timings, never unit tests).
+"""Performance benchmarks (timings, never unit tests): the registry and the runner.
 
 A benchmark is ``fn(quick: bool = False) -> dict``, registered with
-:func:`fempipe.bench.harness.register` in a module of :data:`BENCHMARK_MODULES`;
-``fempipe bench`` runs them all or ``--only NAME``.  A result's ``"table"`` (list of flat
-dicts) is printed as a table, the rest as ``key: value``.  One module per subject; what they
-share is :mod:`~fempipe.bench.harness`; this module is the registry and the runner.
-
-What each measures: docs/cli/commands.md, "fempipe bench".
+:func:`fempipe.bench.harness.register` in a module of :data:`BENCHMARK_MODULES`.  What each
+measures: docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations
@@ -65,22 +61,8 @@ def run(
     quick: bool = False,
     callback: Callable[[str, dict], None] | None = None,
 ) -> dict:
-    """Run benchmarks by name (all if None).
-
-    Parameters
-    ----------
-    names : list of str, optional
-    quick : bool
-        Smaller problems, one repetition (a smoke run).
-    callback : callable, optional
-        ``callback(name, result)`` after each benchmark.
-
-    Returns
-    -------
-    dict
-        ``{"environment": ..., "quick": quick, "benchmarks": {name: result}}``; ValueError
-        for an unknown name.
-    """
+    """Run benchmarks by name (all if None), ``quick`` a smoke run, ``callback(name, result)``
+    after each; ``{"environment": ..., "quick": quick, "benchmarks": {name: result}}``."""
     table = available()
     names = list(table) if not names else list(names)
     unknown = [n for n in names if n not in table]

@@ -1,10 +1,4 @@
-"""Benchmarks of the bifurcation diagrams by continuation, as fresh processes.
-
-``fig07_continuation``: ``fempipe bifurcation --v 5:12:36 --json`` (Fig. 7), target
-:data:`FIG07_TARGET_S`; not in quick mode also ``--method sweep``, the ratio and the largest
-differences of the stable orbits.  ``fig08_10_continuation``: ``--alphas pi/4,pi/2,3pi/4,pi``
-(Figs. 8-10), target :data:`FIG08_10_TARGET_S`.
-"""
+"""Benchmarks ``fig07_continuation`` and ``fig08_10_continuation``, as fresh processes."""
 
 from __future__ import annotations
 
@@ -79,7 +73,6 @@ def fig07_continuation(quick: bool = False) -> dict:
 
 @register("fig08_10_continuation")
 def fig08_10_continuation(quick: bool = False) -> dict:
-    """Figs. 8-10 by continuation (four inclinations), whole process (no sweep: the
-    eight sweeps take many minutes; Fig. 7 gives the ratio)."""
+    """Figs. 8-10 by continuation (four inclinations), whole process, no sweep."""
     del quick
     return _bench(FIG08_10, FIG08_10_TARGET_S, "fig08_10_continuation", with_sweep=False)

@@ -13,8 +13,7 @@ from fempipe.studies.convergence import Family, Quantity, doubling, run_study
 @register("convergence_vcr")
 def bench_convergence_vcr(quick: bool = False) -> dict:
     """CPU seconds and observed orders of ``fempipe convergence --quantity v_cr_in_plane --alpha pi/2
-    --v 0,10 --fe P1,P2,P3 --modal 2:32 --basis sine,beam`` in this process (quick: 2:8).
-    """
+    --v 0,10 --fe P1,P2,P3 --modal 2:32 --basis sine,beam`` in this process (quick: 2:8)."""
     elements = doubling(2, 8 if quick else 64)
     modes = doubling(2, 8 if quick else 32)
     families = [Family("fe", tuple(elements), degree=k) for k in (1, 2, 3)] + [

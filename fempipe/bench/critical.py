@@ -1,10 +1,4 @@
-"""Benchmarks of the stability analysis in this process.
-
-``stability_vcr`` (v_cr at alpha = pi/2, target :data:`VCR_TARGET_S`), ``critical_3d`` (both
-planes against the planar analysis, :data:`SPATIAL_TARGET_RATIO`) and ``stability_curve``
-(v_cr(alpha) at 37 inclinations on 2 processes, :data:`CURVE_TARGET_S`).  The whole command
-against a classical Galerkin is :mod:`fempipe.bench.stability`.
-"""
+"""Benchmarks of the stability analysis: ``stability_vcr``, ``critical_3d``, ``stability_curve``."""
 
 from __future__ import annotations
 
@@ -59,9 +53,8 @@ def bench_stability_vcr(quick: bool = False) -> dict:
 
 @register("critical_3d")
 def bench_critical_3d(quick: bool = False) -> dict:
-    """CPU seconds of the analysis in both planes against the planar one, at four inclinations,
-    in turns, each the minimum of its repeats; target: the ratio of the sums.
-    """
+    """CPU seconds of the analysis in both planes against the planar one, four inclinations,
+    in turns, each the minimum of its repeats; target: the ratio of the sums."""
     disc = parse_discretization(DEFAULT_FE)
     resolution(disc)
     repeats = 1 if quick else 3

@@ -1,10 +1,4 @@
-"""Benchmarks of the nonlinear dynamics: ``limit_cycle`` and ``fig7``.
-
-``limit_cycle``: whole ``fempipe simulate --alpha 0 --v 10 --json`` processes (the paper's
-case, start-up included) against the same command at ``--shoot-rtol 1e-10``, then in-process
-:func:`fempipe.analyses.limit_cycle.find_attractor` rows.  ``fig7``: the Fig. 7 diagram,
-36 velocities swept up and down on 2 workers.
-"""
+"""Benchmarks of the nonlinear dynamics ``limit_cycle`` and ``fig7`` (docs/cli/commands.md)."""
 
 from __future__ import annotations
 

@@ -79,13 +79,8 @@ _BYTECODE_CACHE: str | None = None
 
 
 def child_cpu_seconds(argv: list[str], env: dict | None = None) -> tuple[float, str]:
-    """User + system CPU seconds and stdout of one fresh ``python ARGV``.
-
-    ``env`` changes the child's environment (a value None removes the variable).  All children
-    share one bytecode cache (``PYTHONPYCACHEPREFIX``), so fempipe loads compiled bytecode as
-    numpy and scipy do, even under PYTHONDONTWRITEBYTECODE.  RuntimeError with the end of
-    stderr if the process fails.
-    """
+    """User + system CPU seconds and stdout of one fresh ``python ARGV`` (``env``: changes,
+    None removes).  One shared bytecode cache, so fempipe loads bytecode as numpy and scipy do."""
     global _BYTECODE_CACHE
     if _BYTECODE_CACHE is None:
         _BYTECODE_CACHE = tempfile.mkdtemp(prefix="fempipe-bench-pycache-")

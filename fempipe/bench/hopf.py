@@ -1,13 +1,6 @@
-"""Benchmark of the Hopf criticality of the flutter events; not a timed test.
+"""Benchmark ``hopf``: the CPU the Hopf normal forms add to ``fempipe critical --v 0,16``.
 
-Registered with :mod:`fempipe.bench` (``fempipe bench --only hopf``).
-
-* ``hopf``: the CPU seconds (``time.process_time``, median of 3) that
-  :func:`fempipe.analyses.stability.hopf.normal_forms` adds to the stability analysis
-  of ``fempipe critical --v 0,16`` (:func:`fempipe.analyses.stability.analyse_stability`)
-  for the paper's case on the default discretization, at alpha = 0, pi/2, pi;
-  with l1 of the first flutter and its uncertainty.  Target: a small fraction
-  of the analysis (the hook runs on every ``fempipe critical``).
+At alpha = 0, pi/2, pi, with l1 of the first flutter; docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations

@@ -1,9 +1,5 @@
 """Benchmark ``simulate_output``: what writing the files of ``fempipe simulate`` costs beside
-its computation.
-
-``fempipe simulate --alpha 0 --v 10 --planar`` with and without ``--out DIR`` (figures,
-GIF, VTU frames, CSV, JSON), each a fresh process; target: the ratio at most
-:data:`OUTPUT_RATIO_TARGET`.
+its computation (fresh processes with and without ``--out DIR``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,4 @@
-"""Benchmark of the chart of parametric resonance (registered with :mod:`fempipe.bench`).
-
-``parametric_region``
-    One region of the hanging pipe's chart, its threshold and its boundary at 10 amplitudes,
-    on the default discretization, in CPU seconds and as a ratio to one static v_cr
-    (target :data:`REGION_TARGET_S`).
-"""
+"""Benchmark ``parametric_region``: one region of the hanging pipe's parametric resonance chart."""
 
 from __future__ import annotations
 
@@ -27,9 +21,8 @@ HANGING = {"alpha": 0.0, "beta": 0.2, "gamma": 10.0, "mu": 0.005, "v": 6.0}
 
 @register("parametric_region")
 def bench_parametric_region(quick: bool = False) -> dict:
-    """The principal region of the second mode at v0 = 6 (omega 24 to 36, the band holding
-    it alone), its boundary at sigma = 0.10, 0.11, ..., 0.19, against the critical velocity
-    of the same pipe on the same discretization (both in CPU seconds of this process)."""
+    """CPU seconds of the second mode's principal region at v0 = 6 (omega 24..36) and its
+    boundary at sigma = 0.10, ..., 0.19, against the same pipe's critical velocity."""
     disc = parse_discretization(DEFAULT_FE)
     model = PipeModel(disc, Params(**HANGING))
     sigmas = np.round(np.linspace(0.10, 0.19, 5 if quick else 10), 6).tolist()

@@ -1,11 +1,6 @@
 """Benchmark ``critical_vs_classical``: ``fempipe critical`` against a classical beam-mode Galerkin.
 
-CPU seconds of fresh processes of ``fempipe critical`` on the hanging pipe and of the
-classical linear Galerkin of the straight pipe as a user would write it (:data:`BASELINE`,
-40 and 20 modes), with their v_cr errors; ``ratio`` against the 40-mode baseline (target
-:data:`TARGET_RATIO`).  A second case (:data:`CURVED_ARGS`) has a curved static state.
-
-The benchmark in full: docs/cli/commands.md, "fempipe bench".
+CPU seconds of fresh processes and v_cr errors; docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations

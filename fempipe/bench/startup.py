@@ -25,8 +25,7 @@ _STARTUP_COMMANDS: tuple[tuple[str, list[str], bool], ...] = (
 @register("startup")
 def bench_startup(quick: bool = False) -> dict:
     """CPU seconds of ``import fempipe`` and ``fempipe --help`` in fresh processes, median of 5
-    (quick: 1), against ``import numpy`` and ``import scipy.linalg``; target :data:`STARTUP_TARGET`.
-    """
+    (quick: 1), against ``import numpy`` and ``import scipy.linalg``; :data:`STARTUP_TARGET`."""
     runs = 1 if quick else 5
     rows = []
     for label, argv, targeted in _STARTUP_COMMANDS:

@@ -1,10 +1,4 @@
-"""The static benchmarks.
-
-``static_path``: a 61-point path in v = 0..10 at alpha = pi/2 (the paper's case and the
-Texier--Dorbolo pipe) through :func:`fempipe.analyses.statics.solve_path` and, for
-comparison, :func:`fempipe.analyses.statics.continue_static`.  ``static_scaling``: the same
-path on P3 meshes of 8 to 256 elements, time per point and its exponent in n_elements.
-"""
+"""The static benchmarks ``static_path`` and ``static_scaling`` (docs/cli/commands.md)."""
 
 from __future__ import annotations
 

@@ -1,12 +1,7 @@
 """Benchmarks of the 3-D model's limit cycles against the planar ones (``OPENBLAS_NUM_THREADS=1``).
 
-``space_cycle``: shooting one planar cycle (alpha = pi/2, v = 10) with its Floquet
-multipliers, planar and in 3-D from the same guess, their ratio, the out-of-plane
-multipliers by both methods, one period with the monodromy of each model and where the 3-D
-period's CPU goes.  ``space_nonplanar_cycle``: a cycle that leaves the plane (alpha = pi/2,
-v = 6), one period with its full monodromy, CPU per step against the planar cycle's.
-
-docs/cli/commands.md, "fempipe bench"; docs/theory/space.md, "The weak form".
+``space_cycle`` (alpha = pi/2, v = 10) and ``space_nonplanar_cycle`` (v = 6):
+docs/cli/commands.md, "fempipe bench".
 """
 
 from __future__ import annotations
@@ -62,8 +57,7 @@ def bench_space_cycle(quick: bool = False) -> dict:
         lambda: _period(PipeDynamics(planar), cycle.q0, cycle.qdot0, cycle.period), repeats
     )
     t_ps, steps_s = _cpu(
-        lambda: _period(PipeDynamics3D(space), U, planar_state(cycle.qdot0), cycle.period),
-        repeats,
+        lambda: _period(PipeDynamics3D(space), U, planar_state(cycle.qdot0), cycle.period), repeats
     )
     shares = _period_shares(disc, params, U, planar_state(cycle.qdot0), cycle.period)
     return {

@@ -1,9 +1,7 @@
-"""Command-line interface: ``fempipe <subcommand>``, one module per subcommand (:data:`SUBCOMMANDS`).
+"""Command-line interface ``fempipe <subcommand>``, one module per subcommand (:data:`SUBCOMMANDS`).
 
-Each module defines ``add_arguments(parser)``, ``run(args) -> int`` and ``EXAMPLES`` (the
-command lines of its help's epilogue), optionally ``solver_error_hint(args)``, a sentence added
-to the message of a solver failure.  Only the module of the command run is imported.  Errors
-and exit codes (:func:`main`): docs/cli/options.md.
+Each module defines ``add_arguments(parser)``, ``run(args) -> int``, ``EXAMPLES`` and optionally
+``solver_error_hint(args)``; only the command run is imported.  Exit codes: docs/cli/options.md.
 """
 
 from __future__ import annotations
@@ -93,14 +91,8 @@ def build_parser(only: Collection[str] | None = None) -> argparse.ArgumentParser
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit code.
-
-    0 ok; 1 a solver failed (:class:`~fempipe.core.errors.SolverError`) or a disk error; 2 bad
-    input (argparse, :class:`~fempipe.cli.parsing.CLIError`, a point store of another run,
-    an unusable ``--out``), before any computation; 130 / 143 interrupted by SIGINT / SIGTERM.
-    Every error is one line ``fempipe COMMAND: error: --option: message``; a command that
-    fails leaves its ``--out`` directory as it was.
-    """
+    """Entry point; returns the exit code: 0 ok; 1 a solver or disk error; 2 bad input;
+    130 / 143 SIGINT / SIGTERM (docs/cli/options.md)."""
     one_blas_thread()
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((a for a in argv if a in SUBCOMMANDS), None)

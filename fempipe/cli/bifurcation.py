@@ -1,11 +1,7 @@
 """``fempipe bifurcation``: tip extrema against v, by continuation (default) or by sweeps.
 
-``--method continuation`` follows the primary static branch and the periodic orbits born at its
-Hopf points (:func:`fempipe.analyses.periodic.compute_cycle_diagram`); ``--method sweep`` steps
-through the attractors up and down (:func:`fempipe.analyses.bifurcation.compute_bifurcation_diagram`,
-on ``--workers`` or ``--dask``); ``--3d`` sweeps the 3-D model's attractors.  ``--out DIR`` keeps
-the point store DIR/points/: a rerun resumes.  Keys and files: docs/cli/commands.md,
-"fempipe bifurcation".
+``--3d`` sweeps the 3-D model's attractors; ``--out DIR`` keeps the point store DIR/points/ (a
+rerun resumes).  Keys and files: docs/cli/commands.md, "fempipe bifurcation".
 """
 
 from __future__ import annotations
@@ -318,9 +314,8 @@ def _write_outputs(output: reporting.Output, result: dict, keys) -> None:
 
 
 def _print_table(result: dict) -> None:
-    """One line per point.  ``branch``: ``eq`` (the static branch), the cycle branch (``H1``,
-    ...) or the sweep's direction; ``stable``: ``-`` for a sweep's attractor; ``point``:
-    ``requested`` (a v of ``--v``) or ``step``; ``3d``: ``stable_3d`` where computed."""
+    """One line per point; ``branch``: ``eq``, the cycle branch (``H1``, ...) or the sweep's
+    direction; ``point``: ``requested`` (a v of ``--v``) or ``step``."""
     cols = [
         ("alpha", lambda pt: f"{pt['alpha']:.4g}"),
         (

@@ -42,8 +42,7 @@ __all__ = [
 def add_problem_arguments(
     parser: argparse.ArgumentParser, flow: str | None, alpha: bool = True
 ) -> None:
-    """:func:`add_physical_arguments`, :func:`add_flow_arguments` (default ``flow``) and
-    :func:`add_discretization_arguments`."""
+    """The physical, flow (default ``flow``) and discretization arguments."""
     add_physical_arguments(parser, alpha)
     add_flow_arguments(parser, flow)
     add_discretization_arguments(parser)
@@ -219,8 +218,7 @@ def add_allow_large_argument(group, help: str) -> None:
 def add_integration_arguments(
     parser, *, shoot_rtol: str, shoot_help: str, group=None, per: str = "in tau"
 ):
-    """``--t-max``, ``--rtol``, ``--shoot-rtol`` in ``group`` (default a new "time integration"
-    group), which is returned."""
+    """``--t-max``, ``--rtol``, ``--shoot-rtol`` in ``group`` (default a new one), returned."""
     g = group if group is not None else parser.add_argument_group("time integration")
     g.add_argument(
         "--t-max",
@@ -317,20 +315,8 @@ _OPTION = {f: o for o, f in SI_OPTIONS.items()} | {
 
 @dataclass(frozen=True)
 class Setup:
-    """The validated problem behind a command line.
-
-    Attributes
-    ----------
-    params : Params
-        ``params.v`` is the first flow value (0 if none).
-    pipe : PipeSI or None
-        The SI pipe, when given.
-    v : list of float
-        The dimensionless flow velocities (empty if the command has no flow list).
-    disc : FiniteElement or Modal
-    U : list of float or None
-        The flow velocities in m/s with an SI pipe.
-    """
+    """The validated problem behind a command line: ``params.v`` is the first of the flow
+    velocities ``v`` (0 if none); ``pipe`` and ``U`` (m/s) with an SI pipe, else None."""
 
     params: Params
     pipe: PipeSI | None

@@ -1,9 +1,7 @@
 """``fempipe compare FILE.csv``: a user's results against fempipe's, with fempipe's error estimate.
 
-Each quantity of each row of the cases file (:func:`fempipe.io.cases.read_cases`) on the
-discretization and the refined one (:func:`fempipe.studies.compare.compare_values`); a difference
-above the estimate "differs".  Exit codes as diff's: 0 every value agrees, 1 otherwise, 2 bad
-input.  The file, keys and files: docs/cli/commands.md, "fempipe compare".
+Exit codes as diff's: 0 every value agrees, 1 otherwise, 2 bad input.  The file, keys and files:
+docs/cli/commands.md, "fempipe compare".
 """
 
 from __future__ import annotations

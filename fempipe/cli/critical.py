@@ -1,10 +1,7 @@
-"""``fempipe critical``: the critical flow velocity and every stability event on the static branches.
+"""``fempipe critical``: the critical flow velocity and the stability events on the static branches.
 
-Events located to 1e-10 in v on the gravity-loaded branch and the branches born at branch points,
-in three dimensions or with ``--planar`` in the plane
-(:func:`fempipe.analyses.stability.analyse_stability`), each flutter with its Hopf normal form.
-A primary branch cut short by :func:`step_budget` exits 1 unless ``--allow-partial``.  Keys and
-files: docs/cli/commands.md, "fempipe critical".
+Events to 1e-10 in v, in 3-D or with ``--planar`` in the plane, each flutter with its Hopf normal
+form.  Keys and files: docs/cli/commands.md, "fempipe critical".
 """
 
 from __future__ import annotations
@@ -132,8 +129,7 @@ def _with_estimates(result: dict, model, res, kwargs: dict, pipe, bar) -> dict:
 
 
 def _check_coverage(args: argparse.Namespace, result: dict, v_max: float) -> int:
-    """Warn on stderr and return 1 (0 with ``--allow-partial``) if the primary branch ran out
-    of continuation steps."""
+    """1 (0 with ``--allow-partial``) and a warning if the primary branch ran out of steps."""
     primary = next((b for b in result.get("branches", []) if b["name"] == "primary"), None)
     if primary is None or primary["end_reason"] != "max_steps":
         return 0
@@ -170,8 +166,7 @@ def _write(output: reporting.Output, result: dict, res) -> None:
 
 
 def _out_of_plane_forms(result: dict, model) -> dict:
-    """``{(branch, v): keys}`` of the primary branch's flutters out of the plane: the 3-D
-    model's Hopf normal form (:func:`fempipe.analyses.three_d.onset.out_of_plane_event_keys`)."""
+    """``{(branch, v): keys}``: 3-D Hopf normal forms of the primary flutters out of the plane."""
     from fempipe.analyses.three_d.onset import out_of_plane_event_keys
 
     return {

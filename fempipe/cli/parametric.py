@@ -1,9 +1,6 @@
-"""``fempipe parametric``: where a pulsating flow v0 (1 + sigma sin(omega tau)) destabilizes the pipe.
+"""``fempipe parametric``: where a pulsating flow v0 (1 + sigma sin(omega tau)) destabilizes a pipe.
 
-The regions of parametric resonance of the straight pipe in the (omega, sigma) plane
-(:func:`fempipe.analyses.parametric.compute_parametric_chart`), beside the charts on the paper's
-sine modes (``--compare-modal``).  Method: docs/theory/parametric.md; keys and files:
-docs/cli/commands.md, "fempipe parametric".
+Method: docs/theory/parametric.md; keys and files: docs/cli/commands.md, "fempipe parametric".
 """
 
 from __future__ import annotations

@@ -74,8 +74,7 @@ def option_type(option: str, parse: Callable[[str], object]) -> Callable[[str], 
 
 @dataclass(frozen=True)
 class ValueList:
-    """A list option as given (``0,2,4`` or ``start:stop:count``), its count and extremes
-    known before it is expanded."""
+    """A list option as given (``0,2,4`` or ``start:stop:count``), count known before expansion."""
 
     option: str
     text: str
@@ -104,8 +103,7 @@ def _amount(x: float) -> str:
 
 
 def _split_values(text: str, option: str, number=None) -> tuple[list | None, float, float, int]:
-    """``(items, start, stop, count)``: items for ``0,2,4``, None for a range; ``number``
-    parses an item or a range end (default a finite float)."""
+    """``(items, start, stop, count)``: items for ``0,2,4``, None for a range."""
     s = str(text).strip()
     forms = "a list 0,2,4 or start:stop:count such as 0:6:13"
 
@@ -280,8 +278,7 @@ def check_U(pipe: PipeSI, spec: ValueList) -> None:
 
 
 def parse_names(option: str, given: list[str] | None, known, what: str) -> list[str] | None:
-    """The names of a repeatable, comma-separated ``option`` (None if not given); CLIError
-    naming the first unknown one."""
+    """The names of a repeatable, comma-separated ``option`` (None if not given), checked."""
     if not given:
         return None
     names = [n.strip() for item in given for n in item.split(",") if n.strip()]

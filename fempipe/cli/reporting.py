@@ -45,8 +45,7 @@ LOG_INTERVAL = 20.0
 
 
 def check_out_dir(text: str, option: str = "--out") -> Path:
-    """``text`` as a directory that exists or can be created, and is writable (tried, then
-    left as it was); CLIError naming ``option`` otherwise."""
+    """``text`` as a writable directory (created, or probed and left as it was), else CLIError."""
     if not text or not text.strip():
         raise CLIError(option, "empty directory name; give a directory, e.g. --out results/")
     path = Path(text)
@@ -78,9 +77,8 @@ def check_out_dir(text: str, option: str = "--out") -> Path:
 
 
 def progress(args: argparse.Namespace, total: int | None, desc: str):
-    """A context manager with tqdm's ``update`` and ``set_postfix_str``: a bar with
-    ``--progress`` or on a terminal, nothing with ``--quiet``, else a line such as
-    ``fempipe: simulate: 12/40 (30 %), 61 s`` every :data:`LOG_INTERVAL` s."""
+    """tqdm's bar with ``--progress`` or on a terminal, nothing with ``--quiet``, else a line
+    such as ``fempipe: simulate: 12/40 (30 %), 61 s`` every :data:`LOG_INTERVAL` s."""
     show = getattr(args, "progress", None)
     if show is None and not sys.stderr.isatty():
         return _LogProgress(total, desc, LOG_INTERVAL)
@@ -97,8 +95,7 @@ def progress(args: argparse.Namespace, total: int | None, desc: str):
 
 
 def time_progress(bar, t_end: float):
-    """A library ``callback(t)`` that advances ``bar`` by 100 as the integration time runs
-    from 0 to ``t_end``; ``callback.done`` is the count advanced so far."""
+    """A ``callback(t)`` advancing ``bar`` by 100 over t in [0, t_end] (``.done`` so far)."""
 
     def on_time(t: float) -> None:
         k = min(100, int(100 * t / t_end))
@@ -255,8 +252,7 @@ class Output:
         return self.record(path)
 
     def report(self, args: argparse.Namespace) -> None:
-        """:meth:`commit`, then ``wrote PATH`` on stderr for each file (not with ``--json``
-        or ``--quiet``)."""
+        """:meth:`commit`, then ``wrote PATH`` on stderr per file (not with --json or --quiet)."""
         self.commit()
         if getattr(args, "json", False) or getattr(args, "progress", None) is False:
             return
@@ -277,8 +273,7 @@ def describe(result: dict, keys: Sequence[str] = ("alpha", "beta", "gamma", "mu"
 
 
 def cpu_seconds(t0: float) -> float:
-    """CPU seconds of this process since ``t0`` (``time.process_time()``) plus those of
-    the worker processes it has waited for (a finished process pool)."""
+    """CPU seconds since ``t0`` (``time.process_time()``), finished worker processes included."""
     t = os.times()
     return time.process_time() - t0 + t.children_user + t.children_system
 
@@ -290,9 +285,8 @@ def deliver(
     write: Callable[[Output], None] | None = None,
     text: Callable[[], None] | None = None,
 ) -> None:
-    """The end of a command: its files (``write(output)``, into ``output`` or a new
-    :class:`Output` of ``--out``), then JSON or ``text()`` on stdout, then the files moved
-    into ``--out`` (:meth:`Output.report`)."""
+    """The end of a command: its files (``write(output)``), JSON or ``text()`` on stdout,
+    then the files moved into ``--out`` (:meth:`Output.report`)."""
     from fempipe.io import json_dumps
 
     if output is None and write is not None and getattr(args, "out", None) is not None:
@@ -315,16 +309,14 @@ def agg() -> None:
 
 
 def error_columns(rows: Iterable[Mapping]) -> list[str]:
-    """The CSV columns of ``rows`` with ``--error-estimate``: every key but ``*_refined`` and
-    ``error_note``, the ``*_error`` columns after the others."""
+    """CSV columns with ``--error-estimate``: no ``*_refined``, ``error_note``; ``*_error`` last."""
     keys = list(dict.fromkeys(k for row in rows for k in row))
     errors = [k for k in keys if k.endswith(ERROR)]
     return [k for k in keys if not k.endswith((ERROR, REFINED)) and k != "error_note"] + errors
 
 
 def print_footer(est: Mapping, where: str = "") -> None:
-    """How the error estimates were formed (``where``: after the refined discretization),
-    then their notes."""
+    """How the error estimates were formed, then their notes."""
     print(
         f"± error estimate: {est['method']} to {est['refined']}{where}, {est['formula']} "
         f"(floor: {est['floor']})"

@@ -1,9 +1,7 @@
 """``fempipe simulate``: nonlinear time integration of Eq. (20) and its attractor.
 
-From the static state perturbed in a sine mode: the attractor classified, a limit cycle shot with
-its Floquet multipliers and its verdict out of the plane (unless ``--planar``); ``--sigma`` > 0 a
-pulsating flow; ``--3d`` the 3-D model (:func:`run_3d`).  Keys and files: docs/cli/commands.md,
-"fempipe simulate".
+``--sigma`` > 0 a pulsating flow; ``--3d`` the 3-D model (:func:`run_3d`).  Keys and files:
+docs/cli/commands.md, "fempipe simulate".
 """
 
 from __future__ import annotations
@@ -119,9 +117,7 @@ CPU_LIMIT = 900.0
 
 
 def _cost_check(v: float, t_max: float, allow: bool):
-    """A callback ``(tau, cpu_seconds)`` refusing, once, a run projected past ``CPU_LIMIT``:
-    at high flow the error-controlled step follows the fast large-amplitude motion, whatever
-    the mesh; a run that finds its attractor early is never refused."""
+    """A callback ``(tau, cpu_seconds)`` refusing, once, a run projected past ``CPU_LIMIT``."""
     done = [False]
 
     def check(t: float, elapsed: float) -> None:
@@ -290,8 +286,7 @@ def _with_estimates(result: dict, model, computed, q_static, pipe, args, bar) ->
 
 def _display_states(att, traj, n_periods: int = 3):
     """(t, q, qdot) for the figures: the transient, then a few periods of the cycle from its
-    sample nearest the transient's last state (the shooting's phase condition moves the orbit's
-    first sample along the orbit; appended from there the traces would jump)."""
+    sample nearest the transient's end (from its first sample the traces would jump)."""
     from fempipe.analyses.limit_cycle import state_distance
 
     t, q, p = traj.t, traj.q, traj.qdot
@@ -398,8 +393,7 @@ TIP3_COLUMNS = ("tau", "eta_tip", "X_tip", "Z_tip", "Y_tip")
 
 
 def run_3d(args: argparse.Namespace, setup: common.Setup) -> int:
-    """``--3d``: the 3-D model from the static state perturbed in and out of the plane
-    (:func:`fempipe.analyses.three_d.simulate_3d`), ``"model": "3d"``."""
+    """``--3d``: the 3-D model from the static state perturbed in and out of the plane."""
     from fempipe.analyses.three_d import simulate_3d
     from fempipe.model.plane.operators import PipeModel
 
@@ -457,10 +451,7 @@ def _write_3d(output: reporting.Output, result: dict, model, motion) -> None:
         write_trajectory_3d(output.path("trajectory.pvd"), space, motion.t[keep], motion.U[keep])
     )
     output.record(output.path("trajectory"))
-    for name, plot in (
-        ("tip_orbit.png", plot_tip_orbit),
-        ("snapshots_3d.png", plot_snapshots_3d),
-    ):
+    for name, plot in (("tip_orbit.png", plot_tip_orbit), ("snapshots_3d.png", plot_snapshots_3d)):
         # tight: a 3-D axes' labels reach beyond the box the layout gives it
         output.figure(name, plot(space, motion, static=static), dpi=130, bbox_inches="tight")
 

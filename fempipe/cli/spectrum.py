@@ -108,8 +108,7 @@ def _with_out_of_plane(result: dict, locus, out_locus) -> dict:
 
 
 def _rows(result: dict, key: str = "eigenvalues") -> list[dict]:
-    """One CSV row per v and eigenvalue of ``pt[key]``; ``stable`` and ``system_stable``
-    are the point's ``stable`` (in three dimensions unless ``--planar``)."""
+    """One CSV row per v and eigenvalue of ``pt[key]``, with the point's ``stable``."""
     rows = []
     for pt in result["points"]:
         members: dict = {}

@@ -152,8 +152,7 @@ def _with_estimates(result: dict, model, sols, parameter: str, pipe, bar) -> dic
 
 
 def _stability(model, q, planar: bool = False) -> dict:
-    """``stable`` in three dimensions (stable in both planes; unstable if unstable in either;
-    else None) and each plane's verdict; with ``planar`` the in-plane ``stable`` alone."""
+    """``stable`` in 3-D (both planes combined) and each plane's; in-plane if ``planar``."""
     from fempipe.analyses.stability import linearly_stable
     from fempipe.model.out_of_plane.model import build_out_of_plane_model
 

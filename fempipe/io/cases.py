@@ -68,10 +68,8 @@ def fempipe_quantity(name: str, planar: bool) -> str:
 
 @dataclass(frozen=True)
 class Case:
-    """One data row, checked: ``row`` and ``line`` (from 1), ``values`` (quantity -> the user's
-    value), ``params`` (at the row's flow ``v``, 0 if none), ``v_range`` (of the critical
-    quantities), ``defaults`` (parameters not given -> the value taken), the SI ``pipe``, ``U``,
-    ``U_range`` (else None) and ``label``."""
+    """One data row, checked: ``row`` and ``line`` from 1, ``values`` (quantity -> the user's
+    value), ``params`` at the row's flow ``v``, ``defaults`` (parameter not given -> value)."""
 
     row: int
     line: int
@@ -342,8 +340,7 @@ def _dimensionless(nums: dict, alpha: float, defaults: dict, err: _CellError) ->
 
 
 def _flows(values, names, nums, flow, flow_cols, pipe, v_max_default, defaults, err) -> tuple:
-    """``(v, v_range, U_range)``: the row's v (static tip values, limit cycle) and the flow
-    range of the critical quantities."""
+    """``(v, v_range, U_range)``: the row's v and the flow range of the critical quantities."""
     v = flow.get("v")
     needs_v = [q for q in values if q not in _CRITICAL]
     if needs_v and v is None:
@@ -374,9 +371,8 @@ def _flows(values, names, nums, flow, flow_cols, pipe, v_max_default, defaults, 
 
 
 def read_cases(path, v_max: float = DEFAULT_V_MAX) -> list[Case]:
-    """The :class:`Case` of every row of the CSV file ``path``, all checked before anything is
-    computed; ``v_max``: end of a critical quantity's flow range where a row gives none.
-    ParamError at the first bad value, naming the file, the row and line, and the column."""
+    """The :class:`Case` of every row of the CSV file ``path``, all checked first (ParamError);
+    ``v_max``: end of a critical quantity's flow range where a row gives none."""
     path = str(path)
     lines = _read_lines(path)
     (header_line, header), rows = lines[0], lines[1:]

@@ -23,10 +23,8 @@ def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Pat
     """An animated GIF of RGBA frames (PIL images), looping, ``int(1000 / fps)`` ms a frame,
     atomically; ValueError without frames.
 
-    Opaque frames share one palette (:func:`quantize_frames`; an antialiased figure has more
-    than a GIF's 256 colors, and a palette per frame is most of the cost), written as it is
-    (``optimize=False``); frames with transparency are encoded as matplotlib's ``PillowWriter``
-    encodes them.
+    Opaque frames share one palette (:func:`quantize_frames`): a palette per frame is most of
+    the cost.  Frames with transparency are encoded as matplotlib's ``PillowWriter`` does.
     """
     if not frames:
         raise ValueError("an animation needs at least one frame")
@@ -50,8 +48,7 @@ def write_gif(path: str | os.PathLike, frames: Sequence, fps: float = 20) -> Pat
 
 
 def quantize_frames(frames: Sequence) -> list | None:
-    """Opaque frames (PIL) as palette images sharing Pillow's adaptive palette of the first
-    frame, each pixel the nearest palette color (RGB); None if a pixel is transparent."""
+    """Opaque frames (PIL) on the first frame's adaptive palette; None if one is transparent."""
     import numpy as np
     from PIL import Image
 

@@ -91,8 +91,7 @@ _PAYLOAD = re.compile(
 
 
 def _zlib_base64(data: np.ndarray) -> str:
-    """One binary DataArray as meshio 5 writes it: a UInt32 header (blocks, block
-    size, last block size, compressed sizes) and the zlib blocks, each base64."""
+    """One binary DataArray as meshio 5 writes it: UInt32 header and zlib blocks, base64."""
     raw = np.ascontiguousarray(data).tobytes()
     blocks = [zlib.compress(raw[i : i + _BLOCK]) for i in range(0, len(raw), _BLOCK)]
     last = len(raw) - (len(blocks) - 1) * _BLOCK
@@ -101,9 +100,8 @@ def _zlib_base64(data: np.ndarray) -> str:
 
 
 class _VTUTemplate:
-    """meshio's VTU text of one frame with the arrays' places open, to be filled with the
-    arrays of other frames of the same layout (meshio's XML tree is most of a small frame's
-    cost); ``valid``: the first frame filled back is meshio's text exactly."""
+    """meshio's VTU text of one frame with the arrays' places open for frames of its layout
+    (meshio's XML tree is most of a small frame's cost); ``valid``: reproduces meshio's text."""
 
     def __init__(self, xml: str, points: np.ndarray, point_data: Mapping) -> None:
         self.pieces: list[str] = []
@@ -150,10 +148,7 @@ def write_vtu_frames(
     """Write one VTU file per name and frame ``(points, point_data, field_data)`` of the line
     cells ``lines`` into ``directory``, as :func:`write_vtu` would, all or none.
 
-    The first frame by meshio, the others by filling its text (:class:`_VTUTemplate`; meshio
-    again if the template does not reproduce the first frame or a frame's layout differs).
-    The files go into a hidden directory beside ``directory`` and are moved in together
-    (:func:`_all_or_none`).
+    Frames after the first fill its text (:class:`_VTUTemplate`), meshio where that differs.
     """
     lines = np.asarray(lines)
     template = None
@@ -175,8 +170,7 @@ def write_vtu_frames(
 
 @contextlib.contextmanager
 def _all_or_none(directory: str | os.PathLike) -> Iterator[Path]:
-    """A new private directory beside ``directory``, its files moved into ``directory`` on
-    success (the whole directory if new), removed on an exception."""
+    """A private directory beside ``directory``, moved into it on success, removed on failure."""
     import shutil
     import tempfile
 
@@ -284,9 +278,8 @@ def read_shapes(path: str | os.PathLike) -> list[dict[str, np.ndarray]]:
 
 
 def write_series(path: str | os.PathLike, t, frames: Iterable, n_points: int) -> Path:
-    """A ParaView time series: one VTU per time ``t`` in ``path``'s stem directory (``frames``:
-    ``(points, point_data, field_data)`` of a polyline of ``n_points``, all or none), then the
-    index ``path`` (.pvd), atomically: a reader never sees it point at missing frames."""
+    """A ParaView time series: one VTU per time ``t`` and frame ``(points, point_data,
+    field_data)`` in ``path``'s stem directory, all or none, then the index ``path`` (.pvd)."""
     path = Path(path)
     if path.suffix != ".pvd":
         raise ValueError(f"trajectory path must end in .pvd, got {path.name!r}")

@@ -1,10 +1,7 @@
 """The accepted input: defaults, ranges and the checks of one value (command line, cases files).
 
-P3:16, the default mesh, resolves the clamp layer 1/sqrt(gamma) and the bending waves 1/v
-down to about its node spacing 1/48, hence v <= 50 and gamma <= 2500; every mode is
-overdamped from mu = 0.57 on, hence mu <= 10; alpha is an angle.  The reasons and the
-accuracy at the ends: docs/cli/options.md, "Accepted ranges".  A value outside its range
-raises :class:`~fempipe.core.errors.ParamError` (or ValueError) naming the field.
+v <= 50 and gamma <= 2500 so that P3:16 resolves the clamp layer and the bending waves; mu <= 10
+(overdamped from 0.57).  Why: docs/cli/options.md, "Accepted ranges".
 """
 
 from __future__ import annotations
@@ -121,8 +118,7 @@ def check_v(x: float, option: str = "--v") -> float:
 
 
 def check_pipe(params: Params) -> Params:
-    """``params`` of an SI pipe if its gamma and mu lie in their ranges (ParamError naming
-    the group otherwise)."""
+    """``params`` of an SI pipe if its gamma and mu lie in their ranges, else ParamError."""
     for field, formula in (("gamma", "(m+M) g L^3/EI"), ("mu", "sqrt(EI/(m+M)) a/L^2")):
         x = getattr(params, field)
         if x > HIGH[field]:

@@ -70,8 +70,7 @@ ERROR_SUFFIX = "_error"
 
 
 def csv_header(name: str) -> str:
-    """``"name [unit]"`` with the unit of :data:`CSV_UNITS` (``<name>_error``: that of
-    ``<name>``); ValueError if ``name`` has none."""
+    """``"name [unit]"`` with the unit of :data:`CSV_UNITS` (``<name>_error``: ``<name>``'s)."""
     unit = CSV_UNITS.get(name)
     if unit is None and name.endswith(ERROR_SUFFIX):
         unit = CSV_UNITS.get(name.removesuffix(ERROR_SUFFIX))
@@ -81,9 +80,7 @@ def csv_header(name: str) -> str:
 
 
 def write_csv(
-    path: str | os.PathLike,
-    rows: Sequence[Mapping],
-    columns: Sequence[str] | None = None,
+    path: str | os.PathLike, rows: Sequence[Mapping], columns: Sequence[str] | None = None
 ) -> Path:
     """Write flat dicts as CSV, atomically: header cells :func:`csv_header`, floats with all
     their digits, ``None`` and missing keys empty; ``columns`` default: keys in order of first

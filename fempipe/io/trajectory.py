@@ -1,10 +1,5 @@
-"""The moving pipe as a ParaView time series (``NAME.pvd`` and one VTU per time in ``NAME/``).
-
-Each VTU holds the centerline in the VTK frame of :mod:`fempipe.io` as ``line`` cells, the
-point data ``xi``, ``theta``, ``varsigma``, ``eta``, ``X_g``, ``Z_g`` (those of ``shapes.vtu``),
-``theta_dot`` and ``velocity`` (r_dot, 3 components) and the field data ``time`` (tau), ``v``
-and the parameters; written all or none (:func:`fempipe.io.meshes.write_series`).  Format and
-the choice of VTU: docs/cli/options.md, "VTK files".  Also the tip's time series (tip.csv).
+"""The moving pipe as a ParaView time series (``NAME.pvd`` and one VTU per time in ``NAME/``),
+and the tip's time series (tip.csv).  Format: docs/cli/options.md, "VTK files".
 """
 
 from __future__ import annotations
@@ -34,10 +29,9 @@ __all__ = [
 class CenterlineSampler:
     """The centerlines of many states of one discretization at the same sample points.
 
-    What depends on the points only (the basis there, the Lagrange integrals) is computed once;
-    each state then costs the operations of :func:`fempipe.model.kinematics.compute_shape` in the same
-    order, the same numbers bit for bit.  Checked on the first state against ``shape`` and
-    ``disc.evaluate``; on any difference every state falls back to them.
+    The point-only work is done once; each state is then
+    :func:`fempipe.model.kinematics.compute_shape` bit for bit (checked on the first state,
+    else every state falls back to it).
     """
 
     def __init__(self, disc: Discretization, alpha: float, points_per_cell: int = 4) -> None:
@@ -113,8 +107,7 @@ def frame_data(
     points_per_cell: int = 4,
     sampler: CenterlineSampler | None = None,
 ):
-    """Points (m, 3) and point data of one frame; ``sampler``: a :class:`CenterlineSampler` of
-    ``disc``, ``alpha`` and ``points_per_cell`` reused over the frames."""
+    """Points (m, 3) and point data of one frame; ``sampler`` reused over the frames."""
     if sampler is None:
         s = compute_shape(disc, q, alpha, points_per_cell=points_per_cell)
         theta_dot = disc.evaluate(qdot, s.xi)

@@ -41,13 +41,7 @@ def frame_points_3d(model: PipeModel3D, U: np.ndarray) -> tuple[np.ndarray, dict
     tX = np.cos(a) * tp[:, 0] - np.sin(a) * tp[:, 1]
     tZ = np.sin(a) * tp[:, 0] + np.cos(a) * tp[:, 1]
     points = np.column_stack([Z, -X, Y])
-    data = {
-        "xi": xi,
-        "X_g": X,
-        "Z_g": Z,
-        "Y_g": Y,
-        "tangent": np.column_stack([tZ, -tX, tp[:, 2]]),
-    }
+    data = {"xi": xi, "X_g": X, "Z_g": Z, "Y_g": Y, "tangent": np.column_stack([tZ, -tX, tp[:, 2]])}
     return points, data
 
 

@@ -20,10 +20,8 @@ FAMILY_STYLE = {
 
 
 def reference_member(study, series) -> int | None:
-    """Index of the member of ``series`` that defines the reference (the finest of the two
-    Richardson-extrapolated ones), or None: its distance to the reference is an estimate, not
-    a measured error.
-    """
+    """Index of the member of ``series`` that defines the reference (the finer of the two
+    extrapolated), or None: its distance to the reference is an estimate, not an error."""
     if series.family != study.reference.family:
         return None
     ok = np.flatnonzero(np.isfinite(series.values))
@@ -105,7 +103,6 @@ def plot_convergence(study, ax=None, title: str | None = None):
         )
     if title:
         ax.set_title(title, fontsize=10)
-    # The families first, then what belongs to the reference.
     handles = sorted(ax.get_legend_handles_labels()[0], key=lambda h: h.get_gid() is not None)
     # Below the axes: a legend inside would hide the finest points.
     ax.legend(

@@ -49,16 +49,7 @@ def _tip_series(disc: Discretization, q: np.ndarray, qdot: np.ndarray | None, al
 
 
 def plot_time_traces(disc: Discretization, t, q, alpha: float, ax=None, title: str | None = None):
-    """Tip position in the global frame against time, Fig. 11.
-
-    Parameters
-    ----------
-    disc : Discretization
-    t : ndarray, shape (m,)
-    q : ndarray, shape (m, n)
-    alpha : float
-        The inclination.
-    """
+    """Tip position in the global frame against time ``t`` of the states ``q`` (m, n), Fig. 11."""
     ax = new_axes(ax, (7, 3.5))
     tip = _tip_series(disc, q, None, alpha)
     ax.plot(t, tip["X_tip"], label=_LABEL["X_tip"] + " (along gravity)")
@@ -265,22 +256,10 @@ def _closed(q: np.ndarray) -> bool:
     return q.shape[0] > 2 and float(np.max(np.abs(q[-1] - q[0]))) <= 1e-6 * scale
 
 
-def animation_figure(
-    disc: Discretization,
-    t,
-    q,
-    alpha: float,
-    title: str | None = None,
-):
-    """The figure of :func:`animate` and its frame function.
+def animation_figure(disc: Discretization, t, q, alpha: float, title: str | None = None):
+    """``(fig, draw, n_frames)`` of :func:`animate`; ``draw(k)`` returns the changed artists.
 
-    A closed orbit (last state equal to the first) loses its last frame, so the looping GIF
-    shows no state twice, and its frames are labelled with the time within the period T.
-
-    Returns
-    -------
-    fig, draw, n_frames
-        ``draw(k)`` draws frame k and returns the changed artists.
+    A closed orbit loses its last frame, so the looping GIF shows no state twice.
     """
     import matplotlib.pyplot as plt
 
@@ -389,11 +368,7 @@ def animate(
     fps: int = 20,
     title: str | None = None,
 ):
-    """Write an animated GIF of the moving pipe in the global frame to ``path`` (atomically).
-
-    Frames by :func:`animation_figure` and :func:`render_frames`, one shared palette
-    (:func:`fempipe.io.write_gif`).  Returns the path.
-    """
+    """Write an animated GIF of the moving pipe in the global frame to ``path``; returns it."""
     import matplotlib.pyplot as plt
 
     from fempipe.io import write_gif
@@ -427,8 +402,7 @@ _LABELS_3D = {
 
 
 def diagram_figure(result: dict, key: str):
-    """The figure of ``key`` of a ``fempipe bifurcation`` result: one panel per inclination,
-    the run's parameters above, one legend below the panels."""
+    """The figure of ``key`` of a ``fempipe bifurcation`` result, one panel per inclination."""
     import matplotlib.pyplot as plt
 
     from fempipe.plotting.layout import shared_legend
@@ -491,9 +465,8 @@ def _mesh(disc: dict) -> str:
 
 
 def diagram_figure_3d(result: dict, key: str):
-    """[min, max] of ``key`` against v of a 3-D run: the marker by attractor kind, the color
-    by sweep direction (down shifted a hair to the right), filled where the motion is
-    non-planar; the run's parameters above."""
+    """[min, max] of ``key`` against v of a 3-D run: marker by attractor, color by sweep
+    direction (down shifted a hair right), filled where the motion is non-planar."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 

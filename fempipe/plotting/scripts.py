@@ -27,10 +27,8 @@ def show_or_save(script: str | os.PathLike | None = None, *, dpi: int = 100) -> 
     dpi : int
         Resolution of the saved files.
 
-    Notes
-    -----
-    Figure k is written as ``<stem>-figures/<stem>_<k>.png`` (or into ``$FEMPIPE_FIGURES``)
-    and the files are printed.  Nothing is returned, which Jupyter would display.
+    Figure k goes to ``<stem>-figures/<stem>_<k>.png`` (or ``$FEMPIPE_FIGURES``).  Nothing is
+    returned, which Jupyter would display.
     """
     if script is None:
         script = sys._getframe(1).f_globals.get("__file__")

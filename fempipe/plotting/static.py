@@ -80,7 +80,6 @@ def plot_shapes(
     ]
     unstable, out_only, spatial = _instability_kinds(n, stable, stable_in_plane)
 
-    # Undeformed pipe(s) and clamp(s), once per distinct inclination.
     for k, a in enumerate(dict.fromkeys(round(x, 12) for x in alphas)):
         tx, tz = np.cos(a), np.sin(a)  # (X, Z) direction of the undeformed pipe
         ax.plot(
@@ -196,11 +195,9 @@ def _finish_axes(ax, scale: float, si_length: float | None) -> None:
 
 def _draw_clamp(ax, tx: float, tz: float, size: float) -> None:
     """A wall across the pipe at the origin, hatched on the side away from the pipe."""
-    # Wall direction is perpendicular to the pipe's (X, Z) direction.
     wx, wz = -tz, tx
     ax.plot([-wz * size, wz * size], [-wx * size, wx * size], color="k", lw=2.5, zorder=4)
     for s in np.linspace(-1.0, 1.0, 6):
-        # Short strokes behind the wall (opposite to the pipe), slanted.
         x0, z0 = s * wx * size, s * wz * size
         x1 = x0 - 0.45 * size * tx + 0.3 * size * wx
         z1 = z0 - 0.45 * size * tz + 0.3 * size * wz

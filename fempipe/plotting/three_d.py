@@ -1,9 +1,7 @@
 """Figures of the 3-D motion: the tip's path in three views, 3-D snapshots of the pipe.
 
-Global frame (docs/theory/conventions.md): X_g along gravity, down the page; Z_g horizontal
-in the plane of the static state; Y_g out of it; lengths in units of L.  Views are framed on
-the motion, not the pipe's reach.  The window drawn is the shot periodic orbit, else the
-last period of the run (or its last tenth).
+Frame: docs/theory/conventions.md (X_g down the page, Y_g out of the static state's plane).
+Views are framed on the motion; the window drawn is the shot orbit, else the run's last period.
 """
 
 from __future__ import annotations
@@ -235,8 +233,7 @@ def _frame_3d(ax, pts: np.ndarray) -> None:
 
 def plot_snapshots_3d(model: PipeModel3D, motion, n_snapshots: int = 12, static=None):
     """The centerline at ``n_snapshots`` times over one oscillation in 3-D, colored by τ, with the
-    tip's path and ``static`` as in :func:`plot_tip_orbit`; returns the Figure.
-    """
+    tip's path and ``static`` as in :func:`plot_tip_orbit`; returns the Figure."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import Normalize
     from matplotlib.ticker import MaxNLocator
