@@ -57,10 +57,8 @@ def _limits(values: np.ndarray, log: bool) -> tuple[float, float]:
 def plot_comparison(rows: Sequence[dict], caption: str = "", title: str | None = None):
     """Two panels per quantity: user against fempipe with y = x, and the differences.
 
-    Top: user's value against fempipe's (log-log over more than a decade of positive values),
-    fempipe's error estimate as error bars, each point labelled with its row.  Bottom: the
-    difference against fempipe's value; filled markers are resolved (the bar does not reach 0).
-    Failed rows are not drawn.
+    Error bars: fempipe's error estimate; filled markers are resolved (the bar does not reach
+    0); failed rows are not drawn.
 
     Parameters
     ----------
@@ -69,7 +67,6 @@ def plot_comparison(rows: Sequence[dict], caption: str = "", title: str | None =
     caption : str
         Text below the panels, wrapped.
     title : str, optional
-        Default: "user values against fempipe".
     """
     import matplotlib.pyplot as plt
 

@@ -200,6 +200,7 @@ def direction_arrow(ax, z: np.ndarray, color) -> None:
 
 
 def _nice_step(x: float) -> float:
+    """The smallest of 1, 2, 5, 10 times a power of ten at least ``x``."""
     if x <= 0:
         return 1.0
     e = 10.0 ** np.floor(np.log10(x))

@@ -123,11 +123,9 @@ def _static_label(stable) -> str:
 
 
 def plot_tip_orbit(model: PipeModel3D, motion, static=None):
-    """The tip's path over the window from above, the side and the front; returns the Figure.
+    """The tip's path from above, the side and the front; returns the Figure.
 
-    ``static`` = (3-D state, stable in 3-D or None): its tip is marked when near the motion,
-    filled if stable, open and grey if not.
-    """
+    ``static`` = (3-D state, stable in 3-D or None): its tip, marked when near the motion."""
     import matplotlib.pyplot as plt
 
     tau, states = _window(motion)
