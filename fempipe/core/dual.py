@@ -194,11 +194,8 @@ class Dual:
         return Dual(self.val.sum(axis=axis), *self._map(lambda d: d.sum(axis=axis)))
 
     def nonlocal_map(self, op: Callable[[np.ndarray], np.ndarray], adjoint) -> Dual:
-        """``op`` (linear along axis 0) of the value, its derivative carried as a new :class:`Term`.
-
-        ``adjoint`` is op^T along axis 0, a matrix (n_in, n_out) or a callable; two nested maps by
-        matrices make one term.
-        """
+        """``op`` (linear along axis 0) of the value, its derivative carried as a new :class:`Term`;
+        ``adjoint``: op^T, a matrix (n_in, n_out) (two nested ones make one term) or a callable."""
         val = op(self.val)
         if self.loc is None and self.nl is None:
             return Dual(val)

@@ -16,11 +16,8 @@ class SolverError(RuntimeError):
 
 
 class ParamError(ValueError):
-    """A physical parameter outside its allowed range.
-
-    ``field`` names it (``"gamma"``, ``"v"``, ``"L"``, ...), so a caller can point at the input
-    without parsing ``message`` (what is wrong and what is allowed).
-    """
+    """A physical parameter outside its allowed range; ``field`` names it (``"gamma"``, ``"v"``,
+    ...) so that a caller can point at the input without parsing ``message``."""
 
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
@@ -28,11 +25,8 @@ class ParamError(ValueError):
 
 
 class PointStoreMismatchError(ParamError):
-    """A point store (a resumable run's directory) that holds another run.
-
-    ``field`` is ``"store_dir"``; ``differences`` names what differs: keys of the
-    run's manifest (``run.json``), e.g. ``["options.rtol"]``, or a stored point.
-    """
+    """A point store (a resumable run's directory) of another run: ``field`` is ``"store_dir"``,
+    ``differences`` the keys of ``run.json`` that differ (``["options.rtol"]``) or a point."""
 
     def __init__(self, directory, differences: list[str]) -> None:
         super().__init__(

@@ -65,13 +65,8 @@ class Interrupted(KeyboardInterrupt):
 
 @contextlib.contextmanager
 def interruptible() -> Iterator[None]:
-    """Raise :class:`Interrupted` in the main thread on SIGINT or SIGTERM.
-
-    Inside it SIGTERM unwinds the stack like Ctrl-C (workers terminated, ``finally`` blocks
-    run) instead of ending the process at once.  A second signal during the unwinding is
-    ignored, a signal inherited as ``SIG_IGN`` stays ignored, the handlers are restored on
-    exit.  Outside the main thread it does nothing.
-    """
+    """Raise :class:`Interrupted` in the main thread on SIGINT or SIGTERM: SIGTERM unwinds like
+    Ctrl-C (``finally`` blocks run); a second signal and an inherited ``SIG_IGN`` are ignored."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -329,12 +324,8 @@ BLAS_SET_BY_FEMPIPE: tuple[str, ...] = ()
 
 
 def one_blas_thread() -> tuple[str, ...]:
-    """Set the BLAS thread variables to 1 before numpy loads, unless the user set them.
-
-    Spares the start-up of the thread pools (docs/cli/commands.md, "One BLAS thread").  Does
-    nothing once numpy is loaded.  Returns the names set, also kept in
-    :data:`BLAS_SET_BY_FEMPIPE` (read it as ``fempipe.core.parallel.BLAS_SET_BY_FEMPIPE``).
-    """
+    """Set the BLAS thread variables to 1 before numpy loads, unless the user set them
+    (docs/cli/commands.md, "One BLAS thread"); the names set, also in :data:`BLAS_SET_BY_FEMPIPE`."""
     global BLAS_SET_BY_FEMPIPE
     if "numpy" in sys.modules:
         return ()

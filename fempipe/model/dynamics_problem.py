@@ -34,11 +34,8 @@ BATCHED_STAGES_MAX = 4608
 
 
 def refuse_hysteretic(params, where: str) -> None:
-    """Raise ValueError if ``params`` has hysteretic damping, named after the refusing function ``where``.
-
-    The loss factor multiplies EI by 1 + i mu_h sgn(omega), defined for harmonic motion only;
-    a time integration would silently drop it.
-    """
+    """ValueError (naming ``where``) if ``params`` has hysteretic damping: EI (1 + i mu_h
+    sgn(omega)) is defined for harmonic motion only, a time integration would drop it."""
     mu_h = getattr(params, "hysteretic_damping", 0.0)
     if mu_h:
         raise ValueError(

@@ -18,12 +18,8 @@ __all__ = ["Shape", "compute_shape", "compute_tip", "tip_velocity"]
 
 @dataclass(frozen=True)
 class Shape:
-    """A deformed centerline, dimensionless (multiply by L for m).
-
-    Attributes ``xi`` (0 at the clamp), ``theta`` (rad), ``varsigma``, ``eta`` (axial and
-    lateral displacement, Eq. (5)), ``X_g``, ``Z_g`` (global coordinates, X_g along gravity,
-    Eq. (28)), each of shape (m,).
-    """
+    """A dimensionless centerline, shape (m,) each: ``xi``, ``theta``, ``varsigma``, ``eta`` (axial
+    and lateral displacement, Eq. (5)), ``X_g``, ``Z_g`` (X_g along gravity, Eq. (28))."""
 
     xi: np.ndarray
     theta: np.ndarray

@@ -14,11 +14,8 @@ __all__ = ["project"]
 
 
 def project(src: Discretization, q: np.ndarray, dst: Discretization) -> np.ndarray:
-    r"""Coefficients on ``dst`` of the L2 projection of theta = ``src``\ (q): ``G c = \int phi_i theta``.
-
-    Exact when ``src``'s space lies in ``dst``'s (a refinement, more modes).  ``q`` has shape
-    (src.n,) or (src.n, m) (states as columns); the result (dst.n,) or (dst.n, m).
-    """
+    r"""Coefficients on ``dst`` of the L2 projection of theta = ``src``\ (q), ``G c = \int phi_i
+    theta`` (exact for a refinement); ``q`` (src.n,) or (src.n, m) (states as columns)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 

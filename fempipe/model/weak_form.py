@@ -62,12 +62,8 @@ def _dense_forms(disc: Discretization) -> tuple[np.ndarray, np.ndarray]:
 
 
 class WeakForm:
-    r"""What the terms share: the fields, the test integral, the projection.
-
-    The base of the term classes and so of :class:`~fempipe.model.plane.operators.PipeModel`, which
-    sets ``disc``, ``params``, ``quad``, ``x``, ``w`` and ``test_matrix`` (``Phi^T W``:
-    ``test_matrix @ f`` is ``\int phi_i f``).
-    """
+    r"""What the terms of ``PipeModel`` share: the fields, the test integral (``test_matrix @ f``
+    is ``\int phi_i f``), the projection."""
 
     disc: Discretization
     params: Params

@@ -318,12 +318,8 @@ def critical_velocity(
     tol: float = TOL,
     start: StaticState | None = None,
 ) -> Onset:
-    """The first v in [v_min, v_max] at which the motion out of the plane is unstable.
-
-    The branch is followed in ``step``; in the first interval where the margin (as
-    :func:`fempipe.validation.classical.spectral_abscissa`) turns positive, Brent's method to
-    ``xtol`` on the largest Re lambda.  Returns a classical :class:`~.classical.Onset`.
-    """
+    """The first v in [v_min, v_max] where the motion out of the plane is unstable: the first
+    ``step`` whose margin turns positive, then Brent's method to ``xtol`` on max Re lambda."""
     disc = HermiteSpectral() if disc is None else disc
     prob = LateralProblem(params, disc, start)
 

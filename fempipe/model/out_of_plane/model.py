@@ -241,12 +241,8 @@ def axisymmetric(params) -> bool:
 
 
 class OutOfPlaneModel(PipeModel):
-    """The planar pipe whose linearization is the out-of-plane problem.
-
-    Static states, residual and static Jacobian are the :class:`~fempipe.model.plane.operators.PipeModel`'s;
-    :meth:`linearization` and :meth:`hysteretic_stiffness` are out of the plane, so every
-    stability solver analyses the motion out of the plane when given this model.
-    """
+    """The planar pipe (static states, residual, static Jacobian: ``PipeModel``'s) whose
+    :meth:`linearization` and :meth:`hysteretic_stiffness` are out of the plane."""
 
     plane = "out"
 

@@ -214,11 +214,8 @@ class PipeModel(LocalTerms, NonlocalTerms, EndMassTerms, ExternalDampingTerm, Sp
         return self._K_dense
 
     def static_jacobians(self, q):
-        """:meth:`jacobians` at (q, 0, 0): K^d, C^d, M^d of Eqs. (31b)-(33).
-
-        The terms that vanish with theta_dot = theta_ddot = 0 are left out before they are formed
-        (only exact zeros), which skips two cumulative integrals.
-        """
+        """:meth:`jacobians` at (q, 0, 0), K^d, C^d, M^d of Eqs. (31b)-(33), without the terms
+        that vanish exactly there (two cumulative integrals fewer)."""
         fl = self.fields(q)
         p = self.params
         cv = 2.0 * p.v * np.sqrt(p.beta)

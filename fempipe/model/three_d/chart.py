@@ -80,12 +80,8 @@ def _fiber_rate(p: _Point, ud: Dual) -> Dual:
 
 @dataclass(frozen=True)
 class Fields3D:
-    """The kinematics of a 3-D state at the quadrature points (all (n_q, 3) Duals).
-
-    ``u, u_dot, u_ddot, u_prime, u_dot_prime`` the fields, ``t, t_dot, t_ddot, t_prime,
-    t_dot_prime`` the tangent and its derivatives, ``J[c] = dt/du_c``, ``dt_prime[c] = dt'/du_c``,
-    ``fiber`` and ``fiber_dot``, and ``t_tip`` = t(1) of shape (1, 3).
-    """
+    """A 3-D state's kinematics at the quadrature points ((n_q, 3) Duals): the fields ``u...``,
+    the tangent ``t...``, ``J[c] = dt/du_c``, ``dt_prime[c] = dt'/du_c``, ``fiber...``, ``t_tip``."""
 
     u: Dual
     u_dot: Dual

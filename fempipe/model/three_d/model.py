@@ -102,12 +102,8 @@ class PipeModel3D:
         return np.array([np.cos(a), -np.sin(a), 0.0])
 
     def fields(self, U, Ud=None, Udd=None, blocks: tuple[str, ...] = ()) -> Fields3D:
-        """The kinematics at the quadrature points, with derivatives if ``blocks`` is not empty.
-
-        U, Ud, Udd have shape (3 n,) or (S, 3 n); the fields have a last axis of length S.  With
-        ``blocks`` (of ``"q"``, ``"qdot"``, ``"qddot"``) they are :class:`~fempipe.core.dual.Dual`,
-        each state's derivatives with respect to its own U, U_dot, U_ddot.
-        """
+        """The kinematics at the quadrature points (last axis: the S states of U, Ud, Udd of
+        shape (S, 3 n) or (3 n,)); Duals in the ``blocks`` (of ``"q"``, ``"qdot"``, ``"qddot"``)."""
         s = self._seeds
         nt = self.n_theta
         U = np.atleast_2d(np.asarray(U, dtype=float))
@@ -322,12 +318,8 @@ class PipeModel3D:
         return self._seeds.assemble(W, G, ("q",))[0]
 
     def tip_coordinates(self, U) -> dict:
-        """The tip: eta_tip (e_2 of the pipe's frame), X_tip (along gravity), Z_tip (horizontal, in
-        the plane of the static state), Y_tip (out of it).
-
-        Floats for one state, arrays (S,) for S states; for a planar state those of
-        :func:`fempipe.model.kinematics.compute_tip`.
-        """
+        """eta_tip (e_2 of the pipe's frame), X_tip (along gravity), Z_tip (horizontal, in the
+        plane of the static state), Y_tip (out of it); floats, or arrays (S,) for S states."""
         r1 = np.tensordot(self.w, self.tangents(U), axes=(0, 0))  # (3, S)
         a = self.params.alpha
         out = {

@@ -15,12 +15,8 @@ __all__ = ["continue_curve"]
 
 
 def continue_curve(policy: ContinuationPolicy, h: float) -> Any:
-    """Follow a curve F(y) = 0 from its last known point with first step ``h``; return the branch.
-
-    Each step predicts, corrects onto the curve, accepts or rejects (retried shorter), lands
-    on requested values, detects and locates special points, and adapts the step, each by the
-    ``policy``'s choices (docs/theory/numerics.md).
-    """
+    """Follow a curve F(y) = 0 from its last known point with first step ``h``, each choice the
+    ``policy``'s (docs/theory/numerics.md); return the branch."""
     while True:
         reason = policy.stop_before()
         if reason is not None:

@@ -80,11 +80,8 @@ def correct(
     converged: Callable[[np.ndarray], float | None],
     max_iter: int = 12,
 ) -> tuple[np.ndarray, int, float] | None:
-    """Newton on [F(y); <t, y - y_pred>] = 0 from ``y_pred``, a fresh Jacobian each iteration.
-
-    Converged when the step is below ``1e-10 (1 + ||y||)`` and ``converged(y)`` returns a
-    residual norm (None refuses).  Returns (y, iterations, residual norm), or None.
-    """
+    """Newton on [F(y); <t, y - y_pred>] = 0 from ``y_pred`` until the step is below ``1e-10 (1 +
+    ||y||)`` and ``converged(y)`` is not None: (y, iterations, residual norm), or None."""
     y = y_pred.copy()
     for it in range(1, max_iter + 1):
         r = problem.residual(y)

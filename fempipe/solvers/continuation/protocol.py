@@ -69,11 +69,8 @@ class ContinuationProblem(Protocol):
 
 
 class ContinuationPolicy(Protocol):
-    """The algorithmic choices of one kind of branch, called by the engine.
-
-    The engine hands back what the policy returned: a *step* (from :meth:`predict`) and a
-    *point* (from :meth:`correct`, :meth:`land`); the policy keeps the branch.
-    """
+    """The algorithmic choices of one kind of branch; the engine hands back the *step* of
+    :meth:`predict` and the *point* of :meth:`correct`, :meth:`land`; the policy keeps the branch."""
 
     def stop_before(self) -> str | None:
         """Why the branch ends before the next step (e.g. ``max_steps``), or None."""

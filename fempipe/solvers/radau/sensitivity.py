@@ -17,11 +17,8 @@ __all__ = ["chain_step", "chain_step_blocks", "step_derivative"]
 
 
 def step_derivative(h: float, Ks, Ds, Ms, dR_dp: np.ndarray | None = None) -> np.ndarray:
-    """The part of d y1 / d (y0, p) through the stage accelerations, shape (2n, 2n) or (2n, 2n + 1).
-
-    ``Ks, Ds, Ms`` (3, n, n) are dR/dq, dR/dq', dR/dq'' at the stages, ``dR_dp`` (3, n) the
-    parameter column; :func:`chain_step` adds ``[[I, h I], [0, I]]``.
-    """
+    """The part of d y1 / d (y0, p) through the stage accelerations (``Ks, Ds, Ms``: the stages'
+    Jacobians; ``dR_dp`` (3, n)), shape (2n, 2n) or (2n, 2n + 1)."""
     n = Ks.shape[1]
     # big[i, :, j, :] = M_i d_ij + h a_ij D_i + h^2 (a^2)_ij K_i
     big = np.einsum("ij,iab->iajb", h * A, Ds) + np.einsum("ij,iab->iajb", h * h * A2, Ks)
