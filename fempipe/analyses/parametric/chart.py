@@ -57,23 +57,21 @@ class ParametricChart:
 
     def to_dict(self) -> dict:
         """The JSON of ``fempipe parametric``: each region once per plane."""
-        regions = []
-        for r in self.regions:
-            c = r.candidate
-            for plane in ("in", "out"):
-                regions.append(
-                    {
-                        "mode": list(c.mode),
-                        "kind": c.kind,
-                        "order": c.order,
-                        "plane": plane,
-                        "omega_nominal": c.omega,
-                        "sigma_threshold": r.sigma_threshold,
-                        "omega_threshold": r.omega_threshold,
-                        "multiplier": [r.multiplier.real, r.multiplier.imag],
-                        "boundary": [list(row) for row in r.boundary],
-                    }
-                )
+        regions = [
+            {
+                "mode": list(r.candidate.mode),
+                "kind": r.candidate.kind,
+                "order": r.candidate.order,
+                "plane": plane,
+                "omega_nominal": r.candidate.omega,
+                "sigma_threshold": r.sigma_threshold,
+                "omega_threshold": r.omega_threshold,
+                "multiplier": [r.multiplier.real, r.multiplier.imag],
+                "boundary": [list(row) for row in r.boundary],
+            }
+            for r in self.regions
+            for plane in ("in", "out")
+        ]
         return {
             "params": self.params.to_dict(),
             "discretization": self.discretization,
@@ -163,8 +161,8 @@ def compute_parametric_chart(
     # damped more, or overdamped, is not a resonator)
     modes: dict[int, complex] = {}
     for lam, k in zip(mean.lam, mean.mode, strict=True):
-        if lam.imag > -lam.real and int(k) not in modes:
-            modes[int(k)] = complex(lam)
+        if lam.imag > -lam.real:
+            modes.setdefault(int(k), complex(lam))
     numbers = sorted(modes)
     if pairs is None:
         pairs = max(3, sum(modes[k].imag <= hi for k in numbers) + 1)
@@ -191,9 +189,8 @@ def compute_parametric_chart(
             steps=steps,
         )
         evaluations += count
-        if region is not None:
-            if not _character_fits(cand, region.multiplier):
-                region = None
+        if region is not None and not _character_fits(cand, region.multiplier):
+            region = None
         twin = next((r for r in regions if region is not None and _same_tip(r, region)), None)
         if twin is not None:  # one region found from two candidates: the nearer names it
             if abs(cand.omega - region.omega_threshold) < abs(

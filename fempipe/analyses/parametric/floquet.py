@@ -57,10 +57,9 @@ class PulsationPencil:
         zero = np.zeros(model.n)
         still = model.with_params(replace(model.params, v=0.0))
         Ka = dense(still.jacobians(zero, zero, zero, v_dot=1.0)[0])
-        K0 = dense(straight.K0)
         return cls(
             M=dense(straight.M),
-            K0=K0,
+            K0=dense(straight.K0),
             K2=dense(straight.K2),
             K3=Ka - dense(still.jacobians(zero, zero, zero)[0]),
             C0=dense(straight.C0),

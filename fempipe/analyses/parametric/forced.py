@@ -45,15 +45,10 @@ def _period_map(
     n = model.n
     # The error control sees the state, not the sensitivity (on the straight pipe the state is
     # exactly zero): the steps are also bounded, T / steps at most.
+    h = T / steps
+    problem = PipeDynamics(model, flow)
     stepper = Radau(
-        PipeDynamics(model, flow),
-        x[:n],
-        x[n:],
-        0.0,
-        rtol=rtol,
-        max_step=T / steps,
-        first_step=T / steps,
-        sensitivity=True,
+        problem, x[:n], x[n:], 0.0, rtol=rtol, max_step=h, first_step=h, sensitivity=True
     )
     alpha = model.params.alpha
     tips = [compute_tip(model.disc, x[:n], alpha)["theta_tip"]]
@@ -91,10 +86,7 @@ def solve_forced_response(
         raise ValueError(f"omega must be > 0, got {omega}")
     flow = PulsatingFlow(model.params.v, sigma, omega)
     n = model.n
-    if guess is None:
-        x = np.r_[solve_sagged(model).q, np.zeros(n)]
-    else:
-        x = np.r_[guess[0], guess[1]]
+    x = np.r_[solve_sagged(model).q, np.zeros(n)] if guess is None else np.r_[guess[0], guess[1]]
     T = 2 * math.pi / omega
     for iteration in range(max_iterations + 1):
         end, S, tips = _period_map(model, flow, x, T, steps, rtol)
@@ -102,14 +94,10 @@ def solve_forced_response(
         residual = float(np.linalg.norm(r) / max(1.0, np.linalg.norm(x)))
         if residual <= tol:
             rho = np.linalg.eigvals(S)
+            rho = rho[np.argsort(-np.abs(rho))]
+            amplitude = 0.5 * (max(tips) - min(tips))
             return ForcedResponse(
-                q0=x[:n].copy(),
-                qdot0=x[n:].copy(),
-                period=T,
-                multipliers=rho[np.argsort(-np.abs(rho))],
-                iterations=iteration,
-                residual=residual,
-                amplitude=0.5 * (max(tips) - min(tips)),
+                x[:n].copy(), x[n:].copy(), T, rho, iteration, residual, amplitude
             )
         if iteration == max_iterations:
             break

@@ -139,7 +139,7 @@ def locate_region(
     margin = _Margin(reduced, steps)
     sigma_max = float(max(sigmas))
     lo, hi = window
-    limit_lo, limit_hi = limits if limits is not None else window
+    limits = tuple(limits if limits is not None else window)
     # where the region is widest open at the largest sigma: a grid, then Brent
     grid = np.linspace(lo, hi, 17)
     values = [margin(sigma_max, w) for w in grid]
@@ -151,12 +151,8 @@ def locate_region(
     )
     peak = float(best.x)
     # its edges at sigma_max bound the frequencies where it opens first
-    edge_lo = _edge(lambda w: margin(sigma_max, w), peak, limit_lo, omega_tol)
-    edge_hi = _edge(lambda w: margin(sigma_max, w), peak, limit_hi, omega_tol)
-    span = (
-        limit_lo if math.isnan(edge_lo) else edge_lo,
-        limit_hi if math.isnan(edge_hi) else edge_hi,
-    )
+    edges = [_edge(lambda w: margin(sigma_max, w), peak, x, omega_tol) for x in limits]
+    span = tuple(x if math.isnan(e) else e for x, e in zip(limits, edges, strict=True))
 
     def critical_sigma(w: float) -> float:
         if margin(sigma_max, w) <= 0:
@@ -183,19 +179,9 @@ def locate_region(
             inside = float(
                 minimize_scalar(lambda w, s=s: -margin(s, w), bounds=span, method="bounded").x
             )
-        rows.append(
-            (
-                float(s),
-                _edge(lambda w, s=s: margin(s, w), inside, limit_lo, omega_tol),
-                _edge(lambda w, s=s: margin(s, w), inside, limit_hi, omega_tol),
-            )
-        )
+        edges = [_edge(lambda w, s=s: margin(s, w), inside, x, omega_tol) for x in limits]
+        rows.append((float(s), *edges))
     region = ParametricRegion(
-        candidate=candidate,
-        sigma_threshold=sigma_th,
-        omega_threshold=omega_th,
-        multiplier=complex(rho),
-        boundary=tuple(rows),
-        evaluations=margin.count,
+        candidate, sigma_th, omega_th, complex(rho), tuple(rows), evaluations=margin.count
     )
     return region, margin.count
