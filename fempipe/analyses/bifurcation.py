@@ -23,7 +23,7 @@ from fempipe.model.dynamics_problem import PipeDynamics, refuse_hysteretic
 from fempipe.model.plane.operators import PipeModel
 
 from .dynamics import IntegrationError, make_initial_state
-from .limit_cycle import Attractor, LimitCycle, ShootingError, find_attractor, shoot
+from .limit_cycle import TIP_KEYS, Attractor, LimitCycle, ShootingError, find_attractor, shoot
 from .periodic.points import (
     DIRECTIONS,
     BifurcationPoint,
@@ -158,15 +158,14 @@ def _new_point(
     att: Attractor, m: PipeModel, direction: str, index: int, v: float, t0: float
 ) -> BifurcationPoint:
     """The point of an attractor found at v (``t0``: when its computation began); logged."""
+    tip = att.tip or dict.fromkeys(TIP_KEYS, [math.nan, math.nan])
     point = BifurcationPoint(
         v=float(v),
         direction=direction,
         index=index,
         alpha=float(m.params.alpha),
         attractor=att.kind,
-        eta_tip=att.tip["eta_tip"] if att.tip else [math.nan, math.nan],
-        X_tip=att.tip["X_tip"] if att.tip else [math.nan, math.nan],
-        Z_tip=att.tip["Z_tip"] if att.tip else [math.nan, math.nan],
+        **{k: tip[k] for k in TIP_KEYS},
         period=att.period,
         period_n=att.period_n,
         max_multiplier=(att.cycle.max_nontrivial_multiplier if att.cycle else None),

@@ -166,9 +166,7 @@ class _AttractorSearch:
                 raise ValueError("no initial state given and the static problem has no solution")
             q0, qdot0 = make_initial_state(model, 1, perturbation, q_static=q_s)
         qdot0 = np.zeros(self.n) if qdot0 is None else np.asarray(qdot0, dtype=float)
-        self.level = (
-            eta_tip(self.disc, q_s) if q_s is not None else eta_tip(self.disc, np.asarray(q0))
-        )
+        self.level = eta_tip(self.disc, q_s if q_s is not None else np.asarray(q0))
         return q0, qdot0
 
     def run(self, q0, qdot0, perturbation: float) -> Attractor:
@@ -296,10 +294,8 @@ class _AttractorSearch:
         last_cross = max(self.sec_t[-1] if self.sec_t else 0.0, self.level_time)
         if stepper.t - last_cross > 3.0 and len(self.trace):
             recent = self.trace[-400:]
-            t_recent = recent.times()
-            eta_recent = recent.values("eta_tip")
-            keep = t_recent >= stepper.t - 1.0
-            self.level = float(np.mean(eta_recent[keep]))
+            keep = recent.times() >= stepper.t - 1.0
+            self.level = float(np.mean(recent.values("eta_tip")[keep]))
             self.level_time = stepper.t
             self.sec_t, self.sec_x, self.sec_i = [], [], []
             self.s_old = eta_tip(disc, stepper.q) - self.level
@@ -320,8 +316,7 @@ class _AttractorSearch:
 
     def _recurred(self, nn: int, dist: float) -> Attractor | None:
         """The section recurs after nn points at distance dist: shoot, or wait, or accept."""
-        sec_t = self.sec_t
-        T_guess = sec_t[-1] - sec_t[-1 - nn]
+        T_guess = self.sec_t[-1] - self.sec_t[-1 - nn]
         qk, pk = self.sec_x[-1]
         prev = self.last_dist.get(nn)
         self.last_dist[nn] = dist

@@ -74,13 +74,10 @@ class LimitCycle:
         Period T in tau (the whole orbit, n section crossings).
     q0, qdot0, level : ndarray, ndarray, float
         State on the orbit where the section variable is ``level`` (upward).
-    tip : dict
     floquet_multipliers, stable : ndarray, bool
         By decreasing modulus; the non-trivial ones inside the unit circle.
-    iterations, residual : int, float
     orbit_t, orbit_q, orbit_qdot : ndarray
         The orbit at equally spaced times over one period.
-    steps, total_steps, rejected_steps, wall_time : int, int, int, float
     """
 
     period: float

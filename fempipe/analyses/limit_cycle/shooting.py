@@ -130,9 +130,7 @@ class Shooter:
                 # neighbourhood where the linearized map means anything.
                 size = state_distance(dx[:n], dx[n : 2 * n], scale)
                 lam = min(1.0, 0.3 / size) if size > 0 else 1.0
-                q = q + lam * dx[:n]
-                p = p + lam * dx[n : 2 * n]
-                T = T + lam * dx[-1]
+                q, p, T = q + lam * dx[:n], p + lam * dx[n : 2 * n], T + lam * dx[-1]
                 if not T > 0:
                     break
         raise ShootingError(

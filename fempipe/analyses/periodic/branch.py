@@ -125,8 +125,7 @@ class CycleBranchPolicy:
         self.points: list[CyclePoint] = []
         self.seed = None  # the last flow with the sensitivity of the previous point, if any
         self.steps = self.rejected = 0
-        self.wall_before = 0.0
-        self.integ_before = 0
+        self.wall_before, self.integ_before = 0.0, 0
         self.us = [self.u_H]
         # Rotate z so that Re z is the major axis of the ellipse Re(z e^{i omega tau})
         # in the metric: the first orbit starts on it and later ones stay there
@@ -136,8 +135,7 @@ class CycleBranchPolicy:
         psi = 0.5 * math.atan2(-2.0 * float(a @ b), float(a @ a - b @ b))
         z_hopf_dir = cont.S * np.r_[(hopf.eigenvector * np.exp(1j * psi)).real, 0.0, 0.0]
         z_hopf_dir /= np.linalg.norm(z_hopf_dir)
-        self.z_hopf_dir = z_hopf_dir
-        self.secant = z_hopf_dir
+        self.z_hopf_dir = self.secant = z_hopf_dir
 
     def resume(self, state: dict) -> float:
         """Continue from the state written by ``on_point``; returns its step size."""

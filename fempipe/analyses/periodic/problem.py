@@ -215,8 +215,7 @@ class CycleCorrector:
         row = None if fixed_v else tangent * self.S
         lin = None  # the flow whose monodromy is in the chord matrix
         res_prev = res_exact = math.inf
-        stale = False
-        rejected = 0
+        stale, rejected = False, 0
         monodromy = u_mono = None
 
         if seed is not None and seed.monodromy is not None and seed.dv is not None:
@@ -290,10 +289,7 @@ class CycleCorrector:
         n2 = 2 * self.n
         size = float(np.linalg.norm(self.S[:n2] * du[:n2]) * math.sqrt(2))
         lam = min(1.0, 0.3 / size) if size > 0 else 1.0
-        if fixed_v:
-            u[: n2 + 1] += lam * du
-        else:
-            u += lam * du
+        u[: n2 + 1 if fixed_v else u.size] += lam * du
         if not u[n2] > 0:
             raise CorrectorError("the period became negative")
 
@@ -318,7 +314,6 @@ class CycleCorrector:
         n = self.n
         mu = np.linalg.eigvals(monodromy)
         mu = mu[np.argsort(-np.abs(mu))]
-        nt = nontrivial_multipliers(mu)
         return CyclePoint(
             v=float(u[-1]),
             period=float(u[2 * n]),
@@ -326,7 +321,7 @@ class CycleCorrector:
             qdot0=u[n : 2 * n].copy(),
             tip=self.tip_extrema(u[-1], fl.record),
             multipliers=mu,
-            stable=bool(np.all(np.abs(nt) < 1.0)),
+            stable=bool(np.all(np.abs(nontrivial_multipliers(mu)) < 1.0)),
             source=source,
             iterations=it,
             residual=self.residual_norm(fl.xT - u[: 2 * n], u[2 * n]),

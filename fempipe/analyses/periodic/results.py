@@ -40,15 +40,8 @@ class CycleContinuationError(SolverError):
 
 @dataclass(frozen=True)
 class HopfPoint:
-    """A Hopf point of the static branch: a flutter-type event with its eigenvector.
-
-    Attributes
-    ----------
-    v, omega, event_type : float, float, str
-    q_static : ndarray, shape (n,)
-    eigenvector : ndarray, complex, shape (2 n,)
-        z = (q, i omega q) with A z = i omega z, unit RMS of its q part.
-    """
+    """A Hopf point of the static branch: a flutter-type event with its eigenvector
+    z = (q, i omega q), A z = i omega z, unit RMS of its q part."""
 
     v: float
     omega: float

@@ -103,15 +103,15 @@ def _fold(p0: CyclePoint, a: CyclePoint, b: CyclePoint, index: int) -> CycleSpec
         return math.hypot(p.v - q.v, p.period - q.period, swing(p) - swing(q))
 
     s = np.array([0.0, dist(p0, a), dist(p0, a) + dist(a, b)])
-    vs = np.array([p0.v, a.v, b.v])
-    Ts = np.array([p0.period, a.period, b.period])
-    c = np.polyfit(s, vs, 2)
+    c = np.polyfit(s, np.array([p0.v, a.v, b.v]), 2)
     if c[0] == 0:
         return CycleSpecialPoint(float(a.v), "fold", float(a.period), index)
     s_star = float(np.clip(-c[1] / (2 * c[0]), s[0], s[-1]))
     return CycleSpecialPoint(
         v=float(np.polyval(c, s_star)),
         type="fold",
-        period=float(np.polyval(np.polyfit(s, Ts, 2), s_star)),
+        period=float(
+            np.polyval(np.polyfit(s, np.array([p0.period, a.period, b.period]), 2), s_star)
+        ),
         index=index,
     )

@@ -28,27 +28,17 @@ def cantilever_frequencies(n: int) -> np.ndarray:
     out = np.empty(int(n))
     for r in range(1, int(n) + 1):
         c = (r - 0.5) * np.pi
-        if c > 40.0:
-            out[r - 1] = c**2
-            continue
-        b = brentq(lambda x: np.cos(x) + 1.0 / np.cosh(x), c - 0.4, c + 0.4, xtol=1e-15)
+        f = lambda x: np.cos(x) + 1.0 / np.cosh(x)  # noqa: E731
+        b = c if c > 40.0 else brentq(f, c - 0.4, c + 0.4, xtol=1e-15)
         out[r - 1] = b**2
     return out
 
 
 @dataclass(frozen=True)
 class Resolution:
-    """Which modes a discretization resolves.
-
-    Attributes
-    ----------
-    n_resolved : int
-        Leading canonical modes within ``tolerance`` of the exact frequencies.
-    frequencies, exact, rel_error : ndarray, shape (n,)
-    tolerance : float
-    basis, mass : ndarray, shape (n, n)
-        Canonical modes, M(0)-orthonormal columns; M(0).
-    """
+    """Which modes a discretization resolves: ``n_resolved`` leading canonical modes within
+    ``tolerance`` of the exact frequencies; ``basis``: the canonical modes, M(0)-orthonormal
+    columns, ``mass``: M(0)."""
 
     n_resolved: int
     frequencies: np.ndarray
@@ -87,8 +77,7 @@ def resolution(disc, tolerance: float = RESOLUTION_TOL) -> Resolution:
     err = np.abs(omega / exact - 1.0)
     bad = np.flatnonzero(err > tolerance)
     n_res = int(bad[0]) if bad.size else omega.size
-    res = Resolution(n_res, omega, exact, err, float(tolerance), basis, M0)
-    per_disc[tolerance] = res
+    per_disc[tolerance] = res = Resolution(n_res, omega, exact, err, float(tolerance), basis, M0)
     return res
 
 

@@ -70,8 +70,7 @@ class ChunkedBranch:
                 return continue_static(ma, "v", stop=stop, q0=q_a, tangent=tangent, **kw)
 
         self._next = lambda: advance((lo, q), None)
-        self._hi = hi
-        self._advance = advance
+        self._hi, self._advance = hi, advance
         return self
 
     def _add(self, branch: Branch) -> None:
@@ -170,7 +169,7 @@ def _straight_piece(
     tangent[n] = 1.0
     q = np.zeros(n)
     branch = Branch(parameter="v", base=replace(model.params, v=v_a), end_reason="stop")
-    for v in _straight_values(v_a, stop, ds, ds_max):
-        branch.points.append(BranchPoint(q, float(v), tangent, 0, 0.0, 1))
+    values = _straight_values(v_a, stop, ds, ds_max)
+    branch.points.extend(BranchPoint(q, float(v), tangent, 0, 0.0, 1) for v in values)
     branch.steps = len(branch.points) - 1
     return branch

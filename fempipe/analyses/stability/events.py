@@ -33,7 +33,6 @@ class StabilityEvent:
         Unstable already at the start of the branch's v-range (listed at that v).
     stable_before, stable_after : bool
         Stability of the whole branch just below / above the event, in the event's plane.
-    plane : {'in', 'out'}
     """
 
     v: float
@@ -67,11 +66,8 @@ class BranchStability:
     ----------
     name, parent, born_at : str, str or None, float or None
         The branch, the one it bifurcates from and the v of that branch point.
-    v, theta_tip, max_real : ndarray, shape (m,)
     n_unstable : ndarray of int, shape (m,)
-        Unstable resolved eigenvalues (a complex pair counts 2).
-    events : tuple of StabilityEvent
-    folds, bifurcations : tuple of float
+        Unstable resolved eigenvalues (a complex pair counts 2) at the samples ``v``.
     end_reason : str
         Why the continuation stopped (:class:`fempipe.analyses.statics.Branch`).
     """
@@ -116,14 +112,11 @@ class StabilityResult:
 
     Attributes
     ----------
-    params, discretization, v_range : Params, dict, (float, float)
     v_cr, critical : float or None, StabilityEvent or None
         First v at which the primary branch is not stable (None if stable) and its event.
     v_flutter : float or None
         First flutter on the primary branch (Fig. 6).
     events, branches : tuple of StabilityEvent, tuple of BranchStability
-    n_spectra : int
-    plane : {'in', 'out'}
     """
 
     params: Params

@@ -55,9 +55,7 @@ class StraightPencil:
     """
 
     def __init__(self, model: PipeModel) -> None:
-        n = model.n
-        q = np.zeros(n)
-        p = model.params
+        q, p = np.zeros(model.n), model.params
         K0, C0, M = linearized_matrices(model.with_params(replace(p, v=0.0)), q)
         K1, C1, _ = linearized_matrices(model.with_params(replace(p, v=1.0)), q)
         self.K0, self.K2 = K0, K1 - K0

@@ -82,7 +82,6 @@ class StabilityMap:
 
     Attributes
     ----------
-    alphas, curves, base, v_max : ndarray, tuple of (beta, gamma), Params, float
     points : list of list of dict
         ``points[c][a]``: the keys of :data:`PLANAR_KEYS` (or ``error``); in both planes those
         of the first loss of stability plus :data:`PLANE_KEYS`.

@@ -21,21 +21,16 @@ from .tracking import reference_tracker
 
 @dataclass(frozen=True)
 class Spectrum:
-    """The resolved spectrum of Eq. (32) about one static state.
+    """The resolved spectrum of Eq. (32) about one static state q.
 
     Attributes
     ----------
-    params : Params
-    q : ndarray, shape (n,)
     lam, mode : ndarray of complex, ndarray of int, shape (m,)
         Resolved eigenvalues, upper half first, and their mode numbers (from v = 0).
     vectors : ndarray of complex, shape (n, m)
         theta-parts of the eigenvectors (unit norm).
     share : ndarray, shape (m,)
         Share of each eigenvector on resolved canonical modes (>= 1/2).
-    n_computed, n_resolved_modes : int
-    max_real_unresolved, static_residual : float
-    method : str
     """
 
     params: Params
@@ -96,8 +91,6 @@ def compute_spectrum(
 ) -> Spectrum:
     """Every resolved eigenvalue about a static state, with its mode number. Eq. (32).
 
-    The mode numbers cost a path back to v = 0; for the decision alone use :func:`linearly_stable`.
-
     Parameters
     ----------
     model : PipeModel
@@ -148,16 +141,8 @@ def compute_spectrum(
 
 @dataclass(frozen=True)
 class ModeShape:
-    """A mode shape ``Re(a e^{lambda tau})`` about a static state, max |theta^d| = 1 (real > 0).
-
-    Attributes
-    ----------
-    xi : ndarray, shape (m,)
-    theta, X_g, Z_g : ndarray of complex, shape (m,)
-        theta^d and the centerline's displacement (Eq. (28) linearized).
-    X_static, Z_static : ndarray, shape (m,)
-    lam, mode : complex, int
-    """
+    """A mode shape ``Re(a e^{lambda tau})`` about a static state, max |theta^d| = 1 (real > 0):
+    theta^d and the centerline's displacement ``X_g``, ``Z_g`` (Eq. (28) linearized) at ``xi``."""
 
     xi: np.ndarray
     theta: np.ndarray

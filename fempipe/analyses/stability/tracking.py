@@ -249,17 +249,12 @@ class RootLocus:
 
     Attributes
     ----------
-    params : Params
-    v : ndarray, shape (m,)
     lam : ndarray of complex, shape (m, k)
         Column j belongs to mode ``modes[j]`` (modes 1..n_modes and every unstable one).
-    modes : ndarray of int, shape (k,)
-    resolved, stable : ndarray of bool
     max_real, theta_tip : ndarray, shape (m,)
         Largest resolved Re lambda; static tip rotation.
     n_spectra : int
         Spectra computed, including those inserted for tracking.
-    plane : {'in', 'out'}
     """
 
     params: Params
@@ -341,9 +336,7 @@ def trace_root_locus(
     if res.n_resolved == 0:
         raise ValueError(f"discretization {model.disc.name} resolves no mode; refine it")
     m0 = model.with_params(replace(model.params, v=values[0]))
-    if q0 is None:
-        q0 = solve_sagged(m0).q
-    states = solve_path(m0, values, q0=q0)
+    states = solve_path(m0, values, q0=solve_sagged(m0).q if q0 is None else q0)
     paths = [TrackedPath(m, res, method) for m in models]
     keep: list[list[int]] = [[] for _ in models]  # sample index of each requested value
     s = 0.0

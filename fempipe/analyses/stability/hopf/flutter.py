@@ -91,15 +91,11 @@ def normal_forms(model: PipeModel, result) -> dict:
     if straight_is_static(model.params):
         # The straight pipe is a static state at every v (alpha = 0 or pi); when
         # it carries the event's eigenvalue no path needs to be followed.
-        straight = {
-            _key(ev): np.zeros(model.n)
-            for ev in result.events
-            if ev.type == "flutter" and ev.branch == "primary" and not ev.at_start
-        }
-        for key, q in straight.items():
-            nf = _normal_form(model, result, key, q)
-            if not isinstance(nf, str):
-                out[key] = nf
+        for ev in result.events:
+            if ev.type == "flutter" and ev.branch == "primary" and not ev.at_start:
+                nf = _normal_form(model, result, _key(ev), np.zeros(model.n))
+                if not isinstance(nf, str):
+                    out[_key(ev)] = nf
     states = None
     for ev in result.events:
         key = _key(ev)

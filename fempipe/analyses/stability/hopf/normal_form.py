@@ -33,7 +33,6 @@ class HopfChecks3D:
         \\|q_theta\\| / \\|q_U\\|: 0 for the mirror-odd (out-of-plane) eigenvector.
     largest_real_eigenvalue, next_real_part : float
         The largest real eigenvalue (the gauge's); the largest Re lambda but the pair.
-    secant_iterations : int
     """
 
     v_out_of_plane: float | None
@@ -66,7 +65,6 @@ class HopfNormalForm:
         ``Y_tip`` (3-D, where the cycles exist above v_cr).
     q_static, eigenvector : ndarray
         The equilibrium (planar q or 3-D U) and q (x - x0 ~ 2 rho Re(q e^{i omega tau})).
-    coefficient : HopfCoefficient
     section_gradient : ndarray
         Gradient of the Poincare section variable (eta_tip; 3-D: Y_tip).
     checks : HopfChecks3D or None
