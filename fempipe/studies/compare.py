@@ -80,10 +80,8 @@ def evaluate(quantity: Quantity, disc) -> Evaluation:
     err = None
     if refined is not None:
         floor = quantity.tolerance * max(1.0, abs(value))
-        ratio = refinement_ratio(disc)
-        err = float(
-            estimate(value, refined, expected_order(disc, quantity.params), ratio, floor=floor)
-        )
+        order = expected_order(disc, quantity.params)
+        err = float(estimate(value, refined, order, refinement_ratio(disc), floor=floor))
     return Evaluation(value, refined, err, note, time.process_time() - t0)
 
 
@@ -153,6 +151,8 @@ def compare_values(
 ) -> list[Comparison]:
     """Compare each user's value with fempipe's (:func:`evaluate`), in order.
 
+    A SolverError or ValueError of a computation is that comparison's ``failure``.
+
     Parameters
     ----------
     pairs : sequence of (Quantity, float)
@@ -163,11 +163,6 @@ def compare_values(
         Processes (:func:`fempipe.core.parallel.run_tasks`).
     callback : callable, optional
         ``callback(done, total)`` as each comparison finishes.
-
-    Returns
-    -------
-    list of Comparison
-        A SolverError or ValueError of a computation is that comparison's ``failure``.
     """
     for q, _ in pairs:
         if q.name not in COMPARABLE:

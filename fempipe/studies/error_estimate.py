@@ -100,8 +100,7 @@ def _paper_order(disc) -> float | None:
         return 2.0 * disc.degree
     if isinstance(disc, Modal):
         stated = getattr(disc, "expected_order", None)
-        if callable(stated):
-            stated = stated()
+        stated = stated() if callable(stated) else stated
         if stated is not None:
             return float(stated)
         return SINE_ORDER if _modal_basis(disc) == "sine" else None
@@ -114,18 +113,13 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
     Parameters
     ----------
     coarse, fine : float or array_like
-        The reported and the refined value (broadcast).
+        The reported and the refined value (broadcast; NaN gives NaN).
     order : float or None
         Order p of the error; None if unknown (factor 1).
     ratio : float
         Refinement ratio r > 1.
     floor : float or array_like
         Smallest estimate: the solver's tolerance on the value.
-
-    Returns
-    -------
-    float or ndarray
-        NaN where a value is NaN.
 
     Examples
     --------
@@ -143,8 +137,7 @@ def estimate(coarse, fine, order: float | None, ratio: float = RATIO, floor=0.0)
             raise ValueError(f"the order must be > 0 (or None if unknown), got {order}")
         rp = float(ratio) ** float(order)
         factor = rp / (rp - 1.0)
-    c = np.asarray(coarse, dtype=float)
-    f = np.asarray(fine, dtype=float)
+    c, f = np.asarray(coarse, dtype=float), np.asarray(fine, dtype=float)
     err = np.fmax(SAFETY_FACTOR * factor * np.abs(c - f), np.asarray(floor, dtype=float))
     err = np.where(np.isnan(c) | np.isnan(f), np.nan, err)
     return float(err) if err.ndim == 0 else err
@@ -231,9 +224,6 @@ def match_events(coarse, fine) -> tuple[list[int | None], list[int]]:
     available: dict = {}
     for j, ev in enumerate(fine):
         available.setdefault(key(ev), []).append(j)
-    pairs: list[int | None] = []
-    for ev in coarse:
-        queue = available.get(key(ev))
-        pairs.append(queue.pop(0) if queue else None)
+    pairs = [queue.pop(0) if (queue := available.get(key(ev))) else None for ev in coarse]
     used = {j for j in pairs if j is not None}
     return pairs, [j for j in range(len(fine)) if j not in used]

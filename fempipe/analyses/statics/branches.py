@@ -177,10 +177,6 @@ def continue_static(
     callback : callable, optional
         Called with each accepted :class:`BranchPoint`.
 
-    Returns
-    -------
-    Branch
-
     Raises
     ------
     NewtonError
@@ -200,17 +196,9 @@ def continue_static(
         t0 = normalize(family, np.asarray(tangent, dtype=float))
     t, sign, _ = curve_tangent(family, np.append(first.q, start_value), t0)
     pt = BranchPoint(first.q, start_value, t, first.iterations, first.residual_norm, sign)
+    options = dict(ds_min=ds_min, ds_max=ds_max, max_steps=max_steps, tol=tol, detect=detect)
     policy = StaticBranchPolicy(
-        family,
-        pt,
-        stop,
-        ds_min=ds_min,
-        ds_max=ds_max,
-        max_steps=max_steps,
-        tol=tol,
-        detect=detect,
-        locate_tol=locate_tol,
-        callback=callback,
+        family, pt, stop, locate_tol=locate_tol, callback=callback, **options
     )
     if callback:
         callback(pt)

@@ -118,10 +118,6 @@ def solve_static(
     tol, max_iter : float, int
         Relative force balance (:func:`force_balance`; last step also below 1e-9 (1 + ||q||)).
 
-    Returns
-    -------
-    StaticSolution
-
     Raises
     ------
     NewtonError

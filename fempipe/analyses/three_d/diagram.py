@@ -6,8 +6,7 @@ At each v the 3-D model is integrated until its attractor is recognized
 the tip's [min, max] in the plane and out of it (Y_tip), the period and the whirl rate.  Each
 point starts from the state the previous one ended on; after an equilibrium, and at the first
 point, from the static state of its own v perturbed in the plane and out of it (``started``).
-The points, their store and the sweep driver are those of every diagram
-(:mod:`fempipe.analyses.periodic.points`).
+Points, store and sweep driver: :mod:`fempipe.analyses.periodic.points`.
 """
 
 from __future__ import annotations
@@ -137,10 +136,6 @@ def compute_diagram_3d(
         As :func:`fempipe.analyses.periodic.points.run_diagram`.
     **motion_options
         Passed to :func:`simulate_3d`; part of the store's manifest.
-
-    Returns
-    -------
-    Diagram3D
     """
     t0 = time.perf_counter()
     for d in directions:
@@ -157,9 +152,5 @@ def compute_diagram_3d(
         total=len(values) * len(directions),
     )
     points = [p for r in results for p in r]
-    return Diagram3D(
-        points=[p.to_dict() for p in points],
-        wall_time=time.perf_counter() - t0,
-        cpu_time=math.fsum(p.cpu_time for p in points),
-        manifest=manifest,
-    )
+    cpu = math.fsum(p.cpu_time for p in points)
+    return Diagram3D([p.to_dict() for p in points], time.perf_counter() - t0, cpu, manifest)

@@ -95,10 +95,6 @@ def compute_out_of_plane_floquet(
     method : {"linear", "3d"}
         The linear out-of-plane equation (one unknown psi, the cheaper) or the 3-D model's
         out-of-plane block.
-
-    Returns
-    -------
-    OutOfPlaneFloquet
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS} (got {method!r})")

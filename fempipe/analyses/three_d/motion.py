@@ -42,9 +42,7 @@ class Motion3D:
     Attributes
     ----------
     kind, motion : str
-        ``"equilibrium"``, ``"periodic"``, ``"whirl"``, ``"quasi-periodic"`` or
-        ``"non-periodic"``; ``"planar"`` or ``"nonplanar"``.
-    period, period_n : float or None, int or None
+        equilibrium, periodic, whirl, quasi-periodic or non-periodic; planar or nonplanar.
     whirl_rate : float or None
         Angular velocity of a whirl, right-handed about e_1, rad per tau.
     tip : dict
@@ -54,10 +52,8 @@ class Motion3D:
         or out-of-plane over in-plane extent.
     frequencies : tuple of float or None
         Without recurrence: the two incommensurate frequencies (cycles per tau), or the strongest.
-    cycle : LimitCycle or None
     t, U, Udot : ndarray
         The trajectory at every accepted step.
-    steps, rejected_steps, t_end, cpu_time : int, int, float, float
     """
 
     kind: str
@@ -165,14 +161,12 @@ def simulate_3d(
         The planar model; the motion starts from its static state.
     mode, amplitude, out_of_plane_amplitude : int, float, float
         The sine mode and its in-plane and out-of-plane (psi) amplitudes, rad.
-    t_max, rtol : float
     recurrence_tol, start_tol : float
         Returns that agree to this (RMS): periodic without shooting; shot from the last.
     shoot_rtol, use_shooting, min_swing : float, bool, float
         Shoot only when the section variable swings by more than ``min_swing``.
     planar_tol : float
         :attr:`Motion3D.planarity` below this: a planar motion.
-    n_max : int
     callback : callable, optional
         Called with tau after every step.
     initial : (U0, Ud0), optional
@@ -189,7 +183,7 @@ def simulate_3d(
         )
     level = section_value(space, planar_state(q_s))
     stepper = Radau(PipeDynamics3D(space), U0, Ud0, rtol=rtol)
-    ts, Us, Ps = [stepper.t], [stepper.q.copy()], [stepper.qdot.copy()]
+    samples = [(stepper.t, stepper.q.copy(), stepper.qdot.copy())]
     watch = _Returns(
         space,
         level,
@@ -204,20 +198,17 @@ def simulate_3d(
     )
     kind, period, period_n, cycle = "non-periodic", None, None, None
     for t, q, p in stepper.steps(t_max):
-        ts.append(t)
-        Us.append(q)
-        Ps.append(p)
+        samples.append((t, q, p))
         if callback is not None:
             callback(t)
-        found = watch.step(stepper, ts[-2], t, q)
+        found = watch.step(stepper, samples[-2][0], t, q)
         if found is not None:
             kind, period_n, period, cycle = found
             break
         if _settled(t, p, watch.sections, watch.swings, watch.scale):
             kind = "equilibrium"
             break
-    t = np.array(ts)
-    U, P = np.array(Us), np.array(Ps)
+    t, U, P = (np.array(x) for x in zip(*samples, strict=True))
     kind, motion, planarity, whirl_rate, tip, frequencies = _classify(
         space, kind, period, cycle, t, U, planar_tol
     )

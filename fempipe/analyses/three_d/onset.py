@@ -93,8 +93,7 @@ def locate_hopf(
         v2 = v1 - l1.real * (v1 - v0) / (l1.real - l0.real)
         if abs(v2 - v1) <= HOPF_V_TOL * max(1.0, abs(v1)):
             return v1, q, it
-        v0, l0 = v1, l1
-        v1 = v2
+        v0, l0, v1 = v1, l1, v2
         l1, q = _pair_at(model, planar, v1, q)
     raise RuntimeError(f"the out-of-plane Hopf point was not located (Re lambda = {l1.real:.3e})")
 
@@ -140,9 +139,8 @@ def hopf_normal_form_3d(
     n = model.n
     U0 = planar_state(q0)
     x0 = np.concatenate([U0, np.zeros(n)])
-    gram = dense(planar.disc.gram)
     G = np.zeros((2 * n, 2 * n))
-    G[:n, :n] = np.kron(np.eye(3), gram)
+    G[:n, :n] = np.kron(np.eye(3), dense(planar.disc.gram))
     jac = lambda x: pipe_jacobian(model, x)  # noqa: E731
     hc = lyapunov_coefficient(jac, x0, norm=G, step=step)
     A = jac(x0)
@@ -161,12 +159,10 @@ def hopf_normal_form_3d(
 
     dA = (jac_at(hv) - jac_at(-hv)) / (2.0 * hv)
     dlam = complex(np.conj(p) @ (dA @ q))
-    # The same derivative from the eigenvalue itself on the re-solved branch.
-    lp = _pair_at(model, planar, v + hv, q0)[0]
-    lm = _pair_at(model, planar, v - hv, q0)[0]
+    # the same derivative from the eigenvalue itself on the re-solved branch
+    lp, lm = (_pair_at(model, planar, v + s, q0)[0] for s in (hv, -hv))
     check = (lp.real - lm.real) / (2.0 * hv)
-    gY = model.tip_position_gradient(U0)[2]
-    nt = planar.disc.n
+    gY, nt = model.tip_position_gradient(U0)[2], planar.disc.n
     checks = HopfChecks3D(
         v_out_of_plane=None if v_out_of_plane is None else float(v_out_of_plane),
         transversality_check=float(check),

@@ -76,11 +76,9 @@ class Whirl:
 
 def fit_l2(model: PipeModel3D, f: np.ndarray) -> np.ndarray:
     """The finite element function(s) nearest f (n_q or (n_q, k)) at the quadrature points (L2)."""
-    disc = model.disc
-    Phi = disc.Phi.toarray() if hasattr(disc.Phi, "toarray") else np.asarray(disc.Phi)
-    w = model.w
-    G = Phi.T @ (w[:, None] * Phi)
-    return np.linalg.solve(G, Phi.T @ (w * f.T).T)
+    Phi, w = model.disc.Phi, model.w
+    Phi = Phi.toarray() if hasattr(Phi, "toarray") else np.asarray(Phi)
+    return np.linalg.solve(Phi.T @ (w[:, None] * Phi), Phi.T @ (w * f.T).T)
 
 
 def tangent_state(
@@ -138,19 +136,16 @@ def whirl_guess_from_cycle(model: PipeModel3D, cycle: LimitCycle, tau: float = 0
             np.cos(ps) * psd,
         ]
     )
-    U, Ud = tangent_state(model, t, t_dot)
-    return U, Ud, T
+    return (*tangent_state(model, t, t_dot), T)
 
 
 def _step_ends(model: PipeModel3D, cycle: LimitCycle, rtol: float):
     """tau and U at the step ends of one period (the dense output between them is of lower
     order, too rough for the measures of rigidity)."""
     stepper = Radau(PipeDynamics3D(model), cycle.q0, cycle.qdot0, 0.0, rtol=rtol)
-    ts, Us = [0.0], [np.array(cycle.q0, dtype=float)]
-    for t, q, _ in stepper.steps(cycle.period):
-        ts.append(t)
-        Us.append(q)
-    return np.array(ts), np.array(Us)
+    ends = [(0.0, np.array(cycle.q0, dtype=float))]
+    ends += [(t, q) for t, q, _ in stepper.steps(cycle.period)]
+    return np.array([t for t, _ in ends]), np.array([q for _, q in ends])
 
 
 def _radius_statistics(ts: np.ndarray, rad: np.ndarray) -> tuple[float, float]:
@@ -208,19 +203,17 @@ def find_whirl(
     if abs(abs(turn) - 2.0 * math.pi) > 0.5:
         omega = math.nan  # not one turn a period: no whirl
     mu = np.asarray(cycle.floquet_multipliers)
-    order = np.argsort(-np.abs(mu))
     largest = largest_nontrivial(mu)
     mean, variation = _radius_statistics(ts, rad)
+    defect = _rotation_defect(model, ts, Us, omega) if math.isfinite(omega) else math.nan
     return Whirl(
         v=float(model.params.v),
         omega=omega,
         period=float(cycle.period),
         radius=mean,
         radius_variation=variation,
-        rotation_defect=_rotation_defect(model, ts, Us, omega)
-        if math.isfinite(omega)
-        else math.nan,
-        multipliers=mu[order[:8]],
+        rotation_defect=defect,
+        multipliers=mu[np.argsort(-np.abs(mu))[:8]],
         max_nontrivial=largest,
         stable=largest < 1.0,
         cycle=cycle,

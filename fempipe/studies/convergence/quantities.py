@@ -252,20 +252,15 @@ class Quantity:
         from fempipe.model.plane.operators import PipeModel
 
         model = PipeModel(disc, self.params)
+        rtol = self.shoot_rtol
         if self.seed is not None:
             src, q0, p0, period = self.seed
+            q, p = project(src, q0, disc), project(src, p0, disc)
             try:
-                return shoot(
-                    PipeDynamics(model),
-                    project(src, q0, disc),
-                    project(src, p0, disc),
-                    period,
-                    rtol=self.shoot_rtol,
-                    tol=10 * self.shoot_rtol,
-                )
+                return shoot(PipeDynamics(model), q, p, period, rtol=rtol, tol=10 * rtol)
             except ShootingError:
                 pass  # too far from the seed: find the attractor from the static state
-        att = find_attractor(model, shoot_rtol=self.shoot_rtol, shoot_tol=10 * self.shoot_rtol)
+        att = find_attractor(model, shoot_rtol=rtol, shoot_tol=10 * rtol)
         if att.kind != "periodic" or att.cycle is None:
             raise SolverError(
                 f"no limit cycle at v = {self.params.v:g} on {disc.name}: the attractor is "

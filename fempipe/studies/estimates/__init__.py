@@ -32,22 +32,12 @@ def estimate_errors(result: dict, model: PipeModel, computed, **options) -> dict
     result : dict
         The JSON-ready dict of the reported computation (updated and returned).
     model : PipeModel
-        The reported model.
     computed
-        What was computed, which sets the refined run: a sequence of ``StaticSolution``
-        (:func:`~fempipe.studies.estimates.static.estimate_static_errors`), a stability
-        analysis (:func:`~fempipe.studies.estimates.stability.estimate_stability_errors`),
-        an ``Attractor`` or the ``Trajectory`` of a pulsating flow
-        (:func:`~fempipe.studies.estimates.attractor.estimate_attractor_errors`).
+        A sequence of ``StaticSolution`` (:func:`.static.estimate_static_errors`), a
+        stability analysis (:func:`.stability.estimate_stability_errors`), an ``Attractor``
+        or a pulsating flow's ``Trajectory`` (:func:`.attractor.estimate_attractor_errors`).
     **options
-        Those of the function for ``computed``: ``pipe`` (an SI pipe: its values get
-        estimates too), ``fine`` (the refined discretization if built), ``callback``
-        (progress) and the options of the refined computation.
-
-    Returns
-    -------
-    dict
-        ``result`` with ``Q_error``, ``Q_refined`` and ``"error_estimate"``.
+        Those of the function for ``computed`` (``pipe``, ``fine``, ``callback``, ...).
     """
     if isinstance(computed, Attractor | Trajectory):
         return estimate_attractor_errors(result, model, computed, **options)

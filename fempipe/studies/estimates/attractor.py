@@ -75,21 +75,15 @@ def estimate_attractor_errors(
     result : dict
         The attractor's dict (``period``, ``tip``; with an SI pipe ``period_s``, ``tip_m``).
     model : PipeModel
-        The reported model.
     computed : Attractor or Trajectory
-        :func:`fempipe.analyses.limit_cycle.find_attractor`'s result, or the trajectory of a
-        pulsating flow (its ``flow``), integrated again from the refined static state.
+        :func:`~fempipe.analyses.limit_cycle.find_attractor`'s result, or a pulsating flow's
+        trajectory (integrated again from the refined static state).
     q_static : ndarray
         The coarse static state (the start of a pulsating flow's run).
-    t_max, rtol, shoot_rtol, use_shooting
-        As for :func:`~fempipe.analyses.limit_cycle.find_attractor`.
-    mode, amplitude : int, float
-        The initial perturbation of a pulsating flow's run (:func:`make_initial_state`).
-    pipe : PipeSI, optional
-    fine : FiniteElement or Modal, optional
-        ``refine(model.disc)`` if already built.
-    callback : callable, optional
-        ``callback(tau)`` as the refined integrations advance.
+    t_max, rtol, shoot_rtol, use_shooting, mode, amplitude
+        As :func:`~fempipe.analyses.limit_cycle.find_attractor`, :func:`make_initial_state`.
+    pipe, fine, callback : PipeSI, FiniteElement or Modal, callable, optional
+        The SI pipe; ``refine(model.disc)`` if built; ``callback(tau)`` as the runs advance.
     """
     forced = isinstance(computed, Trajectory)
     att = None if forced else computed
@@ -128,17 +122,11 @@ def estimate_attractor_errors(
         elif att.kind == "non-periodic":
             notes.append("a non-periodic attractor has no error estimate; not refined")
         else:
-            refined, cycle_notes = refine_cycle(
-                model,
-                att,
-                fine_model,
-                t_max=t_max,
-                rtol=rtol,
-                shoot_rtol=shoot_rtol,
-                use_shooting=use_shooting,
-                callback=callback,
+            options = {"rtol": rtol, "shoot_rtol": shoot_rtol, "use_shooting": use_shooting}
+            refined, more = refine_cycle(
+                model, att, fine_model, t_max=t_max, callback=callback, **options
             )
-            notes.extend(cycle_notes)
+            notes.extend(more)
     except SolverError as exc:
         notes.append(f"the refined computation on {fine.name} failed ({exc}); no estimates")
         refined = None
@@ -178,16 +166,8 @@ def refine_cycle(
             if not cyc.stable:
                 return summary("unstable periodic"), notes
             return summary("periodic", cyc.period, att.period_n, cyc.tip), notes
-    fa = find_attractor(
-        fine_model,
-        q0,
-        p0,
-        t_max=t_max,
-        rtol=rtol,
-        shoot_rtol=shoot_rtol,
-        use_shooting=use_shooting,
-        callback=callback,
-    )
+    options = {"rtol": rtol, "shoot_rtol": shoot_rtol, "use_shooting": use_shooting}
+    fa = find_attractor(fine_model, q0, p0, t_max=t_max, callback=callback, **options)
     return summary(fa.kind, fa.period, fa.period_n, fa.tip), notes
 
 
@@ -205,8 +185,7 @@ def _attach(result, info, notes, coarse, fine, floor, pipe) -> dict:
             return None
         return estimate(a, b, info.order, info.ratio, floor=floor * max(1.0, abs(a)))
 
-    fine_tip = fine.tip if same else None
-    fine_period = fine.period if same else None
+    fine_tip, fine_period = (fine.tip, fine.period) if same else (None, None)
     tip_error = None
     if fine_tip is not None:
         tip_error = {

@@ -47,15 +47,10 @@ def estimate_stability_errors(
     result : dict
         ``res.to_dict()``, decorated (``U_cr`` with an SI pipe).
     model : PipeModel
-        The reported model.
     res : StabilityResult or StabilityInPlanes
-        The reported analysis, run again in its planes (in the plane for a StabilityResult,
-        unless ``planes`` is given).
-    pipe : PipeSI, optional
-    fine : FiniteElement or Modal, optional
-        ``refine(model.disc)`` if already built.
-    callback : callable, optional
-        ``callback(branch, v)`` at each sample of the refined run.
+        The reported analysis, run again in its planes (a StabilityResult: in the plane).
+    pipe, fine, callback : PipeSI, FiniteElement or Modal, callable, optional
+        The SI pipe; ``refine(model.disc)`` if built; ``callback(branch, v)`` per sample.
     **options
         The keyword arguments of the reported analysis (``v_max``, ``ds_max``, ...).
     """

@@ -50,15 +50,11 @@ def estimate_static_errors(
         ``{"points": [...]}``, one point per state, with :data:`STATIC_TIP_KEYS`,
         ``tip_drop`` (and with ``pipe`` their SI values).
     model : PipeModel
-        The reported model.
     solutions : sequence of StaticSolution
-        The reported states.
     parameter : str
         The parameter along ``solutions`` (named in the notes).
-    pipe : PipeSI, optional
-        Its SI values get estimates too.
-    fine : FiniteElement or Modal, optional
-        ``refine(model.disc)`` if already built.
+    pipe, fine : PipeSI, FiniteElement or Modal, optional
+        The SI pipe (its values get estimates too); ``refine(model.disc)`` if built.
     callback : callable, optional
         ``callback(i, state)`` after each refined state (None where Newton failed).
     """
