@@ -211,16 +211,8 @@ def simulate(
     """
     if not t_end > t0:
         raise ValueError(f"t_end must be > t0 = {t0}, got {t_end}")
-    stepper = Radau(
-        PipeDynamics(model, flow),
-        q0,
-        qdot0,
-        t0,
-        rtol=rtol,
-        atol=atol,
-        max_step=max_step,
-        h_fixed=h_fixed,
-    )
+    options = {"rtol": rtol, "atol": atol, "max_step": max_step, "h_fixed": h_fixed}
+    stepper = Radau(PipeDynamics(model, flow), q0, qdot0, t0, **options)
     samples = [(stepper.t, stepper.q.copy(), stepper.qdot.copy())]
     grid = np.linspace(t0, t_end, n_out) if n_out else None
     k = 1
