@@ -221,6 +221,10 @@ def _continue(
         end, _, _ = flow(y[:-1], *sw(y[-1] + h), sensitivity=False)
         return (end - y[:-1] - G) / h
 
+    def bordered(y, G, S, row):
+        """[[S - I, dG/dp], [row]]: Newton's matrix and the tangent's."""
+        return np.block([[S - np.eye(2 * n), d_parameter(y, G)[:, None]], [row[None, :]]])
+
     def correct(y, row, target):
         """Newton on G(y) = 0, row . y = target: (y, iterations, residual, S, qs, G) or None."""
         for it in range(max_iterations + 1):
@@ -234,11 +238,7 @@ def _continue(
                 return y, it, res, S, qs, G
             if it == max_iterations or not np.all(np.isfinite(G)):
                 return None
-            J = np.zeros((2 * n + 1, 2 * n + 1))
-            J[:-1, :-1] = S - np.eye(2 * n)
-            J[:-1, -1] = d_parameter(y, G)
-            J[-1] = row
-            y = y + np.linalg.solve(J, -np.r_[G, row @ y - target])
+            y = y + np.linalg.solve(bordered(y, G, S, row), -np.r_[G, row @ y - target])
         return None
 
     # the trivial state's multipliers on either side of the edge: which side is inside
@@ -306,11 +306,7 @@ def _continue(
         if len(points) == max_points:
             break
         # the tangent: the null vector of [S - I, G_p] continuing the previous direction
-        J = np.zeros((2 * n + 1, 2 * n + 1))
-        J[:-1, :-1] = S - np.eye(2 * n)
-        J[:-1, -1] = d_parameter(y, G)
-        J[-1] = weight**2 * tangent
-        new = np.linalg.solve(J, np.r_[np.zeros(2 * n), 1.0])
+        new = np.linalg.solve(bordered(y, G, S, weight**2 * tangent), np.r_[np.zeros(2 * n), 1.0])
         tangent = new / math.sqrt(dot(new, new))
         while True:
             guess = y + step * tangent
@@ -378,29 +374,22 @@ def continue_subharmonic(
     omega_start : float
         An edge of the region at ``sigma`` (:func:`locate_principal_region`).
     direction : int
-        +1 or -1: the sign of the first displacement along the critical eigenvector (its
-        tip rotation positive); -1 follows the mirror image, the same orbit shifted by T.
+        Sign of the first step along the critical eigenvector (-1: the mirror orbit).
     omega_bounds : (float, float), optional
         Stop outside (default 0.5 and 1.5 times ``omega_start``).
-    first_step : float
-        The first orbit's component along the eigenvector (norm of q, qdot / omega).
-    ds, ds_max : float
-        First and largest pseudo-arclength steps (the parameter relative to the edge).
+    first_step, ds, ds_max : float
+        The first orbit's eigenvector component; first and largest arclength steps.
     max_points, max_amplitude : int, float
         Stop after this many orbits, or when max |theta(1)| exceeds this (rad).
-    steps : int
-        Fixed Radau IIA steps per period T.
-    rtol, atol : float
-        The integrator's tolerances (its stage equations only: the steps are fixed).
+    steps, rtol, atol : int, float, float
+        Fixed Radau IIA steps per period T; the tolerances of its stage equations.
     tol : float
-        Newton stops when |x(2T) - x(0)| <= tol max(|x(0)|, 1e-6) (the continuation's norm).
+        Newton stops when |x(2T) - x(0)| <= tol max(|x(0)|, 1e-6).
 
     Raises
     ------
-    ValueError
-        If the straight state has no multiplier -1 at ``omega_start``.
-    SolverError
-        If the first orbit does not converge.
+    ValueError, SolverError
+        No multiplier -1 at ``omega_start``; the first orbit does not converge.
     """
     bounds = omega_bounds or (0.5 * omega_start, 1.5 * omega_start)
     return _continue(
