@@ -215,7 +215,12 @@ def test_sigterm_and_sigint_end_the_command_with_one_line(signum, code, monkeypa
         raise AssertionError("the signal did not interrupt")  # pragma: no cover
 
     monkeypatch.setattr(fempipe.analyses.statics, "solve_path", interrupted)
-    got, out, err = run(["static", "--v", "0,1"], capsys)
+    # as from a terminal: Ctrl-C not ignored (a job started with & in a script inherits SIG_IGN)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        got, out, err = run(["static", "--v", "0,1"], capsys)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert got == code and out == ""
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert signal.Signals(signum).name in err

@@ -157,7 +157,14 @@ def test_a_real_signal_ends_a_running_command_with_one_line(signum, code, tmp_pa
         str(out),
         "--quiet",
     ]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # as from a terminal: Ctrl-C not ignored (a job started with & in a script inherits SIG_IGN)
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     time.sleep(6.0)
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signum)

@@ -216,7 +216,12 @@ def _signal_parent(tmp_path, sig, *, handle=False, disarm=False, method="fork"):
     args = [str(tmp_path), "handle" if handle else "-", "disarm" if disarm else "-", method]
     log = tmp_path / "stderr.txt"
     with log.open("w") as err:
-        proc = subprocess.Popen([sys.executable, str(script), *args], env=env, stderr=err)
+        proc = subprocess.Popen(  # Ctrl-C not ignored, as from a terminal
+            [sys.executable, str(script), *args],
+            env=env,
+            stderr=err,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
     pids: list[int] = []
     try:
         deadline = time.monotonic() + 60
