@@ -109,7 +109,9 @@ html_theme_options = {
 html_static_path: list[str] = []
 # The theme's left sidebar lists the pages under the current top-level page; the top-level
 # pages without any would show an empty "Section Navigation" box.
-html_sidebars = {page: [] for page in ("index", "getting_started", "glossary", "verification", "development")}
+html_sidebars = {
+    page: [] for page in ("index", "getting_started", "glossary", "verification", "development")
+}
 html_show_sourcelink = False
 
 
