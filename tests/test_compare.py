@@ -225,6 +225,82 @@ def test_resolved_separates_a_finer_mesh_from_a_wrong_value(tmp_path, capsys):
     assert (s["differ"], s["agree"]) == (2, 2)
 
 
+def test_parametric_thresholds(tmp_path, capsys):
+    """sigma_threshold and omega_threshold at the mean flow v, searched in the row's band:
+    fempipe on three sine modes against a user's values from other discretizations (P4:2,
+    P2:3) of the convergence study's Quantity; the P4:2 value, 1e-3 off the converged one, lies
+    within fempipe's estimate and the refined modal:7 is closer to it."""
+    from fempipe.model.discretization import FiniteElement, Modal
+    from fempipe.model.params import Params
+    from fempipe.studies.convergence import Quantity
+
+    p = Params(beta=0.2, gamma=10.0, mu=0.005, v=6.0)  # Paidoussis & Issid's hanging pipe
+    band = {"omega_band": (24.0, 36.0), "sigma_max": 0.2}
+    sigma = Quantity("sigma_threshold", p, **band)(FiniteElement(2, 4))
+    omega = Quantity("omega_threshold", p, **band)(FiniteElement(3, 2))
+    path = write(
+        tmp_path,
+        "beta,gamma,mu,v,omega_min [1/T],omega_max,sigma_max,sigma_threshold,omega_threshold",
+        f"0.2,10,0.005,6,24,36,0.2,{sigma!r},",
+        f"0.2,10,0.005,6,24,36,0.2,,{omega!r}",
+    )
+    out = tmp_path / "out"
+    code, res, err = run_json(["compare", path, "--modal", "3", "--out", str(out)], capsys)
+    s, w = res["rows"]
+    assert (s["quantity"], w["quantity"]) == ("sigma_threshold", "omega_threshold")
+    assert code == 0 and res["summary"]["agree"] == 2, err
+    for r, user, q in ((s, sigma, "sigma_threshold"), (w, omega, "omega_threshold")):
+        assert r["fempipe_quantity"] == q and r["unit"] == {"sigma_threshold": "1"}.get(q, "1/T")
+        fempipe = Quantity(q, p, **band)(Modal(3))
+        assert r["fempipe"] == fempipe
+        assert r["difference"] == pytest.approx(user - fempipe, abs=1e-12)
+        assert r["error_estimate"] == pytest.approx(gci(r["fempipe"], r["refined"], 3, 7 / 3))
+        assert (r["omega_min"], r["omega_max"], r["sigma_max"], r["v"]) == (24, 36, 0.2, 6)
+        assert r["v_min"] is None and r["defaults"] == {"alpha": 0.0}
+    # three modes are 8 % off the converged threshold: within the estimate, modal:7 closer
+    assert 0.05 < abs(s["relative_difference"]) < 0.1
+    assert abs(s["difference"]) < s["error_estimate"]
+    assert abs(s["refined"] - sigma) < abs(s["difference"])
+    assert set(res["error_estimate"]["floors"]) == {"sigma_threshold", "omega_threshold"}
+    header = (out / "compare.csv").read_text().splitlines()[0]
+    assert "omega_min [1/T],omega_max [1/T],sigma_max [1]" in header
+
+
+def test_reading_the_band_of_the_thresholds(tmp_path):
+    """The band columns: sigma_max defaults to 0.5 (listed), a row's quantity carries the band,
+    an SI row's mean flow is its U and its band stays dimensionless; the other quantities of
+    the row do not report the band."""
+    from fempipe.io.cases import read_cases
+    from fempipe.model.params import PipeSI
+
+    path = write(
+        tmp_path,
+        "v,omega_min,omega_max,sigma_max,sigma_threshold,X_tip",
+        "6,24,36,,0.09,0.9",
+        "6,,,0.3,,0.9",
+    )
+    thresholds, tip = read_cases(path)
+    q = thresholds.quantity("sigma_threshold")
+    assert (q.omega_band, q.sigma_max, q.params.v) == ((24.0, 36.0), 0.5, 6.0)
+    assert "24 <= omega <= 36, sigma <= 0.5" in q.describe()
+    d = thresholds.to_dict("sigma_threshold")
+    assert (d["omega_min"], d["omega_max"], d["sigma_max"]) == (24.0, 36.0, 0.5)
+    assert d["defaults"]["sigma_max"] == 0.5
+    d = thresholds.to_dict("X_tip")
+    assert (d["omega_min"], d["sigma_max"]) == (None, None) and "sigma_max" not in d["defaults"]
+    assert tip.omega_range is None and "omega_min" not in tip.to_dict()
+    si = write(
+        tmp_path,
+        "length,EI,m,M,U,omega_min,omega_max,omega_threshold",
+        "0.094,1.8e-5,0.0159,0.0058,2,24,36,30",
+        name="si.csv",
+    )
+    (case,) = read_cases(si)
+    q = case.quantity("omega_threshold")
+    pipe = PipeSI(L=0.094, EI=1.8e-5, m=0.0159, M=0.0058)
+    assert q.params.v == pipe.v_of_U(2.0) and q.omega_band == (24.0, 36.0)
+
+
 def test_si_rows(tmp_path, capsys):
     """Texier & Dorbolo's pipe in SI units: the groups of PipeSI, U in m/s, v_cr up to U_max."""
     from fempipe.model.params import PipeSI
@@ -368,6 +444,31 @@ BAD_FILES = {
         "row 2 (line 5), column v: 'x'",
     ),
     "not CSV": (["v,X_tip", "1,0.9", '1,"0.9'], "row 2 (line 3): not CSV"),
+    "no band": (
+        ["v,X_tip,sigma_threshold", "6,1,", "6,,0.09"],
+        "row 2 (line 3), column sigma_threshold: sigma_threshold is searched in the band "
+        "omega_min < omega < omega_max [1/T]: add the columns omega_min, omega_max",
+    ),
+    "empty band cell": (
+        ["v,omega_min,omega_max,omega_threshold", "6,24,,30"],
+        "row 1 (line 2), column omega_max: empty, but omega_threshold is searched in the band",
+    ),
+    "empty band": (
+        ["v,omega_min,omega_max,sigma_threshold", "6,36,24,0.1"],
+        "row 1 (line 2), columns omega_min, omega_max: the band of sigma_threshold needs",
+    ),
+    "omega range": (
+        ["v,omega_min,omega_max,sigma_threshold", "6,0,24,0.1"],
+        "column omega_min: omega_min = 0 is outside 0 < omega_min <= 10000",
+    ),
+    "sigma_max range": (
+        ["v,omega_min,omega_max,sigma_max,sigma_threshold", "6,1,24,1.5,0.1"],
+        "row 1 (line 2), column sigma_max: sigma_max = 1.5 is outside 0 < sigma_max <= 1",
+    ),
+    "band unit": (
+        ["v,omega_min [1],omega_max,sigma_threshold", "6,1,24,0.1"],
+        "header, column omega_min: unit [1] is not the unit of omega_min, [1/T]",
+    ),
 }
 
 

@@ -33,10 +33,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(the first loss of stability, in either plane; with --planar the paper's planar "
         "model's), theta_tip, X_tip, Z_tip, eta_tip, "
         "lc_amplitude, lc_period, v_cr_in_plane, v_cr_out_of_plane, frequency_in_plane, "
-        "frequency_out_of_plane), parameters (alpha or "
+        "frequency_out_of_plane, sigma_threshold, omega_threshold), parameters (alpha or "
         "alpha_deg, beta, gamma, mu, v; or length, EI, m, M, g, a, U in SI), the flow range "
-        "v_min, v_max (or U_min, U_max) of v_cr and frequency, label; '# ...' lines are "
-        "comments (see the docs, 'fempipe compare')",
+        "v_min, v_max (or U_min, U_max) of v_cr and frequency, the band omega_min, omega_max "
+        "(required; 1/T) and sigma_max (default 0.5) of the thresholds at the mean flow v, "
+        "label; '# ...' lines are comments (see the docs, 'fempipe compare')",
     )
     common.add_discretization_arguments(parser)
     g = parser.add_argument_group("comparison")
@@ -140,8 +141,8 @@ VERDICTS = {True: "differs", False: "agrees", None: None}
 #: The columns of compare.csv, in order (those present).
 CSV_COLUMNS = tuple(
     "row label quantity unit user fempipe difference relative_difference error_estimate resolved "
-    "verdict fempipe_quantity refined alpha beta gamma mu v v_min v_max U U_min U_max failure "
-    "note".split()
+    "verdict fempipe_quantity refined alpha beta gamma mu v v_min v_max U U_min U_max omega_min "
+    "omega_max sigma_max failure note".split()
 )
 
 
@@ -247,6 +248,7 @@ def _print(result: dict) -> None:
             "U_min": "the start of the flow range, m/s",
             "v_max": "--v-max",
             "U_max": "--v-max, in m/s",
+            "sigma_max": "the largest pulsation amplitude searched, as convergence --sigma-max",
         }.get(k, "the paper's case")
         print(f"not given in row {_ranges(where)}: {k} = {val:.6g} ({why})")
     s = result["summary"]

@@ -198,8 +198,8 @@ def parse_band(text: str) -> tuple[float, float]:
         lo, hi = (float(x) for x in parts)
     except ValueError:
         raise ValueError(f"expects A:B with 0 < A < B, got {text!r}") from None
-    if not 0 < lo < hi < 1e4:
-        raise ValueError(f"expects A:B with 0 < A < B <= 1e4, got {text!r}")
+    if not 0 < lo < hi <= ranges.OMEGA_MAX:
+        raise ValueError(f"expects A:B with 0 < A < B <= {ranges.OMEGA_MAX:g}, got {text!r}")
     return lo, hi
 
 

@@ -19,12 +19,21 @@ from fempipe.core.errors import ParamError
 from fempipe.io import ranges
 from fempipe.io.tables import CSV_UNITS
 from fempipe.model.params import Params, PipeSI
-from fempipe.studies.convergence import Quantity
+from fempipe.studies.convergence import PARAMETRIC_QUANTITIES, Quantity
 
-__all__ = ["COLUMNS", "DEFAULT_V_MAX", "Case", "fempipe_quantity", "read_cases"]
+__all__ = [
+    "COLUMNS",
+    "DEFAULT_SIGMA_MAX",
+    "DEFAULT_V_MAX",
+    "Case",
+    "fempipe_quantity",
+    "read_cases",
+]
 
 #: Default end of the flow range of v_cr and frequency (above every v_cr of Fig. 6).
 DEFAULT_V_MAX = 15.0
+#: Default sigma_max, as ``fempipe convergence --sigma-max``.
+DEFAULT_SIGMA_MAX = 0.5
 
 _PLANAR = ("v_cr", "frequency")
 _CRITICAL = _PLANAR + (
@@ -34,7 +43,9 @@ _CRITICAL = _PLANAR + (
     "frequency_out_of_plane",
 )
 _QUANTITIES = ("v_cr", "frequency", "theta_tip", "X_tip", "Z_tip", "eta_tip")
-_QUANTITIES += ("lc_amplitude", "lc_period") + _CRITICAL[2:]
+_QUANTITIES += ("lc_amplitude", "lc_period") + _CRITICAL[2:] + PARAMETRIC_QUANTITIES
+#: The band the parametric thresholds are searched in (dimensionless, also in an SI file).
+_BAND = ("omega_min", "omega_max", "sigma_max")
 _DIMLESS = ("beta", "gamma", "mu", "v", "v_min", "v_max")
 _SI = ("length", "EI", "m", "M", "g", "a", "U", "U_min", "U_max")
 _SI_REQUIRED = ("length", "EI", "m", "M")
@@ -54,6 +65,7 @@ COLUMNS: dict[str, str] = {
     "g": "m/s^2",
     "a": "s",
     **dict.fromkeys(("U", "U_min", "U_max"), "m/s"),
+    **{b: CSV_UNITS[b] for b in _BAND},
     **{q: CSV_UNITS[q] for q in _QUANTITIES},
 }
 
@@ -69,7 +81,8 @@ def fempipe_quantity(name: str, planar: bool) -> str:
 @dataclass(frozen=True)
 class Case:
     """One data row, checked: ``row`` and ``line`` from 1, ``values`` (quantity -> the user's
-    value), ``params`` at the row's flow ``v``, ``defaults`` (parameter not given -> value)."""
+    value), ``params`` at the row's flow ``v``, ``defaults`` (parameter not given -> value),
+    ``omega_range`` and ``sigma_max`` the band of the parametric thresholds (None without)."""
 
     row: int
     line: int
@@ -82,6 +95,8 @@ class Case:
     U: float | None = None
     U_range: tuple[float, float] | None = None
     label: str | None = None
+    omega_range: tuple[float, float] | None = None
+    sigma_max: float | None = None
 
     def quantity(self, name: str, shoot_rtol: float = 1e-9, planar: bool = False) -> Quantity:
         """The :class:`~fempipe.studies.convergence.Quantity` of column ``name`` for this row."""
@@ -90,6 +105,10 @@ class Case:
             planar = planar and name in _PLANAR
             return Quantity(
                 name, replace(self.params, v=lo), v_max=hi, shoot_rtol=shoot_rtol, planar=planar
+            )
+        if name in PARAMETRIC_QUANTITIES:
+            return Quantity(
+                name, self.params, omega_band=self.omega_range, sigma_max=self.sigma_max
             )
         return Quantity(name, self.params, shoot_rtol=shoot_rtol)
 
@@ -102,9 +121,14 @@ class Case:
             out["U"] = self.U
             out["U_min"], out["U_max"] = self.U_range or (None, None)
             out["pipe_SI"] = self.pipe.to_dict()
+        if self.omega_range is not None:
+            out["omega_min"], out["omega_max"] = self.omega_range
+            out["sigma_max"] = self.sigma_max
         defaults = dict(self.defaults)
         if quantity is not None:
             unused = ("v", "U") if quantity in _CRITICAL else ("v_min", "v_max", "U_min", "U_max")
+            if quantity not in PARAMETRIC_QUANTITIES:
+                unused += _BAND
             for key in unused:
                 if key in out:
                     out[key] = None
@@ -173,7 +197,8 @@ def _parse_header(cells: list[str], path: str) -> list[str]:
                 "unknown column; the columns are the quantities "
                 f"{', '.join(_QUANTITIES)}; the parameters alpha (rad) or alpha_deg, beta, "
                 "gamma, mu, v (or the SI pipe length, EI, m, M, g, a, U); the flow range v_min, "
-                "v_max (U_min, U_max); label",
+                "v_max (U_min, U_max); the band omega_min, omega_max, sigma_max of the "
+                "thresholds; label",
             )
         if name in names:
             raise err(name, "appears twice")
@@ -227,6 +252,7 @@ def _parse_row(names, cells, row: int, line: int, v_max_default: float, path: st
     v, v_range, U_range = _flows(
         values, names, nums, flow, flow_cols, pipe, v_max_default, defaults, err
     )
+    omega_range, sigma_max = _band(values, names, nums, defaults, err)
     return Case(
         row=row,
         line=line,
@@ -239,6 +265,8 @@ def _parse_row(names, cells, row: int, line: int, v_max_default: float, path: st
         U=nums.get("U") if pipe is not None else None,
         U_range=U_range,
         label=label,
+        omega_range=omega_range,
+        sigma_max=sigma_max,
     )
 
 
@@ -368,6 +396,35 @@ def _flows(values, names, nums, flow, flow_cols, pipe, v_max_default, defaults, 
     if pipe is None:
         return v, (lo, hi), None
     return v, (lo, hi), (nums.get("U_min", pipe.U_of_v(lo)), nums.get("U_max", pipe.U_of_v(hi)))
+
+
+def _band(values, names, nums, defaults, err: _CellError) -> tuple:
+    """``(omega_range, sigma_max)`` of the row's parametric thresholds (None, None without)."""
+    for col in _BAND:
+        if col in nums:
+            try:
+                ranges.check_pulsation(col, nums[col])
+            except ParamError as exc:
+                raise err(col, str(exc)) from None
+    thresholds = [q for q in values if q in PARAMETRIC_QUANTITIES]
+    if not thresholds:
+        return None, None
+    for col in ("omega_min", "omega_max"):
+        if col not in nums:
+            need = f"{thresholds[0]} is searched in the band omega_min < omega < omega_max [1/T]"
+            if col in names:
+                raise err(col, f"empty, but {need}")
+            raise err(thresholds[0], f"{need}: add the columns omega_min, omega_max (e.g. 20, 40)")
+    lo, hi = nums["omega_min"], nums["omega_max"]
+    if not hi > lo:
+        raise err(
+            "omega_min, omega_max",
+            f"the band of {', '.join(thresholds)} needs omega_min < omega_max, got omega_min = "
+            f"{lo:g}, omega_max = {hi:g}",
+        )
+    if "sigma_max" not in nums:
+        defaults["sigma_max"] = DEFAULT_SIGMA_MAX
+    return (lo, hi), nums.get("sigma_max", DEFAULT_SIGMA_MAX)
 
 
 def read_cases(path, v_max: float = DEFAULT_V_MAX) -> list[Case]:

@@ -20,10 +20,12 @@ __all__ = [
     "DEFAULT_MU",
     "GAMMA_MAX",
     "MU_MAX",
+    "OMEGA_MAX",
     "V_MAX",
     "check_alpha",
     "check_param",
     "check_pipe",
+    "check_pulsation",
     "check_v",
     "parse_alpha",
     "parse_float",
@@ -40,6 +42,8 @@ V_MAX = 50.0
 GAMMA_MAX = V_MAX**2
 MU_MAX = 10.0
 ALPHA_MAX = 2 * math.pi
+#: The largest pulsation frequency searched (``--omega``, a cases file's omega_max), per unit tau.
+OMEGA_MAX = 1e4
 
 #: Why each range ends where it does (the end of the message of a value outside it).
 WHY = {
@@ -115,6 +119,16 @@ def check_v(x: float, option: str = "--v") -> float:
         return check_param("v", x)
     except ParamError as exc:
         raise ValueError(f"{option}: {exc}") from None
+
+
+def check_pulsation(field: str, x: float) -> float:
+    """``x`` as ``omega_min``, ``omega_max`` (0 < omega <= :data:`OMEGA_MAX`) or ``sigma_max``
+    (0 < sigma <= 1: the pulsating flow v0 (1 + sigma sin(omega tau)) never reverses); else
+    ParamError naming ``field``."""
+    high = 1.0 if field == "sigma_max" else OMEGA_MAX
+    if not 0.0 < x <= high:
+        raise ParamError(field, f"{field} = {x:g} is outside 0 < {field} <= {high:g}")
+    return x
 
 
 def check_pipe(params: Params) -> Params:

@@ -56,7 +56,7 @@ CSV_UNITS: Mapping[str, str] = _units(
     lc_amplitude_error L  lc_period_error T
     row -  label -  quantity -  fempipe_quantity -  unit -  user -  fempipe -  difference -
     relative_difference 1  error_estimate -  resolved -  verdict -  refined -  v_min 1
-    v_max 1  U_min m/s  U_max m/s  failure -  note -
+    v_max 1  U_min m/s  U_max m/s  omega_min 1/T  omega_max 1/T  sigma_max 1  failure -  note -
     """
 )
 

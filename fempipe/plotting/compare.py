@@ -25,6 +25,8 @@ LABELS = {
     "v_cr_out_of_plane": "v_cr out of the plane [1]",
     "frequency_in_plane": "frequency in the plane [1/T]",
     "frequency_out_of_plane": "frequency out of the plane [1/T]",
+    "sigma_threshold": "parametric threshold σ_th [1]",
+    "omega_threshold": "ω at the threshold [1/T]",
 }
 
 _COLOR = "#0072B2"

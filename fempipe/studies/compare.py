@@ -17,7 +17,7 @@ from fempipe.core.errors import SolverError
 from fempipe.core.parallel import run_tasks
 from fempipe.model.params import Params
 
-from .convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, Quantity
+from .convergence import CRITICAL_QUANTITIES, CYCLE_QUANTITIES, PARAMETRIC_QUANTITIES, Quantity
 from .error_estimate import describe, estimate, expected_order, refine, refinement_ratio
 
 __all__ = [
@@ -44,6 +44,7 @@ COMPARABLE = (
     "v_cr_out_of_plane",
     "frequency_in_plane",
     "frequency_out_of_plane",
+    *PARAMETRIC_QUANTITIES,
 )
 
 
@@ -192,12 +193,16 @@ def estimate_description(
     floors = {}
     for name in quantities:
         kw = {"v_max": 1.0} if name in CRITICAL_QUANTITIES else {}
+        if name in PARAMETRIC_QUANTITIES:
+            kw = {"omega_band": (1.0, 2.0)}
         floors[name] = Quantity(name, Params(), shoot_rtol=shoot_rtol, **kw).tolerance
+    thresholds = set(quantities) & set(PARAMETRIC_QUANTITIES)
     text = (
         "the solver tolerance of the quantity times max(1, |Q|): "
         + ", ".join(f"{k} {v:.0e}" for k, v in floors.items())
         + " (Newton's 1e-12 on static states, events located to 1e-10 in v, 10 x the "
-        "shooting tolerance of limit cycles)"
+        "shooting tolerance of limit cycles"
+        + (", parametric thresholds located to 1e-11 in sigma)" if thresholds else ")")
     )
     info = describe(disc, floor=text).to_dict()
     info["floors"] = floors
