@@ -6,6 +6,7 @@ equation along the straight state, and a small motion), and a Ritz basis of ever
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -211,8 +212,33 @@ def test_the_chart_refuses_what_it_cannot_chart():
         compute_parametric_chart(_model(6.0), 6.0, (20.0, 30.0), [1.5])
     with pytest.raises(ValueError, match="unstable"):
         compute_parametric_chart(_model(6.0), 7.5, (20.0, 30.0), [0.1])
-    with pytest.raises(ValueError, match="alpha"):
-        compute_parametric_chart(PipeModel(DISC, Params(alpha=0.5)), 5.0, (20.0, 30.0), [0.1])
+    with pytest.raises(ValueError, match="planes"):
+        compute_parametric_chart(_model(6.0), 6.0, (20.0, 30.0), [0.1], planes=("up",))
+
+
+def test_the_bent_pipe_tends_to_the_straight_one():
+    """As alpha -> 0 the forced orbit's multipliers, in the plane and out of it (the planar
+    motion and its out-of-plane variation, flow acceleration included), tend to the straight
+    pipe's (the Ritz-reduced monodromy, another computation) like alpha^2."""
+    from fempipe.analyses.parametric.forced import solve_forced_response
+
+    disc = FiniteElement(2, 4)
+    straight = ReducedPulsation(PulsationPencil.of(PipeModel(disc, _model(6.0).params)), 6.0, 3)
+    ref = _largest(floquet_multipliers(straight, 0.2, 29.5, 256), 2)
+    gaps = []
+    for alpha in (1e-2, 1e-3):
+        bent = PipeModel(disc, replace(_model(6.0).params, alpha=alpha))
+        r = solve_forced_response(bent, 0.2, 29.5, out_of_plane=True, rtol=1e-9, steps=64)
+        assert abs(ref[0]) > 1.3  # inside the principal region of mode 2: a real test
+        gaps.append(
+            [
+                abs(_largest(rho, 2) - ref).max()
+                for rho in (r.multipliers, r.out_of_plane_multipliers)
+            ]
+        )
+    (in1, out1), (in2, out2) = gaps
+    assert in2 < 1e-6 and out2 < 1e-6
+    assert 30 < in1 / in2 and 30 < out1 / out2  # alpha^2: 100 for alpha / 10
 
 
 def test_the_command(tmp_path, capsys):
@@ -240,7 +266,6 @@ def test_the_command(tmp_path, capsys):
     assert header.startswith("discretization") and "sigma_threshold [1]" in header
     for bad, option in (
         (["--v", "5,6"], "--v"),
-        (["--v", "5", "--alpha", "1"], "--alpha"),
         (["--v", "5", "--omega", "30:20"], "--omega"),
         (["--v", "5", "--sigma", "0,0.2"], "--sigma"),
         (["--v", "9"], "--v"),
@@ -311,3 +336,43 @@ def test_the_forced_response_of_a_bent_pipe():
     np.testing.assert_allclose(_largest(finer.multipliers), _largest(moved.multipliers), atol=1e-7)
     with pytest.raises(ValueError, match="omega"):
         solve_forced_response(bent, 0.3, 0.0)
+
+
+@pytest.mark.slow
+def test_the_chart_of_a_slightly_bent_pipe():
+    """A bent pipe's chart (forced orbits, both planes) tends to the straight pipe's region
+    (the Ritz-reduced Floquet problem) as alpha -> 0: its threshold in and out of the plane
+    within O(alpha^2) of it; and the 3-D model's out-of-plane multipliers about a forced
+    orbit of the horizontal pipe agree with the linear out-of-plane equation's."""
+    from fempipe.analyses.dynamics import PulsatingFlow
+    from fempipe.analyses.parametric import compute_parametric_chart, solve_forced_response
+    from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
+
+    disc = FiniteElement(2, 4)
+    kw = {"sigma_tol": 1e-7, "omega_tol": 1e-7}
+    flat = compute_parametric_chart(PipeModel(disc, HANGING), 6.0, (26.0, 33.0), [0.2], **kw)
+    bent = compute_parametric_chart(
+        PipeModel(disc, replace(HANGING, alpha=0.02)), 6.0, (26.0, 33.0), [0.2], **kw
+    )
+    (ref,) = flat.regions
+    assert (
+        not bent.straight
+        and [r.candidate.plane for r in bent.regions] == ["in", "out"]
+        or [r.candidate.plane for r in bent.regions] == ["out", "in"]
+    )
+    for r in bent.regions:
+        assert abs(r.sigma_threshold - ref.sigma_threshold) < 4e-4 * ref.sigma_threshold
+        assert r.candidate.mode == ref.candidate.mode and abs(r.multiplier + 1) < 1e-4
+    d = bent.to_dict()
+    assert {r["plane"] for r in d["regions"]} == {"in", "out"} and d["frequencies_out_of_plane"]
+    model = PipeModel(disc, Params(alpha=math.pi / 2, beta=0.142, gamma=18.9, mu=0.005, v=4.0))
+    orbit = solve_forced_response(model, 0.4, 12.0, out_of_plane=True)
+    flow = PulsatingFlow(4.0, 0.4, 12.0)
+    linear = compute_out_of_plane_floquet(model, orbit, rtol=1e-10, flow=flow)
+    three_d = compute_out_of_plane_floquet(model, orbit, rtol=1e-10, flow=flow, method="3d")
+    np.testing.assert_allclose(
+        _largest(orbit.out_of_plane_multipliers, 2), _largest(linear.multipliers, 2), atol=1e-6
+    )
+    np.testing.assert_allclose(
+        _largest(linear.multipliers, 2), _largest(three_d.multipliers, 2), atol=1e-3
+    )

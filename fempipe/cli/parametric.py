@@ -16,6 +16,8 @@ EXAMPLES = (
     "fempipe parametric --v 6 --beta 0.2 --gamma 10 --omega 2:40 --sigma 0.1,0.2,0.3,0.4,0.5 "
     "--out out-par/",
     "fempipe parametric --v 5 --alpha pi --omega 5:60 --json",
+    "fempipe parametric --v 4 --alpha pi/2 --beta 0.142 --gamma 18.9 --fe P2:8 --omega 10:30 "
+    "--sigma 0.3,0.5 --compare-modal none --out out-par-bent/",
 )
 
 
@@ -58,6 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.number_type("--omega-tol", 1e-14, 1e-2),
         default=1e-8,
         help="relative tolerance of the boundary frequencies (default 1e-8)",
+    )
+    common.add_planar_argument(
+        g,
+        "on a bent pipe the forced response's multipliers in the plane alone, about half the work",
     )
     common.add_output_arguments(parser)
 
@@ -112,11 +118,12 @@ def run(args: argparse.Namespace) -> int:
                         args.sigma,
                         max_order=args.max_order,
                         omega_tol=args.omega_tol,
+                        planes=("in",) if args.planar else ("in", "out"),
                         callback=lambda cand, region: bar.update(),
                     )
                 )
             except ValueError as exc:
-                option = "--alpha" if "alpha" in str(exc) else "--v"
+                option = "--planes" if "planes" in str(exc) else "--v"
                 raise CLIError(option, str(exc)) from None
     cpu = reporting.cpu_seconds(t0)
     result = charts[0].to_dict()
@@ -169,16 +176,27 @@ def _print(charts, cpu: float) -> None:
     chart = charts[0]
     p = chart.params
     lo, hi = chart.band
+    about = "the straight pipe" if chart.straight else "the bent pipe's forced response"
     print(
-        f"parametric resonance of the straight pipe, v(tau) = v0 (1 + sigma sin(omega tau)), "
+        f"parametric resonance of {about}, v(tau) = v0 (1 + sigma sin(omega tau)), "
         f"v0 = {p.v:g}, alpha = {p.alpha:g}, beta = {p.beta:g}, gamma = {p.gamma:g}, "
         f"mu = {p.mu:g}; omega {lo:g} to {hi:g}, sigma up to {max(chart.sigmas):g}"
     )
     print(
         "modes (numbered from v = 0) and frequencies of the mean flow: "
         + ", ".join(f"{k}: {w:.6g}" for k, w in zip(chart.modes, chart.frequencies, strict=True))
-        + "; in and out of the plane alike (straight pipe)"
+        + ("; in and out of the plane alike (straight pipe)" if chart.straight else " in the plane")
     )
+    if chart.modes_out_of_plane:
+        print(
+            "out of the plane: "
+            + ", ".join(
+                f"{k}: {w:.6g}"
+                for k, w in zip(
+                    chart.modes_out_of_plane, chart.frequencies_out_of_plane, strict=True
+                )
+            )
+        )
     for c in charts:
         name = c.discretization["name"]
         if not c.regions:
@@ -191,6 +209,8 @@ def _print(charts, cpu: float) -> None:
                 if cand.kind == "principal"
                 else f"{cand.kind} combination of modes {cand.mode[0]} and {cand.mode[1]} /{cand.order}"
             )
+            if cand.plane is not None:
+                what += f", {cand.plane} of the plane"
             print(
                 f"{name}: {what}: opens at sigma = {r.sigma_threshold:.8g}, omega = "
                 f"{r.omega_threshold:.6g} (multiplier {r.multiplier.real:+.4f}"
@@ -202,4 +222,5 @@ def _print(charts, cpu: float) -> None:
                     for w in (w_lo, w_hi)
                 ]
                 print(f"    sigma = {s:g}: unstable for {edges[0]} < omega < {edges[1]}")
-    print(f"{sum(c.evaluations for c in charts)} monodromy matrices, {cpu:.1f} CPU-s")
+    what = "monodromy matrices" if chart.straight else "forced orbits"
+    print(f"{sum(c.evaluations for c in charts)} {what}, {cpu:.1f} CPU-s")

@@ -44,23 +44,35 @@ def plot_parametric_chart(chart, others: Sequence = (), ax=None):
         fig, ax = plt.subplots(figsize=(7.0, 4.6), constrained_layout=True)
     lo, hi = chart.band
     sigma_top = max(chart.sigmas)
-    for k, w in zip(chart.modes, chart.frequencies, strict=True):
+    straight = getattr(chart, "straight", True)
+    marks = [(k, w, "0.35", "") for k, w in zip(chart.modes, chart.frequencies, strict=True)]
+    marks += [
+        (k, w, "tab:blue", "ᵒ")
+        for k, w in zip(chart.modes_out_of_plane, chart.frequencies_out_of_plane, strict=True)
+    ]
+    for k, w, color, mark in marks:
         for n in (1, 2):
             x = 2 * w / n
             if lo <= x <= hi:
-                ax.axvline(x, color="0.6", lw=0.8, ls=(0, (1, 2)), zorder=0)
+                ax.axvline(x, color=color, lw=0.8, ls=(0, (1, 2)), zorder=0, alpha=0.6)
                 ax.text(
-                    x, 1.005 * sigma_top, f"2ω{_sub(k)}/{n}" if n > 1 else f"2ω{_sub(k)}",
-                    ha="center", va="bottom", fontsize=8, color="0.35",
+                    x, 1.005 * sigma_top, f"2ω{mark}{_sub(k)}" + (f"/{n}" if n > 1 else ""),
+                    ha="center", va="bottom", fontsize=8, color=color,
                 )  # fmt: skip
     name = chart.discretization.get("name", "FE")
-    for i, region in enumerate(chart.regions):
+    labelled = set()
+    for region in chart.regions:
+        plane = region.candidate.plane
+        color, hatch = ("tab:blue", "//") if plane == "out" else ("tab:red", None)
+        what = f"unstable, {name}" + ("" if plane is None else f", {plane} of the plane")
         x, y, known = _outline(region, chart.band)
         ax.fill(
-            x, y, color="tab:red", alpha=0.35, lw=0, label=f"unstable, {name}" if i == 0 else None
-        )
-        ax.plot(np.where(known, x, np.nan), y, color="tab:red", lw=1.2, marker=".", ms=5)
-        ax.plot(region.omega_threshold, region.sigma_threshold, "v", color="tab:red", ms=6)
+            x, y, facecolor=color, alpha=0.35, lw=0, hatch=hatch,
+            label=None if what in labelled else what,
+        )  # fmt: skip
+        labelled.add(what)
+        ax.plot(np.where(known, x, np.nan), y, color=color, lw=1.2, marker=".", ms=5)
+        ax.plot(region.omega_threshold, region.sigma_threshold, "v", color=color, ms=6)
         c = region.candidate
         label = f"mode {c.mode[0]}" if c.kind == "principal" else f"modes {c.mode[0]}, {c.mode[1]}"
         ax.annotate(
@@ -84,9 +96,13 @@ def plot_parametric_chart(chart, others: Sequence = (), ax=None):
     p = chart.params
     outlined = ", ".join(o.discretization.get("name", "") for o in others)
     ax.set_title(
-        "Parametric resonance of the straight pipe, v(τ) = v₀ (1 + σ sin ωτ)\n"
+        "Parametric resonance "
+        + ("of the straight pipe" if straight else "about the bent pipe's forced response")
+        + ", v(τ) = v₀ (1 + σ sin ωτ)\n"
         f"{parameter_text(p, v=False)}, v₀ = {p.v:.4g}\n"
-        f"shaded: {name} (dots: computed edges, ▼ thresholds)"
+        f"shaded: {name} (dots: computed edges, ▼ thresholds"
+        + ("" if straight else "; blue, hatched, ᵒ: out of the plane")
+        + ")"
         + (f"; outlined: {outlined}" if others else ""),
         fontsize=9,
     )

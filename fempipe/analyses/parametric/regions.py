@@ -25,13 +25,15 @@ class Candidate:
     """A resonance that may open a region: its nominal frequency and what it involves.
 
     ``kind`` is "principal" (omega = 2 omega_k / order), "sum" or "difference" (omega =
-    (omega_j +- omega_k) / order); ``mode`` the mode numbers (1 = the lowest frequency).
+    (omega_j +- omega_k) / order); ``mode`` the mode numbers (1 = the lowest frequency);
+    ``plane`` "in" or "out" of the plane of a bent pipe, None on the straight pipe (both).
     """
 
     kind: str
     order: int
     mode: tuple[int, ...]
     omega: float
+    plane: str | None = None
 
 
 @dataclass(frozen=True)
@@ -63,20 +65,21 @@ def candidates(
     frequencies: Mapping[int, float] | Sequence[float],
     band: tuple[float, float],
     max_order: int = 2,
+    plane: str | None = None,
 ) -> list[Candidate]:
     """Every principal and combination resonance of ``frequencies`` (mode number ->
     frequency, or a sequence numbered from 1) whose nominal frequency lies in ``band``, by
-    increasing omega."""
+    increasing omega; in ``plane``."""
     if not isinstance(frequencies, Mapping):
         frequencies = dict(enumerate(frequencies, start=1))
     lo, hi = band
     out = []
     for order in range(1, max_order + 1):
         for k, w in frequencies.items():
-            out.append(Candidate("principal", order, (k,), 2.0 * w / order))
+            out.append(Candidate("principal", order, (k,), 2.0 * w / order, plane))
         for (j, wj), (k, wk) in itertools.combinations(sorted(frequencies.items()), 2):
-            out.append(Candidate("sum", order, (j, k), (wj + wk) / order))
-            out.append(Candidate("difference", order, (j, k), abs(wk - wj) / order))
+            out.append(Candidate("sum", order, (j, k), (wj + wk) / order, plane))
+            out.append(Candidate("difference", order, (j, k), abs(wk - wj) / order, plane))
     return sorted((c for c in out if lo <= c.omega <= hi), key=lambda c: c.omega)
 
 
@@ -133,33 +136,38 @@ def locate_region(
     computed, for the multipliers of ``reduced`` (or of a callable (sigma, omega) -> them).
 
     None if it stays closed up to max(``sigmas``), or if the instability in the window is
-    strongest at its edge (the tip of another candidate's region).  Edges are searched up
-    to ``limits`` (default the window).
+    strongest at its edge down to where it closes (the tip of another candidate's region).
+    Edges are searched up to ``limits`` (default the window).
     """
     margin = _Margin(reduced, steps)
-    sigma_max = float(max(sigmas))
+    level = float(max(sigmas))
     lo, hi = window
     limits = tuple(limits if limits is not None else window)
-    # where the region is widest open at the largest sigma: a grid, then Brent
+    # where the region is widest open: a grid, then Brent, at a sigma low enough for the
+    # widest point to lie inside the window (a wide region leans on its neighbours)
     grid = np.linspace(lo, hi, 17)
-    values = [margin(sigma_max, w) for w in grid]
-    k = int(np.argmax(values))
-    if values[k] <= 0 or k in (0, grid.size - 1):
-        return None, margin.count
+    while True:
+        values = [margin(level, w) for w in grid]
+        k = int(np.argmax(values))
+        if values[k] <= 0 or level < 1e-3 * max(sigmas):
+            return None, margin.count
+        if k not in (0, grid.size - 1):
+            break
+        level *= 0.5
     best = minimize_scalar(
-        lambda w: -margin(sigma_max, w), bounds=(grid[k - 1], grid[k + 1]), method="bounded"
+        lambda w: -margin(level, w), bounds=(grid[k - 1], grid[k + 1]), method="bounded"
     )
     peak = float(best.x)
-    # its edges at sigma_max bound the frequencies where it opens first
-    edges = [_edge(lambda w: margin(sigma_max, w), peak, x, omega_tol) for x in limits]
+    # its edges at that sigma bound the frequencies where it opens first
+    edges = [_edge(lambda w: margin(level, w), peak, x, omega_tol) for x in limits]
     span = tuple(x if math.isnan(e) else e for x, e in zip(limits, edges, strict=True))
 
     def critical_sigma(w: float) -> float:
-        if margin(sigma_max, w) <= 0:
-            return sigma_max
+        if margin(level, w) <= 0:
+            return level
         if margin(0.0, w) >= 0:
             return 0.0
-        return brentq(lambda s: margin(s, w), 0.0, sigma_max, xtol=sigma_tol)
+        return brentq(lambda s: margin(s, w), 0.0, level, xtol=sigma_tol)
 
     # sigma_c is flat at its minimum: an error d in omega costs O(d^2) in sigma
     tip = minimize_scalar(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,7 +83,12 @@ METHODS = ("linear", "3d")
 
 
 def compute_out_of_plane_floquet(
-    model: PipeModel, cycle: LimitCycle, *, rtol: float = 1e-7, method: str = "linear"
+    model: PipeModel,
+    cycle: LimitCycle,
+    *,
+    rtol: float = 1e-7,
+    method: str = "linear",
+    flow: Callable[[float], tuple[float, float]] | None = None,
 ) -> OutOfPlaneFloquet:
     """The Floquet multipliers of out-of-plane perturbations of a planar limit cycle.
 
@@ -91,20 +97,24 @@ def compute_out_of_plane_floquet(
     model : PipeModel
         The planar model of the cycle.
     cycle : LimitCycle
+        Or any periodic planar motion with ``q0``, ``qdot0`` and ``period`` (e.g. a
+        :class:`~fempipe.analyses.parametric.ForcedResponse`, with its ``flow``).
     rtol : float
     method : {"linear", "3d"}
         The linear out-of-plane equation (one unknown psi, the cheaper) or the 3-D model's
         out-of-plane block.
+    flow : callable, optional
+        tau -> (v, v_dot) of an unsteady flow (default the steady ``model.params.v``).
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS} (got {method!r})")
     start = time.process_time()
     nt = model.disc.n
     if method == "3d":
-        problem = PipeDynamics3D(PipeModel3D(model.disc, model.params))
+        problem = PipeDynamics3D(PipeModel3D(model.disc, model.params), flow)
         q0, p0, n_fields = planar_state(cycle.q0), planar_state(cycle.qdot0), 3
     else:
-        problem = OutOfPlaneVariation(model)
+        problem = OutOfPlaneVariation(model, flow)
         zero = np.zeros(nt)
         q0, p0, n_fields = np.r_[cycle.q0, zero], np.r_[cycle.qdot0, zero], 2
     stepper = Radau(problem, q0, p0, rtol=rtol, sensitivity=True)

@@ -57,7 +57,7 @@ class OutOfPlaneMotion:
             accel=f["Phi"] @ qddot,
         )
 
-    def base_force(self, b: _Base) -> np.ndarray:
+    def base_force(self, b: _Base, v_dot: float = 0.0) -> np.ndarray:
         """G_0, the force field of the planar motion, shape (n_q, 2): the 3-D model's
         :meth:`~fempipe.model.three_d.model.PipeModel3D.force_field` at the planar state.
         """
@@ -68,7 +68,10 @@ class OutOfPlaneMotion:
         t_ddot = b.accel[:, None] * n - (b.rate**2)[:, None] * t
         # the integral terms share their operators: C^R (C (t_ddot + sigma t_dot) + c t_dot)
         inner = t_ddot + p.external_damping * t_dot if p.external_damping else t_ddot
-        G = quad.from_tip(quad.cumulative(inner) + (2.0 * p.v * math.sqrt(p.beta)) * t_dot)
+        flow = (2.0 * p.v * math.sqrt(p.beta)) * t_dot
+        if v_dot:
+            flow = flow + (v_dot * math.sqrt(p.beta)) * t
+        G = quad.from_tip(quad.cumulative(inner) + flow)
         G += (p.v * p.v) * np.array([math.cos(st.theta_tip), math.sin(st.theta_tip)])
         g = np.array([math.cos(p.alpha), -math.sin(p.alpha)])
         G -= p.gamma * (1.0 - self.x + p.end_mass)[:, None] * g
@@ -76,9 +79,9 @@ class OutOfPlaneMotion:
             G += p.end_mass * quad.integrate(t_ddot)
         return G
 
-    def axial_stiffness(self, b: _Base) -> np.ndarray:
+    def axial_stiffness(self, b: _Base, v_dot: float = 0.0) -> np.ndarray:
         """``-\\int (t_p . G_0) phi_i phi_j``: the planar motion's tangential force."""
-        G = self.base_force(b)
+        G = self.base_force(b, v_dot)
         theta = b.state.theta
         return -self.static.weighted_gram(np.cos(theta) * G[:, 0] + np.sin(theta) * G[:, 1])
 
@@ -86,6 +89,11 @@ class OutOfPlaneMotion:
         """``v^2 \\int phi_i phi_j(1)``: the jet turns with the tip out of the plane."""
         f = self.static.fixed()
         return (self.params.v**2) * np.outer(f["integral"], self.model.disc.tip)
+
+    def flow_acceleration(self, v_dot: float) -> np.ndarray:
+        """``v_dot sqrt(beta) \\int phi_i \\int_xi^1 phi_j``: the force v_dot sqrt(beta) t of an
+        unsteady flow turns with the pipe out of the plane (Eq. (20)'s dv/dtau term)."""
+        return (v_dot * math.sqrt(self.params.beta)) * self.static.fixed()["coriolis"]
 
     def kelvin_voigt(self, b: _Base) -> tuple[np.ndarray, np.ndarray]:
         """(damping, stiffness) of the objective Kelvin-Voigt law about the moving state; stiffness zero at rest."""
@@ -106,11 +114,15 @@ class OutOfPlaneMotion:
         mu = self.params.mu
         return mu * damping, mu * stiffness
 
-    def matrices(self, q, qdot, qddot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(K, C, M) about the planar state (q, q', q'')."""
+    def matrices(
+        self, q, qdot, qddot, v_dot: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, C, M) about the planar state (q, q', q''), the flow accelerating at ``v_dot``."""
         b = self.base(np.asarray(q, float), np.asarray(qdot, float), np.asarray(qddot, float))
         s, p = self.static, self.params
-        K = s.bending(b.state) + self.axial_stiffness(b) + self.jet()
+        K = s.bending(b.state) + self.axial_stiffness(b, v_dot) + self.jet()
+        if v_dot:
+            K = K + self.flow_acceleration(v_dot)
         C = s.coriolis()
         if p.external_damping:
             C = C + s.external_damping()
@@ -126,26 +138,34 @@ class OutOfPlaneVariation:
     Unknowns (q, psi), ``n = 2 model.n``: Eq. (20) and ``M psi_ddot + C psi_dot + K psi = 0``.
     Meant for psi = 0, where the psi rows' derivative in q vanishes, the Jacobians are exact and
     the sensitivity is block diagonal (rule 7 of :mod:`fempipe.solvers.radau.contract`), its psi
-    block the out-of-plane monodromy.  ``model`` is the planar pipe, steady flow.
+    block the out-of-plane monodromy.  ``model`` is the planar pipe; ``flow`` (tau -> (v,
+    v_dot), rule 9) an unsteady flow, by default the steady ``model.params.v``.
     """
 
-    def __init__(self, model: PipeModel) -> None:
-        self.planar = PipeDynamics(model)
+    def __init__(self, model: PipeModel, flow=None) -> None:
+        self.planar = PipeDynamics(model, flow)
         self.motion = OutOfPlaneMotion(model)
-        self.model = model
+        self.model, self.flow = model, flow
         self.m = model.n
         self.n = 2 * model.n
-        self.autonomous = True
+        self.autonomous = flow is None
         self.parameter_derivative = None
         self.stage_residuals = self._stage_residuals if self.planar.stage_residuals else None
         self.stage_jacobians = self._stage_jacobians if self.planar.stage_jacobians else None
         self.prefers_batched_stage_jacobians = self.planar.prefers_batched_stage_jacobians
         self.decoupled_blocks = (np.arange(self.m), np.arange(self.m, self.n))
 
-    def _psi_rows(self, q, qd, qdd, s, sd, sdd) -> np.ndarray:
+    def _matrices(self, t: float, q, qd, qdd):
+        """(K, C, M) of the psi rows at tau = t."""
+        if self.flow is None:
+            return self.motion.matrices(q, qd, qdd)
+        model, v_dot = self.planar.model_at(t)
+        return OutOfPlaneMotion(model).matrices(q, qd, qdd, v_dot)
+
+    def _psi_rows(self, t, q, qd, qdd, s, sd, sdd) -> np.ndarray:
         if not (np.any(s) or np.any(sd) or np.any(sdd)):
             return np.zeros(self.m)  # the linear equation at psi = 0: no matrices needed
-        K, C, M = self.motion.matrices(q, qd, qdd)
+        K, C, M = self._matrices(t, q, qd, qdd)
         return K @ s + C @ sd + M @ sdd
 
     def residual(self, t: float, q, qdot, qddot) -> np.ndarray:
@@ -154,7 +174,7 @@ class OutOfPlaneVariation:
         return np.concatenate(
             [
                 self.planar.residual(t, q[:m], qdot[:m], qddot[:m]),
-                self._psi_rows(q[:m], qdot[:m], qddot[:m], q[m:], qdot[m:], qddot[m:]),
+                self._psi_rows(t, q[:m], qdot[:m], qddot[:m], q[m:], qdot[m:], qddot[m:]),
             ]
         )
 
@@ -170,14 +190,16 @@ class OutOfPlaneVariation:
         """Block-diagonal (dR/dq, dR/dq', dR/dq'') at psi = 0 (rule 3)."""
         m = self.m
         planar = self.planar.jacobians(t, q[:m], qdot[:m], qddot[:m])
-        return self._blocks(planar, self.motion.matrices(q[:m], qdot[:m], qddot[:m]))
+        return self._blocks(planar, self._matrices(t, q[:m], qdot[:m], qddot[:m]))
 
     def _stage_residuals(self, Q, P, A) -> np.ndarray:
         m = self.m
         R = np.empty(np.shape(Q))
         R[:, :m] = self.planar.stage_residuals(Q[:, :m], P[:, :m], A[:, :m])
         for i in range(R.shape[0]):
-            R[i, m:] = self._psi_rows(Q[i, :m], P[i, :m], A[i, :m], Q[i, m:], P[i, m:], A[i, m:])
+            R[i, m:] = self._psi_rows(
+                0.0, Q[i, :m], P[i, :m], A[i, :m], Q[i, m:], P[i, m:], A[i, m:]
+            )
         return R
 
     def _stage_jacobians(self, Q, P, A):
@@ -193,7 +215,7 @@ class OutOfPlaneVariation:
         """(q'', psi'') (rule 4)."""
         m = self.m
         qdd = self.planar.acceleration(t, q[:m], qdot[:m])
-        K, C, M = self.motion.matrices(q[:m], qdot[:m], qdd)
+        K, C, M = self._matrices(t, q[:m], qdot[:m], qdd)
         return np.concatenate([qdd, -np.linalg.solve(M, K @ q[m:] + C @ qdot[m:])])
 
     def describe(self) -> str:
