@@ -130,3 +130,18 @@ def test_a_small_perturbation_settles_on_the_orbit(lower_edge):
     x = 1e-3 * np.random.default_rng(5).standard_normal(2 * MODEL.n)
     _, peak = _run(x, SIGMA, p.omega, 300)
     assert peak == pytest.approx(p.amplitude, rel=1e-3)
+
+
+def test_the_orbit_out_of_the_plane(branch):
+    """The planar 2T orbit of the hanging pipe out of the plane (the linear out-of-plane
+    equation about it, flow acceleration included): the orbit turned about the vertical is an
+    orbit too, so one multiplier is 1 (to the discretization's symmetry defect, which grows from
+    zero with the amplitude); the others lie inside the unit circle: the planar oscillation
+    survives out of the plane."""
+    from fempipe.analyses.three_d.floquet import compute_out_of_plane_floquet
+
+    orbit = branch.points[-1]
+    out = compute_out_of_plane_floquet(
+        MODEL, orbit, rtol=1e-9, flow=PulsatingFlow(V0, orbit.sigma, orbit.omega)
+    )
+    assert out.symmetry_defect < 1e-5 and 0.1 < out.max_nontrivial < 0.5 and out.stable

@@ -60,6 +60,12 @@ class SubharmonicOrbit:
     q0: np.ndarray
     qdot0: np.ndarray
 
+    @property
+    def period(self) -> float:
+        """2T = 4 pi / omega (its out-of-plane multipliers:
+        :func:`~fempipe.analyses.three_d.compute_out_of_plane_floquet` with the flow)."""
+        return 4 * math.pi / self.omega
+
 
 @dataclass(frozen=True)
 class SubharmonicBranch:
