@@ -43,6 +43,8 @@ CASES: tuple[str, ...] = (
     "out_of_plane",
     # the 3-D model: Hopf onset, mesh convergence, whirl against a rotating-frame BVP
     *("space_onset", "space_convergence", "space_whirl"),
+    # pulsating flow: parametric resonance against a classical Floquet solver
+    "parametric",
 )
 
 

@@ -182,13 +182,15 @@ class LegendreGalerkin:
         """``Legendre p = p``."""
         return f"Legendre p = {self.p}"
 
-    def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0):
-        """As :meth:`BeamGalerkin.pencil`, in the M-orthonormal modes of the bending stiffness."""
+    def pencil(self, pipe: StraightPipe, mu_h_sign: float = 1.0, acceleration: bool = False):
+        """As :meth:`BeamGalerkin.pencil`, in the M-orthonormal modes of the bending stiffness;
+        with ``acceleration``, a sixth piece Ka: the flow acceleration's stiffness, K = K0 + v^2 Kv
+        + (dv/dtau) Ka (:mod:`.classical_pulsation`)."""
         nodes = [0.0, *sorted({x for _, x in pipe.springs if x < 1.0}), 1.0]
         S = len(nodes) - 1
         nb = self.p - 1  # bubbles per element
         ndof = 2 * S + S * nb  # (value, slope) at nodes 1..S, then the bubbles
-        Kb, Kg, Kv, Cv, Mm = (np.zeros((ndof, ndof)) for _ in range(5))
+        Kb, Kg, Kv, Ka, Cv, Mm = (np.zeros((ndof, ndof)) for _ in range(6))
         sg, g, G = pipe.sign, pipe.gamma, pipe.end_mass
         for e in range(S):
             a, b = nodes[e], nodes[e + 1]
@@ -211,6 +213,7 @@ class LegendreGalerkin:
             Kb[ii] += integral(f2, f2, wq)
             Kg[ii] += integral(f1, f1, wq * (1.0 - xi + G))
             Kv[ii] += integral(f0, f2, wq)
+            Ka[ii] += integral(f0, f2, wq * (1.0 - xi))
             Cv[ii] += integral(f0, f1, wq)
             Mm[ii] += integral(f0, f0, wq)
         tip = 2 * (S - 1)  # eta(1)
@@ -229,6 +232,8 @@ class LegendreGalerkin:
         _, Q = sla.eigh(Kb * np.outer(d, d), Mm * np.outer(d, d))
         Q = d[:, None] * Q
         pieces = (K0, Kv, C0, 2.0 * math.sqrt(pipe.beta) * Cv, Mm)
+        if acceleration:  # sqrt(beta) (dv/dtau) (1 - xi) eta'' (Paidoussis & Issid 1974)
+            pieces += (math.sqrt(pipe.beta) * Ka,)
         return tuple(Q.T @ A @ Q for A in pieces)
 
     solve = BeamGalerkin.solve
