@@ -384,3 +384,40 @@ def test_legendre_refinement_per_variant(pipe):
     p = 10 against 40), far inside the 1e-6 asked of fempipe's agreement with it."""
     v = [critical_velocity(pipe, 12.0, method="legendre", n=p).v_cr for p in (10, 20, 40)]
     assert max(v) - min(v) < 1e-9
+
+
+def test_flow_acceleration_is_leipholz_column():
+    """The flow-acceleration term sqrt(beta) (dv/dtau)(1 - xi) eta'' of a pipe without gravity
+    or flow is Leipholz's cantilever under a uniform tangential load: flutter at q L^3/EI =
+    40.05 (Leipholz 1962), for the classical term and for fempipe's K3 (FE P3:16)."""
+    from fempipe.analyses.parametric import PulsationPencil
+    from fempipe.model.discretization import parse_discretization
+    from fempipe.model.plane.operators import PipeModel
+    from fempipe.validation.classical_pulsation import flutter_load, leipholz_load
+
+    q = leipholz_load(16)
+    assert q == pytest.approx(40.05, abs=0.005)
+    assert leipholz_load(12) == pytest.approx(q, rel=1e-8)
+    beta = 0.36
+    model = PipeModel(
+        parse_discretization(fe="P3:16"), Params(alpha=0.0, beta=beta, gamma=0.0, mu=0.0)
+    )
+    P = PulsationPencil.of(model)
+    assert np.sqrt(beta) * flutter_load(P.K0, P.K3, P.M, (1.0, 200.0)) == pytest.approx(q, rel=1e-6)
+    # a decelerating flow stretches the pipe: no flutter
+    assert np.isnan(flutter_load(P.K0, -P.K3, P.M, (1.0, 200.0)))
+
+
+def test_classical_pulsation_at_zero_amplitude():
+    """Without pulsation the DOP853 monodromy's multipliers are exp(lambda T) of the spectrum."""
+    from fempipe.validation.classical_pulsation import ClassicalPulsation
+
+    pipe = StraightPipe(beta=0.2, gamma=10.0, mu=0.005)
+    omega = 30.0
+    lam = eigenvalues(pipe, 6.0, **LEG)
+    exact = np.exp(lam * 2 * np.pi / omega)
+    rho = ClassicalPulsation(pipe, 6.0, p=6).multipliers(0.0, omega)
+    exact6 = np.exp(eigenvalues(pipe, 6.0, method="legendre", n=6) * 2 * np.pi / omega)
+    for r in exact6[np.argsort(-np.abs(exact6))][:4]:
+        assert np.min(np.abs(rho - r)) < 1e-9
+    assert np.min(np.abs(rho - exact[np.argmax(np.abs(exact))])) < 1e-4

@@ -46,6 +46,7 @@ CHEAP = [
     "hysteretic",
     "springs",
     "out_of_plane",
+    "parametric",
 ]
 
 #: The quick 3-D cases (about 50 CPU-s together): their numerics run by default too, so
@@ -98,6 +99,7 @@ PAPER_NOT_REPRODUCED_QUICK = {
     "hysteretic": {"omega_cf_b0.23_muh", "u_cf_b0.23_mu0", "u_cf_b0.23_muh"},
     "springs": set(),
     "out_of_plane": {"planar_v_cr_is_first"},
+    "parametric": {"table45_mode3"},
 }
 
 #: The same for the full runs (``fempipe validate``, the committed report).
@@ -122,6 +124,7 @@ PAPER_NOT_REPRODUCED_FULL = {
     "symmetry": {"paper_alpha_minus_pi"},
     "hysteretic": {"u_cf_b0.23_mu0", "u_cf_b0.23_muh", "omega_cf_b0.23_muh"},
     "out_of_plane": {"planar_v_cr_is_first"},
+    "parametric": {"table45_mode3"},
 }
 
 

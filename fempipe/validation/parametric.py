@@ -406,30 +406,34 @@ def _findings(runs: dict, text: dict, v_cr: float) -> list[str]:
             side = "lower" if edges[0] < p.omega_threshold else "upper"
             edge = min(edges, key=lambda e: abs(e - p.omega_threshold))
             rest = [f"{e:.4f}" for e in edges if e != edge]
+            above = v0 * (1 + s) > v_cr
             out.append(
                 f"v₀ = {v0:g}, σ = {s:g}: fempipe's chart finds no {side} edge of the principal "
                 f"region (nan, 'band' in the table); the scan finds it at ω = {edge:.4f} (Brent's "
                 "method on its multipliers)"
                 + (f", and stability changes again at ω = {', '.join(rest)}" if rest else "")
-                + f". {_pairs(r, s)} (v₀(1 + σ) = {v0 * (1 + s):g}, v_cr = {v_cr:.4f})."
+                + f"; complex multipliers outside the unit circle: {_pairs(r, [s])}"
+                + (f"; the flow exceeds v_cr = {v_cr:.4f} for part of each period" if above else "")
+                + f" (v₀(1 + σ) = {v0 * (1 + s):g})."
             )
     r6 = runs.get(6.0)
     if r6 and r6["fe"].charted:
         combos = [g for g in r6["fe"].regions if g.candidate.kind != "principal"]
         lam3 = r6["fe"].spectrum[3]
+        sigmas = sorted({pt[0] for pt in r6["scan"]})
         out.append(
-            f"At v₀ = 6 no combination region opens either ({len(combos)} in the chart; "
-            + "; ".join(_pairs(r6, s) for s in sorted({pt[0] for pt in r6["scan"]}))
-            + "), where the book, without dissipation, finds them at u₀ = 6.0: with μ = 0.005 "
-            f"the third mode is damped to ζ₃ = {-lam3.real / abs(lam3):.3f}."
+            f"At v₀ = 6 no combination region opens either ({len(combos)} in the chart; the "
+            f"scan's complex multipliers outside the unit circle: {_pairs(r6, sigmas)}), where "
+            "the book, without dissipation, finds them at u₀ = 6.0: with μ = 0.005 the third "
+            f"mode is damped to ζ₃ = {-lam3.real / abs(lam3):.3f}."
         )
     return out
 
 
-def _pairs(r: dict, sigma: float) -> str:
-    """Where the scan at ``sigma`` has a complex multiplier outside the unit circle."""
-    ws = [w for s, w, _, pair in r["scan"] if pair and s == sigma]
-    return f"at σ = {sigma:g} the scan has a complex multiplier outside the unit circle at ω = {_ranges(ws)}"
+def _pairs(r: dict, sigmas) -> str:
+    """Where the scan at ``sigmas`` has a complex multiplier outside the unit circle."""
+    at = {s: [w for t, w, _, pair in r["scan"] if pair and t == s] for s in sigmas}
+    return "; ".join(f"σ = {s:g}, ω = {_ranges(ws)}" for s, ws in at.items() if ws) or "none"
 
 
 def _ranges(ws) -> str:
@@ -476,13 +480,15 @@ def _with_scan_edges(g, found: dict) -> tuple:
     return (g.sigma_threshold, g.omega_threshold, tuple(rows))
 
 
-def _outline(tip: tuple, band) -> tuple[list, list]:
-    """A region's boundary as one closed curve through its threshold (nan edges at the band)."""
+def _outline(tip: tuple, band=None) -> tuple[list, list]:
+    """A region's boundary as one curve through its threshold; an edge not found (nan) at the
+    band's end if ``band`` is given, else left out (the curve breaks there)."""
     s_th, w_th, rows = tip
     rows = [row for row in rows if row[0] > s_th]
     sig = [s_th] + [s for s, _, _ in rows]
-    lo = [w_th] + [band[0] if math.isnan(x) else x for _, x, _ in rows]
-    hi = [w_th] + [band[1] if math.isnan(x) else x for _, _, x in rows]
+    ends = band if band is not None else (math.nan, math.nan)
+    lo = [w_th] + [ends[0] if math.isnan(x) else x for _, x, _ in rows]
+    hi = [w_th] + [ends[1] if math.isnan(x) else x for _, _, x in rows]
     return lo[::-1] + hi, sig[::-1] + sig
 
 
@@ -497,10 +503,10 @@ def plot(result: CaseResult, fig=None):
         ax.axvline(dv["nominal"], color="0.5", lw=1.0, ls=(0, (1, 2)))
         for label, tips in dv["regions"].items():
             for tip in tips:
-                x, y = _outline(tip, band)
+                x, y = _outline(tip)
                 style = {"color": color_for(label), "ls": style_for(label), "lw": 1.4}
                 if label.startswith("FE"):
-                    ax.fill(x, y, color="#E69F00", alpha=0.35, lw=0)
+                    ax.fill(*_outline(tip, band), color="#E69F00", alpha=0.35, lw=0)
                     ax.plot(x, y, marker=".", ms=5, **style)
                     ax.plot(tip[1], tip[0], "v", color="k", ms=6)
                 else:
