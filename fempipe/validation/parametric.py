@@ -55,9 +55,9 @@ def run(quick: bool = False) -> CaseResult:
     for v0, r in runs.items():
         checks += _v0_checks(ref, v0, r, quick)
     checks += _trend_checks(ref, runs, quick)
-    requires = [f"{c}_v{v0:g}" for v0, r in runs.items() if r["classical"] for c in _CL]
-    requires += [f"classical_converged_{k}_v{v0:g}" for v0, r in runs.items() if r["classical"]
-                 for k in r["classical"].converged]  # fmt: skip
+    kinds = ("spectrum",) if quick else ("spectrum", "sigma0", "p")
+    families = (*_CL, *(f"classical_converged_{k}" for k in kinds))
+    requires = [f"{c}_v{v0:g}" for v0 in ref.value("classical_v0", quick) for c in families]
     v_cr = fe_onset(base, 10.0).v_cr
     return CASE.result(
         checks,
@@ -103,10 +103,7 @@ def _run_v0(ref, v0: float, quick: bool) -> dict:
     if v0 in ref.value("classical_v0", quick) and fe.principal is not None:
         reduced = ritz(fe_label, params, fe.spectrum, ref.value("ritz_modes"))
         cl = classical_runs(ref, params, fe.principal, reduced, fe.edges(edge[0]), quick)
-    return {
-        **{"fe": fe, "refined": refined, "modal": others, "scan": points, "classical": cl},
-        "scan_edges": found,
-    }
+    return dict(fe=fe, refined=refined, modal=others, scan=points, classical=cl, scan_edges=found)
 
 
 def _leipholz(ref) -> list:
@@ -204,30 +201,34 @@ def _v0_checks(ref, v0: float, r: dict, quick: bool) -> list:
     out.append(measure(
         "scan_v{v0:g}", verdict, ok=not wrong, v0=v0, where=where, sigmas=sigmas, text=verdict
     ))  # fmt: skip
-    cl = r["classical"]
-    if cl is not None:
-        dev = max(deviation(fe_rho, cl_rho) for _, _, fe_rho, cl_rho in cl.points.values())
-        names = ", ".join(cl.points)
-        out.append(measure("classical_multipliers_v{v0:g}", dev, v0=v0, points=names))
-        diff = abs(cl.classical_sigma - cl.fe_sigma) / cl.fe_sigma
-        out.append(measure(
-            "classical_threshold_v{v0:g}", diff if math.isfinite(diff) else math.inf, v0=v0,
-            omega=p.omega_threshold, classical=cl.classical_sigma, fe_sigma=cl.fe_sigma,
-        ))  # fmt: skip
-        p_, p16 = ref.value("classical_p"), "Legendre p = 16"
-        what = {
-            "spectrum": f"e^(λT) of the mean flow's eigenvalues on p = {p_} against {p16} (largest "
-            "deviation of the four largest)",
-            "sigma0": f"at σ = 0 the DOP853 multipliers equal e^(λT) of the {p16} spectrum "
-            "(largest deviation of the four largest)",
-            "p": f"p = {ref.value('classical_p')} against p = {ref.value('classical_p_check')} "
-            "at tip+ (largest deviation of the two largest multipliers)",
-        }
-        for key, value in cl.converged.items():
-            name = f"{key}_v{v0:g}"
-            out.append(
-                measure("classical_converged_{what}", value, what=name, v0=v0, text=what[key])
-            )
+    if r["classical"] is not None:
+        out += _classical_checks(ref, v0, p, r["classical"])
+    return out
+
+
+def _classical_checks(ref, v0: float, p, cl) -> list:
+    """fempipe's multipliers and critical amplitude against the classical theory's."""
+    out = []
+    dev = max(deviation(fe_rho, cl_rho) for _, _, fe_rho, cl_rho in cl.points.values())
+    names = ", ".join(cl.points)
+    out.append(measure("classical_multipliers_v{v0:g}", dev, v0=v0, points=names))
+    diff = abs(cl.classical_sigma - cl.fe_sigma) / cl.fe_sigma
+    out.append(measure(
+        "classical_threshold_v{v0:g}", diff if math.isfinite(diff) else math.inf, v0=v0,
+        omega=p.omega_threshold, classical=cl.classical_sigma, fe_sigma=cl.fe_sigma,
+    ))  # fmt: skip
+    p_, p16 = ref.value("classical_p"), "Legendre p = 16"
+    what = {
+        "spectrum": f"e^(λT) of the mean flow's eigenvalues on p = {p_} against {p16} (largest "
+        "deviation of the four largest)",
+        "sigma0": f"at σ = 0 the DOP853 multipliers equal e^(λT) of the {p16} spectrum "
+        "(largest deviation of the four largest)",
+        "p": f"p = {ref.value('classical_p')} against p = {ref.value('classical_p_check')} "
+        "at tip+ (largest deviation of the two largest multipliers)",
+    }
+    for key, value in cl.converged.items():
+        name = f"{key}_v{v0:g}"
+        out.append(measure("classical_converged_{what}", value, what=name, v0=v0, text=what[key]))
     return out
 
 
