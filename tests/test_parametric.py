@@ -379,3 +379,16 @@ def test_the_chart_of_a_slightly_bent_pipe():
     np.testing.assert_allclose(
         _largest(linear.multipliers, 2), _largest(three_d.multipliers, 2), atol=1e-8
     )
+
+
+def test_an_edge_beyond_a_stable_gap_is_found():
+    """The lower edge of the hanging pipe's region at v0 = 6, sigma = 0.5 lies at 12.74, with
+    the pipe stable down to 7.92 and unstable again below (quasi-static: the flow exceeds v_cr
+    for part of each period): the outward walk must not step over that gap."""
+    from fempipe.analyses.parametric.regions import _edge
+
+    def margin(w: float) -> float:
+        return (w - 12.7399) * (w - 7.9244)  # < 0 in the gap only
+
+    assert _edge(margin, 29.47, 2.0, 1e-10) == pytest.approx(12.7399, abs=1e-8)
+    assert math.isnan(_edge(lambda w: 1.0, 29.47, 2.0, 1e-10))

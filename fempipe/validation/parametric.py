@@ -47,18 +47,18 @@ CASE = Case.load("parametric")
 def run(quick: bool = False) -> CaseResult:
     """The regions at v0 = 5 and 6 and every comparison; see the module docstring."""
     ref = CASE.references
-    runs = {v0: _run_v0(ref, v0, quick) for v0 in ref.value("v0")}
     base = Params(alpha=0.0, v=0.0, **ref.value("pipe"))
+    v_cr = fe_onset(base, 10.0).v_cr
+    runs = {v0: _run_v0(ref, v0, quick, v_cr) for v0 in ref.value("v0")}
     checks, text = [*_leipholz(ref)], {}
     table45, rows45 = _table45(ref, text)
     checks += table45
     for v0, r in runs.items():
-        checks += _v0_checks(ref, v0, r, quick)
+        checks += _v0_checks(ref, v0, r, quick, v_cr)
     checks += _trend_checks(ref, runs, quick)
     kinds = ("spectrum",) if quick else ("spectrum", "sigma0", "p")
     families = (*_CL, *(f"classical_converged_{k}" for k in kinds))
     requires = [f"{c}_v{v0:g}" for v0 in ref.value("classical_v0", quick) for c in families]
-    v_cr = fe_onset(base, 10.0).v_cr
     return CASE.result(
         checks,
         quick=quick,
@@ -78,7 +78,7 @@ def _labels(ref) -> tuple[str, str, list[str]]:
     return f"FE {ref.value('fe')}", f"FE {ref.value('refined')}", modal
 
 
-def _run_v0(ref, v0: float, quick: bool) -> dict:
+def _run_v0(ref, v0: float, quick: bool, v_cr: float) -> dict:
     """The regions on every discretization, the scan and the classical theory at one v0."""
     params = Params(alpha=0.0, v=v0, **ref.value("pipe"))
     band, sigmas = tuple(ref.value("band")), ref.value("sigmas", quick)
@@ -98,12 +98,17 @@ def _run_v0(ref, v0: float, quick: bool) -> dict:
     omegas = nominal_points(fe.spectrum, band) if quick else grid
     scan_basis = ritz(fe_label, params, fe.spectrum, ref.value("scan_modes"))
     points = scan(scan_basis, omegas, ref.value("scan_sigmas", quick))
-    found = scan_edges(scan_basis, scan_verdict(points, fe)[1])
+    unknown = scan_verdict(points, fe, lambda s: v0 * (1 + s) > v_cr)[1]
+    found = scan_edges(scan_basis, [pt for pt in unknown if v0 * (1 + pt[0]) <= v_cr])
+    quasi = [pt for pt in unknown if v0 * (1 + pt[0]) > v_cr]
     cl = None
     if v0 in ref.value("classical_v0", quick) and fe.principal is not None:
         reduced = ritz(fe_label, params, fe.spectrum, ref.value("ritz_modes"))
         cl = classical_runs(ref, params, fe.principal, reduced, fe.edges(edge[0]), quick)
-    return dict(fe=fe, refined=refined, modal=others, scan=points, classical=cl, scan_edges=found)
+    return dict(
+        fe=fe, refined=refined, modal=others, scan=points, classical=cl, scan_edges=found,
+        quasi_static=quasi,
+    )  # fmt: skip
 
 
 def _leipholz(ref) -> list:
@@ -153,7 +158,7 @@ def _omega(w: complex, digits: int) -> str:
     return f"{w.real:.{digits}f} {'+' if w.imag >= 0 else '−'} {abs(w.imag):.{digits}f}i"
 
 
-def _v0_checks(ref, v0: float, r: dict, quick: bool) -> list:
+def _v0_checks(ref, v0: float, r: dict, quick: bool, v_cr: float) -> list:
     """The checks of one mean flow (see the reference file)."""
     fe, refined = r["fe"], r["refined"]
     lam = fe.spectrum
@@ -185,7 +190,7 @@ def _v0_checks(ref, v0: float, r: dict, quick: bool) -> list:
         measure("tip_v{v0:g}", shift, v0=v0, nominal=nominal, limit=p.sigma_threshold**2, **th)
     )
     out += _convergence_checks(ref, v0, p, refined)
-    wrong, unknown = scan_verdict(r["scan"], fe)
+    wrong, unknown = scan_verdict(r["scan"], fe, lambda s: v0 * (1 + s) > v_cr)
     sigmas = ref.value("scan_sigmas", quick)
     where = (
         "the nominal frequencies of every candidate of modes 1–4"
@@ -416,6 +421,14 @@ def _findings(runs: dict, text: dict, v_cr: float) -> list[str]:
                 + f"; complex multipliers outside the unit circle: {_pairs(r, [s])}"
                 + (f"; the flow exceeds v_cr = {v_cr:.4f} for part of each period" if above else "")
                 + f" (v₀(1 + σ) = {v0 * (1 + s):g})."
+            )
+        for s in sorted({pt[0] for pt in r["quasi_static"]}):
+            ws = [w for t, w, _ in r["quasi_static"] if t == s]
+            out.append(
+                f"v₀ = {v0:g}, σ = {s:g}: unstable outside every region of resonance at "
+                f"{len(ws)} scanned point(s), ω = {min(ws):.4g} to {max(ws):.4g}: the flow "
+                f"v₀(1 + σ) = {v0 * (1 + s):g} exceeds v_cr = {v_cr:.4f} for part of each "
+                "period (a quasi-static instability, not searched by the chart)."
             )
     r6 = runs.get(6.0)
     if r6 and r6["fe"].charted:

@@ -108,16 +108,18 @@ class _Margin:
 
 def _edge(margin: Callable[[float], float], inside: float, limit: float, tol: float) -> float:
     """The frequency between ``inside`` (unstable) and ``limit`` where the margin crosses 0,
-    bracketed by steps that double outward; nan if it stays unstable up to ``limit``."""
-    step = 1e-3 * abs(limit - inside)
-    a = inside
+    bracketed by steps that double outward up to 1/16 of the way (a stable gap narrower than
+    that may be stepped over); nan if it stays unstable up to ``limit``."""
+    span = abs(limit - inside)
+    step, cap = 1e-3 * span, span / 16
+    a = b = inside
     while True:
-        b = inside + math.copysign(min(step, abs(limit - inside)), limit - inside)
+        b = b + math.copysign(min(step, abs(limit - b)), limit - inside)
         if margin(b) < 0:
             break
         if b == limit:
             return math.nan
-        a, step = b, 2 * step
+        a, step = b, min(2 * step, cap)
     return brentq(margin, a, b, xtol=tol * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps)
 
 
