@@ -98,9 +98,8 @@ def _run_v0(ref, v0: float, quick: bool, v_cr: float) -> dict:
     omegas = nominal_points(fe.spectrum, band) if quick else grid
     scan_basis = ritz(fe_label, params, fe.spectrum, ref.value("scan_modes"))
     points = scan(scan_basis, omegas, ref.value("scan_sigmas", quick))
-    unknown = scan_verdict(points, fe, lambda s: v0 * (1 + s) > v_cr)[1]
-    found = scan_edges(scan_basis, [pt for pt in unknown if v0 * (1 + pt[0]) <= v_cr])
-    quasi = [pt for pt in unknown if v0 * (1 + pt[0]) > v_cr]
+    _, unknown, quasi = scan_verdict(points, fe, lambda s: v0 * (1 + s) > v_cr)
+    found = scan_edges(scan_basis, unknown)
     cl = None
     if v0 in ref.value("classical_v0", quick) and fe.principal is not None:
         reduced = ritz(fe_label, params, fe.spectrum, ref.value("ritz_modes"))
@@ -190,7 +189,7 @@ def _v0_checks(ref, v0: float, r: dict, quick: bool, v_cr: float) -> list:
         measure("tip_v{v0:g}", shift, v0=v0, nominal=nominal, limit=p.sigma_threshold**2, **th)
     )
     out += _convergence_checks(ref, v0, p, refined)
-    wrong, unknown = scan_verdict(r["scan"], fe, lambda s: v0 * (1 + s) > v_cr)
+    wrong, unknown, quasi = scan_verdict(r["scan"], fe, lambda s: v0 * (1 + s) > v_cr)
     sigmas = ref.value("scan_sigmas", quick)
     where = (
         "the nominal frequencies of every candidate of modes 1–4"
@@ -202,6 +201,7 @@ def _v0_checks(ref, v0: float, r: dict, quick: bool, v_cr: float) -> list:
         f"{len(r['scan'])} points, {n_unstable} unstable; disagreeing: "
         + (", ".join(f"(σ = {s:g}, ω = {om:.4g}: |ρ| = {x:.4f})" for s, om, x in wrong) or "none")
         + f"; {len(unknown)} where the chart found no edge (not judged)"
+        + (f"; {len(quasi)} unstable outside every region, the flow above v_cr" if quasi else "")
     )
     out.append(measure(
         "scan_v{v0:g}", verdict, ok=not wrong, v0=v0, where=where, sigmas=sigmas, text=verdict

@@ -148,22 +148,22 @@ def _inside(region: ParametricRegion, sigma: float, omega: float) -> bool | None
     return lo < omega if below else omega < hi
 
 
-def scan_verdict(points, regions: Regions, quasi_static=lambda s: False) -> tuple[list, list]:
-    """The scanned points where the scan and the chart disagree, and those the chart leaves
-    open (:func:`_inside` None, or unstable outside every region at a sigma where
-    ``quasi_static(sigma)``: the flow exceeds v_cr for part of each period, an instability the
+def scan_verdict(points, regions: Regions, quasi_static=lambda s: False) -> tuple[list, ...]:
+    """The scanned points where the scan and the chart disagree, those the chart leaves open
+    (:func:`_inside` None), and those unstable outside every region at a sigma where
+    ``quasi_static(sigma)`` (the flow exceeds v_cr for part of each period: an instability the
     chart does not search); the scan's sigmas must be the chart's."""
-    wrong, unknown = [], []
+    wrong, unknown, quasi = [], [], []
     for s, w, rho, _ in points:
         verdicts = [_inside(r, s, w) for r in regions.regions]
         if rho > 1.0 and not any(verdicts) and None not in verdicts and quasi_static(s):
-            unknown.append((s, w, rho))
+            quasi.append((s, w, rho))
         elif True in verdicts or None not in verdicts:
             if (rho > 1.0) != (True in verdicts):
                 wrong.append((s, w, rho))
         else:
             unknown.append((s, w, rho))
-    return wrong, unknown
+    return wrong, unknown, quasi
 
 
 @single_blas
