@@ -392,3 +392,24 @@ def test_an_edge_beyond_a_stable_gap_is_found():
 
     assert _edge(margin, 29.47, 2.0, 1e-10) == pytest.approx(12.7399, abs=1e-8)
     assert math.isnan(_edge(lambda w: 1.0, 29.47, 2.0, 1e-10))
+
+
+@pytest.mark.slow
+def test_the_command_on_a_bent_pipe(capsys):
+    """``fempipe parametric`` on a slightly bent pipe: forced orbits, the region in the plane
+    alone with --planar, the out-of-plane keys without it."""
+    import json
+
+    from fempipe.cli import main
+
+    argv = ["parametric", "--v", "6", "--alpha", "0.02", "--beta", "0.2", "--gamma", "10",
+            "--fe", "P2:3", "--omega", "27:32", "--sigma", "0.2", "--max-order", "1",
+            "--compare-modal", "none", "--quiet", "--json"]  # fmt: skip
+    assert main([*argv, "--planar"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert [r["plane"] for r in d["regions"]] == ["in"] and "planes_note" not in d
+    assert d["regions"][0]["mode"] == [2] and 0.05 < d["regions"][0]["sigma_threshold"] < 0.2
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert sorted(r["plane"] for r in d["regions"]) == ["in", "out"]
+    assert len(d["frequencies_out_of_plane"]) == len(d["modes_out_of_plane"]) >= 2
