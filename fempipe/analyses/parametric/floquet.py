@@ -159,28 +159,40 @@ class ReducedPulsation:
         """The state-transition matrix over one period 2 pi / omega (``steps`` Radau IIA steps).
 
         The problem being linear, the stage equations of every step are solved at once,
-        independently of the state; the steps' propagators are then multiplied.
+        independently of the state, on the velocities alone (A(tau) = [[0, I], [-K, -C]]: the
+        stage positions are q0 + h (a x I) P, docs/theory/parametric.md); the steps'
+        propagators are then multiplied.
         """
         if omega <= 0:
             raise ValueError(f"omega must be > 0, got {omega}")
         if steps < 1:
             raise ValueError(f"steps must be >= 1, got {steps}")
-        d = self.size
+        m = self.size // 2
         h = 2 * math.pi / omega / steps
         tau = (np.arange(steps)[:, None] + RADAU_C[None, :]) * h  # (steps, 3)
         v = self.v0 * (1.0 + sigma * np.sin(omega * tau))
         v_dot = self.v0 * sigma * omega * np.cos(omega * tau)
         coef = np.stack([np.ones_like(v), v, v * v, v_dot], axis=-1)  # (steps, 3, 4)
-        A = np.einsum("sjc,cab->sjab", coef, self.F)  # the stage matrices
-        # Y_j = A_j (X + h sum_l a_jl Y_l), all j: (I - h [a_jl A_j]) Y = [A_j] X
-        big = -h * RADAU_A[None, :, None, :, None] * A[:, :, :, None, :]
-        big = big.reshape(steps, 3 * d, 3 * d) + np.eye(3 * d)
-        S = np.linalg.solve(big, A.reshape(steps, 3 * d, d)).reshape(steps, 3, d, d)
+        lower = np.einsum("sjc,cab->sjab", coef, self.F[:, m:])  # [-K, -C] at the stages
+        K, C = -lower[..., :m], -lower[..., m:]
+        a, eye = RADAU_A, np.eye(m)
+        # (I + h (a x I) C + h^2 (a x I) K (a x I)) P = p0 - h (a x I) K q0, for (q0, p0) = I
+        big = h * np.einsum("jl,slab->sjalb", a, C) + h * h * np.einsum(
+            "jk,kl,skab->sjalb", a, a, K
+        )
+        big = big.reshape(steps, 3 * m, 3 * m) + np.eye(3 * m)
+        rhs = np.zeros((steps, 3, m, 2 * m))
+        rhs[..., :m] = -h * np.einsum("jk,skab->sjab", a, K)
+        rhs[..., m:] = eye
+        P = np.linalg.solve(big, rhs.reshape(steps, 3 * m, 2 * m)).reshape(steps, 3, m, 2 * m)
         # stiffly accurate: a step ends at its last stage
-        P = np.eye(d) + h * np.einsum("l,slab->sab", RADAU_A[2], S)
-        Phi = np.eye(d)
+        step = np.empty((steps, 2 * m, 2 * m))
+        step[:, :m] = h * np.einsum("l,slab->sab", a[2], P)
+        step[:, :m, :m] += eye
+        step[:, m:] = P[:, 2]
+        Phi = np.eye(2 * m)
         for k in range(steps):
-            Phi = P[k] @ Phi
+            Phi = step[k] @ Phi
         return Phi
 
 
