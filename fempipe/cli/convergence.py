@@ -88,7 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "v_cr_in_plane, frequency_in_plane: in the plane of the static state, the paper's; "
         "v_cr_out_of_plane, frequency_out_of_plane: out of it); eigenvalue: the --mode-th "
         "eigenvalue at one v; lc_amplitude, lc_period: the limit cycle at one v; "
-        "sigma_threshold, omega_threshold: where the straight pipe first resonates under a "
+        "sigma_threshold, omega_threshold: where the pipe first resonates under a "
         "pulsating flow about the mean flow --v, in the --omega band",
     )
     common.option(
@@ -100,7 +100,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=parsing.option_type("--omega", parsing.parse_band),
         default=None,
         help="the pulsation frequencies searched by --quantity sigma_threshold, omega_threshold "
-        "(the first region of parametric resonance of the straight pipe to open), e.g. 20:40",
+        "(the first region of parametric resonance to open), e.g. 20:40",
     )
     g.add_argument(
         "--sigma-max",

@@ -49,7 +49,7 @@ class PulsationPencil:
         if not straight_is_static(model.params):
             raise ValueError(
                 f"alpha = {model.params.alpha:.6g}: the straight state is a solution only for "
-                "alpha = 0 or pi (the forced periodic response of a bent pipe is not computed yet)"
+                "alpha = 0 or pi (a bent pipe: compute_parametric_chart about its forced response)"
             )
         # The steady terms are the stability analysis's straight pencil; only the flow
         # acceleration's stiffness is new: the Jacobian's change with dv/dtau at v = 0.

@@ -46,7 +46,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "lc_amplitude": ("limit-cycle amplitude (max - min) / 2 of eta(1)", "L"),
     "lc_period": ("limit-cycle period", "1"),
     "sigma_threshold": (
-        "least pulsation amplitude at which the straight pipe resonates (the first region of "
+        "least pulsation amplitude at which the pipe resonates (the first region of "
         "parametric resonance to open in the omega band)",
         "1",
     ),
