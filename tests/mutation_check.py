@@ -99,6 +99,8 @@ LT, NT, VT = (
 OP, BT, SP = "model/plane/operators.py", "model/plane/batched.py", "model/three_d/model.py"
 OOP, OM = "model/out_of_plane/model.py", "model/out_of_plane/motion.py"
 FLIP = "flip sign"
+#: The unsteady flow out of the plane: a forced orbit's multipliers against the straight pipe's.
+BENT = "tests/test_parametric.py::test_the_bent_pipe_tends_to_the_straight_one"
 
 MUTATIONS = (
     # ------------------------------------------------------------ planar: residual --
@@ -230,8 +232,14 @@ MUTATIONS = (
        "return -ops.material_bending(ops.state(q))"),
     # ------------------------------------------- out of the plane, moving state --
     _m("out_of_plane", "coriolis (moving state)", FLIP, OM,
-       "+ (2.0 * p.v * math.sqrt(p.beta)) * t_dot)",
-       "- (2.0 * p.v * math.sqrt(p.beta)) * t_dot)"),
+       "flow = (2.0 * p.v * math.sqrt(p.beta)) * t_dot",
+       "flow = -(2.0 * p.v * math.sqrt(p.beta)) * t_dot"),
+    Mutation("out_of_plane", "flow_acceleration (moving state's force)", FLIP, f"fempipe/{OM}",
+             "flow = flow + (v_dot * math.sqrt(p.beta)) * t",
+             "flow = flow - (v_dot * math.sqrt(p.beta)) * t", (BENT,)),
+    Mutation("out_of_plane", "flow_acceleration (stiffness)", FLIP, f"fempipe/{OM}",
+             "return (v_dot * math.sqrt(self.params.beta)) * self.static.fixed()",
+             "return -(v_dot * math.sqrt(self.params.beta)) * self.static.fixed()", (BENT,)),
     _m("out_of_plane", "follower (moving state)", FLIP, OM,
        "G += (p.v * p.v) * np.array(",
        "G -= (p.v * p.v) * np.array("),
