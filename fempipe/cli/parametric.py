@@ -122,9 +122,8 @@ def run(args: argparse.Namespace) -> int:
                         callback=lambda cand, region: bar.update(),
                     )
                 )
-            except ValueError as exc:
-                option = "--planes" if "planes" in str(exc) else "--v"
-                raise CLIError(option, str(exc)) from None
+            except ValueError as exc:  # the options are checked: only v0 can be refused here
+                raise CLIError("--v", str(exc)) from None
     cpu = reporting.cpu_seconds(t0)
     result = charts[0].to_dict()
     result["cpu_seconds"] = cpu
@@ -222,5 +221,5 @@ def _print(charts, cpu: float) -> None:
                     for w in (w_lo, w_hi)
                 ]
                 print(f"    sigma = {s:g}: unstable for {edges[0]} < omega < {edges[1]}")
-    what = "monodromy matrices" if chart.straight else "forced orbits"
-    print(f"{sum(c.evaluations for c in charts)} {what}, {cpu:.1f} CPU-s")
+    counted = "monodromy matrices" if chart.straight else "forced orbits"
+    print(f"{sum(c.evaluations for c in charts)} {counted}, {cpu:.1f} CPU-s")

@@ -44,7 +44,6 @@ def plot_parametric_chart(chart, others: Sequence = (), ax=None):
         fig, ax = plt.subplots(figsize=(7.0, 4.6), constrained_layout=True)
     lo, hi = chart.band
     sigma_top = max(chart.sigmas)
-    straight = getattr(chart, "straight", True)
     marks = [(k, w, "0.35", "") for k, w in zip(chart.modes, chart.frequencies, strict=True)]
     marks += [
         (k, w, "tab:blue", "ᵒ")
@@ -97,11 +96,11 @@ def plot_parametric_chart(chart, others: Sequence = (), ax=None):
     outlined = ", ".join(o.discretization.get("name", "") for o in others)
     ax.set_title(
         "Parametric resonance "
-        + ("of the straight pipe" if straight else "about the bent pipe's forced response")
+        + ("of the straight pipe" if chart.straight else "about the bent pipe's forced response")
         + ", v(τ) = v₀ (1 + σ sin ωτ)\n"
         f"{parameter_text(p, v=False)}, v₀ = {p.v:.4g}\n"
         f"shaded: {name} (dots: computed edges, ▼ thresholds"
-        + ("" if straight else "; blue, hatched, ᵒ: out of the plane")
+        + ("" if chart.straight else "; blue, hatched, ᵒ: out of the plane")
         + ")"
         + (f"; outlined: {outlined}" if others else ""),
         fontsize=9,

@@ -99,9 +99,7 @@ def principal_region(label: str, params: Params, band, sigmas, modes, steps=128)
     as the chart searches a candidate (window of :data:`TIP_WINDOW` about 2 omega_2)."""
     model = model_of(label, params)
     spectrum = spectrum_of(model)
-    reduced = ReducedPulsation(
-        PulsationPencil.of(model), params.v, targets=[spectrum[k] for k in modes]
-    )
+    reduced = _reduced(model, spectrum, modes)
     w = 2.0 * spectrum[2].imag
     window = (max(band[0], w * (1 - TIP_WINDOW)), min(band[1], w * (1 + TIP_WINDOW)))
     cand = Candidate(*PRINCIPAL_2, w)
@@ -111,9 +109,12 @@ def principal_region(label: str, params: Params, band, sigmas, modes, steps=128)
 
 def ritz(label: str, params: Params, spectrum: dict, modes) -> ReducedPulsation:
     """fempipe's reduced pulsating problem on the Ritz basis of ``modes``."""
-    model = model_of(label, params)
+    return _reduced(model_of(label, params), spectrum, modes)
+
+
+def _reduced(model: PipeModel, spectrum: dict, modes) -> ReducedPulsation:
     return ReducedPulsation(
-        PulsationPencil.of(model), params.v, targets=[spectrum[k] for k in modes]
+        PulsationPencil.of(model), model.params.v, targets=[spectrum[k] for k in modes]
     )
 
 

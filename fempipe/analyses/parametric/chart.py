@@ -166,10 +166,11 @@ class _ForcedMultipliers:
         return turned_apart
 
 
-def _oscillating(model: PipeModel, q: np.ndarray) -> dict[int, complex]:
+def _oscillating(model: PipeModel, q: np.ndarray, spectrum=None) -> dict[int, complex]:
     """Mode number -> eigenvalue of each mode damped below the critical ratio 1/sqrt(2) (a
-    mode damped more, or overdamped, is not a resonator)."""
-    spectrum = compute_spectrum(model, q)
+    mode damped more, or overdamped, is not a resonator); ``spectrum`` at q if computed."""
+    if spectrum is None:
+        spectrum = compute_spectrum(model, q)
     if spectrum.max_real >= 0:
         raise ValueError(
             f"v0 = {model.params.v:g}: the pipe is already unstable without pulsation"
@@ -297,17 +298,16 @@ def compute_parametric_chart(
         raise ValueError(f"planes must be 'in' and/or 'out', got {planes}")
     model = model.with_params(replace(model.params, v=float(v0)))
     q = np.zeros(model.n)
-    if not straight_is_static(model.params) or model.params.springs:
-        q = solve_sagged(model).q
-    elif compute_spectrum(model, q).max_real >= 0:  # buckled under gravity: about the bent state
-        q = solve_sagged(model).q
+    spectrum = compute_spectrum(model, q) if straight_is_static(model.params) else None
+    if spectrum is None or spectrum.max_real >= 0:  # bent, or buckled by its weight
+        q, spectrum = solve_sagged(model).q, None
     straight = float(np.max(np.abs(q))) <= STRAIGHT_TOL
     if steps is None:
         steps = 128 if straight else 32
     kw = {"omega_tol": omega_tol, "sigma_tol": sigma_tol, "steps": steps}
     out_modes: dict[int, complex] = {}
     if straight:
-        modes = _oscillating(model, np.zeros(model.n))
+        modes = _oscillating(model, q, spectrum)
         numbers = sorted(modes)
         if pairs is None:
             pairs = max(3, sum(modes[k].imag <= hi for k in numbers) + 1)
