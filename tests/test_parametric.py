@@ -413,3 +413,20 @@ def test_the_command_on_a_bent_pipe(capsys):
     d = json.loads(capsys.readouterr().out)
     assert sorted(r["plane"] for r in d["regions"]) == ["in", "out"]
     assert len(d["frequencies_out_of_plane"]) == len(d["modes_out_of_plane"]) >= 2
+
+
+def test_a_tip_near_the_band_end_is_found():
+    """A region open widest at the band's lower end at the largest sigma, closed at half of
+    it, with its tip inside the band: a model margin log|rho| = sigma (1 - 0.02 d^2) - 0.2 -
+    max(sigma - 0.2, 0) d (d = omega - 27.1) has the tip (0.2, 27.1) exactly."""
+
+    def source(s: float, w: float) -> np.ndarray:
+        d = w - 27.1
+        return np.array([-math.exp(s * (1 - 0.02 * d * d) - 0.2 - max(s - 0.2, 0.0) * d)])
+
+    cand = Candidate("principal", 1, (2,), 27.5)
+    region, _ = locate_region(source, cand, (27.0, 32.0), [0.3], sigma_tol=1e-10)
+    assert region is not None
+    assert region.sigma_threshold == pytest.approx(0.2, abs=1e-9)
+    assert region.omega_threshold == pytest.approx(27.1, abs=1e-3)
+    assert math.isnan(region.boundary[0][1]) and 27.1 < region.boundary[0][2] < 32.0

@@ -209,7 +209,7 @@ def _print(charts, cpu: float) -> None:
                 else f"{cand.kind} combination of modes {cand.mode[0]} and {cand.mode[1]} /{cand.order}"
             )
             if cand.plane is not None:
-                what += f", {cand.plane} of the plane"
+                what += ", in the plane" if cand.plane == "in" else ", out of the plane"
             print(
                 f"{name}: {what}: opens at sigma = {r.sigma_threshold:.8g}, omega = "
                 f"{r.omega_threshold:.6g} (multiplier {r.multiplier.real:+.4f}"

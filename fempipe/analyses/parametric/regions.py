@@ -155,6 +155,9 @@ def locate_region(
             return None, margin.count
         if k not in (0, grid.size - 1):
             break
+        if grid[k] in limits:  # widest at the band's end: its tip may still lie inside
+            k = min(max(k, 1), grid.size - 2)
+            break
         level *= 0.5
     best = minimize_scalar(
         lambda w: -margin(level, w), bounds=(grid[k - 1], grid[k + 1]), method="bounded"
@@ -172,13 +175,11 @@ def locate_region(
         return brentq(lambda s: margin(s, w), 0.0, level, xtol=sigma_tol)
 
     # sigma_c is flat at its minimum: an error d in omega costs O(d^2) in sigma
-    tip = minimize_scalar(
-        critical_sigma,
-        bounds=span,
-        method="bounded",
-        options={"xatol": math.sqrt(sigma_tol) * max(1.0, peak)},
-    )
+    xatol = math.sqrt(sigma_tol) * max(1.0, peak)
+    tip = minimize_scalar(critical_sigma, bounds=span, method="bounded", options={"xatol": xatol})
     sigma_th, omega_th = float(tip.fun), float(tip.x)
+    if min(abs(omega_th - x) for x in limits) <= 10 * xatol:  # the tip lies beyond the band
+        return None, margin.count
     rho = margin.multipliers(sigma_th, omega_th)[0]
     rows = []
     for s in sorted(sigmas):
